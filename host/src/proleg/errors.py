@@ -1,0 +1,38 @@
+"""Exceptions at proleg's package boundaries.
+
+Every user mistake surfaces as a ``ProlegError`` whose message is one complete line:
+where (file, field or line) and what was expected. The CLI prints that line and exits 2;
+anything else reaching the CLI is a bug and keeps its traceback.
+"""
+
+
+class ProlegError(Exception):
+    """Base of every error a user can cause."""
+
+
+class RobotFileError(ProlegError):
+    """A robot file (or the transition table it names) is malformed."""
+
+
+class GaitError(ProlegError):
+    """A gait request cannot be answered (invalid sequence, unsupported objective...)."""
+
+
+class BoardError(ProlegError):
+    """A board file is malformed or unknown."""
+
+
+class BuildError(ProlegError):
+    """Rendering, compiling or flashing firmware failed."""
+
+
+class ProtocolError(ProlegError):
+    """A frame or message violates the link protocol."""
+
+
+class SimError(ProlegError):
+    """The simulated board or plant was misused."""
+
+
+class LinkError(ProlegError):
+    """A link to a robot (serial, CAN, simulated) failed or timed out."""

@@ -1,0 +1,50 @@
+"""Robot state labels and indices.
+
+A robot state is the tuple of limb states (S_1 ... S_N), written as a label with the
+first limb leftmost. Its index is the label read as a mixed-radix number, first limb
+most significant, so for two binary limbs "00"=0, "01"=1, "10"=2, "11"=3 (SPEC §1).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from math import prod
+
+DIGITS = "0123456789abcdefghijklmnopqrstuvwxyz"
+
+
+def state_count(levels: Sequence[int]) -> int:
+    return prod(levels)
+
+
+def label(index: int, levels: Sequence[int]) -> str:
+    """The label of state ``index``: one digit per limb, first limb leftmost."""
+    if not 0 <= index < state_count(levels):
+        raise ValueError(f"state index {index} out of range 0..{state_count(levels) - 1}")
+    digits = []
+    for k in reversed(levels):
+        index, d = divmod(index, k)
+        digits.append(DIGITS[d])
+    return "".join(reversed(digits))
+
+
+def index(text: str, levels: Sequence[int]) -> int:
+    """The index of the state written as ``text``; ValueError says what is wrong."""
+    if len(text) != len(levels):
+        raise ValueError(f"state label {text!r} has {len(text)} digits, expected {len(levels)} (one per limb)")
+    value = 0
+    for ch, k in zip(text.lower(), levels):
+        d = DIGITS.find(ch)
+        if not 0 <= d < k:
+            raise ValueError(f"state label {text!r}: digit {ch!r} is not a level 0..{k - 1}")
+        value = value * k + d
+    return value
+
+
+def limb_levels(index_: int, levels: Sequence[int]) -> tuple[int, ...]:
+    """The per-limb levels (S_1 ... S_N) of a state index."""
+    out = []
+    for k in reversed(levels):
+        index_, d = divmod(index_, k)
+        out.append(d)
+    return tuple(reversed(out))

@@ -1,0 +1,105 @@
+"""The transition graph every gait algorithm works on.
+
+Edges are the allowed transitions a → b (a ≠ b) with their reward T[a][b] and, when the
+robot file gives them, their duration in seconds. Stored as sorted parallel arrays so
+that a 2^16-state robot with a million transitions costs a few tens of megabytes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import prod
+
+import numpy as np
+
+from . import states
+
+
+@dataclass(frozen=True, eq=False)
+class TransitionTable:
+    levels: tuple[int, ...]
+    src: np.ndarray
+    dst: np.ndarray
+    reward: np.ndarray
+    duration: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        m = len(self.src)
+        if not (len(self.dst) == len(self.reward) == m):
+            raise ValueError("src, dst and reward must have the same length")
+        if self.duration is not None and len(self.duration) != m:
+            raise ValueError("duration must have one entry per transition")
+        n = self.n_states
+        if m and (self.src.min() < 0 or self.dst.min() < 0 or self.src.max() >= n or self.dst.max() >= n):
+            raise ValueError(f"transition endpoint out of range 0..{n - 1}")
+        if np.any(self.src == self.dst):
+            raise ValueError("a state's transition to itself is not a transition")
+        key = self.src * n + self.dst
+        if m > 1 and np.any(np.diff(key) <= 0):
+            raise ValueError("transitions must be sorted by (from, to) and given once each")
+
+    @property
+    def n_states(self) -> int:
+        return prod(self.levels)
+
+    @property
+    def n_transitions(self) -> int:
+        return len(self.src)
+
+    def label(self, i: int) -> str:
+        return states.label(i, self.levels)
+
+    def index(self, text: str) -> int:
+        return states.index(text, self.levels)
+
+    def labels(self) -> list[str]:
+        return [self.label(i) for i in range(self.n_states)]
+
+    @classmethod
+    def from_edges(
+        cls,
+        levels: tuple[int, ...],
+        src,
+        dst,
+        reward,
+        duration=None,
+    ) -> "TransitionTable":
+        """Build from unsorted edge arrays (each (from, to) pair at most once)."""
+        src = np.asarray(src, dtype=np.int64)
+        dst = np.asarray(dst, dtype=np.int64)
+        reward = np.asarray(reward, dtype=np.float64)
+        n = prod(levels)
+        order = np.argsort(src * n + dst, kind="stable")
+        dur = None if duration is None else np.asarray(duration, dtype=np.float64)[order]
+        return cls(tuple(levels), src[order], dst[order], reward[order], dur)
+
+    @classmethod
+    def from_dense(cls, levels, reward_matrix, allowed=None, duration_matrix=None) -> "TransitionTable":
+        """Build from an n×n reward matrix; ``allowed`` masks forbidden transitions."""
+        r = np.asarray(reward_matrix, dtype=np.float64)
+        n = prod(levels)
+        if r.shape != (n, n):
+            raise ValueError(f"reward matrix is {r.shape}, expected ({n}, {n})")
+        mask = np.ones((n, n), dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool).copy()
+        np.fill_diagonal(mask, False)
+        src, dst = np.nonzero(mask)
+        dur = None if duration_matrix is None else np.asarray(duration_matrix, dtype=np.float64)[src, dst]
+        return cls(tuple(levels), src.astype(np.int64), dst.astype(np.int64), r[src, dst], dur)
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray]:
+        """(reward matrix with 0 where forbidden, allowed mask): for small robots only."""
+        n = self.n_states
+        r = np.zeros((n, n))
+        allowed = np.zeros((n, n), dtype=bool)
+        r[self.src, self.dst] = self.reward
+        allowed[self.src, self.dst] = True
+        return r, allowed
+
+    def lookup(self, a: int, b: int) -> int | None:
+        """Edge position of a → b, or None when that transition is forbidden."""
+        key = a * self.n_states + b
+        keys = self.src * self.n_states + self.dst
+        pos = int(np.searchsorted(keys, key))
+        if pos < len(keys) and keys[pos] == key:
+            return pos
+        return None
