@@ -452,18 +452,16 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
 
 
 def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
-    """A CSV state: a label of one digit per limb, or '#i' / a bare index when labels are ambiguous."""
-    if len(text) == len(levels) and all(c in states.DIGITS for c in text.lower()):
+    """A state in a CSV row or a forbidden mark: a label (one digit per limb), else an index."""
+    expected = f"{where}: expected a state label of {len(levels)} digits or an index 0..{n - 1}, got {text!r}"
+    if len(text) == len(levels):
         try:
             return states.index(text, levels)
         except ValueError as e:
-            raise RobotFileError(f"{where}: {e}") from None
-    raw = text[1:] if text.startswith("#") else text
-    if raw.isdigit() and int(raw) < n:
-        return int(raw)
-    raise RobotFileError(
-        f"{where}: expected a state label of {len(levels)} digits or an index 0..{n - 1}, got {text!r}"
-    )
+            raise RobotFileError(f"{expected} ({e})") from None
+    if text.isdigit() and int(text) < n:
+        return int(text)
+    raise RobotFileError(expected)
 
 
 def _is_number(v: Any) -> bool:

@@ -1,0 +1,44 @@
+# proleg — `make demo` runs the main job, `make test` the whole suite, `make bench` the
+# benchmarks. Each sets up what is missing first: the .venv with the package and its
+# test extras, and the Debian toolchains for the three boards.
+
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed-stamp
+APT    := scripts/ensure-apt.sh
+
+# Board toolchains (command:debian-package). The newlib check is a file, not a command.
+TOOLCHAINS := cc:gcc avr-gcc:gcc-avr /usr/lib/avr/include/avr/io.h:avr-libc \
+              arm-none-eabi-gcc:gcc-arm-none-eabi \
+              /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi
+
+.PHONY: demo test bench setup toolchains clean
+
+setup: $(STAMP)
+
+$(BIN)/python:
+	@$(PYTHON) -m venv $(VENV) 2>/dev/null || { \
+	  rm -rf $(VENV); echo "python3 venv support is missing: installing python3-venv"; \
+	  $(APT) --install python3-venv && $(PYTHON) -m venv $(VENV); }
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e '.[test]'
+	@touch $@
+
+toolchains:
+	@$(APT) $(TOOLCHAINS)
+
+demo: $(STAMP) toolchains
+	$(BIN)/python -m proleg.demo
+
+test: $(STAMP) toolchains
+	$(BIN)/python -m pytest -n 2 -q
+
+bench: $(STAMP) toolchains
+	$(BIN)/python bench/run_all.py
+
+clean:
+	rm -rf $(VENV) build out .pytest_cache .hypothesis
+	find . -name __pycache__ -type d -prune -exec rm -rf {} +

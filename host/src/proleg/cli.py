@@ -1,0 +1,185 @@
+"""The ``proleg`` command: parse arguments, call the library, print.
+
+Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr
+with exit status 2; nothing a user typed produces a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from .errors import ProlegError
+
+DIRECTIONS = ("+x", "-x")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(_join_signed_values(sys.argv[1:] if argv is None else list(argv)))
+    try:
+        return args.run(args)
+    except ProlegError as e:
+        print(f"proleg: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        return 0
+
+
+def _join_signed_values(argv: list[str]) -> list[str]:
+    """Let ``--direction -x`` through: argparse would read ``-x`` as an option."""
+    out: list[str] = []
+    it = iter(argv)
+    for a in it:
+        if a == "--direction":
+            nxt = next(it, None)
+            out.append(a if nxt is None else f"--direction={nxt}")
+        else:
+            out.append(a)
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="proleg", description="Gaits, firmware and simulation for soft crawling robots.")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
+    g.add_argument("robot", metavar="ROBOT.toml")
+    g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
+    g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
+    g.add_argument("--max-transitions", type=_positive_int, metavar="N")
+    g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
+    g.add_argument("--json", action="store_true", help="print one JSON object")
+    g.set_defaults(run=cmd_gait)
+    return p
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected at least 1, got {v}")
+    return v
+
+
+# ---------------------------------------------------------------------------------------
+# proleg gait
+
+
+def cmd_gait(args: argparse.Namespace) -> int:
+    from .gait import evaluate_sequence, optimal_gaits
+    from .robot import load_robot
+
+    robot = load_robot(args.robot)
+    table = robot.transitions
+    labels = table.labels() if table.n_states <= 4096 else None
+    if args.evaluate is not None:
+        return _print_evaluation(robot, args, evaluate_sequence)
+
+    directions = DIRECTIONS if args.direction == "both" else (args.direction,)
+    results = [optimal_gaits(table, args.objective, d, args.max_transitions) for d in directions]
+    if args.json:
+        doc = {
+            "robot": robot.name,
+            "states": labels if labels is not None else table.labels(),
+            "results": [_result_json(table, r) for r in results],
+        }
+        print(json.dumps(doc))
+        return 0
+    print(_header(robot))
+    for r in results:
+        print(_result_text(robot, r))
+    return 0
+
+
+def _header(robot) -> str:
+    t = robot.transitions
+    shown = " ".join(t.labels()) if t.n_states <= 16 else f"{t.label(0)} … {t.label(t.n_states - 1)}"
+    return (
+        f"{robot.name}: {len(robot.limbs)} limbs, {t.n_states} states ({shown}), "
+        f"{t.n_transitions} allowed transitions, rewards in {robot.units}"
+    )
+
+
+def _fmt(x: float) -> str:
+    return f"{x:+.6g}"
+
+
+def _bound_text(r) -> str:
+    return f", at most {r.max_transitions} transitions" if r.max_transitions is not None else ""
+
+
+def _result_text(robot, r) -> str:
+    t = robot.transitions
+    what = {"total": "total reward J", "rate": "reward per transition", "speed": f"{robot.units} per second"}
+    head = f"\n{r.direction}  {r.objective} ({what[r.objective]}{_bound_text(r)}): "
+    if r.value is None:
+        return head + f"no gait moves the robot in {r.direction}"
+    n = len(r.gaits)
+    lines = [head + f"best {_fmt(r.value)}, {n} optimal gait{'s' if n != 1 else ''}"]
+    if getattr(r, "truncated", False):
+        lines[0] += f" (listing stopped after {n}: more ties exist)"
+    for gait in r.gaits:
+        walk = " → ".join(t.label(s) for s in gait.states)
+        extra = f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
+        lines.append(f"    {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}{extra}")
+    return "\n".join(lines)
+
+
+def _gait_json(table, gait) -> dict:
+    d = {
+        "states": [table.label(s) for s in gait.states],
+        "reward": gait.reward,
+        "transitions": gait.transitions,
+        "rate": gait.rate,
+    }
+    if gait.duration is not None:
+        d["duration_s"] = gait.duration
+    return d
+
+
+def _result_json(table, r) -> dict:
+    d = {
+        "direction": r.direction,
+        "objective": r.objective,
+        "max_transitions": r.max_transitions,
+        "value": r.value,
+        "gaits": [_gait_json(table, g) for g in r.gaits],
+    }
+    if getattr(r, "truncated", False):
+        d["truncated"] = True
+    return d
+
+
+def _print_evaluation(robot, args, evaluate_sequence) -> int:
+    from .errors import GaitError
+
+    table = robot.transitions
+    names = [s.strip() for s in args.evaluate.split(",") if s.strip()]
+    try:
+        seq = [table.index(s) for s in names]
+    except ValueError as e:
+        raise GaitError(f"--evaluate: {e}") from None
+    try:
+        gait = evaluate_sequence(table, seq)
+    except GaitError as e:
+        if args.json:
+            print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
+        else:
+            print(f"{robot.name}: {' → '.join(names)} is not a valid gait: {e}")
+        return 1
+    if args.json:
+        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(table, gait)}}))
+    else:
+        walk = " → ".join(table.label(s) for s in gait.states)
+        print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,214 @@
+"""Robot files: the paper's robots load as written; every malformed file is rejected with
+one line naming the file, the field and what was expected."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proleg.errors import RobotFileError
+from proleg.robot import load_robot
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+
+R1 = """
+[robot]
+name = "t"
+
+[[limb]]
+name = "left"
+psi_star_deg = [20.0]
+actuator = "a"
+
+[[limb]]
+name = "right"
+psi_star_deg = [20.0]
+actuator = "b"
+
+[[actuator]]
+name = "a"
+channel = 0
+
+[[actuator]]
+name = "b"
+channel = 1
+
+[transitions]
+matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "robot.toml") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def rejects(tmp_path: Path, text: str, *fragments: str) -> str:
+    path = write(tmp_path, text)
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    msg = str(info.value)
+    assert "\n" not in msg, msg
+    assert str(path) in msg, msg
+    for f in fragments:
+        assert f in msg, f"{f!r} not in {msg!r}"
+    return msg
+
+
+def test_paper_matrices_load_row_from_column_to():
+    r1 = load_robot(ROBOTS / "paper-r1.toml")
+    reward, allowed = r1.transitions.dense()
+    assert r1.transitions.labels() == ["00", "01", "10", "11"]
+    expected = np.array([[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]])
+    assert (reward == expected).all()
+    assert allowed.sum() == 12 and not allowed.diagonal().any()
+    # T[00][10] is the paper's T_13: from dec2bin(0) to dec2bin(2)
+    assert reward[r1.transitions.index("00"), r1.transitions.index("10")] == 1
+
+
+def test_one_actuator_robot_forbids_what_the_paper_strikes_out():
+    r = load_robot(ROBOTS / "paper-r1-one-actuator.toml")
+    t = r.transitions
+    allowed = {(t.label(a), t.label(b)) for a, b in zip(t.src, t.dst)}
+    assert allowed == {("00", "10"), ("10", "00"), ("10", "11"), ("11", "10")}
+    assert {limb.actuator for limb in r.limbs} == {"sma-left"}
+
+
+@pytest.mark.parametrize("name", ["paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator"])
+def test_every_shipped_robot_loads(name):
+    r = load_robot(ROBOTS / f"{name}.toml")
+    assert r.levels == (2, 2)
+    assert r.safety.max_duty >= r.control.drive_duty
+
+
+def test_wrong_matrix_size_names_expected_row_count(tmp_path):
+    rejects(tmp_path, R1.replace(", [0, 0, 0, 0]]", "]"), "transitions.matrix", "expected 4 rows", "got 3")
+
+
+def test_short_row_names_the_row(tmp_path):
+    rejects(tmp_path, R1.replace("[1, 0, 0, -1]", "[1, 0, 0]"), "row 2", "expected 4 entries")
+
+
+def test_non_numeric_entry_names_row_and_column(tmp_path):
+    rejects(tmp_path, R1.replace("[1, 0, 0, -1]", '[1, "up", 0, -1]'), "transitions.matrix[2][2]", "'up'")
+
+
+def test_unknown_key_is_rejected_with_the_known_ones(tmp_path):
+    msg = rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\npsi_star = 3'), "limb[0]", "'psi_star'")
+    assert "psi_star_deg" in msg
+
+
+def test_unknown_top_level_table(tmp_path):
+    rejects(tmp_path, R1 + "\n[motors]\nx = 1\n", "unknown key 'motors'")
+
+
+def test_duplicate_limb(tmp_path):
+    rejects(tmp_path, R1.replace('name = "right"', 'name = "left"'), "limb[1].name", "duplicate limb")
+
+
+@pytest.mark.parametrize("angle", ["95.0", "-90.0", "90"])
+def test_psi_star_out_of_range(tmp_path, angle):
+    rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", f"psi_star_deg = [{angle}]", 1), "limb[0].psi_star_deg",
+            "between -90 and 90")
+
+
+def test_psi_star_count_must_match_levels(tmp_path):
+    rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nlevels = 3', 1), "limb[0].psi_star_deg",
+            "2 critical angle")
+
+
+def test_forbidden_mark_on_a_rewarded_transition(tmp_path):
+    text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11"]')
+    rejects(tmp_path, text, "transitions.forbidden[0]", "01->11", "also gives it a reward")
+
+
+def test_forbidden_mark_agreeing_with_the_matrix_is_fine(tmp_path):
+    text = R1.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]').replace("[transitions]", '[transitions]\nforbidden = ["01->11"]')
+    r = load_robot(write(tmp_path, text))
+    assert r.transitions.lookup(1, 3) is None
+
+
+def test_actuator_that_no_limb_names(tmp_path):
+    rejects(tmp_path, R1 + '\n[[actuator]]\nname = "c"\nchannel = 2\n', "actuator 'c' drives no limb")
+
+
+def test_limb_naming_an_unknown_actuator(tmp_path):
+    rejects(tmp_path, R1.replace('actuator = "b"', 'actuator = "z"'), "limb[1].actuator", "'z'")
+
+
+def test_drive_duty_above_safety_ceiling(tmp_path):
+    text = R1 + "\n[safety]\nmax_duty = 0.5\n[control]\ndrive_duty = 0.6\n"
+    rejects(tmp_path, text, "control.drive_duty", "at most safety.max_duty")
+
+
+def test_tick_rate_below_200_hz(tmp_path):
+    rejects(tmp_path, R1 + "\n[control]\ntick_hz = 100\n", "control.tick_hz", "200..10000")
+
+
+def test_invalid_toml_is_one_line(tmp_path):
+    rejects(tmp_path, R1 + "\n[[limb\n", "not valid TOML")
+
+
+def test_missing_file():
+    with pytest.raises(RobotFileError, match="no such robot file"):
+        load_robot("/nonexistent/robot.toml")
+
+
+def test_durations_and_speed_data(tmp_path):
+    d = "durations_s = [[0, 1.5, 1.0, 2], [1, 0, 2, 1], [1, 1, 0, 1], [2, 2, 2, 0]]"
+    r = load_robot(write(tmp_path, R1.replace("[transitions]", "[transitions]\n" + d)))
+    t = r.transitions
+    assert t.duration is not None
+    assert t.duration[t.lookup(0, 1)] == 1.5
+
+
+def test_duration_for_a_forbidden_transition_is_rejected(tmp_path):
+    text = R1.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]').replace(
+        "[transitions]", "[transitions]\ndurations_s = [[0, 1, 1, 1], [1, 0, 1, 1], [1, 1, 0, 1], [1, 1, 1, 0]]"
+    )
+    rejects(tmp_path, text, "durations_s[2][4]", "forbidden")
+
+
+def test_multi_level_limb_labels(tmp_path):
+    text = R1.replace('name = "left"\npsi_star_deg = [20.0]', 'name = "left"\nlevels = 3\npsi_star_deg = [10.0, 25.0]')
+    text = text.replace(
+        "matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]",
+        "matrix = [" + ", ".join("[" + ", ".join("1" for _ in range(6)) + "]" for _ in range(6)) + "]",
+    )
+    r = load_robot(write(tmp_path, text))
+    assert r.levels == (3, 2)
+    assert r.transitions.labels() == ["00", "01", "10", "11", "20", "21"]
+    assert r.transitions.n_transitions == 30
+
+
+def csv_robot(tmp_path: Path, rows: str) -> Path:
+    (tmp_path / "t.csv").write_text(rows)
+    head = R1.split("[transitions]")[0]
+    return write(tmp_path, head + '[transitions]\nfile = "t.csv"\n')
+
+
+def test_csv_table_with_labels_and_indices(tmp_path):
+    r = load_robot(csv_robot(tmp_path, "from,to,reward\n# comment line\n00,10,1\n10,11,0.5\n3,0,-2\n"))
+    t = r.transitions
+    assert t.n_transitions == 3
+    assert t.reward[t.lookup(3, 0)] == -2 and t.reward[t.lookup(2, 3)] == 0.5
+
+
+def test_csv_errors_name_file_and_line(tmp_path):
+    path = csv_robot(tmp_path, "from,to,reward\n00,10,1\n10,2x,1\n")
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    assert re.search(r"t\.csv:3: to: expected a state label", str(info.value))
+
+
+def test_csv_duplicate_transition(tmp_path):
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: transition 00 -> 10 is given twice"):
+        load_robot(csv_robot(tmp_path, "from,to,reward\n00,10,1\n00,10,2\n"))
+
+
+def test_robot_name_goes_into_firmware_so_it_is_restricted(tmp_path):
+    rejects(tmp_path, R1.replace('name = "t"', 'name = "My Robot"'), "robot.name", "lowercase")
