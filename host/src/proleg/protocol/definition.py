@@ -1,0 +1,403 @@
+"""The link protocol's single definition: messages, fields and enums.
+
+Everything else is derived from this module: the Python codec (``codec.py``) interprets
+``MESSAGES``, and ``render.py`` turns the same tables into the C header/tables
+(``proto_gen.h``/``proto_gen.c``) that the hand-written C runtime (``proto.c``) interprets.
+Change a message here, bump ``PROTOCOL_VERSION``, regenerate ``tests/vectors/protocol.json``.
+
+Wire format of one frame: ``COBS(msg_id:u8 | payload | crc16:u16-le) 0x00``, CRC-16/CCITT-FALSE
+over msg_id + payload, payload fields little-endian and packed, in the order listed here.
+
+Field kinds
+- scalar: ``u8 u16 u32 i16 i32``
+- text: ``char`` with a fixed ``length`` (NUL-padded; at most ``length - 1`` characters, ASCII)
+- variable array: ``max_count`` set (an int, or ``"limbs"`` / ``"channels"`` resolved against
+  the build's limits). On the wire a ``u8`` count precedes the elements; in C the struct has
+  ``uint8_t <name>_count`` before ``<type> <name>[max]``; in Python the value is a tuple.
+
+Conventions
+- Every host→robot command starts with ``token`` (u8, 1..255 chosen by the host; 0 is what the
+  robot uses for unsolicited messages). Every command is answered by exactly one reply that
+  echoes the token: ``ACK``/``NACK``, or ``INFO``/``STATS`` for ``GET_INFO``/``GET_STATS``.
+- Ids 0x01..0x3F host→robot, 0x40..0x7F robot→host.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum, IntFlag
+from typing import Literal
+
+PROTOCOL_VERSION = 1
+
+#: Largest frame before COBS (msg_id + payload + crc) for any build of up to
+#: ``LIMB_CEILING`` limbs and ``CHANNEL_CEILING`` channels. The C receive buffer has this size.
+MAX_FRAME = 64
+#: Largest frame on the wire: COBS adds one byte per 254 (here: one), plus the 0x00 delimiter.
+MAX_ENCODED_FRAME = MAX_FRAME + 2
+#: Limits the protocol is sized for (a build may use fewer).
+LIMB_CEILING = 8
+CHANNEL_CEILING = 8
+#: Longest state sequence LOAD_GAIT carries (states are u16).
+MAX_GAIT_STEPS = 24
+#: ``START.gait`` value that selects the sequence sent by LOAD_GAIT.
+GAIT_USER = 0xFF
+#: Fixed text field sizes (bytes incl. the terminating NUL).
+ROBOT_NAME_LEN = 16
+BOARD_NAME_LEN = 16
+
+ScalarType = Literal["u8", "u16", "u32", "i16", "i32", "char"]
+
+#: (size in bytes, struct format char, minimum, maximum)
+TYPES: dict[str, tuple[int, str, int, int]] = {
+    "u8": (1, "B", 0, 0xFF),
+    "u16": (2, "H", 0, 0xFFFF),
+    "u32": (4, "I", 0, 0xFFFFFFFF),
+    "i16": (2, "h", -0x8000, 0x7FFF),
+    "i32": (4, "i", -0x80000000, 0x7FFFFFFF),
+    "char": (1, "s", 0, 0x7F),
+}
+
+
+# ----------------------------------------------------------------------------- enums
+class Direction(IntEnum):
+    """Which way a gait moves the robot (the gait table holds gaits per direction)."""
+
+    PLUS_X = 0
+    MINUS_X = 1
+
+
+class ErrorCode(IntEnum):
+    """``NACK.error``: why a command was refused."""
+
+    UNKNOWN_MESSAGE = 1  # CRC-valid frame with an id this firmware does not decode
+    BAD_CRC = 2  # reserved: frames with a bad CRC are dropped silently (counted), never NACKed
+    BAD_LENGTH = 3  # payload length does not match the message layout
+    OUT_OF_RANGE = 4  # a value outside its allowed range (detail = param id / field index)
+    FORBIDDEN_TRANSITION = 5  # LOAD_GAIT step not an allowed transition (detail = step index)
+    TOO_LONG = 6  # array count above this build's maximum
+    NOT_ALLOWED = 7  # not allowed in the current mode (e.g. LOAD_GAIT while running)
+    SAFETY_LIMIT = 8  # would widen the build's safety envelope
+    NO_GAIT = 9  # START of a gait index that does not exist / user gait not loaded
+    ESTOP_LATCHED = 10  # E-stop latched: CLEAR it first
+
+
+class FaultCode(IntEnum):
+    """``EVENT.code`` when ``kind == FAULT`` (``detail`` = limb or channel index)."""
+
+    NONE = 0
+    STATE_TIMEOUT = 1  # target state not reached within state_timeout_ms
+    IMU_NO_ACK = 2  # IMU stopped answering on I2C
+    IMU_BAD_DATA = 3  # IMU answers nonsense (WHO_AM_I, stuck, implausible |g|)
+    SMA_ON_LIMIT = 4  # SMA on-time hit max_on_ms (cool-down enforced)
+    LINK_WATCHDOG = 5  # no valid frame within link_watchdog_ms
+    INTERNAL = 6  # firmware invariant violated
+
+
+class EventKind(IntEnum):
+    """``EVENT.kind``; the meaning of ``code``/``detail`` per kind is in the comment."""
+
+    BOOT = 0  # code = reset cause (board specific), detail = 0
+    STATE_REACHED = 1  # code = gait step index, detail = state index
+    FAULT = 2  # code = FaultCode, detail = limb/channel index
+    GAIT_STARTED = 3  # code = gait index, detail = Direction
+    GAIT_STOPPED = 4  # code = StopReason, detail = completed cycles (saturating)
+    ESTOP = 5  # code = 0 command / 1 hardware input, detail = 0
+    FAULT_CLEARED = 6  # code = ClearWhat bits that were cleared, detail = 0
+    GAIT_LOADED = 7  # code = 0, detail = number of steps
+
+
+class StopReason(IntEnum):
+    """``EVENT.code`` when ``kind == GAIT_STOPPED``."""
+
+    COMMAND = 0
+    FAULT = 1
+    ESTOP = 2
+    WATCHDOG = 3
+
+
+class ParamId(IntEnum):
+    """``SET_PARAM.param`` whitelist. The firmware checks each value against the build's
+    safety envelope (NACK SAFETY_LIMIT) and sane ranges (NACK OUT_OF_RANGE)."""
+
+    DRIVE_DUTY = 1  # permyriad, ≤ build max_duty
+    HOLD_MS = 2
+    DEBOUNCE_TICKS = 3
+    STATE_TIMEOUT_MS = 4  # ≤ build value
+    PSI_STAR_CDEG = 5  # index = limb*(levels-1) + level; 0.01°
+    HYSTERESIS_CDEG = 6  # index = limb; 0.01°
+    MAX_ON_MS = 7  # may only shrink
+    MIN_COOLDOWN_MS = 8  # may only grow
+    LINK_WATCHDOG_MS = 9  # may only shrink (0 only if the build has it off)
+
+
+class Flag(IntFlag):
+    """``TELEMETRY.flags`` bits."""
+
+    RUNNING = 1 << 0  # a gait is running
+    HOLDING = 1 << 1  # target state reached, holding before the next step
+    FAULT = 1 << 2  # a fault is latched (see the FAULT event)
+    ESTOP = 1 << 3  # E-stop latched, all MOSFETs off
+    COOLDOWN = 1 << 4  # a channel is in enforced cool-down
+    DUTY_CLAMPED = 1 << 5  # a requested duty was clamped to the envelope
+    IMU_FAULT = 1 << 6
+    LINK_WATCHDOG = 1 << 7  # stopped by the link watchdog
+    USER_GAIT = 1 << 8  # a LOAD_GAIT sequence is stored
+    STATE_UNKNOWN = 1 << 9  # measured state not yet debounced
+
+
+class ClearWhat(IntFlag):
+    """``CLEAR.what`` bits."""
+
+    FAULTS = 1 << 0
+    ESTOP = 1 << 1
+    COUNTERS = 1 << 2
+
+
+#: Enums rendered into C: (class, C prefix). Flags render as bit masks.
+ENUMS: tuple[tuple[type[IntEnum] | type[IntFlag], str], ...] = (
+    (Direction, "PROTO_DIR_"),
+    (ErrorCode, "PROTO_ERR_"),
+    (FaultCode, "PROTO_FAULT_"),
+    (EventKind, "PROTO_EV_"),
+    (StopReason, "PROTO_STOP_"),
+    (ParamId, "PROTO_PARAM_"),
+    (Flag, "PROTO_FLAG_"),
+    (ClearWhat, "PROTO_CLEAR_"),
+)
+
+
+# ----------------------------------------------------------------------------- messages
+@dataclass(frozen=True)
+class Field:
+    """One payload field. ``length``: fixed text size; ``max_count``: variable array."""
+
+    name: str
+    type: ScalarType
+    doc: str = ""
+    length: int | None = None
+    max_count: int | Literal["limbs", "channels"] | None = None
+    enum: type[IntEnum] | type[IntFlag] | None = None
+
+    @property
+    def size(self) -> int:
+        return TYPES[self.type][0]
+
+    @property
+    def is_array(self) -> bool:
+        return self.max_count is not None
+
+    def resolved_max(self, max_limbs: int, max_channels: int) -> int:
+        """Array capacity for a build with these limits (0 for non-arrays)."""
+        if self.max_count is None:
+            return 0
+        if self.max_count == "limbs":
+            return max_limbs
+        if self.max_count == "channels":
+            return max_channels
+        return int(self.max_count)
+
+    def max_wire_size(self, max_limbs: int, max_channels: int) -> int:
+        if self.length is not None:
+            return self.length
+        if self.max_count is not None:
+            return 1 + self.size * self.resolved_max(max_limbs, max_channels)
+        return self.size
+
+
+@dataclass(frozen=True)
+class MessageSpec:
+    """One message: ``direction`` is ``"h2r"`` (host→robot command) or ``"r2h"``."""
+
+    id: int
+    name: str
+    direction: Literal["h2r", "r2h"]
+    fields: tuple[Field, ...]
+    doc: str
+
+    def max_frame(self, max_limbs: int = LIMB_CEILING, max_channels: int = CHANNEL_CEILING) -> int:
+        """Largest frame before COBS: id + payload + crc."""
+        return 1 + sum(f.max_wire_size(max_limbs, max_channels) for f in self.fields) + 2
+
+
+def _u8(name: str, doc: str = "", enum: type[IntEnum] | type[IntFlag] | None = None) -> Field:
+    return Field(name, "u8", doc, enum=enum)
+
+
+_TOKEN = _u8("token", "echoed in the reply (1..255; 0 = unsolicited)")
+
+MESSAGES: tuple[MessageSpec, ...] = (
+    # ---------------------------------------------------------------- host → robot
+    MessageSpec(0x01, "PING", "h2r", (_TOKEN,), "Liveness check; answered by ACK."),
+    MessageSpec(0x02, "GET_INFO", "h2r", (_TOKEN,), "Answered by INFO."),
+    MessageSpec(0x03, "GET_STATS", "h2r", (_TOKEN,), "Answered by STATS (link counters)."),
+    MessageSpec(
+        0x04,
+        "START",
+        "h2r",
+        (
+            _TOKEN,
+            _u8("gait", "gait table index, or GAIT_USER (0xFF) for the LOAD_GAIT sequence"),
+            _u8("direction", "Direction", Direction),
+        ),
+        "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED.",
+    ),
+    MessageSpec(0x05, "STOP", "h2r", (_TOKEN,), "Stop the gait, all actuators off."),
+    MessageSpec(0x06, "ESTOP", "h2r", (_TOKEN,), "Latch E-stop: MOSFETs off until CLEAR(ESTOP)."),
+    MessageSpec(
+        0x07,
+        "LOAD_GAIT",
+        "h2r",
+        (
+            _TOKEN,
+            Field("states", "u16", "closed walk without the repeated start state", max_count=MAX_GAIT_STEPS),
+        ),
+        "Store the user gait; firmware checks each step against the allowed transitions "
+        "(NACK FORBIDDEN_TRANSITION, detail = step index).",
+    ),
+    MessageSpec(
+        0x08,
+        "SET_PARAM",
+        "h2r",
+        (
+            _TOKEN,
+            _u8("param", "ParamId", ParamId),
+            _u8("index", "limb/channel/level index where the param has one, else 0"),
+            Field("value", "i32", "in the param's unit"),
+        ),
+        "Change a whitelisted parameter inside the build's safety envelope.",
+    ),
+    MessageSpec(
+        0x09,
+        "SET_TELEMETRY_RATE",
+        "h2r",
+        (_TOKEN, Field("hz", "u16", "0 = telemetry off; firmware may NACK OUT_OF_RANGE above tick_hz")),
+        "Change the TELEMETRY rate.",
+    ),
+    MessageSpec(
+        0x0A,
+        "CLEAR",
+        "h2r",
+        (_TOKEN, _u8("what", "ClearWhat bits", ClearWhat)),
+        "Clear latched faults / E-stop / link counters.",
+    ),
+    # ---------------------------------------------------------------- robot → host
+    MessageSpec(
+        0x40,
+        "INFO",
+        "r2h",
+        (
+            _TOKEN,
+            _u8("protocol_version"),
+            Field("build_id", "u32", "firmware build id"),
+            Field("gait_hash", "u32", "hash of the compiled gait table"),
+            Field("robot_name", "char", "robot file name", length=ROBOT_NAME_LEN),
+            Field("board", "char", "board name", length=BOARD_NAME_LEN),
+            _u8("limbs"),
+            _u8("actuators"),
+            _u8("gaits", "number of compiled gaits"),
+            _u8("max_gait_steps", "LOAD_GAIT capacity of this build"),
+            Field("tick_hz", "u16"),
+            Field("telemetry_hz", "u16"),
+        ),
+        "Reply to GET_INFO; also sent unsolicited (token 0) after reset.",
+    ),
+    MessageSpec(
+        0x41,
+        "TELEMETRY",
+        "r2h",
+        (
+            Field("seq", "u16", "increments per TELEMETRY frame, wraps"),
+            Field("time_ms", "u32", "firmware time"),
+            Field("measured", "u16", "measured (debounced) state index"),
+            Field("target", "u16", "target state index of the current step"),
+            _u8("gait", "running gait index (GAIT_USER for the loaded one)"),
+            _u8("direction", "Direction", Direction),
+            _u8("step", "gait step index"),
+            Field("flags", "u16", "Flag bits", enum=Flag),
+            Field("psi", "i16", "contact angle per limb, 0.01°", max_count="limbs"),
+            Field("duty", "u16", "SMA duty per channel, permyriad", max_count="channels"),
+        ),
+        "Periodic state, at telemetry_hz.",
+    ),
+    MessageSpec(
+        0x42,
+        "EVENT",
+        "r2h",
+        (
+            Field("time_ms", "u32"),
+            _u8("kind", "EventKind", EventKind),
+            _u8("code", "meaning per kind"),
+            Field("detail", "u16", "meaning per kind"),
+        ),
+        "Something happened (state reached, fault, gait started/stopped, E-stop...).",
+    ),
+    MessageSpec(
+        0x43,
+        "ACK",
+        "r2h",
+        (_TOKEN, _u8("cmd", "id of the acknowledged command")),
+        "Command accepted.",
+    ),
+    MessageSpec(
+        0x44,
+        "NACK",
+        "r2h",
+        (
+            _TOKEN,
+            _u8("cmd", "id of the refused command"),
+            _u8("error", "ErrorCode", ErrorCode),
+            Field("detail", "u16", "offending index / param id, else 0"),
+        ),
+        "Command refused.",
+    ),
+    MessageSpec(
+        0x45,
+        "STATS",
+        "r2h",
+        (
+            _TOKEN,
+            Field("rx_ok", "u32", "valid frames received"),
+            Field("crc_errors", "u32"),
+            Field("framing_errors", "u32", "bad COBS, too short, too long"),
+            Field("unknown_ids", "u32"),
+            Field("bad_length", "u32"),
+            Field("bad_value", "u32", "array count above the build maximum"),
+            Field("nacks", "u32", "NACKs sent"),
+            Field("tx_frames", "u32", "frames queued for sending"),
+            Field("tx_dropped", "u32", "frames dropped because the TX queue was full"),
+        ),
+        "Reply to GET_STATS: the firmware's link counters.",
+    ),
+)
+
+BY_NAME: dict[str, MessageSpec] = {m.name: m for m in MESSAGES}
+BY_ID: dict[int, MessageSpec] = {m.id: m for m in MESSAGES}
+
+
+def check_definition() -> None:
+    """Assert the table's invariants (unique ids/names, sizes, frame limit); raises ValueError."""
+    if len(BY_NAME) != len(MESSAGES) or len(BY_ID) != len(MESSAGES):
+        raise ValueError("duplicate message id or name")
+    for m in MESSAGES:
+        if not 0 < m.id < 0x80:
+            raise ValueError(f"{m.name}: id {m.id:#x} outside 0x01..0x7F")
+        if (m.direction == "h2r") != (m.id < 0x40):
+            raise ValueError(f"{m.name}: id {m.id:#x} in the wrong direction range")
+        if m.direction == "h2r" and (not m.fields or m.fields[0].name != "token"):
+            raise ValueError(f"{m.name}: commands must start with token")
+        names = [f.name for f in m.fields]
+        if len(set(names)) != len(names):
+            raise ValueError(f"{m.name}: duplicate field name")
+        for f in m.fields:
+            if f.type not in TYPES:
+                raise ValueError(f"{m.name}.{f.name}: unknown type {f.type}")
+            if (f.type == "char") != (f.length is not None):
+                raise ValueError(f"{m.name}.{f.name}: char fields need a length (and only they)")
+            if f.is_array and f.resolved_max(LIMB_CEILING, CHANNEL_CEILING) > 255:
+                raise ValueError(f"{m.name}.{f.name}: array max above 255")
+        if m.max_frame() > MAX_FRAME:
+            raise ValueError(f"{m.name}: {m.max_frame()} bytes > MAX_FRAME {MAX_FRAME}")
+
+
+check_definition()
