@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from .errors import ProlegError
 
@@ -54,7 +56,27 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
     g.add_argument("--json", action="store_true", help="print one JSON object")
     g.set_defaults(run=cmd_gait)
+
+    b = sub.add_parser("build", help="render and compile the robot's firmware for a board")
+    _firmware_args(b)
+    b.set_defaults(run=cmd_build)
+
+    f = sub.add_parser("flash", help="build and flash the robot's firmware onto a board")
+    _firmware_args(f)
+    f.add_argument("--port", help="serial port of the board's bootloader, e.g. /dev/ttyUSB0")
+    f.add_argument("--tool", help="flash tool when the board has several (e.g. openocd, pyocd)")
+    f.add_argument("--dry-run", action="store_true", help="print the flash command instead of running it")
+    f.set_defaults(run=cmd_flash)
     return p
+
+
+def _firmware_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("robot", metavar="ROBOT.toml")
+    p.add_argument("--board", required=True, help="board name (boards/NAME.toml) or a board file")
+    p.add_argument("-o", "--out", metavar="DIR", help="project directory (default build/ROBOT-BOARD)")
+    p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
+                   help="which optimal gaits the firmware carries (default total)")
+    p.add_argument("--max-transitions", type=_positive_int, metavar="N")
 
 
 def _positive_int(text: str) -> int:
@@ -68,6 +90,51 @@ def _positive_int(text: str) -> int:
 
 
 # ---------------------------------------------------------------------------------------
+# proleg build / flash
+
+
+def _build(args: argparse.Namespace):
+    from .firmware.boards import load_board
+    from .firmware.build import build
+    from .robot import load_robot
+
+    robot = load_robot(args.robot)
+    board = load_board(args.board)
+    result = build(robot, board, args.out, objective=args.objective, max_transitions=args.max_transitions)
+    print(f"built {robot.name} for {board.name}: {result.artifact}")
+    print(f"  {result.size_report()}")
+    for d, gaits in result.gaits.items():
+        shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
+        print(f"  {d} gaits: {shown}")
+    return result
+
+
+def cmd_build(args: argparse.Namespace) -> int:
+    _build(args)
+    return 0
+
+
+def cmd_flash(args: argparse.Namespace) -> int:
+    from .firmware.boards import load_board
+    from .firmware.flash import choose_method, flash, flash_command
+
+    method = choose_method(load_board(args.board), args.tool)
+    if args.dry_run:
+        from .firmware.build import default_out_dir
+        from .robot import load_robot
+
+        robot = load_robot(args.robot)
+        board = load_board(args.board)
+        out = Path(args.out) if args.out else default_out_dir(robot, board)
+        print(shlex.join(flash_command(method, out / board.artifact, args.port)))
+        return 0
+    result = _build(args)
+    flash(method, result.artifact, args.port)
+    print(f"flashed {result.artifact} with {method.tool}")
+    return 0
+
+
+# ---------------------------------------------------------------------------------------
 # proleg gait
 
 
@@ -77,7 +144,6 @@ def cmd_gait(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     table = robot.transitions
-    labels = table.labels() if table.n_states <= 4096 else None
     if args.evaluate is not None:
         return _print_evaluation(robot, args, evaluate_sequence)
 
@@ -86,7 +152,7 @@ def cmd_gait(args: argparse.Namespace) -> int:
     if args.json:
         doc = {
             "robot": robot.name,
-            "states": labels if labels is not None else table.labels(),
+            "states": table.labels(),
             "results": [_result_json(table, r) for r in results],
         }
         print(json.dumps(doc))

@@ -1,0 +1,1 @@
+"""Firmware generation: board files, rendering the C project, building and flashing."""

@@ -1,0 +1,238 @@
+"""Render a robot's firmware project for a board and compile it.
+
+The project directory is self-contained: ``core/`` (the hand-written portable C, copied
+unchanged), ``hal/`` (the board family's port), ``gen/`` (the rendered configuration,
+gait tables and protocol tables), a ``Makefile`` a user can run by hand, and
+``proleg-build.json`` (what was built from which inputs, and its size). The project is
+written and compiled in a temporary sibling directory and moved into place only when
+the build succeeded and fits the board: a failed build leaves nothing half-written.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+
+from .. import __version__
+from ..errors import BuildError
+from ..paths import home, templates_dir
+from ..robot import Robot
+from .boards import Board
+
+MANIFEST = "proleg-build.json"
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    out_dir: Path
+    artifact: Path
+    board: Board
+    flash_used: int
+    ram_used: int
+    gait_table_hash: str
+    gaits: dict  # {"+x": (Gait, ...), "-x": (...)}
+
+    def size_report(self) -> str:
+        b = self.board
+        if not b.flash_bytes:
+            return f"{b.name}: code {self.flash_used:,} bytes, static data {self.ram_used:,} bytes (host, no limit)"
+        return (
+            f"{b.name}: flash {self.flash_used:,} / {b.flash_bytes:,} bytes ({100 * self.flash_used / b.flash_bytes:.1f}%), "
+            f"static RAM {self.ram_used:,} / {b.ram_bytes:,} bytes ({100 * self.ram_used / b.ram_bytes:.1f}%)"
+        )
+
+
+def default_out_dir(robot: Robot, board: Board) -> Path:
+    return Path("build") / f"{robot.name}-{board.name}"
+
+
+def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None) -> dict:
+    """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none)."""
+    from ..gait import optimal_gaits
+
+    return {
+        d: tuple(optimal_gaits(robot.transitions, objective, d, max_transitions).gaits) for d in ("+x", "-x")
+    }
+
+
+def check_buildable(robot: Robot, board: Board) -> None:
+    channels = len(board.pwm_pins)
+    for a in robot.actuators:
+        if a.channel >= channels:
+            raise BuildError(
+                f"robot {robot.name} drives actuator {a.name!r} on PWM channel {a.channel}, but board {board.name} "
+                f"has {channels} channels (0..{channels - 1}: {', '.join(board.pwm_pins)})"
+            )
+    imus = board.i2c.get("imu_addresses", [0x68, 0x69])
+    if len(robot.limbs) > len(imus):
+        raise BuildError(
+            f"robot {robot.name} has {len(robot.limbs)} limbs, each with an IMU, but board {board.name} "
+            f"has {len(imus)} IMU addresses on its bus ({', '.join(hex(a) for a in imus)})"
+        )
+    for tool in (board.cc, board.size_tool, board.objcopy):
+        if tool and shutil.which(tool) is None:
+            pkgs = " ".join(board.packages) or "its toolchain"
+            raise BuildError(
+                f"{tool} not found, needed for board {board.name}: install the Debian packages {pkgs} "
+                f"(`make toolchains` does it)"
+            )
+    if shutil.which("make") is None:
+        raise BuildError("make not found: install the Debian package make")
+
+
+def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:
+    """Every file of the project directory, by relative path; same inputs, same bytes."""
+    from ..protocol.render import render_c
+    from .config import render_config
+
+    tdir = templates_dir()
+    files: dict[str, str] = {}
+    for src in sorted((tdir / "core").iterdir()):
+        if src.suffix in (".c", ".h"):
+            files[f"core/{src.name}"] = src.read_text(encoding="utf-8")
+    hal_dir = tdir / "hal" / board.family
+    if not hal_dir.is_dir():
+        raise BuildError(f"no HAL for board family {board.family!r} in {hal_dir}")
+    for src in sorted(hal_dir.iterdir()):
+        if src.suffix in (".c", ".h", ".S", ".ld"):
+            files[f"hal/{src.name}"] = src.read_text(encoding="utf-8")
+    for name, text in render_config(robot, gaits, board).items():
+        files[f"gen/{name}"] = text
+    for name, text in render_c(len(robot.limbs), len(robot.actuators)).items():
+        files[f"gen/{name}"] = text
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(tdir)),
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+    )
+    files["Makefile"] = env.get_template("Makefile.j2").render(
+        version=__version__,
+        robot=robot,
+        board=board,
+        robot_file=_display_path(robot.path),
+        board_file=_display_path(board.path),
+    )
+    return files
+
+
+def gait_table_hash(files: dict[str, str]) -> str:
+    """The hash the firmware reports, as rendered into robot_config.h by render_config."""
+    m = re.search(r"#define\s+CFG_GAIT_TABLE_HASH\s+(0x[0-9A-Fa-f]+)", files.get("gen/robot_config.h", ""))
+    return m.group(1).lower() if m else ""
+
+
+def build(
+    robot: Robot,
+    board: Board,
+    out_dir: Path | None = None,
+    *,
+    objective: str = "total",
+    max_transitions: int | None = None,
+    jobs: int = 2,
+) -> BuildResult:
+    """Render and compile; on success the project is at ``out_dir``, on failure nothing is."""
+    check_buildable(robot, board)
+    out_dir = Path(out_dir) if out_dir is not None else default_out_dir(robot, board)
+    if out_dir.exists() and not (out_dir / MANIFEST).exists():
+        raise BuildError(f"{out_dir} exists and is not a proleg build directory: refusing to replace it")
+    gaits = firmware_gaits(robot, objective, max_transitions)
+    files = render_project(robot, board, gaits)
+
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+    try:
+        for rel, text in files.items():
+            p = tmp / rel
+            p.parent.mkdir(parents=True, exist_ok=True)
+            p.write_text(text, encoding="utf-8")
+        _make(tmp, jobs)
+        binary = tmp / (board.artifact if board.family == "sim" else "firmware.elf")
+        flash_used, ram_used = _sizes(board, binary, tmp)
+        _check_limits(robot, board, flash_used, ram_used)
+        digest = gait_table_hash(files)
+        manifest = {
+            "generator": f"proleg {__version__}",
+            "robot": robot.name,
+            "robot_file": _display_path(robot.path),
+            "robot_sha256": _sha256(robot.path),
+            "board": board.name,
+            "board_file": _display_path(board.path),
+            "artifact": board.artifact,
+            "flash_used": flash_used,
+            "ram_used": ram_used,
+            "flash_bytes": board.flash_bytes,
+            "ram_bytes": board.ram_bytes,
+            "gait_table_hash": digest,
+            "gaits": {d: [list(g.states) for g in gs] for d, gs in gaits.items()},
+        }
+        (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
+        _replace_dir(tmp, out_dir)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return BuildResult(out_dir, out_dir / board.artifact, board, flash_used, ram_used, digest, gaits)
+
+
+def _make(project: Path, jobs: int) -> None:
+    proc = subprocess.run(
+        ["make", "-C", str(project), f"-j{jobs}", "all"],
+        capture_output=True,
+        text=True,
+    )
+    if proc.returncode != 0:
+        out = (proc.stdout + proc.stderr).replace(str(project) + "/", "")
+        errors = [line for line in out.splitlines() if "error" in line.lower()] or out.splitlines()[-15:]
+        raise BuildError("compilation failed:\n  " + "\n  ".join(errors[:15]))
+
+
+def _sizes(board: Board, binary: Path, cwd: Path) -> tuple[int, int]:
+    """(flash, static RAM) from the Berkeley size format: flash = text+data, RAM = data+bss."""
+    proc = subprocess.run([board.size_tool, "-B", str(binary)], capture_output=True, text=True, cwd=cwd)
+    lines = proc.stdout.strip().splitlines()
+    if proc.returncode != 0 or len(lines) < 2:
+        raise BuildError(f"{board.size_tool} could not read {binary.name}: {proc.stderr.strip()}")
+    text, data, bss = (int(x) for x in lines[1].split()[:3])
+    return text + data, data + bss
+
+
+def _check_limits(robot: Robot, board: Board, flash_used: int, ram_used: int) -> None:
+    if board.flash_bytes and flash_used > board.flash_bytes:
+        raise BuildError(
+            f"robot {robot.name} needs {flash_used:,} bytes of flash, board {board.name} has {board.flash_bytes:,}"
+        )
+    if board.ram_bytes and ram_used > board.ram_bytes:
+        raise BuildError(
+            f"robot {robot.name} needs {ram_used:,} bytes of static RAM, board {board.name} has {board.ram_bytes:,}"
+        )
+
+
+def _replace_dir(new: Path, target: Path) -> None:
+    """Move ``new`` to ``target``; an older build there is removed only after the move."""
+    old = None
+    if target.exists():
+        old = target.with_name(f".{target.name}.old-{os.getpid()}")
+        target.rename(old)
+    new.rename(target)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _display_path(path: Path) -> str:
+    p = Path(path).resolve()
+    try:
+        return str(p.relative_to(home()))
+    except ValueError:
+        return str(p)
