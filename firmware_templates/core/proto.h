@@ -44,6 +44,7 @@
 #define PROTO_READ_BYTE(p) (*(const uint8_t *)(p))
 #endif
 
+#include "cobs.h"
 #include "proto_gen.h" /* PROTO_ID_*, PROTO_ERR_* ..., proto_<msg>_t, proto_msg_t */
 
 /* ---- descriptor tables (rendered into proto_gen.c, interpreted by proto.c) ---- */
@@ -79,8 +80,7 @@ typedef struct {
 typedef struct proto_rx {
     uint8_t buf[PROTO_MAX_FRAME]; /* decoded bytes of the frame being received */
     uint8_t len;                  /* bytes in buf */
-    uint8_t block;                /* COBS: data bytes left in the current block (0 = code next) */
-    uint8_t code;                 /* COBS: code of the current block, 0 before the first */
+    cobs_dec_t cobs;              /* incremental COBS decoder state */
     uint8_t overflow;             /* frame longer than PROTO_MAX_FRAME: drop at delimiter */
     /* Set on the byte that ended a CRC-valid but refused frame, cleared by the next call:
      * rej_error = PROTO_ERR_UNKNOWN_MESSAGE / _BAD_LENGTH / _TOO_LONG, rej_id = its msg_id,
