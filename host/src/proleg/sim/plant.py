@@ -1,0 +1,517 @@
+"""The simulated robot body (plant): SMA drive → temperature → contraction → ψ → friction state
+→ centre-of-mass displacement (SPEC §5).
+
+Chain per step, for a PWM duty held constant over the step:
+
+1. each SMA coil: exact exponential step of the lumped thermal model, then the Liang–Rogers
+   hysteretic austenite fraction α (``proleg.sim.sma``);
+2. contraction_j = α_j × max_strain_j × stroke_j (stroke_j = 1 fresh, < 1 after stroke loss);
+3. body bending, linear in the contractions: each end's target contact angle
+   ψ°_i = ψ_rest_i + Σ_j G[i][j] · contraction_j / max_strain_j, i.e. G[i][j] is how far
+   actuator j at full nominal contraction tilts end i. The coils overlap, so each coil moves
+   "its" end most and the other end less: with the default G = [[60, 27], [27, 60]]° and
+   ψ* = 20°, one coil alone crosses its own end's ψ* at α ≈ 0.33 and the far end's at
+   α ≈ 0.74, so an R1 robot driven by its left coil only goes 00 → 10 → 11 and back
+   11 → 10 → 00, as in the paper's loss-of-actuation experiment;
+4. ψ_i follows ψ°_i with a first-order mechanical lag (τ_m = 30 ms, the soft body's
+   response); dψ/dt is the lag's derivative, for the gyro model;
+5. friction level of limb i = number of critical angles with ψ_i ≥ ψ*_i,k (the TRUE state;
+   the firmware's classifier with hysteresis and debounce is not modelled here);
+6. robot state index (mixed radix, first limb most significant); when it changes, the change
+   and any further change within ``simultaneous_s`` (30 ms) form one transition a → b, and
+   displacement += T_true[a][b] · step_mm + N(0, noise_mm²). A transition that T_true forbids
+   (NaN) but that physically happened earns 0 and is counted in ``unexpected_transitions``.
+
+Not modelled: the quasi-static friction alternative of SPEC §5 (rewards come only from the
+ground-truth matrix), latent heat, the coil's stress dependence of the transformation
+temperatures, non-uniform coil temperature.
+
+Faults: ``kill_actuator(ch)`` (no heating on that channel), ``inject_drift(ch, rate, mode)``:
+"power" — effective heating power × exp(−rate · on-time), on-time = ∫ duty dt since the
+injection (a coil whose response weakens as it ages or whose contact resistance rises);
+"temperature" — As, Af, Ms, Mf shift up by rate °C per second of on-time (functional
+fatigue); "stroke" — the recoverable stroke × exp(−rate · on-time). ``step`` gives an
+immediate part of the same effect, so a test need not age the coil for minutes.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import RobotFileError, SimError
+from .sma import Hysteresis, SmaParams
+
+DIRECT_GAIN_DEG = 60.0
+CROSS_GAIN_DEG = 27.0
+
+
+@dataclass(frozen=True)
+class LimbParams:
+    """One friction mechanism (end of the body)."""
+
+    name: str = "limb"
+    psi_star_deg: tuple[float, ...] = (20.0,)   # critical angles, increasing; levels = len + 1
+    psi_rest_deg: float = 0.0                   # body relaxed and straight: the ends lie flat
+    actuator: int | None = None                 # index into PlantParams.actuators that raises it
+
+
+@dataclass(frozen=True)
+class PlantParams:
+    """Everything the plant needs. Defaults: the paper's R1-class robot (80 mm, ~3 g, two
+    overlapping BioMetal Helix coils, ψ* = 20° at both ends).
+
+    With the defaults and drive duty 0.6 from cold (25 °C), ψ crosses 20° after ≈ 0.75 s
+    (≈ 0.45 s from the ≈ 45 °C a coil keeps between gait steps); released just after the
+    crossing, ψ falls back below 20° after ≈ 0.75 s; a four-transition gait takes ≈ 3–4 s.
+    """
+
+    actuators: tuple[SmaParams, ...] = (
+        SmaParams(name="sma-left", channel=0),
+        SmaParams(name="sma-right", channel=1),
+    )
+    limbs: tuple[LimbParams, ...] = (
+        LimbParams(name="left", actuator=0),
+        LimbParams(name="right", actuator=1),
+    )
+    # n_limbs × n_actuators, degrees of ψ at full nominal contraction; None → direct_gain_deg
+    # on (limb, its actuator), cross_gain_deg elsewhere.
+    coupling_deg: tuple[tuple[float, ...], ...] | None = None
+    direct_gain_deg: float = DIRECT_GAIN_DEG
+    cross_gain_deg: float = CROSS_GAIN_DEG
+    mech_tau_s: float = 0.03        # soft body (TangoPlus) settles in tens of ms
+    ambient_c: float = 25.0
+    step_mm: float = 4.0            # mm per unit of T_true ("steps"); a guess: 5 % of 80 mm
+    noise_mm: float = 0.0           # σ of the Gaussian added to each transition's displacement
+    simultaneous_s: float = 0.03    # limb changes this close together are one transition
+
+    @property
+    def levels(self) -> tuple[int, ...]:
+        return tuple(len(limb.psi_star_deg) + 1 for limb in self.limbs)
+
+    def coupling(self) -> list[list[float]]:
+        if self.coupling_deg is not None:
+            return [list(map(float, row)) for row in self.coupling_deg]
+        return [
+            [self.direct_gain_deg if limb.actuator == j else self.cross_gain_deg for j in range(len(self.actuators))]
+            for limb in self.limbs
+        ]
+
+    def check(self) -> str | None:
+        """What is wrong with these parameters, or None."""
+        if not self.actuators:
+            return "at least one actuator is needed"
+        if not self.limbs:
+            return "at least one limb is needed"
+        channels = [a.channel for a in self.actuators]
+        if len(set(channels)) != len(channels) or min(channels) < 0:
+            return f"actuator channels must be distinct and ≥ 0, got {channels}"
+        for a in self.actuators:
+            msg = a.check()
+            if msg:
+                return f"actuator {a.name!r}: {msg}"
+        for limb in self.limbs:
+            ps = list(limb.psi_star_deg)
+            if not ps or any(not -90.0 < p < 90.0 for p in ps) or any(b <= a for a, b in zip(ps, ps[1:])):
+                return f"limb {limb.name!r}: psi_star_deg must be increasing angles in (-90, 90), got {ps}"
+            if limb.actuator is not None and not 0 <= limb.actuator < len(self.actuators):
+                return f"limb {limb.name!r}: actuator index {limb.actuator} out of range"
+        g = self.coupling()
+        if len(g) != len(self.limbs) or any(len(row) != len(self.actuators) for row in g):
+            return f"coupling_deg must be {len(self.limbs)} × {len(self.actuators)} (limbs × actuators)"
+        if any(not math.isfinite(x) for row in g for x in row):
+            return "coupling_deg must be finite"
+        for name in ("mech_tau_s", "step_mm"):
+            if not getattr(self, name) > 0:
+                return f"{name} must be > 0"
+        for name in ("noise_mm", "simultaneous_s"):
+            if not getattr(self, name) >= 0:
+                return f"{name} must be ≥ 0"
+        return None
+
+
+@dataclass(frozen=True)
+class Transition:
+    t_s: float          # time of the first limb change of this transition
+    src: int
+    dst: int
+    reward_mm: float
+
+    def __iter__(self):  # unpacks as (t, from, to, reward_mm)
+        return iter((self.t_s, self.src, self.dst, self.reward_mm))
+
+
+class Plant:
+    """The simulated robot body. ``step(dt_s, duties)`` advances it; read the rest as properties.
+
+    ``true_rewards``: n×n matrix (n = number of robot states), row = from, column = to, in the
+    robot file's units (scaled by ``params.step_mm``), NaN = forbidden. None → all zero.
+    ``duties``: one PWM duty in [0, 1] per board channel (index = actuator channel).
+    """
+
+    def __init__(
+        self,
+        params: PlantParams | None = None,
+        true_rewards: np.ndarray | None = None,
+        levels: Sequence[int] | None = None,
+        seed: int = 0,
+    ) -> None:
+        params = params or PlantParams()
+        msg = params.check()
+        if msg:
+            raise SimError(f"plant parameters: {msg}")
+        if levels is None:
+            levels = params.levels
+        levels = tuple(int(k) for k in levels)
+        if levels != params.levels:
+            raise SimError(f"levels {levels} do not match the limbs' critical angles (levels {params.levels})")
+        self.params = params
+        self.levels = levels
+        n = math.prod(levels)
+        if true_rewards is None:
+            true_rewards = np.zeros((n, n))
+        tr = np.asarray(true_rewards, dtype=np.float64)
+        if tr.shape != (n, n):
+            raise SimError(f"true_rewards is {tr.shape}, expected ({n}, {n}) for levels {levels}")
+        # reward in mm per (from, to), None where forbidden
+        self._reward = [[None if math.isnan(x) else float(x) * params.step_mm for x in row] for row in tr.tolist()]
+        self._rng = random.Random(seed)
+        self._noise = float(params.noise_mm)
+        self._window = float(params.simultaneous_s)
+
+        acts = params.actuators
+        self._na = len(acts)
+        self._nl = len(params.limbs)
+        self._channel = [a.channel for a in acts]
+        self._n_channels = max(self._channel) + 1
+        self._power = [a.full_power_w for a in acts]          # W at duty 1
+        self._hA = [a.conductance_w_per_k for a in acts]
+        self._tau = [a.tau_s for a in acts]
+        self._strain = [a.max_strain for a in acts]
+        self._amb = float(params.ambient_c)
+        self._temp = [self._amb] * self._na
+        self._hyst = [Hysteresis(a.as_c, a.af_c, a.ms_c, a.mf_c, self._amb) for a in acts]
+        self._alive = [True] * self._na
+        self._pfactor = [1.0] * self._na                      # heating power factor (drift)
+        self._stroke = [1.0] * self._na                       # recoverable stroke factor (drift)
+        self._drift: list[tuple[str, float, float] | None] = [None] * self._na  # (mode, rate, step)
+        self._ontime = [0.0] * self._na                       # ∫ duty dt since drift injection
+        self._ontime_total = [0.0] * self._na
+
+        self._g = params.coupling()
+        self._rest = [float(limb.psi_rest_deg) for limb in params.limbs]
+        self._thresholds = [tuple(float(p) for p in limb.psi_star_deg) for limb in params.limbs]
+        mult, m = [], 1
+        for k in reversed(levels):
+            mult.append(m)
+            m *= k
+        self._mult = list(reversed(mult))
+        self._mtau = float(params.mech_tau_s)
+        self._psi = self._targets()
+        self._dpsi = [0.0] * self._nl
+        self._t = 0.0
+        self._dt_cache = (-1.0, [], 0.0)
+        self._state = self._classify()
+        self._committed = self._state
+        self._pending_since: float | None = None
+        self._displacement = 0.0
+        self._transitions: list[Transition] = []
+        self._unexpected = 0
+
+    # -- stepping -----------------------------------------------------------------------------
+    def _targets(self) -> list[float]:
+        contraction = [h.alpha * s for h, s in zip(self._hyst, self._stroke)]
+        return [r + sum(g * c for g, c in zip(row, contraction)) for r, row in zip(self._rest, self._g)]
+
+    def _classify(self) -> int:
+        idx = 0
+        for psi, ths, m in zip(self._psi, self._thresholds, self._mult):
+            lvl = 0
+            for th in ths:
+                if psi >= th:
+                    lvl += 1
+            idx += lvl * m
+        return idx
+
+    def step(self, dt_s: float, duties: Sequence[float]) -> None:
+        """Advance by ``dt_s`` seconds with each channel's duty held constant."""
+        if dt_s != self._dt_cache[0]:
+            if not dt_s > 0:
+                raise SimError(f"step: dt_s must be > 0, got {dt_s!r}")
+            self._dt_cache = (dt_s, [math.exp(-dt_s / tau) for tau in self._tau], math.exp(-dt_s / self._mtau))
+        _, decay, mdecay = self._dt_cache
+        if len(duties) < self._n_channels:
+            raise SimError(f"step: {len(duties)} duties given, the plant drives channels 0..{self._n_channels - 1}")
+        temp = self._temp
+        amb = self._amb
+        contraction = []
+        for j in range(self._na):
+            d = duties[self._channel[j]]
+            if not 0.0 <= d <= 1.0:
+                raise SimError(f"step: duty {d!r} on channel {self._channel[j]} is outside 0..1")
+            if not self._alive[j]:
+                d = 0.0
+            drift = self._drift[j]
+            if drift is not None and d > 0.0:
+                self._apply_drift(j, d * dt_s)
+            if d > 0.0:
+                self._ontime_total[j] += d * dt_s
+            t_eq = amb + d * self._power[j] * self._pfactor[j] / self._hA[j]
+            t1 = t_eq + (temp[j] - t_eq) * decay[j]
+            temp[j] = t1
+            contraction.append(self._hyst[j].update(t1) * self._stroke[j])
+        psi = self._psi
+        dpsi = self._dpsi
+        inv_tau = 1.0 / self._mtau
+        for i in range(self._nl):
+            target = self._rest[i]
+            for g, c in zip(self._g[i], contraction):
+                target += g * c
+            p = target + (psi[i] - target) * mdecay
+            psi[i] = p
+            dpsi[i] = (target - p) * inv_tau
+        self._t += dt_s
+        # friction state and transitions
+        state = self._classify()
+        if state != self._state:
+            self._state = state
+            if self._pending_since is None:
+                self._pending_since = self._t
+        if self._pending_since is not None and self._t - self._pending_since >= self._window - 1e-12:
+            self._commit()
+
+    def _commit(self) -> None:
+        a, b = self._committed, self._state
+        t0 = self._pending_since
+        self._pending_since = None
+        if a == b:
+            return  # changed and changed back within the window: no transition
+        r = self._reward[a][b]
+        if r is None:
+            self._unexpected += 1
+            r = 0.0
+        elif self._noise > 0.0:
+            r += self._rng.gauss(0.0, self._noise)
+        self._committed = b
+        self._displacement += r
+        self._transitions.append(Transition(t0, a, b, r))
+
+    def _apply_drift(self, j: int, on: float) -> None:
+        mode, rate, step = self._drift[j]
+        self._ontime[j] += on
+        x = self._ontime[j] * rate
+        if mode == "power":
+            self._pfactor[j] = (1.0 - step) * math.exp(-x)
+        elif mode == "stroke":
+            self._stroke[j] = (1.0 - step) * math.exp(-x)
+        else:  # temperature
+            self._hyst[j].shift_c = step + x
+
+    # -- faults -------------------------------------------------------------------------------
+    def _actuator_of(self, channel: int) -> int:
+        try:
+            return self._channel.index(channel)
+        except ValueError:
+            raise SimError(f"no actuator on channel {channel} (channels: {self._channel})") from None
+
+    def kill_actuator(self, channel: int) -> None:
+        """The coil on ``channel`` no longer heats (broken wire, dead MOSFET)."""
+        self._alive[self._actuator_of(channel)] = False
+
+    def inject_drift(self, channel: int, rate: float, mode: str = "power", step: float = 0.0) -> None:
+        """From now on the coil on ``channel`` drifts (see the module doc for the modes).
+
+        ``rate``: per second of on-time (∫ duty dt): 1/s for "power" and "stroke", °C/s for
+        "temperature". ``step``: an immediate part, a fraction in [0, 1) for "power"/"stroke"
+        (0.3 → 30 % weaker at once), °C for "temperature".
+        """
+        j = self._actuator_of(channel)
+        if mode not in ("power", "temperature", "stroke"):
+            raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
+        if not (math.isfinite(rate) and rate >= 0):
+            raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
+        if mode != "temperature" and not 0.0 <= step < 1.0:
+            raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
+        self._drift[j] = (mode, float(rate), float(step))
+        self._ontime[j] = 0.0
+        self._apply_drift(j, 0.0)
+
+    # -- observation --------------------------------------------------------------------------
+    @property
+    def time_s(self) -> float:
+        return self._t
+
+    @property
+    def psi_deg(self) -> np.ndarray:
+        return np.array(self._psi)
+
+    @property
+    def dpsi_dps(self) -> np.ndarray:
+        return np.array(self._dpsi)
+
+    def limb_truth(self, i: int) -> tuple[float, float]:
+        """(ψ_i in degrees, dψ_i/dt in °/s) as plain floats (cheap; for the IMU model)."""
+        return self._psi[i], self._dpsi[i]
+
+    @property
+    def temperature_c(self) -> np.ndarray:
+        return np.array(self._temp)
+
+    @property
+    def austenite(self) -> np.ndarray:
+        return np.array([h.alpha for h in self._hyst])
+
+    @property
+    def contraction(self) -> np.ndarray:
+        """Per actuator, strain relative to the installed length."""
+        return np.array([h.alpha * s * e for h, s, e in zip(self._hyst, self._stroke, self._strain)])
+
+    @property
+    def power_factor(self) -> np.ndarray:
+        return np.array([pf if alive else 0.0 for pf, alive in zip(self._pfactor, self._alive)])
+
+    @property
+    def on_time_s(self) -> np.ndarray:
+        """Per actuator, ∫ duty dt since the start."""
+        return np.array(self._ontime_total)
+
+    @property
+    def true_state(self) -> int:
+        """Current friction state index (from ψ now; transitions are committed after the window)."""
+        return self._state
+
+    @property
+    def limb_levels(self) -> tuple[int, ...]:
+        out, idx = [], self._state
+        for k in reversed(self.levels):
+            idx, d = divmod(idx, k)
+            out.append(d)
+        return tuple(reversed(out))
+
+    @property
+    def displacement_mm(self) -> float:
+        return self._displacement
+
+    @property
+    def transitions(self) -> list[Transition]:
+        return list(self._transitions)
+
+    @property
+    def unexpected_transitions(self) -> int:
+        return self._unexpected
+
+
+# -- robot file ---------------------------------------------------------------------------------
+_PER_ACTUATOR = (
+    "resistance_ohm", "supply_v", "heat_capacity_j_per_k", "conductance_w_per_k",
+    "as_c", "af_c", "ms_c", "mf_c", "max_strain",
+)
+_SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
+PLANT_KEYS = _PER_ACTUATOR + _SCALARS + ("psi_rest_deg", "coupling_deg", "true_matrix")
+
+
+def _where(robot: Any) -> str:
+    path = getattr(robot, "path", None) or getattr(robot, "source", None)
+    return str(path) if path else "<robot>"
+
+
+def _number(where: str, key: str, v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise RobotFileError(f"{where}: [plant].{key}: expected a finite number, got {v!r}")
+    return float(v)
+
+
+def _per(where: str, key: str, v: Any, n: int, what: str) -> list[float]:
+    if isinstance(v, list):
+        if len(v) != n:
+            raise RobotFileError(f"{where}: [plant].{key}: expected one number or {n} (one per {what}), got {len(v)}")
+        return [_number(where, f"{key}[{i}]", x) for i, x in enumerate(v)]
+    return [_number(where, key, v)] * n
+
+
+def plant_params_from_robot(robot: Any) -> PlantParams:
+    """Plant parameters for a loaded robot: limbs, ψ*, actuators and channels from the robot,
+    physics from its optional ``[plant]`` table (``robot.plant``: dict), defaults otherwise.
+
+    ``[plant]`` keys: per actuator (one number, or a list with one per [[actuator]]):
+    resistance_ohm, supply_v, heat_capacity_j_per_k, conductance_w_per_k, as_c, af_c, ms_c,
+    mf_c, max_strain; per limb: psi_rest_deg; coupling_deg (limbs × actuators, degrees at full
+    contraction) or direct_gain_deg / cross_gain_deg; mech_tau_s, ambient_c, step_mm, noise_mm,
+    simultaneous_s; true_matrix (read by ``true_rewards_from_robot``).
+    """
+    where = _where(robot)
+    table = dict(getattr(robot, "plant", None) or {})
+    unknown = sorted(set(table) - set(PLANT_KEYS))
+    if unknown:
+        raise RobotFileError(f"{where}: [plant].{unknown[0]}: unknown key; expected one of {', '.join(PLANT_KEYS)}")
+    acts_in = list(robot.actuators)
+    limbs_in = list(robot.limbs)
+    na, nl = len(acts_in), len(limbs_in)
+    names = [a.name for a in acts_in]
+    per_act = {k: _per(where, k, table[k], na, "actuator") for k in _PER_ACTUATOR if k in table}
+    actuators = tuple(
+        SmaParams(name=a.name, channel=int(a.channel), **{k: v[j] for k, v in per_act.items()})
+        for j, a in enumerate(acts_in)
+    )
+    rest = _per(where, "psi_rest_deg", table.get("psi_rest_deg", 0.0), nl, "limb")
+    limbs = []
+    for i, lb in enumerate(limbs_in):
+        act = getattr(lb, "actuator", None)
+        if act is not None and act not in names:
+            raise RobotFileError(f"{where}: limb {lb.name!r}: actuator {act!r} is not an [[actuator]] ({', '.join(names)})")
+        psi_star = tuple(float(p) for p in lb.psi_star_deg)
+        levels = int(getattr(lb, "levels", len(psi_star) + 1))
+        if levels != len(psi_star) + 1:
+            raise RobotFileError(f"{where}: limb {lb.name!r}: levels = {levels} needs {levels - 1} critical angles, got {len(psi_star)}")
+        limbs.append(LimbParams(name=lb.name, psi_star_deg=psi_star, psi_rest_deg=rest[i],
+                                actuator=None if act is None else names.index(act)))
+    kw: dict[str, Any] = {k: _number(where, k, table[k]) for k in _SCALARS if k in table}
+    if "coupling_deg" in table:
+        g = table["coupling_deg"]
+        if not isinstance(g, list) or len(g) != nl or any(not isinstance(r, list) or len(r) != na for r in g):
+            raise RobotFileError(f"{where}: [plant].coupling_deg: expected {nl} rows (limbs) of {na} numbers (actuators)")
+        kw["coupling_deg"] = tuple(tuple(_number(where, f"coupling_deg[{i}][{j}]", x) for j, x in enumerate(r))
+                                   for i, r in enumerate(g))
+    params = PlantParams(actuators=actuators, limbs=tuple(limbs), **kw)
+    msg = params.check()
+    if msg:
+        raise RobotFileError(f"{where}: [plant]: {msg}")
+    return params
+
+
+def true_rewards_from_robot(robot: Any) -> np.ndarray:
+    """The plant's ground-truth reward matrix (n×n, NaN = forbidden): ``[plant].true_matrix``
+    when the robot file gives one (numbers or "x"), else the robot's own transition table."""
+    where = _where(robot)
+    levels = tuple(int(getattr(lb, "levels", len(lb.psi_star_deg) + 1)) for lb in robot.limbs)
+    n = math.prod(levels)
+    table = dict(getattr(robot, "plant", None) or {})
+    if "true_matrix" in table:
+        m = table["true_matrix"]
+        if not isinstance(m, list) or len(m) != n or any(not isinstance(r, list) or len(r) != n for r in m):
+            raise RobotFileError(f"{where}: [plant].true_matrix: expected {n} rows of {n} entries")
+        out = np.empty((n, n))
+        for a, row in enumerate(m):
+            for b, x in enumerate(row):
+                if isinstance(x, str) and x.strip().lower() == "x":
+                    out[a, b] = np.nan
+                else:
+                    out[a, b] = _number(where, f"true_matrix[{a}][{b}]", x)
+        return out
+    tt = getattr(robot, "transitions", None) or getattr(robot, "table", None)
+    if tt is None:
+        raise RobotFileError(f"{where}: no transition table and no [plant].true_matrix")
+    reward, allowed = tt.dense()
+    out = np.where(allowed, reward, np.nan)
+    np.fill_diagonal(out, 0.0)
+    return out
+
+
+def default_plant(true_rewards: np.ndarray | None = None, seed: int = 0, **overrides: Any) -> Plant:
+    """A plant with the default R1-class parameters (``overrides`` replace PlantParams fields)."""
+    return Plant(replace(PlantParams(), **overrides), true_rewards, seed=seed)
