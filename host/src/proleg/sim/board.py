@@ -1,0 +1,122 @@
+"""The simulated board: the ``host-sim`` build of the generated firmware, in-process.
+
+The firmware is the same C that runs on the microcontrollers, compiled against the
+``hal/sim`` port into a shared library (see the host-sim ABI in docs/ARCHITECTURE.md).
+``SimBoard`` loads it with ctypes and steps it tick by tick in virtual time. Each
+instance loads its own copy of the library (copied to a unique temporary name), so
+several boards, each with its own firmware globals, can run in one process.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import shutil
+import tempfile
+from ctypes import POINTER, c_double, c_uint8, c_uint16, c_uint32, c_uint64
+from pathlib import Path
+
+from ..errors import SimError
+
+#: IMU fault modes understood by the C MPU-6050 model.
+IMU_FAULTS = {"ok": 0, "no-ack": 1, "stuck": 2, "garbage": 3}
+
+_SIGNATURES = {
+    "sim_reset": ([c_uint32], None),
+    "sim_run_ticks": ([c_uint32], None),
+    "sim_time_us": ([], c_uint64),
+    "sim_tick_period_us": ([], c_uint32),
+    "sim_pwm_duty": ([c_uint8], c_uint16),
+    "sim_uart_write": ([POINTER(c_uint8), c_uint32], None),
+    "sim_uart_read": ([POINTER(c_uint8), c_uint32], c_uint32),
+    "sim_imu_set_truth": ([c_uint8, c_double, c_double], None),
+    "sim_imu_set_fault": ([c_uint8, c_uint8], None),
+    "sim_imu_set_noise": ([c_uint8, c_double, c_double, c_double], None),
+    "sim_imu_peek_reg": ([c_uint8, c_uint8], c_uint8),
+}
+
+
+class SimBoard:
+    """One simulated board running one firmware image."""
+
+    def __init__(self, library: str | Path, seed: int = 1):
+        library = Path(library)
+        if not library.exists():
+            raise SimError(f"{library}: no host-sim firmware (build it with: proleg build ROBOT --board host-sim)")
+        fd, copy = tempfile.mkstemp(prefix="proleg-sim-", suffix=".so")
+        os.close(fd)
+        try:
+            shutil.copyfile(library, copy)
+            self._lib = ctypes.CDLL(copy, mode=os.RTLD_LOCAL)
+        except OSError as e:
+            raise SimError(f"{library}: cannot load the simulated board: {e}") from None
+        finally:
+            os.unlink(copy)  # the loaded image stays mapped; nothing is left on disk
+        for name, (args, res) in _SIGNATURES.items():
+            try:
+                fn = getattr(self._lib, name)
+            except AttributeError:
+                raise SimError(f"{library}: not a host-sim firmware (missing {name})") from None
+            fn.argtypes, fn.restype = args, res
+        self._rx_buf = (c_uint8 * 4096)()
+        self.library = library
+        self.tick_us = 0
+        self.reset(seed)
+
+    # -- time -------------------------------------------------------------------------
+    def reset(self, seed: int = 1) -> None:
+        """Power-on reset: firmware globals cleared, IMUs asleep, time 0, FIFOs empty."""
+        self._lib.sim_reset(seed & 0xFFFFFFFF)
+        self.tick_us = int(self._lib.sim_tick_period_us())
+
+    def run_ticks(self, n: int) -> None:
+        if n > 0:
+            self._lib.sim_run_ticks(n)
+
+    @property
+    def time_us(self) -> int:
+        return int(self._lib.sim_time_us())
+
+    @property
+    def time_s(self) -> float:
+        return self.time_us / 1e6
+
+    # -- outputs ----------------------------------------------------------------------
+    def pwm(self, channel: int) -> float:
+        """MOSFET duty of an actuator channel, 0..1, as the firmware last set it."""
+        return self._lib.sim_pwm_duty(channel) / 10000.0
+
+    def pwm_permyriad(self, channel: int) -> int:
+        return int(self._lib.sim_pwm_duty(channel))
+
+    # -- host link (UART) -------------------------------------------------------------
+    def write(self, data: bytes) -> None:
+        """Bytes from the host into the board's receive FIFO."""
+        if data:
+            buf = (c_uint8 * len(data)).from_buffer_copy(data)
+            self._lib.sim_uart_write(buf, len(data))
+
+    def read(self) -> bytes:
+        """Every byte the board has sent since the last read."""
+        chunks = []
+        while True:
+            n = self._lib.sim_uart_read(self._rx_buf, len(self._rx_buf))
+            if n:
+                chunks.append(bytes(self._rx_buf[:n]))
+            if n < len(self._rx_buf):
+                return b"".join(chunks)
+
+    # -- IMUs on the I2C bus ----------------------------------------------------------
+    def imu_truth(self, addr: int, psi_deg: float, dpsi_dps: float) -> None:
+        self._lib.sim_imu_set_truth(addr, psi_deg, dpsi_dps)
+
+    def imu_fault(self, addr: int, mode: str) -> None:
+        if mode not in IMU_FAULTS:
+            raise SimError(f"unknown IMU fault {mode!r} (expected one of: {', '.join(IMU_FAULTS)})")
+        self._lib.sim_imu_set_fault(addr, IMU_FAULTS[mode])
+
+    def imu_noise(self, addr: int, accel_ug_rthz: float, gyro_dps_rthz: float, accel_offset_mg: float) -> None:
+        self._lib.sim_imu_set_noise(addr, accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
+
+    def imu_register(self, addr: int, reg: int) -> int:
+        return int(self._lib.sim_imu_peek_reg(addr, reg))

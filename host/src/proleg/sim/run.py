@@ -1,0 +1,194 @@
+"""The simulated robot: the host-sim firmware in closed loop with the plant.
+
+Every ``plant_dt_s`` of virtual time: the plant's true ψ and dψ/dt go into the IMU
+models, the firmware runs its control ticks (reading those IMUs over the simulated I2C
+bus and setting PWM), and the plant integrates over the duties the firmware set. The
+firmware ticks in C; Python touches the loop once per plant step, which is what lets
+the simulation run far faster than real time.
+
+``SimulatedRobot`` offers ``write``/``read``/``advance``: the duck-typed simulated board
+that ``proleg.link.SimLink`` (and so the console, the recorder and hil_tests) talk to.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import random
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import SimError
+from ..firmware.boards import Board, load_board
+from ..robot import Robot
+from .board import SimBoard
+from .plant import Plant, plant_params_from_robot, true_rewards_from_robot
+
+DEFAULT_PLANT_DT_S = 0.002
+
+
+def cache_dir() -> Path:
+    root = os.environ.get("PROLEG_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "proleg"
+    )
+    return Path(root) / "sim"
+
+
+def sim_library(robot: Robot, *, objective: str = "total", max_transitions: int | None = None) -> Path:
+    """The robot's host-sim firmware, built once per distinct rendered project and cached."""
+    from ..firmware.build import build, firmware_gaits, render_project
+
+    board = load_board("host-sim")
+    files = render_project(robot, board, firmware_gaits(robot, objective, max_transitions))
+    digest = hashlib.sha256()
+    for rel in sorted(files):
+        digest.update(rel.encode() + b"\0" + files[rel].encode() + b"\0")
+    out = cache_dir() / f"{robot.name}-{digest.hexdigest()[:16]}"
+    lib = out / board.artifact
+    if not lib.exists():
+        build(robot, board, out, objective=objective, max_transitions=max_transitions)
+    return lib
+
+
+@dataclass
+class LinkFaults:
+    """Bytes dropped or corrupted on the simulated serial link, both directions."""
+
+    drop: float = 0.0  # probability per byte
+    corrupt: float = 0.0  # probability per byte (one random bit flipped)
+    rng: random.Random = field(default_factory=lambda: random.Random(7))
+
+    def apply(self, data: bytes) -> bytes:
+        if not data or (self.drop == 0.0 and self.corrupt == 0.0):
+            return data
+        out = bytearray()
+        for b in data:
+            r = self.rng.random()
+            if r < self.drop:
+                continue
+            if r < self.drop + self.corrupt:
+                b ^= 1 << self.rng.randrange(8)
+            out.append(b)
+        return bytes(out)
+
+
+class SimulatedRobot:
+    """A simulated board running ``robot``'s firmware, wired to a plant of ``robot``."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        library: Path | None = None,
+        *,
+        seed: int = 1,
+        plant: Plant | None = None,
+        plant_dt_s: float = DEFAULT_PLANT_DT_S,
+        board: Board | None = None,
+    ):
+        self.robot = robot
+        self.board_info = board or load_board("host-sim")
+        self.board = SimBoard(library or sim_library(robot), seed)
+        if plant is None:
+            plant = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed)
+        self.plant = plant
+        addrs = list(self.board_info.i2c.get("imu_addresses", [0x68, 0x69]))
+        self.imu_addresses = tuple(addrs[: len(robot.limbs)])
+        self.channels = tuple(range(max(a.channel for a in robot.actuators) + 1))
+        self.ticks_per_step = max(1, round(plant_dt_s * 1e6 / self.board.tick_us))
+        self.plant_dt_s = self.ticks_per_step * self.board.tick_us / 1e6
+        self.link_faults = LinkFaults()
+        self._push_truth()
+
+    # -- the duck-typed simulated board (proleg.link.SimLink) ---------------------------
+    def write(self, data: bytes) -> None:
+        self.board.write(self.link_faults.apply(data))
+
+    def read(self) -> bytes:
+        return self.link_faults.apply(self.board.read())
+
+    def advance(self, seconds: float) -> None:
+        """Run firmware and plant together for ``seconds`` of virtual time."""
+        for _ in range(max(1, round(seconds / self.plant_dt_s))):
+            self.step()
+
+    @property
+    def time_s(self) -> float:
+        return self.board.time_s
+
+    # -- the loop -----------------------------------------------------------------------
+    def step(self) -> None:
+        """One plant step: firmware ticks on the current truth, then the plant moves."""
+        board = self.board
+        board.run_ticks(self.ticks_per_step)
+        duties = [board.pwm(ch) for ch in self.channels]
+        self.plant.step(self.plant_dt_s, duties)
+        self._push_truth()
+
+    def run_ticks(self, n: int) -> None:
+        """Exactly ``n`` control ticks (the plant advances by whole steps as they complete)."""
+        for _ in range(n // self.ticks_per_step):
+            self.step()
+        self.board.run_ticks(n % self.ticks_per_step)
+
+    def _push_truth(self) -> None:
+        psi = self.plant.psi_deg
+        dpsi = self.plant.dpsi_dps
+        for i, addr in enumerate(self.imu_addresses):
+            self.board.imu_truth(addr, float(psi[i]), float(dpsi[i]))
+
+    # -- fault injection ----------------------------------------------------------------
+    def inject(self, fault: str) -> None:
+        """Apply a fault by name; see ``FAULTS``."""
+        name, _, arg = fault.partition(":")
+        if name not in FAULTS:
+            raise SimError(f"unknown fault {fault!r} (expected one of: {', '.join(sorted(FAULTS))})")
+        FAULTS[name](self, arg)
+
+
+def _limb_addr(sim: SimulatedRobot, arg: str) -> int:
+    names = [limb.name for limb in sim.robot.limbs]
+    if arg in names:
+        return sim.imu_addresses[names.index(arg)]
+    if arg.isdigit() and int(arg) < len(names):
+        return sim.imu_addresses[int(arg)]
+    raise SimError(f"fault needs a limb ({', '.join(names)} or 0..{len(names) - 1}), got {arg!r}")
+
+
+def _channel(sim: SimulatedRobot, arg: str) -> int:
+    for a in sim.robot.actuators:
+        if arg in (a.name, str(a.channel)):
+            return a.channel
+    raise SimError(
+        f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)} or its channel), got {arg!r}"
+    )
+
+
+def _rate(arg: str, default: float) -> float:
+    try:
+        return float(arg) if arg else default
+    except ValueError:
+        raise SimError(f"expected a number, got {arg!r}") from None
+
+
+def _drift(sim: SimulatedRobot, arg: str) -> None:
+    target, _, rate = arg.partition("@")
+    channels = [a.channel for a in sim.robot.actuators] if target in ("", "all") else [_channel(sim, target)]
+    for ch in channels:
+        sim.plant.inject_drift(ch, _rate(rate, 0.05))
+
+
+FAULTS = {
+    # imu-silent:LIMB — the IMU stops acknowledging on I2C
+    "imu-silent": lambda sim, arg: sim.board.imu_fault(_limb_addr(sim, arg), "no-ack"),
+    # imu-stuck:LIMB — the IMU returns the same bytes forever
+    "imu-stuck": lambda sim, arg: sim.board.imu_fault(_limb_addr(sim, arg), "stuck"),
+    # imu-garbage:LIMB — the IMU returns random bytes
+    "imu-garbage": lambda sim, arg: sim.board.imu_fault(_limb_addr(sim, arg), "garbage"),
+    # dead-actuator:ACTUATOR — the SMA coil no longer heats
+    "dead-actuator": lambda sim, arg: sim.plant.kill_actuator(_channel(sim, arg)),
+    # drift[:ACTUATOR|all][@RATE] — the SMA's heating response weakens with use
+    "drift": _drift,
+    # link-drop[:P] / link-corrupt[:P] — bytes dropped / bit-flipped on the serial link
+    "link-drop": lambda sim, arg: setattr(sim.link_faults, "drop", _rate(arg, 0.01)),
+    "link-corrupt": lambda sim, arg: setattr(sim.link_faults, "corrupt", _rate(arg, 0.01)),
+}

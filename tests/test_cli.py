@@ -1,0 +1,103 @@
+"""The ``proleg`` command line: output formats, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from proleg.cli import main
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_gait_json_is_one_object_with_the_documented_shape(capsys):
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--max-transitions", "3", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["robot"] == "paper-r1"
+    assert doc["states"] == ["00", "01", "10", "11"]
+    assert [r["direction"] for r in doc["results"]] == ["+x", "-x"]
+    for r in doc["results"]:
+        assert r["objective"] == "total" and r["max_transitions"] == 3
+        for g in r["gaits"]:
+            assert set(g) == {"states", "reward", "transitions", "rate"}
+            assert g["states"][0] == g["states"][-1]
+            assert g["transitions"] == len(g["states"]) - 1
+            assert g["reward"] == pytest.approx(r["value"])
+            assert g["rate"] == pytest.approx(g["reward"] / g["transitions"])
+
+
+def test_direction_minus_x_is_accepted_as_a_separate_argument(capsys):
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--direction", "-x", "--json")
+    assert code == 0
+    assert [r["direction"] for r in json.loads(out)["results"]] == ["-x"]
+
+
+def test_no_gait_in_a_direction_is_null_with_no_gaits(capsys):
+    # R1 with its left actuator only: every closed walk has J >= 0 (00->10->00 and
+    # 10->11->10 each sum to 0 or +1), so nothing moves it backwards.
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--direction=-x", "--json")
+    assert code == 0
+    (result,) = json.loads(out)["results"]
+    assert result["value"] is None and result["gaits"] == []
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--direction=-x")
+    assert "no gait moves the robot in -x" in out
+
+
+def test_table_output_lists_each_gait_with_its_reward(capsys):
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--direction=+x",
+                       "--max-transitions", "4")
+    assert code == 0
+    assert "00 → 10 → 11 → 10 → 00" in out
+    assert "10 → 11 → 10" in out
+
+
+def test_evaluate_scores_a_valid_sequence(capsys):
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,10,11,01,00", "--json")
+    assert code == 0
+    ev = json.loads(out)["evaluation"]
+    # T[00][10] + T[10][11] + T[11][01] + T[01][00] = 1 + 1 + 0 + 1
+    assert ev["valid"] is True and ev["reward"] == 3 and ev["transitions"] == 4 and ev["rate"] == 0.75
+
+
+def test_evaluate_names_the_forbidden_transition(capsys):
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--evaluate", "00,01,00")
+    assert code == 1
+    assert "00" in out and "01" in out and "forbidden" in out
+
+
+def test_evaluate_rejects_an_unknown_label_in_one_line(capsys):
+    code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,12,00")
+    assert code == 2
+    assert err.startswith("proleg: error: --evaluate:") and err.count("\n") == 1
+
+
+def test_bad_robot_file_is_one_line_and_exit_2(capsys, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text((ROBOTS / "paper-r1.toml").read_text().replace("[20.0]", "[95.0]", 1))
+    code, out, err = run(capsys, "gait", str(bad))
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1
+    assert str(bad) in err and "limb[0].psi_star_deg" in err
+
+
+def test_speed_without_durations_is_a_clear_error(capsys):
+    code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--objective", "speed")
+    assert code == 2 and "duration" in err
+
+
+def test_console_script_is_installed():
+    exe = Path(sys.executable).with_name("proleg")
+    proc = subprocess.run([str(exe), "gait", str(ROBOTS / "paper-r2.toml"), "--json"], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["robot"] == "paper-r2"
