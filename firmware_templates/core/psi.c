@@ -1,0 +1,242 @@
+/* psi.c - see psi.h. */
+#include "psi.h"
+
+#include "rom.h"
+
+/* Per limb, per threshold: {cos upper, sin upper, cos lower, sin lower}, Q14, as rendered. */
+static const int16_t thresholds_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][4] ROM = CFG_LIMB_THRESHOLDS_Q14;
+static const uint8_t limb_levels[CFG_N_LIMBS] ROM = CFG_LIMB_LEVELS;
+static const int16_t psi_star_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS] ROM = CFG_LIMB_PSI_STAR_CDEG;
+static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
+
+/* The thresholds in use (SET_PARAM may move them) and their angles in 0.01°. */
+static int16_t thresholds[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][4];
+static int16_t band_lo[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
+static int16_t band_hi[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
+static int16_t star[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
+static int16_t hyst[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
+
+/* sin(i · 90°/64) in Q14, i = 0..64. */
+static const int16_t sin_tab[65] ROM = {
+    0,     402,   804,   1205,  1606,  2006,  2404,  2801,  3196,  3590,  3981,  4370,  4756,
+    5139,  5520,  5897,  6270,  6639,  7005,  7366,  7723,  8076,  8423,  8765,  9102,  9434,
+    9760,  10080, 10394, 10702, 11003, 11297, 11585, 11866, 12140, 12406, 12665, 12916, 13160,
+    13395, 13623, 13842, 14053, 14256, 14449, 14635, 14811, 14978, 15137, 15286, 15426, 15557,
+    15679, 15791, 15893, 15986, 16069, 16143, 16207, 16261, 16305, 16340, 16364, 16379, 16384,
+};
+
+/* atan(i/32) in 0.01°, i = 0..32. */
+static const int16_t atan_tab[33] ROM = {
+    0,    179,  358,  536,  713,  888,  1062, 1234, 1404, 1571, 1735, 1897, 2056, 2211, 2363, 2511, 2657,
+    2798, 2936, 3070, 3201, 3327, 3451, 3571, 3687, 3800, 3909, 4016, 4119, 4218, 4315, 4409, 4500,
+};
+
+typedef struct {
+    int16_t ax, az;  /* last sample */
+    uint8_t hyst;    /* hysteresis level, PSI_UNKNOWN before the first sample */
+    uint8_t level;   /* debounced level */
+    uint16_t count;  /* samples the hysteresis level has differed from `level` */
+} limb_state_t;
+
+static limb_state_t limbs[CFG_N_LIMBS];
+static uint16_t debounce = CFG_DEBOUNCE_TICKS;
+
+void psi_reset(void)
+{
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        limbs[i].ax = 0;
+        limbs[i].az = 0;
+        limbs[i].hyst = PSI_UNKNOWN;
+        limbs[i].level = PSI_UNKNOWN;
+        limbs[i].count = 0;
+    }
+}
+
+void psi_init(void)
+{
+    uint8_t i, j, k;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        int16_t h = ROM_I16(&hyst_rom[i]);
+        for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
+            int16_t p = ROM_I16(&psi_star_rom[i][j]);
+            for (k = 0; k < 4u; k++) {
+                thresholds[i][j][k] = ROM_I16(&thresholds_rom[i][j][k]);
+            }
+            star[i][j] = p;
+            hyst[i][j] = h;
+            band_lo[i][j] = (int16_t)(p - h / 2);
+            band_hi[i][j] = (int16_t)(p + (h - h / 2));
+        }
+    }
+    debounce = CFG_DEBOUNCE_TICKS;
+    psi_reset();
+}
+
+int16_t psi_sin_q14(int16_t cdeg)
+{
+    uint32_t r;
+    uint16_t i, f;
+    int16_t a, b, v;
+    uint16_t x = (uint16_t)(cdeg < 0 ? -(int32_t)cdeg : cdeg);
+    if (x >= 9000u) {
+        v = 16384;
+    } else {
+        r = (uint32_t)x * 64u;
+        i = (uint16_t)(r / 9000u);
+        f = (uint16_t)(r % 9000u);
+        a = ROM_I16(&sin_tab[i]);
+        b = ROM_I16(&sin_tab[i + 1u]);
+        v = (int16_t)(a + (int16_t)(((int32_t)(b - a) * f + 4500) / 9000));
+    }
+    return cdeg < 0 ? (int16_t)-v : v;
+}
+
+int16_t psi_cos_q14(int16_t cdeg)
+{
+    int16_t x = (int16_t)(cdeg < 0 ? -cdeg : cdeg);
+    return psi_sin_q14((int16_t)(9000 - x));
+}
+
+int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg)
+{
+    int16_t lo, hi;
+    int16_t *t;
+    if (limb >= CFG_N_LIMBS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
+        psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
+        return -1;
+    }
+    lo = (int16_t)(psi_star_cdeg - hyst_cdeg / 2);
+    hi = (int16_t)(psi_star_cdeg + (hyst_cdeg - hyst_cdeg / 2));
+    if (lo <= -9000 || hi >= 9000) {
+        return -1;
+    }
+    if ((thr > 0u && lo <= band_hi[limb][thr - 1u]) || (thr + 2u < psi_levels(limb) && hi >= band_lo[limb][thr + 1u])) {
+        return -1;
+    }
+    t = thresholds[limb][thr];
+    t[0] = psi_cos_q14(hi);
+    t[1] = psi_sin_q14(hi);
+    t[2] = psi_cos_q14(lo);
+    t[3] = psi_sin_q14(lo);
+    band_lo[limb][thr] = lo;
+    band_hi[limb][thr] = hi;
+    star[limb][thr] = psi_star_cdeg;
+    hyst[limb][thr] = hyst_cdeg;
+    return 0;
+}
+
+int16_t psi_star_cdeg(uint8_t limb, uint8_t thr)
+{
+    return star[limb][thr];
+}
+
+int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr)
+{
+    return hyst[limb][thr];
+}
+
+void psi_set_debounce(uint16_t samples)
+{
+    debounce = samples ? samples : 1u;
+}
+
+uint8_t psi_levels(uint8_t limb)
+{
+    return ROM_U8(&limb_levels[limb]);
+}
+
+uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az)
+{
+    const int16_t *t = &thresholds[limb][thr][edge == PSI_EDGE_LOWER ? 2 : 0];
+    int32_t d = (int32_t)ax * t[0] - (int32_t)az * t[1];
+    return d >= 0;
+}
+
+uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
+{
+    uint8_t top = (uint8_t)(psi_levels(limb) - 1u);
+    uint8_t level = prev;
+    if (level == PSI_UNKNOWN || level > top) {
+        /* No history: count the thresholds whose upper edge ψ has reached. */
+        level = 0;
+    }
+    while (level < top && psi_at_or_above(limb, level, PSI_EDGE_UPPER, ax, az)) {
+        level++;
+    }
+    while (level > 0 && !psi_at_or_above(limb, (uint8_t)(level - 1u), PSI_EDGE_LOWER, ax, az)) {
+        level--;
+    }
+    return level;
+}
+
+uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
+{
+    limb_state_t *s = &limbs[limb];
+    s->ax = ax;
+    s->az = az;
+    s->hyst = psi_classify(limb, s->hyst, ax, az);
+    if (s->level == PSI_UNKNOWN) {
+        s->level = s->hyst;
+        s->count = 0;
+    } else if (s->hyst == s->level) {
+        s->count = 0;
+    } else {
+        /* The hysteresis level can only move one way at a time between samples in
+         * practice; any change restarts the count towards the new value. */
+        s->count++;
+        if (s->count >= debounce) {
+            s->level = s->hyst;
+            s->count = 0;
+        }
+    }
+    return s->level;
+}
+
+uint8_t psi_level(uint8_t limb)
+{
+    return limbs[limb].level;
+}
+
+uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr)
+{
+    return psi_at_or_above(limb, thr, PSI_EDGE_UPPER, limbs[limb].ax, limbs[limb].az);
+}
+
+int16_t psi_last_centideg(uint8_t limb)
+{
+    if (limbs[limb].hyst == PSI_UNKNOWN) {
+        return 0;
+    }
+    return psi_centideg(limbs[limb].ax, limbs[limb].az);
+}
+
+/* atan(n/d) in 0.01° for 0 ≤ n ≤ d, d > 0: table plus linear interpolation. */
+static int16_t atan_frac(uint16_t n, uint16_t d)
+{
+    uint32_t r = ((uint32_t)n << 15) / d; /* Q15, 0..32768 */
+    uint16_t i = (uint16_t)(r >> 10);
+    uint16_t f = (uint16_t)(r & 1023u);
+    int16_t a, b;
+    if (i >= 32u) {
+        return ROM_I16(&atan_tab[32]);
+    }
+    a = ROM_I16(&atan_tab[i]);
+    b = ROM_I16(&atan_tab[i + 1u]);
+    return (int16_t)(a + (int16_t)(((int32_t)(b - a) * f + 512) >> 10));
+}
+
+int16_t psi_centideg(int16_t ax, int16_t az)
+{
+    uint16_t x = (uint16_t)(ax < 0 ? -(int32_t)ax : ax);
+    uint16_t z = (uint16_t)(az < 0 ? -(int32_t)az : az);
+    int16_t a;
+    if (x == 0u && z == 0u) {
+        return 0;
+    }
+    a = (x <= z) ? atan_frac(x, z) : (int16_t)(9000 - atan_frac(z, x));
+    if (az < 0) {
+        a = (int16_t)(18000 - a);
+    }
+    return ax < 0 ? (int16_t)-a : a;
+}

@@ -1,0 +1,71 @@
+/* psi.h - contact angle ψ: level classifier (control path) and estimate (telemetry).
+ *
+ * Contract. Each limb i has levels k_i and k_i-1 critical angles ψ*_j, each with a
+ * hysteresis band [ψ*_j - h/2, ψ*_j + h/2]. robot_config.h gives, per limb and
+ * threshold, the cos and sin of both band edges in Q14 (computed at render time).
+ * ψ ≥ θ  ⇔  ax·cos θ − az·sin θ ≥ 0  for ψ, θ in (−90°, 90°), because the accelerometer
+ * reads g·(sin ψ, ·, cos ψ). So the control path needs no atan2 and no floats.
+ *
+ * Level with hysteresis: from level L a limb goes up past threshold L when ψ ≥ its
+ * upper edge, down past threshold L−1 when ψ < its lower edge. Debounce: the reported
+ * level changes only after the hysteresis level has held the new value for `debounce`
+ * consecutive samples. psi_centideg() is an integer atan2 (error < 0.01°) for telemetry.
+ */
+#ifndef PROLEG_PSI_H
+#define PROLEG_PSI_H
+
+#include <stdint.h>
+
+#include "robot_config.h"
+
+#define PSI_EDGE_UPPER 0u
+#define PSI_EDGE_LOWER 1u
+#define PSI_UNKNOWN 0xFFu
+
+/* Load the rendered thresholds and forget all history. */
+void psi_init(void);
+
+/* Forget all history: the next sample of each limb sets its level directly. */
+void psi_reset(void);
+
+/* Samples the reported level must be stable for (1 = no debounce). */
+void psi_set_debounce(uint16_t samples);
+
+/* Move threshold `thr` of `limb` to ψ* ± h/2 (0.01°) at run time (SET_PARAM); the Q14
+ * constants are recomputed with an integer sine table. Returns 0, or -1 (nothing changed)
+ * when the band leaves (−90°, 90°) or overlaps a neighbouring threshold's band. */
+int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg);
+
+/* ψ* and band width in use for threshold `thr` of `limb`, 0.01°. */
+int16_t psi_star_cdeg(uint8_t limb, uint8_t thr);
+int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr);
+
+/* sin and cos in Q14 of an angle in 0.01°, −9000..9000 (integer, error < 2 LSB). */
+int16_t psi_sin_q14(int16_t cdeg);
+int16_t psi_cos_q14(int16_t cdeg);
+
+/* 1 when the gravity vector (ax, az) of `limb` is at or above the `edge` of threshold `thr`. */
+uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az);
+
+/* Hysteresis level of (ax, az) given the previous hysteresis level (PSI_UNKNOWN: none). */
+uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az);
+
+/* Feed one accelerometer sample of `limb`; returns its debounced level. */
+uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az);
+
+/* Debounced level of `limb` (PSI_UNKNOWN before its first sample). */
+uint8_t psi_level(uint8_t limb);
+
+/* 1 when the last sample of `limb` is at or above the upper edge of threshold `thr`. */
+uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr);
+
+/* Number of levels of `limb`. */
+uint8_t psi_levels(uint8_t limb);
+
+/* ψ = atan2(ax, az) in 0.01°, −18000..18000, integer only. */
+int16_t psi_centideg(int16_t ax, int16_t az);
+
+/* ψ of the last sample of `limb` in 0.01° (0 before its first sample). */
+int16_t psi_last_centideg(uint8_t limb);
+
+#endif /* PROLEG_PSI_H */

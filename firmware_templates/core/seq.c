@@ -1,0 +1,252 @@
+/* seq.c - see seq.h. */
+#include "seq.h"
+
+#include "psi.h"
+#include "rom.h"
+
+#if CFG_STATE_BYTES == 1
+#define ROM_STATE(p) ((cfg_state_t)ROM_U8(p))
+#else
+#define ROM_STATE(p) ((cfg_state_t)ROM_U16(p))
+#endif
+
+/* Variables, not macros, so range checks never compare against a type's limits. */
+static const uint32_t n_states = CFG_N_STATES;
+
+static cfg_state_t loaded[CFG_MAX_LOADED_STEPS];
+static uint16_t loaded_n;
+
+static struct {
+    uint8_t running;
+    uint8_t reached;
+    uint8_t dir;
+    uint16_t first; /* offset into seq_steps (rendered gaits) */
+    uint16_t n;     /* steps in the walk */
+    uint16_t step;
+    uint32_t step_ticks;
+    uint32_t held;
+    uint32_t cycles;
+} s;
+
+static uint32_t hold_ticks = CFG_HOLD_TICKS;
+static uint32_t timeout_ticks = CFG_STATE_TIMEOUT_TICKS;
+
+void seq_init(void)
+{
+    s.running = 0;
+    s.reached = 0;
+    s.n = 0;
+    s.step = 0;
+    s.cycles = 0;
+    loaded_n = 0;
+    hold_ticks = CFG_HOLD_TICKS;
+    timeout_ticks = CFG_STATE_TIMEOUT_TICKS;
+}
+
+void seq_set_timing(uint32_t hold, uint32_t timeout)
+{
+    hold_ticks = hold;
+    timeout_ticks = timeout;
+}
+
+uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b)
+{
+    uint32_t key;
+    if (a >= n_states || b >= n_states || a == b) {
+        return 0;
+    }
+    key = (uint32_t)a * n_states + b;
+#if CFG_TRANS_BITMAP
+    return (uint8_t)((ROM_U8(&seq_allowed[key >> 3]) >> (key & 7u)) & 1u);
+#else
+    {
+        /* Sorted keys: binary search, no recursion. */
+        uint32_t lo = 0, hi = CFG_N_TRANSITIONS;
+        while (lo < hi) {
+            uint32_t mid = lo + (hi - lo) / 2u;
+            uint32_t k = ROM_U32(&seq_edges[mid]);
+            if (k == key) {
+                return 1;
+            }
+            if (k < key) {
+                lo = mid + 1u;
+            } else {
+                hi = mid;
+            }
+        }
+        return 0;
+    }
+#endif
+}
+
+uint8_t seq_gait_count(uint8_t dir)
+{
+    if (dir == SEQ_DIR_PX) {
+        return CFG_N_GAITS_PX;
+    }
+    if (dir == SEQ_DIR_MX) {
+        return CFG_N_GAITS_MX;
+    }
+    return loaded_n ? 1u : 0u;
+}
+
+int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
+{
+    uint16_t i;
+    if (n >= 2u && states[n - 1u] == states[0]) {
+        n--; /* closed form */
+    }
+    if (n < 2u || n > CFG_MAX_LOADED_STEPS) {
+        return SEQ_ERR_LENGTH;
+    }
+    for (i = 0; i < n; i++) {
+        if (states[i] >= n_states) {
+            if (bad) {
+                *bad = i;
+            }
+            return SEQ_ERR_STATE;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        cfg_state_t next = states[(uint16_t)(i + 1u) == n ? 0u : (uint16_t)(i + 1u)];
+        if (!seq_allowed_transition(states[i], next)) {
+            if (bad) {
+                *bad = i;
+            }
+            return SEQ_ERR_FORBIDDEN;
+        }
+    }
+    if (s.running && s.dir == SEQ_DIR_LOADED) {
+        s.running = 0; /* never run a half-replaced walk */
+    }
+    for (i = 0; i < n; i++) {
+        loaded[i] = states[i];
+    }
+    loaded_n = n;
+    return SEQ_OK;
+}
+
+static cfg_state_t step_state(uint16_t step)
+{
+    if (s.dir == SEQ_DIR_LOADED) {
+        return loaded[step];
+    }
+    return ROM_STATE(&seq_steps[s.first + step]);
+}
+
+int8_t seq_start(uint8_t dir, uint8_t index, cfg_state_t measured)
+{
+    uint16_t i;
+    if (dir == SEQ_DIR_LOADED) {
+        if (loaded_n == 0u || index != 0u) {
+            return SEQ_ERR_NO_GAIT;
+        }
+        s.first = 0;
+        s.n = loaded_n;
+    } else {
+        uint16_t g;
+        if (dir > SEQ_DIR_MX || index >= seq_gait_count(dir)) {
+            return SEQ_ERR_NO_GAIT;
+        }
+        g = (uint16_t)(dir == SEQ_DIR_PX ? index : CFG_N_GAITS_PX + index);
+        s.first = ROM_U16(&seq_gait_first[g]);
+        s.n = ROM_U16(&seq_gait_len[g]);
+    }
+    s.dir = dir;
+    s.step = 0;
+    for (i = 0; i < s.n; i++) {
+        if (step_state(i) == measured) {
+            s.step = i;
+            break;
+        }
+    }
+    s.step_ticks = 0;
+    s.held = 0;
+    s.reached = 0;
+    s.cycles = 0;
+    s.running = 1;
+    return SEQ_OK;
+}
+
+void seq_stop(void)
+{
+    s.running = 0;
+}
+
+uint8_t seq_tick(cfg_state_t measured)
+{
+    uint8_t ev = 0;
+    if (!s.running) {
+        return 0;
+    }
+    s.step_ticks++;
+    if (measured == step_state(s.step)) {
+        if (!s.reached) {
+            s.reached = 1;
+            ev |= SEQ_EV_REACHED;
+        }
+        s.held++;
+        if (s.held >= hold_ticks) {
+            s.step++;
+            if (s.step >= s.n) {
+                s.step = 0;
+                s.cycles++;
+                ev |= SEQ_EV_CYCLE;
+            }
+            s.step_ticks = 0;
+            s.held = 0;
+            s.reached = 0;
+            return (uint8_t)(ev | SEQ_EV_ADVANCED);
+        }
+    } else {
+        s.held = 0;
+    }
+    if (s.step_ticks >= timeout_ticks) {
+        s.running = 0;
+        ev |= SEQ_EV_TIMEOUT;
+    }
+    return ev;
+}
+
+uint8_t seq_running(void)
+{
+    return s.running;
+}
+
+cfg_state_t seq_target(void)
+{
+    return s.n ? step_state(s.step) : 0u;
+}
+
+uint16_t seq_step(void)
+{
+    return s.step;
+}
+
+uint32_t seq_cycles(void)
+{
+    return s.cycles;
+}
+
+void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
+{
+    uint8_t i = CFG_N_LIMBS;
+    uint32_t v = state;
+    while (i > 0u) {
+        uint8_t k;
+        i--;
+        k = psi_levels(i);
+        levels[i] = (uint8_t)(v % k);
+        v /= k;
+    }
+}
+
+cfg_state_t seq_state_index(const uint8_t levels[CFG_N_LIMBS])
+{
+    uint32_t v = 0;
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        v = v * psi_levels(i) + levels[i];
+    }
+    return (cfg_state_t)v;
+}

@@ -1,0 +1,74 @@
+/* seq.h - the gait sequencer.
+ *
+ * Contract. A gait is a closed walk of robot states; the sequencer holds the current
+ * step's target state. Each tick it gets the measured (debounced) state: when it equals
+ * the target for hold ticks in a row, the next step's state becomes the target; when a
+ * step has not completed within the state timeout, it stops and reports SEQ_EV_TIMEOUT
+ * (e.g. a dead actuator). Gaits come from the rendered gait table (gait_table.c: the
+ * optimal gaits per direction, every tie) or from one gait loaded at run time, which is
+ * checked against the robot's allowed transitions and the length limit first.
+ * A start begins at the measured state's position in the gait when it is on the walk.
+ */
+#ifndef PROLEG_SEQ_H
+#define PROLEG_SEQ_H
+
+#include <stdint.h>
+
+#include "robot_config.h"
+#include "rom.h"
+
+#define SEQ_DIR_PX 0u     /* +x */
+#define SEQ_DIR_MX 1u     /* -x */
+#define SEQ_DIR_LOADED 2u /* the gait loaded with seq_load */
+
+#define SEQ_EV_REACHED 0x01u  /* target state of this step reached (once per step) */
+#define SEQ_EV_ADVANCED 0x02u /* held long enough: next step */
+#define SEQ_EV_CYCLE 0x04u    /* a whole cycle completed */
+#define SEQ_EV_TIMEOUT 0x08u  /* step not completed in time: stopped */
+
+#define SEQ_OK 0
+#define SEQ_ERR_LENGTH (-1)    /* fewer than 2 or more than CFG_MAX_LOADED_STEPS steps */
+#define SEQ_ERR_STATE (-2)     /* a state index ≥ CFG_N_STATES */
+#define SEQ_ERR_FORBIDDEN (-3) /* a transition the robot cannot make */
+#define SEQ_ERR_NO_GAIT (-4)   /* no such gait (direction, index) or nothing loaded */
+
+/* Rendered in gait_table.c. */
+extern const cfg_state_t seq_steps[] ROM;
+extern const uint16_t seq_gait_first[] ROM;
+extern const uint16_t seq_gait_len[] ROM;
+#if CFG_TRANS_BITMAP
+extern const uint8_t seq_allowed[] ROM;
+#else
+extern const uint32_t seq_edges[] ROM;
+#endif
+
+void seq_init(void);
+void seq_set_timing(uint32_t hold_ticks, uint32_t timeout_ticks);
+
+/* 1 when a → b is an allowed transition (a ≠ b). */
+uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b);
+
+/* Number of rendered gaits in a direction (SEQ_DIR_PX / SEQ_DIR_MX). */
+uint8_t seq_gait_count(uint8_t dir);
+
+/* Check and store a gait (open or closed: a repeated first state at the end is dropped).
+ * On SEQ_ERR_FORBIDDEN, *bad is the step index whose transition to the next is forbidden. */
+int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad);
+
+/* Start gait `index` of `dir`, or the loaded gait with SEQ_DIR_LOADED. */
+int8_t seq_start(uint8_t dir, uint8_t index, cfg_state_t measured);
+void seq_stop(void);
+
+/* One control tick with the measured state; returns SEQ_EV_* flags. */
+uint8_t seq_tick(cfg_state_t measured);
+
+uint8_t seq_running(void);
+cfg_state_t seq_target(void);
+uint16_t seq_step(void);
+uint32_t seq_cycles(void);
+
+/* State index ↔ per-limb levels (first limb most significant digit). */
+void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS]);
+cfg_state_t seq_state_index(const uint8_t levels[CFG_N_LIMBS]);
+
+#endif /* PROLEG_SEQ_H */
