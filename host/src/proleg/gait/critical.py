@@ -1,0 +1,98 @@
+"""All optimal simple cycles of a cycle-ratio problem: the critical subgraph.
+
+Given λ* (from Howard) and potentials x with x[u] >= w - λ*·t + x[v] on every edge among
+the nodes whose best reachable ratio is λ*, a cycle C there has Σ_C (w - λ* t) <= 0 with
+equality iff every edge of C is *tight* (x[u] = w - λ* t + x[v]). So the optimal cycles
+are exactly the simple cycles of the subgraph of tight edges, listed by Johnson.
+
+Howard's own potentials satisfy the inequality; to be safe against rounding (and against
+λ* being recomputed exactly from one optimal cycle) they are re-relaxed Bellman-Ford style
+on that node set before the tight edges are taken. Nodes that cannot be on a cycle of the
+tight subgraph (no tight in- or out-edge) are peeled off with vectorised rounds before the
+pure-Python cycle search sees the rest.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cycles import simple_cycles
+from .howard import HowardSolution
+
+
+@dataclass(frozen=True)
+class CriticalCycles:
+    value: float                      # λ*, computed exactly from one optimal cycle
+    cycles: list[tuple[int, ...]]     # open simple cycles, each starting at its lowest node
+    truncated: bool
+    edges: np.ndarray                 # positions (in the input edge arrays) of the tight edges
+
+
+def policy_cycle(sol: HowardSolution, dst: np.ndarray) -> list[int]:
+    """Edge positions of the policy cycle reached from the node with the largest η."""
+    v = int(np.argmax(sol.eta))
+    seen: dict[int, int] = {}
+    order: list[int] = []
+    while v not in seen:
+        seen[v] = len(order)
+        e = int(sol.policy[v])
+        order.append(e)
+        v = int(dst[e])
+    return order[seen[v]:]
+
+
+def critical_cycles(
+    n: int,
+    src: np.ndarray,
+    dst: np.ndarray,
+    w: np.ndarray,
+    t: np.ndarray,
+    sol: HowardSolution,
+    edge_tol: float,
+    ratio_tol: float,
+    limit: int | None,
+) -> CriticalCycles:
+    """The simple cycles whose ratio Σw/Σt is λ* (within the tolerances)."""
+    cyc_edges = policy_cycle(sol, dst)
+    lam = math.fsum(w[cyc_edges].tolist()) / math.fsum(t[cyc_edges].tolist())
+
+    node_ok = np.isfinite(sol.eta) & (sol.eta >= lam - ratio_tol)
+    sel = np.flatnonzero(node_ok[src] & node_ok[dst])
+    es, ed = src[sel], dst[sel]
+    a = w[sel] - lam * t[sel]
+    x = sol.potential.copy()
+    # Bellman-Ford-like repair: raise x[u] to max(a + x[v]) until it holds on every edge.
+    if len(sel):
+        starts = np.flatnonzero(np.r_[True, es[1:] != es[:-1]])
+        heads = es[starts]
+        eps = 1e-13 * (float(np.abs(a).max()) + 1.0)
+        for _ in range(n + 1):
+            best = np.maximum.reduceat(a + x[ed], starts)
+            gap = best - x[heads]
+            if not (gap > eps).any():
+                break
+            x[heads] = np.maximum(x[heads], best)
+    slack = x[es] - a - x[ed]
+    tight = slack <= edge_tol
+    es, ed, pos = es[tight], ed[tight], sel[tight]
+
+    # peel nodes with no tight in- or out-edge (cannot lie on a tight cycle)
+    alive = np.ones(len(es), dtype=bool)
+    for _ in range(64):
+        outdeg = np.bincount(es[alive], minlength=n)
+        indeg = np.bincount(ed[alive], minlength=n)
+        ok = (outdeg > 0) & (indeg > 0)
+        new_alive = alive & ok[es] & ok[ed]
+        if new_alive.sum() == alive.sum():
+            break
+        alive = new_alive
+    es, ed, pos = es[alive], ed[alive], pos[alive]
+
+    adj: dict[int, list[int]] = {int(v): [] for v in np.unique(np.r_[es, ed])}
+    for u, v in zip(es.tolist(), ed.tolist()):
+        adj[u].append(v)
+    cycles, truncated = simple_cycles(adj, limit)
+    return CriticalCycles(lam, cycles, truncated, pos)

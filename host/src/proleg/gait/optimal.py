@@ -1,0 +1,143 @@
+"""``optimal_gaits``: pick the algorithm for an objective and turn its cycles into Gaits.
+
+* ``total`` — the largest J over closed walks (states may recur) of at most
+  ``max_transitions`` transitions: bounded exhaustive search (``search.py``).
+* ``rate`` / ``speed`` — the largest J per transition / per second over simple cycles:
+  Howard policy iteration for the optimum (``howard.py``) and Johnson on the critical
+  subgraph for every tie (``critical.py``, ``cycles.py``). With a bound on the number of
+  transitions: the unbounded ties that fit when there are any (then the optimum is
+  unchanged), else a bounded exhaustive search over simple cycles.
+
+-x is +x on the negated rewards. Tolerances: see ``result.RELATIVE_TOLERANCE``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import GaitError
+from ..transitions import TransitionTable
+from .critical import critical_cycles
+from .evaluate import make_gait
+from .howard import max_cycle_ratio
+from .result import MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
+from .search import bounded_search
+
+OBJECTIVES = ("total", "rate", "speed")
+DIRECTIONS = ("+x", "-x")
+#: ``total`` without an explicit bound uses max_transitions = n_states up to this size.
+TOTAL_DEFAULT_LIMIT_STATES = 16
+
+
+def _objective_value(g: Gait, objective: str) -> float:
+    if objective == "total":
+        return g.reward
+    if objective == "rate":
+        return g.rate
+    assert g.duration is not None
+    return g.reward / g.duration
+
+
+def _finish(
+    table: TransitionTable,
+    objective: str,
+    direction: str,
+    bound: int | None,
+    cycles: list[tuple[int, ...]],
+    tol: float,
+    truncated: bool,
+) -> GaitResult:
+    """Gaits from open cycles: exact scores, keep the best ties, sort."""
+    sign = 1.0 if direction == "+x" else -1.0
+    gaits = [make_gait(table, c + (c[0],)) for c in cycles]
+    scored = [(sign * _objective_value(g, objective), g) for g in gaits]
+    scored = [(v, g) for v, g in scored if v > tol]
+    if not scored:
+        return GaitResult(direction, objective, bound, None, (), False)
+    best = max(v for v, _ in scored)
+    keep = sorted({g.states: g for v, g in scored if v >= best - tol}.values(), key=lambda g: g.states)
+    return GaitResult(direction, objective, bound, sign * best, tuple(keep), truncated)
+
+
+def optimal_gaits(
+    table: TransitionTable,
+    objective: str = "total",
+    direction: str = "+x",
+    max_transitions: int | None = None,
+) -> GaitResult:
+    """Every optimal gait of ``table`` for ``objective`` in ``direction``.
+
+    objective: "total" (J, paper Eq. 4), "rate" (J per transition) or "speed" (J per
+    second; needs durations). direction: "+x" maximises and counts only J > 0; "-x"
+    minimises and counts only J < 0 (``value`` is then negative). ``max_transitions``
+    bounds N; for "total" it defaults to the number of states (tables of at most 16
+    states; larger ones must give it). Ties within 1e-9 of the table's largest |reward|
+    (|reward/duration| for speed) are all listed, each rotated to its canonical start.
+    """
+    if objective not in OBJECTIVES:
+        raise GaitError(f"objective {objective!r} is not one of {', '.join(OBJECTIVES)}")
+    if direction not in DIRECTIONS:
+        raise GaitError(f"direction {direction!r} is not one of {', '.join(DIRECTIONS)}")
+    if max_transitions is not None:
+        if isinstance(max_transitions, bool) or not isinstance(max_transitions, (int, np.integer)):
+            raise GaitError(f"max_transitions must be a whole number, got {max_transitions!r}")
+        if max_transitions < 1:
+            raise GaitError(f"max_transitions must be at least 1, got {max_transitions}")
+        max_transitions = int(max_transitions)
+    n = table.n_states
+    if objective == "total" and max_transitions is None:
+        if n > TOTAL_DEFAULT_LIMIT_STATES:
+            raise GaitError(
+                f"objective total on {n} states needs an explicit max_transitions "
+                f"(the default, the number of states, is only used up to {TOTAL_DEFAULT_LIMIT_STATES} states)"
+            )
+        max_transitions = n
+    time = None
+    if objective == "speed":
+        if table.duration is None:
+            raise GaitError("objective speed needs per-transition durations, and this table has none")
+        time = np.asarray(table.duration, dtype=np.float64)
+        if not np.all(np.isfinite(time) & (time > 0)):
+            raise GaitError("objective speed needs every transition duration to be a positive number of seconds")
+
+    sign = 1.0 if direction == "+x" else -1.0
+    w = sign * np.asarray(table.reward, dtype=np.float64)
+    empty = GaitResult(direction, objective, max_transitions, None, (), False)
+    if len(w) == 0 or not np.any(w > 0) or (max_transitions is not None and max_transitions < 2):
+        return empty
+    reward_scale = float(np.abs(w).max())
+    tol_j = RELATIVE_TOLERANCE * reward_scale
+
+    if objective == "total":
+        assert max_transitions is not None
+        res = bounded_search(
+            n, table.src, table.dst, w, max_transitions, tol_j, simple=False, ratio=False, limit=MAX_TIES
+        )
+        return _finish(table, objective, direction, max_transitions, res.cycles, tol_j, res.truncated)
+
+    t = np.ones(len(w)) if time is None else time
+    tol_r = RELATIVE_TOLERANCE * (reward_scale if time is None else float(np.abs(w / t).max()))
+    sol = max_cycle_ratio(n, table.src, table.dst, w, time)
+    if sol.value is None or sol.value <= tol_r:
+        return empty
+    crit = critical_cycles(n, table.src, table.dst, w, t, sol, tol_j, tol_r, MAX_TIES)
+    if max_transitions is None or max_transitions >= n:
+        return _finish(table, objective, direction, max_transitions, crit.cycles, tol_r, crit.truncated)
+
+    K = max_transitions
+    if any(len(c) <= K for c in crit.cycles):
+        if not crit.truncated:
+            fitting = [c for c in crit.cycles if len(c) <= K]
+            return _finish(table, objective, direction, K, fitting, tol_r, False)
+        # some ties fit but the listing was cut short: list the fitting ones on the tight edges
+        e = np.sort(crit.edges)
+        res = bounded_search(
+            n, table.src[e], table.dst[e], w[e], K, tol_r, time=t[e], simple=True, ratio=True,
+            floor=crit.value - tol_r, ceiling=crit.value, limit=MAX_TIES,
+        )
+        return _finish(table, objective, direction, K, res.cycles, tol_r, res.truncated)
+    # no optimal cycle is short enough: the bounded optimum is lower; search for it exactly
+    res = bounded_search(
+        n, table.src, table.dst, w, K, tol_r, time=time, simple=True, ratio=True, limit=MAX_TIES
+    )
+    return _finish(table, objective, direction, K, res.cycles, tol_r, res.truncated)
