@@ -56,8 +56,13 @@ class SmaParams:
     * hA: bare thin wire in still air has h ≈ 100 W/(m²·K) over its 89 mm² surface; inside
       the body's channel roughly half of that → 4.6 mW/K, so τ = C/hA = 1.0 s (within the
       0.5–3 s of thin coils). Steady state at duty 0.6: T_amb + 90 K ≈ 115 °C.
-    * transformation temperatures: BioMetal's ≈ 70 °C class alloy, As 68 / Af 78 °C on
-      heating, Ms 52 / Mf 42 °C on cooling.
+    * transformation temperatures: BioMetal's ≈ 70 °C class alloy has, for a uniformly hot
+      wire, As ≈ 68 / Af ≈ 78 °C on heating and Ms ≈ 52 / Mf ≈ 42 °C on cooling. A coil
+      threaded through the body is not uniformly hot (its crimped ends and the parts touching
+      the body lag), so the lumped model uses the same midpoints (73 °C heating, 47 °C
+      cooling) with a band widened to 18 K: As 64 / Af 82, Ms 56 / Mf 38 °C. The narrow
+      10 K band makes ψ sweep 60° in ≈ 0.2 s, faster than a ψ-feedback loop with a 30 ms
+      body lag and a few ms of debounce can hold a state.
     * max_strain: contraction of the coil at full transformation relative to its installed
       (pre-stretched) length. Helix coils give large strokes; 0.3 is a modest working value.
       ψ is computed from the fraction of this nominal stroke (see ``PlantParams``), so the
@@ -70,10 +75,10 @@ class SmaParams:
     supply_v: float = 5.0
     heat_capacity_j_per_k: float = 4.6e-3
     conductance_w_per_k: float = 4.6e-3
-    as_c: float = 68.0
-    af_c: float = 78.0
-    ms_c: float = 52.0
-    mf_c: float = 42.0
+    as_c: float = 64.0
+    af_c: float = 82.0
+    ms_c: float = 56.0
+    mf_c: float = 38.0
     max_strain: float = 0.3
 
     @property
