@@ -43,10 +43,14 @@ void seq_init(void)
     timeout_ticks = CFG_STATE_TIMEOUT_TICKS;
 }
 
-void seq_set_timing(uint32_t hold, uint32_t timeout)
+void seq_set_hold(uint32_t ticks)
 {
-    hold_ticks = hold;
-    timeout_ticks = timeout;
+    hold_ticks = ticks;
+}
+
+void seq_set_timeout(uint32_t ticks)
+{
+    timeout_ticks = ticks;
 }
 
 uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b)
@@ -134,7 +138,7 @@ static cfg_state_t step_state(uint16_t step)
     return ROM_STATE(&seq_steps[s.first + step]);
 }
 
-int8_t seq_start(uint8_t dir, uint8_t index, cfg_state_t measured)
+int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
 {
     uint16_t i;
     if (dir == SEQ_DIR_LOADED) {
@@ -211,6 +215,11 @@ uint8_t seq_tick(cfg_state_t measured)
 uint8_t seq_running(void)
 {
     return s.running;
+}
+
+uint8_t seq_holding(void)
+{
+    return (uint8_t)(s.running && s.reached);
 }
 
 cfg_state_t seq_target(void)

@@ -43,7 +43,8 @@ extern const uint32_t seq_edges[] ROM;
 #endif
 
 void seq_init(void);
-void seq_set_timing(uint32_t hold_ticks, uint32_t timeout_ticks);
+void seq_set_hold(uint32_t ticks);    /* target held this long → next step */
+void seq_set_timeout(uint32_t ticks); /* step not done in this long → SEQ_EV_TIMEOUT */
 
 /* 1 when a → b is an allowed transition (a ≠ b). */
 uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b);
@@ -55,14 +56,16 @@ uint8_t seq_gait_count(uint8_t dir);
  * On SEQ_ERR_FORBIDDEN, *bad is the step index whose transition to the next is forbidden. */
 int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad);
 
-/* Start gait `index` of `dir`, or the loaded gait with SEQ_DIR_LOADED. */
-int8_t seq_start(uint8_t dir, uint8_t index, cfg_state_t measured);
+/* Start gait `index` of `dir`, or the loaded gait with SEQ_DIR_LOADED; `measured` is
+ * the current state (any value ≥ CFG_N_STATES: unknown, start at step 0). */
+int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured);
 void seq_stop(void);
 
 /* One control tick with the measured state; returns SEQ_EV_* flags. */
 uint8_t seq_tick(cfg_state_t measured);
 
 uint8_t seq_running(void);
+uint8_t seq_holding(void); /* running and the current target has been reached */
 cfg_state_t seq_target(void);
 uint16_t seq_step(void);
 uint32_t seq_cycles(void);

@@ -19,6 +19,7 @@ static uint16_t max_duty = CFG_MAX_DUTY_PM;
 static uint32_t max_on = CFG_MAX_ON_TICKS;
 static uint32_t cooldown = CFG_MIN_COOLDOWN_TICKS;
 static uint16_t limit_hits;
+static uint8_t clamped;
 /* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
 static const uint32_t min_cooldown = CFG_MIN_COOLDOWN_TICKS;
 
@@ -32,6 +33,9 @@ uint16_t sma_clamp(uint16_t duty_pm)
 static void output(uint8_t act, uint16_t duty_pm)
 {
     uint16_t d = sma_clamp(duty_pm);
+    if (d != duty_pm) {
+        clamped = 1;
+    }
     acts[act].applied = d;
     hal_pwm_set(ROM_U8(&act_channel[act]), d);
 }
@@ -146,6 +150,13 @@ uint16_t sma_duty(uint8_t act)
 uint8_t sma_cooling(uint8_t act)
 {
     return acts[act].cooldown > 0u;
+}
+
+uint8_t sma_take_clamped(void)
+{
+    uint8_t c = clamped;
+    clamped = 0;
+    return c;
 }
 
 uint16_t sma_limit_hits(void)

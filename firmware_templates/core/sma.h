@@ -47,6 +47,9 @@ uint16_t sma_duty(uint8_t act);
 /* 1 while actuator `act` is in forced cool-down. */
 uint8_t sma_cooling(uint8_t act);
 
+/* 1 when an output was clamped to the ceiling since the last call. */
+uint8_t sma_take_clamped(void);
+
 /* Count of forced cool-downs since sma_init (saturates). */
 uint16_t sma_limit_hits(void);
 

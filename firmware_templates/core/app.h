@@ -1,0 +1,23 @@
+/* app.h - the firmware application: one control tick, commands, telemetry.
+ *
+ * Contract. app_init() runs once after hal_init(): it initialises every module, wakes
+ * and checks the IMUs, and sends an unsolicited INFO and a BOOT event. app_tick() runs
+ * once per control tick (CFG_TICK_US) and, in this order:
+ *   1. decodes the bytes the host sent and answers each command (an ESTOP turns every
+ *      MOSFET off before anything else happens in this tick);
+ *   2. reads each limb's MPU-6050 (6 accelerometer bytes), checks the data (no ACK twice
+ *      in a row, |g| outside 0.5..1.5 g, identical samples for CFG_IMU_STUCK_SAMPLES) and
+ *      classifies each limb's level (psi.h);
+ *   3. steps the sequencer (seq.h) and turns the target into a duty per actuator (ctl.h);
+ *   4. applies the duties under the safety envelope (sma.h);
+ *   5. checks the link watchdog, then sends telemetry at the configured rate.
+ * Any fault (state timeout, IMU) stops the gait and turns every MOSFET off in the tick it
+ * is detected, and stays latched until CLEAR(FAULTS). E-stop latches until CLEAR(ESTOP).
+ */
+#ifndef PROLEG_APP_H
+#define PROLEG_APP_H
+
+void app_init(void);
+void app_tick(void);
+
+#endif /* PROLEG_APP_H */
