@@ -81,7 +81,10 @@ class PlantParams:
         LimbParams(name="right", actuator=1),
     )
     # n_limbs × n_actuators, degrees of ψ at full nominal contraction; None → direct_gain_deg
-    # on (limb, its actuator), cross_gain_deg elsewhere.
+    # on (home limb of actuator j, j), cross_gain_deg elsewhere. An actuator's home limb is
+    # the limb at its own position (limb j) if that limb names it, else the first limb that
+    # names it: in R1-with-one-coil both limbs name "sma-left", which still bends mainly
+    # the left end and lifts the right end only at a stronger bend.
     coupling_deg: tuple[tuple[float, ...], ...] | None = None
     direct_gain_deg: float = DIRECT_GAIN_DEG
     cross_gain_deg: float = CROSS_GAIN_DEG
@@ -98,9 +101,13 @@ class PlantParams:
     def coupling(self) -> list[list[float]]:
         if self.coupling_deg is not None:
             return [list(map(float, row)) for row in self.coupling_deg]
+        home = []
+        for j in range(len(self.actuators)):
+            named = [i for i, limb in enumerate(self.limbs) if limb.actuator == j]
+            home.append(j if j in named else (named[0] if named else None))
         return [
-            [self.direct_gain_deg if limb.actuator == j else self.cross_gain_deg for j in range(len(self.actuators))]
-            for limb in self.limbs
+            [self.direct_gain_deg if home[j] == i else self.cross_gain_deg for j in range(len(self.actuators))]
+            for i in range(len(self.limbs))
         ]
 
     def check(self) -> str | None:

@@ -1,0 +1,102 @@
+"""Plant parameters and ground truth from a robot file's limbs, actuators and [plant] table."""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proleg.errors import RobotFileError
+from proleg.robot import load_robot, robot_from_dict
+from proleg.sim.plant import Plant, PlantParams, plant_params_from_robot, true_rewards_from_robot
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+
+
+def r1_with_plant(plant: dict):
+    doc = tomllib.loads((ROBOTS / "paper-r1.toml").read_text())
+    doc = copy.deepcopy(doc)
+    doc["plant"] = plant
+    return robot_from_dict(doc, Path("my-robot.toml"))
+
+
+def test_defaults_come_from_the_robot_limbs_and_actuators():
+    robot = load_robot(ROBOTS / "paper-r1.toml")
+    params = plant_params_from_robot(robot)
+    assert [a.channel for a in params.actuators] == [a.channel for a in robot.actuators]
+    assert [lb.psi_star_deg for lb in params.limbs] == [tuple(lb.psi_star_deg) for lb in robot.limbs]
+    assert params.levels == robot.levels
+    assert params.coupling() == [[60.0, 27.0], [27.0, 60.0]]
+    assert params.actuators[0].resistance_ohm == PlantParams().actuators[0].resistance_ohm
+
+
+def test_one_actuator_robot_bends_its_own_end_most():
+    robot = load_robot(ROBOTS / "paper-r1-one-actuator.toml")
+    params = plant_params_from_robot(robot)
+    assert params.coupling() == [[60.0], [27.0]]
+    truth = true_rewards_from_robot(robot)
+    assert math.isnan(truth[0, 1]) and truth[2, 3] == 1.0
+    p = Plant(params, truth)
+    for _ in range(2000):
+        p.step(0.002, [0.6])
+    for _ in range(2000):
+        p.step(0.002, [0.0])
+    assert [(a, b) for _, a, b, _ in p.transitions] == [(0, 2), (2, 3), (3, 2), (2, 0)]
+
+
+def test_plant_table_overrides_defaults_per_actuator_and_per_limb():
+    robot = r1_with_plant({
+        "supply_v": 3.7,
+        "resistance_ohm": [30.0, 40.0],
+        "psi_rest_deg": [2.0, -1.0],
+        "coupling_deg": [[50, 20], [25, 55]],
+        "noise_mm": 0.3,
+        "step_mm": 5.0,
+    })
+    params = plant_params_from_robot(robot)
+    assert [a.supply_v for a in params.actuators] == [3.7, 3.7]
+    assert [a.resistance_ohm for a in params.actuators] == [30.0, 40.0]
+    assert [lb.psi_rest_deg for lb in params.limbs] == [2.0, -1.0]
+    assert params.coupling() == [[50.0, 20.0], [25.0, 55.0]]
+    assert (params.noise_mm, params.step_mm) == (0.3, 5.0)
+
+
+def test_a_separate_true_matrix_replaces_the_robot_table_for_the_plant():
+    robot = r1_with_plant({"true_matrix": [[0, 2, 1, "x"], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]})
+    truth = true_rewards_from_robot(robot)
+    assert truth[0, 1] == 2.0 and math.isnan(truth[0, 3])
+    assert true_rewards_from_robot(load_robot(ROBOTS / "paper-r1.toml"))[0, 1] == -1.0
+
+
+@pytest.mark.parametrize(
+    "plant, message",
+    [
+        ({"supply_volts": 5.0}, r"my-robot\.toml: \[plant\]\.supply_volts: unknown key"),
+        ({"supply_v": "five"}, r"my-robot\.toml: \[plant\]\.supply_v: expected a finite number"),
+        ({"resistance_ohm": [30.0]}, r"\[plant\]\.resistance_ohm: expected one number or 2"),
+        ({"resistance_ohm": -3.0}, r"\[plant\]: actuator 'sma-left': resistance_ohm must be a positive"),
+        ({"as_c": 90.0}, r"\[plant\]: actuator 'sma-left': as_c \(90.0\) must be below af_c"),
+        ({"coupling_deg": [[1, 2, 3], [4, 5, 6]]}, r"\[plant\]\.coupling_deg: expected 2 rows"),
+        ({"mech_tau_s": 0.0}, r"\[plant\]: mech_tau_s must be > 0"),
+        ({"true_matrix": [[0, 1], [1, 0]]}, r"\[plant\]\.true_matrix: expected 4 rows of 4"),
+        ({"true_matrix": [[0, 1, "y", 0]] * 4}, r"\[plant\]\.true_matrix\[0\]\[2\]: expected a finite number"),
+    ],
+)
+def test_bad_plant_tables_name_the_file_and_the_key(plant, message):
+    robot = r1_with_plant(plant)
+    with pytest.raises(RobotFileError, match=message):
+        plant_params_from_robot(robot)
+        true_rewards_from_robot(robot)
+
+
+def test_every_example_robot_gives_a_runnable_plant():
+    for path in sorted(ROBOTS.glob("*.toml")):
+        robot = load_robot(path)
+        p = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels)
+        n_ch = max(a.channel for a in robot.actuators) + 1
+        p.step(1.0, [0.6] * n_ch)
+        assert np.all(np.isfinite(p.psi_deg))
