@@ -102,7 +102,7 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
 {
     int16_t lo, hi;
     int16_t *t;
-    if (limb >= CFG_N_LIMBS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
+    if (limb >= CFG_N_LIMBS || thr >= CFG_MAX_THRESHOLDS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
         psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
         return -1;
     }
@@ -111,7 +111,10 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     if (lo <= -9000 || hi >= 9000) {
         return -1;
     }
-    if ((thr > 0u && lo <= band_hi[limb][thr - 1u]) || (thr + 2u < psi_levels(limb) && hi >= band_lo[limb][thr + 1u])) {
+    if (thr > 0u && lo <= band_hi[limb][thr - 1u]) {
+        return -1;
+    }
+    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= band_lo[limb][thr + 1u]) {
         return -1;
     }
     t = thresholds[limb][thr];
