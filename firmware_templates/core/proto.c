@@ -33,126 +33,101 @@ static const proto_msgdesc_t *find_desc(uint8_t id)
     return NULL;
 }
 
-/* little-endian wire <-> native value, through memcpy so alignment never matters */
-static void get_le(const uint8_t *src, uint8_t size, uint8_t *dst)
+/* Copy count elements of size bytes between the little-endian wire and native memory.
+ * The same operation in both directions; the endianness test folds to a constant. */
+static void copy_elems(uint8_t *dst, const uint8_t *src, uint8_t count, uint8_t size)
 {
-    if (size == 1) {
-        *dst = *src;
-    } else if (size == 2) {
-        uint16_t v = (uint16_t)(src[0] | ((uint16_t)src[1] << 8));
-        memcpy(dst, &v, 2);
+    const uint16_t one = 1;
+    uint8_t little;
+    memcpy(&little, &one, 1);
+    if (little || size == 1) {
+        memcpy(dst, src, (size_t)count * size);
     } else {
-        uint32_t v = (uint32_t)src[0] | ((uint32_t)src[1] << 8) | ((uint32_t)src[2] << 16) |
-                     ((uint32_t)src[3] << 24);
-        memcpy(dst, &v, 4);
+        uint8_t k, j;
+        for (k = 0; k < count; k++, dst += size, src += size) {
+            for (j = 0; j < size; j++) {
+                dst[j] = src[size - 1u - j];
+            }
+        }
     }
 }
 
-static void put_le(const uint8_t *src, uint8_t size, uint8_t *dst)
+/* Walk the fields of message d, copying from src to dst. Packing: src = struct, dst = wire;
+ * unpacking: src = wire, dst = struct. wire[0] is the id, fields start at wire[1], the wire
+ * holds at most limit bytes. Returns 0 and sets *end to the wire length after the last
+ * field, or PROTO_ERR_BAD_LENGTH (out of wire bytes) / PROTO_ERR_TOO_LONG (count > max). */
+static uint8_t walk(const proto_msgdesc_t *d, const uint8_t *src, uint8_t *dst, uint8_t limit, uint8_t packing,
+                    uint8_t *end)
 {
-    if (size == 1) {
-        *dst = *src;
-    } else if (size == 2) {
-        uint16_t v;
-        memcpy(&v, src, 2);
-        dst[0] = (uint8_t)v;
-        dst[1] = (uint8_t)(v >> 8);
-    } else {
-        uint32_t v;
-        memcpy(&v, src, 4);
-        dst[0] = (uint8_t)v;
-        dst[1] = (uint8_t)(v >> 8);
-        dst[2] = (uint8_t)(v >> 16);
-        dst[3] = (uint8_t)(v >> 24);
+    const proto_field_t *f = &proto_fields[PROTO_READ_BYTE(&d->first)];
+    uint8_t nf = PROTO_READ_BYTE(&d->n);
+    uint8_t pos = 1, i;
+    for (i = 0; i < nf; i++, f++) {
+        uint8_t type = PROTO_READ_BYTE(&f->type);
+        uint8_t max = PROTO_READ_BYTE(&f->max);
+        uint8_t off = PROTO_READ_BYTE(&f->offset);
+        uint8_t size = type_size(type), count = 1;
+        uint16_t nbytes;
+        if ((type & 0x0Fu) == PROTO_T_CHAR) {
+            count = max;
+        } else if (type & PROTO_F_ARRAY) {
+            uint8_t coff = PROTO_READ_BYTE(&f->count_offset);
+            if (pos >= limit) {
+                return PROTO_ERR_BAD_LENGTH;
+            }
+            count = packing ? src[coff] : src[pos];
+            dst[packing ? pos : coff] = count;
+            pos++;
+            if (count > max) {
+                return PROTO_ERR_TOO_LONG;
+            }
+        }
+        nbytes = (uint16_t)((uint16_t)count * size);
+        if ((uint16_t)(limit - pos) < nbytes) {
+            return PROTO_ERR_BAD_LENGTH;
+        }
+        if (packing) {
+            copy_elems(dst + pos, src + off, count, size);
+        } else {
+            copy_elems(dst + off, src + pos, count, size);
+        }
+        pos = (uint8_t)(pos + nbytes);
     }
+    *end = pos;
+    return 0;
 }
 
 uint8_t proto_unpack(const uint8_t *frame, size_t n, proto_msg_t *msg)
 {
     const proto_msgdesc_t *d;
-    const proto_field_t *f;
-    uint8_t *base = (uint8_t *)&msg->u;
-    size_t pos = 1;
-    uint8_t i, nf;
-
+    uint8_t end, err;
     if (n < 1 || (d = find_desc(frame[0])) == NULL) {
         return PROTO_ERR_UNKNOWN_MESSAGE;
     }
+    if (n > PROTO_MAX_FRAME) {
+        return PROTO_ERR_BAD_LENGTH;
+    }
     msg->id = frame[0];
     memset(&msg->u, 0, sizeof msg->u);
-    f = &proto_fields[PROTO_READ_BYTE(&d->first)];
-    nf = PROTO_READ_BYTE(&d->n);
-    for (i = 0; i < nf; i++, f++) {
-        uint8_t type = PROTO_READ_BYTE(&f->type);
-        uint8_t max = PROTO_READ_BYTE(&f->max);
-        uint8_t *dst = base + PROTO_READ_BYTE(&f->offset);
-        uint8_t size = type_size(type);
-        uint8_t count = 1, k;
-        if ((type & 0x0Fu) == PROTO_T_CHAR) {
-            size = 1;
-            count = max;
-        } else if (type & PROTO_F_ARRAY) {
-            if (pos >= n) {
-                return PROTO_ERR_BAD_LENGTH;
-            }
-            count = frame[pos++];
-            if (count > max) {
-                return PROTO_ERR_TOO_LONG;
-            }
-            base[PROTO_READ_BYTE(&f->count_offset)] = count;
-        }
-        if (n - pos < (size_t)count * size) {
-            return PROTO_ERR_BAD_LENGTH;
-        }
-        for (k = 0; k < count; k++) {
-            get_le(frame + pos, size, dst);
-            pos += size;
-            dst += size;
-        }
+    err = walk(d, frame, (uint8_t *)&msg->u, (uint8_t)n, 0, &end);
+    if (err == 0 && end != n) {
+        err = PROTO_ERR_BAD_LENGTH;
     }
-    return pos == n ? 0 : PROTO_ERR_BAD_LENGTH;
+    return err;
 }
 
 size_t proto_pack(const proto_msg_t *msg, uint8_t *out, size_t cap)
 {
     const proto_msgdesc_t *d = find_desc(msg->id);
-    const proto_field_t *f;
-    const uint8_t *base = (const uint8_t *)&msg->u;
-    size_t pos = 0;
-    uint8_t i, nf;
-
+    uint8_t end;
     if (d == NULL || cap < 1) {
         return 0;
     }
-    out[pos++] = msg->id;
-    f = &proto_fields[PROTO_READ_BYTE(&d->first)];
-    nf = PROTO_READ_BYTE(&d->n);
-    for (i = 0; i < nf; i++, f++) {
-        uint8_t type = PROTO_READ_BYTE(&f->type);
-        uint8_t max = PROTO_READ_BYTE(&f->max);
-        const uint8_t *src = base + PROTO_READ_BYTE(&f->offset);
-        uint8_t size = type_size(type);
-        uint8_t count = 1, k;
-        if ((type & 0x0Fu) == PROTO_T_CHAR) {
-            size = 1;
-            count = max;
-        } else if (type & PROTO_F_ARRAY) {
-            count = base[PROTO_READ_BYTE(&f->count_offset)];
-            if (count > max || pos >= cap) {
-                return 0;
-            }
-            out[pos++] = count;
-        }
-        if (cap - pos < (size_t)count * size) {
-            return 0;
-        }
-        for (k = 0; k < count; k++) {
-            put_le(src, size, out + pos);
-            pos += size;
-            src += size;
-        }
+    out[0] = msg->id;
+    if (walk(d, (const uint8_t *)&msg->u, out, (uint8_t)(cap > 255 ? 255 : cap), 1, &end) != 0) {
+        return 0;
     }
-    return pos;
+    return end;
 }
 
 size_t proto_encode(const proto_msg_t *msg, uint8_t *out, size_t cap)
@@ -190,8 +165,8 @@ void proto_rx_init(proto_rx_t *rx)
 
 int proto_rx_byte(proto_rx_t *rx, uint8_t byte, proto_msg_t *msg)
 {
-    uint8_t err;
-    uint16_t crc;
+    uint32_t *counter;
+    uint8_t err = 0;
     rx->rej_error = 0;
     if (byte != 0) {
         uint8_t out;
@@ -204,36 +179,32 @@ int proto_rx_byte(proto_rx_t *rx, uint8_t byte, proto_msg_t *msg)
         }
         return 0;
     }
-    /* delimiter: judge the frame, then start the next one */
+    /* delimiter: judge the frame (exactly one counter), then start the next one */
     if (rx->cobs.code == 0) { /* empty frame: 00 00 */
         return 0;
     }
     if (rx->overflow || !cobs_dec_complete(&rx->cobs) || rx->len < 3) {
-        rx->count.framing_errors++;
-        rx_restart(rx);
-        return 0;
-    }
-    crc = crc16_ccitt(CRC16_INIT, rx->buf, (size_t)rx->len - 2);
-    if ((uint8_t)crc != rx->buf[rx->len - 2] || (uint8_t)(crc >> 8) != rx->buf[rx->len - 1]) {
-        rx->count.crc_errors++;
-        rx_restart(rx);
-        return 0;
-    }
-    err = proto_unpack(rx->buf, (size_t)rx->len - 2, msg);
-    if (err == 0) {
-        rx->count.frames_ok++;
+        counter = &rx->count.framing_errors;
     } else {
-        if (err == PROTO_ERR_UNKNOWN_MESSAGE) {
-            rx->count.unknown_ids++;
-        } else if (err == PROTO_ERR_TOO_LONG) {
-            rx->count.bad_value++;
+        uint8_t n = (uint8_t)(rx->len - 2);
+        uint16_t crc = crc16_ccitt(CRC16_INIT, rx->buf, n);
+        if ((uint8_t)crc != rx->buf[n] || (uint8_t)(crc >> 8) != rx->buf[n + 1]) {
+            counter = &rx->count.crc_errors;
         } else {
-            rx->count.bad_length++;
+            err = proto_unpack(rx->buf, n, msg);
+            if (err == 0) {
+                counter = &rx->count.frames_ok;
+            } else {
+                counter = err == PROTO_ERR_UNKNOWN_MESSAGE ? &rx->count.unknown_ids
+                          : err == PROTO_ERR_TOO_LONG      ? &rx->count.bad_value
+                                                           : &rx->count.bad_length;
+                rx->rej_error = err;
+                rx->rej_id = rx->buf[0];
+                rx->rej_token = n > 1 ? rx->buf[1] : 0;
+            }
         }
-        rx->rej_error = err;
-        rx->rej_id = rx->buf[0];
-        rx->rej_token = rx->len > 3 ? rx->buf[1] : 0;
     }
+    (*counter)++;
     rx_restart(rx);
-    return err == 0;
+    return counter == &rx->count.frames_ok;
 }
