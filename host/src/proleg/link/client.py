@@ -1,0 +1,458 @@
+"""``RobotClient``: talk to one robot over any ``Link``.
+
+One decoded-message stream per robot: ``recv()`` returns every message the robot sent
+(telemetry, events, replies) in order; a ``Notifier`` (``proleg.link.listeners``) pumps that
+stream into listeners (console, recorder, printer, tests), none of which knows the link.
+
+Commands carry a token (1..255) and wait for the reply echoing it: ACK, or INFO/STATS for
+GET_INFO/GET_STATS; a NACK raises ``CommandRefused`` naming the error code; silence raises
+``LinkError("no reply to PING within 0.5 s on /dev/ttyUSB0")``. Timeouts run on the link's
+clock (virtual time on the simulated board). Replies are recognised whoever is reading:
+the waiting command itself when nobody else is, the Notifier thread otherwise.
+
+TELEMETRY sequence numbers are checked: a jump counts the skipped frames in ``stats.lost``;
+a backwards jump (a reset) or a new INFO restarts the count. A vanished serial device
+(``LinkDisconnected``) is reopened until ``reconnect_timeout`` seconds pass; afterwards
+the client sends GET_INFO again (the reply refreshes ``info``) and counts ``stats.reconnects``.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from collections.abc import Iterator, Sequence
+from dataclasses import asdict, dataclass, field
+from types import TracebackType
+
+from ..errors import LinkError
+from ..protocol.codec import FrameDecoder, Message, encode
+from ..protocol.definition import (
+    BY_NAME,
+    CHANNEL_CEILING,
+    GAIT_USER,
+    LIMB_CEILING,
+    PROTOCOL_VERSION,
+    ClearWhat,
+    Direction,
+    ErrorCode,
+    ParamId,
+)
+from .base import Link, LinkDisconnected
+
+DEFAULT_TIMEOUT = 0.5
+#: decoded messages kept for ``recv`` when nobody reads them (oldest dropped first)
+QUEUE_LIMIT = 65536
+_EPS = 1e-9  # clock comparisons: virtual time advances in float steps
+_REPLY_FOR = {"GET_INFO": "INFO", "GET_STATS": "STATS"}
+
+
+class CommandRefused(LinkError):
+    """The robot answered a command with NACK."""
+
+    def __init__(self, command: str, error: int, detail: int, where: str):
+        try:
+            self.error: ErrorCode | int = ErrorCode(error)
+            code = self.error.name
+        except ValueError:
+            self.error = error
+            code = f"error {error}"
+        self.command = command
+        self.detail = detail
+        super().__init__(f"{where}: robot refused {command}: {code} (detail {detail})")
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """The robot's answer to GET_INFO."""
+
+    robot_name: str
+    board: str
+    build_id: int
+    gait_hash: int
+    protocol_version: int
+    limbs: int
+    actuators: int
+    gaits: int
+    max_gait_steps: int
+    tick_hz: int
+    telemetry_hz: int
+
+    @classmethod
+    def from_message(cls, msg: Message) -> RobotInfo:
+        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__})  # type: ignore[arg-type]
+
+    def header(self) -> dict[str, str]:
+        """Key/value pairs for a recording's header."""
+        return {
+            "robot": self.robot_name,
+            "board": self.board,
+            "firmware_build_id": f"{self.build_id:08x}",
+            "gait_table_hash": f"{self.gait_hash:08x}",
+            "protocol_version": str(self.protocol_version),
+            "limbs": str(self.limbs),
+            "channels": str(self.actuators),
+            "tick_hz": str(self.tick_hz),
+            "telemetry_hz": str(self.telemetry_hz),
+        }
+
+
+@dataclass(frozen=True)
+class FirmwareStats:
+    """The firmware's link counters (reply to GET_STATS)."""
+
+    rx_ok: int
+    crc_errors: int
+    framing_errors: int
+    unknown_ids: int
+    bad_length: int
+    bad_value: int
+    nacks: int
+    tx_frames: int
+    tx_dropped: int
+
+    @classmethod
+    def from_message(cls, msg: Message) -> FirmwareStats:
+        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__})  # type: ignore[arg-type]
+
+
+@dataclass
+class LinkStats:
+    """Host-side counters of one client."""
+
+    frames_ok: int = 0
+    crc_errors: int = 0
+    framing_errors: int = 0
+    unknown_ids: int = 0
+    bad_length: int = 0
+    bad_value: int = 0
+    telemetry: int = 0
+    lost: int = 0  # TELEMETRY frames missing from the sequence numbers
+    seq_restarts: int = 0
+    reconnects: int = 0
+    nacks: int = 0
+    timeouts: int = 0
+
+    @property
+    def corrupt(self) -> int:
+        return self.crc_errors + self.framing_errors + self.unknown_ids + self.bad_length + self.bad_value
+
+    def as_dict(self) -> dict[str, int]:
+        return {**asdict(self), "corrupt": self.corrupt}
+
+
+@dataclass(slots=True)
+class Received:
+    """One decoded message with the host's time of receipt (link clock) and whatever ground
+    truth the link knew then (the simulated robot's displacement...)."""
+
+    message: Message
+    time: float
+    truth: dict[str, float] = field(default_factory=dict)
+
+
+class RobotClient:
+    def __init__(
+        self,
+        link: Link,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        reconnect_timeout: float = 10.0,
+        max_limbs: int = LIMB_CEILING,
+        max_channels: int = CHANNEL_CEILING,
+        poll_s: float = 0.02,
+    ):
+        self.link = link
+        self.timeout = timeout
+        self.reconnect_timeout = reconnect_timeout
+        self.poll_s = poll_s
+        self.info: RobotInfo | None = None
+        self.stats = LinkStats()
+        self.decoder = FrameDecoder(max_limbs=max_limbs, max_channels=max_channels)
+        self._queue: deque[Received] = deque(maxlen=QUEUE_LIMIT)
+        self._rx_lock = threading.Lock()
+        self._tx_lock = threading.Lock()
+        self._cond = threading.Condition()
+        self._replies: dict[int, Message] = {}
+        self._waiting: set[int] = set()
+        self._token = 0
+        self._last_seq: int | None = None
+        self._reconnect_lock = threading.Lock()
+        self._closed = False
+
+    # ------------------------------------------------------------------ lifecycle
+    def connect(self, timeout: float | None = None) -> RobotInfo:
+        """Handshake: flush the robot's receiver (an empty frame), then GET_INFO."""
+        self._write(b"\0")
+        info = self.get_info(timeout)
+        if info.protocol_version != PROTOCOL_VERSION:
+            raise LinkError(
+                f"{self.link.description}: robot speaks protocol {info.protocol_version}, "
+                f"this proleg speaks {PROTOCOL_VERSION} (rebuild the firmware or update proleg)"
+            )
+        return info
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.link.close()
+
+    def __enter__(self) -> RobotClient:
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ commands
+    def get_info(self, timeout: float | None = None) -> RobotInfo:
+        info = RobotInfo.from_message(self.request("GET_INFO", timeout=timeout))
+        self.info = info
+        return info
+
+    def ping(self, timeout: float | None = None) -> float:
+        """Round trip in seconds (link clock)."""
+        t0 = self.link.clock()
+        self.request("PING", timeout=timeout)
+        return self.link.clock() - t0
+
+    def start(self, gait: int = 0, direction: Direction | int | str = Direction.PLUS_X) -> None:
+        """Run gait ``gait`` (``GAIT_USER`` / ``"user"`` for the loaded one) in ``direction``
+        (``Direction``, 0/1, ``"+x"``/``"-x"``)."""
+        g = GAIT_USER if gait == "user" else int(gait)
+        self.request("START", gait=g, direction=int(parse_direction(direction)))
+
+    def stop(self) -> None:
+        self.request("STOP")
+
+    def estop(self) -> None:
+        self.request("ESTOP")
+
+    def clear(self, what: ClearWhat | int = ClearWhat.FAULTS | ClearWhat.ESTOP) -> None:
+        self.request("CLEAR", what=int(what))
+
+    def load_gait(self, states: Sequence[int]) -> None:
+        """Store a user gait: a closed walk without the repeated start state."""
+        self.request("LOAD_GAIT", states=tuple(int(s) for s in states))
+
+    def set_param(self, param: ParamId | int | str, index: int, value: int) -> None:
+        if isinstance(param, str):
+            try:
+                param = ParamId[param.upper()]
+            except KeyError:
+                raise LinkError(f"unknown parameter {param!r}; known: {', '.join(p.name.lower() for p in ParamId)}") from None
+        self.request("SET_PARAM", param=int(param), index=int(index), value=int(value))
+
+    def set_telemetry_rate(self, hz: int) -> None:
+        self.request("SET_TELEMETRY_RATE", hz=int(hz))
+
+    def firmware_stats(self, timeout: float | None = None) -> FirmwareStats:
+        """The firmware's link counters (GET_STATS)."""
+        return FirmwareStats.from_message(self.request("GET_STATS", timeout=timeout))
+
+    def request(self, name: str, *, timeout: float | None = None, **fields: int | tuple[int, ...]) -> Message:
+        """Send command ``name`` with a fresh token; return its reply (ACK/INFO/STATS)."""
+        if name not in BY_NAME or BY_NAME[name].direction != "h2r":
+            raise LinkError(f"{name!r} is not a command")
+        token = self._next_token()
+        frame = encode(Message(name, {"token": token, **fields}))
+        with self._cond:
+            self._waiting.add(token)
+            self._replies.pop(token, None)
+        try:
+            self._write(frame)
+            reply = self._wait_reply(token, self.timeout if timeout is None else timeout, name)
+        finally:
+            with self._cond:
+                self._waiting.discard(token)
+                self._replies.pop(token, None)
+        if reply.name == "NACK":
+            self.stats.nacks += 1
+            raise CommandRefused(name, reply.error, reply.detail, self.link.description)
+        expected = _REPLY_FOR.get(name, "ACK")
+        if reply.name != expected:
+            raise LinkError(f"{self.link.description}: {name} answered by {reply.name}, expected {expected}")
+        return reply
+
+    def _next_token(self) -> int:
+        with self._cond:
+            self._token = self._token % 255 + 1
+            return self._token
+
+    def _write(self, data: bytes) -> None:
+        with self._tx_lock:
+            try:
+                self.link.write(data)
+            except LinkDisconnected:
+                self._reconnect()
+                self.link.write(data)
+
+    def _wait_reply(self, token: int, timeout: float, name: str) -> Message:
+        deadline = self.link.clock() + timeout
+        while True:
+            with self._cond:
+                reply = self._replies.get(token)
+                if reply is not None:
+                    return reply
+            now = self.link.clock()
+            if now >= deadline - _EPS:
+                self.stats.timeouts += 1
+                raise LinkError(f"no reply to {name} within {_seconds(timeout)} on {self.link.description}")
+            if self._rx_lock.acquire(blocking=False):
+                try:
+                    self._pump(min(self.poll_s, deadline - now))
+                finally:
+                    self._rx_lock.release()
+            else:  # another thread (a Notifier) is reading and will hand the reply over
+                with self._cond:
+                    if token not in self._replies:
+                        self._cond.wait(self.poll_s)
+
+    # ------------------------------------------------------------------ receiving
+    def recv(self, timeout: float = 0.0) -> Message | None:
+        """The next message the robot sent, or None after ``timeout`` seconds (link clock)."""
+        rx = self.recv_received(timeout)
+        return None if rx is None else rx.message
+
+    def recv_received(self, timeout: float = 0.0) -> Received | None:
+        """Like ``recv`` with the time of receipt and the link's ground truth."""
+        queue = self._queue
+        if queue:
+            return queue.popleft()
+        deadline = self.link.clock() + timeout
+        while True:
+            with self._rx_lock:
+                if queue:
+                    return queue.popleft()
+                remaining = deadline - self.link.clock()
+                self._pump(max(0.0, min(remaining, self.poll_s * 5)))
+            if queue:
+                return queue.popleft()
+            if self.link.clock() >= deadline - _EPS:
+                return None
+
+    def telemetry(self, timeout: float = 1.0, count: int | None = None) -> Iterator[Message]:
+        """TELEMETRY messages as they arrive (other messages are consumed and skipped);
+        raises ``LinkError`` when none arrives within ``timeout`` seconds."""
+        n = 0
+        while count is None or n < count:
+            deadline = self.link.clock() + timeout
+            while True:
+                msg = self.recv(max(0.0, deadline - self.link.clock()))
+                if msg is not None and msg.name == "TELEMETRY":
+                    break
+                if msg is None and self.link.clock() >= deadline - _EPS:
+                    raise LinkError(f"no telemetry within {_seconds(timeout)} on {self.link.description}")
+            n += 1
+            yield msg
+
+    def _pump(self, timeout: float) -> int:
+        """Read the link once (caller holds ``_rx_lock``); decode; queue. Returns messages read."""
+        try:
+            data = self.link.read(timeout)
+        except LinkDisconnected:
+            self._reconnect()
+            return 0
+        if not data:
+            return 0
+        dec = self.decoder
+        msgs = dec.feed(data)
+        st = self.stats
+        st.frames_ok = dec.frames_ok
+        st.crc_errors = dec.crc_errors
+        st.framing_errors = dec.framing_errors
+        st.unknown_ids = dec.unknown_ids
+        st.bad_length = dec.bad_length
+        st.bad_value = dec.bad_value
+        if not msgs:
+            return 0
+        now = self.link.clock()
+        truth = self.link.truth()
+        append = self._queue.append
+        notify = False
+        for m in msgs:
+            name = m.name
+            if name == "TELEMETRY":
+                st.telemetry += 1
+                seq = m.fields["seq"]
+                last = self._last_seq
+                if last is not None and seq != (last + 1) & 0xFFFF:
+                    gap = (seq - last - 1) & 0xFFFF
+                    if gap < 0x8000:
+                        st.lost += gap
+                    else:
+                        st.seq_restarts += 1
+                self._last_seq = seq
+            elif name in ("ACK", "NACK", "INFO", "STATS"):
+                token = m.fields["token"]
+                if name == "INFO":
+                    self._last_seq = None  # a reset or a new session restarts the sequence
+                    if token == 0 or token not in self._waiting:
+                        self.info = RobotInfo.from_message(m)
+                if token in self._waiting:
+                    self._replies[token] = m
+                    notify = True
+            append(Received(m, now, truth))
+        if notify:
+            with self._cond:
+                self._cond.notify_all()
+        return len(msgs)
+
+    def _reconnect(self) -> None:
+        """Reopen a vanished device; then ask for INFO again (without waiting)."""
+        if not self._reconnect_lock.acquire(blocking=False):
+            with self._reconnect_lock:  # another thread is reconnecting: wait for it
+                return
+        try:
+            self._reconnect_locked()
+        finally:
+            self._reconnect_lock.release()
+
+    def _reconnect_locked(self) -> None:
+        deadline = time.monotonic() + self.reconnect_timeout
+        delay = 0.05
+        while True:
+            if self._closed:
+                raise LinkError(f"{self.link.description}: client closed")
+            try:
+                self.link.reopen()
+                break
+            except LinkDisconnected:
+                pass
+            except LinkError as e:
+                if time.monotonic() >= deadline:
+                    raise LinkError(
+                        f"{self.link.description}: device disconnected and not back within "
+                        f"{_seconds(self.reconnect_timeout)} ({e})"
+                    ) from None
+            if time.monotonic() >= deadline:
+                raise LinkError(f"{self.link.description}: device disconnected and not back within "
+                                f"{_seconds(self.reconnect_timeout)}")
+            time.sleep(delay)
+            delay = min(delay * 2, 0.5)
+        self.stats.reconnects += 1
+        self._last_seq = None
+        token = self._next_token()
+        try:
+            self.link.write(b"\0" + encode(Message("GET_INFO", {"token": token})))
+        except LinkError:
+            pass  # gone again: the next read notices
+
+
+def parse_direction(direction: Direction | int | str) -> Direction:
+    if isinstance(direction, str):
+        text = direction.strip().lower()
+        if text in ("+x", "x", "plus_x", "+"):
+            return Direction.PLUS_X
+        if text in ("-x", "minus_x", "-"):
+            return Direction.MINUS_X
+        raise LinkError(f"unknown direction {direction!r}; expected +x or -x")
+    try:
+        return Direction(int(direction))
+    except ValueError:
+        raise LinkError(f"unknown direction {direction!r}; expected 0 (+x) or 1 (-x)") from None
+
+
+def _seconds(t: float) -> str:
+    return f"{t:g} s"

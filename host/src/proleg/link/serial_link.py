@@ -1,0 +1,92 @@
+"""Serial links through pyserial's ``serial_for_url``: ``/dev/ttyUSB0``, ``COM3``, a pty path,
+``socket://host:port``, ``rfc2217://host:port``, ``loop://``.
+
+A USB serial adapter that disappears raises ``LinkDisconnected`` from ``read``/``write``;
+``reopen`` opens the same URL again (the client retries it until the device is back).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import serial
+
+from ..errors import LinkError
+from .base import Link, LinkDisconnected
+
+DEFAULT_BAUDRATE = 115200
+
+Opener = Callable[..., Any]
+
+
+class SerialLink(Link):
+    """One serial port. ``opener`` is ``serial.serial_for_url`` unless a test injects another."""
+
+    def __init__(self, url: str, baudrate: int = DEFAULT_BAUDRATE, *, opener: Opener | None = None):
+        self.url = url
+        self.baudrate = baudrate
+        self.description = url
+        self._opener: Opener = opener or serial.serial_for_url
+        self._port: Any = None
+        self._timeout: float | None = None
+        self._open()
+
+    def _open(self) -> None:
+        try:
+            self._port = self._opener(self.url, baudrate=self.baudrate, timeout=0.0, write_timeout=2.0)
+        except (serial.SerialException, OSError, ValueError) as e:
+            self._port = None
+            raise LinkError(f"cannot open serial port {self.url}: {_reason(e)}") from None
+        self._timeout = 0.0
+
+    def write(self, data: bytes) -> None:
+        port = self._require()
+        try:
+            port.write(data)
+        except serial.SerialTimeoutException:
+            raise LinkError(f"{self.url}: write timed out (is the device reading?)") from None
+        except (serial.SerialException, OSError) as e:
+            self._drop()
+            raise LinkDisconnected(f"{self.url}: device disconnected ({_reason(e)})") from None
+
+    def read(self, timeout: float) -> bytes:
+        port = self._require()
+        try:
+            if self._timeout != timeout:  # pyserial reconfigures the port on every change
+                port.timeout = timeout
+                self._timeout = timeout
+            data = port.read(max(1, port.in_waiting))
+            if data:
+                waiting = port.in_waiting
+                if waiting:
+                    data += port.read(waiting)
+            return bytes(data)
+        except (serial.SerialException, OSError) as e:
+            self._drop()
+            raise LinkDisconnected(f"{self.url}: device disconnected ({_reason(e)})") from None
+
+    def reopen(self) -> None:
+        self._drop()
+        self._open()
+
+    def close(self) -> None:
+        self._drop()
+
+    def _require(self) -> Any:
+        if self._port is None:
+            raise LinkDisconnected(f"{self.url}: port is not open")
+        return self._port
+
+    def _drop(self) -> None:
+        port, self._port = self._port, None
+        if port is not None:
+            try:
+                port.close()
+            except Exception:  # a vanished device may fail to close; it is gone either way
+                pass
+
+
+def _reason(e: BaseException) -> str:
+    text = str(e).strip()
+    return text.splitlines()[0] if text else type(e).__name__
