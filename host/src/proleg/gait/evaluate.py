@@ -32,27 +32,48 @@ def is_primitive(cycle: Sequence[int]) -> bool:
     return True
 
 
-def edge_positions(table: TransitionTable, states: Sequence[int]) -> np.ndarray:
-    """Edge positions of consecutive transitions (int64; -1 where forbidden or a == b)."""
+def edge_positions(table: TransitionTable, states: Sequence[int], keys: np.ndarray | None = None) -> np.ndarray:
+    """Edge positions of consecutive transitions (int64; -1 where forbidden or a == b).
+
+    ``keys`` (src·n + dst, sorted) may be passed in when many walks are looked up."""
+    n = table.n_states
+    if keys is None:
+        keys = table.src * n + table.dst
     a = np.asarray(states[:-1], dtype=np.int64)
     b = np.asarray(states[1:], dtype=np.int64)
+    want = a * n + b
+    if len(keys) == 0:
+        return np.full(len(want), -1, dtype=np.int64)
+    pos = np.minimum(np.searchsorted(keys, want), len(keys) - 1)
+    return np.where(keys[pos] == want, pos, -1)
+
+
+def make_gaits(table: TransitionTable, cycles: Sequence[Sequence[int]]) -> list[Gait]:
+    """Gaits of valid open cycles (start not repeated); no validation, one batched lookup."""
+    if not cycles:
+        return []
     n = table.n_states
     keys = table.src * n + table.dst
-    want = a * n + b
-    pos = np.searchsorted(keys, want)
-    pos_c = np.minimum(pos, max(len(keys) - 1, 0))
-    ok = (pos < len(keys)) & (keys[pos_c] == want) if len(keys) else np.zeros(len(want), bool)
-    return np.where(ok, pos_c, -1)
+    flat_a = np.fromiter((s for c in cycles for s in c), dtype=np.int64)
+    flat_b = np.fromiter((s for c in cycles for s in (*c[1:], c[0])), dtype=np.int64)
+    pos = np.searchsorted(keys, flat_a * n + flat_b).tolist()
+    rewards = table.reward.tolist() if len(cycles) * 8 > len(keys) else None
+    out = []
+    k = 0
+    for c in cycles:
+        p = pos[k:k + len(c)]
+        k += len(c)
+        r = [rewards[i] for i in p] if rewards is not None else table.reward[p].tolist()
+        reward = math.fsum(r)
+        duration = None if table.duration is None else math.fsum(table.duration[p].tolist())
+        cyc = canonical_rotation(c)
+        out.append(Gait(states=cyc + (cyc[0],), reward=reward, transitions=len(c), rate=reward / len(c), duration=duration))
+    return out
 
 
 def make_gait(table: TransitionTable, closed: Sequence[int]) -> Gait:
     """The Gait of a valid closed walk (states[0] == states[-1]); no validation."""
-    pos = edge_positions(table, closed)
-    reward = math.fsum(table.reward[pos].tolist())
-    duration = None if table.duration is None else math.fsum(table.duration[pos].tolist())
-    cyc = canonical_rotation(closed[:-1])
-    n = len(cyc)
-    return Gait(states=cyc + (cyc[0],), reward=reward, transitions=n, rate=reward / n, duration=duration)
+    return make_gaits(table, [tuple(closed[:-1])])[0]
 
 
 def evaluate_sequence(table: TransitionTable, states: Sequence[int | str]) -> Gait:

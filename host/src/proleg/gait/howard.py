@@ -45,21 +45,35 @@ class HowardSolution:
         return None if best == -np.inf else best
 
 
-def _segment_argmax(values: np.ndarray, starts: np.ndarray, nonempty: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per source node: max of ``values`` over its edges and the first edge reaching it."""
-    m = len(values)
-    best = np.full(n, -np.inf)
-    arg = np.full(n, -1, dtype=np.int64)
-    if m == 0:
-        return best, arg
-    seg_start = starts[nonempty]
-    seg_max = np.maximum.reduceat(values, seg_start)
-    best[nonempty] = seg_max
-    counts = np.diff(np.append(seg_start, m))
-    hit = values >= np.repeat(seg_max, counts)
-    cand = np.where(hit, np.arange(m), m)
-    arg[nonempty] = np.minimum.reduceat(cand, seg_start)
-    return best, arg
+class _Segments:
+    """Edges grouped by source (edges sorted by source): per-node reductions via reduceat."""
+
+    def __init__(self, n: int, src: np.ndarray) -> None:
+        deg = np.bincount(src, minlength=n)
+        self.nonempty = deg > 0
+        self.nodes = np.flatnonzero(self.nonempty)
+        self.counts = deg[self.nonempty]
+        self.starts = np.zeros(len(self.nodes), dtype=np.int64)
+        np.cumsum(self.counts[:-1], out=self.starts[1:])
+        self.src = src
+
+    def max(self, values: np.ndarray) -> np.ndarray:
+        """Max of ``values`` over each non-empty node's edges (indexed like ``nodes``)."""
+        return np.maximum.reduceat(values, self.starts)
+
+    def argmax_for(self, values: np.ndarray, best: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """For the non-empty nodes flagged in ``which`` (indexed like ``nodes``): the first
+        edge position whose value reaches that node's ``best``."""
+        counts = self.counts[which]
+        total = int(counts.sum())
+        offsets = np.zeros(len(counts), dtype=np.int64)
+        np.cumsum(counts[:-1], out=offsets[1:])
+        # edge positions of the flagged nodes, touching only their own edges
+        edges = np.repeat(self.starts[which] - offsets, counts) + np.arange(total)
+        hit = values[edges] >= np.repeat(best[which], counts)
+        # first hit per node: the smallest position with hit, per segment
+        pos = np.where(hit, edges, np.iinfo(np.int64).max)
+        return np.minimum.reduceat(pos, offsets)
 
 
 def _doubling_rounds(n: int) -> int:
@@ -97,7 +111,10 @@ def _evaluate(
     acc = step
     for _ in range(rounds):
         acc = acc + acc[parent]
-        parent = parent[parent]
+        grand = parent[parent]
+        if np.array_equal(grand, parent):  # every node now points at its root
+            break
+        parent = grand
     return eta, acc + x_old[rep]
 
 
@@ -115,43 +132,49 @@ def max_cycle_ratio(
     w = np.asarray(weight, dtype=np.float64)
     t = np.ones(len(w)) if time is None else np.asarray(time, dtype=np.float64)
     m = len(w)
-    deg = np.bincount(src, minlength=n) if m else np.zeros(n, dtype=np.int64)
-    starts = np.zeros(n, dtype=np.int64)
-    np.cumsum(deg[:-1], out=starts[1:])
-    nonempty = deg > 0
-    dead = ~nonempty
-    ar = np.arange(n)
     if m == 0:
         return HowardSolution(np.full(n, -np.inf), np.zeros(n), np.full(n, -1, dtype=np.int64), 0)
-
+    seg = _Segments(n, src)
+    dead = ~seg.nonempty
+    ar = np.arange(n)
+    unit_time = time is None
     ratio_scale = float(np.abs(w / t).max())
     dead_ratio = -(2.0 * ratio_scale + 1.0)  # the virtual self-loops of nodes without out-edges
     scale = float(np.abs(w).max() + (2.0 * ratio_scale + 1.0) * max(1.0, t.max()))
     eps = 1e-12 * scale * max(1.0, np.sqrt(n))
 
     # initial policy: the locally best ratio edge
-    _, policy = _segment_argmax(w / t, starts, nonempty, n)
+    policy = np.zeros(n, dtype=np.int64)  # dead nodes: unused
+    r0 = w / t
+    policy[seg.nodes] = seg.argmax_for(r0, seg.max(r0), np.ones(len(seg.nodes), dtype=bool))
     x = np.zeros(n)
+    succ = np.where(dead, ar, dst[policy])
+    cw = np.where(dead, dead_ratio, w[policy])
+    ct = np.where(dead, 1.0, t[policy])
     for it in range(1, max_iterations + 1):
-        pol = np.where(dead, 0, policy)
-        succ = np.where(dead, ar, dst[pol])
-        cw = np.where(dead, dead_ratio, w[pol])
-        ct = np.where(dead, 1.0, t[pol])
         eta, x = _evaluate(n, succ, cw, ct, x)
-
-        eta_dst = eta[dst]
-        best_eta, arg_eta = _segment_argmax(eta_dst, starts, nonempty, n)
-        up = nonempty & (best_eta > eta + eps)
-        if up.any():
-            policy = np.where(up, arg_eta, policy)
-            continue
-        eta_src = eta[src]
-        same = np.abs(eta_dst - eta_src) <= eps
-        val = np.where(same, w - eta_src * t + x[dst], -np.inf)
-        best_x, arg_x = _segment_argmax(val, starts, nonempty, n)
-        up = nonempty & (best_x > x + eps)
+        eta_dst = eta.take(dst)
+        eta_ne = eta[seg.nodes]
+        best = seg.max(eta_dst)
+        up = best > eta_ne + eps
         if not up.any():
-            eta = np.where(eta < 0.5 * (dead_ratio - ratio_scale), -np.inf, eta)
-            return HowardSolution(eta, x, np.where(dead, -1, policy), it)
-        policy = np.where(up, arg_x, policy)
+            # no better cycle within reach: improve potentials inside each η class
+            eta_src = np.repeat(eta_ne, seg.counts)
+            val = x.take(dst)
+            val += w
+            val -= eta_src if unit_time else eta_src * t
+            val[eta_dst < eta_src - eps] = -np.inf
+            best = seg.max(val)
+            up = best > x[seg.nodes] + eps
+            if not up.any():
+                eta = np.where(eta < 0.5 * (dead_ratio - ratio_scale), -np.inf, eta)
+                return HowardSolution(eta, x, np.where(dead, -1, policy), it)
+            chosen = seg.argmax_for(val, best, up)
+        else:
+            chosen = seg.argmax_for(eta_dst, best, up)
+        nodes = seg.nodes[up]
+        policy[nodes] = chosen
+        succ[nodes] = dst[chosen]
+        cw[nodes] = w[chosen]
+        ct[nodes] = t[chosen]
     raise RuntimeError(f"Howard policy iteration did not converge in {max_iterations} rounds")

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import GaitError
 from ..transitions import TransitionTable
 from .critical import critical_cycles
-from .evaluate import make_gait
+from .evaluate import make_gaits
 from .howard import max_cycle_ratio
 from .result import MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
 from .search import bounded_search
@@ -49,7 +49,7 @@ def _finish(
 ) -> GaitResult:
     """Gaits from open cycles: exact scores, keep the best ties, sort."""
     sign = 1.0 if direction == "+x" else -1.0
-    gaits = [make_gait(table, c + (c[0],)) for c in cycles]
+    gaits = make_gaits(table, cycles)
     scored = [(sign * _objective_value(g, objective), g) for g in gaits]
     scored = [(v, g) for v, g in scored if v > tol]
     if not scored:

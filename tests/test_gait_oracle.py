@@ -1,0 +1,96 @@
+"""optimal_gaits against the brute-force oracle on random small tables.
+
+Every objective and direction, with and without a bound: the optimum, the COMPLETE set of
+ties, and their canonical rotations must match a listing of every closed walk.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from proleg.gait import RELATIVE_TOLERANCE, optimal_gaits
+from proleg.gait.bruteforce import brute_force_gaits
+from proleg.gait.evaluate import canonical_rotation, is_primitive
+from proleg.transitions import TransitionTable
+
+LEVELS = [(2,), (3,), (2, 2), (4,), (5,), (3, 2), (2, 3), (6,)]
+
+integer_rewards = st.integers(-3, 3).map(float)
+real_rewards = st.floats(-5, 5, allow_nan=False, allow_infinity=False).map(lambda v: round(v, 3))
+
+
+@st.composite
+def tables(draw, max_states: int = 6, durations: bool = True):
+    levels = draw(st.sampled_from([lv for lv in LEVELS if int(np.prod(lv)) <= max_states]))
+    n = int(np.prod(levels))
+    values = draw(st.sampled_from([integer_rewards, real_rewards]))
+    reward = np.array(draw(st.lists(values, min_size=n * n, max_size=n * n))).reshape(n, n)
+    density = draw(st.sampled_from([0.4, 0.7, 1.0]))
+    allowed = np.array(draw(st.lists(st.floats(0, 1), min_size=n * n, max_size=n * n))).reshape(n, n) < density
+    dur = None
+    if durations and draw(st.booleans()):
+        dur_values = st.sampled_from([0.5, 1.0, 2.0, 3.0]) if draw(st.booleans()) else st.floats(0.1, 4.0)
+        dur = np.array(draw(st.lists(dur_values, min_size=n * n, max_size=n * n))).reshape(n, n)
+    return TransitionTable.from_dense(levels, reward, allowed, dur)
+
+
+def assert_matches_oracle(table: TransitionTable, objective: str, direction: str, bound: int | None) -> None:
+    result = optimal_gaits(table, objective, direction, bound)
+    value, ties = brute_force_gaits(table, objective, direction, bound)
+    got = [g.states for g in result.gaits]
+    scale = float(np.abs(table.reward).max()) if table.n_transitions else 0.0
+    if objective == "speed" and table.n_transitions:
+        scale = float(np.abs(table.reward / table.duration).max())
+    if value is None:
+        assert result.value is None and got == [], (objective, direction, bound, result)
+        return
+    assert result.value is not None
+    assert abs(result.value - value) <= 2 * RELATIVE_TOLERANCE * scale + 1e-12
+    assert set(got) == ties, (objective, direction, bound, sorted(ties), got)
+    assert got == sorted(got), "gaits must be sorted by states"
+    assert not result.truncated
+    for g in result.gaits:
+        cyc = g.states[:-1]
+        assert g.states[0] == g.states[-1]
+        assert canonical_rotation(cyc) == cyc and is_primitive(cyc)
+        assert g.transitions == len(cyc)
+        assert (g.reward > 0) == (direction == "+x")
+        if objective != "total":
+            assert len(set(cyc)) == len(cyc), "rate and speed rank simple cycles"
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4, 5]))
+def test_total_finds_the_best_closed_walks_and_every_tie(table, direction, bound):
+    assert_matches_oracle(table, "total", direction, bound)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4, 5]))
+def test_rate_finds_the_best_simple_cycles_and_every_tie(table, direction, bound):
+    assert_matches_oracle(table, "rate", direction, bound)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4]))
+def test_speed_finds_the_best_simple_cycles_per_second_and_every_tie(table, direction, bound):
+    if table.duration is None:
+        table = TransitionTable(table.levels, table.src, table.dst, table.reward, np.full(table.n_transitions, 1.5))
+    assert_matches_oracle(table, "speed", direction, bound)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    n=st.integers(5, 7),
+    seed=st.integers(0, 2**32 - 1),
+    direction=st.sampled_from(["+x", "-x"]),
+    bound=st.sampled_from([None, 2, 3, 4]),
+)
+def test_flat_rewards_with_many_ties_list_all_of_them(n, seed, direction, bound):
+    # rewards in {-1, 0, 1}: many equal cycles, the hardest case for a complete tie set
+    rng = np.random.default_rng(seed)
+    table = TransitionTable.from_dense((n,), rng.integers(-1, 2, (n, n)), rng.random((n, n)) < 0.8)
+    assert_matches_oracle(table, "rate", direction, bound)
+    assert_matches_oracle(table, "total", direction, min(bound or 4, 4))
