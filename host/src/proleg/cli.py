@@ -67,7 +67,34 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--tool", help="flash tool when the board has several (e.g. openocd, pyocd)")
     f.add_argument("--dry-run", action="store_true", help="print the flash command instead of running it")
     f.set_defaults(run=cmd_flash)
+
+    s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
+    s.add_argument("robot", metavar="ROBOT.toml")
+    s.add_argument("--duration", type=_positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
+    s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
+    s.add_argument("--direction", choices=("+x", "-x"), default="+x")
+    s.add_argument("--inject", action="append", default=[], metavar="FAULT",
+                   help="fault to inject, optionally at a time: imu-silent:LIMB, imu-stuck:LIMB, imu-garbage:LIMB, "
+                        "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P]; "
+                        "append +T for T simulated seconds after the start (e.g. dead-actuator:sma-right+10)")
+    s.add_argument("--seed", type=int, default=1)
+    s.add_argument("--record", metavar="FILE", help="record every telemetry frame (.csv or .jsonl)")
+    s.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    s.add_argument("--pty", action="store_true",
+                   help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
+    s.add_argument("--speed", type=_positive_float, default=1.0, help="with --pty: times real time (default 1)")
+    s.set_defaults(run=cmd_sim)
     return p
+
+
+def _positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected a number above 0, got {text}")
+    return v
 
 
 def _firmware_args(p: argparse.ArgumentParser) -> None:
@@ -132,6 +159,130 @@ def cmd_flash(args: argparse.Namespace) -> int:
     flash(method, result.artifact, args.port)
     print(f"flashed {result.artifact} with {method.tool}")
     return 0
+
+
+# ---------------------------------------------------------------------------------------
+# proleg sim
+
+
+def cmd_sim(args: argparse.Namespace) -> int:
+    from .robot import load_robot
+    from .sim.run import SimulatedRobot
+    from .sim.session import SimSession
+
+    robot = load_robot(args.robot)
+    sim = SimulatedRobot(robot, seed=args.seed)
+    timed = []
+    for spec in args.inject:
+        fault, plus, at = spec.rpartition("+") if "+" in spec else ("", "", "")
+        if plus:
+            try:
+                timed.append((float(at), fault))
+            except ValueError:
+                from .errors import SimError
+
+                raise SimError(f"--inject {spec}: expected FAULT+SECONDS after '+', got {at!r}") from None
+        else:
+            sim.inject(spec)
+    if args.pty:
+        return _serve_pty(sim, args)
+    session = SimSession(sim, keep_telemetry=bool(args.record))
+    session.advance(0.2)  # boot
+    report = _run_with_faults(session, args, sorted(timed))
+    if args.record:
+        _record(robot, session, report, args.record)
+    if args.json:
+        print(json.dumps(_report_json(robot, report)))
+    else:
+        print(_report_text(robot, report))
+    return 0
+
+
+def _run_with_faults(session, args, timed):
+    """run_gait, with timed faults applied when their moment comes."""
+    if not timed:
+        return session.run_gait(args.direction, args.gait, args.duration)
+    original = session.advance
+    t0 = session.sim.time_s
+
+    def advance(seconds, chunk_s=0.02):
+        end = session.sim.time_s + seconds
+        while session.sim.time_s < end - 1e-9:
+            while timed and session.sim.time_s - t0 >= timed[0][0]:
+                session.sim.inject(timed.pop(0)[1])
+            original(min(chunk_s, end - session.sim.time_s), chunk_s)
+
+    session.advance = advance
+    try:
+        return session.run_gait(args.direction, args.gait, args.duration)
+    finally:
+        session.advance = original
+
+
+def _serve_pty(sim, args) -> int:
+    from .sim.pty import PtyServer
+
+    with PtyServer(sim, speed=args.speed) as server:
+        print(f"simulated {sim.robot.name} on {server.path} (115200 8N1; Ctrl-C to stop)", flush=True)
+        print(f"  connect with: proleg console --port {server.path}", flush=True)
+        try:
+            server.serve(args.duration if args.duration != 60.0 else None)
+        except KeyboardInterrupt:
+            pass
+    return 0
+
+
+def _record(robot, session, report, path: str) -> None:
+    from .link.recorder import record_messages
+
+    record_messages(path, report.telemetry, header={"robot": robot.name, "board": "host-sim"})
+
+
+def _report_json(robot, report) -> dict:
+    t = robot.transitions
+    return {
+        "robot": robot.name,
+        "direction": report.direction,
+        "gait": report.gait,
+        "duration_s": report.duration_s,
+        "cycles": report.cycles,
+        "cycle_displacements_mm": report.cycle_displacements_mm,
+        "mean_cycle_mm": report.mean_cycle_mm,
+        "displacement_mm": report.displacement_mm,
+        "states_reached": [t.label(s) for s in report.states_reached],
+        "true_transitions": report.true_transitions,
+        "unexpected_transitions": report.unexpected_transitions,
+        "faults": [{"time_s": f.time_s, "code": f.code, "detail": f.detail} for f in report.faults],
+        "telemetry_frames": report.telemetry_frames,
+        "telemetry_lost": report.telemetry_lost,
+        "link_errors": report.link_errors,
+    }
+
+
+def _report_text(robot, report) -> str:
+    t = robot.transitions
+    seq = [t.label(s) for s in report.states_reached]
+    shown = " → ".join(seq[:13]) + (" …" if len(seq) > 13 else "")
+    lines = [
+        f"{robot.name} on host-sim: gait {report.gait} in {report.direction} for {report.duration_s:g} s (simulated)",
+        f"  states reached:   {shown or 'none'}",
+        f"  cycles completed: {report.cycles}",
+    ]
+    if report.cycles:
+        per = ", ".join(f"{d:+.1f}" for d in report.cycle_displacements_mm[:8])
+        more = " …" if report.cycles > 8 else ""
+        lines.append(f"  displacement per cycle (mm): {per}{more}   mean {report.mean_cycle_mm:+.2f}")
+    lines.append(
+        f"  displacement total: {report.displacement_mm:+.1f} mm over {report.true_transitions} true transitions"
+        f" ({report.unexpected_transitions} not in the matrix)"
+    )
+    for f in report.faults:
+        lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+    errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
+    lines.append(
+        f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
+    )
+    return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------------------

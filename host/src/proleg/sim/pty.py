@@ -1,0 +1,89 @@
+"""Serve a simulated robot on a pseudo-terminal, in real time.
+
+Any serial tool, or ``proleg console --port /dev/pts/N``, then talks to the simulated
+board as to a real one on a USB serial port. The simulation is paced to the wall
+clock (``speed`` times real time); bytes the host does not read are dropped once the
+pty's buffer is full, like a UART whose cable nobody listens to, and counted.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import select
+import time
+import tty
+from collections.abc import Callable
+from pathlib import Path
+
+from .run import SimulatedRobot
+
+
+class PtyServer:
+    def __init__(self, sim: SimulatedRobot, speed: float = 1.0, link: str | Path | None = None):
+        self.sim = sim
+        self.speed = speed
+        self.master, self._slave = os.openpty()  # the slave stays open: clients may come and go
+        tty.setraw(self._slave)
+        os.set_blocking(self.master, False)
+        self.path = os.ttyname(self._slave)
+        self.link = Path(link) if link else None
+        if self.link is not None:
+            if self.link.is_symlink():
+                self.link.unlink()
+            self.link.symlink_to(self.path)
+        self.bytes_in = self.bytes_out = self.bytes_dropped = 0
+
+    def close(self) -> None:
+        if self.link is not None and self.link.is_symlink():
+            self.link.unlink()
+        for fd in (self.master, self._slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+    def __enter__(self) -> "PtyServer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def serve(self, duration_s: float | None = None, should_stop: Callable[[], bool] = lambda: False) -> None:
+        """Run until ``duration_s`` of virtual time has passed (forever if None) or stopped."""
+        sim = self.sim
+        wall0, sim0 = time.monotonic(), sim.time_s
+        pending = b""
+        while not should_stop():
+            elapsed = sim.time_s - sim0
+            if duration_s is not None and elapsed >= duration_s:
+                return
+            ready, _, _ = select.select([self.master], [], [], sim.plant_dt_s / self.speed)
+            if ready:
+                try:
+                    data = os.read(self.master, 4096)
+                except OSError as e:  # EIO: no client has the slave open right now
+                    if e.errno != errno.EIO:
+                        raise
+                    data = b""
+                if data:
+                    self.bytes_in += len(data)
+                    sim.write(data)
+            target = (time.monotonic() - wall0) * self.speed
+            while sim.time_s - sim0 < target:
+                sim.step()
+            pending += sim.read()
+            if pending:
+                pending = self._write(pending)
+
+    def _write(self, data: bytes) -> bytes:
+        try:
+            n = os.write(self.master, data)
+        except BlockingIOError:
+            n = 0
+        self.bytes_out += n
+        rest = data[n:]
+        if len(rest) > 65536:  # nobody is reading: drop the oldest, as a UART would
+            self.bytes_dropped += len(rest) - 65536
+            rest = rest[-65536:]
+        return rest
