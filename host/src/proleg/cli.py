@@ -341,10 +341,11 @@ def _result_text(robot, r) -> str:
     lines = [head + f"best {_fmt(r.value)}, {n} optimal gait{'s' if n != 1 else ''}"]
     if getattr(r, "truncated", False):
         lines[0] += f" (listing stopped after {n}: more ties exist)"
-    for gait in r.gaits:
-        walk = " → ".join(t.label(s) for s in gait.states)
+    walks = [" → ".join(t.label(s) for s in gait.states) for gait in r.gaits]
+    width = max(len(w) for w in walks)
+    for walk, gait in zip(walks, r.gaits):
         extra = f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
-        lines.append(f"    {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}{extra}")
+        lines.append(f"    {walk:<{width}}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}{extra}")
     return "\n".join(lines)
 
 

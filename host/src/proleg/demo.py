@@ -1,31 +1,46 @@
-"""``make demo``: the paper's robots, their optimal gaits in both directions.
+"""``make demo``: the main job, end to end on the simulated board.
 
-Later steps of the project extend this into the full closed-loop run on the simulated
-board; for now it is the gait engine answering the paper's questions from the matrices.
+1. The paper's four robots: their optimal gaits in both directions, from the matrices.
+2. Robot R1's firmware, built for the host-sim board (the same C as on the MCUs).
+3. That firmware in closed loop with the plant: R1's optimal +x gait, then its -x gait,
+   each for a simulated minute, with the displacement per cycle and telemetry summary.
 """
 
 from __future__ import annotations
 
 import sys
-from pathlib import Path
+import time
 
 from .cli import main as cli_main
+from .paths import robots_dir
 
 ROBOTS = ("paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator")
 
 
-def robots_dir() -> Path:
-    return Path(__file__).resolve().parents[3] / "robots"
+def _step(title: str) -> None:
+    print(f"\n== {title}", flush=True)
 
 
 def main() -> int:
+    robots = robots_dir()
+    _step("1. optimal gaits of the paper's robots (proleg gait ROBOT.toml)")
     for name in ROBOTS:
-        path = robots_dir() / f"{name}.toml"
-        print(f"$ proleg gait {path.relative_to(Path.cwd()) if path.is_relative_to(Path.cwd()) else path}")
-        status = cli_main(["gait", str(path)])
-        if status:
-            return status
-        print()
+        print(flush=True)
+        if cli_main(["gait", str(robots / f"{name}.toml")]):
+            return 1
+
+    r1 = str(robots / "paper-r1.toml")
+    _step("2. R1's firmware for the simulated board (proleg build robots/paper-r1.toml --board host-sim)")
+    if cli_main(["build", r1, "--board", "host-sim"]):
+        return 1
+
+    for direction in ("+x", "-x"):
+        _step(f"3. R1 in closed loop, optimal {direction} gait, one simulated minute "
+              f"(proleg sim robots/paper-r1.toml --direction {direction})")
+        t0 = time.perf_counter()
+        if cli_main(["sim", r1, "--direction", direction, "--duration", "60"]):
+            return 1
+        print(f"  ({60 / (time.perf_counter() - t0):.0f}x real time)")
     return 0
 
 

@@ -196,7 +196,7 @@ def _make(project: Path, jobs: int) -> None:
 
 def _sizes(board: Board, binary: Path, cwd: Path) -> tuple[int, int]:
     """(flash, static RAM) from the Berkeley size format: flash = text+data, RAM = data+bss."""
-    proc = subprocess.run([board.size_tool, "-B", str(binary)], capture_output=True, text=True, cwd=cwd)
+    proc = subprocess.run([board.size_tool, "-B", binary.name], capture_output=True, text=True, cwd=cwd)
     lines = proc.stdout.strip().splitlines()
     if proc.returncode != 0 or len(lines) < 2:
         raise BuildError(f"{board.size_tool} could not read {binary.name}: {proc.stderr.strip()}")
