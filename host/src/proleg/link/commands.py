@@ -1,0 +1,144 @@
+"""The link's CLI entry points, for ``proleg.cli`` to wire in (the CLI stays thin).
+
+``add_arguments(subparsers)`` adds ``console``, ``plot`` and ``dbc``; each sets ``run`` to a
+function taking the parsed namespace, which calls ``console_main`` / ``plot_main`` /
+``dbc_main`` with plain parameters. Errors are ``LinkError`` (or the robot/sim loaders'
+``ProlegError``): one line, no traceback, no half-written output file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TextIO
+
+from ..errors import LinkError
+from .base import Link
+from .can_link import CanLink
+from .client import RobotClient
+from .serial_link import DEFAULT_BAUDRATE, SerialLink
+from .sim_link import SimLink
+
+
+def open_link(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
+              node: int = 0, sim: str | Path | None = None, baudrate: int = DEFAULT_BAUDRATE,
+              speed: float | None = 1.0, bitrate: int | None = None) -> tuple[Link, Any]:
+    """Exactly one of ``port``, ``can_channel``, ``sim``; returns (link, robot or None)."""
+    chosen = [x for x in (port, can_channel, sim) if x is not None]
+    if len(chosen) != 1:
+        raise LinkError("give exactly one of --port URL, --can CHANNEL or --sim ROBOT.toml")
+    if port is not None:
+        return SerialLink(port, baudrate), None
+    if can_channel is not None:
+        return CanLink(can_channel, interface, node=node, bitrate=bitrate), None
+    from ..robot import load_robot
+    from ..sim.run import SimulatedRobot
+
+    robot = load_robot(sim)  # type: ignore[arg-type]
+    return SimLink(SimulatedRobot(robot), speed=speed, description=f"sim {robot.name}"), robot
+
+
+def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
+                 node: int = 0, sim: str | None = None, robot_file: str | None = None, baudrate: int = DEFAULT_BAUDRATE,
+                 record: str | None = None, plain: bool = False, duration_s: float | None = None,
+                 timeout: float = 0.5, out: TextIO | None = None) -> int:
+    """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame."""
+    from .console import ConsoleApp, LimbView, run_plain
+    from .recorder import Recorder, record_format
+
+    if record is not None:
+        record_format(record)  # reject an unknown extension before opening anything
+    out = out or sys.stdout
+    link, robot = open_link(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim,
+                            baudrate=baudrate)
+    if robot is None and robot_file is not None:
+        from ..robot import load_robot
+
+        robot = load_robot(robot_file)
+    with RobotClient(link, timeout=timeout) as client:
+        info = client.connect()
+        listeners = []
+        header: dict[str, Any] = info.header()
+        if robot is not None:
+            header["psi_star_deg"] = ";".join(",".join(f"{v:g}" for v in limb.psi_star_deg) for limb in robot.limbs)
+            header["limb_names"] = ",".join(limb.name for limb in robot.limbs)
+        header["link"] = link.description
+        if record is not None:
+            listeners.append(Recorder(record, header, limbs=info.limbs, channels=info.actuators))
+        levels = robot.levels if robot is not None else (2,) * info.limbs
+        if plain or not out.isatty():
+            from ..states import label
+
+            run_plain(client, listeners=listeners, out=out, duration_s=duration_s,
+                      labels=lambda s: label(s, levels) if s < _prod(levels) else str(s))
+            return 0
+        limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
+        ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners).run()
+    return 0
+
+
+def _prod(levels: Sequence[int]) -> int:
+    n = 1
+    for k in levels:
+        n *= k
+    return n
+
+
+def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
+    """``proleg plot FILE -o OUT.png``."""
+    from .plot import plot_recording
+
+    path = plot_recording(record_file, out, title=title)
+    print(f"wrote {path}")
+    return 0
+
+
+def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100) -> int:
+    """``proleg dbc -o FILE``."""
+    from .dbc import write_dbc
+
+    path = write_dbc(out, nodes, base)
+    print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})")
+    return 0
+
+
+# --------------------------------------------------------------------------- argparse
+def _int_auto(text: str) -> int:
+    try:
+        return int(text, 0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
+
+
+def add_arguments(subparsers: Any) -> None:
+    """Add ``console``, ``plot`` and ``dbc`` to the CLI's subparsers."""
+    c = subparsers.add_parser("console", help="live console (or --plain lines) on a robot over serial, CAN or the simulator")
+    src = c.add_mutually_exclusive_group(required=True)
+    src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port, loop://")
+    src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
+    src.add_argument("--sim", metavar="ROBOT.toml", help="run the robot's firmware on the simulated board")
+    c.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
+    c.add_argument("--node", type=_int_auto, default=0, help="CAN node id of the robot, 0..15 (default 0)")
+    c.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
+    c.add_argument("--robot", metavar="ROBOT.toml", help="robot file for limb names and ψ* (with --port/--can)")
+    c.add_argument("--record", metavar="FILE", help="record every frame to FILE (.csv or .jsonl)")
+    c.add_argument("--plain", action="store_true", help="print one line per telemetry frame instead of the UI")
+    c.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (plain mode)")
+    c.set_defaults(run=lambda a: console_main(
+        port=a.port, can_channel=a.can, interface=a.interface, node=a.node, sim=a.sim, robot_file=a.robot,
+        baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration))
+
+    p = subparsers.add_parser("plot", help="plot a recording: ψ vs ψ*, states, SMA duty, displacement")
+    p.add_argument("record_file", metavar="FILE", help="recording (.csv or .jsonl) from proleg console --record")
+    p.add_argument("-o", "--out", required=True, metavar="OUT.png", help="image to write (.png, .svg, .pdf)")
+    p.add_argument("--title")
+    p.set_defaults(run=lambda a: plot_main(record_file=a.record_file, out=a.out, title=a.title))
+
+    d = subparsers.add_parser("dbc", help="write a DBC file describing the robot's CAN frames")
+    d.add_argument("-o", "--out", required=True, metavar="FILE.dbc")
+    d.add_argument("--node", type=_int_auto, action="append", metavar="N",
+                   help="robot node id(s) on the bus (repeatable; default 0)")
+    d.add_argument("--base", type=_int_auto, default=0x100, help="base CAN id (default 0x100)")
+    d.set_defaults(run=lambda a: dbc_main(out=a.out, nodes=a.node or [0], base=a.base))

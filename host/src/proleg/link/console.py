@@ -1,0 +1,348 @@
+"""The live console: a textual UI on a ``RobotClient`` (``proleg console``), or one line per
+telemetry frame (``--plain``, for pipes).
+
+It is a listener like any other: a ``Notifier`` feeds ``ConsoleModel`` from the client's
+message stream; the UI redraws from the model ten times a second, so a 1 kHz telemetry
+stream costs the terminal nothing. Commands (start, stop, E-stop, clear) run on worker
+threads, so the UI never blocks on a reply.
+
+Keys: s start · x stop · e E-stop · c clear faults and E-stop · g next gait · d direction · q quit.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from rich.text import Text
+from textual.app import App, ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Footer, Static
+
+from ..errors import LinkError
+from ..protocol.definition import GAIT_USER, Direction, EventKind, FaultCode, Flag, StopReason
+from ..states import label as state_label
+from ..states import limb_levels
+from .client import Received, RobotClient, RobotInfo
+from .listeners import CallbackListener, Listener, Notifier, Printer
+
+BAR_WIDTH = 24
+
+
+@dataclass(frozen=True)
+class LimbView:
+    """What the console knows about a limb beyond telemetry (from the robot file, if given)."""
+
+    name: str
+    psi_star_deg: tuple[float, ...]
+
+
+@dataclass
+class ConsoleModel:
+    """Latest telemetry and counters, written by the Notifier thread, read by the UI."""
+
+    info: RobotInfo | None = None
+    telemetry: dict | None = None
+    truth: dict[str, float] = field(default_factory=dict)
+    events: deque[str] = field(default_factory=lambda: deque(maxlen=8))
+    faults: deque[str] = field(default_factory=lambda: deque(maxlen=4))
+    error: str = ""
+    _times: deque[float] = field(default_factory=lambda: deque(maxlen=2000))
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def on_message(self, rx: Received) -> None:
+        m = rx.message
+        with self._lock:
+            if m.name == "TELEMETRY":
+                self.telemetry = m.fields
+                self.truth = rx.truth
+                self._times.append(time.monotonic())
+            elif m.name == "EVENT":
+                text = describe_event(m.fields)
+                self.events.append(text)
+                if m.fields["kind"] == EventKind.FAULT:
+                    self.faults.append(text)
+                elif m.fields["kind"] == EventKind.FAULT_CLEARED:
+                    self.faults.clear()
+
+    def on_error(self, exc: Exception) -> None:
+        self.error = str(exc)
+
+    def frame_rate(self, window_s: float = 2.0) -> float:
+        with self._lock:
+            now = time.monotonic()
+            recent = [t for t in self._times if now - t <= window_s]
+        if len(recent) < 2:
+            return 0.0
+        span = max(now - recent[0], 1e-6)
+        return len(recent) / span
+
+    def snapshot(self) -> tuple[dict | None, dict[str, float], list[str], list[str]]:
+        with self._lock:
+            return self.telemetry, dict(self.truth), list(self.events), list(self.faults)
+
+
+def describe_event(f: dict) -> str:
+    t = f"{f['time_ms'] / 1000:8.3f}s"
+    kind, code, detail = f["kind"], f["code"], f["detail"]
+    try:
+        k = EventKind(kind)
+    except ValueError:
+        return f"{t} event {kind} code={code} detail={detail}"
+    if k == EventKind.FAULT:
+        try:
+            what = FaultCode(code).name
+        except ValueError:
+            what = f"fault {code}"
+        return f"{t} FAULT {what} (limb/channel {detail})"
+    if k == EventKind.GAIT_STOPPED:
+        try:
+            why = StopReason(code).name
+        except ValueError:
+            why = str(code)
+        return f"{t} gait stopped: {why}"
+    if k == EventKind.GAIT_STARTED:
+        d = "+x" if detail == Direction.PLUS_X else "-x"
+        return f"{t} gait {'user' if code == GAIT_USER else code} started {d}"
+    if k == EventKind.STATE_REACHED:
+        return f"{t} step {code} reached state {detail}"
+    return f"{t} {k.name.lower()} code={code} detail={detail}"
+
+
+def _bar(fraction: float, width: int = BAR_WIDTH) -> str:
+    fraction = min(1.0, max(0.0, fraction))
+    full = round(fraction * width)
+    return "█" * full + "░" * (width - full)
+
+
+def _flags_text(flags: int) -> str:
+    return " ".join(f.name.lower() for f in Flag if f & flags and f.name) or "-"
+
+
+class ConsoleApp(App[None]):
+    """The live console on one robot."""
+
+    CSS = """
+    Screen { layout: vertical; }
+    #top { height: 3; border: round $accent; padding: 0 1; }
+    #middle { height: auto; }
+    .panel { border: round $primary; padding: 0 1; height: auto; }
+    #limbs { width: 2fr; }
+    #state { width: 1fr; }
+    #duty { height: auto; }
+    #bottom { height: auto; }
+    #events { width: 2fr; }
+    #counters { width: 1fr; }
+    #status { height: 1; padding: 0 1; color: $warning; }
+    """
+    BINDINGS = [
+        Binding("s", "start", "Start"),
+        Binding("x", "stop", "Stop"),
+        Binding("e", "estop", "E-STOP"),
+        Binding("c", "clear", "Clear"),
+        Binding("g", "next_gait", "Gait"),
+        Binding("d", "direction", "Direction"),
+        Binding("q", "quit", "Quit"),
+    ]
+
+    def __init__(self, client: RobotClient, *, limbs: Sequence[LimbView] = (), levels: Sequence[int] = (),
+                 listeners: Sequence[Listener] = (), refresh_s: float = 0.1):
+        super().__init__()
+        self.client = client
+        self.model = ConsoleModel(info=client.info)
+        self.limb_views = list(limbs)
+        self.levels = tuple(levels)
+        self.extra_listeners = list(listeners)
+        self.refresh_s = refresh_s
+        self.gait = 0
+        self.direction = Direction.PLUS_X
+        self.status = ""
+        self.notifier: Notifier | None = None
+
+    # ------------------------------------------------------------------ layout
+    def compose(self) -> ComposeResult:
+        yield Static(id="top")
+        with Horizontal(id="middle"):
+            yield Static(id="limbs", classes="panel")
+            yield Static(id="state", classes="panel")
+        yield Static(id="duty", classes="panel")
+        with Horizontal(id="bottom"):
+            yield Static(id="events", classes="panel")
+            yield Static(id="counters", classes="panel")
+        yield Static(id="status")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        info = self.client.info
+        self.title = f"proleg console — {info.robot_name if info else self.client.link.description}"
+        for wid, title in (("limbs", "limbs: ψ vs ψ*"), ("state", "robot state"), ("duty", "SMA duty"),
+                           ("events", "events & faults"), ("counters", "link")):
+            self.query_one(f"#{wid}", Static).border_title = title
+        self.notifier = Notifier(self.client, [CallbackListener(self.model.on_message, self.model.on_error),
+                                               *self.extra_listeners])
+        self.refresh_view()
+        self.set_interval(self.refresh_s, self.refresh_view)
+
+    def on_unmount(self) -> None:
+        if self.notifier is not None:
+            self.notifier.stop()
+
+    # ------------------------------------------------------------------ view
+    def _n_limbs(self, tel: dict | None) -> int:
+        if tel is not None:
+            return len(tel["psi"])
+        return self.client.info.limbs if self.client.info else len(self.limb_views)
+
+    def _levels(self, n: int) -> tuple[int, ...]:
+        return self.levels if len(self.levels) == n else (2,) * n
+
+    def _label(self, state: int, n: int) -> str:
+        try:
+            return state_label(state, self._levels(n))
+        except Exception:
+            return str(state)
+
+    def refresh_view(self) -> None:
+        tel, truth, events, faults = self.model.snapshot()
+        info = self.client.info
+        top = Text()
+        if info is not None:
+            top.append(f"{info.robot_name}", style="bold")
+            top.append(f"  on {info.board} · build {info.build_id:08x} · gaits {info.gait_hash:08x} · "
+                       f"{info.limbs} limbs · {info.tick_hz} Hz tick · via {self.client.link.description}")
+        else:
+            top.append(self.client.link.description)
+        self.query_one("#top", Static).update(top)
+
+        n = self._n_limbs(tel)
+        levels = self._levels(n)
+        limbs = Text()
+        if tel is None:
+            limbs.append("waiting for telemetry…")
+        else:
+            measured = limb_levels(tel["measured"], levels) if tel["measured"] < _prod(levels) else (None,) * n
+            target = limb_levels(tel["target"], levels) if tel["target"] < _prod(levels) else (None,) * n
+            for i, p in enumerate(tel["psi"]):
+                view = self.limb_views[i] if i < len(self.limb_views) else LimbView(f"limb {i}", ())
+                psi = p / 100
+                stars = view.psi_star_deg
+                star = " / ".join(f"{s:.2f}°" for s in stars) if stars else "?"
+                rel = "≥" if stars and psi >= stars[0] else ("<" if stars else " ")
+                limbs.append(f"{view.name:<8} ψ {psi:7.2f}° {rel} ψ* {star:<8}  ")
+                s_now, s_want = measured[i], target[i]
+                style = "green" if s_now == s_want else "yellow"
+                limbs.append(f"S={s_now} (target {s_want})", style=style)
+                limbs.append("\n")
+        self.query_one("#limbs", Static).update(limbs)
+
+        state = Text()
+        if tel is not None:
+            d = "+x" if tel["direction"] == Direction.PLUS_X else "-x"
+            gait = "user" if tel["gait"] == GAIT_USER else str(tel["gait"])
+            ok = tel["measured"] == tel["target"]
+            state.append("measured ")
+            state.append(self._label(tel["measured"], n), style="bold green" if ok else "bold yellow")
+            state.append(f"   target {self._label(tel['target'], n)}\n")
+            state.append(f"gait {gait} {d} · step {tel['step']}\n")
+            state.append(f"flags {_flags_text(tel['flags'])}\n",
+                         style="bold red" if tel["flags"] & (Flag.ESTOP | Flag.FAULT) else "")
+            if "displacement_mm" in truth:
+                state.append(f"displacement {truth['displacement_mm']:.1f} mm (sim)\n")
+        sel_d = "+x" if self.direction == Direction.PLUS_X else "-x"
+        state.append(f"selected: gait {'user' if self.gait == GAIT_USER else self.gait} {sel_d}", style="dim")
+        self.query_one("#state", Static).update(state)
+
+        duty = Text()
+        if tel is not None:
+            for j, dv in enumerate(tel["duty"]):
+                duty.append(f"SMA {j} ")
+                duty.append(_bar(dv / 10000), style="red" if dv else "grey50")
+                duty.append(f" {dv / 100:5.1f} %\n")
+        self.query_one("#duty", Static).update(duty)
+
+        ev = Text()
+        for line in faults:
+            ev.append(line + "\n", style="bold red")
+        for line in events[-6:]:
+            ev.append(line + "\n")
+        self.query_one("#events", Static).update(ev)
+
+        st = self.client.stats
+        counters = Text(
+            f"telemetry {self.model.frame_rate():6.1f} fps\n"
+            f"frames ok {st.frames_ok}\n"
+            f"lost {st.lost} · corrupt {st.corrupt}\n"
+            f"reconnects {st.reconnects} · timeouts {st.timeouts}"
+        )
+        self.query_one("#counters", Static).update(counters)
+        status = self.model.error or self.status
+        self.query_one("#status", Static).update(status)
+
+    # ------------------------------------------------------------------ commands
+    def _command(self, what: str, call: Callable[[], object]) -> None:
+        def work() -> None:
+            try:
+                call()
+                self.status = f"{what}: ok"
+            except LinkError as e:
+                self.status = f"{what}: {e}"
+
+        self.status = f"{what}…"
+        self.run_worker(work, thread=True, group="commands", exclusive=False)
+
+    def action_start(self) -> None:
+        gait, direction = self.gait, self.direction
+        self._command(f"start gait {gait} {'+x' if direction == Direction.PLUS_X else '-x'}",
+                      lambda: self.client.start(gait, direction))
+
+    def action_stop(self) -> None:
+        self._command("stop", self.client.stop)
+
+    def action_estop(self) -> None:
+        self._command("E-STOP", self.client.estop)
+
+    def action_clear(self) -> None:
+        self._command("clear", self.client.clear)
+
+    def action_next_gait(self) -> None:
+        info = self.client.info
+        n = info.gaits if info else 1
+        tel = self.model.telemetry
+        user = bool(tel and tel["flags"] & Flag.USER_GAIT)
+        choices = list(range(max(1, n))) + ([GAIT_USER] if user else [])
+        idx = choices.index(self.gait) if self.gait in choices else -1
+        self.gait = choices[(idx + 1) % len(choices)]
+        self.refresh_view()
+
+    def action_direction(self) -> None:
+        self.direction = Direction.MINUS_X if self.direction == Direction.PLUS_X else Direction.PLUS_X
+        self.refresh_view()
+
+
+def _prod(levels: Sequence[int]) -> int:
+    n = 1
+    for k in levels:
+        n *= k
+    return n
+
+
+def run_plain(client: RobotClient, *, listeners: Sequence[Listener] = (), out: TextIO | None = None,
+              duration_s: float | None = None, labels: Callable[[int], str] | None = None) -> None:
+    """Print one line per telemetry frame until interrupted (or ``duration_s`` wall seconds);
+    a link failure ends it with ``LinkError``."""
+    printer = Printer(out or sys.stdout, telemetry_only=True, labels=labels)
+    notifier = Notifier(client, [printer, *listeners])
+    t_end = None if duration_s is None else time.monotonic() + duration_s
+    try:
+        while notifier.running and (t_end is None or time.monotonic() < t_end):
+            time.sleep(0.05)
+    finally:
+        notifier.stop()
+    if notifier.error is not None:
+        raise notifier.error
