@@ -1,0 +1,40 @@
+/* Host unit tests of an actuator that drives several limbs (the paper's R1 with one
+ * coil): both limbs on actuator 0. */
+#include <math.h>
+
+#include "ctl.h"
+#include "psi.h"
+#include "unit.h"
+
+#define PI_D 3.14159265358979323846
+
+static void put(uint8_t limb, double deg)
+{
+    psi_update(limb, (int16_t)lround(8192.0 * sin(deg * PI_D / 180.0)),
+               (int16_t)lround(8192.0 * cos(deg * PI_D / 180.0)));
+}
+
+static void test_shared_actuator_heats_if_any_of_its_limbs_must_go_up(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint8_t target[CFG_N_LIMBS];
+    psi_init();
+    CHECK_EQ(CFG_N_ACTUATORS, 1);
+    CHECK_EQ(ctl_limb_actuator(0), 0);
+    CHECK_EQ(ctl_limb_actuator(1), 0);
+    put(0, 30.0); /* level 1, must go down */
+    put(1, 0.0);  /* level 0, must go up */
+    target[0] = 0;
+    target[1] = 1;
+    ctl_demand(target, 5000, duty);
+    CHECK_EQ(duty[0], 5000);
+    target[1] = 0; /* both down */
+    ctl_demand(target, 5000, duty);
+    CHECK_EQ(duty[0], 0);
+}
+
+int main(void)
+{
+    RUN(test_shared_actuator_heats_if_any_of_its_limbs_must_go_up);
+    return UNIT_EXIT();
+}

@@ -1,0 +1,188 @@
+/* Host unit tests of core/psi.c (ψ classifier, hysteresis, debounce, integer atan2).
+ * Built by tests/test_firmware_core.py against the rendered config of a paper-R1-like
+ * robot: ψ* = 20°, hysteresis 2° (band edges 19° and 21°), debounce CFG_DEBOUNCE_TICKS. */
+#include <math.h>
+
+#include "psi.h"
+#include "unit.h"
+
+#define PI_D 3.14159265358979323846
+#define G 8192.0 /* LSB per g at ±4 g */
+
+static int16_t ax_of(double deg) { return (int16_t)lround(G * sin(deg * PI_D / 180.0)); }
+static int16_t az_of(double deg) { return (int16_t)lround(G * cos(deg * PI_D / 180.0)); }
+static double ref_deg(int16_t ax, int16_t az) { return atan2((double)ax, (double)az) * 180.0 / PI_D; }
+
+/* Float reference of the two-edge hysteresis classifier for one threshold. */
+static uint8_t ref_level(uint8_t prev, double psi, double lo, double hi)
+{
+    if (prev == 1u) {
+        return psi < lo ? 0u : 1u;
+    }
+    return psi >= hi ? 1u : 0u;
+}
+
+static void sweep_against_reference(double lo, double hi)
+{
+    double deg;
+    for (deg = -89.9; deg <= 89.9; deg += 0.01) {
+        int16_t ax = ax_of(deg), az = az_of(deg);
+        double r = ref_deg(ax, az);
+        uint8_t prev;
+        if (fabs(r - lo) < 0.01 || fabs(r - hi) < 0.01) {
+            continue; /* within the Q14 constants' resolution of an edge */
+        }
+        for (prev = 0; prev <= 1u; prev++) {
+            if (psi_classify(0, prev, ax, az) != ref_level(prev, r, lo, hi)) {
+                printf("  at %.3f deg (ref %.4f) prev %u: got %u\n", deg, r, prev, psi_classify(0, prev, ax, az));
+            }
+            CHECK_EQ(psi_classify(0, prev, ax, az), ref_level(prev, r, lo, hi));
+        }
+        CHECK_EQ(psi_classify(0, PSI_UNKNOWN, ax, az), ref_level(0, r, lo, hi));
+    }
+}
+
+static void test_classifier_agrees_with_float_atan2_across_angles(void)
+{
+    psi_init();
+    sweep_against_reference(19.0, 21.0);
+}
+
+static void test_level_holds_inside_the_hysteresis_band(void)
+{
+    psi_init();
+    CHECK_EQ(psi_classify(0, 1, ax_of(19.5), az_of(19.5)), 1);
+    CHECK_EQ(psi_classify(0, 0, ax_of(20.5), az_of(20.5)), 0);
+    CHECK_EQ(psi_classify(0, 0, ax_of(21.05), az_of(21.05)), 1);
+    CHECK_EQ(psi_classify(0, 1, ax_of(18.95), az_of(18.95)), 0);
+}
+
+static void test_classifier_scales_with_any_gravity_magnitude(void)
+{
+    /* Only the direction matters: ±2 g or ±16 g full scale give the same levels. */
+    double m;
+    psi_init();
+    for (m = 500.0; m < 32000.0; m *= 1.7) {
+        int16_t ax = (int16_t)lround(m * sin(25.0 * PI_D / 180.0));
+        int16_t az = (int16_t)lround(m * cos(25.0 * PI_D / 180.0));
+        CHECK_EQ(psi_classify(0, 0, ax, az), 1);
+        ax = (int16_t)lround(m * sin(15.0 * PI_D / 180.0));
+        az = (int16_t)lround(m * cos(15.0 * PI_D / 180.0));
+        CHECK_EQ(psi_classify(0, 1, ax, az), 0);
+    }
+}
+
+static void test_debounce_reports_a_change_after_n_consecutive_samples(void)
+{
+    uint16_t i;
+    psi_init();
+    CHECK_EQ(psi_level(0), PSI_UNKNOWN);
+    CHECK_EQ(psi_update(0, ax_of(0.0), az_of(0.0)), 0); /* first sample: no history to debounce */
+    for (i = 1; i < CFG_DEBOUNCE_TICKS; i++) {
+        CHECK_EQ(psi_update(0, ax_of(25.0), az_of(25.0)), 0);
+    }
+    CHECK_EQ(psi_update(0, ax_of(25.0), az_of(25.0)), 1);
+}
+
+static void test_debounce_ignores_a_glitch_shorter_than_n_samples(void)
+{
+    uint16_t i, round;
+    psi_init();
+    psi_update(0, ax_of(0.0), az_of(0.0));
+    for (round = 0; round < 5; round++) {
+        for (i = 1; i < CFG_DEBOUNCE_TICKS; i++) {
+            CHECK_EQ(psi_update(0, ax_of(25.0), az_of(25.0)), 0);
+        }
+        CHECK_EQ(psi_update(0, ax_of(0.0), az_of(0.0)), 0);
+    }
+}
+
+static void test_debounce_one_reports_every_change_at_once(void)
+{
+    psi_init();
+    psi_set_debounce(1);
+    psi_update(0, ax_of(0.0), az_of(0.0));
+    CHECK_EQ(psi_update(0, ax_of(25.0), az_of(25.0)), 1);
+    CHECK_EQ(psi_update(0, ax_of(0.0), az_of(0.0)), 0);
+}
+
+static void test_limbs_are_classified_independently(void)
+{
+    psi_init();
+    psi_set_debounce(1);
+    psi_update(0, ax_of(30.0), az_of(30.0));
+    psi_update(1, ax_of(5.0), az_of(5.0));
+    CHECK_EQ(psi_level(0), 1);
+    CHECK_EQ(psi_level(1), 0);
+}
+
+static void test_integer_atan2_is_within_0_02_deg_of_float_all_round(void)
+{
+    static const double mags[] = {300.0, 8192.0, 16384.0, 32000.0};
+    double worst = 0.0;
+    unsigned k;
+    for (k = 0; k < sizeof mags / sizeof mags[0]; k++) {
+        double deg;
+        for (deg = -179.99; deg <= 180.0; deg += 0.173) {
+            int16_t ax = (int16_t)lround(mags[k] * sin(deg * PI_D / 180.0));
+            int16_t az = (int16_t)lround(mags[k] * cos(deg * PI_D / 180.0));
+            double err = psi_centideg(ax, az) - ref_deg(ax, az) * 100.0;
+            if (err > 18000.0) {
+                err -= 36000.0;
+            } else if (err < -18000.0) {
+                err += 36000.0;
+            }
+            if (fabs(err) > worst) {
+                worst = fabs(err);
+            }
+        }
+    }
+    printf("  worst atan2 error %.2f cdeg\n", worst);
+    CHECK(worst <= 2.0);
+}
+
+static void test_integer_sin_cos_match_float_within_2_lsb(void)
+{
+    int32_t cd;
+    for (cd = -9000; cd <= 9000; cd += 7) {
+        double r = cd / 100.0 * PI_D / 180.0;
+        CHECK(labs((long)psi_sin_q14((int16_t)cd) - lround(sin(r) * 16384.0)) <= 2);
+        CHECK(labs((long)psi_cos_q14((int16_t)cd) - lround(cos(r) * 16384.0)) <= 2);
+    }
+}
+
+static void test_moved_threshold_classifies_like_a_rendered_one(void)
+{
+    psi_init();
+    CHECK_EQ(psi_set_band(0, 0, 3000, 200), 0);
+    CHECK_EQ(psi_star_cdeg(0, 0), 3000);
+    sweep_against_reference(29.0, 31.0);
+    CHECK_EQ(psi_set_band(0, 0, -4550, 50), 0);
+    sweep_against_reference(-45.75, -45.25);
+}
+
+static void test_threshold_band_reaching_90_deg_is_refused(void)
+{
+    psi_init();
+    CHECK(psi_set_band(0, 0, 8950, 200) != 0);
+    CHECK(psi_set_band(0, 0, 2000, 2500) != 0);
+    CHECK(psi_set_band(0, 1, 2000, 200) != 0); /* a two-level limb has one threshold */
+    CHECK(psi_set_band(CFG_N_LIMBS, 0, 2000, 200) != 0);
+    sweep_against_reference(19.0, 21.0); /* unchanged */
+}
+
+int main(void)
+{
+    RUN(test_classifier_agrees_with_float_atan2_across_angles);
+    RUN(test_level_holds_inside_the_hysteresis_band);
+    RUN(test_classifier_scales_with_any_gravity_magnitude);
+    RUN(test_debounce_reports_a_change_after_n_consecutive_samples);
+    RUN(test_debounce_ignores_a_glitch_shorter_than_n_samples);
+    RUN(test_debounce_one_reports_every_change_at_once);
+    RUN(test_limbs_are_classified_independently);
+    RUN(test_integer_atan2_is_within_0_02_deg_of_float_all_round);
+    RUN(test_integer_sin_cos_match_float_within_2_lsb);
+    RUN(test_moved_threshold_classifies_like_a_rendered_one);
+    RUN(test_threshold_band_reaching_90_deg_is_refused);
+    return UNIT_EXIT();
+}

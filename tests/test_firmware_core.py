@@ -1,0 +1,438 @@
+"""Host unit tests of the hand-written firmware core (firmware_templates/core, hal/sim).
+
+Each C test in tests/c/ is compiled with the host cc (C99, -Wall -Wextra -Werror -pedantic,
+AddressSanitizer/UBSan when the compiler has them) against a robot_config.h/gait_table.c
+rendered by ``render_config`` from a small robot described here, then run; its output
+names every C test case. The last tests load the whole firmware built for the simulated
+board and talk to it in its own protocol (E-stop, IMU faults, safety envelope).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import shutil
+import subprocess
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from proleg.errors import BuildError
+from proleg.firmware.config import render_config
+from proleg.protocol import definition as d
+from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.protocol.render import render_c
+from proleg.robot import robot_from_dict
+from proleg.transitions import TransitionTable
+
+ROOT = Path(__file__).resolve().parents[1]
+CORE = ROOT / "firmware_templates" / "core"
+SIM = ROOT / "firmware_templates" / "hal" / "sim"
+CDIR = Path(__file__).resolve().parent / "c"
+CC = shutil.which("cc") or shutil.which("gcc")
+CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-g", "-O1"]
+
+pytestmark = pytest.mark.skipif(CC is None, reason="no host C compiler")
+
+SIM_BOARD = {
+    "name": "host-sim",
+    "family": "sim",
+    "pwm_channels": ["SIM0", "SIM1", "SIM2", "SIM3"],
+    "i2c": {"hz": 400000, "imu_addresses": [0x68, 0x69]},
+    "uart_baud": 115200,
+    "clock_hz": 0,
+}
+
+
+def _robot_doc(**over):
+    doc = {
+        "robot": {"name": "test-r1"},
+        "limb": [
+            {"name": "left", "psi_star_deg": [20.0], "hysteresis_deg": 2.0, "actuator": "a0"},
+            {"name": "right", "psi_star_deg": [20.0], "hysteresis_deg": 2.0, "actuator": "a1"},
+        ],
+        "actuator": [{"name": "a0", "channel": 0}, {"name": "a1", "channel": 1}],
+        "transitions": {"matrix": [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]},
+        "safety": {"max_on_ms": 50, "min_cooldown_ms": 20, "max_duty": 0.8, "state_timeout_ms": 200},
+        "control": {"tick_hz": 1000, "drive_duty": 0.6, "debounce_ticks": 3, "hold_ms": 10, "telemetry_hz": 50},
+    }
+    doc.update(over)
+    return doc
+
+
+def _gait(*states):
+    return SimpleNamespace(states=tuple(states))
+
+
+def _r1_fast():
+    robot = robot_from_dict(_robot_doc(), Path("tests/r1-fast.toml"))
+    return robot, {"+x": [_gait(0, 2, 3, 1, 0), _gait(0, 2, 0)], "-x": []}, SIM_BOARD
+
+
+def _r1_one_actuator():
+    doc = _robot_doc(
+        actuator=[{"name": "a0", "channel": 0}],
+        transitions={"matrix": [[0, "x", 1, "x"], ["x", "x", "x", "x"], [-1, "x", 0, 1], ["x", "x", 0, 0]]},
+    )
+    doc["limb"][1]["actuator"] = "a0"
+    robot = robot_from_dict(doc, Path("tests/r1-1act.toml"))
+    return robot, {"+x": [_gait(0, 2, 3, 2, 0)], "-x": []}, SIM_BOARD
+
+
+def _multi_level():
+    doc = _robot_doc(
+        limb=[
+            {"name": "left", "levels": 3, "psi_star_deg": [-10.0, 15.0], "hysteresis_deg": 4.0, "actuator": "a0"},
+            {"name": "right", "psi_star_deg": [30.0], "hysteresis_deg": 2.0, "actuator": "a1"},
+        ],
+        transitions={"matrix": [[0 if a == b else 1 for b in range(6)] for a in range(6)]},
+    )
+    robot = robot_from_dict(doc, Path("tests/multi.toml"))
+    return robot, {"+x": [_gait(0, 3, 5, 0)], "-x": [_gait(0, 1, 0)]}, SIM_BOARD
+
+
+def _big():
+    """128 states (7 binary limbs): the allowed transitions become a sorted key list."""
+    base = robot_from_dict(_robot_doc(), Path("tests/big.toml"))
+    limb = base.limbs[0]
+    limbs = tuple(dataclasses.replace(limb, name=f"l{i}", actuator="a0") for i in range(7))
+    src, dst = [], []
+    for a in range(128):
+        for b in {(a + 1) % 128, (3 * a + 7) % 128}:
+            if a != b:
+                src.append(a)
+                dst.append(b)
+    table = TransitionTable.from_edges((2,) * 7, src, dst, np.ones(len(src)))
+    robot = dataclasses.replace(base, limbs=limbs, actuators=base.actuators[:1], transitions=table)
+    board = dict(SIM_BOARD, i2c={"imu_addresses": list(range(0x68, 0x6F))})
+    return robot, {"+x": [_gait(0, 1, 0)], "-x": []}, board
+
+
+CONFIGS = {"r1-fast": _r1_fast, "r1-1act": _r1_one_actuator, "multi": _multi_level, "big": _big}
+
+# C test → (config, core sources, extra sources, defines)
+C_TESTS = {
+    "test_psi.c": ("r1-fast", ["psi.c"], [], []),
+    "test_psi_multilevel.c": ("multi", ["psi.c", "seq.c"], ["gait_table.c"], []),
+    "test_sma.c": ("r1-fast", ["sma.c"], [], []),
+    "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c"], [], []),
+    "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c"], [], []),
+    "test_seq.c": ("r1-fast", ["seq.c", "psi.c"], ["gait_table.c"], []),
+    "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c"], ["gait_table.c"], []),
+    "test_seq_edges.c": ("big", ["seq.c", "psi.c"], ["gait_table.c"], []),
+    "test_sim_mpu6050.c": ("r1-fast", ["mpu6050.c"], [SIM / "sim_mpu6050.c"], ["-DFAKE_HAL_SIM_MPU"]),
+}
+
+
+@pytest.fixture(scope="session")
+def sanitizers(tmp_path_factory) -> list[str]:
+    flags = ["-fsanitize=address,undefined", "-fno-omit-frame-pointer"]
+    d_ = tmp_path_factory.mktemp("san")
+    (d_ / "t.c").write_text("int main(void) { return 0; }\n")
+    ok = subprocess.run([CC, *flags, str(d_ / "t.c"), "-o", str(d_ / "t")], capture_output=True).returncode == 0
+    return flags if ok else []
+
+
+@pytest.fixture(scope="session")
+def rendered(tmp_path_factory):
+    cache: dict[str, Path] = {}
+
+    def get(name: str) -> Path:
+        if name not in cache:
+            robot, gaits, board = CONFIGS[name]()
+            out = tmp_path_factory.mktemp(f"cfg-{name}")
+            for fname, text in render_config(robot, gaits, board).items():
+                (out / fname).write_text(text)
+            for fname, text in render_c(len(robot.limbs), len(robot.actuators)).items():
+                (out / fname).write_text(text)
+            cache[name] = out
+        return cache[name]
+
+    return get
+
+
+@pytest.mark.parametrize("test_file", sorted(C_TESTS))
+def test_c_unit(test_file, rendered, sanitizers, tmp_path):
+    config, core, extra, defines = C_TESTS[test_file]
+    gen = rendered(config)
+    sources = [CDIR / test_file, CDIR / "fake_hal.c"] + [CORE / c for c in core]
+    sources += [gen / e if isinstance(e, str) else e for e in extra]
+    exe = tmp_path / test_file.removesuffix(".c")
+    cmd = [CC, *CFLAGS, *sanitizers, *defines, f"-I{CORE}", f"-I{gen}", f"-I{SIM}", f"-I{CDIR}"]
+    cmd += [str(s) for s in sources] + ["-o", str(exe), "-lm"]
+    build = subprocess.run(cmd, capture_output=True, text=True)
+    assert build.returncode == 0, build.stderr
+    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
+    print(run.stdout)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "FAIL" not in run.stdout
+
+
+def test_render_is_deterministic_and_names_its_inputs():
+    robot, gaits, board = _r1_fast()
+    a = render_config(robot, gaits, board)
+    b = render_config(robot, gaits, board)
+    assert a == b
+    assert set(a) == {"robot_config.h", "gait_table.c"}
+    head = a["robot_config.h"].splitlines()[:4]
+    assert any("proleg.firmware.config" in line for line in head)
+    assert any("sha256" in line for line in head)
+    assert "#define CFG_GAIT_TABLE_HASH 0x" in a["robot_config.h"]
+
+
+def test_gait_hash_changes_with_the_gaits_but_build_inputs_do_not_leak_time():
+    robot, gaits, board = _r1_fast()
+    a = render_config(robot, gaits, board)["robot_config.h"]
+    b = render_config(robot, {"+x": gaits["+x"][:1], "-x": []}, board)["robot_config.h"]
+    pick = lambda t: [line for line in t.splitlines() if "CFG_GAIT_TABLE_HASH" in line]  # noqa: E731
+    assert pick(a) != pick(b)
+
+
+def test_render_refuses_a_channel_the_board_lacks():
+    robot, gaits, board = _r1_fast()
+    with pytest.raises(BuildError, match="channel"):
+        render_config(robot, gaits, dict(board, pwm_channels=["SIM0"]))
+
+
+def test_render_refuses_a_pin_the_avr_hal_cannot_drive():
+    robot, gaits, board = _r1_fast()
+    avr = dict(board, name="nano", family="avr", pwm_channels=["D9", "D7"])
+    with pytest.raises(BuildError, match="D7"):
+        render_config(robot, gaits, avr)
+
+
+def test_render_refuses_a_band_reaching_90_degrees():
+    doc = _robot_doc()
+    doc["limb"][0]["psi_star_deg"] = [89.5]
+    robot = robot_from_dict(doc, Path("tests/steep.toml"))
+    with pytest.raises(BuildError, match="90"):
+        render_config(robot, {"+x": [], "-x": []}, SIM_BOARD)
+
+
+def test_no_gait_in_either_direction_still_renders_valid_c(rendered, tmp_path):
+    robot, _, board = _r1_fast()
+    files = render_config(robot, {"+x": [], "-x": []}, board)
+    assert "#define CFG_N_GAITS_PX 0u" in files["robot_config.h"]
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    r = subprocess.run(
+        [CC, *CFLAGS, f"-I{CORE}", f"-I{tmp_path}", "-c", str(tmp_path / "gait_table.c"), "-o", str(tmp_path / "g.o")],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0, r.stderr
+
+
+# ------------------------------------------------------------------ the whole firmware on the simulated board
+
+
+class SimBoard:
+    """Minimal ctypes driver of the host-sim ABI for these tests (proleg.sim has the real one)."""
+
+    def __init__(self, so: Path, limbs: int, channels: int):
+        lib = ctypes.CDLL(str(so))
+        lib.sim_imu_set_truth.argtypes = [ctypes.c_uint8, ctypes.c_double, ctypes.c_double]
+        lib.sim_imu_set_noise.argtypes = [ctypes.c_uint8, ctypes.c_double, ctypes.c_double, ctypes.c_double]
+        lib.sim_uart_read.restype = ctypes.c_uint32
+        lib.sim_pwm_duty.restype = ctypes.c_uint16
+        lib.sim_imu_peek_reg.restype = ctypes.c_uint8
+        lib.sim_time_us.restype = ctypes.c_uint64
+        self.lib = lib
+        self.decoder = FrameDecoder(limbs, channels)
+        self.buf = (ctypes.c_uint8 * 65536)()
+        self.token = 0
+        self.log: list[Message] = []
+
+    def reset(self, seed=1):
+        self.lib.sim_reset(seed)
+        return self.run(10)  # INFO + BOOT take a few ms at 115200 baud
+
+    def run(self, n):
+        self.lib.sim_run_ticks(n)
+        k = self.lib.sim_uart_read(self.buf, len(self.buf))
+        msgs = self.decoder.feed(bytes(self.buf[:k]))
+        self.log += msgs
+        return msgs
+
+    def send(self, name, **fields):
+        self.token = self.token % 255 + 1
+        raw = encode(Message.new(name, token=self.token, **fields))
+        self.lib.sim_uart_write((ctypes.c_uint8 * len(raw))(*raw), len(raw))
+        return self.token
+
+    def reply(self, token, ticks=3):
+        for m in self.run(ticks):
+            if m.spec.name in ("ACK", "NACK", "INFO", "STATS") and m.token == token:
+                return m
+        raise AssertionError(f"no reply to token {token}")
+
+    def set_psi(self, limb, deg):
+        self.lib.sim_imu_set_truth(0x68 + limb, deg, 0.0)
+
+    def duty(self, ch):
+        return self.lib.sim_pwm_duty(ch)
+
+
+@pytest.fixture(scope="session")
+def sim_so(rendered, tmp_path_factory):
+    def build(config: str) -> Path:
+        gen = rendered(config)
+        out = tmp_path_factory.mktemp(f"so-{config}") / "libfirmware.so"
+        srcs = sorted(CORE.glob("*.c")) + sorted(SIM.glob("*.c")) + [gen / "gait_table.c", gen / "proto_gen.c"]
+        cmd = [CC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", "-fPIC", "-fvisibility=hidden"]
+        cmd += [f"-I{CORE}", f"-I{SIM}", f"-I{gen}", *map(str, srcs), "-shared", "-lm", "-o", str(out)]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        return out
+
+    cache: dict[str, Path] = {}
+
+    def get(config: str) -> Path:
+        if config not in cache:
+            cache[config] = build(config)
+        return cache[config]
+
+    return get
+
+
+@pytest.fixture
+def board(sim_so):
+    b = SimBoard(sim_so("r1-fast"), 2, 2)
+    b.set_psi(0, 0.0)
+    b.set_psi(1, 0.0)
+    b.reset()
+    b.run(5)
+    return b
+
+
+def _events(msgs, kind):
+    return [m for m in msgs if m.spec.name == "EVENT" and m.kind == kind]
+
+
+def _heating(board: SimBoard) -> None:
+    """Start +x gait #0 (00 -> 10 ...) and run until the left SMA is on."""
+    assert board.reply(board.send("START", gait=0, direction=0)).spec.name == "ACK"
+    for _ in range(100):
+        board.run(1)
+        if board.duty(0) > 0:
+            return
+    raise AssertionError("left SMA never switched on")
+
+
+def test_boot_sends_info_and_boot_event(sim_so):
+    b = SimBoard(sim_so("r1-fast"), 2, 2)
+    msgs = b.reset()
+    assert msgs[0].spec.name == "INFO" and msgs[0].token == 0 and msgs[0].robot_name == "test-r1"
+    assert _events(msgs, d.EventKind.BOOT)
+
+
+def test_estop_turns_every_mosfet_off_within_one_tick(board):
+    _heating(board)
+    assert board.duty(0) == 6000
+    board.send("ESTOP")
+    board.run(1)
+    assert all(board.duty(ch) == 0 for ch in range(4))
+    board.run(5)  # the ACK and event reach the host at line speed
+    assert _events(board.log, d.EventKind.ESTOP)
+    nack = board.reply(board.send("START", gait=0, direction=0))
+    assert nack.spec.name == "NACK" and nack.error == d.ErrorCode.ESTOP_LATCHED
+    board.run(50)
+    assert board.duty(0) == 0
+    assert board.reply(board.send("CLEAR", what=int(d.ClearWhat.ESTOP))).spec.name == "ACK"
+    assert board.reply(board.send("START", gait=0, direction=0)).spec.name == "ACK"
+
+
+def test_imu_that_stops_answering_turns_everything_off_within_two_ticks(board):
+    _heating(board)
+    board.lib.sim_imu_set_fault(0x68, 1)
+    board.run(2)
+    assert board.duty(0) == 0 and board.duty(1) == 0
+    board.run(5)
+    faults = _events(board.log, d.EventKind.FAULT)
+    assert faults and faults[-1].code == d.FaultCode.IMU_NO_ACK and faults[-1].detail == 0
+    nack = board.reply(board.send("START", gait=0, direction=0))
+    assert nack.spec.name == "NACK" and nack.error == d.ErrorCode.NOT_ALLOWED
+
+
+def test_imu_garbage_is_a_fault_at_once(board):
+    _heating(board)
+    board.lib.sim_imu_set_fault(0x69, 3)
+    board.run(2)
+    assert board.duty(0) == 0
+    board.run(5)
+    assert _events(board.log, d.EventKind.FAULT)[-1].code == d.FaultCode.IMU_BAD_DATA
+
+
+def test_stuck_imu_is_a_fault_and_clears_when_it_recovers(board):
+    board.lib.sim_imu_set_fault(0x68, 2)
+    board.run(400)
+    fault = _events(board.log, d.EventKind.FAULT)
+    assert fault and fault[-1].code == d.FaultCode.IMU_BAD_DATA
+    board.lib.sim_imu_set_fault(0x68, 0)
+    assert board.reply(board.send("CLEAR", what=int(d.ClearWhat.FAULTS))).spec.name == "ACK"
+    board.run(10)
+    assert _events(board.log, d.EventKind.FAULT_CLEARED)
+    assert board.reply(board.send("START", gait=0, direction=0)).spec.name == "ACK"
+
+
+def test_dead_actuator_ends_in_a_state_timeout_with_everything_off(board):
+    _heating(board)  # ψ never moves: the plant is dead
+    board.run(250)
+    fault = _events(board.log, d.EventKind.FAULT)
+    assert fault and fault[-1].code == d.FaultCode.STATE_TIMEOUT and fault[-1].detail == 0
+    assert _events(board.log, d.EventKind.GAIT_STOPPED)[-1].code == d.StopReason.FAULT
+    assert board.duty(0) == 0 and board.duty(1) == 0
+
+
+def test_gait_advances_when_the_limbs_reach_their_states(board):
+    _heating(board)
+    board.set_psi(0, 25.0)  # left up: 10 reached
+    board.run(40)
+    reached = _events(board.log, d.EventKind.STATE_REACHED)
+    assert [m.detail for m in reached][-1] == 2
+    assert board.duty(1) == 6000  # next step 11: right SMA on
+
+
+@pytest.mark.parametrize(
+    "param, value, error",
+    [
+        (d.ParamId.DRIVE_DUTY, 8001, d.ErrorCode.SAFETY_LIMIT),
+        (d.ParamId.DRIVE_DUTY, 0, d.ErrorCode.OUT_OF_RANGE),
+        (d.ParamId.MAX_ON_MS, 51, d.ErrorCode.SAFETY_LIMIT),
+        (d.ParamId.MIN_COOLDOWN_MS, 19, d.ErrorCode.SAFETY_LIMIT),
+        (d.ParamId.STATE_TIMEOUT_MS, 201, d.ErrorCode.SAFETY_LIMIT),
+        (d.ParamId.PSI_STAR_CDEG, 9500, d.ErrorCode.OUT_OF_RANGE),
+        (99, 1, d.ErrorCode.OUT_OF_RANGE),
+    ],
+)
+def test_set_param_outside_the_envelope_is_nacked(board, param, value, error):
+    m = board.reply(board.send("SET_PARAM", param=int(param), index=0, value=value))
+    assert m.spec.name == "NACK" and m.error == error and m.detail == int(param)
+
+
+def test_set_param_inside_the_envelope_is_used(board):
+    assert board.reply(board.send("SET_PARAM", param=int(d.ParamId.DRIVE_DUTY), index=0, value=3000)).spec.name == "ACK"
+    _heating(board)
+    assert board.duty(0) == 3000
+
+
+def test_load_gait_with_a_forbidden_transition_is_nacked(sim_so):
+    b = SimBoard(sim_so("r1-1act"), 2, 1)
+    b.reset()
+    m = b.reply(b.send("LOAD_GAIT", states=(0, 2, 3, 1)))
+    assert m.spec.name == "NACK" and m.error == d.ErrorCode.FORBIDDEN_TRANSITION and m.detail == 2
+    assert b.reply(b.send("LOAD_GAIT", states=(0, 2, 3, 2))).spec.name == "ACK"
+    assert b.reply(b.send("START", gait=d.GAIT_USER, direction=0)).spec.name == "ACK"
+
+
+def test_telemetry_comes_at_the_configured_rate(board):
+    board.run(1000)
+    tel = [m for m in board.log if m.spec.name == "TELEMETRY"]
+    assert 49 <= len(tel) <= 51
+    assert len(tel[-1].psi) == 2 and len(tel[-1].duty) == 2
+    assert board.reply(board.send("SET_TELEMETRY_RATE", hz=200)).spec.name == "ACK"
+    before = len([m for m in board.log if m.spec.name == "TELEMETRY"])
+    board.run(1000)
+    assert len([m for m in board.log if m.spec.name == "TELEMETRY"]) - before in (199, 200, 201)
