@@ -1,0 +1,128 @@
+"""RobotClient over the simulated-board link with the Python fake firmware."""
+
+from __future__ import annotations
+
+import pytest
+
+from proleg.errors import LinkError
+from proleg.link import BufferedReader, CommandRefused, Notifier, RobotClient
+from proleg.link.fake_board import FakeBoard
+from proleg.link.sim_link import SimLink
+from proleg.protocol import ErrorCode, Message, ParamId, encode
+
+
+def make(**board_kw) -> tuple[FakeBoard, RobotClient]:
+    board = FakeBoard(**board_kw)
+    client = RobotClient(SimLink(board, description="sim fake"))
+    client.connect()
+    return board, client
+
+
+def test_connect_handshake_reports_robot_info():
+    board, client = make()
+    assert client.info is not None
+    assert client.info.robot_name == "paper-r1"
+    assert client.info.limbs == 2 and client.info.tick_hz == 1000
+    assert client.info.header()["gait_table_hash"] == f"{board.gait_hash:08x}"
+
+
+def test_commands_carry_fresh_tokens_and_wait_for_their_ack():
+    board, client = make()
+    client.ping()
+    client.start(0, "+x")
+    client.stop()
+    client.set_telemetry_rate(100)
+    client.set_param("drive_duty", 0, 5000)
+    client.load_gait([0, 2, 3, 1])
+    client.start("user", "-x")
+    client.estop()
+    client.clear()
+    names = [m.name for m in board.received]
+    assert names == ["GET_INFO", "PING", "START", "STOP", "SET_TELEMETRY_RATE", "SET_PARAM", "LOAD_GAIT",
+                     "START", "ESTOP", "CLEAR"]
+    tokens = [m.token for m in board.received]
+    assert len(set(tokens)) == len(tokens) and 0 not in tokens
+    assert board.drive_duty == 5000 and board.telemetry_hz == 100 and board.user_gait == (0, 2, 3, 1)
+
+
+def test_nack_raises_command_refused_naming_the_error_code():
+    board, client = make()
+    client.estop()
+    with pytest.raises(CommandRefused, match="ESTOP_LATCHED") as e:
+        client.start(0)
+    assert e.value.error == ErrorCode.ESTOP_LATCHED
+    with pytest.raises(CommandRefused, match="SAFETY_LIMIT"):
+        client.set_param(ParamId.DRIVE_DUTY, 0, 9000)
+    assert client.stats.nacks == 2
+
+
+def test_silent_robot_times_out_with_one_clear_line():
+    board, client = make()
+    board.silent = True
+    with pytest.raises(LinkError) as e:
+        client.ping()
+    assert str(e.value) == "no reply to PING within 0.5 s on sim fake"
+    assert client.stats.timeouts == 1
+
+
+def test_telemetry_iterates_in_sequence_and_times_out_when_off():
+    board, client = make()
+    frames = list(client.telemetry(count=20))
+    seqs = [f.seq for f in frames]
+    assert seqs == list(range(seqs[0], seqs[0] + 20))
+    client.set_telemetry_rate(0)
+    with pytest.raises(LinkError, match="no telemetry within 0.2 s"):
+        next(iter(client.telemetry(timeout=0.2)))
+
+
+def test_sequence_gaps_count_lost_frames():
+    board, client = make(drop_every=10)
+    list(client.telemetry(count=90))
+    assert client.stats.lost == 9  # 100 sent, every 10th dropped
+    assert client.stats.corrupt == 0
+
+
+def test_sequence_wraps_without_counting_losses():
+    board, client = make()
+    board.seq = 0xFFF0
+    list(client.telemetry(count=40))
+    assert client.stats.lost == 0 and client.stats.seq_restarts == 0
+
+
+def test_corrupt_bytes_are_counted_and_valid_frames_around_them_survive():
+    board, client = make()
+    client.set_telemetry_rate(0)
+    while client.recv(0.01) is not None:
+        pass
+    good = encode(Message.new("EVENT", time_ms=1, kind=0, code=0, detail=0))
+    bad = bytearray(good)
+    bad[-3] ^= 0x01  # a CRC byte
+    board._tx += good + bytes(bad) + b"\x01\x02\x03\x00" + good
+    msgs = [client.recv(0.1) for _ in range(2)]
+    assert [m.name for m in msgs] == ["EVENT", "EVENT"]
+    assert client.stats.crc_errors == 1 and client.stats.framing_errors == 1
+
+
+def test_replies_are_found_while_a_notifier_is_reading():
+    board, client = make()
+    reader = BufferedReader(["TELEMETRY", "ACK"])
+    notifier = Notifier(client, [reader])
+    try:
+        client.start(0, "+x")
+        client.ping()
+        names = set()
+        while names != {"TELEMETRY", "ACK"}:
+            rx = reader.get_message(2.0)
+            assert rx is not None
+            names.add(rx.message.name)
+    finally:
+        notifier.stop()
+
+
+def test_simulated_link_tells_displacement_as_ground_truth():
+    board, client = make()
+    client.start(0, "+x")
+    for _ in client.telemetry(count=150):
+        pass
+    rx = client.recv_received(1.0)
+    assert rx is not None and rx.truth["displacement_mm"] > 0

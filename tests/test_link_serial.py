@@ -1,0 +1,196 @@
+"""Serial links: pyserial URLs, a pty served by the fake firmware, disconnect and reconnect."""
+
+from __future__ import annotations
+
+import os
+import select
+import threading
+import time
+import tty
+from pathlib import Path
+
+import pytest
+import serial
+
+from proleg.errors import LinkError
+from proleg.link import RobotClient
+from proleg.link.base import LinkDisconnected
+from proleg.link.fake_board import FakeBoard
+from proleg.link.serial_link import SerialLink
+
+
+class PtyBoard:
+    """Serves a FakeBoard on a pseudo-terminal in real time (a stand-in for a USB adapter)."""
+
+    def __init__(self, board: FakeBoard | None = None):
+        self.board = board or FakeBoard()
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        os.set_blocking(self.master, False)
+        self.path = os.ttyname(self.slave)
+        self._running = True
+        self._thread = threading.Thread(target=self._serve, daemon=True)
+        self._thread.start()
+
+    def _serve(self) -> None:
+        t0 = time.monotonic()
+        sim = 0.0
+        while self._running:
+            ready, _, _ = select.select([self.master], [], [], 0.002)
+            if ready:
+                try:
+                    data = os.read(self.master, 4096)
+                except OSError:
+                    data = b""
+                if data:
+                    self.board.write(data)
+            now = time.monotonic() - t0
+            if now > sim:
+                self.board.advance(now - sim)
+                sim = now
+            out = self.board.read()
+            if out:
+                try:
+                    os.write(self.master, out)
+                except OSError:
+                    pass
+
+    def close(self) -> None:
+        """Like unplugging the adapter: the port's reads fail from now on."""
+        self._running = False
+        self._thread.join(2)
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+def test_loop_url_round_trips_bytes():
+    with SerialLink("loop://") as link:
+        link.write(b"\x03\x01\x01\x00")
+        assert link.read(0.2) == b"\x03\x01\x01\x00"
+        assert link.read(0.01) == b""
+
+
+def test_missing_port_is_one_clear_link_error():
+    with pytest.raises(LinkError) as e:
+        SerialLink("/dev/ttyNOPE-proleg")
+    text = str(e.value)
+    assert text.startswith("cannot open serial port /dev/ttyNOPE-proleg:")
+    assert "\n" not in text
+
+
+def test_client_talks_to_firmware_on_a_pty():
+    server = PtyBoard()
+    try:
+        with RobotClient(SerialLink(server.path)) as client:
+            info = client.connect()
+            assert info.robot_name == "paper-r1"
+            client.start(0, "+x")
+            frames = list(client.telemetry(count=10))
+            assert frames[-1].flags & 1  # RUNNING
+            assert client.stats.lost == 0
+    finally:
+        server.close()
+
+
+def test_timeout_names_the_command_and_the_port():
+    server = PtyBoard(FakeBoard(silent=True))
+    try:
+        with RobotClient(SerialLink(server.path), timeout=0.2) as client:
+            with pytest.raises(LinkError) as e:
+                client.ping()
+            assert str(e.value) == f"no reply to PING within 0.2 s on {server.path}"
+    finally:
+        server.close()
+
+
+def test_client_reconnects_when_the_usb_device_comes_back_under_the_same_name(tmp_path: Path):
+    by_id = tmp_path / "usb-proleg-robot"  # like /dev/serial/by-id/...
+    first = PtyBoard()
+    by_id.symlink_to(first.path)
+    second = None
+    try:
+        client = RobotClient(SerialLink(str(by_id)), reconnect_timeout=5.0)
+        client.connect()
+        list(client.telemetry(count=3))
+        first.close()  # unplugged
+        by_id.unlink()
+
+        def plug_back() -> None:
+            nonlocal second
+            time.sleep(0.3)
+            second = PtyBoard(FakeBoard(build_id=0xBEEF))
+            by_id.symlink_to(second.path)
+
+        threading.Thread(target=plug_back).start()
+        list(client.telemetry(count=3, timeout=6.0))
+        assert client.stats.reconnects == 1
+        client.ping()
+        assert client.info is not None and client.info.build_id == 0xBEEF  # INFO refreshed
+        client.close()
+    finally:
+        first.close()
+        if second is not None:
+            second.close()
+
+
+class FlakyPort:
+    """A fake pyserial port: reads raise SerialException while ``unplugged``."""
+
+    def __init__(self, state: dict):
+        self.state = state
+        self.timeout = 0.0
+        self.written = bytearray()
+
+    @property
+    def in_waiting(self) -> int:
+        return 0
+
+    def read(self, n: int) -> bytes:
+        if self.state["unplugged"]:
+            raise serial.SerialException("device reports readiness to read but returned no data")
+        time.sleep(min(self.timeout or 0.0, 0.01))
+        return b""
+
+    def write(self, data: bytes) -> int:
+        self.written += data
+        return len(data)
+
+    def close(self) -> None:
+        pass
+
+
+def test_serial_link_reports_disconnect_and_reopens_when_the_port_is_back():
+    state = {"unplugged": False, "opens": 0, "fail_opens": 0}
+
+    def opener(url, **kw):
+        state["opens"] += 1
+        if state["fail_opens"]:
+            state["fail_opens"] -= 1
+            raise serial.SerialException(f"[Errno 2] could not open port {url}")
+        return FlakyPort(state)
+
+    link = SerialLink("/dev/ttyUSB0", opener=opener)
+    state["unplugged"] = True
+    with pytest.raises(LinkDisconnected, match="/dev/ttyUSB0: device disconnected"):
+        link.read(0.01)
+    state["unplugged"] = False
+    state["fail_opens"] = 2
+    client = RobotClient(link, reconnect_timeout=3.0)
+    assert client.recv(0.05) is None  # the client reopens (two failures, then success)
+    assert client.stats.reconnects == 1 and state["opens"] == 4
+    assert b"\x00" in bytes(link._port.written)  # and asks for INFO again
+
+
+def test_reconnect_gives_up_with_one_line_after_its_timeout():
+    def opener(url, **kw):
+        raise serial.SerialException(f"[Errno 2] could not open port {url}")
+
+    state = {"unplugged": True}
+    link = SerialLink("/dev/ttyUSB9", opener=lambda url, **kw: FlakyPort(state))
+    link._opener = opener
+    client = RobotClient(link, reconnect_timeout=0.3)
+    with pytest.raises(LinkError, match="device disconnected and not back within 0.3 s"):
+        client.recv(0.05)
