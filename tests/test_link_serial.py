@@ -56,7 +56,10 @@ class PtyBoard:
                     pass
 
     def close(self) -> None:
-        """Like unplugging the adapter: the port's reads fail from now on."""
+        """Like unplugging the adapter: the port's reads fail from now on. Idempotent (the
+        descriptors may already belong to someone else)."""
+        if not self._running:
+            return
         self._running = False
         self._thread.join(2)
         for fd in (self.master, self.slave):
