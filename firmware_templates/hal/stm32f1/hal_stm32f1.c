@@ -1,0 +1,367 @@
+/* hal_stm32f1.c - hal.h for the STM32F103 ("Blue Pill"), bare-metal registers.
+ *
+ * Clock: 8 MHz HSE × 9 = 72 MHz (APB1 36 MHz, APB2 72 MHz); if the crystal does not
+ * start, the board runs on the 8 MHz HSI and every divider below follows `sysclk`.
+ * SysTick: 1 ms interrupt; hal_micros = ms·1000 + elapsed counts; the tick is paced by
+ * polling it. PWM: TIM2/TIM3/TIM4 channels from the board pin map (CFG_PWM_MAP:
+ * {timer, channel, port 0=A 1=B, pin}), 1000 counts per period at CFG_PWM_HZ.
+ * I2C1 on PB6/PB7 at CFG_I2C_HZ (fast mode), polled, every wait bounded by I2C_STEP_US.
+ * USART1 on PA9/PA10 at CFG_UART_BAUD with interrupt-driven rings.
+ * main(): hal_init(); app_init(); forever { hal_wait_tick(); app_tick(); }.
+ */
+#include <stdint.h>
+
+#include "app.h"
+#include "hal.h"
+#include "robot_config.h"
+#include "stm32f1_regs.h"
+
+#define RX_RING 128u /* power of two */
+#define TX_RING 256u /* power of two */
+#define I2C_STEP_US 300u
+#define PWM_COUNTS 1000u
+
+typedef struct {
+    uint8_t timer;   /* 2, 3 or 4 */
+    uint8_t channel; /* 1..4 */
+    uint8_t port;    /* 0 = GPIOA, 1 = GPIOB */
+    uint8_t pin;
+} pwm_pin_t;
+
+static const pwm_pin_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
+
+static uint32_t sysclk = 8000000u;
+static volatile uint32_t ms_count;
+static uint32_t next_tick;
+
+void SysTick_Handler(void);
+void USART1_IRQHandler(void);
+
+/* ------------------------------------------------------------------ clock and time */
+
+static int8_t wait_bit(volatile uint32_t *reg, uint32_t mask, uint32_t spins)
+{
+    while (!(*reg & mask)) {
+        if (spins-- == 0u) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static void clock_init(void)
+{
+    RCC_CR |= RCC_CR_HSEON;
+    if (wait_bit(&RCC_CR, RCC_CR_HSERDY, 200000u) != 0) {
+        return; /* no crystal: stay on HSI 8 MHz */
+    }
+    FLASH_ACR = 0x12u;                                  /* prefetch on, 2 wait states */
+    RCC_CFGR = (7u << 18) | (1u << 16) | (4u << 8);     /* PLL ×9 from HSE, APB1 /2 */
+    RCC_CR |= RCC_CR_PLLON;
+    if (wait_bit(&RCC_CR, RCC_CR_PLLRDY, 200000u) != 0) {
+        return;
+    }
+    RCC_CFGR = (RCC_CFGR & ~3u) | 2u;                   /* system clock = PLL */
+    while ((RCC_CFGR & (3u << 2)) != (2u << 2)) {
+    }
+    sysclk = 72000000u;
+}
+
+void SysTick_Handler(void)
+{
+    ms_count++;
+}
+
+uint32_t hal_micros(void)
+{
+    uint32_t ms, val;
+    uint32_t load = SYST_RVR + 1u;
+    do {
+        ms = ms_count;
+        val = SYST_CVR;
+    } while (ms != ms_count);
+    if (SYST_CSR & (1u << 16)) { /* wrapped, interrupt not yet taken */
+        val = SYST_CVR;
+        ms = ms_count + 1u;
+    }
+    return ms * 1000u + (load - 1u - val) / (sysclk / 1000000u);
+}
+
+void hal_wait_tick(void)
+{
+    uint32_t now = hal_micros();
+    if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
+        next_tick = now;
+    }
+    while ((int32_t)(hal_micros() - next_tick) < 0) {
+    }
+    next_tick += CFG_TICK_US;
+}
+
+/* ------------------------------------------------------------------ GPIO */
+
+static uint32_t port_base(uint8_t port)
+{
+    return port ? GPIOB_BASE : GPIOA_BASE;
+}
+
+static void gpio_mode(uint8_t port, uint8_t pin, uint32_t mode)
+{
+    uint32_t base = port_base(port);
+    volatile uint32_t *cr = pin < 8u ? &GPIO_CRL(base) : &GPIO_CRH(base);
+    uint32_t shift = 4u * (pin & 7u);
+    *cr = (*cr & ~(0xFu << shift)) | (mode << shift);
+}
+
+/* ------------------------------------------------------------------ PWM */
+
+static uint32_t timer_base(uint8_t t)
+{
+    return t == 2u ? TIM2_BASE : t == 3u ? TIM3_BASE : TIM4_BASE;
+}
+
+static void pwm_init(void)
+{
+    uint8_t i;
+    uint32_t psc = sysclk / (PWM_COUNTS * CFG_PWM_HZ); /* timers on APB1 run at sysclk */
+    RCC_APB1ENR |= RCC_APB1_TIM2 | RCC_APB1_TIM3 | RCC_APB1_TIM4;
+    for (i = 0; i < CFG_PWM_CHANNELS; i++) {
+        const pwm_pin_t *p = &pwm_map[i];
+        uint32_t b = timer_base(p->timer);
+        volatile uint32_t *ccmr = p->channel <= 2u ? &TIM_CCMR1(b) : &TIM_CCMR2(b);
+        uint32_t shift = (p->channel & 1u) ? 0u : 8u;
+        TIM_CCR(b, p->channel) = 0;
+        *ccmr = (*ccmr & ~(0xFFu << shift)) | ((6u << 4 | 1u << 3) << shift); /* PWM mode 1, preload */
+        TIM_CCER(b) |= 1u << (4u * (p->channel - 1u));
+        TIM_PSC(b) = psc ? psc - 1u : 0u;
+        TIM_ARR(b) = PWM_COUNTS - 1u;
+        TIM_EGR(b) = 1u;
+        TIM_CR1(b) = (1u << 7) | 1u; /* ARPE, CEN */
+        gpio_mode(p->port, p->pin, GPIO_AF_PP_50MHZ);
+    }
+}
+
+void hal_pwm_set(uint8_t channel, uint16_t duty)
+{
+    const pwm_pin_t *p;
+    if (channel >= CFG_PWM_CHANNELS) {
+        return;
+    }
+    p = &pwm_map[channel];
+    if (duty > 10000u) {
+        duty = 10000u;
+    }
+    /* CCR = ARR + 1 is 100 %, 0 is 0 %: no glitch at either end in PWM mode 1. */
+    TIM_CCR(timer_base(p->timer), p->channel) = (uint32_t)duty * PWM_COUNTS / 10000u;
+}
+
+/* ------------------------------------------------------------------ I2C1 */
+
+static int8_t i2c_wait(uint32_t mask)
+{
+    uint32_t t0 = hal_micros();
+    while (!(I2C_SR1 & mask)) {
+        if (I2C_SR1 & (I2C_SR1_AF | I2C_SR1_BERR | I2C_SR1_ARLO)) {
+            return -1;
+        }
+        if ((uint32_t)(hal_micros() - t0) > I2C_STEP_US) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static void i2c_setup(void)
+{
+    uint32_t pclk1 = sysclk == 72000000u ? 36000000u : sysclk;
+    uint32_t mhz = pclk1 / 1000000u;
+    uint32_t ccr = pclk1 / (3u * CFG_I2C_HZ);
+    I2C_CR1 = I2C_CR1_SWRST;
+    I2C_CR1 = 0;
+    I2C_CR2 = mhz;
+    I2C_CCR = (1u << 15) | (ccr < 1u ? 1u : ccr); /* fast mode, duty 2 */
+    I2C_TRISE = mhz * 300u / 1000u + 1u;
+    I2C_CR1 = I2C_CR1_PE;
+}
+
+static int8_t i2c_start(uint8_t sla)
+{
+    I2C_CR1 |= I2C_CR1_START;
+    if (i2c_wait(I2C_SR1_SB) != 0) {
+        return -1;
+    }
+    I2C_DR = sla;
+    if (i2c_wait(I2C_SR1_ADDR) != 0) {
+        return -1;
+    }
+    return 0;
+}
+
+static void clear_addr(void)
+{
+    volatile uint32_t sr;
+    sr = I2C_SR1;
+    sr = I2C_SR2;
+    (void)sr;
+}
+
+static int8_t i2c_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    uint8_t i;
+    if (ntx || !nrx) {
+        if (i2c_start((uint8_t)(addr7 << 1)) != 0) {
+            return -1;
+        }
+        clear_addr();
+        for (i = 0; i < ntx; i++) {
+            if (i2c_wait(I2C_SR1_TXE) != 0) {
+                return -1;
+            }
+            I2C_DR = tx[i];
+        }
+        if (i2c_wait(I2C_SR1_BTF | (ntx ? 0u : I2C_SR1_TXE)) != 0) {
+            return -1;
+        }
+    }
+    if (nrx) {
+        I2C_CR1 |= I2C_CR1_ACK;
+        if (i2c_start((uint8_t)((addr7 << 1) | 1u)) != 0) {
+            return -1;
+        }
+        if (nrx == 1u) {
+            I2C_CR1 &= ~I2C_CR1_ACK;
+        }
+        clear_addr();
+        for (i = 0; i < nrx; i++) {
+            if (i + 1u == nrx) {
+                /* NACK the last byte and stop after it (set while it is being shifted in). */
+                I2C_CR1 &= ~I2C_CR1_ACK;
+                I2C_CR1 |= I2C_CR1_STOP;
+            }
+            if (i2c_wait(I2C_SR1_RXNE) != 0) {
+                return -1;
+            }
+            rx[i] = (uint8_t)I2C_DR;
+        }
+        return 0;
+    }
+    I2C_CR1 |= I2C_CR1_STOP;
+    return 0;
+}
+
+int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    if (i2c_transfer(addr7, tx, ntx, rx, nrx) != 0) {
+        I2C_CR1 |= I2C_CR1_STOP;
+        I2C_SR1 = 0; /* clear AF/BERR/ARLO */
+        if (I2C_SR2 & I2C_SR2_BUSY) {
+            i2c_setup(); /* bus stuck: reset the peripheral */
+        }
+        return -1;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------ USART1 */
+
+static volatile uint8_t rx_buf[RX_RING], tx_buf[TX_RING];
+static volatile uint16_t rx_head, rx_tail, tx_head, tx_tail;
+
+void USART1_IRQHandler(void)
+{
+    uint32_t sr = USART_SR;
+    if (sr & (USART_SR_RXNE | USART_SR_ORE)) {
+        uint8_t b = (uint8_t)USART_DR;
+        uint16_t next = (uint16_t)((rx_head + 1u) & (RX_RING - 1u));
+        if (next != rx_tail) {
+            rx_buf[rx_head] = b;
+            rx_head = next;
+        }
+    }
+    if ((sr & USART_SR_TXE) && (USART_CR1 & USART_CR1_TXEIE)) {
+        if (tx_head == tx_tail) {
+            USART_CR1 &= ~USART_CR1_TXEIE;
+        } else {
+            USART_DR = tx_buf[tx_tail];
+            tx_tail = (uint16_t)((tx_tail + 1u) & (TX_RING - 1u));
+        }
+    }
+}
+
+uint16_t hal_uart_write(const uint8_t *data, uint16_t n)
+{
+    uint16_t i;
+    for (i = 0; i < n; i++) {
+        uint16_t next = (uint16_t)((tx_head + 1u) & (TX_RING - 1u));
+        if (next == tx_tail) {
+            break;
+        }
+        tx_buf[tx_head] = data[i];
+        tx_head = next;
+    }
+    if (i) {
+        USART_CR1 |= USART_CR1_TXEIE;
+    }
+    return i;
+}
+
+int hal_uart_read_byte(void)
+{
+    uint8_t b;
+    if (rx_head == rx_tail) {
+        return -1;
+    }
+    b = rx_buf[rx_tail];
+    rx_tail = (uint16_t)((rx_tail + 1u) & (RX_RING - 1u));
+    return b;
+}
+
+/* ------------------------------------------------------------------ the rest */
+
+uint8_t hal_critical_enter(void)
+{
+    uint32_t primask;
+    __asm__ volatile("mrs %0, primask" : "=r"(primask));
+    __asm__ volatile("cpsid i" ::: "memory");
+    return (uint8_t)(primask & 1u);
+}
+
+void hal_critical_exit(uint8_t state)
+{
+    if (!state) {
+        __asm__ volatile("cpsie i" ::: "memory");
+    }
+}
+
+void hal_init(void)
+{
+    clock_init();
+    RCC_APB2ENR |= RCC_APB2_AFIO | RCC_APB2_IOPA | RCC_APB2_IOPB | RCC_APB2_USART1;
+    RCC_APB1ENR |= RCC_APB1_I2C1;
+    SYST_RVR = sysclk / 1000u - 1u;
+    SYST_CVR = 0;
+    SYST_CSR = 7u; /* processor clock, interrupt, enable */
+    pwm_init();
+    /* I2C1: PB6 = SCL, PB7 = SDA, alternate open-drain. */
+    gpio_mode(1, 6, GPIO_AF_OD_50MHZ);
+    gpio_mode(1, 7, GPIO_AF_OD_50MHZ);
+    i2c_setup();
+    /* USART1: PA9 = TX (AF push-pull), PA10 = RX (input, pull-up). */
+    gpio_mode(0, 9, GPIO_AF_PP_50MHZ);
+    gpio_mode(0, 10, GPIO_IN_PULL);
+    GPIO_BSRR(GPIOA_BASE) = 1u << 10;
+    USART_BRR = (sysclk + CFG_UART_BAUD / 2u) / CFG_UART_BAUD; /* APB2 = sysclk */
+    USART_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
+    NVIC_ISER(USART1_IRQN / 32u) = 1u << (USART1_IRQN % 32u);
+    next_tick = hal_micros() + CFG_TICK_US;
+}
+
+int main(void)
+{
+    hal_init();
+    app_init();
+    for (;;) {
+        hal_wait_tick();
+        app_tick();
+    }
+}
