@@ -589,6 +589,17 @@ static void read_imus(void)
 
 /* ------------------------------------------------------------------ control */
 
+static uint8_t all_settled(void)
+{
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        if (!psi_settled(i)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 static void step_sequencer(void)
 {
     uint8_t ev, i;
@@ -599,7 +610,10 @@ static void step_sequencer(void)
     }
     step = seq_step();
     target = seq_target();
-    ev = seq_tick((cfg_state_t)st.measured);
+    /* The step counts as reached only once every limb is settled clear of its band
+     * edges (psi_settled): until then the sequencer is shown a state that is not
+     * the target (target ^ 1 differs from target by construction). */
+    ev = seq_tick(all_settled() ? (cfg_state_t)st.measured : (cfg_state_t)(target ^ 1u));
     if (ev & SEQ_EV_REACHED) {
         send_event(PROTO_EV_STATE_REACHED, (uint8_t)(step > 255u ? 255u : step), target);
     }

@@ -28,7 +28,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t d
         } else if (want < level || level == 0u) {
             heat = 0;
         } else {
-            heat = !psi_last_at_or_above_upper(i, (uint8_t)(level - 1u));
+            heat = !psi_last_at_or_above_hold(i, (uint8_t)(level - 1u));
         }
         if (heat) {
             duty[ctl_limb_actuator(i)] = drive_pm;

@@ -16,6 +16,32 @@ static int16_t band_hi[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 static int16_t star[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 static int16_t hyst[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 
+/* Holding a level, the controller keeps ψ above the band's upper edge plus this margin:
+ * the SMA's thermal lag makes ψ dip after each heating pulse, and a dip below ψ* would
+ * change the friction state for real even if the hysteresis band hides it. */
+#ifndef CFG_HOLD_MARGIN_CDEG
+#define CFG_HOLD_MARGIN_CDEG 0
+#endif
+/* {cos, sin} Q14 of the hold edge ψ* + h/2 + margin and of the settle edge
+ * ψ* − h/2 − margin, per limb and threshold. */
+static int16_t hold_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
+static int16_t settle_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
+
+static void set_hold_edge(uint8_t limb, uint8_t thr)
+{
+    int16_t hi = (int16_t)(band_hi[limb][thr] + CFG_HOLD_MARGIN_CDEG);
+    int16_t lo = (int16_t)(band_lo[limb][thr] - CFG_HOLD_MARGIN_CDEG);
+    hold_edge[limb][thr][0] = psi_cos_q14(hi > 8900 ? 8900 : hi);
+    hold_edge[limb][thr][1] = psi_sin_q14(hi > 8900 ? 8900 : hi);
+    settle_edge[limb][thr][0] = psi_cos_q14(lo < -8900 ? -8900 : lo);
+    settle_edge[limb][thr][1] = psi_sin_q14(lo < -8900 ? -8900 : lo);
+}
+
+static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
+{
+    return (int32_t)ax * edge[0] - (int32_t)az * edge[1] >= 0;
+}
+
 /* sin(i · 90°/64) in Q14, i = 0..64. */
 static const int16_t sin_tab[65] ROM = {
     0,     402,   804,   1205,  1606,  2006,  2404,  2801,  3196,  3590,  3981,  4370,  4756,
@@ -67,6 +93,7 @@ void psi_init(void)
             hyst[i][j] = h;
             band_lo[i][j] = (int16_t)(p - h / 2);
             band_hi[i][j] = (int16_t)(p + (h - h / 2));
+            set_hold_edge(i, j);
         }
     }
     debounce = CFG_DEBOUNCE_TICKS;
@@ -126,6 +153,7 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     band_hi[limb][thr] = hi;
     star[limb][thr] = psi_star_cdeg;
     hyst[limb][thr] = hyst_cdeg;
+    set_hold_edge(limb, thr);
     return 0;
 }
 
@@ -204,6 +232,27 @@ uint8_t psi_level(uint8_t limb)
 uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr)
 {
     return psi_at_or_above(limb, thr, PSI_EDGE_UPPER, limbs[limb].ax, limbs[limb].az);
+}
+
+uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
+{
+    return at_or_above(hold_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
+}
+
+uint8_t psi_settled(uint8_t limb)
+{
+    const limb_state_t *l = &limbs[limb];
+    uint8_t level = l->level;
+    if (level == PSI_UNKNOWN) {
+        return 0;
+    }
+    if (level > 0u && !at_or_above(hold_edge[limb][level - 1u], l->ax, l->az)) {
+        return 0;
+    }
+    if (level + 1u < psi_levels(limb) && at_or_above(settle_edge[limb][level], l->ax, l->az)) {
+        return 0;
+    }
+    return 1;
 }
 
 int16_t psi_last_centideg(uint8_t limb)

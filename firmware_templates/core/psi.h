@@ -59,6 +59,16 @@ uint8_t psi_level(uint8_t limb);
 /* 1 when the last sample of `limb` is at or above the upper edge of threshold `thr`. */
 uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr);
 
+/* 1 when the last sample of `limb` is at or above the hold edge of threshold `thr`:
+ * the upper edge plus CFG_HOLD_MARGIN_CDEG, where the controller holds a raised level. */
+uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr);
+
+/* 1 when the last sample of `limb` sits inside its debounced level with the hold margin
+ * on both sides: at or above the hold edge below it, below the settle edge
+ * (ψ* − h/2 − margin) above it. The sequencer advances only on settled limbs, so a
+ * coil that starts heating cannot drag a just-lowered neighbour back over its ψ*. */
+uint8_t psi_settled(uint8_t limb);
+
 /* Number of levels of `limb`. */
 uint8_t psi_levels(uint8_t limb);
 

@@ -60,6 +60,7 @@ class Control:
     drive_duty: float = 0.6
     debounce_ticks: int = 5
     hold_ms: int = 100
+    hold_margin_deg: float = 4.0
     telemetry_hz: int = 50
 
 
@@ -268,6 +269,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         drive_duty=f.number("drive_duty", d.drive_duty, 0.0, 1.0, open_lo=True),
         debounce_ticks=f.integer("debounce_ticks", d.debounce_ticks, 1, 1000),
         hold_ms=f.integer("hold_ms", d.hold_ms, 0, 60_000),
+        hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
     )
     if c.drive_duty > safety.max_duty:

@@ -253,6 +253,7 @@ def render_config(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], b
         debounce=int(ctl.debounce_ticks),
         hold_ms=int(ctl.hold_ms),
         hold_ticks=_ticks(ctl.hold_ms, tick_hz),
+        hold_margin_cdeg=round(float(ctl.hold_margin_deg) * 100),
         telemetry_hz=int(ctl.telemetry_hz),
         drive_pm=round(float(ctl.drive_duty) * 10000),
         max_duty_pm=round(float(safety.max_duty) * 10000),
