@@ -21,8 +21,9 @@ used element (2 limbs, 2 channels → A, B, PSI_0, DUTY_0). The receiver assembl
 from A, B and then the PSI/DUTY frames B announces; a new A drops an unfinished one.
 
 Segmented frames carry the protocol's unframed bytes ``msg_id | payload | crc16`` (the CRC
-stays, end to end): byte 0 = segment index (bits 0–6) | 0x80 on the last segment, bytes 1..7 =
-the next up to 7 bytes. A segment out of order drops the message being assembled.
+stays, end to end), always 8 bytes: byte 0 = segment index (bits 0–3) | (data bytes − 1) << 4
+(bits 4–6) | 0x80 on the last segment; bytes 1..7 = the next up to 7 bytes, zero-padded.
+A segment out of order drops the message being assembled.
 """
 
 from __future__ import annotations
@@ -174,12 +175,15 @@ def telemetry_frames(msg: Message, ids: CanIds) -> list[tuple[int, bytes]]:
 
 
 def segment_frames(raw: bytes, arbitration_id: int) -> list[tuple[int, bytes]]:
-    """``raw`` (msg_id | payload | crc) cut into 8-byte segments."""
-    chunks = [raw[i:i + SEGMENT_DATA] for i in range(0, len(raw), SEGMENT_DATA)] or [b""]
-    return [
-        (arbitration_id, bytes([k | (LAST_SEGMENT if k == len(chunks) - 1 else 0)]) + c)
-        for k, c in enumerate(chunks)
-    ]
+    """``raw`` (msg_id | payload | crc, 1..64 bytes) cut into 8-byte segments."""
+    chunks = [raw[i:i + SEGMENT_DATA] for i in range(0, len(raw), SEGMENT_DATA)]
+    if not chunks or len(chunks) > 16:
+        raise LinkError(f"cannot segment a {len(raw)}-byte frame onto CAN")
+    out = []
+    for k, c in enumerate(chunks):
+        head = k | ((len(c) - 1) << 4) | (LAST_SEGMENT if k == len(chunks) - 1 else 0)
+        out.append((arbitration_id, bytes([head]) + c.ljust(SEGMENT_DATA, b"\0")))
+    return out
 
 
 def message_frames(msg: Message, ids: CanIds, *, from_host: bool) -> list[tuple[int, bytes]]:
@@ -240,7 +244,7 @@ class CanToWire:
     def _segment(self, data: bytes) -> bytes:
         if not data:
             return b""
-        index, last = data[0] & 0x7F, bool(data[0] & LAST_SEGMENT)
+        index, size, last = data[0] & 0x0F, ((data[0] >> 4) & 0x07) + 1, bool(data[0] & LAST_SEGMENT)
         if index == 0:
             if self._seg_next:
                 self.dropped += 1
@@ -250,7 +254,7 @@ class CanToWire:
                 self.dropped += 1
             self._seg_next = 0
             return b""
-        self._seg += data[1:]
+        self._seg += data[1:1 + size]
         self._seg_next = index + 1
         if not last:
             return b""

@@ -23,6 +23,18 @@ from .can_map import SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
 HOST = "HOST"
 
 
+_ASCII = {"→": "->", "°": " deg", "≤": "<=", "≥": ">=", "ψ": "psi", "—": "-", "–": "-"}
+
+
+def _ascii(text: str | None) -> str | None:
+    """DBC files are ASCII: spell out the few symbols the protocol's docs use."""
+    if text is None:
+        return None
+    for k, v in _ASCII.items():
+        text = text.replace(k, v)
+    return text.encode("ascii", "replace").decode("ascii")
+
+
 def _robot_node(node: int) -> str:
     return f"ROBOT_{node}"
 
@@ -36,13 +48,14 @@ def _signal(name: str, start: int, length: int, signed: bool, scale: float = 1.0
         lo, hi = 0, (1 << length) - 1
     conv = BaseConversion.factory(scale=scale, offset=0, choices=choices, is_float=False)
     return Signal(name, start, length, "little_endian", signed, conversion=conv,
-                  minimum=lo * scale, maximum=hi * scale, unit=unit or None, comment=comment,
+                  minimum=lo * scale, maximum=hi * scale, unit=unit or None, comment=_ascii(comment),
                   receivers=receivers or [])
 
 
 def _segment_signals(receiver: str) -> list[Signal]:
     sigs = [
-        _signal("segment_index", 0, 7, False, comment="segment number, 0 starts a frame", receivers=[receiver]),
+        _signal("segment_index", 0, 4, False, comment="segment number, 0 starts a frame", receivers=[receiver]),
+        _signal("segment_bytes_minus_1", 4, 3, False, comment="valid data bytes - 1", receivers=[receiver]),
         _signal("segment_last", 7, 1, False, comment="1 on the last segment", receivers=[receiver]),
     ]
     sigs += [_signal(f"data_{k}", 8 * (k + 1), 8, False, receivers=[receiver]) for k in range(7)]
@@ -63,9 +76,9 @@ def build_database(nodes: Sequence[int] = (0,), base: int = 0x100) -> Database:
         robot = _robot_node(node)
         tag = f"_N{node}" if suffix else ""
         messages.append(Message(ids.id(SLOT_CMD), f"CMD{tag}", 8, _segment_signals(robot), senders=[HOST],
-                                comment="host→robot command, segmented protocol frame"))
+                                comment="host->robot command, segmented protocol frame"))
         messages.append(Message(ids.id(SLOT_REPLY), f"REPLY{tag}", 8, _segment_signals(HOST), senders=[robot],
-                                comment="robot→host reply/event, segmented protocol frame"))
+                                comment="robot->host reply/event, segmented protocol frame"))
         for frame in TELEMETRY_FRAMES:
             sigs = []
             for s in frame.signals:
