@@ -64,7 +64,7 @@ class Recorder(Listener):
             self._columns = csv_columns(limbs, channels)
             self._index = {c: i for i, c in enumerate(self._columns)}
             for k, v in self._header.items():
-                self._f.write(f"# {k}: {v}\n")
+                self._write_line(f"# {k}: {v}")
             self._write_csv_row(self._columns)
         else:
             self._write_line(json.dumps({"header": self._header}))
