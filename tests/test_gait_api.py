@@ -132,3 +132,23 @@ def test_total_on_64_dense_states_with_6_transitions_keeps_every_tie():
     short = optimal_gaits(t, "total", max_transitions=2)
     top2 = (t.dense()[0] + t.dense()[0].T)[~np.eye(64, dtype=bool)].max()
     assert short.value == top2
+
+
+def test_ties_in_several_components_are_all_found():
+    # Three strongly connected parts joined one way: A -> B -> C.
+    # A = {0,1,2}: 0->1->2->0 worth 3 each (rate 3), B = {3,4}: 3->4->3 worth 3+3 (rate 3),
+    # C = {5,6,7}: 5->6->7->5 worth 1+1+3 (rate 5/3) and 5->7->5 worth 3+3 (rate 3).
+    # Every part has a rate-3 cycle; the potentials must be right in each, or a tie is lost.
+    edges = {
+        (0, 1): 3, (1, 2): 3, (2, 0): 3, (1, 0): -5,
+        (2, 3): 7,
+        (3, 4): 3, (4, 3): 3,
+        (4, 5): -9,
+        (5, 6): 1, (6, 7): 1, (5, 7): 3, (7, 5): 3,
+    }
+    src, dst = zip(*edges)
+    t = TransitionTable.from_edges((8,), src, dst, list(edges.values()))
+    result = optimal_gaits(t, "rate")
+    assert result.value == 3.0
+    assert [g.states for g in result.gaits] == [(0, 1, 2, 0), (3, 4, 3), (5, 7, 5)]
+    assert [g.states for g in optimal_gaits(t, "rate", max_transitions=2).gaits] == [(3, 4, 3), (5, 7, 5)]

@@ -61,19 +61,19 @@ def assert_matches_oracle(table: TransitionTable, objective: str, direction: str
             assert len(set(cyc)) == len(cyc), "rate and speed rank simple cycles"
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4, 5]))
 def test_total_finds_the_best_closed_walks_and_every_tie(table, direction, bound):
     assert_matches_oracle(table, "total", direction, bound)
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4, 5]))
 def test_rate_finds_the_best_simple_cycles_and_every_tie(table, direction, bound):
     assert_matches_oracle(table, "rate", direction, bound)
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4]))
 def test_speed_finds_the_best_simple_cycles_per_second_and_every_tie(table, direction, bound):
     if table.duration is None:

@@ -141,7 +141,7 @@ def max_cycle_ratio(
     ratio_scale = float(np.abs(w / t).max())
     dead_ratio = -(2.0 * ratio_scale + 1.0)  # the virtual self-loops of nodes without out-edges
     scale = float(np.abs(w).max() + (2.0 * ratio_scale + 1.0) * max(1.0, t.max()))
-    eps = 1e-12 * scale * max(1.0, np.sqrt(n))
+    eps = 1e-12 * scale * max(1.0, np.log2(n))
 
     # initial policy: the locally best ratio edge
     policy = np.zeros(n, dtype=np.int64)  # dead nodes: unused
