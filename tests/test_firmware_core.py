@@ -56,7 +56,14 @@ def _robot_doc(**over):
         "actuator": [{"name": "a0", "channel": 0}, {"name": "a1", "channel": 1}],
         "transitions": {"matrix": [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]},
         "safety": {"max_on_ms": 50, "min_cooldown_ms": 20, "max_duty": 0.8, "state_timeout_ms": 200},
-        "control": {"tick_hz": 1000, "drive_duty": 0.6, "debounce_ticks": 3, "hold_ms": 10, "telemetry_hz": 50},
+        "control": {
+            "tick_hz": 1000,
+            "drive_duty": 0.6,
+            "debounce_ticks": 3,
+            "hold_ms": 10,
+            "telemetry_hz": 50,
+            "hold_margin_deg": 1.0,
+        },
     }
     doc.update(over)
     return doc

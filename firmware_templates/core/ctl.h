@@ -2,8 +2,9 @@
  *
  * Contract, per limb: target above its level → its actuator at the drive duty (heat,
  * ψ rises); target below → off (the body's elasticity lowers ψ); holding a level L ≥ 1
- * → bang-bang on the upper edge of threshold L−1: heat while the last sample is below
- * it, off at or above it, so each on-burst is short; holding level 0 → off.
+ * → bang-bang on the hold edge of threshold L−1 (its upper band edge plus
+ * CFG_HOLD_MARGIN_CDEG): heat while the last sample is below it, off at or above it, so
+ * each on-burst is short; holding level 0 → off.
  * An actuator that drives several limbs takes the largest demand of its limbs (it heats
  * if any of them must go up). Levels come from psi.h.
  */

@@ -1,5 +1,6 @@
 /* Host unit tests of core/ctl.c: measured level vs target → duty per actuator.
- * Config: two limbs, ψ* = 20°, band 19..21°, limb i driven by actuator i. */
+ * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1° (a held level is kept at
+ * or above 22°), limb i driven by actuator i. */
 #include <math.h>
 
 #include "ctl.h"
@@ -51,18 +52,22 @@ static void test_limb_that_must_go_down_is_switched_off(void)
     CHECK_EQ(duty[1], 0);
 }
 
-static void test_holding_a_raised_level_heats_only_below_the_upper_band_edge(void)
+static void test_holding_a_raised_level_heats_only_below_the_hold_edge(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     setup();
+    CHECK_EQ(CFG_HOLD_MARGIN_CDEG, 100);
     put(0, 30.0);
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], 0); /* above the band: let it sag */
+    CHECK_EQ(duty[0], 0); /* above the hold edge: let it sag */
     put(0, 20.0);         /* inside the band: still level 1, heat a little */
     CHECK_EQ(psi_level(0), 1);
     demand(1, 0, duty);
     CHECK_EQ(duty[0], DRIVE);
-    put(0, 21.3); /* back above the upper edge: off again */
+    put(0, 21.5); /* above the band but inside the margin: still heat */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 22.3); /* above the hold edge: off again */
     demand(1, 0, duty);
     CHECK_EQ(duty[0], 0);
 }
@@ -91,7 +96,7 @@ int main(void)
 {
     RUN(test_limb_that_must_go_up_gets_the_drive_duty);
     RUN(test_limb_that_must_go_down_is_switched_off);
-    RUN(test_holding_a_raised_level_heats_only_below_the_upper_band_edge);
+    RUN(test_holding_a_raised_level_heats_only_below_the_hold_edge);
     RUN(test_holding_level_zero_never_heats);
     RUN(test_unknown_level_never_heats);
     return UNIT_EXIT();
