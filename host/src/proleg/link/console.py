@@ -22,7 +22,8 @@ from typing import TextIO
 from rich.text import Text
 from textual.app import App, ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal
+from textual.css.query import NoMatches
 from textual.widgets import Footer, Static
 
 from ..errors import LinkError
@@ -187,9 +188,12 @@ class ConsoleApp(App[None]):
         self.notifier = Notifier(self.client, [CallbackListener(self.model.on_message, self.model.on_error),
                                                *self.extra_listeners])
         self.refresh_view()
-        self.set_interval(self.refresh_s, self.refresh_view)
+        self._timer = self.set_interval(self.refresh_s, self.refresh_view)
 
     def on_unmount(self) -> None:
+        timer = getattr(self, "_timer", None)
+        if timer is not None:
+            timer.stop()
         if self.notifier is not None:
             self.notifier.stop()
 
@@ -209,6 +213,12 @@ class ConsoleApp(App[None]):
             return str(state)
 
     def refresh_view(self) -> None:
+        try:
+            self._refresh_view()
+        except NoMatches:  # a timer tick while the app is shutting down
+            pass
+
+    def _refresh_view(self) -> None:
         tel, truth, events, faults = self.model.snapshot()
         info = self.client.info
         top = Text()
