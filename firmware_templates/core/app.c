@@ -18,6 +18,15 @@
 
 #define RX_BYTES_PER_TICK (2u * PROTO_MAX_ENCODED)
 #define STATE_UNKNOWN 0xFFFFu
+
+/* Telemetry may use at most half the link (UART bytes/s = baud/10), so that replies and
+ * events always find room in the transmit queue: a faster SET_TELEMETRY_RATE is NACKed.
+ * Wire bytes of one TELEMETRY frame: 15 fixed + 2 counts + 2/limb + 2/actuator + CRC 2
+ * + COBS overhead 1 + delimiter 1 (rounded up to 24 fixed). */
+#define TELEMETRY_WIRE_BYTES (24UL + 2UL * CFG_N_LIMBS + 2UL * CFG_N_ACTUATORS)
+#define TELEMETRY_LINK_HZ (CFG_UART_BAUD / 10UL / TELEMETRY_WIRE_BYTES / 2UL)
+#define TELEMETRY_MAX_HZ (TELEMETRY_LINK_HZ < CFG_TICK_HZ ? TELEMETRY_LINK_HZ : CFG_TICK_HZ)
+
 /* |g|² plausibility band, 0.5 g .. 1.5 g, in LSB². */
 #define G2_MIN ((uint32_t)(MPU6050_ACCEL_LSB_PER_G / 2) * (uint32_t)(MPU6050_ACCEL_LSB_PER_G / 2))
 #define G2_MAX ((uint32_t)(3 * MPU6050_ACCEL_LSB_PER_G / 2) * (uint32_t)(3 * MPU6050_ACCEL_LSB_PER_G / 2))
@@ -508,7 +517,7 @@ static void handle_command(void)
         }
         break;
     case PROTO_ID_SET_TELEMETRY_RATE:
-        if (msg.u.set_telemetry_rate.hz > CFG_TICK_HZ) {
+        if (msg.u.set_telemetry_rate.hz > TELEMETRY_MAX_HZ) {
             send_nack(token, PROTO_ID_SET_TELEMETRY_RATE, PROTO_ERR_OUT_OF_RANGE, 0);
         } else {
             st.telem_hz = msg.u.set_telemetry_rate.hz;

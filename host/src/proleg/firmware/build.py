@@ -78,6 +78,14 @@ def check_buildable(robot: Robot, board: Board) -> None:
             f"robot {robot.name} has {len(robot.limbs)} limbs, each with an IMU, but board {board.name} "
             f"has {len(imus)} IMU addresses on its bus ({', '.join(hex(a) for a in imus)})"
         )
+    # Telemetry may use at most half the UART (the firmware's TELEMETRY_MAX_HZ rule).
+    frame = 24 + 2 * len(robot.limbs) + 2 * len(robot.actuators)
+    link_hz = board.uart_baud // 10 // frame // 2
+    if robot.control.telemetry_hz > link_hz:
+        raise BuildError(
+            f"robot {robot.name}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
+            f"board {board.name}'s {board.uart_baud} baud link (at most {link_hz} Hz for {frame}-byte frames)"
+        )
     for tool in (board.cc, board.size_tool, board.objcopy):
         if tool and shutil.which(tool) is None:
             pkgs = " ".join(board.packages) or "its toolchain"
