@@ -56,6 +56,7 @@ class _Segments:
         self.starts = np.zeros(len(self.nodes), dtype=np.int64)
         np.cumsum(self.counts[:-1], out=self.starts[1:])
         self.src = src
+        self.positions: np.ndarray | None = None  # arange(m), made when first needed
 
     def max(self, values: np.ndarray) -> np.ndarray:
         """Max of ``values`` over each non-empty node's edges (indexed like ``nodes``)."""
@@ -64,16 +65,19 @@ class _Segments:
     def argmax_for(self, values: np.ndarray, best: np.ndarray, which: np.ndarray) -> np.ndarray:
         """For the non-empty nodes flagged in ``which`` (indexed like ``nodes``): the first
         edge position whose value reaches that node's ``best``."""
+        big = np.iinfo(np.int64).max
+        if 2 * int(which.sum()) >= len(which):  # most nodes: one pass over every edge
+            if self.positions is None:
+                self.positions = np.arange(len(self.src))
+            hit = values >= np.repeat(best, self.counts)
+            return np.minimum.reduceat(np.where(hit, self.positions, big), self.starts)[which]
         counts = self.counts[which]
-        total = int(counts.sum())
         offsets = np.zeros(len(counts), dtype=np.int64)
         np.cumsum(counts[:-1], out=offsets[1:])
-        # edge positions of the flagged nodes, touching only their own edges
-        edges = np.repeat(self.starts[which] - offsets, counts) + np.arange(total)
+        # edge positions of the flagged nodes only
+        edges = np.repeat(self.starts[which] - offsets, counts) + np.arange(int(counts.sum()))
         hit = values[edges] >= np.repeat(best[which], counts)
-        # first hit per node: the smallest position with hit, per segment
-        pos = np.where(hit, edges, np.iinfo(np.int64).max)
-        return np.minimum.reduceat(pos, offsets)
+        return np.minimum.reduceat(np.where(hit, edges, big), offsets)
 
 
 def _doubling_rounds(n: int) -> int:
@@ -153,25 +157,33 @@ def max_cycle_ratio(
     ct = np.where(dead, 1.0, t[policy])
     for it in range(1, max_iterations + 1):
         eta, x = _evaluate(n, succ, cw, ct, x)
-        eta_dst = eta.take(dst)
         eta_ne = eta[seg.nodes]
-        best = seg.max(eta_dst)
-        up = best > eta_ne + eps
-        if not up.any():
+        one_class = float(eta.max() - eta.min()) <= eps  # then no node can reach a better cycle
+        up = None
+        if not one_class:
+            eta_dst = eta.take(dst)
+            best = seg.max(eta_dst)
+            up = best > eta_ne + eps
+            if up.any():
+                chosen = seg.argmax_for(eta_dst, best, up)
+            else:
+                up = None
+        if up is None:
             # no better cycle within reach: improve potentials inside each η class
-            eta_src = np.repeat(eta_ne, seg.counts)
             val = x.take(dst)
             val += w
-            val -= eta_src if unit_time else eta_src * t
-            val[eta_dst < eta_src - eps] = -np.inf
+            if one_class:
+                val -= eta[0] if unit_time else eta[0] * t
+            else:
+                eta_src = np.repeat(eta_ne, seg.counts)
+                val -= eta_src if unit_time else eta_src * t
+                val[eta_dst < eta_src - eps] = -np.inf
             best = seg.max(val)
             up = best > x[seg.nodes] + eps
             if not up.any():
                 eta = np.where(eta < 0.5 * (dead_ratio - ratio_scale), -np.inf, eta)
                 return HowardSolution(eta, x, np.where(dead, -1, policy), it)
             chosen = seg.argmax_for(val, best, up)
-        else:
-            chosen = seg.argmax_for(eta_dst, best, up)
         nodes = seg.nodes[up]
         policy[nodes] = chosen
         succ[nodes] = dst[chosen]
