@@ -293,10 +293,6 @@ def test_a_broken_source_fails_with_the_compilers_line(proleg_home, parent):
     assert_nothing_left(parent)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "proleg/firmware/build.py _make keeps every output line containing 'error', which matches every "
-    "compiler command line (-Werror), and keeps only the first 15: with 14+ sources the compiler's "
-    "diagnostic is cut off and the message is a wall of cc commands"))
 def test_the_compile_failure_message_is_the_diagnostics_not_the_commands(proleg_home, parent):
     core = proleg_home / "firmware_templates" / "core"
     for i in range(3):  # a few more (valid) sources, as a bigger HAL would bring

@@ -84,6 +84,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
     s.add_argument("--speed", type=_positive_float, default=1.0, help="with --pty: times real time (default 1)")
     s.set_defaults(run=cmd_sim)
+
+    from .link.commands import add_arguments as add_link_commands
+
+    add_link_commands(sub)  # console, plot, dbc
     return p
 
 
@@ -155,6 +159,7 @@ def cmd_flash(args: argparse.Namespace) -> int:
         out = Path(args.out) if args.out else default_out_dir(robot, board)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
         return 0
+    flash_command(method, Path("firmware"), args.port)  # a missing --port fails before building
     result = _build(args)
     flash(method, result.artifact, args.port)
     print(f"flashed {result.artifact} with {method.tool}")
@@ -186,11 +191,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
             sim.inject(spec)
     if args.pty:
         return _serve_pty(sim, args)
-    session = SimSession(sim, keep_telemetry=bool(args.record))
-    session.advance(0.2)  # boot
-    report = _run_with_faults(session, args, sorted(timed))
-    if args.record:
-        _record(robot, session, report, args.record)
+    recorder = _recorder(robot, args.record) if args.record else None
+    session = SimSession(sim, listener=recorder.on_message if recorder else None)
+    try:
+        session.advance(0.2)  # boot
+        report = _run_with_faults(session, args, sorted(timed))
+    finally:
+        if recorder is not None:
+            recorder.stop()
     if args.json:
         print(json.dumps(_report_json(robot, report)))
     else:
@@ -232,10 +240,16 @@ def _serve_pty(sim, args) -> int:
     return 0
 
 
-def _record(robot, session, report, path: str) -> None:
-    from .link.recorder import record_messages
+def _recorder(robot, path: str):
+    from .link.recorder import Recorder
 
-    record_messages(path, report.telemetry, header={"robot": robot.name, "board": "host-sim"})
+    header = {
+        "robot": robot.name,
+        "board": "host-sim",
+        "psi_star_deg": ";".join(",".join(f"{p:g}" for p in limb.psi_star_deg) for limb in robot.limbs),
+        "limbs": ",".join(limb.name for limb in robot.limbs),
+    }
+    return Recorder(path, header, limbs=len(robot.limbs), channels=len(robot.actuators))
 
 
 def _report_json(robot, report) -> dict:

@@ -180,6 +180,8 @@ def build(
             "flash_bytes": board.flash_bytes,
             "ram_bytes": board.ram_bytes,
             "gait_table_hash": digest,
+            "gait_objective": objective,
+            "gait_max_transitions": max_transitions,
             "gaits": {d: [list(g.states) for g in gs] for d, gs in gaits.items()},
         }
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
@@ -198,7 +200,8 @@ def _make(project: Path, jobs: int) -> None:
     )
     if proc.returncode != 0:
         out = (proc.stdout + proc.stderr).replace(str(project) + "/", "")
-        errors = [line for line in out.splitlines() if "error" in line.lower()] or out.splitlines()[-15:]
+        diagnostic = re.compile(r":\d+(:\d+)?: (fatal )?error:|: undefined reference|ld(\.bfd)?: ")
+        errors = [line for line in out.splitlines() if diagnostic.search(line)] or out.splitlines()[-15:]
         raise BuildError("compilation failed:\n  " + "\n  ".join(errors[:15]))
 
 

@@ -105,12 +105,18 @@ class Printer(Listener):
         self.out = out or sys.stdout
         self.telemetry_only = telemetry_only
         self.labels = labels
+        self.closed = False
 
     def on_message(self, rx: Received) -> None:
         if self.telemetry_only and rx.message.name != "TELEMETRY":
             return
-        self.out.write(format_message(rx, self.labels) + "\n")
-        self.out.flush()
+        if self.closed:
+            return
+        try:
+            self.out.write(format_message(rx, self.labels) + "\n")
+            self.out.flush()
+        except BrokenPipeError:  # the reader went away (`proleg console --plain | head`)
+            self.closed = True
 
 
 class Notifier:

@@ -58,8 +58,9 @@ class GaitRun:
 class SimSession:
     """A host talking to one simulated robot over its (simulated) serial link."""
 
-    def __init__(self, sim: SimulatedRobot, keep_telemetry: bool = False):
+    def __init__(self, sim: SimulatedRobot, keep_telemetry: bool = False, listener=None):
         self.sim = sim
+        self.listener = listener  # called with proleg.link.Received for every message
         self.decoder = FrameDecoder(len(sim.robot.limbs), len(sim.robot.actuators))
         self.keep_telemetry = keep_telemetry
         self._token = 0
@@ -94,6 +95,10 @@ class SimSession:
         return None
 
     def _handle(self, msg: Message) -> None:
+        if self.listener is not None:
+            from ..link.client import Received
+
+            self.listener(Received(msg, self.sim.time_s, {"displacement_mm": self.sim.plant.displacement_mm}))
         run = self._run
         if msg.name == "TELEMETRY":
             seq = msg.seq
