@@ -152,3 +152,27 @@ def test_ties_in_several_components_are_all_found():
     assert result.value == 3.0
     assert [g.states for g in result.gaits] == [(0, 1, 2, 0), (3, 4, 3), (5, 7, 5)]
     assert [g.states for g in optimal_gaits(t, "rate", max_transitions=2).gaits] == [(3, 4, 3), (5, 7, 5)]
+
+
+def test_a_flat_table_with_a_flood_of_ties_lists_short_ones_quickly():
+    # 1024 states, every one-limb change worth 1: every cycle of the hypercube has rate 1
+    bits = 10
+    n = 1 << bits
+    v = np.repeat(np.arange(n), bits)
+    d = v ^ (1 << np.tile(np.arange(bits), n))
+    t = TransitionTable.from_edges((2,) * bits, v, d, np.ones(len(v)))
+    result = optimal_gaits(t, "rate")
+    assert result.value == 1.0 and result.truncated and len(result.gaits) == MAX_TIES
+    assert max(g.transitions for g in result.gaits) <= 6  # the short ties come first
+    bounded = optimal_gaits(t, "rate", max_transitions=2)
+    assert len(bounded.gaits) == n * bits // 2 and bounded.truncated is False  # each 2-cycle once
+
+
+def test_one_long_optimal_cycle_in_a_large_tight_subgraph_is_still_found():
+    # a ring of 6000 states worth 1 per step, and every reverse step worth -1
+    n = 6000
+    a = np.arange(n)
+    t = TransitionTable.from_edges((n,), np.r_[a, (a + 1) % n], np.r_[(a + 1) % n, a], np.r_[np.ones(n), -np.ones(n)])
+    result = optimal_gaits(t, "rate")
+    assert result.value == 1.0 and not result.truncated
+    assert [g.states for g in result.gaits] == [tuple(range(n)) + (0,)]

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from proleg.gait.bruteforce import brute_force_max_cycle_mean
-from proleg.gait.cycles import simple_cycles, strongly_connected_components
+from proleg.gait.cycles import short_cycles, simple_cycles, strongly_connected_components
 from proleg.gait.howard import max_cycle_ratio
 from proleg.gait.karp import max_cycle_mean
 
@@ -130,3 +130,14 @@ def test_scc_and_johnson_are_iterative_on_a_100k_node_ring():
     assert len(strongly_connected_components(adj)) == 1
     cycles, _ = simple_cycles(adj)
     assert cycles == [tuple(range(n))]
+
+
+@settings(max_examples=200, deadline=None)
+@given(graphs(), st.integers(2, 7))
+def test_short_cycles_are_the_simple_cycles_up_to_the_length(graph, max_len):
+    n, src, dst, _ = graph
+    adj = {v: [int(b) for a, b in zip(src, dst) if a == v] for v in range(n)}
+    every, _ = simple_cycles(adj)
+    short, truncated = short_cycles(adj, max_len)
+    assert not truncated and len(short) == len(set(short))
+    assert set(short) == {c for c in every if len(c) <= max_len}

@@ -9,7 +9,9 @@ Howard's own potentials satisfy the inequality; to be safe against rounding (and
 λ* being recomputed exactly from one optimal cycle) they are re-relaxed Bellman-Ford style
 on that node set before the tight edges are taken. Nodes that cannot be on a cycle of the
 tight subgraph (no tight in- or out-edge) are peeled off with vectorised rounds before the
-pure-Python cycle search sees the rest.
+pure-Python cycle search sees the rest. When the tight subgraph is large (a flat table:
+thousands of equal cycles), the short cycles are listed first, so that a truncated answer
+holds short gaits rather than a few enormous ones.
 """
 
 from __future__ import annotations
@@ -19,8 +21,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cycles import simple_cycles
+from .cycles import Adjacency, short_cycles, simple_cycles
 from .howard import HowardSolution
+from .result import MAX_LISTED_STATES
+
+
+#: Tight subgraphs with more edges than this list their cycles of at most
+#: SHORT_FIRST_LENGTH transitions first (then Johnson, only if those were not too many).
+SHORT_FIRST_EDGES = 5_000
+SHORT_FIRST_LENGTH = 6
 
 
 @dataclass(frozen=True)
@@ -29,6 +38,7 @@ class CriticalCycles:
     cycles: list[tuple[int, ...]]     # open simple cycles, each starting at its lowest node
     truncated: bool
     edges: np.ndarray                 # positions (in the input edge arrays) of the tight edges
+    graph: Adjacency                  # the tight edges that can lie on a cycle, as adjacency
 
 
 def policy_cycle(sol: HowardSolution, dst: np.ndarray) -> list[int]:
@@ -94,5 +104,11 @@ def critical_cycles(
     adj: dict[int, list[int]] = {int(v): [] for v in np.unique(np.r_[es, ed])}
     for u, v in zip(es.tolist(), ed.tolist()):
         adj[u].append(v)
-    cycles, truncated = simple_cycles(adj, limit)
-    return CriticalCycles(lam, cycles, truncated, pos)
+    if len(es) > SHORT_FIRST_EDGES:
+        # a large tight subgraph usually means a flat table with a flood of ties: list the
+        # short ones first, so that a truncated answer holds the most useful gaits
+        short, truncated = short_cycles(adj, SHORT_FIRST_LENGTH, limit, MAX_LISTED_STATES)
+        if truncated:
+            return CriticalCycles(lam, short, True, pos, adj)
+    cycles, truncated = simple_cycles(adj, limit, MAX_LISTED_STATES)
+    return CriticalCycles(lam, cycles, truncated, pos, adj)

@@ -18,9 +18,10 @@ import numpy as np
 from ..errors import GaitError
 from ..transitions import TransitionTable
 from .critical import critical_cycles
+from .cycles import short_cycles
 from .evaluate import make_gaits
 from .howard import max_cycle_ratio
-from .result import MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
+from .result import MAX_LISTED_STATES, MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
 from .search import bounded_search
 
 OBJECTIVES = ("total", "rate", "speed")
@@ -130,12 +131,8 @@ def optimal_gaits(
             fitting = [c for c in crit.cycles if len(c) <= K]
             return _finish(table, objective, direction, K, fitting, tol_r, False)
         # some ties fit but the listing was cut short: list the fitting ones on the tight edges
-        e = np.sort(crit.edges)
-        res = bounded_search(
-            n, table.src[e], table.dst[e], w[e], K, tol_r, time=t[e], simple=True, ratio=True,
-            floor=crit.value - tol_r, ceiling=crit.value, limit=MAX_TIES,
-        )
-        return _finish(table, objective, direction, K, res.cycles, tol_r, res.truncated)
+        short, truncated = short_cycles(crit.graph, K, MAX_TIES, MAX_LISTED_STATES)
+        return _finish(table, objective, direction, K, short, tol_r, truncated)
     # no optimal cycle is short enough: the bounded optimum is lower; search for it exactly
     res = bounded_search(
         n, table.src, table.dst, w, K, tol_r, time=time, simple=True, ratio=True, limit=MAX_TIES

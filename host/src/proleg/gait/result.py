@@ -11,6 +11,8 @@ RELATIVE_TOLERANCE = 1e-9
 
 #: At most this many tied gaits are listed; beyond it ``GaitResult.truncated`` is True.
 MAX_TIES = 10_000
+#: ...and at most this many states in all (ties of a large flat table can be very long).
+MAX_LISTED_STATES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -39,7 +41,8 @@ class GaitResult:
 
     ``value`` is the optimum (J, J per transition or J per second; negative for -x), or
     None when no gait moves in ``direction``. ``gaits`` holds every tie, sorted by states,
-    unless more than ``MAX_TIES`` exist: then the first ones found and ``truncated=True``.
+    unless more than ``MAX_TIES`` exist (or they hold more than ``MAX_LISTED_STATES`` states):
+    then the first ones found and ``truncated=True``.
     ``max_transitions`` is the bound actually used (the default for ``total`` included).
     """
 
