@@ -5,13 +5,15 @@ Graph families (2^N states, fixed seeds):
   dense N     — every transition allowed: 2^N·(2^N − 1) edges.
 Rewards are mostly antisymmetric integers: T[a][b] = s(a,b)·B{a,b} + e(a,b) with B uniform in
 −1000..1000 per unordered pair, s = ±1 by direction, e uniform in −10..10 per ordered pair;
-"-small" cases use B in −3..3 and e in −1..1 instead (many equal walks: the tie-heavy case).
+"-small" cases use B in −3..3 and e in −1..1 instead (many equal walks: the tie-heavy case);
+"-flat" cases give every transition reward 1 (every cycle ties: the listing is truncated).
 
 Measured, each case in its own subprocess (so the peak RSS is that case's alone):
   rate   — optimal_gaits(table, "rate"): Howard + critical subgraph + every tie;
   howard — max_cycle_ratio alone;
   karp   — Karp's max cycle mean (O(n·m) time, O(n²) memory), where feasible;
   brute  — the brute-force oracle (all simple cycles / all closed walks), tiny N only;
+  speed  — optimal_gaits(table, "speed") with durations uniform in 0.5..2 s (cycle ratio);
   total  — optimal_gaits(table, "total", max_transitions=6), every tie;
   brute-total — the oracle for the same question.
 Time = best of 3 runs (fewer when the runs so far took 3 s). Prints a table and writes
@@ -53,6 +55,7 @@ CASES: list[tuple[str, int, str, float | None]] = (
     + [("dense", n, "brute", None) for n in (2, 3)]
     + [("dense", 6, "total", 1.0), ("dense", 6, "total-small", 1.0), ("hypercube", 6, "total", None)]
     + [("dense", 3, "brute-total", None), ("hypercube", 16, "rate-small", None), ("dense", 8, "rate-small", None)]
+    + [("hypercube", 16, "rate-flat", None), ("hypercube", 16, "speed", None)]
 )
 
 
@@ -65,15 +68,19 @@ def rewards(src: np.ndarray, dst: np.ndarray, n: int, seed: int, base: int = 100
     return (np.where(src < dst, b, -b) + rng.integers(-noise, noise + 1, len(src))).astype(np.float64)
 
 
-def make_table(family: str, bits: int, small: bool = False, seed: int = 2024) -> TransitionTable:
+def make_table(family: str, bits: int, variant: str = "", seed: int = 2024) -> TransitionTable:
     n = 1 << bits
     if family == "hypercube":
         src = np.repeat(np.arange(n, dtype=np.int64), bits)
         dst = src ^ (1 << np.tile(np.arange(bits, dtype=np.int64), n))
     else:
         src, dst = np.nonzero(~np.eye(n, dtype=bool))
-    scale = (3, 1) if small else (1000, 10)
-    return TransitionTable.from_edges((2,) * bits, src, dst, rewards(src, dst, n, seed + bits, *scale))
+    scale = (3, 1) if variant == "small" else (1000, 10)
+    reward = rewards(src, dst, n, seed + bits, *scale)
+    if variant == "flat":
+        reward = np.ones(len(src))
+    duration = np.random.default_rng(seed).uniform(0.5, 2.0, len(src))
+    return TransitionTable.from_edges((2,) * bits, src, dst, reward, duration)
 
 
 def run_case(family: str, bits: int, algorithm: str) -> dict:
@@ -82,12 +89,15 @@ def run_case(family: str, bits: int, algorithm: str) -> dict:
     from proleg.gait.howard import max_cycle_ratio
     from proleg.gait.karp import max_cycle_mean
 
-    small = algorithm.endswith("-small")
-    algorithm = algorithm.removesuffix("-small")
-    table = make_table(family, bits, small)
+    name = algorithm
+    algorithm, _, variant = algorithm.partition("-")
+    if algorithm == "brute" and variant == "total":
+        algorithm, variant = "brute-total", ""
+    table = make_table(family, bits, variant)
     n, src, dst, w = table.n_states, table.src, table.dst, table.reward
     jobs = {
         "rate": lambda: optimal_gaits(table, "rate"),
+        "speed": lambda: optimal_gaits(table, "speed"),
         "howard": lambda: max_cycle_ratio(n, src, dst, w),
         "karp": lambda: max_cycle_mean(n, src, dst, w),
         "brute": lambda: brute_force_max_cycle_mean(n, src, dst, w),
@@ -101,7 +111,7 @@ def run_case(family: str, bits: int, algorithm: str) -> dict:
         out = jobs[algorithm]()
         times.append(time.perf_counter() - t0)
     truncated = None
-    if algorithm in ("rate", "total"):
+    if algorithm in ("rate", "speed", "total"):
         value, ties, truncated = out.value, len(out.gaits), out.truncated
     elif algorithm == "howard":
         value, ties = out.value, None
@@ -114,7 +124,7 @@ def run_case(family: str, bits: int, algorithm: str) -> dict:
         "N": bits,
         "states": n,
         "transitions": int(table.n_transitions),
-        "algorithm": algorithm + ("-small" if small else ""),
+        "algorithm": name,
         "time_s": min(times),
         "runs": len(times),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
