@@ -126,13 +126,14 @@ def optimal_gaits(
         return _finish(table, objective, direction, max_transitions, crit.cycles, tol_r, crit.truncated)
 
     K = max_transitions
-    if any(len(c) <= K for c in crit.cycles):
-        if not crit.truncated:
-            fitting = [c for c in crit.cycles if len(c) <= K]
-            return _finish(table, objective, direction, K, fitting, tol_r, False)
-        # some ties fit but the listing was cut short: list the fitting ones on the tight edges
-        short, truncated = short_cycles(crit.graph, K, MAX_TIES, MAX_LISTED_STATES)
-        return _finish(table, objective, direction, K, short, tol_r, truncated)
+    if crit.truncated:  # the listing was cut short: list the short tight cycles afresh
+        fitting, truncated = short_cycles(crit.graph, K, MAX_TIES, MAX_LISTED_STATES)
+    else:
+        fitting, truncated = [c for c in crit.cycles if len(c) <= K], False
+    if fitting:  # an unbounded optimum fits the bound, so it is the bounded optimum too
+        result = _finish(table, objective, direction, K, fitting, tol_r, truncated)
+        if result.value is not None and sign * result.value >= crit.value - tol_r:
+            return result
     # no optimal cycle is short enough: the bounded optimum is lower; search for it exactly
     res = bounded_search(
         n, table.src, table.dst, w, K, tol_r, time=time, simple=True, ratio=True, limit=MAX_TIES
