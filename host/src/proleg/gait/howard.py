@@ -136,6 +136,8 @@ def max_cycle_ratio(
     w = np.asarray(weight, dtype=np.float64)
     t = np.ones(len(w)) if time is None else np.asarray(time, dtype=np.float64)
     m = len(w)
+    if m > 1 and np.any(src[1:] < src[:-1]):
+        raise ValueError("max_cycle_ratio needs the edges sorted by source")
     if m == 0:
         return HowardSolution(np.full(n, -np.inf), np.zeros(n), np.full(n, -1, dtype=np.int64), 0)
     seg = _Segments(n, src)
