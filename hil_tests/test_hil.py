@@ -126,20 +126,25 @@ def _all_off(sim) -> bool:
     return all(sim.board.pwm(ch) == 0.0 for ch in sim.channels)
 
 
-@pytest.mark.plant
-def test_estop_turns_every_mosfet_off_within_one_control_tick(target):
+def _start_until_driving(target) -> None:
+    """START the +x gait and run tick by tick until some MOSFET is on (at most 4 s)."""
     sim = target.sim
     target.client.start(0, "+x")
-    # run until some MOSFET is on
     for _ in range(4000):
         sim.run_ticks(1)
         if not _all_off(sim):
-            break
-    assert not _all_off(sim), "no actuator came on within 4 s"
+            return
+    raise AssertionError("no actuator came on within 4 s")
+
+
+@pytest.mark.plant
+def test_estop_turns_every_mosfet_off_within_one_control_tick(target):
+    sim = target.sim
+    _start_until_driving(target)
     sim.write(encode(Message.new("ESTOP", token=99)))
     sim.run_ticks(1)
     assert _all_off(sim)
-    # latched: stays off, and START is refused until cleared
+    # latched: stays off while the gait would have driven the coils again
     sim.run_ticks(500)
     assert _all_off(sim)
 
@@ -147,12 +152,7 @@ def test_estop_turns_every_mosfet_off_within_one_control_tick(target):
 @pytest.mark.plant
 def test_imu_that_stops_answering_faults_and_turns_all_mosfets_off_within_two_ticks(target):
     sim = target.sim
-    target.client.start(0, "+x")
-    for _ in range(4000):
-        sim.run_ticks(1)
-        if not _all_off(sim):
-            break
-    assert not _all_off(sim)
+    _start_until_driving(target)
     sim.inject("imu-silent:right")
     sim.run_ticks(2)
     assert _all_off(sim)

@@ -149,14 +149,13 @@ def cmd_flash(args: argparse.Namespace) -> int:
     from .firmware.boards import load_board
     from .firmware.flash import choose_method, flash, flash_command
 
-    method = choose_method(load_board(args.board), args.tool)
+    board = load_board(args.board)
+    method = choose_method(board, args.tool)
     if args.dry_run:
         from .firmware.build import default_out_dir
         from .robot import load_robot
 
-        robot = load_robot(args.robot)
-        board = load_board(args.board)
-        out = Path(args.out) if args.out else default_out_dir(robot, board)
+        out = Path(args.out) if args.out else default_out_dir(load_robot(args.robot), board)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
         return 0
     flash_command(method, Path("firmware"), args.port)  # a missing --port fails before building
@@ -195,7 +194,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
     session = SimSession(sim, listener=recorder.on_message if recorder else None)
     try:
         session.advance(0.2)  # boot
-        report = _run_with_faults(session, args, sorted(timed))
+        start = sim.time_s
+        for at, fault in timed:
+            session.schedule_fault(start + at, fault)
+        report = session.run_gait(args.direction, args.gait, args.duration)
     finally:
         if recorder is not None:
             recorder.stop()
@@ -204,27 +206,6 @@ def cmd_sim(args: argparse.Namespace) -> int:
     else:
         print(_report_text(robot, report))
     return 0
-
-
-def _run_with_faults(session, args, timed):
-    """run_gait, with timed faults applied when their moment comes."""
-    if not timed:
-        return session.run_gait(args.direction, args.gait, args.duration)
-    original = session.advance
-    t0 = session.sim.time_s
-
-    def advance(seconds, chunk_s=0.02):
-        end = session.sim.time_s + seconds
-        while session.sim.time_s < end - 1e-9:
-            while timed and session.sim.time_s - t0 >= timed[0][0]:
-                session.sim.inject(timed.pop(0)[1])
-            original(min(chunk_s, end - session.sim.time_s), chunk_s)
-
-    session.advance = advance
-    try:
-        return session.run_gait(args.direction, args.gait, args.duration)
-    finally:
-        session.advance = original
 
 
 def _serve_pty(sim, args) -> int:

@@ -58,10 +58,6 @@ class Board:
     def pwm_channels(self) -> tuple[str, ...]:
         return self.pwm_pins
 
-    @property
-    def uart_baud_rate(self) -> int:
-        return self.uart_baud
-
     # Dict-style access keeps templates simple: board["name"], board["family"] ...
     def __getitem__(self, key: str) -> Any:
         return getattr(self, key)

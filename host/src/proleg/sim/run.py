@@ -131,10 +131,9 @@ class SimulatedRobot:
         self.board.run_ticks(n % self.ticks_per_step)
 
     def _push_truth(self) -> None:
-        psi = self.plant.psi_deg
-        dpsi = self.plant.dpsi_dps
+        truth = self.plant.limb_truth
         for i, addr in enumerate(self.imu_addresses):
-            self.board.imu_truth(addr, float(psi[i]), float(dpsi[i]))
+            self.board.imu_truth(addr, *truth(i))
 
     # -- fault injection ----------------------------------------------------------------
     def inject(self, fault: str) -> None:

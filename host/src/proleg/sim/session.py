@@ -67,7 +67,13 @@ class SimSession:
         self._last_seq: int | None = None
         self._run: GaitRun | None = None
         self._cycle_start_mm: float | None = None
+        self._scheduled: list[tuple[float, str]] = []  # (virtual time s, fault), sorted
         self.inbox: list[Message] = []
+
+    def schedule_fault(self, at_s: float, fault: str) -> None:
+        """Inject ``fault`` (see proleg.sim.run.FAULTS) once virtual time reaches ``at_s``."""
+        self._scheduled.append((at_s, fault))
+        self._scheduled.sort()
 
     def send(self, name: str, **fields) -> int:
         self._token = self._token % 255 + 1
@@ -78,6 +84,8 @@ class SimSession:
         """Run the simulation, handling every message the firmware sends."""
         steps = max(1, round(seconds / chunk_s))
         for _ in range(steps):
+            while self._scheduled and self.sim.time_s >= self._scheduled[0][0] - 1e-9:
+                self.sim.inject(self._scheduled.pop(0)[1])
             self.sim.advance(chunk_s)
             for msg in self.decoder.feed(self.sim.read()):
                 self._handle(msg)
