@@ -407,6 +407,8 @@ def test_gait_advances_when_the_limbs_reach_their_states(board):
     [
         (d.ParamId.DRIVE_DUTY, 8001, d.ErrorCode.SAFETY_LIMIT),
         (d.ParamId.DRIVE_DUTY, 0, d.ErrorCode.OUT_OF_RANGE),
+        (d.ParamId.HOLD_DUTY, 8001, d.ErrorCode.SAFETY_LIMIT),
+        (d.ParamId.HOLD_DUTY, -1, d.ErrorCode.OUT_OF_RANGE),
         (d.ParamId.MAX_ON_MS, 51, d.ErrorCode.SAFETY_LIMIT),
         (d.ParamId.MIN_COOLDOWN_MS, 19, d.ErrorCode.SAFETY_LIMIT),
         (d.ParamId.STATE_TIMEOUT_MS, 201, d.ErrorCode.SAFETY_LIMIT),
@@ -423,6 +425,20 @@ def test_set_param_inside_the_envelope_is_used(board):
     assert board.reply(board.send("SET_PARAM", param=int(d.ParamId.DRIVE_DUTY), index=0, value=3000)).spec.name == "ACK"
     _heating(board)
     assert board.duty(0) == 3000
+
+
+def test_a_held_limb_keeps_the_hold_duty_which_set_param_changes(board):
+    # r1-fast allows 50 ms of continuous on-time: all of this fits inside it.
+    _heating(board)
+    board.set_psi(0, 25.0)  # left up and above its hold edge: 10 reached
+    board.run(5)
+    assert board.duty(0) == 2500  # holding at the robot file's default hold_duty, 0.25
+    assert board.reply(board.send("SET_PARAM", param=int(d.ParamId.HOLD_DUTY), index=0, value=1000)).spec.name == "ACK"
+    board.run(2)
+    assert board.duty(0) == 1000
+    board.set_psi(0, 21.5)  # sagging below the hold edge (22°): the drive duty again
+    board.run(5)
+    assert board.duty(0) == 6000
 
 
 def test_load_gait_with_a_forbidden_transition_is_nacked(sim_so):

@@ -140,6 +140,16 @@ def test_limb_naming_an_unknown_actuator(tmp_path):
     rejects(tmp_path, R1.replace('actuator = "b"', 'actuator = "z"'), "limb[1].actuator", "'z'")
 
 
+def test_hold_duty_above_drive_duty(tmp_path):
+    text = R1 + "\n[control]\ndrive_duty = 0.5\nhold_duty = 0.6\n"
+    rejects(tmp_path, text, "control.hold_duty", "at most control.drive_duty")
+
+
+def test_hold_duty_negative(tmp_path):
+    text = R1 + "\n[control]\nhold_duty = -0.1\n"
+    rejects(tmp_path, text, "control.hold_duty", "a number in [0.0, 1.0]")
+
+
 def test_drive_duty_above_safety_ceiling(tmp_path):
     text = R1 + "\n[safety]\nmax_duty = 0.5\n[control]\ndrive_duty = 0.6\n"
     rejects(tmp_path, text, "control.drive_duty", "at most safety.max_duty")

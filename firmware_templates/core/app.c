@@ -50,7 +50,7 @@ static struct {
     mpu6050_accel_t last[CFG_N_LIMBS];
     uint32_t measured;      /* debounced robot state, STATE_UNKNOWN until every limb has one */
     uint8_t gait, dir;      /* gait last started */
-    uint16_t drive_pm;
+    uint16_t drive_pm, hold_pm;
     uint32_t max_on_ticks, cooldown_ticks;
     uint32_t watchdog_ticks, since_rx;
     uint8_t watchdog_tripped;
@@ -290,49 +290,55 @@ static int8_t threshold_at(uint8_t flat, uint8_t *limb, uint8_t *thr)
     return -1;
 }
 
+/* 0 when lo ≤ v ≤ hi and v ≤ safe; else OUT_OF_RANGE, or SAFETY_LIMIT past `safe`. */
+static uint8_t check(int32_t v, int32_t lo, int32_t hi, int32_t safe)
+{
+    if (v < lo || v > hi) {
+        return PROTO_ERR_OUT_OF_RANGE;
+    }
+    return v > safe ? PROTO_ERR_SAFETY_LIMIT : 0u;
+}
+
+#define ANY INT32_MAX
+
 /* Returns 0 (accepted) or a PROTO_ERR_* code. */
 static uint8_t set_param(uint8_t param, uint8_t index, int32_t v)
 {
-    uint8_t limb, thr, i;
+    uint8_t limb, thr, i, e;
     switch (param) {
     case PROTO_PARAM_DRIVE_DUTY:
-        if (v <= 0) {
-            return PROTO_ERR_OUT_OF_RANGE;
+    case PROTO_PARAM_HOLD_DUTY:
+        if ((e = check(v, param == PROTO_PARAM_DRIVE_DUTY ? 1 : 0, ANY, (int32_t)sma_max_duty())) != 0u) {
+            return e;
         }
-        if (v > (int32_t)sma_max_duty()) {
-            return PROTO_ERR_SAFETY_LIMIT;
-        }
-        st.drive_pm = (uint16_t)v;
+        *(param == PROTO_PARAM_DRIVE_DUTY ? &st.drive_pm : &st.hold_pm) = (uint16_t)v;
         return 0;
     case PROTO_PARAM_HOLD_MS:
-        if (v < 0 || v > MAX_PARAM_MS) {
-            return PROTO_ERR_OUT_OF_RANGE;
+        if ((e = check(v, 0, MAX_PARAM_MS, ANY)) != 0u) {
+            return e;
         }
         seq_set_hold(ms_to_ticks((uint32_t)v));
         return 0;
     case PROTO_PARAM_DEBOUNCE_TICKS:
-        if (v < 1 || v > 1000) {
-            return PROTO_ERR_OUT_OF_RANGE;
+        if ((e = check(v, 1, 1000, ANY)) != 0u) {
+            return e;
         }
         psi_set_debounce((uint16_t)v);
         return 0;
     case PROTO_PARAM_STATE_TIMEOUT_MS:
-        if (v < 1) {
-            return PROTO_ERR_OUT_OF_RANGE;
-        }
-        if ((uint32_t)v > CFG_STATE_TIMEOUT_MS) {
-            return PROTO_ERR_SAFETY_LIMIT;
+        if ((e = check(v, 1, ANY, CFG_STATE_TIMEOUT_MS)) != 0u) {
+            return e;
         }
         seq_set_timeout(ms_to_ticks((uint32_t)v));
         return 0;
     case PROTO_PARAM_PSI_STAR_CDEG:
-        if (threshold_at(index, &limb, &thr) != 0 || v <= -9000 || v >= 9000 ||
+        if (threshold_at(index, &limb, &thr) != 0 || check(v, -8999, 8999, ANY) != 0u ||
             psi_set_band(limb, thr, (int16_t)v, psi_hyst_cdeg(limb, thr)) != 0) {
             return PROTO_ERR_OUT_OF_RANGE;
         }
         return 0;
     case PROTO_PARAM_HYSTERESIS_CDEG:
-        if (index >= CFG_N_LIMBS || v < 0 || v > 2000) {
+        if (index >= CFG_N_LIMBS || check(v, 0, 2000, ANY) != 0u) {
             return PROTO_ERR_OUT_OF_RANGE;
         }
         for (i = 0; i + 1u < psi_levels(index); i++) {
@@ -342,18 +348,17 @@ static uint8_t set_param(uint8_t param, uint8_t index, int32_t v)
         }
         return 0;
     case PROTO_PARAM_MAX_ON_MS:
-        if (v < 1) {
-            return PROTO_ERR_OUT_OF_RANGE;
+        if ((e = check(v, 1, ANY, CFG_MAX_ON_MS)) != 0u) {
+            return e;
         }
-        if ((uint32_t)v > CFG_MAX_ON_MS ||
-            sma_set_limits(sma_max_duty(), ms_to_ticks((uint32_t)v), st.cooldown_ticks) != 0) {
+        if (sma_set_limits(sma_max_duty(), ms_to_ticks((uint32_t)v), st.cooldown_ticks) != 0) {
             return PROTO_ERR_SAFETY_LIMIT;
         }
         st.max_on_ticks = ms_to_ticks((uint32_t)v);
         return 0;
     case PROTO_PARAM_MIN_COOLDOWN_MS:
-        if (v < 0 || v > MAX_PARAM_MS) {
-            return PROTO_ERR_OUT_OF_RANGE;
+        if ((e = check(v, 0, MAX_PARAM_MS, ANY)) != 0u) {
+            return e;
         }
         if ((uint32_t)v < CFG_MIN_COOLDOWN_MS ||
             sma_set_limits(sma_max_duty(), st.max_on_ticks, ms_to_ticks((uint32_t)v)) != 0) {
@@ -362,8 +367,8 @@ static uint8_t set_param(uint8_t param, uint8_t index, int32_t v)
         st.cooldown_ticks = ms_to_ticks((uint32_t)v);
         return 0;
     case PROTO_PARAM_LINK_WATCHDOG_MS:
-        if (v < 0 || v > MAX_PARAM_MS) {
-            return PROTO_ERR_OUT_OF_RANGE;
+        if ((e = check(v, 0, MAX_PARAM_MS, ANY)) != 0u) {
+            return e;
         }
         if (CFG_LINK_WATCHDOG_MS != 0u && (v == 0 || (uint32_t)v > CFG_LINK_WATCHDOG_MS)) {
             return PROTO_ERR_SAFETY_LIMIT;
@@ -651,7 +656,7 @@ static void drive(void)
     if (seq_running() && !st.fault && !sma_estopped() && st.measured != STATE_UNKNOWN) {
         uint8_t want[CFG_N_LIMBS];
         seq_state_levels(seq_target(), want);
-        ctl_demand(want, st.drive_pm, duty);
+        ctl_demand(want, st.drive_pm, st.hold_pm, duty);
     } else {
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
             duty[i] = 0;
@@ -706,6 +711,7 @@ void app_init(void)
     memset(&st, 0, sizeof st);
     st.measured = STATE_UNKNOWN;
     st.drive_pm = CFG_DRIVE_DUTY_PM;
+    st.hold_pm = CFG_HOLD_DUTY_PM;
     st.max_on_ticks = CFG_MAX_ON_TICKS;
     st.cooldown_ticks = CFG_MIN_COOLDOWN_TICKS;
     st.watchdog_ticks = CFG_LINK_WATCHDOG_TICKS;

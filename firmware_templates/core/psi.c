@@ -27,14 +27,18 @@ static int16_t hyst[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 static int16_t hold_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
 static int16_t settle_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
 
+/* {cos, sin} Q14 of `cdeg` clamped to ±89°. */
+static void edge_at(int16_t cdeg, int16_t edge[2])
+{
+    cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
+    edge[0] = psi_cos_q14(cdeg);
+    edge[1] = psi_sin_q14(cdeg);
+}
+
 static void set_hold_edge(uint8_t limb, uint8_t thr)
 {
-    int16_t hi = (int16_t)(band_hi[limb][thr] + CFG_HOLD_MARGIN_CDEG);
-    int16_t lo = (int16_t)(band_lo[limb][thr] - CFG_HOLD_MARGIN_CDEG);
-    hold_edge[limb][thr][0] = psi_cos_q14(hi > 8900 ? 8900 : hi);
-    hold_edge[limb][thr][1] = psi_sin_q14(hi > 8900 ? 8900 : hi);
-    settle_edge[limb][thr][0] = psi_cos_q14(lo < -8900 ? -8900 : lo);
-    settle_edge[limb][thr][1] = psi_sin_q14(lo < -8900 ? -8900 : lo);
+    edge_at((int16_t)(band_hi[limb][thr] + CFG_HOLD_MARGIN_CDEG), hold_edge[limb][thr]);
+    edge_at((int16_t)(band_lo[limb][thr] - CFG_HOLD_MARGIN_CDEG), settle_edge[limb][thr]);
 }
 
 static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
@@ -237,6 +241,17 @@ uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr)
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
 {
     return at_or_above(hold_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
+}
+
+uint8_t psi_last_at_or_above_settle(uint8_t limb, uint8_t thr)
+{
+    return at_or_above(settle_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
+}
+
+int16_t psi_to_cross(uint8_t limb, uint8_t thr, uint8_t rising)
+{
+    int16_t psi = psi_last_centideg(limb);
+    return (int16_t)(rising ? band_hi[limb][thr] - psi : psi - band_lo[limb][thr]);
 }
 
 uint8_t psi_settled(uint8_t limb)

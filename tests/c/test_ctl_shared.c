@@ -26,15 +26,33 @@ static void test_shared_actuator_heats_if_any_of_its_limbs_must_go_up(void)
     put(1, 0.0);  /* level 0, must go up */
     target[0] = 0;
     target[1] = 1;
-    ctl_demand(target, 5000, duty);
+    ctl_demand(target, 5000, 2000, duty);
     CHECK_EQ(duty[0], 5000);
     target[1] = 0; /* both down */
-    ctl_demand(target, 5000, duty);
+    ctl_demand(target, 5000, 2000, duty);
     CHECK_EQ(duty[0], 0);
+}
+
+static void test_shared_actuator_lets_an_unsettled_limb_settle_before_holding_the_other(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint8_t target[CFG_N_LIMBS] = {1, 0};
+    psi_init();
+    psi_set_debounce(1);
+    put(0, 40.0);
+    put(1, 30.0);
+    put(1, 18.5); /* level 0, but not yet below the settle edge under the band */
+    CHECK_EQ(psi_level(1), 0);
+    ctl_demand(target, 5000, 2000, duty);
+    CHECK_EQ(duty[0], 0); /* release wins over the other limb's hold */
+    put(1, 10.0);         /* settled */
+    ctl_demand(target, 5000, 2000, duty);
+    CHECK_EQ(duty[0], 2000);
 }
 
 int main(void)
 {
     RUN(test_shared_actuator_heats_if_any_of_its_limbs_must_go_up);
+    RUN(test_shared_actuator_lets_an_unsettled_limb_settle_before_holding_the_other);
     return UNIT_EXIT();
 }

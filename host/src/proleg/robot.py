@@ -58,6 +58,7 @@ class Safety:
 class Control:
     tick_hz: int = 1000
     drive_duty: float = 0.6
+    hold_duty: float = 0.25
     debounce_ticks: int = 5
     hold_ms: int = 100
     hold_margin_deg: float = 4.0
@@ -267,6 +268,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
     c = Control(
         tick_hz=f.integer("tick_hz", d.tick_hz, 200, 10_000),
         drive_duty=f.number("drive_duty", d.drive_duty, 0.0, 1.0, open_lo=True),
+        hold_duty=f.number("hold_duty", d.hold_duty, 0.0, 1.0),
         debounce_ticks=f.integer("debounce_ticks", d.debounce_ticks, 1, 1000),
         hold_ms=f.integer("hold_ms", d.hold_ms, 0, 60_000),
         hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
@@ -274,6 +276,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
     )
     if c.drive_duty > safety.max_duty:
         f.fail("drive_duty", f"at most safety.max_duty ({safety.max_duty})", c.drive_duty)
+    if c.hold_duty > c.drive_duty:
+        f.fail("hold_duty", f"at most control.drive_duty ({c.drive_duty})", c.hold_duty)
     if c.telemetry_hz > c.tick_hz:
         f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
     return c

@@ -256,6 +256,7 @@ def render_config(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], b
         hold_margin_cdeg=round(float(ctl.hold_margin_deg) * 100),
         telemetry_hz=int(ctl.telemetry_hz),
         drive_pm=round(float(ctl.drive_duty) * 10000),
+        hold_pm=round(float(ctl.hold_duty) * 10000),
         max_duty_pm=round(float(safety.max_duty) * 10000),
         max_on_ms=int(safety.max_on_ms),
         max_on_ticks=_ticks(safety.max_on_ms, tick_hz),

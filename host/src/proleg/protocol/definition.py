@@ -129,6 +129,7 @@ class ParamId(IntEnum):
     MAX_ON_MS = 7  # may only shrink
     MIN_COOLDOWN_MS = 8  # may only grow
     LINK_WATCHDOG_MS = 9  # may only shrink (0 only if the build has it off)
+    HOLD_DUTY = 10  # permyriad, ≤ build max_duty; 0 = hold by bang-bang only
 
 
 class Flag(IntFlag):
