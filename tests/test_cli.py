@@ -30,11 +30,29 @@ def test_gait_json_is_one_object_with_the_documented_shape(capsys):
     for r in doc["results"]:
         assert r["objective"] == "total" and r["max_transitions"] == 3
         for g in r["gaits"]:
-            assert set(g) == {"states", "reward", "transitions", "rate"}
+            assert set(g) == {"states", "reward", "transitions", "rate", "opposing_steps"}
             assert g["states"][0] == g["states"][-1]
             assert g["transitions"] == len(g["states"]) - 1
             assert g["reward"] == pytest.approx(r["value"])
             assert g["rate"] == pytest.approx(g["reward"] / g["transitions"])
+
+
+def test_gaits_with_a_step_that_raises_one_limb_and_lowers_another_are_flagged(capsys):
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r3.toml"), "--direction", "-x", "--json")
+    assert code == 0
+    gaits = {"-".join(g["states"]): g["opposing_steps"] for g in json.loads(out)["results"][0]["gaits"]}
+    assert gaits == {"00-01-10-11-00": [["01", "10"]], "00-01-11-00": [], "00-01-11-10-00": []}
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r3.toml"), "--direction", "-x")
+    assert "note: 00 → 01 → 10 → 11 → 00 raises one limb while lowering another in 01 → 10" in out
+    assert out.count("note:") == 1
+
+
+def test_the_firmware_carries_one_way_gaits_first(capsys):
+    from proleg.firmware.build import firmware_gaits
+    from proleg.robot import load_robot
+
+    gaits = firmware_gaits(load_robot(ROBOTS / "paper-r3.toml"))["-x"]
+    assert [g.states for g in gaits] == [(0, 1, 3, 0), (0, 1, 3, 2, 0), (0, 1, 2, 3, 0)]
 
 
 def test_direction_minus_x_is_accepted_as_a_separate_argument(capsys):

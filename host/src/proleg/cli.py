@@ -341,15 +341,32 @@ def _result_text(robot, r) -> str:
     for walk, gait in zip(walks, r.gaits):
         extra = f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
         lines.append(f"    {walk:<{width}}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}{extra}")
+    mixed = [(walk, _opposing_text(t, gait)) for walk, gait in zip(walks, r.gaits) if _opposing_text(t, gait)]
+    for walk, steps in mixed:
+        lines.append(f"    note: {walk} raises one limb while lowering another in {steps}; an SMA robot")
+        lines.append("          may make such a step as two transitions (heating and cooling differ in speed)")
     return "\n".join(lines)
 
 
+def _opposing_text(table, gait) -> str:
+    from .states import opposing_steps
+
+    steps = opposing_steps(gait.states, table.levels)
+    return ", ".join(f"{table.label(gait.states[t])} → {table.label(gait.states[t + 1])}" for t in steps)
+
+
 def _gait_json(table, gait) -> dict:
+    from .states import opposing_steps
+
     d = {
         "states": [table.label(s) for s in gait.states],
         "reward": gait.reward,
         "transitions": gait.transitions,
         "rate": gait.rate,
+        "opposing_steps": [
+            [table.label(gait.states[t]), table.label(gait.states[t + 1])]
+            for t in opposing_steps(gait.states, table.levels)
+        ],
     }
     if gait.duration is not None:
         d["duration_s"] = gait.duration

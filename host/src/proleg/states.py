@@ -48,3 +48,18 @@ def limb_levels(index_: int, levels: Sequence[int]) -> tuple[int, ...]:
         index_, d = divmod(index_, k)
         out.append(d)
     return tuple(reversed(out))
+
+
+def opposing_steps(states: Sequence[int], levels: Sequence[int]) -> list[int]:
+    """Indices t of the steps states[t] → states[t+1] that raise one limb while lowering
+    another.
+
+    An SMA robot heats to raise a limb and cools to lower one, and the two take different
+    times, so such a step is hard to make as one transition: the controller synchronises
+    the crossings as well as it can, but a robot may pass through an intermediate state."""
+    out = []
+    for t, (a, b) in enumerate(zip(states, states[1:])):
+        la, lb = limb_levels(a, levels), limb_levels(b, levels)
+        if any(y > x for x, y in zip(la, lb)) and any(y < x for x, y in zip(la, lb)):
+            out.append(t)
+    return out

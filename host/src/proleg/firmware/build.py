@@ -56,12 +56,18 @@ def default_out_dir(robot: Robot, board: Board) -> Path:
 
 
 def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None) -> dict:
-    """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none)."""
-    from ..gait import optimal_gaits
+    """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none).
 
-    return {
-        d: tuple(optimal_gaits(robot.transitions, objective, d, max_transitions).gaits) for d in ("+x", "-x")
-    }
+    Ties whose steps each move limbs one way only come first (stable otherwise), so that
+    gait 0, the one START and ``proleg sim`` run by default, is the easiest to make
+    physically (``proleg.states.opposing_steps``)."""
+    from ..gait import optimal_gaits
+    from ..states import opposing_steps
+
+    def ordered(gaits):
+        return tuple(sorted(gaits, key=lambda g: len(opposing_steps(g.states, robot.levels))))
+
+    return {d: ordered(optimal_gaits(robot.transitions, objective, d, max_transitions).gaits) for d in ("+x", "-x")}
 
 
 def check_buildable(robot: Robot, board: Board) -> None:

@@ -1,0 +1,26 @@
+"""State labels and limb levels: which gait steps move limbs in opposite directions."""
+
+from proleg.states import limb_levels, opposing_steps
+
+
+def index(levels, limb_values):
+    i = 0
+    for k, v in zip(levels, limb_values):
+        i = i * k + v
+    return i
+
+
+def test_a_step_is_opposing_only_when_one_limb_rises_and_another_falls():
+    levels = (3, 2)  # a three-level left limb, a binary right limb
+    walk = [(0, 0), (2, 1), (1, 1), (2, 0), (0, 1), (0, 0)]
+    states = [index(levels, w) for w in walk]
+    assert [limb_levels(s, levels) for s in states] == walk
+    # (0,0)->(2,1) both up; (2,1)->(1,1) one down; (1,1)->(2,0) up and down;
+    # (2,0)->(0,1) down and up; (0,1)->(0,0) one down
+    assert opposing_steps(states, levels) == [2, 3]
+
+
+def test_a_walk_of_single_limb_steps_has_no_opposing_step():
+    levels = (2, 2)
+    assert opposing_steps([0, 2, 3, 1, 0], levels) == []
+    assert opposing_steps([0, 1, 2, 3, 0], levels) == [1]
