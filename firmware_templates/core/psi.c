@@ -243,11 +243,6 @@ uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
     return at_or_above(hold_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
 }
 
-uint8_t psi_last_at_or_above_settle(uint8_t limb, uint8_t thr)
-{
-    return at_or_above(settle_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
-}
-
 int16_t psi_to_cross(uint8_t limb, uint8_t thr, uint8_t rising)
 {
     int16_t psi = psi_last_centideg(limb);

@@ -63,10 +63,6 @@ uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr);
  * the upper edge plus CFG_HOLD_MARGIN_CDEG, where the controller holds a raised level. */
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr);
 
-/* 1 when the last sample of `limb` is at or above the settle edge of threshold `thr`
- * (its lower band edge minus CFG_HOLD_MARGIN_CDEG): not yet settled below it. */
-uint8_t psi_last_at_or_above_settle(uint8_t limb, uint8_t thr);
-
 /* How far (0.01°) the last sample of `limb` still is from crossing threshold `thr`: to
  * its band's upper edge when `rising`, to its lower edge when falling; ≤ 0 once past. */
 int16_t psi_to_cross(uint8_t limb, uint8_t thr, uint8_t rising);
