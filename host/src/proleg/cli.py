@@ -341,8 +341,10 @@ def _result_text(robot, r) -> str:
     for walk, gait in zip(walks, r.gaits):
         extra = f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
         lines.append(f"    {walk:<{width}}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}{extra}")
-    mixed = [(walk, _opposing_text(t, gait)) for walk, gait in zip(walks, r.gaits) if _opposing_text(t, gait)]
-    for walk, steps in mixed:
+    for walk, gait in zip(walks, r.gaits):
+        steps = _opposing_text(t, gait)
+        if not steps:
+            continue
         lines.append(f"    note: {walk} raises one limb while lowering another in {steps}; an SMA robot")
         lines.append("          may make such a step as two transitions (heating and cooling differ in speed)")
     return "\n".join(lines)
