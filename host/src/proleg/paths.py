@@ -1,18 +1,35 @@
 """Where proleg's data directories are: boards/, firmware_templates/, robots/.
 
-They live at the top of the source tree (design-card layout). ``PROLEG_HOME`` points
-elsewhere, e.g. at an unpacked source tree next to an installed wheel.
+An installed wheel carries them inside the package (``proleg/_data/``, copied there by
+``setup.py`` when the wheel is built) and finds them with ``importlib.resources``; a
+source checkout (or an editable install) uses the directories at the top of the tree.
+``PROLEG_HOME`` points elsewhere, e.g. at a lab's own tree of boards and templates.
 """
 
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
+
+#: The data directories a home holds; a wheel carries exactly these.
+DATA_DIRS = ("boards", "firmware_templates", "robots")
+
+
+def _packaged() -> Path | None:
+    data = resources.files("proleg") / "_data"
+    # a wheel installs as plain files, so the traversable is a real directory
+    if isinstance(data, Path) and (data / "boards").is_dir():
+        return data
+    return None
 
 
 def home() -> Path:
+    """The directory holding ``boards/``, ``firmware_templates/`` and ``robots/``."""
     env = os.environ.get("PROLEG_HOME")
-    return Path(env) if env else Path(__file__).resolve().parents[3]
+    if env:
+        return Path(env)
+    return _packaged() or Path(__file__).resolve().parents[3]
 
 
 def boards_dir() -> Path:
@@ -25,3 +42,21 @@ def templates_dir() -> Path:
 
 def robots_dir() -> Path:
     return home() / "robots"
+
+
+def bundled_robots() -> list[str]:
+    """Names of the example robot files that come with proleg (``paper-r1``, ...)."""
+    return sorted(p.stem for p in robots_dir().glob("*.toml"))
+
+
+def resolve_robot(text: str) -> Path:
+    """A robot file path as given, or the bundled example of that name.
+
+    ``paper-r1`` (no such file in the working directory) means ``robots/paper-r1.toml``
+    of this installation; anything that exists as a path is taken as it is.
+    """
+    path = Path(text)
+    if path.exists() or path.suffix == ".toml" or os.sep in text:
+        return path
+    bundled = robots_dir() / f"{text}.toml"
+    return bundled if bundled.exists() else path
