@@ -6,9 +6,10 @@ import pytest
 
 from proleg.errors import LinkError
 from proleg.link import BufferedReader, CommandRefused, Notifier, RobotClient
-from proleg.link.fake_board import FakeBoard
+from fake_board import FakeBoard
 from proleg.link.sim_link import SimLink
-from proleg.protocol import ErrorCode, Message, ParamId, encode
+from proleg.protocol import BY_NAME, MESSAGES, ErrorCode, Message, ParamId, encode
+from proleg.protocol.definition import reply_answers
 
 
 def make(**board_kw) -> tuple[FakeBoard, RobotClient]:
@@ -63,6 +64,36 @@ def test_silent_robot_times_out_with_one_clear_line():
         client.ping()
     assert str(e.value) == "no reply to PING within 0.5 s on sim fake"
     assert client.stats.timeouts == 1
+
+
+def test_a_stale_ack_for_another_command_with_the_same_token_does_not_confirm_estop():
+    board, client = make()
+    board.silent = True  # the ESTOP is lost on the way...
+    token = client._token % 255 + 1  # ...and the token it will carry was last used by a PING
+    board._send(Message.new("ACK", token=token, cmd=BY_NAME["PING"].id))
+    with pytest.raises(LinkError, match="no reply to ESTOP"):
+        client.estop()
+    assert [m.name for m in board.received[-1:]] == ["ESTOP"]
+
+
+def test_a_nack_for_another_command_with_the_same_token_does_not_refuse_this_one():
+    board, client = make()
+    token = client._token % 255 + 1
+    board._send(Message.new("NACK", token=token, cmd=BY_NAME["START"].id, error=int(ErrorCode.NOT_ALLOWED), detail=0))
+    client.stop()  # answered by its own ACK, the stale NACK is ignored
+
+
+def test_each_command_waits_for_the_reply_the_protocol_definition_names():
+    for spec in MESSAGES:
+        if spec.direction == "h2r":
+            assert spec.reply in ("ACK", "INFO", "STATS")
+    assert BY_NAME["GET_INFO"].reply == "INFO" and BY_NAME["GET_STATS"].reply == "STATS"
+    stop = BY_NAME["STOP"]
+    assert reply_answers("ACK", {"token": 3, "cmd": stop.id}, stop)
+    assert reply_answers("NACK", {"token": 3, "cmd": stop.id}, stop)
+    assert not reply_answers("ACK", {"token": 3, "cmd": BY_NAME["PING"].id}, stop)
+    assert not reply_answers("INFO", {"token": 3}, stop)
+    assert reply_answers("INFO", {"token": 3}, BY_NAME["GET_INFO"])
 
 
 def test_telemetry_iterates_in_sequence_and_times_out_when_off():

@@ -8,7 +8,7 @@ import io
 from proleg.link import RobotClient
 from proleg.link.commands import console_main
 from proleg.link.console import ConsoleApp, LimbView, run_plain
-from proleg.link.fake_board import FakeBoard
+from fake_board import FakeBoard
 from proleg.link.sim_link import SimLink
 
 

@@ -10,7 +10,7 @@ import pytest
 from proleg.errors import LinkError
 from proleg.link import RobotClient
 from proleg.link.commands import console_main, dbc_main, plot_main
-from proleg.link.fake_board import FakeBoard
+from fake_board import FakeBoard
 from proleg.link.plot import plot_recording
 from proleg.link.recorder import Recorder, read_recording
 from proleg.link.sim_link import SimLink

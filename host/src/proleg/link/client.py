@@ -4,8 +4,11 @@ One decoded-message stream per robot: ``recv()`` returns every message the robot
 (telemetry, events, replies) in order; a ``Notifier`` (``proleg.link.listeners``) pumps that
 stream into listeners (console, recorder, printer, tests), none of which knows the link.
 
-Commands carry a token (1..255) and wait for the reply echoing it: ACK, or INFO/STATS for
-GET_INFO/GET_STATS; a NACK raises ``CommandRefused`` naming the error code; silence raises
+Commands carry a token (1..255) and wait for the reply echoing it; which message answers
+which command comes from the protocol definition (``MessageSpec.reply``: INFO for GET_INFO,
+STATS for GET_STATS, ACK otherwise; ``reply_answers``), so a reply is matched by token *and*
+command: a stale ACK for another command that reused the token does not confirm a STOP or an
+ESTOP. A NACK raises ``CommandRefused`` naming the error code; silence raises
 ``LinkError("no reply to PING within 0.5 s on /dev/ttyUSB0")``. Timeouts run on the link's
 clock (virtual time on the simulated board). Replies are recognised whoever is reading:
 the waiting command itself when nobody else is, the Notifier thread otherwise.
@@ -30,13 +33,16 @@ from ..protocol.codec import FrameDecoder, Message, encode
 from ..protocol.definition import (
     BY_NAME,
     CHANNEL_CEILING,
+    MESSAGES,
     GAIT_USER,
     LIMB_CEILING,
     PROTOCOL_VERSION,
     ClearWhat,
     Direction,
     ErrorCode,
+    MessageSpec,
     ParamId,
+    reply_answers,
 )
 from .base import Link, LinkDisconnected
 
@@ -44,7 +50,8 @@ DEFAULT_TIMEOUT = 0.5
 #: decoded messages kept for ``recv`` when nobody reads them (oldest dropped first)
 QUEUE_LIMIT = 65536
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
-_REPLY_FOR = {"GET_INFO": "INFO", "GET_STATS": "STATS"}
+#: messages that can answer a command (the declared replies plus NACK)
+_REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
 
 
 class CommandRefused(LinkError):
@@ -174,7 +181,7 @@ class RobotClient:
         self._tx_lock = threading.Lock()
         self._cond = threading.Condition()
         self._replies: dict[int, Message] = {}
-        self._waiting: set[int] = set()
+        self._waiting: dict[int, MessageSpec] = {}  # token -> the command waiting for its reply
         self._token = 0
         self._last_seq: int | None = None
         self._reconnect_lock = threading.Lock()
@@ -252,27 +259,26 @@ class RobotClient:
         return FirmwareStats.from_message(self.request("GET_STATS", timeout=timeout))
 
     def request(self, name: str, *, timeout: float | None = None, **fields: int | tuple[int, ...]) -> Message:
-        """Send command ``name`` with a fresh token; return its reply (ACK/INFO/STATS)."""
-        if name not in BY_NAME or BY_NAME[name].direction != "h2r":
+        """Send command ``name`` with a fresh token; return its reply (the one the protocol
+        definition names: ACK, INFO or STATS). NACK raises ``CommandRefused``."""
+        spec = BY_NAME.get(name)
+        if spec is None or spec.direction != "h2r":
             raise LinkError(f"{name!r} is not a command")
         token = self._next_token()
         frame = encode(Message(name, {"token": token, **fields}))
         with self._cond:
-            self._waiting.add(token)
+            self._waiting[token] = spec
             self._replies.pop(token, None)
         try:
             self._write(frame)
             reply = self._wait_reply(token, self.timeout if timeout is None else timeout, name)
         finally:
             with self._cond:
-                self._waiting.discard(token)
+                self._waiting.pop(token, None)
                 self._replies.pop(token, None)
         if reply.name == "NACK":
             self.stats.nacks += 1
             raise CommandRefused(name, reply.error, reply.detail, self.link.description)
-        expected = _REPLY_FOR.get(name, "ACK")
-        if reply.name != expected:
-            raise LinkError(f"{self.link.description}: {name} answered by {reply.name}, expected {expected}")
         return reply
 
     def _next_token(self) -> int:
@@ -384,13 +390,15 @@ class RobotClient:
                     else:
                         st.seq_restarts += 1
                 self._last_seq = seq
-            elif name in ("ACK", "NACK", "INFO", "STATS"):
+            elif name in _REPLY_NAMES:
                 token = m.fields["token"]
+                waiting = self._waiting.get(token)
+                answers = waiting is not None and reply_answers(name, m.fields, waiting)
                 if name == "INFO":
                     self._last_seq = None  # a reset or a new session restarts the sequence
-                    if token == 0 or token not in self._waiting:
+                    if not answers:
                         self.info = RobotInfo.from_message(m)
-                if token in self._waiting:
+                if answers:
                     self._replies[token] = m
                     notify = True
             append(Received(m, now, truth))
