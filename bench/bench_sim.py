@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_firmware import machine, sha256, tree_sha256  # noqa: E402
 
 from proleg.robot import load_robot  # noqa: E402
-from proleg.sim.run import SimulatedRobot, sim_library  # noqa: E402
+from proleg.sim.closed_loop import SimulatedRobot, sim_library  # noqa: E402
 from proleg.sim.session import SimSession  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results" / "sim.json"

@@ -23,7 +23,7 @@ ROBOT = "paper-r1.toml"
 @pytest.fixture(scope="module")
 def robot():
     from proleg.robot import load_robot
-    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.closed_loop import SimulatedRobot
 
     r = load_robot(robots_dir() / ROBOT)
     try:
@@ -34,7 +34,7 @@ def robot():
 
 
 def _sim(robot):
-    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.closed_loop import SimulatedRobot
 
     return SimulatedRobot(robot)
 
@@ -121,3 +121,34 @@ def test_console_e_stop_reaches_the_simulated_firmware(robot):
 
     asyncio.run(scenario())
     client.close()
+
+
+class _CountingBoard:
+    """Another simulated board: the host-sim board behind a wrapper that counts its ticks, as an
+    emulated MCU written elsewhere would be dropped in."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self.ticks = 0
+
+    def run_ticks(self, n: int) -> None:
+        self.ticks += n
+        self._inner.run_ticks(n)
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
+def test_simulated_robot_drives_any_board_with_the_simulated_board_interface(robot):
+    from proleg.sim.board import SimBoard, SimulatedBoardLike
+    from proleg.sim.closed_loop import SimulatedRobot, sim_library
+
+    board = _CountingBoard(SimBoard(sim_library(robot)))
+    sim = SimulatedRobot(robot, board=board)
+    assert sim.board is board and isinstance(SimBoard(sim_library(robot)), SimulatedBoardLike)
+    with RobotClient(SimLink(sim, description="sim paper-r1")) as client:
+        assert client.connect().robot_name == "paper-r1"
+        client.start(0, "+x")
+        frames = list(client.telemetry(count=100))
+    assert {f.measured for f in frames} >= {0, 2}
+    assert board.ticks == round(sim.time_s * 1e6 / board.tick_us)

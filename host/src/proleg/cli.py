@@ -171,7 +171,7 @@ def cmd_flash(args: argparse.Namespace) -> int:
 
 def cmd_sim(args: argparse.Namespace) -> int:
     from .robot import load_robot
-    from .sim.run import SimulatedRobot
+    from .sim.closed_loop import SimulatedRobot
     from .sim.session import SimSession
 
     robot = load_robot(args.robot)

@@ -34,7 +34,7 @@ def open_link(*, port: str | None = None, can_channel: str | None = None, interf
     if can_channel is not None:
         return CanLink(can_channel, interface, node=node, bitrate=bitrate), None
     from ..robot import load_robot
-    from ..sim.run import SimulatedRobot
+    from ..sim.closed_loop import SimulatedRobot
 
     robot = load_robot(sim)  # type: ignore[arg-type]
     return SimLink(SimulatedRobot(robot), speed=speed, description=f"sim {robot.name}"), robot

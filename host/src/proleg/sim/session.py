@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from ..protocol.codec import FrameDecoder, Message, encode
 from ..protocol.definition import Direction, EventKind, FaultCode
-from .run import SimulatedRobot
+from .closed_loop import SimulatedRobot
 
 DIRECTION_CODE = {"+x": int(Direction.PLUS_X), "-x": int(Direction.MINUS_X)}
 
@@ -71,7 +71,7 @@ class SimSession:
         self.inbox: list[Message] = []
 
     def schedule_fault(self, at_s: float, fault: str) -> None:
-        """Inject ``fault`` (see proleg.sim.run.FAULTS) once virtual time reaches ``at_s``."""
+        """Inject ``fault`` (see proleg.sim.closed_loop.FAULTS) once virtual time reaches ``at_s``."""
         self._scheduled.append((at_s, fault))
         self._scheduled.sort()
 
