@@ -157,3 +157,47 @@ def test_simulated_link_tells_displacement_as_ground_truth():
         pass
     rx = client.recv_received(1.0)
     assert rx is not None and rx.truth["displacement_mm"] > 0
+
+
+class _ResettingBoard:
+    """A board that, like a Nano whose port was just opened, says nothing for its first second."""
+
+    def __init__(self, inner: FakeBoard, quiet_s: float = 1.0):
+        self.inner, self.quiet_s, self.t = inner, quiet_s, 0.0
+
+    def write(self, data: bytes) -> None:
+        if self.t >= self.quiet_s:
+            self.inner.write(data)
+
+    def read(self) -> bytes:
+        data = self.inner.read()
+        return data if self.t >= self.quiet_s else b""
+
+    def advance(self, seconds: float) -> None:
+        self.t += seconds
+        self.inner.advance(seconds)
+
+
+def test_connect_keeps_asking_for_info_while_the_board_boots():
+    client = RobotClient(SimLink(_ResettingBoard(FakeBoard()), description="sim fake"))
+    assert client.connect().robot_name == "paper-r1"
+    assert 1.0 <= client.link.clock() < 3.0
+
+
+def test_connect_gives_up_after_three_seconds_with_one_clear_line():
+    board = FakeBoard(silent=True)
+    client = RobotClient(SimLink(board, description="sim fake"))
+    with pytest.raises(LinkError, match=r"^no reply to GET_INFO within 3 s \(\d+ tries\) on sim fake$"):
+        client.connect()
+    assert 3.0 <= client.link.clock() < 3.1
+    assert [m.name for m in board.received].count("GET_INFO") >= 50
+
+
+def test_request_retries_with_the_same_token_until_acknowledged():
+    board, client = make()
+    board.silent = True
+    with pytest.raises(LinkError, match=r"no reply to START within 0.5 s on sim fake \(3 tries\)"):
+        client.request("START", retries=2, gait=0, direction=0)
+    sent = [m for m in board.received if m.name == "START"]
+    assert len(sent) == 3 and len({m.token for m in sent}) == 1
+    assert client.stats.retries == 2 and client.stats.timeouts == 1

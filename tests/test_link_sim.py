@@ -152,3 +152,18 @@ def test_simulated_robot_drives_any_board_with_the_simulated_board_interface(rob
         frames = list(client.telemetry(count=100))
     assert {f.measured for f in frames} >= {0, 2}
     assert board.ticks == round(sim.time_s * 1e6 / board.tick_us)
+
+
+def test_connect_mostly_gets_through_five_percent_corruption(robot):
+    # one 0.5 s GET_INFO got through in about 1 of 10 seeds; 3 s of tries in 17 of 20 (measured)
+    connected = 0
+    for seed in range(10):
+        sim = _sim(robot)
+        sim.link_faults.rng.seed(seed)
+        sim.inject("link-corrupt:0.05")
+        with RobotClient(SimLink(sim, description="sim paper-r1")) as client:
+            try:
+                connected += client.connect().robot_name == "paper-r1"
+            except ProlegError:
+                pass
+    assert connected >= 7

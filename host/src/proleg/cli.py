@@ -170,9 +170,9 @@ def cmd_flash(args: argparse.Namespace) -> int:
 
 
 def cmd_sim(args: argparse.Namespace) -> int:
+    from .report import SimSession
     from .robot import load_robot
     from .sim.closed_loop import SimulatedRobot
-    from .sim.session import SimSession
 
     robot = load_robot(args.robot)
     sim = SimulatedRobot(robot, seed=args.seed)
@@ -191,7 +191,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.pty:
         return _serve_pty(sim, args)
     recorder = _recorder(robot, args.record) if args.record else None
-    session = SimSession(sim, listener=recorder.on_message if recorder else None)
+    session = SimSession(sim, listeners=[recorder] if recorder else [])
     try:
         session.advance(0.2)  # boot
         start = sim.time_s
@@ -205,7 +205,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
         print(json.dumps(_report_json(robot, report)))
     else:
         print(_report_text(robot, report))
-    return 0
+    for e in report.errors:
+        print(f"proleg: error: {e}", file=sys.stderr)
+    return 0 if report.ok else 1
 
 
 def _serve_pty(sim, args) -> int:
@@ -251,6 +253,7 @@ def _report_json(robot, report) -> dict:
         "telemetry_frames": report.telemetry_frames,
         "telemetry_lost": report.telemetry_lost,
         "link_errors": report.link_errors,
+        "errors": report.errors,
     }
 
 
@@ -273,6 +276,8 @@ def _report_text(robot, report) -> str:
     )
     for f in report.faults:
         lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+    for e in report.errors:
+        lines.append(f"  ERROR: {e}")
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
     lines.append(
         f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"

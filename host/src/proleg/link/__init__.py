@@ -6,7 +6,7 @@ recorder, printer, tests). See ``docs/ARCHITECTURE.md`` and each module's docstr
 """
 
 from .base import Link, LinkDisconnected
-from .client import CommandRefused, FirmwareStats, LinkStats, Received, RobotClient, RobotInfo
+from .client import CommandRefused, FirmwareStats, LinkStats, Received, ReplyTimeout, RobotClient, RobotInfo
 from .listeners import BufferedReader, CallbackListener, Listener, Notifier, Printer
 
 __all__ = [
@@ -21,6 +21,7 @@ __all__ = [
     "Notifier",
     "Printer",
     "Received",
+    "ReplyTimeout",
     "RobotClient",
     "RobotInfo",
 ]

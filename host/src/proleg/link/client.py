@@ -47,6 +47,10 @@ from ..protocol.definition import (
 from .base import Link, LinkDisconnected
 
 DEFAULT_TIMEOUT = 0.5
+#: how long ``connect`` keeps asking GET_INFO (link clock, seconds)
+CONNECT_WITHIN_S = 3.0
+#: how long each of ``connect``'s GET_INFO tries waits (a round trip at 115200 Bd is ~10 ms)
+CONNECT_TRY_S = 0.05
 #: decoded messages kept for ``recv`` when nobody reads them (oldest dropped first)
 QUEUE_LIMIT = 65536
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
@@ -67,6 +71,10 @@ class CommandRefused(LinkError):
         self.command = command
         self.detail = detail
         super().__init__(f"{where}: robot refused {command}: {code} (detail {detail})")
+
+
+class ReplyTimeout(LinkError):
+    """A command got no reply in time (after its retries)."""
 
 
 @dataclass(frozen=True)
@@ -138,7 +146,8 @@ class LinkStats:
     seq_restarts: int = 0
     reconnects: int = 0
     nacks: int = 0
-    timeouts: int = 0
+    timeouts: int = 0  # commands that got no reply (after their retries)
+    retries: int = 0  # commands sent again after a try got no reply
 
     @property
     def corrupt(self) -> int:
@@ -188,10 +197,31 @@ class RobotClient:
         self._closed = False
 
     # ------------------------------------------------------------------ lifecycle
-    def connect(self, timeout: float | None = None) -> RobotInfo:
-        """Handshake: flush the robot's receiver (an empty frame), then GET_INFO."""
-        self._write(b"\0")
-        info = self.get_info(timeout)
+    def connect(self, timeout: float | None = None, *, within_s: float = CONNECT_WITHIN_S) -> RobotInfo:
+        """Handshake: flush the robot's receiver (an empty frame), then GET_INFO, again and
+        again (each try waits ``timeout``, default ``CONNECT_TRY_S``) until ``within_s`` seconds
+        of the link's clock have passed: a Nano resets when its port opens and its bootloader
+        waits about a second, and a noisy link loses frames (an INFO frame is ~45 bytes: at 5 %
+        corrupted bytes fewer than one in ten arrives intact). Any INFO that arrives meanwhile
+        counts, also a late answer to an earlier try. Raises ``LinkError`` when no INFO came."""
+        wait = CONNECT_TRY_S if timeout is None else timeout
+        deadline = self.link.clock() + within_s
+        tries = 0
+        self.info = None
+        while True:
+            self._write(b"\0")
+            tries += 1
+            try:
+                info = self.get_info(wait)
+                break
+            except ReplyTimeout:
+                if self.info is not None:  # a late answer to an earlier try, or the boot INFO
+                    info = self.info
+                    break
+                if self.link.clock() >= deadline - _EPS:
+                    raise ReplyTimeout(
+                        f"no reply to GET_INFO within {_seconds(within_s)} ({tries} tries) on {self.link.description}"
+                    ) from None
         if info.protocol_version != PROTOCOL_VERSION:
             raise LinkError(
                 f"{self.link.description}: robot speaks protocol {info.protocol_version}, "
@@ -258,9 +288,12 @@ class RobotClient:
         """The firmware's link counters (GET_STATS)."""
         return FirmwareStats.from_message(self.request("GET_STATS", timeout=timeout))
 
-    def request(self, name: str, *, timeout: float | None = None, **fields: int | tuple[int, ...]) -> Message:
+    def request(self, name: str, *, timeout: float | None = None, retries: int = 0,
+                **fields: int | tuple[int, ...]) -> Message:
         """Send command ``name`` with a fresh token; return its reply (the one the protocol
-        definition names: ACK, INFO or STATS). NACK raises ``CommandRefused``."""
+        definition names: ACK, INFO or STATS). NACK raises ``CommandRefused``. Without a reply
+        within ``timeout`` the same frame (same token) is sent again up to ``retries`` times;
+        then ``LinkError``."""
         spec = BY_NAME.get(name)
         if spec is None or spec.direction != "h2r":
             raise LinkError(f"{name!r} is not a command")
@@ -269,9 +302,20 @@ class RobotClient:
         with self._cond:
             self._waiting[token] = spec
             self._replies.pop(token, None)
+        wait = self.timeout if timeout is None else timeout
         try:
-            self._write(frame)
-            reply = self._wait_reply(token, self.timeout if timeout is None else timeout, name)
+            for attempt in range(retries + 1):
+                self._write(frame)
+                try:
+                    reply = self._wait_reply(token, wait, name)
+                    break
+                except ReplyTimeout as e:
+                    if attempt == retries:
+                        self.stats.timeouts += 1
+                        if retries:
+                            raise ReplyTimeout(f"{e} ({retries + 1} tries)") from None
+                        raise
+                    self.stats.retries += 1
         finally:
             with self._cond:
                 self._waiting.pop(token, None)
@@ -303,8 +347,7 @@ class RobotClient:
                     return reply
             now = self.link.clock()
             if now >= deadline - _EPS:
-                self.stats.timeouts += 1
-                raise LinkError(f"no reply to {name} within {_seconds(timeout)} on {self.link.description}")
+                raise ReplyTimeout(f"no reply to {name} within {_seconds(timeout)} on {self.link.description}")
             if self._rx_lock.acquire(blocking=False):
                 try:
                     self._pump(min(self.poll_s, deadline - now))
