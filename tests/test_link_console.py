@@ -6,8 +6,8 @@ import asyncio
 import io
 
 from proleg.link import RobotClient
-from proleg.link.commands import console_main
-from proleg.link.console import ConsoleApp, LimbView, run_plain
+from proleg.cli.link_commands import console_main
+from proleg.console import ConsoleApp, LimbView, run_plain
 from fake_board import FakeBoard
 from proleg.link.sim_link import SimLink
 

@@ -10,9 +10,10 @@ import pytest
 
 from proleg.errors import ProlegError
 from proleg.link import RobotClient
-from proleg.link.can_link import CanBoardBridge, CanLink
-from proleg.link.console import ConsoleApp, LimbView
-from proleg.link.dbc import dbc_text
+from proleg.link.can_link import CanLink
+from proleg.sim.can_bridge import CanBoardBridge
+from proleg.console import ConsoleApp, LimbView
+from proleg.protocol.dbc import dbc_text
 from proleg.link.sim_link import SimLink
 from proleg.paths import robots_dir
 from proleg.protocol import FrameDecoder
