@@ -40,7 +40,7 @@ from proleg.firmware.build import build  # noqa: E402
 from proleg.protocol import Message, encode  # noqa: E402
 from proleg.protocol.definition import Direction  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
-from proleg.sim.run import SimulatedRobot  # noqa: E402
+from proleg.sim.closed_loop import SimulatedRobot  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results" / "firmware.json"
 ROBOTS = ["paper-r1", "paper-r1-one-actuator", "paper-r2", "paper-r3"]

@@ -104,7 +104,7 @@ def bench_pty(seconds: float, hz: int = 1000) -> dict:
         from proleg.paths import robots_dir
         from proleg.robot import load_robot
         from proleg.sim.pty import PtyServer
-        from proleg.sim.run import SimulatedRobot
+        from proleg.sim.closed_loop import SimulatedRobot
     except ImportError as e:
         return {"case": case, "missing": str(e)}
     sim = SimulatedRobot(load_robot(robots_dir() / "paper-r1.toml"))

@@ -47,7 +47,7 @@ class Target:
     robot: Robot
     board: Board
     client: RobotClient
-    sim: object | None  # proleg.sim.run.SimulatedRobot on the simulator, None on hardware
+    sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on the simulator, None on hardware
 
     @property
     def expected_gait_hash(self) -> int:
@@ -70,7 +70,7 @@ class Target:
 
 def _open_sim(robot: Robot, seed: int = 1) -> Target:
     from proleg.link.sim_link import SimLink
-    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.closed_loop import SimulatedRobot
 
     sim = SimulatedRobot(robot, seed=seed)
     client = RobotClient(SimLink(sim, description=f"simulated {robot.name}"),

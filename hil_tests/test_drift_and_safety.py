@@ -86,7 +86,7 @@ COMMANDS = st.one_of(
 
 @pytest.mark.plant
 def test_random_command_sequences_never_break_the_safety_envelope(open_target):
-    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.closed_loop import SimulatedRobot
 
     target = open_target("paper-r1")
     robot = target.robot

@@ -119,3 +119,34 @@ def test_console_script_is_installed():
     proc = subprocess.run([str(exe), "gait", str(ROBOTS / "paper-r2.toml"), "--json"], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["robot"] == "paper-r2"
+
+
+SIM_JSON_FIELDS = {
+    "robot", "direction", "gait", "duration_s", "cycles", "cycle_displacements_mm", "mean_cycle_mm",
+    "displacement_mm", "states_reached", "true_transitions", "unexpected_transitions", "faults",
+    "telemetry_frames", "telemetry_lost", "link_errors", "errors",
+}
+
+
+def test_sim_walks_and_exits_0_with_the_documented_json(capsys):
+    code, out, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "10", "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    assert set(doc) == SIM_JSON_FIELDS
+    assert doc["cycles"] >= 2 and doc["displacement_mm"] > 0 and doc["errors"] == [] and doc["faults"] == []
+
+
+def test_sim_reports_a_lost_start_as_an_error_and_exits_1(capsys):
+    code, out, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "5", "--json",
+                         "--inject", "link-drop:1.0")
+    assert code == 1
+    doc = json.loads(out)
+    assert doc["cycles"] == 0 and doc["errors"][0].startswith("START failed: no reply to START")
+    assert "proleg: error: START failed" in err
+
+
+def test_sim_exits_1_when_the_run_faulted(capsys):
+    code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "15",
+                       "--inject", "dead-actuator:sma-right+2")
+    assert code == 1
+    assert "FAULT at" in out

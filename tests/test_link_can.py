@@ -12,10 +12,11 @@ from hypothesis import strategies as st
 
 from proleg.errors import LinkError
 from proleg.link import RobotClient
-from proleg.link.can_link import CanBoardBridge, CanLink
-from proleg.link.can_map import CanIds, CanToWire, message_frames
-from proleg.link.dbc import build_database, dbc_text, write_dbc
-from proleg.link.fake_board import FakeBoard
+from proleg.link.can_link import CanLink
+from proleg.sim.can_bridge import CanBoardBridge
+from proleg.protocol.can import CanIds, CanToWire, message_frames
+from proleg.protocol.dbc import build_database, dbc_text, write_dbc
+from fake_board import FakeBoard
 from proleg.protocol import FrameDecoder, Message
 
 _channels = (f"proleg-test-{i}" for i in itertools.count())

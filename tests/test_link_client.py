@@ -6,9 +6,10 @@ import pytest
 
 from proleg.errors import LinkError
 from proleg.link import BufferedReader, CommandRefused, Notifier, RobotClient
-from proleg.link.fake_board import FakeBoard
+from fake_board import FakeBoard
 from proleg.link.sim_link import SimLink
-from proleg.protocol import ErrorCode, Message, ParamId, encode
+from proleg.protocol import BY_NAME, MESSAGES, ErrorCode, Message, ParamId, encode
+from proleg.protocol.definition import reply_answers
 
 
 def make(**board_kw) -> tuple[FakeBoard, RobotClient]:
@@ -63,6 +64,36 @@ def test_silent_robot_times_out_with_one_clear_line():
         client.ping()
     assert str(e.value) == "no reply to PING within 0.5 s on sim fake"
     assert client.stats.timeouts == 1
+
+
+def test_a_stale_ack_for_another_command_with_the_same_token_does_not_confirm_estop():
+    board, client = make()
+    board.silent = True  # the ESTOP is lost on the way...
+    token = client._token % 255 + 1  # ...and the token it will carry was last used by a PING
+    board._send(Message.new("ACK", token=token, cmd=BY_NAME["PING"].id))
+    with pytest.raises(LinkError, match="no reply to ESTOP"):
+        client.estop()
+    assert [m.name for m in board.received[-1:]] == ["ESTOP"]
+
+
+def test_a_nack_for_another_command_with_the_same_token_does_not_refuse_this_one():
+    board, client = make()
+    token = client._token % 255 + 1
+    board._send(Message.new("NACK", token=token, cmd=BY_NAME["START"].id, error=int(ErrorCode.NOT_ALLOWED), detail=0))
+    client.stop()  # answered by its own ACK, the stale NACK is ignored
+
+
+def test_each_command_waits_for_the_reply_the_protocol_definition_names():
+    for spec in MESSAGES:
+        if spec.direction == "h2r":
+            assert spec.reply in ("ACK", "INFO", "STATS")
+    assert BY_NAME["GET_INFO"].reply == "INFO" and BY_NAME["GET_STATS"].reply == "STATS"
+    stop = BY_NAME["STOP"]
+    assert reply_answers("ACK", {"token": 3, "cmd": stop.id}, stop)
+    assert reply_answers("NACK", {"token": 3, "cmd": stop.id}, stop)
+    assert not reply_answers("ACK", {"token": 3, "cmd": BY_NAME["PING"].id}, stop)
+    assert not reply_answers("INFO", {"token": 3}, stop)
+    assert reply_answers("INFO", {"token": 3}, BY_NAME["GET_INFO"])
 
 
 def test_telemetry_iterates_in_sequence_and_times_out_when_off():
@@ -126,3 +157,48 @@ def test_simulated_link_tells_displacement_as_ground_truth():
         pass
     rx = client.recv_received(1.0)
     assert rx is not None and rx.truth["displacement_mm"] > 0
+
+
+class _ResettingBoard:
+    """A board that, like a Nano whose port was just opened, says nothing for its first second."""
+
+    def __init__(self, inner: FakeBoard, quiet_s: float = 1.0):
+        self.inner, self.quiet_s, self.t = inner, quiet_s, 0.0
+
+    def write(self, data: bytes) -> None:
+        if self.t >= self.quiet_s:
+            self.inner.write(data)
+
+    def read(self) -> bytes:
+        data = self.inner.read()
+        return data if self.t >= self.quiet_s else b""
+
+    def advance(self, seconds: float) -> None:
+        self.t += seconds
+        self.inner.advance(seconds)
+
+
+def test_connect_keeps_asking_for_info_while_the_board_boots():
+    client = RobotClient(SimLink(_ResettingBoard(FakeBoard()), description="sim fake"))
+    assert client.connect().robot_name == "paper-r1"
+    assert 1.0 <= client.link.clock() < 3.0
+
+
+def test_connect_gives_up_after_three_seconds_with_one_clear_line():
+    board = FakeBoard(silent=True)
+    board.read()  # its boot INFO went out before we listened
+    client = RobotClient(SimLink(board, description="sim fake"))
+    with pytest.raises(LinkError, match=r"^no reply to GET_INFO within 3 s \(\d+ tries\) on sim fake$"):
+        client.connect()
+    assert 3.0 <= client.link.clock() < 3.1
+    assert [m.name for m in board.received].count("GET_INFO") >= 50
+
+
+def test_request_retries_with_the_same_token_until_acknowledged():
+    board, client = make()
+    board.silent = True
+    with pytest.raises(LinkError, match=r"no reply to START within 0.5 s on sim fake \(3 tries\)"):
+        client.request("START", retries=2, gait=0, direction=0)
+    sent = [m for m in board.received if m.name == "START"]
+    assert len(sent) == 3 and len({m.token for m in sent}) == 1
+    assert client.stats.retries == 2 and client.stats.timeouts == 1

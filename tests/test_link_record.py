@@ -9,10 +9,10 @@ import pytest
 
 from proleg.errors import LinkError
 from proleg.link import RobotClient
-from proleg.link.commands import console_main, dbc_main, plot_main
-from proleg.link.fake_board import FakeBoard
-from proleg.link.plot import plot_recording
-from proleg.link.recorder import Recorder, read_recording
+from proleg.cli.link_commands import console_main, dbc_main, plot_main
+from fake_board import FakeBoard
+from proleg.plot import plot_recording
+from proleg.record import Recorder, read_recording
 from proleg.link.sim_link import SimLink
 
 

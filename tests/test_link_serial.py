@@ -15,7 +15,7 @@ import serial
 from proleg.errors import LinkError
 from proleg.link import RobotClient
 from proleg.link.base import LinkDisconnected
-from proleg.link.fake_board import FakeBoard
+from fake_board import FakeBoard
 from proleg.link.serial_link import SerialLink
 
 

@@ -10,9 +10,10 @@ import pytest
 
 from proleg.errors import ProlegError
 from proleg.link import RobotClient
-from proleg.link.can_link import CanBoardBridge, CanLink
-from proleg.link.console import ConsoleApp, LimbView
-from proleg.link.dbc import dbc_text
+from proleg.link.can_link import CanLink
+from proleg.sim.can_bridge import CanBoardBridge
+from proleg.console import ConsoleApp, LimbView
+from proleg.protocol.dbc import dbc_text
 from proleg.link.sim_link import SimLink
 from proleg.paths import robots_dir
 from proleg.protocol import FrameDecoder
@@ -23,7 +24,7 @@ ROBOT = "paper-r1.toml"
 @pytest.fixture(scope="module")
 def robot():
     from proleg.robot import load_robot
-    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.closed_loop import SimulatedRobot
 
     r = load_robot(robots_dir() / ROBOT)
     try:
@@ -34,7 +35,7 @@ def robot():
 
 
 def _sim(robot):
-    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.closed_loop import SimulatedRobot
 
     return SimulatedRobot(robot)
 
@@ -121,3 +122,49 @@ def test_console_e_stop_reaches_the_simulated_firmware(robot):
 
     asyncio.run(scenario())
     client.close()
+
+
+class _CountingBoard:
+    """Another simulated board: the host-sim board behind a wrapper that counts its ticks, as an
+    emulated MCU written elsewhere would be dropped in."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self.ticks = 0
+
+    def run_ticks(self, n: int) -> None:
+        self.ticks += n
+        self._inner.run_ticks(n)
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
+def test_simulated_robot_drives_any_board_with_the_simulated_board_interface(robot):
+    from proleg.sim.board import SimBoard, SimulatedBoardLike
+    from proleg.sim.closed_loop import SimulatedRobot, sim_library
+
+    board = _CountingBoard(SimBoard(sim_library(robot)))
+    sim = SimulatedRobot(robot, board=board)
+    assert sim.board is board and isinstance(SimBoard(sim_library(robot)), SimulatedBoardLike)
+    with RobotClient(SimLink(sim, description="sim paper-r1")) as client:
+        assert client.connect().robot_name == "paper-r1"
+        client.start(0, "+x")
+        frames = list(client.telemetry(count=100))
+    assert {f.measured for f in frames} >= {0, 2}
+    assert board.ticks == round(sim.time_s * 1e6 / board.tick_us)
+
+
+def test_connect_mostly_gets_through_five_percent_corruption(robot):
+    # one 0.5 s GET_INFO got through in about 1 of 10 seeds; 3 s of tries in 17 of 20 (measured)
+    connected = 0
+    for seed in range(10):
+        sim = _sim(robot)
+        sim.link_faults.rng.seed(seed)
+        sim.inject("link-corrupt:0.05")
+        with RobotClient(SimLink(sim, description="sim paper-r1")) as client:
+            try:
+                connected += client.connect().robot_name == "paper-r1"
+            except ProlegError:
+                pass
+    assert connected >= 7

@@ -1,12 +1,15 @@
-"""Links to robots (serial, CAN, simulated board), the robot client and its consumers.
+"""Links to robots (serial, CAN, simulated board), the one protocol client and its listeners.
 
-python-can's shape: one ``Link`` interface, ``RobotClient`` turning its bytes into one
-decoded-message stream, ``Notifier`` fanning that stream out to ``Listener``s (console,
-recorder, printer, tests). See ``docs/ARCHITECTURE.md`` and each module's docstring.
+python-can's shape: one ``Link`` interface (``base``; ``serial_link``, ``can_link``,
+``sim_link``), opened from a URL by ``factory.open_link``; ``RobotClient`` (``client``) turning
+its bytes into one decoded-message stream and matching replies to commands as the protocol
+definition says; ``Notifier`` fanning that stream out to ``Listener``s (``listeners``; the
+console, the recorder and the gait report live in their own packages above this one).
 """
 
 from .base import Link, LinkDisconnected
-from .client import CommandRefused, FirmwareStats, LinkStats, Received, RobotClient, RobotInfo
+from .factory import open_link, register_link
+from .client import CommandRefused, FirmwareStats, LinkStats, Received, ReplyTimeout, RobotClient, RobotInfo
 from .listeners import BufferedReader, CallbackListener, Listener, Notifier, Printer
 
 __all__ = [
@@ -21,6 +24,9 @@ __all__ = [
     "Notifier",
     "Printer",
     "Received",
+    "ReplyTimeout",
     "RobotClient",
     "RobotInfo",
+    "open_link",
+    "register_link",
 ]

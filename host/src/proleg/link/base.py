@@ -6,10 +6,10 @@ console/recorder/tests subscribe to the client. Three implementations:
 
 - ``SerialLink``  — pyserial's ``serial_for_url`` (a device, COM port, ``socket://``,
   ``rfc2217://``, ``loop://``, a pty path);
-- ``CanLink``     — python-can (any interface), frames mapped as in ``can_map``;
+- ``CanLink``     — python-can (any interface), frames mapped as in ``proleg.protocol.can``;
 - ``SimLink``     — an in-process simulated board, advanced in virtual time.
 
-``open_link`` picks one from plain parameters (what the CLI gets).
+``proleg.link.factory.open_link(url)`` picks one from a URL (``serial://…``, ``can://…``, ``sim://ROBOT``).
 """
 
 from __future__ import annotations

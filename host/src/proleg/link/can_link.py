@@ -1,24 +1,22 @@
 """CAN links through python-can: ``can.Bus(interface=…, channel=…)``, any interface python-can
-supports (socketcan, pcan, kvaser, slcan, virtual...). The frame layout is in ``can_map``.
+supports (socketcan, pcan, kvaser, slcan, virtual...). The frame layout is protocol data, in
+``proleg.protocol.can``.
 
 ``CanLink`` is the host side: it turns the client's wire bytes into CAN frames and the
-robot's CAN frames back into wire bytes, so ``RobotClient`` works unchanged. ``CanBoardBridge``
-is the robot side for a board object (the simulated board or ``FakeBoard``): it serves the
-board on a bus, which is how the tests and ``proleg console --can`` against a simulated
-robot run without hardware.
+robot's CAN frames back into wire bytes, so ``RobotClient`` works unchanged. The robot side for
+a simulated board is ``proleg.sim.can_bridge.CanBoardBridge``.
 """
 
 from __future__ import annotations
 
-import threading
 import time
 from typing import Any
 
 import can
 
 from ..errors import LinkError
+from ..protocol.can import DEFAULT_BASE, CanIds, CanToWire, WireToCan
 from .base import Link
-from .can_map import DEFAULT_BASE, CanIds, CanToWire, WireToCan
 
 
 def open_bus(channel: str, interface: str, bitrate: int | None = None, **kwargs: Any) -> can.BusABC:
@@ -95,64 +93,3 @@ class CanLink(Link):
         if not self._closed:
             self._closed = True
             self.bus.shutdown()
-
-
-class CanBoardBridge:
-    """Robot side: serve a board object (``write``/``read``/``advance``) on a CAN bus.
-
-    ``step(dt)`` moves commands from the bus into the board, advances it by ``dt`` seconds
-    and sends what it produced; ``start()`` does that on a thread in (roughly) real time.
-    """
-
-    def __init__(self, board: Any, bus: can.BusABC, *, node: int = 0, base: int = DEFAULT_BASE,
-                 step_s: float = 0.002):
-        self.board = board
-        self.bus = bus
-        self.ids = CanIds(node=node, base=base)
-        self.step_s = step_s
-        self._rx = CanToWire(self.ids, from_host=True)
-        self._tx = WireToCan(self.ids, from_host=False)
-        self._thread: threading.Thread | None = None
-        self._running = False
-        self.frames_sent = 0
-
-    def step(self, dt: float) -> None:
-        while True:
-            frame = self.bus.recv(timeout=0.0)
-            if frame is None:
-                break
-            if frame.is_extended_id or frame.is_error_frame:
-                continue
-            data = self._rx.feed(frame.arbitration_id, bytes(frame.data))
-            if data:
-                self.board.write(data)
-        self.board.advance(dt)
-        out = self.board.read()
-        if out:
-            for arbitration_id, payload in self._tx.feed(out):
-                self.bus.send(can.Message(arbitration_id=arbitration_id, data=payload, is_extended_id=False))
-                self.frames_sent += 1
-
-    def start(self, speed: float = 1.0) -> CanBoardBridge:
-        """Run ``step`` on a thread, virtual time paced to wall time × ``speed``."""
-        self._running = True
-
-        def run() -> None:
-            t0 = time.monotonic()
-            virtual = 0.0
-            while self._running:
-                self.step(self.step_s)
-                virtual += self.step_s
-                ahead = virtual / speed - (time.monotonic() - t0)
-                if ahead > 0:
-                    time.sleep(ahead)
-
-        self._thread = threading.Thread(target=run, name="proleg-can-bridge", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._running = False
-        if self._thread is not None:
-            self._thread.join(2.0)
-            self._thread = None

@@ -4,8 +4,11 @@ One decoded-message stream per robot: ``recv()`` returns every message the robot
 (telemetry, events, replies) in order; a ``Notifier`` (``proleg.link.listeners``) pumps that
 stream into listeners (console, recorder, printer, tests), none of which knows the link.
 
-Commands carry a token (1..255) and wait for the reply echoing it: ACK, or INFO/STATS for
-GET_INFO/GET_STATS; a NACK raises ``CommandRefused`` naming the error code; silence raises
+Commands carry a token (1..255) and wait for the reply echoing it; which message answers
+which command comes from the protocol definition (``MessageSpec.reply``: INFO for GET_INFO,
+STATS for GET_STATS, ACK otherwise; ``reply_answers``), so a reply is matched by token *and*
+command: a stale ACK for another command that reused the token does not confirm a STOP or an
+ESTOP. A NACK raises ``CommandRefused`` naming the error code; silence raises
 ``LinkError("no reply to PING within 0.5 s on /dev/ttyUSB0")``. Timeouts run on the link's
 clock (virtual time on the simulated board). Replies are recognised whoever is reading:
 the waiting command itself when nobody else is, the Notifier thread otherwise.
@@ -30,21 +33,29 @@ from ..protocol.codec import FrameDecoder, Message, encode
 from ..protocol.definition import (
     BY_NAME,
     CHANNEL_CEILING,
+    MESSAGES,
     GAIT_USER,
     LIMB_CEILING,
     PROTOCOL_VERSION,
     ClearWhat,
     Direction,
     ErrorCode,
+    MessageSpec,
     ParamId,
+    reply_answers,
 )
 from .base import Link, LinkDisconnected
 
 DEFAULT_TIMEOUT = 0.5
+#: how long ``connect`` keeps asking GET_INFO (link clock, seconds)
+CONNECT_WITHIN_S = 3.0
+#: how long each of ``connect``'s GET_INFO tries waits (a round trip at 115200 Bd is ~10 ms)
+CONNECT_TRY_S = 0.05
 #: decoded messages kept for ``recv`` when nobody reads them (oldest dropped first)
 QUEUE_LIMIT = 65536
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
-_REPLY_FOR = {"GET_INFO": "INFO", "GET_STATS": "STATS"}
+#: messages that can answer a command (the declared replies plus NACK)
+_REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
 
 
 class CommandRefused(LinkError):
@@ -60,6 +71,10 @@ class CommandRefused(LinkError):
         self.command = command
         self.detail = detail
         super().__init__(f"{where}: robot refused {command}: {code} (detail {detail})")
+
+
+class ReplyTimeout(LinkError):
+    """A command got no reply in time (after its retries)."""
 
 
 @dataclass(frozen=True)
@@ -131,7 +146,8 @@ class LinkStats:
     seq_restarts: int = 0
     reconnects: int = 0
     nacks: int = 0
-    timeouts: int = 0
+    timeouts: int = 0  # commands that got no reply (after their retries)
+    retries: int = 0  # commands sent again after a try got no reply
 
     @property
     def corrupt(self) -> int:
@@ -174,17 +190,38 @@ class RobotClient:
         self._tx_lock = threading.Lock()
         self._cond = threading.Condition()
         self._replies: dict[int, Message] = {}
-        self._waiting: set[int] = set()
+        self._waiting: dict[int, MessageSpec] = {}  # token -> the command waiting for its reply
         self._token = 0
         self._last_seq: int | None = None
         self._reconnect_lock = threading.Lock()
         self._closed = False
 
     # ------------------------------------------------------------------ lifecycle
-    def connect(self, timeout: float | None = None) -> RobotInfo:
-        """Handshake: flush the robot's receiver (an empty frame), then GET_INFO."""
-        self._write(b"\0")
-        info = self.get_info(timeout)
+    def connect(self, timeout: float | None = None, *, within_s: float = CONNECT_WITHIN_S) -> RobotInfo:
+        """Handshake: flush the robot's receiver (an empty frame), then GET_INFO, again and
+        again (each try waits ``timeout``, default ``CONNECT_TRY_S``) until ``within_s`` seconds
+        of the link's clock have passed: a Nano resets when its port opens and its bootloader
+        waits about a second, and a noisy link loses frames (an INFO frame is ~45 bytes: at 5 %
+        corrupted bytes fewer than one in ten arrives intact). Any INFO that arrives meanwhile
+        counts, also a late answer to an earlier try. Raises ``LinkError`` when no INFO came."""
+        wait = CONNECT_TRY_S if timeout is None else timeout
+        deadline = self.link.clock() + within_s
+        tries = 0
+        self.info = None
+        while True:
+            self._write(b"\0")
+            tries += 1
+            try:
+                info = self.get_info(wait)
+                break
+            except ReplyTimeout:
+                if self.info is not None:  # a late answer to an earlier try, or the boot INFO
+                    info = self.info
+                    break
+                if self.link.clock() >= deadline - _EPS:
+                    raise ReplyTimeout(
+                        f"no reply to GET_INFO within {_seconds(within_s)} ({tries} tries) on {self.link.description}"
+                    ) from None
         if info.protocol_version != PROTOCOL_VERSION:
             raise LinkError(
                 f"{self.link.description}: robot speaks protocol {info.protocol_version}, "
@@ -251,28 +288,41 @@ class RobotClient:
         """The firmware's link counters (GET_STATS)."""
         return FirmwareStats.from_message(self.request("GET_STATS", timeout=timeout))
 
-    def request(self, name: str, *, timeout: float | None = None, **fields: int | tuple[int, ...]) -> Message:
-        """Send command ``name`` with a fresh token; return its reply (ACK/INFO/STATS)."""
-        if name not in BY_NAME or BY_NAME[name].direction != "h2r":
+    def request(self, name: str, *, timeout: float | None = None, retries: int = 0,
+                **fields: int | tuple[int, ...]) -> Message:
+        """Send command ``name`` with a fresh token; return its reply (the one the protocol
+        definition names: ACK, INFO or STATS). NACK raises ``CommandRefused``. Without a reply
+        within ``timeout`` the same frame (same token) is sent again up to ``retries`` times;
+        then ``LinkError``."""
+        spec = BY_NAME.get(name)
+        if spec is None or spec.direction != "h2r":
             raise LinkError(f"{name!r} is not a command")
         token = self._next_token()
         frame = encode(Message(name, {"token": token, **fields}))
         with self._cond:
-            self._waiting.add(token)
+            self._waiting[token] = spec
             self._replies.pop(token, None)
+        wait = self.timeout if timeout is None else timeout
         try:
-            self._write(frame)
-            reply = self._wait_reply(token, self.timeout if timeout is None else timeout, name)
+            for attempt in range(retries + 1):
+                self._write(frame)
+                try:
+                    reply = self._wait_reply(token, wait, name)
+                    break
+                except ReplyTimeout as e:
+                    if attempt == retries:
+                        self.stats.timeouts += 1
+                        if retries:
+                            raise ReplyTimeout(f"{e} ({retries + 1} tries)") from None
+                        raise
+                    self.stats.retries += 1
         finally:
             with self._cond:
-                self._waiting.discard(token)
+                self._waiting.pop(token, None)
                 self._replies.pop(token, None)
         if reply.name == "NACK":
             self.stats.nacks += 1
             raise CommandRefused(name, reply.error, reply.detail, self.link.description)
-        expected = _REPLY_FOR.get(name, "ACK")
-        if reply.name != expected:
-            raise LinkError(f"{self.link.description}: {name} answered by {reply.name}, expected {expected}")
         return reply
 
     def _next_token(self) -> int:
@@ -297,8 +347,7 @@ class RobotClient:
                     return reply
             now = self.link.clock()
             if now >= deadline - _EPS:
-                self.stats.timeouts += 1
-                raise LinkError(f"no reply to {name} within {_seconds(timeout)} on {self.link.description}")
+                raise ReplyTimeout(f"no reply to {name} within {_seconds(timeout)} on {self.link.description}")
             if self._rx_lock.acquire(blocking=False):
                 try:
                     self._pump(min(self.poll_s, deadline - now))
@@ -384,13 +433,15 @@ class RobotClient:
                     else:
                         st.seq_restarts += 1
                 self._last_seq = seq
-            elif name in ("ACK", "NACK", "INFO", "STATS"):
+            elif name in _REPLY_NAMES:
                 token = m.fields["token"]
+                waiting = self._waiting.get(token)
+                answers = waiting is not None and reply_answers(name, m.fields, waiting)
                 if name == "INFO":
                     self._last_seq = None  # a reset or a new session restarts the sequence
-                    if token == 0 or token not in self._waiting:
+                    if not answers:
                         self.info = RobotInfo.from_message(m)
-                if token in self._waiting:
+                if answers:
                     self._replies[token] = m
                     notify = True
             append(Received(m, now, truth))

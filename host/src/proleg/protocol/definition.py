@@ -18,7 +18,10 @@ Field kinds
 Conventions
 - Every host→robot command starts with ``token`` (u8, 1..255 chosen by the host; 0 is what the
   robot uses for unsolicited messages). Every command is answered by exactly one reply that
-  echoes the token: ``ACK``/``NACK``, or ``INFO``/``STATS`` for ``GET_INFO``/``GET_STATS``.
+  echoes the token: the reply its ``MessageSpec.reply`` names (``INFO`` for ``GET_INFO``,
+  ``STATS`` for ``GET_STATS``, ``ACK`` for the others), or ``NACK``. ``ACK`` and ``NACK`` also
+  carry the command's id, so a host matches a reply by token *and* command
+  (``reply_answers``).
 - Ids 0x01..0x3F host→robot, 0x40..0x7F robot→host.
 """
 
@@ -215,6 +218,8 @@ class MessageSpec:
     direction: Literal["h2r", "r2h"]
     fields: tuple[Field, ...]
     doc: str
+    #: commands only: the message that answers it when accepted (NACK may always answer)
+    reply: str | None = None
 
     def max_frame(self, max_limbs: int = LIMB_CEILING, max_channels: int = CHANNEL_CEILING) -> int:
         """Largest frame before COBS: id + payload + crc."""
@@ -229,9 +234,9 @@ _TOKEN = _u8("token", "echoed in the reply (1..255; 0 = unsolicited)")
 
 MESSAGES: tuple[MessageSpec, ...] = (
     # ---------------------------------------------------------------- host → robot
-    MessageSpec(0x01, "PING", "h2r", (_TOKEN,), "Liveness check; answered by ACK."),
-    MessageSpec(0x02, "GET_INFO", "h2r", (_TOKEN,), "Answered by INFO."),
-    MessageSpec(0x03, "GET_STATS", "h2r", (_TOKEN,), "Answered by STATS (link counters)."),
+    MessageSpec(0x01, "PING", "h2r", (_TOKEN,), "Liveness check; answered by ACK.", reply="ACK"),
+    MessageSpec(0x02, "GET_INFO", "h2r", (_TOKEN,), "Answered by INFO.", reply="INFO"),
+    MessageSpec(0x03, "GET_STATS", "h2r", (_TOKEN,), "Answered by STATS (link counters).", reply="STATS"),
     MessageSpec(
         0x04,
         "START",
@@ -242,9 +247,10 @@ MESSAGES: tuple[MessageSpec, ...] = (
             _u8("direction", "Direction", Direction),
         ),
         "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED.",
+        reply="ACK",
     ),
-    MessageSpec(0x05, "STOP", "h2r", (_TOKEN,), "Stop the gait, all actuators off."),
-    MessageSpec(0x06, "ESTOP", "h2r", (_TOKEN,), "Latch E-stop: MOSFETs off until CLEAR(ESTOP)."),
+    MessageSpec(0x05, "STOP", "h2r", (_TOKEN,), "Stop the gait, all actuators off.", reply="ACK"),
+    MessageSpec(0x06, "ESTOP", "h2r", (_TOKEN,), "Latch E-stop: MOSFETs off until CLEAR(ESTOP).", reply="ACK"),
     MessageSpec(
         0x07,
         "LOAD_GAIT",
@@ -255,6 +261,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
         ),
         "Store the user gait; firmware checks each step against the allowed transitions "
         "(NACK FORBIDDEN_TRANSITION, detail = step index).",
+        reply="ACK",
     ),
     MessageSpec(
         0x08,
@@ -267,6 +274,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
             Field("value", "i32", "in the param's unit"),
         ),
         "Change a whitelisted parameter inside the build's safety envelope.",
+        reply="ACK",
     ),
     MessageSpec(
         0x09,
@@ -274,6 +282,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "h2r",
         (_TOKEN, Field("hz", "u16", "0 = telemetry off; firmware may NACK OUT_OF_RANGE above tick_hz")),
         "Change the TELEMETRY rate.",
+        reply="ACK",
     ),
     MessageSpec(
         0x0A,
@@ -281,6 +290,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "h2r",
         (_TOKEN, _u8("what", "ClearWhat bits", ClearWhat)),
         "Clear latched faults / E-stop / link counters.",
+        reply="ACK",
     ),
     # ---------------------------------------------------------------- robot → host
     MessageSpec(
@@ -376,6 +386,21 @@ BY_NAME: dict[str, MessageSpec] = {m.name: m for m in MESSAGES}
 BY_ID: dict[int, MessageSpec] = {m.id: m for m in MESSAGES}
 
 
+#: replies that echo the command's id in a ``cmd`` field
+REPLIES_WITH_CMD = ("ACK", "NACK")
+
+
+def reply_answers(reply_name: str, fields: dict, command: MessageSpec) -> bool:
+    """Whether a reply (already matched by token) answers ``command``: it is the command's
+    declared reply or NACK, and, where the reply carries ``cmd``, for this command. A stale ACK
+    for another command with the same token does not answer it."""
+    if reply_name != command.reply and reply_name != "NACK":
+        return False
+    if reply_name in REPLIES_WITH_CMD:
+        return fields.get("cmd") == command.id
+    return True
+
+
 def check_definition() -> None:
     """Assert the table's invariants (unique ids/names, sizes, frame limit); raises ValueError."""
     if len(BY_NAME) != len(MESSAGES) or len(BY_ID) != len(MESSAGES):
@@ -387,6 +412,12 @@ def check_definition() -> None:
             raise ValueError(f"{m.name}: id {m.id:#x} in the wrong direction range")
         if m.direction == "h2r" and (not m.fields or m.fields[0].name != "token"):
             raise ValueError(f"{m.name}: commands must start with token")
+        if m.direction == "h2r":
+            r = BY_NAME.get(m.reply or "")
+            if r is None or r.direction != "r2h" or not r.fields or r.fields[0].name != "token":
+                raise ValueError(f"{m.name}: reply {m.reply!r} is not a robot->host message starting with token")
+        elif m.reply is not None:
+            raise ValueError(f"{m.name}: only commands have a reply")
         names = [f.name for f in m.fields]
         if len(set(names)) != len(names):
             raise ValueError(f"{m.name}: duplicate field name")

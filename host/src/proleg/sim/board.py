@@ -1,6 +1,8 @@
-"""The simulated board: the ``host-sim`` build of the generated firmware, in-process.
+"""The simulated-board interface, and its host-sim implementation ``SimBoard``.
 
-The firmware is the same C that runs on the microcontrollers, compiled against the
+``SimulatedBoardLike`` is the interface every simulated board offers (the host-sim build
+here; emulated MCUs elsewhere); ``proleg.sim.closed_loop.SimulatedRobot`` drives any object
+that has it. ``SimBoard`` is the ``host-sim`` build of the generated firmware, in-process: the firmware is the same C that runs on the microcontrollers, compiled against the
 ``hal/sim`` port into a shared library (see the host-sim ABI in docs/ARCHITECTURE.md).
 ``SimBoard`` loads it with ctypes and steps it tick by tick in virtual time. Each
 instance loads its own copy of the library (copied to a unique temporary name), so
@@ -15,6 +17,7 @@ import shutil
 import tempfile
 from ctypes import POINTER, c_double, c_uint8, c_uint16, c_uint32, c_uint64
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 from ..errors import SimError
 
@@ -36,8 +39,51 @@ _SIGNATURES = {
 }
 
 
+@runtime_checkable
+class SimulatedBoardLike(Protocol):
+    """What ``SimulatedRobot`` needs from a simulated board running one firmware image.
+
+    Time is virtual: nothing happens between calls. ``tick_us`` is the control tick period.
+    """
+
+    tick_us: int
+
+    def reset(self, seed: int = 1) -> None:
+        """Power-on reset: firmware state cleared, time 0, FIFOs empty; ``seed`` seeds the models."""
+
+    def run_ticks(self, n: int) -> None:
+        """Run ``n`` control ticks of the firmware."""
+
+    @property
+    def time_us(self) -> int: ...
+
+    @property
+    def time_s(self) -> float: ...
+
+    def pwm(self, channel: int) -> float:
+        """MOSFET duty of an actuator channel, 0..1."""
+
+    def pwm_permyriad(self, channel: int) -> int: ...
+
+    def write(self, data: bytes) -> None:
+        """Host → board UART bytes."""
+
+    def read(self) -> bytes:
+        """Board → host UART bytes sent since the last read."""
+
+    def imu_truth(self, addr: int, psi_deg: float, dpsi_dps: float) -> None:
+        """The true contact angle and rate the IMU at ``addr`` senses."""
+
+    def imu_fault(self, addr: int, mode: str) -> None:
+        """``mode`` in ``IMU_FAULTS``: ok, no-ack, stuck, garbage."""
+
+    def imu_noise(self, addr: int, accel_ug_rthz: float, gyro_dps_rthz: float, accel_offset_mg: float) -> None: ...
+
+    def imu_register(self, addr: int, reg: int) -> int: ...
+
+
 class SimBoard:
-    """One simulated board running one firmware image."""
+    """One simulated board running one firmware image (implements ``SimulatedBoardLike``)."""
 
     def __init__(self, library: str | Path, seed: int = 1):
         library = Path(library)

@@ -16,7 +16,7 @@ import tty
 from collections.abc import Callable
 from pathlib import Path
 
-from .run import SimulatedRobot
+from .closed_loop import SimulatedRobot
 
 
 class PtyServer:

@@ -1,9 +1,9 @@
 """A DBC file describing proleg's CAN frames (``proleg dbc -o FILE``), built from
-``can_map``'s layout with cantools' database objects, so any CAN tool can decode telemetry.
+``proleg.protocol.can``'s layout with cantools' database objects, so any CAN tool can decode telemetry.
 
 One message set per node: names get a ``_N<node>`` suffix when several nodes are described.
 The segmented CMD/REPLY frames are described by their header (segment index, last flag) and
-seven raw data bytes; their content is the protocol frame (see ``can_map``).
+seven raw data bytes; their content is the protocol frame (see ``proleg.protocol.can``).
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from cantools.database.can import Database, Message, Node, Signal
 from cantools.database.conversion import BaseConversion
 
 from ..errors import LinkError
-from ..protocol.definition import PROTOCOL_VERSION, BY_NAME, Direction
-from .can_map import SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
+from .definition import PROTOCOL_VERSION, BY_NAME, Direction
+from .can import SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
 
 HOST = "HOST"
 

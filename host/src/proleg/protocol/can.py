@@ -34,8 +34,8 @@ from dataclasses import dataclass
 from cobs import cobs
 
 from ..errors import LinkError
-from ..protocol.codec import FrameDecoder, Message, encode
-from ..protocol.definition import BY_NAME, CHANNEL_CEILING, LIMB_CEILING
+from .codec import FrameDecoder, Message, encode
+from .definition import BY_NAME, CHANNEL_CEILING, LIMB_CEILING
 
 DEFAULT_BASE = 0x100
 MAX_NODE = 15
@@ -103,7 +103,7 @@ def _check_layout() -> None:
     spec = BY_NAME["TELEMETRY"]
     names = [f.name for f in spec.fields]
     if names != [*_TELEMETRY_SCALARS, "psi", "duty"]:
-        raise RuntimeError(f"TELEMETRY fields changed ({names}); update proleg.link.can_map")
+        raise RuntimeError(f"TELEMETRY fields changed ({names}); update proleg.protocol.can")
     if LIMB_CEILING > 8 or CHANNEL_CEILING > 8:
         raise RuntimeError("CAN telemetry layout carries at most 8 limbs and 8 channels")
 

@@ -1,4 +1,5 @@
-"""The ``proleg`` command: parse arguments, call the library, print.
+"""The ``proleg`` command's parser and the gait/build/flash/sim commands: parse arguments,
+call the library, print. ``console``, ``plot`` and ``dbc`` are in ``link_commands``.
 
 Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr
 with exit status 2; nothing a user typed produces a traceback.
@@ -13,7 +14,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .errors import ProlegError
+from ..errors import ProlegError
 
 DIRECTIONS = ("+x", "-x")
 
@@ -85,7 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--speed", type=_positive_float, default=1.0, help="with --pty: times real time (default 1)")
     s.set_defaults(run=cmd_sim)
 
-    from .link.commands import add_arguments as add_link_commands
+    from .link_commands import add_arguments as add_link_commands
 
     add_link_commands(sub)  # console, plot, dbc
     return p
@@ -125,9 +126,9 @@ def _positive_int(text: str) -> int:
 
 
 def _build(args: argparse.Namespace):
-    from .firmware.boards import load_board
-    from .firmware.build import build
-    from .robot import load_robot
+    from ..firmware.boards import load_board
+    from ..firmware.build import build
+    from ..robot import load_robot
 
     robot = load_robot(args.robot)
     board = load_board(args.board)
@@ -146,14 +147,14 @@ def cmd_build(args: argparse.Namespace) -> int:
 
 
 def cmd_flash(args: argparse.Namespace) -> int:
-    from .firmware.boards import load_board
-    from .firmware.flash import choose_method, flash, flash_command
+    from ..firmware.boards import load_board
+    from ..firmware.flash import choose_method, flash, flash_command
 
     board = load_board(args.board)
     method = choose_method(board, args.tool)
     if args.dry_run:
-        from .firmware.build import default_out_dir
-        from .robot import load_robot
+        from ..firmware.build import default_out_dir
+        from ..robot import load_robot
 
         out = Path(args.out) if args.out else default_out_dir(load_robot(args.robot), board)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
@@ -170,9 +171,9 @@ def cmd_flash(args: argparse.Namespace) -> int:
 
 
 def cmd_sim(args: argparse.Namespace) -> int:
-    from .robot import load_robot
-    from .sim.run import SimulatedRobot
-    from .sim.session import SimSession
+    from ..report import SimSession
+    from ..robot import load_robot
+    from ..sim.closed_loop import SimulatedRobot
 
     robot = load_robot(args.robot)
     sim = SimulatedRobot(robot, seed=args.seed)
@@ -183,7 +184,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
             try:
                 timed.append((float(at), fault))
             except ValueError:
-                from .errors import SimError
+                from ..errors import SimError
 
                 raise SimError(f"--inject {spec}: expected FAULT+SECONDS after '+', got {at!r}") from None
         else:
@@ -191,7 +192,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.pty:
         return _serve_pty(sim, args)
     recorder = _recorder(robot, args.record) if args.record else None
-    session = SimSession(sim, listener=recorder.on_message if recorder else None)
+    session = SimSession(sim, listeners=[recorder] if recorder else [])
     try:
         session.advance(0.2)  # boot
         start = sim.time_s
@@ -205,11 +206,13 @@ def cmd_sim(args: argparse.Namespace) -> int:
         print(json.dumps(_report_json(robot, report)))
     else:
         print(_report_text(robot, report))
-    return 0
+    for e in report.errors:
+        print(f"proleg: error: {e}", file=sys.stderr)
+    return 0 if report.ok else 1
 
 
 def _serve_pty(sim, args) -> int:
-    from .sim.pty import PtyServer
+    from ..sim.pty import PtyServer
 
     with PtyServer(sim, speed=args.speed) as server:
         print(f"simulated {sim.robot.name} on {server.path} (115200 8N1; Ctrl-C to stop)", flush=True)
@@ -222,7 +225,7 @@ def _serve_pty(sim, args) -> int:
 
 
 def _recorder(robot, path: str):
-    from .link.recorder import Recorder
+    from ..record import Recorder
 
     header = {
         "robot": robot.name,
@@ -251,6 +254,7 @@ def _report_json(robot, report) -> dict:
         "telemetry_frames": report.telemetry_frames,
         "telemetry_lost": report.telemetry_lost,
         "link_errors": report.link_errors,
+        "errors": report.errors,
     }
 
 
@@ -273,6 +277,8 @@ def _report_text(robot, report) -> str:
     )
     for f in report.faults:
         lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+    for e in report.errors:
+        lines.append(f"  ERROR: {e}")
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
     lines.append(
         f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
@@ -285,8 +291,8 @@ def _report_text(robot, report) -> str:
 
 
 def cmd_gait(args: argparse.Namespace) -> int:
-    from .gait import evaluate_sequence, optimal_gaits
-    from .robot import load_robot
+    from ..gait import evaluate_sequence, optimal_gaits
+    from ..robot import load_robot
 
     robot = load_robot(args.robot)
     table = robot.transitions
@@ -351,14 +357,14 @@ def _result_text(robot, r) -> str:
 
 
 def _opposing_text(table, gait) -> str:
-    from .states import opposing_steps
+    from ..states import opposing_steps
 
     steps = opposing_steps(gait.states, table.levels)
     return ", ".join(f"{table.label(gait.states[t])} → {table.label(gait.states[t + 1])}" for t in steps)
 
 
 def _gait_json(table, gait) -> dict:
-    from .states import opposing_steps
+    from ..states import opposing_steps
 
     d = {
         "states": [table.label(s) for s in gait.states],
@@ -389,7 +395,7 @@ def _result_json(table, r) -> dict:
 
 
 def _print_evaluation(robot, args, evaluate_sequence) -> int:
-    from .errors import GaitError
+    from ..errors import GaitError
 
     table = robot.transitions
     names = [s.strip() for s in args.evaluate.split(",") if s.strip()]
@@ -412,6 +418,3 @@ def _print_evaluation(robot, args, evaluate_sequence) -> int:
         print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,7 +1,6 @@
-"""A tiny Python stand-in for the firmware + robot, speaking the real protocol.
+"""Test double: a tiny Python stand-in for the firmware + robot, speaking the real protocol.
 
-It is what the link tests, the benchmark and the console screenshot run against when the
-compiled simulated board is not wanted: a two-level-per-limb robot whose ψ rises towards
+It is what the link tests run against when the compiled simulated board is not wanted: a two-level-per-limb robot whose ψ rises towards
 ``psi_high_deg`` while its actuator is driven and relaxes to ``psi_low_deg`` otherwise, a gait
 sequencer that advances when the target state is held for ``hold_ms``, E-stop latching,
 and the command set (PING, GET_INFO, GET_STATS, START, STOP, ESTOP, LOAD_GAIT, SET_PARAM,
@@ -14,8 +13,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from ..protocol.codec import FrameDecoder, Message, encode
-from ..protocol.definition import (
+from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.protocol.definition import (
     BY_NAME,
     GAIT_USER,
     MAX_GAIT_STEPS,

@@ -6,8 +6,11 @@ bus and setting PWM), and the plant integrates over the duties the firmware set.
 firmware ticks in C; Python touches the loop once per plant step, which is what lets
 the simulation run far faster than real time.
 
-``SimulatedRobot`` offers ``write``/``read``/``advance``: the duck-typed simulated board
-that ``proleg.link.SimLink`` (and so the console, the recorder and hil_tests) talk to.
+The board is any object with the simulated-board interface (``proleg.sim.board.
+SimulatedBoardLike``): by default the host-sim build (``SimBoard``) of the robot's firmware;
+an emulated MCU can be passed as ``board=``. ``SimulatedRobot`` offers ``write``/``read``/
+``advance``, the board interface ``proleg.link.sim_link.SimLink`` (and so the client, the
+console, the recorder and hil_tests) talk to.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from pathlib import Path
 from ..errors import SimError
 from ..firmware.boards import Board, load_board
 from ..robot import Robot
-from .board import SimBoard
+from .board import SimBoard, SimulatedBoardLike
 from .plant import Plant, plant_params_from_robot, true_rewards_from_robot
 
 DEFAULT_PLANT_DT_S = 0.002
@@ -73,7 +76,13 @@ class LinkFaults:
 
 
 class SimulatedRobot:
-    """A simulated board running ``robot``'s firmware, wired to a plant of ``robot``."""
+    """A simulated board running ``robot``'s firmware, wired to a plant of ``robot``.
+
+    ``board``: a simulated board already loaded with the robot's firmware (any
+    ``SimulatedBoardLike``, e.g. an emulated MCU); by default the host-sim build from
+    ``library`` (or built and cached by ``sim_library``), reset with ``seed``. ``board_info``:
+    the board description whose ``[i2c] imu_addresses`` wire the IMUs (default host-sim).
+    """
 
     def __init__(
         self,
@@ -83,11 +92,12 @@ class SimulatedRobot:
         seed: int = 1,
         plant: Plant | None = None,
         plant_dt_s: float = DEFAULT_PLANT_DT_S,
-        board: Board | None = None,
+        board: SimulatedBoardLike | None = None,
+        board_info: Board | None = None,
     ):
         self.robot = robot
-        self.board_info = board or load_board("host-sim")
-        self.board = SimBoard(library or sim_library(robot), seed)
+        self.board_info = board_info or load_board("host-sim")
+        self.board: SimulatedBoardLike = board if board is not None else SimBoard(library or sim_library(robot), seed)
         if plant is None:
             plant = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed)
         self.plant = plant
@@ -99,7 +109,7 @@ class SimulatedRobot:
         self.link_faults = LinkFaults()
         self._push_truth()
 
-    # -- the duck-typed simulated board (proleg.link.SimLink) ---------------------------
+    # -- the board interface SimLink drives (write/read/advance) -------------------------
     def write(self, data: bytes) -> None:
         self.board.write(self.link_faults.apply(data))
 

@@ -30,8 +30,8 @@ from ..errors import LinkError
 from ..protocol.definition import GAIT_USER, Direction, EventKind, FaultCode, Flag, StopReason
 from ..states import label as state_label
 from ..states import limb_levels
-from .client import Received, RobotClient, RobotInfo
-from .listeners import CallbackListener, Listener, Notifier, Printer
+from ..link.client import Received, RobotClient, RobotInfo
+from ..link.listeners import CallbackListener, Listener, Notifier, Printer
 
 BAR_WIDTH = 24
 

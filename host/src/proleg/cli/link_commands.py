@@ -1,6 +1,6 @@
-"""The link's CLI entry points, for ``proleg.cli`` to wire in (the CLI stays thin).
+"""``proleg console``, ``proleg plot`` and ``proleg dbc`` (the CLI stays thin).
 
-``add_arguments(subparsers)`` adds ``console``, ``plot`` and ``dbc``; each sets ``run`` to a
+``add_arguments(subparsers)`` adds them to the one parser (``proleg.cli.main``); each sets ``run`` to a
 function taking the parsed namespace, which calls ``console_main`` / ``plot_main`` /
 ``dbc_main`` with plain parameters. Errors are ``LinkError`` (or the robot/sim loaders'
 ``ProlegError``): one line, no traceback, no half-written output file.
@@ -15,29 +15,9 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from ..errors import LinkError
-from .base import Link
-from .can_link import CanLink
-from .client import RobotClient
-from .serial_link import DEFAULT_BAUDRATE, SerialLink
-from .sim_link import SimLink
-
-
-def open_link(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
-              node: int = 0, sim: str | Path | None = None, baudrate: int = DEFAULT_BAUDRATE,
-              speed: float | None = 1.0, bitrate: int | None = None) -> tuple[Link, Any]:
-    """Exactly one of ``port``, ``can_channel``, ``sim``; returns (link, robot or None)."""
-    chosen = [x for x in (port, can_channel, sim) if x is not None]
-    if len(chosen) != 1:
-        raise LinkError("give exactly one of --port URL, --can CHANNEL or --sim ROBOT.toml")
-    if port is not None:
-        return SerialLink(port, baudrate), None
-    if can_channel is not None:
-        return CanLink(can_channel, interface, node=node, bitrate=bitrate), None
-    from ..robot import load_robot
-    from ..sim.run import SimulatedRobot
-
-    robot = load_robot(sim)  # type: ignore[arg-type]
-    return SimLink(SimulatedRobot(robot), speed=speed, description=f"sim {robot.name}"), robot
+from ..link.client import RobotClient
+from ..link.factory import link_url, open_link
+from ..link.serial_link import DEFAULT_BAUDRATE
 
 
 def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
@@ -45,14 +25,15 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                  record: str | None = None, plain: bool = False, duration_s: float | None = None,
                  timeout: float = 0.5, out: TextIO | None = None) -> int:
     """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame."""
-    from .console import ConsoleApp, LimbView, run_plain
-    from .recorder import Recorder, record_format
+    from ..console import ConsoleApp, LimbView, run_plain
+    from ..record import Recorder, record_format
 
     if record is not None:
         record_format(record)  # reject an unknown extension before opening anything
     out = out or sys.stdout
-    link, robot = open_link(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim,
-                            baudrate=baudrate)
+    link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim),
+                     baudrate=baudrate, speed=1.0)
+    robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
     if robot is None and robot_file is not None:
         from ..robot import load_robot
 
@@ -88,7 +69,7 @@ def _prod(levels: Sequence[int]) -> int:
 
 def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
     """``proleg plot FILE -o OUT.png``."""
-    from .plot import plot_recording
+    from ..plot import plot_recording
 
     path = plot_recording(record_file, out, title=title)
     print(f"wrote {path}")
@@ -97,7 +78,7 @@ def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
 
 def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100) -> int:
     """``proleg dbc -o FILE``."""
-    from .dbc import write_dbc
+    from ..protocol.dbc import write_dbc
 
     path = write_dbc(out, nodes, base)
     print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})")

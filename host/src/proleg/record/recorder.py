@@ -24,8 +24,8 @@ from typing import Any, TextIO
 import numpy as np
 
 from ..errors import LinkError
-from .client import Received
-from .listeners import Listener
+from ..link.client import Received
+from ..link.listeners import Listener
 
 FORMATS = {".csv": "csv", ".jsonl": "jsonl", ".ndjson": "jsonl"}
 TELEMETRY_SCALARS = ("seq", "time_ms", "measured", "target", "gait", "direction", "step", "flags")

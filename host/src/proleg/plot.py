@@ -10,9 +10,9 @@ import os
 import tempfile
 from pathlib import Path
 
-from ..errors import LinkError
-from ..states import label
-from .recorder import Recording, read_recording
+from .errors import LinkError
+from .states import label
+from .record import Recording, read_recording
 
 
 def _psi_stars(rec: Recording) -> list[list[float]]:

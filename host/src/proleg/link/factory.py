@@ -1,0 +1,116 @@
+"""Open a link from one URL-like string, python-can style: a registry of schemes, each
+opener imported only when used (so opening a serial port never imports python-can).
+
+    open_link("/dev/ttyUSB0")                         # a bare device path (or COM3, a pty path)
+    open_link("serial:///dev/ttyUSB0", baudrate=115200)
+    open_link("socket://host:7000")                   # any pyserial URL (socket, rfc2217, loop...)
+    open_link("can://socketcan/can0?node=1&bitrate=500000")
+    open_link("sim://paper-r1")                       # a bundled robot, or sim://path/to/ROBOT.toml
+
+A ``sim://`` link's ``board`` is the ``SimulatedRobot`` (``link.board.robot`` its description).
+An unknown scheme is a ``LinkError`` naming the known ones.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+from urllib.parse import parse_qsl, urlsplit
+
+from ..errors import LinkError
+from .base import Link
+
+#: pyserial's own URL schemes (``serial.serial_for_url``): passed to the serial link whole
+PYSERIAL_SCHEMES = ("socket", "rfc2217", "loop", "spy", "alt", "hwgrep")
+
+
+def _open_serial(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
+    from .serial_link import DEFAULT_BAUDRATE, SerialLink
+
+    port = url if url.split("://", 1)[0] in PYSERIAL_SCHEMES or "://" not in url else rest
+    if not port:
+        raise LinkError(f"{url}: no serial device (expected serial:///dev/ttyUSB0)")
+    baudrate = int(query.get("baudrate", options.get("baudrate", DEFAULT_BAUDRATE)))
+    return SerialLink(port, baudrate)
+
+
+def _open_can(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
+    from .can_link import CanLink
+
+    interface, _, channel = rest.partition("/")
+    if not interface or not channel:
+        raise LinkError(f"{url}: expected can://INTERFACE/CHANNEL, e.g. can://socketcan/can0")
+    bitrate = query.get("bitrate", options.get("bitrate"))
+    return CanLink(channel, interface, node=_int(url, "node", query.get("node", options.get("node", 0))),
+                   bitrate=None if bitrate is None else _int(url, "bitrate", bitrate))
+
+
+def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
+    from ..paths import robots_dir
+    from ..robot import load_robot
+    from ..sim.closed_loop import SimulatedRobot
+    from .sim_link import SimLink
+
+    if not rest:
+        raise LinkError(f"{url}: expected sim://ROBOT (a bundled robot name or a robot file)")
+    path = Path(rest) if rest.endswith(".toml") or "/" in rest else robots_dir() / f"{rest}.toml"
+    robot = load_robot(path)
+    seed = _int(url, "seed", query.get("seed", options.get("seed", 1)))
+    speed = options.get("speed", None)
+    if "speed" in query:
+        speed = None if query["speed"] == "max" else float(query["speed"])
+    return SimLink(SimulatedRobot(robot, seed=seed), speed=speed, description=f"sim {robot.name}")
+
+
+Opener = Callable[[str, str, dict[str, str], dict[str, Any]], Link]
+
+#: scheme -> opener(url, rest after "scheme://", query, options)
+LINKS: dict[str, Opener] = {
+    "serial": _open_serial,
+    "can": _open_can,
+    "sim": _open_sim,
+    **{scheme: _open_serial for scheme in PYSERIAL_SCHEMES},
+}
+
+
+def register_link(scheme: str, opener: Opener) -> None:
+    """Add a link type (e.g. an emulated MCU board) under ``scheme://``."""
+    LINKS[scheme] = opener
+
+
+def open_link(url: str, **options: Any) -> Link:
+    """The link ``url`` names; ``options`` (baudrate, node, bitrate, seed, speed) fill in what
+    the URL's query does not say."""
+    if "://" not in url:
+        return _open_serial(url, url, {}, options)  # a bare device path
+    scheme = url.split("://", 1)[0].lower()
+    opener = LINKS.get(scheme)
+    if opener is None:
+        raise LinkError(f"{url}: unknown link scheme {scheme!r}; known: {', '.join(sorted(LINKS))} "
+                        "(or a bare device path)")
+    parts = urlsplit(url)
+    rest = url.split("://", 1)[1].split("?", 1)[0]
+    if scheme == "serial" and rest.startswith("/") is False and parts.netloc:
+        rest = parts.netloc + parts.path
+    return opener(url, rest, dict(parse_qsl(parts.query)), options)
+
+
+def link_url(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
+             node: int = 0, sim: str | Path | None = None) -> str:
+    """The URL for the CLI's ``--port`` / ``--can`` / ``--sim`` options (exactly one)."""
+    chosen = [x for x in (port, can_channel, sim) if x is not None]
+    if len(chosen) != 1:
+        raise LinkError("give exactly one of --port URL, --can CHANNEL or --sim ROBOT.toml")
+    if port is not None:
+        return port
+    if can_channel is not None:
+        return f"can://{interface}/{can_channel}?node={node}"
+    return f"sim://{sim}"
+
+
+def _int(url: str, name: str, value: Any) -> int:
+    try:
+        return int(str(value), 0)
+    except ValueError:
+        raise LinkError(f"{url}: {name} must be an integer, got {value!r}") from None

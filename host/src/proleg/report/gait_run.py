@@ -1,0 +1,204 @@
+"""Run a gait on the simulated robot and report what happened.
+
+The firmware is commanded through ``proleg.link.RobotClient`` over a ``SimLink``, exactly as a
+real board would be (START, STOP, ... each checked against its acknowledgement); what it
+reports (events, telemetry) is compared with the plant's ground truth, which the link attaches
+to every received message (``Received.truth``). A gait cycle is counted each time the firmware
+reports reaching step 0 of the running gait; the displacement per cycle is the plant's
+displacement between consecutive such events.
+
+A START or STOP that is not acknowledged after ``COMMAND_RETRIES`` retries, or that the robot
+refuses, is an error of the run (``GaitRun.errors``; a STOP that fails is followed by an
+ESTOP); ``GaitRun.ok`` is False then, and also when the firmware reported a fault.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from ..errors import LinkError
+from ..link.client import Received, RobotClient
+from ..link.listeners import Listener
+from ..link.sim_link import SimLink
+from ..protocol.codec import Message
+from ..protocol.definition import Direction, EventKind, FaultCode
+from ..sim.closed_loop import SimulatedRobot
+
+DIRECTION_CODE = {"+x": int(Direction.PLUS_X), "-x": int(Direction.MINUS_X)}
+#: a START/STOP is sent again this many times when no reply comes within the client's timeout
+COMMAND_RETRIES = 4
+#: virtual seconds the run goes on after STOP (telemetry is counted until then)
+STOP_TAIL_S = 0.05
+_EPS = 1e-9
+
+
+@dataclass
+class Fault:
+    time_s: float
+    code: str
+    detail: int
+
+
+@dataclass
+class GaitRun:
+    """What one run of a gait produced: firmware view and plant truth side by side."""
+
+    robot: str
+    direction: str
+    gait: int
+    duration_s: float
+    states_reached: list[int] = field(default_factory=list)  # firmware STATE_REACHED, in order
+    cycle_displacements_mm: list[float] = field(default_factory=list)
+    displacement_mm: float = 0.0  # plant truth over the whole run
+    true_transitions: int = 0
+    unexpected_transitions: int = 0
+    faults: list[Fault] = field(default_factory=list)
+    telemetry_frames: int = 0
+    telemetry_lost: int = 0  # sequence-number gaps
+    link_errors: dict[str, int] = field(default_factory=dict)
+    replies: list[Message] = field(default_factory=list)
+    telemetry: list[Message] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)  # commands not acknowledged or refused
+
+    @property
+    def cycles(self) -> int:
+        return len(self.cycle_displacements_mm)
+
+    @property
+    def mean_cycle_mm(self) -> float | None:
+        c = self.cycle_displacements_mm
+        return sum(c) / len(c) if c else None
+
+    @property
+    def ok(self) -> bool:
+        """No command failed and the firmware reported no fault."""
+        return not self.errors and not self.faults
+
+
+class GaitRunListener(Listener):
+    """Fills a ``GaitRun`` from the decoded-message stream (truth from ``Received.truth``)."""
+
+    def __init__(self, run: GaitRun, keep_telemetry: bool = False):
+        self.run = run
+        self.keep_telemetry = keep_telemetry
+        self._last_seq: int | None = None
+        self._cycle_start_mm: float | None = None
+
+    def on_message(self, rx: Received) -> None:
+        msg, run = rx.message, self.run
+        if msg.name == "TELEMETRY":
+            seq = msg.seq
+            if self._last_seq is not None:
+                run.telemetry_lost += (seq - self._last_seq - 1) % 0x10000
+            self._last_seq = seq
+            run.telemetry_frames += 1
+            if self.keep_telemetry:
+                run.telemetry.append(msg)
+        elif msg.name == "EVENT":
+            if msg.kind == EventKind.STATE_REACHED:
+                run.states_reached.append(msg.detail)
+                if msg.code == 0:  # step 0 of the gait: a cycle boundary
+                    now = rx.truth.get("displacement_mm", 0.0)
+                    if self._cycle_start_mm is not None:
+                        run.cycle_displacements_mm.append(now - self._cycle_start_mm)
+                    self._cycle_start_mm = now
+            elif msg.kind == EventKind.FAULT:
+                run.faults.append(Fault(msg.time_ms / 1000.0, FaultCode(msg.code).name, msg.detail))
+        else:
+            run.replies.append(msg)
+
+
+class SimSession:
+    """A host talking to one simulated robot through ``RobotClient`` over a ``SimLink``.
+
+    Every received message goes, in order and in this thread, to ``listeners`` (a recorder...)
+    and, during ``run_gait``, to the run's ``GaitRunListener``."""
+
+    def __init__(self, sim: SimulatedRobot, keep_telemetry: bool = False, listeners: Iterable[Listener] = ()):
+        self.sim = sim
+        self.keep_telemetry = keep_telemetry
+        self.listeners: list[Listener] = list(listeners)
+        self.link = SimLink(sim, step_s=sim.plant_dt_s, description=f"simulated {sim.robot.name}")
+        self.client = RobotClient(self.link, max_limbs=len(sim.robot.limbs), max_channels=len(sim.robot.actuators))
+        self._scheduled: list[tuple[float, str]] = []  # (virtual time s, fault), sorted
+
+    def schedule_fault(self, at_s: float, fault: str) -> None:
+        """Inject ``fault`` (see proleg.sim.closed_loop.FAULTS) once virtual time reaches ``at_s``."""
+        self._scheduled.append((at_s, fault))
+        self._scheduled.sort()
+
+    def request(self, name: str, *, retries: int = COMMAND_RETRIES, **fields: int | tuple[int, ...]) -> Message:
+        """Send a command and return its reply; raises ``LinkError`` (``CommandRefused`` on NACK)."""
+        reply = self.client.request(name, retries=retries, **fields)
+        self._dispatch_queued()
+        return reply
+
+    def advance(self, seconds: float) -> None:
+        """Run the simulation for ``seconds`` of virtual time, handing every message the
+        firmware sends to the listeners and injecting scheduled faults on time."""
+        clock = self.link.clock
+        deadline = clock() + seconds
+        while True:
+            self._inject_due()
+            remaining = deadline - clock()
+            if remaining <= _EPS:
+                return
+            if self._scheduled:
+                remaining = min(remaining, max(self.sim.plant_dt_s, self._scheduled[0][0] - self.sim.time_s))
+            rx = self.client.recv_received(remaining)
+            if rx is not None:
+                self._dispatch(rx)
+
+    def run_gait(self, direction: str = "+x", gait: int = 0, duration_s: float = 60.0) -> GaitRun:
+        """START the gait, run for ``duration_s`` of virtual time, STOP, report. A START or STOP
+        that is refused or never acknowledged is recorded in ``GaitRun.errors``."""
+        plant = self.sim.plant
+        start_mm = plant.displacement_mm
+        start_transitions = len(plant.transitions)
+        start_unexpected = plant.unexpected_transitions
+        counters = self.client.decoder.counters()
+        run = GaitRun(self.sim.robot.name, direction, gait, duration_s)
+        self._dispatch_queued()
+        listener = GaitRunListener(run, self.keep_telemetry)
+        self.listeners.append(listener)
+        try:
+            t0 = self.link.clock()
+            if self._command(run, "START", gait=gait, direction=DIRECTION_CODE[direction]):
+                self.advance(duration_s - (self.link.clock() - t0))
+            t_stop = self.link.clock()
+            if not self._command(run, "STOP"):
+                self._command(run, "ESTOP")  # the coils must go cold whatever the link does
+            self.advance(STOP_TAIL_S - (self.link.clock() - t_stop))
+        finally:
+            self.listeners.remove(listener)
+        run.displacement_mm = plant.displacement_mm - start_mm
+        run.true_transitions = len(plant.transitions) - start_transitions
+        run.unexpected_transitions = plant.unexpected_transitions - start_unexpected
+        run.link_errors = {
+            k: v - counters.get(k, 0)
+            for k, v in self.client.decoder.counters().items()
+            if k != "frames_ok" and v - counters.get(k, 0)
+        }
+        return run
+
+    def _command(self, run: GaitRun, name: str, **fields: int) -> bool:
+        try:
+            self.request(name, **fields)
+            return True
+        except LinkError as e:
+            self._dispatch_queued()
+            run.errors.append(f"{name} failed: {e}")
+            return False
+
+    def _inject_due(self) -> None:
+        while self._scheduled and self.sim.time_s >= self._scheduled[0][0] - _EPS:
+            self.sim.inject(self._scheduled.pop(0)[1])
+
+    def _dispatch_queued(self) -> None:
+        while (rx := self.client.recv_received(0.0)) is not None:
+            self._dispatch(rx)
+
+    def _dispatch(self, rx: Received) -> None:
+        for listener in self.listeners:
+            listener.on_message(rx)
