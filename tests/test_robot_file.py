@@ -222,3 +222,59 @@ def test_csv_duplicate_transition(tmp_path):
 
 def test_robot_name_goes_into_firmware_so_it_is_restricted(tmp_path):
     rejects(tmp_path, R1.replace('name = "t"', 'name = "My Robot"'), "robot.name", "lowercase")
+
+
+# -- [plant]: checked with the rest of the file, not when the simulator starts ---------------
+
+
+@pytest.mark.parametrize(
+    "plant, fragments",
+    [
+        ('supply_volts = 5.0', ["plant.supply_volts: unknown key", "did you mean 'supply_v'"]),
+        ('zzz = 5.0', ["plant.zzz: unknown key", "expected one of: resistance_ohm"]),
+        ('supply_v = "five"', ["plant.supply_v: expected a number in (0, 60] V", "'five'"]),
+        ('supply_v = 0', ["plant.supply_v: expected a number in (0, 60] V, got 0"]),
+        ('resistance_ohm = [30.0]', ["plant.resistance_ohm: expected one number or a list of 2 (one per actuator)"]),
+        ('resistance_ohm = [30.0, -3]', ["plant.resistance_ohm[2]: expected a number in (0, 10000] Ω, got -3"]),
+        ('psi_rest_deg = [0, 95]', ["plant.psi_rest_deg[2]: expected a number in (-90, 90) °"]),
+        ('as_c = 90.0', ["plant: actuator 'a': expected as_c (90) below af_c (82)"]),
+        ('coupling_deg = [[1, 2, 3], [4, 5, 6]]', ["plant.coupling_deg: expected 2 rows (limbs) of 2 numbers"]),
+        ('coupling_deg = [[1, 2], [4, true]]', ["plant.coupling_deg[2][2]: expected a number"]),
+        ('mech_tau_s = 0.0', ["plant.mech_tau_s: expected a number in (0, 10] s, got 0.0"]),
+        ('noise_mm = -1', ["plant.noise_mm: expected a number in [0, 1000] mm"]),
+        ('true_matrix = [[0, 1], [1, 0]]', ["plant.true_matrix: expected 4 rows of 4 entries"]),
+        ('true_matrix = [[0, 1, "y", 0], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]',
+         ["plant.true_matrix[1][3]: expected a number", "'y'"]),
+    ],
+)
+def test_a_bad_plant_key_is_one_line_naming_file_key_and_range(tmp_path, plant, fragments):
+    rejects(tmp_path, R1 + "\n[plant]\n" + plant + "\n", *fragments)
+
+
+def test_plant_values_are_resolved_per_actuator_and_per_limb(tmp_path):
+    robot = load_robot(write(tmp_path, R1 + """
+[plant]
+supply_v = 3.7
+resistance_ohm = [30.0, 40.0]
+psi_rest_deg = [2.0, -1.0]
+step_mm = 5
+true_matrix = [[0, 2, 1, "x"], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]
+"""))
+    p = robot.plant
+    assert p.actuator["supply_v"] == (3.7, 3.7)
+    assert p.actuator["resistance_ohm"] == (30.0, 40.0)
+    assert p.actuator["as_c"] == (64.0, 64.0)  # default
+    assert p.psi_rest_deg == (2.0, -1.0)
+    assert p.step_mm == 5.0 and p.noise_mm == 0.0
+    assert p.true_matrix[0, 1] == 2.0 and np.isnan(p.true_matrix[0, 3])
+    assert p.given == {"supply_v", "resistance_ohm", "psi_rest_deg", "step_mm", "true_matrix"}
+
+
+def test_every_plant_key_is_documented_with_unit_and_range():
+    from proleg.robot_plant import PLANT_KEYS
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text()
+    for key, spec in PLANT_KEYS.items():
+        row = next((line for line in doc.splitlines() if line.startswith(f"| `{key}` |")), None)
+        assert row is not None, f"{key} is not in docs/robot-file.md"
+        assert spec.range_text() in row, (key, spec.range_text(), row)

@@ -14,7 +14,7 @@ import csv
 import math
 import re
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +22,7 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
+from .robot_plant import PlantSection, default_plant_section, plant_section
 from .transitions import TransitionTable
 
 NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
@@ -76,7 +77,11 @@ class Robot:
     units: str
     safety: Safety
     control: Control
-    plant: dict[str, Any] = field(default_factory=dict)
+    plant: PlantSection | None = None  # the checked [plant] table (defaults when absent)
+
+    def __post_init__(self) -> None:
+        if self.plant is None:
+            object.__setattr__(self, "plant", default_plant_section(len(self.actuators), len(self.limbs)))
 
     @property
     def levels(self) -> tuple[int, ...]:
@@ -183,9 +188,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
-    plant = doc.get("plant", {})
-    if not isinstance(plant, dict):
-        raise RobotFileError(f"{path}: plant: expected a table")
+    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant)
 
 
