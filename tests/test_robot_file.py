@@ -278,3 +278,45 @@ def test_every_plant_key_is_documented_with_unit_and_range():
         row = next((line for line in doc.splitlines() if line.startswith(f"| `{key}` |")), None)
         assert row is not None, f"{key} is not in docs/robot-file.md"
         assert spec.range_text() in row, (key, spec.range_text(), row)
+
+
+# -- hostile files: one line, never a traceback ------------------------------------------------
+
+
+@pytest.mark.parametrize("opening, closing", [("[", "]"), ("{b = ", "}")])
+def test_a_file_nested_500_deep_is_one_line_not_a_recursion_error(tmp_path, opening, closing):
+    rejects(tmp_path, R1 + "\n[plant]\nx = " + opening * 500 + "1" * (opening == "{b = ") + closing * 500 + "\n",
+            "nested 500 deep, expected at most 32")
+
+
+def test_brackets_inside_strings_and_comments_do_not_count_as_nesting(tmp_path):
+    text = R1.replace('name = "t"', 'name = "t"\ndescription = "' + "[" * 100 + '"  # ' + "{" * 100)
+    assert load_robot(write(tmp_path, text)).description == "[" * 100
+
+
+def test_a_huge_robot_file_is_refused_before_it_is_parsed(tmp_path, monkeypatch):
+    import proleg.robot as robot_module
+
+    monkeypatch.setattr(robot_module, "MAX_FILE_BYTES", 4096)
+    rejects(tmp_path, R1 + "#" * 5000 + "\n", "robot file of", "bytes, expected at most 4,096")
+
+
+def test_the_real_size_limit_refuses_a_17_mb_file(tmp_path):
+    rejects(tmp_path, R1 + ("# padding" + " " * 1000 + "\n") * 17_000, "expected at most 16,777,216")
+
+
+def test_absurd_state_counts_are_refused_before_anything_is_allocated(tmp_path):
+    limbs = "".join(
+        f'[[limb]]\nname = "l{i}"\nlevels = 10\npsi_star_deg = [{", ".join(str(-80 + 17 * k) for k in range(9))}]\n'
+        f'hysteresis_deg = 1\nactuator = "a"\n'
+        for i in range(8)
+    )
+    text = f'[robot]\nname = "t"\n{limbs}[[actuator]]\nname = "a"\n[transitions]\nmatrix = []\n'
+    rejects(tmp_path, text, "100,000,000 states", "expected at most 1,048,576")
+
+
+def test_a_csv_with_a_giant_field_is_one_line_naming_the_csv_line(tmp_path):
+    (tmp_path / "t.csv").write_text("from,to,reward\n00,10," + "1" * 200_000 + "\n")
+    text = R1.replace("matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]", 'file = "t.csv"')
+    with pytest.raises(RobotFileError, match=r"t\.csv:2: not a readable CSV row: field larger than field limit"):
+        load_robot(write(tmp_path, text))

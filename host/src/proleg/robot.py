@@ -29,6 +29,15 @@ NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
 FORBIDDEN = "x"
 MAX_LIMBS = 8
 MAX_ACTUATORS = 8
+#: A robot file larger than this is refused before it is parsed (an inline matrix of
+#: 1,024 states takes about 5 MB); a transition CSV larger than MAX_CSV_BYTES likewise.
+MAX_FILE_BYTES = 16 * 1024 * 1024
+MAX_CSV_BYTES = 256 * 1024 * 1024
+#: Brackets and braces nested deeper than this are refused before parsing (a robot file
+#: needs 3: a matrix row inside the matrix inside a table); tomllib recurses per level.
+MAX_NESTING = 32
+#: At most this many states (product of limb levels): 2^20, 16 binary limbs and more.
+MAX_STATES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -151,17 +160,46 @@ class _Fields:
 def load_robot(path: str | Path) -> Robot:
     """Read and check a robot file; RobotFileError says what is wrong and where."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise RobotFileError(f"{path}: no such robot file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise RobotFileError(f"{path}: cannot read: {e}") from None
+    text = _read_text(path, MAX_FILE_BYTES, "robot file")
+    depth = nesting_depth(text)
+    if depth > MAX_NESTING:
+        raise RobotFileError(f"{path}: brackets nested {depth} deep, expected at most {MAX_NESTING}")
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise RobotFileError(f"{path}: not valid TOML: {e}") from None
+    except RecursionError:  # nesting_depth missed a construct: still one line, never a traceback
+        raise RobotFileError(f"{path}: not valid TOML: nested too deeply") from None
     return robot_from_dict(doc, path)
+
+
+def _read_text(path: Path, limit: int, what: str) -> str:
+    try:
+        size = path.stat().st_size
+        if size > limit:
+            raise RobotFileError(f"{path}: {what} of {size:,} bytes, expected at most {limit:,}")
+        with path.open("rb") as fh:
+            data = fh.read(limit + 1)  # the file may have grown since stat
+        if len(data) > limit:
+            raise RobotFileError(f"{path}: {what} larger than {limit:,} bytes")
+        return data.decode("utf-8")
+    except FileNotFoundError:
+        raise RobotFileError(f"{path}: no such {what}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise RobotFileError(f"{path}: cannot read: {e}") from None
+
+
+_STRINGS_AND_COMMENTS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*')
+
+
+def nesting_depth(text: str) -> int:
+    """The deepest nesting of [ ] and { } outside strings and comments (no recursion)."""
+    code = _STRINGS_AND_COMMENTS.sub("", text).encode("utf-8")
+    b = np.frombuffer(code, dtype=np.uint8)
+    step = np.zeros(len(b), dtype=np.int64)
+    step[(b == ord("[")) | (b == ord("{"))] = 1
+    step[(b == ord("]")) | (b == ord("}"))] = -1
+    return int(np.cumsum(step).max(initial=0))
 
 
 def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
@@ -184,6 +222,11 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
             raise RobotFileError(f"{path}: actuator {a.name!r} drives no limb (name it in a [[limb]] actuator field)")
 
     levels = tuple(limb.levels for limb in limbs)
+    n = states.state_count(levels)
+    if n > MAX_STATES:
+        raise RobotFileError(
+            f"{path}: limb: {n:,} states (the product of the limbs' levels {levels}), expected at most {MAX_STATES:,}"
+        )
     table, units = _transitions(path, doc["transitions"], levels)
 
     safety = _safety(path, doc.get("safety", {}))
@@ -412,13 +455,16 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
     dur: list[float] = []
     seen: set[tuple[int, int]] = set()
     try:
+        size = csv_path.stat().st_size
         fh = csv_path.open(newline="", encoding="utf-8")
     except OSError as e:
         raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
+    if size > MAX_CSV_BYTES:
+        fh.close()
+        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
     with fh:
-        reader = csv.reader(fh)
         has_duration = None
-        for lineno, row in enumerate(reader, start=1):
+        for lineno, row in enumerate(_csv_rows(fh, csv_path), start=1):
             if not row or row[0].lstrip().startswith("#"):
                 continue
             cells = [c.strip() for c in row]
@@ -458,6 +504,18 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
     if not src:
         raise RobotFileError(f"{csv_path}: no transitions (expected rows from,to,reward)")
     return src, dst, rew, (dur if dur else None)
+
+
+def _csv_rows(fh, csv_path: Path):
+    """csv.reader's rows, its errors (NUL bytes, a field over its size limit) as RobotFileError."""
+    reader = csv.reader(fh)
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except (csv.Error, UnicodeDecodeError) as e:
+            raise RobotFileError(f"{csv_path}:{reader.line_num}: not a readable CSV row: {e}") from None
 
 
 def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
