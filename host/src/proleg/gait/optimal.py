@@ -1,17 +1,21 @@
 """``optimal_gaits``: pick the algorithm for an objective and turn its cycles into Gaits.
 
-* ``total`` — the largest J over closed walks (states may recur) of at most
-  ``max_transitions`` transitions: bounded exhaustive search (``search.py``).
+* ``total`` — the largest J over closed walks (states may recur, repeated walks count) of
+  at most ``max_transitions`` transitions: max-plus matrix powers for the optimum, a lazy
+  pruned enumeration for the ties (``total.py``, ``maxplus.py``).
 * ``rate`` / ``speed`` — the largest J per transition / per second over simple cycles:
   Howard policy iteration for the optimum (``howard.py``) and Johnson on the critical
   subgraph for every tie (``critical.py``, ``cycles.py``). With a bound on the number of
   transitions: the unbounded ties that fit when there are any (then the optimum is
   unchanged), else a bounded exhaustive search over simple cycles.
 
--x is +x on the negated rewards. Tolerances: see ``result.RELATIVE_TOLERANCE``.
+-x is +x on the negated rewards. Tolerances: see ``result.RELATIVE_TOLERANCE``. Ties are
+ranked (``rank_gaits``): best rate first, then fewest transitions, then by states.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -23,6 +27,7 @@ from .evaluate import make_gaits
 from .howard import max_cycle_ratio
 from .result import MAX_LISTED_STATES, MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
 from .search import bounded_search
+from .total import best_total_walks
 
 OBJECTIVES = ("total", "rate", "speed")
 DIRECTIONS = ("+x", "-x")
@@ -32,11 +37,24 @@ TOTAL_DEFAULT_LIMIT_STATES = 16
 
 def _objective_value(g: Gait, objective: str) -> float:
     if objective == "total":
-        return g.reward
+        return g.total
     if objective == "rate":
         return g.rate
     assert g.duration is not None
     return g.reward / g.duration
+
+
+def rank_gaits(gaits: list[Gait], direction: str, tol: float) -> list[Gait]:
+    """Ties in rank order: best rate in ``direction`` first (rates within ``tol`` of each
+    other are equal), then fewest transitions, then by states."""
+    sign = 1.0 if direction == "+x" else -1.0
+    by_rate = sorted(gaits, key=lambda g: -sign * g.rate)
+    group, head, keyed = -1, 0.0, []
+    for g in by_rate:
+        if group < 0 or sign * (head - g.rate) > tol:  # a new, lower rate
+            group, head = group + 1, g.rate
+        keyed.append(((group, g.transitions, g.states), g))
+    return [g for _, g in sorted(keyed, key=lambda kg: kg[0])]
 
 
 def _finish(
@@ -47,17 +65,25 @@ def _finish(
     cycles: list[tuple[int, ...]],
     tol: float,
     truncated: bool,
+    repeats: list[int] | None = None,
 ) -> GaitResult:
-    """Gaits from open cycles: exact scores, keep the best ties, sort."""
+    """Gaits from open cycles: exact scores, keep the best ties, rank."""
     sign = 1.0 if direction == "+x" else -1.0
     gaits = make_gaits(table, cycles)
+    if repeats is not None:
+        gaits = [replace(g, repeats=k) for g, k in zip(gaits, repeats)]
     scored = [(sign * _objective_value(g, objective), g) for g in gaits]
     scored = [(v, g) for v, g in scored if v > tol]
     if not scored:
         return GaitResult(direction, objective, bound, None, (), False)
     best = max(v for v, _ in scored)
-    keep = sorted({g.states: g for v, g in scored if v >= best - tol}.values(), key=lambda g: g.states)
-    return GaitResult(direction, objective, bound, sign * best, tuple(keep), truncated)
+    keep = list({g.states: g for v, g in scored if v >= best - tol}.values())
+    rate_tol = tol if objective == "rate" else RELATIVE_TOLERANCE * _rate_scale(table)
+    return GaitResult(direction, objective, bound, sign * best, tuple(rank_gaits(keep, direction, rate_tol)), truncated)
+
+
+def _rate_scale(table: TransitionTable) -> float:
+    return float(np.abs(table.reward).max()) if len(table.reward) else 0.0
 
 
 def optimal_gaits(
@@ -111,10 +137,12 @@ def optimal_gaits(
 
     if objective == "total":
         assert max_transitions is not None
-        res = bounded_search(
-            n, table.src, table.dst, w, max_transitions, tol_j, simple=False, ratio=False, limit=MAX_TIES
+        res = best_total_walks(
+            n, table.src, table.dst, w, max_transitions, tol_j, limit=MAX_TIES, max_states=MAX_LISTED_STATES
         )
-        return _finish(table, objective, direction, max_transitions, res.cycles, tol_j, res.truncated)
+        cycles = [c for c, _ in res.ties]
+        repeats = [k for _, k in res.ties]
+        return _finish(table, objective, direction, max_transitions, cycles, tol_j, res.truncated, repeats)
 
     t = np.ones(len(w)) if time is None else time
     tol_r = RELATIVE_TOLERANCE * (reward_scale if time is None else float(np.abs(w / t).max()))
