@@ -320,3 +320,51 @@ def test_a_csv_with_a_giant_field_is_one_line_naming_the_csv_line(tmp_path):
     text = R1.replace("matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]", 'file = "t.csv"')
     with pytest.raises(RobotFileError, match=r"t\.csv:2: not a readable CSV row: field larger than field limit"):
         load_robot(write(tmp_path, text))
+
+
+def test_robot_names_longer_than_the_firmwares_15_characters_are_accepted(tmp_path):
+    # the firmware reports the first 15 characters in GET_INFO; the name itself may be longer
+    name = "terresoro-4-limb-freeman-2025"
+    assert load_robot(write(tmp_path, R1.replace('name = "t"', f'name = "{name}"'))).name == name
+    rejects(tmp_path, R1.replace('name = "t"', f'name = "{"a" * 64}"'), "robot.name", "1 to 63 characters")
+
+
+# -- planar statistics in [transitions] (issue 17) ----------------------------------------------
+
+PLANAR = R1 + """dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]
+dtheta_deg = [[0, 2, -2, 0], [0, 0, 0, 1], [1, 0, 0, 0], [0, 0, 0, 0]]
+var_dx = [[0, 0.1, 0.1, 0.1], [0.1, 0, 0.1, 0.1], [0.1, 0.1, 0, 0.1], [0.1, 0.1, 0.1, 0]]
+"""
+
+
+def test_planar_statistics_are_read_per_transition_beside_the_matrix(tmp_path):
+    t = load_robot(write(tmp_path, PLANAR)).transitions
+    assert t.planar is not None and set(t.planar.given()) == {"dy", "dtheta_deg", "var_dx"}
+    pos = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(t.src, t.dst))}
+    assert t.planar.dy[pos[(0, 1)]] == 0.5 and t.planar.dtheta_deg[pos[(2, 0)]] == 1.0
+    assert t.planar.var_dy is None
+    assert load_robot(write(tmp_path, R1)).transitions.planar is None
+
+
+@pytest.mark.parametrize(
+    "replace, fragments",
+    [
+        ("dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1]]", ["transitions.dy: expected 4 rows like the matrix, got 2"]),
+        ("dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]\n"
+         "var_dy = [[0, 1, 1, 1], [1, 0, 1, 1], [1, 1, 0, -1], [1, 1, 1, 0]]",
+         ["transitions.var_dy[3][4]: expected a variance >= 0 or 'x', got -1"]),
+        ('dy = [[0, "x", -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]',
+         ["transitions.dy[1][2]: transition is allowed in the matrix, expected a number, got 'x'"]),
+    ],
+)
+def test_bad_planar_statistics_name_the_field_row_and_column(tmp_path, replace, fragments):
+    head = PLANAR.split("dy = ")[0]
+    text = head + replace + "\n"
+    rejects(tmp_path, text, *fragments)
+
+
+def test_planar_statistics_must_mark_the_same_forbidden_transitions(tmp_path):
+    text = R1.replace("matrix = [[0, -1, 1, 0]", 'matrix = [[0, -1, 1, "x"]') + (
+        "dy = [[0, 0, 0, 1], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]\n"
+    )
+    rejects(tmp_path, text, "transitions.dy[1][4]: transition is forbidden in the matrix, expected 'x', got 1")

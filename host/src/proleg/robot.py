@@ -23,9 +23,14 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .robot_plant import PlantSection, default_plant_section, plant_section
-from .transitions import TransitionTable
+from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
 NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
+#: Robot names may be longer than the 15 characters the firmware reports (GET_INFO's
+#: robot_name field, protocol ROBOT_NAME_LEN 16 with its NUL): the firmware keeps the full
+#: name in ROM and sends the first 15 characters. Published robots have longer names
+#: (issue 17); 63 keeps build directory names reasonable.
+ROBOT_NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
 FORBIDDEN = "x"
 MAX_LIMBS = 8
 MAX_ACTUATORS = 8
@@ -210,8 +215,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     head = _Fields(path, "robot", doc["robot"], {"name", "description"})
     name = head.string("name")
-    if not NAME_RE.match(name):
-        head.fail("name", "lowercase letters, digits and '-', 1 to 15 characters", name)
+    if not ROBOT_NAME_RE.match(name):
+        head.fail("name", "lowercase letters, digits and '-', 1 to 63 characters", name)
     description = head.string("description", "")
 
     actuators = _actuators(path, doc["actuator"])
@@ -335,7 +340,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
 
 def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[TransitionTable, str]:
     f = _Fields(
-        path, "transitions", value, {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states"}
+        path, "transitions", value,
+        {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", *PLANAR_FIELDS},
     )
     units = f.string("units", "steps")
     n = states.state_count(levels)
@@ -352,9 +358,14 @@ def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[Trans
         rew = reward[src, dst]
         dur_matrix = _durations_matrix(path, value.get("durations_s"), n, allowed) if f.has("durations_s") else None
         dur = None if dur_matrix is None else dur_matrix[src, dst]
+        planar = _planar(path, value, n, allowed)
     else:
         if f.has("durations_s"):
             f.fail("durations_s", "durations in the CSV's 4th column when the table is a file")
+        for key in PLANAR_FIELDS:
+            if f.has(key):
+                f.fail(key, "an inline 'matrix' (planar statistics are not read from a CSV table yet)")
+        planar = None
         src, dst, rew, dur = _csv(path, f.string("file"), levels)
 
     if f.has("forbidden"):
@@ -370,7 +381,46 @@ def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[Trans
         raise RobotFileError(
             f"{path}: transitions: some allowed transitions have no duration (give them, or set default_duration_s)"
         )
-    return TransitionTable.from_edges(levels, src, dst, rew, dur), units
+    return TransitionTable.from_edges(levels, src, dst, rew, dur, planar), units
+
+
+def _planar(path: Path, value: dict, n: int, allowed: np.ndarray) -> PlanarRewards | None:
+    """dy, dtheta_deg (means) and var_dx, var_dy, var_dtheta_deg (variances, >= 0): n × n like
+    the matrix, 'x' exactly where the matrix forbids a transition, the diagonal ignored."""
+    given = {}
+    src, dst = np.nonzero(allowed)
+    for key in PLANAR_FIELDS:
+        if key in value:
+            m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed, variance=key.startswith("var_"))
+            given[key] = m[src, dst]
+    return PlanarRewards(**given) if given else None
+
+
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool) -> np.ndarray:
+    where = f"{path}: {name}"
+    expected = "a variance >= 0" if variance else "a number"
+    if not isinstance(rows, list) or len(rows) != n:
+        got = len(rows) if isinstance(rows, list) else type(rows).__name__
+        raise RobotFileError(f"{where}: expected {n} rows like the matrix, got {got}")
+    out = np.full((n, n), np.nan)
+    for a, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != n:
+            got = len(row) if isinstance(row, list) else type(row).__name__
+            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries, got {got}")
+        for b, v in enumerate(row):
+            if a == b:
+                continue  # the diagonal is not a transition
+            cell = f"{where}[{a + 1}][{b + 1}]"
+            if v == FORBIDDEN:
+                if allowed[a, b]:
+                    raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
+                continue
+            if not _is_number(v) or (variance and v < 0):
+                raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
+            if not allowed[a, b]:
+                raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")
+            out[a, b] = float(v)
+    return out
 
 
 def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) -> None:
