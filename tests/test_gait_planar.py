@@ -64,3 +64,42 @@ def test_a_planar_objective_needs_the_statistics_it_weighs():
         planar_scores(t, PlanarObjective(heading_deg=90.0))
     with pytest.raises(GaitError, match="variance weights must be >= 0"):
         planar_scores(t, PlanarObjective(variance_weight=(-1.0, 0.0, 0.0)))
+
+
+def capped_oracle(table: TransitionTable, dtheta_dense: np.ndarray, score: np.ndarray, allowed, K: int, cap: float):
+    """Every primitive closed walk of at most K transitions, listed; the best within the cap."""
+    from proleg.gait.bruteforce import closed_walks
+
+    scored = []
+    for c in closed_walks(TransitionTable.from_dense(table.levels, score, allowed), K, simple=False):
+        steps = list(zip(c, c[1:] + c[:1]))
+        j = math.fsum(score[a, b] for a, b in steps)
+        turn = math.fsum(dtheta_dense[a, b] for a, b in steps)
+        if j > 1e-9 and abs(turn) <= cap + 1e-9:
+            scored.append((j * (K // len(c)), c))
+    if not scored:
+        return None, set()
+    best = max(v for v, _ in scored)
+    return best, {c + (c[0],) for v, c in scored if v >= best - 1e-9 * np.abs(score[allowed]).max()}
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    n=st.integers(2, 5),
+    seed=st.integers(0, 2**32 - 1),
+    heading=st.sampled_from([0.0, 180.0, 90.0]),
+    cap=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
+    bound=st.sampled_from([2, 3, 4]),
+)
+def test_the_rotation_cap_keeps_the_best_walk_that_turns_little_enough(n, seed, heading, cap, bound):
+    table, allowed, dense, var = planar_table(n, seed)
+    h = math.radians(heading)
+    score = math.cos(h) * dense["dx"] + math.sin(h) * dense["dy"] - 0.25 * var["vx"] - 0.5
+    objective = PlanarObjective(heading, (0.25, 0.0, 0.0), 0.5)
+    value, ties = capped_oracle(table, dense["dth"], score, allowed, bound, cap)
+    result = optimal_planar_gaits(table, objective, "total", bound, rotation_cap_deg=cap)
+    if value is None:
+        assert result.value is None and result.gaits == ()
+    else:
+        assert result.value == pytest.approx(value, abs=1e-9)
+        assert {g.states for g in result.gaits} == ties
