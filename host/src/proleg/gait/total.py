@@ -54,10 +54,13 @@ class _Threshold:
     def __init__(self, value: float):
         self.value = value
         self.pruned = -np.inf
+        self.pruned_exact = -np.inf  # the best cut value that is a closed walk's own value
 
-    def cut(self, bounds: np.ndarray) -> None:
+    def cut(self, bounds: np.ndarray, exact: bool = False) -> None:
         if len(bounds):
             self.pruned = max(self.pruned, float(bounds.max()))
+            if exact:
+                self.pruned_exact = max(self.pruned_exact, float(bounds.max()))
 
 
 def best_total_walks(
@@ -116,6 +119,8 @@ def _best_value(g: Graph, bound: ClosingBound, K: int, tol: float, slack: float)
             return found
         if threshold.value <= tol or not threshold.pruned > tol:
             return None
+        if threshold.pruned_exact >= threshold.pruned:  # the best cut is itself a closed walk
+            return threshold.pruned_exact
         level = threshold.pruned
     return None
 
@@ -169,7 +174,7 @@ def _closed_walks(
         keep = nxt >= start
         if left == 0:
             keep &= nxt == start
-            threshold.cut(new_reward[keep & (new_reward < threshold.value - slack)])
+            threshold.cut(new_reward[keep & (new_reward < threshold.value - slack)], exact=True)
             keep &= new_reward >= threshold.value - slack
             if keep.any():
                 weights = new_reward[keep]
@@ -178,7 +183,9 @@ def _closed_walks(
                 yield paths[rows[keep]], weights
             continue
         reach = new_reward[keep] + bound(left, nxt[keep], start[keep])
-        threshold.cut(reach[reach < threshold.value - slack])
+        # one transition to go: the bound is that transition's own reward, so a cut prefix
+        # is a closed walk of exactly that value (over states >= its start)
+        threshold.cut(reach[reach < threshold.value - slack], exact=left == 1)
         keep[keep] = reach >= threshold.value - slack
         if keep.any():
             stack.append((np.hstack([paths[rows[keep]], nxt[keep, None]]), new_reward[keep]))
