@@ -14,12 +14,15 @@ Measured, each case in its own subprocess (so the peak RSS is that case's alone)
   karp   — Karp's max cycle mean (O(n·m) time, O(n²) memory), where feasible;
   brute  — the brute-force oracle (all simple cycles / all closed walks), tiny N only;
   speed  — optimal_gaits(table, "speed") with durations uniform in 0.5..2 s (cycle ratio);
-  total  — optimal_gaits(table, "total", max_transitions=6), every tie;
+  total  — optimal_gaits(table, "total", max_transitions=6), every tie (totalK: bound K);
+  plainK — a plain enumeration of every closed walk of at most K transitions (numpy, no
+           pruning, stopped after PLAIN_LIMIT_S): the baseline for totalK;
   brute-total — the oracle for the same question.
 Time = best of 3 runs (fewer when the runs so far took 3 s). Prints a table and writes
 bench/results/gait.json with machine information.
 Targets: rate dense 10 ≤ 0.3 s; rate hypercube 16 ≤ 1 s; total 64 states / 6 transitions
-≤ 1 s; peak memory ≤ 1 GB for every case.
+≤ 1 s; total 65,536 states / 4 transitions ≤ 1 s; total 16 states / 8 transitions with many
+ties (flat: every walk ties, listing capped) ≤ 1 s; peak memory ≤ 1 GB for every case.
 """
 
 from __future__ import annotations
@@ -56,7 +59,42 @@ CASES: list[tuple[str, int, str, float | None]] = (
     + [("dense", 6, "total", 1.0), ("dense", 6, "total-small", 1.0), ("hypercube", 6, "total", None)]
     + [("dense", 3, "brute-total", None), ("hypercube", 16, "rate-small", None), ("dense", 8, "rate-small", None)]
     + [("hypercube", 16, "rate-flat", None), ("hypercube", 16, "speed", None)]
+    + [("hypercube", n, "total2", None) for n in (12, 14, 16)] + [("hypercube", 16, "total4", 1.0)]
+    + [("hypercube", 16, "total4-small", None), ("dense", 4, "total8-flat", 1.0), ("dense", 4, "total8-small", 1.0)]
+    + [("hypercube", 12, "plain2", None), ("hypercube", 16, "plain2", None), ("hypercube", 16, "plain4", None)]
+    + [("dense", 4, "plain8-flat", None), ("dense", 4, "plain6-flat", None)]
 )
+#: The plain enumeration gives up after this long (its row then says "> limit").
+PLAIN_LIMIT_S = 60.0
+
+
+def plain_total(table: TransitionTable, max_transitions: int, limit_s: float = PLAIN_LIMIT_S) -> float | None:
+    """The best closed walk of at most K transitions by listing every walk from every start
+    over states >= start, level by level in blocks (no bounds): the baseline. Returns
+    None when it runs out of time (NaN: no closed walk)."""
+    n, src, dst, w = table.n_states, table.src, table.dst, table.reward
+    ptr = np.searchsorted(src, np.arange(n + 1))
+    best = -np.inf
+    started = time.perf_counter()
+    stack = [(np.arange(n), np.arange(n), np.zeros(n), 0)]
+    while stack:
+        if time.perf_counter() - started > limit_s:
+            return None
+        start, cur, rew, depth = stack.pop()
+        if len(cur) > 1 << 16:
+            stack.append((start[1 << 16:], cur[1 << 16:], rew[1 << 16:], depth))
+            start, cur, rew = start[: 1 << 16], cur[: 1 << 16], rew[: 1 << 16]
+        deg = ptr[cur + 1] - ptr[cur]
+        rows = np.repeat(np.arange(len(cur)), deg)
+        edge = ptr[cur][rows] + np.arange(len(rows)) - (np.cumsum(deg) - deg)[rows]
+        nxt, nrew, nstart = dst[edge], rew[rows] + w[edge], start[rows]
+        keep = nxt >= nstart
+        closed = keep & (nxt == nstart)
+        if closed.any():
+            best = max(best, float(nrew[closed].max()))
+        if depth + 1 < max_transitions:  # walks may pass their start again: keep those too
+            stack.append((nstart[keep], nxt[keep], nrew[keep], depth + 1))
+    return best if np.isfinite(best) else float("nan")
 
 
 def rewards(src: np.ndarray, dst: np.ndarray, n: int, seed: int, base: int = 1000, noise: int = 10) -> np.ndarray:
@@ -93,6 +131,9 @@ def run_case(family: str, bits: int, algorithm: str) -> dict:
     algorithm, _, variant = algorithm.partition("-")
     if algorithm == "brute" and variant == "total":
         algorithm, variant = "brute-total", ""
+    bound = 6
+    if algorithm[:5] in ("total", "plain") and algorithm[5:].isdigit():
+        algorithm, bound = algorithm[:5], int(algorithm[5:])
     table = make_table(family, bits, variant)
     n, src, dst, w = table.n_states, table.src, table.dst, table.reward
     jobs = {
@@ -101,12 +142,13 @@ def run_case(family: str, bits: int, algorithm: str) -> dict:
         "howard": lambda: max_cycle_ratio(n, src, dst, w),
         "karp": lambda: max_cycle_mean(n, src, dst, w),
         "brute": lambda: brute_force_max_cycle_mean(n, src, dst, w),
-        "total": lambda: optimal_gaits(table, "total", max_transitions=6),
+        "total": lambda: optimal_gaits(table, "total", max_transitions=bound),
+        "plain": lambda: plain_total(table, bound),
         "brute-total": lambda: brute_force_gaits(table, "total", max_transitions=6),
     }
     times = []
     out = None
-    while len(times) < 3 and sum(times) < 3.0:
+    while len(times) < 3 and sum(times) < 3.0 and not (algorithm == "plain" and out is None and times):
         t0 = time.perf_counter()
         out = jobs[algorithm]()
         times.append(time.perf_counter() - t0)
@@ -115,6 +157,10 @@ def run_case(family: str, bits: int, algorithm: str) -> dict:
         value, ties, truncated = out.value, len(out.gaits), out.truncated
     elif algorithm == "howard":
         value, ties = out.value, None
+    elif algorithm == "plain":
+        value, ties = out, None
+        if out is None:
+            times = [float("inf")]
     elif algorithm == "brute-total":
         value, ties = out[0], len(out[1])
     else:

@@ -76,8 +76,9 @@ def test_table_output_lists_each_gait_with_its_reward(capsys):
     code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--direction=+x",
                        "--max-transitions", "4")
     assert code == 0
-    assert "00 → 10 → 11 → 10 → 00" in out
-    assert "10 → 11 → 10" in out
+    # issue 14: 10 → 11 → 10 run twice (J = 2 in 4 transitions) beats 00 → 10 → 11 → 10 → 00 (J = 1)
+    assert "best +2" in out and "10 → 11 → 10    J=+1" in out
+    assert "00 → 10 → 11 → 10 → 00" not in out
 
 
 def test_evaluate_scores_a_valid_sequence(capsys):

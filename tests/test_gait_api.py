@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -108,7 +109,9 @@ def test_multi_level_limbs_use_the_mixed_radix_state_space():
     for objective in ("total", "rate"):
         result = optimal_gaits(t, objective)
         for g in result.gaits:
-            assert evaluate_sequence(t, [t.label(s) for s in g.states]) == g
+            # one pass of the gait, as typed; ``total`` also says how many passes it counts
+            assert replace(evaluate_sequence(t, [t.label(s) for s in g.states]), repeats=g.repeats) == g
+            assert g.repeats == (6 // g.transitions if objective == "total" else 1)
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -126,7 +129,11 @@ def test_total_on_64_dense_states_with_6_transitions_keeps_every_tie():
     rng = np.random.default_rng(0)
     t = TransitionTable.from_dense((2,) * 6, rng.integers(-5, 6, (64, 64)))
     result = optimal_gaits(t, "total", max_transitions=6)
-    assert result.gaits and all(g.reward == result.value and g.transitions <= 6 for g in result.gaits)
+    assert result.gaits and all(g.total == result.value and g.transitions * g.repeats <= 6 for g in result.gaits)
+    # 2-cycles worth 10 run three times tie with primitive 6-transition walks worth 30; the
+    # repeated 2-cycles have no more transitions and rank first
+    assert result.value == 3 * (t.dense()[0] + t.dense()[0].T)[~np.eye(64, dtype=bool)].max() == 30
+    assert [g.transitions for g in result.gaits] == sorted(g.transitions for g in result.gaits)
     # a walk of 6 transitions is worth at most 6 times the best transition
     assert result.value <= 6 * t.reward.max()
     short = optimal_gaits(t, "total", max_transitions=2)
@@ -150,7 +157,8 @@ def test_ties_in_several_components_are_all_found():
     t = TransitionTable.from_edges((8,), src, dst, list(edges.values()))
     result = optimal_gaits(t, "rate")
     assert result.value == 3.0
-    assert [g.states for g in result.gaits] == [(0, 1, 2, 0), (3, 4, 3), (5, 7, 5)]
+    # equal rates: fewest transitions first, then by states
+    assert [g.states for g in result.gaits] == [(3, 4, 3), (5, 7, 5), (0, 1, 2, 0)]
     assert [g.states for g in optimal_gaits(t, "rate", max_transitions=2).gaits] == [(3, 4, 3), (5, 7, 5)]
 
 

@@ -49,7 +49,7 @@ def assert_matches_oracle(table: TransitionTable, objective: str, direction: str
     assert result.value is not None
     assert abs(result.value - value) <= 2 * RELATIVE_TOLERANCE * scale + 1e-12
     assert set(got) == ties, (objective, direction, bound, sorted(ties), got)
-    assert got == sorted(got), "gaits must be sorted by states"
+    assert_ranked(result, scale)
     assert not result.truncated
     for g in result.gaits:
         cyc = g.states[:-1]
@@ -59,6 +59,20 @@ def assert_matches_oracle(table: TransitionTable, objective: str, direction: str
         assert (g.reward > 0) == (direction == "+x")
         if objective != "total":
             assert len(set(cyc)) == len(cyc), "rate and speed rank simple cycles"
+            assert g.repeats == 1
+        else:  # the walk repeated as often as it fits in the bound is the walk it stands for
+            assert g.repeats == result.max_transitions // g.transitions
+            assert g.total == g.reward * g.repeats
+
+
+def assert_ranked(result, scale: float) -> None:
+    """Gait 0 first: best rate in the direction, then fewest transitions, then states."""
+    sign = 1.0 if result.direction == "+x" else -1.0
+    tol = 2 * RELATIVE_TOLERANCE * scale + 1e-12
+    for a, b in zip(result.gaits, result.gaits[1:]):
+        assert sign * a.rate >= sign * b.rate - tol, ("rate first", a, b)
+        if abs(a.rate - b.rate) <= tol / 2:
+            assert (a.transitions, a.states) < (b.transitions, b.states), ("then fewest transitions", a, b)
 
 
 @settings(max_examples=500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -79,6 +93,24 @@ def test_speed_finds_the_best_simple_cycles_per_second_and_every_tie(table, dire
     if table.duration is None:
         table = TransitionTable(table.levels, table.src, table.dst, table.reward, np.full(table.n_transitions, 1.5))
     assert_matches_oracle(table, "speed", direction, bound)
+
+
+def test_a_repeated_short_cycle_beats_a_longer_walk_and_ranks_first():
+    # 0 <-> 1 earns 2 per pass (2 transitions); 0 -> 1 -> 2 -> 0 earns 3 (3 transitions).
+    # Within 4 transitions the short cycle run twice (J = 4) beats the triangle (J = 3);
+    # within 3 the triangle wins; within 6 they tie at 6 and the short cycle (rate 1) ranks
+    # before the triangle (rate 1, more transitions).
+    reward = np.array([[0, 1, 0], [1, 0, 1], [1, 0, 0]], dtype=float)
+    allowed = np.array([[0, 1, 0], [1, 0, 1], [1, 0, 0]], dtype=bool)
+    t = TransitionTable.from_dense((3,), reward, allowed)
+    four = optimal_gaits(t, "total", "+x", 4)
+    assert (four.value, [(g.states, g.repeats) for g in four.gaits]) == (4.0, [((0, 1, 0), 2)])
+    three = optimal_gaits(t, "total", "+x", 3)
+    assert (three.value, [g.states for g in three.gaits]) == (3.0, [(0, 1, 2, 0)])
+    six = optimal_gaits(t, "total", "+x", 6)
+    assert six.value == 6.0
+    assert [(g.states, g.repeats) for g in six.gaits] == [((0, 1, 0), 3), ((0, 1, 2, 0), 2)]
+    assert brute_force_gaits(t, "total", "+x", 6) == (6.0, {(0, 1, 0), (0, 1, 2, 0)})
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])

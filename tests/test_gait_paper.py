@@ -88,16 +88,21 @@ def test_r3_matrix_disagrees_with_the_prose_about_its_best_sequences():
     assert (back.value, labels(t, back)) == (-3.0, ["00 01 11 00"])
 
 
-def test_r1_with_one_actuator_moves_forward_by_1_with_both_paper_gaits():
+def test_r1_with_one_actuator_moves_forward_by_2_repeating_its_short_cycle():
     # Allowed: 00<->10, 10<->11 (11->10 worth 0). 10->11->10 = 1 + 0 = 1;
     # 00->10->11->10->00 = 1 + 1 + 0 + (-1) = 1; 00->10->00 = 1 - 1 = 0. Every closed walk has
-    # an even length, and (10 11)^2 = 2 merely repeats 10->11->10, so it is not a gait.
-    # These are the paper's C_L1 and C_L2 (l_max <= 5, i.e. at most 4 transitions).
+    # an even length. Within 4 transitions (the paper's l_max <= 5) the paper lists C_L1 and
+    # C_L2, both worth 1; but the firmware runs a gait cyclically, and 10->11->10 run twice,
+    # (10 11)^2, is a closed walk of 4 transitions worth 2: better than C_L2, so gait 0 is C_L1
+    # with repeats = 2 (issue 14: repeated cycles are candidates, not separate gaits).
     t = table(R1_ONE_ACTUATOR)
     result = optimal_gaits(t, "total", "+x", max_transitions=4)
-    assert result.value == 1.0
-    assert labels(t, result) == ["00 10 11 10 00", "10 11 10"]
+    assert result.value == 2.0
+    assert labels(t, result) == ["10 11 10"]
+    assert (result.gaits[0].reward, result.gaits[0].repeats, result.gaits[0].total) == (1.0, 2, 2.0)
     assert optimal_gaits(t, "total", "+x").gaits == result.gaits  # default bound: 4 states
+    within_three = optimal_gaits(t, "total", "+x", max_transitions=3)
+    assert (within_three.value, labels(t, within_three), within_three.gaits[0].repeats) == (1.0, ["10 11 10"], 1)
     rate = optimal_gaits(t, "rate", "+x")
     assert (rate.value, labels(t, rate)) == (0.5, ["10 11 10"])
 

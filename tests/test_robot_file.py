@@ -222,3 +222,149 @@ def test_csv_duplicate_transition(tmp_path):
 
 def test_robot_name_goes_into_firmware_so_it_is_restricted(tmp_path):
     rejects(tmp_path, R1.replace('name = "t"', 'name = "My Robot"'), "robot.name", "lowercase")
+
+
+# -- [plant]: checked with the rest of the file, not when the simulator starts ---------------
+
+
+@pytest.mark.parametrize(
+    "plant, fragments",
+    [
+        ('supply_volts = 5.0', ["plant.supply_volts: unknown key", "did you mean 'supply_v'"]),
+        ('zzz = 5.0', ["plant.zzz: unknown key", "expected one of: resistance_ohm"]),
+        ('supply_v = "five"', ["plant.supply_v: expected a number in (0, 60] V", "'five'"]),
+        ('supply_v = 0', ["plant.supply_v: expected a number in (0, 60] V, got 0"]),
+        ('resistance_ohm = [30.0]', ["plant.resistance_ohm: expected one number or a list of 2 (one per actuator)"]),
+        ('resistance_ohm = [30.0, -3]', ["plant.resistance_ohm[2]: expected a number in (0, 10000] Ω, got -3"]),
+        ('psi_rest_deg = [0, 95]', ["plant.psi_rest_deg[2]: expected a number in (-90, 90) °"]),
+        ('as_c = 90.0', ["plant: actuator 'a': expected as_c (90) below af_c (82)"]),
+        ('coupling_deg = [[1, 2, 3], [4, 5, 6]]', ["plant.coupling_deg: expected 2 rows (limbs) of 2 numbers"]),
+        ('coupling_deg = [[1, 2], [4, true]]', ["plant.coupling_deg[2][2]: expected a number"]),
+        ('mech_tau_s = 0.0', ["plant.mech_tau_s: expected a number in (0, 10] s, got 0.0"]),
+        ('noise_mm = -1', ["plant.noise_mm: expected a number in [0, 1000] mm"]),
+        ('true_matrix = [[0, 1], [1, 0]]', ["plant.true_matrix: expected 4 rows of 4 entries"]),
+        ('true_matrix = [[0, 1, "y", 0], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]',
+         ["plant.true_matrix[1][3]: expected a number", "'y'"]),
+    ],
+)
+def test_a_bad_plant_key_is_one_line_naming_file_key_and_range(tmp_path, plant, fragments):
+    rejects(tmp_path, R1 + "\n[plant]\n" + plant + "\n", *fragments)
+
+
+def test_plant_values_are_resolved_per_actuator_and_per_limb(tmp_path):
+    robot = load_robot(write(tmp_path, R1 + """
+[plant]
+supply_v = 3.7
+resistance_ohm = [30.0, 40.0]
+psi_rest_deg = [2.0, -1.0]
+step_mm = 5
+true_matrix = [[0, 2, 1, "x"], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]
+"""))
+    p = robot.plant
+    assert p.actuator["supply_v"] == (3.7, 3.7)
+    assert p.actuator["resistance_ohm"] == (30.0, 40.0)
+    assert p.actuator["as_c"] == (64.0, 64.0)  # default
+    assert p.psi_rest_deg == (2.0, -1.0)
+    assert p.step_mm == 5.0 and p.noise_mm == 0.0
+    assert p.true_matrix[0, 1] == 2.0 and np.isnan(p.true_matrix[0, 3])
+    assert p.given == {"supply_v", "resistance_ohm", "psi_rest_deg", "step_mm", "true_matrix"}
+
+
+def test_every_plant_key_is_documented_with_unit_and_range():
+    from proleg.robot_plant import PLANT_KEYS
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text()
+    for key, spec in PLANT_KEYS.items():
+        row = next((line for line in doc.splitlines() if line.startswith(f"| `{key}` |")), None)
+        assert row is not None, f"{key} is not in docs/robot-file.md"
+        assert spec.range_text() in row, (key, spec.range_text(), row)
+
+
+# -- hostile files: one line, never a traceback ------------------------------------------------
+
+
+@pytest.mark.parametrize("opening, closing", [("[", "]"), ("{b = ", "}")])
+def test_a_file_nested_500_deep_is_one_line_not_a_recursion_error(tmp_path, opening, closing):
+    rejects(tmp_path, R1 + "\n[plant]\nx = " + opening * 500 + "1" * (opening == "{b = ") + closing * 500 + "\n",
+            "nested 500 deep, expected at most 32")
+
+
+def test_brackets_inside_strings_and_comments_do_not_count_as_nesting(tmp_path):
+    text = R1.replace('name = "t"', 'name = "t"\ndescription = "' + "[" * 100 + '"  # ' + "{" * 100)
+    assert load_robot(write(tmp_path, text)).description == "[" * 100
+
+
+def test_a_huge_robot_file_is_refused_before_it_is_parsed(tmp_path, monkeypatch):
+    import proleg.robot as robot_module
+
+    monkeypatch.setattr(robot_module, "MAX_FILE_BYTES", 4096)
+    rejects(tmp_path, R1 + "#" * 5000 + "\n", "robot file of", "bytes, expected at most 4,096")
+
+
+def test_the_real_size_limit_refuses_a_17_mb_file(tmp_path):
+    rejects(tmp_path, R1 + ("# padding" + " " * 1000 + "\n") * 17_000, "expected at most 16,777,216")
+
+
+def test_absurd_state_counts_are_refused_before_anything_is_allocated(tmp_path):
+    limbs = "".join(
+        f'[[limb]]\nname = "l{i}"\nlevels = 10\npsi_star_deg = [{", ".join(str(-80 + 17 * k) for k in range(9))}]\n'
+        f'hysteresis_deg = 1\nactuator = "a"\n'
+        for i in range(8)
+    )
+    text = f'[robot]\nname = "t"\n{limbs}[[actuator]]\nname = "a"\n[transitions]\nmatrix = []\n'
+    rejects(tmp_path, text, "100,000,000 states", "expected at most 1,048,576")
+
+
+def test_a_csv_with_a_giant_field_is_one_line_naming_the_csv_line(tmp_path):
+    (tmp_path / "t.csv").write_text("from,to,reward\n00,10," + "1" * 200_000 + "\n")
+    text = R1.replace("matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]", 'file = "t.csv"')
+    with pytest.raises(RobotFileError, match=r"t\.csv:2: not a readable CSV row: field larger than field limit"):
+        load_robot(write(tmp_path, text))
+
+
+def test_robot_names_longer_than_the_firmwares_15_characters_are_accepted(tmp_path):
+    # the firmware reports the first 15 characters in GET_INFO; the name itself may be longer
+    name = "terresoro-4-limb-freeman-2025"
+    assert load_robot(write(tmp_path, R1.replace('name = "t"', f'name = "{name}"'))).name == name
+    rejects(tmp_path, R1.replace('name = "t"', f'name = "{"a" * 64}"'), "robot.name", "1 to 63 characters")
+
+
+# -- planar statistics in [transitions] (issue 17) ----------------------------------------------
+
+PLANAR = R1 + """dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]
+dtheta_deg = [[0, 2, -2, 0], [0, 0, 0, 1], [1, 0, 0, 0], [0, 0, 0, 0]]
+var_dx = [[0, 0.1, 0.1, 0.1], [0.1, 0, 0.1, 0.1], [0.1, 0.1, 0, 0.1], [0.1, 0.1, 0.1, 0]]
+"""
+
+
+def test_planar_statistics_are_read_per_transition_beside_the_matrix(tmp_path):
+    t = load_robot(write(tmp_path, PLANAR)).transitions
+    assert t.planar is not None and set(t.planar.given()) == {"dy", "dtheta_deg", "var_dx"}
+    pos = {(int(a), int(b)): k for k, (a, b) in enumerate(zip(t.src, t.dst))}
+    assert t.planar.dy[pos[(0, 1)]] == 0.5 and t.planar.dtheta_deg[pos[(2, 0)]] == 1.0
+    assert t.planar.var_dy is None
+    assert load_robot(write(tmp_path, R1)).transitions.planar is None
+
+
+@pytest.mark.parametrize(
+    "replace, fragments",
+    [
+        ("dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1]]", ["transitions.dy: expected 4 rows like the matrix, got 2"]),
+        ("dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]\n"
+         "var_dy = [[0, 1, 1, 1], [1, 0, 1, 1], [1, 1, 0, -1], [1, 1, 1, 0]]",
+         ["transitions.var_dy[3][4]: expected a variance >= 0 or 'x', got -1"]),
+        ('dy = [[0, "x", -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]',
+         ["transitions.dy[1][2]: transition is allowed in the matrix, expected a number, got 'x'"]),
+    ],
+)
+def test_bad_planar_statistics_name_the_field_row_and_column(tmp_path, replace, fragments):
+    head = PLANAR.split("dy = ")[0]
+    text = head + replace + "\n"
+    rejects(tmp_path, text, *fragments)
+
+
+def test_planar_statistics_must_mark_the_same_forbidden_transitions(tmp_path):
+    text = R1.replace("matrix = [[0, -1, 1, 0]", 'matrix = [[0, -1, 1, "x"]') + (
+        "dy = [[0, 0, 0, 1], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]\n"
+    )
+    rejects(tmp_path, text, "transitions.dy[1][4]: transition is forbidden in the matrix, expected 'x', got 1")

@@ -12,7 +12,9 @@ import pytest
 
 from proleg.errors import RobotFileError
 from proleg.robot import load_robot, robot_from_dict
-from proleg.sim.plant import Plant, PlantParams, plant_params_from_robot, true_rewards_from_robot
+from proleg.robot_plant import PLANT_KEYS
+from proleg.sim.plant import LimbParams, Plant, PlantParams, plant_params_from_robot, true_rewards_from_robot
+from proleg.sim.sma import SmaParams
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 
@@ -72,25 +74,22 @@ def test_a_separate_true_matrix_replaces_the_robot_table_for_the_plant():
     assert true_rewards_from_robot(load_robot(ROBOTS / "paper-r1.toml"))[0, 1] == -1.0
 
 
-@pytest.mark.parametrize(
-    "plant, message",
-    [
-        ({"supply_volts": 5.0}, r"my-robot\.toml: \[plant\]\.supply_volts: unknown key"),
-        ({"supply_v": "five"}, r"my-robot\.toml: \[plant\]\.supply_v: expected a finite number"),
-        ({"resistance_ohm": [30.0]}, r"\[plant\]\.resistance_ohm: expected one number or 2"),
-        ({"resistance_ohm": -3.0}, r"\[plant\]: actuator 'sma-left': resistance_ohm must be a positive"),
-        ({"as_c": 90.0}, r"\[plant\]: actuator 'sma-left': as_c \(90.0\) must be below af_c"),
-        ({"coupling_deg": [[1, 2, 3], [4, 5, 6]]}, r"\[plant\]\.coupling_deg: expected 2 rows"),
-        ({"mech_tau_s": 0.0}, r"\[plant\]: mech_tau_s must be > 0"),
-        ({"true_matrix": [[0, 1], [1, 0]]}, r"\[plant\]\.true_matrix: expected 4 rows of 4"),
-        ({"true_matrix": [[0, 1, "y", 0]] * 4}, r"\[plant\]\.true_matrix\[0\]\[2\]: expected a finite number"),
-    ],
-)
-def test_bad_plant_tables_name_the_file_and_the_key(plant, message):
-    robot = r1_with_plant(plant)
-    with pytest.raises(RobotFileError, match=message):
-        plant_params_from_robot(robot)
-        true_rewards_from_robot(robot)
+def test_the_plant_section_defaults_are_the_simulators_defaults():
+    # proleg.robot_plant documents and checks [plant]; the numbers themselves are the sim's.
+    section = load_robot(ROBOTS / "paper-r1.toml").plant
+    sma, body = SmaParams(), PlantParams()
+    for key, values in section.actuator.items():
+        assert values == (getattr(sma, key),) * 2, key
+        assert PLANT_KEYS[key].default == getattr(sma, key)
+    for key, value in section.scalars().items():
+        assert value == getattr(body, key) == PLANT_KEYS[key].default, key
+    assert section.psi_rest_deg == (LimbParams().psi_rest_deg,) * 2
+    assert section.coupling_deg is None and section.true_matrix is None
+
+
+def test_a_bad_plant_table_fails_when_the_robot_file_is_loaded_not_when_the_sim_starts():
+    with pytest.raises(RobotFileError, match=r"my-robot\.toml: plant\.supply_volts: unknown key \(did you mean 'supply_v'\?\)"):
+        r1_with_plant({"supply_volts": 5.0})
 
 
 def test_every_example_robot_gives_a_runnable_plant():

@@ -14,7 +14,7 @@ import csv
 import math
 import re
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,12 +22,27 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .transitions import TransitionTable
+from .robot_plant import PlantSection, default_plant_section, plant_section
+from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
 NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
+#: Robot names may be longer than the 15 characters the firmware reports (GET_INFO's
+#: robot_name field, protocol ROBOT_NAME_LEN 16 with its NUL): the firmware keeps the full
+#: name in ROM and sends the first 15 characters. Published robots have longer names
+#: (issue 17); 63 keeps build directory names reasonable.
+ROBOT_NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
 FORBIDDEN = "x"
 MAX_LIMBS = 8
 MAX_ACTUATORS = 8
+#: A robot file larger than this is refused before it is parsed (an inline matrix of
+#: 1,024 states takes about 5 MB); a transition CSV larger than MAX_CSV_BYTES likewise.
+MAX_FILE_BYTES = 16 * 1024 * 1024
+MAX_CSV_BYTES = 256 * 1024 * 1024
+#: Brackets and braces nested deeper than this are refused before parsing (a robot file
+#: needs 3: a matrix row inside the matrix inside a table); tomllib recurses per level.
+MAX_NESTING = 32
+#: At most this many states (product of limb levels): 2^20, 16 binary limbs and more.
+MAX_STATES = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -76,7 +91,11 @@ class Robot:
     units: str
     safety: Safety
     control: Control
-    plant: dict[str, Any] = field(default_factory=dict)
+    plant: PlantSection | None = None  # the checked [plant] table (defaults when absent)
+
+    def __post_init__(self) -> None:
+        if self.plant is None:
+            object.__setattr__(self, "plant", default_plant_section(len(self.actuators), len(self.limbs)))
 
     @property
     def levels(self) -> tuple[int, ...]:
@@ -146,17 +165,46 @@ class _Fields:
 def load_robot(path: str | Path) -> Robot:
     """Read and check a robot file; RobotFileError says what is wrong and where."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise RobotFileError(f"{path}: no such robot file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise RobotFileError(f"{path}: cannot read: {e}") from None
+    text = _read_text(path, MAX_FILE_BYTES, "robot file")
+    depth = nesting_depth(text)
+    if depth > MAX_NESTING:
+        raise RobotFileError(f"{path}: brackets nested {depth} deep, expected at most {MAX_NESTING}")
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise RobotFileError(f"{path}: not valid TOML: {e}") from None
+    except RecursionError:  # nesting_depth missed a construct: still one line, never a traceback
+        raise RobotFileError(f"{path}: not valid TOML: nested too deeply") from None
     return robot_from_dict(doc, path)
+
+
+def _read_text(path: Path, limit: int, what: str) -> str:
+    try:
+        size = path.stat().st_size
+        if size > limit:
+            raise RobotFileError(f"{path}: {what} of {size:,} bytes, expected at most {limit:,}")
+        with path.open("rb") as fh:
+            data = fh.read(limit + 1)  # the file may have grown since stat
+        if len(data) > limit:
+            raise RobotFileError(f"{path}: {what} larger than {limit:,} bytes")
+        return data.decode("utf-8")
+    except FileNotFoundError:
+        raise RobotFileError(f"{path}: no such {what}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise RobotFileError(f"{path}: cannot read: {e}") from None
+
+
+_STRINGS_AND_COMMENTS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*')
+
+
+def nesting_depth(text: str) -> int:
+    """The deepest nesting of [ ] and { } outside strings and comments (no recursion)."""
+    code = _STRINGS_AND_COMMENTS.sub("", text).encode("utf-8")
+    b = np.frombuffer(code, dtype=np.uint8)
+    step = np.zeros(len(b), dtype=np.int64)
+    step[(b == ord("[")) | (b == ord("{"))] = 1
+    step[(b == ord("]")) | (b == ord("}"))] = -1
+    return int(np.cumsum(step).max(initial=0))
 
 
 def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
@@ -167,8 +215,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     head = _Fields(path, "robot", doc["robot"], {"name", "description"})
     name = head.string("name")
-    if not NAME_RE.match(name):
-        head.fail("name", "lowercase letters, digits and '-', 1 to 15 characters", name)
+    if not ROBOT_NAME_RE.match(name):
+        head.fail("name", "lowercase letters, digits and '-', 1 to 63 characters", name)
     description = head.string("description", "")
 
     actuators = _actuators(path, doc["actuator"])
@@ -179,13 +227,16 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
             raise RobotFileError(f"{path}: actuator {a.name!r} drives no limb (name it in a [[limb]] actuator field)")
 
     levels = tuple(limb.levels for limb in limbs)
+    n = states.state_count(levels)
+    if n > MAX_STATES:
+        raise RobotFileError(
+            f"{path}: limb: {n:,} states (the product of the limbs' levels {levels}), expected at most {MAX_STATES:,}"
+        )
     table, units = _transitions(path, doc["transitions"], levels)
 
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
-    plant = doc.get("plant", {})
-    if not isinstance(plant, dict):
-        raise RobotFileError(f"{path}: plant: expected a table")
+    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant)
 
 
@@ -289,7 +340,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
 
 def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[TransitionTable, str]:
     f = _Fields(
-        path, "transitions", value, {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states"}
+        path, "transitions", value,
+        {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", *PLANAR_FIELDS},
     )
     units = f.string("units", "steps")
     n = states.state_count(levels)
@@ -306,9 +358,14 @@ def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[Trans
         rew = reward[src, dst]
         dur_matrix = _durations_matrix(path, value.get("durations_s"), n, allowed) if f.has("durations_s") else None
         dur = None if dur_matrix is None else dur_matrix[src, dst]
+        planar = _planar(path, value, n, allowed)
     else:
         if f.has("durations_s"):
             f.fail("durations_s", "durations in the CSV's 4th column when the table is a file")
+        for key in PLANAR_FIELDS:
+            if f.has(key):
+                f.fail(key, "an inline 'matrix' (planar statistics are not read from a CSV table yet)")
+        planar = None
         src, dst, rew, dur = _csv(path, f.string("file"), levels)
 
     if f.has("forbidden"):
@@ -324,7 +381,46 @@ def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[Trans
         raise RobotFileError(
             f"{path}: transitions: some allowed transitions have no duration (give them, or set default_duration_s)"
         )
-    return TransitionTable.from_edges(levels, src, dst, rew, dur), units
+    return TransitionTable.from_edges(levels, src, dst, rew, dur, planar), units
+
+
+def _planar(path: Path, value: dict, n: int, allowed: np.ndarray) -> PlanarRewards | None:
+    """dy, dtheta_deg (means) and var_dx, var_dy, var_dtheta_deg (variances, >= 0): n × n like
+    the matrix, 'x' exactly where the matrix forbids a transition, the diagonal ignored."""
+    given = {}
+    src, dst = np.nonzero(allowed)
+    for key in PLANAR_FIELDS:
+        if key in value:
+            m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed, variance=key.startswith("var_"))
+            given[key] = m[src, dst]
+    return PlanarRewards(**given) if given else None
+
+
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool) -> np.ndarray:
+    where = f"{path}: {name}"
+    expected = "a variance >= 0" if variance else "a number"
+    if not isinstance(rows, list) or len(rows) != n:
+        got = len(rows) if isinstance(rows, list) else type(rows).__name__
+        raise RobotFileError(f"{where}: expected {n} rows like the matrix, got {got}")
+    out = np.full((n, n), np.nan)
+    for a, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != n:
+            got = len(row) if isinstance(row, list) else type(row).__name__
+            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries, got {got}")
+        for b, v in enumerate(row):
+            if a == b:
+                continue  # the diagonal is not a transition
+            cell = f"{where}[{a + 1}][{b + 1}]"
+            if v == FORBIDDEN:
+                if allowed[a, b]:
+                    raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
+                continue
+            if not _is_number(v) or (variance and v < 0):
+                raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
+            if not allowed[a, b]:
+                raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")
+            out[a, b] = float(v)
+    return out
 
 
 def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) -> None:
@@ -409,13 +505,16 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
     dur: list[float] = []
     seen: set[tuple[int, int]] = set()
     try:
+        size = csv_path.stat().st_size
         fh = csv_path.open(newline="", encoding="utf-8")
     except OSError as e:
         raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
+    if size > MAX_CSV_BYTES:
+        fh.close()
+        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
     with fh:
-        reader = csv.reader(fh)
         has_duration = None
-        for lineno, row in enumerate(reader, start=1):
+        for lineno, row in enumerate(_csv_rows(fh, csv_path), start=1):
             if not row or row[0].lstrip().startswith("#"):
                 continue
             cells = [c.strip() for c in row]
@@ -455,6 +554,18 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
     if not src:
         raise RobotFileError(f"{csv_path}: no transitions (expected rows from,to,reward)")
     return src, dst, rew, (dur if dur else None)
+
+
+def _csv_rows(fh, csv_path: Path):
+    """csv.reader's rows, its errors (NUL bytes, a field over its size limit) as RobotFileError."""
+    reader = csv.reader(fh)
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except (csv.Error, UnicodeDecodeError) as e:
+            raise RobotFileError(f"{csv_path}:{reader.line_num}: not a readable CSV row: {e}") from None
 
 
 def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:

@@ -15,6 +15,28 @@ import numpy as np
 from . import states
 
 
+#: Optional planar statistics per transition (issue 17): mean Δy (same units as the reward,
+#: which is the mean Δx), mean Δθ in degrees, and the variances of Δx, Δy (units²) and Δθ (deg²).
+PLANAR_FIELDS = ("dy", "dtheta_deg", "var_dx", "var_dy", "var_dtheta_deg")
+
+
+@dataclass(frozen=True, eq=False)
+class PlanarRewards:
+    """Planar statistics aligned with a table's edges; a field is None when not given."""
+
+    dy: np.ndarray | None = None
+    dtheta_deg: np.ndarray | None = None
+    var_dx: np.ndarray | None = None
+    var_dy: np.ndarray | None = None
+    var_dtheta_deg: np.ndarray | None = None
+
+    def given(self) -> dict[str, np.ndarray]:
+        return {k: getattr(self, k) for k in PLANAR_FIELDS if getattr(self, k) is not None}
+
+    def reordered(self, order: np.ndarray) -> "PlanarRewards":
+        return PlanarRewards(**{k: np.asarray(v, dtype=np.float64)[order] for k, v in self.given().items()})
+
+
 @dataclass(frozen=True, eq=False)
 class TransitionTable:
     levels: tuple[int, ...]
@@ -22,11 +44,14 @@ class TransitionTable:
     dst: np.ndarray
     reward: np.ndarray
     duration: np.ndarray | None = None
+    planar: PlanarRewards | None = None
 
     def __post_init__(self) -> None:
         m = len(self.src)
         if not (len(self.dst) == len(self.reward) == m):
             raise ValueError("src, dst and reward must have the same length")
+        if self.planar is not None and any(len(v) != m for v in self.planar.given().values()):
+            raise ValueError("planar statistics must have one entry per transition")
         if self.duration is not None and len(self.duration) != m:
             raise ValueError("duration must have one entry per transition")
         n = self.n_states
@@ -63,6 +88,7 @@ class TransitionTable:
         dst,
         reward,
         duration=None,
+        planar: PlanarRewards | None = None,
     ) -> "TransitionTable":
         """Build from unsorted edge arrays (each (from, to) pair at most once)."""
         src = np.asarray(src, dtype=np.int64)
@@ -71,7 +97,8 @@ class TransitionTable:
         n = prod(levels)
         order = np.argsort(src * n + dst, kind="stable")
         dur = None if duration is None else np.asarray(duration, dtype=np.float64)[order]
-        return cls(tuple(levels), src[order], dst[order], reward[order], dur)
+        plan = None if planar is None else planar.reordered(order)
+        return cls(tuple(levels), src[order], dst[order], reward[order], dur, plan)
 
     @classmethod
     def from_dense(cls, levels, reward_matrix, allowed=None, duration_matrix=None) -> "TransitionTable":

@@ -48,13 +48,16 @@ def closed_walks(table: TransitionTable, max_transitions: int, simple: bool) -> 
     return sorted(found)
 
 
-def score(table: TransitionTable, cycle: tuple[int, ...], objective: str) -> float:
-    """J, J/N or J/seconds of an open cycle, summed straight from the dense matrices."""
+def score(table: TransitionTable, cycle: tuple[int, ...], objective: str, max_transitions: int | None = None) -> float:
+    """J, J/N or J/seconds of an open cycle, summed straight from the dense matrices. For
+    ``total`` with a bound N, J of the closed walk that repeats the cycle as often as fits in
+    N transitions (⌊N / len⌋ times) when J > 0: a repeated walk is a walk the firmware runs."""
     reward, _ = table.dense()
     steps = list(zip(cycle, cycle[1:] + cycle[:1]))
     j = math.fsum(float(reward[a, b]) for a, b in steps)
     if objective == "total":
-        return j
+        repeats = 1 if max_transitions is None else max_transitions // len(cycle)
+        return j * repeats if j > 0 else j
     if objective == "rate":
         return j / len(cycle)
     dur = np.zeros_like(reward)
@@ -79,6 +82,8 @@ def brute_force_gaits(
         scale = reward_scale
     tol = RELATIVE_TOLERANCE * scale
     scored = [(sign * score(table, c, objective), c) for c in closed_walks(table, bound, simple)]
+    if objective == "total":  # repeats count in the direction the walk moves
+        scored = [(v * (bound // len(c)) if v > 0 else v, c) for v, c in scored]
     scored = [(v, c) for v, c in scored if v > tol]
     if not scored:
         return None, set()

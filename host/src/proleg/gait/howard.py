@@ -159,36 +159,44 @@ def max_cycle_ratio(
     ct = np.where(dead, 1.0, t[policy])
     for it in range(1, max_iterations + 1):
         eta, x = _evaluate(n, succ, cw, ct, x)
-        eta_ne = eta[seg.nodes]
-        one_class = float(eta.max() - eta.min()) <= eps  # then no node can reach a better cycle
-        up = None
-        if not one_class:
-            eta_dst = eta.take(dst)
-            best = seg.max(eta_dst)
-            up = best > eta_ne + eps
-            if up.any():
-                chosen = seg.argmax_for(eta_dst, best, up)
-            else:
-                up = None
-        if up is None:
-            # no better cycle within reach: improve potentials inside each η class
-            val = x.take(dst)
-            val += w
-            if one_class:
-                val -= eta[0] if unit_time else eta[0] * t
-            else:
-                eta_src = np.repeat(eta_ne, seg.counts)
-                val -= eta_src if unit_time else eta_src * t
-                val[eta_dst < eta_src - eps] = -np.inf
-            best = seg.max(val)
-            up = best > x[seg.nodes] + eps
-            if not up.any():
-                eta = np.where(eta < 0.5 * (dead_ratio - ratio_scale), -np.inf, eta)
-                return HowardSolution(eta, x, np.where(dead, -1, policy), it)
-            chosen = seg.argmax_for(val, best, up)
+        step = _improvement(seg, eta, x, dst, w, t, unit_time, eps)
+        if step is None:  # no edge improves the policy: optimal
+            eta = np.where(eta < 0.5 * (dead_ratio - ratio_scale), -np.inf, eta)
+            return HowardSolution(eta, x, np.where(dead, -1, policy), it)
+        up, chosen = step
         nodes = seg.nodes[up]
         policy[nodes] = chosen
         succ[nodes] = dst[chosen]
         cw[nodes] = w[chosen]
         ct[nodes] = t[chosen]
     raise RuntimeError(f"Howard policy iteration did not converge in {max_iterations} rounds")
+
+
+def _improvement(
+    seg: "_Segments", eta: np.ndarray, x: np.ndarray, dst: np.ndarray, w: np.ndarray, t: np.ndarray,
+    unit_time: bool, eps: float,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Howard's improvement step: (nodes that switch, as a mask over ``seg.nodes``, and their
+    new edges), or None when the policy is optimal. First a better cycle ratio within reach
+    (η of the successor); failing that, better potentials inside each η class."""
+    eta_ne = eta[seg.nodes]
+    one_class = float(eta.max() - eta.min()) <= eps  # then no node can reach a better cycle
+    if not one_class:
+        eta_dst = eta.take(dst)
+        best = seg.max(eta_dst)
+        up = best > eta_ne + eps
+        if up.any():
+            return up, seg.argmax_for(eta_dst, best, up)
+    val = x.take(dst)
+    val += w
+    if one_class:
+        val -= eta[0] if unit_time else eta[0] * t
+    else:
+        eta_src = np.repeat(eta_ne, seg.counts)
+        val -= eta_src if unit_time else eta_src * t
+        val[eta_dst < eta_src - eps] = -np.inf
+    best = seg.max(val)
+    up = best > x[seg.nodes] + eps
+    if not up.any():
+        return None
+    return up, seg.argmax_for(val, best, up)

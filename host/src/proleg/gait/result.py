@@ -20,7 +20,11 @@ class Gait:
     """A closed walk s0 -> s1 -> ... -> sN = s0 over allowed transitions.
 
     ``states`` is rotated to its canonical start: among the rotations that start at the
-    walk's lowest state index, the lexicographically smallest.
+    walk's lowest state index, the lexicographically smallest. ``reward``, ``transitions``,
+    ``rate`` and ``duration`` are those of one pass. ``repeats`` is how many passes the
+    answer to a ``total`` question counts (k = ⌊N / transitions⌋: the walk repeated k times
+    is the closed walk of at most N transitions it stands for; the firmware runs the gait
+    cyclically, so it runs that walk); 1 for every other gait.
     """
 
     states: tuple[int, ...]
@@ -28,6 +32,12 @@ class Gait:
     transitions: int
     rate: float
     duration: float | None = None
+    repeats: int = 1
+
+    @property
+    def total(self) -> float:
+        """J of the walk this gait stands for: ``reward × repeats``."""
+        return self.reward * self.repeats
 
     @property
     def speed(self) -> float | None:
@@ -40,8 +50,11 @@ class GaitResult:
     """Every optimal gait for one objective and direction.
 
     ``value`` is the optimum (J, J per transition or J per second; negative for -x), or
-    None when no gait moves in ``direction``. ``gaits`` holds every tie, sorted by states,
-    unless more than ``MAX_TIES`` exist (or they hold more than ``MAX_LISTED_STATES`` states):
+    None when no gait moves in ``direction``; for ``total`` it is the best J of a closed walk
+    of at most ``max_transitions`` transitions, repeated walks included (``Gait.total``).
+    ``gaits`` holds every tie in rank order — gait 0 is the one the firmware runs by
+    default: best rate (J per transition, in ``direction``) first, then fewest transitions,
+    then by states (rates within the tie tolerance count as equal) — unless more than ``MAX_TIES`` exist (or they hold more than ``MAX_LISTED_STATES`` states):
     then the first ones found and ``truncated=True``.
     ``max_transitions`` is the bound actually used (the default for ``total`` included).
     """

@@ -1,57 +1,38 @@
-"""Bounded exhaustive search for the best closed walks or simple cycles.
+"""Bounded exhaustive search for the best simple cycles by ratio (J per transition or second).
 
-Depth-first search from each start s over states >= s (s is then the walk's lowest
-state, where its canonical rotation begins), pruned by a max-plus upper bound:
+Used when no optimal cycle of the unbounded problem fits the bound on the number of
+transitions (``optimal.py``); ``total`` has its own polynomial method (``total.py``).
 
-    ub[k][v] = the largest weight of a walk of at most k steps from v back to s over
-               states >= s (ub[0][s] = 0, ub[0][v != s] = -inf),
+Depth-first search from each start s over states >= s (s is then the cycle's lowest state,
+where its canonical rotation begins), pruned by a max-plus upper bound. A cycle reaches
+ratio L iff Σ (w − L·t) >= 0 (the parametric method: Dantzig, Blattner & Rao, 1967), so with
+a = w − L·t for the threshold L current when s is reached:
 
-computed per start by k rounds of a vectorised max-plus product over the edge arrays.
-A prefix of weight R at v with r steps left can still reach a walk worth R + ub[r][v];
-it is abandoned when that cannot reach the best value found so far (minus the tie
-tolerance). Ratio objectives (J per transition, J per second) are bounded the parametric
-way: a cycle reaches ratio L iff  Σ (w - L·t) >= 0, and the table is built for the
-threshold current at each start (a stale, lower threshold only loosens the bound).
+    ub[k][v] = the largest Σa of a walk of at most k steps from v back to s over states >= s
+               (ub[0][s] = 0, ub[0][v != s] = −∞),
 
-Exponential in the bound in the worst case (many ties, flat rewards), fast when the
-rewards separate walks. Up to ``limit`` optimal walks are kept; beyond it the result is
-marked truncated.
+computed by k rounds of a vectorised max-plus product over the edge arrays. A prefix with
+Σ(w − L·t) = R at v with r steps left is abandoned when R + ub[r][v] < 0 for the current L
+(a stale, lower L in the table only loosens the bound). Exponential in the bound in the
+worst case (many ties, flat rewards), fast when the rewards separate cycles. Up to
+``limit`` optimal cycles are kept; beyond it the result is marked truncated.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
-
-from .evaluate import canonical_rotation, is_primitive
 
 
 @dataclass(frozen=True)
 class SearchResult:
-    """Open cycles (start not repeated, starting at their lowest state) whose value is at
-    least ``best - tol``; ``best`` is None when nothing reached the threshold."""
+    """Open simple cycles (start not repeated, starting at their lowest state) whose ratio
+    is at least ``best - tol``; ``best`` is None when nothing reached the threshold."""
 
     best: float | None
     cycles: list[tuple[int, ...]]
     truncated: bool
-
-
-def _upper_bounds(n: int, s: int, src: np.ndarray, dst: np.ndarray, a: np.ndarray, k_max: int) -> list[np.ndarray]:
-    """ub[k] for k = 0..k_max on the edges given (already restricted to states >= s)."""
-    ub0 = np.full(n, -np.inf)
-    ub0[s] = 0.0
-    out = [ub0]
-    if len(src) == 0:
-        return out + [ub0] * k_max
-    starts = np.flatnonzero(np.r_[True, src[1:] != src[:-1]])
-    heads = src[starts]
-    for _ in range(k_max):
-        prev = out[-1]
-        cur = prev.copy()
-        cur[heads] = np.maximum(prev[heads], np.maximum.reduceat(a + prev[dst], starts))
-        out.append(cur)
-    return out
 
 
 def bounded_search(
@@ -63,116 +44,130 @@ def bounded_search(
     tol: float,
     *,
     time: np.ndarray | None = None,
-    simple: bool,
-    ratio: bool,
-    floor: float | None = None,
-    ceiling: float | None = None,
     limit: int | None = None,
 ) -> SearchResult:
-    """Best closed walks (``simple=False``) or simple cycles (``simple=True``).
+    """Best simple cycles of 2..``max_transitions`` transitions by Σw / Σt.
 
-    Value = Σw (``ratio=False``) or Σw / Σt (``ratio=True``; t = 1 per edge when ``time`` is
-    None). Only walks worth at least ``floor`` (default ``tol``: they must move) count;
-    walks within ``tol`` of the best are all kept. Walks that repeat a shorter walk are
-    skipped. ``ceiling``, a known upper bound on the value, lets the search stop once
-    ``limit`` walks at that value are found. Edges must be sorted by source.
+    t = 1 per edge when ``time`` is None (J per transition), else seconds (J per second).
+    Only cycles worth more than ``tol`` count; cycles within ``tol`` of the best are all
+    kept (at most ``limit``). Edges must be sorted by source.
     """
     src = np.asarray(src, dtype=np.int64)
     dst = np.asarray(dst, dtype=np.int64)
     w = np.asarray(weight, dtype=np.float64)
     t = np.ones(len(w)) if time is None else np.asarray(time, dtype=np.float64)
-    K = int(max_transitions)
-    first = float(tol if floor is None else floor)
-    lower = first
-    best: float | None = None
-    kept: list[tuple[float, tuple[int, ...]]] = []
-    skipped_best = -np.inf
-    ptr_all = np.searchsorted(src, np.arange(n + 1))
-    stop = False
-
-    def offer(value: float, cyc: tuple[int, ...]) -> None:
-        nonlocal best, lower, kept, skipped_best, stop
-        if value < lower:
-            return
-        if best is None or value > best:
-            best = value
-            lower = max(first, best - tol)
-            kept = [kv for kv in kept if kv[0] >= lower]
-        if limit is not None and len(kept) >= limit:
-            skipped_best = max(skipped_best, value)
-            if ceiling is not None and best >= ceiling - tol:
-                stop = True
-            return
-        kept.append((value, cyc))
-
+    best = _Best(floor=float(tol), tol=float(tol), limit=limit)
+    ptr = np.searchsorted(src, np.arange(n + 1))
     for s in range(n):
-        if stop:
-            break
-        lo = ptr_all[s]
-        keep = dst[lo:] >= s
-        e_src, e_dst, e_w, e_t = src[lo:][keep], dst[lo:][keep], w[lo:][keep], t[lo:][keep]
-        if len(e_src) == 0:
+        keep = dst[ptr[s]:] >= s
+        if keep.any():
+            sub = _Subgraph(n, s, src[ptr[s]:][keep], dst[ptr[s]:][keep], w[ptr[s]:][keep], t[ptr[s]:][keep])
+            _search_from(sub, int(max_transitions), best)
+    return best.result()
+
+
+@dataclass
+class _Best:
+    """The best ratio so far, the cycles within ``tol`` of it, and whether some were dropped."""
+
+    floor: float
+    tol: float
+    limit: int | None
+    best: float | None = None
+    kept: list[tuple[float, tuple[int, ...]]] = field(default_factory=list)
+    dropped_best: float = -np.inf
+
+    @property
+    def lower(self) -> float:
+        """What a cycle must reach to be kept."""
+        return self.floor if self.best is None else max(self.floor, self.best - self.tol)
+
+    def offer(self, value: float, cycle: tuple[int, ...]) -> None:
+        if value < self.lower:
+            return
+        if self.best is None or value > self.best:
+            self.best = value
+            self.kept = [kv for kv in self.kept if kv[0] >= self.lower]
+        if self.limit is not None and len(self.kept) >= self.limit:
+            self.dropped_best = max(self.dropped_best, value)
+            return
+        self.kept.append((value, cycle))
+
+    def result(self) -> SearchResult:
+        lower = self.lower
+        return SearchResult(self.best, [c for v, c in self.kept if v >= lower], bool(self.dropped_best >= lower))
+
+
+@dataclass
+class _Subgraph:
+    """The edges from states >= s to states >= s, sorted by source, for the search from s."""
+
+    n: int
+    s: int
+    src: np.ndarray
+    dst: np.ndarray
+    w: np.ndarray
+    t: np.ndarray
+
+    def ptr(self) -> np.ndarray:
+        return np.searchsorted(self.src, np.arange(self.n + 1))
+
+
+def _upper_bounds(sub: _Subgraph, a: np.ndarray, k_max: int) -> list[np.ndarray]:
+    """ub[k] for k = 0..k_max: the best Σa of at most k steps from each state back to s."""
+    ub0 = np.full(sub.n, -np.inf)
+    ub0[sub.s] = 0.0
+    out = [ub0]
+    starts = np.flatnonzero(np.r_[True, sub.src[1:] != sub.src[:-1]])
+    heads = sub.src[starts]
+    for _ in range(k_max):
+        prev = out[-1]
+        cur = prev.copy()
+        cur[heads] = np.maximum(prev[heads], np.maximum.reduceat(a + prev[sub.dst], starts))
+        out.append(cur)
+    return out
+
+
+def _search_from(sub: _Subgraph, K: int, best: _Best) -> None:
+    """Every simple cycle through s (its lowest state) that can reach ``best.lower``."""
+    a = sub.w - best.lower * sub.t
+    ub = _upper_bounds(sub, a, K)
+    ptr = sub.ptr()
+    gain = [None] + [a + ub[r - 1][sub.dst] for r in range(1, K + 1)]
+    slack = 1e-12 * (float(np.abs(a).max()) + 1.0) * K
+    path = [sub.s]
+    on_path = np.zeros(sub.n, dtype=bool)
+    on_path[sub.s] = True
+    # frames: [node, steps left, Σw, Σt, candidate edge positions, next candidate]
+    frames: list[list] = [_frame(sub.s, K, 0.0, 0.0, gain[K], ptr, best.lower, slack)]
+    while frames:
+        fr = frames[-1]
+        v, r, rw, rt, cand, i = fr
+        if i >= len(cand):
+            frames.pop()
+            if frames:
+                on_path[path.pop()] = False
             continue
-        lam_tab = lower if ratio else 0.0
-        a = e_w - lam_tab * e_t if ratio else e_w
-        ub = _upper_bounds(n, s, e_src, e_dst, a, K)
-        # can any walk from s reach the threshold?
-        if not ratio and ub[K][s] < lower:
+        fr[5] = i + 1
+        e = cand[i]
+        u = int(sub.dst[e])
+        nw, nt = rw + float(sub.w[e]), rt + float(sub.t[e])
+        if nw - best.lower * nt + float(ub[r - 1][u]) < -slack:  # the threshold may have risen
             continue
-        ptr = np.searchsorted(e_src, np.arange(n + 1))
-        gain = [None] + [a + ub[r - 1][e_dst] for r in range(1, K + 1)]
-        slack = 1e-12 * (float(np.abs(a).max()) + 1.0) * K
+        if u == sub.s:
+            best.offer(nw / nt, tuple(path))
+            continue
+        if on_path[u] or r - 1 < 1:
+            continue
+        path.append(u)
+        on_path[u] = True
+        frames.append(_frame(u, r - 1, nw, nt, gain[r - 1], ptr, best.lower, slack))
 
-        path = [s]
-        on_path = np.zeros(n, dtype=bool)
-        on_path[s] = True
-        # frames: (node, steps left, Σw, Σt, candidate edge positions, next candidate)
-        frames: list[list] = []
 
-        def push(v: int, r: int, rw: float, rt: float) -> None:
-            seg = slice(ptr[v], ptr[v + 1])
-            g = gain[r][seg]
-            if ratio:  # Σ(w - lower·t) over the finished cycle <= rw - lower·rt + g, as lam_tab <= lower
-                cand = np.flatnonzero(rw - lower * rt + g >= -slack)
-            else:
-                cand = np.flatnonzero(rw + g >= lower)
-            cand = cand[np.argsort(-g[cand], kind="stable")] + ptr[v]
-            frames.append([v, r, rw, rt, cand.tolist(), 0])
-
-        push(s, K, 0.0, 0.0)
-        while frames and not stop:
-            fr = frames[-1]
-            v, r, rw, rt, cand, i = fr
-            if i >= len(cand):
-                frames.pop()
-                if frames:
-                    on_path[path.pop()] = False
-                continue
-            fr[5] = i + 1
-            e = cand[i]
-            u = int(e_dst[e])
-            nw, nt = rw + float(e_w[e]), rt + float(e_t[e])
-            # re-check against the current threshold (it may have risen since the push)
-            if ratio:
-                if nw - lower * nt + float(ub[r - 1][u]) < -slack:
-                    continue
-            elif nw + float(ub[r - 1][u]) < lower:
-                continue
-            if u == s:
-                cyc = tuple(path)
-                value = nw / nt if ratio else nw
-                if value >= lower and (simple or (is_primitive(cyc) and canonical_rotation(cyc) == cyc)):
-                    offer(value, cyc)
-                if simple or r - 1 < 2:
-                    continue
-            elif simple and on_path[u]:
-                continue
-            if r - 1 < 1:
-                continue
-            path.append(u)
-            on_path[u] = simple
-            push(u, r - 1, nw, nt)
-
-    final = [c for val, c in kept if val >= lower]
-    truncated = bool(skipped_best >= lower)
-    return SearchResult(best, final, truncated)
+def _frame(v: int, r: int, rw: float, rt: float, gain: np.ndarray, ptr: np.ndarray, lower: float, slack: float) -> list:
+    """A DFS frame at v: the edges out of v that can still reach ``lower``, best first.
+    Σ(w − lower·t) over the finished cycle <= rw − lower·rt + gain, as the table's L <= lower."""
+    g = gain[ptr[v]:ptr[v + 1]]
+    cand = np.flatnonzero(rw - lower * rt + g >= -slack)
+    cand = cand[np.argsort(-g[cand], kind="stable")] + ptr[v]
+    return [v, r, rw, rt, cand.tolist(), 0]

@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import RobotFileError, SimError
+from ..errors import SimError
 from .sma import Hysteresis, SmaParams
 
 DIRECT_GAIN_DEG = 60.0
@@ -415,106 +415,42 @@ class Plant:
 
 
 # -- robot file ---------------------------------------------------------------------------------
-_PER_ACTUATOR = (
-    "resistance_ohm", "supply_v", "heat_capacity_j_per_k", "conductance_w_per_k",
-    "as_c", "af_c", "ms_c", "mf_c", "max_strain",
-)
-_SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
-PLANT_KEYS = _PER_ACTUATOR + _SCALARS + ("psi_rest_deg", "coupling_deg", "true_matrix")
-
-
-def _where(robot: Any) -> str:
-    path = getattr(robot, "path", None) or getattr(robot, "source", None)
-    return str(path) if path else "<robot>"
-
-
-def _number(where: str, key: str, v: Any) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise RobotFileError(f"{where}: [plant].{key}: expected a finite number, got {v!r}")
-    return float(v)
-
-
-def _per(where: str, key: str, v: Any, n: int, what: str) -> list[float]:
-    if isinstance(v, list):
-        if len(v) != n:
-            raise RobotFileError(f"{where}: [plant].{key}: expected one number or {n} (one per {what}), got {len(v)}")
-        return [_number(where, f"{key}[{i}]", x) for i, x in enumerate(v)]
-    return [_number(where, key, v)] * n
+# The [plant] table is checked by the robot loader (proleg.robot_plant, documented in
+# docs/robot-file.md); here its resolved values only become PlantParams.
 
 
 def plant_params_from_robot(robot: Any) -> PlantParams:
     """Plant parameters for a loaded robot: limbs, ψ*, actuators and channels from the robot,
-    physics from its optional ``[plant]`` table (``robot.plant``: dict), defaults otherwise.
-
-    ``[plant]`` keys: per actuator (one number, or a list with one per [[actuator]]):
-    resistance_ohm, supply_v, heat_capacity_j_per_k, conductance_w_per_k, as_c, af_c, ms_c,
-    mf_c, max_strain; per limb: psi_rest_deg; coupling_deg (limbs × actuators, degrees at full
-    contraction) or direct_gain_deg / cross_gain_deg; mech_tau_s, ambient_c, step_mm, noise_mm,
-    simultaneous_s; true_matrix (read by ``true_rewards_from_robot``).
-    """
-    where = _where(robot)
-    table = dict(getattr(robot, "plant", None) or {})
-    unknown = sorted(set(table) - set(PLANT_KEYS))
-    if unknown:
-        raise RobotFileError(f"{where}: [plant].{unknown[0]}: unknown key; expected one of {', '.join(PLANT_KEYS)}")
-    acts_in = list(robot.actuators)
-    limbs_in = list(robot.limbs)
-    na, nl = len(acts_in), len(limbs_in)
-    names = [a.name for a in acts_in]
-    per_act = {k: _per(where, k, table[k], na, "actuator") for k in _PER_ACTUATOR if k in table}
+    physics from its checked ``[plant]`` section (``robot.plant``: ``PlantSection``, defaults
+    filled in by the loader)."""
+    section = robot.plant
+    names = [a.name for a in robot.actuators]
     actuators = tuple(
-        SmaParams(name=a.name, channel=int(a.channel), **{k: v[j] for k, v in per_act.items()})
-        for j, a in enumerate(acts_in)
+        SmaParams(name=a.name, channel=int(a.channel), **{k: v[j] for k, v in section.actuator.items()})
+        for j, a in enumerate(robot.actuators)
     )
-    rest = _per(where, "psi_rest_deg", table.get("psi_rest_deg", 0.0), nl, "limb")
-    limbs = []
-    for i, lb in enumerate(limbs_in):
-        act = getattr(lb, "actuator", None)
-        if act is not None and act not in names:
-            raise RobotFileError(f"{where}: limb {lb.name!r}: actuator {act!r} is not an [[actuator]] ({', '.join(names)})")
-        psi_star = tuple(float(p) for p in lb.psi_star_deg)
-        levels = int(getattr(lb, "levels", len(psi_star) + 1))
-        if levels != len(psi_star) + 1:
-            raise RobotFileError(f"{where}: limb {lb.name!r}: levels = {levels} needs {levels - 1} critical angles, got {len(psi_star)}")
-        limbs.append(LimbParams(name=lb.name, psi_star_deg=psi_star, psi_rest_deg=rest[i],
-                                actuator=None if act is None else names.index(act)))
-    kw: dict[str, Any] = {k: _number(where, k, table[k]) for k in _SCALARS if k in table}
-    if "coupling_deg" in table:
-        g = table["coupling_deg"]
-        if not isinstance(g, list) or len(g) != nl or any(not isinstance(r, list) or len(r) != na for r in g):
-            raise RobotFileError(f"{where}: [plant].coupling_deg: expected {nl} rows (limbs) of {na} numbers (actuators)")
-        kw["coupling_deg"] = tuple(tuple(_number(where, f"coupling_deg[{i}][{j}]", x) for j, x in enumerate(r))
-                                   for i, r in enumerate(g))
-    params = PlantParams(actuators=actuators, limbs=tuple(limbs), **kw)
+    limbs = tuple(
+        LimbParams(
+            name=lb.name,
+            psi_star_deg=tuple(float(p) for p in lb.psi_star_deg),
+            psi_rest_deg=section.psi_rest_deg[i],
+            actuator=names.index(lb.actuator),
+        )
+        for i, lb in enumerate(robot.limbs)
+    )
+    params = PlantParams(actuators=actuators, limbs=limbs, coupling_deg=section.coupling_deg, **section.scalars())
     msg = params.check()
-    if msg:
-        raise RobotFileError(f"{where}: [plant]: {msg}")
+    if msg:  # the loader checks every key and range; this only fires on a loader bug
+        raise SimError(f"{robot.path}: plant: {msg}")
     return params
 
 
 def true_rewards_from_robot(robot: Any) -> np.ndarray:
     """The plant's ground-truth reward matrix (n×n, NaN = forbidden): ``[plant].true_matrix``
     when the robot file gives one (numbers or "x"), else the robot's own transition table."""
-    where = _where(robot)
-    levels = tuple(int(getattr(lb, "levels", len(lb.psi_star_deg) + 1)) for lb in robot.limbs)
-    n = math.prod(levels)
-    table = dict(getattr(robot, "plant", None) or {})
-    if "true_matrix" in table:
-        m = table["true_matrix"]
-        if not isinstance(m, list) or len(m) != n or any(not isinstance(r, list) or len(r) != n for r in m):
-            raise RobotFileError(f"{where}: [plant].true_matrix: expected {n} rows of {n} entries")
-        out = np.empty((n, n))
-        for a, row in enumerate(m):
-            for b, x in enumerate(row):
-                if isinstance(x, str) and x.strip().lower() == "x":
-                    out[a, b] = np.nan
-                else:
-                    out[a, b] = _number(where, f"true_matrix[{a}][{b}]", x)
-        return out
-    tt = getattr(robot, "transitions", None) or getattr(robot, "table", None)
-    if tt is None:
-        raise RobotFileError(f"{where}: no transition table and no [plant].true_matrix")
-    reward, allowed = tt.dense()
+    if robot.plant.true_matrix is not None:
+        return robot.plant.true_matrix.copy()
+    reward, allowed = robot.transitions.dense()
     out = np.where(allowed, reward, np.nan)
     np.fill_diagonal(out, 0.0)
     return out

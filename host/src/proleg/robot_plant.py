@@ -1,0 +1,212 @@
+"""The robot file's optional ``[plant]`` table: the simulated body's physics, checked once.
+
+Every key is listed in ``PLANT_KEYS`` with its unit, its allowed range and its default (the
+defaults are the simulator's, ``proleg.sim.sma.SmaParams`` and ``proleg.sim.plant.PlantParams``;
+a test keeps the two in step). ``plant_section`` checks a ``[plant]`` table when the robot file
+is loaded, so a misspelt key or a value out of range fails ``proleg gait`` and ``proleg build``
+as it fails ``proleg sim``: one line naming the file, the key and what was expected.
+The result, ``PlantSection``, holds every value resolved (defaults filled in, one number per
+actuator or per limb where the key is per actuator or per limb); the simulator only consumes it.
+docs/robot-file.md documents the same keys for users.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import RobotFileError
+
+FORBIDDEN = "x"
+
+
+@dataclass(frozen=True)
+class PlantKey:
+    """One ``[plant]`` key: unit, range (``lo``..``hi``, open at ``lo`` when ``open_lo``,
+    open at both ends when ``open_hi`` too), default, and whether it is per actuator or
+    per limb (one number for all, or a list with one per [[actuator]] / [[limb]])."""
+
+    name: str
+    unit: str
+    lo: float
+    hi: float
+    default: float | None
+    per: str = ""            # "actuator", "limb" or "" (one number)
+    open_lo: bool = False
+    open_hi: bool = False
+    doc: str = ""
+
+    def range_text(self) -> str:
+        left = "(" if self.open_lo else "["
+        right = ")" if self.open_hi else "]"
+        unit = f" {self.unit}" if self.unit else ""
+        return f"{left}{_g(self.lo)}, {_g(self.hi)}{right}{unit}"
+
+    def accepts(self, v: float) -> bool:
+        above = v > self.lo if self.open_lo else v >= self.lo
+        below = v < self.hi if self.open_hi else v <= self.hi
+        return above and below
+
+
+def _g(x: float) -> str:
+    return f"{x:g}"
+
+
+# Defaults: a Toki BioMetal Helix BMX100-class coil and the paper's R1-class body; the sources
+# of every number are in proleg/sim/sma.py (SmaParams) and proleg/sim/plant.py (PlantParams).
+_KEYS = (
+    PlantKey("resistance_ohm", "Ω", 0.0, 10_000.0, 36.0, "actuator", open_lo=True, doc="coil resistance"),
+    PlantKey("supply_v", "V", 0.0, 60.0, 5.0, "actuator", open_lo=True, doc="supply voltage across the coil at duty 1"),
+    PlantKey("heat_capacity_j_per_k", "J/K", 0.0, 10.0, 4.6e-3, "actuator", open_lo=True, doc="coil heat capacity C"),
+    PlantKey("conductance_w_per_k", "W/K", 0.0, 10.0, 4.6e-3, "actuator", open_lo=True,
+             doc="heat loss hA to the surroundings (τ = C / hA)"),
+    PlantKey("as_c", "°C", -100.0, 300.0, 64.0, "actuator", doc="austenite start temperature (heating)"),
+    PlantKey("af_c", "°C", -100.0, 300.0, 82.0, "actuator", doc="austenite finish temperature (heating)"),
+    PlantKey("ms_c", "°C", -100.0, 300.0, 56.0, "actuator", doc="martensite start temperature (cooling)"),
+    PlantKey("mf_c", "°C", -100.0, 300.0, 38.0, "actuator", doc="martensite finish temperature (cooling)"),
+    PlantKey("max_strain", "", 0.0, 1.0, 0.3, "actuator", open_lo=True,
+             doc="coil contraction at full transformation, fraction of its installed length"),
+    PlantKey("psi_rest_deg", "°", -90.0, 90.0, 0.0, "limb", open_lo=True, open_hi=True,
+             doc="contact angle ψ of the end with its coil cold"),
+    PlantKey("direct_gain_deg", "°", -360.0, 360.0, 60.0,
+             doc="ψ of an actuator's own end at full contraction (used when coupling_deg is not given)"),
+    PlantKey("cross_gain_deg", "°", -360.0, 360.0, 27.0,
+             doc="ψ of every other end at full contraction (used when coupling_deg is not given)"),
+    PlantKey("coupling_deg", "°", -360.0, 360.0, None,
+             doc="limbs × actuators matrix: ψ of limb i at full contraction of actuator j"),
+    PlantKey("mech_tau_s", "s", 0.0, 10.0, 0.03, open_lo=True, doc="first-order lag of the soft body's ψ"),
+    PlantKey("ambient_c", "°C", -50.0, 100.0, 25.0, doc="ambient temperature"),
+    PlantKey("step_mm", "mm", 0.0, 1000.0, 4.0, open_lo=True, doc="displacement per unit of the reward matrix"),
+    PlantKey("noise_mm", "mm", 0.0, 1000.0, 0.0, doc="σ of the Gaussian noise added to each transition's displacement"),
+    PlantKey("simultaneous_s", "s", 0.0, 10.0, 0.03, doc="limb changes this close together form one transition"),
+    PlantKey("true_matrix", "reward units", -1e9, 1e9, None,
+             doc="n × n ground-truth rewards for the simulator (numbers or 'x'); default: [transitions]"),
+)
+PLANT_KEYS: dict[str, PlantKey] = {k.name: k for k in _KEYS}
+PER_ACTUATOR = tuple(k.name for k in _KEYS if k.per == "actuator")
+SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
+
+
+@dataclass(frozen=True, eq=False)
+class PlantSection:
+    """A checked ``[plant]`` table, every value resolved (see ``PLANT_KEYS`` for units).
+
+    ``actuator[key]`` holds one value per [[actuator]] (file order) for each per-actuator key;
+    ``psi_rest_deg`` one per [[limb]]; ``coupling_deg`` is None unless the file gives it (then
+    the simulator derives it from ``direct_gain_deg`` / ``cross_gain_deg``); ``true_matrix`` is
+    None unless given (n × n, NaN = forbidden). ``given`` names the keys the file set.
+    """
+
+    actuator: dict[str, tuple[float, ...]]
+    psi_rest_deg: tuple[float, ...]
+    coupling_deg: tuple[tuple[float, ...], ...] | None
+    direct_gain_deg: float
+    cross_gain_deg: float
+    mech_tau_s: float
+    ambient_c: float
+    step_mm: float
+    noise_mm: float
+    simultaneous_s: float
+    true_matrix: np.ndarray | None = None
+    given: frozenset[str] = field(default_factory=frozenset)
+
+    def scalars(self) -> dict[str, float]:
+        return {k: getattr(self, k) for k in SCALARS}
+
+
+def default_plant_section(n_actuators: int, n_limbs: int) -> PlantSection:
+    """The section a robot file without ``[plant]`` gets."""
+    return plant_section(Path("<defaults>"), {}, [f"a{j}" for j in range(n_actuators)], n_limbs, 0)
+
+
+def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_states: int) -> PlantSection:
+    """Check a ``[plant]`` table; RobotFileError names the file and the key."""
+    if not isinstance(table, dict):
+        raise RobotFileError(f"{path}: plant: expected a table")
+    unknown = sorted(set(table) - set(PLANT_KEYS))
+    if unknown:
+        near = difflib.get_close_matches(unknown[0], list(PLANT_KEYS), n=1)
+        hint = f" (did you mean {near[0]!r}?)" if near else f" (expected one of: {', '.join(PLANT_KEYS)})"
+        raise RobotFileError(f"{path}: plant.{unknown[0]}: unknown key{hint}")
+    na = len(actuators)
+    per_act = {k: _per(path, PLANT_KEYS[k], table.get(k), na) for k in PER_ACTUATOR}
+    _check_transformation(path, per_act, actuators)
+    rest = _per(path, PLANT_KEYS["psi_rest_deg"], table.get("psi_rest_deg"), n_limbs)
+    scalars = {k: _scalar(path, PLANT_KEYS[k], table.get(k)) for k in SCALARS}
+    coupling = _coupling(path, table["coupling_deg"], n_limbs, na) if "coupling_deg" in table else None
+    truth = _true_matrix(path, table["true_matrix"], n_states) if "true_matrix" in table else None
+    return PlantSection(
+        actuator=per_act, psi_rest_deg=rest, coupling_deg=coupling, true_matrix=truth,
+        given=frozenset(table), **scalars,
+    )
+
+
+def _fail(path: Path, key: str, expected: str, got: Any) -> None:
+    raise RobotFileError(f"{path}: plant.{key}: expected {expected}, got {got!r}")
+
+
+def _value(path: Path, spec: PlantKey, key: str, v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or not spec.accepts(v):
+        _fail(path, key, f"a number in {spec.range_text()}", v)
+    return float(v)
+
+
+def _scalar(path: Path, spec: PlantKey, v: Any) -> float:
+    if v is None:
+        assert spec.default is not None
+        return spec.default
+    return _value(path, spec, spec.name, v)
+
+
+def _per(path: Path, spec: PlantKey, v: Any, n: int) -> tuple[float, ...]:
+    if v is None:
+        assert spec.default is not None
+        return (spec.default,) * n
+    if isinstance(v, list):
+        if len(v) != n:
+            _fail(path, spec.name, f"one number or a list of {n} (one per {spec.per})", v)
+        return tuple(_value(path, spec, f"{spec.name}[{i + 1}]", x) for i, x in enumerate(v))
+    return (_value(path, spec, spec.name, v),) * n
+
+
+def _check_transformation(path: Path, per_act: dict[str, tuple[float, ...]], actuators: list[str]) -> None:
+    """Mf < Ms ≤ Af, Mf ≤ As < Af for each coil (the hysteresis model needs that order)."""
+    for j, name in enumerate(actuators):
+        as_c, af_c, ms_c, mf_c = (per_act[k][j] for k in ("as_c", "af_c", "ms_c", "mf_c"))
+        for ok, what in (
+            (mf_c < ms_c, f"mf_c ({_g(mf_c)}) below ms_c ({_g(ms_c)})"),
+            (as_c < af_c, f"as_c ({_g(as_c)}) below af_c ({_g(af_c)})"),
+            (ms_c <= af_c, f"ms_c ({_g(ms_c)}) at most af_c ({_g(af_c)})"),
+            (mf_c <= as_c, f"mf_c ({_g(mf_c)}) at most as_c ({_g(as_c)})"),
+        ):
+            if not ok:
+                raise RobotFileError(f"{path}: plant: actuator {name!r}: expected {what}")
+
+
+def _coupling(path: Path, g: Any, n_limbs: int, na: int) -> tuple[tuple[float, ...], ...]:
+    spec = PLANT_KEYS["coupling_deg"]
+    if not isinstance(g, list) or len(g) != n_limbs or any(not isinstance(r, list) or len(r) != na for r in g):
+        raise RobotFileError(f"{path}: plant.coupling_deg: expected {n_limbs} rows (limbs) of {na} numbers (actuators)")
+    return tuple(
+        tuple(_value(path, spec, f"coupling_deg[{i + 1}][{j + 1}]", x) for j, x in enumerate(r))
+        for i, r in enumerate(g)
+    )
+
+
+def _true_matrix(path: Path, m: Any, n: int) -> np.ndarray:
+    spec = PLANT_KEYS["true_matrix"]
+    if not isinstance(m, list) or len(m) != n or any(not isinstance(r, list) or len(r) != n for r in m):
+        raise RobotFileError(f"{path}: plant.true_matrix: expected {n} rows of {n} entries (numbers or 'x')")
+    out = np.empty((n, n))
+    for a, row in enumerate(m):
+        for b, x in enumerate(row):
+            if isinstance(x, str) and x.strip().lower() == FORBIDDEN:
+                out[a, b] = np.nan
+            else:
+                out[a, b] = _value(path, spec, f"true_matrix[{a + 1}][{b + 1}]", x)
+    return out

@@ -1,0 +1,115 @@
+"""Feasibility of a gait on the robot's hardware, and the entry path from rest."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from proleg.errors import GaitError
+from proleg.gait import optimal_gaits
+from proleg.gait.feasibility import check_gait, entry_path, gait_problems
+from proleg.robot import load_robot
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+
+ONE_ACTUATOR = """
+[robot]
+name = "t"
+
+[[limb]]
+name = "front"
+psi_star_deg = [20.0]
+actuator = "coil"
+
+[[limb]]
+name = "back"
+psi_star_deg = [20.0]
+actuator = "coil"
+
+[[actuator]]
+name = "coil"
+
+[transitions]
+matrix = [[0, "x", 1, "x"], [1, 0, "x", 1], [-1, 2, 0, 1], ["x", 0, 1, 0]]
+"""
+
+
+def robot_from(tmp_path: Path, text: str):
+    path = tmp_path / "robot.toml"
+    path.write_text(text)
+    return load_robot(path)
+
+
+def idx(robot, *labels: str) -> list[int]:
+    return [robot.transitions.index(s) for s in labels]
+
+
+def kinds(robot, *labels: str) -> list[str]:
+    return [p.kind for p in gait_problems(robot, idx(robot, *labels))]
+
+
+def test_the_paper_r1_forward_gait_runs_as_is():
+    r1 = load_robot(ROBOTS / "paper-r1.toml")
+    best = optimal_gaits(r1.transitions, "total", "+x", 4).gaits[0]
+    assert gait_problems(r1, best.states) == []
+    check_gait(r1, best.states)
+    assert entry_path(r1, best.states).states == (0,)
+
+
+def test_a_step_raising_one_limb_while_lowering_another_is_flagged_as_opposing():
+    r1 = load_robot(ROBOTS / "paper-r1.toml")
+    problems = gait_problems(r1, idx(r1, "00", "10", "01", "00"))
+    assert [(p.kind, p.severity) for p in problems] == [("opposing", "warning")]
+    assert problems[0].message == (
+        "gait 00 10 01 00: step 2 (10 -> 01) raises 'right' while lowering 'left' "
+        "(a heating and a cooling crossing must coincide)"
+    )
+    check_gait(r1, idx(r1, "00", "10", "01", "00"))  # a warning does not refuse the gait
+
+
+def test_limbs_on_one_actuator_cannot_move_in_opposite_directions(tmp_path):
+    robot = robot_from(tmp_path, ONE_ACTUATOR)
+    assert kinds(robot, "00", "10", "01", "00") == ["shared-actuator"]
+    with pytest.raises(GaitError, match=(
+        r"^gait 00 10 01 00: step 2 \(10 -> 01\) limbs 'back' and 'front' share actuator 'coil' "
+        r"but would move in opposite directions$"
+    )):
+        check_gait(robot, idx(robot, "00", "10", "01", "00"))
+
+
+def test_a_coil_on_in_every_state_never_cools_down():
+    one = load_robot(ROBOTS / "paper-r1-one-actuator.toml")
+    assert kinds(one, "10", "11", "10") == ["never-cools"]
+    with pytest.raises(GaitError, match="gait 10 11 10: actuator 'sma-left' is on in every state"):
+        check_gait(one, idx(one, "10", "11", "10"))
+
+
+def test_a_coil_held_on_longer_than_max_on_ms_is_refused(tmp_path):
+    text = (ROBOTS / "paper-r1.toml").read_text().replace("max_on_ms = 3000", "max_on_ms = 150")
+    robot = robot_from(tmp_path, text)
+    # left coil on in 10 and 11: two states of at least hold_ms = 100 ms each
+    problems = gait_problems(robot, idx(robot, "00", "10", "11", "01", "00"))
+    assert [p.kind for p in problems] == ["on-time", "on-time"]
+    assert "actuator 'sma-left' stays on for at least 200 ms up to state 11, above safety.max_on_ms = 150" in (
+        problems[0].message
+    )
+
+
+def test_the_entry_path_from_rest_uses_only_allowed_transitions_the_hardware_can_make(tmp_path):
+    robot = robot_from(tmp_path, ONE_ACTUATOR)
+    # gait 01 11 01: 00 -> 10 -> 01 is shorter to 01 but lowers 'front' while raising 'back'
+    # on one coil; 00 -> 10 -> 11 enters at the gait's second state
+    path = entry_path(robot, idx(robot, "01", "11", "01"))
+    assert path.states == tuple(idx(robot, "00", "10", "11")) and path.gait_step == 1
+    assert path.transitions == 2
+    one = load_robot(ROBOTS / "paper-r1-one-actuator.toml")
+    assert entry_path(one, idx(one, "10", "11", "10")).states == tuple(idx(one, "00", "10"))
+
+
+def test_a_gait_unreachable_from_rest_is_an_error_naming_it(tmp_path):
+    text = ONE_ACTUATOR.replace('matrix = [[0, "x", 1, "x"]', 'matrix = [[0, "x", "x", "x"]')
+    robot = robot_from(tmp_path, text)
+    with pytest.raises(GaitError, match=r"^gait 01 11 01: no allowed path from the rest state 00 into the gait"):
+        entry_path(robot, idx(robot, "01", "11", "01"))
+    assert "no-entry" in kinds(robot, "01", "11", "01")

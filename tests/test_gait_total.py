@@ -1,0 +1,70 @@
+"""The ``total`` engine's parts: max-plus powers, the large-graph branch-and-bound, lazy ties."""
+
+from __future__ import annotations
+
+from unittest import mock
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from proleg.gait import MAX_TIES, optimal_gaits
+from proleg.gait.bruteforce import brute_force_gaits
+from proleg.gait.maxplus import ClosingBound, Graph, powers, walk_bounds
+from proleg.transitions import TransitionTable
+from test_gait_oracle import assert_matches_oracle, tables
+
+
+def naive_power(reward: np.ndarray, allowed: np.ndarray, r: int) -> np.ndarray:
+    a = np.where(allowed, reward, -np.inf)
+    np.fill_diagonal(a, -np.inf)
+    p = np.full(a.shape, -np.inf)
+    np.fill_diagonal(p, 0.0)
+    for _ in range(r):
+        p = np.max(a[:, :, None] + p[None, :, :], axis=1)
+    return p
+
+
+@settings(max_examples=100, deadline=None)
+@given(table=tables(durations=False), r=st.integers(0, 5))
+def test_maxplus_powers_are_the_best_walks_of_exactly_r_transitions(table, r):
+    reward, allowed = table.dense()
+    np.fill_diagonal(allowed, False)
+    g = Graph.from_edges(table.n_states, table.src, table.dst, table.reward)
+    np.testing.assert_allclose(powers(g, r)[r], naive_power(reward, allowed, r), rtol=1e-12)
+    out_ub, in_ub = walk_bounds(g, r)
+    p = naive_power(reward, allowed, r)
+    np.testing.assert_allclose(out_ub[r], p.max(axis=1))
+    np.testing.assert_allclose(in_ub[r], p.max(axis=0))
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(table=tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4, 5]))
+def test_total_without_the_full_powers_finds_the_same_optimum_and_ties(table, direction, bound):
+    # large robots do not fit the full powers: the branch-and-bound over walk bounds runs
+    with mock.patch("proleg.gait.maxplus.EXACT_ENTRIES", 0):
+        assert not ClosingBound(Graph.from_edges(2, [0], [1], [1.0]), 2).exact
+        assert_matches_oracle(table, "total", direction, bound)
+
+
+def test_flat_rewards_list_ties_lazily_up_to_the_cap_best_ranked_first():
+    # every transition worth 1 on 16 fully connected states: every closed walk of 8 ties
+    # (2-cycles run 4 times, 4-walks twice, 8-walks once): far more than MAX_TIES
+    n = 16
+    t = TransitionTable.from_dense((n,), np.ones((n, n)))
+    result = optimal_gaits(t, "total", "+x", max_transitions=8)
+    assert result.value == 8.0 and result.truncated and len(result.gaits) == MAX_TIES
+    two_cycles = [g for g in result.gaits if g.transitions == 2]
+    assert len(two_cycles) == n * (n - 1) // 2 and all(g.repeats == 4 for g in two_cycles)
+    assert result.gaits[: len(two_cycles)] == tuple(two_cycles)  # fewest transitions first
+    assert result.gaits[len(two_cycles)].transitions == 4
+    assert all(g.total == 8.0 for g in result.gaits)
+
+
+def test_odd_bounds_leave_a_remainder_and_the_oracle_agrees():
+    # 0 <-> 1 worth 3 per pass; bound 5: two passes (4 transitions) fit, J = 6
+    t = TransitionTable.from_dense((3,), np.array([[0, 2, 0], [1, 0, 0], [0, 0, 0]]), np.array(
+        [[0, 1, 0], [1, 0, 1], [1, 1, 0]], dtype=bool))
+    result = optimal_gaits(t, "total", "+x", 5)
+    assert (result.value, result.gaits[0].states, result.gaits[0].repeats) == (6.0, (0, 1, 0), 2)
+    assert brute_force_gaits(t, "total", "+x", 5) == (6.0, {(0, 1, 0)})
