@@ -214,16 +214,26 @@ def test_generated_files_start_with_a_comment_naming_generator_and_inputs(board)
     assert sha in _header(generated["gen/robot_config.h"]) and sha in _header(generated["gen/gait_table.c"])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "the gait selection (objective, max_transitions) changes gen/gait_table.c and gen/robot_config.h "
-    "but neither their header comments nor proleg-build.json name it (proleg/firmware/config.py, "
-    "firmware_templates/gait_table.c.j2, build.py manifest)"))
 def test_gait_selection_inputs_are_named_in_the_gait_table_header():
     robot, b = load_robot(R1), load_board("host-sim")
     total = render_project(robot, b, firmware_gaits(robot, "total"))["gen/gait_table.c"]
     short = render_project(robot, b, firmware_gaits(robot, "total", 2))["gen/gait_table.c"]
     assert total != short  # different inputs, different tables ...
     assert _header(total) != _header(short)  # ... so the headers must say which
+    assert "objective total, max_transitions unbounded" in _header(total)
+    assert "objective total, max_transitions 2" in _header(short)
+    for head in (_header(total), _header(short)):
+        assert "directions +x -x" in head and "ranked fewest opposing steps first" in head
+
+
+def test_the_build_manifest_names_the_gait_selection(parent):
+    robot, b = load_robot(R1), load_board("host-sim")
+    result = build(robot, b, parent / "sel", max_transitions=2)
+    manifest = json.loads((result.out_dir / MANIFEST).read_text())
+    assert manifest["gait_selection"] == {
+        "objective": "total", "max_transitions": 2, "directions": ["+x", "-x"],
+        "rank": "fewest opposing steps first, then search order",
+    }
 
 
 # ---------------------------------------------------------------------------------------

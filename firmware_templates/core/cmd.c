@@ -5,7 +5,7 @@
 
 #include "drive.h"
 #include "fault.h"
-#include "hal.h"
+#include "uart.h"
 #include "imucheck.h"
 #include "param.h"
 #include "proto.h"
@@ -234,7 +234,7 @@ void cmd_poll(void)
 {
     uint16_t n;
     for (n = 0; n < RX_BYTES_PER_TICK; n++) {
-        int c = hal_uart_read_byte();
+        int c = uart_read_byte();
         if (c < 0) {
             break;
         }
