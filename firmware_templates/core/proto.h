@@ -23,7 +23,7 @@
  *     size_t n = proto_encode(&m, tx, sizeof tx);   // n == 0: does not fit / invalid message
  *     uart_write(tx, (uint16_t)n);
  * Every command struct starts with its token: PROTO_CMD_TOKEN(&m) reads it for any command.
- * STATS: rx.count supplies rx_ok..bad_value; nacks, tx_frames, tx_dropped are the app's.
+ * STATS: rx.count supplies rx_ok..bad_value; nacks, tx_frames, tx_dropped are counted by tx.c.
  * RAM: proto_rx_t ~ 96 B; proto_msg_t is its largest member (LOAD_GAIT, ~52 B).
  *
  * Flash tables: on AVR the descriptor tables live in flash (PROGMEM) and are read with
