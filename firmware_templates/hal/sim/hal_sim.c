@@ -6,8 +6,10 @@
  * UART: host → board bytes go straight into the core's receive ring (uart.h, as a real
  * board's receive interrupt would put them); the core's transmit ring drains to the host
  * FIFO at the board's baud rate (10 bits per byte), so telemetry overruns show up as
- * they would on hardware. The ring sizes are the board file's [uart] buffers. PWM: the duty the firmware set, per board channel. I2C: the
- * register-level MPU-6050 models of sim_mpu6050.c at the robot's IMU addresses.
+ * they would on hardware. The ring sizes are the board file's [uart] buffers. PWM: the
+ * duty the firmware set, per board channel. I2C: the register-level MPU-6050 models of
+ * sim_mpu6050.c at the robot's IMU addresses. main() is not in this image (the board
+ * file's build.main_loop = false): sim_reset/sim_run_ticks drive app_init/app_tick.
  */
 #include <string.h>
 
