@@ -21,7 +21,7 @@ LAYERS: list[set[str]] = [
     {"link"},
     {"record", "plot", "console", "report"},
     {"cli"},
-    {"demo"},
+    {"demo", "__main__"},
 ]
 RANK = {name: i for i, layer in enumerate(LAYERS) for name in layer}
 

@@ -26,10 +26,10 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                  timeout: float = 0.5, out: TextIO | None = None) -> int:
     """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame."""
     from ..console import ConsoleApp, LimbView, run_plain
-    from ..record import Recorder, record_format
+    from ..record import Logger, RecordingMeta, check_suffix
 
     if record is not None:
-        record_format(record)  # reject an unknown extension before opening anything
+        check_suffix(record)  # reject an unknown extension before opening anything
     out = out or sys.stdout
     link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim),
                      baudrate=baudrate, speed=1.0)
@@ -41,13 +41,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     with RobotClient(link, timeout=timeout) as client:
         info = client.connect()
         listeners = []
-        header: dict[str, Any] = info.header()
-        if robot is not None:
-            header["psi_star_deg"] = ";".join(",".join(f"{v:g}" for v in limb.psi_star_deg) for limb in robot.limbs)
-            header["limb_names"] = ",".join(limb.name for limb in robot.limbs)
-        header["link"] = link.description
         if record is not None:
-            listeners.append(Recorder(record, header, limbs=info.limbs, channels=info.actuators))
+            listeners.append(Logger(record, RecordingMeta.for_robot(info=info, robot=robot, link=link)))
         levels = robot.levels if robot is not None else (2,) * info.limbs
         if plain or not out.isatty():
             from ..states import label

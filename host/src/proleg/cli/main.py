@@ -225,15 +225,9 @@ def _serve_pty(sim, args) -> int:
 
 
 def _recorder(robot, path: str):
-    from ..record import Recorder
+    from ..record import Logger, RecordingMeta
 
-    header = {
-        "robot": robot.name,
-        "board": "host-sim",
-        "psi_star_deg": ";".join(",".join(f"{p:g}" for p in limb.psi_star_deg) for limb in robot.limbs),
-        "limbs": ",".join(limb.name for limb in robot.limbs),
-    }
-    return Recorder(path, header, limbs=len(robot.limbs), channels=len(robot.actuators))
+    return Logger(path, RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",)))
 
 
 def _report_json(robot, report) -> dict:
