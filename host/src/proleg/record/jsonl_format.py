@@ -9,8 +9,10 @@ import json
 from typing import Any, TextIO
 
 from ..errors import LinkError
+from ..link.client import Received
+from ..link.listeners import Listener
 from .base import Reader, Recording, Writer
-from .fields import RecordingMeta, dumps
+from .fields import RecordingMeta, dumps, event_row, telemetry_row
 
 
 class JsonlWriter(Writer):
@@ -64,3 +66,28 @@ class JsonlReader(Reader):
         if meta is None:
             raise LinkError(f"{p}: not a proleg JSON Lines recording (no META line)")
         return Recording.from_rows(p, meta, rows, events)
+
+
+class JsonlPrinter(Listener):
+    """Every message as one JSON line on a text stream (``--format jsonl``): the JSONL
+    recording's objects without the META line. A reader that goes away (``| head``) closes it."""
+
+    def __init__(self, meta: RecordingMeta, out: TextIO, *, telemetry_only: bool = False):
+        self.meta = meta
+        self.out = out
+        self.telemetry_only = telemetry_only
+        self.closed = False
+
+    def on_message(self, rx: Received) -> None:
+        if self.closed or (self.telemetry_only and rx.message.name != "TELEMETRY"):
+            return
+        m = rx.message
+        if m.name == "TELEMETRY":
+            obj = {"msg": "TELEMETRY", **telemetry_row(self.meta, rx.time, m.fields, rx.truth)}
+        else:
+            obj = event_row(rx.time, m.name, m.fields)
+        try:
+            self.out.write(dumps(obj) + "\n")
+            self.out.flush()
+        except BrokenPipeError:
+            self.closed = True
