@@ -11,10 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any, TextIO
 
-from ..errors import LinkError
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
