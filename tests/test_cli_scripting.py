@@ -264,3 +264,12 @@ def test_sim_recording_marks_injections_and_faults_for_the_plot(capsys, tmp_path
     assert labels[0] == "injected dead-actuator:sma-right" and any(x.startswith("FAULT ") for x in labels)
     code, out, _ = run(capsys, "plot", str(path), "-o", str(tmp_path / "run.png"))
     assert code == 0 and (tmp_path / "run.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_console_plain_jsonl_prints_named_rows_for_scripts(capsys):
+    code, out, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--format", "jsonl", "--duration", "1")
+    assert code == 0, err
+    rows = [json.loads(x) for x in out.splitlines()]
+    tel = [r for r in rows if r["msg"] == "TELEMETRY"]
+    assert len(tel) >= 20 and isinstance(tel[0]["seq"], int) and "psi_right_deg" in tel[0]
+    assert any(r["msg"] == "EVENT" and r["kind"] == "BOOT" for r in rows)

@@ -64,6 +64,9 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             return 0
         limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
         ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners).run()
+        errors = [w.error for w in listeners if getattr(w, "error", None)]
+        if errors:
+            raise errors[0]
     return 0
 
 
