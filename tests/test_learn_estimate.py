@@ -130,3 +130,24 @@ def test_a_variance_penalty_moves_the_gait_to_the_reliable_transitions():
     label = [t.label(s) for s in plain]
     assert "11" in label  # through the noisy, big 10->11
     assert "11" not in [t.label(s) for s in careful]
+
+
+def test_the_extra_trial_plan_makes_every_suggested_trial_in_closed_tours():
+    from collections import Counter
+
+    from proleg.learn.plan import adaptive_demand, extra_plan
+
+    rng = np.random.default_rng(4)
+    sig = rng.uniform(0.2, 3.0, TABLE.n_transitions)
+    trials = []
+    for e, (a, b) in enumerate(zip(TABLE.src.tolist(), TABLE.dst.tolist())):
+        trials += [Trial(TABLE.label(a), TABLE.label(b), 0, 1, float(v)) for v in rng.normal(0, sig[e], 3)]
+    est = estimate(TABLE, trials)
+    need, plan = extra_plan(est, 1.0, seed=1)
+    assert np.array_equal(need, est.extra_trials(1.0))
+    made = Counter(tr for tour in plan.tours for tr in tour.transitions)
+    for e, (a, b) in enumerate(zip(TABLE.src.tolist(), TABLE.dst.tolist())):
+        assert made[(a, b)] >= need[e]
+    pick = adaptive_demand(est, 0.25)
+    assert pick.sum() == 3
+    assert set(np.nonzero(pick)[0]) == set(np.argsort(-est.dx.half_width)[:3])

@@ -150,3 +150,25 @@ def test_a_partial_demand_is_joined_into_one_closed_tour_from_the_start_state():
     (tour,) = ex.tours
     assert tour.states[0] == tour.states[-1] == 0
     assert Counter(tour.transitions)[(2, 3)] >= 2
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(2, 3), st.integers(1, 3), st.floats(1.0, 4.0), st.integers(0, 1000))
+def test_no_coil_is_planned_on_longer_than_its_limit(limbs, r, coil_s, seed):
+    from proleg import states
+
+    levels = (2,) * limbs
+    n = 2 ** limbs
+    src = [a for a in range(n) for b in range(n) if a != b]
+    dst = [b for a in range(n) for b in range(n) if a != b]
+    table = TransitionTable.from_edges(levels, src, dst, np.zeros(len(src)))
+    limits = PieceLimits(max_transitions=20, coil_of_limb=tuple(range(limbs)), max_coil_on_s=coil_s)
+    for tour in exploration(table, r, seed=seed).tours:
+        for p in split(table, tour.states, limits):
+            if len(p.transitions) == 1:
+                continue
+            run = [0.0] * limbs
+            for _a, b in p.transitions:
+                up = states.limb_levels(b, levels)
+                run = [x + 1.0 if u else 0.0 for x, u in zip(run, up)]
+                assert max(run) <= coil_s
