@@ -104,3 +104,23 @@ def test_the_gait_from_the_learned_matrix_is_at_least_95_percent_as_fast_as_the_
         walk = list(gait.states) + ([] if gait.states[-1] == gait.states[0] else [gait.states[0]])
         true_rate = evaluate_sequence(eff, walk).rate
         assert true_rate >= 0.95 * best
+
+
+def test_an_interrupted_exploration_resumes_from_its_log_and_loses_nothing(tmp_path):
+    from proleg.learn.runner import Explorer, simulated_robot
+
+    robot = load_robot(R1)
+    log_path = tmp_path / "trials.jsonl"
+    sim, client, pose = simulated_robot(robot, seed=5)
+    with client, TrialLog(log_path) as log:
+        client.connect()
+        first = Explorer(client, robot, log, pose, repeats=2, seed=5).run(max_pieces=2)
+    assert 0 < len(first) < 2 * robot.transitions.n_transitions
+    before = log_path.read_text().splitlines()
+    sim, client, pose = simulated_robot(robot, seed=6)  # a fresh session, as after a crash
+    with client, TrialLog(log_path) as log:
+        client.connect()
+        Explorer(client, robot, log, pose, repeats=2, seed=6).run()
+        assert counts(robot.transitions, log.trials).min() >= 2
+    after = log_path.read_text().splitlines()
+    assert after[: len(before)] == before
