@@ -77,7 +77,7 @@ def test_extra_trials_are_the_fewest_that_reach_the_half_width(n, s, h):
     def width(k):
         return t_quantile(0.975, n + k - 1) * math.sqrt(var / (n + k))
 
-    assert width(m) <= h
+    assert width(m) <= h or m == 100_000  # the documented cap for hopeless requests
     assert m == 0 or width(m - 1) > h
     assert all(x == 2 for k, x in enumerate(extra_trials(comp, h)) if k != e)  # never measured: two to start with
 
