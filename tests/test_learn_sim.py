@@ -124,3 +124,54 @@ def test_an_interrupted_exploration_resumes_from_its_log_and_loses_nothing(tmp_p
         assert counts(robot.transitions, log.trials).min() >= 2
     after = log_path.read_text().splitlines()
     assert after[: len(before)] == before
+
+
+def test_manual_entry_asks_once_per_transition_with_the_robot_at_rest(tmp_path):
+    from proleg.learn.runner import Explorer, simulated_robot
+
+    robot = load_robot(R1)
+    sim, client, _pose = simulated_robot(robot, seed=7)
+    prompts = []
+
+    def ask(prompt):
+        prompts.append((prompt, [sim.board.pwm(ch) for ch in (0, 1)]))
+        return "" if len(prompts) == 1 else "2.5"  # the first trial is skipped
+
+    with client, TrialLog(tmp_path / "manual.jsonl") as log:
+        client.connect()
+        added = Explorer(client, robot, log, None, repeats=1, seed=7, ask=ask).run(max_pieces=3)
+    assert len(prompts) == 3 and len(added) == 2
+    assert all(t.source == "manual" and t.dx == 2.5 for t in added)
+    assert prompts[0][0].endswith("(empty = skip): ") and "→" in prompts[0][0]
+    assert all(duties == [0.0, 0.0] for _p, duties in prompts)  # stopped: every coil off
+
+
+def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
+    """Record without a pose, write the plant's path as a camera would (other clock, 30 fps),
+    then attach the track: the trials match the ground truth."""
+    from proleg.learn.runner import Explorer, simulated_robot
+    from proleg.learn.tracker import Track, attach_track
+
+    robot = load_robot(R1)
+    sim, client, _pose = simulated_robot(robot, seed=8)
+    path = []
+    step = sim.step
+
+    def stepping():
+        step()
+        path.append((sim.time_s, sim.plant.displacement_mm))
+
+    sim.step = stepping
+    with client, TrialLog(tmp_path / "t.jsonl") as log:
+        client.connect()
+        Explorer(client, robot, log, None, repeats=1, seed=8).run(max_pieces=2)
+        trials = list(log.trials)
+    t, x = np.array(path).T
+    keep = np.arange(0, len(t), 17)  # ~30 fps
+    track = Track(t[keep] + 42.0, x[keep])
+    with_motion, offset = attach_track(trials, track)
+    assert offset == pytest.approx(42.0, abs=0.06)
+    plant = sim.plant.transitions
+    for tr in with_motion:
+        truth = sum(p.reward_mm for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05)
+        assert tr.dx == pytest.approx(truth, abs=0.2)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind
 from ..robot import Robot
-from .measure import Pose, Trial, TrialLog, planar_delta, remaining
+from .measure import Pose, Trial, TrialLog, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
 
@@ -67,13 +67,17 @@ class Explorer:
                  repeats: int = 5, limits: PieceLimits | None = None, settle_s: float = 0.05,
                  source: str = "sim", seed: int | None = None,
                  on_progress: Callable[[Progress], None] | None = None,
-                 rest: Callable[[float], None] | None = None):
+                 rest: Callable[[float], None] | None = None,
+                 ask: Callable[[str], str] | None = None):
         self.client, self.robot, self.log, self.pose = client, robot, log, pose
         self.repeats, self.settle_s, self.source, self.seed = repeats, settle_s, source, seed
         info_steps = getattr(getattr(client, "info", None), "max_gait_steps", None) or MAX_GAIT_STEPS
         self.max_steps = min(MAX_GAIT_STEPS, int(info_steps))
         base = limits or limits_for(robot)
-        self.limits = replace(base, max_transitions=min(base.max_transitions, self.max_steps - 1))
+        # manual entry (``ask``): one transition per piece, the operator measures while the robot rests
+        k = 1 if ask is not None else min(base.max_transitions, self.max_steps - 1)
+        self.limits = replace(base, max_transitions=k)
+        self.ask = ask
         self.on_progress = on_progress
         self._rest = rest or self._rest_on_link
         self._t0 = self._clock()
@@ -113,7 +117,14 @@ class Explorer:
                 raise ExplorationError(f"the robot rests in {t.label(start)}, from where the transitions still to do "
                                        "cannot be reached (see the uncoverable transitions)")
             piece = split(t, tour.states, self.limits)[0]
-            added += self.run_piece(piece)
+            if self.ask is None:
+                added += self.run_piece(piece)
+            else:
+                for tr in self.run_piece(piece, record=False):
+                    asked = manual_trial(tr.src, tr.dst, tr.t_start, tr.t_end, ask=self.ask, units=self.robot.units)
+                    if asked is not None:
+                        self.log.append(asked)
+                        added.append(asked)
             self.pieces_run += 1
             self._report()
             self._rest(self.limits.rest_s)
@@ -127,8 +138,9 @@ class Explorer:
         el = self._clock() - self._t0
         self.on_progress(Progress(done, todo, el, el / max(1, done) * todo))
 
-    def run_piece(self, piece: Piece) -> list[Trial]:
-        """Run one piece from its first state (see the module docstring)."""
+    def run_piece(self, piece: Piece, record: bool = True) -> list[Trial]:
+        """Run one piece from its first state (see the module docstring); ``record``: append
+        its trials to the log as they happen."""
         t = self.robot.transitions
         client = self.client
         gait = _closing_gait(self.robot, piece, self.max_steps)
@@ -152,7 +164,8 @@ class Explorer:
                         if t.lookup(a, state) is not None:
                             d = planar_delta(p0, pose) if (p0 is not None and pose is not None) else (None, None, None)
                             trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source)
-                            self.log.append(trial)
+                            if record:
+                                self.log.append(trial)
                             out.append(trial)
                     reached.append((t_ev, state, pose))
                     continue

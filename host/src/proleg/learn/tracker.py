@@ -145,3 +145,21 @@ def trials_from_events(reached: Sequence[tuple[float, str]], source, *, settle_s
         dx, dy, dth = planar_delta(source.pose_at(t0 + settle_s), source.pose_at(t1 + settle_s))
         out.append(Trial(a, b, t0, t1, dx, dy, dth, name))
     return out
+
+
+def attach_track(trials, track: Track, offset_s: float | None = None, *, settle_s: float = 0.05):
+    """Trials recorded without a pose (``dx`` None), e.g. a run with ``--source tracker``,
+    given their motion from ``track``; the offset is estimated from the trials' end times
+    (their state-reached events) unless given. Returns (new trials, offset used)."""
+    from dataclasses import replace
+
+    from .measure import planar_delta
+
+    if offset_s is None:
+        offset_s = estimate_offset(track, [t.t_end for t in trials])
+    src = TrackerSource(track, offset_s)
+    out = []
+    for t in trials:
+        dx, dy, dth = planar_delta(src.pose_at(t.t_start + settle_s), src.pose_at(t.t_end + settle_s))
+        out.append(replace(t, dx=dx, dy=dy, dtheta_deg=dth, source="tracker"))
+    return out, offset_s
