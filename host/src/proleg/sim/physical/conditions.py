@@ -30,7 +30,7 @@ class Key:
 
 KEYS: dict[str, Key] = {
     "power": Key("×", 0.2, 2.0, 1.0, None, "heating power factor at the coils (supply voltage² / nominal)"),
-    "supply_v": Key("V", 2.0, 12.0, 5.0, None, "supply voltage across a coil at duty 1"),
+    "supply_v": Key("V", 2.0, 12.0, 7.4, None, "supply voltage across a coil at duty 1 (2S LiPo)"),
     "supply_ohm": Key("Ω", 0.0, 50.0, 0.0, None, "source resistance shared by all coils (supply sag under load)"),
     "ambient_c": Key("°C", -10.0, 50.0, 25.0, None, "air and ground temperature"),
     "convection": Key("×", 0.2, 5.0, 1.0, None, "convective heat transfer factor (draught > 1, enclosure < 1)"),

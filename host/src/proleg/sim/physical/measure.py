@@ -111,7 +111,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
 
 
 def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats: int = 2,
-                   duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 1.0,
+                   duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 2.5,
                    timeout_s: float = 12.0, dt_s: float = 0.002, seed: int = 0,
                    params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None) -> MeasuredMatrix:
     """The reward matrix of ``robot`` measured on the physical plant (mm, row = from)."""
@@ -184,3 +184,32 @@ def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float 
             if go(b):
                 out[a, b] = plant.displacement_mm - x0
     return out
+
+
+def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditions: Conditions | None = None,
+                 duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 0.3,
+                 timeout_s: float = 12.0, dt_s: float = 0.002, plant: PhysicalPlant | None = None) -> tuple[float, float]:
+    """Walk the closed sequence ``states`` (first state repeated at the end or not) with the
+    idealised drive, ``cycles`` times after one warm-up cycle; return (mm per cycle, s per
+    cycle). Raises SimError if a state cannot be reached."""
+    from ...errors import SimError
+
+    plant = plant or PhysicalPlant(robot, conditions)
+    drive = IdealDrive(robot, plant, margin_deg)
+    duty = robot.control.drive_duty if duty is None else duty
+    seq = list(states)
+    if len(seq) > 1 and seq[0] == seq[-1]:
+        seq = seq[:-1]
+
+    def one_cycle() -> None:
+        for s in seq[1:] + seq[:1]:
+            if _run_to(plant, drive, s, duty, dt_s, timeout_s, settle_s) is None:
+                raise SimError(f"run_sequence: state {s} not reached within {timeout_s} s")
+
+    if _run_to(plant, drive, seq[0], duty, dt_s, timeout_s, settle_s) is None:
+        raise SimError(f"run_sequence: start state {seq[0]} not reached")
+    one_cycle()
+    x0, t0 = plant.displacement_mm, plant.time_s
+    for _ in range(cycles):
+        one_cycle()
+    return (plant.displacement_mm - x0) / cycles, (plant.time_s - t0) / cycles

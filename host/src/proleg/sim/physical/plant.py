@@ -311,22 +311,22 @@ class PhysicalPlant:
                 self._c[j] = c
                 changed = True
         self._tbody = tb + dt_s * (to_body - self._hAb * (tb - amb)) / self._Cb
-        psi_old = self._psi
+        self._t += dt_s
         if changed:
-            gaps_old = self._gaps
+            psi_old, gaps_old = self._psi, self._gaps
             self._set_shape(self._shape.evaluate(self._c))
             self._move([g1 - g0 for g0, g1 in zip(gaps_old, self._gaps)])
+            inv = 1.0 / dt_s
+            self._dpsi = [(a - b) * inv for a, b in zip(self._psi, psi_old)]
+            state = self._classify()
+            if state != self._state:
+                self._state = state
+                if self._pending is None:
+                    self._pending = self._t
         elif not self._resting:
             self._stuck = [True] * self._nl   # the body came to rest: every contact is static again
             self._resting = True
-        inv = 1.0 / dt_s
-        self._dpsi = [(a - b) * inv for a, b in zip(self._psi, psi_old)]
-        self._t += dt_s
-        state = self._classify()
-        if state != self._state:
-            self._state = state
-            if self._pending is None:
-                self._pending = self._t
+            self._dpsi = [0.0] * self._nl
         if self._pending is not None and self._t - self._pending >= self.physics.simultaneous_s - 1e-12:
             self._commit()
 
