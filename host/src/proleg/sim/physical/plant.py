@@ -294,7 +294,11 @@ class PhysicalPlant:
             t = t_eq + (self._temp[j] - t_eq) * decay[j]
             hy = self._hyst[j]
             a0 = hy.alpha
-            a1 = hy.update(t)
+            if (a0 == 0.0 and t < hy.as_c + hy.shift_c and hy.temp < hy.as_c + hy.shift_c) or (
+                    a0 == 1.0 and t > hy.ms_c + hy.shift_c and hy.temp > hy.ms_c + hy.shift_c):
+                a1 = a0   # outside the transformation band on a saturated branch: nothing moves
+            else:
+                a1 = hy.update(t)
             if a1 != a0:
                 t -= self._lat[j] * (a1 - a0) / self._C[j]
                 hy.temp = t
