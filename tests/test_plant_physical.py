@@ -144,8 +144,12 @@ def test_measured_matrix_has_the_papers_signs(name):
     assert _sign_mismatches(name) == []
 
 
-@pytest.mark.xfail(strict=True, reason="plant model: anchor/slip with D1 left / D2 right does not give the "
-                   "paper's R3 signs, and no D1/D2 assignment gives all ten (docs/plant.md)")
+R3_REASON = ("not realisable under Coulomb friction: with D1 left / D2 right the paper's 00->10 = +1 needs the "
+             "left end to slide on a contact at least as grippy and at least as loaded as the right one; with "
+             "D2 left / D1 right 00->01 = -1 needs the same of the right end (docs/plant.md, 'R3')")
+
+
+@pytest.mark.xfail(strict=True, reason=R3_REASON)
 def test_measured_matrix_of_r3_has_the_papers_signs():
     assert _sign_mismatches("paper-r3") == []
 
@@ -174,13 +178,35 @@ def test_one_actuator_r1_moves_plus_x_with_cl1_and_cl2():
     assert run_sequence(r, [2, 3, 2], cycles=2)[0] > 0.5
 
 
-@pytest.mark.xfail(strict=True, reason="with R3 inferred as D1/D1 the physical plant moves it like R1 "
-                   "(C_T1 and C_T2 equally fast); D1/D2 mechanics do not give the paper's R3 matrix")
-def test_r3_ct1_moves_plus_x_more_slowly_than_ct2_moves_minus_x():
+@pytest.mark.xfail(strict=True, reason="a D1/D2 robot is a friction ratchet: C_T1 and C_T2 move it the same way "
+                   "(D1 left / D2 right: both -x; D2 left / D1 right: both +x); the paper's opposite directions "
+                   "rest on the R3 entries that Coulomb friction forbids (docs/plant.md, 'R3')")
+@pytest.mark.parametrize("mech", [("D1", "D2"), ("D2", "D1")])
+def test_r3_ct1_moves_plus_x_more_slowly_than_ct2_moves_minus_x(mech):
     r = robot("paper-r3")
-    a, _ = run_sequence(r, [0, 2, 1, 0], cycles=2)
-    b, _ = run_sequence(r, [0, 1, 2, 0], cycles=2)
+    a, _ = run_sequence(r, [0, 2, 1, 0], cycles=2, plant=PhysicalPlant(r, mechanisms=mech))
+    b, _ = run_sequence(r, [0, 1, 2, 0], cycles=2, plant=PhysicalPlant(r, mechanisms=mech))
     assert 0 < a < -b
+
+
+def test_the_bent_side_carries_at_least_half_the_weight():
+    """The statics premise of the R3 argument: one coil bending moves the centre of mass
+    towards its own end (its half shortens along the ground)."""
+    shape = PhysicalPlant(robot("paper-r3"), mechanisms=("D1", "D2"))._shape
+    for c in (0.1, 0.3, 0.5, 0.8, 1.0):
+        left = shape.evaluate([c, 0.0])
+        right = shape.evaluate([0.0, c])
+        assert left[3] >= left[4] and right[4] >= right[3]
+
+
+@pytest.mark.parametrize("mech, entry, sign", [(("D1", "D2"), (0, 2), -1), (("D2", "D1"), (0, 1), +1)])
+def test_r3_entries_the_paper_reports_against_coulomb_friction(mech, entry, sign):
+    """D1 left / D2 right: from 00 (left soft, right hard) contracting the left coil the left end
+    anchors (grippier and more loaded), so 00->10 moves -x (paper: +1). Mirror for D2/D1, 00->01."""
+    from proleg.sim.physical.measure import kinematic_signs
+
+    k = kinematic_signs(robot("paper-r3"), mech)
+    assert np.sign(k[entry]) == sign
 
 
 # -- closed loop with the host-sim firmware ---------------------------------------------------
