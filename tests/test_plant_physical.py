@@ -9,11 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from proleg.errors import SimError
 from proleg.robot import load_robot
 from proleg.sim.physical import Conditions, PhysicalPlant, measure_matrix, parse_conditions
-from proleg.sim.physical.friction import mu_at, solve_translation
+from proleg.sim.physical.friction import mu_at, solve_translation, solve_two
 from proleg.sim.physical.measure import run_sequence
 from proleg.sim.physical.thermal import CoilGeometry
 
@@ -91,6 +93,20 @@ def test_weighted_median_against_brute_force():
         cost = (caps[None, :] * np.abs(grid[:, None] + offs[None, :])).sum(axis=1) + push * grid
         best = cost.min()
         assert (caps * np.abs(d + offs)).sum() + push * d <= best + 1e-3
+
+
+@given(dg=st.floats(-2, 2, allow_nan=False), c0=st.floats(0, 1), c1=st.floats(0, 1),
+       push=st.floats(-2.5, 2.5), tie=st.booleans())
+def test_two_contact_closed_form_against_brute_force(dg, c0, c1, push, tie):
+    if tie:
+        c1, push = c0, 0.0
+    d = solve_two(dg, c0, c1, push)
+    assert d == pytest.approx(solve_translation([0.0, dg], [c0, c1], push), abs=1e-9)
+    if abs(push) >= c0 + c1:
+        return   # the weight along the slope beats all friction: unbounded, the body slides away
+    grid = np.linspace(-3, 3, 6001)
+    cost = c0 * np.abs(grid) + c1 * np.abs(grid + dg) + push * grid
+    assert c0 * abs(d) + c1 * abs(d + dg) + push * d <= cost.min() + 1e-2
 
 
 def test_a_soft_pad_loses_grip_as_it_peels_towards_psi_star():

@@ -67,3 +67,19 @@ def solve_translation(offsets: Sequence[float], caps: Sequence[float], push: flo
             return (p + nxt) / 2.0
         slope = new
     return pts[-1][0]
+
+
+def solve_two(dg: float, c0: float, c1: float, push: float) -> float:
+    """``solve_translation((0, dg), (c0, c1), push)`` in closed form (two contacts, the hot path)."""
+    lo, clo, hi = (-dg, c1, 0.0) if dg > 0 else (0.0, c0, -dg)
+    total = c0 + c1
+    if push >= total:
+        return lo
+    if -push >= total:
+        return hi
+    slope = -total + push + 2.0 * clo     # the dissipation's slope just right of the lower breakpoint
+    if slope > 1e-12:
+        return lo
+    if slope >= -1e-12:
+        return (lo + hi) / 2.0
+    return hi

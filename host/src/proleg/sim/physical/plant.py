@@ -38,9 +38,11 @@ from ..sma import Hysteresis
 from . import materials as mat
 from .body import BodyGeometry, Shape, default_spans
 from .conditions import Conditions
-from .friction import mu_at, solve_translation
+from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
 from .thermal import BodyThermal, CoilGeometry
+
+SHAPE_EPS = 3e-4   # contraction change (fraction of stroke) that triggers a shape update (≈ 0.013° of ψ)
 
 
 @dataclass(frozen=True)
@@ -192,6 +194,7 @@ class PhysicalPlant:
         self._cycles = [cond.get("fatigue_cycles")] * na
         self._fat_stroke = [1.0] * na
         self._fat_shift = [0.0] * na
+        self._fat_at = [0.0] * na
         for j in range(na):
             self._update_fatigue(j)
 
@@ -217,6 +220,8 @@ class PhysicalPlant:
         self._com0 = self._com
         self._dpsi = [0.0] * nl
         self._t = 0.0
+        self._t_eval = 0.0
+        self._c_eval = list(self._c)
         self._dt_cache: tuple[float, list[float], float] = (-1.0, [], 0.0)
         mult, m = [], 1
         for k in reversed(self.levels):
@@ -254,6 +259,7 @@ class PhysicalPlant:
     def _update_fatigue(self, j: int) -> None:
         law = self.physics.fatigue
         n = self._cycles[j]
+        self._fat_at[j] = n
         self._fat_stroke[j] = law.stroke(n)
         self._fat_shift[j] = law.shift(n)
         self._hyst[j].shift_c = self._fat_shift[j] + self._drift_shift[j]
@@ -282,6 +288,7 @@ class PhysicalPlant:
         amb, tb = self._amb, self._tbody
         to_body = 0.0
         changed = False
+        moving = False
         for j in range(na):
             d = ds[j]
             if d > 0.0:
@@ -303,7 +310,8 @@ class PhysicalPlant:
                 t -= self._lat[j] * (a1 - a0) / self._C[j]
                 hy.temp = t
                 self._cycles[j] += abs(a1 - a0) * 0.5 * self._speedup
-                self._update_fatigue(j)
+                if abs(self._cycles[j] - self._fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
+                    self._update_fatigue(j)
             self._temp[j] = t
             to_body += g * (t - tb)
             target = a1 * self._fat_stroke[j] * self._drift_stroke[j]
@@ -312,25 +320,40 @@ class PhysicalPlant:
                 c = target + (c - target) * mdecay
                 if abs(c - target) < 1e-7:
                     c = target
+                else:
+                    moving = True
                 self._c[j] = c
                 changed = True
         self._tbody = tb + dt_s * (to_body - self._hAb * (tb - amb)) / self._Cb
         self._t += dt_s
         if changed:
-            psi_old, gaps_old = self._psi, self._gaps
-            self._set_shape(self._shape.evaluate(self._c))
-            self._move([g1 - g0 for g0, g1 in zip(gaps_old, self._gaps)])
-            inv = 1.0 / dt_s
-            self._dpsi = [(a - b) * inv for a, b in zip(self._psi, psi_old)]
-            state = self._classify()
-            if state != self._state:
-                self._state = state
-                if self._pending is None:
-                    self._pending = self._t
+            # Re-evaluate the shape once the contractions have moved by SHAPE_EPS since the
+            # last evaluation (≈ 0.013° of ψ, below the IMU's resolution): the anchor/slip solve is rate-independent, so
+            # one step over the accumulated change is the same motion as many small ones.
+            ce = self._c_eval
+            if any(abs(a - b) > SHAPE_EPS for a, b in zip(self._c, ce)) or not moving:
+                self._c_eval = list(self._c)
+                psi_old, gaps_old = self._psi, self._gaps
+                self._set_shape(self._shape.evaluate(self._c))
+                if self._nl == 2:
+                    self._move2(self._gaps[0] - gaps_old[0])
+                else:
+                    self._move([g1 - g0 for g0, g1 in zip(gaps_old, self._gaps)])
+                inv = 1.0 / (self._t - self._t_eval)
+                self._t_eval = self._t
+                self._dpsi = [(a - b) * inv for a, b in zip(self._psi, psi_old)]
+                state = self._classify()
+                if state != self._state:
+                    self._state = state
+                    if self._pending is None:
+                        self._pending = self._t
         elif not self._resting:
             self._stuck = [True] * self._nl   # the body came to rest: every contact is static again
             self._resting = True
             self._dpsi = [0.0] * self._nl
+            self._t_eval = self._t
+        else:
+            self._t_eval = self._t
         if self._pending is not None and self._t - self._pending >= self.physics.simultaneous_s - 1e-12:
             self._commit()
 
@@ -352,6 +375,22 @@ class PhysicalPlant:
         delta = solve_translation(offsets, caps, self._push)
         self._x0 += delta
         self._stuck = [abs(delta + o) < 1e-9 for o in offsets]
+        self._com = self._x0 + self._com_off
+
+    def _move2(self, dg: float) -> None:
+        """``_move`` for two contacts: offsets (0, dg), a closed-form weighted median."""
+        if abs(dg) < 1e-12:
+            self._stuck = [True, True]
+            self._resting = True
+            return
+        self._resting = False
+        psi, th, band, st = self._psi, self._true_th, self._band, self._stuck
+        n = self._normal_n
+        c0 = mu_at(psi[0], th[0], self._mu_s[0] if st[0] else self._mu_k[0], band) * self._load[0] * n
+        c1 = mu_at(psi[1], th[1], self._mu_s[1] if st[1] else self._mu_k[1], band) * self._load[1] * n
+        delta = solve_two(dg, c0, c1, self._push)
+        self._x0 += delta
+        self._stuck = [abs(delta) < 1e-9, abs(delta + dg) < 1e-9]
         self._com = self._x0 + self._com_off
 
     def _commit(self) -> None:
@@ -475,6 +514,7 @@ class PhysicalPlant:
         """Set the coils' contractions directly (bypassing the thermal model) and let the body
         move by friction mechanics: for kinematic sweeps (``measure.infer_mechanisms``)."""
         self._c = [float(c) for c in contractions]
+        self._c_eval = list(self._c)
         gaps_old = self._gaps
         psi_old = self._psi
         self._set_shape(self._shape.evaluate(self._c))
