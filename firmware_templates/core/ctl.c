@@ -53,30 +53,30 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
     if (target != c->target) {
         c->target = target;
         c->crossings = 0;
-        c->best = 0x7FFF;
+        c->best = PSI_FAR;
         c->stall = CTL_STALL_NONE;
         c->ticks = 0;
         c->heat = 0;
         psi_relax(i, 0);
     }
-    if (c->level != PSI_UNKNOWN && level != c->level) {
+    if (level != c->level) {
         c->ticks = 0; /* a new level: the hover and stall clocks restart */
-        if (c->crossings < 0xFFu) {
+        if (c->level != PSI_UNKNOWN && c->crossings < CTL_OSC_CROSSINGS) {
             c->crossings++;
         }
+        c->level = level;
     }
-    c->level = level;
+    if (c->stall != CTL_STALL_NONE) {
+        return; /* decided for this step */
+    }
     if (level == target) {
         if (psi_settled(i)) {
             c->ticks = 0;
-        } else if (c->ticks < 0xFFFFu) {
-            c->ticks++;
-        }
-        if (c->stall == CTL_STALL_NONE && (c->crossings >= CTL_OSC_CROSSINGS || c->ticks > TICKS(CTL_HOVER_MS))) {
+        } else if (++c->ticks > TICKS(CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
             c->stall = CTL_STALL_OSCILLATING;
             psi_relax(i, 1);
         }
-    } else if (heating && c->stall != CTL_STALL_UNREACHABLE) {
+    } else if (heating) {
         if (progress < c->best) {
             c->best = progress;
             c->ticks = 0;

@@ -57,6 +57,11 @@ static void set_hold_edge(uint8_t limb, uint8_t thr)
     }
 }
 
+/* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Called from many places; kept
+ * out of line so that the 8-bit targets carry the two 32-bit products once. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
 {
     return (int32_t)ax * edge[0] - (int32_t)az * edge[1] >= 0;
@@ -205,9 +210,7 @@ uint8_t psi_levels(uint8_t limb)
 
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az)
 {
-    const int16_t *t = &thresholds[limb][thr][edge == PSI_EDGE_LOWER ? 2 : 0];
-    int32_t d = (int32_t)ax * t[0] - (int32_t)az * t[1];
-    return d >= 0;
+    return at_or_above(&thresholds[limb][thr][edge == PSI_EDGE_LOWER ? 2 : 0], ax, az);
 }
 
 uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
