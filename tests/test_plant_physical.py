@@ -248,3 +248,25 @@ def test_r1_walks_without_faults_on_the_physical_plant(r1_runs):
     """The bang-bang hold on ψ has off phases (the fixed hold duty had none and ran into
     max_on_ms), so holding a state never trips the on-time limit."""
     assert not r1_runs["+x"].faults and not r1_runs["-x"].faults
+
+
+def test_a_coil_that_cannot_reach_its_state_is_switched_off_before_the_state_timeout():
+    """power ×0.3: the coil never gets ψ past ψ*. The stall detector (ctl.h) cuts it after
+    5 s of heating without progress, so it is cooling when the 8 s state timeout reports."""
+    from proleg.sim.run import SimulatedRobot
+    from proleg.sim.session import SimSession
+
+    r = robot("paper-r1")
+    sim = SimulatedRobot(r, plant=PhysicalPlant(r, parse_conditions(["power=0.3"])))
+    step, late = sim.step, []
+
+    def watched():
+        step()
+        if 6.5 <= sim.time_s <= 8.0:
+            late.append((sim.board.pwm(0), float(sim.plant.temperature_c[0])))
+
+    sim.step = watched
+    run = SimSession(sim).run_gait("+x", 0, 10.0)
+    assert "STATE_TIMEOUT" in [f.code for f in run.faults]
+    assert late and all(d == 0.0 for d, _ in late)
+    assert late[-1][1] < 35.0   # ambient 25 °C; heating at the drive duty it sits above 50 °C
