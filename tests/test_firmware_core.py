@@ -424,18 +424,24 @@ def test_set_param_inside_the_envelope_is_used(board):
     assert board.duty(0) == 3000
 
 
-def test_a_held_limb_keeps_the_hold_duty_which_set_param_changes(board):
+def test_a_held_limb_is_held_bang_bang_on_psi(board):
     # r1-fast allows 50 ms of continuous on-time: all of this fits inside it.
     _heating(board)
-    board.set_psi(0, 25.0)  # left up and above its hold edge: 10 reached
+    board.set_psi(0, 25.0)  # left up, above its hold top (23°): 10 reached, coil off
     board.run(5)
-    assert board.duty(0) == 2500  # holding at the robot file's default hold_duty, 0.25
+    assert board.duty(0) == 0
     board.client.set_param("hold_duty", 0, 1000)
     board.run(2)
-    assert board.duty(0) == 1000
-    board.set_psi(0, 21.5)  # sagging below the hold edge (22°): the drive duty again
+    assert board.duty(0) == 0  # the hold duty is only for synchronised waits (ctl.h)
+    board.set_psi(0, 21.5)  # sagging below the hold edge (22°): the drive duty
     board.run(5)
     assert board.duty(0) == 6000
+    board.set_psi(0, 22.5)  # above the edge, below the top: still heating (hysteresis)
+    board.run(5)
+    assert board.duty(0) == 6000
+    board.set_psi(0, 23.5)  # the top: off
+    board.run(5)
+    assert board.duty(0) == 0
 
 
 def test_load_gait_with_a_forbidden_transition_is_nacked(sim_so):

@@ -11,9 +11,79 @@ enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT };
 /* A limb's part in the current step. */
 enum { STAY, RISE, FALL, SAG };
 
+#define TICKS(ms) ((uint16_t)(((uint32_t)(ms) * CFG_TICK_HZ + 999u) / 1000u))
+
+/* Per limb: the step it is in (target), and what the hold and the stall detector know. */
+typedef struct {
+    uint8_t target;    /* target level of the current step, PSI_UNKNOWN: none yet */
+    uint8_t level;     /* debounced level at the previous call */
+    uint8_t heat;      /* bang-bang hold: heating */
+    uint8_t crossings; /* level changes in this step */
+    int16_t best;      /* best psi_to_go_cdeg while rising in this step */
+    uint8_t stall;     /* CTL_STALL_* */
+    uint16_t ticks;    /* rising without progress / at the target level unsettled */
+} ctl_limb_t;
+
+static ctl_limb_t cl[CFG_N_LIMBS];
+
 uint8_t ctl_limb_actuator(uint8_t limb)
 {
     return ROM_U8(&limb_actuator[limb]);
+}
+
+void ctl_reset(void)
+{
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        cl[i].target = PSI_UNKNOWN;
+        cl[i].level = PSI_UNKNOWN;
+        psi_relax(i, 0);
+    }
+}
+
+uint8_t ctl_stall(uint8_t limb)
+{
+    return cl[limb].stall;
+}
+
+/* Stall detector of limb i for this tick (ctl.h). */
+static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int16_t progress)
+{
+    ctl_limb_t *c = &cl[i];
+    if (target != c->target) {
+        c->target = target;
+        c->crossings = 0;
+        c->best = PSI_FAR;
+        c->stall = CTL_STALL_NONE;
+        c->ticks = 0;
+        c->heat = 0;
+        psi_relax(i, 0);
+    }
+    if (level != c->level) {
+        c->ticks = 0; /* a new level: the hover and stall clocks restart */
+        if (c->level != PSI_UNKNOWN && c->crossings < CTL_OSC_CROSSINGS) {
+            c->crossings++;
+        }
+        c->level = level;
+    }
+    if (c->stall != CTL_STALL_NONE) {
+        return; /* decided for this step */
+    }
+    if (level == target) {
+        if (psi_settled(i)) {
+            c->ticks = 0;
+        } else if (++c->ticks > TICKS(CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
+            c->stall = CTL_STALL_OSCILLATING;
+            psi_relax(i, 1);
+        }
+    } else if (heating) {
+        if (progress < c->best) {
+            c->best = progress;
+            c->ticks = 0;
+        } else if (++c->ticks >= TICKS(CTL_STALL_MS)) {
+            c->stall = CTL_STALL_UNREACHABLE;
+        }
+    }
 }
 
 void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t hold_pm,
@@ -23,7 +93,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t move[CFG_N_LIMBS];
     int16_t to_go[CFG_N_LIMBS];
     uint8_t falling = 0, sagging = 0, far_fall = 0;
-    int16_t farthest = -32767;
+    int16_t farthest = -1;
     uint8_t i;
 
     for (i = 0; i < CFG_N_LIMBS; i++) {
@@ -34,14 +104,27 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             continue;
         }
         if (target[i] == level) {
-            if (level > 0u && !psi_last_at_or_above_hold(i, (uint8_t)(level - 1u))) {
-                move[i] = SAG;
-                sagging = 1;
+            if (target[i] != cl[i].target) {
+                cl[i].heat = 0;
+            }
+            if (level > 0u) {
+                /* Bang-bang hold with hysteresis: heat from below the hold edge up to the
+                 * hold top, then off until it sags below the hold edge again. */
+                uint8_t thr = (uint8_t)(level - 1u);
+                if (!psi_last_at_or_above_hold(i, thr)) {
+                    cl[i].heat = 1;
+                    sagging = 1;
+                } else if (psi_last_at_or_above_hold_top(i, thr)) {
+                    cl[i].heat = 0;
+                }
+                if (cl[i].heat) {
+                    move[i] = SAG;
+                }
             }
             continue;
         }
         move[i] = target[i] > level ? RISE : FALL;
-        to_go[i] = psi_to_cross(i, move[i] == RISE ? level : (uint8_t)(level - 1u), (uint8_t)(move[i] == RISE));
+        to_go[i] = psi_to_go_cdeg(i, move[i] == RISE ? level : (uint8_t)(level - 1u), (uint8_t)(move[i] == RISE));
         if (to_go[i] > farthest) {
             farthest = to_go[i];
         }
@@ -60,11 +143,12 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         uint8_t level = psi_level(i);
         uint8_t w, a;
         if (move[i] == RISE) {
-            /* Rising with others (ctl.h): wait at the hold duty while ahead of the
-             * farthest (never true when rising alone), or, if some limb falls, in the
-             * zone below the crossing until every falling limb is about to cross. */
+            /* Rising with others (ctl.h): wait at the hold duty while more than
+             * CTL_SYNC_CDEG ahead of the farthest (never true when rising alone), or, if some limb
+             * falls, in the zone below the crossing until every falling limb is about
+             * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
-                                   : to_go[i] + CTL_SYNC_CDEG < farthest;
+                                   : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
             w = wait ? WANT_HOLD : WANT_HEAT;
         } else if (move[i] == FALL) {
             w = sagging ? WANT_HOLD : WANT_RELEASE; /* it may be what holds a sagging limb up */
@@ -75,7 +159,13 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         } else if (!psi_settled(i)) {
             w = WANT_RELEASE; /* not yet settled clear of the level above */
         } else {
-            w = level > 0u ? WANT_HOLD : WANT_NOTHING;
+            w = WANT_NOTHING; /* held level between hold edge and top: coil off (bang-bang) */
+        }
+        if (level != PSI_UNKNOWN) {
+            watch(i, target[i], level, (uint8_t)(w == WANT_HEAT && move[i] == RISE), to_go[i]);
+            if (cl[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {
+                w = WANT_NOTHING; /* cannot get there: stop heating, let it cool */
+            }
         }
         a = ctl_limb_actuator(i);
         if (w > want[a]) {

@@ -3,31 +3,46 @@
  * Contract, per limb, in order:
  * - rising (target above its level) → the drive duty: heat, ψ rises;
  * - falling (target below) → off: the body's elasticity lowers ψ;
- * - holding a level L ≥ 1 below the hold edge of threshold L−1 (its upper band edge
- *   plus CFG_HOLD_MARGIN_CDEG), i.e. sagging → the drive duty;
- * - holding any level at or above the settle edge of the threshold above (its lower
- *   band edge minus the margin), i.e. not yet clear of it → off;
- * - holding a level L ≥ 1 otherwise → the hold duty; holding level 0 → off.
+ * - holding a level L ≥ 1: closed loop on ψ, bang-bang with hysteresis. Below the hold
+ *   edge of threshold L−1 (its upper band edge plus CFG_HOLD_MARGIN_CDEG) the coil heats
+ *   at the drive duty until ψ reaches the hold top (the hold edge plus
+ *   PSI_HOLD_BAND_CDEG), then it is off until ψ sags below the hold edge again;
+ * - holding any level not yet settled (psi.h: clear of its margins, with hysteresis and
+ *   dwell) → off: it must first get clear of the threshold above;
+ * - holding level 0 → off.
  *
- * Why a hold duty: an SMA coil that cools below its martensite start temperature Ms
- * relaxes, and heating it again contracts it only once it is back above its austenite
- * start As, some 10-20 K higher (transformation hysteresis). A held limb whose coil is
- * left to cool therefore sags, and by the time ψ reaches the hold edge its coil is too
- * cold to catch it: the limb falls through ψ* while the coil re-heats. The hold duty
- * keeps the coil warm between Ms and As, where it neither relaxes nor contracts further;
- * ψ feedback on the hold edge still corrects any sag. 0 turns it off.
+ * Why bang-bang on ψ and not a fixed hold duty: an SMA coil that cools below its
+ * martensite start Ms relaxes, and heating it again contracts it only once it is back
+ * above its austenite start As (transformation hysteresis). Which duty keeps a coil
+ * between the two depends on the supply, the air, the ambient, the coil's age: a fixed
+ * duty overheats or lets it drop on most robots. ψ itself says when the coil has relaxed
+ * enough to matter; the hold margin leaves room for the re-heat (the coil warms from Ms
+ * back to As within tens of ms at the drive duty), and the band above it keeps the
+ * switching rate low. Every off phase also lets the on-time limit (sma.c) restart.
  *
  * Steps that change several limbs at once (the friction states must change together,
- * or the robot makes two transitions with other rewards):
- * - all rising: a limb ahead of the farthest one by more than CTL_SYNC_CDEG waits at
- *   the hold duty, so that they cross together even when their coils start at
- *   different temperatures;
- * - some falling: a rising limb climbs to CTL_SYNC_ZONE_CDEG below its crossing and
- *   waits there until every falling limb is within CTL_SYNC_CDEG of its own; a falling
- *   limb is never held back for this (that would mean re-heating its coil).
- * - While any held raised limb sags, falling limbs wait at the hold duty: through the
- *   body they may be what holds it up (a step like 11 → 01 on coupled coils), and a
- *   coil kept warm stops relaxing until the sagging limb's own coil has caught it.
+ * or the robot makes two transitions with other rewards). Distances to a crossing come
+ * from psi_to_go_cdeg() (comparisons against Q14 edges, no atan; 1° resolution within
+ * 6°, coarser beyond):
+ * - all rising: a limb more than CTL_SYNC_CDEG ahead of the farthest waits at the hold duty,
+ *   so that they cross together even when their coils start at different temperatures;
+ * - some falling: a rising limb climbs to within CTL_SYNC_ZONE_CDEG of its crossing and
+ *   waits there until every falling limb is within CTL_SYNC_CDEG of its own; a falling limb
+ *   is never held back for this (that would mean re-heating its coil).
+ * - While any held raised limb sags below its hold edge, falling limbs wait at the hold
+ *   duty: through the body they may be what holds it up (a step like 11 → 01 on coupled
+ *   coils), and a coil kept warm stops relaxing until the sagging limb's coil caught it.
+ * hold_pm is only used for these waits.
+ *
+ * Stall detector, per limb and step (a step = an unchanged target level):
+ * - oscillating at the threshold: the level changed CTL_OSC_CROSSINGS times in this step,
+ *   or the limb sat at its target level without settling for CTL_HOVER_MS. Recovery: the
+ *   limb settles on the band edges alone (psi_relax), so the sequencer can go on, and
+ *   the bang-bang hold keeps it above ψ*;
+ * - cannot reach the state: rising and heating at the drive duty without getting one
+ *   progress edge closer (psi_to_go_cdeg) for CTL_STALL_MS. The coil is switched off (cold coils when the
+ *   sequencer's state timeout reports the fault).
+ * ctl_stall() tells which; both clear when the limb's target changes.
  *
  * An actuator that drives several limbs serves the strongest demand of its limbs: heat
  * over release over hold. Levels come from psi.h.
@@ -43,10 +58,24 @@
 #define CTL_SYNC_CDEG 200
 #define CTL_SYNC_ZONE_CDEG 600
 
+/* Stall detector (see above). */
+#define CTL_OSC_CROSSINGS 3u
+#define CTL_HOVER_MS 1000u
+#define CTL_STALL_MS 5000u
+#define CTL_STALL_NONE 0u
+#define CTL_STALL_OSCILLATING 1u
+#define CTL_STALL_UNREACHABLE 2u
+
 /* target[i]: wanted level of limb i; drive_pm, hold_pm and duty[a], the result for
- * actuator a: permyriad. */
+ * actuator a: permyriad. Call once per control tick (the stall detector counts calls). */
 void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t hold_pm,
                 uint16_t duty[CFG_N_ACTUATORS]);
+
+/* Forget every limb's step, hold and stall state (static storage starts so, too). */
+void ctl_reset(void);
+
+/* CTL_STALL_* of limb i in its current step. */
+uint8_t ctl_stall(uint8_t limb);
 
 /* Actuator index driving limb i. */
 uint8_t ctl_limb_actuator(uint8_t limb);

@@ -22,10 +22,16 @@ static int16_t hyst[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 #ifndef CFG_HOLD_MARGIN_CDEG
 #define CFG_HOLD_MARGIN_CDEG 0
 #endif
-/* {cos, sin} Q14 of the hold edge ψ* + h/2 + margin and of the settle edge
- * ψ* − h/2 − margin, per limb and threshold. */
+/* {cos, sin} Q14 of the hold edge ψ* + h/2 + margin, the hold top (the hold edge plus
+ * PSI_HOLD_BAND_CDEG), the settle edge ψ* − h/2 − margin, and the progress edges
+ * PSI_PROGRESS_CDEG inside each band edge (below the upper edge for rising, above the
+ * lower edge for falling), per limb and threshold. */
 static int16_t hold_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
+static int16_t hold_top[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
 static int16_t settle_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
+static int16_t rise_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][PSI_PROGRESS_EDGES][2];
+static int16_t fall_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][PSI_FALL_EDGES][2];
+static const int16_t progress_cdeg[PSI_PROGRESS_EDGES] ROM = PSI_PROGRESS_CDEG;
 
 /* {cos, sin} Q14 of `cdeg` clamped to ±89°. */
 static void edge_at(int16_t cdeg, int16_t edge[2])
@@ -37,10 +43,25 @@ static void edge_at(int16_t cdeg, int16_t edge[2])
 
 static void set_hold_edge(uint8_t limb, uint8_t thr)
 {
-    edge_at((int16_t)(band_hi[limb][thr] + CFG_HOLD_MARGIN_CDEG), hold_edge[limb][thr]);
-    edge_at((int16_t)(band_lo[limb][thr] - CFG_HOLD_MARGIN_CDEG), settle_edge[limb][thr]);
+    uint8_t k;
+    int16_t hi = band_hi[limb][thr], lo = band_lo[limb][thr];
+    edge_at((int16_t)(hi + CFG_HOLD_MARGIN_CDEG), hold_edge[limb][thr]);
+    edge_at((int16_t)(hi + CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG), hold_top[limb][thr]);
+    edge_at((int16_t)(lo - CFG_HOLD_MARGIN_CDEG), settle_edge[limb][thr]);
+    for (k = 0; k < PSI_PROGRESS_EDGES; k++) {
+        int16_t d = ROM_I16(&progress_cdeg[k]);
+        edge_at((int16_t)(hi - d), rise_edge[limb][thr][k]);
+        if (k < PSI_FALL_EDGES) {
+            edge_at((int16_t)(lo + d), fall_edge[limb][thr][k]);
+        }
+    }
 }
 
+/* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Called from many places; kept
+ * out of line so that the 8-bit targets carry the two 32-bit products once. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
 {
     return (int32_t)ax * edge[0] - (int32_t)az * edge[1] >= 0;
@@ -66,6 +87,9 @@ typedef struct {
     uint8_t hyst;    /* hysteresis level, PSI_UNKNOWN before the first sample */
     uint8_t level;   /* debounced level */
     uint16_t count;  /* samples the hysteresis level has differed from `level` */
+    uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
+    uint8_t relaxed; /* settle on the band edges instead of the margin edges */
+    uint16_t dwell;  /* samples clear of the margins while not yet settled */
 } limb_state_t;
 
 static limb_state_t limbs[CFG_N_LIMBS];
@@ -80,6 +104,9 @@ void psi_reset(void)
         limbs[i].hyst = PSI_UNKNOWN;
         limbs[i].level = PSI_UNKNOWN;
         limbs[i].count = 0;
+        limbs[i].settled = 0;
+        limbs[i].relaxed = 0;
+        limbs[i].dwell = 0;
     }
 }
 
@@ -183,9 +210,7 @@ uint8_t psi_levels(uint8_t limb)
 
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az)
 {
-    const int16_t *t = &thresholds[limb][thr][edge == PSI_EDGE_LOWER ? 2 : 0];
-    int32_t d = (int32_t)ax * t[0] - (int32_t)az * t[1];
-    return d >= 0;
+    return at_or_above(&thresholds[limb][thr][edge == PSI_EDGE_LOWER ? 2 : 0], ax, az);
 }
 
 uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
@@ -203,6 +228,31 @@ uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
         level--;
     }
     return level;
+}
+
+/* The last sample of `limb` is inside its debounced level: clear of the band edges of
+ * its thresholds (margins = 0) or of the hold and settle edges (margins = 1). */
+static uint8_t inside(uint8_t limb, uint8_t margins)
+{
+    const limb_state_t *l = &limbs[limb];
+    uint8_t level = l->level;
+    const int16_t *e;
+    if (level == PSI_UNKNOWN) {
+        return 0;
+    }
+    if (level > 0u) {
+        e = margins ? hold_edge[limb][level - 1u] : &thresholds[limb][level - 1u][0];
+        if (!at_or_above(e, l->ax, l->az)) {
+            return 0;
+        }
+    }
+    if (level + 1u < psi_levels(limb)) {
+        e = margins ? settle_edge[limb][level] : &thresholds[limb][level][2];
+        if (at_or_above(e, l->ax, l->az)) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
@@ -223,9 +273,28 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
         if (s->count >= debounce) {
             s->level = s->hyst;
             s->count = 0;
+            s->settled = 0;
+            s->dwell = 0;
         }
     }
+    if (s->settled) {
+        if (!inside(limb, 0)) {
+            s->settled = 0; /* left the band's edges: a real excursion */
+            s->dwell = 0;
+        }
+    } else if (inside(limb, s->relaxed ? 0 : 1)) {
+        if (++s->dwell >= debounce) {
+            s->settled = 1;
+        }
+    } else {
+        s->dwell = 0;
+    }
     return s->level;
+}
+
+void psi_relax(uint8_t limb, uint8_t on)
+{
+    limbs[limb].relaxed = on;
 }
 
 uint8_t psi_level(uint8_t limb)
@@ -233,36 +302,36 @@ uint8_t psi_level(uint8_t limb)
     return limbs[limb].level;
 }
 
-uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr)
-{
-    return psi_at_or_above(limb, thr, PSI_EDGE_UPPER, limbs[limb].ax, limbs[limb].az);
-}
-
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
 {
     return at_or_above(hold_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
 }
 
-int16_t psi_to_cross(uint8_t limb, uint8_t thr, uint8_t rising)
+uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 {
-    int16_t psi = psi_last_centideg(limb);
-    return (int16_t)(rising ? band_hi[limb][thr] - psi : psi - band_lo[limb][thr]);
+    return at_or_above(hold_top[limb][thr], limbs[limb].ax, limbs[limb].az);
+}
+
+int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
+{
+    const limb_state_t *l = &limbs[limb];
+    uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
+    /* rising: crossed at the upper edge, edges run downwards; falling: the mirror */
+    if (psi_at_or_above(limb, thr, rising ? PSI_EDGE_UPPER : PSI_EDGE_LOWER, l->ax, l->az) == !!rising) {
+        return 0;
+    }
+    for (k = 0; k < n; k++) {
+        const int16_t *e = rising ? rise_edge[limb][thr][k] : fall_edge[limb][thr][k];
+        if (at_or_above(e, l->ax, l->az) == !!rising) {
+            return ROM_I16(&progress_cdeg[k]);
+        }
+    }
+    return PSI_FAR;
 }
 
 uint8_t psi_settled(uint8_t limb)
 {
-    const limb_state_t *l = &limbs[limb];
-    uint8_t level = l->level;
-    if (level == PSI_UNKNOWN) {
-        return 0;
-    }
-    if (level > 0u && !at_or_above(hold_edge[limb][level - 1u], l->ax, l->az)) {
-        return 0;
-    }
-    if (level + 1u < psi_levels(limb) && at_or_above(settle_edge[limb][level], l->ax, l->az)) {
-        return 0;
-    }
-    return 1;
+    return limbs[limb].settled;
 }
 
 int16_t psi_last_centideg(uint8_t limb)

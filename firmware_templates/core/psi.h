@@ -9,7 +9,16 @@
  * Level with hysteresis: from level L a limb goes up past threshold L when ψ ≥ its
  * upper edge, down past threshold L−1 when ψ < its lower edge. Debounce: the reported
  * level changes only after the hysteresis level has held the new value for `debounce`
- * consecutive samples. psi_centideg() is an integer atan2 (error < 0.01°) for telemetry.
+ * consecutive samples. psi_centideg() is an integer atan2 (error < 0.01°) for telemetry
+ * only: everything the controller asks (levels, hold and settle edges, progress towards a
+ * crossing) is a comparison against Q14 edge constants computed when a band is set.
+ *
+ * Settled, with hysteresis and dwell: a limb becomes settled once its last sample has been
+ * inside its debounced level clear of the margins (at or above the hold edge below it,
+ * below the settle edge above it) for `debounce` consecutive samples, and stays settled
+ * until it leaves the band edges themselves (below ψ*+h/2 of the threshold under it, at or
+ * above ψ*−h/2 of the one above) or its level changes. Relaxed (psi_relax, set by the
+ * controller when a limb oscillates at a threshold), the margins are not required.
  */
 #ifndef PROLEG_PSI_H
 #define PROLEG_PSI_H
@@ -21,6 +30,16 @@
 #define PSI_EDGE_UPPER 0u
 #define PSI_EDGE_LOWER 1u
 #define PSI_UNKNOWN 0xFFu
+
+/* Progress edges towards a crossing (psi_to_go_cdeg): distances from the band edge in
+ * 0.01°, fine near the crossing, coarse far from it; falling limbs use the first
+ * PSI_FALL_EDGES only. */
+#define PSI_PROGRESS_EDGES 13
+#define PSI_PROGRESS_CDEG {100, 200, 300, 400, 500, 600, 800, 1000, 1200, 1500, 2000, 2500, 3000}
+#define PSI_FALL_EDGES 2
+#define PSI_FAR 0x7FFF
+/* Width of the hold band above the hold edge (bang-bang hold, ctl.h), 0.01°. */
+#define PSI_HOLD_BAND_CDEG 100
 
 /* Load the rendered thresholds and forget all history. */
 void psi_init(void);
@@ -56,22 +75,25 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az);
 /* Debounced level of `limb` (PSI_UNKNOWN before its first sample). */
 uint8_t psi_level(uint8_t limb);
 
-/* 1 when the last sample of `limb` is at or above the upper edge of threshold `thr`. */
-uint8_t psi_last_at_or_above_upper(uint8_t limb, uint8_t thr);
-
 /* 1 when the last sample of `limb` is at or above the hold edge of threshold `thr`:
  * the upper edge plus CFG_HOLD_MARGIN_CDEG, where the controller holds a raised level. */
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr);
 
-/* How far (0.01°) the last sample of `limb` still is from crossing threshold `thr`: to
- * its band's upper edge when `rising`, to its lower edge when falling; ≤ 0 once past. */
-int16_t psi_to_cross(uint8_t limb, uint8_t thr, uint8_t rising);
+/* 1 when the last sample of `limb` is at or above the hold top of threshold `thr`: the
+ * hold edge plus PSI_HOLD_BAND_CDEG. */
+uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr);
 
-/* 1 when the last sample of `limb` sits inside its debounced level with the hold margin
- * on both sides: at or above the hold edge below it, below the settle edge
- * (ψ* − h/2 − margin) above it. The sequencer advances only on settled limbs, so a
- * coil that starts heating cannot drag a just-lowered neighbour back over its ψ*. */
+/* How far the last sample of `limb` still is from crossing threshold `thr` (to the
+ * band's upper edge when `rising`, to its lower edge when falling), rounded up to the
+ * next of PSI_PROGRESS_CDEG: 0 once past, PSI_FAR beyond the last edge (rising 30°,
+ * falling 2°). Comparisons against Q14 edges only, no atan. */
+int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising);
+
+/* 1 when `limb` is settled in its debounced level (see above). */
 uint8_t psi_settled(uint8_t limb);
+
+/* Settle on the band edges alone (on = 1) or with the margins (0, the default). */
+void psi_relax(uint8_t limb, uint8_t on);
 
 /* Number of levels of `limb`. */
 uint8_t psi_levels(uint8_t limb);

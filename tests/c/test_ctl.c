@@ -1,6 +1,7 @@
 /* Host unit tests of core/ctl.c: measured level vs target → duty per actuator.
- * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1° (a held level is kept at
- * or above 22°, the settle edge below the band is 18°), limb i driven by actuator i. */
+ * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1° (a held level is kept between
+ * the hold edge 22° and the hold top 23°, the settle edge below the band is 18°), limb i
+ * driven by actuator i. */
 #include <math.h>
 
 #include "ctl.h"
@@ -29,6 +30,7 @@ static void setup(void)
 {
     psi_init();
     psi_set_debounce(1);
+    ctl_reset();
 }
 
 static void test_limb_that_must_go_up_gets_the_drive_duty(void)
@@ -53,33 +55,43 @@ static void test_limb_that_must_go_down_is_switched_off(void)
     CHECK_EQ(duty[1], 0);
 }
 
-static void test_holding_a_raised_level_drives_below_the_hold_edge_and_keeps_warm_above(void)
+static void test_holding_a_raised_level_is_bang_bang_with_hysteresis_on_psi(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     setup();
     CHECK_EQ(CFG_HOLD_MARGIN_CDEG, 100);
+    CHECK_EQ(PSI_HOLD_BAND_CDEG, 100); /* hold edge 22°, hold top 23° */
     put(0, 30.0);
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], HOLD); /* above the hold edge: keep the coil warm */
-    put(0, 20.0);            /* inside the band: still level 1, sagging: drive */
+    CHECK_EQ(duty[0], 0); /* above the hold top: off, no fixed hold duty */
+    put(0, 22.5);         /* between edge and top, coming down: stays off */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+    put(0, 20.0); /* inside the band: still level 1, sagging: drive */
     CHECK_EQ(psi_level(0), 1);
     demand(1, 0, duty);
     CHECK_EQ(duty[0], DRIVE);
-    put(0, 21.5); /* above the band but inside the margin: still drive */
+    put(0, 22.5); /* above the hold edge but below the top, going up: keeps heating */
     demand(1, 0, duty);
     CHECK_EQ(duty[0], DRIVE);
-    put(0, 22.3); /* above the hold edge: back to the hold duty */
+    put(0, 23.2); /* reached the top: off */
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], HOLD);
+    CHECK_EQ(duty[0], 0);
+    put(0, 22.2); /* coming down again, above the edge: off */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+    put(0, 21.8); /* below the edge: heat */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
 }
 
-static void test_a_hold_duty_of_zero_holds_by_feedback_alone(void)
+static void test_the_hold_duty_is_not_used_to_hold(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     uint8_t target[CFG_N_LIMBS] = {1, 0};
     setup();
     put(0, 30.0);
-    ctl_demand(target, DRIVE, 0, duty);
+    ctl_demand(target, DRIVE, HOLD, duty);
     CHECK_EQ(duty[0], 0);
     put(0, 20.0);
     ctl_demand(target, DRIVE, 0, duty);
@@ -90,15 +102,15 @@ static void test_limbs_rising_together_wait_for_the_farthest(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     setup();
-    put(0, 15.0); /* 6° to go to the band's upper edge */
-    put(1, 5.0);  /* 16° to go */
+    put(0, 15.5); /* 5.5° to go to the band's upper edge (the 6° progress edge) */
+    put(1, 5.0);  /* 16° to go (the 20° progress edge) */
     demand(1, 1, duty);
     CHECK_EQ(duty[0], HOLD);
     CHECK_EQ(duty[1], DRIVE);
-    put(1, 12.0); /* 9° to go: still more than the 2° window behind */
+    put(1, 12.0); /* 9° to go (the 10° edge): still more than 2° behind */
     demand(1, 1, duty);
     CHECK_EQ(duty[0], HOLD);
-    put(1, 13.5); /* 7.5° to go: within the window, both heat */
+    put(1, 13.5); /* 7.5° to go (the 8° edge): within 2°, both heat */
     demand(1, 1, duty);
     CHECK_EQ(duty[0], DRIVE);
     CHECK_EQ(duty[1], DRIVE);
@@ -129,8 +141,8 @@ static void test_a_falling_limb_waits_while_a_held_limb_sags(void)
     setup();
     put(0, 30.0);
     put(1, 30.0);
-    demand(1, 0, duty); /* limb 0 holds, limb 1 falls */
-    CHECK_EQ(duty[0], HOLD);
+    demand(1, 0, duty); /* limb 0 holds (above its top: off), limb 1 falls */
+    CHECK_EQ(duty[0], 0);
     CHECK_EQ(duty[1], 0);
     put(0, 20.5); /* limb 0 sags below its hold edge (still level 1) */
     CHECK_EQ(psi_level(0), 1);
@@ -162,12 +174,76 @@ static void test_unknown_level_never_heats(void)
     CHECK_EQ(duty[1], 0);
 }
 
+static void test_a_limb_crossing_back_and_forth_is_oscillating_and_settles_on_the_band(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 10.0);
+    put(1, 0.0);
+    demand(1, 0, duty);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+    put(0, 21.5); /* up: level 1, inside the margin (not settled) */
+    demand(1, 0, duty);
+    put(0, 18.5); /* back down below the band */
+    demand(1, 0, duty);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE); /* two crossings: 0->1->0 */
+    put(0, 21.5);
+    demand(1, 0, duty);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    CHECK_EQ(psi_settled(0), 0); /* margins still required until the next sample */
+    put(0, 21.5);
+    CHECK_EQ(psi_settled(0), 1); /* relaxed: above the band's upper edge is enough */
+    demand(0, 0, duty);          /* a new step clears it */
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+}
+
+static void test_a_limb_hovering_unsettled_at_its_level_is_oscillating(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(0, 21.5); /* level 1 but inside the hold margin */
+    put(1, 0.0);
+    for (k = 0; k <= (uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u; k++) {
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE); /* the hold keeps heating it towards the top */
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+}
+
+static void test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, n = (uint32_t)CTL_STALL_MS * CFG_TICK_HZ / 1000u;
+    setup();
+    put(0, 5.0);
+    put(1, 0.0);
+    for (k = 0; k < n / 2u; k++) {
+        demand(1, 0, duty);
+    }
+    put(0, 14.0); /* one progress edge closer (7° to go): the clock restarts */
+    for (k = 0; k < n; k++) {
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+    demand(1, 0, duty);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_UNREACHABLE);
+    CHECK_EQ(duty[0], 0); /* cold coil when the state timeout comes */
+    CHECK_EQ(duty[1], 0);
+    demand(0, 0, duty); /* another step: forgotten */
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+}
+
 int main(void)
 {
     RUN(test_limb_that_must_go_up_gets_the_drive_duty);
     RUN(test_limb_that_must_go_down_is_switched_off);
-    RUN(test_holding_a_raised_level_drives_below_the_hold_edge_and_keeps_warm_above);
-    RUN(test_a_hold_duty_of_zero_holds_by_feedback_alone);
+    RUN(test_holding_a_raised_level_is_bang_bang_with_hysteresis_on_psi);
+    RUN(test_the_hold_duty_is_not_used_to_hold);
+    RUN(test_a_limb_crossing_back_and_forth_is_oscillating_and_settles_on_the_band);
+    RUN(test_a_limb_hovering_unsettled_at_its_level_is_oscillating);
+    RUN(test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off);
     RUN(test_limbs_rising_together_wait_for_the_farthest);
     RUN(test_a_limb_rising_while_another_falls_waits_near_its_crossing);
     RUN(test_a_falling_limb_waits_while_a_held_limb_sags);

@@ -39,6 +39,7 @@ static void test_shared_actuator_lets_an_unsettled_limb_settle_before_holding_th
     uint8_t target[CFG_N_LIMBS] = {1, 0};
     psi_init();
     psi_set_debounce(1);
+    ctl_reset();
     put(0, 40.0);
     put(1, 30.0);
     put(1, 18.5); /* level 0, but not yet below the settle edge under the band */
@@ -47,7 +48,10 @@ static void test_shared_actuator_lets_an_unsettled_limb_settle_before_holding_th
     CHECK_EQ(duty[0], 0); /* release wins over the other limb's hold */
     put(1, 10.0);         /* settled */
     ctl_demand(target, 5000, 2000, duty);
-    CHECK_EQ(duty[0], 2000);
+    CHECK_EQ(duty[0], 0); /* limb 0 above its hold top: off */
+    put(0, 20.0);         /* limb 0 sags: the shared coil heats */
+    ctl_demand(target, 5000, 2000, duty);
+    CHECK_EQ(duty[0], 5000);
 }
 
 int main(void)

@@ -171,6 +171,90 @@ static void test_threshold_band_reaching_90_deg_is_refused(void)
     sweep_against_reference(19.0, 21.0); /* unchanged */
 }
 
+static void put(uint8_t limb, double deg)
+{
+    psi_update(limb, ax_of(deg), az_of(deg));
+}
+
+/* Float reference of psi_to_go_cdeg: the distance rounded up to the next edge. */
+static int16_t ref_to_go(double d, uint8_t rising)
+{
+    static const int16_t edges[PSI_PROGRESS_EDGES] = PSI_PROGRESS_CDEG;
+    uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
+    if (d <= 0.0) {
+        return 0;
+    }
+    for (k = 0; k < n; k++) {
+        if (d * 100.0 <= edges[k]) {
+            return edges[k];
+        }
+    }
+    return PSI_FAR;
+}
+
+static void test_distance_to_a_crossing_agrees_with_float_without_atan(void)
+{
+    double deg;
+    psi_init();
+    psi_set_debounce(1);
+    for (deg = -30.0; deg <= 60.0; deg += 0.037) {
+        int16_t ax = ax_of(deg), az = az_of(deg);
+        double r = ref_deg(ax, az);
+        uint8_t k, near = fabs(21.0 - r) * 100.0 < 1.0 || fabs(r - 19.0) * 100.0 < 1.0;
+        static const int16_t edges[PSI_PROGRESS_EDGES] = PSI_PROGRESS_CDEG;
+        for (k = 0; k < PSI_PROGRESS_EDGES; k++) {
+            near |= fabs((21.0 - r) * 100.0 - edges[k]) < 1.0 || fabs((r - 19.0) * 100.0 - edges[k]) < 1.0;
+        }
+        if (near) {
+            continue; /* within the Q14 constants' resolution of an edge */
+        }
+        psi_reset();
+        psi_update(0, ax, az);
+        CHECK_EQ(psi_to_go_cdeg(0, 0, 1), ref_to_go(21.0 - r, 1));
+        CHECK_EQ(psi_to_go_cdeg(0, 0, 0), ref_to_go(r - 19.0, 0));
+    }
+}
+
+static void test_settled_needs_the_margins_for_a_dwell_and_keeps_until_the_band_edge(void)
+{
+    /* hold edge 21° + margin, settle edge 19° − margin (CFG_HOLD_MARGIN_CDEG) */
+    double m = CFG_HOLD_MARGIN_CDEG / 100.0;
+    psi_init();
+    psi_set_debounce(3);
+    put(0, 30.0); /* first sample: level 1 at once, clear of the margin: 1 of 3 */
+    CHECK_EQ(psi_level(0), 1);
+    CHECK_EQ(psi_settled(0), 0);
+    put(0, 30.0);
+    CHECK_EQ(psi_settled(0), 0);
+    put(0, 30.0);
+    CHECK_EQ(psi_settled(0), 1); /* dwell: 3 samples */
+    put(0, 21.0 + m / 2.0);      /* inside the margin but above the band: stays settled */
+    CHECK_EQ(psi_settled(0), 1);
+    put(0, 20.5); /* below the band's upper edge: unsettled (still level 1) */
+    CHECK_EQ(psi_level(0), 1);
+    CHECK_EQ(psi_settled(0), 0);
+    put(0, 21.0 + m / 2.0); /* back inside the margin: not enough to settle again */
+    put(0, 21.0 + m / 2.0);
+    put(0, 21.0 + m / 2.0);
+    CHECK_EQ(psi_settled(0), 0);
+    psi_relax(0, 1); /* relaxed: above the band edge is enough */
+    put(0, 21.0 + m / 2.0);
+    put(0, 21.0 + m / 2.0);
+    put(0, 21.0 + m / 2.0);
+    CHECK_EQ(psi_settled(0), 1);
+    psi_relax(0, 0);
+    put(0, 5.0); /* level change (after the debounce): unsettled at once */
+    put(0, 5.0);
+    put(0, 5.0);
+    CHECK_EQ(psi_level(0), 0);
+    CHECK_EQ(psi_settled(0), 0);
+    put(0, 19.0 - m / 2.0); /* level 0 inside the settle margin: never settles */
+    put(0, 19.0 - m / 2.0);
+    put(0, 19.0 - m / 2.0);
+    put(0, 19.0 - m / 2.0);
+    CHECK_EQ(psi_settled(0), 0);
+}
+
 int main(void)
 {
     RUN(test_classifier_agrees_with_float_atan2_across_angles);
@@ -184,5 +268,7 @@ int main(void)
     RUN(test_integer_sin_cos_match_float_within_2_lsb);
     RUN(test_moved_threshold_classifies_like_a_rendered_one);
     RUN(test_threshold_band_reaching_90_deg_is_refused);
+    RUN(test_distance_to_a_crossing_agrees_with_float_without_atan);
+    RUN(test_settled_needs_the_margins_for_a_dwell_and_keeps_until_the_band_edge);
     return UNIT_EXIT();
 }

@@ -1,0 +1,148 @@
+"""Body shape from coil contractions: curvature → centre line → contact angles, gaps, loads.
+
+The body is a slender beam of arc length L lying on its contacts (limbs, evenly spaced along
+it, the first at s = 0, the last at s = L). Each SMA coil runs in a channel at height d above
+the neutral axis over a span of the body; contracting by a working strain ε it bends that
+span with curvature κ = ε / d (a contracting fibre at offset d, Euler–Bernoulli; the body's
+elastic resistance is folded into the working strain ε, the strain the coil actually achieves
+against the body). Overlapping spans add. The centre line is integrated segment by segment
+(exact chords for constant-curvature segments).
+
+Between two neighbouring contacts the body is an arch standing on the ground: the ground is
+the chord through the two contacts, the contact angle ψ at each end is the angle between the
+body tangent and that chord (ψ_p + ψ_q = total turning of the section), the section's ground
+length (the gap between the contacts) is the chord length, and its weight splits between
+the two contacts by the lever rule about its centre of mass (statics of a two-support body).
+
+For one or two coils the shape quantities are tabulated on a grid of contractions when the
+plant is built and interpolated bilinearly while it runs (the hot path stays small); for
+more coils they are computed directly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+N_SEGMENTS = 64
+GRID = 41
+
+
+@dataclass(frozen=True)
+class BodyGeometry:
+    length_mm: float = 80.0
+    coil_offset_mm: float = 2.0       # channel height above the neutral axis
+    working_strain: float = 0.06      # coil contraction achieved against the body at α = 1
+    spans: tuple[tuple[float, float], ...] = ((0.0, 48.0), (32.0, 80.0))  # per coil, mm
+    contacts_mm: tuple[float, ...] = (0.0, 80.0)
+
+    @property
+    def kappa_max_per_mm(self) -> float:
+        return self.working_strain / self.coil_offset_mm
+
+
+def default_spans(n_contacts: int, homes: list[int], length_mm: float, overlap_mm: list[float]) -> tuple:
+    """Each coil spans the half-section on either side of its home contact plus ``overlap``."""
+    pos = np.linspace(0.0, length_mm, n_contacts)
+    half = length_mm / (n_contacts - 1) / 2.0
+    out = []
+    for h, ov in zip(homes, overlap_mm):
+        a = max(0.0, pos[h] - half - ov) if h > 0 else 0.0
+        b = min(length_mm, pos[h] + half + ov) if h < n_contacts - 1 else length_mm
+        out.append((float(a), float(b)))
+    return tuple(out)
+
+
+class Shape:
+    """Shape quantities as functions of the coils' contractions c ∈ [0, 1]^n.
+
+    ``evaluate(c)`` → (ψ per contact in degrees, gap per section in mm, load fraction per
+    contact (sums to 1), centre-of-mass position along the ground measured from contact 0 in mm).
+    """
+
+    def __init__(self, geo: BodyGeometry):
+        self.geo = geo
+        n = N_SEGMENTS
+        self.ds = geo.length_mm / n
+        mids = (np.arange(n) + 0.5) * self.ds
+        self._w = np.array([[(a <= m < b) for m in mids] for a, b in geo.spans], dtype=float)
+        self._w *= geo.kappa_max_per_mm
+        self._cnode = [int(round(s / self.ds)) for s in geo.contacts_mm]
+        self.n_contacts = len(self._cnode)
+        self.n_coils = len(geo.spans)
+        self._table = None
+        if self.n_coils <= 2:
+            self._build_table()
+
+    # -- exact computation (vectorised over a batch of contraction vectors) ------------------
+    def compute(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        c = np.atleast_2d(np.asarray(c, dtype=float))              # (B, n_coils)
+        kappa = c @ self._w                                          # (B, n_seg)
+        dphi = kappa * self.ds
+        phi_nodes = -np.concatenate([np.zeros((len(c), 1)), np.cumsum(dphi, axis=1)], axis=1)
+        phi_mid = (phi_nodes[:, :-1] + phi_nodes[:, 1:]) / 2.0
+        half = dphi / 2.0
+        sinc = np.where(np.abs(half) > 1e-9, np.sin(half) / np.where(half == 0, 1, half), 1.0)
+        chord = self.ds * sinc
+        x = np.concatenate([np.zeros((len(c), 1)), np.cumsum(chord * np.cos(phi_mid), axis=1)], axis=1)
+        y = np.concatenate([np.zeros((len(c), 1)), np.cumsum(chord * np.sin(phi_mid), axis=1)], axis=1)
+        xm = (x[:, :-1] + x[:, 1:]) / 2.0
+        ym = (y[:, :-1] + y[:, 1:]) / 2.0
+        nc = self.n_contacts
+        psi = np.zeros((len(c), nc))
+        gaps = np.zeros((len(c), nc - 1))
+        load = np.zeros((len(c), nc))
+        com = np.zeros(len(c))
+        start = np.zeros(len(c))
+        total = float(self.geo.length_mm)
+        for k in range(nc - 1):
+            p, q = self._cnode[k], self._cnode[k + 1]
+            vx, vy = x[:, q] - x[:, p], y[:, q] - y[:, p]
+            g = np.hypot(vx, vy)
+            chi = np.arctan2(vy, vx)
+            psi_p = np.degrees(phi_nodes[:, p] - chi)
+            psi_q = np.degrees(chi - phi_nodes[:, q])
+            psi[:, k] += psi_p if k == 0 else psi_p / 2.0
+            psi[:, k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
+            ux, uy = vx / g, vy / g
+            u = ((xm[:, p:q] - x[:, p:p + 1]) * ux[:, None] + (ym[:, p:q] - y[:, p:p + 1]) * uy[:, None]).mean(axis=1)
+            frac = (q - p) * self.ds / total                        # section's share of the mass
+            load[:, k] += frac * (1.0 - u / g)
+            load[:, k + 1] += frac * (u / g)
+            com += frac * (start + u)
+            gaps[:, k] = g
+            start = start + g
+        return psi, gaps, load, com
+
+    # -- tabulated (one or two coils) ---------------------------------------------------------
+    def _build_table(self) -> None:
+        axes = [np.linspace(0.0, 1.0, GRID)] * self.n_coils
+        mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, self.n_coils)
+        psi, gaps, load, com = self.compute(mesh)
+        flat = np.concatenate([psi, gaps, load, com[:, None]], axis=1)
+        shape = (GRID,) * self.n_coils + (flat.shape[1],)
+        self._table = flat.reshape(shape)
+        self._tlist = self._table.tolist()
+
+    def evaluate(self, c: list[float]) -> list[float]:
+        """Flat list: ψ per contact, gap per section, load per contact, centre of mass."""
+        if self._table is None:
+            psi, gaps, load, com = self.compute(np.array(c))
+            return [*psi[0], *gaps[0], *load[0], float(com[0])]
+        g1 = GRID - 1
+        if self.n_coils == 1:
+            u = min(max(c[0], 0.0), 1.0) * g1
+            i = min(int(u), g1 - 1)
+            f = u - i
+            a, b = self._tlist[i], self._tlist[i + 1]
+            return [x + (y - x) * f for x, y in zip(a, b)]
+        u = min(max(c[0], 0.0), 1.0) * g1
+        v = min(max(c[1], 0.0), 1.0) * g1
+        i = min(int(u), g1 - 1)
+        j = min(int(v), g1 - 1)
+        fu, fv = u - i, v - j
+        t = self._tlist
+        a, b, cc, d = t[i][j], t[i + 1][j], t[i][j + 1], t[i + 1][j + 1]
+        w00, w10, w01, w11 = (1 - fu) * (1 - fv), fu * (1 - fv), (1 - fu) * fv, fu * fv
+        return [p * w00 + q * w10 + r * w01 + s * w11 for p, q, r, s in zip(a, b, cc, d)]

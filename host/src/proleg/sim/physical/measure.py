@@ -1,0 +1,215 @@
+"""Measure a robot's transition reward matrix on the physical plant (no firmware needed).
+
+``measure_matrix`` drives the plant with an idealised state-tracking drive: perfect sensing
+(true ψ, true ψ*), each limb's own coil heated at ``duty`` until its end reaches the target
+level by ``margin_deg``, then held there bang-bang; coils whose limbs are all to be at level 0
+are switched off and cool freely (as the firmware does). For every allowed transition a → b it
+goes to a, settles, records the centre of mass, drives to b, settles again and records the
+displacement; ``repeats`` times. A transition the drive cannot reach within ``timeout_s`` gets
+no sample (its entry is NaN and its count 0).
+
+``kinematic_signs`` does the same with the coils' contractions moved directly at a fixed rate
+(no thermal model): the sign pattern a friction assignment predicts, used to infer D1/D2.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .conditions import Conditions
+from .plant import PhysicalParams, PhysicalPlant
+
+
+def _limb_levels(state: int, levels: Sequence[int]) -> list[int]:
+    out = []
+    for k in reversed(levels):
+        state, d = divmod(state, k)
+        out.append(d)
+    return list(reversed(out))
+
+
+class IdealDrive:
+    """Per actuator: +1 heat, 0 hold, −1 cool, towards a target robot state."""
+
+    def __init__(self, robot: Any, plant: PhysicalPlant, margin_deg: float):
+        names = [a.name for a in robot.actuators]
+        self.limb_act = [names.index(lb.actuator) for lb in robot.limbs]
+        self.n_act = len(names)
+        self.levels = plant.levels
+        self.th = plant.true_psi_star_deg
+        self.margin = margin_deg
+
+    def command(self, psi: Sequence[float], target: int) -> list[int]:
+        want = _limb_levels(target, self.levels)
+        heat = [False] * self.n_act
+        cool = [False] * self.n_act
+        active = [False] * self.n_act
+        for i, (p, k) in enumerate(zip(psi, want)):
+            j = self.limb_act[i]
+            th = self.th[i]
+            lo = th[k - 1] + self.margin if k > 0 else -math.inf
+            hi = th[k] - self.margin if k < len(th) else math.inf
+            if p > hi:
+                cool[j] = True
+            elif p < lo:
+                heat[j] = True
+            if k > 0:
+                active[j] = True
+        return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
+
+
+@dataclass
+class MeasuredMatrix:
+    states: list[str]
+    matrix_mm: np.ndarray      # mean displacement per transition, NaN where not measured
+    std_mm: np.ndarray
+    samples: np.ndarray        # int counts
+    duration_s: np.ndarray     # mean time to reach the target state
+    mechanisms: tuple[str, ...]
+    mechanism_source: str
+
+    def to_json(self) -> dict:
+        def clean(m: np.ndarray) -> list:
+            return [[None if not np.isfinite(x) else round(float(x), 4) for x in row] for row in m]
+        return {"states": self.states, "matrix": clean(self.matrix_mm), "units": "mm",
+                "std": clean(self.std_mm), "samples": self.samples.tolist(),
+                "duration_s": clean(self.duration_s), "mechanisms": list(self.mechanisms),
+                "mechanism_source": self.mechanism_source}
+
+
+def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, dt: float,
+            timeout_s: float, settle_s: float) -> float | None:
+    """Drive to ``target`` until the robot has stayed in it for ``settle_s``; return the time
+    it first reached it (None if it did not settle there within ``timeout_s``)."""
+    chans = [a.channel for a in plant.params.actuators]
+    nch = max(chans) + 1
+    t0 = plant.time_s
+    first = since = None
+    while True:
+        cmd = drive.command(plant.psi_deg.tolist(), target)
+        duties = [0.0] * nch
+        for j, c in enumerate(cmd):
+            if c > 0:
+                duties[chans[j]] = duty
+        plant.step(dt, duties)
+        now = plant.time_s - t0
+        if plant.true_state == target:
+            if since is None:
+                since = now
+                first = now if first is None else first
+            if now - since >= settle_s:
+                return first
+        else:
+            since = None
+        if now > timeout_s:
+            return None
+
+
+def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats: int = 2,
+                   duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 2.5,
+                   timeout_s: float = 12.0, dt_s: float = 0.002, seed: int = 0,
+                   params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None) -> MeasuredMatrix:
+    """The reward matrix of ``robot`` measured on the physical plant (mm, row = from)."""
+    plant = PhysicalPlant(robot, conditions, seed=seed, params=params, mechanisms=mechanisms)
+    drive = IdealDrive(robot, plant, margin_deg)
+    duty = robot.control.drive_duty if duty is None else duty
+    _, allowed = robot.transitions.dense()
+    n = len(allowed)
+    sums = [[[] for _ in range(n)] for _ in range(n)]
+    times = [[[] for _ in range(n)] for _ in range(n)]
+    for _ in range(repeats):
+        for a in range(n):
+            for b in range(n):
+                if a == b or not allowed[a][b]:
+                    continue
+                if _run_to(plant, drive, a, duty, dt_s, timeout_s, settle_s) is None:
+                    continue
+                x0 = plant.displacement_mm
+                took = _run_to(plant, drive, b, duty, dt_s, timeout_s, settle_s)
+                if took is None:
+                    continue
+                sums[a][b].append(plant.displacement_mm - x0)
+                times[a][b].append(took)
+    mean = np.full((n, n), np.nan)
+    std = np.full((n, n), np.nan)
+    dur = np.full((n, n), np.nan)
+    count = np.zeros((n, n), dtype=int)
+    for a in range(n):
+        for b in range(n):
+            if sums[a][b]:
+                mean[a, b] = float(np.mean(sums[a][b]))
+                std[a, b] = float(np.std(sums[a][b]))
+                dur[a, b] = float(np.mean(times[a][b]))
+                count[a, b] = len(sums[a][b])
+    labels = robot.transitions.labels() if hasattr(robot.transitions, "labels") else [str(i) for i in range(n)]
+    return MeasuredMatrix(list(labels), mean, std, count, dur, tuple(plant.mechanisms), plant.mechanism_source)
+
+
+def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float = 4.0,
+                    rate_per_s: float = 1.0, dt_s: float = 0.005) -> np.ndarray:
+    """Displacement per allowed transition (mm) with the coils' contractions moved directly
+    at ``rate_per_s`` (no thermal model, no lag): the pattern ``mechanisms`` predict."""
+    plant = PhysicalPlant(robot, Conditions(), mechanisms=mechanisms)
+    drive = IdealDrive(robot, plant, margin_deg)
+    _, allowed = robot.transitions.dense()
+    n = len(allowed)
+    out = np.zeros((n, n))
+    c = [0.0] * drive.n_act
+    step = rate_per_s * dt_s
+
+    def go(target: int) -> bool:
+        for _ in range(int(4.0 / dt_s)):
+            cmd = drive.command(plant.psi_deg.tolist(), target)
+            for j, x in enumerate(cmd):
+                c[j] = min(1.0, max(0.0, c[j] + x * step))
+            plant.pose(c)
+            if plant.true_state == target and all(x != 1 for x in cmd) and all(
+                    x == 0 or c[j] == 0.0 for j, x in enumerate(cmd)):
+                plant.pose(c)  # a pause: the body comes to rest
+                return True
+        return False
+
+    for a in range(n):
+        for b in range(n):
+            if a == b or not allowed[a][b]:
+                continue
+            if not go(a):
+                continue
+            x0 = plant.displacement_mm
+            if go(b):
+                out[a, b] = plant.displacement_mm - x0
+    return out
+
+
+def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditions: Conditions | None = None,
+                 duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 0.3,
+                 timeout_s: float = 12.0, dt_s: float = 0.002, plant: PhysicalPlant | None = None) -> tuple[float, float]:
+    """Walk the closed sequence ``states`` (first state repeated at the end or not) with the
+    idealised drive, ``cycles`` times after one warm-up cycle; return (mm per cycle, s per
+    cycle). Raises SimError if a state cannot be reached."""
+    from ...errors import SimError
+
+    plant = plant or PhysicalPlant(robot, conditions)
+    drive = IdealDrive(robot, plant, margin_deg)
+    duty = robot.control.drive_duty if duty is None else duty
+    seq = list(states)
+    if len(seq) > 1 and seq[0] == seq[-1]:
+        seq = seq[:-1]
+
+    def one_cycle() -> None:
+        for s in seq[1:] + seq[:1]:
+            if _run_to(plant, drive, s, duty, dt_s, timeout_s, settle_s) is None:
+                raise SimError(f"run_sequence: state {s} not reached within {timeout_s} s")
+
+    if _run_to(plant, drive, seq[0], duty, dt_s, timeout_s, settle_s) is None:
+        raise SimError(f"run_sequence: start state {seq[0]} not reached")
+    one_cycle()
+    x0, t0 = plant.displacement_mm, plant.time_s
+    for _ in range(cycles):
+        one_cycle()
+    return (plant.displacement_mm - x0) / cycles, (plant.time_s - t0) / cycles

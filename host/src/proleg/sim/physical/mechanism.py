@@ -1,0 +1,102 @@
+"""Which friction mechanism each limb carries: from the robot file, or inferred.
+
+The paper's mechanisms: D1 (material M1, touching at ψ < ψ*, is soft/sticky; M2 hard/slippery)
+and D2 (the reverse). A robot file may say so per limb (``friction = "D1"`` or a list of
+material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``). Today's
+robot files do not have that key; then the mechanisms are inferred from the sign pattern of
+the robot's transition matrix: every assignment of D1/D2 to the limbs is swept kinematically
+through every allowed transition (``measure.kinematic_signs``) and the assignment whose signs
+agree with the most non-zero matrix entries wins (ties: D1 first). Multi-level limbs without
+the key alternate soft/hard from level 0.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...errors import SimError
+from . import materials as mat
+
+
+@dataclass(frozen=True)
+class Mechanisms:
+    names: tuple[str, ...]                      # "D1", "D2" or "custom"
+    materials: tuple[tuple[str, ...], ...]      # per limb, material per level
+    source: str                                 # "robot file", "given", "inferred from the matrix", "default"
+
+
+def _materials(name_or_list: Any, levels: int, where: str) -> tuple[str, tuple[str, ...]]:
+    if isinstance(name_or_list, str):
+        if name_or_list not in mat.MECHANISMS:
+            raise SimError(f"{where}: friction {name_or_list!r}: expected one of {', '.join(mat.MECHANISMS)} or a list of materials")
+        mats = mat.MECHANISMS[name_or_list]
+        if levels != 2:
+            raise SimError(f"{where}: friction {name_or_list!r} describes 2 levels, the limb has {levels}")
+        return name_or_list, mats
+    mats = tuple(str(m) for m in name_or_list)
+    if len(mats) != levels or any(m not in mat.MATERIALS for m in mats):
+        raise SimError(f"{where}: friction: expected {levels} materials from {', '.join(mat.MATERIALS)}, got {list(mats)}")
+    named = next((k for k, v in mat.MECHANISMS.items() if v == mats), "custom")
+    return named, mats
+
+
+def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None) -> Mechanisms:
+    limbs = list(robot.limbs)
+    levels = [len(lb.psi_star_deg) + 1 for lb in limbs]
+    if override is not None:
+        if len(override) != len(limbs):
+            raise SimError(f"mechanisms: expected one per limb ({len(limbs)}), got {len(override)}")
+        got = [_materials(m, k, f"mechanisms[{i}]") for i, (m, k) in enumerate(zip(override, levels))]
+        return Mechanisms(tuple(g[0] for g in got), tuple(g[1] for g in got), "given")
+    declared = [getattr(lb, "friction", None) for lb in limbs]
+    if all(d is not None for d in declared):
+        got = [_materials(d, k, f"limb {lb.name!r}") for d, k, lb in zip(declared, levels, limbs)]
+        return Mechanisms(tuple(g[0] for g in got), tuple(g[1] for g in got), "robot file")
+    if any(k != 2 for k in levels) or getattr(robot, "transitions", None) is None:
+        mats = tuple(tuple("soft" if lv % 2 == 0 else "hard" for lv in range(k)) for k in levels)
+        return Mechanisms(tuple("D1" if k == 2 else "custom" for k in levels), mats, "default")
+    names = _infer(robot)
+    return Mechanisms(names, tuple(mat.MECHANISMS[n] for n in names), "inferred from the matrix")
+
+
+def _infer(robot: Any) -> tuple[str, ...]:
+    reward, allowed = robot.transitions.dense()
+    key = (tuple(tuple(float(x) for x in row) for row in np.asarray(reward)),
+           tuple(tuple(bool(x) for x in row) for row in np.asarray(allowed)),
+           tuple((lb.name, tuple(lb.psi_star_deg), lb.actuator) for lb in robot.limbs),
+           tuple((a.name, a.channel) for a in robot.actuators))
+    return _infer_cached(key, robot)
+
+
+# Inference is a pure function of the robot's limbs, actuators and matrix; memoised so that
+# building many plants of one robot sweeps it once.
+_CACHE: dict[tuple, tuple[str, ...]] = {}
+
+
+def _infer_cached(key: tuple, robot: Any) -> tuple[str, ...]:
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit
+    from .measure import kinematic_signs
+
+    reward, allowed = robot.transitions.dense()
+    reward = np.asarray(reward, dtype=float)
+    best, best_score = None, -1
+    for combo in itertools.product(("D1", "D2"), repeat=len(robot.limbs)):
+        signs = kinematic_signs(robot, combo)
+        score = 0
+        for a in range(len(reward)):
+            for b in range(len(reward)):
+                if a != b and allowed[a][b] and reward[a][b] != 0 and np.sign(signs[a][b]) == np.sign(reward[a][b]):
+                    score += 1
+        if score > best_score:
+            best, best_score = combo, score
+    _CACHE[key] = best
+    return best
+
+

@@ -1,0 +1,552 @@
+"""The physical plant: SMA coils → body shape → contact angles → anchor/slip mechanics.
+
+Drop-in for ``proleg.sim.plant.Plant`` (``SimulatedRobot(robot, plant=PhysicalPlant(robot))``):
+``step(dt_s, duties)``, ``limb_truth(i)``, ``displacement_mm``, ``transitions``,
+``unexpected_transitions``, ``kill_actuator(ch)``, ``inject_drift(ch, rate, mode, step)``.
+Unlike the table plant nothing here reads the robot's reward matrix to move: displacement is
+the centre of mass of a body whose contacts stick or slide by force balance (``friction``).
+
+Per step (duty held constant over the step):
+1. supply: V at the coils = V_s·√power − R_source·ΣI (sag when both coils draw);
+2. each coil: thermal node (``thermal``), Liang–Rogers hysteresis (``proleg.sim.sma``), latent
+   heat, the body node; fatigue (stroke loss, transformation-temperature shift) accrues with
+   transformation cycles;
+3. contraction c_j = α_j × stroke_j, through a first-order mechanical lag (τ = 30 ms, the soft
+   body's response); body shape → ψ per contact, gaps, loads, centre of mass (``body``);
+4. contacts: friction coefficient from the mechanism's material at the true ψ (configured ψ*
+   plus ``psi_star_shift_deg``), normal force from the loads, anchor/slip solve of the gap
+   change (``friction``); the centre of mass moves with the contacts and the shape;
+5. the robot's true friction state (for the transition log) from ψ and the true ψ*.
+
+What the IMUs sense (``limb_truth``) is the end's tilt against gravity: ψ ± the ground incline
+(the first limb's end faces up the slope, the last one down), plus mounting offset, bias and
+noise. ``psi_deg`` is the true contact angle.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ...errors import SimError
+from ..sma import Hysteresis
+from . import materials as mat
+from .body import BodyGeometry, Shape, default_spans
+from .conditions import Conditions
+from .friction import mu_at, solve_translation, solve_two
+from .mechanism import limb_mechanisms
+from .thermal import BodyThermal, CoilGeometry
+
+SHAPE_EPS = 3e-4   # contraction change (fraction of stroke) that triggers a shape update (≈ 0.013° of ψ)
+
+
+@dataclass(frozen=True)
+class FatigueLaw:
+    """Functional fatigue of NiTi under thermal cycling: recoverable stroke falls and the
+    transformation temperatures drift, both saturating (Lagoudas (ed.), "Shape Memory Alloys",
+    Springer 2008, ch. 7; Mammano & Dragoni, Int. J. Fatigue 2014: a few % to tens of % stroke
+    loss and several K of shift over 10³–10⁵ cycles). Representative values."""
+
+    stroke_loss: float = 0.25        # fraction lost after many cycles
+    stroke_cycles: float = 20000.0   # e-folding cycles of the loss
+    shift_c: float = 6.0             # transformation temperatures rise by this much
+    shift_cycles: float = 5000.0
+
+    def stroke(self, n: float) -> float:
+        return 1.0 - self.stroke_loss * (1.0 - math.exp(-n / self.stroke_cycles))
+
+    def shift(self, n: float) -> float:
+        return self.shift_c * (1.0 - math.exp(-n / self.shift_cycles))
+
+
+@dataclass(frozen=True)
+class PhysicalParams:
+    coil: CoilGeometry = CoilGeometry()
+    body_thermal: BodyThermal = BodyThermal()
+    length_mm: float = 80.0
+    coil_offset_mm: float = 2.0
+    working_strain: float = 0.06
+    mech_tau_s: float = 0.03
+    friction_band_deg: float = 12.0     # soft pad peel / bed-in range (estimate)
+    materials: dict = field(default_factory=lambda: dict(mat.MATERIALS))
+    fatigue: FatigueLaw = FatigueLaw()
+    simultaneous_s: float = 0.03
+
+
+@dataclass(frozen=True)
+class Transition:
+    t_s: float
+    src: int
+    dst: int
+    reward_mm: float    # centre-of-mass displacement since the previous transition
+
+    def __iter__(self):
+        return iter((self.t_s, self.src, self.dst, self.reward_mm))
+
+
+@dataclass(frozen=True)
+class _Act:
+    name: str
+    channel: int
+
+
+@dataclass(frozen=True)
+class _LimbView:
+    name: str
+    psi_star_deg: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class PlantView:
+    """What callers of the table plant read from ``plant.params``."""
+
+    actuators: tuple[_Act, ...]
+    limbs: tuple[_LimbView, ...]
+    step_mm: float = 1.0
+
+
+class PhysicalPlant:
+    """A robot body that moves by friction mechanics. ``robot``: a loaded ``proleg.robot.Robot``
+    (limbs, ψ*, actuators, channels; its matrix only to infer D1/D2 when the file does not
+    say, and to count transitions it forbids). ``conditions``: ``Conditions`` (see
+    ``conditions.KEYS``). ``mechanisms``: per limb "D1"/"D2" or per-level material names,
+    overriding the robot file."""
+
+    def __init__(self, robot: Any, conditions: Conditions | None = None, *, seed: int = 0,
+                 params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None) -> None:
+        self.robot = robot
+        self.physics = p = params or PhysicalParams()
+        self.conditions = cond = conditions or Conditions()
+        limbs = list(robot.limbs)
+        acts = list(robot.actuators)
+        lnames = [lb.name for lb in limbs]
+        anames = [a.name for a in acts]
+        cond.check_names(lnames, anames)
+        self.levels = tuple(len(lb.psi_star_deg) + 1 for lb in limbs)
+        self.params = PlantView(tuple(_Act(a.name, a.channel) for a in acts),
+                              tuple(_LimbView(lb.name, tuple(lb.psi_star_deg)) for lb in limbs))
+        self._rng = random.Random(seed)
+        nl, na = len(limbs), len(acts)
+        if nl < 2:
+            raise SimError("physical plant: at least two limbs (contacts) are needed")
+        self._nl, self._na = nl, na
+
+        # -- friction mechanisms (robot file, override, or inferred from the matrix) ----------
+        mech = limb_mechanisms(robot, mechanisms)
+        self.mechanisms = mech.names
+        self.mechanism_source = mech.source
+        fr = cond.get("friction")
+        self._mu_s = [[p.materials[m].mu_static * fr for m in mats] for mats in mech.materials]
+        self._mu_k = [[p.materials[m].mu_kinetic * fr for m in mats] for mats in mech.materials]
+        self._true_th = [tuple(t + cond.for_index("psi_star_shift_deg", i, lnames) for t in lb.psi_star_deg)
+                         for i, lb in enumerate(limbs)]
+        self._band = p.friction_band_deg
+
+        # -- geometry -------------------------------------------------------------------------
+        homes = []
+        for j, a in enumerate(acts):
+            named = [i for i, lb in enumerate(limbs) if lb.actuator == a.name]
+            homes.append(j if j in named else (named[0] if named else 0))
+        overlap = [cond.for_index("overlap_mm", j, anames) for j in range(na)]
+        contacts = tuple(float(x) for x in np.linspace(0.0, p.length_mm, nl))
+        geo = BodyGeometry(p.length_mm, p.coil_offset_mm, p.working_strain,
+                           default_spans(nl, homes, p.length_mm, overlap), contacts)
+        self.geometry = geo
+        self._shape = Shape(geo)
+
+        # -- thermal --------------------------------------------------------------------------
+        self._amb = cond.get("ambient_c")
+        mism = cond.get("coil_mismatch")
+        conv = cond.get("convection")
+        self._R, self._C, self._hA, self._G, self._lat = [], [], [], [], []
+        for j in range(na):
+            scale = 1.0 + (mism if j == 0 else -mism if j == na - 1 and na > 1 else 0.0)
+            g = p.coil
+            self._R.append(g.resistance_ohm * scale)
+            self._C.append(g.heat_capacity_j_k * scale)
+            self._lat.append(g.latent_j * scale)
+            self._hA.append(g.convection_w_k(80.0, self._amb, conv) * scale)
+            self._G.append(g.coil_to_body_w_k)
+        self._Cb = p.body_thermal.heat_capacity_j_k()
+        self._hAb = p.body_thermal.convection_w_k(conv)
+        self._supply = cond.get("supply_v") * math.sqrt(cond.get("power"))
+        self._rsrc = cond.get("supply_ohm")
+        self._pscale = [cond.for_index("power_scale", j, anames) for j in range(na)]
+        self._channel = [a.channel for a in acts]
+        self._n_channels = max(self._channel) + 1
+        self._temp = [self._amb] * na
+        self._tbody = self._amb
+        g = p.coil
+        self._hyst = [Hysteresis(g.as_c, g.af_c, g.ms_c, g.mf_c, self._amb) for _ in range(na)]
+        self._alive = [True] * na
+        self._pfactor = [1.0] * na
+        self._drift: list[tuple[str, float, float] | None] = [None] * na
+        self._drift_on = [0.0] * na
+        self._drift_shift = [0.0] * na
+        self._drift_stroke = [1.0] * na
+        self._ontime = [0.0] * na
+        self._speedup = cond.get("fatigue_speedup")
+        self._cycles = [cond.get("fatigue_cycles")] * na
+        self._fat_stroke = [1.0] * na
+        self._fat_shift = [0.0] * na
+        self._fat_at = [0.0] * na
+        for j in range(na):
+            self._update_fatigue(j)
+
+        # -- sensors and world --------------------------------------------------------------
+        inc = cond.get("incline_deg")
+        self._incline = math.radians(inc)
+        self._sense_off = []
+        for i in range(nl):
+            side = inc if i == 0 else -inc if i == nl - 1 else 0.0
+            self._sense_off.append(side + cond.for_index("imu_offset_deg", i, lnames)
+                                   + cond.for_index("imu_bias_deg", i, lnames))
+        self._noise = cond.get("imu_noise_deg")
+        self._weight_n = cond.get("mass_g") * 1e-3 * mat.GRAVITY_M_S2
+        self._normal_n = self._weight_n * math.cos(self._incline)
+        self._push = self._weight_n * math.sin(self._incline)   # downhill force along −x
+
+        # -- state ----------------------------------------------------------------------------
+        self._c = [0.0] * na
+        self._set_shape(self._shape.evaluate(self._c))
+        self._x0 = 0.0                                          # ground position of contact 0
+        self._stuck = [True] * nl
+        self._resting = True
+        self._com0 = self._com
+        self._dpsi = [0.0] * nl
+        self._t = 0.0
+        self._t_eval = 0.0
+        self._c_eval = list(self._c)
+        self._dt_cache: tuple[float, list[float], float] = (-1.0, [], 0.0)
+        mult, m = [], 1
+        for k in reversed(self.levels):
+            mult.append(m)
+            m *= k
+        self._mult = list(reversed(mult))
+        self._state = self._classify()
+        self._committed = self._state
+        self._pending: float | None = None
+        self._last_commit_x = 0.0
+        self._transitions: list[Transition] = []
+        self._unexpected = 0
+        tt = getattr(robot, "transitions", None)
+        self._allowed = tt.dense()[1] if tt is not None else None
+
+    # -- helpers ------------------------------------------------------------------------------
+    def _set_shape(self, vals: list[float]) -> None:
+        nl = self._nl
+        self._psi = vals[:nl]
+        self._gaps = vals[nl:2 * nl - 1]
+        self._load = vals[2 * nl - 1:3 * nl - 1]
+        self._com_off = vals[3 * nl - 1]
+        self._com = getattr(self, "_x0", 0.0) + self._com_off
+
+    def _classify(self) -> int:
+        idx = 0
+        for psi, ths, m in zip(self._psi, self._true_th, self._mult):
+            lvl = 0
+            for th in ths:
+                if psi >= th:
+                    lvl += 1
+            idx += lvl * m
+        return idx
+
+    def _update_fatigue(self, j: int) -> None:
+        law = self.physics.fatigue
+        n = self._cycles[j]
+        self._fat_at[j] = n
+        self._fat_stroke[j] = law.stroke(n)
+        self._fat_shift[j] = law.shift(n)
+        self._hyst[j].shift_c = self._fat_shift[j] + self._drift_shift[j]
+
+    # -- stepping -------------------------------------------------------------------------------
+    def step(self, dt_s: float, duties: Sequence[float]) -> None:
+        """Advance by ``dt_s`` seconds with each channel's duty held constant."""
+        if dt_s != self._dt_cache[0]:
+            if not dt_s > 0:
+                raise SimError(f"step: dt_s must be > 0, got {dt_s!r}")
+            k = [math.exp(-dt_s * (h + g) / c) for h, g, c in zip(self._hA, self._G, self._C)]
+            self._dt_cache = (dt_s, k, math.exp(-dt_s / self.physics.mech_tau_s))
+        _, decay, mdecay = self._dt_cache
+        if len(duties) < self._n_channels:
+            raise SimError(f"step: {len(duties)} duties given, the plant drives channels 0..{self._n_channels - 1}")
+        na = self._na
+        ds = []
+        for j in range(na):
+            d = duties[self._channel[j]]
+            if not 0.0 <= d <= 1.0:
+                raise SimError(f"step: duty {d!r} on channel {self._channel[j]} is outside 0..1")
+            ds.append(d if self._alive[j] else 0.0)
+        v = self._supply
+        if self._rsrc > 0.0:
+            v = v * v / (v + self._rsrc * sum(d * v / r for d, r in zip(ds, self._R)))
+        amb, tb = self._amb, self._tbody
+        to_body = 0.0
+        changed = False
+        moving = False
+        for j in range(na):
+            d = ds[j]
+            if d > 0.0:
+                self._ontime[j] += d * dt_s
+                if self._drift[j] is not None:
+                    self._apply_drift(j, d * dt_s)
+            power = d * v * v / self._R[j] * self._pscale[j] * self._pfactor[j]
+            h, g = self._hA[j], self._G[j]
+            t_eq = (power + h * amb + g * tb) / (h + g)
+            t = t_eq + (self._temp[j] - t_eq) * decay[j]
+            hy = self._hyst[j]
+            a0 = hy.alpha
+            if (a0 == 0.0 and t < hy.as_c + hy.shift_c and hy.temp < hy.as_c + hy.shift_c) or (
+                    a0 == 1.0 and t > hy.ms_c + hy.shift_c and hy.temp > hy.ms_c + hy.shift_c):
+                a1 = a0   # outside the transformation band on a saturated branch: nothing moves
+            else:
+                a1 = hy.update(t)
+            if a1 != a0:
+                t -= self._lat[j] * (a1 - a0) / self._C[j]
+                hy.temp = t
+                self._cycles[j] += abs(a1 - a0) * 0.5 * self._speedup
+                if abs(self._cycles[j] - self._fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
+                    self._update_fatigue(j)
+            self._temp[j] = t
+            to_body += g * (t - tb)
+            target = a1 * self._fat_stroke[j] * self._drift_stroke[j]
+            c = self._c[j]
+            if c != target:
+                c = target + (c - target) * mdecay
+                if abs(c - target) < 1e-7:
+                    c = target
+                else:
+                    moving = True
+                self._c[j] = c
+                changed = True
+        self._tbody = tb + dt_s * (to_body - self._hAb * (tb - amb)) / self._Cb
+        self._t += dt_s
+        if changed:
+            # Re-evaluate the shape once the contractions have moved by SHAPE_EPS since the
+            # last evaluation (≈ 0.013° of ψ, below the IMU's resolution): the anchor/slip solve is rate-independent, so
+            # one step over the accumulated change is the same motion as many small ones.
+            ce = self._c_eval
+            if any(abs(a - b) > SHAPE_EPS for a, b in zip(self._c, ce)) or not moving:
+                self._c_eval = list(self._c)
+                psi_old, gaps_old = self._psi, self._gaps
+                self._set_shape(self._shape.evaluate(self._c))
+                if self._nl == 2:
+                    self._move2(self._gaps[0] - gaps_old[0])
+                else:
+                    self._move([g1 - g0 for g0, g1 in zip(gaps_old, self._gaps)])
+                inv = 1.0 / (self._t - self._t_eval)
+                self._t_eval = self._t
+                self._dpsi = [(a - b) * inv for a, b in zip(self._psi, psi_old)]
+                state = self._classify()
+                if state != self._state:
+                    self._state = state
+                    if self._pending is None:
+                        self._pending = self._t
+        elif not self._resting:
+            self._stuck = [True] * self._nl   # the body came to rest: every contact is static again
+            self._resting = True
+            self._dpsi = [0.0] * self._nl
+            self._t_eval = self._t
+        else:
+            self._t_eval = self._t
+        if self._pending is not None and self._t - self._pending >= self.physics.simultaneous_s - 1e-12:
+            self._commit()
+
+    def _move(self, dgaps: list[float]) -> None:
+        """Anchor/slip: how the contacts move when the gaps change by ``dgaps``."""
+        offsets = [0.0]
+        for dg in dgaps:
+            offsets.append(offsets[-1] + dg)
+        caps = []
+        band = self._band
+        for i in range(self._nl):
+            mus = self._mu_s[i] if self._stuck[i] else self._mu_k[i]
+            caps.append(mu_at(self._psi[i], self._true_th[i], mus, band) * self._load[i] * self._normal_n)
+        if all(abs(o) < 1e-12 for o in offsets):
+            self._stuck = [True] * self._nl
+            self._resting = True
+            return
+        self._resting = False
+        delta = solve_translation(offsets, caps, self._push)
+        self._x0 += delta
+        self._stuck = [abs(delta + o) < 1e-9 for o in offsets]
+        self._com = self._x0 + self._com_off
+
+    def _move2(self, dg: float) -> None:
+        """``_move`` for two contacts: offsets (0, dg), a closed-form weighted median."""
+        if abs(dg) < 1e-12:
+            self._stuck = [True, True]
+            self._resting = True
+            return
+        self._resting = False
+        psi, th, band, st = self._psi, self._true_th, self._band, self._stuck
+        n = self._normal_n
+        c0 = mu_at(psi[0], th[0], self._mu_s[0] if st[0] else self._mu_k[0], band) * self._load[0] * n
+        c1 = mu_at(psi[1], th[1], self._mu_s[1] if st[1] else self._mu_k[1], band) * self._load[1] * n
+        delta = solve_two(dg, c0, c1, self._push)
+        self._x0 += delta
+        self._stuck = [abs(delta) < 1e-9, abs(delta + dg) < 1e-9]
+        self._com = self._x0 + self._com_off
+
+    def _commit(self) -> None:
+        a, b = self._committed, self._state
+        t0 = self._pending
+        self._pending = None
+        if a == b:
+            return
+        x = self._com - self._com0
+        r = x - self._last_commit_x
+        self._last_commit_x = x
+        self._committed = b
+        if self._allowed is not None and not self._allowed[a][b]:
+            self._unexpected += 1
+        self._transitions.append(Transition(t0, a, b, r))
+
+    def _apply_drift(self, j: int, on: float) -> None:
+        mode, rate, step = self._drift[j]
+        self._drift_on[j] += on
+        x = self._drift_on[j] * rate
+        if mode == "power":
+            self._pfactor[j] = (1.0 - step) * math.exp(-x)
+        elif mode == "stroke":
+            self._drift_stroke[j] = (1.0 - step) * math.exp(-x)
+        else:
+            self._drift_shift[j] = step + x
+            self._hyst[j].shift_c = self._fat_shift[j] + self._drift_shift[j]
+
+    # -- faults ---------------------------------------------------------------------------------
+    def _actuator_of(self, channel: int) -> int:
+        try:
+            return self._channel.index(channel)
+        except ValueError:
+            raise SimError(f"no actuator on channel {channel} (channels: {self._channel})") from None
+
+    def kill_actuator(self, channel: int) -> None:
+        """The coil on ``channel`` no longer heats (broken wire, dead MOSFET)."""
+        self._alive[self._actuator_of(channel)] = False
+
+    def inject_drift(self, channel: int, rate: float, mode: str = "power", step: float = 0.0) -> None:
+        """From now on the coil on ``channel`` drifts with its on-time (∫ duty dt): "power"
+        (heating × exp(−rate·t_on)), "stroke" (stroke × exp(−rate·t_on)), "temperature"
+        (transformation temperatures + rate °C per s of on-time); ``step`` an immediate part."""
+        j = self._actuator_of(channel)
+        if mode not in ("power", "temperature", "stroke"):
+            raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
+        if not (math.isfinite(rate) and rate >= 0):
+            raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
+        if mode != "temperature" and not 0.0 <= step < 1.0:
+            raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
+        self._drift[j] = (mode, float(rate), float(step))
+        self._drift_on[j] = 0.0
+        self._apply_drift(j, 0.0)
+
+    # -- observation ----------------------------------------------------------------------------
+    def limb_truth(self, i: int) -> tuple[float, float]:
+        """(angle the limb's IMU senses in degrees, its rate in °/s)."""
+        a = self._psi[i] + self._sense_off[i]
+        if self._noise > 0.0:
+            a += self._rng.gauss(0.0, self._noise)
+        return a, self._dpsi[i]
+
+    @property
+    def time_s(self) -> float:
+        return self._t
+
+    @property
+    def psi_deg(self) -> np.ndarray:
+        """True contact angles."""
+        return np.array(self._psi)
+
+    @property
+    def dpsi_dps(self) -> np.ndarray:
+        return np.array(self._dpsi)
+
+    @property
+    def true_psi_star_deg(self) -> list[tuple[float, ...]]:
+        return list(self._true_th)
+
+    @property
+    def temperature_c(self) -> np.ndarray:
+        return np.array(self._temp)
+
+    @property
+    def body_temperature_c(self) -> float:
+        return self._tbody
+
+    @property
+    def austenite(self) -> np.ndarray:
+        return np.array([h.alpha for h in self._hyst])
+
+    @property
+    def contraction(self) -> np.ndarray:
+        """Per coil, fraction of its fresh stroke (after the mechanical lag)."""
+        return np.array(self._c)
+
+    @property
+    def stroke(self) -> np.ndarray:
+        return np.array([a * b for a, b in zip(self._fat_stroke, self._drift_stroke)])
+
+    @property
+    def cycles(self) -> np.ndarray:
+        return np.array(self._cycles)
+
+    @property
+    def resistance_ohm(self) -> np.ndarray:
+        return np.array(self._R)
+
+    @property
+    def on_time_s(self) -> np.ndarray:
+        return np.array(self._ontime)
+
+    @property
+    def contact_x_mm(self) -> np.ndarray:
+        xs = [self._x0]
+        for g in self._gaps:
+            xs.append(xs[-1] + g)
+        return np.array(xs)
+
+    def pose(self, contractions: Sequence[float]) -> None:
+        """Set the coils' contractions directly (bypassing the thermal model) and let the body
+        move by friction mechanics: for kinematic sweeps (``measure.infer_mechanisms``)."""
+        self._c = [float(c) for c in contractions]
+        self._c_eval = list(self._c)
+        gaps_old = self._gaps
+        psi_old = self._psi
+        self._set_shape(self._shape.evaluate(self._c))
+        self._move([g1 - g0 for g0, g1 in zip(gaps_old, self._gaps)])
+        self._dpsi = [0.0 for _ in psi_old]
+        self._state = self._classify()
+
+    @property
+    def stuck(self) -> tuple[bool, ...]:
+        return tuple(self._stuck)
+
+    @property
+    def true_state(self) -> int:
+        return self._state
+
+    @property
+    def limb_levels(self) -> tuple[int, ...]:
+        out, idx = [], self._state
+        for k in reversed(self.levels):
+            idx, d = divmod(idx, k)
+            out.append(d)
+        return tuple(reversed(out))
+
+    @property
+    def displacement_mm(self) -> float:
+        """Centre of mass along the ground (+x = from the first limb towards the last)."""
+        return self._com - self._com0
+
+    @property
+    def transitions(self) -> list[Transition]:
+        return list(self._transitions)
+
+    @property
+    def unexpected_transitions(self) -> int:
+        return self._unexpected
