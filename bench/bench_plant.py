@@ -22,8 +22,8 @@ from bench_firmware import machine  # noqa: E402
 
 from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.physical import PhysicalPlant, measure_matrix  # noqa: E402
-from proleg.sim.run import SimulatedRobot, sim_library  # noqa: E402
-from proleg.sim.session import SimSession  # noqa: E402
+from proleg.sim.closed_loop import SimulatedRobot, sim_library  # noqa: E402
+from proleg.report import SimSession  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results" / "plant.json"
 ROBOT = ROOT / "robots" / "paper-r1.toml"

@@ -228,8 +228,8 @@ def test_r3_entries_the_paper_reports_against_coulomb_friction(mech, entry, sign
 # -- closed loop with the host-sim firmware ---------------------------------------------------
 @pytest.fixture(scope="module")
 def r1_runs():
-    from proleg.sim.run import SimulatedRobot
-    from proleg.sim.session import SimSession
+    from proleg.sim.closed_loop import SimulatedRobot
+    from proleg.report import SimSession
 
     r = robot("paper-r1")
     out = {}
@@ -253,8 +253,8 @@ def test_r1_walks_without_faults_on_the_physical_plant(r1_runs):
 def test_a_coil_that_cannot_reach_its_state_is_switched_off_before_the_state_timeout():
     """power ×0.3: the coil never gets ψ past ψ*. The stall detector (ctl.h) cuts it after
     5 s of heating without progress, so it is cooling when the 8 s state timeout reports."""
-    from proleg.sim.run import SimulatedRobot
-    from proleg.sim.session import SimSession
+    from proleg.sim.closed_loop import SimulatedRobot
+    from proleg.report import SimSession
 
     r = robot("paper-r1")
     sim = SimulatedRobot(r, plant=PhysicalPlant(r, parse_conditions(["power=0.3"])))
