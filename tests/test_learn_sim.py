@@ -176,6 +176,9 @@ def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
         client.connect()
         Explorer(client, robot, log, None, repeats=1, seed=8).run(max_pieces=2)
         trials = list(log.trials)
+    # the telemetry saw each new state before the firmware confirmed it settled (STATE_REACHED)
+    assert all(tr.t_seen is not None and tr.t_start < tr.t_seen <= tr.t_end for tr in trials)
+    assert max(tr.t_end - tr.t_seen for tr in trials) > 0.3  # a cooling limb settles late
     t, x = np.array(path).T
     keep = np.arange(0, len(t), 17)  # ~30 fps
     track = Track(t[keep] + 42.0, x[keep])

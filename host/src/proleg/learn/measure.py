@@ -3,8 +3,14 @@
 A record holds the transition (``from``/``to`` as state labels), the firmware's event
 times of its start and end (seconds, the firmware's clock), the planar motion in the
 robot's start frame when the position source knows it (``dx``, ``dy`` in the robot file's
-units, ``dtheta_deg``), and where the numbers came from (``source``: "sim", "tracker",
-"manual", …). Example line::
+units, ``dtheta_deg``), where the numbers came from (``source``: "sim", "tracker",
+"manual", …) and, when the firmware's telemetry showed it, ``t_seen``: the firmware time at
+which the measured (debounced) state first became ``to``. ``t_end`` is the STATE_REACHED
+event, which the ψ-feedback controller sends only once every limb has settled clear of
+its band edges — for a limb that cools, up to ~0.6 s after the friction change that moved
+the robot; ``t_seen`` is within a telemetry period (+ the debounce) of that change, so it
+is what a tracker's clock is aligned with (``tracker.estimate_offset``), while the pose is
+read after ``t_end`` (settled). Example line::
 
     {"from": "00", "to": "10", "t_start": 1.204, "t_end": 1.951, "dx": 3.98, "dy": null,
      "dtheta_deg": null, "source": "sim"}
@@ -44,11 +50,19 @@ class Trial:
     dy: float | None = None
     dtheta_deg: float | None = None
     source: str = ""
+    t_seen: float | None = None  # firmware time the measured state first became dst (≤ t_end)
+
+    @property
+    def t_moved(self) -> float:
+        """Best firmware time of the transition's last motion: ``t_seen``, else ``t_end``."""
+        return self.t_end if self.t_seen is None else self.t_seen
 
     def to_json(self) -> str:
         d = asdict(self)
         d["from"], d["to"] = d.pop("src"), d.pop("dst")
         order = ["from", "to", "t_start", "t_end", "dx", "dy", "dtheta_deg", "source"]
+        if self.t_seen is not None:
+            order.append("t_seen")
         return json.dumps({k: d[k] for k in order}, ensure_ascii=False)
 
     @classmethod
@@ -56,7 +70,8 @@ class Trial:
         try:
             d = json.loads(line)
             t = cls(str(d["from"]), str(d["to"]), float(d["t_start"]), float(d["t_end"]),
-                    _opt(d.get("dx")), _opt(d.get("dy")), _opt(d.get("dtheta_deg")), str(d.get("source", "")))
+                    _opt(d.get("dx")), _opt(d.get("dy")), _opt(d.get("dtheta_deg")), str(d.get("source", "")),
+                    _opt(d.get("t_seen")))
         except (ValueError, KeyError, TypeError) as e:
             raise TrialLogError(f"{where}: expected a trial record (from, to, t_start, t_end, dx…), {e}") from None
         return t

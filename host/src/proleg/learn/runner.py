@@ -14,7 +14,9 @@ shortest way back to p0 (the firmware accepts closed walks only), START, and STO
 the firmware's STATE_REACHED event says ``pk`` was reached the k-th time. Each reached
 state's pose is taken ``settle_s`` after its event (the robot holds a reached state for
 the robot's ``hold_ms`` before it moves on; keep settle_s below that), and every pair of
-consecutive reached states that is an allowed transition becomes a trial.
+consecutive reached states that is an allowed transition becomes a trial. The telemetry's
+measured state is watched meanwhile: the time it first showed a reached state (before the
+firmware confirmed it settled) is the trial's ``t_seen``, which a tracker is aligned with.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
-from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind
+from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
 from .measure import Pose, Trial, TrialLog, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
@@ -150,20 +152,21 @@ class Explorer:
         timeout = (goal + 2) * self.robot.safety.state_timeout_ms / 1000.0
         deadline = self._clock() + timeout
         reached: list[tuple[float, int, Pose | None]] = []
-        pending: tuple[float, float, int] | None = None  # (due on the link clock, event time, state)
+        pending: tuple[float, float, int, float | None] | None = None  # (due, event time, state, seen)
+        seen: tuple[int, float] | None = None  # telemetry: measured state and since when (firmware s)
         out: list[Trial] = []
         try:
             while len(reached) < goal + 1 or pending is not None:
                 now = self._clock()
                 if pending is not None and now >= pending[0] - 1e-9:
-                    _due, t_ev, state = pending
+                    _due, t_ev, state, t_seen = pending
                     pending = None
                     pose = self.pose() if self.pose is not None else None
                     if reached:
                         t0, a, p0 = reached[-1]
                         if t.lookup(a, state) is not None:
                             d = planar_delta(p0, pose) if (p0 is not None and pose is not None) else (None, None, None)
-                            trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source)
+                            trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source, t_seen)
                             if record:
                                 self.log.append(trial)
                             out.append(trial)
@@ -174,6 +177,11 @@ class Explorer:
                                            f"within {timeout:.0f} s")
                 wait = 0.05 if pending is None else max(0.0, min(0.05, pending[0] - now))
                 msg = client.recv(wait)
+                if msg is not None and msg.name == "TELEMETRY" and not int(msg.flags) & Flag.STATE_UNKNOWN:
+                    m = int(msg.measured)
+                    if seen is None or seen[0] != m:
+                        seen = (m, int(msg.time_ms) / 1000.0)
+                    continue
                 if msg is None or msg.name != "EVENT":
                     continue
                 kind = int(msg.kind)
@@ -185,7 +193,9 @@ class Explorer:
                 state = int(msg.detail)
                 if (reached and reached[-1][1] == state) or pending is not None:
                     continue  # the same state again, or a new one before the last settled (hold too short)
-                pending = (self._clock() + self.settle_s, int(msg.time_ms) / 1000.0, state)
+                t_ev = int(msg.time_ms) / 1000.0
+                t_seen = seen[1] if seen is not None and seen[0] == state and seen[1] <= t_ev else None
+                pending = (self._clock() + self.settle_s, t_ev, state, t_seen)
         finally:
             client.stop()
         return out

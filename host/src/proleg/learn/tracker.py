@@ -95,15 +95,31 @@ def _motion_near(track: Track, events: np.ndarray, offset: float, lead_s: float,
 
 
 def estimate_offset(track: Track, event_times: Sequence[float], *, max_offset_s: float = 30.0,
-                    step_s: float = 0.02, lead_s: float = 0.5, lag_s: float = 0.1) -> float:
-    """Tracker time − firmware time that puts the most tracked motion within
-    ``[t − lead_s, t + lag_s]`` of the firmware's state-reached times ``event_times`` (a
-    transition moves the robot while it heads for its target state, up to the moment it is
-    reached) and the least elsewhere. The search spans ``±max_offset_s`` around the offset
-    that lines up the track's start with the first event, in ``step_s`` steps, then takes
-    the middle of the plateau (scores within 2 % of the total tracked motion of the best), so
-    camera noise does not pick an end of it. Accuracy ≈ ±0.05 s on the synthetic tests; a
-    sync event is better when the lab has one."""
+                    step_s: float = 0.02, lead_s: float = 0.25, lag_s: float = 0.1) -> float:
+    """Tracker time − firmware time, from where the tracked motion lies relative to the
+    times ``event_times`` at which the firmware saw each transition's new state.
+
+    Give the times the measured state changed (``Trial.t_moved``), not the STATE_REACHED
+    events: the ψ-feedback controller confirms a state only once every limb has settled
+    clear of its band edges — for a cooling limb up to ~0.6 s after the friction change
+    that moved the robot — whereas the measured state changes within the debounce (+ one
+    telemetry period) of it.
+
+    A transition's motion ends when its new state is seen (give or take ``lag_s``: the
+    plant's or camera's latency) and mostly lies within ``lead_s`` before (a diagonal
+    transition passes through an intermediate state); after a piece, the robot relaxes as
+    its coils cool, which moves it with no event nearby. So the set of offsets that put
+    the most motion within ``[t − lead_s, t + lag_s]`` and the least elsewhere is blurred
+    on its high side (motion before events, relaxation) and sharp on its low side: shift
+    the clocks the other way by more than ``lag_s`` and the last motion of every transition
+    comes after its event. The search: that score on a ``step_s`` grid over
+    ``±max_offset_s`` around lining up the track's start with the first event, refined within
+    ``± lead_s`` of the best; the estimate is the low edge of the best plateau (scores within
+    2 % of the total tracked motion of the best, contiguous with it) + ``lag_s``, i.e. the
+    offset at which the latest-seen motion ends exactly at its event. It is off by that
+    motion's own delay to its event (−one telemetry period to + the debounce on a robot;
+    ≈ +0.03 s on the table plant, which applies a step 30 ms after the crossing) — ±0.06 s
+    on the synthetic and simulated tests. A sync event is better when the lab has one."""
     ev = np.sort(np.asarray(event_times, dtype=float))
     if len(ev) == 0:
         raise TrackerError("no transitions to align the tracker with")
@@ -111,11 +127,14 @@ def estimate_offset(track: Track, event_times: Sequence[float], *, max_offset_s:
     grid = base + np.arange(-max_offset_s, max_offset_s + step_s / 2, step_s)
     scores = np.array([_motion_near(track, ev, o, lead_s, lag_s) for o in grid])
     best = float(grid[int(np.argmax(scores))])
-    fine = best + np.arange(-0.5 * lead_s, 0.5 * lead_s + 1e-9, step_s / 20)
+    fine = best + np.arange(-lead_s, lead_s + 1e-9, step_s / 20)
     fscores = np.array([_motion_near(track, ev, o, lead_s, lag_s) for o in fine])
     total = float(np.hypot(np.diff(track.x), np.diff(track.y) if track.y is not None else 0.0).sum())
-    top = fine[fscores >= fscores.max() - 0.02 * total]  # the plateau, not the noise's favourite
-    return float((top.min() + top.max()) / 2)
+    top = fscores >= fscores.max() - 0.02 * total  # the plateau, not the noise's favourite
+    k = int(np.argmax(fscores))
+    while k > 0 and top[k - 1]:
+        k -= 1
+    return float(fine[k]) + lag_s
 
 
 class TrackerSource:
@@ -149,14 +168,16 @@ def trials_from_events(reached: Sequence[tuple[float, str]], source, *, settle_s
 
 def attach_track(trials, track: Track, offset_s: float | None = None, *, settle_s: float = 0.05):
     """Trials recorded without a pose (``dx`` None), e.g. a run with ``--source tracker``,
-    given their motion from ``track``; the offset is estimated from the trials' end times
-    (their state-reached events) unless given. Returns (new trials, offset used)."""
+    given their motion from ``track``; the offset is estimated from the times the trials'
+    motion ended (``Trial.t_moved``: when the telemetry first showed the new state, else the
+    state-reached event) unless given; the poses are read ``settle_s`` after the events
+    (the robot settled). Returns (new trials, offset used)."""
     from dataclasses import replace
 
     from .measure import planar_delta
 
     if offset_s is None:
-        offset_s = estimate_offset(track, [t.t_end for t in trials])
+        offset_s = estimate_offset(track, [t.t_moved for t in trials])
     src = TrackerSource(track, offset_s)
     out = []
     for t in trials:
