@@ -124,6 +124,7 @@ C_TESTS = {
     "test_psi.c": ("r1-fast", ["psi.c"], [], []),
     "test_psi_multilevel.c": ("multi", ["psi.c", "seq.c"], ["gait_table.c"], []),
     "test_sma.c": ("r1-fast", ["sma.c"], [], []),
+    "test_safety.c": ("r1-fast", ["safety.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c"], [], []),
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c"], ["gait_table.c"], []),

@@ -57,6 +57,41 @@ def _ticks(ms: float, tick_hz: int) -> int:
     return int(math.ceil(ms * tick_hz / 1000.0 - 1e-9))
 
 
+#: Thermal-budget keys of [safety] (docs/safety.md) and their defaults when a robot file
+#: (or a robot.py that predates them) has none: hold_max_duty None = max(0.3, control.hold_duty).
+BUDGET_DEFAULTS: dict[str, Any] = {
+    "hold_max_duty": None,
+    "max_mean_duty": 0.5,
+    "duty_window_ms": 10_000,
+    "on_limit_latch": 3,
+}
+
+
+def _thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
+    """The [safety] keys of the thermal budget, read with their defaults (docs/safety.md)."""
+    v = {k: getattr(safety, k, d) for k, d in BUDGET_DEFAULTS.items()}
+    max_duty = float(safety.max_duty)
+    hold_max = v["hold_max_duty"]
+    if hold_max is None:
+        hold_max = min(max_duty, max(0.3, float(ctl.hold_duty)))
+    mean = min(float(v["max_mean_duty"]), max_duty)
+    if not 0.0 <= float(hold_max) <= mean:
+        raise BuildError(
+            f"robot {name}: safety.hold_max_duty {hold_max:g} must lie in 0 .. max_mean_duty ({mean:g}): "
+            "a duty the coil may hold forever must fit the mean-duty window"
+        )
+    if not 8 <= int(v["duty_window_ms"]) <= 600_000:
+        raise BuildError(f"robot {name}: safety.duty_window_ms {v['duty_window_ms']} must lie in 8 .. 600000")
+    if not 1 <= int(v["on_limit_latch"]) <= 255:
+        raise BuildError(f"robot {name}: safety.on_limit_latch {v['on_limit_latch']} must lie in 1 .. 255")
+    return dict(
+        hold_max_duty_pm=round(float(hold_max) * 10000),
+        mean_duty_pm=round(mean * 10000),
+        duty_window_ms=int(v["duty_window_ms"]),
+        on_limit_latch=int(v["on_limit_latch"]),
+    )
+
+
 def _q14(deg: float) -> tuple[int, int]:
     r = math.radians(deg)
     return round(math.cos(r) * Q14), round(math.sin(r) * Q14)
@@ -173,6 +208,7 @@ def render_config(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], b
 
     ctl, safety = robot.control, robot.safety
     tick_hz = int(ctl.tick_hz)
+    budget = _thermal_budget(robot.name, safety, ctl)
     tick_us = round(1_000_000 / tick_hz)
     if tick_hz < 200:
         raise BuildError(f"robot {robot.name}: control.tick_hz {tick_hz} below 200")
@@ -266,6 +302,7 @@ def render_config(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], b
         timeout_ticks=_ticks(safety.state_timeout_ms, tick_hz),
         watchdog_ms=int(safety.link_watchdog_ms),
         watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
+        **budget,
         stuck_samples=max(20, tick_hz // 5),
         uart_baud=uart_baud,
         clock_hz=clock_hz,
