@@ -19,9 +19,7 @@ void guard_init(void)
 
 void guard_set_timeout_ms(uint32_t ms)
 {
-    if (ms <= CFG_STATE_TIMEOUT_MS) {
-        timeout_us = ms * 1000UL;
-    }
+    timeout_us = (ms < CFG_STATE_TIMEOUT_MS ? ms : CFG_STATE_TIMEOUT_MS) * 1000UL;
 }
 
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)

@@ -26,7 +26,7 @@
 
 void guard_init(void);
 
-/* Narrow the state timeout (ms, at most CFG_STATE_TIMEOUT_MS; the caller checks). */
+/* Narrow the state timeout (ms; a value above CFG_STATE_TIMEOUT_MS counts as it). */
 void guard_set_timeout_ms(uint32_t ms);
 
 /* Once per tick after the sequencer. demanding: a gait is running and its current target

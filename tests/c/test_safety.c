@@ -112,7 +112,7 @@ static void test_the_operator_acknowledging_a_fault_restarts_the_step_time(void)
     CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
 }
 
-static void test_a_narrowed_timeout_applies_and_a_wider_one_is_ignored(void)
+static void test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value(void)
 {
     setup(0);
     guard_set_timeout_ms(50);
@@ -131,6 +131,6 @@ int main(void)
     RUN(test_repeated_on_limit_hits_without_progress_latch);
     RUN(test_hits_on_different_steps_do_not_latch);
     RUN(test_the_operator_acknowledging_a_fault_restarts_the_step_time);
-    RUN(test_a_narrowed_timeout_applies_and_a_wider_one_is_ignored);
+    RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
     return UNIT_EXIT();
 }
