@@ -29,6 +29,7 @@ typedef struct {
     uint16_t applied;           /* last output (0 after all_off/estop) */
     uint16_t charged;           /* duty the pin carried since the last tick: charged at the next */
     uint8_t blocked;            /* the mean-duty window refused the last request */
+    uint8_t forced;             /* the cool-down owed follows an on-limit hit: fully off */
 } act_state_t;
 
 static act_state_t acts[CFG_N_ACTUATORS];
@@ -127,6 +128,9 @@ static void charge(act_state_t *a, uint32_t dt)
         a->on_us = add_sat(a->on_us, dt);
     } else {
         a->owed_us = a->owed_us > dt ? a->owed_us - dt : 0u;
+        if (a->owed_us == 0u) {
+            a->forced = 0;
+        }
     }
 }
 
@@ -144,6 +148,7 @@ void sma_init(void)
         a->win_rem = 0;
         a->charged = 0;
         a->blocked = 0;
+        a->forced = 0;
     }
     last_us = hal_micros();
     slot_us = 0;
@@ -183,11 +188,14 @@ uint8_t sma_tick(void)
             clamped = 1;
         }
         charge(a, dt);
-        if (duty > hold_max) {
+        if (a->forced) {
+            duty = 0; /* cooling after an on-limit hit: off */
+        } else if (duty > hold_max) {
             if (a->owed_us > 0u) {
-                duty = 0;
+                duty = hold_max; /* cooling: no more than a duty the coil may carry forever */
             } else if (a->on_us + CFG_TICK_US > max_on_us) {
                 duty = 0; /* cut before the next tick would pass max_on */
+                a->forced = 1;
                 hit = (uint8_t)(hit | (1u << i));
                 if (limit_hits < 0xFFFFu) {
                     limit_hits++;

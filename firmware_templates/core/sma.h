@@ -14,7 +14,8 @@
  *   tick early rather than one tick late) - an on-limit hit, reported;
  * - cool-down after ANY on-period, forced or not, in proportion to its length:
  *   period × min_cooldown / max_on (a full max_on period owes min_cooldown). While it is
- *   owed, a request above the hold ceiling gets 0; requests at or below it pass;
+ *   owed the coil carries at most the hold ceiling, and nothing at all when the period was
+ *   cut at max_on (an on-limit hit);
  * - mean duty: the duty integrated over any window of CFG_DUTY_WINDOW_MS stays at or below
  *   CFG_MEAN_DUTY_PM (a request that would not fit gets 0).
  * Nothing resets the spent budget: sma_all_off() and sma_estop() turn the pins off at once

@@ -199,8 +199,8 @@ static void test_any_on_period_owes_a_cool_down_in_proportion_to_it(void)
     CHECK(sma_cooling(0));
     sma_request(0, 6000);
     off = CFG_TICK_US;
-    while (fake_pwm[0] == 0u && off < COOL_US * 4u) {
-        tick();
+    while (fake_pwm[0] <= CFG_HOLD_MAX_DUTY_PM && off < COOL_US * 4u) {
+        tick(); /* cooling: at most the hold ceiling, until the loop ends */
         off += CFG_TICK_US;
     }
     CHECK(off >= COOL_US / 2u); /* 25 ms of 50 owes 10 of 20 ms */
@@ -208,14 +208,38 @@ static void test_any_on_period_owes_a_cool_down_in_proportion_to_it(void)
     CHECK_EQ(sma_limit_hits(), 0); /* not a limit hit: an ordinary cool-down */
 }
 
-static void test_hold_requests_pass_during_a_cool_down(void)
+static void test_a_cool_down_after_a_voluntary_period_allows_holding_but_not_heating(void)
+{
+    uint32_t t;
+    setup();
+    sma_request(0, 6000);
+    for (t = 0; t < 20; t++) {
+        tick();
+    }
+    sma_request(0, 2500); /* the limb got there: hold */
+    tick();
+    CHECK(sma_cooling(0));
+    CHECK_EQ(fake_pwm[0], 2500);
+    sma_request(0, 6000); /* sagging: drive again, but the coil still owes a cool-down */
+    tick();
+    CHECK(sma_cooling(0));
+    CHECK_EQ(fake_pwm[0], CFG_HOLD_MAX_DUTY_PM);
+}
+
+static void test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down(void)
 {
     uint8_t hit;
+    uint32_t off = 0;
     setup();
     on_time_until_cut(6000, CFG_TICK_US, &hit);
     sma_request(0, 2500);
+    while (off < COOL_US - CFG_TICK_US) {
+        tick();
+        CHECK_EQ(fake_pwm[0], 0);
+        off += CFG_TICK_US;
+    }
     tick();
-    CHECK(sma_cooling(0));
+    tick();
     CHECK_EQ(fake_pwm[0], 2500);
 }
 
@@ -327,7 +351,8 @@ int main(void)
     RUN(test_stop_and_start_between_two_ticks_continue_the_on_period);
     RUN(test_estop_and_clear_refund_nothing);
     RUN(test_any_on_period_owes_a_cool_down_in_proportion_to_it);
-    RUN(test_hold_requests_pass_during_a_cool_down);
+    RUN(test_a_cool_down_after_a_voluntary_period_allows_holding_but_not_heating);
+    RUN(test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down);
     RUN(test_holding_at_or_below_the_hold_ceiling_is_never_on_time);
     RUN(test_mean_duty_over_any_window_stays_below_the_limit);
     RUN(test_run_time_limits_may_narrow_but_never_widen_the_envelope);
