@@ -277,6 +277,24 @@ def test_holding_a_state_at_the_hold_duty_is_not_ended_by_the_envelope(rig):
     assert len(rig.events(EventKind.STATE_REACHED)) >= 4
 
 
+def test_the_link_watchdog_stops_a_gait_the_host_went_quiet_on(tmp_path):
+    text = (robots_dir() / "paper-r1.toml").read_text()
+    path = tmp_path / "paper-r1-watchdog.toml"
+    path.write_text(text.replace("[safety]\n", "[safety]\nlink_watchdog_ms = 500\n"))
+    rig = Rig(load_robot(path))
+    rig.ticks(50)
+    assert rig.reply(rig.send("START", gait=0, direction=0)).spec.name == "ACK"
+    for _ in range(6):  # a PING every 400 ms keeps it alive
+        last_frame_us = rig.now_us
+        rig.reply(rig.send("PING"), ticks=400)
+    assert not rig.events(EventKind.FAULT)
+    rig.ticks(600)
+    fault = rig.events(EventKind.FAULT)
+    assert fault and fault[-1].code == FaultCode.LINK_WATCHDOG
+    assert 500_000 <= fault[-1].time_ms * 1000 - last_frame_us <= 503_000
+    assert all(rig.sim.board.pwm(c) == 0 for c in rig.sim.channels)
+
+
 # ------------------------------------------------------------------ the attacker
 
 _PARAMS = [int(p) for p in ParamId]
