@@ -2,7 +2,7 @@
 #include "safety.h"
 
 #include "hal.h"
-#include "sma.h"
+#define GUARD_DT_CAP_US 400000UL /* as sma.c: a longer gap counts as this */
 
 static uint32_t last_us;
 static uint32_t unreached_us;
@@ -30,8 +30,8 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
     last_us = now;
     if (dt >= 0x80000000UL) {
         dt = CFG_TICK_US; /* the clock stepped back: count one tick */
-    } else if (dt > SMA_DT_CAP_US) {
-        dt = SMA_DT_CAP_US;
+    } else if (dt > GUARD_DT_CAP_US) {
+        dt = GUARD_DT_CAP_US;
     }
     if (reached) {
         unreached_us = 0;

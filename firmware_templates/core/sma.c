@@ -1,6 +1,8 @@
 /* sma.c - see sma.h. */
 #include "sma.h"
 
+#include <string.h>
+
 #include "hal.h"
 #include "rom.h"
 
@@ -20,26 +22,26 @@
 static const uint8_t act_channel[CFG_N_ACTUATORS] ROM = CFG_ACTUATOR_CHANNELS;
 
 typedef struct {
-    uint32_t on_us;             /* length of the current on-period */
-    uint32_t owed_us;           /* cool-down still owed */
-    uint32_t win[SMA_WIN_SLOTS];
-    uint32_t win_total;         /* sum of win[] */
-    uint16_t win_rem;           /* remainder of the last charge, below 1024 */
-    uint16_t request;           /* wanted duty */
-    uint16_t applied;           /* last output (0 after all_off/estop) */
-    uint16_t charged;           /* duty the pin carried since the last tick: charged at the next */
-    uint8_t blocked;            /* the mean-duty window refused the last request */
-    uint8_t forced;             /* the cool-down owed follows an on-limit hit: fully off */
+    uint32_t on_us;    /* length of the current on-period */
+    uint32_t owed_us;  /* cool-down still owed */
+    uint32_t win_total; /* sum of this actuator's window slots */
+    uint16_t win_rem;  /* remainder of the last charge, below 1024 */
+    uint16_t request;  /* wanted duty */
+    uint16_t applied;  /* last output (0 after all_off/estop) */
+    uint16_t charged;  /* duty the pin carried since the last tick: charged at the next */
+    uint8_t blocked;   /* the mean-duty window refused the last request */
+    uint8_t forced;    /* the cool-down owed follows an on-limit hit: fully off */
 } act_state_t;
 
 static act_state_t acts[CFG_N_ACTUATORS];
+static uint32_t win[SMA_WIN_SLOTS][CFG_N_ACTUATORS];
 static uint32_t last_us;
 static uint32_t slot_us;
 static uint8_t slot;
 static uint8_t estopped;
 static uint16_t max_duty = CFG_MAX_DUTY_PM;
 static uint32_t max_on_us = CFG_MAX_ON_TICKS * CFG_TICK_US;
-static uint32_t cooldown_us = CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US;
+static uint32_t cool_per_unit; /* cool-down µs owed per 1/256 of max_on, rounded up */
 static uint16_t limit_hits;
 static uint8_t clamped;
 /* Variables, not the macros: comparing against a constant 0 would warn (-Wtype-limits). */
@@ -79,84 +81,48 @@ static void every_channel_off(void)
     }
 }
 
-static uint32_t add_sat(uint32_t a, uint32_t b)
+static void set_times(uint32_t on_us, uint32_t cooldown_us)
 {
-    return a > 0xFFFFFFFFUL - b ? 0xFFFFFFFFUL : a + b;
+    uint32_t unit = on_us >> 8;
+    max_on_us = on_us;
+    cool_per_unit = cooldown_us / (unit ? unit : 1u) + 1u;
 }
 
 /* Cool-down owed after an on-period of on_us: on_us × cooldown / max_on, rounded up. */
 static uint32_t cooldown_for(uint32_t on_us)
 {
-    uint32_t unit = max_on_us >> 8; /* 1/256 of max_on, rounded down: more units */
-    uint32_t units, per_unit;
-    if (unit == 0u) {
-        unit = 1u;
-    }
-    units = on_us / unit + 1u;
-    per_unit = (cooldown_us >> 8) + 1u;
-    return units > 0xFFFFFFFFUL / per_unit ? 0xFFFFFFFFUL : units * per_unit;
+    uint32_t units = (on_us >> 8) + 1u;
+    return units > 0xFFFFFFFFUL / cool_per_unit ? 0xFFFFFFFFUL : units * cool_per_unit;
 }
 
 /* Move the window on by dt: slots older than the window fall out. */
 static void advance_window(uint32_t dt)
 {
-    uint8_t n = 0;
-    uint8_t i;
-    slot_us = add_sat(slot_us, dt);
-    while (slot_us >= SMA_SLOT_US && n < SMA_WIN_SLOTS) {
+    uint8_t n, i;
+    if (dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
+        dt = SMA_SLOT_US * SMA_WIN_SLOTS;
+    }
+    slot_us += dt;
+    for (n = 0; slot_us >= SMA_SLOT_US && n < SMA_WIN_SLOTS; n++) {
         slot_us -= SMA_SLOT_US;
-        slot = (uint8_t)((slot + 1u) % SMA_WIN_SLOTS);
+        slot = (uint8_t)(slot + 1u < SMA_WIN_SLOTS ? slot + 1u : 0u);
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
-            acts[i].win_total -= acts[i].win[slot];
-            acts[i].win[slot] = 0;
-        }
-        n++;
-    }
-    if (slot_us >= SMA_SLOT_US) { /* a gap longer than the whole window: all cold */
-        slot_us = 0;
-    }
-}
-
-/* Charge actuator a for dt µs at the duty its pin carried. */
-static void charge(act_state_t *a, uint32_t dt)
-{
-    uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
-    a->win[slot] += x >> 10;
-    a->win_total += x >> 10;
-    a->win_rem = (uint16_t)(x & 1023u);
-    if (a->charged > hold_max) {
-        a->on_us = add_sat(a->on_us, dt);
-    } else {
-        a->owed_us = a->owed_us > dt ? a->owed_us - dt : 0u;
-        if (a->owed_us == 0u) {
-            a->forced = 0;
+            acts[i].win_total -= win[slot][i];
+            win[slot][i] = 0;
         }
     }
 }
 
 void sma_init(void)
 {
-    uint8_t i, k;
-    for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        act_state_t *a = &acts[i];
-        a->on_us = 0;
-        a->owed_us = 0;
-        for (k = 0; k < SMA_WIN_SLOTS; k++) {
-            a->win[k] = 0;
-        }
-        a->win_total = 0;
-        a->win_rem = 0;
-        a->charged = 0;
-        a->blocked = 0;
-        a->forced = 0;
-    }
+    memset(acts, 0, sizeof acts);
+    memset(win, 0, sizeof win);
     last_us = hal_micros();
     slot_us = 0;
     slot = 0;
     estopped = 0;
     max_duty = CFG_MAX_DUTY_PM;
-    max_on_us = CFG_MAX_ON_TICKS * CFG_TICK_US;
-    cooldown_us = CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US;
+    set_times(CFG_MAX_ON_TICKS * CFG_TICK_US, CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US);
     limit_hits = 0;
     every_channel_off();
 }
@@ -184,10 +150,23 @@ uint8_t sma_tick(void)
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         act_state_t *a = &acts[i];
         uint16_t duty = estopped ? 0u : sma_clamp(a->request);
+        uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
         if (!estopped && duty != a->request) {
             clamped = 1;
         }
-        charge(a, dt);
+        /* charge the interval since the last tick at the duty the pin carried */
+        win[slot][i] += x >> 10;
+        a->win_total += x >> 10;
+        a->win_rem = (uint16_t)(x & 1023u);
+        if (a->charged > hold_max) {
+            a->on_us += dt; /* ≤ max_on + SMA_DT_CAP_US: the period is cut at max_on */
+        } else if (a->owed_us > dt) {
+            a->owed_us -= dt;
+        } else {
+            a->owed_us = 0;
+            a->forced = 0;
+        }
+        /* then decide the next output */
         if (a->forced) {
             duty = 0; /* cooling after an on-limit hit: off */
         } else if (duty > hold_max) {
@@ -207,7 +186,8 @@ uint8_t sma_tick(void)
             duty = 0;
         }
         if (duty <= hold_max && a->on_us > 0u) { /* an on-period ends: it owes a cool-down */
-            a->owed_us = add_sat(a->owed_us, cooldown_for(a->on_us));
+            uint32_t owe = cooldown_for(a->on_us);
+            a->owed_us = a->owed_us > 0xFFFFFFFFUL - owe ? 0xFFFFFFFFUL : a->owed_us + owe;
             a->on_us = 0;
         }
         output(i, duty);
@@ -243,8 +223,7 @@ int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cool
         return -1;
     }
     max_duty = max_duty_pm;
-    max_on_us = max_on_ticks * CFG_TICK_US;
-    cooldown_us = cooldown_ticks * CFG_TICK_US;
+    set_times(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US);
     return 0;
 }
 
