@@ -311,8 +311,8 @@ COMMAND = st.one_of(
     ),
 )
 
-EXAMPLES = int(os.environ.get("PROLEG_ATTACK_EXAMPLES", "6"))
-STEPS = int(os.environ.get("PROLEG_ATTACK_STEPS", "14"))
+EXAMPLES = int(os.environ.get("PROLEG_ATTACK_EXAMPLES", "10"))
+STEPS = int(os.environ.get("PROLEG_ATTACK_STEPS", "20"))
 
 
 class Attacker(RuleBasedStateMachine):
