@@ -7,8 +7,9 @@ stated ceiling:
 
 - duty ≤ max_duty;
 - an on-period (duty above the hold ceiling) lasts at most max_on + one tick;
-- after an on-period of length L the coil carries no more than the hold ceiling for
-  L × min_cooldown / max_on (less one tick);
+- cool-down in proportion to every on-period: the on-time not yet paid back by cool-down
+  (each µs not on pays back max_on / min_cooldown µs) never exceeds max_on + one tick, so
+  an on-period of L owes L × min_cooldown / max_on before the full max_on is back;
 - the duty integrated over any window of duty_window_ms is at most max_mean_duty × window
   (plus one tick at max_duty);
 - every coil stays below the steady-state temperature of max_duty plus 5 K.
@@ -76,7 +77,7 @@ class Envelope:
 @dataclass
 class _Channel:
     on_us: int = 0
-    free_at_us: int = 0  # no on-period may start before this (cool-down)
+    debt_us: float = 0.0  # on-time not yet paid back by cool-down
     window: deque = field(default_factory=deque)
     window_sum: int = 0
     longest_on_us: int = 0
@@ -96,18 +97,20 @@ class EnvelopeMonitor:
             s = self.ch[c]
             assert duty <= env.max_duty_pm, f"t={now_us} µs: channel {c} at {duty} ‱ > max_duty {env.max_duty_pm}"
             if duty > env.hold_max_pm:
-                if s.on_us == 0:
-                    assert now_us + env.tick_us >= s.free_at_us, (
-                        f"t={now_us} µs: channel {c} heats again {s.free_at_us - now_us} µs before its cool-down ends"
-                    )
                 s.on_us += env.tick_us  # this duty holds until the next tick
+                s.debt_us += env.tick_us
                 s.longest_on_us = max(s.longest_on_us, s.on_us)
                 assert s.on_us <= env.max_on_us + env.tick_us, (
                     f"t={now_us} µs: channel {c} on for {s.on_us} µs > max_on {env.max_on_us} + one tick"
                 )
-            elif s.on_us:
-                s.free_at_us = now_us + s.on_us * env.cooldown_us // env.max_on_us
+                assert s.debt_us <= env.max_on_us + env.tick_us, (
+                    f"t={now_us} µs: channel {c} heats without its cool-down: {s.debt_us:.0f} µs of on-time "
+                    f"not paid back > max_on {env.max_on_us} + one tick"
+                )
+            else:
                 s.on_us = 0
+                pay = env.tick_us * env.max_on_us / env.cooldown_us if env.cooldown_us else s.debt_us
+                s.debt_us = max(0.0, s.debt_us - pay)
             s.window.append(duty)
             s.window_sum += duty
             if len(s.window) > self.window_ticks:

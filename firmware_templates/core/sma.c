@@ -22,15 +22,14 @@
 static const uint8_t act_channel[CFG_N_ACTUATORS] ROM = CFG_ACTUATOR_CHANNELS;
 
 typedef struct {
-    uint32_t on_us;    /* length of the current on-period */
-    uint32_t owed_us;  /* cool-down still owed */
+    uint32_t debt_us;  /* on-time not yet paid back by cool-down */
     uint32_t win_total; /* sum of this actuator's window slots */
     uint16_t win_rem;  /* remainder of the last charge, below 1024 */
     uint16_t request;  /* wanted duty */
     uint16_t applied;  /* last output (0 after all_off/estop) */
     uint16_t charged;  /* duty the pin carried since the last tick: charged at the next */
     uint8_t blocked;   /* the mean-duty window refused the last request */
-    uint8_t forced;    /* the cool-down owed follows an on-limit hit: fully off */
+    uint8_t forced;    /* cut at max_on: fully off until the debt is paid */
 } act_state_t;
 
 static act_state_t acts[CFG_N_ACTUATORS];
@@ -41,7 +40,7 @@ static uint8_t slot;
 static uint8_t estopped;
 static uint16_t max_duty = CFG_MAX_DUTY_PM;
 static uint32_t max_on_us = CFG_MAX_ON_TICKS * CFG_TICK_US;
-static uint32_t cool_per_unit; /* cool-down µs owed per 1/256 of max_on, rounded up */
+static uint32_t refill_q8;     /* on-time paid back per µs of cool-down, × 256, rounded down */
 static uint16_t limit_hits;
 static uint8_t clamped;
 /* Variables, not the macros: comparing against a constant 0 would warn (-Wtype-limits). */
@@ -81,18 +80,16 @@ static void every_channel_off(void)
     }
 }
 
+/* Cool-down pays back max_on / min_cooldown µs of on-time per µs, i.e. an on-period of L
+ * is paid back by L × min_cooldown / max_on of cool-down. Rounded down, and at most 39×
+ * (a min_cooldown below 1/39 of max_on counts as 1/39): paid back no faster than that. */
 static void set_times(uint32_t on_us, uint32_t cooldown_us)
 {
-    uint32_t unit = on_us >> 8;
     max_on_us = on_us;
-    cool_per_unit = cooldown_us / (unit ? unit : 1u) + 1u;
-}
-
-/* Cool-down owed after an on-period of on_us: on_us × cooldown / max_on, rounded up. */
-static uint32_t cooldown_for(uint32_t on_us)
-{
-    uint32_t units = (on_us >> 8) + 1u;
-    return units > 0xFFFFFFFFUL / cool_per_unit ? 0xFFFFFFFFUL : units * cool_per_unit;
+    refill_q8 = on_us / ((cooldown_us >> 8) + 1u);
+    if (refill_q8 > 10000u) {
+        refill_q8 = 10000u;
+    }
 }
 
 /* Move the window on by dt: slots older than the window fall out. */
@@ -159,20 +156,19 @@ uint8_t sma_tick(void)
         a->win_total += x >> 10;
         a->win_rem = (uint16_t)(x & 1023u);
         if (a->charged > hold_max) {
-            a->on_us += dt; /* ≤ max_on + SMA_DT_CAP_US: the period is cut at max_on */
-        } else if (a->owed_us > dt) {
-            a->owed_us -= dt;
+            a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
         } else {
-            a->owed_us = 0;
-            a->forced = 0;
+            uint32_t paid = (dt * refill_q8) >> 8; /* ≤ 400000 × 10000 */
+            a->debt_us = a->debt_us > paid ? a->debt_us - paid : 0u;
+            if (a->debt_us == 0u) {
+                a->forced = 0;
+            }
         }
         /* then decide the next output */
         if (a->forced) {
-            duty = 0; /* cooling after an on-limit hit: off */
+            duty = 0; /* cooling after an on-limit hit: off until the debt is paid */
         } else if (duty > hold_max) {
-            if (a->owed_us > 0u) {
-                duty = hold_max; /* cooling: no more than a duty the coil may carry forever */
-            } else if (a->on_us + CFG_TICK_US > max_on_us) {
+            if (a->debt_us + CFG_TICK_US > max_on_us) {
                 duty = 0; /* cut before the next tick would pass max_on */
                 a->forced = 1;
                 hit = (uint8_t)(hit | (1u << i));
@@ -184,11 +180,6 @@ uint8_t sma_tick(void)
         a->blocked = (uint8_t)(duty > 0u && a->win_total + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
         if (a->blocked) {
             duty = 0;
-        }
-        if (duty <= hold_max && a->on_us > 0u) { /* an on-period ends: it owes a cool-down */
-            uint32_t owe = cooldown_for(a->on_us);
-            a->owed_us = a->owed_us > 0xFFFFFFFFUL - owe ? 0xFFFFFFFFUL : a->owed_us + owe;
-            a->on_us = 0;
         }
         output(i, duty);
     }
@@ -239,17 +230,12 @@ uint16_t sma_duty(uint8_t act)
 
 uint8_t sma_cooling(uint8_t act)
 {
-    return (uint8_t)(acts[act].owed_us > 0u || acts[act].blocked);
+    return (uint8_t)(acts[act].forced || acts[act].blocked);
 }
 
-uint32_t sma_on_us(uint8_t act)
+uint32_t sma_debt_us(uint8_t act)
 {
-    return acts[act].on_us;
-}
-
-uint32_t sma_owed_us(uint8_t act)
-{
-    return acts[act].owed_us;
+    return acts[act].debt_us;
 }
 
 uint8_t sma_take_clamped(void)

@@ -10,17 +10,17 @@
  * highest duty the pin carried in it, then decides the next output. Per actuator:
  * - "on" means a duty above the hold ceiling CFG_HOLD_MAX_DUTY_PM (a duty the coil may
  *   carry forever: holding at or below it is never on-time);
- * - max continuous on-time: an on-period never lasts longer than max_on (it is cut one
- *   tick early rather than one tick late) - an on-limit hit, reported;
- * - cool-down after ANY on-period, forced or not, in proportion to its length:
- *   period × min_cooldown / max_on (a full max_on period owes min_cooldown). While it is
- *   owed the coil carries at most the hold ceiling, and nothing at all when the period was
- *   cut at max_on (an on-limit hit);
+ * - an on-time debt: every µs on adds a µs; every µs not on pays back max_on / min_cooldown
+ *   µs, so ANY on-period of length L owes L × min_cooldown / max_on of cool-down;
+ * - max on-time: the debt never exceeds max_on, so no on-period lasts longer than max_on,
+ *   and on/off games cannot beat max_on / (max_on + min_cooldown) of the time on. A period
+ *   that would pass it is cut one tick early (an on-limit hit, reported) and the coil then
+ *   stays fully off until the debt is paid: min_cooldown after a full max_on;
  * - mean duty: the duty integrated over any window of CFG_DUTY_WINDOW_MS stays at or below
  *   CFG_MEAN_DUTY_PM (a request that would not fit gets 0).
  * Nothing resets the spent budget: sma_all_off() and sma_estop() turn the pins off at once
  * but the interval until the next sma_tick is still charged at the duty it had, so a
- * STOP + START in one tick continues the on-period. Only sma_init() (power-on) starts
+ * STOP + START in one tick continues the on-period. Only sma_init() (reset) starts
  * from a cold budget. sma_estop() latches until sma_clear_estop().
  */
 #ifndef PROLEG_SMA_H
@@ -74,12 +74,12 @@ uint16_t sma_clamp(uint16_t duty_pm);
 /* Duty applied to actuator `act` at the last output (permyriad). */
 uint16_t sma_duty(uint8_t act);
 
-/* 1 while actuator `act` may not heat: cool-down owed, or its mean-duty window is full. */
+/* 1 while actuator `act` may not heat: cooling after an on-limit hit, or its mean-duty
+ * window is full. */
 uint8_t sma_cooling(uint8_t act);
 
-/* Length of actuator `act`'s current on-period and the cool-down it still owes (µs). */
-uint32_t sma_on_us(uint8_t act);
-uint32_t sma_owed_us(uint8_t act);
+/* Actuator `act`'s on-time not yet paid back by cool-down (µs). */
+uint32_t sma_debt_us(uint8_t act);
 
 /* 1 when an output was clamped to the ceiling since the last call. */
 uint8_t sma_take_clamped(void);

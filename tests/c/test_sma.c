@@ -185,9 +185,20 @@ static void test_estop_and_clear_refund_nothing(void)
     CHECK_EQ(fake_pwm[0], 0);
 }
 
+/* Drive channel 0 until the budget cuts it; returns the real on-time (µs). */
+static uint32_t burst(void)
+{
+    uint32_t on = 0;
+    sma_request(0, 6000);
+    while (tick() == 0 && on < 10u * MAX_ON_US) {
+        on += CFG_TICK_US;
+    }
+    return on;
+}
+
 static void test_any_on_period_owes_a_cool_down_in_proportion_to_it(void)
 {
-    uint32_t t, off;
+    uint32_t t, second;
     setup();
     sma_request(0, 6000);
     for (t = 0; t < 26; t++) { /* 25 ms on (the first tick only switches on) */
@@ -196,34 +207,28 @@ static void test_any_on_period_owes_a_cool_down_in_proportion_to_it(void)
     sma_request(0, 0); /* one off tick, as a host sending STOP ... START */
     tick();
     CHECK_EQ(fake_pwm[0], 0);
+    CHECK_EQ(sma_debt_us(0), 26000u); /* 26 ms on: the off tick is paid at the next tick */
+    second = burst(); /* the off ms pays back only its share, 50 / 20 ms */
+    CHECK(second >= MAX_ON_US - 26000u + 1500u && second <= MAX_ON_US - 26000u + 3500u);
     CHECK(sma_cooling(0));
-    sma_request(0, 6000);
-    off = CFG_TICK_US;
-    while (fake_pwm[0] <= CFG_HOLD_MAX_DUTY_PM && off < COOL_US * 4u) {
-        tick(); /* cooling: at most the hold ceiling, until the loop ends */
-        off += CFG_TICK_US;
-    }
-    CHECK(off >= COOL_US / 2u); /* 25 ms of 50 owes 10 of 20 ms */
-    CHECK(off <= COOL_US / 2u + 3u * CFG_TICK_US);
-    CHECK_EQ(sma_limit_hits(), 0); /* not a limit hit: an ordinary cool-down */
 }
 
-static void test_a_cool_down_after_a_voluntary_period_allows_holding_but_not_heating(void)
+static void test_a_cool_down_in_proportion_pays_the_on_time_back(void)
 {
-    uint32_t t;
+    uint32_t t, full;
     setup();
     sma_request(0, 6000);
-    for (t = 0; t < 20; t++) {
+    for (t = 0; t < 26; t++) {
         tick();
     }
-    sma_request(0, 2500); /* the limb got there: hold */
-    tick();
-    CHECK(sma_cooling(0));
-    CHECK_EQ(fake_pwm[0], 2500);
-    sma_request(0, 6000); /* sagging: drive again, but the coil still owes a cool-down */
-    tick();
-    CHECK(sma_cooling(0));
-    CHECK_EQ(fake_pwm[0], CFG_HOLD_MAX_DUTY_PM);
+    sma_request(0, 2500); /* holding is cooling */
+    for (t = 0; t < 12; t++) { /* 26 ms × 20 / 50 = 10.4 ms, paid from the 2nd hold tick on */
+        tick();
+        CHECK_EQ(fake_pwm[0], 2500);
+    }
+    CHECK_EQ(sma_debt_us(0), 0);
+    full = burst();
+    CHECK(full >= MAX_ON_US - CFG_TICK_US && full <= MAX_ON_US);
 }
 
 static void test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down(void)
@@ -252,7 +257,7 @@ static void test_holding_at_or_below_the_hold_ceiling_is_never_on_time(void)
         CHECK_EQ(tick(), 0);
         CHECK_EQ(fake_pwm[0], CFG_HOLD_MAX_DUTY_PM);
     }
-    CHECK_EQ(sma_on_us(0), 0);
+    CHECK_EQ(sma_debt_us(0), 0);
 }
 
 /* Bursts as long as the budget allows, at the full duty: the mean over every window of
@@ -351,7 +356,7 @@ int main(void)
     RUN(test_stop_and_start_between_two_ticks_continue_the_on_period);
     RUN(test_estop_and_clear_refund_nothing);
     RUN(test_any_on_period_owes_a_cool_down_in_proportion_to_it);
-    RUN(test_a_cool_down_after_a_voluntary_period_allows_holding_but_not_heating);
+    RUN(test_a_cool_down_in_proportion_pays_the_on_time_back);
     RUN(test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down);
     RUN(test_holding_at_or_below_the_hold_ceiling_is_never_on_time);
     RUN(test_mean_duty_over_any_window_stays_below_the_limit);

@@ -2,8 +2,8 @@
  *
  * Fed the PWM of every actuator channel after each control tick (host-sim virtual time),
  * it aborts the process on the first violation: a duty above max_duty; an on-period (duty
- * above the hold ceiling) longer than max_on + one tick; heating again before the
- * cool-down owed for the last on-period (length × min_cooldown / max_on, less one tick);
+ * above the hold ceiling) longer than max_on + one tick; more than max_on + one tick of
+ * on-time not yet paid back by cool-down (each µs not on pays max_on / min_cooldown µs);
  * a mean duty over any CFG_DUTY_WINDOW_MS window above CFG_MEAN_DUTY_PM (plus one tick);
  * any output while the E-stop is latched. Same rules as tests/test_safety_attacker.py.
  */
@@ -21,7 +21,7 @@
 #define ENV_WINDOW_TICKS (CFG_DUTY_WINDOW_MS * 1000UL / CFG_TICK_US)
 
 typedef struct {
-    uint64_t on_us, free_at_us, sum;
+    uint64_t on_us, debt_us, sum;
     uint16_t ring[ENV_WINDOW_TICKS];
     uint32_t pos;
 } env_channel_t;
@@ -54,17 +54,20 @@ static void env_after_tick(uint64_t now_us, uint16_t (*pwm)(uint8_t), uint8_t es
             ENV_FAIL("t=%llu channel %u on while E-stopped", (unsigned long long)now_us, i);
         }
         if (d > CFG_HOLD_MAX_DUTY_PM) {
-            if (c->on_us == 0u && now_us + CFG_TICK_US < c->free_at_us) {
-                ENV_FAIL("t=%llu channel %u heats during its cool-down", (unsigned long long)now_us, i);
-            }
             c->on_us += CFG_TICK_US;
+            c->debt_us += CFG_TICK_US;
             if (c->on_us > CFG_MAX_ON_MS * 1000ULL + CFG_TICK_US) {
                 ENV_FAIL("t=%llu channel %u on for %llu us", (unsigned long long)now_us, i,
                          (unsigned long long)c->on_us);
             }
-        } else if (c->on_us) {
-            c->free_at_us = now_us + c->on_us * CFG_MIN_COOLDOWN_MS / CFG_MAX_ON_MS;
+            if (c->debt_us > CFG_MAX_ON_MS * 1000ULL + CFG_TICK_US) {
+                ENV_FAIL("t=%llu channel %u heats without its cool-down", (unsigned long long)now_us, i);
+            }
+        } else {
+            uint64_t pay = CFG_MIN_COOLDOWN_MS ? (uint64_t)CFG_TICK_US * CFG_MAX_ON_MS / CFG_MIN_COOLDOWN_MS
+                                               : c->debt_us;
             c->on_us = 0;
+            c->debt_us = c->debt_us > pay ? c->debt_us - pay : 0u;
         }
         c->sum += d;
         c->sum -= c->ring[c->pos];
