@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from proleg.errors import BuildError
-from proleg.firmware.config import render_config
+from proleg.firmware.render import render_config
 from proleg.protocol import definition as d
 from proleg.protocol.codec import FrameDecoder, Message, encode
 from proleg.protocol.render import render_c
@@ -185,7 +185,7 @@ def test_render_is_deterministic_and_names_its_inputs():
     assert a == b
     assert set(a) == {"robot_config.h", "gait_table.c"}
     head = a["robot_config.h"].splitlines()[:4]
-    assert any("proleg.firmware.config" in line for line in head)
+    assert any("proleg.firmware.render" in line for line in head)
     assert any("sha256" in line for line in head)
     assert "#define CFG_GAIT_TABLE_HASH 0x" in a["robot_config.h"]
 

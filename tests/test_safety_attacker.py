@@ -31,7 +31,7 @@ from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
 
-from proleg.firmware.config import _thermal_budget
+from proleg.firmware.render import thermal_budget
 from proleg.protocol.codec import FrameDecoder, Message, encode
 from proleg.protocol.definition import ClearWhat, ErrorCode, EventKind, FaultCode, ParamId
 from proleg.robot import Robot, load_robot
@@ -59,7 +59,7 @@ class Envelope:
     @classmethod
     def of(cls, robot: Robot, plant: Plant) -> "Envelope":
         s = robot.safety
-        b = _thermal_budget(robot.name, s, robot.control)
+        b = thermal_budget(robot.name, s, robot.control)
         acts = plant.params.actuators
         hottest = max(a.full_power_w / a.conductance_w_per_k for a in acts)
         return cls(

@@ -14,6 +14,7 @@
 #include "sma.h"
 #include "telemetry.h"
 #include "tx.h"
+#include "uart.h"
 
 static uint32_t ms;     /* firmware time */
 static uint16_t us_acc; /* µs of the current ms */
@@ -28,6 +29,7 @@ void app_init(void)
     uint8_t i;
     ms = 0;
     us_acc = 0;
+    uart_init();
     tx_init();
     fault_init();
     param_init();

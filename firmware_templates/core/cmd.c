@@ -5,7 +5,7 @@
 
 #include "drive.h"
 #include "fault.h"
-#include "hal.h"
+#include "uart.h"
 #include "imucheck.h"
 #include "param.h"
 #include "proto.h"
@@ -24,6 +24,11 @@ static const char board_name[] ROM = CFG_BOARD_NAME;
 static proto_rx_t rx;
 
 #define msg tx_msg /* the command being handled, then each reply (fields read first) */
+
+/* One handler per command of the protocol definition (proto_gen.h's PROTO_COMMANDS):
+ * a command added there does not compile until its cmd_<name> is written here. */
+#define DECLARE_HANDLER(id, handler) static void handler(uint8_t token);
+PROTO_COMMANDS(DECLARE_HANDLER)
 
 static void copy_rom_text(char *dst, const char *src, uint8_t cap)
 {
@@ -56,7 +61,12 @@ void cmd_send_info(uint8_t token)
     tx_send();
 }
 
-static void send_stats(uint8_t token)
+static void cmd_get_info(uint8_t token)
+{
+    cmd_send_info(token);
+}
+
+static void cmd_get_stats(uint8_t token)
 {
     const tx_counts_t *c = tx_counts();
     msg.id = PROTO_ID_STATS;
@@ -176,55 +186,54 @@ static void cmd_clear(uint8_t token)
     }
 }
 
+static void cmd_estop(uint8_t token)
+{
+    sma_estop(); /* first: every MOSFET off now */
+    tx_ack(token, PROTO_ID_ESTOP);
+    tx_event(PROTO_EV_ESTOP, 0, 0);
+    fault_stop_gait(PROTO_STOP_ESTOP);
+}
+
+static void cmd_ping(uint8_t token)
+{
+    tx_ack(token, PROTO_ID_PING);
+}
+
+static void cmd_stop(uint8_t token)
+{
+    sma_all_off();
+    tx_ack(token, PROTO_ID_STOP);
+    fault_stop_gait(PROTO_STOP_COMMAND);
+}
+
+static void cmd_set_param(uint8_t token)
+{
+    uint8_t r = param_set(msg.u.set_param.param, msg.u.set_param.index, msg.u.set_param.value);
+    if (r) {
+        tx_nack(token, PROTO_ID_SET_PARAM, r, msg.u.set_param.param);
+    } else {
+        tx_ack(token, PROTO_ID_SET_PARAM);
+    }
+}
+
+static void cmd_set_telemetry_rate(uint8_t token)
+{
+    if (telemetry_set_rate(msg.u.set_telemetry_rate.hz) != 0u) {
+        tx_nack(token, PROTO_ID_SET_TELEMETRY_RATE, PROTO_ERR_OUT_OF_RANGE, 0);
+    } else {
+        tx_ack(token, PROTO_ID_SET_TELEMETRY_RATE);
+    }
+}
+
 static void handle_command(void)
 {
     uint8_t token = PROTO_CMD_TOKEN(&msg);
-    uint8_t r;
     switch (msg.id) {
-    case PROTO_ID_ESTOP:
-        sma_estop(); /* first: every MOSFET off now */
-        tx_ack(token, PROTO_ID_ESTOP);
-        tx_event(PROTO_EV_ESTOP, 0, 0);
-        fault_stop_gait(PROTO_STOP_ESTOP);
+#define DISPATCH(id, handler) \
+    case id:                  \
+        handler(token);       \
         break;
-    case PROTO_ID_PING:
-        tx_ack(token, PROTO_ID_PING);
-        break;
-    case PROTO_ID_GET_INFO:
-        cmd_send_info(token);
-        break;
-    case PROTO_ID_GET_STATS:
-        send_stats(token);
-        break;
-    case PROTO_ID_START:
-        cmd_start(token);
-        break;
-    case PROTO_ID_STOP:
-        sma_all_off();
-        tx_ack(token, PROTO_ID_STOP);
-        fault_stop_gait(PROTO_STOP_COMMAND);
-        break;
-    case PROTO_ID_LOAD_GAIT:
-        cmd_load_gait(token);
-        break;
-    case PROTO_ID_SET_PARAM:
-        r = param_set(msg.u.set_param.param, msg.u.set_param.index, msg.u.set_param.value);
-        if (r) {
-            tx_nack(token, PROTO_ID_SET_PARAM, r, msg.u.set_param.param);
-        } else {
-            tx_ack(token, PROTO_ID_SET_PARAM);
-        }
-        break;
-    case PROTO_ID_SET_TELEMETRY_RATE:
-        if (telemetry_set_rate(msg.u.set_telemetry_rate.hz) != 0u) {
-            tx_nack(token, PROTO_ID_SET_TELEMETRY_RATE, PROTO_ERR_OUT_OF_RANGE, 0);
-        } else {
-            tx_ack(token, PROTO_ID_SET_TELEMETRY_RATE);
-        }
-        break;
-    case PROTO_ID_CLEAR:
-        cmd_clear(token);
-        break;
+        PROTO_COMMANDS(DISPATCH)
     default: /* a robot->host message sent to the robot */
         tx_nack(token, msg.id, PROTO_ERR_UNKNOWN_MESSAGE, 0);
         break;
@@ -240,7 +249,7 @@ void cmd_poll(void)
 {
     uint16_t n;
     for (n = 0; n < RX_BYTES_PER_TICK; n++) {
-        int c = hal_uart_read_byte();
+        int c = uart_read_byte();
         if (c < 0) {
             break;
         }

@@ -106,7 +106,7 @@ static void send_telemetry(void)
     m->u.telemetry.flags = telemetry_flags();
     m->u.telemetry.psi_count = CFG_N_LIMBS;
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        m->u.telemetry.psi[i] = psi_last_centideg(i); /* atan2 only here, at telemetry rate */
+        m->u.telemetry.psi[i] = psi_last_centideg(i);
     }
     m->u.telemetry.duty_count = CFG_N_ACTUATORS;
     for (i = 0; i < CFG_N_ACTUATORS; i++) {

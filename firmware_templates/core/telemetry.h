@@ -6,9 +6,9 @@
  * (UART bytes/s = baud/10) so that replies and events always find room in the transmit
  * queue: telemetry_set_rate() refuses a faster rate (returns nonzero, nothing changed).
  * The frame carries the firmware clock, the measured and target state, the gait last
- * started, the step, the flags (telemetry_flags()), ψ per limb (atan2 only here, at
- * telemetry rate) and the applied duty per actuator; DUTY_CLAMPED is set when an output
- * was clamped since the previous frame (telemetry_note_clamped()).
+ * started, the step, the flags (telemetry_flags()), ψ per limb (psi_last_centideg) and
+ * the applied duty per actuator; DUTY_CLAMPED is set when an output was clamped since
+ * the previous frame (telemetry_note_clamped()).
  */
 #ifndef PROLEG_TELEMETRY_H
 #define PROLEG_TELEMETRY_H

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "app.h"
-#include "hal.h"
+#include "uart.h"
 
 proto_msg_t tx_msg;
 
@@ -28,13 +28,13 @@ void tx_send(void)
     }
     if (pending_delim) {
         uint8_t zero = 0;
-        if (hal_uart_write(&zero, 1) != 1u) {
+        if (uart_write(&zero, 1) != 1u) {
             count.tx_dropped++;
             return;
         }
         pending_delim = 0;
     }
-    w = hal_uart_write(txbuf, (uint16_t)n);
+    w = uart_write(txbuf, (uint16_t)n);
     if (w == n) {
         count.tx_frames++;
     } else {

@@ -3,7 +3,7 @@
  * Contract. tx_msg is the one message buffer of the application: the command being
  * handled is decoded into it, and each reply and event is then built in it, so a
  * handler reads every field it needs before it sends anything. tx_send() encodes
- * tx_msg and queues the whole frame with hal_uart_write, never waiting: a frame that
+ * tx_msg and queues the whole frame with uart_write (uart.h), never waiting: a frame that
  * does not fit is dropped and counted (tx_dropped); when only part of it went out, the
  * next frame starts with a delimiter so the host resynchronises. The helpers build
  * EVENT, ACK and NACK (NACKs are counted) stamped with the firmware clock (app.h).

@@ -79,7 +79,7 @@ class Result:
 
 def render(gen: Path) -> None:
     sys.path.insert(0, str(ROOT / "host" / "src"))
-    from proleg.firmware.config import render_config
+    from proleg.firmware.render import render_config
     from proleg.protocol.render import render_c
     from proleg.robot import robot_from_dict
 
@@ -96,7 +96,7 @@ def sources(spec: list[str], gen: Path) -> list[str]:
     out: list[Path] = []
     for s in spec:
         if s == "*core":
-            out += sorted(CORE.glob("*.c"))
+            out += sorted(p for p in CORE.glob("*.c") if p.name != "main.c")  # host-sim: no main loop
         elif s == "*sim":
             out += sorted(SIM.glob("*.c"))
         elif s.startswith("gen:"):
