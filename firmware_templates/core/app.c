@@ -9,6 +9,7 @@
 #include "proto.h"
 #include "psi.h"
 #include "robot_config.h"
+#include "safety.h"
 #include "seq.h"
 #include "sma.h"
 #include "telemetry.h"
@@ -36,6 +37,7 @@ void app_init(void)
     drive_init();
     imucheck_init();
     sma_init();
+    guard_init(); /* safety: the step guard on real time */
     psi_init();
     seq_init();
     cmd_init();
