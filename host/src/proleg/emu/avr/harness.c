@@ -8,10 +8,10 @@
  * again after each write of UBRR0L, UCSR0A or UCSR0C from the registers, as the chip
  * does: (UBRR0 + 1) · (U2X0 ? 8 : 16) cycles per bit, 1 start + data + parity (only when
  * UPM0 is set) + stop bits. Host -> board: bytes wait in a host queue and reach the
- * receiver one frame (10 bits at the host's baud rate) apart, as on the wire; a byte that
+ * receiver one frame (10 bits at the host's baud rate) apart, as on the wire; a frame that
  * arrives while the receiver holds three unread characters (two in UDR0's FIFO, one in
- * the shift register) is lost as on the chip (data overrun), and bytes sent while the
- * receiver is disabled are lost too.
+ * the shift register) overwrites the shift register's (data overrun, as on the chip),
+ * and bytes sent while the receiver is disabled are lost.
  *
  * PWM. The duty of an output-compare pin is computed from the timer registers (waveform
  * mode, TOP, OCRnx, COMnx) and, when the compare output is disconnected, from the port
@@ -300,6 +300,10 @@ static void deliver_rx_byte(void)
     if (!(E.avr->data[R_UCSR0B] & RXEN0_)) {
         E.rx_receiver_off++;
     } else if (rx_unread() >= 3u) {
+        /* UDR0's two-character FIFO and the shift register are full: the new frame
+         * overwrites the shift register (data overrun, datasheet §20.7.4). */
+        uart_fifo_t *f = &E.uart->input;
+        f->buffer[(f->write + uart_fifo_fifo_size - 1u) & (uart_fifo_fifo_size - 1u)] = (uint16_t)c;
         E.rx_overruns++;
     } else {
         avr_raise_irq(E.uart_irq + UART_IRQ_INPUT, (uint32_t)c);
