@@ -9,9 +9,11 @@ STAMP  := $(VENV)/.installed-stamp
 APT    := scripts/ensure-apt.sh
 
 # Board toolchains (command:debian-package). The newlib check is a file, not a command.
+# simavr (avr-emu board): the simulator and the headers/library the harness links.
 TOOLCHAINS := cc:gcc avr-gcc:gcc-avr /usr/lib/avr/include/avr/io.h:avr-libc \
               arm-none-eabi-gcc:gcc-arm-none-eabi \
-              /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi
+              /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi \
+              simavr:simavr /usr/include/simavr/sim_avr.h:libsimavr-dev
 
 .PHONY: demo test bench setup toolchains clean
 
