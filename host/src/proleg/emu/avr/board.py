@@ -179,6 +179,7 @@ class AvrEmuBoard:
         self._records: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._window_cycles = 0
         self._window_wall = 0.0
+        self._window_cpu = 0.0
 
     @property
     def tick_us(self) -> float:
@@ -203,7 +204,7 @@ class AvrEmuBoard:
 
     def run_cycles(self, cycles: int) -> None:
         chunk = int(CHUNK_S * self.freq)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         while cycles > 0:
             step = min(cycles, chunk)
             self._lib.emu_run_cycles(step)
@@ -211,6 +212,7 @@ class AvrEmuBoard:
             self._window_cycles += step
             self._drain_ticks()
         self._window_wall += time.perf_counter() - t0
+        self._window_cpu += time.process_time() - c0
 
     @property
     def time_us(self) -> int:
@@ -332,6 +334,7 @@ class AvrEmuBoard:
         self._records = []
         self._window_cycles = 0
         self._window_wall = 0.0
+        self._window_cpu = 0.0
 
     @property
     def measures_ticks(self) -> bool:
@@ -357,4 +360,5 @@ class AvrEmuBoard:
             stack_margin_bytes=sp_min - self._static_end + 1 if sp_min <= RAMEND else RAMEND - self._static_end,
             emulated_s=self._window_cycles / self.freq,
             wall_s=self._window_wall,
+            cpu_s=self._window_cpu,
         )

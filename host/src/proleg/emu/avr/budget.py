@@ -28,6 +28,7 @@ class TickBudget:
     stack_margin_bytes: int  # lowest stack pointer - end of static data (what is left)
     emulated_s: float
     wall_s: float
+    cpu_s: float  # process CPU time (the wall time includes whatever else the machine runs)
 
     @property
     def p99_fraction(self) -> float:
@@ -41,6 +42,11 @@ class TickBudget:
     def emulation_speed(self) -> float:
         """Emulated seconds per wall-clock second."""
         return self.emulated_s / self.wall_s if self.wall_s > 0 else float("inf")
+
+    @property
+    def emulation_speed_cpu(self) -> float:
+        """Emulated seconds per CPU second of this process."""
+        return self.emulated_s / self.cpu_s if self.cpu_s > 0 else float("inf")
 
     def meets_target(self) -> bool:
         return self.p99_fraction <= P99_LIMIT and self.max_fraction <= MAX_LIMIT
@@ -64,7 +70,9 @@ class TickBudget:
             "stack_margin_bytes": self.stack_margin_bytes,
             "emulated_s": round(self.emulated_s, 3),
             "wall_s": round(self.wall_s, 3),
+            "cpu_s": round(self.cpu_s, 3),
             "emulation_speed": round(self.emulation_speed, 3),
+            "emulation_speed_cpu": round(self.emulation_speed_cpu, 3),
         }
 
 
@@ -79,6 +87,7 @@ def summarize(
     stack_margin_bytes: int,
     emulated_s: float,
     wall_s: float,
+    cpu_s: float,
 ) -> TickBudget:
     """Summary of per-tick records (cycles) from the harness."""
     us = 1e6 / freq_hz
@@ -100,4 +109,5 @@ def summarize(
         stack_margin_bytes=stack_margin_bytes,
         emulated_s=emulated_s,
         wall_s=wall_s,
+        cpu_s=cpu_s,
     )

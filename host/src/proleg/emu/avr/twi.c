@@ -4,11 +4,11 @@
  * driver can see (docs/emulators-avr.md):
  *   - SLA+W answered with status 0x28 (data ACK) instead of 0x18 when TWDR was written
  *     before the address phase, which is how every driver sends the address;
- *   - TWINT handling: the flag is not cleared and set by the bus timing the way the
- *     datasheet says (it is raised through the interrupt vector's "raised" bit, so a
- *     polled driver sees it sticky or early);
+ *   - TWINT: right after TWCR = TWINT|TWEN for the address it still reads 1 and TWSR
+ *     already holds the final status; writing TWCR with TWINT = 0 clears it;
  *   - every TWI "bit" takes 1 µs whatever TWBR and TWPS say (a 9-bit byte is 9 µs, so
- *     400 kHz I2C looks 2.5 times faster than it is).
+ *     400 kHz I2C looks 2.5 times faster than it is), and START or the SLA+W above
+ *     complete in 8 CPU cycles.
  * Here the registers TWBR, TWSR, TWAR, TWDR, TWCR and TWAMR are ours (simavr's read and
  * write callbacks for them are replaced after avr_init). Master transmitter and receiver
  * as in the datasheet (§22.6-22.7): SCL period = 16 + 2·TWBR·4^TWPS CPU cycles; START,
