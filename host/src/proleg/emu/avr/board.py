@@ -32,7 +32,7 @@ import numpy as np
 from ...errors import SimError
 from ...firmware.boards import Board, load_board
 from .budget import TickBudget, summarize
-from .elf import TickMarkers, find_symbol, tick_markers
+from .elf import TickMarkers, find_symbol, symbols, tick_markers
 from .library import harness_library
 
 #: IMU fault modes understood by the MPU-6050 model (as host-sim).
@@ -77,6 +77,8 @@ _SIGNATURES = {
     "emu_ticks_read": ([POINTER(c_uint64), POINTER(c_uint32), POINTER(c_uint32), c_uint32], c_uint32),
     "emu_ticks_lost": ([], c_uint64),
     "emu_sp_min": ([], c_uint16),
+    "emu_profile": ([c_int], None),
+    "emu_profile_read": ([POINTER(c_uint64), c_uint32], c_uint32),
 }
 
 
@@ -311,6 +313,37 @@ class AvrEmuBoard:
         if sym is None or sym.kind not in "bBdD":
             raise SimError(f"{self.elf}: no data symbol {name!r}")
         return self.read_data(sym.address, sym.size)
+
+    # -- where the cycles go ------------------------------------------------------------
+    def profile_start(self) -> None:
+        """Count cycles per instruction from now on (slows the emulation a little)."""
+        self._lib.emu_profile(1)
+
+    def profile(self, stop: bool = True) -> dict[str, int]:
+        """Cycles spent per function since ``profile_start``, largest first. Inlined code
+        counts for the function it was inlined into (``main`` with today's LTO build)."""
+        words = 1 << 14
+        buf = (c_uint64 * words)()
+        n = self._lib.emu_profile_read(buf, words)
+        if stop:
+            self._lib.emu_profile(0)
+        cycles = np.ctypeslib.as_array(buf)[:n]
+        funcs = sorted(
+            (s.address, s.address + max(s.size, 2), s.name.split(".")[0])
+            for s in symbols(self.elf).values()
+            if s.kind in "tTW" and s.address < 2 * words
+        )
+        out: dict[str, int] = {}
+        for word in np.flatnonzero(cycles):
+            pc = int(word) * 2
+            name = "?"
+            for lo, hi, fname in funcs:
+                if lo <= pc < hi:
+                    name = fname
+                    if hi - lo > 2:
+                        break
+            out[name] = out.get(name, 0) + int(cycles[word])
+        return dict(sorted(out.items(), key=lambda kv: -kv[1]))
 
     # -- tick budget ------------------------------------------------------------------
     def _drain_ticks(self) -> None:

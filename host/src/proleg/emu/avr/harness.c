@@ -57,6 +57,7 @@
 #define HOSTQ_SIZE 65536u
 #define TICKS_SIZE 16384u
 #define MAX_PWM 8u
+#define FLASH_WORDS 16384u /* 32 KB of flash */
 #define NO_PC 0xFFFFFFFFu
 
 /* Output-compare pins, as emu_set_pwm_map numbers them. */
@@ -78,6 +79,8 @@ typedef struct {
 } tick_rec_t;
 
 static uint8_t rxq_mem[RXQ_SIZE], hostq_mem[HOSTQ_SIZE];
+static uint64_t prof_cycles[FLASH_WORDS]; /* cycles spent per instruction address */
+static uint8_t profiling;
 
 static struct {
     avr_t *avr;
@@ -540,7 +543,13 @@ EMU_API int emu_run_cycles(uint64_t n)
                 busy_end();
             }
         }
-        avr->run(avr);
+        if (profiling) {
+            uint64_t c0 = avr->cycle;
+            avr->run(avr);
+            prof_cycles[(pc >> 1) & (FLASH_WORDS - 1u)] += avr->cycle - c0;
+        } else {
+            avr->run(avr);
+        }
         sp = (uint16_t)(avr->data[R_SPL] | (avr->data[R_SPH] << 8));
         if (sp < sp_min) {
             sp_min = sp;
@@ -716,6 +725,23 @@ EMU_API uint32_t emu_ticks_read(uint64_t *start, uint32_t *busy, uint32_t *i2c, 
 EMU_API uint64_t emu_ticks_lost(void)
 {
     return E.ticks_lost;
+}
+
+/* Cycle profile: per instruction (word) address, cycles spent executing it (interrupt
+ * entry counted with the instruction it interrupted). on = 1 clears and starts it. */
+EMU_API void emu_profile(int on)
+{
+    if (on) {
+        memset(prof_cycles, 0, sizeof prof_cycles);
+    }
+    profiling = (uint8_t)(on != 0);
+}
+
+EMU_API uint32_t emu_profile_read(uint64_t *out, uint32_t max_words)
+{
+    uint32_t n = max_words < FLASH_WORDS ? max_words : FLASH_WORDS;
+    memcpy(out, prof_cycles, n * sizeof *out);
+    return n;
 }
 
 /* Lowest stack pointer since reset (the stack grows down from RAMEND = 0x8FF). */
