@@ -322,3 +322,32 @@ def test_pwm_duty_comes_from_the_timer_registers(tmp_path):
     # D9: (OCR1A + 1) / (ICR1 + 1) in mode 14; D10: port pin high; D11: (127 + 1) / 256.
     assert [board.pwm_permyriad(ch) for ch in range(4)] == [2500, 10000, 5000, 0]
     assert board.pwm(2) == 0.5
+
+
+# ------------------------------------------------------------------ watchdog and reset cause
+
+WDT_PROG = r"""
+#include <avr/wdt.h>
+volatile uint8_t cause;
+
+int main(void)
+{
+    cause = MCUSR;
+    MCUSR = 0;
+    wdt_enable(WDTO_15MS);
+    done = 1;
+    for (;;) { /* hung: never feeds the watchdog */
+    }
+}
+"""
+
+
+def test_a_watchdog_timeout_resets_the_mcu_and_mcusr_says_so(tmp_path):
+    board = make_board(compile_avr(tmp_path, WDT_PROG))
+    board.run_us(1000)
+    assert board.read_symbol("cause") == b"\x01"  # PORF: power-on
+    assert board.mcu_resets == 0
+    board.run_us(25_000)  # 15 ms watchdog period (nominal, 5 V)
+    assert board.mcu_resets == 1
+    assert board.read_symbol("cause") == b"\x08"  # WDRF
+    assert board.time_us >= 26_000  # a reset does not restart emulated time
