@@ -351,3 +351,49 @@ def test_a_watchdog_timeout_resets_the_mcu_and_mcusr_says_so(tmp_path):
     assert board.mcu_resets == 1
     assert board.read_symbol("cause") == b"\x08"  # WDRF
     assert board.time_us >= 26_000  # a reset does not restart emulated time
+
+
+BUS_RECOVERY = r"""
+volatile uint8_t blocked, st_after;
+
+static void wait_us(uint16_t us)
+{
+    uint16_t t0 = TCNT1;
+    while ((uint16_t)(TCNT1 - t0) < us * 2u) {
+    }
+}
+
+int main(void)
+{
+    uint8_t i;
+    TCCR1B = _BV(CS11); /* 0.5 us per count */
+    TWBR = 12;
+    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTA);
+    wait_us(200);
+    blocked = !(TWCR & _BV(TWINT)); /* the START cannot get onto a bus held low */
+    TWCR = 0;                       /* TWI off: PC5 (SCL) is a GPIO again */
+    PORTC &= (uint8_t)~_BV(PC5);
+    for (i = 0; i < CLOCKS; i++) {  /* open-drain clock: drive low, then release */
+        DDRC |= _BV(PC5);
+        wait_us(5);
+        DDRC &= (uint8_t)~_BV(PC5);
+        wait_us(5);
+    }
+    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTA);
+    wait_us(200);
+    st_after = (TWCR & _BV(TWINT)) ? (TWSR & 0xF8) : 0xFF;
+    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO);
+    done = 1;
+    for (;;) {
+    }
+}
+"""
+
+
+@pytest.mark.parametrize("clocks,recovered", [(9, True), (5, False)])
+def test_a_bus_held_low_blocks_start_until_nine_scl_clocks_release_it(tmp_path, clocks, recovered):
+    board = make_board(compile_avr(tmp_path, BUS_RECOVERY, f"-DCLOCKS={clocks}"))
+    board.i2c_hold_sda(True, release_after_clocks=9)
+    run_until_done(board)
+    assert board.read_symbol("blocked") == b"\x01"
+    assert board.read_symbol("st_after") == (b"\x08" if recovered else b"\xff")

@@ -70,6 +70,7 @@ _SIGNATURES = {
     "emu_imu_set_noise": ([c_uint8, c_double, c_double, c_double], None),
     "emu_imu_peek_reg": ([c_uint8, c_uint8], c_uint8),
     "emu_imu_set_startup_us": ([c_uint8, c_uint64], None),
+    "emu_i2c_hold_sda": ([c_int, c_uint8], None),
     "emu_i2c_transactions": ([], c_uint64),
     "emu_i2c_bus_cycles": ([], c_uint64),
     "emu_set_tick_markers": ([c_uint32, c_uint32], None),
@@ -286,6 +287,12 @@ class AvrEmuBoard:
     def imu_startup(self, addr: int, us: float) -> None:
         """The IMU at addr does not acknowledge until ``us`` after power-on (kept across resets)."""
         self._lib.emu_imu_set_startup_us(addr, max(0, round(us)))
+
+    def i2c_hold_sda(self, held: bool = True, release_after_clocks: int = 9) -> None:
+        """A device holds SDA low (a transfer cut short): no START until it has seen
+        ``release_after_clocks`` SCL pulses, driven on PC5 as GPIO while the TWI is off
+        (0 = never). Kept across MCU resets (watchdog), released by a power-on reset."""
+        self._lib.emu_i2c_hold_sda(int(held), max(0, min(255, release_after_clocks)))
 
     @property
     def i2c_transactions(self) -> int:

@@ -683,6 +683,13 @@ EMU_API void emu_imu_set_startup_us(uint8_t addr, uint64_t us)
     twi_set_startup_us(addr, us);
 }
 
+/* A device holds SDA low until it has seen release_clocks SCL pulses (0 = until
+ * emu_i2c_hold_sda(0, ...)); power-on resets release it, MCU resets do not. */
+EMU_API void emu_i2c_hold_sda(int held, uint8_t release_clocks)
+{
+    twi_hold_sda(held, release_clocks);
+}
+
 EMU_API uint64_t emu_i2c_transactions(void)
 {
     return twi_transactions();

@@ -23,6 +23,7 @@ uint64_t twi_transactions(void);                  /* START..STOP sequences seen 
 uint64_t twi_bus_cycles(void);                    /* cycles the bus was owned since reset */
 int twi_bus_owned(void);                          /* a START was sent and no STOP completed yet */
 void twi_set_startup_us(uint8_t addr, uint64_t us); /* device NACKs until this time after reset */
+void twi_hold_sda(int held, uint8_t release_clocks); /* a device holds SDA low (kept across MCU resets) */
 
 /* harness.c services the TWI model uses. */
 uint64_t emu_now_cycles(void);                    /* cycles since the last power-on reset */

@@ -67,6 +67,12 @@ static struct {
     uint8_t ntx;
     uint64_t read_us;  /* time of the SLA+R: the burst reads one sample */
     uint64_t owned_since, bus_cycles, transactions;
+    /* A device holding SDA low (a transfer cut short by a reset): no START can be made
+     * until it sees release_clocks SCL pulses (0 = never), driven as GPIO on PC5 while
+     * the TWI is off, the usual 9-clock bus recovery. */
+    uint8_t sda_held, release_clocks, clocks_seen, start_blocked, scl_low;
+    avr_io_write_t portc_w, ddrc_w;
+    void *portc_p, *ddrc_p;
 } t;
 
 /* Start-up time of each device after power-on: configuration, kept across resets. */
@@ -181,6 +187,10 @@ static avr_cycle_count_t complete(struct avr_t *avr, avr_cycle_count_t when, voi
 static void start_op(uint8_t op, uint32_t bits)
 {
     t.op = op;
+    if (op == OP_START && t.sda_held) {
+        t.start_blocked = 1; /* the bus is not free: the START waits */
+        return;
+    }
     avr_cycle_timer_register(t.avr, (avr_cycle_count_t)bits * scl_cycles(), complete, 0);
 }
 
@@ -328,6 +338,49 @@ static uint8_t read_plain(struct avr_t *avr, avr_io_addr_t addr, void *param)
     return avr->data[addr];
 }
 
+static void release_sda(void)
+{
+    t.sda_held = 0;
+    if (t.start_blocked && t.op == OP_START) {
+        t.start_blocked = 0;
+        start_op(OP_START, 1u);
+    }
+}
+
+/* SCL as a GPIO (PC5): low when driven low as an output, else pulled up. */
+static void scl_pin_changed(struct avr_t *avr)
+{
+    uint8_t low = (uint8_t)((avr->data[0x27] & 0x20u) && !(avr->data[0x28] & 0x20u));
+    if (t.scl_low && !low && !(t.twcr & TWEN_) && t.sda_held && t.release_clocks) {
+        if (++t.clocks_seen >= t.release_clocks) {
+            release_sda();
+        }
+    }
+    t.scl_low = low;
+}
+
+static void write_portc(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
+{
+    (void)param;
+    if (t.portc_w) {
+        t.portc_w(avr, addr, v, t.portc_p);
+    } else {
+        avr->data[addr] = v;
+    }
+    scl_pin_changed(avr);
+}
+
+static void write_ddrc(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
+{
+    (void)param;
+    if (t.ddrc_w) {
+        t.ddrc_w(avr, addr, v, t.ddrc_p);
+    } else {
+        avr->data[addr] = v;
+    }
+    scl_pin_changed(avr);
+}
+
 /* While TWINT and TWIE stay set the interrupt is taken again after RETI (level). */
 static void vector_running(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -357,6 +410,14 @@ void twi_attach(avr_t *avr)
     own(avr, R_TWDR, write_twdr, read_twdr);
     own(avr, R_TWCR, write_twcr, read_twcr);
     own(avr, R_TWAMR, write_plain, read_plain);
+    t.portc_w = avr->io[AVR_DATA_TO_IO(0x28)].w.c;
+    t.portc_p = avr->io[AVR_DATA_TO_IO(0x28)].w.param;
+    avr->io[AVR_DATA_TO_IO(0x28)].w.c = write_portc;
+    avr->io[AVR_DATA_TO_IO(0x28)].w.param = 0;
+    t.ddrc_w = avr->io[AVR_DATA_TO_IO(0x27)].w.c;
+    t.ddrc_p = avr->io[AVR_DATA_TO_IO(0x27)].w.param;
+    avr->io[AVR_DATA_TO_IO(0x27)].w.c = write_ddrc;
+    avr->io[AVR_DATA_TO_IO(0x27)].w.param = 0;
     t.vec.vector = TWI_VECTOR;
     t.vec.enable.reg = R_TWCR;
     t.vec.enable.bit = 0;
@@ -378,6 +439,9 @@ void twi_reset(void)
     t.op = OP_NONE;
     t.ntx = 0;
     t.acked = 0;
+    t.start_blocked = 0;
+    t.clocks_seen = 0;
+    t.scl_low = 0;
     t.bus_cycles = 0;
     t.transactions = 0;
     t.vec.pending = 0;
@@ -406,5 +470,16 @@ void twi_set_startup_us(uint8_t addr, uint64_t us)
 {
     if (addr >= SIM_MPU_BASE_ADDR && addr < SIM_MPU_BASE_ADDR + SIM_MPU_MAX) {
         startup_us[addr - SIM_MPU_BASE_ADDR] = us;
+    }
+}
+
+void twi_hold_sda(int held, uint8_t release_clocks)
+{
+    t.clocks_seen = 0;
+    t.release_clocks = release_clocks;
+    if (held) {
+        t.sda_held = 1;
+    } else {
+        release_sda();
     }
 }
