@@ -408,9 +408,6 @@ static uint16_t oc_duty(uint8_t oc)
     }
     if (fast) {
         duty = ocr >= top ? 10000u : ((uint64_t)(ocr + 1u) * 10000u + (top + 1u) / 2u) / (top + 1u);
-        if (ocr >= top) {
-            duty = 10000u;
-        }
     } else {
         duty = top == 0u ? 0u : (ocr >= top ? 10000u : ((uint64_t)ocr * 10000u + top / 2u) / top);
     }

@@ -267,16 +267,15 @@ static void write_twcr(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *p
     t.twcr = (uint8_t)((v & (TWEA_ | TWSTA_ | TWSTO_ | TWEN_ | TWIE_)) | (old & TWWC_));
     if (v & TWINT_) {
         avr_clear_interrupt(t.avr, &t.vec);
-        mirror();
         if (t.op == OP_NONE) {
             act();
         }
+        mirror();
     } else {
         t.twcr |= (uint8_t)(old & TWINT_);
         mirror();
         raise_if_enabled();
     }
-    mirror();
 }
 
 static uint8_t read_twcr(struct avr_t *avr, avr_io_addr_t addr, void *param)
