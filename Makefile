@@ -9,10 +9,12 @@ STAMP  := $(VENV)/.installed-stamp
 APT    := scripts/ensure-apt.sh
 
 # Board toolchains (command:debian-package). The newlib check is a file, not a command.
+# simavr (avr-emu board): the simulator and the headers/library the harness links.
 TOOLCHAINS := cc:gcc avr-gcc:gcc-avr /usr/lib/avr/include/avr/io.h:avr-libc \
               arm-none-eabi-gcc:gcc-arm-none-eabi \
               /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi \
-              clang:clang /usr/lib/llvm-14/lib/clang/14.0.6/lib/linux/libclang_rt.fuzzer-x86_64.a:libclang-rt-14-dev
+              clang:clang /usr/lib/llvm-14/lib/clang/14.0.6/lib/linux/libclang_rt.fuzzer-x86_64.a:libclang-rt-14-dev \
+              simavr:simavr /usr/include/simavr/sim_avr.h:libsimavr-dev
 
 .PHONY: demo test bench fuzz setup toolchains clean
 

@@ -1,0 +1,1 @@
+"""Emulated microcontrollers running the exact firmware binaries (``avr``: simavr)."""
