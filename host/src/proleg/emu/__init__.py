@@ -1,0 +1,1 @@
+"""Boards emulated at the instruction level: the exact MCU firmware images on CPU emulators."""
