@@ -269,6 +269,7 @@ class ArmEmuBoard:
 
     def _run_until(self, end: int) -> None:
         native = self.native
+        self._end = end
         while True:
             now = native.cycles.value
             self._advance(now)
@@ -334,7 +335,7 @@ class ArmEmuBoard:
         key = (self._reg(_PC), addr, value)
         if key in self._poll_seen:
             now = self.native.cycles.value
-            target = min(self._next_event(), now + POLL_SKIP_US * CYC_PER_US)
+            target = min(self._next_event(), now + POLL_SKIP_US * CYC_PER_US, self._end)
             if target > now:
                 self.native.cycles.value = target
             self._poll_seen.clear()
@@ -348,7 +349,7 @@ class ArmEmuBoard:
         if not (w.value <= pc < w.value + w.size or w.value <= (lr & ~1) < w.value + w.size):
             return
         now = self.native.cycles.value
-        target = self._next_event()
+        target = min(self._next_event(), self._end)
         if self._next_tick and self._ms_count:
             next_tick = int.from_bytes(self.uc.mem_read(self._next_tick.value, 4), "little")
             ms = int.from_bytes(self.uc.mem_read(self._ms_count.value, 4), "little")
@@ -429,6 +430,52 @@ class ArmEmuBoard:
         """The core faults (as on a wild pointer): HardFault is taken at once."""
         self.hardfault_pending = True
 
+    def call(self, function: str, *args: int, max_cycles: int = 1_000_000) -> int:
+        """Call a firmware function now (interrupts held off) and return r0; the CPU state
+        is restored afterwards. The cycles it takes pass in emulated time."""
+        sym = self.elf.symbol(function)
+        if sym is None or not sym.is_func:
+            raise SimError(f"{self.elf.path}: no function {function!r} in the firmware")
+        ctx = self.uc.context_save()
+        for reg, v in zip((A.UC_ARM_REG_R0, A.UC_ARM_REG_R1, A.UC_ARM_REG_R2, A.UC_ARM_REG_R3), args):
+            self.uc.reg_write(reg, v & 0xFFFFFFFF)
+        sentinel = FLASH_BASE + FLASH_SIZE - 16  # erased flash, never executed
+        self.uc.reg_write(A.UC_ARM_REG_LR, sentinel | 1)
+        self.native.deadline.value = self.cycles + max_cycles
+        try:
+            self.uc.emu_start(sym.value | 1, sentinel, 0, 0)
+        except Exception as e:  # noqa: BLE001 - any unicorn error is a failed probe
+            self.uc.context_restore(ctx)
+            raise SimError(f"calling {function} in the emulated firmware failed: {e}") from None
+        r0 = self.uc.reg_read(A.UC_ARM_REG_R0)
+        if self.uc.reg_read(A.UC_ARM_REG_PC) != sentinel:
+            self.uc.context_restore(ctx)
+            raise SimError(f"{function} did not return within {max_cycles} cycles")
+        self.uc.context_restore(ctx)
+        return r0
+
+    def watch_returns(self, function: str) -> list[tuple[int, int]]:
+        """Record (time in cycles, r0) at every return of a firmware function from now on
+        (a probe for tests: it hooks each instruction of that function, which is slow)."""
+        sym = self.elf.symbol(function)
+        if sym is None or not sym.is_func or not sym.size:
+            raise SimError(f"{self.elf.path}: no function {function!r} in the firmware")
+        out: list[tuple[int, int]] = []
+        lo = sym.value - FLASH_BASE
+        code = self._flash[lo : lo + sym.size]
+        returns = set()
+        for i in range(0, len(code) - 1, 2):
+            hw = code[i] | code[i + 1] << 8
+            if hw == 0x4770 or hw & 0xFF00 == 0xBD00:  # bx lr, pop {..., pc}
+                returns.add(sym.value + i)
+
+        def hook(uc, address, size, user):
+            if address in returns:
+                out.append((self.native.cycles.value, self._reg(A.UC_ARM_REG_R0)))
+
+        self.uc.hook_add(UC_HOOK_CODE, hook, None, sym.value, sym.value + sym.size - 1)
+        return out
+
     @property
     def i2c_violations(self) -> int:
         return self.i2c1.violations
@@ -450,6 +497,7 @@ class ArmEmuBoard:
         g = self.gpiob
         scl = 0 if g.is_gp_output(6) and not g.odr >> 6 & 1 else 1
         self.bus.scl(scl)
+        self.bus.sda_master(0 if g.is_gp_output(7) and not g.odr >> 7 & 1 else 1)
         self.i2c1.poll_blocked(self.native.cycles.value)
 
     @property

@@ -39,6 +39,7 @@ class Bus:
     def __init__(self) -> None:
         self.hold_bits: list[int] = []  # bits a stranded slave still drives on SDA
         self.scl_gpio = 1
+        self.sda_gpio = 1
         self.recoveries = 0
 
     @property
@@ -48,6 +49,13 @@ class Bus:
     def strand(self, byte: int) -> None:
         """A slave was cut off while sending ``byte``: it keeps driving its bits."""
         self.hold_bits = [(byte >> (7 - i)) & 1 for i in range(8)] + [1]
+
+    def sda_master(self, level: int) -> None:
+        """SDA driven by GPIO: rising while SCL is high is a STOP, which resets every slave."""
+        if level and not self.sda_gpio and self.scl_gpio and self.hold_bits and not self.sda_low:
+            self.hold_bits = []
+            self.recoveries += 1
+        self.sda_gpio = level
 
     def scl(self, level: int) -> None:
         """SCL driven by GPIO: each rising edge clocks a stranded slave one bit on."""
