@@ -44,7 +44,7 @@ USART1_IRQ = 37
 POLL_SKIP_US = 20
 CYC_PER_US = CPU_HZ // 1_000_000
 _PC, _LR = A.UC_ARM_REG_PC, A.UC_ARM_REG_LR
-_TIME_REGS = {0xE000E010, 0xE000E018}  # SYST_CSR, SYST_CVR: reading them is not a poll
+_TIME_REGS = {0xE000E010, 0xE000E018, 0xE000ED04}  # SYST_CSR, SYST_CVR, ICSR: reading them is not a poll
 
 
 @dataclass(frozen=True)
@@ -299,6 +299,8 @@ class ArmEmuBoard:
 
     def _mmio_read(self, uc, offset: int, size: int, page: int) -> int:
         addr = page + offset
+        if addr == 0xE000E018 and self._wait is not None:
+            self._wait_skip()  # before the read: the firmware sees the time it skipped to
         now = self.native.cycles.value
         if now >= self._soonest:
             self._advance(now)
@@ -311,8 +313,6 @@ class ArmEmuBoard:
             self._soonest = 0
         if addr not in _TIME_REGS and addr != 0x40005410 and addr != 0x40013804:
             self._poll(addr, v)
-        elif addr == 0xE000E018 and self._wait is not None:
-            self._wait_skip()
         return v & ((1 << (8 * size)) - 1)
 
     def _mmio_write(self, uc, offset: int, size: int, value: int, page: int) -> None:

@@ -37,6 +37,7 @@ class Rcc:
     def __init__(self) -> None:
         self.csr_flags = RESET_FLAGS["power-on"]
         self.csr_reads = 0
+        self.csr_last_read = 0  # what the firmware last saw in RCC_CSR
         self.reset()
 
     def reset(self) -> None:
@@ -65,7 +66,8 @@ class Rcc:
             return self.cfgr
         if off == 0x24:
             self.csr_reads += 1
-            return self.csr_flags | self.csr_low
+            self.csr_last_read = self.csr_flags | self.csr_low
+            return self.csr_last_read
         return self.regs.get(off, 0)
 
     def write(self, off: int, value: int, now: int) -> None:
