@@ -41,9 +41,13 @@ IMU_FAULTS = {"ok": 0, "no-ack": 1, "stuck": 2, "garbage": 3}
 FLASH_BASE, FLASH_SIZE = 0x08000000, 0x10000
 RAM_BASE, RAM_SIZE = 0x20000000, 0x5000
 USART1_IRQ = 37
-POLL_SKIP_US = 20
+POLL_SKIP_US = 20  # a poll loop with no peripheral event coming skips this much at a time
+POLL_JUMP_US = 2000  # a peripheral event at most this far ahead is jumped to directly
+POLL_WINDOW = 400  # cycles: two identical status reads closer than this are a poll loop
 CYC_PER_US = CPU_HZ // 1_000_000
 _PC, _LR = A.UC_ARM_REG_PC, A.UC_ARM_REG_LR
+_I2C1_STATUS = {0x40005400, 0x40005414, 0x40005418}  # CR1 (START/STOP clear), SR1, SR2
+_USART_SR = 0x40013800
 _TIME_REGS = {0xE000E010, 0xE000E018, 0xE000ED04}  # SYST_CSR, SYST_CVR, ICSR: reading them is not a poll
 
 
@@ -139,6 +143,8 @@ class ArmEmuBoard:
             raise SimError(f"unicorn: cannot add the cycle-counting hook (error {err})")
         self.cpu = CortexM(uc, self._vector)
         self._regbuf = ctypes.c_uint32()
+        self._returns_sinks: list = []
+        self.trace: list | None = None  # (cycle, "R"/"W", address, value) of every MMIO access when a list
         # tick markers and the tick-wait fast path
         sym = self.elf.symbol
         self._app_tick = sym("app_tick")
@@ -184,7 +190,7 @@ class ArmEmuBoard:
                 d.reset()
         self.hardfault_pending = False
         self._tick_start: int | None = None
-        self._poll_seen: set = set()
+        self._poll_seen: dict = {}
         self._soonest = 0
         self.cpu.reset()
 
@@ -265,6 +271,7 @@ class ArmEmuBoard:
             irq = exc - 16
             self.scs.ispr[irq >> 5] &= ~(1 << (irq & 31))
         self.cpu.enter(exc)
+        self._poll_seen.clear()
         return False
 
     def _run_until(self, end: int) -> None:
@@ -283,6 +290,7 @@ class ArmEmuBoard:
             self.cpu.run()
             if self.cpu.exc_exit:
                 self.cpu.exit()
+                self._poll_seen.clear()  # an interrupt returning is not a polling loop
             if self.cpu.fault:
                 self.cpu.fault = None
                 self.hardfault_pending = True
@@ -313,6 +321,8 @@ class ArmEmuBoard:
             self._soonest = 0
         if addr not in _TIME_REGS and addr != 0x40005410 and addr != 0x40013804:
             self._poll(addr, v)
+        if self.trace is not None:
+            self.trace.append((now, "R", addr, v))
         return v & ((1 << (8 * size)) - 1)
 
     def _mmio_write(self, uc, offset: int, size: int, value: int, page: int) -> None:
@@ -321,6 +331,8 @@ class ArmEmuBoard:
         self._advance(now)
         self._poll_seen.clear()
         self._soonest = 0
+        if self.trace is not None:
+            self.trace.append((now, "W", addr, value))
         d = self._device(addr)
         if d is None:
             self._unmodelled[addr & ~3] = value
@@ -332,14 +344,31 @@ class ArmEmuBoard:
             self.native.deadline.value = min(self.native.deadline.value, now + 1)  # re-plan events
 
     def _poll(self, addr: int, value: int) -> None:
-        key = (self._reg(_PC), addr, value)
-        if key in self._poll_seen:
-            now = self.native.cycles.value
-            target = min(self._next_event(), now + POLL_SKIP_US * CYC_PER_US, self._end)
-            if target > now:
-                self.native.cycles.value = target
+        """A status value read again within POLL_WINDOW cycles with no write in between is a
+        polling loop: nothing it reads can change before the next event. With a transfer in
+        flight, jump to its completion; with none, after a third read, jump POLL_SKIP_US at
+        a time (so software timeouts expire close to when they would on the chip)."""
+        key = (addr, value)
+        now = self.native.cycles.value
+        last, n = self._poll_seen.get(key, (0, 0))
+        n = n + 1 if n and now - last <= POLL_WINDOW else 1
+        self._poll_seen[key] = (now, n)
+        if n < 2:
+            return
+        device = NEVER
+        if addr in _I2C1_STATUS:
+            device = self.i2c1.next_event()
+        elif addr == _USART_SR:
+            device = self.usart.next_event()
+        if device - now <= POLL_JUMP_US * CYC_PER_US:  # waiting for a transfer in flight
+            target = min(device, self._next_interrupt(), self._end)
+        elif n >= 3:  # straight-line code may read a register twice; only a loop reads it again
+            target = min(self._next_interrupt(), self._end, now + POLL_SKIP_US * CYC_PER_US)
+        else:
+            return
+        if target > now:
+            self.native.cycles.value = target
             self._poll_seen.clear()
-        self._poll_seen.add(key)
 
     def _wait_skip(self) -> None:
         """In the tick wait: jump to just before the firmware's next tick (or the next event)."""
@@ -466,15 +495,41 @@ class ArmEmuBoard:
         returns = set()
         for i in range(0, len(code) - 1, 2):
             hw = code[i] | code[i + 1] << 8
-            if hw == 0x4770 or hw & 0xFF00 == 0xBD00:  # bx lr, pop {..., pc}
+            hw2 = code[i + 2] | code[i + 3] << 8 if i + 3 < len(code) else 0
+            if hw == 0x4770 or hw & 0xFF00 == 0xBD00 or (hw == 0xE8BD and hw2 & 0x8000):  # bx lr, pop {.., pc}
                 returns.add(sym.value + i)
 
         def hook(uc, address, size, user):
             if address in returns:
                 out.append((self.native.cycles.value, self._reg(A.UC_ARM_REG_R0)))
+                for lst, fn in self._returns_sinks:
+                    if lst is out:
+                        fn(out[-1][0])
 
         self.uc.hook_add(UC_HOOK_CODE, hook, None, sym.value, sym.value + sym.size - 1)
         return out
+
+    def time_in(self, function: str) -> list[int]:
+        """Accumulate the cycles spent inside a firmware function (entry to return, callees
+        and interrupts included) from now on: returns [total cycles, calls]."""
+        sym = self.elf.symbol(function)
+        if sym is None or not sym.is_func or not sym.size:
+            raise SimError(f"{self.elf.path}: no function {function!r} in the firmware")
+        acc = [0, 0]
+        start: list[int] = []
+        rets = self.watch_returns(function)
+
+        def entry(uc, address, size, user):
+            start.append(self.native.cycles.value)
+
+        def on_return(t: int) -> None:
+            if start:
+                acc[0] += t - start.pop()
+                acc[1] += 1
+
+        self.uc.hook_add(UC_HOOK_CODE, entry, None, sym.value, sym.value)
+        self._returns_sinks.append((rets, on_return))
+        return acc
 
     @property
     def i2c_violations(self) -> int:
