@@ -230,3 +230,21 @@ def test_an_imu_that_stops_answering_is_a_fault_not_a_hang(elf):
     faults = _events(_messages(b), EventKind.FAULT)
     assert [(f.code, f.detail) for f in faults] == [(FaultCode.IMU_NO_ACK, 1)]
     assert b.resets == []
+
+
+@pytest.mark.xfail(strict=True, reason="app.c re-initialises the IMU (mpu6050_init, 7 blocking transfers) inside "
+                   "the tick on CLEAR(FAULTS): needs the core's non-blocking IMU start-up (issue 11, fwhouse)")
+def test_clear_faults_keeps_every_tick_within_its_period(robot, elf):
+    from proleg.emu.arm import ArmEmuRobot
+    from proleg.protocol.definition import ClearWhat
+
+    sim = ArmEmuRobot(robot, elf)
+    with _client(sim) as client:
+        client.connect()
+        sim.board.imu_fault(IMU1, "no-ack")
+        sim.advance(0.05)
+        sim.board.imu_fault(IMU1, "ok")
+        sim.board.busy_us.clear()
+        client.clear(ClearWhat.FAULTS)
+        sim.advance(0.05)
+        assert max(sim.board.busy_us) < sim.board.tick_us
