@@ -46,7 +46,8 @@ POLL_JUMP_US = 2000  # a peripheral event at most this far ahead is jumped to di
 POLL_WINDOW = 400  # cycles: two identical status reads closer than this are a poll loop
 CYC_PER_US = CPU_HZ // 1_000_000
 _PC, _LR = A.UC_ARM_REG_PC, A.UC_ARM_REG_LR
-_I2C1_STATUS = {0x40005400, 0x40005414, 0x40005418}  # CR1 (START/STOP clear), SR1, SR2
+_I2C1_STATUS = {0x40005400, 0x40005414}  # CR1 (START/STOP cleared by hardware), SR1
+_SIDE_EFFECT_READS = {0x40005410, 0x40005418, 0x40013804}  # I2C1 DR, SR2 (clears ADDR), USART1 DR
 _USART_SR = 0x40013800
 _TIME_REGS = {0xE000E010, 0xE000E018, 0xE000ED04}  # SYST_CSR, SYST_CVR, ICSR: reading them is not a poll
 
@@ -319,8 +320,10 @@ class ArmEmuBoard:
         v = d.read(reg & ~3, now) >> (8 * (reg & 3))
         if d is self.i2c1 or d is self.usart:
             self._soonest = 0
-        if addr not in _TIME_REGS and addr != 0x40005410 and addr != 0x40013804:
-            self._poll(addr, v)
+        if addr not in _TIME_REGS and addr not in _SIDE_EFFECT_READS and self._poll(addr, v):
+            now = self.native.cycles.value  # jumped to where the loop would see a change:
+            self._advance(now)  # read again (these registers have no read side effects)
+            v = d.read(reg & ~3, now) >> (8 * (reg & 3))
         if self.trace is not None:
             self.trace.append((now, "R", addr, v))
         return v & ((1 << (8 * size)) - 1)
@@ -343,18 +346,20 @@ class ArmEmuBoard:
         if d is self.usart or d is self.scs or d is self.iwdg or d is self.rcc:
             self.native.deadline.value = min(self.native.deadline.value, now + 1)  # re-plan events
 
-    def _poll(self, addr: int, value: int) -> None:
-        """A status value read again within POLL_WINDOW cycles with no write in between is a
-        polling loop: nothing it reads can change before the next event. With a transfer in
-        flight, jump to its completion; with none, after a third read, jump POLL_SKIP_US at
-        a time (so software timeouts expire close to when they would on the chip)."""
+    def _poll(self, addr: int, value: int) -> bool:
+        """A value read a third time, each read within POLL_WINDOW cycles of the last, with no
+        write in between, is a polling loop: nothing it reads can change before the next
+        event. For a status register with its transfer in flight, jump to the completion;
+        otherwise POLL_SKIP_US at a time (so software timeouts expire close to when they
+        would on the chip). Two reads are not enough: a loop may read a register twice per
+        pass and leave on the second (i2c_wait checks SR1 for the flag, then for errors)."""
         key = (addr, value)
         now = self.native.cycles.value
         last, n = self._poll_seen.get(key, (0, 0))
         n = n + 1 if n and now - last <= POLL_WINDOW else 1
         self._poll_seen[key] = (now, n)
-        if n < 2:
-            return
+        if n < 3:  # code may read a value twice and act on it (the i2c_wait loop does): not a poll yet
+            return False
         device = NEVER
         if addr in _I2C1_STATUS:
             device = self.i2c1.next_event()
@@ -362,13 +367,13 @@ class ArmEmuBoard:
             device = self.usart.next_event()
         if device - now <= POLL_JUMP_US * CYC_PER_US:  # waiting for a transfer in flight
             target = min(device, self._next_interrupt(), self._end)
-        elif n >= 3:  # straight-line code may read a register twice; only a loop reads it again
-            target = min(self._next_interrupt(), self._end, now + POLL_SKIP_US * CYC_PER_US)
         else:
-            return
+            target = min(self._next_interrupt(), self._end, now + POLL_SKIP_US * CYC_PER_US)
         if target > now:
             self.native.cycles.value = target
             self._poll_seen.clear()
+            return True
+        return False
 
     def _wait_skip(self) -> None:
         """In the tick wait: jump to just before the firmware's next tick (or the next event)."""

@@ -229,10 +229,10 @@ class I2c:
             self.sr1 &= ~RXNE
             if self.sr1 & BTF and self.phase == "rx":
                 self.sr1 &= ~BTF
-                if self.rx_ready is not None:
+                if self.rx_ready is not None:  # SCL was stretched before this byte's ACK pulse
                     self.dr_rx, self.rx_ready = self.rx_ready, None
                     self.sr1 |= RXNE
-                    self._after_rx_byte(now, self.rx_acked)
+                    self._after_rx_byte(now, bool(self.cr1 & CR1_ACK))
             return v
         return self.regs.get(off, 0)
 
