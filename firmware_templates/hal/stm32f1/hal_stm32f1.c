@@ -337,7 +337,11 @@ static void i2c_recover(void)
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     if (i2c_transfer(addr7, tx, ntx, rx, nrx) != 0) {
-        if (!(I2C_CR1 & (I2C_CR1_START | I2C_CR1_STOP))) {
+        if (I2C_CR1 & I2C_CR1_START) {
+            i2c_recover(); /* the START never went out: a line is held low */
+            return -1;
+        }
+        if (!(I2C_CR1 & I2C_CR1_STOP)) {
             I2C_CR1 |= I2C_CR1_STOP;
         }
         I2C_SR1 = 0; /* clear AF/BERR/ARLO */
