@@ -35,7 +35,8 @@ from proleg.emu.avr import AvrEmuRobot, nano_build_dir  # noqa: E402
 from proleg.emu.avr.budget import MAX_LIMIT, P99_LIMIT  # noqa: E402
 from proleg.errors import BuildError  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
-from proleg.sim.session import SimSession  # noqa: E402
+from proleg.link.listeners import Listener  # noqa: E402
+from proleg.report import SimSession  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results" / "mcu.json"
 RUN_S = 10.0
@@ -49,11 +50,12 @@ def measure(robot) -> dict:
     sim = AvrEmuRobot(robot, build / "firmware.elf", seed=SEED)
     clock: list[tuple[float, int]] = []
 
-    def on_message(received) -> None:
-        if received.message.name == "TELEMETRY":
-            clock.append((received.time, received.message.time_ms))
+    class Clock(Listener):
+        def on_message(self, received) -> None:
+            if received.message.name == "TELEMETRY":
+                clock.append((received.time, received.message.time_ms))
 
-    session = SimSession(sim, listener=on_message)
+    session = SimSession(sim, listeners=[Clock()])
     session.advance(BOOT_S)
     sim.board.clear_ticks()
     clock.clear()

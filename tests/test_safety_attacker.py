@@ -36,7 +36,7 @@ from proleg.protocol.codec import FrameDecoder, Message, encode
 from proleg.protocol.definition import ClearWhat, ErrorCode, EventKind, FaultCode, ParamId
 from proleg.robot import Robot, load_robot
 from proleg.sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
-from proleg.sim.run import SimulatedRobot
+from proleg.sim.closed_loop import SimulatedRobot
 
 from proleg.paths import robots_dir
 

@@ -1,1 +1,2 @@
-"""Emulated microcontrollers running the exact firmware binaries (``avr``: simavr)."""
+"""Boards emulated at the instruction level: the exact MCU firmware images on CPU emulators
+(``avr``: simavr, ``arm``: unicorn)."""

@@ -383,7 +383,7 @@ class AvrEmuBoard:
     def tick_budget(self) -> TickBudget:
         """The ticks completed in the window (since reset or ``clear_ticks``)."""
         if not self.measures_ticks:
-            raise SimError(f"{self.elf}: no tick markers found (no hal_wait_tick wait loop, no GPIOR0 writes)")
+            raise SimError(f"{self.elf}: no tick markers found (no wait_tick wait loop, no GPIOR0 writes)")
         self._drain_ticks()
         if self._records:
             starts, busy, i2c = (np.concatenate(parts) for parts in zip(*self._records))

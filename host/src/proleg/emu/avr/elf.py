@@ -145,11 +145,11 @@ def _is_branch(ins: Instruction) -> bool:
 def tick_markers(elf: str | Path) -> TickMarkers | None:
     """Where the firmware's tick work starts and ends (None when no wait was recognised)."""
     code = disassembly(elf)
-    wait = find_symbol(elf, "hal_wait_tick")
+    wait = find_symbol(elf, "wait_tick")
     if wait is not None and wait.kind in "tT":
         sites = [i for i in code if _is_call(i) and i.target == wait.address]
         if len(sites) == 1:
-            return TickMarkers(sites[0].address + sites[0].size, wait.address, "hal_wait_tick call")
+            return TickMarkers(sites[0].address + sites[0].size, wait.address, "wait_tick call")
     micros = find_symbol(elf, "hal_micros")
     if micros is None or micros.kind not in "tT":
         return None
