@@ -9,11 +9,14 @@ STAMP  := $(VENV)/.installed-stamp
 APT    := scripts/ensure-apt.sh
 
 # Board toolchains (command:debian-package). The newlib check is a file, not a command.
+# simavr (avr-emu board): the simulator and the headers/library the harness links.
 TOOLCHAINS := cc:gcc avr-gcc:gcc-avr /usr/lib/avr/include/avr/io.h:avr-libc \
               arm-none-eabi-gcc:gcc-arm-none-eabi \
-              /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi
+              /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi \
+              clang:clang /usr/lib/llvm-14/lib/clang/14.0.6/lib/linux/libclang_rt.fuzzer-x86_64.a:libclang-rt-14-dev \
+              simavr:simavr /usr/include/simavr/sim_avr.h:libsimavr-dev
 
-.PHONY: demo test bench setup toolchains clean
+.PHONY: demo test bench fuzz setup toolchains clean
 
 setup: $(STAMP)
 
@@ -35,6 +38,12 @@ demo: $(STAMP) toolchains
 
 test: $(STAMP) toolchains
 	$(BIN)/python -m pytest -n 2 -q
+
+# Long fuzzing (the short run is part of `make test`) and a longer attacker profile.
+FUZZ_SECONDS ?= 300
+fuzz: $(STAMP) toolchains
+	$(BIN)/python tests/fuzz/run_fuzz.py --seconds $(FUZZ_SECONDS) --coverage --json bench/results/fuzz.json
+	PROLEG_ATTACK_EXAMPLES=200 PROLEG_ATTACK_STEPS=40 $(BIN)/python -m pytest -q tests/test_safety_attacker.py
 
 bench: $(STAMP) toolchains
 	$(BIN)/python bench/run_all.py

@@ -21,7 +21,7 @@ from proleg.errors import BuildError
 from proleg.firmware.boards import load_board
 from proleg.firmware.build import build
 from proleg.protocol import FrameDecoder
-from proleg.protocol.definition import EventKind, FaultCode
+from proleg.protocol.definition import EventKind, FaultCode, ResetCause
 from proleg.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -94,6 +94,9 @@ TOY_BODIES = {
         "    }\n"
         "    fflush(stdout);"
     ),
+    "hal_reset_cause": "    return HAL_RESET_POWER_ON; /* the toy only ever powers on */",
+    "hal_watchdog_feed": "    /* no watchdog on the toy */",
+    "hal_tick_mark": "    (void)busy;",
 }
 TOY_GLOBALS = (
     "#include <stdio.h>\n#include <stdlib.h>\n#include <time.h>\n\n"
@@ -169,7 +172,7 @@ def test_a_toy_board_from_the_template_boots_and_speaks_the_protocol(home, tmp_p
     info = next(m for m in msgs if m.name == "INFO")
     assert (info.robot_name, info.board) == (robot.name, "toy-host")
     events = [(m.kind, m.code, m.detail) for m in msgs if m.name == "EVENT"]
-    assert events[0] == (EventKind.BOOT, 0, 0)
+    assert events[0] == (EventKind.BOOT, ResetCause.POWER_ON, 0)
     assert (EventKind.FAULT, FaultCode.IMU_NO_ACK, 0) in events  # no IMU on the toy's bus
     assert any(m.name == "TELEMETRY" for m in msgs)  # the core's tick loop ran
 

@@ -4,16 +4,23 @@
 #include "cmd.h"
 #include "drive.h"
 #include "fault.h"
+#include "hal.h"
 #include "imucheck.h"
 #include "param.h"
 #include "proto.h"
 #include "psi.h"
 #include "robot_config.h"
+#include "safety.h"
 #include "seq.h"
 #include "sma.h"
 #include "telemetry.h"
 #include "tx.h"
 #include "uart.h"
+
+/* hal.h's reset causes are the protocol's (BOOT's code goes out unchanged). */
+typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG &&
+                                     HAL_RESET_BROWN_OUT == PROTO_RESET_BROWN_OUT &&
+                                     HAL_RESET_SOFTWARE == PROTO_RESET_SOFTWARE) ? 1 : -1];
 
 static uint32_t ms;     /* firmware time */
 static uint16_t us_acc; /* µs of the current ms */
@@ -36,11 +43,12 @@ void app_init(void)
     drive_init();
     imucheck_init();
     sma_init();
+    guard_init(); /* safety: the step guard on real time */
     psi_init();
     seq_init();
     cmd_init();
     cmd_send_info(0);
-    tx_event(PROTO_EV_BOOT, 0, 0);
+    tx_event(PROTO_EV_BOOT, hal_reset_cause(), 0);
     for (i = 0; i < CFG_N_LIMBS; i++) {
         imucheck_start(i);
     }

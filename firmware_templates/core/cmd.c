@@ -11,6 +11,7 @@
 #include "proto.h"
 #include "rom.h"
 #include "seq.h"
+#include "safety.h"
 #include "sma.h"
 #include "telemetry.h"
 #include "tx.h"
@@ -95,6 +96,10 @@ static void cmd_start(uint8_t token)
         tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
+    if (seq_running()) { /* safety: a restart would restart the step; STOP first */
+        tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 1);
+        return;
+    }
     if (gait == PROTO_GAIT_USER) {
         r = seq_start(SEQ_DIR_LOADED, 0, imucheck_measured());
     } else if (dir > PROTO_DIR_MINUS_X) {
@@ -166,6 +171,7 @@ static void cmd_clear(uint8_t token)
     if ((what & PROTO_CLEAR_FAULTS) && fault_latched()) {
         bad = imucheck_take_bad();
         fault_clear();
+        guard_ack(); /* safety: the operator acknowledged; the thermal budget is not refunded */
         done |= PROTO_CLEAR_FAULTS;
         tx_event(PROTO_EV_FAULT_CLEARED, done, 0);
         done = 0;

@@ -7,17 +7,20 @@
 #include "param.h"
 #include "proto.h"
 #include "psi.h"
+#include "safety.h"
 #include "seq.h"
 #include "sma.h"
 #include "telemetry.h"
 #include "tx.h"
 
 static uint8_t gait, dir; /* gait last started */
+static uint8_t reached;   /* the sequencer reported REACHED this tick */
 
 void drive_init(void)
 {
     gait = 0;
     dir = PROTO_DIR_PLUS_X;
+    reached = 0;
 }
 
 void drive_started(uint8_t g, uint8_t d)
@@ -36,6 +39,20 @@ uint8_t drive_dir(void)
     return dir;
 }
 
+/* The first limb not at its level of `target` (0 if all are). */
+static uint16_t limb_off_target(cfg_state_t target)
+{
+    uint8_t want[CFG_N_LIMBS];
+    uint8_t i;
+    seq_state_levels(target, want);
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        if (psi_level(i) != want[i]) {
+            return i;
+        }
+    }
+    return 0;
+}
+
 static uint8_t all_settled(void)
 {
     uint8_t i;
@@ -49,10 +66,11 @@ static uint8_t all_settled(void)
 
 void drive_step(void)
 {
-    uint8_t ev, i;
+    uint8_t ev;
     uint16_t step;
     cfg_state_t target;
     uint32_t measured = imucheck_measured();
+    reached = 0;
     if (!seq_running() || measured == IMUCHECK_UNKNOWN) {
         return;
     }
@@ -63,26 +81,18 @@ void drive_step(void)
      * the target (target ^ 1 differs from target by construction). */
     ev = seq_tick(all_settled() ? (cfg_state_t)measured : (cfg_state_t)(target ^ 1u));
     if (ev & SEQ_EV_REACHED) {
+        reached = 1;
         tx_event(PROTO_EV_STATE_REACHED, (uint8_t)(step > 255u ? 255u : step), target);
     }
     if (ev & SEQ_EV_TIMEOUT) {
-        uint8_t want[CFG_N_LIMBS];
-        uint16_t limb = 0;
-        seq_state_levels(target, want);
-        for (i = 0; i < CFG_N_LIMBS; i++) {
-            if (psi_level(i) != want[i]) {
-                limb = i;
-                break;
-            }
-        }
-        fault_raise_stopped(PROTO_FAULT_STATE_TIMEOUT, limb);
+        fault_raise_stopped(PROTO_FAULT_STATE_TIMEOUT, limb_off_target(target));
     }
 }
 
 void drive_apply(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
-    uint8_t i, hits;
+    uint8_t i, hits, guard, act = 0;
     if (seq_running() && !fault_latched() && !sma_estopped() && imucheck_measured() != IMUCHECK_UNKNOWN) {
         uint8_t want[CFG_N_LIMBS];
         seq_state_levels(seq_target(), want);
@@ -99,10 +109,21 @@ void drive_apply(void)
     if (sma_take_clamped()) {
         telemetry_note_clamped();
     }
+    /* safety: the step guard (safety.h) runs on real time from the first demand of an
+     * unreached target; a START, STOP or ESTOP does not reset it. */
+    guard = guard_tick((uint8_t)(seq_running() && !seq_holding() && !fault_latched()), reached, hits, &act);
+    if (guard == GUARD_ON_LIMIT && !fault_latched()) {
+        fault_raise(PROTO_FAULT_SMA_ON_LIMIT, act); /* repeated hits on one step: latched */
+        return;
+    }
+    if (guard == GUARD_TIMEOUT && !fault_latched() && seq_running()) {
+        fault_raise(PROTO_FAULT_STATE_TIMEOUT, limb_off_target(seq_target()));
+        return;
+    }
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         if (hits & (1u << i)) {
-            /* Reported, not latched: the channel cools down and the gait goes on; a limb
-             * that cannot reach its state then ends in a state timeout. */
+            /* A single hit is reported, not latched: the channel cools down and the gait
+             * goes on; CFG_ON_LIMIT_LATCH hits without progress latch a fault (above). */
             tx_event(PROTO_EV_FAULT, PROTO_FAULT_SMA_ON_LIMIT, i);
         }
     }

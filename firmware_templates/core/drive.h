@@ -7,7 +7,9 @@
  * naming the first limb off its level. drive_apply() then asks the controller (ctl.h)
  * for the target's duties (every duty 0 when idle, faulted, e-stopped or the state is
  * unknown), applies them through sma.h and reports each actuator forced into cool-down
- * (EVENT FAULT SMA_ON_LIMIT, reported, not latched). drive_started() records the gait
+ * (EVENT FAULT SMA_ON_LIMIT, reported, not latched) - unless the step guard (safety.h)
+ * latches a fault: repeated on-limit hits on one step, or the state timeout on real time
+ * from the first demand (STOP/START do not reset it). drive_started() records the gait
  * and direction last started, for telemetry.
  */
 #ifndef PROLEG_DRIVE_H

@@ -1,6 +1,7 @@
 /* fault.c - see fault.h. */
 #include "fault.h"
 
+#include "hal.h"
 #include "param.h"
 #include "proto.h"
 #include "seq.h"
@@ -10,7 +11,8 @@
 static struct {
     uint8_t latched;
     uint8_t watchdog_tripped;
-    uint32_t since_rx; /* ticks since the last valid frame */
+    uint32_t rx_us;    /* hal_micros() at the last valid frame */
+    uint8_t rx_stale;  /* no valid frame for 2^30 µs: stays stale across the clock wrap */
 } st;
 
 static uint16_t cycles_u16(void)
@@ -23,7 +25,8 @@ void fault_init(void)
 {
     st.latched = 0;
     st.watchdog_tripped = 0;
-    st.since_rx = 0;
+    st.rx_us = hal_micros();
+    st.rx_stale = 0;
 }
 
 void fault_stop_gait(uint8_t reason)
@@ -64,15 +67,21 @@ void fault_clear(void)
 
 void fault_heard_host(void)
 {
-    st.since_rx = 0;
+    st.rx_us = hal_micros();
+    st.rx_stale = 0;
 }
 
 void fault_watchdog_tick(void)
 {
-    if (st.since_rx < 0xFFFFFFFFu) {
-        st.since_rx++;
+    /* safety: on real time (hal_micros, wrap-safe), not on the tick count */
+    uint32_t since = hal_micros() - st.rx_us;
+    if (since >= 0x40000000UL) {
+        st.rx_stale = 1;
     }
-    if (param_watchdog_ticks() && seq_running() && st.since_rx >= param_watchdog_ticks()) {
+    if (st.rx_stale) {
+        since = 0xFFFFFFFFUL;
+    }
+    if (param_watchdog_ticks() && seq_running() && since >= param_watchdog_ticks() * CFG_TICK_US) {
         sma_all_off();
         st.watchdog_tripped = 1;
         tx_event(PROTO_EV_FAULT, PROTO_FAULT_LINK_WATCHDOG, 0);

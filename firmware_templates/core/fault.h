@@ -6,8 +6,8 @@
  * and no actuator is driven. fault_stop_gait() stops a running gait and reports why
  * (nothing when none runs). The link watchdog: fault_watchdog_tick() runs once per
  * tick; when a gait runs and no valid frame has arrived for the watchdog period
- * (param.h, 0 = off) it turns every MOSFET off and stops the gait (reported, not
- * latched: a START clears the flag). fault_heard_host() restarts the count.
+ * (param.h, 0 = off; measured on hal_micros, not on ticks) it turns every MOSFET off
+ * and stops the gait (reported, not latched: a START clears the flag). fault_heard_host() restarts the count.
  */
 #ifndef PROLEG_FAULT_H
 #define PROLEG_FAULT_H

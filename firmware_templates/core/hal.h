@@ -26,6 +26,27 @@ uint32_t hal_micros(void);
  * timeout (bounded: never longer than about 2 ms). */
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
 
+/* Why the chip last reset, one of HAL_RESET_* (the BOOT event's code; protocol
+ * ResetCause). Read from the reset flags once in hal_init(), which also clears them so
+ * the next reset reports its own cause. */
+#define HAL_RESET_UNKNOWN 0u
+#define HAL_RESET_POWER_ON 1u
+#define HAL_RESET_EXTERNAL 2u
+#define HAL_RESET_BROWN_OUT 3u
+#define HAL_RESET_WATCHDOG 4u
+#define HAL_RESET_SOFTWARE 5u
+uint8_t hal_reset_cause(void);
+
+/* Reload the hardware watchdog (started by hal_init). The core calls it once per
+ * completed tick and nowhere else: a hung tick, a stuck bus wait or a dead core resets
+ * the chip with every coil off. */
+void hal_watchdog_feed(void);
+
+/* Tick-budget marker: 1 when a tick's work starts, 0 when it ends. One store to a
+ * register that does nothing else (AVR GPIOR0 bit 0; STM32 BKP_DR1, clock off: the chip
+ * ignores it), so an emulator or a logic probe can time every tick. */
+void hal_tick_mark(uint8_t busy);
+
 /* Set the MOSFET PWM duty of an actuator channel, in permyriad (0 = off, 10000 = on);
  * 0 must drive the gate low, not leave a one-count pulse. */
 void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad);

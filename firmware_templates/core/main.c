@@ -6,6 +6,11 @@
  * schedule from now (no burst of catch-up ticks). Boards whose host drives the ticks
  * (host-sim: sim_run_ticks) leave this file out of the image (board file
  * [build] main_loop = false).
+ *
+ * Each tick's work is framed by hal_tick_mark(1) / hal_tick_mark(0) (the emulators and a
+ * logic probe time it), and the watchdog is fed only after a tick's work has returned.
+ * The wait is its own function with `next_tick` its schedule, so the emulators can find
+ * it in the ELF and skip idle time (docs/emulators-arm.md).
  */
 #include <stdint.h>
 
@@ -13,9 +18,11 @@
 #include "hal.h"
 #include "robot_config.h"
 
-static uint32_t next_tick;
+uint32_t next_tick;
 
-static void wait_tick(void)
+void wait_tick(void);
+
+void __attribute__((noinline)) wait_tick(void)
 {
     uint32_t now = hal_micros();
     if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
@@ -33,6 +40,9 @@ int main(void)
     app_init();
     for (;;) {
         wait_tick();
+        hal_tick_mark(1);
         app_tick();
+        hal_tick_mark(0);
+        hal_watchdog_feed();
     }
 }

@@ -4,6 +4,7 @@
 #include "proto.h"
 #include "psi.h"
 #include "rom.h"
+#include "safety.h"
 #include "seq.h"
 #include "sma.h"
 
@@ -61,6 +62,7 @@ static uint8_t set_timeout(uint8_t index, int32_t ticks)
 {
     (void)index;
     seq_set_timeout((uint32_t)ticks);
+    guard_set_timeout_ms((uint32_t)ticks * CFG_TICK_US / 1000u); /* safety: the real-time timeout */
     return 0;
 }
 

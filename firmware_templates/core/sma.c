@@ -1,27 +1,51 @@
 /* sma.c - see sma.h. */
 #include "sma.h"
 
+#include <string.h>
+
 #include "hal.h"
 #include "rom.h"
+
+#if CFG_DUTY_WINDOW_MS < 8UL || CFG_DUTY_WINDOW_MS > 600000UL
+#error "duty_window_ms must lie in 8 .. 600000"
+#endif
+
+/* The mean-duty window as SMA_WIN_SLOTS ring slots of CFG_DUTY_WINDOW_MS / 8 each plus the
+ * slot being filled: their sum covers between 1 and 9/8 windows, so a limit on the sum is a
+ * limit on every window of CFG_DUTY_WINDOW_MS (conservative by at most one slot). */
+#define SMA_WIN_SLOTS 9u
+#define SMA_SLOT_US (CFG_DUTY_WINDOW_MS * 1000UL / (SMA_WIN_SLOTS - 1u))
+/* Window sums count permyriad × µs / 1024. */
+#define SMA_WIN_LIMIT ((uint32_t)CFG_MEAN_DUTY_PM * ((CFG_DUTY_WINDOW_MS * 1000UL) >> 10))
+#define SMA_TICK_CHARGE(d) (((uint32_t)(d) * CFG_TICK_US + 1023UL) >> 10)
 
 static const uint8_t act_channel[CFG_N_ACTUATORS] ROM = CFG_ACTUATOR_CHANNELS;
 
 typedef struct {
-    uint32_t on_ticks;  /* consecutive ticks on */
-    uint32_t cooldown;  /* ticks of forced off left */
-    uint16_t request;   /* wanted duty */
-    uint16_t applied;   /* last output */
+    uint32_t debt_us;  /* on-time not yet paid back by cool-down */
+    uint32_t win_total; /* sum of this actuator's window slots */
+    uint16_t win_rem;  /* remainder of the last charge, below 1024 */
+    uint16_t request;  /* wanted duty */
+    uint16_t applied;  /* last output (0 after all_off/estop) */
+    uint16_t charged;  /* duty the pin carried since the last tick: charged at the next */
+    uint8_t blocked;   /* the mean-duty window refused the last request */
+    uint8_t forced;    /* cut at max_on: fully off until the debt is paid */
 } act_state_t;
 
 static act_state_t acts[CFG_N_ACTUATORS];
+static uint32_t win[SMA_WIN_SLOTS][CFG_N_ACTUATORS];
+static uint32_t last_us;
+static uint32_t slot_us;
+static uint8_t slot;
 static uint8_t estopped;
 static uint16_t max_duty = CFG_MAX_DUTY_PM;
-static uint32_t max_on = CFG_MAX_ON_TICKS;
-static uint32_t cooldown = CFG_MIN_COOLDOWN_TICKS;
+static uint32_t max_on_us = CFG_MAX_ON_TICKS * CFG_TICK_US;
+static uint32_t refill_q8;     /* on-time paid back per µs of cool-down, × 256, rounded down */
 static uint16_t limit_hits;
 static uint8_t clamped;
-/* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
+/* Variables, not the macros: comparing against a constant 0 would warn (-Wtype-limits). */
 static const uint32_t min_cooldown = CFG_MIN_COOLDOWN_TICKS;
+static const uint16_t hold_max = CFG_HOLD_MAX_DUTY_PM;
 
 uint16_t sma_clamp(uint16_t duty_pm)
 {
@@ -37,9 +61,12 @@ static void output(uint8_t act, uint16_t duty_pm)
         clamped = 1;
     }
     acts[act].applied = d;
+    acts[act].charged = d;
     hal_pwm_set(ROM_U8(&act_channel[act]), d);
 }
 
+/* Pins off now. `charged` keeps the duty the pin had: the time until the next sma_tick is
+ * charged at it, so stopping between two ticks never shortens an on-period. */
 static void every_channel_off(void)
 {
     uint8_t ch;
@@ -50,20 +77,49 @@ static void every_channel_off(void)
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         acts[i].request = 0;
         acts[i].applied = 0;
-        acts[i].on_ticks = 0;
+    }
+}
+
+/* Cool-down pays back max_on / min_cooldown µs of on-time per µs, i.e. an on-period of L
+ * is paid back by L × min_cooldown / max_on of cool-down. Rounded down, and at most 39×
+ * (a min_cooldown below 1/39 of max_on counts as 1/39): paid back no faster than that. */
+static void set_times(uint32_t on_us, uint32_t cooldown_us)
+{
+    max_on_us = on_us;
+    refill_q8 = on_us / ((cooldown_us >> 8) + 1u);
+    if (refill_q8 > 10000u) {
+        refill_q8 = 10000u;
+    }
+}
+
+/* Move the window on by dt: slots older than the window fall out. */
+static void advance_window(uint32_t dt)
+{
+    uint8_t n, i;
+    if (dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
+        dt = SMA_SLOT_US * SMA_WIN_SLOTS;
+    }
+    slot_us += dt;
+    for (n = 0; slot_us >= SMA_SLOT_US && n < SMA_WIN_SLOTS; n++) {
+        slot_us -= SMA_SLOT_US;
+        slot = (uint8_t)(slot + 1u < SMA_WIN_SLOTS ? slot + 1u : 0u);
+        for (i = 0; i < CFG_N_ACTUATORS; i++) {
+            acts[i].win_total -= win[slot][i];
+            win[slot][i] = 0;
+        }
     }
 }
 
 void sma_init(void)
 {
-    uint8_t i;
-    for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        acts[i].cooldown = 0;
-    }
+    memset(acts, 0, sizeof acts);
+    memset(win, 0, sizeof win);
+    last_us = hal_micros();
+    slot_us = 0;
+    slot = 0;
     estopped = 0;
     max_duty = CFG_MAX_DUTY_PM;
-    max_on = CFG_MAX_ON_TICKS;
-    cooldown = CFG_MIN_COOLDOWN_TICKS;
+    set_times(CFG_MAX_ON_TICKS * CFG_TICK_US, CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US);
     limit_hits = 0;
     every_channel_off();
 }
@@ -77,28 +133,53 @@ void sma_request(uint8_t act, uint16_t duty_pm)
 
 uint8_t sma_tick(void)
 {
+    uint32_t now = hal_micros();
+    uint32_t dt = now - last_us; /* unsigned: right across the 2^32 wrap */
     uint8_t hit = 0;
     uint8_t i;
+    last_us = now;
+    if (dt >= 0x80000000UL) {
+        dt = CFG_TICK_US; /* the clock stepped back: count one tick */
+    } else if (dt > SMA_DT_CAP_US) {
+        dt = SMA_DT_CAP_US;
+    }
+    advance_window(dt);
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         act_state_t *a = &acts[i];
-        uint16_t duty = estopped ? 0u : a->request;
-        if (a->cooldown > 0u) {
-            a->cooldown--;
-            duty = 0;
+        uint16_t duty = estopped ? 0u : sma_clamp(a->request);
+        uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
+        if (!estopped && duty != a->request) {
+            clamped = 1;
         }
-        if (duty > 0u) {
-            a->on_ticks++;
-            if (a->on_ticks > max_on) {
-                a->cooldown = cooldown;
-                a->on_ticks = 0;
-                duty = 0;
+        /* charge the interval since the last tick at the duty the pin carried */
+        win[slot][i] += x >> 10;
+        a->win_total += x >> 10;
+        a->win_rem = (uint16_t)(x & 1023u);
+        if (a->charged > hold_max) {
+            a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
+        } else {
+            uint32_t paid = (dt * refill_q8) >> 8; /* ≤ 400000 × 10000 */
+            a->debt_us = a->debt_us > paid ? a->debt_us - paid : 0u;
+            if (a->debt_us == 0u) {
+                a->forced = 0;
+            }
+        }
+        /* then decide the next output */
+        if (a->forced) {
+            duty = 0; /* cooling after an on-limit hit: off until the debt is paid */
+        } else if (duty > hold_max) {
+            if (a->debt_us + CFG_TICK_US > max_on_us) {
+                duty = 0; /* cut before the next tick would pass max_on */
+                a->forced = 1;
                 hit = (uint8_t)(hit | (1u << i));
                 if (limit_hits < 0xFFFFu) {
                     limit_hits++;
                 }
             }
-        } else {
-            a->on_ticks = 0;
+        }
+        a->blocked = (uint8_t)(duty > 0u && a->win_total + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
+        if (a->blocked) {
+            duty = 0;
         }
         output(i, duty);
     }
@@ -128,12 +209,12 @@ uint8_t sma_estopped(void)
 
 int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cooldown_ticks)
 {
-    if (max_duty_pm > CFG_MAX_DUTY_PM || max_on_ticks > CFG_MAX_ON_TICKS || cooldown_ticks < min_cooldown) {
+    if (max_duty_pm > CFG_MAX_DUTY_PM || max_on_ticks > CFG_MAX_ON_TICKS || cooldown_ticks < min_cooldown ||
+        cooldown_ticks > 0xFFFFFFFFUL / CFG_TICK_US) {
         return -1;
     }
     max_duty = max_duty_pm;
-    max_on = max_on_ticks;
-    cooldown = cooldown_ticks;
+    set_times(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US);
     return 0;
 }
 
@@ -149,7 +230,12 @@ uint16_t sma_duty(uint8_t act)
 
 uint8_t sma_cooling(uint8_t act)
 {
-    return acts[act].cooldown > 0u;
+    return (uint8_t)(acts[act].forced || acts[act].blocked);
+}
+
+uint32_t sma_debt_us(uint8_t act)
+{
+    return acts[act].debt_us;
 }
 
 uint8_t sma_take_clamped(void)

@@ -1,12 +1,27 @@
-/* sma.h - SMA MOSFET drive and the safety envelope.
+/* sma.h - SMA MOSFET drive and the thermal budget of every coil (the safety envelope).
  *
  * Contract. Every PWM duty the firmware sets goes through this module's one output
  * function, which clamps it to the duty ceiling (CFG_MAX_DUTY_PM, fixed at build time,
  * possibly narrowed at run time). Commands that ask for more are refused by the caller
  * (sma_set_limits refuses to widen); the clamp is the last line of defence.
- * Per actuator: a channel that has been on for more than max_on ticks in a row is forced
- * off for cooldown ticks. sma_estop() turns every channel off before it returns and
- * latches until sma_clear_estop(). sma_all_off() turns every channel off now (fault, stop).
+ *
+ * The budget runs on real time, hal_micros() (wrap-safe unsigned differences), never on
+ * the tick count. Each sma_tick charges the interval since the previous one at the
+ * highest duty the pin carried in it, then decides the next output. Per actuator:
+ * - "on" means a duty above the hold ceiling CFG_HOLD_MAX_DUTY_PM (a duty the coil may
+ *   carry forever: holding at or below it is never on-time);
+ * - an on-time debt: every µs on adds a µs; every µs not on pays back max_on / min_cooldown
+ *   µs, so ANY on-period of length L owes L × min_cooldown / max_on of cool-down;
+ * - max on-time: the debt never exceeds max_on, so no on-period lasts longer than max_on,
+ *   and on/off games cannot beat max_on / (max_on + min_cooldown) of the time on. A period
+ *   that would pass it is cut one tick early (an on-limit hit, reported) and the coil then
+ *   stays fully off until the debt is paid: min_cooldown after a full max_on;
+ * - mean duty: the duty integrated over any window of CFG_DUTY_WINDOW_MS stays at or below
+ *   CFG_MEAN_DUTY_PM (a request that would not fit gets 0).
+ * Nothing resets the spent budget: sma_all_off() and sma_estop() turn the pins off at once
+ * but the interval until the next sma_tick is still charged at the duty it had, so a
+ * STOP + START in one tick continues the on-period. Only sma_init() (reset) starts
+ * from a cold budget. sma_estop() latches until sma_clear_estop().
  */
 #ifndef PROLEG_SMA_H
 #define PROLEG_SMA_H
@@ -15,26 +30,41 @@
 
 #include "robot_config.h"
 
+/* Defaults for builds whose robot_config.h predates these keys (see docs/safety.md). */
+#ifndef CFG_HOLD_MAX_DUTY_PM
+#define CFG_HOLD_MAX_DUTY_PM 3000u
+#endif
+#ifndef CFG_MEAN_DUTY_PM
+#define CFG_MEAN_DUTY_PM 5000u
+#endif
+#ifndef CFG_DUTY_WINDOW_MS
+#define CFG_DUTY_WINDOW_MS 10000UL
+#endif
+
+/* A gap between two sma_tick calls longer than this is charged as this long (a stalled
+ * loop is the hardware watchdog's job); a backwards step of the clock as one tick. */
+#define SMA_DT_CAP_US 400000UL
+
 void sma_init(void);
 
 /* Duty (permyriad) the controller wants for actuator `act` from the next sma_tick on. */
 void sma_request(uint8_t act, uint16_t duty_pm);
 
-/* Apply requests under the envelope; returns a bit per actuator forced into cool-down
- * this tick (bit i = actuator i hit max continuous on-time). */
+/* Charge the time since the last call, then apply requests under the budget; returns a
+ * bit per actuator whose on-period was cut at max_on this tick (an on-limit hit). */
 uint8_t sma_tick(void);
 
-/* Every channel off at once; requests cleared. Not latched. */
+/* Every channel off at once; requests cleared. Not latched; refunds nothing. */
 void sma_all_off(void);
 
-/* Every channel off at once and latched until sma_clear_estop(). */
+/* Every channel off at once and latched until sma_clear_estop(). Refunds nothing. */
 void sma_estop(void);
 void sma_clear_estop(void);
 uint8_t sma_estopped(void);
 
 /* Narrow the envelope at run time. Returns 0, or -1 (nothing changed) when a value
  * would widen it: duty above CFG_MAX_DUTY_PM, on-time above CFG_MAX_ON_TICKS, cool-down
- * below CFG_MIN_COOLDOWN_TICKS. */
+ * below CFG_MIN_COOLDOWN_TICKS. Times in ticks of CFG_TICK_US, enforced in microseconds. */
 int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cooldown_ticks);
 uint16_t sma_max_duty(void);
 
@@ -44,13 +74,17 @@ uint16_t sma_clamp(uint16_t duty_pm);
 /* Duty applied to actuator `act` at the last output (permyriad). */
 uint16_t sma_duty(uint8_t act);
 
-/* 1 while actuator `act` is in forced cool-down. */
+/* 1 while actuator `act` may not heat: cooling after an on-limit hit, or its mean-duty
+ * window is full. */
 uint8_t sma_cooling(uint8_t act);
+
+/* Actuator `act`'s on-time not yet paid back by cool-down (µs). */
+uint32_t sma_debt_us(uint8_t act);
 
 /* 1 when an output was clamped to the ceiling since the last call. */
 uint8_t sma_take_clamped(void);
 
-/* Count of forced cool-downs since sma_init (saturates). */
+/* Count of on-limit hits since sma_init (saturates). */
 uint16_t sma_limit_hits(void);
 
 #endif /* PROLEG_SMA_H */

@@ -1,13 +1,37 @@
-/* Host unit tests of core/sma.c, the SMA drive safety envelope. Config: max_duty 0.8
- * (8000 ‰o), max_on 50 ms = 50 ticks, min_cooldown 20 ms = 20 ticks, 1 kHz tick. */
+/* Host unit tests of core/sma.c, the thermal budget of every SMA coil. Config (r1-fast):
+ * max_duty 0.8 (8000 ‱), max_on 50 ms, min_cooldown 20 ms, 1 kHz tick; budget defaults:
+ * hold ceiling 3000 ‱, mean duty 5000 ‱ over 10 s. Time comes from fake_now_us only. */
+#include <string.h>
+
 #include "fake_hal.h"
 #include "sma.h"
 #include "unit.h"
 
-static void setup(void)
+#define MAX_ON_US (CFG_MAX_ON_MS * 1000UL)
+#define COOL_US (CFG_MIN_COOLDOWN_MS * 1000UL)
+
+static void setup_at(uint64_t t0)
 {
     fake_hal_reset();
+    fake_now_us = t0;
     sma_init();
+}
+
+static void setup(void)
+{
+    setup_at(0);
+}
+
+/* One control tick of `us` real microseconds. */
+static uint8_t tick_us(uint32_t us)
+{
+    fake_now_us += us;
+    return sma_tick();
+}
+
+static uint8_t tick(void)
+{
+    return tick_us(CFG_TICK_US);
 }
 
 static void test_init_turns_every_board_channel_off(void)
@@ -25,7 +49,7 @@ static void test_every_output_is_clamped_to_the_duty_ceiling(void)
     CHECK_EQ(CFG_MAX_DUTY_PM, 8000);
     sma_request(0, 10000);
     sma_request(1, 7999);
-    sma_tick();
+    tick();
     CHECK_EQ(fake_pwm[0], 8000);
     CHECK_EQ(sma_duty(0), 8000);
     CHECK_EQ(fake_pwm[1], 7999);
@@ -42,48 +66,238 @@ static void test_actuators_drive_their_configured_channels(void)
     for (a = 0; a < CFG_N_ACTUATORS; a++) {
         sma_request(a, (uint16_t)(1000u + a));
     }
-    sma_tick();
+    tick();
     for (a = 0; a < CFG_N_ACTUATORS; a++) {
         CHECK_EQ(fake_pwm[channel[a]], 1000u + a);
     }
 }
 
-static void test_max_on_time_forces_cooldown_then_allows_heating_again(void)
+/* Ticks channel 0 at `duty` until it goes off; returns the real on-time (µs). */
+static uint32_t on_time_until_cut(uint16_t duty, uint32_t period_us, uint8_t *hit)
+{
+    uint32_t on = 0;
+    int guard = 0;
+    sma_request(0, duty);
+    *hit = tick_us(period_us);
+    while (fake_pwm[0] != 0u && guard++ < 100000) {
+        *hit = tick_us(period_us);
+        on += period_us;
+    }
+    return on;
+}
+
+static void test_max_on_time_cuts_at_max_on_then_cools_for_min_cooldown(void)
+{
+    uint8_t hit;
+    uint32_t off = 0;
+    setup();
+    CHECK_EQ(on_time_until_cut(6000, CFG_TICK_US, &hit), MAX_ON_US);
+    CHECK_EQ(hit, 1);
+    CHECK(sma_cooling(0));
+    CHECK_EQ(sma_limit_hits(), 1);
+    while (fake_pwm[0] == 0u && off < 10u * COOL_US) {
+        tick();
+        off += CFG_TICK_US;
+    }
+    CHECK(off >= COOL_US);                      /* cooled at least min_cooldown */
+    CHECK(off <= COOL_US + 3u * CFG_TICK_US);   /* and heats again soon after */
+    CHECK_EQ(fake_pwm[0], 6000);
+}
+
+static void test_on_time_runs_on_real_time_when_ticks_are_slow_or_fast(void)
+{
+    static const uint32_t periods[] = {250u, 1000u, 1760u, 3000u, 7000u};
+    uint8_t hit;
+    unsigned k;
+    for (k = 0; k < sizeof periods / sizeof periods[0]; k++) {
+        uint32_t on;
+        setup();
+        on = on_time_until_cut(6000, periods[k], &hit);
+        /* The cut assumes the nominal tick: never late by more than one real tick. */
+        CHECK(on <= MAX_ON_US + periods[k]);
+        CHECK(on + 2u * periods[k] + CFG_TICK_US > MAX_ON_US);
+    }
+}
+
+static void test_the_budget_is_right_across_the_microsecond_clock_wrap(void)
+{
+    uint8_t hit;
+    setup_at(0xFFFFFFFFull - 20000u); /* wraps 20 ms into the on-period */
+    CHECK_EQ(on_time_until_cut(6000, CFG_TICK_US, &hit), MAX_ON_US);
+    CHECK_EQ(hit, 1);
+    CHECK((uint32_t)fake_now_us < 100000u); /* it did wrap */
+}
+
+static void test_a_clock_that_steps_back_and_forth_never_lengthens_an_on_period(void)
+{
+    /* The STM32 bug of issue 11: +1 ms on one read, back on the next. */
+    uint32_t true_on = 0;
+    int k = 0;
+    setup();
+    sma_request(0, 6000);
+    tick();
+    while (fake_pwm[0] != 0u && k < 1000) {
+        if (k % 2 == 0) {
+            fake_now_us += 2000u; /* one real ms, read as two */
+        } else {
+            fake_now_us += 0u;    /* one real ms, read as none (back to the truth) */
+        }
+        sma_tick();
+        true_on += 1000u;
+        k++;
+    }
+    CHECK(true_on <= MAX_ON_US);
+}
+
+static void test_stop_and_start_between_two_ticks_continue_the_on_period(void)
+{
+    uint32_t on = 0;
+    setup();
+    sma_request(0, 6000);
+    tick();
+    while (fake_pwm[0] != 0u && on < 10u * MAX_ON_US) {
+        sma_all_off();          /* STOP ... */
+        CHECK_EQ(fake_pwm[0], 0);
+        sma_request(0, 6000);   /* ... and START before the next tick */
+        tick();
+        on += CFG_TICK_US;
+    }
+    CHECK(on <= MAX_ON_US);
+    CHECK_EQ(sma_limit_hits(), 1);
+}
+
+static void test_estop_and_clear_refund_nothing(void)
 {
     uint32_t t;
     setup();
     sma_request(0, 6000);
-    for (t = 1; t <= CFG_MAX_ON_TICKS; t++) {
-        CHECK_EQ(sma_tick(), 0);
+    for (t = 0; t < 30; t++) {
+        tick();
+    }
+    sma_estop();
+    sma_clear_estop();
+    sma_request(0, 6000);
+    for (t = 0; t < 20; t++) {
+        CHECK_EQ(tick(), 0);
         CHECK_EQ(fake_pwm[0], 6000);
     }
-    CHECK_EQ(sma_tick(), 1); /* one tick past max_on: forced off, reported */
+    CHECK_EQ(tick(), 1); /* 50 ms of on-time in all, ESTOP or not */
     CHECK_EQ(fake_pwm[0], 0);
-    CHECK(sma_cooling(0));
-    CHECK_EQ(sma_limit_hits(), 1);
-    for (t = 0; t < CFG_MIN_COOLDOWN_TICKS; t++) {
-        sma_tick();
-        CHECK_EQ(fake_pwm[0], 0);
-    }
-    CHECK(!sma_cooling(0));
-    sma_tick();
-    CHECK_EQ(fake_pwm[0], 6000);
 }
 
-static void test_short_bursts_do_not_accumulate_on_time(void)
+/* Drive channel 0 until the budget cuts it; returns the real on-time (µs). */
+static uint32_t burst(void)
+{
+    uint32_t on = 0;
+    sma_request(0, 6000);
+    while (tick() == 0 && on < 10u * MAX_ON_US) {
+        on += CFG_TICK_US;
+    }
+    return on;
+}
+
+static void test_any_on_period_owes_a_cool_down_in_proportion_to_it(void)
+{
+    uint32_t t, second;
+    setup();
+    sma_request(0, 6000);
+    for (t = 0; t < 26; t++) { /* 25 ms on (the first tick only switches on) */
+        tick();
+    }
+    sma_request(0, 0); /* one off tick, as a host sending STOP ... START */
+    tick();
+    CHECK_EQ(fake_pwm[0], 0);
+    CHECK_EQ(sma_debt_us(0), 26000u); /* 26 ms on: the off tick is paid at the next tick */
+    second = burst(); /* the off ms pays back only its share, 50 / 20 ms */
+    CHECK(second >= MAX_ON_US - 26000u + 1500u && second <= MAX_ON_US - 26000u + 3500u);
+    CHECK(sma_cooling(0));
+}
+
+static void test_a_cool_down_in_proportion_pays_the_on_time_back(void)
+{
+    uint32_t t, full;
+    setup();
+    sma_request(0, 6000);
+    for (t = 0; t < 26; t++) {
+        tick();
+    }
+    sma_request(0, 2500); /* holding is cooling */
+    for (t = 0; t < 12; t++) { /* 26 ms × 20 / 50 = 10.4 ms, paid from the 2nd hold tick on */
+        tick();
+        CHECK_EQ(fake_pwm[0], 2500);
+    }
+    CHECK_EQ(sma_debt_us(0), 0);
+    full = burst();
+    CHECK(full >= MAX_ON_US - CFG_TICK_US && full <= MAX_ON_US);
+}
+
+static void test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down(void)
+{
+    uint8_t hit;
+    uint32_t off = 0;
+    setup();
+    on_time_until_cut(6000, CFG_TICK_US, &hit);
+    sma_request(0, 2500);
+    while (off < COOL_US - CFG_TICK_US) {
+        tick();
+        CHECK_EQ(fake_pwm[0], 0);
+        off += CFG_TICK_US;
+    }
+    tick();
+    tick();
+    CHECK_EQ(fake_pwm[0], 2500);
+}
+
+static void test_holding_at_or_below_the_hold_ceiling_is_never_on_time(void)
 {
     uint32_t t;
-    int round;
     setup();
-    for (round = 0; round < 10; round++) {
-        sma_request(0, 5000);
-        for (t = 0; t < CFG_MAX_ON_TICKS; t++) {
-            CHECK_EQ(sma_tick(), 0);
-        }
-        sma_request(0, 0);
-        CHECK_EQ(sma_tick(), 0);
+    sma_request(0, CFG_HOLD_MAX_DUTY_PM);
+    for (t = 0; t < 120000u; t++) { /* two minutes */
+        CHECK_EQ(tick(), 0);
+        CHECK_EQ(fake_pwm[0], CFG_HOLD_MAX_DUTY_PM);
     }
-    CHECK_EQ(sma_limit_hits(), 0);
+    CHECK_EQ(sma_debt_us(0), 0);
+}
+
+/* Bursts as long as the budget allows, at the full duty: the mean over every window of
+ * CFG_DUTY_WINDOW_MS stays at or below CFG_MEAN_DUTY_PM (brute-force sliding sum). */
+static void test_mean_duty_over_any_window_stays_below_the_limit(void)
+{
+    enum { W = CFG_DUTY_WINDOW_MS * 1000UL / CFG_TICK_US };
+    static uint16_t hist[W];
+    uint64_t sum = 0, on = 0;
+    uint32_t t;
+    setup();
+    memset(hist, 0, sizeof hist);
+    sma_request(0, 8000);
+    for (t = 0; t < 5u * W; t++) {
+        tick();
+        sum += fake_pwm[0];
+        on += fake_pwm[0];
+        sum -= hist[t % W];
+        hist[t % W] = fake_pwm[0];
+        CHECK(sum <= (uint64_t)CFG_MEAN_DUTY_PM * W);
+    }
+    CHECK(on > (uint64_t)CFG_MEAN_DUTY_PM * 4u * W); /* and it does use its budget */
+}
+
+static void test_run_time_limits_may_narrow_but_never_widen_the_envelope(void)
+{
+    uint8_t hit;
+    setup();
+    CHECK(sma_set_limits(8001, CFG_MAX_ON_TICKS, CFG_MIN_COOLDOWN_TICKS) != 0);
+    CHECK(sma_set_limits(8000, CFG_MAX_ON_TICKS + 1u, CFG_MIN_COOLDOWN_TICKS) != 0);
+    CHECK(sma_set_limits(8000, CFG_MAX_ON_TICKS, CFG_MIN_COOLDOWN_TICKS - 1u) != 0);
+    CHECK_EQ(sma_max_duty(), 8000);
+    CHECK_EQ(sma_set_limits(5000, 10, CFG_MIN_COOLDOWN_TICKS + 5u), 0);
+    CHECK_EQ(sma_max_duty(), 5000);
+    CHECK_EQ(on_time_until_cut(6000, CFG_TICK_US, &hit), 10u * CFG_TICK_US);
+    setup();
+    sma_set_limits(5000, 10, CFG_MIN_COOLDOWN_TICKS);
+    sma_request(0, 6000);
+    tick();
+    CHECK_EQ(fake_pwm[0], 5000);
 }
 
 static void test_estop_turns_every_mosfet_off_within_one_tick(void)
@@ -93,7 +307,7 @@ static void test_estop_turns_every_mosfet_off_within_one_tick(void)
     setup();
     sma_request(0, 6000);
     sma_request(1, 6000);
-    sma_tick();
+    tick();
     CHECK_EQ(fake_pwm[0], 6000);
     sma_estop(); /* no tick in between: off when the call returns */
     for (ch = 0; ch < CFG_PWM_CHANNELS; ch++) {
@@ -102,15 +316,15 @@ static void test_estop_turns_every_mosfet_off_within_one_tick(void)
     for (t = 0; t < 100; t++) { /* latched: requests are ignored */
         sma_request(0, 6000);
         sma_request(1, 6000);
-        sma_tick();
+        tick();
         CHECK_EQ(fake_pwm[0], 0);
         CHECK_EQ(fake_pwm[1], 0);
     }
     CHECK(sma_estopped());
     sma_clear_estop();
-    sma_request(0, 6000);
-    sma_tick();
-    CHECK_EQ(fake_pwm[0], 6000);
+    sma_request(0, 2000);
+    tick();
+    CHECK_EQ(fake_pwm[0], 2000);
 }
 
 static void test_all_off_turns_every_board_channel_off_at_once(void)
@@ -119,7 +333,7 @@ static void test_all_off_turns_every_board_channel_off_at_once(void)
     setup();
     sma_request(0, 6000);
     sma_request(1, 6000);
-    sma_tick();
+    tick();
     for (ch = 0; ch < CFG_PWM_CHANNELS; ch++) {
         fake_pwm[ch] = 0x5555u; /* whatever a channel had */
     }
@@ -130,29 +344,24 @@ static void test_all_off_turns_every_board_channel_off_at_once(void)
     CHECK(!sma_estopped());
 }
 
-static void test_run_time_limits_may_narrow_but_never_widen_the_envelope(void)
-{
-    setup();
-    CHECK(sma_set_limits(8001, CFG_MAX_ON_TICKS, CFG_MIN_COOLDOWN_TICKS) != 0);
-    CHECK(sma_set_limits(8000, CFG_MAX_ON_TICKS + 1u, CFG_MIN_COOLDOWN_TICKS) != 0);
-    CHECK(sma_set_limits(8000, CFG_MAX_ON_TICKS, CFG_MIN_COOLDOWN_TICKS - 1u) != 0);
-    CHECK_EQ(sma_max_duty(), 8000);
-    CHECK_EQ(sma_set_limits(5000, 10, CFG_MIN_COOLDOWN_TICKS + 5u), 0);
-    CHECK_EQ(sma_max_duty(), 5000);
-    sma_request(0, 6000);
-    sma_tick();
-    CHECK_EQ(fake_pwm[0], 5000);
-}
-
 int main(void)
 {
     RUN(test_init_turns_every_board_channel_off);
     RUN(test_every_output_is_clamped_to_the_duty_ceiling);
     RUN(test_actuators_drive_their_configured_channels);
-    RUN(test_max_on_time_forces_cooldown_then_allows_heating_again);
-    RUN(test_short_bursts_do_not_accumulate_on_time);
+    RUN(test_max_on_time_cuts_at_max_on_then_cools_for_min_cooldown);
+    RUN(test_on_time_runs_on_real_time_when_ticks_are_slow_or_fast);
+    RUN(test_the_budget_is_right_across_the_microsecond_clock_wrap);
+    RUN(test_a_clock_that_steps_back_and_forth_never_lengthens_an_on_period);
+    RUN(test_stop_and_start_between_two_ticks_continue_the_on_period);
+    RUN(test_estop_and_clear_refund_nothing);
+    RUN(test_any_on_period_owes_a_cool_down_in_proportion_to_it);
+    RUN(test_a_cool_down_in_proportion_pays_the_on_time_back);
+    RUN(test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down);
+    RUN(test_holding_at_or_below_the_hold_ceiling_is_never_on_time);
+    RUN(test_mean_duty_over_any_window_stays_below_the_limit);
+    RUN(test_run_time_limits_may_narrow_but_never_widen_the_envelope);
     RUN(test_estop_turns_every_mosfet_off_within_one_tick);
     RUN(test_all_off_turns_every_board_channel_off_at_once);
-    RUN(test_run_time_limits_may_narrow_but_never_widen_the_envelope);
     return UNIT_EXIT();
 }

@@ -11,6 +11,7 @@
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
+#include <avr/wdt.h>
 #include <stdint.h>
 
 #include "hal.h"
@@ -242,6 +243,56 @@ void hal_uart_tx_start(void)
     UCSR0B |= _BV(UDRIE0);
 }
 
+/* ------------------------------------------------------------------ reset, watchdog, markers */
+
+/* MCUSR keeps its flags across resets until cleared, and after a watchdog reset WDRF
+ * keeps the watchdog on (15 ms): both are handled first thing, before the C runtime
+ * initialises RAM (.init3), together with driving the MOSFET gates low (the pins are
+ * high-impedance inputs from reset until here). */
+uint8_t hal_avr_mcusr __attribute__((section(".noinit")));
+
+void hal_avr_early(void) __attribute__((naked, used, section(".init3")));
+void hal_avr_early(void)
+{
+    hal_avr_mcusr = MCUSR;
+    MCUSR = 0;
+    wdt_disable();
+    PORTB &= (uint8_t) ~(_BV(PB1) | _BV(PB2) | _BV(PB3));
+    PORTD &= (uint8_t)~_BV(PD3);
+    DDRB |= _BV(PB1) | _BV(PB2) | _BV(PB3);
+    DDRD |= _BV(PD3);
+}
+
+uint8_t hal_reset_cause(void)
+{
+    uint8_t f = hal_avr_mcusr;
+    /* ATmega328P datasheet §10.9.1: several flags may be set; the watchdog wins, and
+     * power-on over brown-out (a power-on also trips the brown-out detector). */
+    return (f & _BV(WDRF))    ? HAL_RESET_WATCHDOG
+           : (f & _BV(PORF))  ? HAL_RESET_POWER_ON
+           : (f & _BV(BORF))  ? HAL_RESET_BROWN_OUT
+           : (f & _BV(EXTRF)) ? HAL_RESET_EXTERNAL
+                              : HAL_RESET_UNKNOWN;
+}
+
+void hal_watchdog_feed(void)
+{
+    wdt_reset();
+}
+
+void hal_tick_mark(uint8_t busy)
+{
+    GPIOR0 = busy;
+}
+
+/* Watchdog period: at least four ticks, 60 ms nominal for every tick rate of 100 Hz and
+ * up (datasheet table 10-3; the oscillator is ±10 % or worse with voltage). */
+#if CFG_TICK_US <= 15000u
+#define HAL_WDTO WDTO_60MS
+#else
+#define HAL_WDTO WDTO_250MS
+#endif
+
 /* ------------------------------------------------------------------ the rest */
 
 void hal_init(void)
@@ -262,5 +313,6 @@ void hal_init(void)
     UBRR0 = (uint16_t)((F_CPU + 4u * CFG_UART_BAUD) / (8u * CFG_UART_BAUD) - 1u);
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
+    wdt_enable(HAL_WDTO);
     sei();
 }

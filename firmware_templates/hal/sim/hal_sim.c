@@ -89,6 +89,21 @@ void hal_uart_tx_start(void)
     /* nothing to switch on: drain_line() empties the transmit ring at the line rate */
 }
 
+uint8_t hal_reset_cause(void)
+{
+    return HAL_RESET_POWER_ON; /* sim_reset is a power-on */
+}
+
+void hal_watchdog_feed(void)
+{
+    /* no watchdog: the host drives every tick (the emulated boards have one) */
+}
+
+void hal_tick_mark(uint8_t busy)
+{
+    (void)busy;
+}
+
 /* ------------------------------------------------------------------ host-sim ABI */
 
 static void drain_line(void)

@@ -19,6 +19,24 @@
 #define I2C_STEP_US 300u
 #define PWM_COUNTS 1000u
 
+/* Registers for the issue 11 fixes, not (yet) in stm32f1_regs.h (RM0008, PM0056). */
+#define SCB_ICSR REG32(0xE000ED04u)
+#define SCB_ICSR_PENDSTSET (1u << 26) /* SysTick pending: cleared when it is taken, not on read */
+#define RCC_CSR REG32(RCC_BASE + 0x24u)
+#define RCC_CSR_RMVF (1u << 24)
+#define RCC_CSR_IWDGRSTF (1u << 29)
+#define RCC_CSR_SFTRSTF (1u << 28)
+#define RCC_CSR_PORRSTF (1u << 27)
+#define RCC_CSR_PINRSTF (1u << 26)
+#define IWDG_KR REG32(0x40003000u)
+#define IWDG_PR REG32(0x40003004u)
+#define IWDG_RLR REG32(0x40003008u)
+#define BKP_DR1 REG32(0x40006C04u) /* RM0008 §5.4.1; BKP clock off: writes are ignored */
+#define GPIO_IDR(b) REG32((b) + 0x08u)
+#define GPIO_BRR(b) REG32((b) + 0x14u)
+#define GPIO_OUT_OD_50MHZ 0x7u
+
+
 typedef struct {
     uint8_t timer;   /* 2, 3 or 4 */
     uint8_t channel; /* 1..4 */
@@ -30,6 +48,7 @@ static const pwm_pin_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 
 static uint32_t sysclk = 8000000u;
 static volatile uint32_t ms_count;
+static uint8_t reset_cause;
 
 void SysTick_Handler(void);
 void USART1_IRQHandler(void);
@@ -71,17 +90,21 @@ void SysTick_Handler(void)
 
 uint32_t hal_micros(void)
 {
-    uint32_t ms, val;
+    uint32_t m0, ms, val;
     uint32_t load = SYST_RVR + 1u;
+    /* Not COUNTFLAG: it is clear-on-read and the SysTick handler never reads it, so it
+     * stayed set after the handler ran and the next call counted that ms twice. */
     do {
-        ms = ms_count;
+        m0 = ms_count;
+        ms = m0;
         val = SYST_CVR;
-    } while (ms != ms_count);
-    if (SYST_CSR & (1u << 16)) { /* wrapped, interrupt not yet taken */
-        val = SYST_CVR;
-        ms = ms_count + 1u;
-    }
-    return ms * 1000u + (load - 1u - val) / (sysclk / 1000000u);
+        if (SCB_ICSR & SCB_ICSR_PENDSTSET) { /* wrapped, interrupt not yet taken */
+            val = SYST_CVR;                  /* a count after the wrap */
+            ms = m0 + 1u;
+        }
+    } while (m0 != ms_count);
+    /* The count 0 is where the next millisecond starts (the wrap is flagged on reaching it). */
+    return ms * 1000u + (val ? load - val : 0u) / (sysclk / 1000000u);
 }
 
 /* ------------------------------------------------------------------ GPIO */
@@ -143,6 +166,19 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
 
 /* ------------------------------------------------------------------ I2C1 */
 
+/* Until no START/STOP request is pending: RM0008 §26.6.1 forbids any write to CR1 before
+ * the hardware has cleared them (the read-modify-write would request a second one). */
+static int8_t i2c_wait_idle(void)
+{
+    uint32_t t0 = hal_micros();
+    while (I2C_CR1 & (I2C_CR1_START | I2C_CR1_STOP)) {
+        if ((uint32_t)(hal_micros() - t0) > I2C_STEP_US) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
 static int8_t i2c_wait(uint32_t mask)
 {
     uint32_t t0 = hal_micros();
@@ -194,6 +230,9 @@ static void clear_addr(void)
 static int8_t i2c_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     uint8_t i;
+    if (i2c_wait_idle() != 0) {
+        return -1;
+    }
     if (ntx || !nrx) {
         if (i2c_start((uint8_t)(addr7 << 1)) != 0) {
             return -1;
@@ -235,13 +274,52 @@ static int8_t i2c_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_
     return 0;
 }
 
+/* Bus recovery (I2C spec UM10204 §3.1.16): a slave cut off mid-byte holds SDA low until it
+ * has clocked out its byte. With the peripheral off, clock SCL as GPIO until SDA is released
+ * (at most 9 clocks), make a STOP, then set the peripheral up again. A reset of the
+ * peripheral alone (SWRST) never frees the bus. */
+static void i2c_delay_us(uint32_t us)
+{
+    uint32_t t0 = hal_micros();
+    while ((uint32_t)(hal_micros() - t0) < us) {
+    }
+}
+
+static void i2c_recover(void)
+{
+    uint8_t i;
+    I2C_CR1 = 0; /* PE off: PB6/PB7 follow their GPIO output latches */
+    GPIO_BSRR(GPIOB_BASE) = (1u << 6) | (1u << 7);
+    gpio_mode(1, 6, GPIO_OUT_OD_50MHZ);
+    gpio_mode(1, 7, GPIO_OUT_OD_50MHZ);
+    for (i = 0; i < 9u && !(GPIO_IDR(GPIOB_BASE) & (1u << 7)); i++) {
+        GPIO_BRR(GPIOB_BASE) = 1u << 6;
+        i2c_delay_us(5u);
+        GPIO_BSRR(GPIOB_BASE) = 1u << 6;
+        i2c_delay_us(5u);
+    }
+    GPIO_BRR(GPIOB_BASE) = 1u << 7; /* STOP: SDA rises while SCL is high */
+    i2c_delay_us(5u);
+    GPIO_BSRR(GPIOB_BASE) = 1u << 7;
+    i2c_delay_us(5u);
+    gpio_mode(1, 6, GPIO_AF_OD_50MHZ);
+    gpio_mode(1, 7, GPIO_AF_OD_50MHZ);
+    i2c_setup();
+}
+
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     if (i2c_transfer(addr7, tx, ntx, rx, nrx) != 0) {
-        I2C_CR1 |= I2C_CR1_STOP;
+        if (I2C_CR1 & I2C_CR1_START) {
+            i2c_recover(); /* the START never went out: a line is held low */
+            return -1;
+        }
+        if (!(I2C_CR1 & I2C_CR1_STOP)) {
+            I2C_CR1 |= I2C_CR1_STOP;
+        }
         I2C_SR1 = 0; /* clear AF/BERR/ARLO */
-        if (I2C_SR2 & I2C_SR2_BUSY) {
-            i2c_setup(); /* bus stuck: reset the peripheral */
+        if (i2c_wait_idle() != 0 || (I2C_SR2 & I2C_SR2_BUSY)) {
+            i2c_recover(); /* bus stuck or a request never completed */
         }
         return -1;
     }
@@ -271,10 +349,59 @@ void hal_uart_tx_start(void)
     USART_CR1 |= USART_CR1_TXEIE;
 }
 
+/* ------------------------------------------------------------------ watchdog, reset cause */
+
+/* IWDG on the LSI (40 kHz typical, 30-60 kHz: DS5319 table 24): prescaler /8, reload 249:
+ * 50 ms typical (33-67 ms). Once started only a reset stops it. */
+static void iwdg_start(void)
+{
+    IWDG_KR = 0x5555u;
+    IWDG_PR = 1u;
+    IWDG_RLR = 249u;
+    IWDG_KR = 0xAAAAu;
+    IWDG_KR = 0xCCCCu;
+}
+
+void hal_watchdog_feed(void)
+{
+    IWDG_KR = 0xAAAAu;
+}
+
+/* RCC_CSR's flags survive a reset until RMVF clears them: read once at boot, then clear. */
+static void reset_cause_read(void)
+{
+    uint32_t csr = RCC_CSR;
+    if (csr & RCC_CSR_IWDGRSTF) {
+        reset_cause = HAL_RESET_WATCHDOG;
+    } else if (csr & RCC_CSR_SFTRSTF) {
+        reset_cause = HAL_RESET_SOFTWARE;
+    } else if (csr & RCC_CSR_PORRSTF) {
+        reset_cause = HAL_RESET_POWER_ON;
+    } else if (csr & RCC_CSR_PINRSTF) {
+        reset_cause = HAL_RESET_EXTERNAL;
+    } else {
+        reset_cause = HAL_RESET_UNKNOWN;
+    }
+    RCC_CSR |= RCC_CSR_RMVF;
+}
+
+uint8_t hal_reset_cause(void)
+{
+    return reset_cause;
+}
+
+/* The tick-budget marker: a store to BKP_DR1 with the BKP clock off, which the chip
+ * ignores and the arm-emu board times (docs/emulators-arm.md). */
+void hal_tick_mark(uint8_t busy)
+{
+    BKP_DR1 = busy;
+}
+
 /* ------------------------------------------------------------------ the rest */
 
 void hal_init(void)
 {
+    reset_cause_read(); /* first: RMVF clears the flags for the next reset */
     clock_init();
     RCC_APB2ENR |= RCC_APB2_AFIO | RCC_APB2_IOPA | RCC_APB2_IOPB | RCC_APB2_USART1;
     RCC_APB1ENR |= RCC_APB1_I2C1;
@@ -293,4 +420,5 @@ void hal_init(void)
     USART_BRR = (sysclk + CFG_UART_BAUD / 2u) / CFG_UART_BAUD; /* APB2 = sysclk */
     USART_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
     NVIC_ISER(USART1_IRQN / 32u) = 1u << (USART1_IRQN % 32u);
+    iwdg_start(); /* fed by the core's main loop once per completed tick */
 }

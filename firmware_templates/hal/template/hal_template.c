@@ -81,6 +81,26 @@ void hal_uart_tx_start(void)
 {
 }
 
+/* Read the reset flags in hal_init (then clear them so the next reset reports its own)
+ * and return the cause as HAL_RESET_*; HAL_RESET_UNKNOWN if the MCU cannot tell. */
+uint8_t hal_reset_cause(void)
+{
+    return HAL_RESET_UNKNOWN;
+}
+
+/* Start the hardware watchdog in hal_init (a period of a few ticks, tens of ms); this
+ * reloads it. The core calls it once after every completed tick, nowhere else. */
+void hal_watchdog_feed(void)
+{
+}
+
+/* One store to a register or pin with no other effect: 1 when a tick's work starts, 0
+ * when it ends (a debug pin gives a logic probe the tick budget). */
+void hal_tick_mark(uint8_t busy)
+{
+    (void)busy;
+}
+
 /* Interrupt handlers (names and attributes are the MCU's): the UART's receive interrupt
  * passes every byte to uart_isr_rx(byte); its transmit-empty interrupt does
  *     int b = uart_isr_tx(); if (b < 0) { transmit interrupt off; } else { send (uint8_t)b; }

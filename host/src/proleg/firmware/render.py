@@ -98,6 +98,10 @@ class ControlPart:
     timeout_ticks: int
     watchdog_ms: int
     watchdog_ticks: int
+    hold_max_duty_pm: int  # thermal budget (docs/safety.md)
+    mean_duty_pm: int
+    duty_window_ms: int
+    on_limit_latch: int
     stuck_samples: int
     max_loaded: int
 
@@ -288,6 +292,41 @@ def _limb_part(robot: Any, board: BoardPart) -> LimbPart:
     )
 
 
+#: Thermal-budget keys of [safety] (docs/safety.md) and their defaults when a robot file
+#: (or a robot.py that predates them) has none: hold_max_duty None = max(0.3, control.hold_duty).
+BUDGET_DEFAULTS: dict[str, Any] = {
+    "hold_max_duty": None,
+    "max_mean_duty": 0.5,
+    "duty_window_ms": 10_000,
+    "on_limit_latch": 3,
+}
+
+
+def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
+    """The [safety] keys of the thermal budget, read with their defaults (docs/safety.md)."""
+    v = {k: getattr(safety, k, d) for k, d in BUDGET_DEFAULTS.items()}
+    max_duty = float(safety.max_duty)
+    hold_max = v["hold_max_duty"]
+    if hold_max is None:
+        hold_max = min(max_duty, max(0.3, float(ctl.hold_duty)))
+    mean = min(float(v["max_mean_duty"]), max_duty)
+    if not 0.0 <= float(hold_max) <= mean:
+        raise BuildError(
+            f"robot {name}: safety.hold_max_duty {hold_max:g} must lie in 0 .. max_mean_duty ({mean:g}): "
+            "a duty the coil may hold forever must fit the mean-duty window"
+        )
+    if not 8 <= int(v["duty_window_ms"]) <= 600_000:
+        raise BuildError(f"robot {name}: safety.duty_window_ms {v['duty_window_ms']} must lie in 8 .. 600000")
+    if not 1 <= int(v["on_limit_latch"]) <= 255:
+        raise BuildError(f"robot {name}: safety.on_limit_latch {v['on_limit_latch']} must lie in 1 .. 255")
+    return dict(
+        hold_max_duty_pm=round(float(hold_max) * 10000),
+        mean_duty_pm=round(mean * 10000),
+        duty_window_ms=int(v["duty_window_ms"]),
+        on_limit_latch=int(v["on_limit_latch"]),
+    )
+
+
 def _control_part(robot: Any) -> ControlPart:
     ctl, safety = robot.control, robot.safety
     tick_hz = int(ctl.tick_hz)
@@ -312,6 +351,7 @@ def _control_part(robot: Any) -> ControlPart:
         timeout_ticks=_ticks(safety.state_timeout_ms, tick_hz),
         watchdog_ms=int(safety.link_watchdog_ms),
         watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
+        **thermal_budget(robot.name, safety, ctl),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
     )

@@ -100,7 +100,7 @@ class FaultCode(IntEnum):
 class EventKind(IntEnum):
     """``EVENT.kind``; the meaning of ``code``/``detail`` per kind is in the comment."""
 
-    BOOT = 0  # code = reset cause (board specific), detail = 0
+    BOOT = 0  # code = ResetCause, detail = 0
     STATE_REACHED = 1  # code = gait step index, detail = state index
     FAULT = 2  # code = FaultCode, detail = limb/channel index
     GAIT_STARTED = 3  # code = gait index, detail = Direction
@@ -108,6 +108,18 @@ class EventKind(IntEnum):
     ESTOP = 5  # code = 0 command / 1 hardware input, detail = 0
     FAULT_CLEARED = 6  # code = ClearWhat bits that were cleared, detail = 0
     GAIT_LOADED = 7  # code = 0, detail = number of steps
+
+
+class ResetCause(IntEnum):
+    """``EVENT.code`` when ``kind == BOOT``: why the MCU last reset (its reset flags; a
+    board that cannot tell reports UNKNOWN, host-sim POWER_ON)."""
+
+    UNKNOWN = 0
+    POWER_ON = 1
+    EXTERNAL = 2  # reset pin
+    BROWN_OUT = 3
+    WATCHDOG = 4  # the hardware watchdog: a tick or a bus wait hung
+    SOFTWARE = 5
 
 
 class StopReason(IntEnum):
@@ -165,6 +177,7 @@ ENUMS: tuple[tuple[type[IntEnum] | type[IntFlag], str], ...] = (
     (FaultCode, "PROTO_FAULT_"),
     (EventKind, "PROTO_EV_"),
     (StopReason, "PROTO_STOP_"),
+    (ResetCause, "PROTO_RESET_"),
     (ParamId, "PROTO_PARAM_"),
     (Flag, "PROTO_FLAG_"),
     (ClearWhat, "PROTO_CLEAR_"),

@@ -1,0 +1,74 @@
+/* safety.c - see safety.h. */
+#include "safety.h"
+
+#include "hal.h"
+#define GUARD_DT_CAP_US 400000UL /* as sma.c: a longer gap counts as this */
+
+static uint32_t last_us;
+static uint32_t unreached_us;
+static uint32_t timeout_us = CFG_STATE_TIMEOUT_MS * 1000UL;
+static uint8_t hits_since_reached;
+
+void guard_init(void)
+{
+    last_us = hal_micros();
+    unreached_us = 0;
+    timeout_us = CFG_STATE_TIMEOUT_MS * 1000UL;
+    hits_since_reached = 0;
+}
+
+void guard_set_timeout_ms(uint32_t ms)
+{
+    timeout_us = (ms < CFG_STATE_TIMEOUT_MS ? ms : CFG_STATE_TIMEOUT_MS) * 1000UL;
+}
+
+uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)
+{
+    uint32_t now = hal_micros();
+    uint32_t dt = now - last_us; /* unsigned: right across the 2^32 wrap */
+    uint8_t i;
+    last_us = now;
+    if (dt >= 0x80000000UL) {
+        dt = CFG_TICK_US; /* the clock stepped back: count one tick */
+    } else if (dt > GUARD_DT_CAP_US) {
+        dt = GUARD_DT_CAP_US;
+    }
+    if (reached) {
+        unreached_us = 0;
+        hits_since_reached = 0;
+    }
+    for (i = 0; i < CFG_N_ACTUATORS; i++) {
+        if (hits & (1u << i)) {
+            *act = i;
+            if (hits_since_reached < 0xFFu) {
+                hits_since_reached++;
+            }
+        }
+    }
+    if (hits_since_reached >= CFG_ON_LIMIT_LATCH) {
+        return GUARD_ON_LIMIT;
+    }
+    if (demanding) {
+        unreached_us = unreached_us > 0xFFFFFFFFUL - dt ? 0xFFFFFFFFUL : unreached_us + dt;
+        if (unreached_us >= timeout_us) {
+            return GUARD_TIMEOUT;
+        }
+    }
+    return GUARD_OK;
+}
+
+void guard_ack(void)
+{
+    unreached_us = 0;
+    hits_since_reached = 0;
+}
+
+uint32_t guard_unreached_us(void)
+{
+    return unreached_us;
+}
+
+uint8_t guard_hits(void)
+{
+    return hits_since_reached;
+}

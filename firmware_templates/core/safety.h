@@ -1,0 +1,44 @@
+/* safety.h - the step guard: state timeout on real time and latched on-limit hits.
+ *
+ * Contract. The guard watches what the gait demands, on hal_micros() (wrap-safe), not on
+ * ticks. Time spent demanding a target that has not been reached accumulates from the
+ * first demand and is NOT reset by STOP, START, ESTOP or LOAD_GAIT: only reaching a
+ * target (the sequencer's REACHED) or the operator acknowledging a fault (guard_ack, on
+ * CLEAR(FAULTS) of a latched fault) resets it. When it passes the state timeout, or
+ * when CFG_ON_LIMIT_LATCH on-limit hits happen without a target reached in between, the
+ * guard reports a fault for the caller to latch. The thermal budget itself lives in
+ * sma.c and nothing here refunds it.
+ */
+#ifndef PROLEG_SAFETY_H
+#define PROLEG_SAFETY_H
+
+#include <stdint.h>
+
+#include "robot_config.h"
+
+#ifndef CFG_ON_LIMIT_LATCH
+#define CFG_ON_LIMIT_LATCH 3u
+#endif
+
+#define GUARD_OK 0u
+#define GUARD_TIMEOUT 1u  /* the demanded target was not reached in time */
+#define GUARD_ON_LIMIT 2u /* repeated on-limit hits on one step */
+
+void guard_init(void);
+
+/* Narrow the state timeout (ms; a value above CFG_STATE_TIMEOUT_MS counts as it). */
+void guard_set_timeout_ms(uint32_t ms);
+
+/* Once per tick after the sequencer. demanding: a gait is running and its current target
+ * is not yet reached; reached: the sequencer reported REACHED this tick; hits: on-limit
+ * bits from sma_tick. Returns GUARD_*; *act is the actuator of the last hit. */
+uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act);
+
+/* The operator acknowledged a fault: the step's time and hit count start again. */
+void guard_ack(void);
+
+/* Time (µs) spent demanding an unreached target, and on-limit hits since one was reached. */
+uint32_t guard_unreached_us(void);
+uint8_t guard_hits(void);
+
+#endif /* PROLEG_SAFETY_H */

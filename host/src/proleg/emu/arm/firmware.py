@@ -1,0 +1,29 @@
+"""The bluepill firmware image of a robot, built once per rendered project and cached."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from ...firmware.boards import load_board
+from ...robot import Robot
+from .native import cache_root
+
+BOARD = "bluepill-f103"
+
+
+def bluepill_elf(robot: Robot, *, objective: str = "total", max_transitions: int | None = None) -> Path:
+    """``firmware.elf`` that ``proleg build ROBOT --board bluepill-f103`` links, cached under
+    ``$PROLEG_CACHE/emu-arm/``, keyed by the rendered project (templates and HAL included)."""
+    from ...firmware.build import build, firmware_gaits, render_project
+
+    board = load_board(BOARD)
+    files = render_project(robot, board, firmware_gaits(robot, objective, max_transitions))
+    digest = hashlib.sha256()
+    for rel in sorted(files):
+        digest.update(rel.encode() + b"\0" + files[rel].encode() + b"\0")
+    out = cache_root() / "emu-arm" / f"{robot.name}-{digest.hexdigest()[:16]}"
+    elf = out / "firmware.elf"
+    if not elf.exists():
+        build(robot, board, out, objective=objective, max_transitions=max_transitions)
+    return elf

@@ -1,0 +1,105 @@
+"""The arm-emu board's native helper: the cycle-counting block hook and the MPU-6050 models.
+
+``cycles.c`` (next to this file) and the shared register-level MPU-6050 model of every
+simulated board (``firmware_templates/hal/sim/sim_mpu6050.c``) are compiled with ``cc``
+into one small shared library, cached under ``$PROLEG_CACHE/emu-arm/<hash>/``. Each
+emulated board loads its own copy (the library holds that board's cycle counter and IMU
+states in C globals), like ``proleg.sim.board.SimBoard`` does.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from ctypes import POINTER, c_double, c_int, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
+from pathlib import Path
+
+from ...errors import SimError
+from ...paths import templates_dir
+
+_HERE = Path(__file__).resolve().parent
+
+_SIGNATURES = {
+    "emu_setup": ([POINTER(c_uint32), c_uint32, c_uint32, POINTER(c_uint16), c_void_p], None),
+    "sim_mpu_power_on": ([c_uint32], None),
+    "sim_mpu_attach": ([c_uint8], None),
+    "sim_mpu_transfer": ([c_uint8, POINTER(c_uint8), c_uint8, POINTER(c_uint8), c_uint8, c_uint64], c_int),
+    "sim_mpu_set_truth": ([c_uint8, c_double, c_double], None),
+    "sim_mpu_set_fault": ([c_uint8, c_uint8], None),
+    "sim_mpu_set_noise": ([c_uint8, c_double, c_double, c_double], None),
+    "sim_mpu_peek": ([c_uint8, c_uint8], c_uint8),
+}
+
+
+def cache_root() -> Path:
+    root = os.environ.get("PROLEG_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "proleg"
+    )
+    return Path(root)
+
+
+def _sources() -> list[Path]:
+    sim = templates_dir() / "hal" / "sim"
+    return [_HERE / "cycles.c", sim / "sim_mpu6050.c", sim / "sim_mpu6050.h"]
+
+
+def native_library() -> Path:
+    """Compile (once per source hash) and return the path of the shared helper library."""
+    digest = hashlib.sha256()
+    for src in _sources():
+        digest.update(src.name.encode() + b"\0" + src.read_bytes())
+    out = cache_root() / "emu-arm" / digest.hexdigest()[:16]
+    lib = out / "libarmemu.so"
+    if lib.exists():
+        return lib
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / f".libarmemu.{os.getpid()}.so"
+    srcs = [str(s) for s in _sources() if s.suffix == ".c"]
+    cmd = ["cc", "-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", "-o", str(tmp), *srcs, "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise SimError("cannot build the arm-emu helper library:\n  " + (proc.stdout + proc.stderr).strip())
+    os.replace(tmp, lib)
+    return lib
+
+
+class Native:
+    """One loaded copy of the helper library: this board's cycle counter and IMU models."""
+
+    def __init__(self) -> None:
+        path = native_library()
+        fd, copy = tempfile.mkstemp(prefix="proleg-armemu-", suffix=".so")
+        os.close(fd)
+        try:
+            shutil.copyfile(path, copy)
+            self.lib = ctypes.CDLL(copy, mode=os.RTLD_LOCAL)
+        except OSError as e:
+            raise SimError(f"{path}: cannot load the arm-emu helper library: {e}") from None
+        finally:
+            os.unlink(copy)
+        for name, (args, res) in _SIGNATURES.items():
+            fn = getattr(self.lib, name)
+            fn.argtypes, fn.restype = args, res
+        self.cycles = c_uint64.in_dll(self.lib, "emu_cycles")
+        self.deadline = c_uint64.in_dll(self.lib, "emu_deadline")
+        self.blocks = c_uint64.in_dll(self.lib, "emu_blocks")
+        self.block_hook = ctypes.cast(self.lib.emu_block_hook, c_void_p).value
+        self._keep: list = []
+
+    def setup(self, table: list[int] | bytes, base: int, image: bytes, stop_fn: int) -> None:
+        cum = (c_uint32 * len(table))(*table)
+        img = (c_uint16 * (len(image) // 2)).from_buffer_copy(image[: len(image) // 2 * 2])
+        self._keep = [cum, img]
+        self.lib.emu_setup(cum, base, len(table), img, c_void_p(stop_fn))
+
+    # -- the MPU-6050 models ----------------------------------------------------------
+    def mpu_transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+        txb = (c_uint8 * max(1, len(tx))).from_buffer_copy(tx or b"\0")
+        rxb = (c_uint8 * max(1, nrx))()
+        if self.lib.sim_mpu_transfer(addr, txb, len(tx), rxb, nrx, t_us) != 0:
+            return None
+        return bytes(rxb[:nrx])

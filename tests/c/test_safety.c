@@ -1,0 +1,136 @@
+/* Host unit tests of core/safety.c, the step guard (r1-fast: state timeout 200 ms, on-limit
+ * latch after 3 hits). Time comes from fake_now_us only. */
+#include "fake_hal.h"
+#include "safety.h"
+#include "unit.h"
+
+#define TIMEOUT_US (CFG_STATE_TIMEOUT_MS * 1000UL)
+
+static uint8_t act;
+
+static uint8_t tick_us(uint32_t us, uint8_t demanding, uint8_t reached, uint8_t hits)
+{
+    fake_now_us += us;
+    return guard_tick(demanding, reached, hits, &act);
+}
+
+static uint8_t tick(uint8_t demanding, uint8_t reached, uint8_t hits)
+{
+    return tick_us(CFG_TICK_US, demanding, reached, hits);
+}
+
+static void setup(uint64_t t0)
+{
+    fake_hal_reset();
+    fake_now_us = t0;
+    guard_init();
+}
+
+/* Real µs of demand until the guard answers `want` (or 100 timeouts' worth). */
+static uint32_t demand_until(uint8_t want, uint32_t period_us)
+{
+    uint32_t t = 0;
+    while (t < 100u * TIMEOUT_US) {
+        t += period_us;
+        if (tick_us(period_us, 1, 0, 0) == want) {
+            break;
+        }
+    }
+    return t;
+}
+
+static void test_an_unreached_target_times_out_on_real_time(void)
+{
+    setup(0);
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+}
+
+static void test_the_timeout_is_right_across_the_clock_wrap_and_with_slow_ticks(void)
+{
+    uint32_t t;
+    setup(0xFFFFFFFFull - 50000u);
+    t = demand_until(GUARD_TIMEOUT, 3000u);
+    CHECK(t >= TIMEOUT_US && t < TIMEOUT_US + 3000u);
+}
+
+static void test_time_not_demanding_does_not_count_but_a_restart_does_not_reset_it(void)
+{
+    uint32_t k;
+    setup(0);
+    for (k = 0; k < 150u; k++) {
+        CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    }
+    for (k = 0; k < 5000u; k++) { /* STOP: nothing demanded for 5 s */
+        CHECK_EQ(tick(0, 0, 0), GUARD_OK);
+    }
+    /* START again: 50 ms of the 200 ms are left */
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US - 150u * CFG_TICK_US);
+}
+
+static void test_reaching_a_target_starts_the_next_step_afresh(void)
+{
+    uint32_t k;
+    setup(0);
+    for (k = 0; k < 190u; k++) {
+        CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    }
+    CHECK_EQ(tick(0, 1, 0), GUARD_OK); /* reached: not demanding an unreached target */
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+}
+
+static void test_repeated_on_limit_hits_without_progress_latch(void)
+{
+    uint8_t k;
+    setup(0);
+    for (k = 1; k < CFG_ON_LIMIT_LATCH; k++) {
+        CHECK_EQ(tick(0, 0, 0x02), GUARD_OK);
+        CHECK_EQ(guard_hits(), k);
+    }
+    CHECK_EQ(tick(0, 0, 0x02), GUARD_ON_LIMIT);
+    CHECK_EQ(act, 1);
+    CHECK_EQ(tick(0, 0, 0), GUARD_ON_LIMIT); /* stays until acknowledged */
+    guard_ack();
+    CHECK_EQ(tick(0, 0, 0), GUARD_OK);
+}
+
+static void test_hits_on_different_steps_do_not_latch(void)
+{
+    uint8_t k;
+    setup(0);
+    for (k = 0; k < 10u; k++) {
+        CHECK_EQ(tick(1, 0, 0x01), GUARD_OK);
+        CHECK_EQ(tick(1, 1, 0), GUARD_OK); /* the step completed */
+    }
+}
+
+static void test_the_operator_acknowledging_a_fault_restarts_the_step_time(void)
+{
+    setup(0);
+    demand_until(GUARD_TIMEOUT, CFG_TICK_US);
+    guard_ack();
+    CHECK_EQ(guard_unreached_us(), 0);
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+}
+
+static void test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value(void)
+{
+    setup(0);
+    guard_set_timeout_ms(50);
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), 50000u);
+    setup(0);
+    guard_set_timeout_ms(CFG_STATE_TIMEOUT_MS + 1u);
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+}
+
+int main(void)
+{
+    RUN(test_an_unreached_target_times_out_on_real_time);
+    RUN(test_the_timeout_is_right_across_the_clock_wrap_and_with_slow_ticks);
+    RUN(test_time_not_demanding_does_not_count_but_a_restart_does_not_reset_it);
+    RUN(test_reaching_a_target_starts_the_next_step_afresh);
+    RUN(test_repeated_on_limit_hits_without_progress_latch);
+    RUN(test_hits_on_different_steps_do_not_latch);
+    RUN(test_the_operator_acknowledging_a_fault_restarts_the_step_time);
+    RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
+    return UNIT_EXIT();
+}

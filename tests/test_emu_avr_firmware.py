@@ -1,0 +1,245 @@
+"""The exact arduino-nano firmware.elf on the avr-emu board (simavr): the focused CI
+subset of issue 11 — boot, link, a closed-loop gait, ESTOP, the coil on-time limit,
+IMU loss — plus the timing properties today's firmware does not meet yet, written as
+strict xfails so they flip when the firmware is fixed.
+
+Everything runs in emulated time at the MCU's 16 MHz; budgets and times asserted here
+are emulated microseconds, never wall time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+from pathlib import Path
+
+import pytest
+
+from proleg.link import RobotClient
+from proleg.link.sim_link import SimLink
+from proleg.paths import robots_dir
+from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.protocol.definition import EventKind, FaultCode, Flag, StopReason
+from proleg.robot import load_robot
+
+pytestmark = pytest.mark.skipif(
+    not Path("/usr/include/simavr/sim_avr.h").exists() or shutil.which("avr-gcc") is None,
+    reason="needs simavr/libsimavr-dev and avr-gcc (make toolchains installs them)",
+)
+
+BUDGET_XFAIL = (
+    "today's firmware overruns its 1 kHz tick on the ATmega328P: blocking I2C ≈ 500 µs per tick, "
+    "32-bit divisions and atan2 on the control path (issue 11, phase 2)"
+)
+
+
+def variant(robot, *, tick_hz: int | None = None, max_on_ms: int | None = None):
+    """The same robot with another tick rate or on-time limit (a different build)."""
+    control = robot.control if tick_hz is None else dataclasses.replace(robot.control, tick_hz=tick_hz)
+    safety = robot.safety if max_on_ms is None else dataclasses.replace(robot.safety, max_on_ms=max_on_ms)
+    return dataclasses.replace(robot, control=control, safety=safety)
+
+
+@pytest.fixture(scope="module")
+def r1():
+    return load_robot(robots_dir() / "paper-r1.toml")
+
+
+def events(messages: list[Message], kind: EventKind) -> list[Message]:
+    return [m for m in messages if m.name == "EVENT" and m.kind == kind]
+
+
+def emu_robot(robot, **kwargs):
+    from proleg.emu.avr import AvrEmuRobot
+
+    return AvrEmuRobot(robot, **kwargs)
+
+
+# ------------------------------------------------------------------ boot and link
+
+
+def test_the_nano_firmware_boots_and_announces_itself_on_the_link(r1):
+    from proleg.emu.avr import AvrEmuBoard, nano_elf
+
+    board = AvrEmuBoard(nano_elf(r1))
+    board.advance(0.05)
+    msgs = FrameDecoder().feed(board.read())
+    assert msgs[0].name == "INFO" and msgs[0].robot_name == "paper-r1" and msgs[0].board == "arduino-nano"
+    assert events(msgs, EventKind.BOOT)
+    telemetry = [m for m in msgs if m.name == "TELEMETRY"]
+    assert telemetry and not telemetry[-1].flags & (Flag.FAULT | Flag.IMU_FAULT)
+    assert board.cpu_state == "running"
+    assert board.imu_register(0x68, 0x6B) & 0x40 == 0  # the firmware woke both IMUs up
+    assert board.imu_register(0x69, 0x6B) & 0x40 == 0
+
+
+def test_the_same_seed_gives_the_same_bytes_on_the_link(r1):
+    from proleg.emu.avr import AvrEmuBoard, nano_elf
+
+    runs = []
+    for seed in (7, 7, 8):
+        board = AvrEmuBoard(nano_elf(r1), seed=seed)
+        board.imu_truth(0x68, 25.0, 0.0)
+        board.advance(0.15)
+        runs.append(board.read())
+    assert len(runs[0]) > 200 and runs[0] == runs[1]
+    assert runs[2] != runs[0]  # the seed drives the IMU noise that telemetry reports
+
+
+def test_ping_and_get_info_are_answered_over_the_emulated_uart(r1):
+    from proleg.emu.avr import AvrEmuBoard, nano_elf
+
+    board = AvrEmuBoard(nano_elf(r1))
+    board.advance(0.01)  # bytes sent before the firmware enables its receiver are lost
+    assert board.uart_losses()["rx_disabled"] == 0
+    with RobotClient(SimLink(board, step_s=0.001, description="avr-emu")) as client:
+        info = client.connect()
+        assert (info.robot_name, info.board, info.tick_hz, info.limbs) == ("paper-r1", "arduino-nano", 1000, 2)
+        rtt = client.ping()
+        assert 0 < rtt < 0.01  # emulated seconds: 12 frames on the wire plus at most a tick or two
+        stats = client.firmware_stats()
+        assert stats.rx_ok >= 3 and stats.crc_errors == 0 and stats.framing_errors == 0
+
+
+# ------------------------------------------------------------------ a closed-loop gait
+
+
+def test_r1_walks_forward_on_the_emulated_nano_exactly_as_on_host_sim(r1):
+    from proleg.sim.closed_loop import SimulatedRobot
+    from proleg.report import SimSession
+
+    sim = emu_robot(r1)
+    session = SimSession(sim)
+    session.advance(0.2)
+    run = session.run_gait("+x", 0, 8.5)
+    host = SimSession(SimulatedRobot(r1)).run_gait("+x", 0, 8.5)
+    assert run.cycles >= 2
+    assert all(mm > 0 for mm in run.cycle_displacements_mm)
+    assert run.cycle_displacements_mm == host.cycle_displacements_mm[: run.cycles]
+    assert run.faults == [] and run.unexpected_transitions == 0
+    assert run.telemetry_lost == 0 and run.link_errors == {}
+
+
+@pytest.fixture(scope="module")
+def r1_budget(r1):
+    """The tick budget of R1 walking +x for 1.5 s (after boot) on the emulated Nano."""
+    sim, session = walking(r1, 0.3)
+    sim.board.clear_ticks()
+    session.advance(1.5)
+    return sim.board.tick_budget()
+
+
+@pytest.mark.xfail(strict=True, reason="the tick overruns its period (fewer ticks than periods) until the budget fix")
+def test_the_tick_budget_is_measured_in_cpu_cycles(r1_budget):
+    budget = r1_budget
+    assert budget.ticks == pytest.approx(1500, abs=3)  # one record per 1 kHz tick
+    assert 0 < budget.busy_mean_us <= budget.busy_p99_us <= budget.busy_max_us
+    # Two blocking accelerometer reads per tick, 9 bytes of 9 SCL periods at 400 kHz each.
+    assert 2 * 9 * 9 * 2.5 <= budget.i2c_mean_us <= 650
+    assert 0 < budget.stack_peak_bytes < 2048 - 654 and budget.stack_margin_bytes > 0
+
+
+@pytest.mark.xfail(strict=True, reason=BUDGET_XFAIL)
+def test_the_tick_work_fits_70_percent_of_the_period_at_p99_and_90_percent_at_worst(r1_budget):
+    assert r1_budget.p99_fraction <= 0.70
+    assert r1_budget.max_fraction <= 0.90
+
+
+# ------------------------------------------------------------------ safety
+
+
+def walking(robot, seconds: float, **kwargs):
+    from proleg.report import SimSession
+
+    sim = emu_robot(robot, **kwargs)
+    session = SimSession(sim)
+    session.advance(0.1)
+    session.request("START", gait=0, direction=0)
+    session.advance(seconds)
+    return sim, session
+
+
+def test_estop_turns_every_mosfet_off_within_one_tick(r1):
+    sim, session = walking(r1, 0.6)
+    board = sim.board
+    assert any(board.pwm_permyriad(ch) for ch in sim.channels), "a coil should be driven by now"
+    frame = encode(Message.new("ESTOP", token=77))
+    board.write(frame)
+    board.run_us(len(frame) * 1e6 * 10 / 115200)  # the frame's last stop bit arrives
+    t0 = board.time_us
+    while any(board.pwm_permyriad(ch) for ch in range(4)):
+        board.run_us(10)
+        assert board.time_us - t0 <= board.tick_us * 1.5, "ESTOP did not reach the pins within a tick"
+    for _ in range(100):  # stays off, plant and all
+        sim.step()
+        assert all(board.pwm_permyriad(ch) == 0 for ch in range(4))
+    msgs = FrameDecoder().feed(sim.read())
+    assert any(m.name == "ACK" and m.token == 77 for m in msgs)
+    assert events(msgs, EventKind.ESTOP)
+    assert all(m.flags & Flag.ESTOP for m in msgs if m.name == "TELEMETRY")
+
+
+def longest_on_ms(robot, seconds: float) -> tuple[float, list[Message]]:
+    """Both coils dead (they heat, nothing moves): the drive stays on until the firmware's
+    on-time limit. Sampled every tick of emulated time; returns the longest on-period."""
+    tick_s = 1.0 / robot.control.tick_hz
+    sim, session = walking(robot, 0.0, plant_dt_s=tick_s)
+    for a in robot.actuators:
+        sim.inject(f"dead-actuator:{a.name}")
+    board = sim.board
+    on_since = [None] * len(sim.channels)
+    longest = 0.0
+    decoder, msgs = FrameDecoder(), []
+    for _ in range(round(seconds / sim.plant_dt_s)):
+        sim.step()
+        now = board.time_us
+        for ch in sim.channels:
+            if board.pwm_permyriad(ch):
+                on_since[ch] = now if on_since[ch] is None else on_since[ch]
+                longest = max(longest, (now - on_since[ch]) / 1000)
+            else:
+                on_since[ch] = None
+        msgs += decoder.feed(sim.read())
+    return longest, msgs
+
+
+def test_a_coil_is_switched_off_at_max_on_ms(r1):
+    robot = variant(r1, max_on_ms=1000)
+    longest, msgs = longest_on_ms(robot, 1.5)
+    assert 1000 - 1 <= longest <= 1000 + 1  # emulated ms, one tick of resolution
+    assert [e for e in events(msgs, EventKind.FAULT) if e.code == FaultCode.SMA_ON_LIMIT]
+
+
+def test_max_on_ms_holds_in_real_time_at_every_accepted_tick_rate(r1):
+    robot = variant(r1, tick_hz=2000, max_on_ms=1000)
+    longest, _msgs = longest_on_ms(robot, 2.0)
+    assert longest <= 1000 + 0.5  # + one tick
+
+
+def test_an_imu_that_stops_answering_faults_and_turns_the_coils_off(r1):
+    sim, session = walking(r1, 0.6)
+    sim.read()
+    sim.inject("imu-silent:left")
+    t0 = sim.time_s
+    decoder, msgs = FrameDecoder(), []
+    while not [e for e in events(msgs, EventKind.FAULT) if e.code == FaultCode.IMU_NO_ACK]:
+        sim.step()
+        msgs += decoder.feed(sim.read())
+        assert sim.time_s - t0 < 0.02, "no IMU_NO_ACK fault within 20 ms"
+    fault = [e for e in events(msgs, EventKind.FAULT) if e.code == FaultCode.IMU_NO_ACK][0]
+    assert fault.detail == 0  # the left limb
+    assert all(sim.board.pwm_permyriad(ch) == 0 for ch in range(4))
+    assert [e for e in events(msgs, EventKind.GAIT_STOPPED) if e.code == StopReason.FAULT]
+
+
+@pytest.mark.xfail(strict=True, reason="no IMU start-up wait or WHO_AM_I retry at boot (issue 11)")
+def test_an_imu_that_needs_30_ms_to_start_is_waited_for(r1):
+    from proleg.emu.avr import AvrEmuBoard, nano_elf
+
+    board = AvrEmuBoard(nano_elf(r1))
+    for addr in (0x68, 0x69):
+        board.imu_startup(addr, 30_000)  # MPU-6050 start-up time: up to 30 ms (datasheet §6.3)
+    board.reset()
+    board.advance(0.2)
+    msgs = FrameDecoder().feed(board.read())
+    assert not events(msgs, EventKind.FAULT)

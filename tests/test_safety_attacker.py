@@ -1,0 +1,375 @@
+"""An attacker against the firmware's safety envelope (issue 12), on the host-sim board.
+
+The firmware built for host-sim runs in closed loop with the plant, one control tick at a
+time. After every tick an ``EnvelopeMonitor`` checks the PWM each coil carries against the
+envelope's rules on the virtual clock, and the plant's true coil temperature against a
+stated ceiling:
+
+- duty ≤ max_duty;
+- an on-period (duty above the hold ceiling) lasts at most max_on + one tick;
+- cool-down in proportion to every on-period: the on-time not yet paid back by cool-down
+  (each µs not on pays back max_on / min_cooldown µs) never exceeds max_on + one tick, so
+  an on-period of L owes L × min_cooldown / max_on before the full max_on is back;
+- the duty integrated over any window of duty_window_ms is at most max_mean_duty × window
+  (plus one tick at max_duty);
+- every coil stays below the steady-state temperature of max_duty plus 5 K.
+
+The three bypasses found in issue 12 are explicit regression tests; a hypothesis
+``RuleBasedStateMachine`` then interleaves STOP/START/ESTOP/CLEAR/LOAD_GAIT/SET_PARAM
+within one tick and across ticks with dead coils, stuck or silent IMUs and dropped and
+replayed frames. ``PROLEG_ATTACK_EXAMPLES`` (``make fuzz`` sets it) runs it longer.
+"""
+
+from __future__ import annotations
+
+import os
+from collections import deque
+from dataclasses import dataclass, field
+
+import pytest
+from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
+from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
+
+from proleg.firmware.render import thermal_budget
+from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.protocol.definition import ClearWhat, ErrorCode, EventKind, FaultCode, ParamId
+from proleg.robot import Robot, load_robot
+from proleg.sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
+from proleg.sim.closed_loop import SimulatedRobot
+
+from proleg.paths import robots_dir
+
+GAIT_USER = 0xFF
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """The envelope a robot file asks for, in µs and permyriad (docs/safety.md)."""
+
+    tick_us: int
+    max_duty_pm: int
+    hold_max_pm: int
+    max_on_us: int
+    cooldown_us: int
+    mean_pm: int
+    window_us: int
+    ceiling_c: float
+
+    @classmethod
+    def of(cls, robot: Robot, plant: Plant) -> "Envelope":
+        s = robot.safety
+        b = thermal_budget(robot.name, s, robot.control)
+        acts = plant.params.actuators
+        hottest = max(a.full_power_w / a.conductance_w_per_k for a in acts)
+        return cls(
+            tick_us=round(1_000_000 / robot.control.tick_hz),
+            max_duty_pm=round(s.max_duty * 10000),
+            hold_max_pm=b["hold_max_duty_pm"],
+            max_on_us=s.max_on_ms * 1000,
+            cooldown_us=s.min_cooldown_ms * 1000,
+            mean_pm=b["mean_duty_pm"],
+            window_us=b["duty_window_ms"] * 1000,
+            ceiling_c=plant.params.ambient_c + s.max_duty * hottest + 5.0,
+        )
+
+
+@dataclass
+class _Channel:
+    on_us: int = 0
+    debt_us: float = 0.0  # on-time not yet paid back by cool-down
+    window: deque = field(default_factory=deque)
+    window_sum: int = 0
+    longest_on_us: int = 0
+
+
+class EnvelopeMonitor:
+    """Checks, after every tick, what the coils carried against the envelope (see module doc)."""
+
+    def __init__(self, env: Envelope, channels: tuple[int, ...]):
+        self.env = env
+        self.ch = {c: _Channel() for c in channels}
+        self.window_ticks = env.window_us // env.tick_us
+
+    def after_tick(self, now_us: int, duties: dict[int, int], temps_c) -> None:
+        env = self.env
+        for c, duty in duties.items():
+            s = self.ch[c]
+            assert duty <= env.max_duty_pm, f"t={now_us} µs: channel {c} at {duty} ‱ > max_duty {env.max_duty_pm}"
+            if duty > env.hold_max_pm:
+                s.on_us += env.tick_us  # this duty holds until the next tick
+                s.debt_us += env.tick_us
+                s.longest_on_us = max(s.longest_on_us, s.on_us)
+                assert s.on_us <= env.max_on_us + env.tick_us, (
+                    f"t={now_us} µs: channel {c} on for {s.on_us} µs > max_on {env.max_on_us} + one tick"
+                )
+                assert s.debt_us <= env.max_on_us + env.tick_us, (
+                    f"t={now_us} µs: channel {c} heats without its cool-down: {s.debt_us:.0f} µs of on-time "
+                    f"not paid back > max_on {env.max_on_us} + one tick"
+                )
+            else:
+                s.on_us = 0
+                pay = env.tick_us * env.max_on_us / env.cooldown_us if env.cooldown_us else s.debt_us
+                s.debt_us = max(0.0, s.debt_us - pay)
+            s.window.append(duty)
+            s.window_sum += duty
+            if len(s.window) > self.window_ticks:
+                s.window_sum -= s.window.popleft()
+            limit = env.mean_pm * self.window_ticks + env.max_duty_pm
+            assert s.window_sum <= limit, (
+                f"t={now_us} µs: channel {c} mean duty {s.window_sum / self.window_ticks:.0f} ‱ over "
+                f"{env.window_us // 1000} ms > {env.mean_pm} ‱"
+            )
+        for j, t in enumerate(temps_c):
+            assert t <= env.ceiling_c, f"t={now_us} µs: coil {j} at {t:.1f} °C > ceiling {env.ceiling_c:.1f} °C"
+
+
+class Rig:
+    """The host-sim firmware and the plant, stepped one control tick at a time, monitored."""
+
+    def __init__(self, robot: Robot, sim: SimulatedRobot | None = None):
+        self.robot = robot
+        self.sim = sim or SimulatedRobot(robot)
+        self.decoder = FrameDecoder(len(robot.limbs), len(robot.actuators))
+        self.reset()
+
+    def reset(self, seed: int = 1) -> None:
+        sim, robot = self.sim, self.robot
+        sim.plant = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed)
+        sim.link_faults.drop = sim.link_faults.corrupt = 0.0
+        for addr in sim.imu_addresses:
+            sim.board.imu_fault(addr, "ok")
+        sim.board.reset(seed)
+        sim._push_truth()
+        self.env = Envelope.of(robot, sim.plant)
+        self.monitor = EnvelopeMonitor(self.env, sim.channels)
+        self.token = 0
+        self.log: list[Message] = []
+        self._acc = [0.0] * len(sim.channels)
+        self._n = 0
+        self.last_frame = b""
+
+    @property
+    def now_us(self) -> int:
+        return self.sim.board.time_us
+
+    def ticks(self, n: int) -> None:
+        sim, board = self.sim, self.sim.board
+        tps = sim.ticks_per_step
+        for _ in range(n):
+            board.run_ticks(1)
+            duties = {c: board.pwm_permyriad(c) for c in sim.channels}
+            self.monitor.after_tick(board.time_us, duties, sim.plant.temperature_c)
+            for k, c in enumerate(sim.channels):
+                self._acc[k] += duties[c]
+            self._n += 1
+            if self._n == tps:
+                sim.plant.step(sim.plant_dt_s, [a / tps / 10000.0 for a in self._acc])
+                sim._push_truth()
+                self._acc = [0.0] * len(sim.channels)
+                self._n = 0
+        self.log += self.decoder.feed(sim.read())
+
+    def frame(self, name: str, **fields) -> bytes:
+        self.token = self.token % 255 + 1
+        return encode(Message.new(name, token=self.token, **fields))
+
+    def send(self, name: str, **fields) -> int:
+        """Queue one command (no tick): several sends before ``ticks`` land in one tick."""
+        raw = self.frame(name, **fields)
+        self.last_frame = raw
+        self.sim.write(raw)
+        return self.token
+
+    def reply(self, token: int, ticks: int = 20) -> Message:
+        self.ticks(ticks)
+        for m in reversed(self.log):
+            if m.spec.name in ("ACK", "NACK", "INFO", "STATS") and m.token == token:
+                return m
+        raise AssertionError(f"no reply to token {token}")
+
+    def events(self, kind: int) -> list[Message]:
+        return [m for m in self.log if m.spec.name == "EVENT" and m.kind == kind]
+
+
+def _robot() -> Robot:
+    return load_robot(robots_dir() / "paper-r1.toml")
+
+
+@pytest.fixture(scope="module")
+def rig() -> Rig:
+    return Rig(_robot())
+
+
+def _dead_left_on_a_two_state_user_gait(rig: Rig) -> None:
+    rig.reset()
+    rig.sim.inject("dead-actuator:sma-left")
+    rig.ticks(50)
+    assert rig.reply(rig.send("LOAD_GAIT", states=(2, 3))).spec.name == "ACK"  # 10 <-> 11
+    assert rig.reply(rig.send("START", gait=GAIT_USER, direction=0)).spec.name == "ACK"
+
+
+# ------------------------------------------------------------------ the three bypasses of issue 12
+
+
+def test_stop_and_start_in_one_tick_every_2_99_s_cannot_keep_a_coil_on(rig):
+    """Bypass 1: STOP + START in the same tick reset the on-time counter (62.8 s at 100 %)."""
+    _dead_left_on_a_two_state_user_gait(rig)
+    for _ in range(7):  # 21 s
+        rig.ticks(2990 - 1)
+        rig.send("STOP")
+        rig.send("START", gait=GAIT_USER, direction=0)
+        rig.ticks(1)
+    assert rig.monitor.ch[0].longest_on_us <= rig.env.max_on_us + rig.env.tick_us
+    faults = [m.code for m in rig.events(EventKind.FAULT)]
+    assert FaultCode.STATE_TIMEOUT in faults or faults.count(FaultCode.SMA_ON_LIMIT) >= 3
+    rig.ticks(5)
+    assert rig.sim.board.pwm(0) == 0 and rig.sim.board.pwm(1) == 0  # latched: START refused
+
+
+def test_a_one_tick_gap_every_2999_ticks_does_not_give_full_duty(rig):
+    """Bypass 2: STOP, one tick, START every 2999 ticks gave 99.96 % duty for 63 s."""
+    _dead_left_on_a_two_state_user_gait(rig)
+    on_ticks = total = 0
+    for _ in range(7):
+        for _ in range(2998):
+            rig.ticks(1)
+            on_ticks += rig.sim.board.pwm_permyriad(0) > rig.env.hold_max_pm
+            total += 1
+        rig.send("STOP")
+        rig.ticks(1)
+        rig.send("START", gait=GAIT_USER, direction=0)
+        rig.ticks(1)
+        total += 2
+    # max_on / (max_on + min_cooldown) = 3 / 3.8 at most, and the fault latches anyway
+    assert on_ticks / total <= rig.env.max_on_us / (rig.env.max_on_us + rig.env.cooldown_us) + 0.01
+
+
+def test_start_resent_while_a_gait_runs_is_refused_and_the_state_timeout_still_fires(rig):
+    """Bypass 3: a re-sent START restarted the step timer: a dead limb heated forever."""
+    rig.reset()
+    rig.sim.inject("dead-actuator:sma-left")
+    rig.ticks(50)
+    assert rig.reply(rig.send("START", gait=0, direction=0)).spec.name == "ACK"
+    started = rig.now_us
+    timeout_us = rig.robot.safety.state_timeout_ms * 1000
+    refused = 0
+    while not rig.events(EventKind.FAULT) or rig.events(EventKind.FAULT)[-1].code == FaultCode.SMA_ON_LIMIT:
+        m = rig.reply(rig.send("START", gait=0, direction=0), ticks=1000)
+        if m.spec.name == "NACK":
+            refused += 1
+            assert m.error == ErrorCode.NOT_ALLOWED
+        assert rig.now_us - started < 3 * timeout_us, "no latched fault: the dead limb is heated forever"
+    fault = rig.events(EventKind.FAULT)[-1]
+    assert fault.code in (FaultCode.STATE_TIMEOUT, FaultCode.SMA_ON_LIMIT)
+    assert rig.now_us - started <= timeout_us + 1_100_000  # from the first demand (+ one reply period)
+    assert refused >= 5
+    rig.ticks(5)
+    assert all(rig.sim.board.pwm(c) == 0 for c in rig.sim.channels)
+
+
+def test_holding_a_state_at_the_hold_duty_is_not_ended_by_the_envelope(rig):
+    """The one-coil hold of C_L2 (10 -> 11 -> 10) must live inside the budget: a gait that
+    merely holds the left limb up for far longer than max_on runs on without an on-limit."""
+    rig.reset()
+    rig.ticks(50)
+    assert rig.reply(rig.send("LOAD_GAIT", states=(2, 3))).spec.name == "ACK"
+    assert rig.reply(rig.send("START", gait=GAIT_USER, direction=0)).spec.name == "ACK"
+    rig.ticks(20_000)
+    assert not [m for m in rig.events(EventKind.FAULT)], [(m.code, m.detail) for m in rig.events(EventKind.FAULT)]
+    assert len(rig.events(EventKind.STATE_REACHED)) >= 4
+
+
+def test_the_link_watchdog_stops_a_gait_the_host_went_quiet_on(tmp_path):
+    text = (robots_dir() / "paper-r1.toml").read_text()
+    path = tmp_path / "paper-r1-watchdog.toml"
+    path.write_text(text.replace("[safety]\n", "[safety]\nlink_watchdog_ms = 500\n"))
+    rig = Rig(load_robot(path))
+    rig.ticks(50)
+    assert rig.reply(rig.send("START", gait=0, direction=0)).spec.name == "ACK"
+    for _ in range(6):  # a PING every 400 ms keeps it alive
+        last_frame_us = rig.now_us
+        rig.reply(rig.send("PING"), ticks=400)
+    assert not rig.events(EventKind.FAULT)
+    rig.ticks(600)
+    fault = rig.events(EventKind.FAULT)
+    assert fault and fault[-1].code == FaultCode.LINK_WATCHDOG
+    assert 500_000 <= fault[-1].time_ms * 1000 - last_frame_us <= 503_000
+    assert all(rig.sim.board.pwm(c) == 0 for c in rig.sim.channels)
+
+
+# ------------------------------------------------------------------ the attacker
+
+_PARAMS = [int(p) for p in ParamId]
+COMMAND = st.one_of(
+    st.builds(lambda g, d: ("START", {"gait": g, "direction": d}), st.sampled_from([0, 1, GAIT_USER]), st.integers(0, 1)),
+    st.just(("STOP", {})),
+    st.just(("ESTOP", {})),
+    st.builds(lambda w: ("CLEAR", {"what": w}), st.sampled_from([int(ClearWhat.ESTOP), int(ClearWhat.FAULTS), 7])),
+    st.builds(lambda s: ("LOAD_GAIT", {"states": tuple(s)}), st.lists(st.integers(0, 3), min_size=2, max_size=4)),
+    st.builds(
+        lambda p, v: ("SET_PARAM", {"param": p, "index": 0, "value": v}),
+        st.sampled_from(_PARAMS),
+        st.sampled_from([0, 1, 50, 800, 2500, 3000, 6000, 8000, 100000, -1]),
+    ),
+)
+
+EXAMPLES = int(os.environ.get("PROLEG_ATTACK_EXAMPLES", "10"))
+STEPS = int(os.environ.get("PROLEG_ATTACK_STEPS", "20"))
+
+
+class Attacker(RuleBasedStateMachine):
+    rig: Rig  # set by the test
+
+    def __init__(self):
+        super().__init__()
+        self.rig.reset()
+        self.rig.ticks(30)
+        self.rig.send("START", gait=0, direction=0)
+        self.rig.ticks(1)
+
+    @rule(burst=st.lists(COMMAND, min_size=1, max_size=4))
+    def commands_in_one_tick(self, burst):
+        for name, fields in burst:
+            try:
+                self.rig.send(name, **fields)
+            except Exception:  # noqa: BLE001 - not encodable: the host codec refuses it
+                continue
+        self.rig.ticks(1)
+
+    @rule(n=st.sampled_from([1, 2, 50, 799, 1000, 2990, 2999, 4000]))
+    def wait(self, n):
+        self.rig.ticks(n)
+
+    @rule(act=st.sampled_from(["sma-left", "sma-right"]))
+    def dead_coil(self, act):
+        self.rig.sim.inject(f"dead-actuator:{act}")
+
+    @rule(limb=st.sampled_from(["left", "right"]), mode=st.sampled_from(["imu-stuck", "imu-silent"]))
+    def imu_fault(self, limb, mode):
+        self.rig.sim.inject(f"{mode}:{limb}")
+
+    @precondition(lambda self: bool(self.rig.last_frame))
+    @rule(n=st.integers(1, 3))
+    def replay_last_frame(self, n):
+        for _ in range(n):
+            self.rig.sim.write(self.rig.last_frame)
+        self.rig.ticks(1)
+
+    @rule(name=st.sampled_from(["STOP", "ESTOP", "START"]), cut=st.integers(1, 6))
+    def dropped_frame(self, name, cut):
+        raw = self.rig.frame(name, gait=0, direction=0) if name == "START" else self.rig.frame(name)
+        self.rig.sim.write(raw[: max(0, len(raw) - cut)])  # the rest of the frame is lost
+        self.rig.ticks(1)
+
+    @invariant()
+    def ticks_between_rules(self):
+        self.rig.ticks(3)  # the monitor asserts on every tick
+
+
+def test_an_attacker_cannot_get_around_the_envelope(rig):
+    Attacker.rig = rig
+    Attacker.TestCase.settings = settings(
+        max_examples=EXAMPLES, stateful_step_count=STEPS, deadline=None, suppress_health_check=list(HealthCheck)
+    )
+    Attacker.TestCase().runTest()
