@@ -2,6 +2,7 @@
 #include "app.h"
 
 #include "cmd.h"
+#include "ctl.h"
 #include "drive.h"
 #include "fault.h"
 #include "hal.h"
@@ -45,6 +46,7 @@ void app_init(void)
     sma_init();
     guard_init(); /* safety: the step guard on real time */
     psi_init();
+    ctl_reset();
     seq_init();
     cmd_init();
     cmd_send_info(0);

@@ -37,6 +37,11 @@ void ctl_reset(void)
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
         cl[i].level = PSI_UNKNOWN;
+        cl[i].heat = 0;
+        cl[i].crossings = 0;
+        cl[i].best = 0;
+        cl[i].stall = 0;
+        cl[i].ticks = 0;
         psi_relax(i, 0);
     }
 }

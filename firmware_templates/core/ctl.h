@@ -71,7 +71,8 @@
 void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t hold_pm,
                 uint16_t duty[CFG_N_ACTUATORS]);
 
-/* Forget every limb's step, hold and stall state (static storage starts so, too). */
+/* Forget every limb's step, hold and stall state. app_init calls it (after psi_init), so a
+ * reset of the simulated board starts as cold as the chip's cleared RAM, and so does START. */
 void ctl_reset(void);
 
 /* CTL_STALL_* of limb i in its current step. */

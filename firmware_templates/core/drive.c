@@ -27,6 +27,7 @@ void drive_started(uint8_t g, uint8_t d)
 {
     gait = g;
     dir = d;
+    ctl_reset(); /* a new gait: no stall or hold state carried over from the last one */
 }
 
 uint8_t drive_gait(void)
