@@ -175,3 +175,85 @@ def test_unknown_can_interface_is_one_clear_link_error():
         CanLink("can0", "no-such-interface")
     assert "unknown or unavailable CAN interface 'no-such-interface'" in str(e.value)
     assert "\n" not in str(e.value)
+
+
+# --------------------------------------------------------------------------- python-can's configuration
+@pytest.fixture
+def can_config(tmp_path, monkeypatch):
+    """A private ~/.canrc and a clean CAN_* environment."""
+    import can.util
+
+    for var in ("CAN_INTERFACE", "CAN_CHANNEL", "CAN_BITRATE", "CAN_CONFIG"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setattr(can.util, "CONFIG_FILES", ["~/.canrc"])  # not a can.ini in the working directory
+    return tmp_path / ".canrc"
+
+
+def _bridge(channel: str, node: int = 0):
+    bus = can.Bus(interface="virtual", channel=channel)
+    board = FakeBoard(build_id=0xCA)
+    return board, bus, CanBoardBridge(board, bus, node=node).start(speed=1.0)
+
+
+def test_interface_channel_and_bitrate_come_from_canrc(can_config):
+    from proleg.link.factory import link_url, open_link
+
+    channel = next(_channels)
+    can_config.write_text(f"[default]\ninterface = virtual\nchannel = {channel}\nbitrate = 250000\n")
+    board, bus, bridge = _bridge(channel)
+    try:
+        url = link_url(can_channel="", node=0)
+        assert url == "can://?node=0"
+        with RobotClient(open_link(url)) as client:
+            assert client.connect().build_id == 0xCA
+            assert client.link.description == f"CAN {channel} (virtual, 250000 bit/s) node 0"
+            assert client.link.config["bitrate"] == 250000
+    finally:
+        bridge.stop()
+        bus.shutdown()
+
+
+def test_the_environment_beats_canrc_and_options_beat_both(can_config, monkeypatch):
+    from proleg.link.can_link import bus_config
+
+    can_config.write_text("[default]\ninterface = socketcan\nchannel = can9\nbitrate = 125000\n")
+    monkeypatch.setenv("CAN_INTERFACE", "virtual")
+    monkeypatch.setenv("CAN_BITRATE", "500000")
+    cfg = bus_config()
+    assert (cfg["interface"], cfg["channel"], cfg["bitrate"]) == ("virtual", "can9", 500000)
+    cfg = bus_config("vcan1", None, 1_000_000)
+    assert (cfg["interface"], cfg["channel"], cfg["bitrate"]) == ("virtual", "vcan1", 1_000_000)
+
+
+def test_without_any_configuration_the_interface_is_socketcan_and_a_channel_is_required(can_config):
+    from proleg.link.can_link import bus_config
+
+    assert bus_config("can0")["interface"] == "socketcan"
+    with pytest.raises(LinkError, match="no CAN channel: give one"):
+        bus_config()
+
+
+def test_console_bitrate_and_interface_options_reach_the_bus(can_config):
+    channel = next(_channels)
+    board, bus, bridge = _bridge(channel, node=3)
+    import io
+
+    from proleg.cli.link_commands import console_main
+
+    err = io.StringIO()
+    try:
+        assert console_main(can_channel=channel, interface="virtual", bitrate=500000, node=3, plain=True,
+                            duration_s=0.3, out=io.StringIO(), err=err) == 0
+    finally:
+        bridge.stop()
+        bus.shutdown()
+    assert f"robot stopped on CAN {channel} (virtual, 500000 bit/s) node 3" in err.getvalue()
+    assert [m.name for m in board.received][-1] == "STOP"
+
+
+def test_cli_parses_can_without_a_channel_and_bitrate():
+    from proleg.cli.main import build_parser
+
+    a = build_parser().parse_args(["console", "--can", "--bitrate", "250000"])
+    assert (a.can, a.interface, a.bitrate) == ("", None, 250000)

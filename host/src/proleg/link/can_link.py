@@ -35,18 +35,25 @@ def bus_config(channel: str | None = None, interface: str | None = None, bitrate
     given = {k: v for k, v in {"channel": channel, "interface": interface, "bitrate": bitrate, **kwargs}.items()
              if v is not None and v != ""}
     try:
+        if "interface" not in given and not _configured_interface():
+            given["interface"] = FALLBACK_INTERFACE
         config = can.util.load_config(config=given)
     except can.exceptions.CanInterfaceNotImplementedError as e:
         known = ", ".join(sorted(can.VALID_INTERFACES))
-        raise LinkError(f"unknown CAN interface in the options or python-can's configuration "
-                        f"({_first_line(e)}); python-can knows: {known}") from None
+        where = repr(given["interface"]) if "interface" in given else "named by CAN_INTERFACE or ~/.canrc"
+        raise LinkError(f"unknown or unavailable CAN interface {where} ({_first_line(e)}); "
+                        f"python-can knows: {known}") from None
     except (ValueError, TypeError, KeyError) as e:  # a malformed ~/.canrc or CAN_* value
         raise LinkError(f"python-can configuration (CAN_* environment or ~/.canrc): {_first_line(e)}") from None
-    if not config.get("interface"):
-        config["interface"] = FALLBACK_INTERFACE
     if config.get("channel") in (None, ""):
         raise LinkError("no CAN channel: give one (--can can0) or set CAN_CHANNEL / channel in ~/.canrc")
     return config
+
+
+def _configured_interface() -> bool:
+    """Whether python-can's configuration (environment, config files) names an interface."""
+    sources = (can.rc, can.util.load_environment_config(), can.util.load_file_config())
+    return any(src.get("interface") or src.get("bustype") for src in sources)
 
 
 def open_bus(channel: str | None = None, interface: str | None = None, bitrate: int | None = None,
