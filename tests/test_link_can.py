@@ -18,6 +18,7 @@ from proleg.protocol.can import CanIds, CanToWire, message_frames
 from proleg.protocol.dbc import build_database, dbc_text, write_dbc
 from fake_board import FakeBoard
 from proleg.protocol import FrameDecoder, Message
+from proleg.protocol.definition import EventKind, FaultCode, Flag, StopReason
 
 _channels = (f"proleg-test-{i}" for i in itertools.count())
 
@@ -146,15 +147,16 @@ def test_generated_dbc_decodes_simulated_telemetry_on_the_bus():
         if msg.name == "TELEMETRY_A":
             current = dict(values)
             decoded[int(values["seq"])] = current
-        else:
+        elif msg.name != "EVENT":  # events have their own frame (and their own time_ms)
             current.update(values)
     robot_bus.shutdown()
     sniffer.shutdown()
     assert len(sent) >= 15 and len(decoded) == len(sent)
     for m in sent:
         d = decoded[m.seq]
-        for k in ("time_ms", "measured", "target", "gait", "direction", "step", "flags"):
+        for k in ("time_ms", "measured", "target", "gait", "direction", "step"):
             assert d[k] == m[k], k
+        assert sum(int(d[f"flag_{f.name.lower()}"]) << (f.bit_length() - 1) for f in Flag if f.name) == m.flags
         assert d["psi_count"] == len(m.psi) and d["duty_count"] == len(m.duty)
         for i, p in enumerate(m.psi):
             assert d[f"psi_{i}"] == pytest.approx(p / 100)  # degrees
@@ -165,9 +167,11 @@ def test_generated_dbc_decodes_simulated_telemetry_on_the_bus():
 def test_dbc_describes_every_frame_of_each_node(tmp_path):
     path = write_dbc(tmp_path / "proleg.dbc", nodes=(0, 7), base=0x200)
     db = cantools.database.load_file(str(path))
-    assert {m.frame_id for m in db.messages} == {0x200 + (s << 4) + n for s in range(8) for n in (0, 7)}
+    assert {m.frame_id for m in db.messages} == {0x200 + (s << 4) + n for s in range(9) for n in (0, 7)}
     assert db.get_message_by_name("TELEMETRY_PSI_0_N7").get_signal_by_name("psi_0").unit == "deg"
-    assert len(build_database().messages) == 8
+    assert len(build_database().messages) == 9
+    bu = [line for line in path.read_text().splitlines() if line.startswith("BU_:")]
+    assert bu == ["BU_: HOST ROBOT_0 ROBOT_7"]  # each node named once
 
 
 def test_unknown_can_interface_is_one_clear_link_error():
@@ -257,3 +261,81 @@ def test_cli_parses_can_without_a_channel_and_bitrate():
 
     a = build_parser().parse_args(["console", "--can", "--bitrate", "250000"])
     assert (a.can, a.interface, a.bitrate) == ("", None, 250000)
+
+
+# --------------------------------------------------------------------------- the DBC on a recorded simulated run
+def test_a_recorded_can_stream_of_a_simulated_run_decodes_with_the_dbc_as_the_protocol_does():
+    """The real firmware on the simulated board runs a gait, an IMU goes silent (a FAULT): every
+    message it sent is put on the bus as the CAN bridge does, recorded, and decoded with the
+    DBC (cantools); the physical values equal the protocol decoder's."""
+    from proleg.paths import resolve_robot
+    from proleg.protocol.can import message_frames
+    from proleg.robot import load_robot
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    robot = load_robot(resolve_robot("paper-r1"))
+    sim = SimulatedRobot(robot, seed=2)
+    client = RobotClient(__import__("proleg.link.sim_link", fromlist=["SimLink"]).SimLink(sim, step_s=sim.plant_dt_s))
+    client.connect()
+    client.start(0, "+x")
+    sent: list[Message] = []
+    t_end = client.link.clock() + 3.0
+    injected = False
+    while client.link.clock() < t_end:
+        m = client.recv(0.05)
+        if m is not None and m.name in ("TELEMETRY", "EVENT"):
+            sent.append(m)
+        if not injected and client.link.clock() > 2.0:
+            sim.inject(f"imu-silent:{robot.limbs[1].name}")
+            injected = True
+    client.close()
+    ids = CanIds(node=5)
+    recording = [f for m in sent for f in message_frames(m, ids, from_host=False)]
+    db = cantools.database.load_string(dbc_text(nodes=(5,), robot=robot), "dbc")
+    left, right = (limb.name.replace("-", "_") for limb in robot.limbs)
+    a0, a1 = (a.name.replace("-", "_") for a in robot.actuators)
+    tel = iter(m for m in sent if m.name == "TELEMETRY")
+    events = iter(m for m in sent if m.name == "EVENT")
+    current: dict = {}
+    n_tel = n_ev = 0
+    names_seen = set()
+    for frame_id, data in recording:
+        msg = db.get_message_by_frame_id(frame_id)
+        values = msg.decode(data)
+        if msg.name == "EVENT":
+            e = next(events)
+            n_ev += 1
+            assert values["time_ms"] == e.time_ms and values["kind"] == EventKind(e.kind).name
+            if e.kind == EventKind.FAULT:
+                assert values["fault_code"] == FaultCode(e.code).name and values["fault_detail"] == e.detail
+            if e.kind == EventKind.GAIT_STOPPED:
+                assert values["stop_reason"] == StopReason(e.code).name
+            names_seen.add(str(values["kind"]))
+            continue
+        current.update(values)
+        if msg.name == "TELEMETRY_DUTY_0":  # the last frame of a 2-limb, 2-actuator TELEMETRY
+            t = next(tel)
+            n_tel += 1
+            assert current["seq"] == t.seq and current["time_ms"] == t.time_ms
+            assert current[f"psi_{left}"] == pytest.approx(t.psi[0] / 100)  # degrees
+            assert current[f"psi_{right}"] == pytest.approx(t.psi[1] / 100)
+            assert current[f"duty_{a0}"] == pytest.approx(t.duty[0] / 100)  # percent
+            assert current[f"duty_{a1}"] == pytest.approx(t.duty[1] / 100)
+            assert bool(current["flag_running"]) == bool(t.flags & Flag.RUNNING)
+            assert bool(current["flag_fault"]) == bool(t.flags & Flag.FAULT)
+            current = {}
+    assert n_tel >= 100 and n_ev == sum(1 for m in sent if m.name == "EVENT")
+    assert {"GAIT_STARTED", "STATE_REACHED", "FAULT", "GAIT_STOPPED"} <= names_seen
+    sig = db.get_message_by_name("TELEMETRY_PSI_0").get_signal_by_name(f"psi_{left}")
+    assert (sig.unit, sig.scale) == ("deg", 0.01)
+    assert db.get_message_by_name("TELEMETRY_A").get_signal_by_name("time_ms").unit == "ms"
+
+
+def test_events_travel_in_their_own_can_frame_and_come_back_intact():
+    ids = CanIds(node=2)
+    ev = Message.new("EVENT", time_ms=123456, kind=int(EventKind.FAULT), code=int(FaultCode.IMU_NO_ACK), detail=1)
+    frames = message_frames(ev, ids, from_host=False)
+    assert [f[0] for f in frames] == [ids.id(8)]
+    rx = CanToWire(ids, from_host=False)
+    wire = b"".join(rx.feed(i, d) for i, d in frames)
+    assert FrameDecoder().feed(wire) == [ev]

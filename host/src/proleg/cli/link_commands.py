@@ -118,11 +118,16 @@ def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
     return 0
 
 
-def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100) -> int:
-    """``proleg dbc -o FILE``."""
+def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_file: str | None = None) -> int:
+    """``proleg dbc -o FILE [--robot ROBOT]`` (the robot names the ψ and duty signals)."""
     from ..protocol.dbc import write_dbc
 
-    path = write_dbc(out, nodes, base)
+    robot = None
+    if robot_file is not None:
+        from ..robot import load_robot
+
+        robot = load_robot(robot_file)
+    path = write_dbc(out, nodes, base, robot)
     print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})")
     return 0
 
@@ -183,4 +188,5 @@ def add_arguments(subparsers: Any) -> None:
     d.add_argument("--node", type=_int_auto, action="append", metavar="N",
                    help="robot node id(s) on the bus (repeatable; default 0)")
     d.add_argument("--base", type=_int_auto, default=0x100, help="base CAN id (default 0x100)")
-    d.set_defaults(run=lambda a: dbc_main(out=a.out, nodes=a.node or [0], base=a.base))
+    d.add_argument("--robot", metavar="ROBOT", type=_robot, help="name ψ and duty signals after its limbs and actuators")
+    d.set_defaults(run=lambda a: dbc_main(out=a.out, nodes=a.node or [0], base=a.base, robot_file=a.robot))

@@ -20,7 +20,7 @@ from typing import Any
 import can
 
 from ..errors import LinkError
-from ..protocol.can import DEFAULT_BASE, CanIds, CanToWire, WireToCan
+from ..protocol.can import DEFAULT_BASE, N_SLOTS, CanIds, CanToWire, WireToCan
 from .base import Link
 
 
@@ -77,7 +77,7 @@ def _first_line(e: BaseException) -> str:
 
 
 def _filters(ids: CanIds) -> list[dict[str, int]]:
-    return [{"can_id": ids.id(slot), "can_mask": 0x7FF, "extended": False} for slot in range(8)]
+    return [{"can_id": ids.id(slot), "can_mask": 0x7FF, "extended": False} for slot in range(N_SLOTS)]
 
 
 class CanLink(Link):
