@@ -165,6 +165,25 @@ def _event(kind: int, code: int, detail: int):
     return Received(Message("EVENT", {"time_ms": 1234, "kind": kind, "code": code, "detail": detail}), 0.0)
 
 
+def test_a_few_events_are_all_shown():
+    board = FakeBoard()
+    client = _client(board)
+    app = ConsoleApp(client, names=NAMES)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            for code in (0, 1, 2):
+                app.model.on_message(_event(1, code, code))  # STATE_REACHED, step = code
+            await pilot.pause(0.2)
+            app.refresh_view()
+            text = str(app.query_one("#events").content)
+            assert all(f"step {k} reached" in text for k in (0, 1, 2)), text
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+
+
 def test_g_cycles_through_the_gaits_info_reports_and_no_others():
     board = FakeBoard(gaits={0: ((0, 2, 3, 1), (0, 1, 3, 2), (0, 2, 3, 1)), 1: ((0, 1, 3, 2),)})
     client = _client(board)

@@ -236,7 +236,7 @@ class ConsoleApp(App[None]):
                 stars = view.psi_star_deg
                 star = "/".join(f"{s:.2f}°" for s in stars) if stars else "?"
                 rel = "≥" if stars and psi >= stars[0] else ("<" if stars else " ")
-                limbs.append(f"{view.name[:12]:<12} ψ{psi:7.2f}° {rel} ψ* {star:<6} ")
+                limbs.append(f"{view.name[:12]:<12} ψ{psi:7.2f}° {rel} ψ* {star:<6}  ")
                 s_now, s_want = measured[i], target[i]
                 limbs.append(f"S {s_now}→{s_want}", style="green" if s_now == s_want else "yellow")
                 if i < len(tel["psi"]) - 1:
@@ -270,7 +270,8 @@ class ConsoleApp(App[None]):
         panel = self.query_one("#events", Static)
         room = max(1, panel.content_region.height)
         latched = faults[-max(1, room // 2):] if faults else []  # latched faults stay in view
-        recent = events[len(events) - (room - len(latched)):] if room > len(latched) else []
+        n_recent = room - len(latched)
+        recent = events[max(0, len(events) - n_recent):] if n_recent > 0 else []
         lines = [(line, "bold red") for line in latched] + [(line, "") for line in recent]
         ev = Text()
         for k, (line, style) in enumerate(lines):
