@@ -269,13 +269,13 @@ def test_a_recorded_can_stream_of_a_simulated_run_decodes_with_the_dbc_as_the_pr
     message it sent is put on the bus as the CAN bridge does, recorded, and decoded with the
     DBC (cantools); the physical values equal the protocol decoder's."""
     from proleg.paths import resolve_robot
-    from proleg.protocol.can import message_frames
+    from proleg.link.sim_link import SimLink
     from proleg.robot import load_robot
     from proleg.sim.closed_loop import SimulatedRobot
 
     robot = load_robot(resolve_robot("paper-r1"))
     sim = SimulatedRobot(robot, seed=2)
-    client = RobotClient(__import__("proleg.link.sim_link", fromlist=["SimLink"]).SimLink(sim, step_s=sim.plant_dt_s))
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
     client.connect()
     client.start(0, "+x")
     sent: list[Message] = []
