@@ -18,6 +18,7 @@ from proleg.protocol.can import CanIds, CanToWire, message_frames
 from proleg.protocol.dbc import build_database, dbc_text, write_dbc
 from fake_board import FakeBoard
 from proleg.protocol import FrameDecoder, Message
+from proleg.protocol.definition import EventKind, FaultCode, Flag, StopReason
 
 _channels = (f"proleg-test-{i}" for i in itertools.count())
 
@@ -146,15 +147,16 @@ def test_generated_dbc_decodes_simulated_telemetry_on_the_bus():
         if msg.name == "TELEMETRY_A":
             current = dict(values)
             decoded[int(values["seq"])] = current
-        else:
+        elif msg.name != "EVENT":  # events have their own frame (and their own time_ms)
             current.update(values)
     robot_bus.shutdown()
     sniffer.shutdown()
     assert len(sent) >= 15 and len(decoded) == len(sent)
     for m in sent:
         d = decoded[m.seq]
-        for k in ("time_ms", "measured", "target", "gait", "direction", "step", "flags"):
+        for k in ("time_ms", "measured", "target", "gait", "direction", "step"):
             assert d[k] == m[k], k
+        assert sum(int(d[f"flag_{f.name.lower()}"]) << (f.bit_length() - 1) for f in Flag if f.name) == m.flags
         assert d["psi_count"] == len(m.psi) and d["duty_count"] == len(m.duty)
         for i, p in enumerate(m.psi):
             assert d[f"psi_{i}"] == pytest.approx(p / 100)  # degrees
@@ -165,9 +167,11 @@ def test_generated_dbc_decodes_simulated_telemetry_on_the_bus():
 def test_dbc_describes_every_frame_of_each_node(tmp_path):
     path = write_dbc(tmp_path / "proleg.dbc", nodes=(0, 7), base=0x200)
     db = cantools.database.load_file(str(path))
-    assert {m.frame_id for m in db.messages} == {0x200 + (s << 4) + n for s in range(8) for n in (0, 7)}
+    assert {m.frame_id for m in db.messages} == {0x200 + (s << 4) + n for s in range(9) for n in (0, 7)}
     assert db.get_message_by_name("TELEMETRY_PSI_0_N7").get_signal_by_name("psi_0").unit == "deg"
-    assert len(build_database().messages) == 8
+    assert len(build_database().messages) == 9
+    bu = [line for line in path.read_text().splitlines() if line.startswith("BU_:")]
+    assert bu == ["BU_: HOST ROBOT_0 ROBOT_7"]  # each node named once
 
 
 def test_unknown_can_interface_is_one_clear_link_error():
@@ -175,3 +179,163 @@ def test_unknown_can_interface_is_one_clear_link_error():
         CanLink("can0", "no-such-interface")
     assert "unknown or unavailable CAN interface 'no-such-interface'" in str(e.value)
     assert "\n" not in str(e.value)
+
+
+# --------------------------------------------------------------------------- python-can's configuration
+@pytest.fixture
+def can_config(tmp_path, monkeypatch):
+    """A private ~/.canrc and a clean CAN_* environment."""
+    import can.util
+
+    for var in ("CAN_INTERFACE", "CAN_CHANNEL", "CAN_BITRATE", "CAN_CONFIG"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setattr(can.util, "CONFIG_FILES", ["~/.canrc"])  # not a can.ini in the working directory
+    return tmp_path / ".canrc"
+
+
+def _bridge(channel: str, node: int = 0):
+    bus = can.Bus(interface="virtual", channel=channel)
+    board = FakeBoard(build_id=0xCA)
+    return board, bus, CanBoardBridge(board, bus, node=node).start(speed=1.0)
+
+
+def test_interface_channel_and_bitrate_come_from_canrc(can_config):
+    from proleg.link.factory import link_url, open_link
+
+    channel = next(_channels)
+    can_config.write_text(f"[default]\ninterface = virtual\nchannel = {channel}\nbitrate = 250000\n")
+    board, bus, bridge = _bridge(channel)
+    try:
+        url = link_url(can_channel="", node=0)
+        assert url == "can://?node=0"
+        with RobotClient(open_link(url)) as client:
+            assert client.connect().build_id == 0xCA
+            assert client.link.description == f"CAN {channel} (virtual, 250000 bit/s) node 0"
+            assert client.link.config["bitrate"] == 250000
+    finally:
+        bridge.stop()
+        bus.shutdown()
+
+
+def test_the_environment_beats_canrc_and_options_beat_both(can_config, monkeypatch):
+    from proleg.link.can_link import bus_config
+
+    can_config.write_text("[default]\ninterface = socketcan\nchannel = can9\nbitrate = 125000\n")
+    monkeypatch.setenv("CAN_INTERFACE", "virtual")
+    monkeypatch.setenv("CAN_BITRATE", "500000")
+    cfg = bus_config()
+    assert (cfg["interface"], cfg["channel"], cfg["bitrate"]) == ("virtual", "can9", 500000)
+    cfg = bus_config("vcan1", None, 1_000_000)
+    assert (cfg["interface"], cfg["channel"], cfg["bitrate"]) == ("virtual", "vcan1", 1_000_000)
+
+
+def test_without_any_configuration_the_interface_is_socketcan_and_a_channel_is_required(can_config):
+    from proleg.link.can_link import bus_config
+
+    assert bus_config("can0")["interface"] == "socketcan"
+    with pytest.raises(LinkError, match="no CAN channel: give one"):
+        bus_config()
+
+
+def test_console_bitrate_and_interface_options_reach_the_bus(can_config):
+    channel = next(_channels)
+    board, bus, bridge = _bridge(channel, node=3)
+    import io
+
+    from proleg.cli.link_commands import console_main
+
+    err = io.StringIO()
+    try:
+        assert console_main(can_channel=channel, interface="virtual", bitrate=500000, node=3, plain=True,
+                            duration_s=0.3, out=io.StringIO(), err=err) == 0
+    finally:
+        bridge.stop()
+        bus.shutdown()
+    assert f"robot stopped on CAN {channel} (virtual, 500000 bit/s) node 3" in err.getvalue()
+    assert [m.name for m in board.received][-1] == "STOP"
+
+
+def test_cli_parses_can_without_a_channel_and_bitrate():
+    from proleg.cli.main import build_parser
+
+    a = build_parser().parse_args(["console", "--can", "--bitrate", "250000"])
+    assert (a.can, a.interface, a.bitrate) == ("", None, 250000)
+
+
+# --------------------------------------------------------------------------- the DBC on a recorded simulated run
+def test_a_recorded_can_stream_of_a_simulated_run_decodes_with_the_dbc_as_the_protocol_does():
+    """The real firmware on the simulated board runs a gait, an IMU goes silent (a FAULT): every
+    message it sent is put on the bus as the CAN bridge does, recorded, and decoded with the
+    DBC (cantools); the physical values equal the protocol decoder's."""
+    from proleg.paths import resolve_robot
+    from proleg.link.sim_link import SimLink
+    from proleg.robot import load_robot
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    robot = load_robot(resolve_robot("paper-r1"))
+    sim = SimulatedRobot(robot, seed=2)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+    client.connect()
+    client.start(0, "+x")
+    sent: list[Message] = []
+    t_end = client.link.clock() + 3.0
+    injected = False
+    while client.link.clock() < t_end:
+        m = client.recv(0.05)
+        if m is not None and m.name in ("TELEMETRY", "EVENT"):
+            sent.append(m)
+        if not injected and client.link.clock() > 2.0:
+            sim.inject(f"imu-silent:{robot.limbs[1].name}")
+            injected = True
+    client.close()
+    ids = CanIds(node=5)
+    recording = [f for m in sent for f in message_frames(m, ids, from_host=False)]
+    db = cantools.database.load_string(dbc_text(nodes=(5,), robot=robot), "dbc")
+    left, right = (limb.name.replace("-", "_") for limb in robot.limbs)
+    a0, a1 = (a.name.replace("-", "_") for a in robot.actuators)
+    tel = iter(m for m in sent if m.name == "TELEMETRY")
+    events = iter(m for m in sent if m.name == "EVENT")
+    current: dict = {}
+    n_tel = n_ev = 0
+    names_seen = set()
+    for frame_id, data in recording:
+        msg = db.get_message_by_frame_id(frame_id)
+        values = msg.decode(data)
+        if msg.name == "EVENT":
+            e = next(events)
+            n_ev += 1
+            assert values["time_ms"] == e.time_ms and values["kind"] == EventKind(e.kind).name
+            if e.kind == EventKind.FAULT:
+                assert values["fault_code"] == FaultCode(e.code).name and values["fault_detail"] == e.detail
+            if e.kind == EventKind.GAIT_STOPPED:
+                assert values["stop_reason"] == StopReason(e.code).name
+            names_seen.add(str(values["kind"]))
+            continue
+        current.update(values)
+        if msg.name == "TELEMETRY_DUTY_0":  # the last frame of a 2-limb, 2-actuator TELEMETRY
+            t = next(tel)
+            n_tel += 1
+            assert current["seq"] == t.seq and current["time_ms"] == t.time_ms
+            assert current[f"psi_{left}"] == pytest.approx(t.psi[0] / 100)  # degrees
+            assert current[f"psi_{right}"] == pytest.approx(t.psi[1] / 100)
+            assert current[f"duty_{a0}"] == pytest.approx(t.duty[0] / 100)  # percent
+            assert current[f"duty_{a1}"] == pytest.approx(t.duty[1] / 100)
+            assert bool(current["flag_running"]) == bool(t.flags & Flag.RUNNING)
+            assert bool(current["flag_fault"]) == bool(t.flags & Flag.FAULT)
+            current = {}
+    assert n_tel >= 100 and n_ev == sum(1 for m in sent if m.name == "EVENT")
+    assert {"GAIT_STARTED", "STATE_REACHED", "FAULT", "GAIT_STOPPED"} <= names_seen
+    sig = db.get_message_by_name("TELEMETRY_PSI_0").get_signal_by_name(f"psi_{left}")
+    assert (sig.unit, sig.scale) == ("deg", 0.01)
+    assert db.get_message_by_name("TELEMETRY_A").get_signal_by_name("time_ms").unit == "ms"
+
+
+def test_events_travel_in_their_own_can_frame_and_come_back_intact():
+    ids = CanIds(node=2)
+    ev = Message.new("EVENT", time_ms=123456, kind=int(EventKind.FAULT), code=int(FaultCode.IMU_NO_ACK), detail=1)
+    frames = message_frames(ev, ids, from_host=False)
+    assert [f[0] for f in frames] == [ids.id(8)]
+    rx = CanToWire(ids, from_host=False)
+    wire = b"".join(rx.feed(i, d) for i, d in frames)
+    assert FrameDecoder().feed(wire) == [ev]

@@ -7,9 +7,12 @@ import io
 
 from proleg.link import RobotClient
 from proleg.cli.link_commands import console_main
-from proleg.console import ConsoleApp, LimbView, run_plain
+from proleg.console import ConsoleApp, LimbView, RobotNames, describe_event, run_plain
 from fake_board import FakeBoard
 from proleg.link.sim_link import SimLink
+
+
+NAMES = RobotNames(("left", "right"), ("sma-left", "sma-right"))
 
 
 def _client(board: FakeBoard) -> RobotClient:
@@ -29,10 +32,11 @@ async def _wait_for(pilot, predicate, timeout: float = 5.0) -> None:
 def test_console_keys_drive_the_robot_and_widgets_show_its_state():
     board = FakeBoard()
     client = _client(board)
-    app = ConsoleApp(client, limbs=[LimbView("left", (20.0,)), LimbView("right", (20.0,))], levels=(2, 2))
+    app = ConsoleApp(client, limbs=[LimbView("left", (20.0,)), LimbView("right", (20.0,))], levels=(2, 2),
+                     names=NAMES)
 
     async def scenario() -> None:
-        async with app.run_test(size=(110, 32)) as pilot:
+        async with app.run_test(size=(80, 24)) as pilot:
             await pilot.press("d")  # direction -x
             await pilot.press("s")
             await _wait_for(pilot, lambda: any(m.name == "START" for m in board.received))
@@ -44,10 +48,10 @@ def test_console_keys_drive_the_robot_and_widgets_show_its_state():
             limbs = str(app.query_one("#limbs").content)
             assert "left" in limbs and "ψ* 20.00°" in limbs
             psi0 = app.model.telemetry["psi"][0] / 100
-            assert f"{psi0:7.2f}°" in limbs
+            assert f"ψ{psi0:7.2f}°" in limbs
             state = str(app.query_one("#state").content)
             assert "gait 0 -x" in state and "running" in state and "displacement" in state
-            assert "SMA 0" in str(app.query_one("#duty").content)
+            assert "sma-left" in str(app.query_one("#duty").content)
             assert "telemetry" in str(app.query_one("#counters").content)
 
             await pilot.press("e")
@@ -105,3 +109,214 @@ def test_console_main_plain_with_record_on_a_serial_url(tmp_path):
     with pytest.raises(LinkError, match=r"no reply to GET_INFO within 3 s \(\d+ tries\) on loop://"):
         console_main(port="loop://", plain=True, record=str(tmp_path / "r.csv"), timeout=0.2, out=io.StringIO())
     assert not (tmp_path / "r.csv").exists()
+
+
+# --------------------------------------------------------------------------- 80×24, gaits, names
+def _unclipped(app: ConsoleApp) -> list[str]:
+    """Every widget inside the 80×24 screen; every panel's text fits its content area."""
+    from rich.cells import cell_len
+    from textual.widgets import Footer, Static
+
+    problems = []
+    screen = app.screen.region
+    for w in [*app.query(Static), app.query_one(Footer)]:
+        r = w.region
+        if r.width <= 0 or r.height <= 0 or r.right > screen.right or r.bottom > screen.bottom:
+            problems.append(f"{w.id or type(w).__name__} at {r} outside {screen}")
+            continue
+        if isinstance(w, Static) and not isinstance(w, Footer) and w.id:
+            lines = str(w.content).split("\n")
+            box = w.content_region
+            if len(lines) > box.height:
+                problems.append(f"#{w.id}: {len(lines)} lines in {box.height} rows")
+            problems += [f"#{w.id}: {line!r} wider than {box.width}" for line in lines if cell_len(line) > box.width]
+    return problems
+
+
+def test_every_panel_fits_an_80x24_terminal_with_four_limbs_and_a_fault():
+    board = FakeBoard(limbs=4, gaits={0: ((0, 1),), 1: ((0, 2),)})
+    client = _client(board)
+    names = RobotNames(("front-left", "front-right", "rear-left", "rear-right"),
+                       ("sma-front-left", "sma-front-right", "sma-rear-left", "sma-rear-right"))
+    app = ConsoleApp(client, limbs=[LimbView(n, (20.0,)) for n in names.limbs], levels=(2,) * 4, names=names)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.press("s")
+            await _wait_for(pilot, lambda: app.model.telemetry is not None and any(app.model.telemetry["duty"]))
+            for k in range(12):  # more events than the panel has rows
+                app.model.on_message(_event(2, 1 + k % 5, k % 4))
+            await pilot.pause(0.3)
+            app.refresh_view()
+            assert _unclipped(app) == []
+            assert "rear-right" in str(app.query_one("#limbs").content)
+            assert "sma-rear-right" in str(app.query_one("#duty").content)
+            assert "FAULT" in str(app.query_one("#events").content)
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+
+
+def _event(kind: int, code: int, detail: int):
+    from proleg.link.client import Received
+    from proleg.protocol.codec import Message
+
+    return Received(Message("EVENT", {"time_ms": 1234, "kind": kind, "code": code, "detail": detail}), 0.0)
+
+
+def test_a_few_events_are_all_shown():
+    board = FakeBoard()
+    client = _client(board)
+    app = ConsoleApp(client, names=NAMES)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            for code in (0, 1, 2):
+                app.model.on_message(_event(1, code, code))  # STATE_REACHED, step = code
+            await pilot.pause(0.2)
+            app.refresh_view()
+            text = str(app.query_one("#events").content)
+            assert all(f"step {k} reached" in text for k in (0, 1, 2)), text
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+
+
+def test_g_cycles_through_the_gaits_info_reports_and_no_others():
+    board = FakeBoard(gaits={0: ((0, 2, 3, 1), (0, 1, 3, 2), (0, 2, 3, 1)), 1: ((0, 1, 3, 2),)})
+    client = _client(board)
+    assert client.info.gaits == 3
+    app = ConsoleApp(client)
+    seen = []
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            for _ in range(7):
+                await pilot.press("g")
+                seen.append(app.gait)
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+    assert seen == [1, 2, 0, 1, 2, 0, 1]
+
+
+def test_a_firmware_without_gaits_offers_none_and_starts_nothing():
+    board = FakeBoard(gaits={0: (), 1: ()})
+    client = _client(board)
+    app = ConsoleApp(client)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.press("g")
+            await pilot.press("s")
+            await pilot.pause(0.3)
+            assert "no gait" in app.status
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+    assert not any(m.name == "START" for m in board.received)
+
+
+def test_events_name_kinds_faults_reasons_limbs_and_actuators_never_raw_codes():
+    from proleg.protocol.definition import EventKind, FaultCode, StopReason
+
+    def text(kind, code, detail):
+        return describe_event(_event(int(kind), int(code), detail).message.fields, NAMES, lambda s: format(s, "02b"))
+
+    assert text(EventKind.FAULT, FaultCode.IMU_NO_ACK, 1).endswith("FAULT IMU_NO_ACK on right")
+    assert text(EventKind.FAULT, FaultCode.STATE_TIMEOUT, 0).endswith("FAULT STATE_TIMEOUT on left")
+    assert text(EventKind.FAULT, FaultCode.SMA_ON_LIMIT, 1).endswith("FAULT SMA_ON_LIMIT on sma-right")
+    assert text(EventKind.FAULT, FaultCode.LINK_WATCHDOG, 0).endswith("FAULT LINK_WATCHDOG")
+    assert text(EventKind.GAIT_STOPPED, StopReason.WATCHDOG, 3).endswith("gait stopped: WATCHDOG after 3 cycles")
+    assert text(EventKind.STATE_REACHED, 2, 3).endswith("step 2 reached state 11")
+    assert text(EventKind.GAIT_STARTED, 255, 1).endswith("gait user started -x")
+    assert text(EventKind.FAULT_CLEARED, 3, 0).endswith("cleared faults estop")
+    assert "limb 7" in describe_event(_event(2, 2, 7).message.fields)  # no robot file: still a word
+    assert "unknown 99" in describe_event(_event(2, 99, 0).message.fields)
+
+
+# --------------------------------------------------------------------------- leaving stops the robot
+class _StopDeaf(FakeBoard):
+    """Answers everything but STOP (a STOP lost on the wire)."""
+
+    def _command(self, msg):
+        if msg.name != "STOP":
+            super()._command(msg)
+
+
+def _fake_links(board: FakeBoard):
+    from proleg.link.factory import LINKS, register_link
+
+    register_link("fake", lambda url, rest, query, options: SimLink(board, speed=4.0, description="fake board"))
+    return LINKS
+
+
+def _console_on(board: FakeBoard, **kwargs) -> tuple[str, list[str]]:
+    links = _fake_links(board)
+    err = io.StringIO()
+    try:
+        console_main(port="fake://r1", plain=True, duration_s=0.3, out=io.StringIO(), err=err, **kwargs)
+    finally:
+        links.pop("fake")
+    return err.getvalue(), [m.name for m in board.received]
+
+
+def test_leaving_the_console_sends_stop_and_waits_for_its_ack():
+    board = FakeBoard()
+    board.running, board.sequence = True, (0, 2, 3, 1)  # left running by an earlier session
+    err, sent = _console_on(board)
+    assert sent[-1] == "STOP" and "ESTOP" not in sent
+    assert "robot stopped" in err
+    assert not board.running and board.duty == [0, 0]
+
+
+def test_an_unacknowledged_stop_on_leaving_becomes_an_estop():
+    board = _StopDeaf()
+    board.running, board.sequence = True, (0, 2, 3, 1)
+    err, sent = _console_on(board, timeout=0.05)
+    assert sent.count("STOP") == 3 and sent[-1] == "ESTOP"
+    assert "STOP not acknowledged" in err and "E-stopped" in err
+    assert board.estop and board.duty == [0, 0]
+
+
+def test_leave_running_leaves_the_robot_alone():
+    board = FakeBoard()
+    board.running, board.sequence = True, (0, 2, 3, 1)
+    err, sent = _console_on(board, leave_running=True)
+    assert "STOP" not in sent and "ESTOP" not in sent and err == ""
+    assert board.running
+
+
+def test_a_closed_terminal_window_runs_the_leaving_code():
+    import os
+    import signal
+
+    from proleg.console.leave import hangup_as_exception
+
+    called = []
+    with hangup_as_exception(lambda: called.append("exit")):
+        os.kill(os.getpid(), signal.SIGHUP)
+    assert called == ["exit"]
+    finally_ran = []
+    with hangup_as_exception():
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            raise AssertionError("SIGTERM did not interrupt")  # pragma: no cover
+        finally:
+            finally_ran.append(True)
+    assert finally_ran == [True]
+    assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL or callable(signal.getsignal(signal.SIGHUP))
+
+
+def test_an_idle_console_keeps_the_link_watchdog_fed():
+    board = FakeBoard()
+    client = _client(board)
+    run_plain(client, out=io.StringIO(), duration_s=2.0, quiet=True)  # ~8 s of the board's time at speed 4
+    pings = [m for m in board.received if m.name == "PING"]
+    times = client.heartbeats
+    client.close()
+    assert times >= 10 and len(pings) == times

@@ -39,9 +39,12 @@ def test_sim_scheme_runs_a_bundled_robot_by_name():
         assert client.connect().robot_name == "paper-r1"
 
 
-def test_can_url_needs_an_interface_and_a_channel():
-    with pytest.raises(LinkError, match="expected can://INTERFACE/CHANNEL"):
-        open_link("can://socketcan")
+def test_can_url_needs_a_channel_from_itself_or_python_can_configuration(tmp_path, monkeypatch):
+    for var in ("CAN_INTERFACE", "CAN_CHANNEL", "CAN_BITRATE", "CAN_CONFIG"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path))  # no ~/.canrc
+    with pytest.raises(LinkError, match="no CAN channel: give one"):
+        open_link("can://")
     with pytest.raises(LinkError, match="node must be an integer"):
         open_link("can://virtual/proleg-factory?node=x")
 

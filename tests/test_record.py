@@ -210,7 +210,7 @@ def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys):
 
     out = tmp_path / "robot.dbc"
     assert dbc_main(out=str(out), nodes=[1]) == 0
-    assert len(cantools.database.load_file(str(out)).messages) == 8
+    assert len(cantools.database.load_file(str(out)).messages) == 9  # 8 protocol frames + EVENT
     assert "wrote" in capsys.readouterr().out
     with pytest.raises(LinkError, match="does not exist"):
         dbc_main(out=str(tmp_path / "no" / "robot.dbc"))

@@ -66,7 +66,7 @@ class Safety:
     min_cooldown_ms: int = 800
     max_duty: float = 0.8
     state_timeout_ms: int = 8000
-    link_watchdog_ms: int = 0
+    link_watchdog_ms: int = 2000  # on by default: a host that goes away stops the robot (docs/safety.md)
 
 
 @dataclass(frozen=True)

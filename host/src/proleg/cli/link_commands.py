@@ -18,15 +18,23 @@ from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
 
 
-def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
+def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str | None = None,
                  node: int = 0, sim: str | None = None, robot_file: str | None = None, baudrate: int = DEFAULT_BAUDRATE,
                  record: str | None = None, plain: bool = False, duration_s: float | None = None,
                  timeout: float = 0.5, out: TextIO | None = None, fmt: str = "text",
-                 udp: str | None = None, udp_format: str = "plotjuggler") -> int:
+                 udp: str | None = None, udp_format: str = "plotjuggler", bitrate: int | None = None,
+                 force: bool = False, leave_running: bool = False, err: TextIO | None = None) -> int:
     """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame
     (``fmt="jsonl"``: one JSON object per frame, the recordings' field names); ``udp`` streams
-    every frame to PlotJuggler or Teleplot."""
-    from ..console import ConsoleApp, LimbView, run_plain
+    every frame to PlotJuggler or Teleplot.
+
+    With ``robot_file`` the board's INFO must match it (robot name, gait table hash, build id;
+    ``force`` overrides). Leaving — q, Ctrl-C, the window closed, the link lost, ``duration_s``
+    over — sends STOP (ESTOP if unacknowledged) unless ``leave_running``; what happened is
+    written to ``err``."""
+    from ..console import ConsoleApp, LimbView, RobotNames, run_plain
+    from ..console.identity import check_identity
+    from ..console.leave import hangup_as_exception, stop_robot
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..record.udp import parse_endpoint
 
@@ -35,35 +43,59 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     if udp is not None:
         parse_endpoint(udp)
     out = out or sys.stdout
-    link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim),
-                     baudrate=baudrate, speed=1.0)
-    robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
-    if robot is None and robot_file is not None:
+    err = err or sys.stderr
+    robot = None
+    if robot_file is not None:
         from ..robot import load_robot
 
         robot = load_robot(robot_file)
-    with RobotClient(link, timeout=timeout) as client:
-        info = client.connect()
-        listeners = []
-        meta = RecordingMeta.for_robot(info=info, robot=robot, link=link)
-        if record is not None:
-            listeners.append(Logger(record, meta))
-        if udp is not None:
-            listeners.append(UdpStreamer(udp, udp_format, meta))
-        levels = robot.levels if robot is not None else (2,) * info.limbs
-        if plain or fmt == "jsonl" or not out.isatty():
-            from ..states import label
+    link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim,
+                              bitrate=bitrate), baudrate=baudrate, speed=1.0)
+    if robot is None:
+        robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
+    app: ConsoleApp | None = None
 
-            if fmt == "jsonl":
-                listeners.append(JsonlPrinter(meta, out, telemetry_only=False))
-            run_plain(client, listeners=listeners, out=out, duration_s=duration_s, quiet=fmt == "jsonl",
-                      labels=lambda s: label(s, levels) if s < _prod(levels) else str(s))
-            errors = [w.error for w in listeners if getattr(w, "error", None)]
-            if errors:
-                raise errors[0]
-            return 0
-        limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
-        ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners).run()
+    def hang_up() -> None:
+        if app is not None and app.is_running:
+            app.exit()
+        else:
+            raise KeyboardInterrupt
+
+    with hangup_as_exception(hang_up), RobotClient(link, timeout=timeout) as client:
+        info = client.connect()
+        if robot is not None:
+            for problem in check_identity(info, robot, force=force):
+                print(f"proleg: warning: --force: {problem}", file=err)
+        if robot is not None and robot.safety.link_watchdog_ms:
+            client.heartbeat_s = min(client.heartbeat_s or 1e9, robot.safety.link_watchdog_ms / 2000)
+        listeners: list = []
+        try:
+            meta = RecordingMeta.for_robot(info=info, robot=robot, link=link)
+            if record is not None:
+                listeners.append(Logger(record, meta))
+            if udp is not None:
+                listeners.append(UdpStreamer(udp, udp_format, meta))
+            levels = robot.levels if robot is not None else (2,) * info.limbs
+            if plain or fmt == "jsonl" or not out.isatty():
+                from ..states import label
+
+                if fmt == "jsonl":
+                    listeners.append(JsonlPrinter(meta, out, telemetry_only=False))
+                try:
+                    run_plain(client, listeners=listeners, out=out, duration_s=duration_s, quiet=fmt == "jsonl",
+                              labels=lambda s: label(s, levels) if s < _prod(levels) else str(s))
+                except KeyboardInterrupt:
+                    pass  # Ctrl-C ends the plain mode like the duration does
+            else:
+                limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
+                app = ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners,
+                                 names=RobotNames.for_robot(robot))
+                app.run()
+                if app.model.link_error is not None:
+                    raise app.model.link_error
+        finally:
+            if not leave_running:
+                print(f"proleg: {stop_robot(client)} on {link.description}", file=err)
         errors = [w.error for w in listeners if getattr(w, "error", None)]
         if errors:
             raise errors[0]
@@ -86,11 +118,16 @@ def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
     return 0
 
 
-def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100) -> int:
-    """``proleg dbc -o FILE``."""
+def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_file: str | None = None) -> int:
+    """``proleg dbc -o FILE [--robot ROBOT]`` (the robot names the ψ and duty signals)."""
     from ..protocol.dbc import write_dbc
 
-    path = write_dbc(out, nodes, base)
+    robot = None
+    if robot_file is not None:
+        from ..robot import load_robot
+
+        robot = load_robot(robot_file)
+    path = write_dbc(out, nodes, base, robot)
     print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})")
     return 0
 
@@ -116,9 +153,12 @@ def add_arguments(subparsers: Any) -> None:
     c = subparsers.add_parser("console", help="live console (or --plain lines) on a robot over serial, CAN or the simulator")
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port, loop://")
-    src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
+    src.add_argument("--can", metavar="CHANNEL", nargs="?", const="",
+                     help="CAN channel (python-can), e.g. can0; alone: CAN_CHANNEL or ~/.canrc's channel")
     src.add_argument("--sim", metavar="ROBOT", type=_robot, help="run the robot's firmware on the simulated board")
-    c.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
+    c.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
+                                       "else socketcan)")
+    c.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
     c.add_argument("--node", type=_int_auto, default=0, help="CAN node id of the robot, 0..15 (default 0)")
     c.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
     c.add_argument("--robot", metavar="ROBOT", type=_robot, help="robot file for limb names and ψ* (with --port/--can)")
@@ -128,10 +168,14 @@ def add_arguments(subparsers: Any) -> None:
                    help="with --plain: text lines, or one JSON object per message for scripts")
     add_udp_options(c)
     c.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (plain mode)")
+    c.add_argument("--force", action="store_true",
+                   help="connect even when the board's INFO does not match --robot (name, gait hash, build id)")
+    c.add_argument("--leave-running", action="store_true",
+                   help="do not STOP the robot when the console ends (default: STOP, ESTOP if unanswered)")
     c.set_defaults(run=lambda a: console_main(
         port=a.port, can_channel=a.can, interface=a.interface, node=a.node, sim=a.sim, robot_file=a.robot,
         baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration, fmt=a.format,
-        udp=a.udp, udp_format=a.udp_format))
+        udp=a.udp, udp_format=a.udp_format, bitrate=a.bitrate, force=a.force, leave_running=a.leave_running))
 
     p = subparsers.add_parser("plot", help="plot a recording: ψ vs ψ*, states, SMA duty, displacement")
     p.add_argument("record_file", metavar="FILE", help="recording (.csv, .jsonl or .mcap) from --record")
@@ -144,4 +188,5 @@ def add_arguments(subparsers: Any) -> None:
     d.add_argument("--node", type=_int_auto, action="append", metavar="N",
                    help="robot node id(s) on the bus (repeatable; default 0)")
     d.add_argument("--base", type=_int_auto, default=0x100, help="base CAN id (default 0x100)")
-    d.set_defaults(run=lambda a: dbc_main(out=a.out, nodes=a.node or [0], base=a.base))
+    d.add_argument("--robot", metavar="ROBOT", type=_robot, help="name ψ and duty signals after its limbs and actuators")
+    d.set_defaults(run=lambda a: dbc_main(out=a.out, nodes=a.node or [0], base=a.base, robot_file=a.robot))

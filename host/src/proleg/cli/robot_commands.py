@@ -31,7 +31,8 @@ def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> No
         src.add_argument("--sim", metavar="ROBOT", help="the robot's firmware on the simulated board")
     else:
         src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board")
-    p.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
+    p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, else socketcan)")
+    p.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
     p.add_argument("--node", type=lambda t: int(t, 0), default=0, help="CAN node id of the robot (default 0)")
     p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
     p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
@@ -52,7 +53,8 @@ def open_client(args: argparse.Namespace, robot_path: str | None = None, *, spee
         from .main import robot_arg
 
         sim = robot_arg(sim)
-    url = link_url(port=args.port, can_channel=args.can, interface=args.interface, node=args.node, sim=sim)
+    url = link_url(port=args.port, can_channel=args.can, interface=args.interface, node=args.node, sim=sim,
+                   bitrate=args.bitrate)
     link = open_link(url, baudrate=args.baudrate, speed=speed)
     client = RobotClient(link, timeout=args.timeout)
     try:

@@ -6,7 +6,11 @@ message stream; the UI redraws from the model ten times a second, so a 1 kHz tel
 stream costs the terminal nothing. Commands (start, stop, E-stop, clear) run on worker
 threads, so the UI never blocks on a reply.
 
-Keys: s start · x stop · e E-stop · c clear faults and E-stop · g next gait · d direction · q quit.
+Keys: s start · x stop · e E-stop · c clear faults and E-stop · g next gait · d direction ·
+q (or Ctrl-C) quit. ``g`` offers only the gaits INFO says the firmware has (and ``user`` once
+a user gait is loaded). Events name their kind, fault, stop reason, limb and actuator
+(``proleg.console.names``). The layout fits an 80×24 terminal. Leaving stops the robot: that
+is ``console_main``'s job (``proleg.console.leave``), whatever ended the UI.
 """
 
 from __future__ import annotations
@@ -27,11 +31,12 @@ from textual.css.query import NoMatches
 from textual.widgets import Footer, Static
 
 from ..errors import LinkError
-from ..protocol.definition import GAIT_USER, Direction, EventKind, FaultCode, Flag, StopReason
+from ..protocol.definition import GAIT_USER, Direction, EventKind, Flag
 from ..states import label as state_label
 from ..states import limb_levels
 from ..link.client import Received, RobotClient, RobotInfo
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
+from .names import RobotNames, describe_event, direction_text, gait_text
 
 BAR_WIDTH = 24
 
@@ -49,11 +54,14 @@ class ConsoleModel:
     """Latest telemetry and counters, written by the Notifier thread, read by the UI."""
 
     info: RobotInfo | None = None
+    names: RobotNames = field(default_factory=RobotNames)
+    state_label: Callable[[int], str] | None = None
     telemetry: dict | None = None
     truth: dict[str, float] = field(default_factory=dict)
     events: deque[str] = field(default_factory=lambda: deque(maxlen=8))
     faults: deque[str] = field(default_factory=lambda: deque(maxlen=4))
     error: str = ""
+    link_error: Exception | None = None  # the Notifier stopped: the link is gone
     _times: deque[float] = field(default_factory=lambda: deque(maxlen=2000))
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
@@ -65,7 +73,7 @@ class ConsoleModel:
                 self.truth = rx.truth
                 self._times.append(time.monotonic())
             elif m.name == "EVENT":
-                text = describe_event(m.fields)
+                text = describe_event(m.fields, self.names, self.state_label)
                 self.events.append(text)
                 if m.fields["kind"] == EventKind.FAULT:
                     self.faults.append(text)
@@ -74,6 +82,7 @@ class ConsoleModel:
 
     def on_error(self, exc: Exception) -> None:
         self.error = str(exc)
+        self.link_error = exc
 
     def frame_rate(self, window_s: float = 2.0) -> float:
         with self._lock:
@@ -89,33 +98,6 @@ class ConsoleModel:
             return self.telemetry, dict(self.truth), list(self.events), list(self.faults)
 
 
-def describe_event(f: dict) -> str:
-    t = f"{f['time_ms'] / 1000:8.3f}s"
-    kind, code, detail = f["kind"], f["code"], f["detail"]
-    try:
-        k = EventKind(kind)
-    except ValueError:
-        return f"{t} event {kind} code={code} detail={detail}"
-    if k == EventKind.FAULT:
-        try:
-            what = FaultCode(code).name
-        except ValueError:
-            what = f"fault {code}"
-        return f"{t} FAULT {what} (limb/channel {detail})"
-    if k == EventKind.GAIT_STOPPED:
-        try:
-            why = StopReason(code).name
-        except ValueError:
-            why = str(code)
-        return f"{t} gait stopped: {why}"
-    if k == EventKind.GAIT_STARTED:
-        d = "+x" if detail == Direction.PLUS_X else "-x"
-        return f"{t} gait {'user' if code == GAIT_USER else code} started {d}"
-    if k == EventKind.STATE_REACHED:
-        return f"{t} step {code} reached state {detail}"
-    return f"{t} {k.name.lower()} code={code} detail={detail}"
-
-
 def _bar(fraction: float, width: int = BAR_WIDTH) -> str:
     fraction = min(1.0, max(0.0, fraction))
     full = round(fraction * width)
@@ -127,19 +109,20 @@ def _flags_text(flags: int) -> str:
 
 
 class ConsoleApp(App[None]):
-    """The live console on one robot."""
+    """The live console on one robot. ``names`` name limbs and actuators in events; the app
+    exits by itself when the link is lost (``model.link_error``)."""
 
     CSS = """
     Screen { layout: vertical; }
-    #top { height: 3; border: round $accent; padding: 0 1; }
+    #top { height: 2; padding: 0 1; background: $boost; }
     #middle { height: auto; }
     .panel { border: round $primary; padding: 0 1; height: auto; }
-    #limbs { width: 2fr; }
-    #state { width: 1fr; }
+    #limbs { width: 3fr; }
+    #state { width: 2fr; }
     #duty { height: auto; }
-    #bottom { height: auto; }
-    #events { width: 2fr; }
-    #counters { width: 1fr; }
+    #bottom { height: 1fr; min-height: 4; }
+    #events { width: 3fr; height: 1fr; }
+    #counters { width: 2fr; height: 1fr; }
     #status { height: 1; padding: 0 1; color: $warning; }
     """
     BINDINGS = [
@@ -148,17 +131,20 @@ class ConsoleApp(App[None]):
         Binding("e", "estop", "E-STOP"),
         Binding("c", "clear", "Clear"),
         Binding("g", "next_gait", "Gait"),
-        Binding("d", "direction", "Direction"),
+        Binding("d", "direction", "Dir"),
         Binding("q", "quit", "Quit"),
+        Binding("ctrl+c", "quit", "Quit", show=False, priority=True),
     ]
 
     def __init__(self, client: RobotClient, *, limbs: Sequence[LimbView] = (), levels: Sequence[int] = (),
-                 listeners: Sequence[Listener] = (), refresh_s: float = 0.1):
+                 listeners: Sequence[Listener] = (), refresh_s: float = 0.1, names: RobotNames | None = None):
         super().__init__()
         self.client = client
-        self.model = ConsoleModel(info=client.info)
         self.limb_views = list(limbs)
         self.levels = tuple(levels)
+        if names is None:
+            names = RobotNames(tuple(v.name for v in self.limb_views))
+        self.model = ConsoleModel(info=client.info, names=names, state_label=self._state_text)
         self.extra_listeners = list(listeners)
         self.refresh_s = refresh_s
         self.gait = 0
@@ -212,20 +198,26 @@ class ConsoleApp(App[None]):
         except Exception:
             return str(state)
 
+    def _state_text(self, state: int) -> str:
+        return self._label(state, self._n_limbs(self.model.telemetry))
+
     def refresh_view(self) -> None:
         try:
             self._refresh_view()
         except NoMatches:  # a timer tick while the app is shutting down
             pass
+        if self.model.link_error is not None and self.is_running:
+            self.exit()  # the link is gone: console_main reports it and tries to stop the robot
 
     def _refresh_view(self) -> None:
         tel, truth, events, faults = self.model.snapshot()
         info = self.client.info
+        names = self.model.names
         top = Text()
         if info is not None:
             top.append(f"{info.robot_name}", style="bold")
-            top.append(f"  on {info.board} · build {info.build_id:08x} · gaits {info.gait_hash:08x} · "
-                       f"{info.limbs} limbs · {info.tick_hz} Hz tick · via {self.client.link.description}")
+            top.append(f" on {info.board} · {info.limbs} limbs · {info.gaits} gaits · {info.tick_hz} Hz tick\n"
+                       f"build {info.build_id:08x} · gait table {info.gait_hash:08x} · {self.client.link.description}")
         else:
             top.append(self.client.link.description)
         self.query_one("#top", Static).update(top)
@@ -239,53 +231,56 @@ class ConsoleApp(App[None]):
             measured = limb_levels(tel["measured"], levels) if tel["measured"] < _prod(levels) else (None,) * n
             target = limb_levels(tel["target"], levels) if tel["target"] < _prod(levels) else (None,) * n
             for i, p in enumerate(tel["psi"]):
-                view = self.limb_views[i] if i < len(self.limb_views) else LimbView(f"limb {i}", ())
+                view = self.limb_views[i] if i < len(self.limb_views) else LimbView(names.limb(i), ())
                 psi = p / 100
                 stars = view.psi_star_deg
-                star = " / ".join(f"{s:.2f}°" for s in stars) if stars else "?"
+                star = "/".join(f"{s:.2f}°" for s in stars) if stars else "?"
                 rel = "≥" if stars and psi >= stars[0] else ("<" if stars else " ")
-                limbs.append(f"{view.name:<8} ψ {psi:7.2f}° {rel} ψ* {star:<8}  ")
+                limbs.append(f"{view.name[:12]:<12} ψ{psi:7.2f}° {rel} ψ* {star:<6}  ")
                 s_now, s_want = measured[i], target[i]
-                style = "green" if s_now == s_want else "yellow"
-                limbs.append(f"S={s_now} (target {s_want})", style=style)
-                limbs.append("\n")
+                limbs.append(f"S {s_now}→{s_want}", style="green" if s_now == s_want else "yellow")
+                if i < len(tel["psi"]) - 1:
+                    limbs.append("\n")
         self.query_one("#limbs", Static).update(limbs)
 
         state = Text()
         if tel is not None:
-            d = "+x" if tel["direction"] == Direction.PLUS_X else "-x"
-            gait = "user" if tel["gait"] == GAIT_USER else str(tel["gait"])
             ok = tel["measured"] == tel["target"]
-            state.append("measured ")
+            state.append("now ")
             state.append(self._label(tel["measured"], n), style="bold green" if ok else "bold yellow")
-            state.append(f"   target {self._label(tel['target'], n)}\n")
-            state.append(f"gait {gait} {d} · step {tel['step']}\n")
-            state.append(f"flags {_flags_text(tel['flags'])}\n",
+            state.append(f"  target {self._label(tel['target'], n)}\n")
+            state.append(f"gait {gait_text(tel['gait'])} {direction_text(tel['direction'])} · step {tel['step']}\n")
+            state.append(f"{_flags_text(tel['flags'])}\n",
                          style="bold red" if tel["flags"] & (Flag.ESTOP | Flag.FAULT) else "")
             if "displacement_mm" in truth:
                 state.append(f"displacement {truth['displacement_mm']:.1f} mm (sim)\n")
-        sel_d = "+x" if self.direction == Direction.PLUS_X else "-x"
-        state.append(f"selected: gait {'user' if self.gait == GAIT_USER else self.gait} {sel_d}", style="dim")
+        state.append(f"selected: gait {gait_text(self.gait)} {direction_text(self.direction)}", style="dim")
         self.query_one("#state", Static).update(state)
 
         duty = Text()
         if tel is not None:
             for j, dv in enumerate(tel["duty"]):
-                duty.append(f"SMA {j} ")
+                duty.append(f"{names.actuator(j)[:16]:<16} ")
                 duty.append(_bar(dv / 10000), style="red" if dv else "grey50")
-                duty.append(f" {dv / 100:5.1f} %\n")
+                duty.append(f" {dv / 100:5.1f} %")
+                if j < len(tel["duty"]) - 1:
+                    duty.append("\n")
         self.query_one("#duty", Static).update(duty)
 
+        panel = self.query_one("#events", Static)
+        room = max(1, panel.content_region.height)
+        latched = faults[-max(1, room // 2):] if faults else []  # latched faults stay in view
+        n_recent = room - len(latched)
+        recent = events[max(0, len(events) - n_recent):] if n_recent > 0 else []
+        lines = [(line, "bold red") for line in latched] + [(line, "") for line in recent]
         ev = Text()
-        for line in faults:
-            ev.append(line + "\n", style="bold red")
-        for line in events[-6:]:
-            ev.append(line + "\n")
-        self.query_one("#events", Static).update(ev)
+        for k, (line, style) in enumerate(lines):
+            ev.append(("\n" if k else "") + line, style=style)
+        panel.update(ev)
 
         st = self.client.stats
         counters = Text(
-            f"telemetry {self.model.frame_rate():6.1f} fps\n"
+            f"telemetry {self.model.frame_rate():5.1f} fps\n"
             f"frames ok {st.frames_ok}\n"
             f"lost {st.lost} · corrupt {st.corrupt}\n"
             f"reconnects {st.reconnects} · timeouts {st.timeouts}"
@@ -308,7 +303,10 @@ class ConsoleApp(App[None]):
 
     def action_start(self) -> None:
         gait, direction = self.gait, self.direction
-        self._command(f"start gait {gait} {'+x' if direction == Direction.PLUS_X else '-x'}",
+        if gait not in self.gait_choices():
+            self.status = "no gait to start: the firmware has none (load one with proleg load-gait)"
+            return
+        self._command(f"start gait {gait_text(gait)} {direction_text(direction)}",
                       lambda: self.client.start(gait, direction))
 
     def action_stop(self) -> None:
@@ -320,14 +318,21 @@ class ConsoleApp(App[None]):
     def action_clear(self) -> None:
         self._command("clear", self.client.clear)
 
-    def action_next_gait(self) -> None:
+    def gait_choices(self) -> list[int]:
+        """The gaits ``g`` offers: 0 .. INFO's count − 1, and ``user`` once one is loaded."""
         info = self.client.info
-        n = info.gaits if info else 1
+        n = info.gaits if info else 0
         tel = self.model.telemetry
         user = bool(tel and tel["flags"] & Flag.USER_GAIT)
-        choices = list(range(max(1, n))) + ([GAIT_USER] if user else [])
-        idx = choices.index(self.gait) if self.gait in choices else -1
-        self.gait = choices[(idx + 1) % len(choices)]
+        return list(range(n)) + ([GAIT_USER] if user else [])
+
+    def action_next_gait(self) -> None:
+        choices = self.gait_choices()
+        if not choices:
+            self.status = "the firmware has no gaits (and no user gait is loaded)"
+        else:
+            idx = choices.index(self.gait) if self.gait in choices else -1
+            self.gait = choices[(idx + 1) % len(choices)]
         self.refresh_view()
 
     def action_direction(self) -> None:

@@ -5,6 +5,11 @@ supports (socketcan, pcan, kvaser, slcan, virtual...). The frame layout is proto
 ``CanLink`` is the host side: it turns the client's wire bytes into CAN frames and the
 robot's CAN frames back into wire bytes, so ``RobotClient`` works unchanged. The robot side for
 a simulated board is ``proleg.sim.can_bridge.CanBoardBridge``.
+
+What is not given (interface, channel, bit rate) comes from python-can's own configuration,
+read by ``can.util.load_config`` in its order: the ``CAN_INTERFACE`` / ``CAN_CHANNEL`` /
+``CAN_BITRATE`` (and ``CAN_CONFIG``) environment, then ``~/.canrc`` / ``can.ini``
+(``[default]`` section). Only when none of them names an interface is it ``socketcan``.
 """
 
 from __future__ import annotations
@@ -15,16 +20,49 @@ from typing import Any
 import can
 
 from ..errors import LinkError
-from ..protocol.can import DEFAULT_BASE, CanIds, CanToWire, WireToCan
+from ..protocol.can import DEFAULT_BASE, N_SLOTS, CanIds, CanToWire, WireToCan
 from .base import Link
 
 
-def open_bus(channel: str, interface: str, bitrate: int | None = None, **kwargs: Any) -> can.BusABC:
-    """``can.Bus`` with python-can's failures turned into one ``LinkError`` line."""
-    if bitrate is not None:
-        kwargs["bitrate"] = bitrate
+#: the interface when neither the caller nor python-can's configuration names one
+FALLBACK_INTERFACE = "socketcan"
+
+
+def bus_config(channel: str | None = None, interface: str | None = None, bitrate: int | None = None,
+               **kwargs: Any) -> dict[str, Any]:
+    """The bus settings: what is given, completed from python-can's configuration
+    (environment, ``~/.canrc``) by ``can.util.load_config``; ``LinkError`` for a bad file or value."""
+    given = {k: v for k, v in {"channel": channel, "interface": interface, "bitrate": bitrate, **kwargs}.items()
+             if v is not None and v != ""}
     try:
-        return can.Bus(interface=interface, channel=channel, **kwargs)
+        if "interface" not in given and not _configured_interface():
+            given["interface"] = FALLBACK_INTERFACE
+        config = can.util.load_config(config=given)
+    except can.exceptions.CanInterfaceNotImplementedError as e:
+        known = ", ".join(sorted(can.VALID_INTERFACES))
+        where = repr(given["interface"]) if "interface" in given else "named by CAN_INTERFACE or ~/.canrc"
+        raise LinkError(f"unknown or unavailable CAN interface {where} ({_first_line(e)}); "
+                        f"python-can knows: {known}") from None
+    except (ValueError, TypeError, KeyError) as e:  # a malformed ~/.canrc or CAN_* value
+        raise LinkError(f"python-can configuration (CAN_* environment or ~/.canrc): {_first_line(e)}") from None
+    if config.get("channel") in (None, ""):
+        raise LinkError("no CAN channel: give one (--can can0) or set CAN_CHANNEL / channel in ~/.canrc")
+    return config
+
+
+def _configured_interface() -> bool:
+    """Whether python-can's configuration (environment, config files) names an interface."""
+    sources = (can.rc, can.util.load_environment_config(), can.util.load_file_config())
+    return any(src.get("interface") or src.get("bustype") for src in sources)
+
+
+def open_bus(channel: str | None = None, interface: str | None = None, bitrate: int | None = None,
+             **kwargs: Any) -> can.BusABC:
+    """``can.Bus`` on ``bus_config(...)``, python-can's failures turned into one ``LinkError`` line."""
+    config = bus_config(channel, interface, bitrate, **kwargs)
+    interface, channel = config["interface"], config["channel"]
+    try:
+        return can.Bus(**config)
     except can.exceptions.CanInterfaceNotImplementedError as e:
         known = ", ".join(sorted(can.VALID_INTERFACES))
         raise LinkError(f"unknown or unavailable CAN interface {interface!r} ({_first_line(e)}); "
@@ -39,18 +77,26 @@ def _first_line(e: BaseException) -> str:
 
 
 def _filters(ids: CanIds) -> list[dict[str, int]]:
-    return [{"can_id": ids.id(slot), "can_mask": 0x7FF, "extended": False} for slot in range(8)]
+    return [{"can_id": ids.id(slot), "can_mask": 0x7FF, "extended": False} for slot in range(N_SLOTS)]
 
 
 class CanLink(Link):
     """Host side of one robot (``node``) on a CAN bus."""
 
-    def __init__(self, channel: str = "can0", interface: str = "socketcan", *, node: int = 0,
+    def __init__(self, channel: str | None = None, interface: str | None = None, *, node: int = 0,
                  base: int = DEFAULT_BASE, bitrate: int | None = None, bus: can.BusABC | None = None,
                  **bus_kwargs: Any):
+        """``channel``/``interface``/``bitrate`` None: from python-can's configuration."""
         self.ids = CanIds(node=node, base=base)
-        self.description = f"CAN {channel} ({interface}) node {node}"
-        self.bus = bus if bus is not None else open_bus(channel, interface, bitrate, **bus_kwargs)
+        if bus is None:
+            self.config = bus_config(channel, interface, bitrate, **bus_kwargs)
+            bus = open_bus(**self.config)
+        else:
+            self.config = {"channel": channel, "interface": interface, "bitrate": bitrate}
+        rate = self.config.get("bitrate")
+        self.description = (f"CAN {self.config['channel']} ({self.config['interface']}"
+                            f"{f', {int(rate)} bit/s' if rate else ''}) node {node}")
+        self.bus = bus
         try:
             self.bus.set_filters(_filters(self.ids))
         except (can.CanError, NotImplementedError):

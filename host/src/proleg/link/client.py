@@ -17,6 +17,13 @@ TELEMETRY sequence numbers are checked: a jump counts the skipped frames in ``st
 a backwards jump (a reset) or a new INFO restarts the count. A vanished serial device
 (``LinkDisconnected``) is reopened until ``reconnect_timeout`` seconds pass; afterwards
 the client sends GET_INFO again (the reply refreshes ``info``) and counts ``stats.reconnects``.
+
+Heartbeat: the firmware's link watchdog (on by default, ``[safety] link_watchdog_ms``) stops
+a gait when no valid frame arrives for that long. While anyone reads the client (``recv``,
+a Notifier, a waiting command), a connected client sends a PING whenever it has written
+nothing for ``heartbeat_s`` seconds of the link's clock (default 0.5 s, a quarter of the
+default 2 s watchdog), so an idle session never trips it; the ACKs of those PINGs are not
+queued. ``heartbeat_s=None`` turns it off (a test playing a host that went away).
 """
 
 from __future__ import annotations
@@ -53,9 +60,12 @@ CONNECT_WITHIN_S = 3.0
 CONNECT_TRY_S = 0.05
 #: decoded messages kept for ``recv`` when nobody reads them (oldest dropped first)
 QUEUE_LIMIT = 65536
+#: default heartbeat period (link clock, s): at most half of any watchdog ≥ 1 s
+HEARTBEAT_S = 0.5
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
 #: messages that can answer a command (the declared replies plus NACK)
 _REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
+_PING = BY_NAME["PING"]
 
 
 class CommandRefused(LinkError):
@@ -177,6 +187,7 @@ class RobotClient:
         max_limbs: int = LIMB_CEILING,
         max_channels: int = CHANNEL_CEILING,
         poll_s: float = 0.02,
+        heartbeat_s: float | None = HEARTBEAT_S,
     ):
         self.link = link
         self.timeout = timeout
@@ -195,6 +206,10 @@ class RobotClient:
         self._last_seq: int | None = None
         self._reconnect_lock = threading.Lock()
         self._closed = False
+        self.heartbeat_s = heartbeat_s
+        self.heartbeats = 0  # PINGs sent by the heartbeat
+        self._last_tx: float | None = None  # link clock of the last write (None: not connected yet)
+        self._heartbeat_tokens: set[int] = set()
 
     # ------------------------------------------------------------------ lifecycle
     def connect(self, timeout: float | None = None, *, within_s: float = CONNECT_WITHIN_S) -> RobotInfo:
@@ -328,6 +343,7 @@ class RobotClient:
     def _next_token(self) -> int:
         with self._cond:
             self._token = self._token % 255 + 1
+            self._heartbeat_tokens.discard(self._token)
             return self._token
 
     def _write(self, data: bytes) -> None:
@@ -337,6 +353,18 @@ class RobotClient:
             except LinkDisconnected:
                 self._reconnect()
                 self.link.write(data)
+            self._last_tx = self.link.clock()
+
+    def _heartbeat(self) -> None:
+        """PING when nothing was written for ``heartbeat_s`` (keeps the link watchdog fed)."""
+        period, last = self.heartbeat_s, self._last_tx
+        if period is None or last is None or self._closed or self.link.clock() - last < period - _EPS:
+            return
+        token = self._next_token()
+        with self._cond:
+            self._heartbeat_tokens.add(token)
+        self.heartbeats += 1
+        self._write(encode(Message("PING", {"token": token})))
 
     def _wait_reply(self, token: int, timeout: float, name: str) -> Message:
         deadline = self.link.clock() + timeout
@@ -398,6 +426,7 @@ class RobotClient:
 
     def _pump(self, timeout: float) -> int:
         """Read the link once (caller holds ``_rx_lock``); decode; queue. Returns messages read."""
+        self._heartbeat()
         try:
             data = self.link.read(timeout)
         except LinkDisconnected:
@@ -444,6 +473,9 @@ class RobotClient:
                 if answers:
                     self._replies[token] = m
                     notify = True
+                elif waiting is None and token in self._heartbeat_tokens and reply_answers(name, m.fields, _PING):
+                    self._heartbeat_tokens.discard(token)
+                    continue  # the heartbeat's own ACK: nobody asked for it
             append(Received(m, now, truth))
         if notify:
             with self._cond:

@@ -5,6 +5,8 @@ opener imported only when used (so opening a serial port never imports python-ca
     open_link("serial:///dev/ttyUSB0", baudrate=115200)
     open_link("socket://host:7000")                   # any pyserial URL (socket, rfc2217, loop...)
     open_link("can://socketcan/can0?node=1&bitrate=500000")
+    open_link("can://can0")                           # interface, bit rate from python-can's config
+    open_link("can://")                               # channel too (CAN_CHANNEL, ~/.canrc)
     open_link("sim://paper-r1")                       # a bundled robot, or sim://path/to/ROBOT.toml
 
 A ``sim://`` link's ``board`` is the ``SimulatedRobot`` (``link.board.robot`` its description).
@@ -38,11 +40,13 @@ def _open_serial(url: str, rest: str, query: dict[str, str], options: dict[str, 
 def _open_can(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
     from .can_link import CanLink
 
-    interface, _, channel = rest.partition("/")
-    if not interface or not channel:
-        raise LinkError(f"{url}: expected can://INTERFACE/CHANNEL, e.g. can://socketcan/can0")
+    # can://INTERFACE/CHANNEL, can://CHANNEL or can:// — the rest from python-can's configuration
+    interface, slash, channel = rest.partition("/")
+    if not slash:
+        interface, channel = "", interface
     bitrate = query.get("bitrate", options.get("bitrate"))
-    return CanLink(channel, interface, node=_int(url, "node", query.get("node", options.get("node", 0))),
+    return CanLink(channel or None, interface or query.get("interface") or options.get("interface"),
+                   node=_int(url, "node", query.get("node", options.get("node", 0))),
                    bitrate=None if bitrate is None else _int(url, "bitrate", bitrate))
 
 
@@ -96,16 +100,18 @@ def open_link(url: str, **options: Any) -> Link:
     return opener(url, rest, dict(parse_qsl(parts.query)), options)
 
 
-def link_url(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
-             node: int = 0, sim: str | Path | None = None) -> str:
-    """The URL for the CLI's ``--port`` / ``--can`` / ``--sim`` options (exactly one)."""
+def link_url(*, port: str | None = None, can_channel: str | None = None, interface: str | None = None,
+             node: int = 0, sim: str | Path | None = None, bitrate: int | None = None) -> str:
+    """The URL for the CLI's ``--port`` / ``--can`` / ``--sim`` options (exactly one).
+    ``can_channel=""`` and ``interface=None`` leave them to python-can's configuration."""
     chosen = [x for x in (port, can_channel, sim) if x is not None]
     if len(chosen) != 1:
         raise LinkError("give exactly one of --port URL, --can CHANNEL or --sim ROBOT.toml")
     if port is not None:
         return port
     if can_channel is not None:
-        return f"can://{interface}/{can_channel}?node={node}"
+        where = f"{interface}/{can_channel}" if interface else can_channel
+        return f"can://{where}?node={node}" + (f"&bitrate={bitrate}" if bitrate is not None else "")
     return f"sim://{sim}"
 
 

@@ -14,6 +14,7 @@ Identifier layout — several robots (nodes) can share one bus::
     5     TELEMETRY_PSI_1   robot→host   psi[4..7] i16
     6     TELEMETRY_DUTY_0  robot→host   duty[0..3] u16 (permyriad)
     7     TELEMETRY_DUTY_1  robot→host   duty[4..7] u16
+    8     EVENT             robot→host   time_ms u32 | kind u8 | code u8 | detail u16
 
 All little-endian (Intel). TELEMETRY uses fixed signal layouts (``proleg dbc`` writes a DBC
 describing them, so any CAN tool can plot a robot); a frame is sent only when it carries a
@@ -23,7 +24,9 @@ from A, B and then the PSI/DUTY frames B announces; a new A drops an unfinished 
 Segmented frames carry the protocol's unframed bytes ``msg_id | payload | crc16`` (the CRC
 stays, end to end), always 8 bytes: byte 0 = segment index (bits 0–3) | (data bytes − 1) << 4
 (bits 4–6) | 0x80 on the last segment; bytes 1..7 = the next up to 7 bytes, zero-padded.
-A segment out of order drops the message being assembled.
+A segment out of order drops the message being assembled. EVENT (exactly 8 payload bytes)
+travels in its own fixed frame (slot 8) so a CAN tool decodes events and faults with the DBC;
+the CRC is left out there as for TELEMETRY (CAN's own CRC covers the frame).
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ DEFAULT_BASE = 0x100
 MAX_NODE = 15
 SLOT_CMD = 0
 SLOT_REPLY = 1
+SLOT_EVENT = 8
+N_SLOTS = 9
 SEGMENT_DATA = 7
 LAST_SEGMENT = 0x80
 
@@ -93,6 +98,12 @@ TELEMETRY_FRAMES: tuple[FixedFrame, ...] = (
     _array_frame(6, "TELEMETRY_DUTY_0", "duty", 0, False, 0.01, "%"),
     _array_frame(7, "TELEMETRY_DUTY_1", "duty", 4, False, 0.01, "%"),
 )
+EVENT_FRAME = FixedFrame(SLOT_EVENT, "EVENT", (
+    Signal("time_ms", "time_ms", None, 0, 32, False, 1.0, "ms"),
+    Signal("kind", "kind", None, 32, 8, False),
+    Signal("code", "code", None, 40, 8, False),
+    Signal("detail", "detail", None, 48, 16, False),
+))
 _BY_SLOT = {f.slot: f for f in TELEMETRY_FRAMES}
 _TELEMETRY_SCALARS = ("seq", "time_ms", "measured", "target", "gait", "direction", "step", "flags")
 _TELEMETRY_ID = BY_NAME["TELEMETRY"].id
@@ -121,8 +132,8 @@ class CanIds:
     def __post_init__(self) -> None:
         if not 0 <= self.node <= MAX_NODE:
             raise LinkError(f"CAN node id {self.node} outside 0..{MAX_NODE}")
-        if not 0 <= self.base or self.base + (7 << 4) + MAX_NODE > 0x7FF:
-            raise LinkError(f"CAN base id {self.base:#x} leaves no room for 11-bit ids (base ≤ 0x780)")
+        if not 0 <= self.base or self.base + ((N_SLOTS - 1) << 4) + MAX_NODE > 0x7FF:
+            raise LinkError(f"CAN base id {self.base:#x} leaves no room for 11-bit ids (base ≤ 0x770)")
 
     def id(self, slot: int) -> int:
         return self.base + (slot << 4) + self.node
@@ -130,7 +141,7 @@ class CanIds:
     def slot(self, arbitration_id: int) -> int | None:
         """The slot of a frame addressed to/from this node, else None."""
         off = arbitration_id - self.base
-        if off < 0 or off > 0x7F or (off & 0x0F) != self.node:
+        if off < 0 or off >= N_SLOTS << 4 or (off & 0x0F) != self.node:
             return None
         return off >> 4
 
@@ -190,6 +201,11 @@ def message_frames(msg: Message, ids: CanIds, *, from_host: bool) -> list[tuple[
     """The CAN frames that carry one message."""
     if not from_host and msg.name == "TELEMETRY":
         return telemetry_frames(msg, ids)
+    if not from_host and msg.name == "EVENT":
+        buf = bytearray(8)
+        for sig in EVENT_FRAME.signals:
+            _put(buf, sig, int(msg[sig.field]))
+        return [(ids.id(SLOT_EVENT), bytes(buf))]
     wire = encode(msg)
     raw = cobs.decode(wire[:-1])
     return segment_frames(raw, ids.id(SLOT_CMD if from_host else SLOT_REPLY))
@@ -237,6 +253,8 @@ class CanToWire:
             return b""
         if slot == self.seg_slot:
             return self._segment(bytes(data))
+        if self.accept_telemetry and slot == SLOT_EVENT:
+            return encode(Message("EVENT", {s.field: _get(bytes(data), s) for s in EVENT_FRAME.signals}))
         if self.accept_telemetry and slot in _BY_SLOT:
             return self._telemetry(slot, bytes(data))
         return b""
@@ -302,6 +320,7 @@ def iter_slots() -> Iterator[tuple[int, str]]:
     yield SLOT_REPLY, "REPLY"
     for f in TELEMETRY_FRAMES:
         yield f.slot, f.name
+    yield SLOT_EVENT, EVENT_FRAME.name
 
 
 def frames_text(frames: Iterable[tuple[int, bytes]]) -> str:

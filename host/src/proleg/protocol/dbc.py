@@ -4,6 +4,13 @@
 One message set per node: names get a ``_N<node>`` suffix when several nodes are described.
 The segmented CMD/REPLY frames are described by their header (segment index, last flag) and
 seven raw data bytes; their content is the protocol frame (see ``proleg.protocol.can``).
+
+Signals are physical: ψ in degrees, duty in %, times in ms, each with its unit; TELEMETRY's
+flags are one 1-bit signal per flag (``flag_running``...); direction, EVENT kinds, fault codes
+and stop reasons carry value tables. EVENT is multiplexed by ``kind``: ``fault_code`` /
+``fault_detail`` for FAULT, ``stop_reason`` / ``cycles`` for GAIT_STOPPED and so on. Given a
+robot (``robot=``), ψ and duty signals are named for its limbs and actuators
+(``psi_front_left``, ``duty_sma_left``).
 """
 
 from __future__ import annotations
@@ -17,8 +24,11 @@ from cantools.database.can import Database, Message, Node, Signal
 from cantools.database.conversion import BaseConversion
 
 from ..errors import LinkError
-from .definition import PROTOCOL_VERSION, BY_NAME, Direction
-from .can import SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
+import re
+from typing import Any
+
+from .definition import PROTOCOL_VERSION, BY_NAME, Direction, EventKind, FaultCode, Flag, StopReason
+from .can import EVENT_FRAME, SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
 
 HOST = "HOST"
 
@@ -41,7 +51,7 @@ def _robot_node(node: int) -> str:
 
 def _signal(name: str, start: int, length: int, signed: bool, scale: float = 1.0, unit: str = "",
             comment: str | None = None, choices: dict[int, str] | None = None,
-            receivers: list[str] | None = None) -> Signal:
+            receivers: list[str] | None = None, **extra: Any) -> Signal:
     if signed:
         lo, hi = -(1 << (length - 1)), (1 << (length - 1)) - 1
     else:
@@ -49,7 +59,7 @@ def _signal(name: str, start: int, length: int, signed: bool, scale: float = 1.0
     conv = BaseConversion.factory(scale=scale, offset=0, choices=choices, is_float=False)
     return Signal(name, start, length, "little_endian", signed, conversion=conv,
                   minimum=lo * scale, maximum=hi * scale, unit=unit or None, comment=_ascii(comment),
-                  receivers=receivers or [])
+                  receivers=receivers or [], **extra)
 
 
 def _segment_signals(receiver: str) -> list[Signal]:
@@ -65,39 +75,97 @@ def _segment_signals(receiver: str) -> list[Signal]:
 _FIELD_DOCS = {f.name: f.doc for f in BY_NAME["TELEMETRY"].fields}
 
 
-def build_database(nodes: Sequence[int] = (0,), base: int = 0x100) -> Database:
-    """The cantools database of proleg's frames for robots ``nodes`` on one bus."""
+def _choices(enum: type) -> dict[int, str]:
+    return {int(v): v.name for v in enum}
+
+
+def _ident(name: str) -> str:
+    """A DBC identifier from a limb/actuator name (``sma-left`` → ``sma_left``)."""
+    return re.sub(r"[^A-Za-z0-9_]", "_", name)
+
+
+def _telemetry_signals(frame: Any, limbs: Sequence[str], actuators: Sequence[str]) -> list[Signal]:
+    sigs = []
+    for s in frame.signals:
+        if s.field == "flags":
+            sigs += [_signal(f"flag_{f.name.lower()}", s.start_bit + f.bit_length() - 1, 1, False,
+                             comment=f"TELEMETRY.flags bit {f.bit_length() - 1}", receivers=[HOST])
+                     for f in Flag if f.name]
+            continue
+        name = s.name
+        if s.field == "psi" and s.index is not None and s.index < len(limbs):
+            name = f"psi_{_ident(limbs[s.index])}"
+        elif s.field == "duty" and s.index is not None and s.index < len(actuators):
+            name = f"duty_{_ident(actuators[s.index])}"
+        choices = _choices(Direction) if s.field == "direction" else None
+        sigs.append(_signal(name, s.start_bit, s.length, s.signed, s.scale, s.unit,
+                            comment=_FIELD_DOCS.get(s.field) or None, choices=choices, receivers=[HOST]))
+    return sigs
+
+
+def _event_signals() -> list[Signal]:
+    """EVENT, multiplexed by ``kind``: the meaning of code/detail per kind gets its own signals."""
+    t, k, c, d = EVENT_FRAME.signals
+    r = [HOST]
+    sigs = [
+        _signal("time_ms", t.start_bit, t.length, False, 1.0, "ms", comment="firmware time of the event", receivers=r),
+        _signal("kind", k.start_bit, k.length, False, choices=_choices(EventKind), receivers=r, is_multiplexer=True),
+    ]
+
+    def muxed(name: str, sig: Any, kinds: Sequence[EventKind], choices: dict[int, str] | None = None,
+              comment: str | None = None) -> Signal:
+        return _signal(name, sig.start_bit, sig.length, False, choices=choices, comment=comment, receivers=r,
+                       multiplexer_ids=[int(x) for x in kinds], multiplexer_signal="kind")
+
+    sigs += [
+        muxed("fault_code", c, [EventKind.FAULT], _choices(FaultCode)),
+        muxed("fault_detail", d, [EventKind.FAULT], comment="limb index (actuator index for SMA_ON_LIMIT)"),
+        muxed("stop_reason", c, [EventKind.GAIT_STOPPED], _choices(StopReason)),
+        muxed("cycles", d, [EventKind.GAIT_STOPPED], comment="completed gait cycles (saturating)"),
+        muxed("gait", c, [EventKind.GAIT_STARTED], comment="gait index, 255 = the loaded user gait"),
+        muxed("direction", d, [EventKind.GAIT_STARTED], _choices(Direction)),
+        muxed("step", c, [EventKind.STATE_REACHED], comment="gait step index"),
+        muxed("state", d, [EventKind.STATE_REACHED], comment="state index (limb levels, first limb most significant)"),
+        muxed("code", c, [EventKind.BOOT, EventKind.ESTOP, EventKind.FAULT_CLEARED, EventKind.GAIT_LOADED]),
+        muxed("detail", d, [EventKind.BOOT, EventKind.ESTOP, EventKind.FAULT_CLEARED, EventKind.GAIT_LOADED]),
+    ]
+    return sigs
+
+
+def build_database(nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = None) -> Database:
+    """The cantools database of proleg's frames for robots ``nodes`` on one bus; ``robot``
+    names the ψ and duty signals after its limbs and actuators."""
     if not nodes:
         raise LinkError("dbc: at least one node id is needed")
+    limbs = [limb.name for limb in robot.limbs] if robot is not None else []
+    actuators = [a.name for a in robot.actuators] if robot is not None else []
     messages: list[Message] = []
     suffix = len(nodes) > 1
     for node in nodes:
         ids = CanIds(node=node, base=base)
-        robot = _robot_node(node)
+        robot_node = _robot_node(node)
         tag = f"_N{node}" if suffix else ""
-        messages.append(Message(ids.id(SLOT_CMD), f"CMD{tag}", 8, _segment_signals(robot), senders=[HOST],
+        messages.append(Message(ids.id(SLOT_CMD), f"CMD{tag}", 8, _segment_signals(robot_node), senders=[HOST],
                                 comment="host->robot command, segmented protocol frame"))
-        messages.append(Message(ids.id(SLOT_REPLY), f"REPLY{tag}", 8, _segment_signals(HOST), senders=[robot],
-                                comment="robot->host reply/event, segmented protocol frame"))
+        messages.append(Message(ids.id(SLOT_REPLY), f"REPLY{tag}", 8, _segment_signals(HOST), senders=[robot_node],
+                                comment="robot->host reply, segmented protocol frame"))
         for frame in TELEMETRY_FRAMES:
-            sigs = []
-            for s in frame.signals:
-                choices = {int(d): d.name for d in Direction} if s.field == "direction" else None
-                sigs.append(_signal(s.name, s.start_bit, s.length, s.signed, s.scale, s.unit,
-                                    comment=_FIELD_DOCS.get(s.field) or None, choices=choices, receivers=[HOST]))
-            messages.append(Message(ids.id(frame.slot), f"{frame.name}{tag}", 8, sigs, senders=[robot],
+            messages.append(Message(ids.id(frame.slot), f"{frame.name}{tag}", 8,
+                                    _telemetry_signals(frame, limbs, actuators), senders=[robot_node],
                                     comment=f"TELEMETRY part (protocol {PROTOCOL_VERSION})"))
+        messages.append(Message(ids.id(EVENT_FRAME.slot), f"EVENT{tag}", 8, _event_signals(), senders=[robot_node],
+                                comment="EVENT: boot, state reached, fault, gait started/stopped, E-stop..."))
     db_nodes = [Node(HOST, comment="proleg host")] + [Node(_robot_node(n), comment=f"robot node {n}") for n in nodes]
     return Database(messages=messages, nodes=db_nodes, version=f"proleg-protocol-{PROTOCOL_VERSION}")
 
 
-def dbc_text(nodes: Sequence[int] = (0,), base: int = 0x100) -> str:
-    return build_database(nodes, base).as_dbc_string()
+def dbc_text(nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = None) -> str:
+    return build_database(nodes, base, robot).as_dbc_string()
 
 
-def write_dbc(path: str | Path, nodes: Sequence[int] = (0,), base: int = 0x100) -> Path:
+def write_dbc(path: str | Path, nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = None) -> Path:
     """Write the DBC atomically (temp file + rename); returns the path."""
-    text = dbc_text(nodes, base)
+    text = dbc_text(nodes, base, robot)
     out = Path(path)
     directory = out.parent if str(out.parent) else Path(".")
     if not directory.is_dir():

@@ -1,0 +1,91 @@
+"""Names for what the robot reports as numbers: event kinds, fault codes, stop reasons, and
+the limb and actuator an event's ``detail`` points at (from the robot file when one is
+given, ``limb 0`` / ``actuator 0`` otherwise). The console, its plain mode and its status
+line show these, never a raw code."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..protocol.definition import GAIT_USER, ClearWhat, Direction, EventKind, FaultCode, StopReason
+
+#: faults whose ``detail`` is an actuator index; the other faults name a limb (or nothing)
+_ACTUATOR_FAULTS = frozenset({FaultCode.SMA_ON_LIMIT})
+_NO_DETAIL_FAULTS = frozenset({FaultCode.LINK_WATCHDOG, FaultCode.NONE, FaultCode.INTERNAL})
+
+
+@dataclass(frozen=True)
+class RobotNames:
+    """Limb and actuator names in the firmware's index order."""
+
+    limbs: tuple[str, ...] = ()
+    actuators: tuple[str, ...] = ()
+
+    @classmethod
+    def for_robot(cls, robot: object | None) -> RobotNames:
+        if robot is None:
+            return cls()
+        return cls(tuple(limb.name for limb in robot.limbs),  # type: ignore[attr-defined]
+                   tuple(a.name for a in robot.actuators))  # type: ignore[attr-defined]
+
+    def limb(self, i: int) -> str:
+        return self.limbs[i] if 0 <= i < len(self.limbs) else f"limb {i}"
+
+    def actuator(self, i: int) -> str:
+        return self.actuators[i] if 0 <= i < len(self.actuators) else f"actuator {i}"
+
+
+def enum_name(enum: type, value: int) -> str:
+    """``FaultCode.IMU_NO_ACK`` → ``IMU_NO_ACK``; an unknown value → ``unknown 17``."""
+    try:
+        return enum(value).name
+    except ValueError:
+        return f"unknown {value}"
+
+
+def direction_text(direction: int) -> str:
+    return "+x" if direction == Direction.PLUS_X else "-x"
+
+
+def gait_text(gait: int) -> str:
+    return "user" if gait == GAIT_USER else str(gait)
+
+
+def fault_text(code: int, detail: int, names: RobotNames = RobotNames()) -> str:
+    """``IMU_NO_ACK on left``, ``SMA_ON_LIMIT on sma-right``, ``LINK_WATCHDOG``."""
+    what = enum_name(FaultCode, code)
+    try:
+        fc = FaultCode(code)
+    except ValueError:
+        return f"{what} (detail {detail})"
+    if fc in _NO_DETAIL_FAULTS:
+        return what
+    return f"{what} on {names.actuator(detail) if fc in _ACTUATOR_FAULTS else names.limb(detail)}"
+
+
+def describe_event(f: dict, names: RobotNames = RobotNames(), state_label: object = None) -> str:
+    """One line for an EVENT's fields: time, then what happened in words."""
+    t = f"{f['time_ms'] / 1000:8.3f}s"
+    kind, code, detail = f["kind"], f["code"], f["detail"]
+    try:
+        k = EventKind(kind)
+    except ValueError:
+        return f"{t} unknown event {kind} (code {code}, detail {detail})"
+    if k == EventKind.FAULT:
+        return f"{t} FAULT {fault_text(code, detail, names)}"
+    if k == EventKind.GAIT_STOPPED:
+        return f"{t} gait stopped: {enum_name(StopReason, code)} after {detail} cycles"
+    if k == EventKind.GAIT_STARTED:
+        return f"{t} gait {gait_text(code)} started {direction_text(detail)}"
+    if k == EventKind.STATE_REACHED:
+        state = state_label(detail) if callable(state_label) else str(detail)
+        return f"{t} step {code} reached state {state}"
+    if k == EventKind.FAULT_CLEARED:
+        cleared = " ".join(c.name.lower() for c in ClearWhat if c & code and c.name) or "nothing"
+        return f"{t} cleared {cleared}"
+    if k == EventKind.ESTOP:
+        return f"{t} E-STOP ({'hardware input' if code else 'command'})"
+    if k == EventKind.GAIT_LOADED:
+        return f"{t} user gait loaded ({detail} steps)"
+    return f"{t} boot (reset cause {code})"
+

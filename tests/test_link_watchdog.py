@@ -1,0 +1,118 @@
+"""The link watchdog, on by default, on the simulated board running the real firmware: a host
+that goes silent for longer than ``link_watchdog_ms`` (default 2000) stops the coils; a
+connected client's heartbeat keeps an idle session from tripping it. And the console's check
+of a robot file against the board's INFO."""
+
+from __future__ import annotations
+
+import io
+import shutil
+
+import pytest
+
+from proleg.cli.link_commands import console_main
+from proleg.console.identity import IdentityMismatch, expected_identity
+from proleg.link import RobotClient
+from proleg.link.sim_link import SimLink
+from proleg.paths import resolve_robot
+from proleg.protocol.definition import EventKind, FaultCode, Flag, StopReason
+from proleg.robot import Safety, load_robot
+from proleg.sim.closed_loop import SimulatedRobot
+
+
+def _running_robot(heartbeat_s: float | None):
+    robot = load_robot(resolve_robot("paper-r1"))
+    sim = SimulatedRobot(robot, seed=3)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), heartbeat_s=heartbeat_s)
+    client.connect()
+    client.start(0, "+x")
+    return robot, sim, client
+
+
+def _duties(sim: SimulatedRobot) -> list[float]:
+    return [sim.board.pwm(ch) for ch in sim.channels]
+
+
+def _events(client: RobotClient) -> list:
+    out = []
+    while (m := client.recv(0.0)) is not None:
+        if m.name == "EVENT":
+            out.append(m)
+    return out
+
+
+def test_the_watchdog_is_on_by_default_at_two_seconds():
+    assert Safety().link_watchdog_ms == 2000
+    assert load_robot(resolve_robot("paper-r1")).safety.link_watchdog_ms == 2000
+
+
+def test_the_firmware_stops_driving_when_the_host_goes_silent_for_over_two_seconds():
+    robot, sim, client = _running_robot(heartbeat_s=None)
+    _events(client)
+    driven = 0.0
+    for _ in range(round(1.9 / sim.plant_dt_s)):  # the host says nothing for 1.9 s: still walking
+        sim.step()
+        driven = max(driven, *_duties(sim))
+    assert driven > 0.2
+    for _ in range(round(0.2 / sim.plant_dt_s)):  # past 2 s: stopped
+        sim.step()
+    assert _duties(sim) == [0.0] * len(sim.channels)
+    for _ in range(round(1.0 / sim.plant_dt_s)):  # and it stays cold
+        sim.step()
+        assert max(_duties(sim)) == 0.0
+    events = _events(client)
+    assert any(e.kind == EventKind.FAULT and e.code == FaultCode.LINK_WATCHDOG for e in events)
+    assert any(e.kind == EventKind.GAIT_STOPPED and e.code == StopReason.WATCHDOG for e in events)
+    tel = next(client.telemetry(timeout=1.0))
+    assert tel.flags & Flag.LINK_WATCHDOG and not tel.flags & Flag.RUNNING
+    client.close()
+
+
+def test_an_idle_session_with_the_heartbeat_never_trips_the_watchdog():
+    robot, sim, client = _running_robot(heartbeat_s=0.5)
+    seen = []
+    deadline = client.link.clock() + 6.0
+    while client.link.clock() < deadline:  # only reading, as an idle console does
+        m = client.recv(0.1)
+        if m is not None and m.name in ("EVENT", "TELEMETRY"):
+            seen.append(m)
+    assert client.heartbeats >= 10
+    assert not any(m.name == "EVENT" and m.kind == EventKind.FAULT for m in seen)
+    assert all(m.flags & Flag.RUNNING for m in seen if m.name == "TELEMETRY")
+    assert not any(m.name == "ACK" for m in seen)  # the heartbeat's ACKs are not in the stream
+    client.close()
+
+
+# --------------------------------------------------------------------------- identity
+def test_the_identity_computed_from_the_robot_file_is_what_the_firmware_reports():
+    robot, sim, client = _running_robot(heartbeat_s=0.5)
+    info = client.info
+    want = expected_identity(robot, info.board)
+    client.close()
+    assert (want.robot_name, want.gait_hash, want.build_id) == (info.robot_name, info.gait_hash, info.build_id)
+
+
+def test_the_console_refuses_a_robot_file_the_board_was_not_built_from(tmp_path):
+    edited = tmp_path / "paper-r1.toml"
+    shutil.copy(resolve_robot("paper-r1"), edited)
+    edited.write_text(edited.read_text() + "\n# edited after flashing\n")
+    sim_robot = load_robot(resolve_robot("paper-r1"))
+    lib_info = expected_identity(sim_robot, "host-sim")
+    mine = expected_identity(load_robot(edited), "host-sim")
+    assert mine.gait_hash == lib_info.gait_hash and mine.build_id != lib_info.build_id
+    with pytest.raises(IdentityMismatch) as e:
+        console_main(sim="paper-r1", robot_file=str(edited), plain=True, duration_s=0.1, out=io.StringIO(),
+                     err=io.StringIO())
+    text = str(e.value)
+    assert f"build id {lib_info.build_id:08x} on the board, {mine.build_id:08x} from {edited}" in text
+    assert "--force" in text and "\n" not in text
+    err = io.StringIO()
+    assert console_main(sim="paper-r1", robot_file=str(edited), plain=True, duration_s=0.1, out=io.StringIO(),
+                        err=err, force=True) == 0
+    assert "warning: --force: build id" in err.getvalue() and "robot stopped" in err.getvalue()
+
+
+def test_the_console_refuses_another_robots_file():
+    with pytest.raises(IdentityMismatch, match="robot 'paper-r1' on the board, 'paper-r3'"):
+        console_main(sim="paper-r1", robot_file=str(resolve_robot("paper-r3")), plain=True, duration_s=0.1,
+                     out=io.StringIO(), err=io.StringIO())
