@@ -26,7 +26,8 @@ Both bounds hold for every walk, hence for every simple path: nothing that could
 dropped. The threshold starts at the best value any walk could reach (the unconstrained
 bound) and is lowered, at growing steps, until some walk qualifies; everything at or above
 the final threshold has been listed, so the best one and every tie within ``tol`` of it are
-exact. The work is exponential in the worst case (the simple-cycle question is NP-hard);
+exact. While listing, the threshold rises to (best found − tol), so the enumeration keeps
+only candidates for the best and its ties (plain branch and bound). The work is exponential in the worst case (the simple-cycle question is NP-hard);
 the listing gives up with a GaitError past ``MAX_LISTED_WALKS`` walks.
 """
 
@@ -45,6 +46,7 @@ from .maxplus import ClosingBound, Graph
 MAX_LISTED_WALKS = 200_000
 #: Prefix rows expanded at once.
 _EXPAND = 1 << 17
+_STEPPED = True
 
 
 @dataclass(frozen=True)
@@ -95,6 +97,7 @@ class _Search:
         self.g, self.K, self.kind, self.simple = g, K, kind, simple
         self.constraints, self.accept, self.tol = list(constraints), accept, tol
         self.bound = ClosingBound(g, K)
+        self.stepped = _STEPPED
         self.c_hi = [ClosingBound(c, K) for c in cons]
         self.c_lo = [ClosingBound(Graph.from_edges(c.n, c.src, c.dst, -c.weight), K) for c in cons]
         self.c_graph = cons
@@ -127,7 +130,7 @@ class _Search:
         lows = [float(self.value(L, np.array([L * float(w.min())]))[0]) for L in lengths]
         low = min(lows) - 1.0
         step = 2.0 ** -10 * (abs(top) + float(np.abs(w).max()) + 1e-300)
-        t = top - step
+        t = top - step if self.stepped else low
         while True:
             t = max(t, low)
             found = self._list(t)
@@ -144,13 +147,18 @@ class _Search:
             t = top - step
 
     def _list(self, t: float) -> list[tuple[float, tuple[int, ...], int]]:
+        """Every qualifying walk worth at least ``t``, and at least (best found so far − tol):
+        the threshold rises as walks are found (branch and bound), so only candidates for
+        the best and its ties are kept."""
         out: list[tuple[float, tuple[int, ...], int]] = []
-        for L in range(2, self.K + 1):
-            if float(self.value(L, np.array([self.bound.closed_walk_bound(L)]))[0]) < t - self.slack:
+        self.level = t
+        tops = {L: float(self.value(L, np.array([self.bound.closed_walk_bound(L)]))[0]) for L in range(2, self.K + 1)}
+        for L in sorted(tops, key=lambda L: -tops[L]):  # most promising lengths first: the level rises sooner
+            if tops[L] < self.level - self.slack:
                 continue
-            for walks, J, sums in self._walks(L, self.j_threshold(L, t)):
+            for walks, J, sums in self._walks(L):
                 values = self.value(L, J)
-                keep = values >= t - self.slack
+                keep = values >= self.level - self.slack
                 if self.accept is not None and keep.any():
                     keep &= self.accept(sums)
                 k = 1 if (self.kind == "rate" or self.simple) else self.K // L
@@ -158,15 +166,18 @@ class _Search:
                     cyc = tuple(row)
                     if self.simple or (is_primitive(cyc) and canonical_rotation(cyc) == cyc):
                         out.append((v, cyc, k if v > 0 else 1))
+                        self.level = max(self.level, v - self.tol)
+                if len(out) > MAX_LISTED_WALKS:
+                    out = [f for f in out if f[0] >= self.level - self.slack]
                 if len(out) > MAX_LISTED_WALKS:
                     raise GaitError(
-                        f"the planar constraints leave more than {MAX_LISTED_WALKS:,} walks to compare; "
-                        "give a smaller max_transitions"
+                        f"more than {MAX_LISTED_WALKS:,} planar gaits tie; give a smaller max_transitions"
                     )
-        return out
+        return [f for f in out if f[0] >= self.level - self.slack]
 
-    def _walks(self, L: int, j_min: float):
-        """Closed walks of exactly L transitions with J ≥ j_min within every constraint:
+    def _walks(self, L: int):
+        """Closed walks of exactly L transitions worth at least ``self.level`` (as it stands
+        when each block is expanded) within every constraint:
         yields (walks [k, L] as open cycles, J [k], constraint sums [k, nc])."""
         g, nc = self.g, len(self.constraints)
         starts = np.flatnonzero(np.diff(g.ptr) > 0)
@@ -195,7 +206,7 @@ class _Search:
             else:
                 keep = nxt >= start
             reach = new_reward + (self.bound(left, nxt, start) if left else 0.0)
-            keep &= reach >= j_min - self.slack
+            keep &= reach >= self.j_threshold(L, self.level) - self.slack
             for i, con in enumerate(self.constraints):
                 if not keep.any():
                     break
@@ -208,8 +219,9 @@ class _Search:
                 keep &= (up >= con.lo - self.c_slack[i]) & (down <= con.hi + self.c_slack[i])
             if not keep.any():
                 continue
-            grown = np.hstack([paths[rows[keep]], nxt[keep, None]])
             if left == 0:
-                yield grown[:, :-1], new_reward[keep], new_sums[keep]
-            else:
-                stack.append((grown, new_reward[keep], new_sums[keep]))
+                yield paths[rows[keep]], new_reward[keep], new_sums[keep]
+                continue
+            best_first = np.flatnonzero(keep)[np.argsort(-reach[keep], kind="stable")]
+            grown = np.hstack([paths[rows[best_first]], nxt[best_first, None]])
+            stack.append((grown, new_reward[best_first], new_sums[best_first]))
