@@ -46,7 +46,6 @@ from .maxplus import ClosingBound, Graph
 MAX_LISTED_WALKS = 200_000
 #: Prefix rows expanded at once.
 _EXPAND = 1 << 17
-_STEPPED = True
 
 
 @dataclass(frozen=True)
@@ -97,7 +96,6 @@ class _Search:
         self.g, self.K, self.kind, self.simple = g, K, kind, simple
         self.constraints, self.accept, self.tol = list(constraints), accept, tol
         self.bound = ClosingBound(g, K)
-        self.stepped = _STEPPED
         self.c_hi = [ClosingBound(c, K) for c in cons]
         self.c_lo = [ClosingBound(Graph.from_edges(c.n, c.src, c.dst, -c.weight), K) for c in cons]
         self.c_graph = cons
@@ -130,7 +128,7 @@ class _Search:
         lows = [float(self.value(L, np.array([L * float(w.min())]))[0]) for L in lengths]
         low = min(lows) - 1.0
         step = 2.0 ** -10 * (abs(top) + float(np.abs(w).max()) + 1e-300)
-        t = top - step if self.stepped else low
+        t = top - step
         while True:
             t = max(t, low)
             found = self._list(t)
