@@ -11,7 +11,7 @@ from proleg.errors import RobotFileError
 from proleg.robot import load_robot
 
 sio = pytest.importorskip("scipy.io")
-from proleg.convert.terresoro import PAIRS, main, read_terresoro, robot_toml  # noqa: E402
+from proleg.convert.terresoro import PAIRS, main, read_terresoro  # noqa: E402
 
 
 def synthetic(trials: int = 5, seed: int = 3) -> np.ndarray:

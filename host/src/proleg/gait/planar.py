@@ -27,6 +27,7 @@ Everything else goes to the exact constrained search (``constrained.py``):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -129,7 +130,7 @@ def optimal_planar_gaits(
     else:
         scored = planar_table(table, objective)
     constraints: list[Constraint] = []
-    accept = None
+    accept: Callable[[np.ndarray], np.ndarray] | None = None
     if rotation_cap_deg is not None and rotate is None:
         if not (isinstance(rotation_cap_deg, (int, float)) and math.isfinite(rotation_cap_deg) and rotation_cap_deg >= 0):
             raise GaitError(f"rotation cap must be a number of degrees >= 0, got {rotation_cap_deg!r}")
@@ -142,9 +143,7 @@ def optimal_planar_gaits(
         cap = float(cap)
         dy = table.planar.dy if table.planar is not None and table.planar.dy is not None else np.zeros(table.n_transitions)
         constraints += [Constraint(np.asarray(table.reward, dtype=np.float64), -cap, cap), Constraint(dy, -cap, cap)]
-
-        def accept(sums: np.ndarray, cap: float = cap) -> np.ndarray:
-            return np.hypot(sums[:, 0], sums[:, 1]) <= cap * (1 + 1e-12) + 1e-12
+        accept = _translation_within(cap)
 
     constrained = bool(constraints) or simple_cycles
     if kind == "speed" and constrained:
@@ -157,6 +156,15 @@ def optimal_planar_gaits(
         # (rate: simple cycles, as optimal_gaits answers it)
         return _constrained(scored, kind, max_transitions, kind == "rate", [], None)
     return _constrained(scored, kind, max_transitions, simple_cycles, constraints, accept)
+
+
+def _translation_within(cap: float) -> Callable[[np.ndarray], np.ndarray]:
+    """Accepts walks whose (ΣΔx, ΣΔy) — the first two constraint sums — has length ≤ cap."""
+
+    def accept(sums: np.ndarray) -> np.ndarray:
+        return np.hypot(sums[:, 0], sums[:, 1]) <= cap * (1 + 1e-12) + 1e-12
+
+    return accept
 
 
 def _default_bound(table: TransitionTable, kind: str, max_transitions: int | None, simple: bool) -> int:
