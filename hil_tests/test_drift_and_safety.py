@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import random
 
 import pytest
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, rule
 
-from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.errors import ProtocolError
+from proleg.protocol.codec import Message, encode
 from proleg.protocol.definition import EventKind, ParamId
 
 WEAKER = 0.3  # the drifted coils deliver 30 % less heating power
@@ -86,6 +86,8 @@ COMMANDS = st.one_of(
 
 @pytest.mark.plant
 def test_random_command_sequences_never_break_the_safety_envelope(open_target):
+    from proleg.link import CommandRefused, ReplyTimeout, RobotClient
+    from proleg.link.sim_link import SimLink
     from proleg.sim.closed_loop import SimulatedRobot
 
     target = open_target("paper-r1")
@@ -96,17 +98,21 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
     channels = target.sim.channels
     sim = None
 
-    class Commands(RuleBasedStateMachine):
-        def __init__(self):
-            super().__init__()
-            nonlocal sim
-            sim = SimulatedRobot(robot)  # every example starts from power-on
-            self.on_ticks = [0] * len(channels)
-            self.decoder = FrameDecoder(len(target.robot.limbs), len(target.robot.actuators))
-            self.token = 0
+    class EnvelopeBoard:
+        """The simulated robot stepped one control tick at a time (the plant every 2 ms),
+        checking the envelope after every tick; ``SimLink`` drives it for the client."""
 
-        def _ticks(self, n: int) -> None:
-            for _ in range(n):
+        def __init__(self, on_ticks: list[int]):
+            self.on_ticks = on_ticks
+
+        def write(self, data: bytes) -> None:
+            sim.write(data)
+
+        def read(self) -> bytes:
+            return sim.read()
+
+        def advance(self, seconds: float) -> None:
+            for _ in range(round(seconds * 1e6 / sim.board.tick_us)):
                 sim.run_ticks(1)
                 for k, ch in enumerate(channels):
                     duty = sim.board.pwm_permyriad(ch)
@@ -117,17 +123,35 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
                     sim.plant.step(0.002, [sim.board.pwm(ch) for ch in channels])
                     sim._push_truth()
 
+    class Commands(RuleBasedStateMachine):
+        def __init__(self):
+            super().__init__()
+            nonlocal sim
+            sim = SimulatedRobot(robot)  # every example starts from power-on
+            self.on_ticks = [0] * len(channels)
+            tick_s = sim.board.tick_us / 1e6
+            self.client = RobotClient(SimLink(EnvelopeBoard(self.on_ticks), step_s=tick_s),
+                                      max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
+
+        def _ticks(self, n: int) -> None:
+            """Let ``n`` ticks pass, reading (and dropping) whatever the robot sends."""
+            link = self.client.link
+            deadline = link.clock() + n * sim.board.tick_us / 1e6
+            while self.client.recv(max(0.0, deadline - link.clock())) is not None or link.clock() < deadline - 1e-9:
+                pass
+
         def _command(self, name: str, fields: dict) -> None:
-            self.token = self.token % 255 + 1
             try:
-                frame = encode(Message.new(name, token=self.token, **fields))
-            except Exception:
+                encode(Message.new(name, token=1, **fields))
+            except ProtocolError:
                 return  # not encodable (the host codec refuses it before the wire)
-            sim.write(frame)
-            self._ticks(20)
-            replies = [m for m in self.decoder.feed(sim.read()) if m.fields.get("token") == self.token]
-            assert len(replies) == 1, f"{name} {fields}: {len(replies)} replies"
-            assert replies[0].name in ("ACK", "NACK", "INFO", "STATS")
+            try:
+                reply = self.client.request(name, timeout=0.02, **fields)  # 20 ticks
+            except CommandRefused:
+                return  # a NACK is an answer
+            except ReplyTimeout as e:
+                raise AssertionError(f"{name} {fields}: {e}") from None
+            assert reply.name in ("ACK", "INFO", "STATS")
 
         @rule(cmd=COMMANDS)
         def send(self, cmd):
@@ -135,14 +159,12 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
 
         @rule(junk=st.binary(min_size=1, max_size=80))
         def garbage(self, junk):
-            sim.write(junk + b"\0")
+            self.client.link.write(junk + b"\0")
             self._ticks(5)
-            self.decoder.feed(sim.read())
 
         @rule(ms=st.integers(1, 400))
         def wait(self, ms):
             self._ticks(ms)
-            self.decoder.feed(sim.read())
 
         @invariant()
         def answers_ping(self):

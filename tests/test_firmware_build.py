@@ -214,16 +214,26 @@ def test_generated_files_start_with_a_comment_naming_generator_and_inputs(board)
     assert sha in _header(generated["gen/robot_config.h"]) and sha in _header(generated["gen/gait_table.c"])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "the gait selection (objective, max_transitions) changes gen/gait_table.c and gen/robot_config.h "
-    "but neither their header comments nor proleg-build.json name it (proleg/firmware/config.py, "
-    "firmware_templates/gait_table.c.j2, build.py manifest)"))
 def test_gait_selection_inputs_are_named_in_the_gait_table_header():
     robot, b = load_robot(R1), load_board("host-sim")
     total = render_project(robot, b, firmware_gaits(robot, "total"))["gen/gait_table.c"]
     short = render_project(robot, b, firmware_gaits(robot, "total", 2))["gen/gait_table.c"]
     assert total != short  # different inputs, different tables ...
     assert _header(total) != _header(short)  # ... so the headers must say which
+    assert "objective total, max_transitions unbounded" in _header(total)
+    assert "objective total, max_transitions 2" in _header(short)
+    for head in (_header(total), _header(short)):
+        assert "directions +x -x" in head and "ranked fewest opposing steps first" in head
+
+
+def test_the_build_manifest_names_the_gait_selection(parent):
+    robot, b = load_robot(R1), load_board("host-sim")
+    result = build(robot, b, parent / "sel", max_transitions=2)
+    manifest = json.loads((result.out_dir / MANIFEST).read_text())
+    assert manifest["gait_selection"] == {
+        "objective": "total", "max_transitions": 2, "directions": ["+x", "-x"],
+        "rank": "fewest opposing steps first, then search order",
+    }
 
 
 # ---------------------------------------------------------------------------------------
@@ -464,3 +474,35 @@ def test_missing_artifact_and_failing_tool_are_clear_errors(tmp_path, fake_hex):
 def test_unknown_board_file_path_is_a_board_error(tmp_path):
     with pytest.raises(BoardError, match="no such board file"):
         load_board(tmp_path / "nope.toml")
+
+
+def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
+    text = (ROOT / "boards" / "arduino-nano.toml").read_text()
+    assert old in text
+    p = tmp_path / "variant.toml"
+    p.write_text(text.replace(old, new))
+    return p
+
+
+@pytest.mark.parametrize(("old", "new", "expected"), [
+    ("[build]", "[built]", r"variant.toml: unknown table 'built'"),
+    ("main_loop = true", "main_loop = 1", r"variant.toml: build.main_loop: expected true or false, got 1"),
+    ('objcopy = ["avr-objcopy"', 'objcopy_off = ["avr-objcopy"',
+     r"variant.toml: build.objcopy: missing, needed to make artifact 'firmware.hex' from 'firmware.elf'"),
+    ('family = "avr"', 'family = "rp2040"',
+     r"variant.toml: board.family: expected one of avr, sim, stm32f1, template \(a folder with a family.toml"),
+    ("tx_buffer = 128", "tx_buffer = 100", r"variant.toml: uart.tx_buffer: expected a power of two"),
+])
+def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, expected):
+    with pytest.raises(BoardError, match=expected) as e:
+        load_board(_board_variant(tmp_path, old, new))
+    assert "\n" not in str(e.value)
+
+
+def test_the_makefile_runs_the_board_files_build_steps(tmp_path):
+    board = load_board(_board_variant(tmp_path, '"-R", ".eeprom", ', ""))
+    robot = load_robot(R1)
+    makefile = render_project(robot, board, firmware_gaits(robot))["Makefile"]
+    assert "\tavr-objcopy -O ihex firmware.elf firmware.hex\n" in makefile
+    assert "\tavr-size -B firmware.elf\n" in makefile
+    assert "family" not in makefile.lower()

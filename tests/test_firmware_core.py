@@ -9,7 +9,6 @@ board and talk to it in its own protocol (E-stop, IMU faults, safety envelope).
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import shutil
 import subprocess
@@ -20,11 +19,14 @@ import numpy as np
 import pytest
 
 from proleg.errors import BuildError
-from proleg.firmware.config import render_config
+from proleg.firmware.render import render_config
 from proleg.protocol import definition as d
-from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.link import CommandRefused, RobotClient
+from proleg.link.sim_link import SimLink
+from proleg.protocol.codec import Message, encode
 from proleg.protocol.render import render_c
 from proleg.robot import robot_from_dict
+from proleg.sim.board import SimBoard
 from proleg.transitions import TransitionTable
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -184,7 +186,7 @@ def test_render_is_deterministic_and_names_its_inputs():
     assert a == b
     assert set(a) == {"robot_config.h", "gait_table.c"}
     head = a["robot_config.h"].splitlines()[:4]
-    assert any("proleg.firmware.config" in line for line in head)
+    assert any("proleg.firmware.render" in line for line in head)
     assert any("sha256" in line for line in head)
     assert "#define CFG_GAIT_TABLE_HASH 0x" in a["robot_config.h"]
 
@@ -235,51 +237,48 @@ def test_no_gait_in_either_direction_still_renders_valid_c(rendered, tmp_path):
 # ------------------------------------------------------------------ the whole firmware on the simulated board
 
 
-class SimBoard:
-    """Minimal ctypes driver of the host-sim ABI for these tests (proleg.sim has the real one)."""
+class Rig:
+    """The firmware built for the simulated board (``proleg.sim.board.SimBoard``), stepped one
+    control tick at a time through ``SimLink`` and talked to through the one client
+    (``proleg.link.RobotClient``). ``log`` keeps every message received so far."""
 
     def __init__(self, so: Path, limbs: int, channels: int):
-        lib = ctypes.CDLL(str(so))
-        lib.sim_imu_set_truth.argtypes = [ctypes.c_uint8, ctypes.c_double, ctypes.c_double]
-        lib.sim_imu_set_noise.argtypes = [ctypes.c_uint8, ctypes.c_double, ctypes.c_double, ctypes.c_double]
-        lib.sim_uart_read.restype = ctypes.c_uint32
-        lib.sim_pwm_duty.restype = ctypes.c_uint16
-        lib.sim_imu_peek_reg.restype = ctypes.c_uint8
-        lib.sim_time_us.restype = ctypes.c_uint64
-        self.lib = lib
-        self.decoder = FrameDecoder(limbs, channels)
-        self.buf = (ctypes.c_uint8 * 65536)()
-        self.token = 0
+        self.board = SimBoard(so)
+        self.tick_s = self.board.tick_us / 1e6
+        self.client = RobotClient(SimLink(self.board, step_s=self.tick_s),
+                                  max_limbs=limbs, max_channels=channels)
         self.log: list[Message] = []
 
     def reset(self, seed=1):
-        self.lib.sim_reset(seed)
+        self.board.reset(seed)
         return self.run(10)  # INFO + BOOT take a few ms at 115200 baud
 
     def run(self, n):
-        self.lib.sim_run_ticks(n)
-        k = self.lib.sim_uart_read(self.buf, len(self.buf))
-        msgs = self.decoder.feed(bytes(self.buf[:k]))
+        """Run ``n`` control ticks; the messages that arrived meanwhile (and any the client
+        had queued while it waited for a reply)."""
+        link = self.client.link
+        deadline = link.clock() + n * self.tick_s
+        msgs = []
+        while True:
+            msg = self.client.recv(max(0.0, deadline - link.clock()))
+            if msg is not None:
+                msgs.append(msg)
+            elif link.clock() >= deadline - 1e-9:
+                break
         self.log += msgs
         return msgs
 
-    def send(self, name, **fields):
-        self.token = self.token % 255 + 1
-        raw = encode(Message.new(name, token=self.token, **fields))
-        self.lib.sim_uart_write((ctypes.c_uint8 * len(raw))(*raw), len(raw))
-        return self.token
-
-    def reply(self, token, ticks=3):
-        for m in self.run(ticks):
-            if m.spec.name in ("ACK", "NACK", "INFO", "STATS") and m.token == token:
-                return m
-        raise AssertionError(f"no reply to token {token}")
+    def refused(self, name, **fields) -> CommandRefused:
+        """Send command ``name``; it must be NACKed: the refusal."""
+        with pytest.raises(CommandRefused) as e:
+            self.client.request(name, **fields)
+        return e.value
 
     def set_psi(self, limb, deg):
-        self.lib.sim_imu_set_truth(0x68 + limb, deg, 0.0)
+        self.board.imu_truth(0x68 + limb, deg, 0.0)
 
     def duty(self, ch):
-        return self.lib.sim_pwm_duty(ch)
+        return self.board.pwm_permyriad(ch)
 
 
 @pytest.fixture(scope="session")
@@ -306,7 +305,7 @@ def sim_so(rendered, tmp_path_factory):
 
 @pytest.fixture
 def board(sim_so):
-    b = SimBoard(sim_so("r1-fast"), 2, 2)
+    b = Rig(sim_so("r1-fast"), 2, 2)
     b.set_psi(0, 0.0)
     b.set_psi(1, 0.0)
     b.reset()
@@ -318,9 +317,9 @@ def _events(msgs, kind):
     return [m for m in msgs if m.spec.name == "EVENT" and m.kind == kind]
 
 
-def _heating(board: SimBoard) -> None:
+def _heating(board: Rig) -> None:
     """Start +x gait #0 (00 -> 10 ...) and run until the left SMA is on."""
-    assert board.reply(board.send("START", gait=0, direction=0)).spec.name == "ACK"
+    board.client.start(0, "+x")
     for _ in range(100):
         board.run(1)
         if board.duty(0) > 0:
@@ -329,7 +328,7 @@ def _heating(board: SimBoard) -> None:
 
 
 def test_boot_sends_info_and_boot_event(sim_so):
-    b = SimBoard(sim_so("r1-fast"), 2, 2)
+    b = Rig(sim_so("r1-fast"), 2, 2)
     msgs = b.reset()
     assert msgs[0].spec.name == "INFO" and msgs[0].token == 0 and msgs[0].robot_name == "test-r1"
     assert _events(msgs, d.EventKind.BOOT)
@@ -338,34 +337,32 @@ def test_boot_sends_info_and_boot_event(sim_so):
 def test_estop_turns_every_mosfet_off_within_one_tick(board):
     _heating(board)
     assert board.duty(0) == 6000
-    board.send("ESTOP")
+    board.board.write(encode(Message.new("ESTOP", token=99)))  # timed by the tick, not by a reply
     board.run(1)
     assert all(board.duty(ch) == 0 for ch in range(4))
     board.run(5)  # the ACK and event reach the host at line speed
     assert _events(board.log, d.EventKind.ESTOP)
-    nack = board.reply(board.send("START", gait=0, direction=0))
-    assert nack.spec.name == "NACK" and nack.error == d.ErrorCode.ESTOP_LATCHED
+    assert board.refused("START", gait=0, direction=0).error == d.ErrorCode.ESTOP_LATCHED
     board.run(50)
     assert board.duty(0) == 0
-    assert board.reply(board.send("CLEAR", what=int(d.ClearWhat.ESTOP))).spec.name == "ACK"
-    assert board.reply(board.send("START", gait=0, direction=0)).spec.name == "ACK"
+    board.client.clear(d.ClearWhat.ESTOP)
+    board.client.start(0, "+x")
 
 
 def test_imu_that_stops_answering_turns_everything_off_within_two_ticks(board):
     _heating(board)
-    board.lib.sim_imu_set_fault(0x68, 1)
+    board.board.imu_fault(0x68, "no-ack")
     board.run(2)
     assert board.duty(0) == 0 and board.duty(1) == 0
     board.run(5)
     faults = _events(board.log, d.EventKind.FAULT)
     assert faults and faults[-1].code == d.FaultCode.IMU_NO_ACK and faults[-1].detail == 0
-    nack = board.reply(board.send("START", gait=0, direction=0))
-    assert nack.spec.name == "NACK" and nack.error == d.ErrorCode.NOT_ALLOWED
+    assert board.refused("START", gait=0, direction=0).error == d.ErrorCode.NOT_ALLOWED
 
 
 def test_imu_garbage_is_a_fault_at_once(board):
     _heating(board)
-    board.lib.sim_imu_set_fault(0x69, 3)
+    board.board.imu_fault(0x69, "garbage")
     board.run(2)
     assert board.duty(0) == 0
     board.run(5)
@@ -373,15 +370,15 @@ def test_imu_garbage_is_a_fault_at_once(board):
 
 
 def test_stuck_imu_is_a_fault_and_clears_when_it_recovers(board):
-    board.lib.sim_imu_set_fault(0x68, 2)
+    board.board.imu_fault(0x68, "stuck")
     board.run(400)
     fault = _events(board.log, d.EventKind.FAULT)
     assert fault and fault[-1].code == d.FaultCode.IMU_BAD_DATA
-    board.lib.sim_imu_set_fault(0x68, 0)
-    assert board.reply(board.send("CLEAR", what=int(d.ClearWhat.FAULTS))).spec.name == "ACK"
+    board.board.imu_fault(0x68, "ok")
+    board.client.clear(d.ClearWhat.FAULTS)
     board.run(10)
     assert _events(board.log, d.EventKind.FAULT_CLEARED)
-    assert board.reply(board.send("START", gait=0, direction=0)).spec.name == "ACK"
+    board.client.start(0, "+x")
 
 
 def test_dead_actuator_ends_in_a_state_timeout_with_everything_off(board):
@@ -417,12 +414,12 @@ def test_gait_advances_when_the_limbs_reach_their_states(board):
     ],
 )
 def test_set_param_outside_the_envelope_is_nacked(board, param, value, error):
-    m = board.reply(board.send("SET_PARAM", param=int(param), index=0, value=value))
-    assert m.spec.name == "NACK" and m.error == error and m.detail == int(param)
+    nack = board.refused("SET_PARAM", param=int(param), index=0, value=value)
+    assert nack.error == error and nack.detail == int(param)
 
 
 def test_set_param_inside_the_envelope_is_used(board):
-    assert board.reply(board.send("SET_PARAM", param=int(d.ParamId.DRIVE_DUTY), index=0, value=3000)).spec.name == "ACK"
+    board.client.set_param(d.ParamId.DRIVE_DUTY, 0, 3000)
     _heating(board)
     assert board.duty(0) == 3000
 
@@ -433,7 +430,7 @@ def test_a_held_limb_keeps_the_hold_duty_which_set_param_changes(board):
     board.set_psi(0, 25.0)  # left up and above its hold edge: 10 reached
     board.run(5)
     assert board.duty(0) == 2500  # holding at the robot file's default hold_duty, 0.25
-    assert board.reply(board.send("SET_PARAM", param=int(d.ParamId.HOLD_DUTY), index=0, value=1000)).spec.name == "ACK"
+    board.client.set_param("hold_duty", 0, 1000)
     board.run(2)
     assert board.duty(0) == 1000
     board.set_psi(0, 21.5)  # sagging below the hold edge (22°): the drive duty again
@@ -442,12 +439,12 @@ def test_a_held_limb_keeps_the_hold_duty_which_set_param_changes(board):
 
 
 def test_load_gait_with_a_forbidden_transition_is_nacked(sim_so):
-    b = SimBoard(sim_so("r1-1act"), 2, 1)
+    b = Rig(sim_so("r1-1act"), 2, 1)
     b.reset()
-    m = b.reply(b.send("LOAD_GAIT", states=(0, 2, 3, 1)))
-    assert m.spec.name == "NACK" and m.error == d.ErrorCode.FORBIDDEN_TRANSITION and m.detail == 2
-    assert b.reply(b.send("LOAD_GAIT", states=(0, 2, 3, 2))).spec.name == "ACK"
-    assert b.reply(b.send("START", gait=d.GAIT_USER, direction=0)).spec.name == "ACK"
+    nack = b.refused("LOAD_GAIT", states=(0, 2, 3, 1))
+    assert nack.error == d.ErrorCode.FORBIDDEN_TRANSITION and nack.detail == 2
+    b.client.load_gait((0, 2, 3, 2))
+    b.client.start("user", "+x")
 
 
 def test_telemetry_comes_at_the_configured_rate(board):
@@ -455,7 +452,8 @@ def test_telemetry_comes_at_the_configured_rate(board):
     tel = [m for m in board.log if m.spec.name == "TELEMETRY"]
     assert 49 <= len(tel) <= 51
     assert len(tel[-1].psi) == 2 and len(tel[-1].duty) == 2
-    assert board.reply(board.send("SET_TELEMETRY_RATE", hz=150)).spec.name == "ACK"
+    board.client.set_telemetry_rate(150)
+    board.run(0)  # what arrived while the client waited for the ACK
     before = len([m for m in board.log if m.spec.name == "TELEMETRY"])
     board.run(1000)
     assert len([m for m in board.log if m.spec.name == "TELEMETRY"]) - before in (149, 150, 151)
@@ -464,6 +462,5 @@ def test_telemetry_comes_at_the_configured_rate(board):
 def test_telemetry_faster_than_half_the_uart_is_refused_so_replies_keep_room(board):
     # 115200 baud carries 11,520 B/s; a 2-limb, 2-actuator TELEMETRY frame is budgeted at
     # 32 B, so at most 11520 / 32 / 2 = 180 Hz may go to telemetry.
-    m = board.reply(board.send("SET_TELEMETRY_RATE", hz=181))
-    assert m.spec.name == "NACK" and m.error == d.ErrorCode.OUT_OF_RANGE
-    assert board.reply(board.send("SET_TELEMETRY_RATE", hz=180)).spec.name == "ACK"
+    assert board.refused("SET_TELEMETRY_RATE", hz=181).error == d.ErrorCode.OUT_OF_RANGE
+    board.client.set_telemetry_rate(180)

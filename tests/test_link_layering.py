@@ -19,7 +19,7 @@ LAYERS: list[set[str]] = [
     {"firmware"},
     {"sim", "emu"},
     {"link"},
-    {"record", "plot", "console", "report"},
+    {"record", "plot", "console", "report", "learn"},
     {"cli"},
     {"demo", "__main__"},
 ]

@@ -1,4 +1,4 @@
-/* app.h - the firmware application: one control tick, commands, telemetry.
+/* app.h - the firmware application: the order of one control tick.
  *
  * Contract. app_init() runs once after hal_init(): it initialises every module, wakes
  * and checks the IMUs, and sends an unsolicited INFO and a BOOT event. app_tick() runs
@@ -13,11 +13,18 @@
  *   5. checks the link watchdog, then sends telemetry at the configured rate.
  * Any fault (state timeout, IMU) stops the gait and turns every MOSFET off in the tick it
  * is detected, and stays latched until CLEAR(FAULTS). E-stop latches until CLEAR(ESTOP).
+ * Each step is one module: cmd.h (1), imucheck.h (2), drive.h (3, 4), fault.h and
+ * telemetry.h (5); tx.h sends, param.h holds SET_PARAM's table. app_time_ms() is the
+ * firmware clock (ms since app_init, advanced by CFG_TICK_US per tick) that stamps
+ * events and telemetry.
  */
 #ifndef PROLEG_APP_H
 #define PROLEG_APP_H
 
+#include <stdint.h>
+
 void app_init(void);
 void app_tick(void);
+uint32_t app_time_ms(void);
 
 #endif /* PROLEG_APP_H */

@@ -1,11 +1,12 @@
-/* hal.h - the whole porting layer between proleg's portable core and a board.
+/* hal.h - the porting layer: everything the core needs from a board, and nothing else.
  *
- * One implementation per board family: hal/avr, hal/stm32f1, hal/sim. Nothing above
- * this header knows which board it runs on. Every call is non-blocking or bounded:
- * the control tick must never wait on the host link.
- *
- * Real boards provide main(): app_init(); then forever { hal_wait_tick(); app_tick(); }.
- * The simulated board drives app_init()/app_tick() from sim_reset()/sim_run_ticks().
+ * Contract. One implementation per board family under hal/<family>/ (avr, stm32f1,
+ * sim; hal/template/ to copy for a new MCU). Nothing above this header knows which
+ * board it runs on. Every call is non-blocking or bounded: the control tick never
+ * waits on the host link. The core owns main() and the tick pacing (main.c, on
+ * hal_micros) and the UART byte rings (uart.h); a HAL only moves bytes between its
+ * UART and those rings in its interrupt handlers: each received byte to uart_isr_rx(),
+ * and, while the transmit interrupt is on, uart_isr_tx() until it returns -1.
  */
 #ifndef PROLEG_HAL_H
 #define PROLEG_HAL_H
@@ -13,33 +14,24 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Clocks, tick timer (CFG_TICK_US), I2C at 400 kHz, PWM channels (all off), UART at
- * the board's baud rate. Called once before anything else. */
+/* Clocks, the microsecond counter, I2C at the board's rate, PWM channels (all off),
+ * the UART at CFG_UART_BAUD with its receive interrupt on. Called once, first. */
 void hal_init(void);
 
-/* Free-running microsecond counter; wraps at 2^32. */
+/* Free-running microsecond counter: monotonic, wraps at 2^32. */
 uint32_t hal_micros(void);
-
-/* Block until the next control tick boundary (real boards only). */
-void hal_wait_tick(void);
 
 /* One I2C transaction on the IMU bus: write ntx bytes, then (repeated start) read nrx
  * bytes; either count may be 0. Returns 0 on success, negative on NACK, bus error or
  * timeout (bounded: never longer than about 2 ms). */
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
 
-/* Set the MOSFET PWM duty of an actuator channel, in permyriad (0 = off, 10000 = on). */
+/* Set the MOSFET PWM duty of an actuator channel, in permyriad (0 = off, 10000 = on);
+ * 0 must drive the gate low, not leave a one-count pulse. */
 void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad);
 
-/* Queue bytes for the host link; returns how many were queued (the rest are dropped
- * and counted by the caller: telemetry never stalls the control loop). */
-uint16_t hal_uart_write(const uint8_t *data, uint16_t n);
-
-/* Next byte received from the host link, or -1 when none is waiting. */
-int hal_uart_read_byte(void);
-
-/* Critical section (interrupts off); returns the state to restore. */
-uint8_t hal_critical_enter(void);
-void hal_critical_exit(uint8_t state);
+/* Bytes are waiting in the transmit ring: turn the transmit interrupt on (it then takes
+ * them with uart_isr_tx). Called from the main loop; must return at once. */
+void hal_uart_tx_start(void);
 
 #endif /* PROLEG_HAL_H */

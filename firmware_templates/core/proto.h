@@ -13,7 +13,7 @@
  * Usage (firmware):
  *     static proto_rx_t rx;  static proto_msg_t m;  static uint8_t tx[PROTO_MAX_ENCODED];
  *     proto_rx_init(&rx);
- *     int c = hal_uart_read_byte();
+ *     int c = uart_read_byte();
  *     if (c >= 0 && proto_rx_byte(&rx, (uint8_t)c, &m)) {
  *         switch (m.id) { case PROTO_ID_START: ... m.u.start.gait ... }
  *     } else if (rx.rej_error) {               // CRC-valid frame refused: NACK it
@@ -21,9 +21,9 @@
  *     }
  *     m.id = PROTO_ID_ACK; m.u.ack.token = t; m.u.ack.cmd = id;
  *     size_t n = proto_encode(&m, tx, sizeof tx);   // n == 0: does not fit / invalid message
- *     hal_uart_write(tx, (uint16_t)n);
+ *     uart_write(tx, (uint16_t)n);
  * Every command struct starts with its token: PROTO_CMD_TOKEN(&m) reads it for any command.
- * STATS: rx.count supplies rx_ok..bad_value; nacks, tx_frames, tx_dropped are the app's.
+ * STATS: rx.count supplies rx_ok..bad_value; nacks, tx_frames, tx_dropped are counted by tx.c.
  * RAM: proto_rx_t ~ 96 B; proto_msg_t is its largest member (LOAD_GAIT, ~52 B).
  *
  * Flash tables: on AVR the descriptor tables live in flash (PROGMEM) and are read with

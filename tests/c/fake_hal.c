@@ -27,10 +27,6 @@ uint32_t hal_micros(void)
     return (uint32_t)fake_now_us;
 }
 
-void hal_wait_tick(void)
-{
-}
-
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
 #ifdef FAKE_HAL_SIM_MPU
@@ -53,23 +49,6 @@ void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad)
     fake_pwm_writes++;
 }
 
-uint16_t hal_uart_write(const uint8_t *data, uint16_t n)
+void hal_uart_tx_start(void)
 {
-    (void)data;
-    return n;
-}
-
-int hal_uart_read_byte(void)
-{
-    return -1;
-}
-
-uint8_t hal_critical_enter(void)
-{
-    return 0;
-}
-
-void hal_critical_exit(uint8_t state)
-{
-    (void)state;
 }

@@ -1,21 +1,21 @@
 /* hal_avr.c - hal.h for the ATmega328P (Arduino Nano/Uno) at F_CPU (16 MHz).
  *
- * Timer0: free-running /64 (4 µs per count), overflow interrupt → hal_micros; the control
- * tick is paced by polling it (hal_wait_tick), so any tick rate works.
+ * Timer0: free-running /64 (4 µs per count), overflow interrupt → hal_micros (the core
+ * paces the control tick on it, so any tick rate works).
  * Timer1 (OC1A = D9, OC1B = D10): fast PWM, TOP = ICR1 for CFG_PWM_HZ, /8.
  * Timer2 (OC2A = D11, OC2B = D3): fast PWM 8 bit, /128 (~490 Hz).
  * Duty 0 and 10000 disconnect the compare output and drive the pin low/high, so "off"
  * is really off (fast PWM with OCR = 0 still gives a one-count pulse).
- * TWI at CFG_I2C_HZ, every wait bounded by TWI_STEP_US. USART0 at CFG_UART_BAUD (U2X),
- * interrupt-driven rings of RX_RING / TX_RING bytes.
- * main(): hal_init(); app_init(); forever { hal_wait_tick(); app_tick(); }.
+ * TWI at CFG_I2C_HZ, every wait bounded by TWI_STEP_US. USART0 at CFG_UART_BAUD (U2X);
+ * its interrupts move bytes to and from the core's rings (uart.h). main() is the core's.
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <stdint.h>
 
-#include "app.h"
 #include "hal.h"
+#include "ring.h"
+#include "uart.h"
 
 enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 
@@ -25,8 +25,9 @@ enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 #define F_CPU CFG_CLOCK_HZ
 #endif
 
-#define RX_RING 64u  /* power of two */
-#define TX_RING 128u /* power of two */
+#if RING_LARGE
+#error "AVR: the UART rings must be at most 128 bytes (8-bit indices are the only atomic ones)"
+#endif
 #define TWI_STEP_US 400u
 
 static const uint8_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
@@ -34,7 +35,6 @@ static const uint8_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 /* ------------------------------------------------------------------ time */
 
 static volatile uint32_t t0_overflows;
-static uint32_t next_tick;
 
 ISR(TIMER0_OVF_vect)
 {
@@ -54,17 +54,6 @@ uint32_t hal_micros(void)
     }
     SREG = sreg;
     return ((ovf << 8) + cnt) * 4u;
-}
-
-void hal_wait_tick(void)
-{
-    uint32_t now = hal_micros();
-    if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
-        next_tick = now; /* overran by more than a tick: resynchronise */
-    }
-    while ((int32_t)(hal_micros() - next_tick) < 0) {
-    }
-    next_tick += CFG_TICK_US;
 }
 
 /* ------------------------------------------------------------------ PWM */
@@ -233,70 +222,27 @@ int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *r
 
 /* ------------------------------------------------------------------ USART0 */
 
-static volatile uint8_t rx_buf[RX_RING], tx_buf[TX_RING];
-static volatile uint8_t rx_head, rx_tail, tx_head, tx_tail;
-
 ISR(USART_RX_vect)
 {
-    uint8_t b = UDR0;
-    uint8_t next = (uint8_t)((rx_head + 1u) & (RX_RING - 1u));
-    if (next != rx_tail) {
-        rx_buf[rx_head] = b;
-        rx_head = next;
-    }
+    (void)uart_isr_rx(UDR0);
 }
 
 ISR(USART_UDRE_vect)
 {
-    if (tx_head == tx_tail) {
+    int b = uart_isr_tx();
+    if (b < 0) {
         UCSR0B &= (uint8_t)~_BV(UDRIE0);
         return;
     }
-    UDR0 = tx_buf[tx_tail];
-    tx_tail = (uint8_t)((tx_tail + 1u) & (TX_RING - 1u));
+    UDR0 = (uint8_t)b;
 }
 
-uint16_t hal_uart_write(const uint8_t *data, uint16_t n)
+void hal_uart_tx_start(void)
 {
-    uint16_t i;
-    for (i = 0; i < n; i++) {
-        uint8_t next = (uint8_t)((tx_head + 1u) & (TX_RING - 1u));
-        if (next == tx_tail) {
-            break;
-        }
-        tx_buf[tx_head] = data[i];
-        tx_head = next;
-    }
-    if (i) {
-        UCSR0B |= _BV(UDRIE0);
-    }
-    return i;
-}
-
-int hal_uart_read_byte(void)
-{
-    uint8_t b;
-    if (rx_head == rx_tail) {
-        return -1;
-    }
-    b = rx_buf[rx_tail];
-    rx_tail = (uint8_t)((rx_tail + 1u) & (RX_RING - 1u));
-    return b;
+    UCSR0B |= _BV(UDRIE0);
 }
 
 /* ------------------------------------------------------------------ the rest */
-
-uint8_t hal_critical_enter(void)
-{
-    uint8_t sreg = SREG;
-    cli();
-    return sreg;
-}
-
-void hal_critical_exit(uint8_t state)
-{
-    SREG = state;
-}
 
 void hal_init(void)
 {
@@ -317,15 +263,4 @@ void hal_init(void)
     UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);
     UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
     sei();
-    next_tick = hal_micros() + CFG_TICK_US;
-}
-
-int main(void)
-{
-    hal_init();
-    app_init();
-    for (;;) {
-        hal_wait_tick();
-        app_tick();
-    }
 }

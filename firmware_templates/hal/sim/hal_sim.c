@@ -3,11 +3,13 @@
  *
  * Virtual time: sim_run_ticks(n) advances the clock by CFG_TICK_US and runs app_tick()
  * once per tick; nothing depends on wall-clock time, so a seed gives the same run.
- * UART: host → board bytes wait in a FIFO that app_tick reads; board → host bytes go
- * into a small transmit buffer (like a real board's ring) that drains to the host FIFO
- * at the board's baud rate (10 bits per byte), so telemetry overruns show up as they
- * would on hardware. PWM: the duty the firmware set, per board channel. I2C: the
- * register-level MPU-6050 models of sim_mpu6050.c at the robot's IMU addresses.
+ * UART: host → board bytes go straight into the core's receive ring (uart.h, as a real
+ * board's receive interrupt would put them); the core's transmit ring drains to the host
+ * FIFO at the board's baud rate (10 bits per byte), so telemetry overruns show up as
+ * they would on hardware. The ring sizes are the board file's [uart] buffers. PWM: the
+ * duty the firmware set, per board channel. I2C: the register-level MPU-6050 models of
+ * sim_mpu6050.c at the robot's IMU addresses. main() is not in this image (the board
+ * file's build.main_loop = false): sim_reset/sim_run_ticks drive app_init/app_tick.
  */
 #include <string.h>
 
@@ -15,11 +17,10 @@
 #include "hal.h"
 #include "robot_config.h"
 #include "sim_mpu6050.h"
+#include "uart.h"
 
 #define SIM_API __attribute__((visibility("default")))
 
-#define RXQ_SIZE 4096u    /* host → board */
-#define TXBUF_SIZE 256u   /* the board's transmit ring */
 #define HOSTQ_SIZE 65536u /* wire → host, until sim_uart_read */
 
 typedef struct {
@@ -27,9 +28,7 @@ typedef struct {
     uint32_t cap, head, count;
 } fifo_t;
 
-static uint8_t rxq_mem[RXQ_SIZE], txbuf_mem[TXBUF_SIZE], hostq_mem[HOSTQ_SIZE];
-static fifo_t rxq = {rxq_mem, RXQ_SIZE, 0, 0};
-static fifo_t txbuf = {txbuf_mem, TXBUF_SIZE, 0, 0};
+static uint8_t hostq_mem[HOSTQ_SIZE];
 static fifo_t hostq = {hostq_mem, HOSTQ_SIZE, 0, 0};
 
 static const uint8_t limb_imu[CFG_N_LIMBS] = CFG_LIMB_IMU_ADDR;
@@ -37,7 +36,6 @@ static uint64_t now_us;
 static uint64_t line_budget; /* bytes × 1e6 the line may still carry */
 static uint16_t pwm[CFG_PWM_CHANNELS];
 static uint32_t uart_dropped, i2c_count;
-static uint8_t irq_off;
 
 static uint32_t fifo_put(fifo_t *f, const uint8_t *data, uint32_t n)
 {
@@ -73,10 +71,6 @@ uint32_t hal_micros(void)
     return (uint32_t)now_us;
 }
 
-void hal_wait_tick(void)
-{
-}
-
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     i2c_count++;
@@ -90,26 +84,9 @@ void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad)
     }
 }
 
-uint16_t hal_uart_write(const uint8_t *data, uint16_t n)
+void hal_uart_tx_start(void)
 {
-    return (uint16_t)fifo_put(&txbuf, data, n);
-}
-
-int hal_uart_read_byte(void)
-{
-    return fifo_get(&rxq);
-}
-
-uint8_t hal_critical_enter(void)
-{
-    uint8_t was = irq_off;
-    irq_off = 1;
-    return was;
-}
-
-void hal_critical_exit(uint8_t state)
-{
-    irq_off = state;
+    /* nothing to switch on: drain_line() empties the transmit ring at the line rate */
 }
 
 /* ------------------------------------------------------------------ host-sim ABI */
@@ -117,15 +94,20 @@ void hal_critical_exit(uint8_t state)
 static void drain_line(void)
 {
     line_budget += (uint64_t)CFG_UART_BAUD / 10u * CFG_TICK_US;
-    while (txbuf.count > 0u && line_budget >= 1000000u) {
-        uint8_t b = (uint8_t)fifo_get(&txbuf);
+    while (line_budget >= 1000000u) {
+        int c = uart_isr_tx();
+        uint8_t b;
+        if (c < 0) {
+            break;
+        }
+        b = (uint8_t)c;
         if (fifo_put(&hostq, &b, 1) != 1u) {
             uart_dropped++;
         }
         line_budget -= 1000000u;
     }
-    if (txbuf.count == 0u && line_budget > 1000000u) {
-        line_budget = 1000000u; /* an idle line stores no credit */
+    if (line_budget > 1000000u) {
+        line_budget = 1000000u; /* an idle line stores no credit (the ring is empty here) */
     }
 }
 
@@ -136,9 +118,6 @@ SIM_API void sim_reset(uint32_t seed)
     line_budget = 0;
     uart_dropped = 0;
     i2c_count = 0;
-    irq_off = 0;
-    rxq.head = rxq.count = 0;
-    txbuf.head = txbuf.count = 0;
     hostq.head = hostq.count = 0;
     sim_mpu_power_on(seed);
     for (i = 0; i < CFG_N_LIMBS; i++) {
@@ -175,7 +154,12 @@ SIM_API uint16_t sim_pwm_duty(uint8_t ch)
 
 SIM_API void sim_uart_write(const uint8_t *data, uint32_t n)
 {
-    uart_dropped += n - fifo_put(&rxq, data, n);
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        if (uart_isr_rx(data[i]) != 0) {
+            uart_dropped++;
+        }
+    }
 }
 
 SIM_API uint32_t sim_uart_read(uint8_t *out, uint32_t cap)

@@ -2,22 +2,20 @@
  *
  * Clock: 8 MHz HSE × 9 = 72 MHz (APB1 36 MHz, APB2 72 MHz); if the crystal does not
  * start, the board runs on the 8 MHz HSI and every divider below follows `sysclk`.
- * SysTick: 1 ms interrupt; hal_micros = ms·1000 + elapsed counts; the tick is paced by
- * polling it. PWM: TIM2/TIM3/TIM4 channels from the board pin map (CFG_PWM_MAP:
+ * SysTick: 1 ms interrupt; hal_micros = ms·1000 + elapsed counts (the core paces the
+ * control tick on it). PWM: TIM2/TIM3/TIM4 channels from the board pin map (CFG_PWM_MAP:
  * {timer, channel, port 0=A 1=B, pin}), 1000 counts per period at CFG_PWM_HZ.
  * I2C1 on PB6/PB7 at CFG_I2C_HZ (fast mode), polled, every wait bounded by I2C_STEP_US.
- * USART1 on PA9/PA10 at CFG_UART_BAUD with interrupt-driven rings.
- * main(): hal_init(); app_init(); forever { hal_wait_tick(); app_tick(); }.
+ * USART1 on PA9/PA10 at CFG_UART_BAUD; its interrupt moves bytes to and from the core's
+ * rings (uart.h). main() is the core's.
  */
 #include <stdint.h>
 
-#include "app.h"
 #include "hal.h"
 #include "robot_config.h"
 #include "stm32f1_regs.h"
+#include "uart.h"
 
-#define RX_RING 128u /* power of two */
-#define TX_RING 256u /* power of two */
 #define I2C_STEP_US 300u
 #define PWM_COUNTS 1000u
 
@@ -32,7 +30,6 @@ static const pwm_pin_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 
 static uint32_t sysclk = 8000000u;
 static volatile uint32_t ms_count;
-static uint32_t next_tick;
 
 void SysTick_Handler(void);
 void USART1_IRQHandler(void);
@@ -85,17 +82,6 @@ uint32_t hal_micros(void)
         ms = ms_count + 1u;
     }
     return ms * 1000u + (load - 1u - val) / (sysclk / 1000000u);
-}
-
-void hal_wait_tick(void)
-{
-    uint32_t now = hal_micros();
-    if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
-        next_tick = now;
-    }
-    while ((int32_t)(hal_micros() - next_tick) < 0) {
-    }
-    next_tick += CFG_TICK_US;
 }
 
 /* ------------------------------------------------------------------ GPIO */
@@ -264,74 +250,28 @@ int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *r
 
 /* ------------------------------------------------------------------ USART1 */
 
-static volatile uint8_t rx_buf[RX_RING], tx_buf[TX_RING];
-static volatile uint16_t rx_head, rx_tail, tx_head, tx_tail;
-
 void USART1_IRQHandler(void)
 {
     uint32_t sr = USART_SR;
     if (sr & (USART_SR_RXNE | USART_SR_ORE)) {
-        uint8_t b = (uint8_t)USART_DR;
-        uint16_t next = (uint16_t)((rx_head + 1u) & (RX_RING - 1u));
-        if (next != rx_tail) {
-            rx_buf[rx_head] = b;
-            rx_head = next;
-        }
+        (void)uart_isr_rx((uint8_t)USART_DR);
     }
     if ((sr & USART_SR_TXE) && (USART_CR1 & USART_CR1_TXEIE)) {
-        if (tx_head == tx_tail) {
+        int b = uart_isr_tx();
+        if (b < 0) {
             USART_CR1 &= ~USART_CR1_TXEIE;
         } else {
-            USART_DR = tx_buf[tx_tail];
-            tx_tail = (uint16_t)((tx_tail + 1u) & (TX_RING - 1u));
+            USART_DR = (uint32_t)b;
         }
     }
 }
 
-uint16_t hal_uart_write(const uint8_t *data, uint16_t n)
+void hal_uart_tx_start(void)
 {
-    uint16_t i;
-    for (i = 0; i < n; i++) {
-        uint16_t next = (uint16_t)((tx_head + 1u) & (TX_RING - 1u));
-        if (next == tx_tail) {
-            break;
-        }
-        tx_buf[tx_head] = data[i];
-        tx_head = next;
-    }
-    if (i) {
-        USART_CR1 |= USART_CR1_TXEIE;
-    }
-    return i;
-}
-
-int hal_uart_read_byte(void)
-{
-    uint8_t b;
-    if (rx_head == rx_tail) {
-        return -1;
-    }
-    b = rx_buf[rx_tail];
-    rx_tail = (uint16_t)((rx_tail + 1u) & (RX_RING - 1u));
-    return b;
+    USART_CR1 |= USART_CR1_TXEIE;
 }
 
 /* ------------------------------------------------------------------ the rest */
-
-uint8_t hal_critical_enter(void)
-{
-    uint32_t primask;
-    __asm__ volatile("mrs %0, primask" : "=r"(primask));
-    __asm__ volatile("cpsid i" ::: "memory");
-    return (uint8_t)(primask & 1u);
-}
-
-void hal_critical_exit(uint8_t state)
-{
-    if (!state) {
-        __asm__ volatile("cpsie i" ::: "memory");
-    }
-}
 
 void hal_init(void)
 {
@@ -353,15 +293,4 @@ void hal_init(void)
     USART_BRR = (sysclk + CFG_UART_BAUD / 2u) / CFG_UART_BAUD; /* APB2 = sysclk */
     USART_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
     NVIC_ISER(USART1_IRQN / 32u) = 1u << (USART1_IRQN % 32u);
-    next_tick = hal_micros() + CFG_TICK_US;
-}
-
-int main(void)
-{
-    hal_init();
-    app_init();
-    for (;;) {
-        hal_wait_tick();
-        app_tick();
-    }
 }

@@ -1,7 +1,8 @@
 """Exceptions at proleg's package boundaries.
 
 Every user mistake surfaces as a ``ProlegError`` whose message is one complete line:
-where (file, field or line) and what was expected. The CLI prints that line and exits 2;
+where (file, field or line) and what was expected. The CLI prints that line and exits 2
+(usage), or 1 for a ``LinkError`` (the robot, the link or an output failed);
 anything else reaching the CLI is a bug and keeps its traceback.
 """
 

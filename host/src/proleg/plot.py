@@ -1,6 +1,6 @@
-"""``proleg plot FILE -o OUT.png``: ψ per limb against ψ*, robot state (measured and
-target), SMA duty per channel and — when the recording has it — displacement, over firmware
-time. matplotlib with the Agg backend; written to a temp file and renamed, so a failed plot
+"""``proleg plot FILE -o OUT.png``: ψ per limb (by name) against ψ*, robot state (measured
+and target), SMA duty per actuator (by name) and — when the recording has it — displacement,
+over firmware time; faults, E-stops and injected faults as vertical markers on every panel. matplotlib with the Agg backend; written to a temp file and renamed, so a failed plot
 leaves no half-written output.
 """
 
@@ -15,22 +15,28 @@ from .states import label
 from .record import Recording, read_recording
 
 
-def _psi_stars(rec: Recording) -> list[list[float]]:
-    """``psi_star_deg`` header: limbs separated by ';', levels by ','."""
-    text = rec.header.get("psi_star_deg", "")
-    if not text:
-        return []
-    try:
-        return [[float(v) for v in limb.split(",") if v.strip()] for limb in text.split(";")]
-    except ValueError:
-        return []
-
-
 def _levels(rec: Recording) -> tuple[int, ...]:
-    stars = _psi_stars(rec)
+    stars = rec.meta.psi_star_deg
     if len(stars) == rec.limbs:
         return tuple(len(s) + 1 for s in stars)
     return (2,) * rec.limbs
+
+
+def _markers(rec: Recording) -> list[tuple[float, str, str]]:
+    """(firmware time, colour, label) of every fault, E-stop and injected fault."""
+    out = []
+    for e in rec.events:
+        t = e.get("t_s")
+        if t is None or t == "":
+            continue
+        kind = e.get("kind", "")
+        if kind == "FAULT":
+            out.append((float(t), "red", str(e.get("text", "fault"))))
+        elif kind == "ESTOP":
+            out.append((float(t), "black", "E-stop"))
+        elif kind == "INJECT":
+            out.append((float(t), "darkorange", f"injected {e.get('text', '')}"))
+    return out
 
 
 def plot_recording(path: str | Path, out: str | Path, *, title: str | None = None) -> Path:
@@ -56,11 +62,12 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     colors = [f"C{i}" for i in range(max(rec.limbs, rec.channels))]
 
     ax = axes[0]
-    stars = _psi_stars(rec)
+    stars = rec.meta.psi_star_deg
+    limb_names = list(rec.meta.limb_names) or [f"limb {i}" for i in range(rec.limbs)]
     for i in range(rec.limbs):
-        ax.plot(t, rec.psi_deg[:, i], color=colors[i], lw=1.2, label=f"ψ{i}")
+        ax.plot(t, rec.psi_deg[:, i], color=colors[i], lw=1.2, label=f"ψ {limb_names[i]}")
         for s in stars[i] if i < len(stars) else []:
-            ax.axhline(s, color=colors[i], ls="--", lw=0.8, label=f"ψ*{i} = {s:g}°")
+            ax.axhline(s, color=colors[i], ls="--", lw=0.8, label=f"ψ* {limb_names[i]} = {s:g}°")
     ax.set_ylabel("ψ (°)")
     ax.legend(loc="upper right", fontsize="small", ncols=2)
 
@@ -78,7 +85,8 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
 
     ax = axes[2]
     for j in range(rec.channels):
-        ax.plot(t, rec.duty_pct[:, j], color=colors[j], lw=1.0, label=f"SMA {j}")
+        name = rec.meta.channel_names[j] if j < len(rec.meta.channel_names) else f"channel {j}"
+        ax.plot(t, rec.duty_pct[:, j], color=colors[j], lw=1.0, label=name)
     ax.set_ylabel("duty (%)")
     ax.set_ylim(-2, 102)
     ax.legend(loc="upper right", fontsize="small")
@@ -87,9 +95,16 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
         ax = axes[3]
         ax.plot(t, rec.displacement_mm, color="C2", lw=1.2)
         ax.set_ylabel("displacement (mm)")
+    seen: set[str] = set()
+    for when, color, text in _markers(rec):
+        for ax in axes:
+            ax.axvline(when, color=color, ls=":", lw=1.2)
+        if text not in seen:  # one label per distinct fault, on the top panel
+            seen.add(text)
+            axes[0].annotate(text, (when, 1.0), xycoords=("data", "axes fraction"), rotation=90, va="top",
+                             ha="right", fontsize="x-small", color=color)
     axes[-1].set_xlabel("firmware time (s)")
-    robot = rec.header.get("robot", "")
-    fig.suptitle(title or f"{robot} {rec.header.get('board', '')} — {rec.path.name}".strip())
+    fig.suptitle(title or f"{rec.meta.robot} {rec.meta.board} — {rec.path.name}".strip())
 
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=f".{ext}", dir=directory)
     os.close(fd)

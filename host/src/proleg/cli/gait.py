@@ -25,8 +25,10 @@ PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_d
 
 def add_gait_parser(sub) -> None:
     """Register ``proleg gait`` on the one parser's subcommands."""
+    from .main import robot_arg  # a robot file or a bundled example's name
+
     g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
-    g.add_argument("robot", metavar="ROBOT.toml")
+    g.add_argument("robot", metavar="ROBOT", type=robot_arg)
     g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
     g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
     g.add_argument("--max-transitions", type=_positive_int, metavar="N")

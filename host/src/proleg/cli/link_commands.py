@@ -11,10 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any, TextIO
 
-from ..errors import LinkError
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
@@ -23,13 +21,19 @@ from ..link.serial_link import DEFAULT_BAUDRATE
 def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str = "socketcan",
                  node: int = 0, sim: str | None = None, robot_file: str | None = None, baudrate: int = DEFAULT_BAUDRATE,
                  record: str | None = None, plain: bool = False, duration_s: float | None = None,
-                 timeout: float = 0.5, out: TextIO | None = None) -> int:
-    """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame."""
+                 timeout: float = 0.5, out: TextIO | None = None, fmt: str = "text",
+                 udp: str | None = None, udp_format: str = "plotjuggler") -> int:
+    """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame
+    (``fmt="jsonl"``: one JSON object per frame, the recordings' field names); ``udp`` streams
+    every frame to PlotJuggler or Teleplot."""
     from ..console import ConsoleApp, LimbView, run_plain
-    from ..record import Recorder, record_format
+    from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
+    from ..record.udp import parse_endpoint
 
     if record is not None:
-        record_format(record)  # reject an unknown extension before opening anything
+        check_suffix(record)  # reject an unknown extension before opening anything
+    if udp is not None:
+        parse_endpoint(udp)
     out = out or sys.stdout
     link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim),
                      baudrate=baudrate, speed=1.0)
@@ -41,22 +45,28 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     with RobotClient(link, timeout=timeout) as client:
         info = client.connect()
         listeners = []
-        header: dict[str, Any] = info.header()
-        if robot is not None:
-            header["psi_star_deg"] = ";".join(",".join(f"{v:g}" for v in limb.psi_star_deg) for limb in robot.limbs)
-            header["limb_names"] = ",".join(limb.name for limb in robot.limbs)
-        header["link"] = link.description
+        meta = RecordingMeta.for_robot(info=info, robot=robot, link=link)
         if record is not None:
-            listeners.append(Recorder(record, header, limbs=info.limbs, channels=info.actuators))
+            listeners.append(Logger(record, meta))
+        if udp is not None:
+            listeners.append(UdpStreamer(udp, udp_format, meta))
         levels = robot.levels if robot is not None else (2,) * info.limbs
-        if plain or not out.isatty():
+        if plain or fmt == "jsonl" or not out.isatty():
             from ..states import label
 
-            run_plain(client, listeners=listeners, out=out, duration_s=duration_s,
+            if fmt == "jsonl":
+                listeners.append(JsonlPrinter(meta, out, telemetry_only=False))
+            run_plain(client, listeners=listeners, out=out, duration_s=duration_s, quiet=fmt == "jsonl",
                       labels=lambda s: label(s, levels) if s < _prod(levels) else str(s))
+            errors = [w.error for w in listeners if getattr(w, "error", None)]
+            if errors:
+                raise errors[0]
             return 0
         limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
         ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners).run()
+        errors = [w.error for w in listeners if getattr(w, "error", None)]
+        if errors:
+            raise errors[0]
     return 0
 
 
@@ -93,26 +103,38 @@ def _int_auto(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
 
 
+def _robot(text: str) -> str:
+    from .main import robot_arg
+
+    return robot_arg(text)
+
+
 def add_arguments(subparsers: Any) -> None:
     """Add ``console``, ``plot`` and ``dbc`` to the CLI's subparsers."""
+    from .main import add_udp_options
+
     c = subparsers.add_parser("console", help="live console (or --plain lines) on a robot over serial, CAN or the simulator")
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port, loop://")
     src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
-    src.add_argument("--sim", metavar="ROBOT.toml", help="run the robot's firmware on the simulated board")
+    src.add_argument("--sim", metavar="ROBOT", type=_robot, help="run the robot's firmware on the simulated board")
     c.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
     c.add_argument("--node", type=_int_auto, default=0, help="CAN node id of the robot, 0..15 (default 0)")
     c.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
-    c.add_argument("--robot", metavar="ROBOT.toml", help="robot file for limb names and ψ* (with --port/--can)")
-    c.add_argument("--record", metavar="FILE", help="record every frame to FILE (.csv or .jsonl)")
+    c.add_argument("--robot", metavar="ROBOT", type=_robot, help="robot file for limb names and ψ* (with --port/--can)")
+    c.add_argument("--record", metavar="FILE", help="record every frame to FILE (.csv, .jsonl or .mcap)")
     c.add_argument("--plain", action="store_true", help="print one line per telemetry frame instead of the UI")
+    c.add_argument("--format", choices=("text", "jsonl"), default="text",
+                   help="with --plain: text lines, or one JSON object per message for scripts")
+    add_udp_options(c)
     c.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (plain mode)")
     c.set_defaults(run=lambda a: console_main(
         port=a.port, can_channel=a.can, interface=a.interface, node=a.node, sim=a.sim, robot_file=a.robot,
-        baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration))
+        baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration, fmt=a.format,
+        udp=a.udp, udp_format=a.udp_format))
 
     p = subparsers.add_parser("plot", help="plot a recording: ψ vs ψ*, states, SMA duty, displacement")
-    p.add_argument("record_file", metavar="FILE", help="recording (.csv or .jsonl) from proleg console --record")
+    p.add_argument("record_file", metavar="FILE", help="recording (.csv, .jsonl or .mcap) from --record")
     p.add_argument("-o", "--out", required=True, metavar="OUT.png", help="image to write (.png, .svg, .pdf)")
     p.add_argument("--title")
     p.set_defaults(run=lambda a: plot_main(record_file=a.record_file, out=a.out, title=a.title))

@@ -1,34 +1,106 @@
-"""The ``proleg`` command's parser and the build/flash/sim commands (``gait`` is in ``gait``): parse arguments,
-call the library, print. ``console``, ``plot`` and ``dbc`` are in ``link_commands``.
+"""The ``proleg`` command's parser and the build/flash/sim commands: parse arguments,
+call the library, print. ``gait`` is in ``gait``; ``console``, ``plot`` and ``dbc`` in
+``link_commands``; ``run``, ``load-gait``, ``set-param`` and ``robots`` in ``robot_commands``.
 
-Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr
-with exit status 2; nothing a user typed produces a traceback.
+Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
+faulted, an output could not be written); 2 usage (a bad argument, robot file, board file or
+gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
+a closed pipe (``proleg … | head``), a full disk and a terminal that cannot show UTF-8 end
+without a traceback.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
+import os
 import shlex
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..errors import ProlegError
+from .. import __version__
+from ..errors import LinkError, ProlegError
 from .gait import add_gait_parser
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+EPILOG = """\
+exit status:
+  0  ok
+  1  failed: a link or command failed, the robot faulted, an output could not be written
+  2  usage: a bad argument, robot file, board file or gait
+
+ROBOT is a robot file or the name of a bundled example (proleg robots lists them).
+"""
+log = logging.getLogger("proleg")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(_join_signed_values(sys.argv[1:] if argv is None else list(argv)))
+    _tolerant_streams()
+    argv = _hoist_verbosity(_join_signed_values(sys.argv[1:] if argv is None else list(argv)))
+    args = build_parser().parse_args(argv)
+    _setup_logging(args.verbose - args.quiet)
     try:
-        return args.run(args)
+        code = args.run(args)
+        sys.stdout.flush()
+        return code
+    except LinkError as e:  # the robot, the link or a file to write failed
+        print(f"proleg: error: {e}", file=sys.stderr)
+        return EXIT_FAILED
     except ProlegError as e:
         print(f"proleg: error: {e}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     except KeyboardInterrupt:
         return 130
-    except BrokenPipeError:
-        return 0
+    except BrokenPipeError:  # the reader went away (`proleg … | head -1`): not an error
+        _silence_stdout()
+        return EXIT_OK
+    except OSError as e:  # a full disk, a vanished directory... while writing an output
+        where = f" {e.filename}" if e.filename else ""
+        print(f"proleg: error: cannot write{where}: {e.strerror or e}", file=sys.stderr)
+        _silence_stdout()
+        return EXIT_FAILED
+
+
+def _tolerant_streams() -> None:
+    """Print with replacement on a terminal that cannot encode everything (LANG=C,
+    PYTHONIOENCODING=ascii): ``→`` becomes ``?`` rather than a UnicodeEncodeError."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None and (stream.encoding or "").lower().replace("-", "") != "utf8":
+            try:
+                reconfigure(errors="replace")
+            except (ValueError, OSError):
+                pass
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's last flush does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass
+
+
+def _setup_logging(verbosity: int) -> None:
+    """-v: debug; default: info (progress); -q: warnings only; -qq: errors only."""
+    level = {1: logging.DEBUG, 0: logging.INFO, -1: logging.WARNING}.get(verbosity, logging.DEBUG if verbosity > 0
+                                                                      else logging.ERROR)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("proleg: %(message)s"))
+    log.handlers[:] = [handler]
+    log.setLevel(level)
+    log.propagate = False
+
+
+def _hoist_verbosity(argv: list[str]) -> list[str]:
+    """Accept -v/-q anywhere (``proleg run … -q``): argparse takes them before the command."""
+    flags = [a for a in argv if a in ("-v", "-vv", "-q", "-qq", "--verbose", "--quiet")]
+    rest = [a for a in argv if a not in flags]
+    return flags + rest
 
 
 def _join_signed_values(argv: list[str]) -> list[str]:
@@ -44,8 +116,19 @@ def _join_signed_values(argv: list[str]) -> list[str]:
     return out
 
 
+def robot_arg(text: str) -> str:
+    """A ROBOT argument: a robot file, or the name of a bundled example robot."""
+    from ..paths import resolve_robot
+
+    return str(resolve_robot(text))
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="proleg", description="Gaits, firmware and simulation for soft crawling robots.")
+    p = argparse.ArgumentParser(prog="proleg", description="Gaits, firmware and simulation for soft crawling robots.",
+                                epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--version", action="version", version=f"proleg {__version__}")
+    p.add_argument("-v", "--verbose", action="count", default=0, help="more messages on stderr (-vv: debug)")
+    p.add_argument("-q", "--quiet", action="count", default=0, help="fewer messages on stderr (no progress)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     add_gait_parser(sub)
@@ -62,7 +145,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.set_defaults(run=cmd_flash)
 
     s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
-    s.add_argument("robot", metavar="ROBOT.toml")
+    s.add_argument("robot", metavar="ROBOT", type=robot_arg)
     s.add_argument("--duration", type=_positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
     s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
@@ -71,7 +154,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P]; "
                         "append +T for T simulated seconds after the start (e.g. dead-actuator:sma-right+10)")
     s.add_argument("--seed", type=int, default=1)
-    s.add_argument("--record", metavar="FILE", help="record every telemetry frame (.csv or .jsonl)")
+    s.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
+    add_udp_options(s)
     s.add_argument("--json", action="store_true", help="print the report as one JSON object")
     s.add_argument("--pty", action="store_true",
                    help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
@@ -79,9 +163,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(run=cmd_sim)
 
     from .link_commands import add_arguments as add_link_commands
+    from .robot_commands import add_arguments as add_robot_commands
 
     add_link_commands(sub)  # console, plot, dbc
+    add_robot_commands(sub)  # run, load-gait, set-param, robots
     return p
+
+
+def add_udp_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--udp", metavar="HOST:PORT", help="stream every telemetry frame over UDP to PlotJuggler or Teleplot")
+    p.add_argument("--udp-format", choices=("plotjuggler", "teleplot"), default="plotjuggler",
+                   help="plotjuggler: one JSON object per datagram (default); teleplot: >name:timestamp_ms:value lines")
 
 
 def _positive_float(text: str) -> float:
@@ -95,7 +187,7 @@ def _positive_float(text: str) -> float:
 
 
 def _firmware_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("robot", metavar="ROBOT.toml")
+    p.add_argument("robot", metavar="ROBOT", type=robot_arg)
     p.add_argument("--board", required=True, help="board name (boards/NAME.toml) or a board file")
     p.add_argument("-o", "--out", metavar="DIR", help="project directory (default build/ROBOT-BOARD)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
@@ -168,6 +260,15 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..sim.closed_loop import SimulatedRobot
 
     robot = load_robot(args.robot)
+    if not args.pty:
+        from .robot_commands import gaits_per_direction
+
+        have = gaits_per_direction(robot).get(args.direction, 0)
+        if args.gait >= have:
+            from ..errors import GaitError
+
+            shown = f"gaits 0..{have - 1}" if have else "no gait"
+            raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
     sim = SimulatedRobot(robot, seed=args.seed)
     timed = []
     for spec in args.inject:
@@ -184,7 +285,13 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.pty:
         return _serve_pty(sim, args)
     recorder = _recorder(robot, args.record) if args.record else None
-    session = SimSession(sim, listeners=[recorder] if recorder else [])
+    listeners = [recorder] if recorder else []
+    if args.udp:
+        from ..record import RecordingMeta, UdpStreamer
+
+        meta = RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",))
+        listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
+    session = SimSession(sim, listeners=listeners)
     try:
         session.advance(0.2)  # boot
         start = sim.time_s
@@ -192,15 +299,18 @@ def cmd_sim(args: argparse.Namespace) -> int:
             session.schedule_fault(start + at, fault)
         report = session.run_gait(args.direction, args.gait, args.duration)
     finally:
-        if recorder is not None:
-            recorder.stop()
+        for listener in listeners:
+            listener.stop()
     if args.json:
         print(json.dumps(_report_json(robot, report)))
     else:
         print(_report_text(robot, report))
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
-    return 0 if report.ok else 1
+    if recorder is not None and recorder.error is not None:
+        print(f"proleg: error: {recorder.error}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK if report.ok else EXIT_FAILED
 
 
 def _serve_pty(sim, args) -> int:
@@ -217,15 +327,9 @@ def _serve_pty(sim, args) -> int:
 
 
 def _recorder(robot, path: str):
-    from ..record import Recorder
+    from ..record import Logger, RecordingMeta
 
-    header = {
-        "robot": robot.name,
-        "board": "host-sim",
-        "psi_star_deg": ";".join(",".join(f"{p:g}" for p in limb.psi_star_deg) for limb in robot.limbs),
-        "limbs": ",".join(limb.name for limb in robot.limbs),
-    }
-    return Recorder(path, header, limbs=len(robot.limbs), channels=len(robot.actuators))
+    return Logger(path, RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",)))
 
 
 def _report_json(robot, report) -> dict:

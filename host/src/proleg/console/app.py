@@ -343,11 +343,12 @@ def _prod(levels: Sequence[int]) -> int:
 
 
 def run_plain(client: RobotClient, *, listeners: Sequence[Listener] = (), out: TextIO | None = None,
-              duration_s: float | None = None, labels: Callable[[int], str] | None = None) -> None:
-    """Print one line per telemetry frame until interrupted (or ``duration_s`` wall seconds);
-    a link failure ends it with ``LinkError``."""
-    printer = Printer(out or sys.stdout, telemetry_only=True, labels=labels)
-    notifier = Notifier(client, [printer, *listeners])
+              duration_s: float | None = None, labels: Callable[[int], str] | None = None,
+              quiet: bool = False) -> None:
+    """Print one line per telemetry frame (``quiet``: none; the listeners print) until
+    interrupted (or ``duration_s`` wall seconds); a link failure ends it with ``LinkError``."""
+    printers = [] if quiet else [Printer(out or sys.stdout, telemetry_only=True, labels=labels)]
+    notifier = Notifier(client, [*printers, *listeners])
     t_end = None if duration_s is None else time.monotonic() + duration_s
     try:
         while notifier.running and (t_end is None or time.monotonic() < t_end):

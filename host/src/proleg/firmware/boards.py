@@ -1,8 +1,11 @@
-"""Board files (``boards/*.toml``): one file per board.
+"""Board files (``boards/*.toml``): one file per board, the only board-specific data.
 
-A board file names the MCU and clock, the toolchain and its flags, flash and RAM size,
-the IMU bus, the PWM pin of each actuator channel, the host UART, and how to flash.
-``load_board`` takes a board name (``arduino-nano``) or a path to a board file.
+A board file names its HAL family (a folder ``firmware_templates/hal/<family>/``), the
+MCU and clock, flash and RAM size, the compiler and its flags, the build steps after
+compiling (``[build]``: link output, conversion to the flashed artifact, the size
+command, whether the core's main loop is in the image), the IMU bus, the PWM pin of each
+actuator channel, the host UART and its buffers, and how to flash. ``load_board`` takes
+a board name (``arduino-nano``) or a path to a board file. See docs/adding-a-board.md.
 """
 
 from __future__ import annotations
@@ -14,8 +17,11 @@ from typing import Any
 
 from ..errors import BoardError
 from ..paths import boards_dir
+from .families import available_families, hal_root
 
-FAMILIES = ("sim", "avr", "stm32f1")
+#: [uart] buffers when a board file does not give them (bytes, powers of two).
+DEFAULT_UART_RX_BUFFER = 64
+DEFAULT_UART_TX_BUFFER = 128
 
 
 @dataclass(frozen=True)
@@ -42,21 +48,34 @@ class Board:
     cc: str
     cflags: tuple[str, ...]
     ldflags: tuple[str, ...]
-    objcopy: str | None
-    objcopy_flags: tuple[str, ...]
-    size_tool: str
-    artifact: str
     packages: tuple[str, ...]
+    main_loop: bool  # core/main.c (main, tick pacing) is in the image; False: a host drives the ticks
+    link: str  # what `$(CC) <objects> <ldflags> -o` writes
+    artifact: str  # what is flashed or loaded: the link output, or made from it by `objcopy`
+    objcopy: tuple[str, ...]  # link -> artifact command ({link}, {artifact} filled in); empty: none
+    size: tuple[str, ...]  # Berkeley-format size command ({link} filled in)
     i2c: dict[str, Any]
     pwm_pins: tuple[str, ...]
     pwm_frequency_hz: int
     uart_port: str
     uart_baud: int
+    uart_rx_buffer: int
+    uart_tx_buffer: int
     flash_methods: tuple[FlashMethod, ...]
 
     @property
     def pwm_channels(self) -> tuple[str, ...]:
         return self.pwm_pins
+
+    def objcopy_command(self) -> list[str]:
+        return [_fill(p, link=self.link, artifact=self.artifact) for p in self.objcopy]
+
+    def size_command(self) -> list[str]:
+        return [_fill(p, link=self.link, artifact=self.artifact) for p in self.size]
+
+    def tools(self) -> list[str]:
+        """Every program the build runs (compiler, conversion, size)."""
+        return [self.cc] + [cmd[0] for cmd in (self.objcopy, self.size) if cmd]
 
     # Dict-style access keeps templates simple: board["name"], board["family"] ...
     def __getitem__(self, key: str) -> Any:
@@ -105,14 +124,50 @@ def _strings(path: Path, doc: dict, table: str, key: str, default: list | None =
     return tuple(v)
 
 
+def _fill(part: str, **values: str) -> str:
+    for k, v in values.items():
+        part = part.replace("{" + k + "}", v)
+    return part
+
+
+def _buffer(path: Path, doc: dict, key: str, default: int) -> int:
+    v = doc.get("uart", {}).get(key, default)
+    if not isinstance(v, int) or isinstance(v, bool) or v < 16 or v > 32768 or v & (v - 1):
+        raise BoardError(f"{path}: uart.{key}: expected a power of two from 16 to 32768 bytes, got {v!r}")
+    return v
+
+
+def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
+    b = doc.get("build")
+    if not isinstance(b, dict):
+        raise BoardError(f"{path}: build: missing (the [build] table: main_loop, link, artifact, size)")
+    main_loop = b.get("main_loop")
+    if not isinstance(main_loop, bool):
+        raise BoardError(f"{path}: build.main_loop: expected true or false, got {main_loop!r}")
+    link = _need(path, doc, "build", "link", str)
+    artifact = _need(path, doc, "build", "artifact", str)
+    objcopy = _strings(path, doc, "build", "objcopy", [])
+    size = _strings(path, doc, "build", "size")
+    if not size:
+        raise BoardError(f"{path}: build.size: expected a command, e.g. [\"size\", \"-B\", \"{{link}}\"]")
+    if artifact != link and not objcopy:
+        raise BoardError(f"{path}: build.objcopy: missing, needed to make artifact {artifact!r} from {link!r}")
+    if artifact == link and objcopy:
+        raise BoardError(f"{path}: build.objcopy: given, but build.artifact is the link output {link!r}")
+    return dict(main_loop=main_loop, link=link, artifact=artifact, objcopy=objcopy, size=size)
+
+
 def _board_from_dict(path: Path, doc: dict) -> Board:
-    known = {"board", "toolchain", "i2c", "pwm", "uart", "flash"}
+    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
     family = _need(path, doc, "board", "family", str)
-    if family not in FAMILIES:
-        raise BoardError(f"{path}: board.family: expected one of {', '.join(FAMILIES)}, got {family!r}")
+    if family not in available_families():
+        raise BoardError(
+            f"{path}: board.family: expected one of {', '.join(available_families())} "
+            f"(a folder with a family.toml under {hal_root()}), got {family!r}"
+        )
     flash = doc.get("flash", [])
     if not isinstance(flash, list):
         raise BoardError(f"{path}: flash: expected [[flash]] tables")
@@ -124,7 +179,6 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         if not isinstance(cmd, list) or not cmd or not all(isinstance(s, str) for s in cmd):
             raise BoardError(f"{path}: flash[{i}].command: expected a list of strings")
         methods.append(FlashMethod(f["tool"], tuple(cmd), tuple(f.get("packages", []))))
-    tc = doc.get("toolchain", {})
     i2c = doc.get("i2c", {})
     if not isinstance(i2c, dict):
         raise BoardError(f"{path}: i2c: expected a table")
@@ -140,15 +194,14 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         cc=_need(path, doc, "toolchain", "cc", str),
         cflags=_strings(path, doc, "toolchain", "cflags", []),
         ldflags=_strings(path, doc, "toolchain", "ldflags", []),
-        objcopy=tc.get("objcopy"),
-        objcopy_flags=_strings(path, doc, "toolchain", "objcopy_flags", []),
-        size_tool=_need(path, doc, "toolchain", "size", str),
-        artifact=_need(path, doc, "toolchain", "artifact", str),
         packages=_strings(path, doc, "toolchain", "packages", []),
+        **_build_steps(path, doc),
         i2c=i2c,
         pwm_pins=_strings(path, doc, "pwm", "pins"),
         pwm_frequency_hz=_need(path, doc, "pwm", "frequency_hz", int),
         uart_port=_need(path, doc, "uart", "port", str),
         uart_baud=_need(path, doc, "uart", "baud", int),
+        uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
+        uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
         flash_methods=tuple(methods),
     )

@@ -1,9 +1,11 @@
 """Render a robot's firmware project for a board and compile it.
 
 The project directory is self-contained: ``core/`` (the hand-written portable C, copied
-unchanged), ``hal/`` (the board family's port), ``gen/`` (the rendered configuration,
-gait tables and protocol tables), a ``Makefile`` a user can run by hand, and
-``proleg-build.json`` (what was built from which inputs, and its size). The project is
+unchanged; ``main.c`` only when the board file's ``build.main_loop`` is true), ``hal/``
+(the board family's port), ``gen/`` (the rendered configuration, gait tables and
+protocol tables), a ``Makefile`` a user can run by hand (its link, objcopy and size steps
+are the board file's ``[build]`` table), and ``proleg-build.json`` (what was built from
+which inputs, the gait selection, and its size). The project is
 written and compiled in a temporary sibling directory and moved into place only when
 the build succeeded and fits the board: a failed build leaves nothing half-written.
 """
@@ -27,8 +29,13 @@ from ..errors import BuildError
 from ..paths import home, templates_dir
 from ..robot import Robot
 from .boards import Board
+from .gaits import firmware_gaits
+
+__all__ = ["MANIFEST", "BuildResult", "build", "check_buildable", "firmware_gaits", "render_project"]
 
 MANIFEST = "proleg-build.json"
+#: The core file that holds main() and the tick loop: in the image only when build.main_loop.
+CORE_MAIN = "main.c"
 
 
 @dataclass(frozen=True)
@@ -55,21 +62,6 @@ def default_out_dir(robot: Robot, board: Board) -> Path:
     return Path("build") / f"{robot.name}-{board.name}"
 
 
-def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None) -> dict:
-    """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none).
-
-    Ties whose steps each move limbs one way only come first (stable otherwise), so that
-    gait 0, the one START and ``proleg sim`` run by default, is the easiest to make
-    physically (``proleg.states.opposing_steps``)."""
-    from ..gait import optimal_gaits
-    from ..states import opposing_steps
-
-    def ordered(gaits):
-        return tuple(sorted(gaits, key=lambda g: len(opposing_steps(g.states, robot.levels))))
-
-    return {d: ordered(optimal_gaits(robot.transitions, objective, d, max_transitions).gaits) for d in ("+x", "-x")}
-
-
 def check_buildable(robot: Robot, board: Board) -> None:
     channels = len(board.pwm_pins)
     for a in robot.actuators:
@@ -92,8 +84,8 @@ def check_buildable(robot: Robot, board: Board) -> None:
             f"robot {robot.name}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
             f"board {board.name}'s {board.uart_baud} baud link (at most {link_hz} Hz for {frame}-byte frames)"
         )
-    for tool in (board.cc, board.size_tool, board.objcopy):
-        if tool and shutil.which(tool) is None:
+    for tool in board.tools():
+        if shutil.which(tool) is None:
             pkgs = " ".join(board.packages) or "its toolchain"
             raise BuildError(
                 f"{tool} not found, needed for board {board.name}: install the Debian packages {pkgs} "
@@ -106,18 +98,18 @@ def check_buildable(robot: Robot, board: Board) -> None:
 def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:
     """Every file of the project directory, by relative path; same inputs, same bytes."""
     from ..protocol.render import render_c
-    from .config import render_config
+    from .render import render_config
 
     tdir = templates_dir()
     files: dict[str, str] = {}
     for src in sorted((tdir / "core").iterdir()):
-        if src.suffix in (".c", ".h"):
+        if src.suffix in (".c", ".h") and (board.main_loop or src.name != CORE_MAIN):
             files[f"core/{src.name}"] = src.read_text(encoding="utf-8")
     hal_dir = tdir / "hal" / board.family
     if not hal_dir.is_dir():
         raise BuildError(f"no HAL for board family {board.family!r} in {hal_dir}")
     for src in sorted(hal_dir.iterdir()):
-        if src.suffix in (".c", ".h", ".S", ".ld"):
+        if src.suffix in (".c", ".h", ".S", ".ld"):  # not family.toml: that is data for the renderer
             files[f"hal/{src.name}"] = src.read_text(encoding="utf-8")
     for name, text in render_config(robot, gaits, board).items():
         files[f"gen/{name}"] = text
@@ -169,8 +161,7 @@ def build(
             p.parent.mkdir(parents=True, exist_ok=True)
             p.write_text(text, encoding="utf-8")
         _make(tmp, jobs)
-        binary = tmp / (board.artifact if board.family == "sim" else "firmware.elf")
-        flash_used, ram_used = _sizes(board, binary, tmp)
+        flash_used, ram_used = _sizes(board, tmp)
         _check_limits(robot, board, flash_used, ram_used)
         digest = gait_table_hash(files)
         manifest = {
@@ -188,6 +179,7 @@ def build(
             "gait_table_hash": digest,
             "gait_objective": objective,
             "gait_max_transitions": max_transitions,
+            "gait_selection": gaits.selection.as_json(),
             "gaits": {d: [list(g.states) for g in gs] for d, gs in gaits.items()},
         }
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
@@ -211,12 +203,14 @@ def _make(project: Path, jobs: int) -> None:
         raise BuildError("compilation failed:\n  " + "\n  ".join(errors[:15]))
 
 
-def _sizes(board: Board, binary: Path, cwd: Path) -> tuple[int, int]:
-    """(flash, static RAM) from the Berkeley size format: flash = text+data, RAM = data+bss."""
-    proc = subprocess.run([board.size_tool, "-B", binary.name], capture_output=True, text=True, cwd=cwd)
+def _sizes(board: Board, cwd: Path) -> tuple[int, int]:
+    """(flash, static RAM) from the board's size command (Berkeley format: flash = text+data,
+    RAM = data+bss)."""
+    cmd = board.size_command()
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd)
     lines = proc.stdout.strip().splitlines()
     if proc.returncode != 0 or len(lines) < 2:
-        raise BuildError(f"{board.size_tool} could not read {binary.name}: {proc.stderr.strip()}")
+        raise BuildError(f"{cmd[0]} could not read {board.link}: {proc.stderr.strip()}")
     text, data, bss = (int(x) for x in lines[1].split()[:3])
     return text + data, data + bss
 

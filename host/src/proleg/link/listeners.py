@@ -2,7 +2,7 @@
 
 ``Notifier(client, listeners)`` runs one thread that calls ``client.recv_received`` and hands
 every message to each ``Listener``: ``Printer`` (one line per telemetry frame), ``BufferedReader``
-(a queue for tests and scripts), ``Recorder`` (``proleg.record``), the console (``proleg.console``). None of
+(a queue for tests and scripts), the recording writers (``proleg.record.Logger``), the console (``proleg.console``). None of
 them knows which link the messages came over.
 """
 

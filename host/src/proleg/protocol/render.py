@@ -3,10 +3,16 @@
 
 ``render_c(max_limbs, max_channels)`` is pure and deterministic: the same inputs give the same
 text, byte for byte. Only data is generated; all logic lives in ``firmware_templates/core``.
+That data includes the command list ``PROTO_COMMANDS(X)``: one ``X(PROTO_ID_<NAME>,
+cmd_<name>)`` per host→robot message, which ``core/cmd.c`` expands into its handler
+declarations and its dispatch, so a command added to the definition has to get its handler
+``cmd_<name>`` there before the firmware compiles (docs/adding-a-message.md). ``messages``
+(default: the definition's) lets a test render a toy definition.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from enum import IntFlag
 
 from proleg.errors import ProtocolError
@@ -74,7 +80,22 @@ def _enum_block(cls: type, prefix: str) -> str:
     return "\n".join(lines)
 
 
-def render_h(max_limbs: int, max_channels: int) -> str:
+def handler_name(m: MessageSpec) -> str:
+    """The C function in core/cmd.c that handles command ``m``: ``cmd_<name>(token)``."""
+    return f"cmd_{m.name.lower()}"
+
+
+def _commands(messages: Sequence[MessageSpec]) -> str:
+    rows = [f"    X(PROTO_ID_{m.name}, {handler_name(m)})" for m in sorted(messages, key=lambda m: m.id)
+            if m.direction == "h2r"]
+    return (
+        "/* Commands (host->robot), by id: X(id, handler). core/cmd.c declares and dispatches\n"
+        " * through this list; each handler is static void cmd_<name>(uint8_t token). */\n"
+        "#define PROTO_COMMANDS(X) \\\n" + " \\\n".join(rows) + "\n"
+    )
+
+
+def render_h(max_limbs: int, max_channels: int, messages: Sequence[MessageSpec] = MESSAGES) -> str:
     """The text of ``proto_gen.h``."""
     out = [_header(max_limbs, max_channels)]
     out.append("#ifndef PROLEG_PROTO_GEN_H\n#define PROLEG_PROTO_GEN_H\n\n#include <stdint.h>\n")
@@ -90,17 +111,18 @@ def render_h(max_limbs: int, max_channels: int) -> str:
                 f"#define PROTO_MAX_ENCODED {MAX_ENCODED_FRAME}    /* bytes on the wire incl. 0x00 */",
                 f"#define PROTO_ROBOT_NAME_LEN {ROBOT_NAME_LEN}",
                 f"#define PROTO_BOARD_NAME_LEN {BOARD_NAME_LEN}",
-                f"#define PROTO_N_MESSAGES {len(MESSAGES)}",
+                f"#define PROTO_N_MESSAGES {len(messages)}",
                 "",
                 "/* message ids */",
             ]
-            + [f"#define PROTO_ID_{m.name} 0x{m.id:02X}" for m in MESSAGES]
+            + [f"#define PROTO_ID_{m.name} 0x{m.id:02X}" for m in messages]
         )
         + "\n"
     )
+    out.append(_commands(messages))
     out.append("\n\n".join(_enum_block(cls, prefix) for cls, prefix in ENUMS) + "\n")
-    out.append("\n\n".join(_struct(m) for m in MESSAGES) + "\n")
-    members = "\n".join(f"        proto_{m.name.lower()}_t {m.name.lower()};" for m in MESSAGES)
+    out.append("\n\n".join(_struct(m) for m in messages) + "\n")
+    members = "\n".join(f"        proto_{m.name.lower()}_t {m.name.lower()};" for m in messages)
     out.append(
         "/* One decoded message: id selects the union member (lower-case message name). */\n"
         "typedef struct {\n    uint8_t id;\n    union {\n"
@@ -110,13 +132,13 @@ def render_h(max_limbs: int, max_channels: int) -> str:
     return "\n".join(out)
 
 
-def render_c_tables(max_limbs: int, max_channels: int) -> str:
+def render_c_tables(max_limbs: int, max_channels: int, messages: Sequence[MessageSpec] = MESSAGES) -> str:
     """The text of ``proto_gen.c``: descriptor tables, in the definition's order."""
     out = [_header(max_limbs, max_channels)]
     out.append('#include <stddef.h>\n\n#include "proto.h"\n')
     rows: list[str] = []
     descs: list[str] = []
-    for m in MESSAGES:
+    for m in messages:
         st = f"proto_{m.name.lower()}_t"
         descs.append(f"    {{PROTO_ID_{m.name}, {len(rows)}, {len(m.fields)}}},")
         for f in m.fields:
@@ -135,7 +157,7 @@ def render_c_tables(max_limbs: int, max_channels: int) -> str:
     return "\n".join(out)
 
 
-def render_c(max_limbs: int, max_channels: int) -> dict[str, str]:
+def render_c(max_limbs: int, max_channels: int, messages: Sequence[MessageSpec] = MESSAGES) -> dict[str, str]:
     """Filename → text of the rendered protocol files for a build with these limits.
 
     Raises ProtocolError if the limits are outside 1..LIMB_CEILING / 1..CHANNEL_CEILING
@@ -146,6 +168,6 @@ def render_c(max_limbs: int, max_channels: int) -> dict[str, str]:
     if not 1 <= max_channels <= CHANNEL_CEILING:
         raise ProtocolError(f"render_c: max_channels={max_channels}, expected 1..{CHANNEL_CEILING}")
     return {
-        "proto_gen.h": render_h(max_limbs, max_channels),
-        "proto_gen.c": render_c_tables(max_limbs, max_channels),
+        "proto_gen.h": render_h(max_limbs, max_channels, messages),
+        "proto_gen.c": render_c_tables(max_limbs, max_channels, messages),
     }

@@ -1,10 +1,18 @@
-"""Recording the decoded-message stream to a file and reading it back.
+"""Recording the decoded-message stream and reading it back, one writer and one reader per
+format, chosen by the file's suffix (``registry``: ``.csv``, ``.jsonl``, ``.mcap``).
 
-``Recorder`` is a ``Listener`` (``proleg.link.listeners``) writing every message; the file's
-suffix picks the format (``record_format``: ``.csv`` or ``.jsonl``). ``read_recording`` reads
-either back into a ``Recording``.
+``Logger(path, meta)`` is a ``Listener`` writing every message; ``read_recording(path)``
+reads any format back into a ``Recording``. ``UdpStreamer`` sends the same rows live to
+PlotJuggler or Teleplot (``udp``). Field names and units: ``fields``; formats and
+how pandas, PlotJuggler and Foxglove read them: docs/data.md.
 """
 
-from .recorder import Recorder, Recording, csv_columns, read_recording, record_format
+from .base import Reader, Recording, Writer
+from .fields import RecordingMeta
+from .jsonl_format import JsonlPrinter
+from .registry import READERS, WRITERS, LogReader, Logger, check_suffix, read_recording
+from .udp import UDP_FORMATS, UdpStreamer
 
-__all__ = ["Recorder", "Recording", "csv_columns", "read_recording", "record_format"]
+__all__ = ["JsonlPrinter", "READERS", "WRITERS", "LogReader", "Logger", "Reader", "Recording", "RecordingMeta", "UDP_FORMATS", "UdpStreamer",
+           "Writer",
+           "check_suffix", "read_recording"]

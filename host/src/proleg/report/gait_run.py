@@ -193,7 +193,12 @@ class SimSession:
 
     def _inject_due(self) -> None:
         while self._scheduled and self.sim.time_s >= self._scheduled[0][0] - _EPS:
-            self.sim.inject(self._scheduled.pop(0)[1])
+            fault = self._scheduled.pop(0)[1]
+            self.sim.inject(fault)
+            for listener in self.listeners:
+                mark = getattr(listener, "mark", None)  # recorders mark injections for the plots
+                if callable(mark):
+                    mark(self.link.clock(), self.sim.time_s, fault)
 
     def _dispatch_queued(self) -> None:
         while (rx := self.client.recv_received(0.0)) is not None:

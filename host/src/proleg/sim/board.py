@@ -107,6 +107,7 @@ class SimBoard:
         self._rx_buf = (c_uint8 * 4096)()
         self.library = library
         self.tick_us = 0
+        self._pending_us = 0.0
         self.reset(seed)
 
     # -- time -------------------------------------------------------------------------
@@ -114,10 +115,20 @@ class SimBoard:
         """Power-on reset: firmware globals cleared, IMUs asleep, time 0, FIFOs empty."""
         self._lib.sim_reset(seed & 0xFFFFFFFF)
         self.tick_us = int(self._lib.sim_tick_period_us())
+        self._pending_us = 0.0
 
     def run_ticks(self, n: int) -> None:
         if n > 0:
             self._lib.sim_run_ticks(n)
+
+    def advance(self, seconds: float) -> None:
+        """Run the control ticks that fit in ``seconds`` of virtual time (a remainder shorter
+        than a tick is carried over to the next call), so ``proleg.link.sim_link.SimLink``
+        can drive the bare board tick by tick: ``SimLink(board, step_s=board.tick_us / 1e6)``."""
+        self._pending_us += seconds * 1e6
+        n = int(self._pending_us / self.tick_us + 1e-9)
+        self._pending_us -= n * self.tick_us
+        self.run_ticks(n)
 
     @property
     def time_us(self) -> int:

@@ -1,0 +1,257 @@
+/* cmd.c - see cmd.h. Messages and their fields are defined in proleg/protocol/definition.py. */
+#include "cmd.h"
+
+#include <string.h>
+
+#include "drive.h"
+#include "fault.h"
+#include "uart.h"
+#include "imucheck.h"
+#include "param.h"
+#include "proto.h"
+#include "rom.h"
+#include "seq.h"
+#include "sma.h"
+#include "telemetry.h"
+#include "tx.h"
+
+#define RX_BYTES_PER_TICK (2u * PROTO_MAX_ENCODED)
+
+static const char robot_name[] ROM = CFG_ROBOT_NAME;
+static const char board_name[] ROM = CFG_BOARD_NAME;
+
+static proto_rx_t rx;
+
+#define msg tx_msg /* the command being handled, then each reply (fields read first) */
+
+/* One handler per command of the protocol definition (proto_gen.h's PROTO_COMMANDS):
+ * a command added there does not compile until its cmd_<name> is written here. */
+#define DECLARE_HANDLER(id, handler) static void handler(uint8_t token);
+PROTO_COMMANDS(DECLARE_HANDLER)
+
+static void copy_rom_text(char *dst, const char *src, uint8_t cap)
+{
+    uint8_t i = 0;
+    char c;
+    while (i + 1u < cap && (c = (char)ROM_U8(&src[i])) != '\0') {
+        dst[i++] = c;
+    }
+    while (i < cap) {
+        dst[i++] = '\0';
+    }
+}
+
+void cmd_send_info(uint8_t token)
+{
+    uint16_t gaits = (uint16_t)(CFG_N_GAITS_PX + CFG_N_GAITS_MX);
+    msg.id = PROTO_ID_INFO;
+    msg.u.info.token = token;
+    msg.u.info.protocol_version = PROTO_VERSION;
+    msg.u.info.build_id = CFG_BUILD_ID;
+    msg.u.info.gait_hash = CFG_GAIT_TABLE_HASH;
+    copy_rom_text(msg.u.info.robot_name, robot_name, PROTO_ROBOT_NAME_LEN);
+    copy_rom_text(msg.u.info.board, board_name, PROTO_BOARD_NAME_LEN);
+    msg.u.info.limbs = CFG_N_LIMBS;
+    msg.u.info.actuators = CFG_N_ACTUATORS;
+    msg.u.info.gaits = (uint8_t)(gaits > 255u ? 255u : gaits);
+    msg.u.info.max_gait_steps = CFG_MAX_LOADED_STEPS;
+    msg.u.info.tick_hz = (uint16_t)CFG_TICK_HZ;
+    msg.u.info.telemetry_hz = telemetry_rate();
+    tx_send();
+}
+
+static void cmd_get_info(uint8_t token)
+{
+    cmd_send_info(token);
+}
+
+static void cmd_get_stats(uint8_t token)
+{
+    const tx_counts_t *c = tx_counts();
+    msg.id = PROTO_ID_STATS;
+    msg.u.stats.token = token;
+    msg.u.stats.rx_ok = rx.count.frames_ok;
+    msg.u.stats.crc_errors = rx.count.crc_errors;
+    msg.u.stats.framing_errors = rx.count.framing_errors;
+    msg.u.stats.unknown_ids = rx.count.unknown_ids;
+    msg.u.stats.bad_length = rx.count.bad_length;
+    msg.u.stats.bad_value = rx.count.bad_value;
+    msg.u.stats.nacks = c->nacks;
+    msg.u.stats.tx_frames = c->tx_frames;
+    msg.u.stats.tx_dropped = c->tx_dropped;
+    tx_send();
+}
+
+static void cmd_start(uint8_t token)
+{
+    uint8_t gait = msg.u.start.gait;
+    uint8_t dir = msg.u.start.direction;
+    int8_t r;
+    if (sma_estopped()) {
+        tx_nack(token, PROTO_ID_START, PROTO_ERR_ESTOP_LATCHED, 0);
+        return;
+    }
+    if (fault_latched()) {
+        tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 0);
+        return;
+    }
+    if (gait == PROTO_GAIT_USER) {
+        r = seq_start(SEQ_DIR_LOADED, 0, imucheck_measured());
+    } else if (dir > PROTO_DIR_MINUS_X) {
+        tx_nack(token, PROTO_ID_START, PROTO_ERR_OUT_OF_RANGE, 2);
+        return;
+    } else {
+        r = seq_start(dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX, gait, imucheck_measured());
+    }
+    if (r != SEQ_OK) {
+        tx_nack(token, PROTO_ID_START, PROTO_ERR_NO_GAIT, gait);
+        return;
+    }
+    drive_started(gait, dir);
+    fault_watchdog_rearm();
+    tx_ack(token, PROTO_ID_START);
+    tx_event(PROTO_EV_GAIT_STARTED, gait, dir);
+}
+
+static void cmd_load_gait(uint8_t token)
+{
+    cfg_state_t states[PROTO_MAX_GAIT_STEPS];
+    uint8_t n = msg.u.load_gait.states_count;
+    uint16_t bad = 0;
+    uint8_t i;
+    int8_t r;
+    if (seq_running()) {
+        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_NOT_ALLOWED, 0);
+        return;
+    }
+    if (n > PROTO_MAX_GAIT_STEPS) {
+        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_TOO_LONG, n);
+        return;
+    }
+    for (i = 0; i < n; i++) {
+        if (msg.u.load_gait.states[i] >= CFG_N_STATES) {
+            tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_OUT_OF_RANGE, i);
+            return;
+        }
+        states[i] = (cfg_state_t)msg.u.load_gait.states[i];
+    }
+    r = seq_load(states, n, &bad);
+    if (r == SEQ_ERR_FORBIDDEN) {
+        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_FORBIDDEN_TRANSITION, bad);
+    } else if (r == SEQ_ERR_LENGTH) {
+        tx_nack(token, PROTO_ID_LOAD_GAIT, n > CFG_MAX_LOADED_STEPS ? PROTO_ERR_TOO_LONG : PROTO_ERR_OUT_OF_RANGE, n);
+    } else if (r != SEQ_OK) {
+        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_OUT_OF_RANGE, bad);
+    } else {
+        tx_ack(token, PROTO_ID_LOAD_GAIT);
+        tx_event(PROTO_EV_GAIT_LOADED, 0, n);
+    }
+}
+
+static void cmd_clear(uint8_t token)
+{
+    uint8_t what = msg.u.clear.what;
+    uint8_t done = 0;
+    uint8_t i, bad;
+    if (what & PROTO_CLEAR_COUNTERS) {
+        memset(&rx.count, 0, sizeof rx.count);
+        tx_clear_counts();
+        done |= PROTO_CLEAR_COUNTERS;
+    }
+    if ((what & PROTO_CLEAR_ESTOP) && sma_estopped()) {
+        sma_clear_estop();
+        done |= PROTO_CLEAR_ESTOP;
+    }
+    tx_ack(token, PROTO_ID_CLEAR);
+    if ((what & PROTO_CLEAR_FAULTS) && fault_latched()) {
+        bad = imucheck_take_bad();
+        fault_clear();
+        done |= PROTO_CLEAR_FAULTS;
+        tx_event(PROTO_EV_FAULT_CLEARED, done, 0);
+        done = 0;
+        for (i = 0; i < CFG_N_LIMBS; i++) {
+            if (bad & (1u << i)) {
+                imucheck_start(i); /* faults again at once if it still does not answer */
+            }
+        }
+    }
+    if (done) {
+        tx_event(PROTO_EV_FAULT_CLEARED, done, 0);
+    }
+}
+
+static void cmd_estop(uint8_t token)
+{
+    sma_estop(); /* first: every MOSFET off now */
+    tx_ack(token, PROTO_ID_ESTOP);
+    tx_event(PROTO_EV_ESTOP, 0, 0);
+    fault_stop_gait(PROTO_STOP_ESTOP);
+}
+
+static void cmd_ping(uint8_t token)
+{
+    tx_ack(token, PROTO_ID_PING);
+}
+
+static void cmd_stop(uint8_t token)
+{
+    sma_all_off();
+    tx_ack(token, PROTO_ID_STOP);
+    fault_stop_gait(PROTO_STOP_COMMAND);
+}
+
+static void cmd_set_param(uint8_t token)
+{
+    uint8_t r = param_set(msg.u.set_param.param, msg.u.set_param.index, msg.u.set_param.value);
+    if (r) {
+        tx_nack(token, PROTO_ID_SET_PARAM, r, msg.u.set_param.param);
+    } else {
+        tx_ack(token, PROTO_ID_SET_PARAM);
+    }
+}
+
+static void cmd_set_telemetry_rate(uint8_t token)
+{
+    if (telemetry_set_rate(msg.u.set_telemetry_rate.hz) != 0u) {
+        tx_nack(token, PROTO_ID_SET_TELEMETRY_RATE, PROTO_ERR_OUT_OF_RANGE, 0);
+    } else {
+        tx_ack(token, PROTO_ID_SET_TELEMETRY_RATE);
+    }
+}
+
+static void handle_command(void)
+{
+    uint8_t token = PROTO_CMD_TOKEN(&msg);
+    switch (msg.id) {
+#define DISPATCH(id, handler) \
+    case id:                  \
+        handler(token);       \
+        break;
+        PROTO_COMMANDS(DISPATCH)
+    default: /* a robot->host message sent to the robot */
+        tx_nack(token, msg.id, PROTO_ERR_UNKNOWN_MESSAGE, 0);
+        break;
+    }
+}
+
+void cmd_init(void)
+{
+    proto_rx_init(&rx);
+}
+
+void cmd_poll(void)
+{
+    uint16_t n;
+    for (n = 0; n < RX_BYTES_PER_TICK; n++) {
+        int c = uart_read_byte();
+        if (c < 0) {
+            break;
+        }
+        if (proto_rx_byte(&rx, (uint8_t)c, &msg)) {
+            fault_heard_host();
+            handle_command();
+        } else if (rx.rej_error) {
+            tx_nack(rx.rej_token, rx.rej_id, rx.rej_error, 0);
+        }
+    }
+}

@@ -1,0 +1,91 @@
+/* fault.c - see fault.h. */
+#include "fault.h"
+
+#include "param.h"
+#include "proto.h"
+#include "seq.h"
+#include "sma.h"
+#include "tx.h"
+
+static struct {
+    uint8_t latched;
+    uint8_t watchdog_tripped;
+    uint32_t since_rx; /* ticks since the last valid frame */
+} st;
+
+static uint16_t cycles_u16(void)
+{
+    uint32_t cycles = seq_cycles();
+    return (uint16_t)(cycles > 0xFFFFu ? 0xFFFFu : cycles);
+}
+
+void fault_init(void)
+{
+    st.latched = 0;
+    st.watchdog_tripped = 0;
+    st.since_rx = 0;
+}
+
+void fault_stop_gait(uint8_t reason)
+{
+    uint16_t cycles = cycles_u16();
+    if (!seq_running()) {
+        return;
+    }
+    seq_stop();
+    tx_event(PROTO_EV_GAIT_STOPPED, reason, cycles);
+}
+
+void fault_raise(uint8_t code, uint16_t detail)
+{
+    sma_all_off();
+    st.latched = 1;
+    tx_event(PROTO_EV_FAULT, code, detail);
+    fault_stop_gait(PROTO_STOP_FAULT);
+}
+
+void fault_raise_stopped(uint8_t code, uint16_t detail)
+{
+    sma_all_off();
+    st.latched = 1;
+    tx_event(PROTO_EV_FAULT, code, detail);
+    tx_event(PROTO_EV_GAIT_STOPPED, PROTO_STOP_FAULT, cycles_u16());
+}
+
+uint8_t fault_latched(void)
+{
+    return st.latched;
+}
+
+void fault_clear(void)
+{
+    st.latched = 0;
+}
+
+void fault_heard_host(void)
+{
+    st.since_rx = 0;
+}
+
+void fault_watchdog_tick(void)
+{
+    if (st.since_rx < 0xFFFFFFFFu) {
+        st.since_rx++;
+    }
+    if (param_watchdog_ticks() && seq_running() && st.since_rx >= param_watchdog_ticks()) {
+        sma_all_off();
+        st.watchdog_tripped = 1;
+        tx_event(PROTO_EV_FAULT, PROTO_FAULT_LINK_WATCHDOG, 0);
+        fault_stop_gait(PROTO_STOP_WATCHDOG);
+    }
+}
+
+uint8_t fault_watchdog_tripped(void)
+{
+    return st.watchdog_tripped;
+}
+
+void fault_watchdog_rearm(void)
+{
+    st.watchdog_tripped = 0;
+}

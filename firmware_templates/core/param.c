@@ -1,0 +1,209 @@
+/* param.c - see param.h. */
+#include "param.h"
+
+#include "proto.h"
+#include "psi.h"
+#include "rom.h"
+#include "seq.h"
+#include "sma.h"
+
+#define ANY INT32_MAX
+#define MAX_PARAM_MS 600000L
+
+static struct {
+    uint16_t drive_pm, hold_pm;
+    uint32_t max_on_ticks, cooldown_ticks;
+    uint32_t watchdog_ticks;
+} st;
+
+static uint32_t ms_to_ticks(uint32_t ms)
+{
+    return (ms / 1000u) * CFG_TICK_HZ + ((ms % 1000u) * CFG_TICK_HZ + 999u) / 1000u;
+}
+
+/* ---- where each parameter lives: v is in range and scaled; 0 or a PROTO_ERR_* code */
+
+static uint8_t set_drive_duty(uint8_t index, int32_t v)
+{
+    (void)index;
+    if (v > (int32_t)sma_max_duty()) {
+        return PROTO_ERR_SAFETY_LIMIT;
+    }
+    st.drive_pm = (uint16_t)v;
+    return 0;
+}
+
+static uint8_t set_hold_duty(uint8_t index, int32_t v)
+{
+    (void)index;
+    if (v > (int32_t)sma_max_duty()) {
+        return PROTO_ERR_SAFETY_LIMIT;
+    }
+    st.hold_pm = (uint16_t)v;
+    return 0;
+}
+
+static uint8_t set_hold(uint8_t index, int32_t ticks)
+{
+    (void)index;
+    seq_set_hold((uint32_t)ticks);
+    return 0;
+}
+
+static uint8_t set_debounce(uint8_t index, int32_t v)
+{
+    (void)index;
+    psi_set_debounce((uint16_t)v);
+    return 0;
+}
+
+static uint8_t set_timeout(uint8_t index, int32_t ticks)
+{
+    (void)index;
+    seq_set_timeout((uint32_t)ticks);
+    return 0;
+}
+
+/* Where threshold `flat` (limb by limb, thresholds in order) lives. */
+static int8_t threshold_at(uint8_t flat, uint8_t *limb, uint8_t *thr)
+{
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        uint8_t n = (uint8_t)(psi_levels(i) - 1u);
+        if (flat < n) {
+            *limb = i;
+            *thr = flat;
+            return 0;
+        }
+        flat = (uint8_t)(flat - n);
+    }
+    return -1;
+}
+
+static uint8_t set_psi_star(uint8_t index, int32_t v)
+{
+    uint8_t limb, thr;
+    if (threshold_at(index, &limb, &thr) != 0 ||
+        psi_set_band(limb, thr, (int16_t)v, psi_hyst_cdeg(limb, thr)) != 0) {
+        return PROTO_ERR_OUT_OF_RANGE;
+    }
+    return 0;
+}
+
+static uint8_t set_hysteresis(uint8_t index, int32_t v)
+{
+    uint8_t i;
+    if (index >= CFG_N_LIMBS) {
+        return PROTO_ERR_OUT_OF_RANGE;
+    }
+    for (i = 0; i + 1u < psi_levels(index); i++) {
+        if (psi_set_band(index, i, psi_star_cdeg(index, i), (int16_t)v) != 0) {
+            return PROTO_ERR_OUT_OF_RANGE; /* earlier thresholds keep the new width */
+        }
+    }
+    return 0;
+}
+
+static uint8_t set_max_on(uint8_t index, int32_t ticks)
+{
+    (void)index;
+    if (sma_set_limits(sma_max_duty(), (uint32_t)ticks, st.cooldown_ticks) != 0) {
+        return PROTO_ERR_SAFETY_LIMIT;
+    }
+    st.max_on_ticks = (uint32_t)ticks;
+    return 0;
+}
+
+static uint8_t set_cooldown(uint8_t index, int32_t ticks)
+{
+    (void)index;
+    if (sma_set_limits(sma_max_duty(), st.max_on_ticks, (uint32_t)ticks) != 0) {
+        return PROTO_ERR_SAFETY_LIMIT;
+    }
+    st.cooldown_ticks = (uint32_t)ticks;
+    return 0;
+}
+
+static uint8_t set_watchdog(uint8_t index, int32_t ticks)
+{
+    (void)index;
+    st.watchdog_ticks = (uint32_t)ticks;
+    return 0;
+}
+
+/* ---- the table */
+
+#define AS_IS 0u
+#define MS 1u /* value in ms, applied in ticks (rounded up) */
+
+typedef struct {
+    uint8_t scale;              /* AS_IS or MS */
+    int32_t min, max;           /* outside: OUT_OF_RANGE */
+    int32_t safe_min, safe_max; /* outside: SAFETY_LIMIT (the build's envelope) */
+    uint8_t (*apply)(uint8_t index, int32_t v);
+} param_desc_t;
+
+#if CFG_LINK_WATCHDOG_MS != 0
+#define WATCHDOG_SAFE_MIN 1 /* a build with a watchdog cannot turn it off */
+#define WATCHDOG_SAFE_MAX ((int32_t)CFG_LINK_WATCHDOG_MS)
+#else
+#define WATCHDOG_SAFE_MIN 0
+#define WATCHDOG_SAFE_MAX ANY
+#endif
+
+static const param_desc_t table[] ROM = {
+    /* id                          scale  min    max           safe_min  safe_max */
+    [PROTO_PARAM_DRIVE_DUTY] = {AS_IS, 1, ANY, 0, ANY, set_drive_duty}, /* ≤ sma_max_duty() */
+    [PROTO_PARAM_HOLD_DUTY] = {AS_IS, 0, ANY, 0, ANY, set_hold_duty},   /* ≤ sma_max_duty() */
+    [PROTO_PARAM_HOLD_MS] = {MS, 0, MAX_PARAM_MS, 0, ANY, set_hold},
+    [PROTO_PARAM_DEBOUNCE_TICKS] = {AS_IS, 1, 1000, 0, ANY, set_debounce},
+    [PROTO_PARAM_STATE_TIMEOUT_MS] = {MS, 1, ANY, 0, (int32_t)CFG_STATE_TIMEOUT_MS, set_timeout},
+    [PROTO_PARAM_PSI_STAR_CDEG] = {AS_IS, -8999, 8999, -8999, ANY, set_psi_star},
+    [PROTO_PARAM_HYSTERESIS_CDEG] = {AS_IS, 0, 2000, 0, ANY, set_hysteresis},
+    [PROTO_PARAM_MAX_ON_MS] = {MS, 1, ANY, 0, (int32_t)CFG_MAX_ON_MS, set_max_on},
+    [PROTO_PARAM_MIN_COOLDOWN_MS] = {MS, 0, MAX_PARAM_MS, (int32_t)CFG_MIN_COOLDOWN_MS, ANY, set_cooldown},
+    [PROTO_PARAM_LINK_WATCHDOG_MS] = {MS, 0, MAX_PARAM_MS, WATCHDOG_SAFE_MIN, WATCHDOG_SAFE_MAX, set_watchdog},
+};
+
+uint8_t param_set(uint8_t param, uint8_t index, int32_t v)
+{
+    param_desc_t d;
+    if (param >= sizeof table / sizeof table[0]) {
+        return PROTO_ERR_OUT_OF_RANGE;
+    }
+    ROM_COPY(&d, &table[param], sizeof d);
+    if (d.apply == 0 || v < d.min || v > d.max) {
+        return PROTO_ERR_OUT_OF_RANGE;
+    }
+    if (v < d.safe_min || v > d.safe_max) {
+        return PROTO_ERR_SAFETY_LIMIT;
+    }
+    if (d.scale == MS) {
+        v = (int32_t)ms_to_ticks((uint32_t)v);
+    }
+    return d.apply(index, v);
+}
+
+void param_init(void)
+{
+    st.drive_pm = CFG_DRIVE_DUTY_PM;
+    st.hold_pm = CFG_HOLD_DUTY_PM;
+    st.max_on_ticks = CFG_MAX_ON_TICKS;
+    st.cooldown_ticks = CFG_MIN_COOLDOWN_TICKS;
+    st.watchdog_ticks = CFG_LINK_WATCHDOG_TICKS;
+}
+
+uint16_t param_drive_pm(void)
+{
+    return st.drive_pm;
+}
+
+uint16_t param_hold_pm(void)
+{
+    return st.hold_pm;
+}
+
+uint32_t param_watchdog_ticks(void)
+{
+    return st.watchdog_ticks;
+}

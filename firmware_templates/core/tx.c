@@ -1,0 +1,83 @@
+/* tx.c - see tx.h. */
+#include "tx.h"
+
+#include <string.h>
+
+#include "app.h"
+#include "uart.h"
+
+proto_msg_t tx_msg;
+
+static uint8_t txbuf[PROTO_MAX_ENCODED];
+static tx_counts_t count;
+static uint8_t pending_delim; /* a frame went out half: start the next with a delimiter */
+
+void tx_init(void)
+{
+    memset(&count, 0, sizeof count);
+    pending_delim = 0;
+}
+
+void tx_send(void)
+{
+    size_t n = proto_encode(&tx_msg, txbuf, sizeof txbuf);
+    uint16_t w;
+    if (n == 0u) {
+        count.tx_dropped++;
+        return;
+    }
+    if (pending_delim) {
+        uint8_t zero = 0;
+        if (uart_write(&zero, 1) != 1u) {
+            count.tx_dropped++;
+            return;
+        }
+        pending_delim = 0;
+    }
+    w = uart_write(txbuf, (uint16_t)n);
+    if (w == n) {
+        count.tx_frames++;
+    } else {
+        count.tx_dropped++;
+        pending_delim = (uint8_t)(w > 0u);
+    }
+}
+
+void tx_event(uint8_t kind, uint8_t code, uint16_t detail)
+{
+    tx_msg.id = PROTO_ID_EVENT;
+    tx_msg.u.event.time_ms = app_time_ms();
+    tx_msg.u.event.kind = kind;
+    tx_msg.u.event.code = code;
+    tx_msg.u.event.detail = detail;
+    tx_send();
+}
+
+void tx_ack(uint8_t token, uint8_t cmd)
+{
+    tx_msg.id = PROTO_ID_ACK;
+    tx_msg.u.ack.token = token;
+    tx_msg.u.ack.cmd = cmd;
+    tx_send();
+}
+
+void tx_nack(uint8_t token, uint8_t cmd, uint8_t error, uint16_t detail)
+{
+    count.nacks++;
+    tx_msg.id = PROTO_ID_NACK;
+    tx_msg.u.nack.token = token;
+    tx_msg.u.nack.cmd = cmd;
+    tx_msg.u.nack.error = error;
+    tx_msg.u.nack.detail = detail;
+    tx_send();
+}
+
+const tx_counts_t *tx_counts(void)
+{
+    return &count;
+}
+
+void tx_clear_counts(void)
+{
+    memset(&count, 0, sizeof count);
+}

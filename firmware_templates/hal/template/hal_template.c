@@ -1,0 +1,87 @@
+/* hal_template.c - hal.h for a new MCU family: every function the core needs, stubbed.
+ *
+ * Copy firmware_templates/hal/template/ to firmware_templates/hal/<family>/, rename this
+ * file hal_<family>.c, and fill in each function below; its comment says what it must
+ * do and how long it may take. Then write a board file (boards/<board>.toml) that names
+ * the family. docs/adding-a-board.md walks through it.
+ *
+ * What the core already does, so a HAL does not: main() and the tick loop (core/main.c,
+ * paced on hal_micros; leave it out with [build] main_loop = false when a host program
+ * drives app_init/app_tick instead), the UART byte rings (core/uart.h), the protocol,
+ * the safety envelope. Everything board-specific the renderer knows comes from the
+ * board file and this folder's family.toml, as CFG_* macros in robot_config.h:
+ *   CFG_CLOCK_HZ, CFG_TICK_US, CFG_I2C_HZ, CFG_PWM_CHANNELS, CFG_PWM_MAP (one entry per
+ *   channel, from family.toml), CFG_PWM_HZ, CFG_UART_BAUD, CFG_UART_RX_BYTES/TX_BYTES.
+ * Other files of this folder (.c, .h, .S, .ld) are copied into the project's hal/:
+ * startup code, a linker script (an .ld file is passed to the linker), register headers.
+ */
+#include <stdint.h>
+
+#include "hal.h"
+#include "robot_config.h"
+#include "uart.h"
+
+/* Your CFG_PWM_MAP entries, one per channel (family.toml's [pwm] pins). With
+ * pins = "any" each entry is the channel number. */
+static const uint8_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
+
+/* Called once, first, with interrupts as the reset left them. Must: start the clocks;
+ * start the microsecond counter; set up I2C master at CFG_I2C_HZ on the IMU bus; set
+ * every PWM channel of CFG_PWM_MAP to CFG_PWM_HZ with its output driven low (coils off)
+ * before anything else can turn it on; set up the UART at CFG_UART_BAUD, 8N1, with its
+ * receive interrupt on (each byte to uart_isr_rx); enable interrupts. May take as long
+ * as the clocks need to settle (no tick runs yet). */
+void hal_init(void)
+{
+}
+
+/* Microseconds since hal_init, free-running, wrapping at 2^32. Must be monotonic across
+ * the counter's own overflow (read the overflow count and the counter consistently) and
+ * callable from the main loop at any time; a few microseconds at most. The core paces
+ * the control tick on it and bounds every wait with it. */
+uint32_t hal_micros(void)
+{
+    return 0;
+}
+
+/* One I2C transaction with the 7-bit address addr7: write ntx bytes from tx, then (with
+ * a repeated start when both are non-zero) read nrx bytes into rx, NACKing the last one.
+ * Returns 0 on success, negative on NACK, arbitration loss, bus error or timeout. Must
+ * be bounded: every wait on the peripheral times out (the other HALs use a few hundred
+ * µs per step; never more than about 2 ms in all), and after a failure leave the bus
+ * usable for the next call (stop condition, peripheral reset if it is stuck). */
+int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    (void)addr7;
+    (void)tx;
+    (void)ntx;
+    (void)rx;
+    (void)nrx;
+    return -1;
+}
+
+/* Set channel's duty in permyriad (0..10000) at once (takes effect within one PWM
+ * period). 0 must drive the gate low with no pulse at all, 10000 high; ignore a channel
+ * >= CFG_PWM_CHANNELS. Called from the main loop every tick and on E-stop: a few
+ * microseconds, no waiting. */
+void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad)
+{
+    if (channel >= CFG_PWM_CHANNELS) {
+        return;
+    }
+    (void)pwm_map[channel];
+    (void)duty_permyriad;
+}
+
+/* Bytes are waiting in the transmit ring. Must return at once: turn the UART's
+ * transmit-empty interrupt on. That interrupt handler then sends uart_isr_tx() byte by
+ * byte and turns itself off when it returns -1. (A board with no interrupt can instead
+ * drain uart_isr_tx() here, if the bytes leave without waiting.) */
+void hal_uart_tx_start(void)
+{
+}
+
+/* Interrupt handlers (names and attributes are the MCU's): the UART's receive interrupt
+ * passes every byte to uart_isr_rx(byte); its transmit-empty interrupt does
+ *     int b = uart_isr_tx(); if (b < 0) { transmit interrupt off; } else { send (uint8_t)b; }
+ * the timer overflow interrupt, if hal_micros needs one, counts overflows. */

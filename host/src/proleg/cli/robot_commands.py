@@ -1,0 +1,234 @@
+"""``proleg run``, ``proleg load-gait``, ``proleg set-param`` and ``proleg robots``: scripting
+a robot over serial, CAN or the simulated board (``--sim``), headless.
+
+``run`` starts a gait, reports progress on stderr (``-q`` silences it), stops it after
+``--duration`` seconds and exits 1 when a command failed or the robot reported a fault.
+``--format jsonl`` prints every message as one JSON line (the JSONL recording's field names,
+physical units) and a last ``{"msg": "RESULT", ...}`` line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from typing import Any
+
+from ..errors import GaitError, LinkError
+from ..link.serial_link import DEFAULT_BAUDRATE
+
+log = logging.getLogger("proleg")
+
+
+# --------------------------------------------------------------------------- shared
+def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> None:
+    """``--port`` / ``--can`` / ``--sim`` (exactly one) and their settings."""
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port")
+    src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
+    if sim_takes_robot:
+        src.add_argument("--sim", metavar="ROBOT", help="the robot's firmware on the simulated board")
+    else:
+        src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board")
+    p.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
+    p.add_argument("--node", type=lambda t: int(t, 0), default=0, help="CAN node id of the robot (default 0)")
+    p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
+    p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
+
+
+def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None):
+    """A connected ``RobotClient`` on the link the options name (the simulated board runs
+    flat out unless ``speed`` paces it)."""
+    from ..link.client import RobotClient
+    from ..link.factory import link_url, open_link
+
+    sim = args.sim
+    if sim is True:
+        sim = robot_path
+    elif sim is False:
+        sim = None
+    if isinstance(sim, str):
+        from .main import robot_arg
+
+        sim = robot_arg(sim)
+    url = link_url(port=args.port, can_channel=args.can, interface=args.interface, node=args.node, sim=sim)
+    link = open_link(url, baudrate=args.baudrate, speed=speed)
+    client = RobotClient(link, timeout=args.timeout)
+    try:
+        info = client.connect()
+    except BaseException:
+        client.close()
+        raise
+    log.debug("connected to %s on %s (build %08x)", info.robot_name, link.description, info.build_id)
+    return client
+
+
+def gaits_per_direction(robot: Any) -> dict[str, int]:
+    """How many gaits the robot's firmware carries in each direction."""
+    from ..firmware.build import firmware_gaits
+
+    return {d: len(g) for d, g in firmware_gaits(robot).items()}
+
+
+def parse_gait(text: str) -> int:
+    from ..protocol.definition import GAIT_USER
+
+    if text.strip().lower() == "user":
+        return GAIT_USER
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a gait index or 'user', got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
+    return v
+
+
+# --------------------------------------------------------------------------- run
+def cmd_run(args: argparse.Namespace) -> int:
+    from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
+    from ..report import check_gait, run_gait_on
+    from ..robot import load_robot
+
+    robot = load_robot(args.robot)
+    if args.record:
+        check_suffix(args.record)
+    client = open_client(args, args.robot, speed=args.speed)
+    with client:
+        info = client.info
+        if info.robot_name != robot.name:
+            raise LinkError(f"{client.link.description} runs robot {info.robot_name!r}, not {robot.name!r} "
+                            f"({args.robot}); give the robot file it was built from")
+        check_gait(info, args.gait, args.direction, gaits_per_direction(robot))
+        meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
+        listeners: list[Any] = []
+        if args.record:
+            listeners.append(Logger(args.record, meta))
+        if args.udp:
+            listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
+        if args.format == "jsonl":
+            listeners.append(JsonlPrinter(meta, sys.stdout))
+        try:
+            run = run_gait_on(client, args.gait, args.direction, args.duration, listeners=listeners,
+                              progress=log.info, progress_every_s=args.progress)
+        finally:
+            for listener in listeners:
+                listener.stop()
+    errors = list(run.errors) + [str(w.error) for w in listeners if getattr(w, "error", None)]
+    doc = {
+        "msg": "RESULT", "robot": run.robot, "link": client.link.description, "gait": args.gait,
+        "direction": args.direction, "duration_s": args.duration, "cycles": run.cycles,
+        "states_reached": len(run.states_reached), "telemetry_frames": run.telemetry_frames,
+        "telemetry_lost": run.telemetry_lost,
+        "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
+        "errors": errors, "ok": run.ok and not errors,
+    }
+    if args.format == "jsonl":
+        print(json.dumps(doc))
+    else:
+        print(f"{run.robot} on {doc['link']}: gait {args.gait} in {args.direction} for {args.duration:g} s: "
+              f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
+              f"{len(run.faults)} faults")
+        for f in run.faults:
+            print(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+    for e in errors:
+        print(f"proleg: error: {e}", file=sys.stderr)
+    return 0 if doc["ok"] else 1
+
+
+# --------------------------------------------------------------------------- load-gait, set-param
+def cmd_load_gait(args: argparse.Namespace) -> int:
+    from ..robot import load_robot
+
+    robot = load_robot(args.robot)
+    table = robot.transitions
+    labels = [s.strip() for s in args.states.split(",") if s.strip()]
+    try:
+        states = [table.index(s) for s in labels]
+    except ValueError as e:
+        raise GaitError(f"STATES: {e}") from None
+    if len(states) > 1 and states[0] == states[-1]:
+        states = states[:-1]  # a closed walk may repeat its start state
+    if len(states) < 2:
+        raise GaitError(f"STATES: a gait needs at least two states, got {args.states!r}")
+    with open_client(args, args.robot) as client:
+        client.load_gait(states)
+        print(f"loaded {' → '.join(labels)} as the user gait on {client.link.description} "
+              f"(run it with --gait user)")
+    return 0
+
+
+def cmd_set_param(args: argparse.Namespace) -> int:
+    with open_client(args) as client:
+        client.set_param(args.name, args.index, args.value)
+        print(f"set {args.name}[{args.index}] = {args.value} on {client.link.description}")
+    return 0
+
+
+def _param_name(text: str) -> str:
+    from ..protocol.definition import ParamId
+
+    name = text.strip().lower().replace("-", "_")
+    if name.upper() not in ParamId.__members__:
+        raise argparse.ArgumentTypeError(
+            f"unknown parameter {text!r}; known: {', '.join(p.name.lower() for p in ParamId)}")
+    return name
+
+
+# --------------------------------------------------------------------------- robots
+def cmd_robots(args: argparse.Namespace) -> int:
+    import tomllib
+
+    from ..paths import bundled_robots, robots_dir
+
+    for name in bundled_robots():
+        path = robots_dir() / f"{name}.toml"
+        try:
+            doc = tomllib.loads(path.read_text(encoding="utf-8"))
+            desc = str(doc.get("robot", {}).get("description", "")).strip().splitlines()[0:1]
+            limbs = len(doc.get("limb", []))
+        except (OSError, tomllib.TOMLDecodeError):
+            desc, limbs = [], 0
+        print(f"{name:24s} {limbs} limbs  {desc[0] if desc else ''}".rstrip())
+    return 0
+
+
+# --------------------------------------------------------------------------- argparse
+def add_arguments(subparsers: Any) -> None:
+    from .main import _positive_float, add_udp_options, robot_arg
+
+    r = subparsers.add_parser("run", help="run a gait on a robot headless: progress on stderr, exit 1 on faults")
+    r.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    add_link_options(r, sim_takes_robot=False)
+    r.add_argument("--gait", type=parse_gait, default=0, metavar="N",
+                   help="gait index in the firmware's table for the direction, or 'user' (default 0)")
+    r.add_argument("--direction", choices=("+x", "-x"), default="+x")
+    r.add_argument("--duration", type=_positive_float, default=10.0, metavar="S", help="seconds to run (default 10)")
+    r.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
+    add_udp_options(r)
+    r.add_argument("--format", choices=("text", "jsonl"), default="text",
+                   help="text: a summary; jsonl: every message as a JSON line, then a RESULT line")
+    r.add_argument("--progress", type=_positive_float, default=1.0, metavar="S", help="progress every S seconds")
+    r.add_argument("--speed", type=_positive_float, default=None,
+                   help="with --sim: times real time (default: as fast as possible)")
+    r.set_defaults(run=cmd_run)
+
+    lg = subparsers.add_parser("load-gait", help="store a user gait (state labels) on the robot")
+    lg.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    lg.add_argument("states", metavar="STATES", help="state labels of a closed walk, e.g. 00,10,11,01")
+    add_link_options(lg, sim_takes_robot=False)
+    lg.set_defaults(run=cmd_load_gait)
+
+    from ..protocol.definition import ParamId
+
+    sp = subparsers.add_parser("set-param", help="set a firmware parameter (within the build's safety envelope)",
+                               epilog="parameters: " + ", ".join(p.name.lower() for p in ParamId))
+    sp.add_argument("name", metavar="NAME", type=_param_name, help="parameter name (see below)")
+    sp.add_argument("value", metavar="VALUE", type=int, help="value in the parameter's unit (permyriad, ms, 0.01°)")
+    sp.add_argument("--index", type=int, default=0, help="limb or level index for per-limb parameters (default 0)")
+    add_link_options(sp, sim_takes_robot=True)
+    sp.set_defaults(run=cmd_set_param)
+
+    rb = subparsers.add_parser("robots", help="list the example robots bundled with proleg (usable as ROBOT)")
+    rb.set_defaults(run=cmd_robots)

@@ -1,0 +1,78 @@
+"""HAL families: ``firmware_templates/hal/<family>/`` holds the board-specific C and a
+``family.toml`` with the data proleg needs to render for it (its id and which PWM pins the
+HAL drives, with the ``CFG_PWM_MAP`` entry of each). A family exists when its folder has a
+``family.toml``; nothing outside the folder names a family.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import BoardError, BuildError
+from ..paths import templates_dir
+
+
+@dataclass(frozen=True)
+class Family:
+    name: str
+    path: Path  # the HAL folder
+    id: int  # CFG_BOARD_ID
+    description: str
+    pin_kind: str  # what a PWM pin is to this HAL ("timer output", "channel", ...)
+    pwm_pins: dict[str, str] | None  # pin name (upper case) -> CFG_PWM_MAP entry; None: any pin, entry = channel
+
+    def pwm_entry(self, board_name: str, channel: int, pin: str) -> str:
+        """The C initialiser of channel's CFG_PWM_MAP entry; BuildError for a pin the HAL cannot drive."""
+        if self.pwm_pins is None:
+            return f"{channel}u"
+        key = str(pin).upper()
+        if key not in self.pwm_pins:
+            raise BuildError(
+                f"board {board_name}: PWM pin {pin!r} (channel {channel}) is not a {self.pin_kind} "
+                f"this HAL drives (expected one of: {', '.join(sorted(self.pwm_pins))})"
+            )
+        return self.pwm_pins[key]
+
+
+def hal_root() -> Path:
+    return templates_dir() / "hal"
+
+
+def available_families() -> list[str]:
+    return sorted(p.parent.name for p in hal_root().glob("*/family.toml"))
+
+
+def load_family(name: str) -> Family:
+    path = hal_root() / name
+    spec = path / "family.toml"
+    if not spec.is_file():
+        raise BoardError(
+            f"no HAL family {name!r}: expected {spec} (families: {', '.join(available_families())})"
+        )
+    try:
+        doc = tomllib.loads(spec.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as e:
+        raise BoardError(f"{spec}: not valid TOML: {e}") from None
+    fam, pwm = doc.get("family", {}), doc.get("pwm", {})
+    fid = fam.get("id")
+    if not isinstance(fid, int) or isinstance(fid, bool) or not 0 <= fid <= 255:
+        raise BoardError(f"{spec}: family.id: expected an integer 0..255, got {fid!r}")
+    pins = pwm.get("pins")
+    if pins == "any":
+        table = None
+    elif isinstance(pins, dict) and pins:
+        table = {str(k).upper(): _c_entry(spec, k, v) for k, v in pins.items()}
+    else:
+        raise BoardError(f"{spec}: pwm.pins: expected \"any\" or a table of pin = C entry")
+    return Family(name, path, fid, str(fam.get("description", "")), str(pwm.get("pin_kind", "PWM pin")), table)
+
+
+def _c_entry(spec: Path, pin: str, value: object) -> str:
+    """A pin's CFG_PWM_MAP entry: a C expression (string) or a list of unsigned fields."""
+    if isinstance(value, str) and value:
+        return value
+    if isinstance(value, list) and value and all(isinstance(x, int) and x >= 0 for x in value):
+        return "{" + ", ".join(f"{x}u" for x in value) + "}"
+    raise BoardError(f"{spec}: pwm.pins.{pin}: expected a C expression or a list of unsigned integers")

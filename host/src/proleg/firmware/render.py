@@ -1,0 +1,440 @@
+"""Render a robot's configuration and gait tables for the firmware core.
+
+``render_config(robot, gaits_by_direction, board)`` fills ``firmware_templates/robot_config.h.j2``
+and ``gait_table.c.j2``. Only data is rendered (STYLE.md: generate data, keep logic
+hand-written): limb levels, the Q14 cos/sin of every hysteresis band edge (so the control
+path classifies ψ with two multiplications, no atan2), actuator channels and the board's
+PWM pin map (each pin's entry from its HAL family's ``family.toml``), the UART buffers,
+the safety envelope in ticks, the gait step tables of both directions, the allowed-
+transition bitmap and the gait selection that chose the gaits. Same inputs, same bytes:
+no timestamps.
+
+The work is a chain of small functions, each filling one part of a ``RenderContext``:
+``_board_part`` (board and family), ``_limb_part`` (thresholds), ``_control_part`` (tick,
+duties, safety envelope), ``_gait_part`` (step tables, transitions, hashes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import jinja2
+
+from .. import __version__
+from ..errors import BoardError, BuildError
+from ..paths import home, templates_dir
+from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER
+from .families import Family, load_family
+
+Q14 = 1 << 14
+#: LOAD_GAIT capacity (the protocol's MAX_GAIT_STEPS).
+MAX_LOADED_STEPS = 24
+#: Largest state space whose allowed-transition table is a bitmap (n*n bits); above, a sorted key list.
+BITMAP_MAX_STATES = 64
+GENERATOR = "proleg.firmware.render"
+
+
+# ------------------------------------------------------------------ the typed context
+
+
+@dataclass(frozen=True)
+class BoardPart:
+    board_name: str
+    family: str
+    family_id: int
+    pins: list[str]
+    pwm_map: list[str]
+    imu_addresses: list[int]
+    uart_baud: int
+    uart_rx_buffer: int
+    uart_tx_buffer: int
+    clock_hz: int
+    pwm_hz: int
+    i2c_hz: int
+
+
+@dataclass(frozen=True)
+class LimbPart:
+    n_limbs: int
+    n_actuators: int
+    limbs: list[Any]
+    levels: list[int]
+    max_levels: int
+    max_thr: int
+    n_states: int
+    state_type: str
+    state_bytes: int
+    limb_actuator: list[int]
+    imu_addr: list[str]
+    thresholds: list[list[tuple[int, int, int, int]]]  # per limb: (up_c, up_s, lo_c, lo_s), padded
+    psi_cdeg: list[list[int]]
+    hyst_cdeg: list[int]
+    actuators: list[Any]
+    act_channels: list[int]
+
+
+@dataclass(frozen=True)
+class ControlPart:
+    tick_hz: int
+    tick_us: int
+    debounce: int
+    hold_ms: int
+    hold_ticks: int
+    hold_margin_cdeg: int
+    telemetry_hz: int
+    drive_pm: int
+    hold_pm: int
+    max_duty_pm: int
+    max_on_ms: int
+    max_on_ticks: int
+    cooldown_ms: int
+    cooldown_ticks: int
+    timeout_ms: int
+    timeout_ticks: int
+    watchdog_ms: int
+    watchdog_ticks: int
+    stuck_samples: int
+    max_loaded: int
+
+
+@dataclass(frozen=True)
+class GaitPart:
+    selection: str  # how the gaits were chosen (GaitSelection.describe), for the headers
+    rows: list[tuple[int, str, tuple[int, ...]]]
+    n_px: int
+    n_mx: int
+    steps: list[int]
+    gait_first: list[int]
+    gait_len: list[int]
+    use_bitmap: bool
+    bitmap: list[str]
+    edges: list[str]
+    n_transitions: int
+    labels: list[str]
+    gait_hash: str
+
+
+@dataclass(frozen=True)
+class RenderContext:
+    version: str
+    robot_name: str
+    robot_path: str
+    robot_sha: str
+    build_id: str
+    board: BoardPart
+    limb: LimbPart
+    control: ControlPart
+    gait: GaitPart
+
+    def template_vars(self) -> dict[str, Any]:
+        """The flat names the templates use (each part's fields, plus the identity)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, (BoardPart, LimbPart, ControlPart, GaitPart)):
+                out.update({g.name: getattr(v, g.name) for g in fields(v)})
+            else:
+                out[f.name] = v
+        return out
+
+
+# ------------------------------------------------------------------ small helpers
+
+
+def _get(obj: Any, key: str, default: Any = None) -> Any:
+    if isinstance(obj, Mapping):
+        return obj.get(key, default)
+    getter = getattr(obj, "get", None)
+    if callable(getter):
+        return getter(key, default)
+    return getattr(obj, key, default)
+
+
+def _ticks(ms: float, tick_hz: int) -> int:
+    return int(math.ceil(ms * tick_hz / 1000.0 - 1e-9))
+
+
+def _q14(deg: float) -> tuple[int, int]:
+    r = math.radians(deg)
+    return round(math.cos(r) * Q14), round(math.sin(r) * Q14)
+
+
+def _file_sha256(path: Any) -> str:
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except (OSError, TypeError):
+        return "unavailable"
+
+
+def _display_path(path: Any) -> str:
+    if path is None:
+        return "(no file)"
+    p = Path(path).resolve()
+    try:
+        return str(p.relative_to(home()))
+    except ValueError:
+        return str(p)
+
+
+def _chunks(values: Sequence[Any], per_line: int = 16) -> list[str]:
+    """Comma-joined lines of at most per_line values (for C initialisers)."""
+    vals = [str(v) for v in values]
+    return [", ".join(vals[i : i + per_line]) for i in range(0, len(vals), per_line)]
+
+
+def gait_table_rows(gaits_by_direction: Mapping[str, Sequence[Any]]) -> list[tuple[int, str, tuple[int, ...]]]:
+    """(direction code, direction, open step list) of every compiled gait: +x first, then -x."""
+    rows = []
+    for code, d in ((0, "+x"), (1, "-x")):
+        for g in gaits_by_direction.get(d, ()) or ():
+            st = tuple(int(s) for s in g.states)
+            if len(st) >= 2 and st[-1] == st[0]:
+                st = st[:-1]
+            rows.append((code, d, st))
+    return rows
+
+
+# ------------------------------------------------------------------ the parts
+
+
+def _family(board_name: str, name: str) -> Family:
+    try:
+        return load_family(name)
+    except BoardError as e:
+        raise BuildError(f"board {board_name}: {e}") from None
+
+
+def _board_part(board: Any) -> BoardPart:
+    """The board's data and its HAL family's PWM map; BuildError for what the HAL cannot do."""
+    board_name = str(_get(board, "name"))
+    family = _family(board_name, str(_get(board, "family")))
+    pins = [str(p) for p in (_get(board, "pwm_channels", None) or _get(board, "pwm_pins", ()) or ())]
+    if not pins:
+        raise BuildError(f"board {board_name}: no PWM channels")
+    i2c = _get(board, "i2c", {}) or {}
+    return BoardPart(
+        board_name=board_name,
+        family=family.name,
+        family_id=family.id,
+        pins=pins,
+        pwm_map=[family.pwm_entry(board_name, i, pin) for i, pin in enumerate(pins)],
+        imu_addresses=list(_get(i2c, "imu_addresses", None) or [0x68, 0x69]),
+        uart_baud=int(_get(board, "uart_baud", None) or 115200),
+        uart_rx_buffer=int(_get(board, "uart_rx_buffer", None) or DEFAULT_UART_RX_BUFFER),
+        uart_tx_buffer=int(_get(board, "uart_tx_buffer", None) or DEFAULT_UART_TX_BUFFER),
+        clock_hz=int(_get(board, "clock_hz", 0) or 0),
+        pwm_hz=int(_get(board, "pwm_frequency_hz", 1000) or 1000),
+        i2c_hz=int(_get(i2c, "hz", 400000) or 400000),
+    )
+
+
+def _thresholds(robot: Any, limb: Any, max_thr: int) -> list[tuple[int, int, int, int]]:
+    """Q14 (cos, sin) of the upper and lower band edge of each of a limb's thresholds, padded."""
+    rows = []
+    h = float(limb.hysteresis_deg)
+    for p in limb.psi_star_deg:
+        up, lo = p + h / 2.0, p - h / 2.0
+        if not (-90.0 < lo and up < 90.0):
+            raise BuildError(
+                f"robot {robot.name}: limb {limb.name!r}: band {lo:g}..{up:g} deg around psi* {p:g} "
+                "must lie strictly inside (-90, 90)"
+            )
+        rows.append((*_q14(up), *_q14(lo)))
+    return rows + [(0, 0, 0, 0)] * (max_thr - len(rows))
+
+
+def _limb_part(robot: Any, board: BoardPart) -> LimbPart:
+    limbs, actuators = list(robot.limbs), list(robot.actuators)
+    if len(limbs) > len(board.imu_addresses):
+        raise BuildError(
+            f"robot {robot.name}: {len(limbs)} limbs but board {board.board_name} has "
+            f"{len(board.imu_addresses)} IMU addresses"
+        )
+    for a in actuators:
+        if not 0 <= a.channel < len(board.pins):
+            raise BuildError(
+                f"robot {robot.name}: actuator {a.name!r} on channel {a.channel}, board {board.board_name} "
+                f"has channels 0..{len(board.pins) - 1}"
+            )
+    levels = [int(limb.levels) for limb in limbs]
+    n_states = math.prod(levels)
+    if n_states > 0xFFFF:
+        raise BuildError(f"robot {robot.name}: {n_states} states, the firmware supports at most 65535")
+    max_thr = max(k - 1 for k in levels)
+    act_index = {a.name: i for i, a in enumerate(actuators)}
+    return LimbPart(
+        n_limbs=len(limbs),
+        n_actuators=len(actuators),
+        limbs=limbs,
+        levels=levels,
+        max_levels=max(levels),
+        max_thr=max_thr,
+        n_states=n_states,
+        state_type="uint8_t" if n_states <= 256 else "uint16_t",
+        state_bytes=1 if n_states <= 256 else 2,
+        limb_actuator=[act_index[limb.actuator] for limb in limbs],
+        imu_addr=[f"0x{board.imu_addresses[i]:02X}u" for i in range(len(limbs))],
+        thresholds=[_thresholds(robot, limb, max_thr) for limb in limbs],
+        psi_cdeg=[[round(p * 100) for p in limb.psi_star_deg] + [0] * (max_thr - len(limb.psi_star_deg))
+                  for limb in limbs],
+        hyst_cdeg=[round(float(limb.hysteresis_deg) * 100) for limb in limbs],
+        actuators=actuators,
+        act_channels=[a.channel for a in actuators],
+    )
+
+
+def _control_part(robot: Any) -> ControlPart:
+    ctl, safety = robot.control, robot.safety
+    tick_hz = int(ctl.tick_hz)
+    if tick_hz < 200:
+        raise BuildError(f"robot {robot.name}: control.tick_hz {tick_hz} below 200")
+    return ControlPart(
+        tick_hz=tick_hz,
+        tick_us=round(1_000_000 / tick_hz),
+        debounce=int(ctl.debounce_ticks),
+        hold_ms=int(ctl.hold_ms),
+        hold_ticks=_ticks(ctl.hold_ms, tick_hz),
+        hold_margin_cdeg=round(float(ctl.hold_margin_deg) * 100),
+        telemetry_hz=int(ctl.telemetry_hz),
+        drive_pm=round(float(ctl.drive_duty) * 10000),
+        hold_pm=round(float(ctl.hold_duty) * 10000),
+        max_duty_pm=round(float(safety.max_duty) * 10000),
+        max_on_ms=int(safety.max_on_ms),
+        max_on_ticks=_ticks(safety.max_on_ms, tick_hz),
+        cooldown_ms=int(safety.min_cooldown_ms),
+        cooldown_ticks=_ticks(safety.min_cooldown_ms, tick_hz),
+        timeout_ms=int(safety.state_timeout_ms),
+        timeout_ticks=_ticks(safety.state_timeout_ms, tick_hz),
+        watchdog_ms=int(safety.link_watchdog_ms),
+        watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
+        stuck_samples=max(20, tick_hz // 5),
+        max_loaded=MAX_LOADED_STEPS,
+    )
+
+
+def _step_table(robot: Any, rows: list[tuple[int, str, tuple[int, ...]]]) -> tuple[list[int], list[int], list[int]]:
+    """(steps of every gait concatenated, first step of each gait, length of each gait)."""
+    steps: list[int] = []
+    first, length = [], []
+    for _, _, st in rows:
+        first.append(len(steps))
+        length.append(len(st))
+        steps.extend(st)
+    if len(steps) > 0xFFFF:
+        raise BuildError(f"robot {robot.name}: gait table of {len(steps)} steps, at most 65535")
+    return steps, first, length
+
+
+def _transition_table(src: list[int], dst: list[int], n_states: int) -> tuple[bool, list[str], list[str]]:
+    """(use_bitmap, bitmap bytes, sorted src*n+dst keys): a bitmap for small state spaces."""
+    if n_states <= BITMAP_MAX_STATES:
+        bitmap = [0] * ((n_states * n_states + 7) // 8)
+        for a, b in zip(src, dst):
+            k = a * n_states + b
+            bitmap[k >> 3] |= 1 << (k & 7)
+        return True, [f"0x{b:02X}" for b in bitmap], []
+    return False, [], [f"{e}UL" for e in sorted(a * n_states + b for a, b in zip(src, dst))]
+
+
+def _gait_hash(n_states: int, rows: list[tuple[int, str, tuple[int, ...]]], src: list[int], dst: list[int]) -> int:
+    """Covers exactly what gait_table.c carries: steps, gaits, allowed transitions."""
+    gh = hashlib.sha256()
+    gh.update(f"states={n_states};".encode())
+    for code, _, st in rows:
+        gh.update(f"g{code}:{','.join(map(str, st))};".encode())
+    gh.update(("t:" + ",".join(f"{a}>{b}" for a, b in zip(src, dst))).encode())
+    return int.from_bytes(gh.digest()[:4], "big")
+
+
+def _selection_text(gaits_by_direction: Mapping[str, Sequence[Any]]) -> str:
+    selection = getattr(gaits_by_direction, "selection", None)
+    return selection.describe() if selection is not None else "gaits given directly (no selection named)"
+
+
+def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_states: int) -> GaitPart:
+    rows = gait_table_rows(gaits_by_direction)
+    n_px = sum(1 for r in rows if r[0] == 0)
+    n_mx = len(rows) - n_px
+    if n_px > 255 or n_mx > 255:
+        raise BuildError(f"robot {robot.name}: more than 255 optimal gaits in one direction")
+    steps, first, length = _step_table(robot, rows)
+    table = robot.transitions
+    src = [int(x) for x in table.src]
+    dst = [int(x) for x in table.dst]
+    use_bitmap, bitmap, edges = _transition_table(src, dst, n_states)
+    return GaitPart(
+        selection=_selection_text(gaits_by_direction),
+        rows=rows,
+        n_px=n_px,
+        n_mx=n_mx,
+        steps=steps,
+        gait_first=first,
+        gait_len=length,
+        use_bitmap=use_bitmap,
+        bitmap=bitmap,
+        edges=edges,
+        n_transitions=len(src),
+        labels=[table.label(i) for i in range(n_states)] if n_states <= 64 else [],
+        gait_hash=f"0x{_gait_hash(n_states, rows, src, dst):08X}",
+    )
+
+
+def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:
+    bh = hashlib.sha256(
+        f"proleg {__version__}|{robot_sha}|{board.board_name}|{board.family}|{','.join(board.pins)}|"
+        f"{gait_hash[2:].lower()}".encode()
+    )
+    return f"0x{int.from_bytes(bh.digest()[:4], 'big'):08X}"
+
+
+def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], board: Any) -> RenderContext:
+    """Everything the templates need, checked (BuildError when the robot does not fit)."""
+    board_part = _board_part(board)
+    limb_part = _limb_part(robot, board_part)
+    control_part = _control_part(robot)
+    gait_part = _gait_part(robot, gaits_by_direction, limb_part.n_states)
+    robot_sha = _file_sha256(getattr(robot, "path", None))
+    return RenderContext(
+        version=__version__,
+        robot_name=robot.name,
+        robot_path=_display_path(getattr(robot, "path", None)),
+        robot_sha=robot_sha,
+        build_id=_build_id(robot_sha, board_part, gait_part.gait_hash),
+        board=board_part,
+        limb=limb_part,
+        control=control_part,
+        gait=gait_part,
+    )
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(templates_dir())),
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.filters["chunks"] = _chunks
+    return env
+
+
+def render_config(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], board: Any) -> dict[str, str]:
+    """Filename → text of ``robot_config.h`` and ``gait_table.c`` for this robot on this board.
+
+    ``gaits_by_direction`` is ``{"+x": gaits, "-x": gaits}``; when it is a
+    ``FirmwareGaits`` (``firmware_gaits``) its selection is named in both headers.
+    Raises BuildError when the robot does not fit what the firmware supports (thresholds
+    near ±90°, more states than 65535, a channel the board lacks, a pin the HAL cannot drive).
+    """
+    ctx = render_context(robot, gaits_by_direction, board).template_vars()
+    env = _environment()
+    return {
+        "robot_config.h": env.get_template("robot_config.h.j2").render(generator=GENERATOR, **ctx),
+        "gait_table.c": env.get_template("gait_table.c.j2").render(generator=GENERATOR, **ctx),
+    }

@@ -1,0 +1,204 @@
+"""Trial logs: one JSON line per completed transition, appended and flushed as it happens.
+
+A record holds the transition (``from``/``to`` as state labels), the firmware's event
+times of its start and end (seconds, the firmware's clock), the planar motion in the
+robot's start frame when the position source knows it (``dx``, ``dy`` in the robot file's
+units, ``dtheta_deg``), and where the numbers came from (``source``: "sim", "tracker",
+"manual", …). Example line::
+
+    {"from": "00", "to": "10", "t_start": 1.204, "t_end": 1.951, "dx": 3.98, "dy": null,
+     "dtheta_deg": null, "source": "sim"}
+
+``TrialLog`` reopens an existing log and keeps everything in it: a run interrupted halfway
+continues with ``remaining`` (what is still to do), and nothing recorded is lost — each
+record is written, flushed and fsync'ed before the next transition is measured. A torn
+last line (the process died mid-write) is dropped with a warning and overwritten.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import warnings
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..transitions import TransitionTable
+
+
+class TrialLogError(ValueError):
+    """A trial log line that is not a record (other than a torn last line)."""
+
+
+@dataclass(frozen=True)
+class Trial:
+    src: str
+    dst: str
+    t_start: float
+    t_end: float
+    dx: float | None = None
+    dy: float | None = None
+    dtheta_deg: float | None = None
+    source: str = ""
+
+    def to_json(self) -> str:
+        d = asdict(self)
+        d["from"], d["to"] = d.pop("src"), d.pop("dst")
+        order = ["from", "to", "t_start", "t_end", "dx", "dy", "dtheta_deg", "source"]
+        return json.dumps({k: d[k] for k in order}, ensure_ascii=False)
+
+    @classmethod
+    def from_json(cls, line: str, where: str = "") -> Trial:
+        try:
+            d = json.loads(line)
+            t = cls(str(d["from"]), str(d["to"]), float(d["t_start"]), float(d["t_end"]),
+                    _opt(d.get("dx")), _opt(d.get("dy")), _opt(d.get("dtheta_deg")), str(d.get("source", "")))
+        except (ValueError, KeyError, TypeError) as e:
+            raise TrialLogError(f"{where}: expected a trial record (from, to, t_start, t_end, dx…), {e}") from None
+        return t
+
+
+def _opt(v) -> float | None:
+    if v is None:
+        return None
+    f = float(v)
+    if not math.isfinite(f):
+        raise ValueError(f"not a finite number: {v!r}")
+    return f
+
+
+class TrialLog:
+    """An append-only JSONL trial log (see the module docstring)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.trials: list[Trial] = []
+        self._good_bytes = 0
+        if self.path.exists():
+            self._read()
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._fh = open(self.path, "r+b" if self.path.exists() else "wb")
+        self._fh.truncate(self._good_bytes)  # drop a torn last line
+        self._fh.seek(self._good_bytes)
+
+    def _read(self) -> None:
+        data = self.path.read_bytes()
+        lines = data.split(b"\n")
+        pos = 0
+        for k, raw in enumerate(lines):
+            last = k == len(lines) - 1
+            if not raw.strip():
+                pos += len(raw) + (0 if last else 1)
+                if not last:
+                    self._good_bytes = pos
+                continue
+            try:
+                trial = Trial.from_json(raw.decode("utf-8"), f"{self.path}:{k + 1}")
+            except (TrialLogError, UnicodeDecodeError) as e:
+                if last or all(not x.strip() for x in lines[k + 1:]):
+                    warnings.warn(f"{self.path}:{k + 1}: torn last record dropped (the run was interrupted while writing it)",
+                                  stacklevel=3)
+                    return
+                raise TrialLogError(str(e)) from None
+            if last:  # complete JSON but no newline: keep it, add the newline on the next append
+                self.trials.append(trial)
+                self._good_bytes = pos + len(raw)
+                self._needs_newline = True
+                return
+            self.trials.append(trial)
+            pos += len(raw) + 1
+            self._good_bytes = pos
+
+    _needs_newline = False
+
+    def append(self, trial: Trial) -> None:
+        prefix = b"\n" if self._needs_newline else b""
+        self._needs_newline = False
+        self._fh.write(prefix + trial.to_json().encode("utf-8") + b"\n")
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+        self.trials.append(trial)
+
+    def close(self) -> None:
+        self._fh.close()
+
+    def __enter__(self) -> TrialLog:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def counts(table: TransitionTable, trials: Iterable[Trial]) -> np.ndarray:
+    """Trials per allowed transition (aligned with ``table.src``); unknown pairs are ignored."""
+    out = np.zeros(table.n_transitions, dtype=np.int64)
+    for t in trials:
+        try:
+            e = table.lookup(table.index(t.src), table.index(t.dst))
+        except (ValueError, KeyError):
+            continue
+        if e is not None:
+            out[e] += 1
+    return out
+
+
+def remaining(table: TransitionTable, trials: Iterable[Trial], repeats: int) -> np.ndarray:
+    """How many more trials each allowed transition needs to reach ``repeats``."""
+    return np.maximum(0, repeats - counts(table, trials))
+
+
+# ------------------------------------------------------------------------- position sources
+Pose = tuple[float | None, float | None, float | None]  # x, y, θ (degrees); None = unknown
+
+
+def planar_delta(p0: Pose, p1: Pose) -> Pose:
+    """Motion from pose p0 to p1 in p0's frame (x forward). With no θ, the world Δx/Δy."""
+    x0, y0, th0 = p0
+    x1, y1, th1 = p1
+    if x0 is None or x1 is None:
+        return None, None, None
+    wx = x1 - x0
+    wy = None if y0 is None or y1 is None else y1 - y0
+    if th0 is None or th1 is None:
+        return wx, wy, None
+    c, s = math.cos(math.radians(th0)), math.sin(math.radians(th0))
+    wy0 = wy or 0.0
+    dth = (th1 - th0 + 180.0) % 360.0 - 180.0
+    return c * wx + s * wy0, -s * wx + c * wy0, dth
+
+
+class GroundTruthSource:
+    """The simulator's ground truth: ``pose()`` returns (x, y, θ) now (any may be None)."""
+
+    name = "sim"
+
+    def __init__(self, pose: Callable[[], Pose]):
+        self.pose = pose
+
+
+def manual_trial(src: str, dst: str, t_start: float, t_end: float, *,
+                 ask: Callable[[str], str] = input, units: str = "mm", planar: bool = False) -> Trial | None:
+    """The paper's visual method: ask the operator for the transition's motion. Answers:
+    ``Δx`` (or ``Δx Δy Δθ`` with ``planar``), empty to skip the trial, and a clear line is
+    asked again on anything else. ``ask`` is injectable (tests, a GUI)."""
+    what = f"Δx Δy [{units}] Δθ [deg]" if planar else f"Δx [{units}]"
+    prompt = f"{src} → {dst}: {what} (empty = skip): "
+    while True:
+        text = ask(prompt).strip().replace(",", " ")
+        if not text:
+            return None
+        parts = text.split()
+        try:
+            vals = [float(p) for p in parts]
+        except ValueError:
+            prompt = f"  not a number ({text!r}); {src} → {dst}: {what}: "
+            continue
+        if len(vals) == 1 or (planar and len(vals) == 3):
+            if all(math.isfinite(v) for v in vals):
+                vals += [None, None] * (len(vals) == 1)  # type: ignore[list-item]
+                return Trial(src, dst, t_start, t_end, vals[0], vals[1], vals[2], "manual")
+        prompt = f"  expected {what}; {src} → {dst}: "

@@ -1,0 +1,146 @@
+"""The learned robot file: the robot file the lab gave, with ``[transitions]`` replaced.
+
+The new ``[transitions]`` holds the learned Δx means as ``matrix`` (in the trials' units,
+stated in ``units``; forbidden entries stay ``"x"``; a transition never measured keeps its
+previous value and is named in a comment), the durations of the old table when it had
+some, and beside it the learned statistics under issue 17's names — ``dy``,
+``dtheta_deg``, ``var_dx``, ``var_dy``, ``var_dtheta_deg`` — and ``n_trials``, same shape as
+``matrix``, ``"x"`` where forbidden, ``nan`` where unknown. Today's loader
+(``proleg.robot``) refuses keys it does not know in ``[transitions]``, so by default these
+are written as comment lines ``#learned: key = [...]`` that ``read_learned`` reads back and
+that become real keys by deleting ``#learned: `` once the loader accepts them
+(``stats_as_keys=True`` writes them as keys already). The previous ``[transitions]`` table is
+kept below, commented out. Everything else in the file is copied unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from ..robot import Robot
+from .estimate import Estimates
+
+HEADER_RE = re.compile(r"^\s*\[\[?\s*[A-Za-z_][\w.\-]*\s*\]\]?\s*(#.*)?$")
+PREFIX = "#learned: "
+STAT_KEYS = (("dy", "dy", "mean"), ("dtheta_deg", "dtheta_deg", "mean"), ("var_dx", "dx", "var"),
+             ("var_dy", "dy", "var"), ("var_dtheta_deg", "dtheta_deg", "var"))
+
+
+def _num(v: float) -> str:
+    if math.isnan(v):
+        return "nan"
+    if v == int(v) and abs(v) < 1e15:
+        return str(int(v))
+    return f"{v:.6g}"
+
+
+def _matrix(name: str, values: np.ndarray, allowed: np.ndarray, prefix: str = "") -> list[str]:
+    n = len(values)
+    width = max(len(_num(float(v))) for v in values.ravel())
+    lines = [f"{prefix}{name} = ["]
+    for a in range(n):
+        cells = []
+        for b in range(n):
+            cell = '"x"' if (a != b and not allowed[a, b]) else _num(float(values[a, b]))
+            cells.append(cell.rjust(max(width, 3)))
+        lines.append(f"{prefix}  [{', '.join(cells)}],")
+    lines.append(f"{prefix}]")
+    return lines
+
+
+def _section_span(lines: list[str], name: str) -> tuple[int, int] | None:
+    start = None
+    for i, ln in enumerate(lines):
+        if HEADER_RE.match(ln):
+            head = ln.strip().split("#")[0].strip()
+            if start is not None:
+                return start, i
+            if head == f"[{name}]":
+                start = i
+    return None if start is None else (start, len(lines))
+
+
+def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = False,
+                             note: str = "") -> list[str]:
+    table = robot.transitions
+    n = table.n_states
+    old, allowed = table.dense()
+    dx = est.dx
+    new = old.copy()
+    missing = []
+    for e, (a, b) in enumerate(zip(table.src.tolist(), table.dst.tolist())):
+        if dx.n[e] >= 1:
+            new[a, b] = dx.mean[e]
+        else:
+            missing.append(f"{table.label(a)}->{table.label(b)}")
+    when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    out = [
+        f"# [transitions] learned by proleg learn ({when}) from {int(dx.n.sum())} trials{note}.",
+        f"# matrix: mean Δx per transition in {units}; var_*: sample variances (square of the unit, deg² for θ);",
+        f"# n_trials: trials per transition; {int(est.confidence * 100)} % intervals are in the learn report.",
+    ]
+    if missing:
+        out.append(f"# not measured (previous value kept): {', '.join(missing)}")
+    out += ["[transitions]", f'units = "{units}"',
+            "states = [" + ", ".join(f'"{table.label(i)}"' for i in range(n)) + "]"]
+    out += _matrix("matrix", new, allowed)
+    if table.duration is not None:
+        dur = np.zeros((n, n))
+        dur[table.src, table.dst] = table.duration
+        out += _matrix("durations_s", dur, allowed)
+    prefix = "" if stats_as_keys else PREFIX
+    if not stats_as_keys:
+        out.append("# Learned statistics beside the matrix (issue 17 names). Today's loader does not accept them")
+        out.append(f"# in [transitions]: delete '{PREFIX}' once it does; `proleg.learn.robotfile.read_learned` reads them.")
+    counts = np.zeros((n, n))
+    counts[table.src, table.dst] = dx.n
+    out += _matrix("n_trials", counts, allowed, prefix)
+    for key, comp, what in STAT_KEYS:
+        c = est.components.get(comp)
+        if c is None:
+            continue
+        m = np.full((n, n), np.nan)
+        np.fill_diagonal(m, 0.0)
+        m[table.src, table.dst] = getattr(c, what)
+        out += _matrix(key, m, allowed, prefix)
+    return out
+
+
+def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units: str | None = None,
+                        stats_as_keys: bool = False, note: str = "") -> Path:
+    """Write ``robot``'s file with the learned ``[transitions]`` (see the module docstring)."""
+    out = Path(out)
+    lines = Path(robot.path).read_text(encoding="utf-8").splitlines()
+    span = _section_span(lines, "transitions")
+    new = learned_transitions_text(robot, est, units=units or robot.units, stats_as_keys=stats_as_keys, note=note)
+    if span is None:
+        body = lines + [""] + new
+    else:
+        a, b = span
+        old = lines[a:b]
+        while old and not old[-1].strip():
+            old.pop()
+        kept = ["", "# previous [transitions] (before learning):"] + ["# " + ln if ln.strip() else "#" for ln in old] + [""]
+        body = lines[:a] + new + kept + lines[b:]
+    text = "\n".join(body) + "\n"
+    out.write_text(text, encoding="utf-8")
+    return out
+
+
+def read_learned(path: str | Path) -> dict[str, np.ndarray]:
+    """The learned statistics of a file written by ``write_learned_robot`` (commented or as
+    keys): key → n×n array with NaN where forbidden or unknown."""
+    text = Path(path).read_text(encoding="utf-8")
+    commented = "\n".join(ln[len(PREFIX):] for ln in text.splitlines() if ln.startswith(PREFIX))
+    doc = tomllib.loads(commented) if commented else tomllib.loads(text).get("transitions", {})
+    out = {}
+    for key in ("n_trials",) + tuple(k for k, _c, _w in STAT_KEYS):
+        if key in doc:
+            out[key] = np.array([[np.nan if v == "x" else float(v) for v in row] for row in doc[key]])
+    return out

@@ -1,0 +1,225 @@
+"""Driving a robot through exploration pieces over a link (the only module that talks to
+one; everything else in ``proleg.learn`` is link-free).
+
+``explore`` repeats until every allowed transition inside a closed tour has ``repeats``
+trials in the log: plan a tour of what is still to do from the robot's measured state
+(``tours.exploration`` with the remaining demand), take its first piece
+(``pieces.split``), run it, rest, append every observed transition to the log. Planning
+again after each piece is what makes a run resumable (an interrupted run's log is the
+demand already met) and robust to what a piece really did (a timeout, the robot relaxing
+into another state while its coils cool).
+
+A piece ``p0 → … → pk`` runs as a user gait: LOAD_GAIT of the piece closed by the
+shortest way back to p0 (the firmware accepts closed walks only), START, and STOP once
+the firmware's STATE_REACHED event says ``pk`` was reached the k-th time. Each reached
+state's pose is taken ``settle_s`` after its event (the robot holds a reached state for
+the robot's ``hold_ms`` before it moves on; keep settle_s below that), and every pair of
+consecutive reached states that is an allowed transition becomes a trial.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind
+from ..robot import Robot
+from .measure import Pose, Trial, TrialLog, manual_trial, planar_delta, remaining
+from .pieces import Piece, PieceLimits, limits_for, split
+from .tours import _bfs_path, exploration
+
+
+class ExplorationError(RuntimeError):
+    """The robot stopped (fault, E-stop, timeout); the log keeps every trial made."""
+
+
+@dataclass(frozen=True)
+class Progress:
+    done: int          # trials counted toward the goal
+    to_do: int         # trials still needed
+    elapsed_s: float   # link clock since the start
+    eta_s: float       # estimated time left at the pace so far
+
+
+def _closing_gait(robot: Robot, piece: Piece, max_steps: int) -> tuple[int, ...]:
+    t = robot.transitions
+    s = list(piece.states)
+    if s[-1] == s[0]:
+        walk = s[:-1]
+    else:
+        succ: list[list[int]] = [[] for _ in range(t.n_states)]
+        for a, b in zip(t.src.tolist(), t.dst.tolist()):
+            succ[a].append(b)
+        back = _bfs_path(t.n_states, succ, s[-1], s[0])
+        if back is None:
+            raise ExplorationError(f"no way back from {t.label(s[-1])} to {t.label(s[0])} to close the piece")
+        walk = s + back[1:-1]
+    if len(walk) > max_steps:
+        raise ExplorationError(f"piece needs {len(walk)} gait steps, the firmware takes {max_steps}")
+    return tuple(walk)
+
+
+class Explorer:
+    """One exploration run over ``client`` (a ``proleg.link.RobotClient``, connected)."""
+
+    def __init__(self, client, robot: Robot, log: TrialLog, pose: Callable[[], Pose] | None, *,
+                 repeats: int = 5, limits: PieceLimits | None = None, settle_s: float = 0.05,
+                 source: str = "sim", seed: int | None = None,
+                 on_progress: Callable[[Progress], None] | None = None,
+                 rest: Callable[[float], None] | None = None,
+                 ask: Callable[[str], str] | None = None):
+        self.client, self.robot, self.log, self.pose = client, robot, log, pose
+        self.repeats, self.settle_s, self.source, self.seed = repeats, settle_s, source, seed
+        info_steps = getattr(getattr(client, "info", None), "max_gait_steps", None) or MAX_GAIT_STEPS
+        self.max_steps = min(MAX_GAIT_STEPS, int(info_steps))
+        base = limits or limits_for(robot)
+        # manual entry (``ask``): one transition per piece, the operator measures while the robot rests
+        k = 1 if ask is not None else min(base.max_transitions, self.max_steps - 1)
+        self.limits = replace(base, max_transitions=k)
+        self.ask = ask
+        self.on_progress = on_progress
+        self._rest = rest or self._rest_on_link
+        self._t0 = self._clock()
+        self.pieces_run = 0
+
+    def _clock(self) -> float:
+        return float(self.client.link.clock()) if hasattr(self.client.link, "clock") else _time.monotonic()
+
+    def _rest_on_link(self, seconds: float) -> None:
+        end = self._clock() + seconds
+        while self._clock() < end:
+            self.client.recv(min(0.2, end - self._clock()))
+
+    def measured_state(self) -> int:
+        for msg in self.client.telemetry(timeout=2.0, count=3):
+            state = int(msg.measured)
+        return state
+
+    def to_do(self):
+        return remaining(self.robot.transitions, self.log.trials, self.repeats)
+
+    def run(self, max_pieces: int | None = None) -> list[Trial]:
+        """Explore until done (or ``max_pieces``); returns the trials added by this run."""
+        added: list[Trial] = []
+        t = self.robot.transitions
+        while max_pieces is None or self.pieces_run < max_pieces:
+            demand = self.to_do()
+            ex = exploration(t, self.repeats)  # which transitions any closed tour can make
+            for a, b in ex.uncoverable:
+                demand[t.lookup(a, b)] = 0
+            if demand.sum() == 0:
+                break
+            start = self.measured_state()
+            plan = exploration(t, demand=demand, start=start, seed=None if self.seed is None else self.seed + self.pieces_run)
+            tour = next((x for x in plan.tours if x.states[0] == start), None)
+            if tour is None:
+                raise ExplorationError(f"the robot rests in {t.label(start)}, from where the transitions still to do "
+                                       "cannot be reached (see the uncoverable transitions)")
+            piece = split(t, tour.states, self.limits)[0]
+            if self.ask is None:
+                added += self.run_piece(piece)
+            else:
+                for tr in self.run_piece(piece, record=False):
+                    asked = manual_trial(tr.src, tr.dst, tr.t_start, tr.t_end, ask=self.ask, units=self.robot.units)
+                    if asked is not None:
+                        self.log.append(asked)
+                        added.append(asked)
+            self.pieces_run += 1
+            self._report()
+            self._rest(self.limits.rest_s)
+        return added
+
+    def _report(self) -> None:
+        if self.on_progress is None:
+            return
+        todo = int(self.to_do().sum())
+        done = int(len(self.log.trials))
+        el = self._clock() - self._t0
+        self.on_progress(Progress(done, todo, el, el / max(1, done) * todo))
+
+    def run_piece(self, piece: Piece, record: bool = True) -> list[Trial]:
+        """Run one piece from its first state (see the module docstring); ``record``: append
+        its trials to the log as they happen."""
+        t = self.robot.transitions
+        client = self.client
+        gait = _closing_gait(self.robot, piece, self.max_steps)
+        client.load_gait(gait)
+        client.start(GAIT_USER, "+x")
+        goal = len(piece.transitions)
+        timeout = (goal + 2) * self.robot.safety.state_timeout_ms / 1000.0
+        deadline = self._clock() + timeout
+        reached: list[tuple[float, int, Pose | None]] = []
+        pending: tuple[float, float, int] | None = None  # (due on the link clock, event time, state)
+        out: list[Trial] = []
+        try:
+            while len(reached) < goal + 1 or pending is not None:
+                now = self._clock()
+                if pending is not None and now >= pending[0] - 1e-9:
+                    _due, t_ev, state = pending
+                    pending = None
+                    pose = self.pose() if self.pose is not None else None
+                    if reached:
+                        t0, a, p0 = reached[-1]
+                        if t.lookup(a, state) is not None:
+                            d = planar_delta(p0, pose) if (p0 is not None and pose is not None) else (None, None, None)
+                            trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source)
+                            if record:
+                                self.log.append(trial)
+                            out.append(trial)
+                    reached.append((t_ev, state, pose))
+                    continue
+                if now > deadline:
+                    raise ExplorationError(f"piece {'→'.join(t.label(s) for s in piece.states)} did not finish "
+                                           f"within {timeout:.0f} s")
+                wait = 0.05 if pending is None else max(0.0, min(0.05, pending[0] - now))
+                msg = client.recv(wait)
+                if msg is None or msg.name != "EVENT":
+                    continue
+                kind = int(msg.kind)
+                if kind in (EventKind.FAULT, EventKind.ESTOP) or (kind == EventKind.GAIT_STOPPED and int(msg.code) != 0):
+                    raise ExplorationError(f"the robot stopped: {EventKind(kind).name} code {int(msg.code)} "
+                                           f"detail {int(msg.detail)}")
+                if kind != EventKind.STATE_REACHED:
+                    continue
+                state = int(msg.detail)
+                if (reached and reached[-1][1] == state) or pending is not None:
+                    continue  # the same state again, or a new one before the last settled (hold too short)
+                pending = (self._clock() + self.settle_s, int(msg.time_ms) / 1000.0, state)
+        finally:
+            client.stop()
+        return out
+
+
+# ------------------------------------------------------------------------- the simulated robot
+def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1):
+    """The host-sim firmware of ``robot`` in closed loop with a table plant driven by
+    ``truth``'s matrix and ``[plant]`` (its ``noise_mm``, ``step_mm``...; default: ``robot``)
+    — the learner never sees the truth. Returns (SimulatedRobot, RobotClient over SimLink,
+    ground-truth pose callable)."""
+    from ..link import RobotClient
+    from ..link.sim_link import SimLink
+    from ..sim.closed_loop import SimulatedRobot
+    from ..sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
+
+    truth = truth or robot
+    if truth.levels != robot.levels:
+        raise ExplorationError(f"truth {truth.path} has state levels {truth.levels}, the robot {robot.levels}")
+    plant = Plant(plant_params_from_robot(truth), true_rewards_from_robot(truth), robot.levels, seed)
+    sim = SimulatedRobot(robot, seed=seed, plant=plant)
+    client = RobotClient(SimLink(sim, description=f"sim {robot.name}"))
+
+    def pose() -> Pose:
+        return (sim.plant.displacement_mm, None, None)
+
+    return sim, client, pose
+
+
+def explore_simulated(robot: Robot, truth: Robot | None, log: TrialLog, *, repeats: int = 5, seed: int = 1,
+                      on_progress: Callable[[Progress], None] | None = None):
+    """``proleg learn ROBOT --sim --truth TRUTH`` as a function: returns (trials added, sim)."""
+    sim, client, pose = simulated_robot(robot, truth, seed=seed)
+    with client:
+        client.connect()
+        ex = Explorer(client, robot, log, pose, repeats=repeats, source="sim", seed=seed, on_progress=on_progress)
+        return ex.run(), sim

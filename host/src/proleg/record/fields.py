@@ -1,0 +1,166 @@
+"""What a recording holds, in physical units with named fields — shared by every format.
+
+``RecordingMeta``: who was recorded (robot, board, firmware ids, limb and actuator names, ψ*,
+the wall-clock start time in ISO 8601 UTC). ``telemetry_row`` turns one TELEMETRY frame into
+a flat row: ``t_host_s`` (host receipt time on the link's clock), ``t_s`` (firmware time),
+the integer fields as integers, ``psi_<limb>_deg`` per limb, ``duty_<actuator>_pct`` per
+channel and the link's ground truth (``displacement_mm`` on the simulated robot). Every
+format (CSV, JSON Lines, MCAP) writes these same names; docs/data.md lists them.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import asdict, dataclass, field
+from datetime import datetime, timezone
+from typing import Any
+
+from ..protocol.definition import GAIT_USER, Direction, ErrorCode, EventKind, FaultCode, StopReason
+
+#: TELEMETRY's integer fields, as recorded (no scaling)
+INTEGER_FIELDS = ("seq", "measured", "target", "gait", "direction", "step", "flags")
+#: the columns of the events table (EVENT messages, replies, fault injections)
+EVENT_COLUMNS = ("t_host_s", "t_s", "msg", "kind", "code", "detail", "text")
+
+
+def column_name(name: str) -> str:
+    """A limb or actuator name as part of a column name: ``sma-left`` → ``sma_left``."""
+    return re.sub(r"[^0-9A-Za-z_]", "_", name)
+
+
+def utc_now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+@dataclass(frozen=True)
+class RecordingMeta:
+    """A recording's metadata (the CSV sidecar ``.meta.json``, JSONL's first line, MCAP metadata)."""
+
+    limb_names: tuple[str, ...]
+    channel_names: tuple[str, ...]
+    robot: str = ""
+    board: str = ""
+    start_utc: str = field(default_factory=utc_now)
+    psi_star_deg: tuple[tuple[float, ...], ...] = ()
+    truth: tuple[str, ...] = ()  # ground-truth columns the link provides (displacement_mm)
+    info: dict[str, str] = field(default_factory=dict)  # firmware build id, gait hash, link, rates...
+
+    def columns(self) -> list[str]:
+        """The telemetry columns, in order."""
+        return (["t_host_s", "t_s", *INTEGER_FIELDS]
+                + [f"psi_{column_name(n)}_deg" for n in self.limb_names]
+                + [f"duty_{column_name(n)}_pct" for n in self.channel_names]
+                + list(self.truth))
+
+    def as_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["psi_star_deg"] = [list(v) for v in self.psi_star_deg]
+        d["columns"] = self.columns()
+        d["units"] = {"t_host_s": "s (host clock)", "t_s": "s (firmware clock)", "psi_*_deg": "degree",
+                      "duty_*_pct": "percent", "displacement_mm": "mm"}
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> RecordingMeta:
+        return cls(
+            limb_names=tuple(d.get("limb_names", ())), channel_names=tuple(d.get("channel_names", ())),
+            robot=str(d.get("robot", "")), board=str(d.get("board", "")), start_utc=str(d.get("start_utc", "")),
+            psi_star_deg=tuple(tuple(float(x) for x in v) for v in d.get("psi_star_deg", ())),
+            truth=tuple(d.get("truth", ())), info={str(k): str(v) for k, v in d.get("info", {}).items()},
+        )
+
+    @classmethod
+    def for_robot(cls, *, info: Any = None, robot: Any = None, link: Any = None, **kw: Any) -> RecordingMeta:
+        """Metadata from a connected robot's INFO (``RobotInfo``), its robot file (``Robot``,
+        for limb and actuator names and ψ*) and the link (its description, its ground truth)."""
+        limbs = info.limbs if info is not None else len(robot.limbs)
+        channels = info.actuators if info is not None else max(a.channel for a in robot.actuators) + 1
+        limb_names = [f"limb{i}" for i in range(limbs)]
+        channel_names = [f"ch{j}" for j in range(channels)]
+        stars: tuple[tuple[float, ...], ...] = ()
+        if robot is not None and len(robot.limbs) == limbs:
+            limb_names = [limb.name for limb in robot.limbs]
+            stars = tuple(tuple(limb.psi_star_deg) for limb in robot.limbs)
+            for a in robot.actuators:
+                if a.channel < channels:
+                    channel_names[a.channel] = a.name
+        extra = dict(info.header()) if info is not None else {}
+        for k in ("robot", "board", "limbs", "channels"):
+            extra.pop(k, None)
+        if link is not None:
+            extra["link"] = link.description
+        return cls(
+            limb_names=tuple(limb_names), channel_names=tuple(channel_names),
+            robot=info.robot_name if info is not None else robot.name,
+            board=info.board if info is not None else kw.pop("board", ""),
+            psi_star_deg=stars, info=extra,
+            truth=kw.pop("truth", tuple(sorted(link.truth())) if link is not None else ()), **kw,
+        )
+
+
+def telemetry_row(meta: RecordingMeta, host_s: float, f: dict[str, Any], truth: dict[str, float]) -> dict[str, Any]:
+    """One TELEMETRY frame's fields in physical units under the recording's column names."""
+    row: dict[str, Any] = {"t_host_s": round(host_s, 6), "t_s": f["time_ms"] / 1000}
+    for k in INTEGER_FIELDS:
+        row[k] = int(f[k])
+    psi, duty = f["psi"], f["duty"]
+    for i, n in enumerate(meta.limb_names):
+        row[f"psi_{column_name(n)}_deg"] = psi[i] / 100 if i < len(psi) else None
+    for j, n in enumerate(meta.channel_names):
+        row[f"duty_{column_name(n)}_pct"] = duty[j] / 100 if j < len(duty) else None
+    for k in meta.truth:
+        row[k] = truth.get(k)
+    return row
+
+
+def event_row(host_s: float, name: str, f: dict[str, Any]) -> dict[str, Any]:
+    """Any other message as one events-table row: ``kind``/``code``/``detail`` of an EVENT
+    (kind by name), a NACK's error/detail, 0 otherwise; ``text`` says it in words."""
+    t_s = f["time_ms"] / 1000 if "time_ms" in f else None
+    if name == "EVENT":
+        return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": name, "kind": _name(EventKind, f["kind"]),
+                "code": int(f["code"]), "detail": int(f["detail"]), "text": describe_event(f)}
+    code = int(f.get("error", 0)) if name == "NACK" else 0
+    detail = int(f.get("detail", 0)) if name == "NACK" else 0
+    text = " ".join(f"{k}={v}" for k, v in f.items() if k != "time_ms")
+    if name == "NACK":
+        text = f"{_name(ErrorCode, code)} " + text
+    return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": name, "kind": "", "code": code, "detail": detail,
+            "text": text}
+
+
+def injection_row(host_s: float, t_s: float | None, fault: str) -> dict[str, Any]:
+    """A fault the simulator injected (``proleg sim --inject``), for plots' markers."""
+    return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": "INJECT", "kind": "INJECT", "code": 0, "detail": 0,
+            "text": fault}
+
+
+def describe_event(f: dict[str, Any]) -> str:
+    """An EVENT in words (fault, stop reason and event kind by name)."""
+    kind, code, detail = f["kind"], f["code"], f["detail"]
+    try:
+        k = EventKind(kind)
+    except ValueError:
+        return f"event {kind} code={code} detail={detail}"
+    if k == EventKind.FAULT:
+        return f"FAULT {_name(FaultCode, code)} (limb/channel {detail})"
+    if k == EventKind.GAIT_STOPPED:
+        return f"gait stopped: {_name(StopReason, code)}"
+    if k == EventKind.GAIT_STARTED:
+        d = "+x" if detail == Direction.PLUS_X else "-x"
+        return f"gait {'user' if code == GAIT_USER else code} started {d}"
+    if k == EventKind.STATE_REACHED:
+        return f"step {code} reached state {detail}"
+    return f"{k.name.lower()} code={code} detail={detail}"
+
+
+def _name(enum: Any, value: int) -> str:
+    try:
+        return enum(value).name
+    except ValueError:
+        return str(value)
+
+
+def dumps(obj: Any) -> str:
+    return json.dumps(obj, separators=(",", ":"), allow_nan=False)

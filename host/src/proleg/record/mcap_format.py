@@ -1,0 +1,99 @@
+"""MCAP for Foxglove: JSON-encoded messages on JSON-schema channels ``/proleg/telemetry``
+(the CSV columns as fields) and ``/proleg/events``; the metadata as an MCAP metadata record
+``proleg`` (string values; lists as JSON). Log times: the start time plus the host time
+since the first message. Written with the ``mcap`` library; ``McapReader`` reads it back.
+"""
+
+from __future__ import annotations
+
+import json
+from datetime import datetime
+from typing import Any, BinaryIO
+
+from ..errors import LinkError
+from .base import Reader, Recording, Writer
+from .fields import EVENT_COLUMNS, INTEGER_FIELDS, RecordingMeta, dumps
+
+TELEMETRY_TOPIC = "/proleg/telemetry"
+EVENTS_TOPIC = "/proleg/events"
+
+
+def _schema(columns: list[str], integers: tuple[str, ...], strings: tuple[str, ...] = ()) -> bytes:
+    props = {c: {"type": "integer" if c in integers else "string" if c in strings else ["number", "null"]}
+             for c in columns}
+    return json.dumps({"type": "object", "properties": props}).encode()
+
+
+class McapWriter(Writer):
+    suffixes = (".mcap",)
+
+    def open(self) -> None:
+        from mcap.writer import Writer as _Mcap
+
+        self._f: BinaryIO = open(self.path, "wb")
+        self._w = _Mcap(self._f)
+        self._w.start(profile="", library="proleg")
+        tel = self._w.register_schema(name="proleg.Telemetry", encoding="jsonschema",
+                                      data=_schema(self.meta.columns(), INTEGER_FIELDS))
+        ev = self._w.register_schema(name="proleg.Event", encoding="jsonschema",
+                                     data=_schema(list(EVENT_COLUMNS), ("code", "detail"), ("msg", "kind", "text")))
+        self._tel = self._w.register_channel(topic=TELEMETRY_TOPIC, message_encoding="json", schema_id=tel)
+        self._ev = self._w.register_channel(topic=EVENTS_TOPIC, message_encoding="json", schema_id=ev)
+        self._w.add_metadata("proleg", {k: v if isinstance(v, str) else json.dumps(v)
+                                        for k, v in self.meta.as_dict().items()})
+        try:
+            self._t0_ns = int(datetime.fromisoformat(self.meta.start_utc.replace("Z", "+00:00")).timestamp() * 1e9)
+        except ValueError:
+            self._t0_ns = 0
+        self._host0: float | None = None
+
+    def _log(self, channel: int, row: dict[str, Any]) -> None:
+        if self._host0 is None:
+            self._host0 = row["t_host_s"]
+        t = self._t0_ns + round((row["t_host_s"] - self._host0) * 1e9)
+        self._w.add_message(channel_id=channel, log_time=t, publish_time=t, data=dumps(row).encode())
+
+    def write_telemetry(self, row: dict[str, Any]) -> None:
+        self._log(self._tel, row)
+
+    def write_event(self, row: dict[str, Any]) -> None:
+        self._log(self._ev, row)
+
+    def close(self) -> None:
+        self._w.finish()
+        self._f.close()
+
+
+class McapReader(Reader):
+    suffixes = (".mcap",)
+
+    def read(self) -> Recording:
+        from mcap.exceptions import McapError
+        from mcap.reader import make_reader
+
+        p = self.path
+        try:
+            f = open(p, "rb")
+        except FileNotFoundError:
+            raise LinkError(f"record file {p} does not exist") from None
+        except OSError as e:
+            raise LinkError(f"cannot read record file {p}: {e.strerror or e}") from None
+        rows: list[dict[str, Any]] = []
+        events: list[dict[str, Any]] = []
+        meta: RecordingMeta | None = None
+        with f:
+            try:
+                reader = make_reader(f)
+                for record in reader.iter_metadata():
+                    if record.name == "proleg":
+                        meta = RecordingMeta.from_dict(
+                            {k: v if k in ("robot", "board", "start_utc") else json.loads(v)
+                             for k, v in record.metadata.items()})
+                for _schema, channel, message in reader.iter_messages():
+                    row = json.loads(message.data)
+                    (rows if channel.topic == TELEMETRY_TOPIC else events).append(row)
+            except (McapError, ValueError, EOFError) as e:
+                raise LinkError(f"{p}: not a readable MCAP recording ({e})") from None
+        if meta is None:
+            raise LinkError(f"{p}: not a proleg MCAP recording (no 'proleg' metadata)")
+        return Recording.from_rows(p, meta, rows, events)

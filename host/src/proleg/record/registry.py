@@ -1,0 +1,47 @@
+"""Writers and readers chosen by the file's suffix, as python-can's ``can.Logger`` and
+``can.LogReader`` do: ``Logger(path, meta)`` → the format's ``Writer``; ``LogReader(path)`` →
+its ``Reader``; ``read_recording(path)`` → a ``Recording``. One class per format; adding a
+format = a module with a writer and a reader + one line in each table below.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import LinkError
+from .base import Reader, Recording, Writer
+from .csv_format import CsvReader, CsvWriter
+from .fields import RecordingMeta
+from .jsonl_format import JsonlReader, JsonlWriter
+from .mcap_format import McapReader, McapWriter
+
+WRITERS: dict[str, type[Writer]] = {s: w for w in (CsvWriter, JsonlWriter, McapWriter) for s in w.suffixes}
+READERS: dict[str, type[Reader]] = {s: r for r in (CsvReader, JsonlReader, McapReader) for s in r.suffixes}
+
+
+def _lookup(path: str | Path, table: dict) -> type:
+    suffix = Path(path).suffix.lower()
+    try:
+        return table[suffix]
+    except KeyError:
+        known = ", ".join(sorted(table))
+        raise LinkError(f"{path}: unknown record format {suffix or '(none)'!r}; use {known}") from None
+
+
+def check_suffix(path: str | Path) -> None:
+    """Refuse a file name no writer takes (before connecting to anything)."""
+    _lookup(path, WRITERS)
+
+
+def Logger(path: str | Path, meta: RecordingMeta) -> Writer:  # noqa: N802 (python-can's name)
+    """The writer for ``path``'s suffix, opened (metadata written)."""
+    return _lookup(path, WRITERS)(path, meta)
+
+
+def LogReader(path: str | Path) -> Reader:  # noqa: N802
+    return _lookup(path, READERS)(path)
+
+
+def read_recording(path: str | Path) -> Recording:
+    """Read any recording back; ``LinkError`` names the file (and line) when it is bad."""
+    return LogReader(path).read()

@@ -1,0 +1,89 @@
+"""Run a gait on any robot (serial, CAN, simulated) headless: ``proleg run``.
+
+``run_gait_on(client, ...)`` STARTs the gait, hands every received message to the listeners
+(recorders, UDP streamers, printers) and to a ``GaitRunListener`` for the report, reports
+progress every ``progress_every_s`` seconds of the link's clock, STOPs (ESTOP when the STOP is
+not acknowledged) and returns the ``GaitRun``: ``ok`` is False when a command failed or the
+firmware reported a fault. ``check_gait`` refuses a gait index the robot does not have.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+from ..errors import GaitError, LinkError
+from ..link.client import RobotClient, RobotInfo
+from ..link.listeners import Listener
+from ..protocol.definition import GAIT_USER
+from .gait_run import GaitRun, GaitRunListener
+
+COMMAND_RETRIES = 2
+STOP_TAIL_S = 0.1
+_EPS = 1e-9
+
+
+def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[str, int] | None = None) -> None:
+    """``GaitError`` when gait ``gait`` does not exist: beyond INFO's count of compiled gaits,
+    or (when the robot file is known) beyond the gaits in ``direction``."""
+    if gait == GAIT_USER:
+        return
+    if gait < 0 or gait >= info.gaits:
+        have = f"gaits 0..{info.gaits - 1}" if info.gaits else "no gaits"
+        raise GaitError(f"--gait {gait}: {info.robot_name} has {have} (INFO reports {info.gaits} compiled gaits)")
+    if per_direction is not None and gait >= per_direction.get(direction, 0):
+        n = per_direction.get(direction, 0)
+        have = f"gaits 0..{n - 1}" if n else "no gait"
+        raise GaitError(f"--gait {gait}: {info.robot_name} has {have} in {direction}")
+
+
+def run_gait_on(
+    client: RobotClient,
+    gait: int,
+    direction: str,
+    duration_s: float,
+    *,
+    listeners: Iterable[Listener] = (),
+    progress: Callable[[str], None] | None = None,
+    progress_every_s: float = 1.0,
+) -> GaitRun:
+    info = client.info
+    run = GaitRun(info.robot_name if info else "", direction, gait, duration_s)
+    report = GaitRunListener(run)
+    targets = [*listeners, report]
+    clock = client.link.clock
+
+    def pump(seconds: float) -> None:
+        deadline = clock() + seconds
+        next_progress = clock() + progress_every_s
+        while True:
+            remaining = deadline - clock()
+            if remaining <= _EPS:
+                return
+            rx = client.recv_received(min(remaining, progress_every_s))
+            if rx is not None:
+                for listener in targets:
+                    listener.on_message(rx)
+            if progress is not None and clock() >= next_progress - _EPS:
+                next_progress += progress_every_s
+                progress(f"{clock() - t0:6.1f} s: {run.telemetry_frames} frames, "
+                         f"{max(0, len(run.states_reached))} states reached, {len(run.faults)} faults")
+
+    def command(name: str, **fields: int) -> bool:
+        try:
+            client.request(name, retries=COMMAND_RETRIES, **fields)
+            return True
+        except LinkError as e:
+            run.errors.append(f"{name} failed: {e}")
+            return False
+
+    t0 = clock()
+    if command("START", gait=gait, direction=0 if direction == "+x" else 1):
+        if progress is not None:
+            progress(f"started gait {gait} in {direction} for {duration_s:g} s on {client.link.description}")
+        pump(duration_s)
+    t_stop = clock()
+    if not command("STOP"):
+        command("ESTOP")  # the coils must go cold whatever the link does
+    pump(STOP_TAIL_S - (clock() - t_stop))
+    run.telemetry_lost = client.stats.lost
+    return run

@@ -1,0 +1,275 @@
+"""Scripting a robot from the command line on the simulated board (``--sim``): proleg run,
+load-gait, set-param, robots; exit codes, --version, -v/-q, JSON lines, live UDP output,
+and no traceback on a closed pipe, a full disk or an ASCII terminal."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from proleg import __version__
+from proleg.cli import main
+
+PROLEG = str(Path(sys.executable).with_name("proleg"))
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def shell(cmd: str, cwd: Path, **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run(["bash", "-c", cmd], cwd=cwd, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, **env})
+
+
+# --------------------------------------------------------------------------- hygiene
+def test_version_and_exit_codes_in_help(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"proleg {__version__}"
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert "exit status:" in out
+    assert re.search(r"0\s+ok", out) and re.search(r"1\s+failed", out) and re.search(r"2\s+usage", out)
+
+
+def test_a_usage_error_exits_2(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["run", "paper-r1"])  # no --port/--can/--sim
+    assert e.value.code == 2
+
+
+def test_robots_lists_the_bundled_examples_and_robot_accepts_their_names(capsys, tmp_path, monkeypatch):
+    code, out, _ = run(capsys, "robots")
+    assert code == 0
+    names = [line.split()[0] for line in out.splitlines()]
+    assert {"paper-r1", "paper-r2", "paper-r3"} <= set(names)
+    monkeypatch.chdir(tmp_path)  # no robots/ here: the name means the bundled file
+    code, out, _ = run(capsys, "gait", "paper-r2", "--json")
+    assert code == 0 and json.loads(out)["robot"] == "paper-r2"
+
+
+def test_build_accepts_a_bundled_robot_name(capsys, tmp_path, monkeypatch):
+    import shutil
+
+    if shutil.which("avr-gcc") is None:
+        pytest.skip("no avr-gcc")
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, "build", "paper-r1", "--board", "arduino-nano", "-o", str(tmp_path / "fw"))
+    assert code == 0, err
+    assert "built paper-r1 for arduino-nano" in out
+
+
+def test_verbosity_flags_control_progress_on_stderr(capsys):
+    code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2")
+    assert code == 0, err
+    assert "started gait 0 in +x" in err and re.search(r"1\.0 s: \d+ frames", err)
+    assert out.startswith("paper-r1 on sim paper-r1: gait 0 in +x for 2 s")
+    code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2", "-q")
+    assert code == 0 and err == ""
+    code, _, err = run(capsys, "-v", "run", "paper-r1", "--sim", "--duration", "1")
+    assert code == 0 and "connected to paper-r1" in err
+
+
+def test_broken_pipe_ends_quietly(tmp_path):
+    p = shell(f"'{PROLEG}' run paper-r1 --sim --duration 30 --format jsonl -q | head -1", tmp_path)
+    assert json.loads(p.stdout.splitlines()[0])["msg"] in ("INFO", "EVENT", "TELEMETRY", "ACK")
+    assert p.stderr == ""
+
+
+def test_a_full_disk_is_one_line_and_exit_1(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    p = shell(f"'{PROLEG}' gait paper-r1 --json > /dev/full", tmp_path)
+    assert p.returncode == 1
+    assert p.stderr.count("\n") == 1 and "No space left on device" in p.stderr
+    (tmp_path / "run.jsonl").symlink_to("/dev/full")
+    p = shell(f"'{PROLEG}' run paper-r1 --sim --duration 1 -q --record run.jsonl", tmp_path)
+    assert p.returncode == 1
+    assert p.stderr.count("\n") == 1 and "No space left on device" in p.stderr and "Traceback" not in p.stderr
+
+
+@pytest.mark.parametrize("env", [{"PYTHONIOENCODING": "ascii"}, {"LANG": "C", "LC_ALL": "C", "PYTHONUTF8": "0"}])
+def test_a_terminal_without_utf8_gets_replacement_characters(tmp_path, env):
+    p = shell(f"'{PROLEG}' gait paper-r1", tmp_path, **env)
+    assert p.returncode == 0, p.stderr
+    assert p.stderr == ""
+    assert "00 ? 10" in p.stdout or "00 → 10" in p.stdout  # LANG=C may still be UTF-8 on Python ≥ 3.7
+    if env.get("PYTHONIOENCODING") == "ascii":
+        assert "?" in p.stdout and "→" not in p.stdout
+
+
+# --------------------------------------------------------------------------- run
+def test_run_a_gait_that_does_not_exist_is_a_usage_error(capsys):
+    code, out, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "7", "--duration", "1")
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and "--gait 7" in err and "INFO reports 2 compiled gaits" in err
+    code, _, err = run(capsys, "run", "paper-r1-one-actuator", "--sim", "--direction", "-x", "--duration", "1")
+    assert code == 2 and "no gait in -x" in err
+    code, _, err = run(capsys, "sim", "paper-r1", "--gait", "3", "--duration", "1")
+    assert code == 2 and "--gait 3" in err
+
+
+def test_run_jsonl_prints_every_message_then_a_result_line(capsys):
+    code, out, _ = run(capsys, "run", "paper-r1", "--sim", "--duration", "3", "--format", "jsonl", "-q")
+    assert code == 0
+    lines = [json.loads(x) for x in out.splitlines()]
+    tel = [x for x in lines if x["msg"] == "TELEMETRY"]
+    assert len(tel) >= 140
+    assert isinstance(tel[0]["seq"], int) and isinstance(tel[0]["psi_left_deg"], float)
+    assert "duty_sma_right_pct" in tel[0] and "displacement_mm" in tel[0]
+    result = lines[-1]
+    assert result["msg"] == "RESULT" and result["ok"] is True and result["faults"] == []
+    assert result["telemetry_frames"] == len(tel)
+
+
+def test_run_exits_1_when_the_robot_refuses_to_start(capsys):
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "-q")
+    assert code == 1
+    assert "START failed" in err and "robot refused START" in err
+
+
+def test_run_on_a_faulting_robot_reports_the_fault(tmp_path):
+    from proleg.link import RobotClient, open_link
+    from proleg.report import run_gait_on
+
+    link = open_link("sim://paper-r1")
+    link.board.inject("dead-actuator:sma-left")
+    with RobotClient(link) as client:
+        client.connect()
+        result = run_gait_on(client, 0, "+x", 12.0)
+    assert not result.ok
+    assert "STATE_TIMEOUT" in [f.code for f in result.faults]
+
+
+def test_run_records_mcap_that_the_mcap_reader_reads(capsys, tmp_path):
+    from mcap.reader import make_reader
+
+    path = tmp_path / "run.mcap"
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2", "-q", "--record", str(path))
+    assert code == 0, err
+    with path.open("rb") as f:
+        topics = [ch.topic for _, ch, _ in make_reader(f).iter_messages()]
+    assert topics.count("/proleg/telemetry") >= 95 and "/proleg/events" in topics
+
+
+# --------------------------------------------------------------------------- live UDP
+def _udp_socket() -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
+    sock.bind(("127.0.0.1", 0))
+    sock.settimeout(0.5)
+    return sock
+
+
+def _datagrams(sock: socket.socket) -> list[bytes]:
+    out = []
+    while True:
+        try:
+            out.append(sock.recv(65536))
+        except TimeoutError:
+            return out
+
+
+TELEPLOT_LINE = re.compile(r"^>(?P<name>[A-Za-z0-9_]+):(?P<ts>\d+):(?P<value>-?\d+(\.\d+)?([eE][-+]?\d+)?)$")
+
+
+def test_teleplot_lines_over_udp(capsys):
+    with _udp_socket() as sock:
+        port = sock.getsockname()[1]
+        code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2", "-q",
+                           "--udp", f"127.0.0.1:{port}", "--udp-format", "teleplot")
+        assert code == 0, err
+        grams = _datagrams(sock)
+    assert len(grams) >= 95
+    series: dict[str, list[tuple[int, float]]] = {}
+    for g in grams:
+        for line in g.decode("ascii").split("\n"):
+            m = TELEPLOT_LINE.match(line)  # Teleplot: >name:timestamp_ms:value
+            assert m, line
+            series.setdefault(m["name"], []).append((int(m["ts"]), float(m["value"])))
+    assert {"psi_left_deg", "psi_right_deg", "duty_sma_left_pct", "seq", "measured"} <= set(series)
+    ts = [t for t, _ in series["seq"]]
+    assert ts == sorted(ts) and ts[-1] - ts[0] >= 1900
+    assert [v for _, v in series["seq"]][:3] == sorted([v for _, v in series["seq"]][:3])
+
+
+def test_plotjuggler_json_over_udp(capsys):
+    with _udp_socket() as sock:
+        port = sock.getsockname()[1]
+        code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2", "-q",
+                           "--udp", f"127.0.0.1:{port}")
+        assert code == 0, err
+        grams = _datagrams(sock)
+    docs = [json.loads(g) for g in grams]  # PlotJuggler's JSON parser: one object per datagram
+    assert len(docs) >= 95
+    assert all(isinstance(d["timestamp"], float) for d in docs)
+    assert [d["timestamp"] for d in docs] == sorted(d["timestamp"] for d in docs)
+    assert isinstance(docs[0]["psi_left_deg"], float) and isinstance(docs[0]["seq"], int)
+
+
+def test_a_bad_udp_endpoint_is_one_line(capsys):
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", "--udp", "nowhere")
+    assert code == 1 and "expected HOST:PORT" in err and err.count("\n") == 1
+
+
+# --------------------------------------------------------------------------- load-gait, set-param
+def test_load_gait_on_the_simulated_board(capsys):
+    code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,10,11,01,00")
+    assert code == 0, err
+    assert "loaded 00 → 10 → 11 → 01 → 00 as the user gait" in out
+    code, _, err = run(capsys, "load-gait", "paper-r1-one-actuator", "--sim", "00,01,11")
+    assert code == 1 and "FORBIDDEN_TRANSITION" in err and err.count("\n") == 1
+    code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,12")
+    assert code == 2 and "STATES" in err
+
+
+def test_set_param_by_name_on_the_simulated_board(capsys):
+    code, out, err = run(capsys, "set-param", "--sim", "paper-r1", "drive_duty", "3000")
+    assert code == 0, err
+    assert out.startswith("set drive_duty[0] = 3000")
+    code, _, err = run(capsys, "set-param", "--sim", "paper-r1", "DRIVE-DUTY", "9900")
+    assert code == 1 and "SAFETY_LIMIT" in err
+    with pytest.raises(SystemExit) as e:
+        main(["set-param", "--sim", "paper-r1", "warp_factor", "9"])
+    assert e.value.code == 2
+    assert "known: drive_duty" in capsys.readouterr().err
+
+
+def test_sim_recording_marks_injections_and_faults_for_the_plot(capsys, tmp_path):
+    pd = pytest.importorskip("pandas")
+    from proleg.plot import _markers
+    from proleg.record import read_recording
+
+    path = tmp_path / "run.csv"
+    code, _, _ = run(capsys, "sim", "paper-r1", "--duration", "12", "--inject", "dead-actuator:sma-right+2",
+                     "--record", str(path))
+    assert code == 1  # faulted
+    events = pd.read_csv(tmp_path / "run.events.csv")
+    injected = events[events["msg"] == "INJECT"]
+    assert list(injected["text"]) == ["dead-actuator:sma-right"]
+    assert injected["t_s"].iloc[0] == pytest.approx(2.2, abs=0.01)  # boot 0.2 s + 2 s
+    assert "FAULT" in set(events["kind"].dropna())
+    labels = [m[2] for m in _markers(read_recording(path))]
+    assert labels[0] == "injected dead-actuator:sma-right" and any(x.startswith("FAULT ") for x in labels)
+    code, out, _ = run(capsys, "plot", str(path), "-o", str(tmp_path / "run.png"))
+    assert code == 0 and (tmp_path / "run.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_console_plain_jsonl_prints_named_rows_for_scripts(capsys):
+    code, out, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--format", "jsonl", "--duration", "1")
+    assert code == 0, err
+    rows = [json.loads(x) for x in out.splitlines()]
+    tel = [r for r in rows if r["msg"] == "TELEMETRY"]
+    assert len(tel) >= 20 and isinstance(tel[0]["seq"], int) and "psi_right_deg" in tel[0]
+    assert any(r["msg"] == "EVENT" and r["kind"] == "BOOT" for r in rows)

@@ -1,0 +1,137 @@
+"""Trial logs (append-only, resumable), position sources, tracker clock alignment."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proleg.learn.measure import Trial, TrialLog, TrialLogError, counts, manual_trial, planar_delta, remaining
+from proleg.learn.tours import exploration
+from proleg.learn.tracker import Track, TrackerError, TrackerSource, estimate_offset, read_track, trials_from_events
+from proleg.robot import load_robot
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _trial(k: int) -> Trial:
+    return Trial("00", "10", k * 1.0, k * 1.0 + 0.5, 4.0 + k, None, None, "sim")
+
+
+def test_every_record_is_on_disk_before_the_next_transition(tmp_path):
+    p = tmp_path / "log.jsonl"
+    with TrialLog(p) as log:
+        log.append(_trial(0))
+        assert json.loads(p.read_text().splitlines()[0])["dx"] == 4.0  # readable while still open
+        log.append(_trial(1))
+    assert [t.dx for t in TrialLog(p).trials] == [4.0, 5.0]
+
+
+def test_a_torn_last_line_is_dropped_with_a_warning_and_the_log_continues(tmp_path):
+    p = tmp_path / "log.jsonl"
+    with TrialLog(p) as log:
+        log.append(_trial(0))
+        log.append(_trial(1))
+    p.write_bytes(p.read_bytes() + b'{"from": "10", "to": "11", "t_sta')
+    with pytest.warns(UserWarning, match="torn last record"):
+        log = TrialLog(p)
+    assert len(log.trials) == 2
+    log.append(_trial(2))
+    log.close()
+    assert [t.dx for t in TrialLog(p).trials] == [4.0, 5.0, 6.0]
+
+
+def test_a_complete_last_record_without_newline_is_kept(tmp_path):
+    p = tmp_path / "log.jsonl"
+    p.write_text(_trial(0).to_json())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        log = TrialLog(p)
+    log.append(_trial(1))
+    log.close()
+    assert len(TrialLog(p).trials) == 2
+
+
+def test_a_broken_line_in_the_middle_is_an_error_naming_the_line(tmp_path):
+    p = tmp_path / "log.jsonl"
+    p.write_text(_trial(0).to_json() + "\nnot json\n" + _trial(1).to_json() + "\n")
+    with pytest.raises(TrialLogError, match="log.jsonl:2"):
+        TrialLog(p)
+
+
+def test_an_interrupted_run_resumes_with_exactly_the_transitions_still_to_do(tmp_path):
+    table = load_robot(ROOT / "robots" / "paper-r1.toml").transitions
+    tour = exploration(table, 3, seed=2).tours[0]
+    p = tmp_path / "log.jsonl"
+    with TrialLog(p) as log:
+        for a, b in tour.transitions[:17]:
+            log.append(Trial(table.label(a), table.label(b), 0, 1, 1.0, source="sim"))
+    done = TrialLog(p).trials
+    rest = remaining(table, done, 3)
+    assert rest.sum() == 3 * table.n_transitions - 17
+    again = exploration(table, demand=rest, start=tour.transitions[16][1], seed=3).tours[0]
+    total = counts(table, done) + counts(table, [Trial(table.label(a), table.label(b), 0, 1) for a, b in again.transitions])
+    assert total.min() >= 3
+
+
+def test_manual_entry_asks_again_on_nonsense_and_skips_on_empty():
+    answers = iter(["four", "4.5"])
+    prompts = []
+
+    def ask(p):
+        prompts.append(p)
+        return next(answers)
+
+    t = manual_trial("00", "10", 1.0, 2.0, ask=ask)
+    assert t is not None and t.dx == 4.5 and t.dy is None and t.source == "manual"
+    assert "not a number" in prompts[1]
+    assert manual_trial("00", "10", 1.0, 2.0, ask=lambda p: "") is None
+    t = manual_trial("00", "10", 1.0, 2.0, ask=lambda p: "1, 2, -3", planar=True)
+    assert (t.dx, t.dy, t.dtheta_deg) == (1.0, 2.0, -3.0)
+
+
+def test_planar_delta_is_in_the_start_frame():
+    dx, dy, dth = planar_delta((10.0, 0.0, 90.0), (10.0, 5.0, 100.0))
+    assert dx == pytest.approx(5.0) and dy == pytest.approx(0.0, abs=1e-12) and dth == pytest.approx(10.0)
+    assert planar_delta((0.0, None, None), (3.0, None, None)) == (3.0, None, None)
+
+
+def test_the_documented_example_tracker_file_reads():
+    track = read_track(ROOT / "docs" / "examples" / "tracker-example.csv")
+    assert track.y is not None and track.theta_deg is not None and len(track.t) >= 10
+
+
+def test_a_bad_tracker_file_names_the_row(tmp_path):
+    p = tmp_path / "t.csv"
+    p.write_text("time,x,y,theta\n0,0,0,0\n0.1,abc,0,0\n")
+    with pytest.raises(TrackerError, match="row 3, column x"):
+        read_track(p)
+
+
+def _synthetic(offset: float, seed: int):
+    """Firmware state-reached events and a tracker that saw the motion ``offset`` s later."""
+    rng = np.random.default_rng(seed)
+    t, events, step = 0.0, [], []
+    for k in range(30):
+        t += rng.uniform(0.6, 1.2) + (3.0 if k % 6 == 5 else 0.0)  # pieces with rests
+        events.append(t)
+        step.append(rng.normal(4.0, 1.0) * (1 if k % 2 else -0.5))
+    tt = np.arange(-2.0, t + 3.0, 1 / 30) + offset  # 30 fps camera on its own clock
+    x = np.zeros_like(tt)
+    for te, dx in zip(events, step):  # motion during the 0.4 s before the state is reached
+        x += dx * np.clip((tt - offset - (te - 0.4)) / 0.4, 0, 1)
+    x += rng.normal(0, 0.05, len(tt))
+    return events, step, Track(tt, x, np.zeros_like(tt), np.zeros_like(tt))
+
+
+@pytest.mark.parametrize("offset", [-7.3, 0.0, 12.62])
+def test_the_tracker_clock_offset_is_recovered_from_a_shifted_track(offset):
+    events, step, track = _synthetic(offset, seed=int(abs(offset) * 10))
+    est = estimate_offset(track, events, max_offset_s=20.0)
+    assert est == pytest.approx(offset, abs=0.05)
+    reached = [(t, "10" if k % 2 else "00") for k, t in enumerate(events)]
+    trials = trials_from_events(reached, TrackerSource(track, est))
+    assert np.allclose([tr.dx for tr in trials], step[1:], atol=0.3)

@@ -1,0 +1,177 @@
+"""Proof on the simulated robot: learn paper-r1's matrix through the real firmware in
+closed loop with a table plant whose (hidden, noisy) truth matrix moves the robot."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proleg.gait import optimal_gaits
+from proleg.gait.evaluate import evaluate_sequence
+from proleg.learn.estimate import estimate, penalised_table
+from proleg.learn.measure import TrialLog, counts
+from proleg.learn.robotfile import write_learned_robot
+from proleg.learn.runner import explore_simulated
+from proleg.robot import load_robot
+from proleg.transitions import TransitionTable
+
+ROOT = Path(__file__).resolve().parent.parent
+R1 = ROOT / "robots" / "paper-r1.toml"
+NOISE_MM = 0.5
+REPEATS = 5
+
+
+def _truth_file(tmp: Path) -> Path:
+    """paper-r1 with its matrix in mm (4 mm per step, each entry ±10 %), noise per transition."""
+    robot = load_robot(R1)
+    rng = np.random.default_rng(15)
+    reward, allowed = robot.transitions.dense()
+    mm = reward * 4.0 * (1 + 0.1 * rng.uniform(-1, 1, reward.shape))
+    rows = ",\n".join("  [" + ", ".join(f"{v:.3f}" if allowed[a, b] or a == b else '"x"' for b, v in enumerate(row)) + "]"
+                      for a, row in enumerate(mm))
+    text = R1.read_text().replace('units = "steps"', 'units = "mm"')
+    start = text.index("matrix = [")
+    end = text.index("\n]\n", start) + 2
+    text = text[:start] + f"matrix = [\n{rows},\n]" + text[end:] + f"\n[plant]\nstep_mm = 1.0\nnoise_mm = {NOISE_MM}\n"
+    out = tmp / "truth.toml"
+    out.write_text(text)
+    return out
+
+
+@pytest.fixture(scope="module")
+def learned(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("learn-sim")
+    robot, truth = load_robot(R1), load_robot(_truth_file(tmp))
+    with TrialLog(tmp / "trials.jsonl") as log:
+        _added, sim = explore_simulated(robot, truth, log, repeats=REPEATS, seed=3)
+        trials = list(log.trials)
+    return robot, truth, trials, sim, tmp
+
+
+def _effective_truth(robot, truth, trials, sim) -> np.ndarray:
+    """Noise-free mm per firmware transition: a transition that changes both limbs passes
+    through an intermediate state in the plant, whose truth entries then add up (the table
+    plant looks up every state change it sees)."""
+    mm = np.nan_to_num(truth.transitions.dense()[0]) * 1.0
+    plant = sim.plant.transitions
+    t = robot.transitions
+    sums = [[] for _ in range(t.n_transitions)]
+    for tr in trials:
+        e = t.lookup(t.index(tr.src), t.index(tr.dst))
+        sums[e].append(sum(mm[p.src, p.dst] for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05))
+    return np.array([np.mean(s) for s in sums])
+
+
+def test_every_allowed_transition_is_measured_at_least_r_times(learned):
+    robot, _truth, trials, _sim, _tmp = learned
+    assert counts(robot.transitions, trials).min() >= REPEATS
+    assert all(t.source == "sim" and t.dx is not None for t in trials)
+
+
+def test_the_learned_matrix_has_the_truths_sign_wherever_the_truth_moves(learned):
+    robot, truth, trials, _sim, _tmp = learned
+    est = estimate(robot.transitions, trials)
+    tv = truth.transitions.reward
+    moving = np.abs(tv) > 1.0
+    assert moving.sum() == 6
+    assert np.all(np.sign(est.dx.mean[moving]) == np.sign(tv[moving]))
+
+
+def test_at_least_90_percent_of_the_means_are_within_their_95_percent_interval(learned):
+    robot, truth, trials, sim, _tmp = learned
+    est = estimate(robot.transitions, trials)
+    eff = _effective_truth(robot, truth, trials, sim)
+    # the single-limb transitions are exactly the truth file's entries
+    single = [sum(x != y for x, y in zip(robot.transitions.label(a), robot.transitions.label(b))) == 1
+              for a, b in zip(robot.transitions.src, robot.transitions.dst)]
+    assert np.allclose(eff[single], truth.transitions.reward[single])
+    inside = np.abs(est.dx.mean - eff) <= est.dx.half_width
+    assert inside.mean() >= 0.9, (est.dx.mean, eff, est.dx.half_width)
+
+
+def test_the_gait_from_the_learned_matrix_is_at_least_95_percent_as_fast_as_the_true_optimum(learned):
+    robot, truth, trials, sim, tmp = learned
+    est = estimate(robot.transitions, trials)
+    out = write_learned_robot(robot, est, tmp / "learned.toml", units="mm")
+    learned_robot = load_robot(out)
+    eff = TransitionTable(robot.levels, robot.transitions.src, robot.transitions.dst,
+                          _effective_truth(robot, truth, trials, sim))
+    best = optimal_gaits(eff, "rate").value
+    for table in (learned_robot.transitions, penalised_table(est, 1.0)):
+        gait = optimal_gaits(table, "rate").gaits[0]
+        walk = list(gait.states) + ([] if gait.states[-1] == gait.states[0] else [gait.states[0]])
+        true_rate = evaluate_sequence(eff, walk).rate
+        assert true_rate >= 0.95 * best
+
+
+def test_an_interrupted_exploration_resumes_from_its_log_and_loses_nothing(tmp_path):
+    from proleg.learn.runner import Explorer, simulated_robot
+
+    robot = load_robot(R1)
+    log_path = tmp_path / "trials.jsonl"
+    sim, client, pose = simulated_robot(robot, seed=5)
+    with client, TrialLog(log_path) as log:
+        client.connect()
+        first = Explorer(client, robot, log, pose, repeats=2, seed=5).run(max_pieces=2)
+    assert 0 < len(first) < 2 * robot.transitions.n_transitions
+    before = log_path.read_text().splitlines()
+    sim, client, pose = simulated_robot(robot, seed=6)  # a fresh session, as after a crash
+    with client, TrialLog(log_path) as log:
+        client.connect()
+        Explorer(client, robot, log, pose, repeats=2, seed=6).run()
+        assert counts(robot.transitions, log.trials).min() >= 2
+    after = log_path.read_text().splitlines()
+    assert after[: len(before)] == before
+
+
+def test_manual_entry_asks_once_per_transition_with_the_robot_at_rest(tmp_path):
+    from proleg.learn.runner import Explorer, simulated_robot
+
+    robot = load_robot(R1)
+    sim, client, _pose = simulated_robot(robot, seed=7)
+    prompts = []
+
+    def ask(prompt):
+        prompts.append((prompt, [sim.board.pwm(ch) for ch in (0, 1)]))
+        return "" if len(prompts) == 1 else "2.5"  # the first trial is skipped
+
+    with client, TrialLog(tmp_path / "manual.jsonl") as log:
+        client.connect()
+        added = Explorer(client, robot, log, None, repeats=1, seed=7, ask=ask).run(max_pieces=3)
+    assert len(prompts) == 3 and len(added) == 2
+    assert all(t.source == "manual" and t.dx == 2.5 for t in added)
+    assert prompts[0][0].endswith("(empty = skip): ") and "→" in prompts[0][0]
+    assert all(duties == [0.0, 0.0] for _p, duties in prompts)  # stopped: every coil off
+
+
+def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
+    """Record without a pose, write the plant's path as a camera would (other clock, 30 fps),
+    then attach the track: the trials match the ground truth."""
+    from proleg.learn.runner import Explorer, simulated_robot
+    from proleg.learn.tracker import Track, attach_track
+
+    robot = load_robot(R1)
+    sim, client, _pose = simulated_robot(robot, seed=8)
+    path = []
+    step = sim.step
+
+    def stepping():
+        step()
+        path.append((sim.time_s, sim.plant.displacement_mm))
+
+    sim.step = stepping
+    with client, TrialLog(tmp_path / "t.jsonl") as log:
+        client.connect()
+        Explorer(client, robot, log, None, repeats=1, seed=8).run(max_pieces=2)
+        trials = list(log.trials)
+    t, x = np.array(path).T
+    keep = np.arange(0, len(t), 17)  # ~30 fps
+    track = Track(t[keep] + 42.0, x[keep])
+    with_motion, offset = attach_track(trials, track)
+    assert offset == pytest.approx(42.0, abs=0.06)
+    plant = sim.plant.transitions
+    for tr in with_motion:
+        truth = sum(p.reward_mm for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05)
+        assert tr.dx == pytest.approx(truth, abs=0.2)

@@ -1,0 +1,216 @@
+"""Recording (CSV / JSON Lines / MCAP, chosen by suffix), plots, DBC output, and bad input → one LinkError line."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from proleg.errors import LinkError
+from proleg.link import RobotClient
+from proleg.cli.link_commands import console_main, dbc_main, plot_main
+from fake_board import FakeBoard
+from proleg.plot import plot_recording
+from proleg.record import Logger, RecordingMeta, read_recording
+from proleg.robot import load_robot
+from proleg.link.sim_link import SimLink
+
+
+ROBOT = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+
+
+def record(path: Path, frames: int = 120, inject_at: int | None = None) -> FakeBoard:
+    board = FakeBoard()
+    link = SimLink(board)
+    client = RobotClient(link)
+    info = client.connect()
+    rec = Logger(path, RecordingMeta.for_robot(info=info, robot=ROBOT, link=link))
+    client.start(0, "+x")
+    n = 0
+    while n < frames:
+        rx = client.recv_received(1.0)
+        assert rx is not None
+        rec.on_message(rx)
+        n += rx.message.name == "TELEMETRY"
+        if n == inject_at and rx.message.name == "TELEMETRY":
+            rec.mark(rx.time, rx.message.time_ms / 1000, "dead-actuator:sma-left")
+        if n == frames // 2 and rx.message.name == "TELEMETRY" and path.suffix != ".mcap":
+            # flushed per line: everything so far is already in the file(s)
+            files = [path, path.with_name(f"{path.stem}.events.csv")] if path.suffix == ".csv" else [path]
+            lines = sum(p.read_text().count("\n") for p in files)
+            assert lines == rec.records + (2 if path.suffix == ".csv" else 1)
+    rec.stop()
+    assert rec.error is None
+    return board
+
+
+def test_pandas_reads_the_csv_plainly_with_integer_columns_si_units_and_limb_names(tmp_path):
+    pd = pytest.importorskip("pandas")
+    path = tmp_path / "run.csv"
+    board = record(path)
+    df = pd.read_csv(path)
+    assert len(df) == 120
+    assert list(df.columns[:3]) == ["t_host_s", "t_s", "seq"]
+    assert {"psi_left_deg", "psi_right_deg", "duty_sma_left_pct", "duty_sma_right_pct", "displacement_mm"} <= set(df)
+    for c in ("seq", "measured", "target", "gait", "direction", "step", "flags"):
+        assert df[c].dtype == "int64", c
+    assert (df["seq"].diff().dropna() == 1).all()
+    assert df["displacement_mm"].iloc[-1] == pytest.approx(board.displacement_mm, abs=10)
+    events = pd.read_csv(tmp_path / "run.events.csv")
+    assert "ACK" in set(events["msg"])
+    assert events["code"].dtype == "int64"
+
+
+def test_the_csv_metadata_sidecar_has_the_robot_firmware_ids_and_a_utc_start_time(tmp_path):
+    from datetime import datetime, timezone
+
+    before = datetime.now(timezone.utc)
+    record(tmp_path / "run.csv", 10)
+    meta = json.loads((tmp_path / "run.meta.json").read_text())
+    start = datetime.fromisoformat(meta["start_utc"].replace("Z", "+00:00"))
+    assert start.tzinfo is not None and start.utcoffset().total_seconds() == 0
+    assert abs((start - before).total_seconds()) < 5
+    assert meta["robot"] == "paper-r1" and meta["board"] == "fake"
+    assert meta["info"]["firmware_build_id"] == "00c0ffee" and meta["info"]["gait_table_hash"] == "1234abcd"
+    assert meta["limb_names"] == ["left", "right"] and meta["psi_star_deg"] == [[20.0], [20.0]]
+    rec = read_recording(tmp_path / "run.csv")
+    assert rec.psi_deg.shape == (10, 2) and rec.meta.board == "fake"
+
+
+def test_jsonl_uses_the_csv_field_names_in_physical_units(tmp_path):
+    record(tmp_path / "run.csv")
+    record(tmp_path / "run.jsonl")
+    lines = (tmp_path / "run.jsonl").read_text().splitlines()
+    meta = json.loads(lines[0])
+    assert meta["msg"] == "META" and meta["robot"] == "paper-r1" and meta["start_utc"].endswith("Z")
+    tel = [json.loads(x) for x in lines[1:] if '"TELEMETRY"' in x]
+    header = (tmp_path / "run.csv").read_text().splitlines()[0].split(",")
+    assert len(tel) == 120 and set(tel[0]) == {"msg", *header}
+    assert isinstance(tel[5]["psi_left_deg"], float) and isinstance(tel[5]["seq"], int)
+    rec = read_recording(tmp_path / "run.jsonl")
+    assert rec.psi_deg[5, 0] == pytest.approx(tel[5]["psi_left_deg"])
+
+
+def test_mcap_recording_reads_back_with_the_mcap_reader(tmp_path):
+    from mcap.reader import make_reader
+
+    path = tmp_path / "run.mcap"
+    record(path, 50, inject_at=20)
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        topics = {c.topic: c for c in summary.channels.values()}
+        assert set(topics) == {"/proleg/telemetry", "/proleg/events"}
+        schema = summary.schemas[topics["/proleg/telemetry"].schema_id]
+        assert schema.encoding == "jsonschema"
+        assert json.loads(schema.data)["properties"]["seq"]["type"] == "integer"
+        msgs = [(ch.topic, m) for _, ch, m in reader.iter_messages()]
+        meta = {r.name: r.metadata for r in reader.iter_metadata()}
+    tel = [json.loads(m.data) for topic, m in msgs if topic == "/proleg/telemetry"]
+    assert len(tel) == 50 and "psi_left_deg" in tel[0]
+    times = [m.log_time for topic, m in msgs]
+    assert times == sorted(times) and times[0] > 1.7e18  # wall-clock nanoseconds
+    assert meta["proleg"]["robot"] == "paper-r1"
+    rec = read_recording(path)
+    assert rec.time_s.size == 50
+    assert [e["text"] for e in rec.events if e["msg"] == "INJECT"] == ["dead-actuator:sma-left"]
+
+
+def test_every_writer_has_a_reader_and_the_suffix_picks_them():
+    from proleg.record import READERS, WRITERS
+
+    assert set(WRITERS) == set(READERS) == {".csv", ".jsonl", ".ndjson", ".mcap"}
+    for suffix, writer in WRITERS.items():
+        assert suffix in writer.suffixes and suffix in READERS[suffix].suffixes
+
+
+def test_a_full_disk_stops_the_writer_with_one_error_line_and_no_exception(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    full = tmp_path / "full.jsonl"
+    full.symlink_to("/dev/full")
+    board = FakeBoard()
+    client = RobotClient(SimLink(board))
+    info = client.connect()
+    meta = RecordingMeta.for_robot(info=info, robot=ROBOT)
+    with pytest.raises(LinkError, match="cannot write record file .*full.jsonl: No space left on device"):
+        Logger(full, meta)  # the metadata line already fails
+    rec = Logger(tmp_path / "run.jsonl", meta)
+    rec._f.close()
+    rec._f = open("/dev/full", "w")  # the disk fills up during the run
+    for _ in range(5):
+        rec.on_message(client.recv_received(1.0))  # must not raise into the Notifier thread
+    assert rec.error is not None and "No space left on device" in str(rec.error)
+    assert "\n" not in str(rec.error)
+
+
+def test_a_killed_recorders_half_line_is_ignored(tmp_path):
+    path = tmp_path / "run.jsonl"
+    record(path, 20)
+    with path.open("a") as f:
+        f.write('{"t_host_s": 1.0, "msg": "TELEM')
+    assert read_recording(path).time_s.size == 20
+
+
+def test_plot_has_fault_and_injection_markers_and_limb_names(tmp_path):
+    from proleg.plot import _markers
+
+    record(tmp_path / "run.jsonl", 60, inject_at=30)
+    rec = read_recording(tmp_path / "run.jsonl")
+    marks = _markers(rec)
+    assert [m[2] for m in marks] == ["injected dead-actuator:sma-left"]
+    assert rec.meta.limb_names == ("left", "right") and rec.meta.channel_names == ("sma-left", "sma-right")
+    out = plot_recording(tmp_path / "run.jsonl", tmp_path / "run.svg")
+    svg = out.read_text()
+    assert "injected dead-actuator:sma-left" in svg or "injected" in svg
+
+
+def test_plot_writes_the_image_atomically(tmp_path):
+    src = tmp_path / "run.csv"
+    record(src)
+    out = plot_recording(src, tmp_path / "run.png")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv", "run.events.csv", "run.meta.json", "run.png"]
+
+
+@pytest.mark.parametrize("content, match", [
+    (None, "does not exist"),
+    ("hello\n", "not a proleg CSV recording"),
+])
+def test_unreadable_record_file_is_one_link_error_and_no_output(tmp_path, content, match):
+    src = tmp_path / "bad.csv"
+    if content is not None:
+        src.write_text(content)
+    with pytest.raises(LinkError, match=match) as e:
+        plot_main(record_file=str(src), out=str(tmp_path / "out.png"))
+    assert "\n" not in str(e.value)
+    assert not (tmp_path / "out.png").exists()
+    assert [p.name for p in tmp_path.iterdir() if p.name != "bad.csv"] == []
+
+
+def test_unknown_record_extension_is_refused_before_connecting(tmp_path):
+    with pytest.raises(LinkError, match="use .csv, .jsonl, .mcap"):
+        console_main(port="/dev/ttyNOPE", record=str(tmp_path / "run.txt"), plain=True)
+
+
+def test_console_on_a_missing_port_is_one_clear_line(tmp_path):
+    with pytest.raises(LinkError, match="^cannot open serial port /dev/ttyNOPE-proleg:"):
+        console_main(port="/dev/ttyNOPE-proleg", record=str(tmp_path / "run.csv"), plain=True)
+    assert not (tmp_path / "run.csv").exists()
+
+
+def test_console_on_an_unknown_can_interface_is_one_clear_line():
+    with pytest.raises(LinkError, match="unknown or unavailable CAN interface 'bogus'"):
+        console_main(can_channel="can0", interface="bogus", plain=True)
+
+
+def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys):
+    import cantools
+
+    out = tmp_path / "robot.dbc"
+    assert dbc_main(out=str(out), nodes=[1]) == 0
+    assert len(cantools.database.load_file(str(out)).messages) == 8
+    assert "wrote" in capsys.readouterr().out
+    with pytest.raises(LinkError, match="does not exist"):
+        dbc_main(out=str(tmp_path / "no" / "robot.dbc"))
