@@ -46,8 +46,8 @@ def test_planar_gaits_match_the_oracle_on_the_dense_score_matrix(n, seed, headin
     oracle_table = TransitionTable.from_dense((n,), score, allowed)
     value, ties = brute_force_gaits(oracle_table, kind, "+x", bound)
     result = optimal_planar_gaits(table, PlanarObjective(heading, weights, cost), kind, bound)
-    if value is None:
-        assert result.value is None and result.gaits == ()
+    if value is None:  # nothing above zero: the best of the rest is reported, marked (test_planar_objectives)
+        assert result.value is None or result.below_zero
     else:
         assert result.value == pytest.approx(value, abs=1e-9)
         assert {g.states for g in result.gaits} == ties
@@ -98,8 +98,8 @@ def test_the_rotation_cap_keeps_the_best_walk_that_turns_little_enough(n, seed, 
     objective = PlanarObjective(heading, (0.25, 0.0, 0.0), 0.5)
     value, ties = capped_oracle(table, dense["dth"], score, allowed, bound, cap)
     result = optimal_planar_gaits(table, objective, "total", bound, rotation_cap_deg=cap)
-    if value is None:
-        assert result.value is None and result.gaits == ()
+    if value is None:  # nothing above zero: the best of the rest is reported, marked (test_planar_objectives)
+        assert result.value is None or result.below_zero
     else:
         assert result.value == pytest.approx(value, abs=1e-9)
         assert {g.states for g in result.gaits} == ties

@@ -1,6 +1,6 @@
-"""The ``proleg`` command's parser and the gait/build/flash/sim commands: parse arguments,
-call the library, print. ``console``, ``plot`` and ``dbc`` are in ``link_commands``; ``run``,
-``load-gait``, ``set-param`` and ``robots`` in ``robot_commands``.
+"""The ``proleg`` command's parser and the build/flash/sim commands: parse arguments,
+call the library, print. ``gait`` is in ``gait``; ``console``, ``plot`` and ``dbc`` in
+``link_commands``; ``run``, ``load-gait``, ``set-param`` and ``robots`` in ``robot_commands``.
 
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
 faulted, an output could not be written); 2 usage (a bad argument, robot file, board file or
@@ -22,8 +22,8 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import LinkError, ProlegError
+from .gait import add_gait_parser
 
-DIRECTIONS = ("+x", "-x")
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
 exit status:
@@ -131,14 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="count", default=0, help="fewer messages on stderr (no progress)")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
-    g.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
-    g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
-    g.add_argument("--max-transitions", type=_positive_int, metavar="N")
-    g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
-    g.add_argument("--json", action="store_true", help="print one JSON object")
-    g.set_defaults(run=cmd_gait)
+    add_gait_parser(sub)
 
     b = sub.add_parser("build", help="render and compile the robot's firmware for a board")
     _firmware_args(b)
@@ -387,137 +380,4 @@ def _report_text(robot, report) -> str:
         f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
     )
     return "\n".join(lines)
-
-
-# ---------------------------------------------------------------------------------------
-# proleg gait
-
-
-def cmd_gait(args: argparse.Namespace) -> int:
-    from ..gait import evaluate_sequence, optimal_gaits
-    from ..robot import load_robot
-
-    robot = load_robot(args.robot)
-    table = robot.transitions
-    if args.evaluate is not None:
-        return _print_evaluation(robot, args, evaluate_sequence)
-
-    directions = DIRECTIONS if args.direction == "both" else (args.direction,)
-    results = [optimal_gaits(table, args.objective, d, args.max_transitions) for d in directions]
-    if args.json:
-        doc = {
-            "robot": robot.name,
-            "states": table.labels(),
-            "results": [_result_json(table, r) for r in results],
-        }
-        print(json.dumps(doc))
-        return 0
-    print(_header(robot))
-    for r in results:
-        print(_result_text(robot, r))
-    return 0
-
-
-def _header(robot) -> str:
-    t = robot.transitions
-    shown = " ".join(t.labels()) if t.n_states <= 16 else f"{t.label(0)} … {t.label(t.n_states - 1)}"
-    return (
-        f"{robot.name}: {len(robot.limbs)} limbs, {t.n_states} states ({shown}), "
-        f"{t.n_transitions} allowed transitions, rewards in {robot.units}"
-    )
-
-
-def _fmt(x: float) -> str:
-    return f"{x:+.6g}"
-
-
-def _bound_text(r) -> str:
-    return f", at most {r.max_transitions} transitions" if r.max_transitions is not None else ""
-
-
-def _result_text(robot, r) -> str:
-    t = robot.transitions
-    what = {"total": "total reward J", "rate": "reward per transition", "speed": f"{robot.units} per second"}
-    head = f"\n{r.direction}  {r.objective} ({what[r.objective]}{_bound_text(r)}): "
-    if r.value is None:
-        return head + f"no gait moves the robot in {r.direction}"
-    n = len(r.gaits)
-    lines = [head + f"best {_fmt(r.value)}, {n} optimal gait{'s' if n != 1 else ''}"]
-    if getattr(r, "truncated", False):
-        lines[0] += f" (listing stopped after {n}: more ties exist)"
-    walks = [" → ".join(t.label(s) for s in gait.states) for gait in r.gaits]
-    width = max(len(w) for w in walks)
-    for walk, gait in zip(walks, r.gaits):
-        extra = f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
-        lines.append(f"    {walk:<{width}}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}{extra}")
-    for walk, gait in zip(walks, r.gaits):
-        steps = _opposing_text(t, gait)
-        if not steps:
-            continue
-        lines.append(f"    note: {walk} raises one limb while lowering another in {steps}; an SMA robot")
-        lines.append("          may make such a step as two transitions (heating and cooling differ in speed)")
-    return "\n".join(lines)
-
-
-def _opposing_text(table, gait) -> str:
-    from ..states import opposing_steps
-
-    steps = opposing_steps(gait.states, table.levels)
-    return ", ".join(f"{table.label(gait.states[t])} → {table.label(gait.states[t + 1])}" for t in steps)
-
-
-def _gait_json(table, gait) -> dict:
-    from ..states import opposing_steps
-
-    d = {
-        "states": [table.label(s) for s in gait.states],
-        "reward": gait.reward,
-        "transitions": gait.transitions,
-        "rate": gait.rate,
-        "opposing_steps": [
-            [table.label(gait.states[t]), table.label(gait.states[t + 1])]
-            for t in opposing_steps(gait.states, table.levels)
-        ],
-    }
-    if gait.duration is not None:
-        d["duration_s"] = gait.duration
-    return d
-
-
-def _result_json(table, r) -> dict:
-    d = {
-        "direction": r.direction,
-        "objective": r.objective,
-        "max_transitions": r.max_transitions,
-        "value": r.value,
-        "gaits": [_gait_json(table, g) for g in r.gaits],
-    }
-    if getattr(r, "truncated", False):
-        d["truncated"] = True
-    return d
-
-
-def _print_evaluation(robot, args, evaluate_sequence) -> int:
-    from ..errors import GaitError
-
-    table = robot.transitions
-    names = [s.strip() for s in args.evaluate.split(",") if s.strip()]
-    try:
-        seq = [table.index(s) for s in names]
-    except ValueError as e:
-        raise GaitError(f"--evaluate: {e}") from None
-    try:
-        gait = evaluate_sequence(table, seq)
-    except GaitError as e:
-        if args.json:
-            print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
-        else:
-            print(f"{robot.name}: {' → '.join(names)} is not a valid gait: {e}")
-        return 1
-    if args.json:
-        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(table, gait)}}))
-    else:
-        walk = " → ".join(table.label(s) for s in gait.states)
-        print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
-    return 0
 

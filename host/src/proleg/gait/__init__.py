@@ -7,7 +7,11 @@
 
     feasibility: gait_problems(robot, states) -> list[Problem], check_gait(robot, states),
                  entry_path(robot, states) -> EntryPath
-    planar:      optimal_planar_gaits(table, PlanarObjective(...), kind, max_transitions)
+    planar:      optimal_planar_gaits(table, PlanarObjective(...), kind, max_transitions,
+                                  rotation_cap_deg, simple_cycles=, rotate=, translation_cap=)
+    compose:     net_motion(table, states) -> Pose, gait_path(table, states, cycles) -> [Pose]
+    library:     gait_library(table, "0,90,rot-cw", ...) -> [LibraryEntry],
+                 library_gaits(entries) -> [(Heading, Gait)] (the firmware's table, in order)
 
 See ``optimal.py`` for which algorithm answers which objective, docs/gait-selection.md
 for what ``total`` counts (repeated walks: ``Gait.repeats``) and how ties are ranked.
@@ -16,11 +20,14 @@ for what ``total`` counts (repeated walks: ``Gait.repeats``) and how ties are ra
 from .evaluate import evaluate_sequence
 from .feasibility import EntryPath, Problem, check_gait, entry_path, gait_problems
 from .optimal import optimal_gaits, rank_gaits
+from .compose import Pose, gait_path, net_motion
+from .library import Heading, LibraryEntry, gait_library, library_gaits, parse_headings
 from .planar import PlanarObjective, optimal_planar_gaits
 from .result import MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
 
 __all__ = [
-    "EntryPath", "Gait", "GaitResult", "MAX_TIES", "PlanarObjective", "Problem", "RELATIVE_TOLERANCE",
-    "check_gait", "entry_path", "evaluate_sequence", "gait_problems", "optimal_gaits", "optimal_planar_gaits",
+    "EntryPath", "Gait", "GaitResult", "Heading", "LibraryEntry", "MAX_TIES", "PlanarObjective", "Pose", "Problem",
+    "RELATIVE_TOLERANCE", "check_gait", "entry_path", "evaluate_sequence", "gait_library", "gait_path",
+    "gait_problems", "library_gaits", "net_motion", "optimal_gaits", "optimal_planar_gaits", "parse_headings",
     "rank_gaits",
 ]

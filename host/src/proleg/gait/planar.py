@@ -11,33 +11,35 @@ engines of ``optimal_gaits`` answer it unchanged on a table whose rewards are th
 (``total``: best score of a closed walk of at most N transitions, repeats counted;
 ``rate``: best score per transition), with every tie, checked against the same oracle.
 
-With a rotation cap (``total`` only so far), a gait counts only when one pass turns the
-robot by at most the cap, |ΣΔθ| ≤ cap: the engine lists the walks above a threshold with
-the same pruned enumeration as ``total`` (``total._closed_walks``), keeps those within the
-cap, and lowers the threshold from the uncapped optimum in steps until some walk is kept.
-Exact: every walk above the final threshold is listed, so the best capped one is found.
+Everything else goes to the exact constrained search (``constrained.py``):
 
-Not here yet: the cap for ``rate``, the simple-cycle restriction for ``total``, rotation
-gaits and "best of the negatives" when nothing scores above zero.
+* a rotation cap: a gait counts only when one pass turns the robot by at most the cap,
+  |ΣΔθ| ≤ cap (``total`` and ``rate``);
+* ``simple_cycles``: only simple cycles of at least two transitions (each state once per
+  pass); ``total`` is then the score of one pass (repeats = 1), as in a synthesiser that
+  picks one cycle (Freeman et al.'s binary integer programme over simple cycles);
+* rotation gaits (``rotate="cw"|"ccw"``): the score is the turn, −Δθ or +Δθ in degrees
+  (counter-clockwise = +θ, from +x towards +y), minus the same variance and transition
+  terms, with the translation of one pass capped, |(ΣΔx, ΣΔy)| ≤ ``translation_cap``;
+* when no gait scores above zero, the best one is still reported (``below_zero``).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import GaitError
 from ..transitions import TransitionTable
-from .evaluate import canonical_rotation, is_primitive
-from .maxplus import ClosingBound, Graph
-from .optimal import _check_request, _finish, optimal_gaits
+from .constrained import Constraint, best_constrained
+from .evaluate import make_gaits
+from .optimal import TOTAL_DEFAULT_LIMIT_STATES, _check_request, optimal_gaits, rank_gaits
 from .result import RELATIVE_TOLERANCE, GaitResult
-from .total import _best_value, _closed_walks, _Threshold
 
-#: A capped search that must list more walks than this gives up with a GaitError.
-MAX_CAPPED_WALKS = 200_000
+ROTATIONS = ("cw", "ccw")
 
 
 @dataclass(frozen=True)
@@ -76,71 +78,120 @@ def planar_table(table: TransitionTable, objective: PlanarObjective) -> Transiti
     return replace(table, reward=planar_scores(table, objective))
 
 
+def rotation_scores(table: TransitionTable, objective: PlanarObjective, rotate: str) -> np.ndarray:
+    """Per-transition score of a rotation gait: the turn in degrees (+Δθ for ccw, −Δθ for
+    cw) minus the variance and transition-cost terms of ``objective`` (its heading unused)."""
+    if rotate not in ROTATIONS:
+        raise GaitError(f"rotate must be one of {', '.join(ROTATIONS)}, got {rotate!r}")
+    theta = _dtheta(table, "a rotation gait")
+    sign = 1.0 if rotate == "ccw" else -1.0
+    level = replace(objective, heading_deg=0.0, transition_cost=0.0)
+    penalties = np.asarray(table.reward, dtype=np.float64) - planar_scores(table, level)
+    return sign * theta - penalties - float(objective.transition_cost)
+
+
+def _dtheta(table: TransitionTable, what: str) -> np.ndarray:
+    if table.planar is None or table.planar.dtheta_deg is None:
+        raise GaitError(f"{what} needs [transitions].dtheta_deg in the robot file, and it has none")
+    return np.asarray(table.planar.dtheta_deg, dtype=np.float64)
+
+
+def default_translation_cap(table: TransitionTable) -> float:
+    """The translation a rotation gait may drift per pass when none is given: the mean
+    length |(Δx, Δy)| of one transition of the table."""
+    dy = table.planar.dy if table.planar is not None and table.planar.dy is not None else 0.0
+    step = np.hypot(np.asarray(table.reward, dtype=np.float64), dy)
+    return float(step.mean()) if len(step) else 0.0
+
+
 def optimal_planar_gaits(
     table: TransitionTable,
     objective: PlanarObjective,
     kind: str = "total",
     max_transitions: int | None = None,
     rotation_cap_deg: float | None = None,
+    *,
+    simple_cycles: bool = False,
+    rotate: str | None = None,
+    translation_cap: float | None = None,
 ) -> GaitResult:
     """Every gait with the best planar score (``kind`` "total", "rate" or "speed"), ranked.
+
     ``value`` is in score units; gaits carry their scores as ``reward``. With
-    ``rotation_cap_deg`` only gaits turning by at most that much per pass count."""
-    scored = planar_table(table, objective)
-    if rotation_cap_deg is None:
-        return optimal_gaits(scored, kind, "+x", max_transitions)
-    if kind != "total":
-        raise GaitError(f"a rotation cap is only supported with objective total so far, not {kind}")
-    if table.planar is None or table.planar.dtheta_deg is None:
-        raise GaitError("a rotation cap needs [transitions].dtheta_deg in the robot file, and it has none")
-    if not (math.isfinite(rotation_cap_deg) and rotation_cap_deg >= 0):
-        raise GaitError(f"rotation cap must be a number of degrees >= 0, got {rotation_cap_deg!r}")
-    K = _check_request(scored, "total", "+x", max_transitions)
-    assert K is not None
-    return _capped_total(scored, table.planar.dtheta_deg, K, float(rotation_cap_deg))
+    ``rotation_cap_deg`` only gaits turning by at most that much per pass count; with
+    ``simple_cycles`` only simple cycles; with ``rotate`` ("cw"/"ccw") the gait that turns
+    the most that way, its translation per pass capped at ``translation_cap`` (default
+    ``default_translation_cap``). When no gait scores above zero the best one is returned
+    with ``below_zero=True``. ``max_transitions`` defaults to the number of states (at most
+    16) for ``total`` and for every constrained question.
+    """
+    if rotate is not None:
+        scored = replace(table, reward=rotation_scores(table, objective, rotate))
+    else:
+        scored = planar_table(table, objective)
+    constraints: list[Constraint] = []
+    accept: Callable[[np.ndarray], np.ndarray] | None = None
+    if rotation_cap_deg is not None and rotate is None:
+        if not (isinstance(rotation_cap_deg, (int, float)) and math.isfinite(rotation_cap_deg) and rotation_cap_deg >= 0):
+            raise GaitError(f"rotation cap must be a number of degrees >= 0, got {rotation_cap_deg!r}")
+        cap = float(rotation_cap_deg)
+        constraints.append(Constraint(_dtheta(table, "a rotation cap"), -cap, cap))
+    if rotate is not None:
+        cap = default_translation_cap(table) if translation_cap is None else translation_cap
+        if not (isinstance(cap, (int, float)) and math.isfinite(cap) and cap >= 0):
+            raise GaitError(f"translation cap must be a number >= 0, got {cap!r}")
+        cap = float(cap)
+        dy = table.planar.dy if table.planar is not None and table.planar.dy is not None else np.zeros(table.n_transitions)
+        constraints += [Constraint(np.asarray(table.reward, dtype=np.float64), -cap, cap), Constraint(dy, -cap, cap)]
+        accept = _translation_within(cap)
+
+    constrained = bool(constraints) or simple_cycles
+    if kind == "speed" and constrained:
+        raise GaitError("rotation caps, simple cycles and rotation gaits are answered for total and rate, not speed")
+    if not constrained:
+        result = optimal_gaits(scored, kind, "+x", max_transitions)
+        if result.value is not None or kind == "speed" or scored.n_transitions == 0:
+            return result
+        # nothing scores above zero: the best of the rest, over the same gaits
+        # (rate: simple cycles, as optimal_gaits answers it)
+        return _constrained(scored, kind, max_transitions, kind == "rate", [], None)
+    return _constrained(scored, kind, max_transitions, simple_cycles, constraints, accept)
 
 
-def _capped_total(scored: TransitionTable, dtheta: np.ndarray, K: int, cap: float) -> GaitResult:
-    n, w = scored.n_states, np.asarray(scored.reward, dtype=np.float64)
-    empty = GaitResult("+x", "total", K, None, (), False)
-    if len(w) == 0 or not np.any(w > 0) or K < 2:
+def _translation_within(cap: float) -> Callable[[np.ndarray], np.ndarray]:
+    """Accepts walks whose (ΣΔx, ΣΔy) — the first two constraint sums — has length ≤ cap."""
+
+    def accept(sums: np.ndarray) -> np.ndarray:
+        return np.hypot(sums[:, 0], sums[:, 1]) <= cap * (1 + 1e-12) + 1e-12
+
+    return accept
+
+
+def _default_bound(table: TransitionTable, kind: str, max_transitions: int | None, simple: bool) -> int:
+    K = _check_request(table, kind, "+x", max_transitions)
+    if K is not None:
+        return K
+    n = table.n_states
+    if n > TOTAL_DEFAULT_LIMIT_STATES and not simple:
+        raise GaitError(
+            f"this planar question on {n} states needs an explicit max_transitions "
+            f"(the default, the number of states, is only used up to {TOTAL_DEFAULT_LIMIT_STATES} states)"
+        )
+    return n
+
+
+def _constrained(
+    scored: TransitionTable, kind: str, max_transitions: int | None, simple: bool, constraints, accept
+) -> GaitResult:
+    K = _default_bound(scored, kind, max_transitions, simple)
+    w = np.asarray(scored.reward, dtype=np.float64)
+    empty = GaitResult("+x", kind, K, None, (), False)
+    if len(w) == 0 or K < 2:
         return empty
     tol = RELATIVE_TOLERANCE * float(np.abs(w).max())
-    g = Graph.from_edges(n, scored.src, scored.dst, w)
-    turn = Graph.from_edges(n, scored.src, scored.dst, dtheta)
-    bound = ClosingBound(g, K)
-    slack = 1e-12 * (float(np.abs(w).max()) + 1.0) * K
-    top = _best_value(g, bound, K, tol, slack)
-    if top is None:
+    found = best_constrained(scored.n_states, scored.src, scored.dst, w, K, kind, simple, constraints, accept, tol)
+    if found.best is None:
         return empty
-    gap = top - tol
-    for step in range(12, -1, -1):  # thresholds top − gap/4096, ..., tol
-        threshold = top - gap / (1 << step) if step else tol
-        found = _capped_walks(g, turn, bound, K, threshold, cap, slack)
-        if found:
-            best = max(v for v, _, _ in found)
-            ties = [(c, k) for v, c, k in sorted(found, key=lambda f: f[1]) if v >= best - tol]
-            return _finish(scored, "total", "+x", K, [c for c, _ in ties], tol, False, [k for _, k in ties])
-    return empty
-
-
-def _capped_walks(
-    g: Graph, turn: Graph, bound: ClosingBound, K: int, threshold: float, cap: float, slack: float
-) -> list[tuple[float, tuple[int, ...], int]]:
-    """(k·J, primitive canonical walk, k) for every walk with k·J >= threshold within the cap."""
-    out: list[tuple[float, tuple[int, ...], int]] = []
-    listed = 0
-    for L in range(2, K + 1):
-        k = K // L
-        for walks, weights in _closed_walks(g, bound, L, _Threshold(threshold / k), slack, raise_threshold=False):
-            listed += len(walks)
-            if listed > MAX_CAPPED_WALKS:
-                raise GaitError(
-                    f"the rotation cap leaves more than {MAX_CAPPED_WALKS:,} walks to check; give a smaller max_transitions"
-                )
-            rot = turn.edge_weight(walks.ravel(), np.roll(walks, -1, axis=1).ravel()).reshape(walks.shape).sum(axis=1)
-            for row, j, r in zip(walks.tolist(), weights.tolist(), rot.tolist()):
-                cyc = tuple(row)
-                if abs(r) <= cap + 1e-9 and is_primitive(cyc) and canonical_rotation(cyc) == cyc:
-                    out.append((k * j, cyc, k))
-    return out
+    gaits = [replace(g, repeats=k) for g, (_, k) in zip(make_gaits(scored, [c for c, _ in found.ties]), found.ties)]
+    ranked = rank_gaits(gaits, "+x", tol)
+    return GaitResult("+x", kind, K, found.best, tuple(ranked), False, below_zero=found.best <= tol)

@@ -57,6 +57,8 @@ class GaitResult:
     then by states (rates within the tie tolerance count as equal) — unless more than ``MAX_TIES`` exist (or they hold more than ``MAX_LISTED_STATES`` states):
     then the first ones found and ``truncated=True``.
     ``max_transitions`` is the bound actually used (the default for ``total`` included).
+    ``below_zero`` (planar objectives only): no gait scores above zero, and ``value`` and
+    ``gaits`` are the best ones anyway (the least costly, in a cost-minimising reading).
     """
 
     direction: str
@@ -65,3 +67,4 @@ class GaitResult:
     value: float | None
     gaits: tuple[Gait, ...]
     truncated: bool = False
+    below_zero: bool = False

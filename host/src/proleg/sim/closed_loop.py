@@ -25,7 +25,7 @@ from ..errors import SimError
 from ..firmware.boards import Board, load_board
 from ..robot import Robot
 from .board import SimBoard, SimulatedBoardLike
-from .plant import Plant, plant_params_from_robot, true_rewards_from_robot
+from .plant import Plant, plant_params_from_robot, planar_motion_from_robot, true_rewards_from_robot
 
 DEFAULT_PLANT_DT_S = 0.002
 
@@ -99,7 +99,8 @@ class SimulatedRobot:
         self.board_info = board_info or load_board("host-sim")
         self.board: SimulatedBoardLike = board if board is not None else SimBoard(library or sim_library(robot), seed)
         if plant is None:
-            plant = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed)
+            plant = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed,
+                          planar_motion_from_robot(robot))
         self.plant = plant
         addrs = list(self.board_info.i2c.get("imu_addresses", [0x68, 0x69]))
         self.imu_addresses = tuple(addrs[: len(robot.limbs)])

@@ -154,8 +154,33 @@ class Transition:
         return iter((self.t_s, self.src, self.dst, self.reward_mm))
 
 
+@dataclass(frozen=True, eq=False)
+class PlanarMotion:
+    """Per transition (n×n, row = from, column = to, robot-file units / degrees): mean Δy and
+    Δθ and the variances of Δx, Δy, Δθ, body frame (the robot file's planar statistics).
+    Missing statistics are zero."""
+
+    dy: np.ndarray
+    dtheta_deg: np.ndarray
+    var_dx: np.ndarray
+    var_dy: np.ndarray
+    var_dtheta_deg: np.ndarray
+
+
+#: The planar pose's noise comes from its own generator (seed mixed with this), so a plant
+#: without planar statistics draws exactly the numbers it always drew.
+_POSE_SEED = 0x5E2
+
+
 class Plant:
     """The simulated robot body. ``step(dt_s, duties)`` advances it; read the rest as properties.
+
+    ``planar`` (optional): the robot file's planar statistics; then each transition also moves
+    a planar pose (x, y in mm, θ in degrees, start frame) by its body-frame (Δx, Δy, Δθ) —
+    Δx the true reward as for ``displacement_mm``, Δy and Δθ the means — each with Gaussian
+    noise of the file's variance (seeded), composed in SE(2): ``pose``, ``poses``. Δx's
+    variance noise is then in ``displacement_mm`` too. Without ``planar``, ``pose`` is None and
+    nothing else changes.
 
     ``true_rewards``: n×n matrix (n = number of robot states), row = from, column = to, in the
     robot file's units (scaled by ``params.step_mm``), NaN = forbidden. None → all zero.
@@ -168,6 +193,7 @@ class Plant:
         true_rewards: np.ndarray | None = None,
         levels: Sequence[int] | None = None,
         seed: int = 0,
+        planar: PlanarMotion | None = None,
     ) -> None:
         params = params or PlantParams()
         msg = params.check()
@@ -230,6 +256,18 @@ class Plant:
         self._displacement = 0.0
         self._transitions: list[Transition] = []
         self._unexpected = 0
+        self._planar = None
+        self._poses: list[tuple[float, float, float, float]] = []
+        if planar is not None:
+            fields = {k: np.asarray(getattr(planar, k), dtype=np.float64) for k in
+                      ("dy", "dtheta_deg", "var_dx", "var_dy", "var_dtheta_deg")}
+            bad = [k for k, v in fields.items() if v.shape != (n, n) or not np.all(np.isfinite(v))]
+            if bad or min(float(fields[k].min()) for k in ("var_dx", "var_dy", "var_dtheta_deg")) < 0:
+                raise SimError(f"planar statistics: {bad[0] if bad else 'a variance'} must be a finite ({n}, {n}) "
+                               "matrix (variances >= 0)")
+            self._planar = {k: v.tolist() for k, v in fields.items()}
+            self._pose_rng = random.Random(seed * 1_000_003 + _POSE_SEED)
+            self._poses.append((0.0, 0.0, 0.0, 0.0))
 
     # -- stepping -----------------------------------------------------------------------------
     def _targets(self) -> list[float]:
@@ -305,9 +343,24 @@ class Plant:
             r = 0.0
         elif self._noise > 0.0:
             r += self._rng.gauss(0.0, self._noise)
+        if self._planar is not None and self._reward[a][b] is not None:
+            r = self._move_pose(a, b, r)
         self._committed = b
         self._displacement += r
         self._transitions.append(Transition(t0, a, b, r))
+
+    def _move_pose(self, a: int, b: int, dx: float) -> float:
+        """Compose one transition's noisy body-frame step into the pose; returns the Δx used."""
+        p, rng, k = self._planar, self._pose_rng, self.params.step_mm
+        assert p is not None
+        dx += rng.gauss(0.0, math.sqrt(p["var_dx"][a][b]) * k) if p["var_dx"][a][b] > 0 else 0.0
+        dy = p["dy"][a][b] * k + (rng.gauss(0.0, math.sqrt(p["var_dy"][a][b]) * k) if p["var_dy"][a][b] > 0 else 0.0)
+        dth = p["dtheta_deg"][a][b] + (
+            rng.gauss(0.0, math.sqrt(p["var_dtheta_deg"][a][b])) if p["var_dtheta_deg"][a][b] > 0 else 0.0)
+        _, x, y, th = self._poses[-1]
+        c, s = math.cos(math.radians(th)), math.sin(math.radians(th))
+        self._poses.append((self._t, x + c * dx - s * dy, y + s * dx + c * dy, th + dth))
+        return dx
 
     def _apply_drift(self, j: int, on: float) -> None:
         mode, rate, step = self._drift[j]
@@ -406,6 +459,16 @@ class Plant:
         return self._displacement
 
     @property
+    def pose(self) -> tuple[float, float, float] | None:
+        """(x mm, y mm, θ degrees) in the start frame; None without planar statistics."""
+        return None if self._planar is None else self._poses[-1][1:]
+
+    @property
+    def poses(self) -> list[tuple[float, float, float, float]]:
+        """(t s, x mm, y mm, θ degrees) at the start and after each transition ([] when not planar)."""
+        return list(self._poses)
+
+    @property
     def transitions(self) -> list[Transition]:
         return list(self._transitions)
 
@@ -454,6 +517,23 @@ def true_rewards_from_robot(robot: Any) -> np.ndarray:
     out = np.where(allowed, reward, np.nan)
     np.fill_diagonal(out, 0.0)
     return out
+
+
+def planar_motion_from_robot(robot: Any) -> PlanarMotion | None:
+    """The robot file's planar statistics as a ``PlanarMotion`` (missing ones zero), or None
+    when ``[transitions]`` has none."""
+    table = robot.transitions
+    if table.planar is None or not table.planar.given():
+        return None
+    n = table.n_states
+    out = {}
+    for k in ("dy", "dtheta_deg", "var_dx", "var_dy", "var_dtheta_deg"):
+        m = np.zeros((n, n))
+        v = getattr(table.planar, k)
+        if v is not None:
+            m[table.src, table.dst] = v
+        out[k] = m
+    return PlanarMotion(**out)
 
 
 def default_plant(true_rewards: np.ndarray | None = None, seed: int = 0, **overrides: Any) -> Plant:

@@ -1,0 +1,348 @@
+"""``proleg gait``: optimal gaits of a robot (along ±x, along a heading in the plane, turning
+on the spot, or a library of them), or the score of a typed sequence.
+
+Without a planar option the answer is today's: ``--direction`` +x / −x / both on the
+``matrix`` rewards. With ``--heading``, ``--variance-weight``, ``--transition-cost``,
+``--rotation-cap-deg``, ``--simple-cycles``, ``--rotate`` or ``--library`` the question is
+planar (``proleg.gait.planar``; docs/planar.md) and every gait also shows its SE(2)-composed
+net motion per pass and the path of ``--cycles`` passes (``--plot FILE.png`` draws them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+from ..errors import GaitError
+
+DIRECTIONS = ("+x", "-x")
+PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_deg", "simple_cycles", "rotate", "library")
+
+
+def add_gait_parser(sub) -> None:
+    """Register ``proleg gait`` on the one parser's subcommands."""
+    from .main import robot_arg  # a robot file or a bundled example's name
+
+    g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
+    g.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
+    g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
+    g.add_argument("--max-transitions", type=_positive_int, metavar="N")
+    g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
+    g.add_argument("--json", action="store_true", help="print one JSON object")
+    p = g.add_argument_group("planar gaits (robot files with dy / dtheta_deg / var_*; docs/planar.md)")
+    p.add_argument("--heading", type=_finite_float, metavar="DEG", help="score motion along this heading (0 = +x, 90 = +y)")
+    p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
+                   help="subtract λ·(var_dx + var_dy + var_dtheta_deg), or each with its own weight")
+    p.add_argument("--transition-cost", type=_finite_float, metavar="κ", help="subtract κ per transition")
+    p.add_argument("--rotation-cap-deg", type=_non_negative, metavar="DEG", help="only gaits turning at most this much per pass")
+    p.add_argument("--simple-cycles", action="store_true", help="only simple cycles (each state once per pass)")
+    p.add_argument("--rotate", choices=("cw", "ccw"), help="the gait that turns the most this way")
+    p.add_argument("--translation-cap", type=_non_negative, metavar="D",
+                   help="with --rotate: at most this translation per pass (default: one mean step)")
+    p.add_argument("--library", metavar="HEADINGS", help="best gait per heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
+    p.add_argument("--cycles", type=_positive_int, default=10, metavar="N", help="passes in the composed path (default 10)")
+    p.add_argument("--plot", metavar="FILE.png", help="draw each answer's gait 0 composed over --cycles passes")
+    g.set_defaults(run=cmd_gait)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return v
+
+
+def _finite_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return v
+
+
+def _non_negative(text: str) -> float:
+    v = _finite_float(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return v
+
+
+def _weights(text: str) -> tuple[float, float, float]:
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) not in (1, 3):
+        raise argparse.ArgumentTypeError(f"expected λ or λx,λy,λθ, got {text!r}")
+    values = [_non_negative(p) for p in parts]
+    return (values[0],) * 3 if len(values) == 1 else (values[0], values[1], values[2])
+
+
+def cmd_gait(args: argparse.Namespace) -> int:
+    from ..robot import load_robot
+
+    robot = load_robot(args.robot)
+    if args.evaluate is not None:
+        return _print_evaluation(robot, args)
+    planar = any(getattr(args, k) is not None and getattr(args, k) is not False for k in PLANAR_FLAGS)
+    if not planar:
+        if args.translation_cap is not None:
+            raise GaitError("--translation-cap only applies with --rotate or rot-cw/rot-ccw in --library")
+        from ..gait import optimal_gaits
+
+        directions = DIRECTIONS if args.direction == "both" else (args.direction,)
+        answers = [(d, optimal_gaits(robot.transitions, args.objective, d, args.max_transitions)) for d in directions]
+    else:
+        answers = _planar_answers(robot, args)
+    if args.plot:
+        _plot(robot, answers, args.cycles, args.plot)
+    if args.json:
+        doc = {
+            "robot": robot.name,
+            "states": robot.transitions.labels(),
+            "results": [_result_json(robot, name, r, planar, args.cycles) for name, r in answers],
+        }
+        print(json.dumps(doc))
+        return 0
+    print(_header(robot))
+    for name, r in answers:
+        print(_result_text(robot, name, r, planar, args.cycles))
+    return 0
+
+
+def _planar_answers(robot, args) -> list:
+    from ..gait.library import Heading, gait_library, parse_headings
+
+    given = [k for k in ("heading", "rotate", "library") if getattr(args, k) is not None]
+    if len(given) > 1:
+        raise GaitError(f"give one of --heading, --rotate and --library, not --{given[0]} and --{given[1].replace('_', '-')}")
+    if args.library is not None:
+        headings = parse_headings(args.library)
+    elif args.rotate is not None:
+        headings = [Heading(f"rot-{args.rotate}", rotate=args.rotate)]
+    elif args.heading is not None:
+        headings = [Heading(f"{args.heading:g}", heading_deg=args.heading)]
+    else:
+        headings = [Heading(d, heading_deg=0.0 if d == "+x" else 180.0)
+                    for d in (DIRECTIONS if args.direction == "both" else (args.direction,))]
+    entries = gait_library(
+        robot.transitions, headings, args.objective, args.max_transitions,
+        variance_weight=args.variance_weight or (0.0, 0.0, 0.0),
+        transition_cost=args.transition_cost or 0.0,
+        rotation_cap_deg=args.rotation_cap_deg,
+        simple_cycles=args.simple_cycles,
+        translation_cap=args.translation_cap,
+    )
+    return [(e.heading.name, e.result) for e in entries]
+
+
+def _header(robot) -> str:
+    t = robot.transitions
+    shown = " ".join(t.labels()) if t.n_states <= 16 else f"{t.label(0)} … {t.label(t.n_states - 1)}"
+    return (
+        f"{robot.name}: {len(robot.limbs)} limbs, {t.n_states} states ({shown}), "
+        f"{t.n_transitions} allowed transitions, rewards in {robot.units}"
+    )
+
+
+def _fmt(x: float) -> str:
+    return f"{x:+.6g}"
+
+
+def _title(name: str, planar: bool) -> str:
+    if not planar or name in DIRECTIONS:
+        return name
+    return name if name.startswith("rot-") else f"heading {name}°"
+
+
+def _result_text(robot, name: str, r, planar: bool, cycles: int) -> str:
+    t = robot.transitions
+    what = {"total": "total", "rate": "per transition", "speed": "per second"}[r.objective]
+    what = f"score {what}" if planar else {"total": "total reward J", "rate": "reward per transition",
+                                           "speed": f"{robot.units} per second"}[r.objective]
+    bound = f", at most {r.max_transitions} transitions" if r.max_transitions is not None else ""
+    head = f"\n{_title(name, planar)}  {r.objective} ({what}{bound}): "
+    if r.value is None:
+        return head + (f"no gait moves the robot in {name}" if name in DIRECTIONS else "no gait")
+    n = len(r.gaits)
+    head += f"best {_fmt(r.value)}, {n} optimal gait{'s' if n != 1 else ''}"
+    if r.below_zero:
+        head += " (no gait scores above zero: the best one is shown)"
+    if r.truncated:
+        head += f" (listing stopped after {n}: more ties exist)"
+    lines = [head]
+    walks = [" → ".join(t.label(s) for s in gait.states) for gait in r.gaits]
+    width = max(len(w) for w in walks)
+    for walk, gait in zip(walks, r.gaits):
+        extra = f"  ×{gait.repeats}" if gait.repeats > 1 else ""
+        extra += f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
+        lines.append(f"    {walk:<{width}}    J={_fmt(gait.reward)}{extra}  N={gait.transitions}  rate={_fmt(gait.rate)}")
+        if planar:
+            from ..gait.compose import gait_path
+
+            path = gait_path(t, gait.states, cycles)
+            one = path[gait.transitions]
+            lines.append(f"      per pass Δx={_fmt(one.x)} Δy={_fmt(one.y)} {robot.units}  Δθ={_fmt(one.theta_deg)}°;"
+                         f" after {cycles} passes ({path[-1].x:+.4g}, {path[-1].y:+.4g}) {robot.units},"
+                         f" {path[-1].theta_deg:+.4g}°")
+    for walk, gait in zip(walks, r.gaits):
+        steps = _opposing_text(t, gait)
+        if steps:
+            lines.append(f"    note: {walk} raises one limb while lowering another in {steps}; an SMA robot")
+            lines.append("          may make such a step as two transitions (heating and cooling differ in speed)")
+    for walk, gait in zip(walks, r.gaits):
+        problems, entry = _feasibility(robot, gait)
+        for p in problems:
+            lines.append(f"    {p.severity}: {p.message}")
+        if entry is not None and entry.transitions:
+            names = " → ".join(t.label(s) for s in entry.states)
+            lines.append(f"    entry: {walk} is entered from rest by {names} (gait step {entry.gait_step})")
+    return "\n".join(lines)
+
+
+def _feasibility(robot, gait):
+    """(problems other than the opposing steps noted above, entry path or None)."""
+    from ..gait.feasibility import entry_path, gait_problems
+
+    problems = [p for p in gait_problems(robot, gait.states) if p.kind != "opposing"]
+    try:
+        entry = entry_path(robot, gait.states)
+    except GaitError:
+        entry = None
+    return problems, entry
+
+
+def _opposing_text(table, gait) -> str:
+    from ..states import opposing_steps
+
+    steps = opposing_steps(gait.states, table.levels)
+    return ", ".join(f"{table.label(gait.states[t])} → {table.label(gait.states[t + 1])}" for t in steps)
+
+
+def _gait_json(robot, gait, planar: bool = False, cycles: int = 10) -> dict:
+    from ..states import opposing_steps
+
+    table = robot.transitions
+    d = {
+        "states": [table.label(s) for s in gait.states],
+        "reward": gait.reward,
+        "transitions": gait.transitions,
+        "rate": gait.rate,
+        "opposing_steps": [
+            [table.label(gait.states[t]), table.label(gait.states[t + 1])]
+            for t in opposing_steps(gait.states, table.levels)
+        ],
+    }
+    if gait.duration is not None:
+        d["duration_s"] = gait.duration
+    if planar:
+        from ..gait.compose import gait_path
+
+        path = gait_path(table, gait.states, cycles)
+        one = path[gait.transitions]
+        problems, entry = _feasibility(robot, gait)
+        d.update({
+            "repeats": gait.repeats,
+            "net_motion": {"dx": one.x, "dy": one.y, "dtheta_deg": one.theta_deg},
+            "path": [[p.x, p.y, p.theta_deg] for p in path],
+            "problems": [{"kind": p.kind, "severity": p.severity, "message": p.message} for p in problems],
+            "entry_path": None if entry is None else {"states": [table.label(s) for s in entry.states],
+                                                      "gait_step": entry.gait_step},
+        })
+    return d
+
+
+def _result_json(robot, name: str, r, planar: bool, cycles: int) -> dict:
+    d = {
+        "direction": name,
+        "objective": r.objective,
+        "max_transitions": r.max_transitions,
+        "value": r.value,
+        "gaits": [_gait_json(robot, g, planar, cycles) for g in r.gaits],
+    }
+    if planar:
+        d["below_zero"] = r.below_zero
+        d["path_cycles"] = cycles
+    if r.truncated:
+        d["truncated"] = True
+    return d
+
+
+def _plot(robot, answers, cycles: int, out: str) -> None:
+    """Each answer's gait 0 composed over ``cycles`` passes, in one plane, PNG/SVG/PDF."""
+    from ..gait.compose import gait_path
+
+    path = Path(out)
+    if path.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise GaitError(f"--plot {out}: the file must end in .png, .svg or .pdf")
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise GaitError(f"--plot {out}: directory {directory} does not exist")
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    from matplotlib.figure import Figure
+
+    t = robot.transitions
+    fig = Figure(figsize=(7, 7), layout="constrained")
+    ax = fig.subplots()
+    for i, (name, r) in enumerate(answers):
+        if not r.gaits:
+            continue
+        g = r.gaits[0]
+        poses = gait_path(t, g.states, cycles)
+        xs, ys = [p.x for p in poses], [p.y for p in poses]
+        walk = "→".join(t.label(s) for s in g.states)
+        ax.plot(xs, ys, color=f"C{i}", lw=1.2, label=f"{name}: {walk}")
+        ax.plot(xs[:: g.transitions], ys[:: g.transitions], "o", color=f"C{i}", ms=3)
+        end = poses[-1]
+        L = 0.05 * max(1e-9, max(abs(v) for v in xs + ys))
+        ax.annotate("", xy=(end.x + L * math.cos(math.radians(end.theta_deg)), end.y + L * math.sin(math.radians(end.theta_deg))),
+                    xytext=(end.x, end.y), arrowprops={"arrowstyle": "->", "color": f"C{i}"})
+    ax.plot([0], [0], "k+", ms=10)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"x ({robot.units}, start frame)")
+    ax.set_ylabel(f"y ({robot.units})")
+    ax.set_title(f"{robot.name}: {cycles} passes of each gait (dots: one pass)")
+    ax.grid(True, lw=0.3)
+    ax.legend(loc="best", fontsize="small")
+    fd, tmp = tempfile.mkstemp(suffix=path.suffix, dir=directory)
+    os.close(fd)
+    try:
+        fig.savefig(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _print_evaluation(robot, args) -> int:
+    from ..gait import evaluate_sequence
+
+    table = robot.transitions
+    names = [s.strip() for s in args.evaluate.split(",") if s.strip()]
+    try:
+        seq = [table.index(s) for s in names]
+    except ValueError as e:
+        raise GaitError(f"--evaluate: {e}") from None
+    try:
+        gait = evaluate_sequence(table, seq)
+    except GaitError as e:
+        if args.json:
+            print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
+        else:
+            print(f"{robot.name}: {' → '.join(names)} is not a valid gait: {e}")
+        return 1
+    if args.json:
+        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))
+    else:
+        walk = " → ".join(table.label(s) for s in gait.states)
+        print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
+    return 0

@@ -1,0 +1,103 @@
+"""``proleg gait`` with planar options: text, JSON, plot, library, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from proleg.cli import main
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+
+# 2 limbs; 00 → 10 → 11 → 00 moves +x most but turns 20°; 00 → 01 → 00 moves less, straight
+PLANAR = """
+[robot]
+name = "planar-two"
+[[limb]]
+name = "left"
+psi_star_deg = [20.0]
+actuator = "a"
+[[limb]]
+name = "right"
+psi_star_deg = [20.0]
+actuator = "b"
+[[actuator]]
+name = "a"
+[[actuator]]
+name = "b"
+[transitions]
+units = "mm"
+matrix     = [[0, 1, 2, "x"], [0.5, 0, "x", 0], ["x", "x", 0, 2], [0, "x", 0, 0]]
+dy         = [[0, 0, 0, "x"], [0, 0, "x", 0], ["x", "x", 0, 1], [0, "x", 0, 0]]
+dtheta_deg = [[0, 2, 10, "x"], [-2, 0, "x", 0], ["x", "x", 0, 10], [0, "x", 0, 0]]
+var_dx     = [[0, 0.1, 1, "x"], [0.1, 0, "x", 0], ["x", "x", 0, 1], [0, "x", 0, 0]]
+"""
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture()
+def robot(tmp_path) -> str:
+    p = tmp_path / "planar.toml"
+    p.write_text(PLANAR)
+    return str(p)
+
+
+def test_the_rotation_cap_picks_the_straight_gait_and_shows_its_motion(capsys, robot):
+    code, out, _ = run(capsys, "gait", robot, "--heading", "0", "--max-transitions", "4", "--json")
+    assert code == 0
+    r = json.loads(out)["results"][0]
+    assert r["gaits"][0]["states"] == ["00", "10", "11", "00"] and r["below_zero"] is False
+    assert r["gaits"][0]["net_motion"]["dtheta_deg"] == pytest.approx(20.0)
+    code, out, _ = run(capsys, "gait", robot, "--heading", "0", "--rotation-cap-deg", "5", "--max-transitions", "4",
+                       "--json", "--cycles", "3")
+    r = json.loads(out)["results"][0]
+    g = r["gaits"][0]
+    assert g["states"] == ["00", "01", "00"] and g["repeats"] == 2 and r["value"] == pytest.approx(3.0)
+    # 1 mm straight on, turn 2°, then 0.5 mm in the turned frame, turn back: composed in SE(2)
+    dx, dy = 1 + 0.5 * math.cos(math.radians(2)), 0.5 * math.sin(math.radians(2))
+    assert g["net_motion"] == pytest.approx({"dx": dx, "dy": dy, "dtheta_deg": 0.0}, abs=1e-12)
+    assert len(g["path"]) == 3 * 2 + 1 and g["path"][-1] == pytest.approx([3 * dx, 3 * dy, 0.0], abs=1e-12)
+    assert g["entry_path"] == {"states": ["00"], "gait_step": 0}
+
+
+def test_text_marks_repeats_and_a_best_below_zero(capsys, robot):
+    code, out, _ = run(capsys, "gait", robot, "--heading", "0", "--rotation-cap-deg", "5", "--max-transitions", "4")
+    assert code == 0 and "00 → 01 → 00    J=+1.5  ×2  N=2" in out
+    assert "per pass Δx=+1.4997 Δy=+0.0174497 mm  Δθ=+0°; after 10 passes (+15, +0.1745) mm, +0°" in out
+    code, out, _ = run(capsys, "gait", robot, "--heading", "0", "--transition-cost", "5", "--max-transitions", "4")
+    assert "no gait scores above zero: the best one is shown" in out
+
+
+def test_library_and_plot(capsys, robot, tmp_path):
+    png = tmp_path / "paths.png"
+    code, out, _ = run(capsys, "gait", robot, "--library", "0,90,rot-ccw", "--max-transitions", "4", "--json", "--translation-cap", "5",
+                       "--plot", str(png))
+    assert code == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    doc = json.loads(out)
+    assert [r["direction"] for r in doc["results"]] == ["0", "90", "rot-ccw"]
+    assert all(r["gaits"] for r in doc["results"])
+    assert doc["results"][2]["gaits"][0]["states"] == ["00", "10", "11", "00"]  # turns +20° a pass
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--heading", "0", "--rotate", "cw"], "give one of --heading, --rotate and --library"),
+    (["--library", "0,north"], "'north' is neither a heading"),
+    (["--heading", "0", "--plot", "out.txt"], "must end in .png"),
+    (["--translation-cap", "1"], "--translation-cap only applies with --rotate"),
+])
+def test_planar_mistakes_are_one_line(capsys, robot, argv, message):
+    code, _, err = run(capsys, "gait", robot, "--max-transitions", "4", *argv)
+    assert code == 2 and message in err and "Traceback" not in err and err.count("\n") == 1
+
+
+def test_a_rotation_cap_on_a_robot_without_dtheta_is_one_line(capsys):
+    code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--rotation-cap-deg", "5")
+    assert code == 2 and "needs [transitions].dtheta_deg" in err
