@@ -72,7 +72,7 @@ def _open_sim(robot: Robot, seed: int = 1) -> Target:
     from proleg.link.sim_link import SimLink
     from proleg.sim.closed_loop import SimulatedRobot
 
-    sim = SimulatedRobot(robot, seed=seed)
+    sim = SimulatedRobot(robot, seed=seed, plant="table")
     client = RobotClient(SimLink(sim, description=f"simulated {robot.name}"),
                          max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()

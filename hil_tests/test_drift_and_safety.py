@@ -127,7 +127,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
         def __init__(self):
             super().__init__()
             nonlocal sim
-            sim = SimulatedRobot(robot)  # every example starts from power-on
+            sim = SimulatedRobot(robot, plant="table")  # every example starts from power-on
             self.on_ticks = [0] * len(channels)
             tick_s = sim.board.tick_us / 1e6
             self.client = RobotClient(SimLink(EnvelopeBoard(self.on_ticks), step_s=tick_s),
