@@ -98,6 +98,21 @@ def grid() -> list[GridPoint]:
 
 NOMINAL = GridPoint("nominal", (), "none")
 
+#: The best open-loop drive for R1 +x that ``tune_open_loop_for(R1, "+x", budget=150)`` finds
+#: (bench/bench_claim.py re-tunes it on every run and prints it; bench/results/claim.json): both
+#: coils together, left at 0.8 and right at 0.6, 1.0 s on in a 4 s cycle: a full-stroke inchworm
+#: through 00 → 10 → 11 → 10 → 00, ≈ 4.2 mm/s at its worst over ±10 % power. The hil test of the
+#: central claim replays it rather than re-tuning (≈ 1–3 min).
+TUNED_R1_PLUS_X = OpenLoopDrive((0.8, 0.6), (1.0, 1.0), (4.0, 4.0), (0.0, 0.0), (0, 1))
+
+
+def point(name: str) -> GridPoint:
+    """The grid point called ``name`` (e.g. "supply sag (strong)")."""
+    for p in grid():
+        if p.name == name:
+            return p
+    raise SimError(f"claim grid: no point {name!r}")
+
 
 # ---------------------------------------------------------------------------------------------
 @dataclass
@@ -160,17 +175,21 @@ def _plant_fault(robot: Any, plant: Any, fault: str) -> None:
 
 def physically_possible(robot: Any, point: GridPoint, direction: str = "+x", gait: int = 0) -> tuple[bool, str]:
     """Can the coils complete the gait's transformations under ``point`` at all? An idealised
-    drive (true ψ, true ψ*, the firmware's drive duty) walks three cycles; if it cannot reach
-    a state, the reason: the hottest steady temperature the supply gives the coil against
+    drive (true ψ, true ψ*, the firmware's drive duty) walks the gait; if it cannot reach a
+    state, or the gait then moves the wrong way, the reason: the hottest steady temperature the supply gives the coil against
     its transformation temperatures, or else the end's angle the stroke reaches."""
     from ..sim.physical.measure import run_sequence
 
     plant = _plant(robot, point)
     try:
-        run_sequence(robot, gait_states(robot, direction, gait), cycles=2, plant=plant, timeout_s=10.0)
-        return True, ""
+        mm, _ = run_sequence(robot, gait_states(robot, direction, gait), cycles=2, plant=plant, timeout_s=10.0)
     except SimError:
-        pass
+        mm = None
+    if mm is not None:
+        if (1 if direction == "+x" else -1) * mm > 0:
+            return True, ""
+        return False, (f"the coils complete the gait, but even an ideal drive (true ψ) moves {mm:+.2f} mm per "
+                       f"cycle: under this condition the gait does not go {direction}")
     duty = robot.control.drive_duty
     hot = plant.steady_coil_temperature_c(duty)
     tr = plant.transformation_c()
@@ -201,6 +220,8 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     speed = run.displacement_mm / duration_s
     sign = 1 if direction == "+x" else -1
     completed = not faults and run.cycles >= 2 and sign * speed > 0
+    if not faults and not completed:
+        faults = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
     return DriveOutcome(completed, speed, run.displacement_mm, faults,
                         float(max(sim.plant.temperature_c)), peak[0])
 
@@ -208,8 +229,9 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
 def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, direction: str = "+x",
                   gait: int = 0, duration_s: float = RUN_S, dt_s: float = 0.01) -> DriveOutcome:
     """The timed drive replayed on the physical plant under ``point``: completed if the robot
-    still goes through every state of the gait in the last third of the run, moves in
-    ``direction`` and no coil overheats (> ``OVERHEAT_C``)."""
+    still changes state in the last third of the run, moves in ``direction`` over the run and
+    no coil overheats (> ``OVERHEAT_C``). (The open loop need not walk the firmware's gait:
+    any sequence that moves the robot counts.)"""
     plant = _plant(robot, point)
     nch = max(a.channel for a in robot.actuators) + 1
     peak = 0.0
@@ -219,16 +241,13 @@ def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
         if i % 20 == 0:
             peak = max(peak, float(max(plant.temperature_c)))
     x = plant.displacement_mm
-    late = {s for tr in plant.transitions if tr.t_s > duration_s * 2 / 3 for s in (tr.src, tr.dst)}
-    need = set(gait_states(robot, direction, gait))
+    late = [tr for tr in plant.transitions if tr.t_s > duration_s * 2 / 3]
     sign = 1 if direction == "+x" else -1
     why = ""
     if peak > OVERHEAT_C:
         why = f"coil overheated ({peak:.0f} °C)"
-    elif not need <= late:
-        missing = ", ".join(robot.transitions.label(s) for s in sorted(need - late))
-        now = robot.transitions.label(plant.true_state)
-        why = f"stalled: in its last third it never reaches {missing} (stuck near {now})"
+    elif not late:
+        why = f"stalled: no state change in the last third (stuck in {robot.transitions.label(plant.true_state)})"
     elif sign * x <= 0:
         why = "walks the wrong way"
     for _ in range(int(2.0 / dt_s)):
