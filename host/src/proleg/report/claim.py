@@ -61,6 +61,9 @@ MODES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "slippery ground": (("friction=0.6",), ("friction=0.35",)),
     "heavier body": (("mass_g=5",), ("mass_g=8",)),
     "sma drift with use": (("!drift:all@0.01",), ("!drift:all@0.03",)),
+    # beyond what the coils can do: the firmware must stop with a fault and cold coils
+    "supply collapse": (("power=0.35",), ("power=0.2",)),
+    "dead coil": (("!dead-actuator:sma-right",), ("!dead-actuator:sma-left",)),
 }
 
 PAIRS: tuple[tuple[str, str], ...] = (
@@ -120,7 +123,8 @@ class DriveOutcome:
     completed: bool
     speed_mm_s: float
     displacement_mm: float
-    fault: str = ""          # firmware fault (ψ-feedback) or why the open loop stopped walking
+    fault: str = ""          # the firmware's fault codes (ψ-feedback only; "" = none)
+    note: str = ""           # why a run without a fault did not complete (wrong way, stalled, overheated)
     coil_max_end_c: float = 0.0   # hottest coil 2 s after the run (cold coils after a fault)
     coil_peak_c: float = 0.0
 
@@ -195,6 +199,8 @@ def physically_possible(robot: Any, point: GridPoint, direction: str = "+x", gai
     tr = plant.transformation_c()
     for j, a in enumerate(robot.actuators):
         as_c, af_c = tr[j]
+        if not plant.alive[j]:
+            return False, f"coil {a.name} does not heat (dead coil): its limb cannot leave level 0"
         if hot[j] < as_c + 0.5 * (af_c - as_c):
             return False, (f"the supply heats coil {a.name} to at most {hot[j]:.0f} °C at duty {duty:g} "
                            f"(As {as_c:.0f} °C, Af {af_c:.0f} °C): it cannot transform far enough")
@@ -209,20 +215,28 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
 
     sim = SimulatedRobot(robot, seed=seed, plant=_plant(robot, point))
     session = SimSession(sim)
-    session.advance(0.2)
     peak = [0.0]
+    step = sim.step
+    temps = sim.plant._temp  # the coil temperatures, read once per plant step
+
+    def stepping() -> None:
+        step()
+        peak[0] = max(peak[0], *temps)
+
+    sim.step = stepping  # type: ignore[method-assign]
+    session.advance(0.2)
     run = session.run_gait(direction, gait, duration_s)
     session.advance(2.0)
-    peak[0] = max(peak[0], float(max(sim.plant.temperature_c)))
     faults = ", ".join(sorted({f.code for f in run.faults})) if run.faults else ""
     if run.errors:
         faults = (faults + "; " if faults else "") + "; ".join(run.errors)
     speed = run.displacement_mm / duration_s
     sign = 1 if direction == "+x" else -1
     completed = not faults and run.cycles >= 2 and sign * speed > 0
+    note = ""
     if not faults and not completed:
-        faults = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
-    return DriveOutcome(completed, speed, run.displacement_mm, faults,
+        note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
+    return DriveOutcome(completed, speed, run.displacement_mm, faults, note,
                         float(max(sim.plant.temperature_c)), peak[0])
 
 
@@ -252,7 +266,7 @@ def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
         why = "walks the wrong way"
     for _ in range(int(2.0 / dt_s)):
         plant.step(dt_s, [0.0] * nch)
-    return DriveOutcome(not why, x / duration_s, x, why, float(max(plant.temperature_c)), peak)
+    return DriveOutcome(not why, x / duration_s, x, "", why, float(max(plant.temperature_c)), peak)
 
 
 def tune_open_loop_for(robot: Any, direction: str = "+x", *, budget: int = 150, dt_s: float = 0.01,

@@ -458,6 +458,11 @@ class PhysicalPlant:
             out.append(self._amb + power / (self._hA[j] + self._G[j]))
         return out
 
+    @property
+    def alive(self) -> tuple[bool, ...]:
+        """Per actuator: False once ``kill_actuator`` was called on it."""
+        return tuple(self._alive)
+
     def transformation_c(self) -> list[tuple[float, float]]:
         """Each coil's (As, Af) now, fatigue and drift shifts included."""
         return [(h.as_c + h.shift_c, h.af_c + h.shift_c) for h in self._hyst]
