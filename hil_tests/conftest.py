@@ -68,11 +68,11 @@ class Target:
                 return out
 
 
-def _open_sim(robot: Robot, seed: int = 1) -> Target:
+def _open_sim(robot: Robot, seed: int = 1, plant: str | None = None) -> Target:
     from proleg.link.sim_link import SimLink
     from proleg.sim.closed_loop import SimulatedRobot
 
-    sim = SimulatedRobot(robot, seed=seed)
+    sim = SimulatedRobot(robot, seed=seed, plant=plant)  # None: the default (physical) plant
     client = RobotClient(SimLink(sim, description=f"simulated {robot.name}"),
                          max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
@@ -93,16 +93,17 @@ def _open_serial(config, robot: Robot) -> Target:
 
 @pytest.fixture
 def open_target(request):
-    """Factory: ``open_target("paper-r1")`` → a connected Target (closed after the test).
+    """Factory: ``open_target("paper-r1")`` → a connected Target (closed after the test);
+    ``plant="table"`` on the simulator for tests where the lookup plant is the point.
 
     On hardware, the robot is the one given with --robot, whatever the test asks for;
     tests that need a particular robot's behaviour are marked ``plant``."""
     config = request.config
     opened: list[Target] = []
 
-    def open_(robot_name: str = "paper-r1", seed: int = 1) -> Target:
+    def open_(robot_name: str = "paper-r1", seed: int = 1, plant: str | None = None) -> Target:
         if config.getoption("--target") == "sim":
-            t = _open_sim(load_robot(ROBOTS / f"{robot_name}.toml"), seed)
+            t = _open_sim(load_robot(ROBOTS / f"{robot_name}.toml"), seed, plant)
         else:
             path = config.getoption("--robot")
             if not path:

@@ -12,59 +12,46 @@ from proleg.errors import ProtocolError
 from proleg.protocol.codec import Message, encode
 from proleg.protocol.definition import EventKind, ParamId
 
-WEAKER = 0.3  # the drifted coils deliver 30 % less heating power
-
-
-def _feedback_cycle_mm(open_target, drift: bool) -> float:
-    t = open_target("paper-r1")
-    if drift:
-        for a in t.robot.actuators:
-            t.sim.plant.inject_drift(a.channel, 0.0, "power", WEAKER)
-    t.client.start(0, "+x")
-    received = t.wait(40.0)
-    t.client.stop()
-    marks = [r.truth["displacement_mm"] for r in received
-             if r.message.name == "EVENT" and r.message.kind == EventKind.STATE_REACHED and r.message.code == 0]
-    assert len(marks) >= 4, "fewer than three complete cycles"
-    return (marks[-1] - marks[0]) / (len(marks) - 1)
+#: grid points of bench/bench_claim.py (proleg.report.claim.grid), a handful of drift modes
+CLAIM_POINTS = (
+    "supply sag (strong)",                          # heating power ×0.7
+    "weak coil (strong)",                           # one coil's power ×0.7
+    "coil mismatch + source resistance (mild)",     # wire lengths ±10 %, 3 Ω supply
+    "fatigue + supply sag (strong)",                # 30 000 cycles of wear, power ×0.7
+)
 
 
 @pytest.mark.plant
-def test_under_sma_drift_psi_feedback_keeps_the_displacement_per_cycle_while_open_loop_timing_degrades(
-    open_target, record_property
-):
+@pytest.mark.slow
+def test_psi_feedback_keeps_walking_under_drift_where_the_best_open_loop_timing_does_not(record_property):
+    """The central claim at a handful of the benchmark's grid points, on the physical plant:
+    ψ-feedback firmware completes every one without a fault at ≥ 75 % of its nominal speed;
+    the best timed open-loop drive (tuned on the fresh robot, scored on its worst speed over
+    ±10 % power; replayed as ``TUNED_R1_PLUS_X``) loses at least a quarter of its nominal speed,
+    walks the wrong way or overheats at each. (On the fresh robot the open loop is the faster:
+    it uses the coils' full stroke; bench/results/claim.json.)"""
+    from proleg.report import claim
     from proleg.robot import load_robot
-    from proleg.sim.openloop import run_open_loop, tune_open_loop
-    from proleg.sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
 
     from .conftest import ROBOTS
 
     robot = load_robot(ROBOTS / "paper-r1.toml")
-    params, truth = plant_params_from_robot(robot), true_rewards_from_robot(robot)
-
-    # Open loop: the 7 timing parameters tuned on the fresh actuators, then replayed.
-    tuned = tune_open_loop(params, truth, +1)
-    drive, period = tuned.drive, tuned.drive.period_s
-    plant = Plant(params, truth, robot.levels)
-    for a in robot.actuators:
-        plant.inject_drift(a.channel, 0.0, "power", WEAKER)
-    run_open_loop(plant, drive, period)  # one warm-up cycle, as in tuning
-    open_fresh = tuned.displacement_per_cycle_mm
-    open_drifted = run_open_loop(plant, drive, 8 * period) / 8
-
-    # State feedback: the firmware on the simulated board, same drift.
-    fb_fresh = _feedback_cycle_mm(open_target, drift=False)
-    fb_drifted = _feedback_cycle_mm(open_target, drift=True)
-
-    report = (f"displacement per cycle, fresh -> {int(WEAKER * 100)} % weaker SMA: "
-              f"psi feedback {fb_fresh:+.1f} -> {fb_drifted:+.1f} mm; "
-              f"open-loop timing {open_fresh:+.1f} -> {open_drifted:+.1f} mm")
-    print("\n" + report)
-    record_property("central_claim", report)
-    assert fb_drifted == pytest.approx(fb_fresh, abs=1e-6)
-    assert fb_fresh > 0
-    assert open_fresh > 0
-    assert open_drifted < 0.5 * open_fresh
+    drive = claim.TUNED_R1_PLUS_X
+    nominal = claim.run_condition(robot, drive, claim.NOMINAL)
+    fb0, ol0 = nominal.feedback, nominal.open_loop
+    assert fb0.completed and fb0.speed_mm_s > 0 and ol0.speed_mm_s > 0
+    lines = [f"nominal: psi feedback {fb0.speed_mm_s:+.3f} mm/s, open loop {ol0.speed_mm_s:+.3f} mm/s"]
+    for name in CLAIM_POINTS:
+        r = claim.run_condition(robot, drive, claim.point(name))
+        fb, ol = r.feedback, r.open_loop
+        lines.append(f"{name}: psi feedback {fb.speed_mm_s:+.3f} ({fb.fault or 'ok'}), "
+                     f"open loop {ol.speed_mm_s:+.3f} ({ol.fault or 'ok'})")
+        assert r.possible, (name, r.why_not)
+        assert fb.completed and not fb.fault, lines[-1]
+        assert fb.speed_mm_s >= 0.75 * fb0.speed_mm_s, lines[-1]
+        assert not ol.completed or ol.speed_mm_s < 0.75 * ol0.speed_mm_s, lines[-1]
+    print("\n" + "\n".join(lines))
+    record_property("central_claim", lines)
 
 
 # ---------------------------------------------------------------------------------------
@@ -127,7 +114,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
         def __init__(self):
             super().__init__()
             nonlocal sim
-            sim = SimulatedRobot(robot)  # every example starts from power-on
+            sim = SimulatedRobot(robot, plant="table")  # every example starts from power-on
             self.on_ticks = [0] * len(channels)
             tick_s = sim.board.tick_us / 1e6
             self.client = RobotClient(SimLink(EnvelopeBoard(self.on_ticks), step_s=tick_s),

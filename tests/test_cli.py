@@ -124,13 +124,13 @@ def test_console_script_is_installed():
 
 SIM_JSON_FIELDS = {
     "robot", "direction", "gait", "duration_s", "cycles", "cycle_displacements_mm", "mean_cycle_mm",
-    "displacement_mm", "states_reached", "true_transitions", "unexpected_transitions", "faults",
+    "displacement_mm", "speed_mm_s", "states_reached", "true_transitions", "unexpected_transitions", "faults",
     "telemetry_frames", "telemetry_lost", "link_errors", "errors",
 }
 
 
 def test_sim_walks_and_exits_0_with_the_documented_json(capsys):
-    code, out, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "10", "--json")
+    code, out, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "20", "--json")
     assert code == 0, err
     doc = json.loads(out)
     assert set(doc) == SIM_JSON_FIELDS

@@ -1,8 +1,15 @@
 """The robot file's optional ``[plant]`` table: the simulated body's physics, checked once.
 
-Every key is listed in ``PLANT_KEYS`` with its unit, its allowed range and its default (the
-defaults are the simulator's, ``proleg.sim.sma.SmaParams`` and ``proleg.sim.plant.PlantParams``;
-a test keeps the two in step). ``plant_section`` checks a ``[plant]`` table when the robot file
+ONE schema for both simulated plants. Every key is listed in ``PLANT_KEYS`` with its unit,
+its allowed range, its default and the plants it applies to (``plants``): ``table`` (the
+lookup plant, ``proleg.sim.plant``: its coil model and matrix keys), ``physical`` (the
+physical plant, ``proleg.sim.physical``: its conditions — supply, air, wear, sensors and
+world) or both (``supply_v``, ``ambient_c``: the same quantity in both; ``supply_v``'s default
+differs because the two plants model different coils, ``physical_default``). The same
+physical keys are what ``proleg sim --condition KEY=VALUE`` takes
+(``proleg.sim.physical.conditions`` reads them from here). The table plant's defaults are
+``proleg.sim.sma.SmaParams`` and ``proleg.sim.plant.PlantParams`` (a test keeps them in step);
+the physical ones are documented with their sources in docs/plant.md. ``plant_section`` checks a ``[plant]`` table when the robot file
 is loaded, so a misspelt key or a value out of range fails ``proleg gait`` and ``proleg build``
 as it fails ``proleg sim``: one line naming the file, the key and what was expected.
 The result, ``PlantSection``, holds every value resolved (defaults filled in, one number per
@@ -40,6 +47,13 @@ class PlantKey:
     open_lo: bool = False
     open_hi: bool = False
     doc: str = ""
+    plants: tuple[str, ...] = ("table",)   # which simulated plants read it
+    physical_default: float | None = None  # the physical plant's default when it differs
+
+    def default_for(self, plant: str) -> float | None:
+        if plant == "physical" and self.physical_default is not None:
+            return self.physical_default
+        return self.default
 
     def range_text(self) -> str:
         left = "(" if self.open_lo else "["
@@ -57,11 +71,15 @@ def _g(x: float) -> str:
     return f"{x:g}"
 
 
+BOTH = ("table", "physical")
+PHYS = ("physical",)
+
 # Defaults: a Toki BioMetal Helix BMX100-class coil and the paper's R1-class body; the sources
 # of every number are in proleg/sim/sma.py (SmaParams) and proleg/sim/plant.py (PlantParams).
 _KEYS = (
     PlantKey("resistance_ohm", "Ω", 0.0, 10_000.0, 36.0, "actuator", open_lo=True, doc="coil resistance"),
-    PlantKey("supply_v", "V", 0.0, 60.0, 5.0, "actuator", open_lo=True, doc="supply voltage across the coil at duty 1"),
+    PlantKey("supply_v", "V", 0.0, 60.0, 5.0, "actuator", open_lo=True, doc="supply voltage across the coil at duty 1",
+             plants=BOTH, physical_default=7.4),
     PlantKey("heat_capacity_j_per_k", "J/K", 0.0, 10.0, 4.6e-3, "actuator", open_lo=True, doc="coil heat capacity C"),
     PlantKey("conductance_w_per_k", "W/K", 0.0, 10.0, 4.6e-3, "actuator", open_lo=True,
              doc="heat loss hA to the surroundings (τ = C / hA)"),
@@ -80,15 +98,41 @@ _KEYS = (
     PlantKey("coupling_deg", "°", -360.0, 360.0, None,
              doc="limbs × actuators matrix: ψ of limb i at full contraction of actuator j"),
     PlantKey("mech_tau_s", "s", 0.0, 10.0, 0.03, open_lo=True, doc="first-order lag of the soft body's ψ"),
-    PlantKey("ambient_c", "°C", -50.0, 100.0, 25.0, doc="ambient temperature"),
+    PlantKey("ambient_c", "°C", -50.0, 100.0, 25.0, doc="ambient (air and ground) temperature", plants=BOTH),
     PlantKey("step_mm", "mm", 0.0, 1000.0, 4.0, open_lo=True, doc="displacement per unit of the reward matrix"),
     PlantKey("noise_mm", "mm", 0.0, 1000.0, 0.0, doc="σ of the Gaussian noise added to each transition's displacement"),
     PlantKey("simultaneous_s", "s", 0.0, 10.0, 0.03, doc="limb changes this close together form one transition"),
     PlantKey("true_matrix", "reward units", -1e9, 1e9, None,
              doc="n × n ground-truth rewards for the simulator (numbers or 'x'); default: [transitions]"),
+    # -- the physical plant's conditions (docs/plant.md: model, constants and sources) ----------
+    PlantKey("power", "×", 0.2, 2.0, 1.0, plants=PHYS,
+             doc="heating power factor at the coils (supply voltage² / nominal): supply sag or boost"),
+    PlantKey("supply_ohm", "Ω", 0.0, 50.0, 0.0, plants=PHYS,
+             doc="source resistance shared by all coils (supply sag when they draw together)"),
+    PlantKey("convection", "×", 0.2, 5.0, 1.0, plants=PHYS,
+             doc="convective heat transfer factor (draught > 1, enclosure < 1)"),
+    PlantKey("fatigue_cycles", "cycles", 0.0, 1e6, 0.0, plants=PHYS,
+             doc="transformation cycles the coils have already made (stroke loss, temperature shift)"),
+    PlantKey("fatigue_speedup", "×", 1.0, 1e5, 1.0, plants=PHYS,
+             doc="each cycle made during the run counts this many times (accelerated wear)"),
+    PlantKey("coil_mismatch", "", 0.0, 0.5, 0.0, plants=PHYS,
+             doc="wire-length mismatch: first coil +m, last coil −m (resistance, mass, surface)"),
+    PlantKey("power_scale", "×", 0.2, 2.0, 1.0, "actuator", plants=PHYS,
+             doc="heating power factor of one coil (contact resistance, crimp)"),
+    PlantKey("overlap_mm", "mm", 0.0, 30.0, 8.0, "actuator", plants=PHYS,
+             doc="how far a coil reaches past its half of the body (coil-to-coil coupling, asymmetric if they differ)"),
+    PlantKey("imu_offset_deg", "°", -20.0, 20.0, 0.0, "limb", plants=PHYS, doc="IMU mounting tilt on the limb"),
+    PlantKey("imu_bias_deg", "°", -20.0, 20.0, 0.0, "limb", plants=PHYS, doc="IMU accelerometer bias, as an angle"),
+    PlantKey("imu_noise_deg", "° rms", 0.0, 5.0, 0.0, plants=PHYS, doc="white noise on every IMU angle sample"),
+    PlantKey("incline_deg", "°", -12.0, 12.0, 0.0, plants=PHYS, doc="ground slope, rising towards +x"),
+    PlantKey("psi_star_shift_deg", "°", -15.0, 15.0, 0.0, "limb", plants=PHYS,
+             doc="true critical angle ψ* − the configured one"),
+    PlantKey("friction", "×", 0.2, 3.0, 1.0, plants=PHYS, doc="scale of every friction coefficient (the ground)"),
+    PlantKey("mass_g", "g", 1.0, 20.0, 3.3, plants=PHYS, doc="robot mass"),
 )
 PLANT_KEYS: dict[str, PlantKey] = {k.name: k for k in _KEYS}
-PER_ACTUATOR = tuple(k.name for k in _KEYS if k.per == "actuator")
+PER_ACTUATOR = tuple(k.name for k in _KEYS if k.per == "actuator" and "table" in k.plants)
+PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants)
 SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
 
 
@@ -114,6 +158,9 @@ class PlantSection:
     simultaneous_s: float
     true_matrix: np.ndarray | None = None
     given: frozenset[str] = field(default_factory=frozenset)
+    physical: dict[str, float | tuple[float, ...]] = field(default_factory=dict)
+    """The physical plant's keys the file gives (``supply_v`` and ``ambient_c`` included):
+    one number, or one per actuator / per limb for a per-actuator / per-limb key."""
 
     def scalars(self) -> dict[str, float]:
         return {k: getattr(self, k) for k in SCALARS}
@@ -140,9 +187,19 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
     scalars = {k: _scalar(path, PLANT_KEYS[k], table.get(k)) for k in SCALARS}
     coupling = _coupling(path, table["coupling_deg"], n_limbs, na) if "coupling_deg" in table else None
     truth = _true_matrix(path, table["true_matrix"], n_states) if "true_matrix" in table else None
+    physical: dict[str, float | tuple[float, ...]] = {}
+    for k in PHYSICAL_KEYS:
+        if k not in table:
+            continue
+        spec = PLANT_KEYS[k]
+        if spec.per:
+            vals = _per(path, spec, table[k], na if spec.per == "actuator" else n_limbs)
+            physical[k] = vals if isinstance(table[k], list) else vals[0]
+        else:
+            physical[k] = _scalar(path, spec, table[k])
     return PlantSection(
         actuator=per_act, psi_rest_deg=rest, coupling_deg=coupling, true_matrix=truth,
-        given=frozenset(table), **scalars,
+        given=frozenset(table), physical=physical, **scalars,
     )
 
 

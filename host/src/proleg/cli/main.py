@@ -160,6 +160,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--pty", action="store_true",
                    help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
     s.add_argument("--speed", type=_positive_float, default=1.0, help="with --pty: times real time (default 1)")
+    from .sim_plant import add_plant_options
+
+    add_plant_options(s)  # --plant, --condition, --measure-matrix
     s.set_defaults(run=cmd_sim)
 
     from .link_commands import add_arguments as add_link_commands
@@ -260,6 +263,12 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..sim.closed_loop import SimulatedRobot
 
     robot = load_robot(args.robot)
+    from .sim_plant import cmd_measure_matrix, plant_kwargs, wants_help
+
+    if wants_help(args):
+        return EXIT_OK
+    if args.measure_matrix:
+        return cmd_measure_matrix(args, robot)
     if not args.pty:
         from .robot_commands import gaits_per_direction
 
@@ -269,7 +278,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
             shown = f"gaits 0..{have - 1}" if have else "no gait"
             raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
-    sim = SimulatedRobot(robot, seed=args.seed)
+    sim = SimulatedRobot(robot, seed=args.seed, **plant_kwargs(args))
     timed = []
     for spec in args.inject:
         fault, plus, at = spec.rpartition("+") if "+" in spec else ("", "", "")
@@ -343,6 +352,7 @@ def _report_json(robot, report) -> dict:
         "cycle_displacements_mm": report.cycle_displacements_mm,
         "mean_cycle_mm": report.mean_cycle_mm,
         "displacement_mm": report.displacement_mm,
+        "speed_mm_s": report.displacement_mm / report.duration_s if report.duration_s > 0 else 0.0,
         "states_reached": [t.label(s) for s in report.states_reached],
         "true_transitions": report.true_transitions,
         "unexpected_transitions": report.unexpected_transitions,

@@ -8,7 +8,11 @@ the simulation run far faster than real time.
 
 The board is any object with the simulated-board interface (``proleg.sim.board.
 SimulatedBoardLike``): by default the host-sim build (``SimBoard``) of the robot's firmware;
-an emulated MCU can be passed as ``board=``. ``SimulatedRobot`` offers ``write``/``read``/
+an emulated MCU can be passed as ``board=``. The plant is the physical one by default
+(``proleg.sim.physical``: displacement from friction mechanics, with the robot file's
+``[plant]`` conditions and any given on top); ``plant="table"`` picks the lookup plant
+(``proleg.sim.plant``: the robot's matrix, e.g. to test learning against a known matrix), and
+a plant object is used as it is. ``make_plant`` is the factory. ``SimulatedRobot`` offers ``write``/``read``/
 ``advance``, the board interface ``proleg.link.sim_link.SimLink`` (and so the client, the
 console, the recorder and hil_tests) talk to.
 """
@@ -20,6 +24,7 @@ import os
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ..errors import SimError
 from ..firmware.boards import Board, load_board
@@ -28,6 +33,46 @@ from .board import SimBoard, SimulatedBoardLike
 from .plant import Plant, plant_params_from_robot, planar_motion_from_robot, true_rewards_from_robot
 
 DEFAULT_PLANT_DT_S = 0.002
+PLANTS = ("physical", "table")
+DEFAULT_PLANT = "physical"
+
+
+def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, *, seed: int = 1) -> Any:
+    """The plant ``kind`` ("physical" or "table") of ``robot``. ``conditions``: ``key=value``
+    strings, a mapping or a ``Conditions``, applied on top of the robot file's ``[plant]``
+    (physical plant only; the table plant takes none: SimError)."""
+    if kind == "table":
+        if conditions:
+            raise SimError("--condition: conditions apply to the physical plant (--plant physical), "
+                           "the table plant reads only the robot file's [plant] table")
+        return Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed,
+                     planar_motion_from_robot(robot))
+    if kind != "physical":
+        raise SimError(f"plant {kind!r}: expected one of: {', '.join(PLANTS)}")
+    from .physical import PhysicalPlant
+
+    return PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
+
+
+def plant_conditions(robot: Robot, conditions: Any = None) -> Any:
+    """The physical plant's ``Conditions`` for ``robot``: its robot file's ``[plant]`` values,
+    with ``conditions`` (strings, a mapping or a ``Conditions``) on top."""
+    from .physical import Conditions, parse_conditions
+    from .physical.conditions import conditions_from_section
+
+    base = conditions_from_section(robot.plant, [a.name for a in robot.actuators], [lb.name for lb in robot.limbs])
+    if isinstance(conditions, Conditions):
+        return _merge(base, conditions)
+    return parse_conditions(conditions or [], base)
+
+
+def _merge(base: Any, top: Any) -> Any:
+    from dataclasses import replace as _replace
+
+    named = {k: dict(v) for k, v in base.named.items()}
+    for k, v in top.named.items():
+        named.setdefault(k, {}).update(v)
+    return _replace(base, values={**base.values, **top.values}, named=named)
 
 
 def cache_dir() -> Path:
@@ -82,6 +127,8 @@ class SimulatedRobot:
     ``SimulatedBoardLike``, e.g. an emulated MCU); by default the host-sim build from
     ``library`` (or built and cached by ``sim_library``), reset with ``seed``. ``board_info``:
     the board description whose ``[i2c] imu_addresses`` wire the IMUs (default host-sim).
+    ``plant``: "physical" (default), "table" or a plant object; ``conditions``: the physical
+    plant's conditions on top of the robot file's (``make_plant``).
     """
 
     def __init__(
@@ -90,7 +137,8 @@ class SimulatedRobot:
         library: Path | None = None,
         *,
         seed: int = 1,
-        plant: Plant | None = None,
+        plant: Any = None,
+        conditions: Any = None,
         plant_dt_s: float = DEFAULT_PLANT_DT_S,
         board: SimulatedBoardLike | None = None,
         board_info: Board | None = None,
@@ -98,10 +146,12 @@ class SimulatedRobot:
         self.robot = robot
         self.board_info = board_info or load_board("host-sim")
         self.board: SimulatedBoardLike = board if board is not None else SimBoard(library or sim_library(robot), seed)
-        if plant is None:
-            plant = Plant(plant_params_from_robot(robot), true_rewards_from_robot(robot), robot.levels, seed,
-                          planar_motion_from_robot(robot))
+        if plant is None or isinstance(plant, str):
+            plant = make_plant(robot, plant or DEFAULT_PLANT, conditions, seed=seed)
+        elif conditions:
+            raise SimError("SimulatedRobot: conditions go with a plant kind, not with a plant object")
         self.plant = plant
+        self.plant_kind = "table" if isinstance(plant, Plant) else "physical"
         addrs = list(self.board_info.i2c.get("imu_addresses", [0x68, 0x69]))
         self.imu_addresses = tuple(addrs[: len(robot.limbs)])
         self.channels = tuple(range(max(a.channel for a in robot.actuators) + 1))

@@ -1,6 +1,8 @@
 """Conditions of a simulated run: supply, air, wear, sensors and world (``key=value``).
 
-Every key, its unit and range is in ``KEYS``. Per-limb and per-actuator keys take
+Every key, its unit and range is in ``KEYS`` (the physical keys of the robot file's
+``[plant]`` schema, ``proleg.robot_plant.PLANT_KEYS``; ``conditions_from_section`` turns a
+robot file's ``[plant]`` values into ``Conditions``). Per-limb and per-actuator keys take
 ``NAME:value`` (a limb or actuator name, its index, ``rear``/``front`` for the first/last
 limb or actuator) or a bare value for all of them; repeat the key for several names
 (``imu_bias_deg=left:3``, ``imu_bias_deg=right:-2``). ``parse_conditions`` turns strings such
@@ -16,6 +18,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ...errors import SimError
+from ...robot_plant import PHYSICAL_KEYS, PLANT_KEYS, PlantKey
 
 
 @dataclass(frozen=True)
@@ -26,28 +29,26 @@ class Key:
     default: float
     per: str | None  # None: one value; "limb" / "actuator": per name
     doc: str
+    spec: PlantKey
+
+    def accepts(self, v: float) -> bool:
+        return self.spec.accepts(v)
+
+    def range_text(self) -> str:
+        return self.spec.range_text()
 
 
-KEYS: dict[str, Key] = {
-    "power": Key("×", 0.2, 2.0, 1.0, None, "heating power factor at the coils (supply voltage² / nominal)"),
-    "supply_v": Key("V", 2.0, 12.0, 7.4, None, "supply voltage across a coil at duty 1 (2S LiPo)"),
-    "supply_ohm": Key("Ω", 0.0, 50.0, 0.0, None, "source resistance shared by all coils (supply sag under load)"),
-    "ambient_c": Key("°C", -10.0, 50.0, 25.0, None, "air and ground temperature"),
-    "convection": Key("×", 0.2, 5.0, 1.0, None, "convective heat transfer factor (draught > 1, enclosure < 1)"),
-    "fatigue_cycles": Key("cycles", 0.0, 1e6, 0.0, None, "transformation cycles the coils have already made"),
-    "fatigue_speedup": Key("×", 1.0, 1e5, 1.0, None, "each cycle made during the run counts this many times"),
-    "coil_mismatch": Key("fraction", 0.0, 0.5, 0.0, None,
-                         "wire-length mismatch: first coil +m, last coil −m (resistance and mass)"),
-    "power_scale": Key("×", 0.2, 2.0, 1.0, "actuator", "heating power factor of one coil (contact resistance)"),
-    "overlap_mm": Key("mm", 0.0, 30.0, 8.0, "actuator", "how far a coil reaches past its half of the body (coupling)"),
-    "imu_offset_deg": Key("°", -20.0, 20.0, 0.0, "limb", "IMU mounting tilt on the limb"),
-    "imu_bias_deg": Key("°", -20.0, 20.0, 0.0, "limb", "IMU accelerometer bias, as an angle"),
-    "imu_noise_deg": Key("° rms", 0.0, 5.0, 0.0, None, "white noise on every IMU angle sample"),
-    "incline_deg": Key("°", -12.0, 12.0, 0.0, None, "ground slope, rising towards +x"),
-    "psi_star_shift_deg": Key("°", -15.0, 15.0, 0.0, "limb", "true critical angle − configured ψ*"),
-    "friction": Key("×", 0.2, 3.0, 1.0, None, "scale of every friction coefficient (ground)"),
-    "mass_g": Key("g", 1.0, 20.0, 3.3, None, "robot mass"),
-}
+def _key(spec: PlantKey) -> Key:
+    default = spec.default_for("physical")
+    assert default is not None
+    # the physical plant has one supply (a per-coil one in a robot file becomes power_scale)
+    per = None if spec.name == "supply_v" else spec.per or None
+    return Key(spec.unit, spec.lo, spec.hi, default, per, spec.doc, spec)
+
+
+# The one schema lives with the robot file's [plant] table (proleg.robot_plant): the same keys,
+# units and ranges for the robot file and for ``--condition``.
+KEYS: dict[str, Key] = {name: _key(PLANT_KEYS[name]) for name in PHYSICAL_KEYS}
 
 
 @dataclass(frozen=True)
@@ -100,8 +101,8 @@ def _number(key: str, text: str) -> float:
         v = float(text)
     except ValueError:
         raise SimError(f"condition {key}: expected a number in {spec.unit}, got {text!r}") from None
-    if not math.isfinite(v) or not spec.lo <= v <= spec.hi:
-        raise SimError(f"condition {key}: {v:g} is outside {spec.lo:g}..{spec.hi:g} {spec.unit}")
+    if not math.isfinite(v) or not spec.accepts(v):
+        raise SimError(f"condition {key}: {v:g} is outside {spec.range_text()}")
     return v
 
 
@@ -142,7 +143,36 @@ def describe_keys() -> str:
     out = []
     for k, s in KEYS.items():
         per = f" (per {s.per}: NAME:value)" if s.per else ""
-        out.append(f"{k:<20} {s.unit:<9} {s.lo:g}..{s.hi:g} (default {s.default:g}){per}  {s.doc}")
+        out.append(f"{k:<20} {s.range_text():<18} default {s.default:g}{per}  {s.doc}")
     return "\n".join(out)
 
 
+
+
+def conditions_from_section(section: Any, actuators: Sequence[str], limbs: Sequence[str]) -> Conditions:
+    """The physical keys a robot file's checked ``[plant]`` table gives, as ``Conditions``
+    (``section``: ``proleg.robot_plant.PlantSection``). A per-actuator ``supply_v`` list
+    becomes the highest voltage plus a per-coil ``power_scale`` of (V_j / V_max)²."""
+    values: dict[str, float] = {}
+    named: dict[str, dict[str, float]] = {}
+    given = dict(getattr(section, "physical", {}) or {})
+    supply = given.pop("supply_v", None)
+    if isinstance(supply, tuple):
+        top = max(supply)
+        values["supply_v"] = top
+        scale = named.setdefault("power_scale", {})
+        for j, v in enumerate(supply):
+            scale[actuators[j]] = (v / top) ** 2
+    elif supply is not None:
+        values["supply_v"] = float(supply)
+    for key, v in given.items():
+        per = KEYS[key].per
+        if per is None:
+            values[key] = float(v)  # type: ignore[arg-type]
+            continue
+        names = actuators if per == "actuator" else limbs
+        vals = v if isinstance(v, tuple) else (float(v),) * len(names)
+        slot = named.setdefault(key, {})
+        for name, x in zip(names, vals):
+            slot[name] = slot.get(name, 1.0) * x if key == "power_scale" else x
+    return Conditions(values=values, named=named)

@@ -445,6 +445,28 @@ class PhysicalPlant:
         self._drift_on[j] = 0.0
         self._apply_drift(j, 0.0)
 
+    # -- what the coils can reach -----------------------------------------------------------------
+    def steady_coil_temperature_c(self, duty: float) -> list[float]:
+        """Each coil's steady temperature at ``duty`` held forever, the body at ambient (its own
+        heating neglected), one coil drawing (no sag from the others): what the supply can do."""
+        v = self._supply
+        out = []
+        for j in range(self._na):
+            r = self._R[j]
+            vv = v * r / (r + self._rsrc) if self._rsrc > 0.0 else v
+            power = duty * vv * vv / r * self._pscale[j] * self._pfactor[j] * (1.0 if self._alive[j] else 0.0)
+            out.append(self._amb + power / (self._hA[j] + self._G[j]))
+        return out
+
+    @property
+    def alive(self) -> tuple[bool, ...]:
+        """Per actuator: False once ``kill_actuator`` was called on it."""
+        return tuple(self._alive)
+
+    def transformation_c(self) -> list[tuple[float, float]]:
+        """Each coil's (As, Af) now, fatigue and drift shifts included."""
+        return [(h.as_c + h.shift_c, h.af_c + h.shift_c) for h in self._hyst]
+
     # -- observation ----------------------------------------------------------------------------
     def limb_truth(self, i: int) -> tuple[float, float]:
         """(angle the limb's IMU senses in degrees, its rate in °/s)."""

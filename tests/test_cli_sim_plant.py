@@ -1,0 +1,112 @@
+"""``proleg sim``'s plant options: --plant, --condition, --measure-matrix, the robot file's
+[plant] conditions, and ``speed_mm_s`` in --json."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from proleg.cli.main import main
+from proleg.robot import load_robot
+from proleg.sim.closed_loop import SimulatedRobot, plant_conditions
+from proleg.sim.physical import PhysicalPlant
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+R1 = ROBOTS / "paper-r1.toml"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def test_the_physical_plant_is_the_default_and_json_adds_speed(capsys):
+    rc, out, _ = run(capsys, "sim", str(R1), "--duration", "20", "--json")
+    report = json.loads(out)
+    assert rc == 0 and report["faults"] == []
+    # the physical plant's R1 makes ~1.5 mm per cycle; the table plant's matrix says 3 × 4 mm
+    assert 0.5 < report["mean_cycle_mm"] < 3.0
+    assert report["speed_mm_s"] == pytest.approx(report["displacement_mm"] / report["duration_s"])
+    for field in ("faults", "cycles", "displacement_mm", "duration_s", "states_reached", "true_transitions"):
+        assert field in report
+
+
+def test_plant_table_is_the_lookup_of_the_robot_matrix(capsys):
+    rc, out, _ = run(capsys, "sim", str(R1), "--plant", "table", "--duration", "10", "--json")
+    report = json.loads(out)
+    assert rc == 0 and report["mean_cycle_mm"] == pytest.approx(12.0)  # (1 + 1 + 1) × step_mm 4
+
+
+def test_a_condition_changes_the_run(capsys):
+    _, base, _ = run(capsys, "sim", str(R1), "--duration", "20", "--json")
+    _, hot, _ = run(capsys, "sim", str(R1), "--duration", "20", "--json", "--condition", "incline_deg=8",
+                    "--condition", "friction=0.5")
+    assert json.loads(hot)["displacement_mm"] != pytest.approx(json.loads(base)["displacement_mm"], abs=0.05)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--condition", "speed=3"], "condition 'speed': unknown key"),
+    (["--condition", "power=9"], "condition power: 9 is outside [0.2, 2] ×"),
+    (["--condition", "imu_bias_deg=middle:2"], "no limb 'middle'"),
+    (["--plant", "table", "--condition", "power=0.9"], "conditions apply to the physical plant"),
+])
+def test_a_bad_condition_is_one_line_without_traceback(capsys, args, words):
+    rc, out, err = run(capsys, "sim", str(R1), "--duration", "1", *args)
+    assert rc != 0 and words in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_condition_help_lists_every_key_with_its_range(capsys):
+    from proleg.sim.physical import CONDITION_KEYS
+
+    rc, out, _ = run(capsys, "sim", str(R1), "--condition", "help")
+    assert rc == 0
+    for key, spec in CONDITION_KEYS.items():
+        line = next(x for x in out.splitlines() if x.startswith(key + " "))
+        assert spec.range_text() in line
+
+
+def test_measure_matrix_json_has_states_matrix_in_mm_and_sample_counts(capsys):
+    rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--json")
+    m = json.loads(out)
+    assert rc == 0 and m["states"] == ["00", "01", "10", "11"] and m["units"] == "mm"
+    paper = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]
+    for a in range(4):
+        for b in range(4):
+            if a != b:
+                assert m["samples"][a][b] >= 1
+                if paper[a][b]:
+                    assert m["matrix"][a][b] * paper[a][b] > 0, (a, b)
+
+
+def test_the_robot_file_plant_table_sets_conditions_and_the_command_line_goes_on_top(tmp_path):
+    text = R1.read_text() + "\n[plant]\npower = 0.8\nimu_bias_deg = [1.0, -2.0]\nsupply_v = [7.0, 6.0]\n"
+    path = tmp_path / "r1-tired.toml"
+    path.write_text(text)
+    robot = load_robot(path)
+    cond = plant_conditions(robot, ["power=1.1", "imu_bias_deg=right:3"])
+    names = [lb.name for lb in robot.limbs]
+    acts = [a.name for a in robot.actuators]
+    assert cond.get("power") == 1.1
+    assert cond.for_index("imu_bias_deg", 0, names) == 1.0 and cond.for_index("imu_bias_deg", 1, names) == 3.0
+    assert cond.get("supply_v") == 7.0
+    assert cond.for_index("power_scale", 1, acts) == pytest.approx((6.0 / 7.0) ** 2)
+
+
+def test_a_physical_key_out_of_range_in_the_robot_file_is_one_line(tmp_path):
+    from proleg.errors import RobotFileError
+
+    path = tmp_path / "bad.toml"
+    path.write_text(R1.read_text() + "\n[plant]\nincline_deg = 30\n")
+    with pytest.raises(RobotFileError, match=r"bad\.toml: plant\.incline_deg: expected a number in \[-12, 12\] °, got 30$"):
+        load_robot(path)
+
+
+def test_simulated_robot_takes_the_plant_choice():
+    robot = load_robot(R1)
+    assert isinstance(SimulatedRobot(robot).plant, PhysicalPlant)
+    assert SimulatedRobot(robot, plant="table").plant_kind == "table"
+    sim = SimulatedRobot(robot, conditions=["ambient_c=30"])
+    assert sim.plant.conditions.get("ambient_c") == 30.0

@@ -1,0 +1,94 @@
+"""The claim benchmark's pieces (proleg.report.claim, proleg.sim.openloop.tune_open_loop_robust):
+the grid covers every mode singly and in pairs at two strengths, the robust tuner cannot be won
+by a knife-edge timing, and a condition the coils cannot physically meet is explained and ends
+with a firmware fault and cold coils."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from proleg.report import claim
+from proleg.robot import load_robot
+from proleg.sim.openloop import OpenLoopDrive, tune_open_loop_robust
+from proleg.sim.physical import CONDITION_KEYS, parse_conditions
+
+R1 = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
+
+
+def test_the_grid_has_every_mode_singly_at_two_strengths_and_pairs_and_at_least_40_points():
+    points = claim.grid()
+    assert len(points) >= 40
+    singles = {(p.modes[0], p.strength) for p in points if len(p.modes) == 1}
+    assert singles == {(m, s) for m in claim.MODES for s in ("mild", "strong")}
+    pairs = [p for p in points if len(p.modes) == 2]
+    assert len(pairs) >= 2 * 10 and {p.strength for p in pairs} == {"mild", "strong"}
+    for p in points:
+        parse_conditions(p.conditions)  # every condition string is valid
+
+
+def test_every_condition_key_that_is_a_drift_or_error_is_in_the_grid():
+    used = {c.split("=")[0] for p in claim.grid() for c in p.conditions}
+    # supply_v and fatigue_speedup are covered by power and fatigue_cycles
+    assert set(CONDITION_KEYS) - used <= {"supply_v", "fatigue_speedup"}
+    assert {f.split(":")[0] for p in claim.grid() for f in p.faults} >= {"drift", "dead-actuator"}
+
+
+class _FakePlant:
+    """Moves at a speed set by the drive's first strength, except at one knife-edge strength
+    that is very fast at exactly nominal power and backwards 10 % off it."""
+
+    def __init__(self, power: float):
+        self.power = power
+        self.displacement_mm = 0.0
+        self.time_s = 0.0
+
+        class _A:
+            channel = 0
+
+        class _P:
+            actuators = (_A(),)
+
+        self.params = _P()
+
+    def step(self, dt: float, duties: list[float]) -> None:
+        s = duties[0]
+        if s == 0.0:
+            return
+        if abs(s - 0.7) < 1e-9:
+            rate = 10.0 if abs(self.power - 1.0) < 1e-9 else -1.0
+        else:
+            rate = s
+        self.displacement_mm += rate * dt
+        self.time_s += dt
+
+
+def test_the_robust_tuner_scores_the_worst_power_so_a_knife_edge_does_not_win():
+    res = tune_open_loop_robust(_FakePlant, (0,), +1, max_duty=0.8, run_s=4.0, dt_s=0.05, budget=200)
+    assert res.drive.strength[0] == pytest.approx(0.8)
+    assert res.worst_speed_mm_s == pytest.approx(min(res.speed_by_power.values()))
+    assert set(res.speed_by_power) == {0.9, 1.0, 1.1}
+    assert res.evaluations <= 200
+
+
+def test_the_robust_tuner_keeps_to_its_budget():
+    res = tune_open_loop_robust(_FakePlant, (0,), +1, run_s=2.0, dt_s=0.1, budget=7)
+    assert res.evaluations <= 7
+
+
+@pytest.mark.slow
+def test_a_supply_that_cannot_heat_the_coils_is_explained_and_ends_in_a_fault_with_cold_coils():
+    robot = load_robot(R1)
+    point = claim.GridPoint("collapse", ("supply collapse",), "strong", ("power=0.2",))
+    possible, why = claim.physically_possible(robot, point)
+    assert not possible and "cannot transform far enough" in why and "°C" in why
+    fb = claim.feedback_run(robot, point, duration_s=20.0)
+    assert not fb.completed and fb.fault and fb.coil_max_end_c < 50.0
+
+
+def test_an_open_loop_run_reports_why_it_did_not_complete():
+    robot = load_robot(R1)
+    idle = OpenLoopDrive((0.0, 0.0), (0.5, 0.5), (2.0, 2.0), (0.0, 1.0))
+    out = claim.open_loop_run(robot, idle, claim.NOMINAL, duration_s=6.0)
+    assert not out.completed and out.note.startswith("stalled") and out.fault == ""
