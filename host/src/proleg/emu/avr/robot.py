@@ -20,7 +20,7 @@ def AvrEmuRobot(  # noqa: N802 - a factory that reads like the class it returns
     elf: Path | None = None,
     *,
     seed: int = 1,
-    plant: Plant | None = None,
+    plant: Plant | str | None = None,
     plant_dt_s: float = DEFAULT_PLANT_DT_S,
     board: Board | None = None,
 ) -> SimulatedRobot:
