@@ -131,7 +131,7 @@ C_TESTS = {
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c"], ["gait_table.c"], []),
     "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c"], ["gait_table.c"], []),
     "test_seq_edges.c": ("big", ["seq.c", "psi.c"], ["gait_table.c"], []),
-    "test_sim_mpu6050.c": ("r1-fast", ["mpu6050.c"], [SIM / "sim_mpu6050.c"], ["-DFAKE_HAL_SIM_MPU"]),
+    "test_sim_mpu6050.c": ("r1-fast", ["mpu6050.c", "imubus.c"], [SIM / "sim_mpu6050.c"], ["-DFAKE_HAL_SIM_MPU"]),
 }
 
 

@@ -226,6 +226,9 @@ def _build(args: argparse.Namespace):
     result = build(robot, board, args.out, objective=args.objective, max_transitions=args.max_transitions)
     print(f"built {robot.name} for {board.name}: {result.artifact}")
     print(f"  {result.size_report()}")
+    if result.fit is not None:
+        for line in result.fit.lines():
+            print(f"  {line}")
     for d, gaits in result.gaits.items():
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
         print(f"  {d} gaits: {shown}")

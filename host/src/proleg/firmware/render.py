@@ -30,6 +30,7 @@ from ..errors import BoardError, BuildError
 from ..paths import home, templates_dir
 from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER
 from .families import Family, load_family
+from .placement import place_imus
 
 Q14 = 1 << 14
 #: LOAD_GAIT capacity (the protocol's MAX_GAIT_STEPS).
@@ -71,6 +72,12 @@ class LimbPart:
     state_bytes: int
     limb_actuator: list[int]
     imu_addr: list[str]
+    imu_bus: list[int]
+    imu_mux: list[str]  # 0x00u: wired directly
+    imu_channel: list[int]
+    n_i2c_buses: int
+    mux_used: bool
+    placement: list[str]  # one line per limb, for the header comment
     thresholds: list[list[tuple[int, int, int, int]]]  # per limb: (up_c, up_s, lo_c, lo_s), padded
     psi_cdeg: list[list[int]]
     hyst_cdeg: list[int]
@@ -248,13 +255,9 @@ def _thresholds(robot: Any, limb: Any, max_thr: int) -> list[tuple[int, int, int
     return rows + [(0, 0, 0, 0)] * (max_thr - len(rows))
 
 
-def _limb_part(robot: Any, board: BoardPart) -> LimbPart:
+def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     limbs, actuators = list(robot.limbs), list(robot.actuators)
-    if len(limbs) > len(board.imu_addresses):
-        raise BuildError(
-            f"robot {robot.name}: {len(limbs)} limbs but board {board.board_name} has "
-            f"{len(board.imu_addresses)} IMU addresses"
-        )
+    placements = place_imus(robot, raw_board)
     for a in actuators:
         if not 0 <= a.channel < len(board.pins):
             raise BuildError(
@@ -278,7 +281,13 @@ def _limb_part(robot: Any, board: BoardPart) -> LimbPart:
         state_type="uint8_t" if n_states <= 256 else "uint16_t",
         state_bytes=1 if n_states <= 256 else 2,
         limb_actuator=[act_index[limb.actuator] for limb in limbs],
-        imu_addr=[f"0x{board.imu_addresses[i]:02X}u" for i in range(len(limbs))],
+        imu_addr=[f"0x{p.address:02X}u" for p in placements],
+        imu_bus=[p.bus for p in placements],
+        imu_mux=[f"0x{p.mux or 0:02X}u" for p in placements],
+        imu_channel=[p.channel or 0 for p in placements],
+        n_i2c_buses=max(p.bus for p in placements) + 1,
+        mux_used=any(p.mux is not None for p in placements),
+        placement=[p.describe() for p in placements],
         thresholds=[_thresholds(robot, limb, max_thr) for limb in limbs],
         psi_cdeg=[[round(p * 100) for p in limb.psi_star_deg] + [0] * (max_thr - len(limb.psi_star_deg))
                   for limb in limbs],
@@ -395,7 +404,7 @@ def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:
 def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], board: Any) -> RenderContext:
     """Everything the templates need, checked (BuildError when the robot does not fit)."""
     board_part = _board_part(board)
-    limb_part = _limb_part(robot, board_part)
+    limb_part = _limb_part(robot, board_part, board)
     control_part = _control_part(robot)
     gait_part = _gait_part(robot, gaits_by_direction, limb_part.n_states)
     robot_sha = _file_sha256(getattr(robot, "path", None))
