@@ -30,6 +30,7 @@ def _feedback_cycle_mm(open_target, drift: bool) -> float:
 
 
 @pytest.mark.plant
+@pytest.mark.robot("paper-r1")
 def test_under_sma_drift_psi_feedback_keeps_the_displacement_per_cycle_while_open_loop_timing_degrades(
     open_target, record_property
 ):
@@ -176,6 +177,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
 
 
 @pytest.mark.plant
+@pytest.mark.robot("paper-r1")
 def test_several_simulated_boards_run_in_one_process_independently(open_target):
     a = open_target("paper-r1")
     b = open_target("paper-r2")

@@ -255,7 +255,9 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
-    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states)
+    act_index = {a.name: j for j, a in enumerate(actuators)}
+    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
+                          [act_index[limb.actuator] for limb in limbs], units)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant)
 
 

@@ -30,7 +30,7 @@ from ..paths import home, templates_dir
 from ..robot import Robot
 from .boards import Board
 from .fit import Fit, check_fit
-from .gaits import firmware_gaits
+from .gaits import firmware_gaits, gait_warnings
 from .placement import place_imus
 
 __all__ = ["MANIFEST", "BuildResult", "build", "check_buildable", "firmware_gaits", "render_project"]
@@ -50,6 +50,7 @@ class BuildResult:
     gait_table_hash: str
     gaits: dict  # {"+x": (Gait, ...), "-x": (...)}
     fit: Fit | None = None  # IMU placement, I2C time and size estimates checked before compiling
+    warnings: tuple[str, ...] = ()  # feasibility problems of gaits other than gait 0 (gait_warnings)
 
     def size_report(self) -> str:
         b = self.board
@@ -150,6 +151,7 @@ def build(
         raise BuildError(f"{out_dir} exists and is not a proleg build directory: refusing to replace it")
     gaits = firmware_gaits(robot, objective, max_transitions)
     fit = check_fit(robot, board, gaits)
+    warnings = tuple(gait_warnings(robot, gaits))
     files = render_project(robot, board, gaits)
 
     out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -191,7 +193,7 @@ def build(
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return BuildResult(out_dir, out_dir / board.artifact, board, flash_used, ram_used, digest, gaits, fit)
+    return BuildResult(out_dir, out_dir / board.artifact, board, flash_used, ram_used, digest, gaits, fit, warnings)
 
 
 def _make(project: Path, jobs: int) -> None:

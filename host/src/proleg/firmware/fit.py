@@ -51,7 +51,7 @@ def table_bytes(robot: Any, gaits: Mapping[str, Sequence[Any]]) -> int:
     state_bytes = 1 if n <= 256 else 2
     rows = gait_table_rows(gaits)
     steps = sum(len(st) for _, _, st in rows)
-    index = 4 * max(1, len(rows))
+    index = 10 * max(1, len(rows))  # first, length; entry first, length, join
     transitions = (n * n + 7) // 8 if n <= BITMAP_MAX_STATES else 4 * max(1, len(robot.transitions.src))
     return steps * state_bytes + index + transitions
 

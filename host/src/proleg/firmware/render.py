@@ -124,6 +124,10 @@ class GaitPart:
     n_transitions: int
     labels: list[str]
     gait_hash: str
+    entry_steps: list[int]  # every gait's entry path from rest (rest and join state excluded)
+    entry_first: list[int]
+    entry_len: list[int]
+    entry_join: list[int]  # the gait step the entry path joins
 
 
 @dataclass(frozen=True)
@@ -350,12 +354,41 @@ def _transition_table(src: list[int], dst: list[int], n_states: int) -> tuple[bo
     return False, [], [f"{e}UL" for e in sorted(a * n_states + b for a, b in zip(src, dst))]
 
 
-def _gait_hash(n_states: int, rows: list[tuple[int, str, tuple[int, ...]]], src: list[int], dst: list[int]) -> int:
-    """Covers exactly what gait_table.c carries: steps, gaits, allowed transitions."""
+def entry_tables(robot: Any, rows: list[tuple[int, str, tuple[int, ...]]]
+                 ) -> tuple[list[int], list[int], list[int], list[int]]:
+    """Per gait, the way in from rest (proleg.gait.feasibility.entry_path): the states
+    between rest and the join state, concatenated, their offset and count, and the join
+    step. A gait with no way in keeps the old start (step 0, no entry states); the build
+    refuses such a gait 0 (build.check_gaits)."""
+    from ..errors import GaitError
+    from ..gait.feasibility import entry_path
+
+    steps: list[int] = []
+    first, length, join = [], [], []
+    for _, _, st in rows:
+        first.append(len(steps))
+        try:
+            path = entry_path(robot, st)
+        except GaitError:
+            length.append(0)
+            join.append(0)
+            continue
+        inner = list(path.states[1:-1])
+        steps.extend(inner)
+        length.append(len(inner))
+        join.append(path.gait_step)
+    return steps, first, length, join
+
+
+def _gait_hash(n_states: int, rows: list[tuple[int, str, tuple[int, ...]]], src: list[int], dst: list[int],
+               entry: tuple[list[int], list[int], list[int], list[int]] | None = None) -> int:
+    """Covers exactly what gait_table.c carries: steps, gaits, entry paths, allowed transitions."""
     gh = hashlib.sha256()
     gh.update(f"states={n_states};".encode())
     for code, _, st in rows:
         gh.update(f"g{code}:{','.join(map(str, st))};".encode())
+    if entry is not None and (entry[0] or any(entry[3])):  # gaits entered from rest off their step 0
+        gh.update(("e:" + ";".join(",".join(map(str, part)) for part in entry)).encode())
     gh.update(("t:" + ",".join(f"{a}>{b}" for a, b in zip(src, dst))).encode())
     return int.from_bytes(gh.digest()[:4], "big")
 
@@ -376,6 +409,7 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
     src = [int(x) for x in table.src]
     dst = [int(x) for x in table.dst]
     use_bitmap, bitmap, edges = _transition_table(src, dst, n_states)
+    entry = entry_tables(robot, rows)
     return GaitPart(
         selection=_selection_text(gaits_by_direction),
         rows=rows,
@@ -389,7 +423,11 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
         edges=edges,
         n_transitions=len(src),
         labels=[table.label(i) for i in range(n_states)] if n_states <= 64 else [],
-        gait_hash=f"0x{_gait_hash(n_states, rows, src, dst):08X}",
+        gait_hash=f"0x{_gait_hash(n_states, rows, src, dst, entry):08X}",
+        entry_steps=entry[0],
+        entry_first=entry[1],
+        entry_len=entry[2],
+        entry_join=entry[3],
     )
 
 
