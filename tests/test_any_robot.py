@@ -168,3 +168,35 @@ def test_hil_tests_run_on_the_robot_given_with_robot():
     gait_ids = [i for i in ids if "gait_engine_predicts" in i]
     assert gait_ids and all("inchworm-3" in i for i in gait_ids)
     assert not any("paper-r" in i for i in ids)
+
+
+def _worm(tmp_path: Path, n: int) -> Path:
+    """An n-limb binary worm (one coil per limb, single-limb transitions, the example
+    robots' sliding rule), its 2^n-state table in a CSV file."""
+    parts = [f'[robot]\nname = "worm-{n}"\n']
+    parts += [f'[[limb]]\nname = "l{i + 1}"\npsi_star_deg = [20.0]\nactuator = "a{i + 1}"\n' for i in range(n)]
+    parts += [f'[[actuator]]\nname = "a{i + 1}"\nchannel = {i}\n' for i in range(n)]
+    parts += ['[transitions]\nfile = "worm.csv"\ndefault_duration_s = 0.8\n',
+              "[control]\ntick_hz = 250\ntelemetry_hz = 10\nhold_duty = 0.0\n"]
+    rows = ["from,to,reward"]
+    for a in range(1 << n):
+        grip = [1 - ((a >> (n - 1 - j)) & 1) for j in range(n)]
+        for i in range(n):
+            b = a ^ (1 << (n - 1 - i))
+            d = sum(grip[i + 1:]) - sum(grip[:i])
+            d = d if b > a else -d
+            rows.append(f"{a},{b},{(d > 0) - (d < 0)}")
+    (tmp_path / "worm.csv").write_text("\n".join(rows) + "\n")
+    path = tmp_path / "worm.toml"
+    path.write_text("\n".join(parts))
+    return path
+
+
+def test_eight_binary_limbs_build_for_the_bluepill_and_the_nano_says_why_not(tmp_path):
+    robot = load_robot(_worm(tmp_path, 8))
+    assert robot.n_states == 256
+    result = build(robot, load_board("bluepill-f103"), tmp_path / "bp")
+    assert result.flash_used < 65536 and len(result.fit.placements) == 8
+    assert result.fit.flash_estimate is not None and abs(result.fit.flash_estimate - result.flash_used) < 4096
+    with pytest.raises(BuildError, match=r"actuator 'a5' on PWM channel 4, but board arduino-nano has 4 channels"):
+        build(robot, load_board("arduino-nano"), tmp_path / "nano")

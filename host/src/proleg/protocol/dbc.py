@@ -69,6 +69,9 @@ def build_database(nodes: Sequence[int] = (0,), base: int = 0x100) -> Database:
     """The cantools database of proleg's frames for robots ``nodes`` on one bus."""
     if not nodes:
         raise LinkError("dbc: at least one node id is needed")
+    repeated = sorted({n for n in nodes if list(nodes).count(n) > 1})
+    if repeated:  # one BU_ node and one message set per robot: a repeat would name a node twice
+        raise LinkError(f"dbc: node id {repeated[0]} given more than once (each robot on the bus once)")
     messages: list[Message] = []
     suffix = len(nodes) > 1
     for node in nodes:
