@@ -1,11 +1,17 @@
 """Hardware-in-the-loop tests: the simulated board by default, a real board on request.
 
-    pytest hil_tests                                   # simulated boards, every example robot
+    pytest hil_tests                                   # simulated boards, the paper's robots
+    pytest hil_tests --robot robots/inchworm-3.toml    # one robot, on the simulated board
+    pytest hil_tests --robot robots/inchworm-3.toml --board host-sim
     pytest hil_tests --target serial:/dev/ttyUSB0 --robot robots/paper-r1.toml --board arduino-nano
 
 The tests talk to the robot only through ``proleg.link.RobotClient`` (the same client the
 console uses). Tests marked ``plant`` also need the simulated plant's ground truth
 (displacement, PWM at tick resolution, injected faults) and are skipped on hardware.
+``--robot`` and ``--board`` are honoured on every target: given a robot, every test runs
+on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
+``robot("paper-r1")``) is skipped for another. On the simulator ``--board`` names a
+simulated board (``proleg.sim.simulators.SIMULATORS``; default host-sim).
 """
 
 from __future__ import annotations
@@ -27,11 +33,53 @@ PAPER_ROBOTS = ("paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator")
 def pytest_addoption(parser):
     group = parser.getgroup("proleg hardware-in-the-loop")
     group.addoption("--target", default="sim", help="'sim' (default) or 'serial:PORT' for a real board")
-    group.addoption("--robot", default=None, help="robot file flashed on the real board")
-    group.addoption("--board", default=None, help="board of the real robot (e.g. arduino-nano)")
+    group.addoption("--robot", default=None, help="robot file under test (on a real board: the one flashed)")
+    group.addoption("--board", default=None,
+                    help="board: of the real robot (e.g. arduino-nano), or the simulated one (default host-sim)")
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "robot(name): shows that robot's own behaviour (skipped for another --robot)")
+    config.addinivalue_line("markers", "gait_cases(opposing): parametrised over the robots' firmware gaits")
+
+
+def robot_paths(config) -> list[Path]:
+    """The robots under test: --robot, else the paper's robots."""
+    given = config.getoption("--robot")
+    return [Path(given)] if given else [ROBOTS / f"{name}.toml" for name in PAPER_ROBOTS]
+
+
+def pytest_generate_tests(metafunc):
+    """Tests marked gait_cases(opposing) run once per firmware gait of the robots under
+    test whose steps do (or do not) raise one limb while lowering another."""
+    mark = metafunc.definition.get_closest_marker("gait_cases")
+    if mark is None:
+        return
+    from proleg.states import opposing_steps
+
+    opposing = mark.kwargs.get("opposing", False)
+    xfail = mark.kwargs.get("xfail", {})  # (robot name, direction) -> reason: a known strict xfail
+    cases = []
+    for path in robot_paths(metafunc.config):
+        robot = load_robot(path)
+        for direction, gaits in firmware_gaits(robot).items():
+            for i, gait in enumerate(gaits):
+                if bool(opposing_steps(gait.states, robot.levels)) == opposing:
+                    walk = "-".join(robot.transitions.label(s) for s in gait.states)
+                    reason = xfail.get((robot.name, direction))
+                    marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
+                    cases.append(pytest.param(str(path), direction, i, id=f"{robot.name}{direction}:{walk}",
+                                              marks=marks))
+    metafunc.parametrize("robot_name,direction,gait_index", cases)
 
 
 def pytest_collection_modifyitems(config, items):
+    given = config.getoption("--robot")
+    name = load_robot(given).name if given else None
+    for item in items:
+        mark = item.get_closest_marker("robot")
+        if name and mark and mark.args and mark.args[0] != name:
+            item.add_marker(pytest.mark.skip(reason=f"shows robot {mark.args[0]}'s behaviour, not {name}'s"))
     if config.getoption("--target") == "sim":
         return
     skip = pytest.mark.skip(reason="needs the simulated plant's ground truth")
@@ -68,15 +116,16 @@ class Target:
                 return out
 
 
-def _open_sim(robot: Robot, seed: int = 1, plant: str | None = None) -> Target:
+def _open_sim(robot: Robot, seed: int = 1, board: str | None = None, plant: str | None = None) -> Target:
     from proleg.link.sim_link import SimLink
-    from proleg.sim.closed_loop import SimulatedRobot
+    from proleg.sim.simulators import open_simulated
 
-    sim = SimulatedRobot(robot, seed=seed, plant=plant)  # None: the default (physical) plant
-    client = RobotClient(SimLink(sim, description=f"simulated {robot.name}"),
+    board = board or "host-sim"
+    sim = open_simulated(robot, board, seed=seed, plant=plant)  # plant None: the default (physical)
+    client = RobotClient(SimLink(sim, description=f"simulated {robot.name} on {board}"),
                          max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
-    return Target(robot, load_board("host-sim"), client, sim)
+    return Target(robot, load_board(board) if board == "host-sim" else sim.board_info, client, sim)
 
 
 def _open_serial(config, robot: Robot) -> Target:
@@ -96,14 +145,18 @@ def open_target(request):
     """Factory: ``open_target("paper-r1")`` → a connected Target (closed after the test);
     ``plant="table"`` on the simulator for tests where the lookup plant is the point.
 
-    On hardware, the robot is the one given with --robot, whatever the test asks for;
-    tests that need a particular robot's behaviour are marked ``plant``."""
+    The robot is the one given with --robot, whatever the test asks for, on every target;
+    without --robot, the simulator runs the robot the test names (a name in robots/ or
+    a robot file's path)."""
     config = request.config
     opened: list[Target] = []
 
     def open_(robot_name: str = "paper-r1", seed: int = 1, plant: str | None = None) -> Target:
         if config.getoption("--target") == "sim":
-            t = _open_sim(load_robot(ROBOTS / f"{robot_name}.toml"), seed, plant)
+            given = config.getoption("--robot")
+            path = Path(given) if given else (
+                Path(robot_name) if robot_name.endswith(".toml") else ROBOTS / f"{robot_name}.toml")
+            t = _open_sim(load_robot(path), seed, config.getoption("--board"), plant)
         else:
             path = config.getoption("--robot")
             if not path:

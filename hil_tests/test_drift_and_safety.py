@@ -23,6 +23,7 @@ CLAIM_POINTS = (
 
 @pytest.mark.plant
 @pytest.mark.slow
+@pytest.mark.robot("paper-r1")
 def test_psi_feedback_keeps_walking_under_drift_where_the_best_open_loop_timing_does_not(record_property):
     """The central claim at a handful of the benchmark's grid points, on the physical plant:
     ψ-feedback firmware completes every one without a fault at ≥ 75 % of its nominal speed;
@@ -163,6 +164,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
 
 
 @pytest.mark.plant
+@pytest.mark.robot("paper-r1")
 def test_several_simulated_boards_run_in_one_process_independently(open_target):
     a = open_target("paper-r1")
     b = open_target("paper-r2")

@@ -266,8 +266,13 @@ def test_more_limbs_than_imu_addresses_is_a_clear_error(tmp_path, parent):
          + "".join("  [" + ", ".join("1" if j == (i + 1) % 8 else "0" for j in range(8)) + "],\n" for i in range(8))
          + "]"),
     )
-    with pytest.raises(BuildError, match=r"3 limbs, each with an IMU, but board host-sim has 2 IMU addresses .*\(0x68, 0x69\)"):
-        build(load_robot(robot), load_board("host-sim"), parent / "fw")
+    one_bus = tmp_path / "one-bus.toml"
+    text = (ROOT / "boards" / "host-sim.toml").read_text(encoding="utf-8")
+    text = text[: text.index("[[i2c.bus]]")] + '[[i2c.bus]]\nname = "sim0"\nimu_addresses = [0x68, 0x69]\n' + text[text.index("[pwm]") - 1 :]
+    one_bus.write_text(text, encoding="utf-8")
+    with pytest.raises(BuildError, match=r"3 limbs, each with an IMU, but board host-sim can host at most 2 IMUs "
+                                         r"\(bus sim0: 0x68/0x69, no multiplexer\)"):
+        build(load_robot(robot), load_board(one_bus), parent / "fw")
     assert_nothing_left(parent)
 
 

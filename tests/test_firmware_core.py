@@ -119,7 +119,16 @@ def _big():
     return robot, {"+x": [_gait(0, 1, 0)], "-x": []}, board
 
 
-CONFIGS = {"r1-fast": _r1_fast, "r1-1act": _r1_one_actuator, "multi": _multi_level, "big": _big}
+def _inchworm_entry():
+    """robots/inchworm-3.toml with gaits off the rest state (entry paths, test_seq_entry.c)."""
+    from proleg.robot import load_robot
+
+    robot = load_robot(Path(__file__).resolve().parents[1] / "robots" / "inchworm-3.toml")
+    board = dict(SIM_BOARD, i2c={"imu_addresses": [0x68, 0x69, 0x6A]})
+    return robot, {"+x": [_gait(3, 7, 3), _gait(7, 3, 7)], "-x": [_gait(1, 5, 1)]}, board
+
+
+CONFIGS = {"inch-entry": _inchworm_entry, "r1-fast": _r1_fast, "r1-1act": _r1_one_actuator, "multi": _multi_level, "big": _big}
 
 # C test → (config, core sources, extra sources, defines)
 C_TESTS = {
@@ -132,7 +141,8 @@ C_TESTS = {
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c"], ["gait_table.c"], []),
     "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c"], ["gait_table.c"], []),
     "test_seq_edges.c": ("big", ["seq.c", "psi.c"], ["gait_table.c"], []),
-    "test_sim_mpu6050.c": ("r1-fast", ["mpu6050.c"], [SIM / "sim_mpu6050.c"], ["-DFAKE_HAL_SIM_MPU"]),
+    "test_seq_entry.c": ("inch-entry", ["seq.c", "psi.c"], ["gait_table.c"], []),
+    "test_sim_mpu6050.c": ("r1-fast", ["mpu6050.c", "imubus.c"], [SIM / "sim_mpu6050.c"], ["-DFAKE_HAL_SIM_MPU"]),
 }
 
 

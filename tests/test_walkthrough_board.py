@@ -83,6 +83,10 @@ TOY_BODIES = {
         "    (void)addr7;\n    (void)tx;\n    (void)ntx;\n    (void)rx;\n    (void)nrx;\n"
         "    return -1; /* nothing on the toy's bus */"
     ),
+    "hal_i2c_write_read_bus": (
+        "    (void)bus;\n    (void)addr7;\n    (void)tx;\n    (void)ntx;\n    (void)rx;\n    (void)nrx;\n"
+        "    return -1; /* the toy has one bus, and nothing on it */"
+    ),
     "hal_pwm_set": (
         "    if (channel >= CFG_PWM_CHANNELS) {\n        return;\n    }\n"
         "    duty[pwm_map[channel]] = duty_permyriad;"

@@ -46,6 +46,10 @@ void hal_watchdog_feed(void);
  * register that does nothing else (AVR GPIOR0 bit 0; STM32 BKP_DR1, clock off: the chip
  * ignores it), so an emulator or a logic probe can time every tick. */
 void hal_tick_mark(uint8_t busy);
+/* The same on the board's I2C bus `bus` (its index in the board file's [[i2c.bus]]
+ * list; 0 is hal_i2c_write_read's bus). Needed only on boards with more than one bus:
+ * the core calls it only when the robot's IMUs use a second bus (CFG_I2C_BUSES > 1). */
+int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
 
 /* Set the MOSFET PWM duty of an actuator channel, in permyriad (0 = off, 10000 = on);
  * 0 must drive the gate low, not leave a one-count pulse. */

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "fault.h"
+#include "imubus.h"
 #include "mpu6050.h"
 #include "proto.h"
 #include "psi.h"
@@ -34,11 +35,12 @@ void imucheck_init(void)
 {
     memset(&st, 0, sizeof st);
     st.measured = IMUCHECK_UNKNOWN;
+    imubus_init();
 }
 
 void imucheck_start(uint8_t limb)
 {
-    int8_t r = mpu6050_init(ROM_U8(&imu_addr[limb]));
+    int8_t r = imubus_select(limb) != 0 ? MPU6050_ERR_BUS : mpu6050_init(ROM_U8(&imu_addr[limb]));
     st.err[limb] = 0;
     st.stuck[limb] = 0;
     if (r == MPU6050_ERR_BUS) {
@@ -59,7 +61,7 @@ void imucheck_read(void)
             known = 0;
             continue;
         }
-        if (mpu6050_read_accel(ROM_U8(&imu_addr[i]), &a) != MPU6050_OK) {
+        if (imubus_select(i) != 0 || mpu6050_read_accel(ROM_U8(&imu_addr[i]), &a) != MPU6050_OK) {
             if (++st.err[i] >= 2u) {
                 imu_fault(i, PROTO_FAULT_IMU_NO_ACK);
             }

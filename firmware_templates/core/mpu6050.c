@@ -1,19 +1,19 @@
 /* mpu6050.c - see mpu6050.h. */
 #include "mpu6050.h"
 
-#include "hal.h"
+#include "imubus.h"
 
 static int8_t write_reg(uint8_t addr, uint8_t reg, uint8_t value)
 {
     uint8_t tx[2];
     tx[0] = reg;
     tx[1] = value;
-    return hal_i2c_write_read(addr, tx, 2, (uint8_t *)0, 0) == 0 ? MPU6050_OK : MPU6050_ERR_BUS;
+    return imubus_write_read(addr, tx, 2, (uint8_t *)0, 0) == 0 ? MPU6050_OK : MPU6050_ERR_BUS;
 }
 
 static int8_t read_regs(uint8_t addr, uint8_t reg, uint8_t *rx, uint8_t n)
 {
-    return hal_i2c_write_read(addr, &reg, 1, rx, n) == 0 ? MPU6050_OK : MPU6050_ERR_BUS;
+    return imubus_write_read(addr, &reg, 1, rx, n) == 0 ? MPU6050_OK : MPU6050_ERR_BUS;
 }
 
 int8_t mpu6050_init(uint8_t addr)

@@ -1,4 +1,4 @@
-/* mpu6050.h - the few MPU-6050 registers proleg uses, over hal_i2c_write_read.
+/* mpu6050.h - the few MPU-6050 registers proleg uses, over imubus_write_read (the bus imubus_select chose).
  *
  * Contract. mpu6050_init checks WHO_AM_I (0x68 whatever AD0 is), wakes the chip from
  * its power-up sleep (PWR_MGMT_1 = PLL on gyro X), sets the sample divider, the digital

@@ -26,6 +26,8 @@ static struct {
     uint32_t step_ticks;
     uint32_t held;
     uint32_t cycles;
+    uint16_t entry_at;   /* next entry state in seq_entry_steps */
+    uint16_t entry_left; /* entry states still to reach before the gait's join step */
 } s;
 
 static uint32_t hold_ticks = CFG_HOLD_TICKS;
@@ -138,6 +140,11 @@ static cfg_state_t step_state(uint16_t step)
     return ROM_STATE(&seq_steps[s.first + step]);
 }
 
+static cfg_state_t target_state(void)
+{
+    return s.entry_left ? ROM_STATE(&seq_entry_steps[s.entry_at]) : step_state(s.step);
+}
+
 int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
 {
     uint16_t i;
@@ -158,11 +165,18 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
     }
     s.dir = dir;
     s.step = 0;
+    s.entry_left = 0;
     for (i = 0; i < s.n; i++) {
         if (step_state(i) == measured) {
             s.step = i;
             break;
         }
+    }
+    if (i == s.n && measured == 0u && dir != SEQ_DIR_LOADED) { /* from rest: the entry path */
+        i = (uint16_t)(dir == SEQ_DIR_PX ? index : CFG_N_GAITS_PX + index);
+        s.step = ROM_U16(&seq_entry_join[i]);
+        s.entry_at = ROM_U16(&seq_entry_first[i]);
+        s.entry_left = ROM_U16(&seq_entry_len[i]);
     }
     s.step_ticks = 0;
     s.held = 0;
@@ -184,15 +198,17 @@ uint8_t seq_tick(cfg_state_t measured)
         return 0;
     }
     s.step_ticks++;
-    if (measured == step_state(s.step)) {
+    if (measured == target_state()) {
         if (!s.reached) {
             s.reached = 1;
             ev |= SEQ_EV_REACHED;
         }
         s.held++;
         if (s.held >= hold_ticks) {
-            s.step++;
-            if (s.step >= s.n) {
+            if (s.entry_left) {
+                s.entry_left--;
+                s.entry_at++;
+            } else if (++s.step >= s.n) {
                 s.step = 0;
                 s.cycles++;
                 ev |= SEQ_EV_CYCLE;
@@ -224,12 +240,12 @@ uint8_t seq_holding(void)
 
 cfg_state_t seq_target(void)
 {
-    return s.n ? step_state(s.step) : 0u;
+    return s.n ? target_state() : 0u;
 }
 
 uint16_t seq_step(void)
 {
-    return s.step;
+    return s.entry_left ? SEQ_STEP_ENTRY : s.step;
 }
 
 uint32_t seq_cycles(void)

@@ -7,7 +7,10 @@
  * (e.g. a dead actuator). Gaits come from the rendered gait table (gait_table.c: the
  * optimal gaits per direction, every tie) or from one gait loaded at run time, which is
  * checked against the robot's allowed transitions and the length limit first.
- * A start begins at the measured state's position in the gait when it is on the walk.
+ * A start begins at the measured state's position in the gait when it is on the walk;
+ * from rest (state 0) off the walk, a rendered gait is entered through its entry path
+ * (gait_table.c: the states between rest and the gait's join step, over allowed
+ * transitions, proleg.gait.feasibility.entry_path), then run from the join step.
  */
 #ifndef PROLEG_SEQ_H
 #define PROLEG_SEQ_H
@@ -20,6 +23,8 @@
 #define SEQ_DIR_PX 0u     /* +x */
 #define SEQ_DIR_MX 1u     /* -x */
 #define SEQ_DIR_LOADED 2u /* the gait loaded with seq_load */
+
+#define SEQ_STEP_ENTRY 0xFFFFu /* seq_step() on the entry path from rest */
 
 #define SEQ_EV_REACHED 0x01u  /* target state of this step reached (once per step) */
 #define SEQ_EV_ADVANCED 0x02u /* held long enough: next step */
@@ -36,6 +41,12 @@
 extern const cfg_state_t seq_steps[] ROM;
 extern const uint16_t seq_gait_first[] ROM;
 extern const uint16_t seq_gait_len[] ROM;
+/* Entry from rest per rendered gait: states seq_entry_steps[first .. first+len), then
+ * the gait from step seq_entry_join. */
+extern const cfg_state_t seq_entry_steps[] ROM;
+extern const uint16_t seq_entry_first[] ROM;
+extern const uint16_t seq_entry_len[] ROM;
+extern const uint16_t seq_entry_join[] ROM;
 #if CFG_TRANS_BITMAP
 extern const uint8_t seq_allowed[] ROM;
 #else
@@ -67,7 +78,7 @@ uint8_t seq_tick(cfg_state_t measured);
 uint8_t seq_running(void);
 uint8_t seq_holding(void); /* running and the current target has been reached */
 cfg_state_t seq_target(void);
-uint16_t seq_step(void);
+uint16_t seq_step(void); /* SEQ_STEP_ENTRY while on the entry path (events show 255) */
 uint32_t seq_cycles(void);
 
 /* State index ↔ per-limb levels (first limb most significant digit). */

@@ -8,7 +8,9 @@
  * FIFO at the board's baud rate (10 bits per byte), so telemetry overruns show up as
  * they would on hardware. The ring sizes are the board file's [uart] buffers. PWM: the
  * duty the firmware set, per board channel. I2C: the register-level MPU-6050 models of
- * sim_mpu6050.c at the robot's IMU addresses. main() is not in this image (the board
+ * sim_mpu6050.c (limb i's IMU is model slot i) on the buses, addresses and multiplexer
+ * channels the robot's IMU placement names (CFG_LIMB_IMU_*), with the register-level
+ * TCA9548A models of sim_tca9548a.c where a limb sits behind one. main() is not in this image (the board
  * file's build.main_loop = false): sim_reset/sim_run_ticks drive app_init/app_tick.
  */
 #include <string.h>
@@ -17,6 +19,8 @@
 #include "hal.h"
 #include "robot_config.h"
 #include "sim_mpu6050.h"
+#include "sim_tca9548a.h"
+#include "imubus.h"
 #include "uart.h"
 
 #define SIM_API __attribute__((visibility("default")))
@@ -32,6 +36,9 @@ static uint8_t hostq_mem[HOSTQ_SIZE];
 static fifo_t hostq = {hostq_mem, HOSTQ_SIZE, 0, 0};
 
 static const uint8_t limb_imu[CFG_N_LIMBS] = CFG_LIMB_IMU_ADDR;
+static const uint8_t limb_bus[CFG_N_LIMBS] = CFG_LIMB_IMU_BUS;
+static const uint8_t limb_mux[CFG_N_LIMBS] = CFG_LIMB_IMU_MUX;
+static const uint8_t limb_channel[CFG_N_LIMBS] = CFG_LIMB_IMU_CHANNEL;
 static uint64_t now_us;
 static uint64_t line_budget; /* bytes × 1e6 the line may still carry */
 static uint16_t pwm[CFG_PWM_CHANNELS];
@@ -71,10 +78,55 @@ uint32_t hal_micros(void)
     return (uint32_t)now_us;
 }
 
+/* The I2C buses: a transfer reaches the multiplexer at that address, else every limb's
+ * MPU-6050 model on that bus at that address that is wired directly or sits behind a
+ * connected multiplexer channel (limb i's IMU is model slot i). Several devices that
+ * answer at once drive the open-drain bus together: the host reads the AND of their bytes. */
+int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    uint8_t tmp[255];
+    uint8_t i, j, acked = 0;
+    i2c_count++;
+    if (sim_tca_transfer(bus, addr7, tx, ntx, rx, nrx) == 0) {
+        return 0;
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        if (limb_bus[i] != bus || limb_imu[i] != addr7 ||
+            (limb_mux[i] != 0u && !sim_tca_enabled(bus, limb_mux[i], limb_channel[i]))) {
+            continue;
+        }
+        if (sim_mpu_transfer_slot(i, tx, ntx, acked ? tmp : rx, nrx, now_us) != 0) {
+            continue;
+        }
+        if (acked) {
+            for (j = 0; j < nrx; j++) {
+                rx[j] &= tmp[j];
+            }
+        }
+        acked = 1;
+    }
+    return acked ? 0 : -1;
+}
+
 int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
-    i2c_count++;
-    return sim_mpu_transfer(addr7, tx, ntx, rx, nrx, now_us);
+    return hal_i2c_write_read_bus(0, addr7, tx, ntx, rx, nrx);
+}
+
+/* The model slot behind a host-sim ABI IMU key: 0x80 | limb, or the address of an IMU
+ * wired directly to bus 0 (what sim_limb_imu_addr returns); -1 when there is none. */
+static int imu_slot(uint8_t key)
+{
+    uint8_t i;
+    if (key & 0x80u) {
+        return (key & 0x7Fu) < CFG_N_LIMBS ? (int)(key & 0x7Fu) : -1;
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        if (limb_bus[i] == 0u && limb_mux[i] == 0u && limb_imu[i] == key) {
+            return i;
+        }
+    }
+    return -1;
 }
 
 void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad)
@@ -135,8 +187,12 @@ SIM_API void sim_reset(uint32_t seed)
     i2c_count = 0;
     hostq.head = hostq.count = 0;
     sim_mpu_power_on(seed);
+    sim_tca_power_on();
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        sim_mpu_attach(limb_imu[i]);
+        sim_mpu_attach_slot(i);
+        if (limb_mux[i] != 0u) {
+            sim_tca_attach(limb_bus[i], limb_mux[i]);
+        }
     }
     hal_init();
     app_init();
@@ -188,22 +244,22 @@ SIM_API uint32_t sim_uart_read(uint8_t *out, uint32_t cap)
 
 SIM_API void sim_imu_set_truth(uint8_t addr, double psi_deg, double dpsi_dps)
 {
-    sim_mpu_set_truth(addr, psi_deg, dpsi_dps);
+    sim_mpu_set_truth_slot((uint8_t)imu_slot(addr), psi_deg, dpsi_dps);
 }
 
 SIM_API void sim_imu_set_fault(uint8_t addr, uint8_t mode)
 {
-    sim_mpu_set_fault(addr, mode);
+    sim_mpu_set_fault_slot((uint8_t)imu_slot(addr), mode);
 }
 
 SIM_API void sim_imu_set_noise(uint8_t addr, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
 {
-    sim_mpu_set_noise(addr, accel_ug_rthz, gyro_dps_rthz, accel_offset_mg);
+    sim_mpu_set_noise_slot((uint8_t)imu_slot(addr), accel_ug_rthz, gyro_dps_rthz, accel_offset_mg);
 }
 
 SIM_API uint8_t sim_imu_peek_reg(uint8_t addr, uint8_t reg)
 {
-    return sim_mpu_peek(addr, reg);
+    return sim_mpu_peek_slot((uint8_t)imu_slot(addr), reg);
 }
 
 /* ---- beyond the documented ABI: what a simulator needs to wire a robot up ---- */
@@ -213,10 +269,26 @@ SIM_API uint8_t sim_n_limbs(void)
     return CFG_N_LIMBS;
 }
 
-/* IMU address of limb i (0 when there is no such limb). */
+/* The key of limb i's IMU for sim_imu_* (0 when there is no such limb): its address
+ * when it is wired directly to bus 0, else 0x80 | i (proleg.firmware.placement.sim_imu_keys). */
 SIM_API uint8_t sim_limb_imu_addr(uint8_t limb)
 {
-    return limb < CFG_N_LIMBS ? limb_imu[limb] : 0u;
+    if (limb >= CFG_N_LIMBS) {
+        return 0u;
+    }
+    return (limb_bus[limb] == 0u && limb_mux[limb] == 0u) ? limb_imu[limb] : (uint8_t)(0x80u | limb);
+}
+
+/* Multiplexer channel selects the firmware made (core/imubus.c) and the control
+ * register of the multiplexer at (bus, addr). */
+SIM_API uint32_t sim_mux_switches(void)
+{
+    return imubus_switches();
+}
+
+SIM_API uint8_t sim_mux_control(uint8_t bus, uint8_t addr)
+{
+    return sim_tca_control(bus, addr);
 }
 
 SIM_API uint8_t sim_n_pwm_channels(void)

@@ -33,12 +33,17 @@ typedef struct {
 
 static mpu_t devs[SIM_MPU_MAX];
 
+static mpu_t *slot_dev(uint8_t slot)
+{
+    return slot < SIM_MPU_MAX ? &devs[slot] : 0;
+}
+
 static mpu_t *dev(uint8_t addr)
 {
     if (addr < SIM_MPU_BASE_ADDR || addr >= SIM_MPU_BASE_ADDR + SIM_MPU_MAX) {
         return 0;
     }
-    return &devs[addr - SIM_MPU_BASE_ADDR];
+    return slot_dev((uint8_t)(addr - SIM_MPU_BASE_ADDR));
 }
 
 static uint64_t splitmix(uint64_t *x)
@@ -83,9 +88,8 @@ void sim_mpu_power_on(uint32_t seed)
     }
 }
 
-void sim_mpu_attach(uint8_t addr)
+static void attach(mpu_t *d)
 {
-    mpu_t *d = dev(addr);
     if (d) {
         d->present = 1;
     }
@@ -144,9 +148,8 @@ static void write_reg(mpu_t *d, uint8_t reg, uint8_t v)
     d->regs[reg] = v;
 }
 
-int sim_mpu_transfer(uint8_t addr, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx, uint64_t t_us)
+static int transfer(mpu_t *d, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx, uint64_t t_us)
 {
-    mpu_t *d = dev(addr);
     uint8_t i;
     if (!d || !d->present || d->fault == SIM_MPU_NO_ACK) {
         return -1;
@@ -168,26 +171,23 @@ int sim_mpu_transfer(uint8_t addr, const uint8_t *tx, uint8_t ntx, uint8_t *rx, 
     return 0;
 }
 
-void sim_mpu_set_truth(uint8_t addr, double psi_deg, double dpsi_dps)
+static void set_truth(mpu_t *d, double psi_deg, double dpsi_dps)
 {
-    mpu_t *d = dev(addr);
     if (d) {
         d->psi_deg = psi_deg;
         d->dpsi_dps = dpsi_dps;
     }
 }
 
-void sim_mpu_set_fault(uint8_t addr, uint8_t mode)
+static void set_fault(mpu_t *d, uint8_t mode)
 {
-    mpu_t *d = dev(addr);
     if (d && mode <= SIM_MPU_GARBAGE) {
         d->fault = mode;
     }
 }
 
-void sim_mpu_set_noise(uint8_t addr, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
+static void set_noise(mpu_t *d, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
 {
-    mpu_t *d = dev(addr);
     if (d) {
         d->accel_ug_rthz = accel_ug_rthz < 0.0 ? 0.0 : accel_ug_rthz;
         d->gyro_dps_rthz = gyro_dps_rthz < 0.0 ? 0.0 : gyro_dps_rthz;
@@ -195,8 +195,40 @@ void sim_mpu_set_noise(uint8_t addr, double accel_ug_rthz, double gyro_dps_rthz,
     }
 }
 
-uint8_t sim_mpu_peek(uint8_t addr, uint8_t reg)
+static uint8_t peek(const mpu_t *d, uint8_t reg)
 {
-    mpu_t *d = dev(addr);
     return (d && reg < 128u) ? d->regs[reg] : 0u;
 }
+
+/* ---- by address (one bus, no multiplexer) and by slot ---- */
+
+void sim_mpu_attach(uint8_t addr) { attach(dev(addr)); }
+void sim_mpu_attach_slot(uint8_t slot) { attach(slot_dev(slot)); }
+
+int sim_mpu_transfer(uint8_t addr, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx, uint64_t t_us)
+{
+    return transfer(dev(addr), tx, ntx, rx, nrx, t_us);
+}
+
+int sim_mpu_transfer_slot(uint8_t slot, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx, uint64_t t_us)
+{
+    return transfer(slot_dev(slot), tx, ntx, rx, nrx, t_us);
+}
+
+void sim_mpu_set_truth(uint8_t addr, double psi_deg, double dpsi_dps) { set_truth(dev(addr), psi_deg, dpsi_dps); }
+void sim_mpu_set_truth_slot(uint8_t slot, double psi_deg, double dpsi_dps) { set_truth(slot_dev(slot), psi_deg, dpsi_dps); }
+void sim_mpu_set_fault(uint8_t addr, uint8_t mode) { set_fault(dev(addr), mode); }
+void sim_mpu_set_fault_slot(uint8_t slot, uint8_t mode) { set_fault(slot_dev(slot), mode); }
+
+void sim_mpu_set_noise(uint8_t addr, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
+{
+    set_noise(dev(addr), accel_ug_rthz, gyro_dps_rthz, accel_offset_mg);
+}
+
+void sim_mpu_set_noise_slot(uint8_t slot, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
+{
+    set_noise(slot_dev(slot), accel_ug_rthz, gyro_dps_rthz, accel_offset_mg);
+}
+
+uint8_t sim_mpu_peek(uint8_t addr, uint8_t reg) { return peek(dev(addr), reg); }
+uint8_t sim_mpu_peek_slot(uint8_t slot, uint8_t reg) { return peek(slot_dev(slot), reg); }

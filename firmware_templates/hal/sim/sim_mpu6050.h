@@ -42,4 +42,14 @@ void sim_mpu_set_fault(uint8_t addr, uint8_t mode);
 void sim_mpu_set_noise(uint8_t addr, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg);
 uint8_t sim_mpu_peek(uint8_t addr, uint8_t reg);
 
+/* The same by device slot 0..SIM_MPU_MAX-1 instead of address (slot i is the device
+ * that sim_mpu_attach(SIM_MPU_BASE_ADDR + i) attaches): for buses where several devices
+ * share one address behind a multiplexer (hal_sim.c routes transfers to slots). */
+void sim_mpu_attach_slot(uint8_t slot);
+int sim_mpu_transfer_slot(uint8_t slot, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx, uint64_t t_us);
+void sim_mpu_set_truth_slot(uint8_t slot, double psi_deg, double dpsi_dps);
+void sim_mpu_set_fault_slot(uint8_t slot, uint8_t mode);
+void sim_mpu_set_noise_slot(uint8_t slot, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg);
+uint8_t sim_mpu_peek_slot(uint8_t slot, uint8_t reg);
+
 #endif /* PROLEG_SIM_MPU6050_H */

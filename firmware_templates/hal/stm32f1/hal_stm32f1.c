@@ -422,3 +422,139 @@ void hal_init(void)
     NVIC_ISER(USART1_IRQN / 32u) = 1u << (USART1_IRQN % 32u);
     iwdg_start(); /* fed by the core's main loop once per completed tick */
 }
+
+/* ------------------------------------------------------------------ I2C2 (bus 1)
+ * The second bus, PB10 = SCL, PB11 = SDA (RM0008 §9.3.9, no remap), polled like I2C1
+ * with the same bounded waits. Only in images whose IMUs use bus 1 (CFG_I2C_BUSES > 1);
+ * set up on its first transfer so hal_init stays as it is. */
+#if CFG_I2C_BUSES > 1
+#define I2C2_BASE 0x40005800u
+#define I2C2_CR1 REG32(I2C2_BASE + 0x00u)
+#define I2C2_CR2 REG32(I2C2_BASE + 0x04u)
+#define I2C2_DR REG32(I2C2_BASE + 0x10u)
+#define I2C2_SR1 REG32(I2C2_BASE + 0x14u)
+#define I2C2_SR2 REG32(I2C2_BASE + 0x18u)
+#define I2C2_CCR REG32(I2C2_BASE + 0x1Cu)
+#define I2C2_TRISE REG32(I2C2_BASE + 0x20u)
+#define RCC_APB1_I2C2 (1u << 22)
+
+static uint8_t i2c2_ready;
+
+static int8_t i2c2_wait(uint32_t mask)
+{
+    uint32_t t0 = hal_micros();
+    while (!(I2C2_SR1 & mask)) {
+        if ((I2C2_SR1 & (I2C_SR1_AF | I2C_SR1_BERR | I2C_SR1_ARLO)) || (uint32_t)(hal_micros() - t0) > I2C_STEP_US) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static void i2c2_setup(void)
+{
+    uint32_t pclk1 = sysclk == 72000000u ? 36000000u : sysclk;
+    uint32_t mhz = pclk1 / 1000000u;
+    uint32_t ccr = pclk1 / (3u * CFG_I2C_HZ);
+    RCC_APB1ENR |= RCC_APB1_I2C2;
+    gpio_mode(1, 10, GPIO_AF_OD_50MHZ);
+    gpio_mode(1, 11, GPIO_AF_OD_50MHZ);
+    I2C2_CR1 = I2C_CR1_SWRST;
+    I2C2_CR1 = 0;
+    I2C2_CR2 = mhz;
+    I2C2_CCR = (1u << 15) | (ccr < 1u ? 1u : ccr); /* fast mode, duty 2 */
+    I2C2_TRISE = mhz * 300u / 1000u + 1u;
+    I2C2_CR1 = I2C_CR1_PE;
+    i2c2_ready = 1;
+}
+
+static int8_t i2c2_start(uint8_t sla)
+{
+    I2C2_CR1 |= I2C_CR1_START;
+    if (i2c2_wait(I2C_SR1_SB) != 0) {
+        return -1;
+    }
+    I2C2_DR = sla;
+    return i2c2_wait(I2C_SR1_ADDR);
+}
+
+static void i2c2_clear_addr(void)
+{
+    volatile uint32_t sr;
+    sr = I2C2_SR1;
+    sr = I2C2_SR2;
+    (void)sr;
+}
+
+static int8_t i2c2_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    uint8_t i;
+    if (ntx || !nrx) {
+        if (i2c2_start((uint8_t)(addr7 << 1)) != 0) {
+            return -1;
+        }
+        i2c2_clear_addr();
+        for (i = 0; i < ntx; i++) {
+            if (i2c2_wait(I2C_SR1_TXE) != 0) {
+                return -1;
+            }
+            I2C2_DR = tx[i];
+        }
+        if (i2c2_wait(I2C_SR1_BTF | (ntx ? 0u : I2C_SR1_TXE)) != 0) {
+            return -1;
+        }
+    }
+    if (nrx) {
+        I2C2_CR1 |= I2C_CR1_ACK;
+        if (i2c2_start((uint8_t)((addr7 << 1) | 1u)) != 0) {
+            return -1;
+        }
+        if (nrx == 1u) {
+            I2C2_CR1 &= ~I2C_CR1_ACK;
+        }
+        i2c2_clear_addr();
+        for (i = 0; i < nrx; i++) {
+            if (i + 1u == nrx) {
+                I2C2_CR1 &= ~I2C_CR1_ACK;
+                I2C2_CR1 |= I2C_CR1_STOP;
+            }
+            if (i2c2_wait(I2C_SR1_RXNE) != 0) {
+                return -1;
+            }
+            rx[i] = (uint8_t)I2C2_DR;
+        }
+        return 0;
+    }
+    I2C2_CR1 |= I2C_CR1_STOP;
+    return 0;
+}
+#endif
+
+int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    if (bus == 0u) {
+        return hal_i2c_write_read(addr7, tx, ntx, rx, nrx);
+    }
+#if CFG_I2C_BUSES > 1
+    if (bus == 1u) {
+        if (!i2c2_ready) {
+            i2c2_setup();
+        }
+        if (i2c2_transfer(addr7, tx, ntx, rx, nrx) != 0) {
+            I2C2_CR1 |= I2C_CR1_STOP;
+            I2C2_SR1 = 0; /* clear AF/BERR/ARLO */
+            if (I2C2_SR2 & I2C_SR2_BUSY) {
+                i2c2_setup(); /* bus stuck: reset the peripheral */
+            }
+            return -1;
+        }
+        return 0;
+    }
+#endif
+    (void)addr7;
+    (void)tx;
+    (void)ntx;
+    (void)rx;
+    (void)nrx;
+    return -1;
+}

@@ -60,6 +60,17 @@ int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *r
     return -1;
 }
 
+/* The same on I2C bus `bus` (its index in the board file's [[i2c.bus]] list): only for
+ * an MCU with a second I2C peripheral; bus 0 is hal_i2c_write_read's bus. The core
+ * calls it only when a robot's IMUs use bus 1 or above. Return -1 for a bus you lack. */
+int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    if (bus == 0u) {
+        return hal_i2c_write_read(addr7, tx, ntx, rx, nrx);
+    }
+    return -1;
+}
+
 /* Set channel's duty in permyriad (0..10000) at once (takes effect within one PWM
  * period). 0 must drive the gate low with no pulse at all, 10000 high; ignore a channel
  * >= CFG_PWM_CHANNELS. Called from the main loop every tick and on E-stop: a few

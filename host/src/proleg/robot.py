@@ -46,12 +46,31 @@ MAX_STATES = 1 << 20
 
 
 @dataclass(frozen=True)
+class ImuSpec:
+    """Where a limb's IMU sits, as the robot file says (every part optional; the build
+    fills in the rest, see proleg.firmware.placement): the board's I2C bus by name, the
+    TCA9548A/PCA9548A multiplexer's address (0x70..0x77) and channel (0..7) when the IMU
+    sits behind one, and the IMU's 7-bit address (0x68 or 0x69 for an MPU-6050)."""
+
+    bus: str | None = None
+    mux: int | None = None
+    channel: int | None = None
+    address: int | None = None
+
+
+#: A multiplexer's 7-bit addresses (TCA9548A/PCA9548A: A2..A0 select 0x70..0x77) and channels.
+MUX_ADDRESSES = range(0x70, 0x78)
+MUX_CHANNELS = 8
+
+
+@dataclass(frozen=True)
 class Limb:
     name: str
     levels: int
     psi_star_deg: tuple[float, ...]
     hysteresis_deg: float
     actuator: str
+    imu: ImuSpec | None = None  # None: placed automatically by the build
 
 
 @dataclass(frozen=True)
@@ -236,7 +255,9 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
-    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states)
+    act_index = {a.name: j for j, a in enumerate(actuators)}
+    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
+                          [act_index[limb.actuator] for limb in limbs], units)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant)
 
 
@@ -271,7 +292,7 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         raise RobotFileError(f"{path}: limb: at most {MAX_LIMBS} limbs, got {len(tables)}")
     out: list[Limb] = []
     for i, t in enumerate(tables):
-        f = _Fields(path, f"limb[{i}]", t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator"})
+        f = _Fields(path, f"limb[{i}]", t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu"})
         name = f.string("name")
         if any(limb.name == name for limb in out):
             f.fail("name", "a name no other limb has (duplicate limb)", name)
@@ -297,8 +318,21 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         actuator = f.string("actuator")
         if actuator not in actuator_names:
             f.fail("actuator", f"the name of an [[actuator]] ({', '.join(sorted(actuator_names))})", actuator)
-        out.append(Limb(name, levels, psi_t, hyst, actuator))
+        imu = _imu_spec(path, f"limb[{i}].imu", t["imu"]) if "imu" in t else None
+        out.append(Limb(name, levels, psi_t, hyst, actuator, imu))
     return tuple(out)
+
+
+def _imu_spec(path: Path, where: str, value: Any) -> ImuSpec:
+    """``imu = { bus = "I2C1", mux = 0x70, channel = 3, address = 0x68 }``, every part optional."""
+    f = _Fields(path, where, value, {"bus", "mux", "channel", "address"})
+    bus = f.string("bus") if f.has("bus") else None
+    mux = f.integer("mux", 0, MUX_ADDRESSES.start, MUX_ADDRESSES.stop - 1) if f.has("mux") else None
+    channel = f.integer("channel", 0, 0, MUX_CHANNELS - 1) if f.has("channel") else None
+    address = f.integer("address", 0, 0x08, 0x77) if f.has("address") else None
+    if address is not None and address in MUX_ADDRESSES:
+        f.fail("address", "an IMU address outside the multiplexer range 0x70..0x77", address)
+    return ImuSpec(bus, mux, channel, address)
 
 
 def _safety(path: Path, value: Any) -> Safety:

@@ -171,8 +171,35 @@ def default_plant_section(n_actuators: int, n_limbs: int) -> PlantSection:
     return plant_section(Path("<defaults>"), {}, [f"a{j}" for j in range(n_actuators)], n_limbs, 0)
 
 
-def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_states: int) -> PlantSection:
-    """Check a ``[plant]`` table; RobotFileError names the file and the key."""
+def geometric_coupling(limb_actuators: list[int], n_actuators: int, direct: float, cross: float
+                       ) -> tuple[tuple[float, ...], ...]:
+    """The default coupling of a robot with more than two limbs, from its geometry.
+
+    Limbs sit in a row in file order; actuator j bends the body at its home limb h(j)
+    (the first limb that names it). It tilts its home limb by ``direct`` and every other
+    limb i by a share of ``cross`` that falls off with the distance |i − h(j)| (weights
+    1/distance), the shares onto each limb summing to ``cross``: with two limbs this is
+    the paper's R1 coupling (``cross`` onto the other end), and with more limbs a limb
+    whose own coil is off stays below its ψ* while its neighbours' coils hold theirs
+    (so any single-limb transition the matrix allows can happen)."""
+    n = len(limb_actuators)
+    home = [limb_actuators.index(j) if j in limb_actuators else 0 for j in range(n_actuators)]
+    rows = []
+    for i in range(n):
+        weights = [0.0 if home[j] == i else 1.0 / abs(i - home[j]) for j in range(n_actuators)]
+        total = sum(weights) or 1.0
+        rows.append(tuple(direct if home[j] == i else round(cross * w / total, 3) for j, w in enumerate(weights)))
+    return tuple(rows)
+
+
+def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_states: int,
+                  limb_actuators: list[int] | None = None, units: str = "steps") -> PlantSection:
+    """Check a ``[plant]`` table; RobotFileError names the file and the key.
+
+    ``limb_actuators`` (the actuator index of each limb) lets a robot with more than two
+    limbs get its coupling from its geometry (``geometric_coupling``) when the file gives
+    none; with ``units = "mm"`` the matrix is in millimetres and ``step_mm`` is 1 (any
+    other value is an error)."""
     if not isinstance(table, dict):
         raise RobotFileError(f"{path}: plant: expected a table")
     unknown = sorted(set(table) - set(PLANT_KEYS))
@@ -186,6 +213,15 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
     rest = _per(path, PLANT_KEYS["psi_rest_deg"], table.get("psi_rest_deg"), n_limbs)
     scalars = {k: _scalar(path, PLANT_KEYS[k], table.get(k)) for k in SCALARS}
     coupling = _coupling(path, table["coupling_deg"], n_limbs, na) if "coupling_deg" in table else None
+    if coupling is None and limb_actuators is not None and n_limbs > 2:
+        coupling = geometric_coupling(limb_actuators, na, scalars["direct_gain_deg"], scalars["cross_gain_deg"])
+    if units == "mm":
+        if scalars["step_mm"] != 1.0 and "step_mm" in table:
+            raise RobotFileError(
+                f"{path}: plant.step_mm: expected 1 (or no step_mm) when transitions.units = \"mm\" "
+                f"(the matrix is in mm), got {table['step_mm']!r}"
+            )
+        scalars["step_mm"] = 1.0
     truth = _true_matrix(path, table["true_matrix"], n_states) if "true_matrix" in table else None
     physical: dict[str, float | tuple[float, ...]] = {}
     for k in PHYSICAL_KEYS:

@@ -149,6 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--duration", type=_positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
     s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
+    add_sim_board_options(s)
     s.add_argument("--inject", action="append", default=[], metavar="FAULT",
                    help="fault to inject, optionally at a time: imu-silent:LIMB, imu-stuck:LIMB, imu-garbage:LIMB, "
                         "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P]; "
@@ -171,6 +172,16 @@ def build_parser() -> argparse.ArgumentParser:
     add_link_commands(sub)  # console, plot, dbc
     add_robot_commands(sub)  # run, load-gait, set-param, robots
     return p
+
+
+def add_sim_board_options(p: argparse.ArgumentParser) -> None:
+    """The simulated board and the gait selection its firmware is built with."""
+    p.add_argument("--board", default="host-sim",
+                   help="simulated board (default host-sim; see proleg.sim.simulators.SIMULATORS)")
+    p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
+                   help="which optimal gaits the simulated firmware carries (default total)")
+    p.add_argument("--max-transitions", type=_positive_int, metavar="N",
+                   help="longest gait considered (default: the build's, see docs/gait-selection.md)")
 
 
 def add_udp_options(p: argparse.ArgumentParser) -> None:
@@ -222,6 +233,11 @@ def _build(args: argparse.Namespace):
     result = build(robot, board, args.out, objective=args.objective, max_transitions=args.max_transitions)
     print(f"built {robot.name} for {board.name}: {result.artifact}")
     print(f"  {result.size_report()}")
+    if result.fit is not None:
+        for line in result.fit.lines():
+            print(f"  {line}")
+    for line in result.warnings:
+        print(f"proleg: warning: {line}", file=sys.stderr)
     for d, gaits in result.gaits.items():
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
         print(f"  {d} gaits: {shown}")
@@ -260,7 +276,8 @@ def cmd_flash(args: argparse.Namespace) -> int:
 def cmd_sim(args: argparse.Namespace) -> int:
     from ..report import SimSession
     from ..robot import load_robot
-    from ..sim.closed_loop import SimulatedRobot
+    from ..firmware.gaits import firmware_gaits
+    from ..sim.simulators import open_simulated
 
     robot = load_robot(args.robot)
     from .sim_plant import cmd_measure_matrix, plant_kwargs, wants_help
@@ -270,15 +287,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.measure_matrix:
         return cmd_measure_matrix(args, robot)
     if not args.pty:
-        from .robot_commands import gaits_per_direction
-
-        have = gaits_per_direction(robot).get(args.direction, 0)
+        have = len(firmware_gaits(robot, args.objective, args.max_transitions).get(args.direction, ()))
         if args.gait >= have:
             from ..errors import GaitError
 
             shown = f"gaits 0..{have - 1}" if have else "no gait"
             raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
-    sim = SimulatedRobot(robot, seed=args.seed, **plant_kwargs(args))
+    sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
+                         max_transitions=args.max_transitions, **plant_kwargs(args))
     timed = []
     for spec in args.inject:
         fault, plus, at = spec.rpartition("+") if "+" in spec else ("", "", "")
@@ -293,12 +309,12 @@ def cmd_sim(args: argparse.Namespace) -> int:
             sim.inject(spec)
     if args.pty:
         return _serve_pty(sim, args)
-    recorder = _recorder(robot, args.record) if args.record else None
+    recorder = _recorder(robot, args.record, args.board) if args.record else None
     listeners = [recorder] if recorder else []
     if args.udp:
         from ..record import RecordingMeta, UdpStreamer
 
-        meta = RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",))
+        meta = RecordingMeta.for_robot(robot=robot, board=args.board, truth=("displacement_mm",))
         listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
     session = SimSession(sim, listeners=listeners)
     try:
@@ -311,9 +327,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
         for listener in listeners:
             listener.stop()
     if args.json:
-        print(json.dumps(_report_json(robot, report)))
+        print(json.dumps(_report_json(robot, report, args.board)))
     else:
-        print(_report_text(robot, report))
+        print(_report_text(robot, report, args.board))
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     if recorder is not None and recorder.error is not None:
@@ -335,16 +351,17 @@ def _serve_pty(sim, args) -> int:
     return 0
 
 
-def _recorder(robot, path: str):
+def _recorder(robot, path: str, board: str = "host-sim"):
     from ..record import Logger, RecordingMeta
 
-    return Logger(path, RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",)))
+    return Logger(path, RecordingMeta.for_robot(robot=robot, board=board, truth=("displacement_mm",)))
 
 
-def _report_json(robot, report) -> dict:
+def _report_json(robot, report, board: str = "host-sim") -> dict:
     t = robot.transitions
     return {
         "robot": robot.name,
+        "board": board,
         "direction": report.direction,
         "gait": report.gait,
         "duration_s": report.duration_s,
@@ -364,12 +381,12 @@ def _report_json(robot, report) -> dict:
     }
 
 
-def _report_text(robot, report) -> str:
+def _report_text(robot, report, board: str = "host-sim") -> str:
     t = robot.transitions
     seq = [t.label(s) for s in report.states_reached]
     shown = " → ".join(seq[:13]) + (" …" if len(seq) > 13 else "")
     lines = [
-        f"{robot.name} on host-sim: gait {report.gait} in {report.direction} for {report.duration_s:g} s (simulated)",
+        f"{robot.name} on {board}: gait {report.gait} in {report.direction} for {report.duration_s:g} s (simulated)",
         f"  states reached:   {shown or 'none'}",
         f"  cycles completed: {report.cycles}",
     ]

@@ -36,6 +36,27 @@ class FlashMethod:
 
 
 @dataclass(frozen=True)
+class I2cBus:
+    """One I2C bus of the board: the HAL's bus index (0 = hal_i2c_write_read's bus),
+    its name and pins, the IMU addresses a device on it may use, and the addresses at
+    which a TCA9548A/PCA9548A multiplexer may sit on it (empty: no multiplexer)."""
+
+    index: int
+    name: str
+    sda: str
+    scl: str
+    addresses: tuple[int, ...]
+    mux_addresses: tuple[int, ...]
+
+
+#: What a bus offers when the board file does not say (an MPU-6050's AD0 low/high).
+DEFAULT_IMU_ADDRESSES = (0x68, 0x69)
+MUX_RANGE = range(0x70, 0x78)
+#: Buses a HAL may offer (hal_i2c_write_read_bus takes a uint8_t index; the core's tables hold up to 4).
+MAX_I2C_BUSES = 4
+
+
+@dataclass(frozen=True)
 class Board:
     name: str
     path: Path
@@ -62,6 +83,9 @@ class Board:
     uart_rx_buffer: int
     uart_tx_buffer: int
     flash_methods: tuple[FlashMethod, ...]
+    i2c_buses: tuple[I2cBus, ...] = ()
+    base_flash_bytes: int = 0  # measured firmware of a two-limb robot with tiny tables (0: not estimated)
+    base_ram_bytes: int = 0
 
     @property
     def pwm_channels(self) -> tuple[str, ...]:
@@ -182,6 +206,11 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     i2c = doc.get("i2c", {})
     if not isinstance(i2c, dict):
         raise BoardError(f"{path}: i2c: expected a table")
+    buses = i2c_buses(path, i2c)
+    i2c = {k: v for k, v in i2c.items() if k != "bus"} | {
+        "bus": buses[0].name,
+        "imu_addresses": list(buses[0].addresses),
+    }
     return Board(
         name=_need(path, doc, "board", "name", str),
         path=path,
@@ -204,4 +233,55 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
         uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
         flash_methods=tuple(methods),
+        i2c_buses=buses,
+        base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
+        base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
     )
+
+
+def _optional_int(path: Path, doc: dict, key: str) -> int:
+    v = doc["board"].get(key, 0)
+    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+        raise BoardError(f"{path}: board.{key}: expected a whole number of bytes, got {v!r}")
+    return v
+
+
+def _addresses(path: Path, where: str, v: Any, allowed: range) -> tuple[int, ...]:
+    if not isinstance(v, list) or not all(isinstance(a, int) and not isinstance(a, bool) and a in allowed for a in v):
+        raise BoardError(f"{path}: {where}: expected a list of 7-bit addresses in 0x{allowed.start:02x}..0x{allowed.stop - 1:02x}, got {v!r}")
+    if len(set(v)) != len(v):
+        raise BoardError(f"{path}: {where}: an address is listed twice")
+    return tuple(v)
+
+
+def i2c_buses(path: Path, i2c: dict) -> tuple[I2cBus, ...]:
+    """The board's I2C buses: ``[[i2c.bus]]`` tables (name, sda, scl, imu_addresses,
+    mux_addresses), or the single bus of a board file that gives ``[i2c] bus = "NAME"``."""
+    tables = i2c.get("bus", "I2C")
+    if isinstance(tables, str):  # one bus, described in [i2c] itself
+        tables = [{"name": tables, **{k: i2c[k] for k in ("sda", "scl", "imu_addresses", "mux_addresses") if k in i2c}}]
+    if not isinstance(tables, list) or not tables or not all(isinstance(t, dict) for t in tables):
+        raise BoardError(f"{path}: i2c.bus: expected [[i2c.bus]] tables (name, sda, scl, imu_addresses, mux_addresses)")
+    if len(tables) > MAX_I2C_BUSES:
+        raise BoardError(f"{path}: i2c.bus: at most {MAX_I2C_BUSES} buses, got {len(tables)}")
+    out: list[I2cBus] = []
+    for i, t in enumerate(tables):
+        where = f"i2c.bus[{i + 1}]"
+        unknown = sorted(set(t) - {"name", "sda", "scl", "imu_addresses", "mux_addresses"})
+        if unknown:
+            raise BoardError(f"{path}: {where}: unknown key {unknown[0]!r} (expected name, sda, scl, imu_addresses, mux_addresses)")
+        name = t.get("name")
+        if not isinstance(name, str) or not name:
+            raise BoardError(f"{path}: {where}.name: expected a string, got {name!r}")
+        if any(b.name == name for b in out):
+            raise BoardError(f"{path}: {where}.name: {name!r} names another bus too")
+        pins = {k: t.get(k, "") for k in ("sda", "scl")}
+        for k, v in pins.items():
+            if not isinstance(v, str):
+                raise BoardError(f"{path}: {where}.{k}: expected a pin name, got {v!r}")
+        addrs = _addresses(path, f"{where}.imu_addresses", t.get("imu_addresses", list(DEFAULT_IMU_ADDRESSES)), range(0x08, 0x70))
+        if not addrs:
+            raise BoardError(f"{path}: {where}.imu_addresses: expected at least one address")
+        muxes = _addresses(path, f"{where}.mux_addresses", t.get("mux_addresses", []), MUX_RANGE)
+        out.append(I2cBus(i, name, pins["sda"], pins["scl"], addrs, muxes))
+    return tuple(out)

@@ -29,7 +29,9 @@ from ..errors import BuildError
 from ..paths import home, templates_dir
 from ..robot import Robot
 from .boards import Board
-from .gaits import firmware_gaits
+from .fit import Fit, check_fit
+from .gaits import firmware_gaits, gait_warnings
+from .placement import place_imus
 
 __all__ = ["MANIFEST", "BuildResult", "build", "check_buildable", "firmware_gaits", "render_project"]
 
@@ -47,6 +49,8 @@ class BuildResult:
     ram_used: int
     gait_table_hash: str
     gaits: dict  # {"+x": (Gait, ...), "-x": (...)}
+    fit: Fit | None = None  # IMU placement, I2C time and size estimates checked before compiling
+    warnings: tuple[str, ...] = ()  # feasibility problems of gaits other than gait 0 (gait_warnings)
 
     def size_report(self) -> str:
         b = self.board
@@ -70,12 +74,7 @@ def check_buildable(robot: Robot, board: Board) -> None:
                 f"robot {robot.name} drives actuator {a.name!r} on PWM channel {a.channel}, but board {board.name} "
                 f"has {channels} channels (0..{channels - 1}: {', '.join(board.pwm_pins)})"
             )
-    imus = board.i2c.get("imu_addresses", [0x68, 0x69])
-    if len(robot.limbs) > len(imus):
-        raise BuildError(
-            f"robot {robot.name} has {len(robot.limbs)} limbs, each with an IMU, but board {board.name} "
-            f"has {len(imus)} IMU addresses on its bus ({', '.join(hex(a) for a in imus)})"
-        )
+    place_imus(robot, board)  # BuildError when the board cannot carry the robot's IMUs
     # Telemetry may use at most half the UART (the firmware's TELEMETRY_MAX_HZ rule).
     frame = 24 + 2 * len(robot.limbs) + 2 * len(robot.actuators)
     link_hz = board.uart_baud // 10 // frame // 2
@@ -151,6 +150,8 @@ def build(
     if out_dir.exists() and not (out_dir / MANIFEST).exists():
         raise BuildError(f"{out_dir} exists and is not a proleg build directory: refusing to replace it")
     gaits = firmware_gaits(robot, objective, max_transitions)
+    fit = check_fit(robot, board, gaits)
+    warnings = tuple(gait_warnings(robot, gaits))
     files = render_project(robot, board, gaits)
 
     out_dir.parent.mkdir(parents=True, exist_ok=True)
@@ -177,6 +178,11 @@ def build(
             "flash_bytes": board.flash_bytes,
             "ram_bytes": board.ram_bytes,
             "gait_table_hash": digest,
+            "imu_placement": [
+                {"limb": p.limb, "bus": p.bus_name, "mux": p.mux, "channel": p.channel, "address": p.address,
+                 "automatic": p.automatic}
+                for p in fit.placements
+            ],
             "gait_objective": objective,
             "gait_max_transitions": max_transitions,
             "gait_selection": gaits.selection.as_json(),
@@ -187,7 +193,7 @@ def build(
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return BuildResult(out_dir, out_dir / board.artifact, board, flash_used, ram_used, digest, gaits)
+    return BuildResult(out_dir, out_dir / board.artifact, board, flash_used, ram_used, digest, gaits, fit, warnings)
 
 
 def _make(project: Path, jobs: int) -> None:

@@ -30,6 +30,7 @@ from ..errors import BoardError, BuildError
 from ..paths import home, templates_dir
 from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER
 from .families import Family, load_family
+from .placement import place_imus
 
 Q14 = 1 << 14
 #: LOAD_GAIT capacity (the protocol's MAX_GAIT_STEPS).
@@ -71,6 +72,12 @@ class LimbPart:
     state_bytes: int
     limb_actuator: list[int]
     imu_addr: list[str]
+    imu_bus: list[int]
+    imu_mux: list[str]  # 0x00u: wired directly
+    imu_channel: list[int]
+    n_i2c_buses: int
+    mux_used: bool
+    placement: list[str]  # one line per limb, for the header comment
     thresholds: list[list[tuple[int, int, int, int]]]  # per limb: (up_c, up_s, lo_c, lo_s), padded
     psi_cdeg: list[list[int]]
     hyst_cdeg: list[int]
@@ -121,6 +128,10 @@ class GaitPart:
     n_transitions: int
     labels: list[str]
     gait_hash: str
+    entry_steps: list[int]  # every gait's entry path from rest (rest and join state excluded)
+    entry_first: list[int]
+    entry_len: list[int]
+    entry_join: list[int]  # the gait step the entry path joins
 
 
 @dataclass(frozen=True)
@@ -252,13 +263,9 @@ def _thresholds(robot: Any, limb: Any, max_thr: int) -> list[tuple[int, int, int
     return rows + [(0, 0, 0, 0)] * (max_thr - len(rows))
 
 
-def _limb_part(robot: Any, board: BoardPart) -> LimbPart:
+def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     limbs, actuators = list(robot.limbs), list(robot.actuators)
-    if len(limbs) > len(board.imu_addresses):
-        raise BuildError(
-            f"robot {robot.name}: {len(limbs)} limbs but board {board.board_name} has "
-            f"{len(board.imu_addresses)} IMU addresses"
-        )
+    placements = place_imus(robot, raw_board)
     for a in actuators:
         if not 0 <= a.channel < len(board.pins):
             raise BuildError(
@@ -282,7 +289,13 @@ def _limb_part(robot: Any, board: BoardPart) -> LimbPart:
         state_type="uint8_t" if n_states <= 256 else "uint16_t",
         state_bytes=1 if n_states <= 256 else 2,
         limb_actuator=[act_index[limb.actuator] for limb in limbs],
-        imu_addr=[f"0x{board.imu_addresses[i]:02X}u" for i in range(len(limbs))],
+        imu_addr=[f"0x{p.address:02X}u" for p in placements],
+        imu_bus=[p.bus for p in placements],
+        imu_mux=[f"0x{p.mux or 0:02X}u" for p in placements],
+        imu_channel=[p.channel or 0 for p in placements],
+        n_i2c_buses=max(p.bus for p in placements) + 1,
+        mux_used=any(p.mux is not None for p in placements),
+        placement=[p.describe() for p in placements],
         thresholds=[_thresholds(robot, limb, max_thr) for limb in limbs],
         psi_cdeg=[[round(p * 100) for p in limb.psi_star_deg] + [0] * (max_thr - len(limb.psi_star_deg))
                   for limb in limbs],
@@ -381,12 +394,41 @@ def _transition_table(src: list[int], dst: list[int], n_states: int) -> tuple[bo
     return False, [], [f"{e}UL" for e in sorted(a * n_states + b for a, b in zip(src, dst))]
 
 
-def _gait_hash(n_states: int, rows: list[tuple[int, str, tuple[int, ...]]], src: list[int], dst: list[int]) -> int:
-    """Covers exactly what gait_table.c carries: steps, gaits, allowed transitions."""
+def entry_tables(robot: Any, rows: list[tuple[int, str, tuple[int, ...]]]
+                 ) -> tuple[list[int], list[int], list[int], list[int]]:
+    """Per gait, the way in from rest (proleg.gait.feasibility.entry_path): the states
+    between rest and the join state, concatenated, their offset and count, and the join
+    step. A gait with no way in keeps the old start (step 0, no entry states); the build
+    refuses such a gait 0 (build.check_gaits)."""
+    from ..errors import GaitError
+    from ..gait.feasibility import entry_path
+
+    steps: list[int] = []
+    first, length, join = [], [], []
+    for _, _, st in rows:
+        first.append(len(steps))
+        try:
+            path = entry_path(robot, st)
+        except GaitError:
+            length.append(0)
+            join.append(0)
+            continue
+        inner = list(path.states[1:-1])
+        steps.extend(inner)
+        length.append(len(inner))
+        join.append(path.gait_step)
+    return steps, first, length, join
+
+
+def _gait_hash(n_states: int, rows: list[tuple[int, str, tuple[int, ...]]], src: list[int], dst: list[int],
+               entry: tuple[list[int], list[int], list[int], list[int]] | None = None) -> int:
+    """Covers exactly what gait_table.c carries: steps, gaits, entry paths, allowed transitions."""
     gh = hashlib.sha256()
     gh.update(f"states={n_states};".encode())
     for code, _, st in rows:
         gh.update(f"g{code}:{','.join(map(str, st))};".encode())
+    if entry is not None and (entry[0] or any(entry[3])):  # gaits entered from rest off their step 0
+        gh.update(("e:" + ";".join(",".join(map(str, part)) for part in entry)).encode())
     gh.update(("t:" + ",".join(f"{a}>{b}" for a, b in zip(src, dst))).encode())
     return int.from_bytes(gh.digest()[:4], "big")
 
@@ -407,6 +449,7 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
     src = [int(x) for x in table.src]
     dst = [int(x) for x in table.dst]
     use_bitmap, bitmap, edges = _transition_table(src, dst, n_states)
+    entry = entry_tables(robot, rows)
     return GaitPart(
         selection=_selection_text(gaits_by_direction),
         rows=rows,
@@ -420,7 +463,11 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
         edges=edges,
         n_transitions=len(src),
         labels=[table.label(i) for i in range(n_states)] if n_states <= 64 else [],
-        gait_hash=f"0x{_gait_hash(n_states, rows, src, dst):08X}",
+        gait_hash=f"0x{_gait_hash(n_states, rows, src, dst, entry):08X}",
+        entry_steps=entry[0],
+        entry_first=entry[1],
+        entry_len=entry[2],
+        entry_join=entry[3],
     )
 
 
@@ -435,7 +482,7 @@ def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:
 def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], board: Any) -> RenderContext:
     """Everything the templates need, checked (BuildError when the robot does not fit)."""
     board_part = _board_part(board)
-    limb_part = _limb_part(robot, board_part)
+    limb_part = _limb_part(robot, board_part, board)
     control_part = _control_part(robot)
     gait_part = _gait_part(robot, gaits_by_direction, limb_part.n_states)
     robot_sha = _file_sha256(getattr(robot, "path", None))

@@ -139,6 +139,9 @@ def build_database(nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = 
         raise LinkError("dbc: at least one node id is needed")
     limbs = [limb.name for limb in robot.limbs] if robot is not None else []
     actuators = [a.name for a in robot.actuators] if robot is not None else []
+    repeated = sorted({n for n in nodes if list(nodes).count(n) > 1})
+    if repeated:  # one BU_ node and one message set per robot: a repeat would name a node twice
+        raise LinkError(f"dbc: node id {repeated[0]} given more than once (each robot on the bus once)")
     messages: list[Message] = []
     suffix = len(nodes) > 1
     for node in nodes:

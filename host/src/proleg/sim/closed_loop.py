@@ -28,6 +28,7 @@ from typing import Any
 
 from ..errors import SimError
 from ..firmware.boards import Board, load_board
+from ..firmware.placement import place_imus, sim_imu_keys
 from ..robot import Robot
 from .board import SimBoard, SimulatedBoardLike
 from .plant import Plant, plant_params_from_robot, planar_motion_from_robot, true_rewards_from_robot
@@ -126,7 +127,7 @@ class SimulatedRobot:
     ``board``: a simulated board already loaded with the robot's firmware (any
     ``SimulatedBoardLike``, e.g. an emulated MCU); by default the host-sim build from
     ``library`` (or built and cached by ``sim_library``), reset with ``seed``. ``board_info``:
-    the board description whose ``[i2c] imu_addresses`` wire the IMUs (default host-sim).
+    the board description whose I2C buses carry the IMUs (default host-sim).
     ``plant``: "physical" (default), "table" or a plant object; ``conditions``: the physical
     plant's conditions on top of the robot file's (``make_plant``).
     """
@@ -152,8 +153,8 @@ class SimulatedRobot:
             raise SimError("SimulatedRobot: conditions go with a plant kind, not with a plant object")
         self.plant = plant
         self.plant_kind = "table" if isinstance(plant, Plant) else "physical"
-        addrs = list(self.board_info.i2c.get("imu_addresses", [0x68, 0x69]))
-        self.imu_addresses = tuple(addrs[: len(robot.limbs)])
+        # The key of each limb's IMU on the board's buses (proleg.firmware.placement).
+        self.imu_addresses = sim_imu_keys(place_imus(robot, self.board_info))
         self.channels = tuple(range(max(a.channel for a in robot.actuators) + 1))
         self.ticks_per_step = max(1, round(plant_dt_s * 1e6 / self.board.tick_us))
         self.plant_dt_s = self.ticks_per_step * self.board.tick_us / 1e6

@@ -1,0 +1,101 @@
+"""Whether a board can host a robot, checked before anything is compiled.
+
+``check_fit(robot, board, gaits)`` places every limb's IMU on the board's buses
+(``placement.place_imus``), checks the actuators' PWM channels, the I2C time the IMU
+reads take per control tick, and estimates the flash and static RAM the firmware needs:
+the board file's measured ``base_flash_bytes``/``base_ram_bytes`` (the firmware of a
+two-limb robot with tiny tables) plus the robot's tables (gait steps, gait index,
+allowed transitions: a bitmap up to 64 states, a sorted 32-bit key list above) plus a
+per-limb allowance. It raises ``BuildError`` naming what does not fit and why; the
+exact sizes are still checked after compiling (build.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import BuildError
+from .placement import ImuPlacement, check_tick_budget, i2c_tick_us, mux_selects_per_tick, place_imus
+from .render import BITMAP_MAX_STATES, gait_table_rows
+
+#: Flash and static RAM one more limb (beyond the two of the measured base) adds: its
+#: thresholds, IMU placement, ψ classifier and IMU-check state (measured: under 50 bytes each).
+FLASH_PER_LIMB = 64
+RAM_PER_LIMB = 48
+BASE_LIMBS = 2
+
+
+@dataclass(frozen=True)
+class Fit:
+    placements: tuple[ImuPlacement, ...]
+    mux_selects_per_tick: int
+    i2c_us_per_tick: float
+    table_bytes: int
+    flash_estimate: int | None  # None: the board gives no base to estimate from
+    ram_estimate: int | None
+
+    def lines(self) -> list[str]:
+        out = [p.describe() for p in self.placements]
+        out.append(
+            f"I2C per tick: about {self.i2c_us_per_tick:.0f} us ({len(self.placements)} IMU reads, "
+            f"{self.mux_selects_per_tick} multiplexer channel switches)"
+        )
+        return out
+
+
+def table_bytes(robot: Any, gaits: Mapping[str, Sequence[Any]]) -> int:
+    """Flash the gait and transition tables take (gait_table.c)."""
+    n = robot.n_states
+    state_bytes = 1 if n <= 256 else 2
+    rows = gait_table_rows(gaits)
+    steps = sum(len(st) for _, _, st in rows)
+    index = 10 * max(1, len(rows))  # first, length; entry first, length, join
+    transitions = (n * n + 7) // 8 if n <= BITMAP_MAX_STATES else 4 * max(1, len(robot.transitions.src))
+    return steps * state_bytes + index + transitions
+
+
+def _board(board: Any, key: str, default: Any = None) -> Any:
+    return board.get(key, default) if isinstance(board, dict) else getattr(board, key, default)
+
+
+def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit:
+    """Everything about the robot that must fit the board, or BuildError saying what does not."""
+    name = _board(board, "name", "board")
+    pins = list(_board(board, "pwm_pins", ()) or ())
+    for a in robot.actuators:
+        if a.channel >= len(pins):
+            raise BuildError(
+                f"robot {robot.name} drives actuator {a.name} on PWM channel {a.channel + 1} (index {a.channel}), "
+                f"but board {name} has {len(pins)} channels ({', '.join(pins)})"
+            )
+    placements = place_imus(robot, board)
+    i2c = _board(board, "i2c", {}) or {}
+    hz = int(i2c.get("hz", 400000) or 400000)
+    check_tick_budget(robot, name, placements, hz)
+    tables = table_bytes(robot, gaits)
+    extra = max(0, len(robot.limbs) - BASE_LIMBS)
+    flash = ram = None
+    base_flash = int(_board(board, "base_flash_bytes", 0) or 0)
+    base_ram = int(_board(board, "base_ram_bytes", 0) or 0)
+    limit_flash = int(_board(board, "flash_bytes", 0) or 0)
+    limit_ram = int(_board(board, "ram_bytes", 0) or 0)
+    if base_flash:
+        flash = base_flash + tables + FLASH_PER_LIMB * extra
+        if limit_flash and flash > limit_flash:
+            raise BuildError(
+                f"robot {robot.name} does not fit board {name} (estimated before compiling; fewer gaits: "
+                f"--max-transitions or another objective, or a larger board): its gait and transition tables take "
+                f"{tables:,} bytes ({robot.n_states:,} states, {len(robot.transitions.src):,} transitions), the rest of "
+                f"the firmware about {flash - tables:,}; robot {robot.name} needs {flash:,} bytes of flash, "
+                f"board {name} has {limit_flash:,}"
+            )
+    if base_ram:
+        ram = base_ram + RAM_PER_LIMB * extra
+        if limit_ram and ram > limit_ram:
+            raise BuildError(
+                f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs): "
+                f"robot {robot.name} needs {ram:,} bytes of static RAM, board {name} has {limit_ram:,}"
+            )
+    return Fit(placements, mux_selects_per_tick(placements), i2c_tick_us(placements, hz), tables, flash, ram)

@@ -1,0 +1,202 @@
+"""Any robot a lab builds: the example robots beyond the paper build where they fit and walk
+both ways on the simulator; IMUs behind a multiplexer; entry from rest; the sim's flags;
+plant defaults for more than two limbs; hil_tests --robot."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from proleg.cli import main
+from proleg.errors import BuildError, RobotFileError
+from proleg.firmware.boards import load_board
+from proleg.firmware.build import build
+from proleg.firmware.gaits import firmware_gaits
+from proleg.gait import evaluate_sequence
+from proleg.protocol.codec import FrameDecoder
+from proleg.protocol.definition import EventKind, FaultCode
+from proleg.report import SimSession
+from proleg.robot import load_robot
+from proleg.sim.simulators import open_simulated
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ("inchworm-3", "caterpillar-4")
+
+
+def cli(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+@pytest.mark.parametrize("direction", ["+x", "-x"])
+def test_example_robot_walks_both_ways_on_the_simulator_without_faults(name, direction):
+    robot = load_robot(ROOT / "robots" / f"{name}.toml")
+    sim = open_simulated(robot)
+    session = SimSession(sim)
+    session.advance(0.2)
+    report = session.run_gait(direction, 0, 40.0)
+    gait = firmware_gaits(robot)[direction][0]
+    per_cycle = evaluate_sequence(robot.transitions, gait.states).reward
+    assert report.faults == [] and report.errors == []
+    assert report.cycles >= 3
+    assert sim.plant.unexpected_transitions == 0
+    sign = 1 if direction == "+x" else -1
+    assert all(sign * d > 0 for d in report.cycle_displacements_mm)
+    assert report.mean_cycle_mm == pytest.approx(per_cycle * sim.plant.params.step_mm)
+
+
+def test_the_inchworm_matrix_is_in_mm_and_the_simulator_honours_it():
+    robot = load_robot(ROOT / "robots" / "inchworm-3.toml")
+    assert robot.units == "mm" and robot.plant.step_mm == 1.0
+    sim = open_simulated(robot)
+    session = SimSession(sim)
+    session.advance(0.2)
+    report = session.run_gait("+x", 0, 20.0)
+    assert report.cycle_displacements_mm and all(d == pytest.approx(12.0) for d in report.cycle_displacements_mm)
+
+
+def test_a_robot_too_big_for_the_tick_is_refused_with_the_reason(tmp_path):
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text().replace("tick_hz = 500", "tick_hz = 1000")
+    path = tmp_path / "caterpillar-fast.toml"
+    path.write_text(text)
+    with pytest.raises(BuildError, match=r"reading 4 IMUs \(2 channel switches\) takes about 940 us .* arduino-nano"):
+        build(load_robot(path), load_board("arduino-nano"), tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def _placed_behind_mux(tmp_path) -> Path:
+    """inchworm-3 with its IMUs placed by hand: tail direct on sim0, middle and head behind
+    the multiplexer of sim1 on channels 2 and 5, both at 0x68."""
+    text = (ROOT / "robots" / "inchworm-3.toml").read_text()
+    places = {
+        "tail": 'imu = { bus = "sim0", address = 0x68 }',
+        "middle": 'imu = { bus = "sim1", mux = 0x73, channel = 2, address = 0x68 }',
+        "head": 'imu = { bus = "sim1", channel = 5, address = 0x68 }',
+    }
+    for limb, line in places.items():
+        text = text.replace(f'name = "{limb}"\n', f'name = "{limb}"\n{line}\n', 1)
+    path = tmp_path / "inchworm-mux.toml"
+    path.write_text(text)
+    return path
+
+
+def test_imus_behind_a_multiplexer_walk_and_faults_still_name_limbs(tmp_path):
+    robot = load_robot(_placed_behind_mux(tmp_path))
+    sim = open_simulated(robot)
+    assert sim.imu_addresses == (0x68, 0x81, 0x82)
+    lib = sim.board._lib
+    session = SimSession(sim)
+    session.advance(0.2)
+    report = session.run_gait("+x", 0, 15.0)
+    assert report.faults == [] and report.cycles >= 2
+    # two IMUs share 0x68 on sim1: every tick switches channel 2 -> 5 -> 2
+    import ctypes
+
+    lib.sim_mux_switches.restype = ctypes.c_uint32
+    lib.sim_mux_control.restype = ctypes.c_uint8
+    lib.sim_mux_control.argtypes = [ctypes.c_uint8, ctypes.c_uint8]
+    before = lib.sim_mux_switches()
+    sim.run_ticks(10)
+    assert lib.sim_mux_switches() - before == 20
+    assert lib.sim_mux_control(1, 0x73) in (1 << 2, 1 << 5)
+    sim.board.read()
+    sim.inject("imu-silent:head")
+    sim.run_ticks(50)
+    msgs = FrameDecoder().feed(sim.board.read())
+    faults = [m for m in msgs if m.name == "EVENT" and m.kind == EventKind.FAULT]
+    assert any(f.code == FaultCode.IMU_NO_ACK and f.detail == 2 for f in faults), faults  # limb 2 = head
+    assert all(sim.board.pwm(ch) == 0.0 for ch in sim.channels)
+
+
+def test_sim_takes_board_objective_and_max_transitions(capsys):
+    code, _, err = cli(capsys, "sim", ROOT / "robots" / "paper-r1.toml", "--board", "avr-emu", "--duration", "1")
+    assert code == 2 and err.strip() == "proleg: error: board 'avr-emu' has no simulator (simulated boards: host-sim)"
+    code, out, _ = cli(capsys, "sim", ROOT / "robots" / "caterpillar-4.toml", "--board", "host-sim",
+                       "--objective", "rate", "--duration", "12", "--json")
+    report = json.loads(out)
+    assert code == 0 and report["board"] == "host-sim" and report["cycles"] >= 1 and report["faults"] == []
+    code, out, _ = cli(capsys, "sim", ROOT / "robots" / "paper-r2.toml", "--max-transitions", "4",
+                       "--duration", "8", "--json")
+    assert code == 0 and json.loads(out)["cycles"] >= 1
+
+
+def test_build_prints_the_imu_placement(capsys, tmp_path):
+    code, out, _ = cli(capsys, "build", ROOT / "robots" / "inchworm-3.toml", "--board", "bluepill-f103",
+                       "-o", tmp_path / "fw")
+    assert code == 0
+    assert "limb head: IMU at 0x68 on bus I2C2 (automatic)" in out
+    assert "I2C per tick: about 630 us (3 IMU reads, 0 multiplexer channel switches)" in out
+    manifest = json.loads((tmp_path / "fw" / "proleg-build.json").read_text())
+    assert manifest["imu_placement"][2] == {"limb": "head", "bus": "I2C2", "mux": None, "channel": None,
+                                            "address": 0x68, "automatic": True}
+    config = (tmp_path / "fw" / "gen" / "robot_config.h").read_text()
+    assert "#define CFG_LIMB_IMU_BUS { 0, 0, 1 }" in config and "#define CFG_I2C_BUSES 2u" in config
+
+
+def test_more_than_two_limbs_get_a_coupling_from_their_geometry(tmp_path):
+    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    g = robot.plant.coupling_deg
+    assert g is not None and [row[i] for i, row in enumerate(g)] == [60.0] * 4
+    for i, row in enumerate(g):  # the cross shares sum to cross_gain_deg and fall off with distance
+        others = [x for j, x in enumerate(row) if j != i]
+        assert sum(others) == pytest.approx(12.0, abs=0.01)
+    assert g[0][1] > g[0][2] > g[0][3]
+    assert load_robot(ROOT / "robots" / "paper-r1.toml").plant.coupling_deg is None  # the paper's two limbs: unchanged
+
+
+def test_step_mm_is_refused_when_the_matrix_is_in_mm(tmp_path):
+    text = (ROOT / "robots" / "inchworm-3.toml").read_text().replace("cross_gain_deg = 12.0", "step_mm = 2.0")
+    path = tmp_path / "mm.toml"
+    path.write_text(text)
+    with pytest.raises(RobotFileError, match=r"plant.step_mm: expected 1 \(or no step_mm\) when transitions.units = \"mm\""):
+        load_robot(path)
+
+
+def test_hil_tests_run_on_the_robot_given_with_robot():
+    out = subprocess.run(
+        [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist", str(ROOT / "hil_tests"),
+         "--robot", str(ROOT / "robots" / "inchworm-3.toml"), "--board", "host-sim"],
+        capture_output=True, text=True, cwd=ROOT,
+    ).stdout
+    ids = [line for line in out.splitlines() if "::" in line]
+    gait_ids = [i for i in ids if "gait_engine_predicts" in i]
+    assert gait_ids and all("inchworm-3" in i for i in gait_ids)
+    assert not any("paper-r" in i for i in ids)
+
+
+def _worm(tmp_path: Path, n: int) -> Path:
+    """An n-limb binary worm (one coil per limb, single-limb transitions, the example
+    robots' sliding rule), its 2^n-state table in a CSV file."""
+    parts = [f'[robot]\nname = "worm-{n}"\n']
+    parts += [f'[[limb]]\nname = "l{i + 1}"\npsi_star_deg = [20.0]\nactuator = "a{i + 1}"\n' for i in range(n)]
+    parts += [f'[[actuator]]\nname = "a{i + 1}"\nchannel = {i}\n' for i in range(n)]
+    parts += ['[transitions]\nfile = "worm.csv"\ndefault_duration_s = 0.8\n',
+              "[control]\ntick_hz = 250\ntelemetry_hz = 10\nhold_duty = 0.0\n"]
+    rows = ["from,to,reward"]
+    for a in range(1 << n):
+        grip = [1 - ((a >> (n - 1 - j)) & 1) for j in range(n)]
+        for i in range(n):
+            b = a ^ (1 << (n - 1 - i))
+            d = sum(grip[i + 1:]) - sum(grip[:i])
+            d = d if b > a else -d
+            rows.append(f"{a},{b},{(d > 0) - (d < 0)}")
+    (tmp_path / "worm.csv").write_text("\n".join(rows) + "\n")
+    path = tmp_path / "worm.toml"
+    path.write_text("\n".join(parts))
+    return path
+
+
+def test_eight_binary_limbs_build_for_the_bluepill_and_the_nano_says_why_not(tmp_path):
+    robot = load_robot(_worm(tmp_path, 8))
+    assert robot.n_states == 256
+    result = build(robot, load_board("bluepill-f103"), tmp_path / "bp")
+    assert result.flash_used < 65536 and len(result.fit.placements) == 8
+    assert result.fit.flash_estimate is not None and abs(result.fit.flash_estimate - result.flash_used) < 4096
+    with pytest.raises(BuildError, match=r"actuator 'a5' on PWM channel 4, but board arduino-nano has 4 channels"):
+        build(robot, load_board("arduino-nano"), tmp_path / "nano")
