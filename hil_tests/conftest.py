@@ -10,7 +10,7 @@ console uses). Tests marked ``plant`` also need the simulated plant's ground tru
 (displacement, PWM at tick resolution, injected faults) and are skipped on hardware.
 ``--robot`` and ``--board`` are honoured on every target: given a robot, every test runs
 on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
-``robot("paper-r1")``) is skipped for another. On the simulator ``--board`` names a
+``robot("paper-r1")``) is deselected for another. On the simulator ``--board`` names a
 simulated board (``proleg.sim.simulators.SIMULATORS``; default host-sim).
 """
 
@@ -39,7 +39,7 @@ def pytest_addoption(parser):
 
 
 def pytest_configure(config):
-    config.addinivalue_line("markers", "robot(name): shows that robot's own behaviour (skipped for another --robot)")
+    config.addinivalue_line("markers", "robot(*names): shows these robots' own behaviour (deselected for another --robot)")
     config.addinivalue_line("markers", "gait_cases(opposing): parametrised over the robots' firmware gaits")
 
 
@@ -76,10 +76,13 @@ def pytest_generate_tests(metafunc):
 def pytest_collection_modifyitems(config, items):
     given = config.getoption("--robot")
     name = load_robot(given).name if given else None
+    kept, other_robots = [], []
     for item in items:
         mark = item.get_closest_marker("robot")
-        if name and mark and mark.args and mark.args[0] != name:
-            item.add_marker(pytest.mark.skip(reason=f"shows robot {mark.args[0]}'s behaviour, not {name}'s"))
+        (other_robots if name and mark and name not in mark.args else kept).append(item)
+    if other_robots:  # another robot's own behaviour: not a test of this one at all
+        config.hook.pytest_deselected(items=other_robots)
+        items[:] = kept
     if config.getoption("--target") == "sim":
         return
     skip = pytest.mark.skip(reason="needs the simulated plant's ground truth")

@@ -36,6 +36,7 @@ def _mean(xs: list[float]) -> float:
 
 
 @pytest.mark.plant
+@pytest.mark.robot("paper-r1", "paper-r2")
 @pytest.mark.parametrize("name, ct1_sign", [("paper-r1", +1), ("paper-r2", -1)])
 def test_ct1_and_ct2_move_r1_and_r2_by_equal_amounts_in_opposite_directions(open_target, name, ct1_sign):
     a = _per_cycle(open_target(name), C_T1)
@@ -45,6 +46,7 @@ def test_ct1_and_ct2_move_r1_and_r2_by_equal_amounts_in_opposite_directions(open
 
 
 @pytest.mark.plant
+@pytest.mark.robot("paper-r1-one-actuator")
 @pytest.mark.parametrize("sequence", [C_L1, C_L2], ids=["C_L1", "C_L2"])
 def test_one_actuator_r1_moves_only_plus_x(open_target, sequence):
     cycles = _per_cycle(open_target("paper-r1-one-actuator"), sequence)

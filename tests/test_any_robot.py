@@ -37,7 +37,7 @@ def cli(capsys, *argv: str) -> tuple[int, str, str]:
 @pytest.mark.parametrize("direction", ["+x", "-x"])
 def test_example_robot_walks_both_ways_on_the_simulator_without_faults(name, direction):
     robot = load_robot(ROOT / "robots" / f"{name}.toml")
-    sim = open_simulated(robot)
+    sim = open_simulated(robot, plant="table")  # the matrix is the truth here: the lookup plant
     session = SimSession(sim)
     session.advance(0.2)
     report = session.run_gait(direction, 0, 40.0)
@@ -54,7 +54,7 @@ def test_example_robot_walks_both_ways_on_the_simulator_without_faults(name, dir
 def test_the_inchworm_matrix_is_in_mm_and_the_simulator_honours_it():
     robot = load_robot(ROOT / "robots" / "inchworm-3.toml")
     assert robot.units == "mm" and robot.plant.step_mm == 1.0
-    sim = open_simulated(robot)
+    sim = open_simulated(robot, plant="table")  # the matrix is the truth here: the lookup plant
     session = SimSession(sim)
     session.advance(0.2)
     report = session.run_gait("+x", 0, 20.0)
@@ -88,7 +88,7 @@ def _placed_behind_mux(tmp_path) -> Path:
 
 def test_imus_behind_a_multiplexer_walk_and_faults_still_name_limbs(tmp_path):
     robot = load_robot(_placed_behind_mux(tmp_path))
-    sim = open_simulated(robot)
+    sim = open_simulated(robot, plant="table")  # the matrix is the truth here: the lookup plant
     assert sim.imu_addresses == (0x68, 0x81, 0x82)
     lib = sim.board._lib
     session = SimSession(sim)
@@ -118,11 +118,11 @@ def test_sim_takes_board_objective_and_max_transitions(capsys):
     code, _, err = cli(capsys, "sim", ROOT / "robots" / "paper-r1.toml", "--board", "avr-emu", "--duration", "1")
     assert code == 2 and err.strip() == "proleg: error: board 'avr-emu' has no simulator (simulated boards: host-sim)"
     code, out, _ = cli(capsys, "sim", ROOT / "robots" / "caterpillar-4.toml", "--board", "host-sim",
-                       "--objective", "rate", "--duration", "12", "--json")
+                       "--objective", "rate", "--duration", "12", "--plant", "table", "--json")
     report = json.loads(out)
     assert code == 0 and report["board"] == "host-sim" and report["cycles"] >= 1 and report["faults"] == []
     code, out, _ = cli(capsys, "sim", ROOT / "robots" / "paper-r2.toml", "--max-transitions", "4",
-                       "--duration", "8", "--json")
+                       "--duration", "8", "--plant", "table", "--json")
     assert code == 0 and json.loads(out)["cycles"] >= 1
 
 
@@ -165,7 +165,7 @@ def test_hil_tests_run_on_the_robot_given_with_robot():
         capture_output=True, text=True, cwd=ROOT,
     ).stdout
     ids = [line for line in out.splitlines() if "::" in line]
-    gait_ids = [i for i in ids if "gait_engine_predicts" in i]
+    gait_ids = [i for i in ids if "measured_matrix_rate" in i]
     assert gait_ids and all("inchworm-3" in i for i in gait_ids)
     assert not any("paper-r" in i for i in ids)
 
