@@ -429,7 +429,7 @@ def _n_trials(path: Path, value: dict, n: int, allowed: np.ndarray) -> np.ndarra
 def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
                        allow_nan: bool = False) -> np.ndarray:
     where = f"{path}: {name}"
-    expected = ("a variance >= 0" if variance else "a number") + (" (nan: not measured)" if allow_nan else "")
+    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
     if not isinstance(rows, list) or len(rows) != n:
         got = len(rows) if isinstance(rows, list) else type(rows).__name__
         raise RobotFileError(f"{where}: expected {n} rows like the matrix, got {got}")
