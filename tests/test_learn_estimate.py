@@ -82,7 +82,7 @@ def test_extra_trials_are_the_fewest_that_reach_the_half_width(n, s, h):
     assert all(x == 2 for k, x in enumerate(extra_trials(comp, h)) if k != e)  # never measured: two to start with
 
 
-def test_the_learned_file_loads_today_keeps_the_old_matrix_and_reads_back_its_statistics(tmp_path):
+def test_the_learned_file_loads_with_its_statistics_and_keeps_the_old_matrix(tmp_path):
     robot = load_robot(R1)
     rng = np.random.default_rng(3)
     truth = robot.transitions.reward * 4.0
@@ -102,6 +102,41 @@ def test_the_learned_file_loads_today_keeps_the_old_matrix_and_reads_back_its_st
     assert stats["n_trials"][a, b] == 4
     assert stats["var_dx"][a, b] == pytest.approx(est.dx.var[e], rel=1e-5)
     assert stats["dy"][a, b] == pytest.approx(est.components["dy"].mean[e], rel=1e-5, abs=1e-6)
+    # the loader takes them as keys: n_trials, and the planar statistics gait selection weighs
+    assert "\nn_trials = [" in text and "#learned:" not in text
+    assert np.array_equal(learned.n_trials, est.dx.n)
+    assert np.allclose(learned.transitions.planar.var_dx, est.dx.var, rtol=1e-5)
+
+
+def test_a_transition_not_measured_is_nan_and_loads_as_unknown(tmp_path):
+    robot = load_robot(R1)
+    t = robot.transitions
+    skip = t.lookup(t.index("11"), t.index("00"))
+    trials = [Trial(t.label(a), t.label(b), 0, 1, float(k) + e, 0.1 * k, None, "sim")
+              for e, (a, b) in enumerate(zip(t.src, t.dst)) if e != skip for k in range(3)]
+    out = write_learned_robot(robot, estimate(t, trials), tmp_path / "l.toml", units="mm")
+    text = out.read_text()
+    assert "not measured (previous value kept): 11->00" in text and "nan" in text
+    learned = load_robot(out)
+    assert learned.n_trials[skip] == 0 and learned.transitions.reward[skip] == t.reward[skip]
+    var = learned.transitions.planar.var_dx
+    assert var[skip] == pytest.approx(var.max())  # unknown spread: not taken for a sure transition
+    assert learned.transitions.planar.dy[skip] == 0.0
+    commented = write_learned_robot(robot, estimate(t, trials), tmp_path / "c.toml", units="mm", stats_as_keys=False)
+    assert load_robot(commented).n_trials is None and read_learned(commented)["n_trials"][3, 0] == 0
+
+
+def test_learned_keys_that_are_wrong_are_one_clear_line(tmp_path):
+    from proleg.errors import RobotFileError
+
+    text = R1.read_text().replace("[transitions]", "[transitions]\nn_trials = [[0, 1, 2, 3], [1, 0, 1, 1], [1, 1, 0, 1.5], [1, 1, 1, 0]]")
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    with pytest.raises(RobotFileError, match=r"n_trials\[3\]\[4\]: expected a whole number"):
+        load_robot(p)
+    p.write_text(R1.read_text().replace("[transitions]", "[transitions]\nvar_dx = [[0, nan, 1, 1], [1, 0, 1, 1], [1, 1, 0, -1], [1, 1, 1, 0]]"))
+    with pytest.raises(RobotFileError, match=r"var_dx\[3\]\[4\]: expected a variance >= 0 or 'x', got -1"):
+        load_robot(p)
 
 
 def test_forbidden_entries_stay_forbidden_in_the_learned_file(tmp_path):

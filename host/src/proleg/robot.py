@@ -111,6 +111,7 @@ class Robot:
     safety: Safety
     control: Control
     plant: PlantSection | None = None  # the checked [plant] table (defaults when absent)
+    n_trials: np.ndarray | None = None  # learned file: trials per allowed transition (aligned with transitions.src)
 
     def __post_init__(self) -> None:
         if self.plant is None:
@@ -252,13 +253,18 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
             f"{path}: limb: {n:,} states (the product of the limbs' levels {levels}), expected at most {MAX_STATES:,}"
         )
     table, units = _transitions(path, doc["transitions"], levels)
+    n_trials = None
+    if isinstance(doc["transitions"], dict) and "n_trials" in doc["transitions"]:
+        allowed = np.zeros((table.n_states, table.n_states), dtype=bool)
+        allowed[table.src, table.dst] = True
+        n_trials = _n_trials(path, doc["transitions"], table.n_states, allowed)
 
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
-    return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant)
+    return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials)
 
 
 def _array_of_tables(path: Path, value: Any, key: str) -> list[dict]:
@@ -375,7 +381,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
 def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[TransitionTable, str]:
     f = _Fields(
         path, "transitions", value,
-        {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", *PLANAR_FIELDS},
+        {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", "n_trials",
+         *PLANAR_FIELDS},
     )
     units = f.string("units", "steps")
     n = states.state_count(levels)
@@ -396,7 +403,7 @@ def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[Trans
     else:
         if f.has("durations_s"):
             f.fail("durations_s", "durations in the CSV's 4th column when the table is a file")
-        for key in PLANAR_FIELDS:
+        for key in (*PLANAR_FIELDS, "n_trials"):
             if f.has(key):
                 f.fail(key, "an inline 'matrix' (planar statistics are not read from a CSV table yet)")
         planar = None
@@ -420,19 +427,43 @@ def _transitions(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[Trans
 
 def _planar(path: Path, value: dict, n: int, allowed: np.ndarray) -> PlanarRewards | None:
     """dy, dtheta_deg (means) and var_dx, var_dy, var_dtheta_deg (variances, >= 0): n × n like
-    the matrix, 'x' exactly where the matrix forbids a transition, the diagonal ignored."""
+    the matrix, 'x' exactly where the matrix forbids a transition, the diagonal ignored.
+    ``nan`` marks an allowed transition not measured (a learned file, ``proleg learn``): for
+    gait selection a mean not measured counts as 0 and a variance not measured as the
+    largest one measured for that key (an unknown transition is not taken for a sure one;
+    0 when none is measured)."""
     given = {}
     src, dst = np.nonzero(allowed)
     for key in PLANAR_FIELDS:
         if key in value:
-            m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed, variance=key.startswith("var_"))
-            given[key] = m[src, dst]
+            m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed,
+                                   variance=key.startswith("var_"), allow_nan=True)
+            v = m[src, dst]
+            known = v[~np.isnan(v)]
+            fill = float(known.max()) if key.startswith("var_") and len(known) else 0.0
+            given[key] = np.where(np.isnan(v), fill, v)
     return PlanarRewards(**given) if given else None
 
 
-def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool) -> np.ndarray:
+def _n_trials(path: Path, value: dict, n: int, allowed: np.ndarray) -> np.ndarray | None:
+    """``n_trials`` (a learned file): whole numbers >= 0 like the matrix, 'x' where forbidden."""
+    if "n_trials" not in value:
+        return None
+    m = _same_shape_matrix(path, "transitions.n_trials", value["n_trials"], n, allowed, variance=True)
+    src, dst = np.nonzero(allowed)
+    v = m[src, dst]
+    bad = [(int(a), int(b)) for a, b, x in zip(src, dst, v) if x != int(x)]
+    if bad:
+        a, b = bad[0]
+        raise RobotFileError(f"{path}: transitions.n_trials[{a + 1}][{b + 1}]: expected a whole number of trials, "
+                             f"got {m[a, b]!r}")
+    return v.astype(np.int64)
+
+
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
+                       allow_nan: bool = False) -> np.ndarray:
     where = f"{path}: {name}"
-    expected = "a variance >= 0" if variance else "a number"
+    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
     if not isinstance(rows, list) or len(rows) != n:
         got = len(rows) if isinstance(rows, list) else type(rows).__name__
         raise RobotFileError(f"{where}: expected {n} rows like the matrix, got {got}")
@@ -449,7 +480,8 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
                 if allowed[a, b]:
                     raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
                 continue
-            if not _is_number(v) or (variance and v < 0):
+            unknown = allow_nan and isinstance(v, float) and math.isnan(v)
+            if not unknown and (not _is_number(v) or (variance and v < 0)):
                 raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
             if not allowed[a, b]:
                 raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")

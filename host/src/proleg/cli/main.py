@@ -171,6 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_link_commands(sub)  # console, plot, dbc
     add_robot_commands(sub)  # run, load-gait, set-param, robots
+    __import__("proleg.cli.learn", fromlist=["add_arguments"]).add_arguments(sub)  # learn
     return p
 
 

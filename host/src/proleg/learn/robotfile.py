@@ -5,11 +5,10 @@ stated in ``units``; forbidden entries stay ``"x"``; a transition never measured
 previous value and is named in a comment), the durations of the old table when it had
 some, and beside it the learned statistics under issue 17's names — ``dy``,
 ``dtheta_deg``, ``var_dx``, ``var_dy``, ``var_dtheta_deg`` — and ``n_trials``, same shape as
-``matrix``, ``"x"`` where forbidden, ``nan`` where unknown. Today's loader
-(``proleg.robot``) refuses keys it does not know in ``[transitions]``, so by default these
-are written as comment lines ``#learned: key = [...]`` that ``read_learned`` reads back and
-that become real keys by deleting ``#learned: `` once the loader accepts them
-(``stats_as_keys=True`` writes them as keys already). The previous ``[transitions]`` table is
+``matrix``, ``"x"`` where forbidden, ``nan`` where unknown — real keys that the loader
+(``proleg.robot``) reads: ``Robot.n_trials``, and the planar statistics that ``proleg gait``
+weighs (``--variance-weight``). ``stats_as_keys=False`` writes them as comment lines
+``#learned: key = [...]`` instead (for an older proleg); ``read_learned`` reads both. The previous ``[transitions]`` table is
 kept below, commented out. Everything else in the file is copied unchanged.
 """
 
@@ -66,7 +65,7 @@ def _section_span(lines: list[str], name: str) -> tuple[int, int] | None:
     return None if start is None else (start, len(lines))
 
 
-def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = False,
+def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = True,
                              note: str = "") -> list[str]:
     table = robot.transitions
     n = table.n_states
@@ -96,8 +95,8 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
         out += _matrix("durations_s", dur, allowed)
     prefix = "" if stats_as_keys else PREFIX
     if not stats_as_keys:
-        out.append("# Learned statistics beside the matrix (issue 17 names). Today's loader does not accept them")
-        out.append(f"# in [transitions]: delete '{PREFIX}' once it does; `proleg.learn.robotfile.read_learned` reads them.")
+        out.append(f"# Learned statistics beside the matrix, commented out for an older proleg: delete '{PREFIX}'")
+        out.append("# to use them; `proleg.learn.robotfile.read_learned` reads them either way.")
     counts = np.zeros((n, n))
     counts[table.src, table.dst] = dx.n
     out += _matrix("n_trials", counts, allowed, prefix)
@@ -113,7 +112,7 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
 
 
 def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units: str | None = None,
-                        stats_as_keys: bool = False, note: str = "") -> Path:
+                        stats_as_keys: bool = True, note: str = "") -> Path:
     """Write ``robot``'s file with the learned ``[transitions]`` (see the module docstring)."""
     out = Path(out)
     lines = Path(robot.path).read_text(encoding="utf-8").splitlines()

@@ -25,9 +25,11 @@ import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
-from .measure import Pose, Trial, TrialLog, manual_trial, planar_delta, remaining
+from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
 
@@ -38,7 +40,7 @@ class ExplorationError(RuntimeError):
 
 @dataclass(frozen=True)
 class Progress:
-    done: int          # trials counted toward the goal
+    done: int          # trials counted toward the goal (at most the goal per transition)
     to_do: int         # trials still needed
     elapsed_s: float   # link clock since the start
     eta_s: float       # estimated time left at the pace so far
@@ -72,6 +74,7 @@ class Explorer:
                  rest: Callable[[float], None] | None = None,
                  ask: Callable[[str], str] | None = None):
         self.client, self.robot, self.log, self.pose = client, robot, log, pose
+        self.goal: np.ndarray | None = None  # trials wanted per transition (default: repeats each)
         self.repeats, self.settle_s, self.source, self.seed = repeats, settle_s, source, seed
         info_steps = getattr(getattr(client, "info", None), "max_gait_steps", None) or MAX_GAIT_STEPS
         self.max_steps = min(MAX_GAIT_STEPS, int(info_steps))
@@ -83,6 +86,7 @@ class Explorer:
         self.on_progress = on_progress
         self._rest = rest or self._rest_on_link
         self._t0 = self._clock()
+        self._trials0 = len(log.trials)  # the pace counts this run's trials only (a resumed log)
         self.pieces_run = 0
 
     def _clock(self) -> float:
@@ -98,7 +102,11 @@ class Explorer:
             state = int(msg.measured)
         return state
 
-    def to_do(self):
+    def to_do(self) -> np.ndarray:
+        """Trials still wanted per allowed transition: up to ``goal`` when set (extra or
+        adaptive plans), else up to ``repeats`` each."""
+        if self.goal is not None:
+            return np.maximum(0, self.goal - counts(self.robot.transitions, self.log.trials))
         return remaining(self.robot.transitions, self.log.trials, self.repeats)
 
     def run(self, max_pieces: int | None = None) -> list[Trial]:
@@ -107,7 +115,7 @@ class Explorer:
         t = self.robot.transitions
         while max_pieces is None or self.pieces_run < max_pieces:
             demand = self.to_do()
-            ex = exploration(t, self.repeats)  # which transitions any closed tour can make
+            ex = exploration(t, 1)  # which transitions any closed tour can make
             for a, b in ex.uncoverable:
                 demand[t.lookup(a, b)] = 0
             if demand.sum() == 0:
@@ -135,10 +143,16 @@ class Explorer:
     def _report(self) -> None:
         if self.on_progress is None:
             return
-        todo = int(self.to_do().sum())
-        done = int(len(self.log.trials))
+        t = self.robot.transitions
+        goal = self.goal if self.goal is not None else np.full(t.n_transitions, self.repeats)
+        for a, b in exploration(t, 1).uncoverable:
+            goal = np.where(np.arange(t.n_transitions) == t.lookup(a, b), 0, goal)
+        have = counts(t, self.log.trials)
+        todo = int(np.maximum(0, goal - have).sum())
+        done = int(np.minimum(goal, have).sum())
         el = self._clock() - self._t0
-        self.on_progress(Progress(done, todo, el, el / max(1, done) * todo))
+        pace = el / max(1, len(self.log.trials) - self._trials0)
+        self.on_progress(Progress(done, todo, el, pace * todo))
 
     def run_piece(self, piece: Piece, record: bool = True) -> list[Trial]:
         """Run one piece from its first state (see the module docstring); ``record``: append

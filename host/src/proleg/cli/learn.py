@@ -1,0 +1,311 @@
+"""``proleg learn``: measure a robot's transition matrix on the robot (docs/learning.md).
+
+Three things, in this order, each optional after the first:
+
+1. **explore** (when a link is given: ``--port``, ``--can`` or ``--sim``): drive the robot
+   through randomised Euler tours until every allowed transition has ``--repeats`` trials
+   in ``--log`` (``--adaptive``: the same budget, spent where the intervals are widest;
+   ``--more`` with ``--half-width``: the fewest extra trials that reach that half-width).
+   The log is append-only: run the same command again to resume;
+2. **report** (``--report``, or always after exploring): per transition n, mean and 95 %
+   interval of Δx (Δy, Δθ when measured), flagged transitions, extra trials for
+   ``--half-width``;
+3. **write** (``--out``): the learned robot file.
+
+Position sources (``--source``): ``sim`` (the simulator's ground truth; the default with
+``--sim``), ``tracker`` (no pose during the run; ``--track FILE.csv`` gives the motion,
+clocks aligned by ``proleg.learn.tracker``), ``manual`` (asked after each transition).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import sys
+from typing import Any, TextIO
+
+import numpy as np
+
+from ..errors import LinkError, ProlegError
+
+log = logging.getLogger("proleg")
+
+
+class LearnError(ProlegError):
+    """A learn option or file the user got wrong (one line, exit code 2)."""
+
+
+def add_arguments(subparsers: Any) -> None:
+    from .main import _positive_float, _positive_int, robot_arg
+    from .robot_commands import DEFAULT_BAUDRATE
+
+    p = subparsers.add_parser(
+        "learn", help="measure the robot's transition matrix (explore, report, write a learned robot file)",
+        description="Explore the robot's allowed transitions (randomised Euler tours, resumable from --log), "
+                    "estimate each transition's motion with confidence intervals, and write a learned robot file.")
+    p.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--port", metavar="URL", help="serial port or pyserial URL of the robot")
+    src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
+    src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board with a table plant")
+    p.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
+    p.add_argument("--node", type=lambda t: int(t, 0), default=0, help="CAN node id of the robot (default 0)")
+    p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
+    p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
+    p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
+                   help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
+    p.add_argument("--log", required=True, metavar="TRIALS.jsonl",
+                   help="append-only trial log; an existing one is resumed, nothing recorded is lost")
+    p.add_argument("--repeats", type=_positive_int, default=5, metavar="R", help="trials per transition (default 5)")
+    p.add_argument("--source", choices=("sim", "tracker", "manual"),
+                   help="position source (default: sim with --sim; required otherwise)")
+    p.add_argument("--track", metavar="FILE.csv", help="tracker CSV (time,x,y,theta) for trials without motion")
+    p.add_argument("--tracker-offset", type=float, metavar="S",
+                   help="tracker time − firmware time from a sync event (default: estimated)")
+    p.add_argument("--adaptive", action="store_true",
+                   help="spend the R × transitions budget where the intervals are widest (2 trials each first)")
+    p.add_argument("--half-width", type=_positive_float, metavar="H",
+                   help="report the extra trials each transition needs for a 95 %% interval of ± H")
+    p.add_argument("--more", action="store_true", help="with --half-width and a link: run those extra trials")
+    p.add_argument("--report", action="store_true", help="print the estimates (always printed after exploring)")
+    p.add_argument("--out", metavar="LEARNED.toml", help="write the robot file with the learned [transitions]")
+    p.add_argument("--variance-weight", type=float, default=0.0, metavar="λ",
+                   help="report the best gait for mean − λ·σ per transition (default 0: the mean)")
+    p.add_argument("--seed", type=int, default=1, help="tour randomisation and simulator seed (default 1)")
+    p.add_argument("--max-pieces", type=_positive_int, metavar="N",
+                   help="stop after N pieces (resume later with the same --log)")
+    p.set_defaults(run=cmd_learn)
+
+
+# --------------------------------------------------------------------------- progress
+class ProgressBar:
+    """``[#####.....] 12/40 transitions, 1:23 left`` on stderr: redrawn in place on a
+    terminal, one line per update otherwise."""
+
+    def __init__(self, stream: TextIO | None = None, width: int = 24):
+        self.stream = stream or sys.stderr
+        self.width = width
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.drawn = False
+
+    @staticmethod
+    def _clock(seconds: float) -> str:
+        s = max(0, int(round(seconds)))
+        return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60}:{s % 60:02d}"
+
+    def line(self, done: int, total: int, eta_s: float) -> str:
+        total = max(total, 1)
+        fill = min(self.width, int(self.width * done / total))
+        return (f"[{'#' * fill}{'.' * (self.width - fill)}] {done}/{total} transitions, "
+                f"{self._clock(eta_s)} left")
+
+    def update(self, done: int, total: int, eta_s: float) -> None:
+        text = self.line(done, total, eta_s)
+        if self.tty:
+            self.stream.write("\r" + text)
+            self.drawn = True
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.drawn:
+            self.stream.write("\n")
+            self.stream.flush()
+            self.drawn = False
+
+
+# --------------------------------------------------------------------------- the command
+def cmd_learn(args: argparse.Namespace) -> int:
+    from ..learn.measure import TrialLog, TrialLogError
+    from ..robot import load_robot
+
+    robot = load_robot(args.robot)
+    linked = bool(args.port or args.can or args.sim)
+    source = args.source or ("sim" if args.sim else None)
+    if linked and source is None:
+        raise LearnError("learn: --source is required with --port/--can (tracker or manual; sim needs --sim)")
+    if source == "sim" and linked and not args.sim:
+        raise LearnError("learn: --source sim needs --sim (the simulator's ground truth)")
+    if args.truth and not args.sim:
+        raise LearnError("learn: --truth needs --sim")
+    if args.more and (args.half_width is None or not linked):
+        raise LearnError("learn: --more needs --half-width and a robot (--port, --can or --sim)")
+    if args.track is not None and source not in (None, "tracker"):
+        raise LearnError("learn: --track goes with --source tracker")
+    try:
+        trial_log = TrialLog(args.log)
+    except (TrialLogError, OSError) as e:
+        raise LearnError(f"learn: {e}") from None
+    with trial_log:
+        if trial_log.trials:
+            log.info("%s: %d trials already recorded; resuming", args.log, len(trial_log.trials))
+        if linked:
+            _explore(args, robot, trial_log, source)
+        trials = list(trial_log.trials)
+    trials = _with_track(args, trials)
+    if not (linked or args.report or args.out or args.half_width):
+        raise LearnError("learn: nothing to do: give a robot link to explore, or --report / --out / --half-width")
+    return _report_and_write(args, robot, trials)
+
+
+def _explore(args: argparse.Namespace, robot, trial_log, source: str) -> None:
+    from ..learn.estimate import estimate
+    from ..learn.plan import adaptive_demand, extra_plan
+    from ..learn.runner import ExplorationError, Explorer, Progress, simulated_robot
+    from .robot_commands import open_client
+
+    truth = None
+    if args.truth:
+        from ..robot import load_robot
+
+        truth = load_robot(args.truth)
+    pose = None
+    if args.sim:
+        try:
+            _sim, client, sim_pose = simulated_robot(robot, truth, seed=args.seed)
+        except ExplorationError as e:
+            raise LearnError(f"learn: {e}") from None
+        client.connect()
+        if source == "sim":
+            pose = sim_pose
+    else:
+        client = open_client(args, args.robot)
+    bar = ProgressBar() if log.isEnabledFor(logging.INFO) else None
+
+    def progress(p: Progress) -> None:
+        if bar is not None:
+            bar.update(p.done, p.done + p.to_do, p.eta_s)
+
+    ask = None
+    if source == "manual":
+        def ask(prompt: str) -> str:
+            if bar is not None:
+                bar.close()
+            sys.stderr.write(prompt)
+            sys.stderr.flush()
+            line = sys.stdin.readline()
+            if not line:
+                raise LearnError("learn: no more input (stdin closed); the trials so far are in the log")
+            return line
+
+    t = robot.transitions
+    with client:
+        ex = Explorer(client, robot, trial_log, pose, repeats=args.repeats, source=source, seed=args.seed,
+                      on_progress=progress, ask=ask)
+        try:
+            if args.adaptive:
+                _adaptive(ex, args, t, trial_log, estimate, adaptive_demand)
+            elif args.more:
+                need, _plan = extra_plan(estimate(t, trial_log.trials), args.half_width, seed=args.seed)
+                _run_to(ex, need + _counts(t, trial_log.trials), args.max_pieces)
+            else:
+                ex.run(max_pieces=args.max_pieces)
+        except ExplorationError as e:
+            raise LinkError(f"learn: {e} (the {len(trial_log.trials)} trials recorded are kept in {args.log}; "
+                            "run the same command to resume)") from None
+        finally:
+            if bar is not None:
+                bar.close()
+
+
+def _counts(table, trials) -> np.ndarray:
+    from ..learn.measure import counts
+
+    return counts(table, trials)
+
+
+def _run_to(ex, goal: np.ndarray, max_pieces: int | None) -> None:
+    """Run until each transition has ``goal`` trials (or ``max_pieces`` in all)."""
+    ex.goal = goal
+    ex.run(max_pieces=max_pieces)
+
+
+def _adaptive(ex, args, table, trial_log, estimate, adaptive_demand) -> None:
+    """Two trials of each transition, then one more for the widest quarter of the intervals,
+    round after round, until the budget R × transitions is spent (bench/bench_learn.py)."""
+    budget = args.repeats * table.n_transitions
+    _run_to(ex, np.full(table.n_transitions, min(2, args.repeats), dtype=np.int64), args.max_pieces)
+    while len(trial_log.trials) < budget and (args.max_pieces is None or ex.pieces_run < args.max_pieces):
+        demand = adaptive_demand(estimate(table, trial_log.trials))
+        before = len(trial_log.trials)
+        _run_to(ex, _counts(table, trial_log.trials) + demand, args.max_pieces)
+        if demand.sum() == 0 or len(trial_log.trials) == before:
+            break
+
+
+def _with_track(args: argparse.Namespace, trials: list) -> list:
+    if args.track is None:
+        if args.tracker_offset is not None:
+            raise LearnError("learn: --tracker-offset goes with --track")
+        return trials
+    from ..learn.tracker import TrackerError, attach_track, read_track
+
+    try:
+        track = read_track(args.track)
+        bare = [t for t in trials if t.dx is None]
+        if not bare:
+            return trials
+        attached, offset = attach_track(bare, track, args.tracker_offset)
+    except TrackerError as e:
+        raise LearnError(f"learn: {e}") from None
+    how = "given" if args.tracker_offset is not None else "estimated"
+    log.info("%s: %d trials given their motion (clock offset %+.3f s, %s)", args.track, len(attached), offset, how)
+    return [t for t in trials if t.dx is not None] + attached
+
+
+def _fmt(v: float, nd: int = 2) -> str:
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{nd}f}"
+
+
+def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
+    from ..learn.estimate import estimate, penalised_table
+    from ..learn.robotfile import write_learned_robot
+
+    t = robot.transitions
+    est = estimate(t, trials)
+    out = sys.stdout
+    dx = est.dx
+    units = "mm" if any(tr.source == "sim" for tr in trials) else robot.units  # the plant moves in mm
+    print(f"{robot.name}: {int(dx.n.sum())} trials, {t.n_transitions} allowed transitions "
+          f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
+    extra = est.extra_trials(args.half_width) if args.half_width else None
+    head = f"{'transition':>12} {'n':>3} {'mean Δx':>9} {'var':>8} {'interval':>19}"
+    if "dy" in est.components and np.any(est.components["dy"].n > 0):
+        head += f" {'mean Δy':>8} {'mean Δθ':>8}"
+    if extra is not None:
+        head += f" {'more':>5}"
+    print(head, file=out)
+    for e, (a, b) in enumerate(zip(t.src.tolist(), t.dst.tolist())):
+        lab = f"{t.label(a)}->{t.label(b)}"
+        ci = "-" if math.isnan(dx.half_width[e]) else f"[{dx.low[e]:.2f}, {dx.high[e]:.2f}]"
+        row = f"{lab:>12} {int(dx.n[e]):>3} {_fmt(dx.mean[e]):>9} {_fmt(dx.var[e]):>8} {ci:>19}"
+        if "dy" in est.components and np.any(est.components["dy"].n > 0):
+            row += f" {_fmt(est.components['dy'].mean[e]):>8} {_fmt(est.components['dtheta_deg'].mean[e], 1):>8}"
+        if extra is not None:
+            row += f" {int(extra[e]):>5}"
+        print(row, file=out)
+    flagged = est.flagged()
+    if flagged:
+        print(f"too few trials (< {est.min_samples}): {', '.join(flagged)}", file=out)
+    if extra is not None:
+        print(f"extra trials for ± {args.half_width:g}: {int(extra.sum())} "
+              f"(run them with --more and a robot link)", file=out)
+    if int(dx.n.sum()) and (args.variance_weight or args.report):
+        from ..gait import optimal_gaits
+
+        try:
+            res = optimal_gaits(penalised_table(est, args.variance_weight, fallback=t), "total", "+x")
+            best = res.gaits[0] if res.gaits and res.value is not None else None
+        except ProlegError:
+            best = None
+        if best is not None:
+            what = "mean" if not args.variance_weight else f"mean − {args.variance_weight:g}·σ"
+            print(f"best +x gait for {what}: {','.join(t.label(s) for s in best.states)}", file=out)
+    if args.out:
+        if not int(dx.n.sum()):
+            raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
+        path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True)
+        print(f"wrote {path}", file=out)
+    return 0

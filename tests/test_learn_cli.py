@@ -1,0 +1,112 @@
+"""``proleg learn`` on the simulated board: explore, resume, report, write, truth hidden."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proleg.cli import main
+from proleg.cli.learn import ProgressBar
+from proleg.robot import load_robot
+
+ROOT = Path(__file__).resolve().parents[1]
+R1 = ROOT / "robots" / "paper-r1.toml"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _lines(path: Path) -> list[str]:
+    return path.read_text().splitlines()
+
+
+def test_an_interrupted_learn_resumes_from_its_log_and_loses_nothing(tmp_path, capsys):
+    log = tmp_path / "trials.jsonl"
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2", "--max-pieces", "1")
+    assert code == 0
+    first = _lines(log)
+    assert 0 < len(first) < 24
+    assert "transitions," in err and "left" in err  # the progress line on stderr
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2", "--seed", "5")
+    assert code == 0 and f"{len(first)} trials already recorded; resuming" in err
+    again = _lines(log)
+    assert again[:len(first)] == first  # nothing recorded is lost or rewritten
+    rows = [ln.split() for ln in out.splitlines() if "->" in ln and ln.split()[0].count("->") == 1]
+    assert len(rows) == 12 and all(int(r[1]) >= 2 for r in rows)
+    assert all(json.loads(ln)["source"] == "sim" for ln in again)
+
+
+def test_the_learned_file_recovers_a_hidden_truth_and_gait_uses_it(tmp_path, capsys):
+    truth = tmp_path / "truth.toml"
+    text = R1.read_text().replace("[ 0, -1,  1,  0]", "[ 0, -2,  1,  0]").replace("[ 1,  0,  0, -1]", "[ 3,  0,  0, -1]")
+    truth.write_text(text.replace('name = "paper-r1"', 'name = "truth-r1"'))
+    log, out_file = tmp_path / "t.jsonl", tmp_path / "learned.toml"
+    code, out, _err = run(capsys, "-q", "learn", str(R1), "--sim", "--truth", str(truth), "--log", str(log),
+                          "--repeats", "2", "--out", str(out_file))
+    assert code == 0 and f"wrote {out_file}" in out
+    learned = load_robot(out_file)
+    t = learned.transitions
+    step_mm = 4.0  # the table plant's default step (sim.plant.PlantParams.step_mm)
+    for a, b, want in [("00", "01", -2), ("01", "00", 3), ("00", "10", 1), ("10", "11", 1)]:
+        e = t.lookup(t.index(a), t.index(b))
+        assert t.reward[e] == pytest.approx(want * step_mm, abs=0.5), f"{a}->{b}"
+    assert learned.units == "mm" and np.all(learned.n_trials >= 1)
+    code, out, _err = run(capsys, "gait", str(out_file), "--objective", "rate", "--direction", "+x")
+    assert code == 0 and "rewards in mm" in out
+
+
+def test_the_report_reads_a_log_without_a_robot_and_says_what_more_to_run(tmp_path, capsys):
+    log = tmp_path / "t.jsonl"
+    rows = [{"from": "00", "to": "10", "t_start": k, "t_end": k + 1, "dx": 4.0 + 0.1 * k, "source": "manual"}
+            for k in range(3)]
+    log.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    code, out, _err = run(capsys, "learn", str(R1), "--log", str(log), "--report", "--half-width", "0.05")
+    assert code == 0
+    row = next(ln.split() for ln in out.splitlines() if ln.split()[:1] == ["00->10"])
+    assert row[1] == "3" and float(row[2]) == pytest.approx(4.1) and int(row[-1]) > 0
+    assert "too few trials" in out and "extra trials for ± 0.05" in out
+
+
+def test_adaptive_spends_the_same_budget_where_intervals_are_widest(tmp_path, capsys):
+    log = tmp_path / "t.jsonl"
+    code, _out, _err = run(capsys, "-q", "learn", str(R1), "--sim", "--log", str(log), "--repeats", "3", "--adaptive")
+    assert code == 0
+    n = len(_lines(log))
+    assert 12 * 2 <= n <= 12 * 3 + 23  # two each first, then the budget (a piece may overshoot it)
+
+
+def test_manual_entry_asks_on_stderr_and_records_the_answers(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("sys.stdin", io.StringIO("oops\n2.5\n"))
+    log = tmp_path / "t.jsonl"
+    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--source", "manual", "--log", str(log),
+                          "--repeats", "1", "--max-pieces", "1")
+    assert code == 0 and "(empty = skip): " in err and "not a number ('oops')" in err
+    recorded = [json.loads(ln) for ln in _lines(log)]
+    assert [r["dx"] for r in recorded] == [2.5] and recorded[0]["source"] == "manual"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--port", "/dev/null"], "--source is required"),
+    (["--truth", str(R1)], "--truth needs --sim"),
+    (["--sim", "--more"], "--more needs --half-width"),
+    ([], "nothing to do"),
+    (["--sim", "--source", "manual", "--track", "x.csv"], "--track goes with --source tracker"),
+])
+def test_learn_mistakes_are_one_line(tmp_path, capsys, argv, message):
+    code, _out, err = run(capsys, "learn", str(R1), "--log", str(tmp_path / "t.jsonl"), *argv)
+    assert code == 2 and message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_progress_bar_counts_and_tells_the_time_left():
+    s = io.StringIO()
+    bar = ProgressBar(s, width=10)
+    bar.update(3, 12, 75.0)
+    assert s.getvalue() == "[##........] 3/12 transitions, 1:15 left\n"
+    assert ProgressBar._clock(3725) == "1:02:05"
