@@ -229,10 +229,11 @@ def test_an_imu_that_stops_answering_faults_and_turns_the_coils_off(r1):
     fault = [e for e in events(msgs, EventKind.FAULT) if e.code == FaultCode.IMU_NO_ACK][0]
     assert fault.detail == 0  # the left limb
     assert all(sim.board.pwm_permyriad(ch) == 0 for ch in range(4))
+    sim.step()  # the events of the fault's tick still on the wire
+    msgs += decoder.feed(sim.read())
     assert [e for e in events(msgs, EventKind.GAIT_STOPPED) if e.code == StopReason.FAULT]
 
 
-@pytest.mark.xfail(strict=True, reason="no IMU start-up wait or WHO_AM_I retry at boot (issue 11)")
 def test_an_imu_that_needs_30_ms_to_start_is_waited_for(r1):
     from proleg.emu.avr import AvrEmuBoard, nano_elf
 
@@ -243,3 +244,20 @@ def test_an_imu_that_needs_30_ms_to_start_is_waited_for(r1):
     board.advance(0.2)
     msgs = FrameDecoder().feed(board.read())
     assert not events(msgs, EventKind.FAULT)
+
+
+def test_an_imu_that_never_starts_faults_after_the_bounded_start_up_deadline(r1):
+    from proleg.emu.avr import AvrEmuBoard, nano_elf
+
+    board = AvrEmuBoard(nano_elf(r1))
+    board.imu_startup(0x69, 5_000_000)  # the right limb's IMU stays silent
+    board.reset()
+    decoder, msgs = FrameDecoder(), []
+    while not events(msgs, EventKind.FAULT):
+        board.advance(0.005)
+        msgs += decoder.feed(board.read())
+        assert board.time_us < 300_000, "no fault within 300 ms"
+    fault = events(msgs, EventKind.FAULT)[0]
+    assert (fault.code, fault.detail) == (FaultCode.IMU_NO_ACK, 1)
+    # typical start-up wait (20 ms) + the datasheet's maximum (100 ms) + 50 ms margin
+    assert 150 <= fault.time_ms <= 200

@@ -22,8 +22,9 @@ typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG 
                                      HAL_RESET_BROWN_OUT == PROTO_RESET_BROWN_OUT &&
                                      HAL_RESET_SOFTWARE == PROTO_RESET_SOFTWARE) ? 1 : -1];
 
-static uint32_t ms;     /* firmware time */
-static uint16_t us_acc; /* µs of the current ms */
+static uint32_t ms;      /* firmware time: real time (hal_micros), not a tick count */
+static uint32_t us_acc;  /* µs of the current ms */
+static uint32_t last_us; /* hal_micros() at the last tick */
 
 uint32_t app_time_ms(void)
 {
@@ -35,6 +36,7 @@ void app_init(void)
     uint8_t i;
     ms = 0;
     us_acc = 0;
+    last_us = hal_micros();
     uart_init();
     tx_init();
     fault_init();
@@ -50,15 +52,22 @@ void app_init(void)
     cmd_send_info(0);
     tx_event(PROTO_EV_BOOT, hal_reset_cause(), 0);
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        imucheck_start(i);
+        imucheck_power_up(i);
     }
+}
+
+void app_idle(void)
+{
+    imucheck_service();
 }
 
 void app_tick(void)
 {
-    us_acc = (uint16_t)(us_acc + CFG_TICK_US);
+    uint32_t now = hal_micros();
+    us_acc += now - last_us; /* wrap-safe; no division: about one ms per tick */
+    last_us = now;
     while (us_acc >= 1000u) {
-        us_acc = (uint16_t)(us_acc - 1000u);
+        us_acc -= 1000u;
         ms++;
     }
     cmd_poll();            /* 1. commands (ESTOP: MOSFETs off first) */

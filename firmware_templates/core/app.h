@@ -15,7 +15,7 @@
  * is detected, and stays latched until CLEAR(FAULTS). E-stop latches until CLEAR(ESTOP).
  * Each step is one module: cmd.h (1), imucheck.h (2), drive.h (3, 4), fault.h and
  * telemetry.h (5); tx.h sends, param.h holds SET_PARAM's table. app_time_ms() is the
- * firmware clock (ms since app_init, advanced by CFG_TICK_US per tick) that stamps
+ * firmware clock (ms since app_init, on hal_micros: real time, not ticks) that stamps
  * events and telemetry.
  */
 #ifndef PROLEG_APP_H
@@ -25,6 +25,9 @@
 
 void app_init(void);
 void app_tick(void);
+/* Between ticks, as often as the main loop likes (bounded, never waits): moves the
+ * background IMU transactions on. */
+void app_idle(void);
 uint32_t app_time_ms(void);
 
 #endif /* PROLEG_APP_H */

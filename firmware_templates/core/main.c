@@ -29,6 +29,7 @@ void __attribute__((noinline)) wait_tick(void)
         next_tick = now; /* overran by more than a tick: resynchronise */
     }
     while ((int32_t)(hal_micros() - next_tick) < 0) {
+        app_idle();
     }
     next_tick += CFG_TICK_US;
 }

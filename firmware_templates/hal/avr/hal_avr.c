@@ -6,7 +6,8 @@
  * Timer2 (OC2A = D11, OC2B = D3): fast PWM 8 bit, /128 (~490 Hz).
  * Duty 0 and 10000 disconnect the compare output and drive the pin low/high, so "off"
  * is really off (fast PWM with OCR = 0 still gives a one-count pulse).
- * TWI at CFG_I2C_HZ, every wait bounded by TWI_STEP_US. USART0 at CFG_UART_BAUD (U2X);
+ * TWI at CFG_I2C_HZ, interrupt-driven (hal_i2c_begin/poll), each transaction bounded by
+ * HAL_I2C_DEADLINE_US. USART0 at CFG_UART_BAUD (U2X);
  * its interrupts move bytes to and from the core's rings (uart.h). main() is the core's.
  */
 #include <avr/interrupt.h>
@@ -25,11 +26,11 @@ enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 #ifndef F_CPU
 #define F_CPU CFG_CLOCK_HZ
 #endif
+#include <util/delay.h>
 
 #if RING_LARGE
 #error "AVR: the UART rings must be at most 128 bytes (8-bit indices are the only atomic ones)"
 #endif
-#define TWI_STEP_US 400u
 
 static const uint8_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 
@@ -140,85 +141,132 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
 
 /* ------------------------------------------------------------------ I2C (TWI) */
 
-static int8_t twi_wait(void)
+/* One transaction, moved on by the TWI interrupt one bus event at a time (ATmega328P
+ * datasheet §22.7, master transmitter and receiver status codes). The main loop only
+ * begins it and polls the result; hal_i2c_poll aborts it past its deadline. */
+#define TWCR_GO (_BV(TWINT) | _BV(TWEN) | _BV(TWIE))
+
+static struct {
+    const uint8_t *tx;
+    uint8_t *rx;
+    uint8_t sla, ntx, nrx, i;
+    uint8_t reading;
+    uint8_t checked;        /* the bus was looked at after this transaction failed */
+    volatile int8_t result; /* HAL_I2C_BUSY, 0 or -1 */
+    uint32_t t0;
+} tw = {0, 0, 0, 0, 0, 0, 0, 1, 0, 0};
+
+static void twi_done(int8_t r)
 {
-    uint32_t t0 = hal_micros();
-    while (!(TWCR & _BV(TWINT))) {
-        if ((uint32_t)(hal_micros() - t0) > TWI_STEP_US) {
-            return -1;
+    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO); /* STOP; TWSTO clears when it is out */
+    tw.result = r;
+}
+
+ISR(TWI_vect)
+{
+    switch (TWSR & 0xF8u) {
+    case 0x08u: /* START */
+    case 0x10u: /* repeated START */
+        TWDR = (uint8_t)(tw.sla | tw.reading);
+        TWCR = TWCR_GO;
+        break;
+    case 0x18u: /* SLA+W ACKed */
+    case 0x28u: /* data byte ACKed */
+        if (tw.i < tw.ntx) {
+            TWDR = tw.tx[tw.i++];
+            TWCR = TWCR_GO;
+        } else if (tw.nrx) {
+            tw.reading = 1;
+            tw.i = 0;
+            TWCR = TWCR_GO | _BV(TWSTA);
+        } else {
+            twi_done(0);
         }
+        break;
+    case 0x50u: /* data byte received, ACK returned */
+        tw.rx[tw.i++] = TWDR;
+        /* fall through */
+    case 0x40u: /* SLA+R ACKed */
+        TWCR = (uint8_t)(TWCR_GO | (tw.i + 1u < tw.nrx ? _BV(TWEA) : 0u));
+        break;
+    case 0x58u: /* last byte received, NACK returned */
+        tw.rx[tw.i] = TWDR;
+        twi_done(0);
+        break;
+    default: /* SLA or data NACKed, arbitration lost, bus error */
+        twi_done(-1);
+        break;
     }
-    return 0;
 }
 
-static void twi_stop(void)
-{
-    uint32_t t0 = hal_micros();
-    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO);
-    while ((TWCR & _BV(TWSTO)) && (uint32_t)(hal_micros() - t0) < TWI_STEP_US) {
-    }
-}
-
+/* UM10204 §3.1.16: a slave cut off mid-byte holds SDA low until it has clocked its byte
+ * out. With the TWI off, clock SCL (PC5) until SDA (PC4) is high, at most 9 times, then
+ * a STOP; then the TWI again. Bounded: about 100 µs, and only after a failure. */
 static void twi_recover(void)
 {
-    TWCR = 0; /* release the bus, then re-enable */
+    uint8_t k;
+    TWCR = 0;
+    PORTC &= (uint8_t) ~(_BV(PC4) | _BV(PC5));
+    for (k = 0; k < 9u && !(PINC & _BV(PC4)); k++) {
+        DDRC |= _BV(PC5); /* SCL low */
+        _delay_us(5);
+        DDRC &= (uint8_t)~_BV(PC5); /* released: the pull-up takes it high */
+        _delay_us(5);
+    }
+    DDRC |= _BV(PC4); /* STOP: SDA low, then released while SCL is high */
+    _delay_us(5);
+    DDRC &= (uint8_t)~_BV(PC4);
+    PORTC |= _BV(PC4) | _BV(PC5);
+    _delay_us(5);
     TWCR = _BV(TWEN);
 }
 
-static int8_t twi_start(uint8_t sla, uint8_t expect_start, uint8_t expect_ack)
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
-    TWCR = _BV(TWINT) | _BV(TWSTA) | _BV(TWEN);
-    if (twi_wait() || (TWSR & 0xF8u) != expect_start) {
+    if (hal_i2c_poll() == HAL_I2C_BUSY) {
         return -1;
     }
-    TWDR = sla;
-    TWCR = _BV(TWINT) | _BV(TWEN);
-    if (twi_wait() || (TWSR & 0xF8u) != expect_ack) {
-        return -1;
-    }
+    tw.tx = tx;
+    tw.rx = rx;
+    tw.sla = (uint8_t)(addr7 << 1);
+    tw.ntx = ntx;
+    tw.nrx = nrx;
+    tw.i = 0;
+    tw.reading = ntx ? 0u : 1u;
+    tw.t0 = hal_micros();
+    tw.checked = 0;
+    tw.result = HAL_I2C_BUSY;
+    TWCR = TWCR_GO | _BV(TWSTA);
     return 0;
 }
 
-static int twi_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+int8_t hal_i2c_poll(void)
 {
-    uint8_t i;
-    if (ntx) {
-        if (twi_start((uint8_t)(addr7 << 1), 0x08u, 0x18u)) {
-            return -1;
+    int8_t r = tw.result;
+    if (r == HAL_I2C_BUSY) {
+        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+            return HAL_I2C_BUSY;
         }
-        for (i = 0; i < ntx; i++) {
-            TWDR = tx[i];
-            TWCR = _BV(TWINT) | _BV(TWEN);
-            if (twi_wait() || (TWSR & 0xF8u) != 0x28u) {
-                return -1;
-            }
-        }
+        TWCR = 0; /* abort: the interrupt cannot run again */
+        tw.result = r = -1;
+        tw.checked = 1;
+        twi_recover();
+        return r;
     }
-    if (nrx) {
-        if (twi_start((uint8_t)((addr7 << 1) | 1u), ntx ? 0x10u : 0x08u, 0x40u)) {
-            return -1;
+    if (TWCR & _BV(TWSTO)) {
+        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+            return HAL_I2C_BUSY; /* the STOP is still going out */
         }
-        for (i = 0; i < nrx; i++) {
-            uint8_t last = (uint8_t)(i + 1u == nrx);
-            TWCR = (uint8_t)(_BV(TWINT) | _BV(TWEN) | (last ? 0u : _BV(TWEA)));
-            if (twi_wait()) {
-                return -1;
-            }
-            rx[i] = TWDR;
-        }
-    }
-    twi_stop();
-    return 0;
-}
-
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
-{
-    if (twi_transfer(addr7, tx, ntx, rx, nrx) != 0) {
-        twi_stop();
         twi_recover();
         return -1;
     }
-    return 0;
+    if (r < 0 && !tw.checked) {
+        tw.checked = 1;
+        if (!(PINC & _BV(PC4))) {
+            twi_recover(); /* a slave kept SDA low */
+        }
+    }
+    return r;
 }
 
 /* ------------------------------------------------------------------ USART0 */

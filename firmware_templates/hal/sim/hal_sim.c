@@ -71,10 +71,19 @@ uint32_t hal_micros(void)
     return (uint32_t)now_us;
 }
 
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+static int8_t i2c_result;
+
+/* The transaction happens at once (virtual time does not pass inside a tick). */
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     i2c_count++;
-    return sim_mpu_transfer(addr7, tx, ntx, rx, nrx, now_us);
+    i2c_result = sim_mpu_transfer(addr7, tx, ntx, rx, nrx, now_us) == 0 ? 0 : -1;
+    return 0;
+}
+
+int8_t hal_i2c_poll(void)
+{
+    return i2c_result;
 }
 
 void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad)

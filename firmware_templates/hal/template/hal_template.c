@@ -44,19 +44,28 @@ uint32_t hal_micros(void)
     return 0;
 }
 
-/* One I2C transaction with the 7-bit address addr7: write ntx bytes from tx, then (with
- * a repeated start when both are non-zero) read nrx bytes into rx, NACKing the last one.
- * Returns 0 on success, negative on NACK, arbitration loss, bus error or timeout. Must
- * be bounded: every wait on the peripheral times out (the other HALs use a few hundred
- * µs per step; never more than about 2 ms in all), and after a failure leave the bus
- * usable for the next call (stop condition, peripheral reset if it is stuck). */
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+/* Begin one I2C transaction with the 7-bit address addr7 in the background: write ntx
+ * bytes from tx, then (with a repeated start when both are non-zero) read nrx bytes
+ * into rx, NACKing the last one; tx and rx stay valid until hal_i2c_poll() is no longer
+ * HAL_I2C_BUSY. Return 0 when begun, -1 if the previous one is still in flight. Best
+ * done from the I2C interrupt (one byte per interrupt); a board may also run the whole
+ * transaction here if it takes a few tens of µs at most. */
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     (void)addr7;
     (void)tx;
     (void)ntx;
     (void)rx;
     (void)nrx;
+    return -1;
+}
+
+/* HAL_I2C_BUSY while the transaction is in flight, 0 when it completed, negative on NACK,
+ * arbitration loss or bus error. Never waits. Past HAL_I2C_DEADLINE_US since the begin,
+ * abort it, leave the bus usable (9 SCL clocks if a slave holds SDA low, a STOP) and
+ * return negative. */
+int8_t hal_i2c_poll(void)
+{
     return -1;
 }
 
