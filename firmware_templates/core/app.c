@@ -25,6 +25,8 @@ typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG 
 static uint32_t ms;      /* firmware time: real time (hal_micros), not a tick count */
 static uint32_t us_acc;  /* µs of the current ms */
 static uint32_t last_us; /* hal_micros() at the last tick */
+static uint32_t overruns; /* ticks whose work ended after the next tick was due */
+static uint16_t overrun_run; /* ... of them in a row */
 
 uint32_t app_time_ms(void)
 {
@@ -37,6 +39,8 @@ void app_init(void)
     ms = 0;
     us_acc = 0;
     last_us = hal_micros();
+    overruns = 0;
+    overrun_run = 0;
     uart_init();
     tx_init();
     fault_init();
@@ -54,6 +58,31 @@ void app_init(void)
     for (i = 0; i < CFG_N_LIMBS; i++) {
         imucheck_power_up(i);
     }
+}
+
+void app_tick_done(uint8_t overran)
+{
+    if (!overran) {
+        overrun_run = 0;
+        return;
+    }
+    overruns++;
+    if (overrun_run < 0xFFFFu) {
+        overrun_run++;
+    }
+    if (overrun_run >= CFG_OVERRUN_FAULT && !fault_latched()) {
+        fault_raise(PROTO_FAULT_TICK_OVERRUN, 0); /* the timing the envelope assumes is gone */
+    }
+}
+
+uint32_t app_overruns(void)
+{
+    return overruns;
+}
+
+void app_clear_overruns(void)
+{
+    overruns = 0;
 }
 
 void app_idle(void)

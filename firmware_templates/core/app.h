@@ -28,6 +28,12 @@ void app_tick(void);
 /* Between ticks, as often as the main loop likes (bounded, never waits): moves the
  * background IMU transactions on. */
 void app_idle(void);
+/* After each tick (core/main.c): whether its work ended after the next tick was due.
+ * Counted (GET_STATS tick_overruns, CLEAR(COUNTERS) zeroes it); CFG_OVERRUN_FAULT in a
+ * row (robot file [control] overrun_fault) latch FAULT TICK_OVERRUN. */
+void app_tick_done(uint8_t overran);
+uint32_t app_overruns(void);
+void app_clear_overruns(void);
 uint32_t app_time_ms(void);
 
 #endif /* PROLEG_APP_H */

@@ -60,18 +60,15 @@ uint32_t hal_micros(void)
 
 /* ------------------------------------------------------------------ PWM */
 
-static uint16_t t1_top;
+/* Timer1 TOP for CFG_PWM_HZ at /8, and OCR = duty · TOP / 10000 as a multiply and a
+ * shift by precomputed Q16 scales: no division in the tick. */
+#define T1_TOP ((uint16_t)(F_CPU / 8u / CFG_PWM_HZ - 1u))
+#define T1_SCALE ((uint16_t)(((uint32_t)T1_TOP * 65536u + 9999u) / 10000u))
+#define T2_SCALE ((uint16_t)((255UL * 65536u + 9999u) / 10000u))
 
-static void pin_out(uint8_t oc, uint8_t high)
-{
-    volatile uint8_t *port = (oc == HAL_AVR_OC2B) ? &PORTD : &PORTB;
-    uint8_t bit = (oc == HAL_AVR_OC1A) ? _BV(PB1) : (oc == HAL_AVR_OC1B) ? _BV(PB2) : (oc == HAL_AVR_OC2A) ? _BV(PB3) : _BV(PD3);
-    if (high) {
-        *port |= bit;
-    } else {
-        *port &= (uint8_t)~bit;
-    }
-}
+/* Per output: its compare-output enable bit in TCCRnA, its port pin. */
+static const uint8_t oc_com[4] = {_BV(COM1A1), _BV(COM1B1), _BV(COM2A1), _BV(COM2B1)};
+static const uint8_t oc_bit[4] = {_BV(PB1), _BV(PB2), _BV(PB3), _BV(PD3)};
 
 static void pwm_init(void)
 {
@@ -80,8 +77,7 @@ static void pwm_init(void)
     DDRD |= _BV(PD3);
     PORTB &= (uint8_t) ~(_BV(PB1) | _BV(PB2) | _BV(PB3));
     PORTD &= (uint8_t)~_BV(PD3);
-    t1_top = (uint16_t)(F_CPU / 8u / CFG_PWM_HZ - 1u);
-    ICR1 = t1_top;
+    ICR1 = T1_TOP;
     TCCR1A = _BV(WGM11);
     TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
     TCCR2A = _BV(WGM21) | _BV(WGM20);
@@ -93,50 +89,41 @@ static void pwm_init(void)
 
 void hal_pwm_set(uint8_t channel, uint16_t duty)
 {
-    uint8_t oc, full, off;
+    uint8_t oc, com, bit;
+    volatile uint8_t *tccra, *port;
     if (channel >= CFG_PWM_CHANNELS) {
         return;
     }
     oc = pwm_map[channel];
-    full = duty >= 10000u;
-    off = duty == 0u;
+    com = oc_com[oc];
+    bit = oc_bit[oc];
+    tccra = oc < HAL_AVR_OC2A ? &TCCR1A : &TCCR2A;
+    port = oc == HAL_AVR_OC2B ? &PORTD : &PORTB;
+    if (duty == 0u || duty >= 10000u) {
+        /* compare output off: the pin is the port's, low (off) or high (full on) */
+        *tccra &= (uint8_t)~com;
+        if (duty) {
+            *port |= bit;
+        } else {
+            *port &= (uint8_t)~bit;
+        }
+        return;
+    }
     switch (oc) {
     case HAL_AVR_OC1A:
-        if (off || full) {
-            TCCR1A &= (uint8_t)~_BV(COM1A1);
-        } else {
-            OCR1A = (uint16_t)((uint32_t)duty * t1_top / 10000u);
-            TCCR1A |= _BV(COM1A1);
-        }
+        OCR1A = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
         break;
     case HAL_AVR_OC1B:
-        if (off || full) {
-            TCCR1A &= (uint8_t)~_BV(COM1B1);
-        } else {
-            OCR1B = (uint16_t)((uint32_t)duty * t1_top / 10000u);
-            TCCR1A |= _BV(COM1B1);
-        }
+        OCR1B = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
         break;
     case HAL_AVR_OC2A:
-        if (off || full) {
-            TCCR2A &= (uint8_t)~_BV(COM2A1);
-        } else {
-            OCR2A = (uint8_t)((uint32_t)duty * 255u / 10000u);
-            TCCR2A |= _BV(COM2A1);
-        }
+        OCR2A = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
         break;
     default:
-        if (off || full) {
-            TCCR2A &= (uint8_t)~_BV(COM2B1);
-        } else {
-            OCR2B = (uint8_t)((uint32_t)duty * 255u / 10000u);
-            TCCR2A |= _BV(COM2B1);
-        }
+        OCR2B = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
         break;
     }
-    if (off || full) {
-        pin_out(oc, full);
-    }
+    *tccra |= com;
 }
 
 /* ------------------------------------------------------------------ I2C (TWI) */
