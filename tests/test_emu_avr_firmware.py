@@ -19,7 +19,7 @@ from proleg.link import RobotClient
 from proleg.link.sim_link import SimLink
 from proleg.paths import robots_dir
 from proleg.protocol.codec import FrameDecoder, Message, encode
-from proleg.protocol.definition import EventKind, FaultCode, Flag, StopReason
+from proleg.protocol.definition import EventKind, FaultCode, Flag, StopReason, ResetCause
 from proleg.robot import load_robot
 
 pytestmark = pytest.mark.skipif(
@@ -261,3 +261,71 @@ def test_an_imu_that_never_starts_faults_after_the_bounded_start_up_deadline(r1)
     assert (fault.code, fault.detail) == (FaultCode.IMU_NO_ACK, 1)
     # typical start-up wait (20 ms) + the datasheet's maximum (100 ms) + 50 ms margin
     assert 150 <= fault.time_ms <= 200
+
+
+# ------------------------------------------------------------------ watchdog and reset cause
+
+
+def test_a_stuck_loop_is_reset_by_the_watchdog_the_coils_go_off_and_boot_says_watchdog(r1):
+    sim, session = walking(r1, 0.6)
+    board = sim.board
+    assert any(board.pwm_permyriad(ch) for ch in range(4)), "a coil should be driven by now"
+    decoder = FrameDecoder()
+    decoder.feed(board.read())
+    board.hang()  # the main loop never comes back: nothing feeds the watchdog
+    t0 = board.time_us
+    while not board.mcu_resets:
+        board.run_us(500)
+        assert board.time_us - t0 < 100_000, "no watchdog reset within 100 ms"
+    hung_ms = (board.time_us - t0) / 1000
+    assert 50 <= hung_ms <= 80  # WDTO_60MS, ±10 % oscillator (ATmega328P table 28-7), one step
+    # from the reset on, the MOSFET gates are low (the pins are driven low before main)
+    for _ in range(100):
+        assert not any(board.pwm_permyriad(ch) for ch in range(4))
+        board.run_us(500)
+    msgs = decoder.feed(board.read())
+    boots = events(msgs, EventKind.BOOT)
+    assert [b.code for b in boots] == [ResetCause.WATCHDOG]
+
+
+def test_power_on_boot_reports_power_on(r1):
+    from proleg.emu.avr import AvrEmuBoard, nano_elf
+
+    board = AvrEmuBoard(nano_elf(r1))
+    board.advance(0.05)
+    boots = events(FrameDecoder().feed(board.read()), EventKind.BOOT)
+    assert [b.code for b in boots] == [ResetCause.POWER_ON]
+
+
+def test_a_slave_stranded_mid_byte_is_clocked_free_without_a_hang_or_a_fault(r1):
+    sim, session = walking(r1, 0.6)
+    board = sim.board
+    decoder = FrameDecoder()
+    decoder.feed(board.read())
+    board.clear_ticks()
+    n0 = board.i2c_transactions
+    board.i2c_hold_sda(True, release_after_clocks=9)  # freed by the 9-clock recovery
+    board.run_us(50_000)
+    budget = board.tick_budget()
+    assert budget.ticks >= 49 and board.mcu_resets == 0  # the tick goes on: no hang, no reset
+    assert budget.busy_max_us < budget.tick_period_us
+    assert board.i2c_transactions - n0 > 50  # the IMUs answer again
+    msgs = decoder.feed(board.read())
+    assert not events(msgs, EventKind.FAULT)  # one failed read per limb is not a fault
+
+
+def test_a_bus_held_low_for_good_faults_the_imus_turns_the_coils_off_and_never_hangs(r1):
+    sim, session = walking(r1, 0.6)
+    board = sim.board
+    decoder = FrameDecoder()
+    decoder.feed(board.read())
+    board.clear_ticks()
+    board.i2c_hold_sda(True, release_after_clocks=0)  # nothing frees it
+    board.run_us(50_000)
+    budget = board.tick_budget()
+    assert budget.ticks >= 49 and board.mcu_resets == 0
+    assert budget.busy_max_us < budget.tick_period_us
+    msgs = decoder.feed(board.read())
+    assert {(f.code, f.detail) for f in events(msgs, EventKind.FAULT)} == {(FaultCode.IMU_NO_ACK, 0),
+                                                                           (FaultCode.IMU_NO_ACK, 1)}
+    assert not any(board.pwm_permyriad(ch) for ch in range(4))

@@ -187,14 +187,15 @@ ISR(TWI_vect)
 }
 
 /* UM10204 §3.1.16: a slave cut off mid-byte holds SDA low until it has clocked its byte
- * out. With the TWI off, clock SCL (PC5) until SDA (PC4) is high, at most 9 times, then
- * a STOP; then the TWI again. Bounded: about 100 µs, and only after a failure. */
+ * out. With the TWI off, clock SCL (PC5) 9 times (enough for any byte and its ACK; a
+ * free slave ignores them), then a STOP; then the TWI again. Bounded: about 100 µs, and
+ * only after a failure. */
 static void twi_recover(void)
 {
     uint8_t k;
     TWCR = 0;
     PORTC &= (uint8_t) ~(_BV(PC4) | _BV(PC5));
-    for (k = 0; k < 9u && !(PINC & _BV(PC4)); k++) {
+    for (k = 0; k < 9u; k++) {
         DDRC |= _BV(PC5); /* SCL low */
         _delay_us(5);
         DDRC &= (uint8_t)~_BV(PC5); /* released: the pull-up takes it high */
