@@ -27,12 +27,6 @@ pytestmark = pytest.mark.skipif(
     reason="needs simavr/libsimavr-dev and avr-gcc (make toolchains installs them)",
 )
 
-BUDGET_XFAIL = (
-    "today's firmware overruns its 1 kHz tick on the ATmega328P: blocking I2C ≈ 500 µs per tick, "
-    "32-bit divisions and atan2 on the control path (issue 11, phase 2)"
-)
-
-
 def variant(robot, *, tick_hz: int | None = None, max_on_ms: int | None = None):
     """The same robot with another tick rate or on-time limit (a different build)."""
     control = robot.control if tick_hz is None else dataclasses.replace(robot.control, tick_hz=tick_hz)
@@ -129,17 +123,16 @@ def r1_budget(r1):
     return sim.board.tick_budget()
 
 
-@pytest.mark.xfail(strict=True, reason="the tick overruns its period (fewer ticks than periods) until the budget fix")
 def test_the_tick_budget_is_measured_in_cpu_cycles(r1_budget):
     budget = r1_budget
     assert budget.ticks == pytest.approx(1500, abs=3)  # one record per 1 kHz tick
     assert 0 < budget.busy_mean_us <= budget.busy_p99_us <= budget.busy_max_us
-    # Two blocking accelerometer reads per tick, 9 bytes of 9 SCL periods at 400 kHz each.
-    assert 2 * 9 * 9 * 2.5 <= budget.i2c_mean_us <= 650
+    # Two accelerometer reads per tick, 9 bytes of 9 SCL periods at 400 kHz each (405 µs of
+    # bus time); they run in the background, partly during the tick's work, partly after.
+    assert 50 <= budget.i2c_mean_us < 2 * 9 * 9 * 2.5
     assert 0 < budget.stack_peak_bytes < 2048 - 654 and budget.stack_margin_bytes > 0
 
 
-@pytest.mark.xfail(strict=True, reason=BUDGET_XFAIL)
 def test_the_tick_work_fits_70_percent_of_the_period_at_p99_and_90_percent_at_worst(r1_budget):
     assert r1_budget.p99_fraction <= 0.70
     assert r1_budget.max_fraction <= 0.90
@@ -210,10 +203,11 @@ def test_a_coil_is_switched_off_at_max_on_ms(r1):
     assert [e for e in events(msgs, EventKind.FAULT) if e.code == FaultCode.SMA_ON_LIMIT]
 
 
-def test_max_on_ms_holds_in_real_time_at_every_accepted_tick_rate(r1):
-    robot = variant(r1, tick_hz=2000, max_on_ms=1000)
+@pytest.mark.parametrize("tick_hz", [200, 500, 1000, 2000])
+def test_max_on_ms_holds_in_real_time_at_every_accepted_tick_rate(r1, tick_hz):
+    robot = variant(r1, tick_hz=tick_hz, max_on_ms=1000)
     longest, _msgs = longest_on_ms(robot, 2.0)
-    assert longest <= 1000 + 0.5  # + one tick
+    assert longest <= 1000 + 1000 / tick_hz  # + one tick of emulated real time
 
 
 def test_an_imu_that_stops_answering_faults_and_turns_the_coils_off(r1):

@@ -85,9 +85,10 @@ void app_clear_overruns(void)
     overruns = 0;
 }
 
-void app_idle(void)
+void app_idle(uint32_t until_next_tick_us)
 {
     imucheck_service();
+    telemetry_idle(until_next_tick_us);
 }
 
 void app_tick(void)

@@ -25,9 +25,10 @@
 
 void app_init(void);
 void app_tick(void);
-/* Between ticks, as often as the main loop likes (bounded, never waits): moves the
- * background IMU transactions on. */
-void app_idle(void);
+/* Between ticks, as often as the main loop likes, with the µs left before the next tick
+ * (bounded, never waits, never starts what would not end before the next tick): moves
+ * the background IMU transactions on and sends the telemetry frame (telemetry.h). */
+void app_idle(uint32_t until_next_tick_us);
 /* After each tick (core/main.c): whether its work ended after the next tick was due.
  * Counted (GET_STATS tick_overruns, CLEAR(COUNTERS) zeroes it); CFG_OVERRUN_FAULT in a
  * row (robot file [control] overrun_fault) latch FAULT TICK_OVERRUN. */

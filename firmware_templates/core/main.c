@@ -30,8 +30,12 @@ void __attribute__((noinline)) wait_tick(void)
     if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
         next_tick = now; /* overran by more than a tick: resynchronise */
     }
-    while ((int32_t)(hal_micros() - next_tick) < 0) {
-        app_idle();
+    for (;;) {
+        int32_t left = (int32_t)(next_tick - hal_micros());
+        if (left <= 0) {
+            break;
+        }
+        app_idle((uint32_t)left);
     }
     next_tick += CFG_TICK_US;
 }

@@ -157,6 +157,7 @@ SIM_API void sim_run_ticks(uint32_t n)
     for (i = 0; i < n; i++) {
         now_us += CFG_TICK_US;
         app_tick();
+        app_idle(CFG_TICK_US); /* the rest of the tick: background work (telemetry) */
         drain_line();
     }
 }
