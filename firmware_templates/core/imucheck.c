@@ -44,7 +44,7 @@ static struct {
     uint8_t res[CFG_N_LIMBS];   /* RES_*: what that limb's last transaction gave */
     uint8_t tx[2];
     uint8_t rx[CFG_N_LIMBS][MPU6050_ACCEL_BYTES];
-    uint8_t ndone;
+    uint8_t due; /* this period's transactions are still to begin */
 } st;
 
 static void imu_fault(uint8_t limb, uint8_t code)
@@ -116,6 +116,10 @@ void imucheck_service(void)
 {
     int8_t r;
     uint8_t limb;
+    if (st.due && st.cur == NO_LIMB) {
+        st.due = 0;
+        next(0); /* between ticks: the samples are as fresh as the next tick can have them */
+    }
     while (st.cur != NO_LIMB) {
         r = hal_i2c_poll();
         if (r == HAL_I2C_BUSY) {
@@ -207,10 +211,7 @@ void imucheck_read(void)
         }
     }
     st.measured = known ? (uint32_t)seq_state_index(levels) : IMUCHECK_UNKNOWN;
-    if (st.cur == NO_LIMB) {
-        next(0); /* this tick's transactions run while the rest of the tick works */
-        imucheck_service();
-    }
+    st.due = 1;
 }
 
 uint32_t imucheck_measured(void)

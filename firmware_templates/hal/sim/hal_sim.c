@@ -156,8 +156,8 @@ SIM_API void sim_run_ticks(uint32_t n)
     uint32_t i;
     for (i = 0; i < n; i++) {
         now_us += CFG_TICK_US;
+        app_idle(CFG_TICK_US); /* the wait before the tick: background work (IMU reads, telemetry) */
         app_tick();
-        app_idle(CFG_TICK_US); /* the rest of the tick: background work (telemetry) */
         drain_line();
     }
 }
