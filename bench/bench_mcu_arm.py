@@ -42,7 +42,7 @@ def run(name: str) -> dict:
         return {"robot": name, "skipped": str(e).splitlines()[0]}
     manifest = json.loads((elf.parent / "proleg-build.json").read_text())
     sim = ArmEmuRobot(robot, elf, seed=SEED)
-    i2c = sim.board.time_in("hal_i2c_write_read")
+    i2c = sim.board.time_in("hal_i2c_begin")
     client = RobotClient(SimLink(sim))
     client.connect()
     client.start(0, "+x")

@@ -202,7 +202,7 @@ class FakeBoard:
             self._send(Message.new(
                 "STATS", token=msg.token, rx_ok=c.frames_ok, crc_errors=c.crc_errors,
                 framing_errors=c.framing_errors, unknown_ids=c.unknown_ids, bad_length=c.bad_length,
-                bad_value=c.bad_value, nacks=self._nacks, tx_frames=self.frames_sent, tx_dropped=0,
+                bad_value=c.bad_value, nacks=self._nacks, tx_frames=self.frames_sent, tx_dropped=0, tick_overruns=0,
             ))
         elif name == "START":
             if self.estop:

@@ -227,7 +227,7 @@ def test_boot_reports_the_watchdog_as_reset_cause(elf):
 
 def test_an_imu_that_stops_answering_is_a_fault_not_a_hang(elf):
     b = _board(elf)
-    b.run_ticks(20)
+    b.run_ticks(60)  # past the IMUs' start-up (20 ms wait, then one step per tick)
     b.read()
     b.imu_fault(IMU1, "no-ack")
     b.run_ticks(20)
@@ -236,8 +236,6 @@ def test_an_imu_that_stops_answering_is_a_fault_not_a_hang(elf):
     assert b.resets == []
 
 
-@pytest.mark.xfail(strict=True, reason="app.c re-initialises the IMU (mpu6050_init, 7 blocking transfers) inside "
-                   "the tick on CLEAR(FAULTS): needs the core's non-blocking IMU start-up (issue 11, fwhouse)")
 def test_clear_faults_keeps_every_tick_within_its_period(robot, elf):
     from proleg.emu.arm import ArmEmuRobot
     from proleg.protocol.definition import ClearWhat

@@ -38,7 +38,7 @@ replies = st.one_of(
     st.builds(lambda t, k, c, d: Message.new("EVENT", time_ms=t, kind=k, code=c, detail=d), u32, u8, u8, u16),
     st.builds(lambda t, *v: Message.new("STATS", token=t, **dict(zip(
         ("rx_ok", "crc_errors", "framing_errors", "unknown_ids", "bad_length", "bad_value", "nacks",
-         "tx_frames", "tx_dropped"), v))), u8, *([u32] * 9)),
+         "tx_frames", "tx_dropped", "tick_overruns"), v))), u8, *([u32] * 10)),
 )
 commands = st.one_of(
     st.builds(lambda t, s: Message.new("LOAD_GAIT", token=t, states=tuple(s)), u8, st.lists(u16, max_size=24)),

@@ -79,14 +79,15 @@ TOY_BODIES = {
         "    }\n"
         "    return (uint32_t)us;"
     ),
-    "hal_i2c_write_read": (
+    "hal_i2c_begin": (
         "    (void)addr7;\n    (void)tx;\n    (void)ntx;\n    (void)rx;\n    (void)nrx;\n"
-        "    return -1; /* nothing on the toy's bus */"
+        "    return 0;"
     ),
     "hal_i2c_write_read_bus": (
         "    (void)bus;\n    (void)addr7;\n    (void)tx;\n    (void)ntx;\n    (void)rx;\n    (void)nrx;\n"
         "    return -1; /* the toy has one bus, and nothing on it */"
     ),
+    "hal_i2c_poll": "    return -1; /* nothing on the toy's bus */",
     "hal_pwm_set": (
         "    if (channel >= CFG_PWM_CHANNELS) {\n        return;\n    }\n"
         "    duty[pwm_map[channel]] = duty_permyriad;"
@@ -127,7 +128,7 @@ def test_the_template_stubs_exactly_the_functions_of_hal_h():
     declared = set(re.findall(r"^\w[\w \*]*?\b(hal_\w+)\(", hal_h, re.M))
     template = (ROOT / "firmware_templates" / "hal" / "template" / "hal_template.c").read_text()
     assert set(hal_functions(template)) == declared
-    assert declared >= {"hal_init", "hal_micros", "hal_i2c_write_read", "hal_pwm_set", "hal_uart_tx_start"}
+    assert declared >= {"hal_init", "hal_micros", "hal_i2c_begin", "hal_i2c_poll", "hal_pwm_set", "hal_uart_tx_start"}
 
 
 def copy_template(home: Path, family: str) -> Path:

@@ -23,8 +23,11 @@ typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG 
                                      HAL_RESET_BROWN_OUT == PROTO_RESET_BROWN_OUT &&
                                      HAL_RESET_SOFTWARE == PROTO_RESET_SOFTWARE) ? 1 : -1];
 
-static uint32_t ms;     /* firmware time */
-static uint16_t us_acc; /* µs of the current ms */
+static uint32_t ms;      /* firmware time: real time (hal_micros), not a tick count */
+static uint32_t us_acc;  /* µs of the current ms */
+static uint32_t last_us; /* hal_micros() at the last tick */
+static uint32_t overruns; /* ticks whose work ended after the next tick was due */
+static uint16_t overrun_run; /* ... of them in a row */
 
 uint32_t app_time_ms(void)
 {
@@ -36,6 +39,9 @@ void app_init(void)
     uint8_t i;
     ms = 0;
     us_acc = 0;
+    last_us = hal_micros();
+    overruns = 0;
+    overrun_run = 0;
     uart_init();
     tx_init();
     fault_init();
@@ -52,15 +58,48 @@ void app_init(void)
     cmd_send_info(0);
     tx_event(PROTO_EV_BOOT, hal_reset_cause(), 0);
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        imucheck_start(i);
+        imucheck_power_up(i);
     }
+}
+
+void app_tick_done(uint8_t overran)
+{
+    if (!overran) {
+        overrun_run = 0;
+        return;
+    }
+    overruns++;
+    if (overrun_run < 0xFFFFu) {
+        overrun_run++;
+    }
+    if (overrun_run >= CFG_OVERRUN_FAULT && !fault_latched()) {
+        fault_raise(PROTO_FAULT_TICK_OVERRUN, 0); /* the timing the envelope assumes is gone */
+    }
+}
+
+uint32_t app_overruns(void)
+{
+    return overruns;
+}
+
+void app_clear_overruns(void)
+{
+    overruns = 0;
+}
+
+void app_idle(uint32_t until_next_tick_us)
+{
+    imucheck_service();
+    telemetry_idle(until_next_tick_us);
 }
 
 void app_tick(void)
 {
-    us_acc = (uint16_t)(us_acc + CFG_TICK_US);
+    uint32_t now = hal_micros();
+    us_acc += now - last_us; /* wrap-safe; no division: about one ms per tick */
+    last_us = now;
     while (us_acc >= 1000u) {
-        us_acc = (uint16_t)(us_acc - 1000u);
+        us_acc -= 1000u;
         ms++;
     }
     cmd_poll();            /* 1. commands (ESTOP: MOSFETs off first) */

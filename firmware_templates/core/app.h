@@ -15,7 +15,7 @@
  * is detected, and stays latched until CLEAR(FAULTS). E-stop latches until CLEAR(ESTOP).
  * Each step is one module: cmd.h (1), imucheck.h (2), drive.h (3, 4), fault.h and
  * telemetry.h (5); tx.h sends, param.h holds SET_PARAM's table. app_time_ms() is the
- * firmware clock (ms since app_init, advanced by CFG_TICK_US per tick) that stamps
+ * firmware clock (ms since app_init, on hal_micros: real time, not ticks) that stamps
  * events and telemetry.
  */
 #ifndef PROLEG_APP_H
@@ -25,6 +25,16 @@
 
 void app_init(void);
 void app_tick(void);
+/* Between ticks, as often as the main loop likes, with the µs left before the next tick
+ * (bounded, never waits, never starts what would not end before the next tick): moves
+ * the background IMU transactions on and sends the telemetry frame (telemetry.h). */
+void app_idle(uint32_t until_next_tick_us);
+/* After each tick (core/main.c): whether its work ended after the next tick was due.
+ * Counted (GET_STATS tick_overruns, CLEAR(COUNTERS) zeroes it); CFG_OVERRUN_FAULT in a
+ * row (robot file [control] overrun_fault) latch FAULT TICK_OVERRUN. */
+void app_tick_done(uint8_t overran);
+uint32_t app_overruns(void);
+void app_clear_overruns(void);
 uint32_t app_time_ms(void);
 
 #endif /* PROLEG_APP_H */

@@ -1,6 +1,8 @@
 /* cmd.c - see cmd.h. Messages and their fields are defined in proleg/protocol/definition.py. */
 #include "cmd.h"
 
+#include "app.h"
+
 #include <string.h>
 
 #include "drive.h"
@@ -80,6 +82,7 @@ static void cmd_get_stats(uint8_t token)
     msg.u.stats.nacks = c->nacks;
     msg.u.stats.tx_frames = c->tx_frames;
     msg.u.stats.tx_dropped = c->tx_dropped;
+    msg.u.stats.tick_overruns = app_overruns();
     tx_send();
 }
 
@@ -161,6 +164,7 @@ static void cmd_clear(uint8_t token)
     if (what & PROTO_CLEAR_COUNTERS) {
         memset(&rx.count, 0, sizeof rx.count);
         tx_clear_counts();
+        app_clear_overruns();
         done |= PROTO_CLEAR_COUNTERS;
     }
     if ((what & PROTO_CLEAR_ESTOP) && sma_estopped()) {

@@ -21,10 +21,19 @@ void hal_init(void);
 /* Free-running microsecond counter: monotonic, wraps at 2^32. */
 uint32_t hal_micros(void);
 
-/* One I2C transaction on the IMU bus: write ntx bytes, then (repeated start) read nrx
- * bytes; either count may be 0. Returns 0 on success, negative on NACK, bus error or
- * timeout (bounded: never longer than about 2 ms). */
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
+/* One I2C transaction on the IMU bus, in the background: write ntx bytes from tx, then
+ * (repeated start) read nrx bytes into rx, NACKing the last; either count may be 0 (not
+ * both). tx and rx must stay valid until hal_i2c_poll() no longer returns HAL_I2C_BUSY.
+ * Returns 0 when begun, negative if the previous transaction is still in flight. */
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
+
+/* The last begun transaction: HAL_I2C_BUSY while in flight, 0 done, negative on NACK,
+ * bus error, or when HAL_I2C_DEADLINE_US have passed since it began (then it is aborted
+ * and the bus recovered: a slave holding SDA gets up to 9 SCL clocks and a STOP). Never
+ * waits; returns at once. */
+#define HAL_I2C_BUSY 1
+#define HAL_I2C_DEADLINE_US 1500u
+int8_t hal_i2c_poll(void);
 
 /* Why the chip last reset, one of HAL_RESET_* (the BOOT event's code; protocol
  * ResetCause). Read from the reset flags once in hal_init(), which also clears them so
@@ -46,9 +55,11 @@ void hal_watchdog_feed(void);
  * register that does nothing else (AVR GPIOR0 bit 0; STM32 BKP_DR1, clock off: the chip
  * ignores it), so an emulator or a logic probe can time every tick. */
 void hal_tick_mark(uint8_t busy);
-/* The same on the board's I2C bus `bus` (its index in the board file's [[i2c.bus]]
- * list; 0 is hal_i2c_write_read's bus). Needed only on boards with more than one bus:
- * the core calls it only when the robot's IMUs use a second bus (CFG_I2C_BUSES > 1). */
+
+/* One whole transaction (write ntx, then read nrx) on the board's I2C bus `bus` (its
+ * index in the board file's [[i2c.bus]] list), waited for but bounded like hal_i2c_poll;
+ * 0 or negative. Needed only on boards with more than one bus: the core calls it only for
+ * IMUs on a second bus (CFG_I2C_BUSES > 1), once per limb between ticks. */
 int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
 
 /* Set the MOSFET PWM duty of an actuator channel, in permyriad (0 = off, 10000 = on);

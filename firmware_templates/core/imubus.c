@@ -20,6 +20,20 @@ static struct {
     uint32_t switches;
 } st;
 
+/* One transaction on bus 0, waited for: hal_i2c_poll() gives up by itself past
+ * HAL_I2C_DEADLINE_US (hal.h), so the wait is bounded. Used only for the one-byte
+ * multiplexer select, between ticks. */
+static int bus0_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    int8_t r;
+    if (hal_i2c_begin(addr7, tx, ntx, rx, nrx) != 0) {
+        return -1;
+    }
+    while ((r = hal_i2c_poll()) == HAL_I2C_BUSY) {
+    }
+    return r == 0 ? 0 : -1;
+}
+
 static int bus_write_read(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
 #if CFG_I2C_BUSES > 1
@@ -29,7 +43,7 @@ static int bus_write_read(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t
 #else
     (void)bus;
 #endif
-    return hal_i2c_write_read(addr7, tx, ntx, rx, nrx);
+    return bus0_write_read(addr7, tx, ntx, rx, nrx);
 }
 
 void imubus_init(void)
@@ -70,6 +84,11 @@ int imubus_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx
         return -1;
     }
     return bus_write_read(st.bus, addr7, tx, ntx, rx, nrx);
+}
+
+uint8_t imubus_on_second_bus(void)
+{
+    return st.bus != 0u;
 }
 
 uint32_t imubus_switches(void)

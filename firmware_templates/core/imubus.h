@@ -3,8 +3,8 @@
  * Contract. imubus_select(limb) makes limb's IMU the one imubus_write_read() talks to:
  * it picks the limb's bus and, when the IMU sits behind a TCA9548A/PCA9548A multiplexer
  * (CFG_LIMB_IMU_MUX != 0), writes the multiplexer's control byte (1 << channel) only when
- * that bus's enabled channel changes; each such write is one short I2C transfer in the
- * tick (counted by imubus_switches()). A failed select forgets the bus's channel (the
+ * that bus's enabled channel changes; each such write is one short blocking I2C transfer
+ * between ticks, before the limb's own transaction (counted by imubus_switches()). A failed select forgets the bus's channel (the
  * next select writes it again) and makes imubus_write_read() fail until the next good
  * select, so a limb never reads another limb's IMU. Tables come from robot_config.h
  * (CFG_LIMB_IMU_BUS/_MUX/_CHANNEL); bus 0 is hal_i2c_write_read's bus, others go through
@@ -30,6 +30,9 @@ int8_t imubus_select(uint8_t limb);
 
 /* One transfer on the selected limb's bus (hal.h semantics); negative after a failed select. */
 int imubus_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
+
+/* 1 when the selected limb's IMU is on a bus other than bus 0 (hal_i2c_begin's bus). */
+uint8_t imubus_on_second_bus(void);
 
 /* Control-byte writes since imubus_init (wraps). */
 uint32_t imubus_switches(void);

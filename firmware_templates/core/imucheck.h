@@ -1,13 +1,21 @@
 /* imucheck.h - the limbs' IMUs: start, read, check, classify into the robot state.
  *
- * Contract. imucheck_start(limb) wakes and checks one MPU-6050 (WHO_AM_I, config);
- * a bus error latches IMU_NO_ACK, a wrong answer IMU_BAD_DATA (fault.h), and the limb
- * is marked bad. imucheck_read() runs once per tick: for each limb not marked bad it
- * reads the accelerometer (6 bytes) and faults the limb on no ACK twice in a row, |g|
+ * Contract. Nothing here waits on the bus: every IMU transaction is begun with
+ * hal_i2c_begin and collected with hal_i2c_poll (bounded by the HAL's per-transaction
+ * deadline). imucheck_read() runs once per tick: it takes each limb's result of the
+ * transactions begun in the previous tick, then begins this tick's (one per limb, in
+ * limb order); imucheck_service() moves them on (called at the tick and from the
+ * main loop's idle wait), so the IMUs are read while the rest of the tick works.
+ * Start-up: imucheck_power_up(limb) waits the MPU-6050's typical start-up time, then
+ * runs its start-up steps (mpu6050.h), one per tick, WHO_AM_I retried until the
+ * maximum start-up time plus margin; then a bus error latches IMU_NO_ACK, a wrong answer
+ * IMU_BAD_DATA (fault.h), and the limb is marked bad. imucheck_start(limb) is the same
+ * without the wait (CLEAR(FAULTS)). A running limb faults on no ACK twice in a row, |g|
  * outside 0.5..1.5 g, or identical samples CFG_IMU_STUCK_SAMPLES times in a row; a good
  * sample goes to the ψ classifier (psi.h). The measured robot state is the state index
- * of every limb's debounced level, or IMUCHECK_UNKNOWN while any limb has none or is bad.
- * A bad limb is not read again until imucheck_take_bad() hands its bit to CLEAR(FAULTS).
+ * of every limb's debounced level, or IMUCHECK_UNKNOWN while any limb has none, is
+ * starting or is bad. A bad limb is not read again until imucheck_take_bad() hands its
+ * bit to CLEAR(FAULTS).
  */
 #ifndef PROLEG_IMUCHECK_H
 #define PROLEG_IMUCHECK_H
@@ -23,8 +31,10 @@
 #define IMUCHECK_UNKNOWN 0xFFFFu
 
 void imucheck_init(void);
+void imucheck_power_up(uint8_t limb);
 void imucheck_start(uint8_t limb);
 void imucheck_read(void);
+void imucheck_service(void);
 
 /* The debounced robot state (seq_state_index), or IMUCHECK_UNKNOWN. */
 uint32_t imucheck_measured(void);

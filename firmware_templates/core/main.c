@@ -7,7 +7,9 @@
  * (host-sim: sim_run_ticks) leave this file out of the image (board file
  * [build] main_loop = false).
  *
- * Each tick's work is framed by hal_tick_mark(1) / hal_tick_mark(0) (the emulators and a
+ * A tick whose work ends after the next tick was due is an overrun: reported to
+ * app_tick_done() (counted, and a fault after [control] overrun_fault in a row), never
+ * silently absorbed. Each tick's work is framed by hal_tick_mark(1) / hal_tick_mark(0) (the emulators and a
  * logic probe time it), and the watchdog is fed only after a tick's work has returned.
  * The wait is its own function with `next_tick` its schedule, so the emulators can find
  * it in the ELF and skip idle time (docs/emulators-arm.md).
@@ -28,7 +30,12 @@ void __attribute__((noinline)) wait_tick(void)
     if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
         next_tick = now; /* overran by more than a tick: resynchronise */
     }
-    while ((int32_t)(hal_micros() - next_tick) < 0) {
+    for (;;) {
+        int32_t left = (int32_t)(next_tick - hal_micros());
+        if (left <= 0) {
+            break;
+        }
+        app_idle((uint32_t)left);
     }
     next_tick += CFG_TICK_US;
 }
@@ -43,6 +50,7 @@ int main(void)
         hal_tick_mark(1);
         app_tick();
         hal_tick_mark(0);
+        app_tick_done((int32_t)(hal_micros() - next_tick) > 0); /* next_tick: the next tick's start */
         hal_watchdog_feed();
     }
 }

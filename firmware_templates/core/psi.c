@@ -345,7 +345,21 @@ int16_t psi_last_centideg(uint8_t limb)
 /* atan(n/d) in 0.01° for 0 ≤ n ≤ d, d > 0: table plus linear interpolation. */
 static int16_t atan_frac(uint16_t n, uint16_t d)
 {
-    uint32_t r = ((uint32_t)n << 15) / d; /* Q15, 0..32768 */
+    uint16_t r = 0, rem = n; /* r = n·2^15 / d (Q15, 0..32768) by shift and subtract: */
+    uint8_t k;               /* no 32-bit division (issue 11) */
+    if (n >= d) {
+        r = 32768u;
+    } else {
+        for (k = 0; k < 15u; k++) {
+            uint32_t t = (uint32_t)rem << 1; /* rem < d ≤ 32768: fits 17 bits */
+            r = (uint16_t)(r << 1);
+            if (t >= d) {
+                t -= d;
+                r |= 1u;
+            }
+            rem = (uint16_t)t;
+        }
+    }
     uint16_t i = (uint16_t)(r >> 10);
     uint16_t f = (uint16_t)(r & 1023u);
     int16_t a, b;

@@ -253,16 +253,22 @@ uint32_t seq_cycles(void)
     return s.cycles;
 }
 
+/* The mixed-radix digits of `state`, most significant (limb 0) first, by subtracting
+ * place values (a digit is below its limb's level count): no division in the tick. */
 void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 {
-    uint8_t i = CFG_N_LIMBS;
+    uint32_t place[CFG_N_LIMBS];
     uint32_t v = state;
-    while (i > 0u) {
-        uint8_t k;
-        i--;
-        k = psi_levels(i);
-        levels[i] = (uint8_t)(v % k);
-        v /= k;
+    uint8_t i, d;
+    place[CFG_N_LIMBS - 1] = 1u;
+    for (i = CFG_N_LIMBS - 1u; i > 0u; i--) {
+        place[i - 1u] = place[i] * psi_levels(i);
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        for (d = 0; v >= place[i] && d < 0xFFu; d++) {
+            v -= place[i];
+        }
+        levels[i] = d;
     }
 }
 

@@ -2,6 +2,7 @@
 #include "telemetry.h"
 
 #include "drive.h"
+#include "hal.h"
 #include "fault.h"
 #include "imucheck.h"
 #include "proto.h"
@@ -21,6 +22,9 @@
 static struct {
     uint16_t hz, acc, seq;
     uint8_t clamped;
+    uint8_t pending;  /* `frame` is taken, not yet sent */
+    uint16_t cost_us; /* the longest encode-and-queue seen so far (starts at a quarter tick) */
+    proto_msg_t frame;
 } st;
 
 void telemetry_init(void)
@@ -29,6 +33,8 @@ void telemetry_init(void)
     st.acc = 0;
     st.seq = 0;
     st.clamped = 0;
+    st.pending = 0;
+    st.cost_us = (uint16_t)(CFG_TICK_US / 4u); /* then learnt */
 }
 
 uint8_t telemetry_set_rate(uint16_t hz)
@@ -90,11 +96,12 @@ uint16_t telemetry_flags(void)
     return f;
 }
 
-static void send_telemetry(void)
+/* Take the frame's values now (in the tick); telemetry_idle() encodes and queues it. */
+static void take_telemetry(void)
 {
     uint8_t i;
     uint16_t step = seq_step();
-    proto_msg_t *m = &tx_msg;
+    proto_msg_t *m = &st.frame;
     m->id = PROTO_ID_TELEMETRY;
     m->u.telemetry.seq = st.seq++;
     m->u.telemetry.time_ms = app_time_ms();
@@ -113,7 +120,7 @@ static void send_telemetry(void)
         m->u.telemetry.duty[i] = sma_duty(i);
     }
     st.clamped = 0;
-    tx_send();
+    st.pending = 1;
 }
 
 void telemetry_tick(void)
@@ -124,6 +131,24 @@ void telemetry_tick(void)
     st.acc = (uint16_t)(st.acc + st.hz);
     if (st.acc >= CFG_TICK_HZ) {
         st.acc = (uint16_t)(st.acc - CFG_TICK_HZ);
-        send_telemetry();
+        if (st.pending) {
+            tx_send_msg(&st.frame); /* no idle time was long enough: send it in the tick */
+        }
+        take_telemetry();
+    }
+}
+
+void telemetry_idle(uint32_t until_next_tick_us)
+{
+    uint32_t t0, dt;
+    if (!st.pending || until_next_tick_us <= st.cost_us) {
+        return;
+    }
+    t0 = hal_micros();
+    tx_send_msg(&st.frame);
+    st.pending = 0;
+    dt = hal_micros() - t0;
+    if (dt > st.cost_us) {
+        st.cost_us = (uint16_t)(dt > 0xFFFFu ? 0xFFFFu : dt);
     }
 }

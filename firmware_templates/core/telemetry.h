@@ -8,7 +8,11 @@
  * The frame carries the firmware clock, the measured and target state, the gait last
  * started, the step, the flags (telemetry_flags()), ψ per limb (psi_last_centideg) and
  * the applied duty per actuator; DUTY_CLAMPED is set when an output was clamped since
- * the previous frame (telemetry_note_clamped()).
+ * the previous frame (telemetry_note_clamped()). The tick only takes the frame's values;
+ * encoding and queueing it (CRC, COBS: a few hundred µs on an 8-bit MCU) is background
+ * work, done by telemetry_idle() between ticks when the time left before the next tick
+ * exceeds the longest encode seen so far (so it never delays a tick); a frame still
+ * waiting when the next is taken is sent then, in the tick (and shows in its budget).
  */
 #ifndef PROLEG_TELEMETRY_H
 #define PROLEG_TELEMETRY_H
@@ -17,6 +21,7 @@
 
 void telemetry_init(void);
 void telemetry_tick(void);
+void telemetry_idle(uint32_t until_next_tick_us);
 
 /* 0 = accepted; nonzero = above the link's share (rate unchanged). */
 uint8_t telemetry_set_rate(uint16_t hz);

@@ -20,7 +20,12 @@ void tx_init(void)
 
 void tx_send(void)
 {
-    size_t n = proto_encode(&tx_msg, txbuf, sizeof txbuf);
+    tx_send_msg(&tx_msg);
+}
+
+void tx_send_msg(const proto_msg_t *m)
+{
+    size_t n = proto_encode(m, txbuf, sizeof txbuf);
     uint16_t w;
     if (n == 0u) {
         count.tx_dropped++;

@@ -23,6 +23,8 @@ extern proto_msg_t tx_msg;
 
 void tx_init(void);
 void tx_send(void);
+/* The same for a message built elsewhere (the telemetry frame, telemetry.h). */
+void tx_send_msg(const proto_msg_t *m);
 void tx_event(uint8_t kind, uint8_t code, uint16_t detail);
 void tx_ack(uint8_t token, uint8_t cmd);
 void tx_nack(uint8_t token, uint8_t cmd, uint8_t error, uint16_t detail);

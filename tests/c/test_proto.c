@@ -110,6 +110,7 @@ static int run_emit(void)
     m.u.stats.nacks = 6;
     m.u.stats.tx_frames = 7;
     m.u.stats.tx_dropped = 8;
+    m.u.stats.tick_overruns = 9;
     print_frame(&m);
 
     memset(&m, 0, sizeof m);

@@ -6,7 +6,8 @@
  * Timer2 (OC2A = D11, OC2B = D3): fast PWM 8 bit, /128 (~490 Hz).
  * Duty 0 and 10000 disconnect the compare output and drive the pin low/high, so "off"
  * is really off (fast PWM with OCR = 0 still gives a one-count pulse).
- * TWI at CFG_I2C_HZ, every wait bounded by TWI_STEP_US. USART0 at CFG_UART_BAUD (U2X);
+ * TWI at CFG_I2C_HZ, interrupt-driven (hal_i2c_begin/poll), each transaction bounded by
+ * HAL_I2C_DEADLINE_US. USART0 at CFG_UART_BAUD (U2X);
  * its interrupts move bytes to and from the core's rings (uart.h). main() is the core's.
  */
 #include <avr/interrupt.h>
@@ -25,11 +26,11 @@ enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 #ifndef F_CPU
 #define F_CPU CFG_CLOCK_HZ
 #endif
+#include <util/delay.h>
 
 #if RING_LARGE
 #error "AVR: the UART rings must be at most 128 bytes (8-bit indices are the only atomic ones)"
 #endif
-#define TWI_STEP_US 400u
 
 static const uint8_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 
@@ -59,18 +60,15 @@ uint32_t hal_micros(void)
 
 /* ------------------------------------------------------------------ PWM */
 
-static uint16_t t1_top;
+/* Timer1 TOP for CFG_PWM_HZ at /8, and OCR = duty · TOP / 10000 as a multiply and a
+ * shift by precomputed Q16 scales: no division in the tick. */
+#define T1_TOP ((uint16_t)(F_CPU / 8u / CFG_PWM_HZ - 1u))
+#define T1_SCALE ((uint16_t)(((uint32_t)T1_TOP * 65536u + 9999u) / 10000u))
+#define T2_SCALE ((uint16_t)((255UL * 65536u + 9999u) / 10000u))
 
-static void pin_out(uint8_t oc, uint8_t high)
-{
-    volatile uint8_t *port = (oc == HAL_AVR_OC2B) ? &PORTD : &PORTB;
-    uint8_t bit = (oc == HAL_AVR_OC1A) ? _BV(PB1) : (oc == HAL_AVR_OC1B) ? _BV(PB2) : (oc == HAL_AVR_OC2A) ? _BV(PB3) : _BV(PD3);
-    if (high) {
-        *port |= bit;
-    } else {
-        *port &= (uint8_t)~bit;
-    }
-}
+/* Per output: its compare-output enable bit in TCCRnA, its port pin. */
+static const uint8_t oc_com[4] = {_BV(COM1A1), _BV(COM1B1), _BV(COM2A1), _BV(COM2B1)};
+static const uint8_t oc_bit[4] = {_BV(PB1), _BV(PB2), _BV(PB3), _BV(PD3)};
 
 static void pwm_init(void)
 {
@@ -79,8 +77,7 @@ static void pwm_init(void)
     DDRD |= _BV(PD3);
     PORTB &= (uint8_t) ~(_BV(PB1) | _BV(PB2) | _BV(PB3));
     PORTD &= (uint8_t)~_BV(PD3);
-    t1_top = (uint16_t)(F_CPU / 8u / CFG_PWM_HZ - 1u);
-    ICR1 = t1_top;
+    ICR1 = T1_TOP;
     TCCR1A = _BV(WGM11);
     TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
     TCCR2A = _BV(WGM21) | _BV(WGM20);
@@ -92,133 +89,172 @@ static void pwm_init(void)
 
 void hal_pwm_set(uint8_t channel, uint16_t duty)
 {
-    uint8_t oc, full, off;
+    uint8_t oc, com, bit;
+    volatile uint8_t *tccra, *port;
     if (channel >= CFG_PWM_CHANNELS) {
         return;
     }
     oc = pwm_map[channel];
-    full = duty >= 10000u;
-    off = duty == 0u;
+    com = oc_com[oc];
+    bit = oc_bit[oc];
+    tccra = oc < HAL_AVR_OC2A ? &TCCR1A : &TCCR2A;
+    port = oc == HAL_AVR_OC2B ? &PORTD : &PORTB;
+    if (duty == 0u || duty >= 10000u) {
+        /* compare output off: the pin is the port's, low (off) or high (full on) */
+        *tccra &= (uint8_t)~com;
+        if (duty) {
+            *port |= bit;
+        } else {
+            *port &= (uint8_t)~bit;
+        }
+        return;
+    }
     switch (oc) {
     case HAL_AVR_OC1A:
-        if (off || full) {
-            TCCR1A &= (uint8_t)~_BV(COM1A1);
-        } else {
-            OCR1A = (uint16_t)((uint32_t)duty * t1_top / 10000u);
-            TCCR1A |= _BV(COM1A1);
-        }
+        OCR1A = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
         break;
     case HAL_AVR_OC1B:
-        if (off || full) {
-            TCCR1A &= (uint8_t)~_BV(COM1B1);
-        } else {
-            OCR1B = (uint16_t)((uint32_t)duty * t1_top / 10000u);
-            TCCR1A |= _BV(COM1B1);
-        }
+        OCR1B = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
         break;
     case HAL_AVR_OC2A:
-        if (off || full) {
-            TCCR2A &= (uint8_t)~_BV(COM2A1);
-        } else {
-            OCR2A = (uint8_t)((uint32_t)duty * 255u / 10000u);
-            TCCR2A |= _BV(COM2A1);
-        }
+        OCR2A = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
         break;
     default:
-        if (off || full) {
-            TCCR2A &= (uint8_t)~_BV(COM2B1);
-        } else {
-            OCR2B = (uint8_t)((uint32_t)duty * 255u / 10000u);
-            TCCR2A |= _BV(COM2B1);
-        }
+        OCR2B = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
         break;
     }
-    if (off || full) {
-        pin_out(oc, full);
-    }
+    *tccra |= com;
 }
 
 /* ------------------------------------------------------------------ I2C (TWI) */
 
-static int8_t twi_wait(void)
+/* One transaction, moved on by the TWI interrupt one bus event at a time (ATmega328P
+ * datasheet §22.7, master transmitter and receiver status codes). The main loop only
+ * begins it and polls the result; hal_i2c_poll aborts it past its deadline. */
+#define TWCR_GO (_BV(TWINT) | _BV(TWEN) | _BV(TWIE))
+
+static struct {
+    const uint8_t *tx;
+    uint8_t *rx;
+    uint8_t sla, ntx, nrx, i;
+    uint8_t reading;
+    uint8_t checked;        /* the bus was looked at after this transaction failed */
+    volatile int8_t result; /* HAL_I2C_BUSY, 0 or -1 */
+    uint32_t t0;
+} tw = {0, 0, 0, 0, 0, 0, 0, 1, 0, 0};
+
+static void twi_done(int8_t r)
 {
-    uint32_t t0 = hal_micros();
-    while (!(TWCR & _BV(TWINT))) {
-        if ((uint32_t)(hal_micros() - t0) > TWI_STEP_US) {
-            return -1;
+    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO); /* STOP; TWSTO clears when it is out */
+    tw.result = r;
+}
+
+ISR(TWI_vect)
+{
+    switch (TWSR & 0xF8u) {
+    case 0x08u: /* START */
+    case 0x10u: /* repeated START */
+        TWDR = (uint8_t)(tw.sla | tw.reading);
+        TWCR = TWCR_GO;
+        break;
+    case 0x18u: /* SLA+W ACKed */
+    case 0x28u: /* data byte ACKed */
+        if (tw.i < tw.ntx) {
+            TWDR = tw.tx[tw.i++];
+            TWCR = TWCR_GO;
+        } else if (tw.nrx) {
+            tw.reading = 1;
+            tw.i = 0;
+            TWCR = TWCR_GO | _BV(TWSTA);
+        } else {
+            twi_done(0);
         }
+        break;
+    case 0x50u: /* data byte received, ACK returned */
+        tw.rx[tw.i++] = TWDR;
+        /* fall through */
+    case 0x40u: /* SLA+R ACKed */
+        TWCR = (uint8_t)(TWCR_GO | (tw.i + 1u < tw.nrx ? _BV(TWEA) : 0u));
+        break;
+    case 0x58u: /* last byte received, NACK returned */
+        tw.rx[tw.i] = TWDR;
+        twi_done(0);
+        break;
+    default: /* SLA or data NACKed, arbitration lost, bus error */
+        twi_done(-1);
+        break;
     }
-    return 0;
 }
 
-static void twi_stop(void)
-{
-    uint32_t t0 = hal_micros();
-    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO);
-    while ((TWCR & _BV(TWSTO)) && (uint32_t)(hal_micros() - t0) < TWI_STEP_US) {
-    }
-}
-
+/* UM10204 §3.1.16: a slave cut off mid-byte holds SDA low until it has clocked its byte
+ * out. With the TWI off, clock SCL (PC5) 9 times (enough for any byte and its ACK; a
+ * free slave ignores them), then a STOP; then the TWI again. Bounded: about 100 µs, and
+ * only after a failure. */
 static void twi_recover(void)
 {
-    TWCR = 0; /* release the bus, then re-enable */
+    uint8_t k;
+    TWCR = 0;
+    PORTC &= (uint8_t) ~(_BV(PC4) | _BV(PC5));
+    for (k = 0; k < 9u; k++) {
+        DDRC |= _BV(PC5); /* SCL low */
+        _delay_us(5);
+        DDRC &= (uint8_t)~_BV(PC5); /* released: the pull-up takes it high */
+        _delay_us(5);
+    }
+    DDRC |= _BV(PC4); /* STOP: SDA low, then released while SCL is high */
+    _delay_us(5);
+    DDRC &= (uint8_t)~_BV(PC4);
+    PORTC |= _BV(PC4) | _BV(PC5);
+    _delay_us(5);
     TWCR = _BV(TWEN);
 }
 
-static int8_t twi_start(uint8_t sla, uint8_t expect_start, uint8_t expect_ack)
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
-    TWCR = _BV(TWINT) | _BV(TWSTA) | _BV(TWEN);
-    if (twi_wait() || (TWSR & 0xF8u) != expect_start) {
+    if (hal_i2c_poll() == HAL_I2C_BUSY) {
         return -1;
     }
-    TWDR = sla;
-    TWCR = _BV(TWINT) | _BV(TWEN);
-    if (twi_wait() || (TWSR & 0xF8u) != expect_ack) {
-        return -1;
-    }
+    tw.tx = tx;
+    tw.rx = rx;
+    tw.sla = (uint8_t)(addr7 << 1);
+    tw.ntx = ntx;
+    tw.nrx = nrx;
+    tw.i = 0;
+    tw.reading = ntx ? 0u : 1u;
+    tw.t0 = hal_micros();
+    tw.checked = 0;
+    tw.result = HAL_I2C_BUSY;
+    TWCR = TWCR_GO | _BV(TWSTA);
     return 0;
 }
 
-static int twi_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+int8_t hal_i2c_poll(void)
 {
-    uint8_t i;
-    if (ntx) {
-        if (twi_start((uint8_t)(addr7 << 1), 0x08u, 0x18u)) {
-            return -1;
+    int8_t r = tw.result;
+    if (r == HAL_I2C_BUSY) {
+        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+            return HAL_I2C_BUSY;
         }
-        for (i = 0; i < ntx; i++) {
-            TWDR = tx[i];
-            TWCR = _BV(TWINT) | _BV(TWEN);
-            if (twi_wait() || (TWSR & 0xF8u) != 0x28u) {
-                return -1;
-            }
-        }
+        TWCR = 0; /* abort: the interrupt cannot run again */
+        tw.result = r = -1;
+        tw.checked = 1;
+        twi_recover();
+        return r;
     }
-    if (nrx) {
-        if (twi_start((uint8_t)((addr7 << 1) | 1u), ntx ? 0x10u : 0x08u, 0x40u)) {
-            return -1;
+    if (TWCR & _BV(TWSTO)) {
+        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+            return HAL_I2C_BUSY; /* the STOP is still going out */
         }
-        for (i = 0; i < nrx; i++) {
-            uint8_t last = (uint8_t)(i + 1u == nrx);
-            TWCR = (uint8_t)(_BV(TWINT) | _BV(TWEN) | (last ? 0u : _BV(TWEA)));
-            if (twi_wait()) {
-                return -1;
-            }
-            rx[i] = TWDR;
-        }
-    }
-    twi_stop();
-    return 0;
-}
-
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
-{
-    if (twi_transfer(addr7, tx, ntx, rx, nrx) != 0) {
-        twi_stop();
         twi_recover();
         return -1;
     }
-    return 0;
+    if (r < 0 && !tw.checked) {
+        tw.checked = 1;
+        if (!(PINC & _BV(PC4))) {
+            twi_recover(); /* a slave kept SDA low */
+        }
+    }
+    return r;
 }
 
 /* ------------------------------------------------------------------ USART0 */

@@ -108,11 +108,6 @@ int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_
     return acked ? 0 : -1;
 }
 
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
-{
-    return hal_i2c_write_read_bus(0, addr7, tx, ntx, rx, nrx);
-}
-
 /* The model slot behind a host-sim ABI IMU key: 0x80 | limb, or the address of an IMU
  * wired directly to bus 0 (what sim_limb_imu_addr returns); -1 when there is none. */
 static int imu_slot(uint8_t key)
@@ -127,6 +122,21 @@ static int imu_slot(uint8_t key)
         }
     }
     return -1;
+}
+
+static int8_t i2c_result;
+
+/* The transaction happens at once (virtual time does not pass inside a tick), through the
+ * same bus model as the blocking call (multiplexers, several IMUs). */
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    i2c_result = hal_i2c_write_read_bus(0, addr7, tx, ntx, rx, nrx) == 0 ? 0 : -1;
+    return 0;
+}
+
+int8_t hal_i2c_poll(void)
+{
+    return i2c_result;
 }
 
 void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad)
@@ -203,6 +213,7 @@ SIM_API void sim_run_ticks(uint32_t n)
     uint32_t i;
     for (i = 0; i < n; i++) {
         now_us += CFG_TICK_US;
+        app_idle(CFG_TICK_US); /* the wait before the tick: background work (IMU reads, telemetry) */
         app_tick();
         drain_line();
     }

@@ -307,7 +307,7 @@ static void i2c_recover(void)
     i2c_setup();
 }
 
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+static int8_t i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     if (i2c_transfer(addr7, tx, ntx, rx, nrx) != 0) {
         if (I2C_CR1 & I2C_CR1_START) {
@@ -324,6 +324,21 @@ int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *r
         return -1;
     }
     return 0;
+}
+
+static int8_t i2c_result;
+
+/* Not yet in the background on this HAL: the transaction runs here, polled, each step
+ * bounded by I2C_STEP_US (≈ 220 µs for a 6-byte read at 400 kHz). */
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    i2c_result = i2c_write_read(addr7, tx, ntx, rx, nrx);
+    return 0;
+}
+
+int8_t hal_i2c_poll(void)
+{
+    return i2c_result;
 }
 
 /* ------------------------------------------------------------------ USART1 */
@@ -533,7 +548,7 @@ static int8_t i2c2_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8
 int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     if (bus == 0u) {
-        return hal_i2c_write_read(addr7, tx, ntx, rx, nrx);
+        return i2c_write_read(addr7, tx, ntx, rx, nrx);
     }
 #if CFG_I2C_BUSES > 1
     if (bus == 1u) {

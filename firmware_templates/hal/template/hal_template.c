@@ -44,13 +44,13 @@ uint32_t hal_micros(void)
     return 0;
 }
 
-/* One I2C transaction with the 7-bit address addr7: write ntx bytes from tx, then (with
- * a repeated start when both are non-zero) read nrx bytes into rx, NACKing the last one.
- * Returns 0 on success, negative on NACK, arbitration loss, bus error or timeout. Must
- * be bounded: every wait on the peripheral times out (the other HALs use a few hundred
- * µs per step; never more than about 2 ms in all), and after a failure leave the bus
- * usable for the next call (stop condition, peripheral reset if it is stuck). */
-int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+/* Begin one I2C transaction with the 7-bit address addr7 in the background: write ntx
+ * bytes from tx, then (with a repeated start when both are non-zero) read nrx bytes
+ * into rx, NACKing the last one; tx and rx stay valid until hal_i2c_poll() is no longer
+ * HAL_I2C_BUSY. Return 0 when begun, -1 if the previous one is still in flight. Best
+ * done from the I2C interrupt (one byte per interrupt); a board may also run the whole
+ * transaction here if it takes a few tens of µs at most. */
+int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     (void)addr7;
     (void)tx;
@@ -60,14 +60,27 @@ int hal_i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *r
     return -1;
 }
 
-/* The same on I2C bus `bus` (its index in the board file's [[i2c.bus]] list): only for
- * an MCU with a second I2C peripheral; bus 0 is hal_i2c_write_read's bus. The core
- * calls it only when a robot's IMUs use bus 1 or above. Return -1 for a bus you lack. */
+/* HAL_I2C_BUSY while the transaction is in flight, 0 when it completed, negative on NACK,
+ * arbitration loss or bus error. Never waits. Past HAL_I2C_DEADLINE_US since the begin,
+ * abort it, leave the bus usable (9 SCL clocks if a slave holds SDA low, a STOP) and
+ * return negative. */
+int8_t hal_i2c_poll(void)
+{
+    return -1;
+}
+
+/* The same as hal_i2c_begin + waiting for hal_i2c_poll, on I2C bus `bus` (its index in
+ * the board file's [[i2c.bus]] list): only for an MCU with a second I2C peripheral. The
+ * core calls it only when a robot's IMUs use bus 1 or above (one transaction between
+ * ticks, bounded like hal_i2c_poll). Return -1 for a bus you lack. */
 int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
-    if (bus == 0u) {
-        return hal_i2c_write_read(addr7, tx, ntx, rx, nrx);
-    }
+    (void)bus;
+    (void)addr7;
+    (void)tx;
+    (void)ntx;
+    (void)rx;
+    (void)nrx;
     return -1;
 }
 

@@ -97,6 +97,7 @@ class Control:
     hold_ms: int = 100
     hold_margin_deg: float = 4.0
     telemetry_hz: int = 50
+    overrun_fault: int = 10  # consecutive ticks whose work overran the period: fault TICK_OVERRUN
 
 
 @dataclass(frozen=True, eq=False)
@@ -364,6 +365,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         hold_ms=f.integer("hold_ms", d.hold_ms, 0, 60_000),
         hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
+        overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
     )
     if c.drive_duty > safety.max_duty:
         f.fail("drive_duty", f"at most safety.max_duty ({safety.max_duty})", c.drive_duty)

@@ -111,6 +111,7 @@ class ControlPart:
     on_limit_latch: int
     stuck_samples: int
     max_loaded: int
+    overrun_fault: int
 
 
 @dataclass(frozen=True)
@@ -367,6 +368,7 @@ def _control_part(robot: Any) -> ControlPart:
         **thermal_budget(robot.name, safety, ctl),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
+        overrun_fault=int(getattr(ctl, "overrun_fault", 10)),
     )
 
 

@@ -105,7 +105,7 @@ class RobotInfo:
 
     @classmethod
     def from_message(cls, msg: Message) -> RobotInfo:
-        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__})  # type: ignore[arg-type]
+        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__ if k in msg.fields})  # type: ignore[arg-type]
 
     def header(self) -> dict[str, str]:
         """Key/value pairs for a recording's header."""
@@ -135,10 +135,11 @@ class FirmwareStats:
     nacks: int
     tx_frames: int
     tx_dropped: int
+    tick_overruns: int = 0  # control ticks that overran their period (issue 11)
 
     @classmethod
     def from_message(cls, msg: Message) -> FirmwareStats:
-        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__})  # type: ignore[arg-type]
+        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__ if k in msg.fields})  # type: ignore[arg-type]
 
 
 @dataclass

@@ -95,6 +95,7 @@ class FaultCode(IntEnum):
     SMA_ON_LIMIT = 4  # SMA on-time hit max_on_ms (cool-down enforced)
     LINK_WATCHDOG = 5  # no valid frame within link_watchdog_ms
     INTERNAL = 6  # firmware invariant violated
+    TICK_OVERRUN = 7  # [control] overrun_fault consecutive ticks overran their period (detail = 0)
 
 
 class EventKind(IntEnum):
@@ -390,8 +391,9 @@ MESSAGES: tuple[MessageSpec, ...] = (
             Field("nacks", "u32", "NACKs sent"),
             Field("tx_frames", "u32", "frames queued for sending"),
             Field("tx_dropped", "u32", "frames dropped because the TX queue was full"),
+            Field("tick_overruns", "u32", "control ticks whose work did not end within the tick period"),
         ),
-        "Reply to GET_STATS: the firmware's link counters.",
+        "Reply to GET_STATS: the firmware's link counters and its tick overruns.",
     ),
 )
 

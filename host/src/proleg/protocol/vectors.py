@@ -107,6 +107,7 @@ def valid_messages() -> list[Message]:
             nacks=5,
             tx_frames=6,
             tx_dropped=0,
+            tick_overruns=4294967295,
         ),
     ]
     return msgs
@@ -156,6 +157,7 @@ C_ENCODED: tuple[Message, ...] = (
         nacks=6,
         tx_frames=7,
         tx_dropped=8,
+        tick_overruns=9,
     ),
     Message.new("SET_PARAM", token=255, param=5, index=1, value=-2147483648),
 )

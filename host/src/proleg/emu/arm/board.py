@@ -392,6 +392,8 @@ class ArmEmuBoard:
         w = self._wait
         if not (w.value <= pc < w.value + w.size or w.value <= (lr & ~1) < w.value + w.size):
             return
+        if self.i2c1.phase != "idle" or self.i2c1.sr1 & 0x47:  # SB, ADDR, BTF, RXNE: waiting on the core
+            return  # the core's idle wait also moves the I2C transaction on: no skipping it
         now = self.native.cycles.value
         target = min(self._next_event(), self._end)
         if self._next_tick and self._ms_count:

@@ -78,6 +78,7 @@ _SIGNATURES = {
     "emu_ticks_read": ([POINTER(c_uint64), POINTER(c_uint32), POINTER(c_uint32), c_uint32], c_uint32),
     "emu_ticks_lost": ([], c_uint64),
     "emu_sp_min": ([], c_uint16),
+    "emu_jump": ([c_uint32], None),
     "emu_profile": ([c_int], None),
     "emu_profile_read": ([POINTER(c_uint64), c_uint32], c_uint32),
 }
@@ -303,6 +304,15 @@ class AvrEmuBoard:
     def cpu_state(self) -> str:
         s = int(self._lib.emu_cpu_state())
         return CPU_STATES[s] if 0 <= s < len(CPU_STATES) else f"state {s}"
+
+    def hang(self, symbol: str = "__stop_program") -> None:
+        """Fault injection: the core jumps into an endless loop (``symbol``, avr-libc's
+        ``rjmp .`` by default) as a stuck loop or a wild pointer would; only the watchdog
+        gets it out."""
+        sym = find_symbol(self.elf, symbol)
+        if sym is None:
+            raise SimError(f"{self.elf}: no symbol {symbol!r} to hang in")
+        self._lib.emu_jump(sym.address)
 
     @property
     def mcu_resets(self) -> int:

@@ -580,6 +580,13 @@ EMU_API uint32_t emu_pc(void)
     return E.avr->pc;
 }
 
+/* Fault injection: the core jumps to `byte_addr` (e.g. a `rjmp .` such as avr-libc's
+ * __stop_program) as a wild pointer or a stuck loop would; interrupts stay as they were. */
+EMU_API void emu_jump(uint32_t byte_addr)
+{
+    E.avr->pc = byte_addr;
+}
+
 EMU_API uint64_t emu_mcu_resets(void)
 {
     return E.mcu_resets;
