@@ -153,6 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
     s.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    _sim_board_arg(s)
     s.add_argument("--duration", type=_positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
     s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
@@ -175,6 +176,14 @@ def build_parser() -> argparse.ArgumentParser:
     add_link_commands(sub)  # console, plot, dbc
     add_robot_commands(sub)  # run, load-gait, set-param, robots
     return p
+
+
+def _sim_board_arg(p: argparse.ArgumentParser) -> None:
+    from ..sim.simulated_boards import SIMULATED_BOARDS
+
+    p.add_argument("--board", choices=tuple(SIMULATED_BOARDS), default="host-sim",
+                   help="host-sim: the firmware's C on the host (default); avr-emu / arm-emu: the exact "
+                        "arduino-nano / bluepill firmware.elf on an emulated MCU (--json adds the tick budget)")
 
 
 def add_udp_options(p: argparse.ArgumentParser) -> None:
@@ -264,7 +273,7 @@ def cmd_flash(args: argparse.Namespace) -> int:
 def cmd_sim(args: argparse.Namespace) -> int:
     from ..report import SimSession
     from ..robot import load_robot
-    from ..sim.closed_loop import SimulatedRobot
+    from ..sim.simulated_boards import clear_ticks, simulated_robot, tick_budget
 
     robot = load_robot(args.robot)
     if not args.pty:
@@ -276,7 +285,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
             shown = f"gaits 0..{have - 1}" if have else "no gait"
             raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
-    sim = SimulatedRobot(robot, seed=args.seed)
+    sim = simulated_robot(args.board, robot, seed=args.seed)
     timed = []
     for spec in args.inject:
         fault, plus, at = spec.rpartition("+") if "+" in spec else ("", "", "")
@@ -291,16 +300,17 @@ def cmd_sim(args: argparse.Namespace) -> int:
             sim.inject(spec)
     if args.pty:
         return _serve_pty(sim, args)
-    recorder = _recorder(robot, args.record) if args.record else None
+    recorder = _recorder(robot, args.record, args.board) if args.record else None
     listeners = [recorder] if recorder else []
     if args.udp:
         from ..record import RecordingMeta, UdpStreamer
 
-        meta = RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",))
+        meta = RecordingMeta.for_robot(robot=robot, board=args.board, truth=("displacement_mm",))
         listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
     session = SimSession(sim, listeners=listeners)
     try:
         session.advance(0.2)  # boot
+        clear_ticks(sim)  # the tick budget is measured over the gait run
         start = sim.time_s
         for at, fault in timed:
             session.schedule_fault(start + at, fault)
@@ -308,10 +318,11 @@ def cmd_sim(args: argparse.Namespace) -> int:
     finally:
         for listener in listeners:
             listener.stop()
+    budget = tick_budget(sim)
     if args.json:
-        print(json.dumps(_report_json(robot, report)))
+        print(json.dumps({**_report_json(robot, report), "board": args.board, **(budget or {})}))
     else:
-        print(_report_text(robot, report))
+        print(_report_text(robot, report, args.board, budget))
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     if recorder is not None and recorder.error is not None:
@@ -333,10 +344,10 @@ def _serve_pty(sim, args) -> int:
     return 0
 
 
-def _recorder(robot, path: str):
+def _recorder(robot, path: str, board: str = "host-sim"):
     from ..record import Logger, RecordingMeta
 
-    return Logger(path, RecordingMeta.for_robot(robot=robot, board="host-sim", truth=("displacement_mm",)))
+    return Logger(path, RecordingMeta.for_robot(robot=robot, board=board, truth=("displacement_mm",)))
 
 
 def _report_json(robot, report) -> dict:
@@ -361,12 +372,12 @@ def _report_json(robot, report) -> dict:
     }
 
 
-def _report_text(robot, report) -> str:
+def _report_text(robot, report, board: str = "host-sim", budget: dict | None = None) -> str:
     t = robot.transitions
     seq = [t.label(s) for s in report.states_reached]
     shown = " → ".join(seq[:13]) + (" …" if len(seq) > 13 else "")
     lines = [
-        f"{robot.name} on host-sim: gait {report.gait} in {report.direction} for {report.duration_s:g} s (simulated)",
+        f"{robot.name} on {board}: gait {report.gait} in {report.direction} for {report.duration_s:g} s (simulated)",
         f"  states reached:   {shown or 'none'}",
         f"  cycles completed: {report.cycles}",
     ]
@@ -386,6 +397,13 @@ def _report_text(robot, report) -> str:
     lines.append(
         f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
     )
+    if budget is not None:
+        period, busy = budget["tick_period_us"], budget["tick_busy_us"]
+        lines.append(
+            f"  tick busy (µs of a {period:g} µs tick, {busy['ticks']} ticks): mean {busy['mean']:g}, "
+            f"p99 {busy['p99']:g} ({100 * busy['p99'] / period:.0f} %), max {busy['max']:g} "
+            f"({100 * busy['max'] / period:.0f} %)"
+        )
     return "\n".join(lines)
 
 

@@ -416,6 +416,10 @@ class ArmEmuBoard:
             self.busy_us.append((now - self._tick_start) / CYC_PER_US)
             self._tick_start = None
 
+    def clear_ticks(self) -> None:
+        """Start a new measurement window (e.g. after boot), as ``AvrEmuBoard.clear_ticks``."""
+        self.busy_us.clear()
+
     def tick_budget(self) -> TickBudget:
         b = sorted(self.busy_us)
         if not b:
