@@ -1,11 +1,18 @@
-"""Hardware-in-the-loop tests: the simulated board by default, a real board on request.
+"""Hardware-in-the-loop tests: the simulated board by default, an emulated MCU or a real
+board on request.
 
-    pytest hil_tests                                   # simulated boards, every example robot
+    pytest hil_tests                                   # host-sim, every example robot
+    pytest hil_tests --target avr-emu                  # the exact arduino-nano firmware.elf on simavr
+    pytest hil_tests --target arm-emu                  # the exact bluepill firmware.elf on unicorn
+    pytest hil_tests --target avr-emu -m "not emu_long"   # the focused subset `make test` runs
     pytest hil_tests --target serial:/dev/ttyUSB0 --robot robots/paper-r1.toml --board arduino-nano
 
 The tests talk to the robot only through ``proleg.link.RobotClient`` (the same client the
 console uses). Tests marked ``plant`` also need the simulated plant's ground truth
-(displacement, PWM at tick resolution, injected faults) and are skipped on hardware.
+(displacement, PWM at tick resolution, injected faults): they run on host-sim and on the
+emulated MCUs (which have the plant) and are skipped on hardware. Tests marked
+``emu_long`` take minutes on an emulated MCU; ``make test`` deselects them there and
+``make emu`` runs them.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ from proleg.firmware.boards import Board, load_board
 from proleg.firmware.build import firmware_gaits, gait_table_hash, render_project
 from proleg.link import RobotClient
 from proleg.robot import Robot, load_robot
+from proleg.sim.simulated_boards import SIMULATED_BOARDS
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 PAPER_ROBOTS = ("paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator")
@@ -26,18 +34,41 @@ PAPER_ROBOTS = ("paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator")
 
 def pytest_addoption(parser):
     group = parser.getgroup("proleg hardware-in-the-loop")
-    group.addoption("--target", default="sim", help="'sim' (default) or 'serial:PORT' for a real board")
+    group.addoption("--target", default="sim",
+                    help="'sim' or 'host-sim' (default), 'avr-emu', 'arm-emu' (an emulated MCU running the exact "
+                         "firmware image), or 'serial:PORT' for a real board")
     group.addoption("--robot", default=None, help="robot file flashed on the real board")
     group.addoption("--board", default=None, help="board of the real robot (e.g. arduino-nano)")
 
 
+def simulated_board_name(config) -> str | None:
+    """The simulated board ``--target`` names (``sim`` is host-sim), None for a real board."""
+    target = config.getoption("--target")
+    if target == "sim":
+        return "host-sim"
+    if target in SIMULATED_BOARDS:
+        return target
+    if target.startswith("serial:"):
+        return None
+    raise pytest.UsageError(
+        f"--target {target}: expected sim, {', '.join(SIMULATED_BOARDS)} or serial:PORT"
+    )
+
+
 def pytest_collection_modifyitems(config, items):
-    if config.getoption("--target") == "sim":
+    here = Path(__file__).resolve().parent
+    hil = [item for item in items if here in Path(str(item.fspath)).resolve().parents]
+    board = simulated_board_name(config)
+    if board is None:
+        skip = pytest.mark.skip(reason="needs the simulated plant's ground truth")
+        for item in hil:
+            if "plant" in item.keywords:
+                item.add_marker(skip)
         return
-    skip = pytest.mark.skip(reason="needs the simulated plant's ground truth")
-    for item in items:
-        if "plant" in item.keywords:
-            item.add_marker(skip)
+    missing = SIMULATED_BOARDS[board].missing()
+    if missing:
+        for item in hil:
+            item.add_marker(pytest.mark.skip(reason=missing))
 
 
 @dataclass
@@ -47,7 +78,21 @@ class Target:
     robot: Robot
     board: Board
     client: RobotClient
-    sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on the simulator, None on hardware
+    sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on a simulated board, None on hardware
+    simulated_board: str | None = None  # host-sim, avr-emu, arm-emu; None on hardware
+
+    @property
+    def emulated(self) -> bool:
+        """The exact MCU firmware image on an instruction-level emulator."""
+        return self.simulated_board is not None and SIMULATED_BOARDS[self.simulated_board].emulated
+
+    def fresh_sim(self, robot: Robot | None = None, seed: int = 1):
+        """Another simulated robot on the same simulated board, from power-on."""
+        from proleg.sim.simulated_boards import simulated_robot
+
+        if self.simulated_board is None:
+            pytest.skip("needs a simulated board")
+        return simulated_robot(self.simulated_board, robot or self.robot, seed=seed)
 
     @property
     def expected_gait_hash(self) -> int:
@@ -68,15 +113,15 @@ class Target:
                 return out
 
 
-def _open_sim(robot: Robot, seed: int = 1) -> Target:
+def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1) -> Target:
     from proleg.link.sim_link import SimLink
-    from proleg.sim.closed_loop import SimulatedRobot
+    from proleg.sim.simulated_boards import simulated_robot
 
-    sim = SimulatedRobot(robot, seed=seed)
-    client = RobotClient(SimLink(sim, description=f"simulated {robot.name}"),
+    sim = simulated_robot(board, robot, seed=seed)
+    client = RobotClient(SimLink(sim, description=f"{robot.name} on {board}"),
                          max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
-    return Target(robot, load_board("host-sim"), client, sim)
+    return Target(robot, load_board(SIMULATED_BOARDS[board].firmware_board), client, sim, board)
 
 
 def _open_serial(config, robot: Robot) -> Target:
@@ -101,8 +146,9 @@ def open_target(request):
     opened: list[Target] = []
 
     def open_(robot_name: str = "paper-r1", seed: int = 1) -> Target:
-        if config.getoption("--target") == "sim":
-            t = _open_sim(load_robot(ROBOTS / f"{robot_name}.toml"), seed)
+        board = simulated_board_name(config)
+        if board is not None:
+            t = _open_sim(load_robot(ROBOTS / f"{robot_name}.toml"), board, seed)
         else:
             path = config.getoption("--robot")
             if not path:

@@ -30,6 +30,7 @@ def _feedback_cycle_mm(open_target, drift: bool) -> float:
 
 
 @pytest.mark.plant
+@pytest.mark.emu_long
 def test_under_sma_drift_psi_feedback_keeps_the_displacement_per_cycle_while_open_loop_timing_degrades(
     open_target, record_property
 ):
@@ -85,10 +86,10 @@ COMMANDS = st.one_of(
 
 
 @pytest.mark.plant
+@pytest.mark.emu_long
 def test_random_command_sequences_never_break_the_safety_envelope(open_target):
     from proleg.link import CommandRefused, ReplyTimeout, RobotClient
     from proleg.link.sim_link import SimLink
-    from proleg.sim.closed_loop import SimulatedRobot
 
     target = open_target("paper-r1")
     robot = target.robot
@@ -127,7 +128,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
         def __init__(self):
             super().__init__()
             nonlocal sim
-            sim = SimulatedRobot(robot)  # every example starts from power-on
+            sim = target.fresh_sim()  # every example starts from power-on
             self.on_ticks = [0] * len(channels)
             tick_s = sim.board.tick_us / 1e6
             self.client = RobotClient(SimLink(EnvelopeBoard(self.on_ticks), step_s=tick_s),
@@ -176,6 +177,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
 
 
 @pytest.mark.plant
+@pytest.mark.emu_long
 def test_several_simulated_boards_run_in_one_process_independently(open_target):
     a = open_target("paper-r1")
     b = open_target("paper-r2")
