@@ -36,6 +36,30 @@ class FlashMethod:
 
 
 @dataclass(frozen=True)
+class TickBudget:
+    """``[budget]``: the control tick's measured work on this board, busy p99 in µs of the
+    MCU's clock = ``tick_us_base`` + ``tick_us_per_limb`` × limbs (bench/bench_mcu.py on the
+    emulated MCU; ``measured`` says when and how). ``proleg build`` refuses a tick_hz whose
+    period this cannot fit within ``BUSY_LIMIT`` of; with ``enforce = false`` it only warns
+    (a board whose firmware is known not to meet its budget yet)."""
+
+    tick_us_base: float
+    tick_us_per_limb: float
+    measured: str
+    enforce: bool = True
+
+    #: busy p99 at most this share of the tick period (issue 11, SPEC §3)
+    BUSY_LIMIT = 0.70
+
+    def busy_us(self, limbs: int) -> float:
+        return self.tick_us_base + self.tick_us_per_limb * limbs
+
+    def max_tick_hz(self, limbs: int) -> int:
+        """The highest whole tick rate whose period the work of ``limbs`` limbs fits."""
+        return int(self.BUSY_LIMIT * 1e6 // self.busy_us(limbs))
+
+
+@dataclass(frozen=True)
 class Board:
     name: str
     path: Path
@@ -62,6 +86,7 @@ class Board:
     uart_rx_buffer: int
     uart_tx_buffer: int
     flash_methods: tuple[FlashMethod, ...]
+    budget: TickBudget | None = None  # None: no measurement (host-sim: virtual time)
 
     @property
     def pwm_channels(self) -> tuple[str, ...]:
@@ -158,7 +183,7 @@ def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
 
 
 def _board_from_dict(path: Path, doc: dict) -> Board:
-    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash"}
+    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash", "budget"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
@@ -204,4 +229,23 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
         uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
         flash_methods=tuple(methods),
+        budget=_budget(path, doc),
     )
+
+
+def _budget(path: Path, doc: dict) -> TickBudget | None:
+    if "budget" not in doc:
+        return None
+    values = []
+    for key in ("tick_us_base", "tick_us_per_limb"):
+        v = _need(path, doc, "budget", key, (int, float))
+        if not v >= 0:
+            raise BoardError(f"{path}: budget.{key}: expected µs ≥ 0, got {v!r}")
+        values.append(float(v))
+    if values[0] + values[1] <= 0:
+        raise BoardError(f"{path}: budget: tick_us_base + tick_us_per_limb must be above 0 µs")
+    measured = _need(path, doc, "budget", "measured", str)
+    enforce = doc["budget"].get("enforce", True)
+    if not isinstance(enforce, bool):
+        raise BoardError(f"{path}: budget.enforce: expected true or false, got {enforce!r}")
+    return TickBudget(values[0], values[1], measured, enforce)
