@@ -133,6 +133,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
             tick_s = sim.board.tick_us / 1e6
             self.client = RobotClient(SimLink(EnvelopeBoard(self.on_ticks), step_s=tick_s),
                                       max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
+            self._ticks(50)  # a host waits for BOOT: an MCU drops bytes until its UART receiver is on
 
         def _ticks(self, n: int) -> None:
             """Let ``n`` ticks pass, reading (and dropping) whatever the robot sends."""
