@@ -1,5 +1,6 @@
-# proleg — `make demo` runs the main job, `make test` the whole suite, `make bench` the
-# benchmarks. Each sets up what is missing first: the .venv with the package and its
+# proleg — `make demo` runs the main job, `make test` the whole suite (with the focused
+# hil_tests subset on each emulated MCU), `make emu` every hil test on the emulated MCUs
+# (long), `make bench` the benchmarks. Each sets up what is missing first: the .venv with the package and its
 # test extras, and the Debian toolchains for the three boards.
 
 PYTHON ?= python3
@@ -16,7 +17,7 @@ TOOLCHAINS := cc:gcc avr-gcc:gcc-avr /usr/lib/avr/include/avr/io.h:avr-libc \
               clang:clang /usr/lib/llvm-14/lib/clang/14.0.6/lib/linux/libclang_rt.fuzzer-x86_64.a:libclang-rt-14-dev \
               simavr:simavr /usr/include/simavr/sim_avr.h:libsimavr-dev
 
-.PHONY: demo test bench fuzz setup toolchains clean
+.PHONY: demo test emu bench fuzz setup toolchains clean
 
 setup: $(STAMP)
 
@@ -36,8 +37,23 @@ toolchains:
 demo: $(STAMP) toolchains
 	$(BIN)/python -m proleg.demo
 
+# The emulated MCUs (avr-emu: simavr, arm-emu: unicorn) run the exact firmware images much
+# slower than host-sim: `make test` runs their focused hil subset (boot, link, one closed-loop
+# gait, ESTOP, on-time limit, IMU loss; tests marked emu_long deselected), `make emu` all.
+EMU_TARGETS := avr-emu arm-emu
+
 test: $(STAMP) toolchains
 	$(BIN)/python -m pytest -n 2 -q
+	@for t in $(EMU_TARGETS); do \
+	  echo "hil_tests on $$t (focused subset)"; \
+	  $(BIN)/python -m pytest -n 2 -q hil_tests --target $$t -m "not emu_long" || exit 1; \
+	done
+
+emu: $(STAMP) toolchains
+	@for t in $(EMU_TARGETS); do \
+	  echo "hil_tests on $$t (all)"; \
+	  $(BIN)/python -m pytest -n 2 -q hil_tests --target $$t || exit 1; \
+	done
 
 # Long fuzzing (the short run is part of `make test`) and a longer attacker profile.
 FUZZ_SECONDS ?= 300

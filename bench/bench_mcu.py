@@ -1,16 +1,23 @@
-"""MCU tick budget on the emulated arduino-nano (avr-emu: the exact firmware.elf on simavr).
+"""MCU tick budget on both emulated MCUs, in one file: bench/results/mcu.json.
 
-For every robots/*.toml that builds for the Nano: the robot walks its +x gait 0 in
-closed loop with the plant for RUN_S emulated seconds at its configured tick rate
-(after 0.2 s of boot, not measured). Per control tick the harness counts CPU cycles
-from the end of the tick wait to the start of the next one (busy), and the cycles the
-I2C bus was owned meanwhile. Reported: busy mean / p99 / max (µs and fraction of the
-period), ticks that overran the period, I2C per tick and its share of busy time, the
-stack peak and what is left above static data, the firmware's clock against emulated
-real time (TELEMETRY time_ms over the run), gait cycles, emulation speed (emulated s per
-wall s, and per CPU s of the process: the wall figure includes the machine's other load)
-and flash size. One extra row runs paper-r1 at tick_hz = 2000, a rate the build
-accepts today, to show what an overrun does to the firmware's clock.
+avr-emu (the exact arduino-nano firmware.elf on simavr) and arm-emu (the exact bluepill
+firmware.elf on unicorn). For every robots/*.toml that builds for the board: the robot
+walks its +x gait 0 in closed loop with the plant for RUN_S emulated seconds at its
+configured tick rate (after 0.2 s of boot, not measured). Per control tick the emulator
+counts CPU cycles from the end of the tick wait to the start of the next one (busy).
+Reported per MCU and robot: busy mean / p99 / max (µs and fraction of the period), ticks
+that overran the period, I2C per tick and its share of the busy time (avr: bus owned
+START..STOP; arm: time inside hal_i2c_write_read), the stack peak, the firmware's clock
+against emulated real time (avr), gait cycles, emulation speed (emulated s per wall s,
+and per CPU s of the process: the wall figure includes the machine's other load) and
+flash size. One extra avr row runs paper-r1 at tick_hz = 2000 to show what an overrun
+does to the firmware's clock.
+
+From the rows each MCU's per-tick cost model is derived, the one ``proleg build`` checks
+a robot's tick_hz against (``[budget]`` in boards/*.toml, written by hand from this
+output): busy p99 = base + per_limb × limbs, per_limb = the I2C time per IMU read (the
+work that grows with the limbs; every example robot has 2 limbs, so the split cannot be
+fitted from the rows alone), base = the rest.
 
 Target (issue 11): p99 ≤ 70 % and max ≤ 90 % of the tick period for every example
 robot at its configured rate. Prints a table, writes bench/results/mcu.json (machine,
@@ -31,9 +38,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_firmware import machine, sha256, tree_sha256  # noqa: E402
 
+from proleg.emu.arm import ArmEmuRobot, bluepill_elf  # noqa: E402
 from proleg.emu.avr import AvrEmuRobot, nano_build_dir  # noqa: E402
 from proleg.emu.avr.budget import MAX_LIMIT, P99_LIMIT  # noqa: E402
-from proleg.errors import BuildError  # noqa: E402
+from proleg.errors import BuildError, ProlegError  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.link.listeners import Listener  # noqa: E402
 from proleg.report import SimSession  # noqa: E402
@@ -42,6 +50,65 @@ RESULTS = ROOT / "bench" / "results" / "mcu.json"
 RUN_S = 10.0
 BOOT_S = 0.2
 SEED = 1
+
+
+def measure_arm(robot) -> dict:
+    """The same run on the emulated bluepill; the same fields where arm-emu measures them."""
+    elf = bluepill_elf(robot)
+    manifest = json.loads((elf.parent / "proleg-build.json").read_text())
+    sim = ArmEmuRobot(robot, elf, seed=SEED)
+    board = sim.board
+    i2c = board.time_in("hal_i2c_write_read")
+    session = SimSession(sim)
+    session.advance(BOOT_S)
+    board.clear_ticks()
+    i2c[0] = i2c[1] = 0
+    t0, c0, e0 = time.perf_counter(), time.process_time(), sim.time_s
+    run = session.run_gait("+x", 0, RUN_S)
+    wall, cpu, emulated = time.perf_counter() - t0, time.process_time() - c0, sim.time_s - e0
+    b = board.tick_budget()
+    period = b.tick_period_us
+    i2c_us = i2c[0] / 72 / max(1, b.ticks)
+    return {
+        "tick_hz": robot.control.tick_hz,
+        "tick_period_us": period,
+        "tick_busy_us": {"mean": round(b.mean, 1), "p99": round(b.p99, 1), "max": round(b.max, 1)},
+        "busy_p99_fraction": round(b.p99 / period, 4),
+        "busy_max_fraction": round(b.max / period, 4),
+        "meets_target": b.p99 <= P99_LIMIT * period and b.max <= MAX_LIMIT * period,
+        "ticks": b.ticks,
+        "overruns": sum(1 for x in board.busy_us if x > period),
+        "i2c_us": {"mean": round(i2c_us, 1), "share_of_busy": round(i2c_us / b.mean, 4) if b.mean else 0.0},
+        "stack_peak_bytes": board.stack_peak_bytes(),
+        "emulated_s": round(emulated, 3),
+        "wall_s": round(wall, 3),
+        "cpu_s": round(cpu, 3),
+        "emulation_speed": round(emulated / wall, 3),
+        "emulation_speed_cpu": round(emulated / cpu, 3),
+        "firmware_clock_ratio": None,
+        "gait_cycles": run.cycles,
+        "mean_cycle_mm": run.mean_cycle_mm,
+        "faults": [f.code for f in run.faults],
+        "flash_used": manifest["flash_used"],
+        "ram_used": manifest["ram_used"],
+    }
+
+
+def cost_model(rows: dict[str, dict], robots: dict[str, object]) -> dict | None:
+    """busy p99 ≈ base + per_limb × limbs from the configured-rate rows (the worst robot)."""
+    fits = []
+    for name, r in rows.items():
+        if "skipped" in r or "@" in name:
+            continue
+        limbs = len(robots[name].limbs)
+        per_limb = r["i2c_us"]["mean"] / limbs
+        fits.append((r["tick_busy_us"]["p99"] - per_limb * limbs, per_limb, name))
+    if not fits:
+        return None
+    base = max(f[0] for f in fits)
+    per_limb = max(f[1] for f in fits)
+    return {"tick_us_base": round(base), "tick_us_per_limb": round(per_limb),
+            "from": ", ".join(sorted(f[2] for f in fits))}
 
 
 def measure(robot) -> dict:
@@ -78,64 +145,95 @@ def measure(robot) -> dict:
     }
 
 
-def main() -> int:
-    t_start = time.perf_counter()
+#: (MCU, simulated board, firmware board, measure, emulator)
+MCUS = (
+    ("atmega328p", "avr-emu", "arduino-nano", measure, "simavr 1.6 + proleg avr-emu harness"),
+    ("stm32f103", "arm-emu", "bluepill-f103", measure_arm, "unicorn 2.1 + proleg arm-emu peripheral models"),
+)
+
+
+def run_mcu(measure_one, board: str, cases: list) -> dict[str, dict]:
     rows: dict[str, dict] = {}
-    robots = sorted((ROOT / "robots").glob("*.toml"))
-    cases = [(p.stem, load_robot(p)) for p in robots]
-    r1 = load_robot(ROOT / "robots" / "paper-r1.toml")
-    cases.append(("paper-r1@2000Hz", dataclasses.replace(r1, control=dataclasses.replace(r1.control, tick_hz=2000))))
     for name, robot in cases:
         try:
-            rows[name] = measure(robot)
-        except BuildError as e:
-            rows[name] = {"skipped": f"does not build for arduino-nano: {e}"}
-        print(f"  {name}: done", flush=True)
+            rows[name] = measure_one(robot)
+        except (BuildError, ProlegError) as e:
+            rows[name] = {"skipped": f"does not build or run on {board}: {str(e).splitlines()[0]}"}
+        print(f"  {board} {name}: done", flush=True)
+    return rows
 
+
+def table(rows: dict[str, dict]) -> bool:
     head = ("robot", "tick", "busy mean/p99/max µs", "p99/max % of tick", "overruns", "I2C µs (share)",
-            "stack peak/left B", "fw clock", "cycles", "speed", "target")
-    table = [head]
+            "stack peak B", "fw clock", "cycles", "speed", "target")
+    out = [head]
     ok = True
     for name, r in rows.items():
         if "skipped" in r:
-            table.append((name, "", r["skipped"], "", "", "", "", "", "", "", ""))
+            out.append((name, "", r["skipped"], "", "", "", "", "", "", "", ""))
             continue
         configured = "@" not in name
         meets = r["meets_target"]
         ok &= meets or not configured
         b = r["tick_busy_us"]
-        table.append((
+        out.append((
             name,
             f"{r['tick_hz']} Hz",
             f"{b['mean']:.0f} / {b['p99']:.0f} / {b['max']:.0f}",
             f"{100 * r['busy_p99_fraction']:.0f} / {100 * r['busy_max_fraction']:.0f}",
             f"{r['overruns']:,}/{r['ticks']:,}",
             f"{r['i2c_us']['mean']:.0f} ({100 * r['i2c_us']['share_of_busy']:.0f} %)",
-            f"{r['stack_peak_bytes']} / {r['stack_margin_bytes']}",
+            str(r["stack_peak_bytes"]),
             f"{r['firmware_clock_ratio']:.3f}×" if r["firmware_clock_ratio"] else "-",
             str(r["gait_cycles"]),
             f"{r['emulation_speed']:.2f}× ({r['emulation_speed_cpu']:.2f}× cpu)",
             ("PASS" if meets else "FAIL") if configured else "(info)",
         ))
-    w = [max(len(row[i]) for row in table) for i in range(len(head))]
-    for row in table:
+    w = [max(len(row[i]) for row in out) for i in range(len(head))]
+    for row in out:
         print("  ".join(f"{c:<{w[i]}}" for i, c in enumerate(row)))
+    return ok
+
+
+def main() -> int:
+    t_start = time.perf_counter()
+    robot_files = sorted((ROOT / "robots").glob("*.toml"))
+    robots = {p.stem: load_robot(p) for p in robot_files}
+    r1 = robots["paper-r1"]
+    fast_r1 = dataclasses.replace(r1, control=dataclasses.replace(r1.control, tick_hz=2000))
+    mcus: dict[str, dict] = {}
+    ok = True
+    for mcu, sim_board, board, measure_one, emulator in MCUS:
+        cases = list(robots.items()) + ([("paper-r1@2000Hz", fast_r1)] if sim_board == "avr-emu" else [])
+        rows = run_mcu(measure_one, sim_board, cases)
+        print(f"\n{mcu} ({sim_board}: the exact {board} firmware.elf on {emulator})")
+        ok &= table(rows)
+        model = cost_model(rows, robots)
+        if model:
+            print(f"per-tick cost model for boards/{board}.toml [budget]: tick_us_base = {model['tick_us_base']}, "
+                  f"tick_us_per_limb = {model['tick_us_per_limb']} (busy p99, from {model['from']})")
+        mcus[mcu] = {
+            "simulated_board": sim_board,
+            "board": board,
+            "emulator": emulator,
+            "board_sha256": sha256(ROOT / "boards" / f"{board}.toml"),
+            "robots": rows,
+            "budget_model": model,
+        }
     print(f"target: busy p99 ≤ {100 * P99_LIMIT:.0f} % and max ≤ {100 * MAX_LIMIT:.0f} % of the tick period")
 
     results = {
         "machine": machine(),
         "inputs": {
-            "robots_sha256": {p.stem: sha256(p) for p in robots},
+            "robots_sha256": {p.stem: sha256(p) for p in robot_files},
             "firmware_templates_sha256": tree_sha256(ROOT / "firmware_templates"),
-            "board_sha256": sha256(ROOT / "boards" / "arduino-nano.toml"),
-            "emulator": "simavr 1.6 + proleg avr-emu harness",
             "run_s": RUN_S,
             "boot_s": BOOT_S,
             "gait": "+x 0",
             "seed": SEED,
         },
         "targets": {"busy_p99_fraction": P99_LIMIT, "busy_max_fraction": MAX_LIMIT},
-        "robots": rows,
+        "mcus": mcus,
         "all_targets_met": ok,
         "bench_seconds": round(time.perf_counter() - t_start, 1),
     }

@@ -1,17 +1,22 @@
-"""Hardware-in-the-loop tests: the simulated board by default, a real board on request.
+"""Hardware-in-the-loop tests: the simulated board by default, an emulated MCU or a real
+board on request.
 
-    pytest hil_tests                                   # simulated boards, the paper's robots
-    pytest hil_tests --robot robots/inchworm-3.toml    # one robot, on the simulated board
-    pytest hil_tests --robot robots/inchworm-3.toml --board host-sim
+    pytest hil_tests                                   # host-sim, the paper's robots
+    pytest hil_tests --robot robots/inchworm-3.toml    # one robot (every test runs on it)
+    pytest hil_tests --target avr-emu                  # the exact arduino-nano firmware.elf on simavr
+    pytest hil_tests --target arm-emu                  # the exact bluepill firmware.elf on unicorn
+    pytest hil_tests --target avr-emu -m "not emu_long"   # the focused subset `make test` runs
     pytest hil_tests --target serial:/dev/ttyUSB0 --robot robots/paper-r1.toml --board arduino-nano
 
 The tests talk to the robot only through ``proleg.link.RobotClient`` (the same client the
 console uses). Tests marked ``plant`` also need the simulated plant's ground truth
-(displacement, PWM at tick resolution, injected faults) and are skipped on hardware.
-``--robot`` and ``--board`` are honoured on every target: given a robot, every test runs
-on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
-``robot("paper-r1")``) is deselected for another. On the simulator ``--board`` names a
-simulated board (``proleg.sim.simulators.SIMULATORS``; default host-sim).
+(displacement, PWM at tick resolution, injected faults): they run on host-sim and on the
+emulated MCUs (which have the plant) and are skipped on hardware. Tests marked
+``emu_long`` take minutes on an emulated MCU; ``make test`` deselects them there and
+``make emu`` runs them. ``--robot`` is honoured on every target: given a robot, every test
+runs on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
+``robot("paper-r1")``) is deselected for another. With ``--target sim``, ``--board`` may
+name the simulated board instead (``proleg.sim.simulated_boards.SIMULATED_BOARDS``).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from proleg.firmware.boards import Board, load_board
 from proleg.firmware.build import firmware_gaits, gait_table_hash, render_project
 from proleg.link import RobotClient
 from proleg.robot import Robot, load_robot
+from proleg.sim.simulated_boards import SIMULATED_BOARDS
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 PAPER_ROBOTS = ("paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator")
@@ -32,10 +38,12 @@ PAPER_ROBOTS = ("paper-r1", "paper-r2", "paper-r3", "paper-r1-one-actuator")
 
 def pytest_addoption(parser):
     group = parser.getgroup("proleg hardware-in-the-loop")
-    group.addoption("--target", default="sim", help="'sim' (default) or 'serial:PORT' for a real board")
+    group.addoption("--target", default="sim",
+                    help="'sim' or 'host-sim' (default), 'avr-emu', 'arm-emu' (an emulated MCU running the exact "
+                         "firmware image), or 'serial:PORT' for a real board")
     group.addoption("--robot", default=None, help="robot file under test (on a real board: the one flashed)")
     group.addoption("--board", default=None,
-                    help="board: of the real robot (e.g. arduino-nano), or the simulated one (default host-sim)")
+                    help="board: of the real robot (e.g. arduino-nano), or with --target sim the simulated one")
 
 
 def pytest_configure(config):
@@ -70,7 +78,26 @@ def pytest_generate_tests(metafunc):
                     marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
                     cases.append(pytest.param(str(path), direction, i, id=f"{robot.name}{direction}:{walk}",
                                               marks=marks))
+    if mark.kwargs.get("focused_first"):  # an emulated MCU's focused subset walks one gait
+        cases = cases[:1] + [pytest.param(*c.values, id=c.id, marks=[*c.marks, pytest.mark.emu_long])
+                             for c in cases[1:]]
     metafunc.parametrize("robot_name,direction,gait_index", cases)
+
+
+def simulated_board_name(config) -> str | None:
+    """The simulated board ``--target`` names (``sim``: ``--board`` if it names a simulated
+    board, else host-sim), None for a real board."""
+    target = config.getoption("--target")
+    if target == "sim":
+        board = config.getoption("--board")
+        return board if board in SIMULATED_BOARDS else "host-sim"
+    if target in SIMULATED_BOARDS:
+        return target
+    if target.startswith("serial:"):
+        return None
+    raise pytest.UsageError(
+        f"--target {target}: expected sim, {', '.join(SIMULATED_BOARDS)} or serial:PORT"
+    )
 
 
 def pytest_collection_modifyitems(config, items):
@@ -83,12 +110,19 @@ def pytest_collection_modifyitems(config, items):
     if other_robots:  # another robot's own behaviour: not a test of this one at all
         config.hook.pytest_deselected(items=other_robots)
         items[:] = kept
-    if config.getoption("--target") == "sim":
+    here = Path(__file__).resolve().parent
+    hil = [item for item in items if here in Path(str(item.fspath)).resolve().parents]
+    board = simulated_board_name(config)
+    if board is None:
+        skip = pytest.mark.skip(reason="needs the simulated plant's ground truth")
+        for item in hil:
+            if "plant" in item.keywords:
+                item.add_marker(skip)
         return
-    skip = pytest.mark.skip(reason="needs the simulated plant's ground truth")
-    for item in items:
-        if "plant" in item.keywords:
-            item.add_marker(skip)
+    missing = SIMULATED_BOARDS[board].missing()
+    if missing:
+        for item in hil:
+            item.add_marker(pytest.mark.skip(reason=missing))
 
 
 @dataclass
@@ -98,7 +132,21 @@ class Target:
     robot: Robot
     board: Board
     client: RobotClient
-    sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on the simulator, None on hardware
+    sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on a simulated board, None on hardware
+    simulated_board: str | None = None  # host-sim, avr-emu, arm-emu; None on hardware
+
+    @property
+    def emulated(self) -> bool:
+        """The exact MCU firmware image on an instruction-level emulator."""
+        return self.simulated_board is not None and SIMULATED_BOARDS[self.simulated_board].emulated
+
+    def fresh_sim(self, robot: Robot | None = None, seed: int = 1, plant: str | None = None):
+        """Another simulated robot on the same simulated board, from power-on."""
+        from proleg.sim.simulators import open_simulated
+
+        if self.simulated_board is None:
+            pytest.skip("needs a simulated board")
+        return open_simulated(robot or self.robot, self.simulated_board, seed=seed, plant=plant)
 
     @property
     def expected_gait_hash(self) -> int:
@@ -119,16 +167,15 @@ class Target:
                 return out
 
 
-def _open_sim(robot: Robot, seed: int = 1, board: str | None = None, plant: str | None = None) -> Target:
+def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str | None = None) -> Target:
     from proleg.link.sim_link import SimLink
     from proleg.sim.simulators import open_simulated
 
-    board = board or "host-sim"
     sim = open_simulated(robot, board, seed=seed, plant=plant)  # plant None: the default (physical)
-    client = RobotClient(SimLink(sim, description=f"simulated {robot.name} on {board}"),
+    client = RobotClient(SimLink(sim, description=f"{robot.name} on {board}"),
                          max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
-    return Target(robot, load_board(board) if board == "host-sim" else sim.board_info, client, sim)
+    return Target(robot, load_board(SIMULATED_BOARDS[board].firmware_board), client, sim, board)
 
 
 def _open_serial(config, robot: Robot) -> Target:
@@ -146,20 +193,21 @@ def _open_serial(config, robot: Robot) -> Target:
 @pytest.fixture
 def open_target(request):
     """Factory: ``open_target("paper-r1")`` → a connected Target (closed after the test);
-    ``plant="table"`` on the simulator for tests where the lookup plant is the point.
+    ``plant="table"`` on a simulated board for tests where the lookup plant is the point.
 
     The robot is the one given with --robot, whatever the test asks for, on every target;
-    without --robot, the simulator runs the robot the test names (a name in robots/ or
+    without --robot, a simulated board runs the robot the test names (a name in robots/ or
     a robot file's path)."""
     config = request.config
     opened: list[Target] = []
 
     def open_(robot_name: str = "paper-r1", seed: int = 1, plant: str | None = None) -> Target:
-        if config.getoption("--target") == "sim":
+        board = simulated_board_name(config)
+        if board is not None:
             given = config.getoption("--robot")
             path = Path(given) if given else (
                 Path(robot_name) if robot_name.endswith(".toml") else ROBOTS / f"{robot_name}.toml")
-            t = _open_sim(load_robot(path), seed, config.getoption("--board"), plant)
+            t = _open_sim(load_robot(path), board, seed, plant)
         else:
             path = config.getoption("--robot")
             if not path:

@@ -23,6 +23,7 @@ CLAIM_POINTS = (
 
 @pytest.mark.plant
 @pytest.mark.slow
+@pytest.mark.emu_long
 @pytest.mark.robot("paper-r1")
 def test_psi_feedback_keeps_walking_under_drift_where_the_best_open_loop_timing_does_not(record_property):
     """The central claim at a handful of the benchmark's grid points, on the physical plant:
@@ -73,10 +74,10 @@ COMMANDS = st.one_of(
 
 
 @pytest.mark.plant
+@pytest.mark.emu_long
 def test_random_command_sequences_never_break_the_safety_envelope(open_target):
     from proleg.link import CommandRefused, ReplyTimeout, RobotClient
     from proleg.link.sim_link import SimLink
-    from proleg.sim.closed_loop import SimulatedRobot
 
     target = open_target("paper-r1")
     robot = target.robot
@@ -115,11 +116,12 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
         def __init__(self):
             super().__init__()
             nonlocal sim
-            sim = SimulatedRobot(robot, plant="table")  # every example starts from power-on
+            sim = target.fresh_sim(plant="table")  # every example starts from power-on
             self.on_ticks = [0] * len(channels)
             tick_s = sim.board.tick_us / 1e6
             self.client = RobotClient(SimLink(EnvelopeBoard(self.on_ticks), step_s=tick_s),
                                       max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
+            self._ticks(50)  # a host waits for BOOT: an MCU drops bytes until its UART receiver is on
 
         def _ticks(self, n: int) -> None:
             """Let ``n`` ticks pass, reading (and dropping) whatever the robot sends."""
@@ -165,6 +167,7 @@ def test_random_command_sequences_never_break_the_safety_envelope(open_target):
 
 @pytest.mark.plant
 @pytest.mark.robot("paper-r1")
+@pytest.mark.emu_long
 def test_several_simulated_boards_run_in_one_process_independently(open_target):
     a = open_target("paper-r1")
     b = open_target("paper-r2")

@@ -177,8 +177,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def add_sim_board_options(p: argparse.ArgumentParser) -> None:
     """The simulated board and the gait selection its firmware is built with."""
-    p.add_argument("--board", default="host-sim",
-                   help="simulated board (default host-sim; see proleg.sim.simulators.SIMULATORS)")
+    from ..sim.simulated_boards import SIMULATED_BOARDS
+
+    p.add_argument("--board", choices=tuple(SIMULATED_BOARDS), default="host-sim",
+                   help="host-sim: the firmware's C on the host (default); avr-emu / arm-emu: the exact "
+                        "arduino-nano / bluepill firmware.elf on an emulated MCU (--json adds the tick budget)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the simulated firmware carries (default total)")
     p.add_argument("--max-transitions", type=_positive_int, metavar="N",
@@ -279,6 +282,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..robot import load_robot
     from ..firmware.gaits import firmware_gaits
     from ..sim.simulators import open_simulated
+    from ..sim.simulated_boards import clear_ticks, simulated_robot, tick_budget
 
     robot = load_robot(args.robot)
     from .sim_plant import cmd_measure_matrix, plant_kwargs, wants_help
@@ -320,6 +324,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     session = SimSession(sim, listeners=listeners)
     try:
         session.advance(0.2)  # boot
+        clear_ticks(sim)  # the tick budget is measured over the gait run
         start = sim.time_s
         for at, fault in timed:
             session.schedule_fault(start + at, fault)
@@ -327,10 +332,11 @@ def cmd_sim(args: argparse.Namespace) -> int:
     finally:
         for listener in listeners:
             listener.stop()
+    budget = tick_budget(sim)
     if args.json:
-        print(json.dumps(_report_json(robot, report, args.board)))
+        print(json.dumps({**_report_json(robot, report, args.board), **(budget or {})}))
     else:
-        print(_report_text(robot, report, args.board))
+        print(_report_text(robot, report, args.board, budget))
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     if recorder is not None and recorder.error is not None:
@@ -382,7 +388,7 @@ def _report_json(robot, report, board: str = "host-sim") -> dict:
     }
 
 
-def _report_text(robot, report, board: str = "host-sim") -> str:
+def _report_text(robot, report, board: str = "host-sim", budget: dict | None = None) -> str:
     t = robot.transitions
     seq = [t.label(s) for s in report.states_reached]
     shown = " → ".join(seq[:13]) + (" …" if len(seq) > 13 else "")
@@ -407,5 +413,12 @@ def _report_text(robot, report, board: str = "host-sim") -> str:
     lines.append(
         f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
     )
+    if budget is not None:
+        period, busy = budget["tick_period_us"], budget["tick_busy_us"]
+        lines.append(
+            f"  tick busy (µs of a {period:g} µs tick, {busy['ticks']} ticks): mean {busy['mean']:g}, "
+            f"p99 {busy['p99']:g} ({100 * busy['p99'] / period:.0f} %), max {busy['max']:g} "
+            f"({100 * busy['max'] / period:.0f} %)"
+        )
     return "\n".join(lines)
 

@@ -57,6 +57,30 @@ MAX_I2C_BUSES = 4
 
 
 @dataclass(frozen=True)
+class TickBudget:
+    """``[budget]``: the control tick's measured work on this board, busy p99 in µs of the
+    MCU's clock = ``tick_us_base`` + ``tick_us_per_limb`` × limbs (bench/bench_mcu.py on the
+    emulated MCU; ``measured`` says when and how). ``proleg build`` refuses a tick_hz whose
+    period this cannot fit within ``BUSY_LIMIT`` of; with ``enforce = false`` it only warns
+    (a board whose firmware is known not to meet its budget yet)."""
+
+    tick_us_base: float
+    tick_us_per_limb: float
+    measured: str
+    enforce: bool = True
+
+    #: busy p99 at most this share of the tick period (issue 11, SPEC §3)
+    BUSY_LIMIT = 0.70
+
+    def busy_us(self, limbs: int) -> float:
+        return self.tick_us_base + self.tick_us_per_limb * limbs
+
+    def max_tick_hz(self, limbs: int) -> int:
+        """The highest whole tick rate whose period the work of ``limbs`` limbs fits."""
+        return int(self.BUSY_LIMIT * 1e6 // self.busy_us(limbs))
+
+
+@dataclass(frozen=True)
 class Board:
     name: str
     path: Path
@@ -86,6 +110,7 @@ class Board:
     i2c_buses: tuple[I2cBus, ...] = ()
     base_flash_bytes: int = 0  # measured firmware of a two-limb robot with tiny tables (0: not estimated)
     base_ram_bytes: int = 0
+    budget: TickBudget | None = None  # None: no measurement (host-sim: virtual time)
 
     @property
     def pwm_channels(self) -> tuple[str, ...]:
@@ -182,7 +207,7 @@ def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
 
 
 def _board_from_dict(path: Path, doc: dict) -> Board:
-    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash"}
+    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash", "budget"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
@@ -236,6 +261,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         i2c_buses=buses,
         base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
         base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
+        budget=_budget(path, doc),
     )
 
 
@@ -285,3 +311,21 @@ def i2c_buses(path: Path, i2c: dict) -> tuple[I2cBus, ...]:
         muxes = _addresses(path, f"{where}.mux_addresses", t.get("mux_addresses", []), MUX_RANGE)
         out.append(I2cBus(i, name, pins["sda"], pins["scl"], addrs, muxes))
     return tuple(out)
+
+
+def _budget(path: Path, doc: dict) -> TickBudget | None:
+    if "budget" not in doc:
+        return None
+    values = []
+    for key in ("tick_us_base", "tick_us_per_limb"):
+        v = _need(path, doc, "budget", key, (int, float))
+        if not v >= 0:
+            raise BoardError(f"{path}: budget.{key}: expected µs ≥ 0, got {v!r}")
+        values.append(float(v))
+    if values[0] + values[1] <= 0:
+        raise BoardError(f"{path}: budget: tick_us_base + tick_us_per_limb must be above 0 µs")
+    measured = _need(path, doc, "budget", "measured", str)
+    enforce = doc["budget"].get("enforce", True)
+    if not isinstance(enforce, bool):
+        raise BoardError(f"{path}: budget.enforce: expected true or false, got {enforce!r}")
+    return TickBudget(values[0], values[1], measured, enforce)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import re
 import shutil
@@ -92,6 +93,30 @@ def check_buildable(robot: Robot, board: Board) -> None:
             )
     if shutil.which("make") is None:
         raise BuildError("make not found: install the Debian package make")
+    check_tick_budget(robot, board)  # last: with enforce = false it only warns
+
+
+def check_tick_budget(robot: Robot, board: Board) -> None:
+    """Refuse a tick rate whose period the board's measured per-tick work (``[budget]``)
+    does not fit within 70 %: its ticks would overrun, and its timers run late."""
+    budget = board.budget
+    if budget is None:
+        return
+    limbs = len(robot.limbs)
+    hz = robot.control.tick_hz
+    period_us = 1e6 / hz
+    need_us = budget.busy_us(limbs)
+    if need_us * hz > budget.BUSY_LIMIT * 1e6:  # need > 70 % of the period, without dividing
+        message = (
+            f"robot {robot.name}: control.tick_hz = {hz} is too fast for board {board.name}: "
+            f"{limbs} limbs need {need_us:.0f} µs per tick ({budget.tick_us_base:g} + {limbs} × "
+            f"{budget.tick_us_per_limb:g} µs, [budget] of {board.path.name}), more than "
+            f"{100 * budget.BUSY_LIMIT:.0f} % of the {period_us:.0f} µs period; at most "
+            f"{budget.max_tick_hz(limbs)} Hz"
+        )
+        if budget.enforce:
+            raise BuildError(message)
+        logging.getLogger(__name__).warning("%s (building anyway: [budget] enforce = false)", message)
 
 
 def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:

@@ -418,6 +418,23 @@ class ArmEmuBoard:
             self.busy_us.append((now - self._tick_start) / CYC_PER_US)
             self._tick_start = None
 
+    def stack_peak_bytes(self) -> int:
+        """Deepest stack use since power-on: RAM is all zeros at reset, so the lowest
+        non-zero byte between the end of static data and the initial SP marks the deepest
+        point the stack wrote. A lower bound (zeros pushed at the very bottom do not show)."""
+        sp0 = int.from_bytes(self._flash[0:4], "little")
+        static_end = max((s.value + s.size for s in self.elf.symbols.values()
+                          if RAM_BASE <= s.value < RAM_BASE + RAM_SIZE), default=RAM_BASE)
+        ram = bytes(self.uc.mem_read(static_end, sp0 - static_end))
+        for i, b in enumerate(ram):
+            if b:
+                return sp0 - (static_end + i)
+        return 0
+
+    def clear_ticks(self) -> None:
+        """Start a new measurement window (e.g. after boot), as ``AvrEmuBoard.clear_ticks``."""
+        self.busy_us.clear()
+
     def tick_budget(self) -> TickBudget:
         b = sorted(self.busy_us)
         if not b:

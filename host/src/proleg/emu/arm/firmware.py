@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 from pathlib import Path
 
@@ -24,6 +25,11 @@ def bluepill_elf(robot: Robot, *, objective: str = "total", max_transitions: int
         digest.update(rel.encode() + b"\0" + files[rel].encode() + b"\0")
     out = cache_root() / "emu-arm" / f"{robot.name}-{digest.hexdigest()[:16]}"
     elf = out / "firmware.elf"
-    if not elf.exists():
-        build(robot, board, out, objective=objective, max_transitions=max_transitions)
+    if elf.exists():
+        return elf
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out.parent / f".{out.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # one builder per project (xdist workers); the others wait and reuse it
+        if not elf.exists():
+            build(robot, board, out, objective=objective, max_transitions=max_transitions)
     return elf

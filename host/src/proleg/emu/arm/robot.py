@@ -9,6 +9,7 @@ and the plant integrates the duties the timer registers produce.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from ...firmware.boards import load_board
 from ...robot import Robot
@@ -25,8 +26,9 @@ def ArmEmuRobot(  # noqa: N802 - a factory that reads like the class it returns
     seed: int = 1,
     plant: Plant | None = None,
     plant_dt_s: float = DEFAULT_PLANT_DT_S,
+    conditions: Any = None,
 ) -> SimulatedRobot:
     board_info = load_board(BOARD)
     addrs = tuple(board_info.i2c.get("imu_addresses", [0x68, 0x69]))
     emu = ArmEmuBoard(elf or bluepill_elf(robot), seed, pwm_pins=board_info.pwm_channels, imu_addresses=addrs)
-    return SimulatedRobot(robot, seed=seed, plant=plant, plant_dt_s=plant_dt_s, board=emu, board_info=board_info)
+    return SimulatedRobot(robot, seed=seed, plant=plant, conditions=conditions, plant_dt_s=plant_dt_s, board=emu, board_info=board_info)

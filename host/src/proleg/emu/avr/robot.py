@@ -6,6 +6,7 @@ as host-sim, so ``SimSession``, ``SimLink``, the client and hil_tests run on it 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from ...firmware.boards import Board, load_board
 from ...robot import Robot
@@ -22,6 +23,7 @@ def AvrEmuRobot(  # noqa: N802 - a factory that reads like the class it returns
     seed: int = 1,
     plant: Plant | str | None = None,
     plant_dt_s: float = DEFAULT_PLANT_DT_S,
+    conditions: Any = None,
     board: Board | None = None,
 ) -> SimulatedRobot:
     """``robot``'s arduino-nano firmware (``elf``, built and cached if None) on simavr,
@@ -35,4 +37,4 @@ def AvrEmuRobot(  # noqa: N802 - a factory that reads like the class it returns
         board=board_info,
         imu_addresses=addrs,
     )
-    return SimulatedRobot(robot, seed=seed, plant=plant, plant_dt_s=plant_dt_s, board=emu, board_info=board_info)
+    return SimulatedRobot(robot, seed=seed, plant=plant, conditions=conditions, plant_dt_s=plant_dt_s, board=emu, board_info=board_info)

@@ -1,0 +1,106 @@
+"""``proleg build`` refuses a tick rate the board's measured per-tick work cannot fit
+(``[budget]`` in boards/*.toml, measured by bench/bench_mcu.py on the emulated MCU)."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from proleg.cli import main
+from proleg.errors import BoardError, BuildError
+from proleg.firmware.boards import TickBudget, load_board
+from proleg.firmware.build import check_tick_budget
+from proleg.paths import boards_dir, robots_dir
+from proleg.robot import load_robot
+
+R1 = robots_dir() / "paper-r1.toml"
+
+
+def at_rate(robot, hz: int):
+    return dataclasses.replace(robot, control=dataclasses.replace(robot.control, tick_hz=hz))
+
+
+def board_with(tmp_path: Path, budget: str, name: str = "bluepill-f103") -> Path:
+    text = (boards_dir() / f"{name}.toml").read_text(encoding="utf-8")
+    text = re.sub(r"\n\[budget\]\n(?:[^\[]*\n)*?(?=\n\[|\Z)", "\n", text)  # drop the board's own
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text + "\n[budget]\n" + budget, encoding="utf-8")
+    return path
+
+
+def test_every_mcu_board_with_a_budget_says_when_and_how_it_was_measured():
+    for name in ("arduino-nano", "bluepill-f103"):
+        budget = load_board(name).budget
+        if budget is not None:
+            assert "bench/bench_mcu.py" in budget.measured and re.search(r"\d{4}-\d\d-\d\d", budget.measured)
+    assert load_board("host-sim").budget is None  # virtual time: nothing to measure
+
+
+def test_the_bluepill_takes_paper_r1_at_1_khz_and_refuses_2_khz_naming_the_numbers():
+    board = load_board("bluepill-f103")
+    assert board.budget is not None
+    r1 = load_robot(R1)
+    check_tick_budget(r1, board)  # 1 kHz: fits
+    with pytest.raises(BuildError) as e:
+        check_tick_budget(at_rate(r1, 2000), board)
+    b = board.budget
+    need = b.tick_us_base + 2 * b.tick_us_per_limb
+    msg = str(e.value)
+    assert "\n" not in msg
+    assert msg.startswith("robot paper-r1: control.tick_hz = 2000 is too fast for board bluepill-f103: ")
+    assert f"2 limbs need {need:.0f} µs per tick" in msg
+    assert "more than 70 % of the 500 µs period" in msg and f"at most {b.max_tick_hz(2)} Hz" in msg
+
+
+def test_proleg_build_refuses_the_rate_in_one_line_before_compiling(tmp_path, capsys):
+    robot = tmp_path / "fast-r1.toml"
+    robot.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", "tick_hz = 5000"), encoding="utf-8")
+    board = board_with(tmp_path, 'tick_us_base = 300\ntick_us_per_limb = 100\nmeasured = "test"\n')
+    code = main(["build", str(robot), "--board", str(board), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and "control.tick_hz = 5000 is too fast" in err
+    assert "2 limbs need 500 µs per tick (300 + 2 × 100 µs, [budget] of bluepill-f103.toml)" in err
+    assert "at most 1400 Hz" in err
+    assert not (tmp_path / "out").exists()
+
+
+@given(base=st.integers(0, 5000), per_limb=st.integers(0, 3000), limbs=st.integers(1, 8))
+def test_max_tick_hz_is_exactly_the_highest_rate_the_check_accepts(base, per_limb, limbs):
+    budget = TickBudget(float(base), float(per_limb), "test")
+    if budget.busy_us(limbs) <= 0:
+        return
+    hz = budget.max_tick_hz(limbs)
+    # brute force: the same rule, in integers (busy ≤ 0.7 × 1e6 / hz  ⇔  10 × busy × hz ≤ 7e6)
+    busy = base + per_limb * limbs
+    assert 10 * busy * hz <= 7_000_000 < 10 * busy * (hz + 1)
+
+
+@pytest.mark.parametrize("budget,expected", [
+    ('tick_us_per_limb = 100\nmeasured = "x"\n', "budget.tick_us_base: missing"),
+    ('tick_us_base = -1\ntick_us_per_limb = 100\nmeasured = "x"\n', "budget.tick_us_base: expected µs ≥ 0, got -1"),
+    ('tick_us_base = 100\ntick_us_per_limb = "fast"\nmeasured = "x"\n', "budget.tick_us_per_limb: expected"),
+    ('tick_us_base = 100\ntick_us_per_limb = 100\n', "budget.measured: missing"),
+    ('tick_us_base = 0\ntick_us_per_limb = 0\nmeasured = "x"\n', "must be above 0 µs"),
+    ('tick_us_base = 1\ntick_us_per_limb = 1\nmeasured = "x"\nenforce = "no"\n', "budget.enforce: expected true or false"),
+])
+def test_a_malformed_budget_is_one_line_naming_the_field(tmp_path, budget, expected):
+    with pytest.raises(BoardError, match=re.escape(expected)):
+        load_board(board_with(tmp_path, budget))
+
+
+def test_a_budget_not_enforced_yet_warns_with_the_same_numbers_and_builds(tmp_path, caplog):
+    board = load_board(board_with(tmp_path, 'tick_us_base = 900\ntick_us_per_limb = 250\n'
+                                            'measured = "test"\nenforce = false\n'))
+    with caplog.at_level("WARNING", logger="proleg"):
+        check_tick_budget(load_robot(R1), board)
+    assert [r.getMessage() for r in caplog.records] == [
+        "robot paper-r1: control.tick_hz = 1000 is too fast for board bluepill-f103: 2 limbs need 1400 µs per tick "
+        "(900 + 2 × 250 µs, [budget] of bluepill-f103.toml), more than 70 % of the 1000 µs period; at most 500 Hz "
+        "(building anyway: [budget] enforce = false)"
+    ]
