@@ -375,3 +375,27 @@ def test_an_attacker_cannot_get_around_the_envelope(rig):
         max_examples=EXAMPLES, stateful_step_count=STEPS, deadline=None, suppress_health_check=list(HealthCheck)
     )
     Attacker.TestCase().runTest()
+
+
+# ------------------------------------------------------------------ the attacker on the MCUs
+
+EMU_EXAMPLES = int(os.environ.get("PROLEG_ATTACK_EMU_EXAMPLES", "3"))
+EMU_STEPS = int(os.environ.get("PROLEG_ATTACK_EMU_STEPS", "8"))
+
+
+@pytest.mark.parametrize("board", ["avr-emu", "arm-emu"])
+def test_an_attacker_cannot_get_around_the_envelope_on_the_emulated_mcus(board):
+    """The same attacker and monitor against the exact MCU images: the envelope's timers run
+    on each chip's own clock there (Timer0 on the ATmega328P, SysTick on the STM32F103)."""
+    from proleg.sim.simulated_boards import simulated_board, simulated_robot
+
+    lacking = simulated_board(board).missing()
+    if lacking:
+        pytest.skip(lacking)
+    robot = _robot()
+    Attacker.rig = Rig(robot, simulated_robot(board, robot))
+    Attacker.TestCase.settings = settings(
+        max_examples=EMU_EXAMPLES, stateful_step_count=EMU_STEPS, deadline=None,
+        suppress_health_check=list(HealthCheck),
+    )
+    Attacker.TestCase().runTest()
