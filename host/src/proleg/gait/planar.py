@@ -51,6 +51,17 @@ class PlanarObjective:
     transition_cost: float = 0.0
 
 
+def heading_cos_sin(heading_deg: float) -> tuple[float, float]:
+    """cos and sin of a heading in degrees, exact at multiples of 90° (``math.sin(math.pi)``
+    is 1.2e-16, which would make heading 180 need Δy data and score Δx-only gaits a hair
+    above zero)."""
+    quarter, rest = divmod(float(heading_deg), 90.0)
+    if rest == 0.0:
+        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[int(quarter) % 4]
+    h = math.radians(heading_deg)
+    return math.cos(h), math.sin(h)
+
+
 def planar_scores(table: TransitionTable, objective: PlanarObjective) -> np.ndarray:
     """The score of every transition (aligned with ``table.src``/``dst``)."""
     h = math.radians(objective.heading_deg)
@@ -61,14 +72,15 @@ def planar_scores(table: TransitionTable, objective: PlanarObjective) -> np.ndar
         raise GaitError("planar objective: heading, variance weights and transition cost must be finite numbers")
     if min(lx, ly, lt) < 0:
         raise GaitError(f"planar objective: variance weights must be >= 0, got {objective.variance_weight}")
-    needed = {"dy": math.sin(h) != 0.0, "var_dx": lx != 0, "var_dy": ly != 0, "var_dtheta_deg": lt != 0}
+    cos_h, sin_h = heading_cos_sin(objective.heading_deg) if math.isfinite(h) else (math.nan, math.nan)
+    needed = {"dy": sin_h != 0.0, "var_dx": lx != 0, "var_dy": ly != 0, "var_dtheta_deg": lt != 0}
     missing = [k for k, used in needed.items() if used and k not in given]
     if missing:
         raise GaitError(f"planar objective needs [transitions].{missing[0]} in the robot file, and it has none")
     zero = np.zeros(table.n_transitions)
-    score = math.cos(h) * np.asarray(table.reward, dtype=np.float64)
-    if math.sin(h) != 0.0:
-        score = score + math.sin(h) * given["dy"]
+    score = cos_h * np.asarray(table.reward, dtype=np.float64)
+    if sin_h != 0.0:
+        score = score + sin_h * given["dy"]
     score = score - lx * given.get("var_dx", zero) - ly * given.get("var_dy", zero) - lt * given.get("var_dtheta_deg", zero)
     return score - float(objective.transition_cost)
 
@@ -150,9 +162,11 @@ def optimal_planar_gaits(
         raise GaitError("rotation caps, simple cycles and rotation gaits are answered for total and rate, not speed")
     if not constrained:
         result = optimal_gaits(scored, kind, "+x", max_transitions)
-        if result.value is not None or kind == "speed" or scored.n_transitions == 0:
+        tol = RELATIVE_TOLERANCE * float(np.abs(scored.reward).max()) if scored.n_transitions else 0.0
+        if (result.value is not None and result.value > tol) or kind == "speed" or scored.n_transitions == 0:
             return result
-        # nothing scores above zero: the best of the rest, over the same gaits
+        # nothing scores above zero (a value within rounding of 0 is zero, as ties are):
+        # the best of the rest, over the same gaits
         # (rate: simple cycles, as optimal_gaits answers it)
         return _constrained(scored, kind, max_transitions, kind == "rate", [], None)
     return _constrained(scored, kind, max_transitions, simple_cycles, constraints, accept)
