@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SimError
+from ..states import limb_levels
 from .sma import Hysteresis, SmaParams
 
 DIRECT_GAIN_DEG = 60.0
@@ -448,11 +449,7 @@ class Plant:
 
     @property
     def limb_levels(self) -> tuple[int, ...]:
-        out, idx = [], self._state
-        for k in reversed(self.levels):
-            idx, d = divmod(idx, k)
-            out.append(d)
-        return tuple(reversed(out))
+        return limb_levels(self._state, self.levels)
 
     @property
     def displacement_mm(self) -> float:

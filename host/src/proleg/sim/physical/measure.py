@@ -21,16 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from ...states import limb_levels
 from .conditions import Conditions
 from .plant import PhysicalParams, PhysicalPlant
-
-
-def _limb_levels(state: int, levels: Sequence[int]) -> list[int]:
-    out = []
-    for k in reversed(levels):
-        state, d = divmod(state, k)
-        out.append(d)
-    return list(reversed(out))
 
 
 class IdealDrive:
@@ -45,7 +38,7 @@ class IdealDrive:
         self.margin = margin_deg
 
     def command(self, psi: Sequence[float], target: int) -> list[int]:
-        want = _limb_levels(target, self.levels)
+        want = limb_levels(target, self.levels)
         heat = [False] * self.n_act
         cool = [False] * self.n_act
         active = [False] * self.n_act

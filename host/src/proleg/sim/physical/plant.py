@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimError
+from ...states import limb_levels
 from ..sma import Hysteresis
 from . import materials as mat
 from .body import BodyGeometry, Shape, default_spans
@@ -554,11 +555,7 @@ class PhysicalPlant:
 
     @property
     def limb_levels(self) -> tuple[int, ...]:
-        out, idx = [], self._state
-        for k in reversed(self.levels):
-            idx, d = divmod(idx, k)
-            out.append(d)
-        return tuple(reversed(out))
+        return limb_levels(self._state, self.levels)
 
     @property
     def displacement_mm(self) -> float:
