@@ -81,6 +81,10 @@ _SIGNATURES = {
     "emu_jump": ([c_uint32], None),
     "emu_profile": ([c_int], None),
     "emu_profile_read": ([POINTER(c_uint64), c_uint32], c_uint32),
+    "emu_set_boot_reset": ([c_uint32], None),
+    "emu_external_reset": ([], None),
+    "emu_flash_write": ([c_uint32, POINTER(c_uint8), c_uint32], c_int),
+    "emu_flash_read": ([c_uint32, POINTER(c_uint8), c_uint32], c_int),
 }
 
 
@@ -412,3 +416,35 @@ class AvrEmuBoard:
             wall_s=self._window_wall,
             cpu_s=self._window_cpu,
         )
+
+    # -- flash and the boot section (boot.c) ---------------------------------------------
+    def flash_write(self, address: int, data: bytes) -> None:
+        """Write program memory directly (as an ISP programmer would)."""
+        buf = (c_uint8 * len(data)).from_buffer_copy(data)
+        if self._lib.emu_flash_write(address, buf, len(data)) != 0:
+            raise SimError(f"flash write of {len(data)} bytes at 0x{address:04x} is past the end of flash")
+
+    def flash_read(self, address: int, n: int) -> bytes:
+        buf = (c_uint8 * n)()
+        if self._lib.emu_flash_read(address, buf, n) != 0:
+            raise SimError(f"flash read of {n} bytes at 0x{address:04x} is past the end of flash")
+        return bytes(buf)
+
+    def install_bootloader(self, image: dict[int, bytes], boot_start: int, *, erase_application: bool = False) -> None:
+        """Program a bootloader (``image``: address → bytes, e.g. from an Intel HEX file)
+        into the boot section starting at ``boot_start`` and set BOOTRST: from now on
+        every reset (power-on, watchdog, ``external_reset``) starts there, and flash keeps
+        what the bootloader writes across power-on resets. ``erase_application`` leaves
+        the application section blank (0xFF), as on a new chip."""
+        for addr in image:
+            if addr < boot_start:
+                raise SimError(f"bootloader byte at 0x{addr:04x} is below the boot section (0x{boot_start:04x})")
+        if erase_application:
+            self.flash_write(0, b"\xff" * boot_start)
+        for addr, data in image.items():
+            self.flash_write(addr, data)
+        self._lib.emu_set_boot_reset(boot_start)
+
+    def external_reset(self) -> None:
+        """Pull RESET low: the MCU restarts with MCUSR = EXTRF (a Nano's DTR auto-reset)."""
+        self._lib.emu_external_reset()

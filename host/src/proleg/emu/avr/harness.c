@@ -152,6 +152,11 @@ uint64_t emu_now_cycles(void)
     return E.avr->cycle - E.cycle0;
 }
 
+avr_t *emu_core(void)
+{
+    return E.avr;
+}
+
 uint64_t emu_now_us(void)
 {
     return emu_now_cycles() * 1000000u / E.freq;
@@ -440,6 +445,7 @@ static avr_t *make_core(void)
     avr_load_firmware(avr, &E.fw);
     avr->frequency = E.freq;
     avr->sleep = no_sleep;
+    boot_power_on(avr);
     E.avr = avr;
     E.cycle0 = avr->cycle;
     E.uart = 0;
@@ -494,6 +500,7 @@ EMU_API int emu_open(const char *elf_path, uint32_t freq, uint32_t host_baud)
 EMU_API int emu_reset(uint32_t seed)
 {
     if (E.avr) {
+        boot_power_off(E.avr);
         avr_terminate(E.avr);
         free(E.avr);
         E.avr = 0;

@@ -29,5 +29,10 @@ void twi_hold_sda(int held, uint8_t release_clocks); /* a device holds SDA low (
 uint64_t emu_now_cycles(void);                    /* cycles since the last power-on reset */
 uint64_t emu_now_us(void);
 void emu_i2c_bus_changed(int owned);              /* bookkeeping of the I2C share of a tick */
+avr_t *emu_core(void);                            /* the current simavr core */
+
+/* boot.c: flash and the boot section (bootloader mode; no effect until emu_set_boot_reset). */
+void boot_power_off(avr_t *avr);                  /* before a power-on reset drops the core */
+void boot_power_on(avr_t *avr);                   /* after the new core loaded the ELF */
 
 #endif /* PROLEG_EMU_AVR_HARNESS_H */

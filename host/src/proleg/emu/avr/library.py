@@ -17,7 +17,7 @@ from ...errors import SimError
 from ...paths import templates_dir
 
 HERE = Path(__file__).resolve().parent
-SOURCES = ("harness.c", "twi.c")
+SOURCES = ("harness.c", "twi.c", "boot.c")
 HEADERS = ("harness.h",)
 SIMAVR_INCLUDE = Path("/usr/include/simavr")
 CFLAGS = ("-std=gnu99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-Wall", "-Wextra", "-Werror")
