@@ -12,12 +12,22 @@
  * 100 nF capacitor) when a host opens the serial port. The MCU Status Register then holds
  * EXTRF only (datasheet §10.9.1), which is what optiboot looks at to stay in the loader.
  *
- * Without emu_set_boot_reset nothing here changes the board: the ELF is loaded at 0 and
- * starts there (the existing avr-emu behaviour).
+ * Watchdog prescaler. simavr 1.6 keeps the old timeout when the prescaler changes while
+ * the watchdog runs (avr_watchdog_write reads the "old" WDP bits after storing the new
+ * ones, so it never re-arms its timer). Optiboot leaves through exactly that path: after
+ * LEAVE_PROGMODE, or on a byte it does not expect, it shortens the running 1 s watchdog to
+ * 16 ms and spins; plain simavr starts the application ~1 s late instead of ~16 ms. A
+ * change of WDP while the watchdog is enabled re-arms it with the new period (as the
+ * `wdr` that avr-libc's wdt_enable and optiboot issue just before makes it on the chip).
+ *
+ * Without emu_set_boot_reset nothing else here changes the board: the ELF is loaded at 0
+ * and starts there (the existing avr-emu behaviour).
  */
 #include <string.h>
 
+#include "avr_watchdog.h"
 #include "harness.h"
+#include "sim_io.h"
 
 #define EMU_API __attribute__((visibility("default")))
 
@@ -25,6 +35,13 @@
 #define EXTRF_BIT 0x02u
 #define FLASH_BYTES 32768u
 
+#define R_WDTCSR 0x60u
+#define WDT_WDE 0x08u
+#define WDT_WDIE 0x40u
+#define WDT_WDP 0x27u /* WDP3 (bit 5), WDP2..0 */
+
+static avr_io_write_t wdt_write_c; /* simavr's WDTCSR write handler */
+static void *wdt_write_param;
 static uint32_t boot_pc;              /* byte address of the reset vector; 0 = application */
 static uint8_t flash_kept[FLASH_BYTES]; /* flash across a power-on reset (boot mode only) */
 
@@ -35,8 +52,25 @@ void boot_power_off(avr_t *avr)
     }
 }
 
+static void wdtcsr_write(struct avr_t *avr, avr_io_addr_t addr, uint8_t v, void *param)
+{
+    uint8_t before = avr->data[addr];
+    (void)param;
+    wdt_write_c(avr, addr, v, wdt_write_param);
+    if (((before ^ avr->data[addr]) & WDT_WDP) && (avr->data[addr] & (WDT_WDE | WDT_WDIE))) {
+        avr_ioctl(avr, AVR_IOCTL_WATCHDOG_RESET, 0); /* re-arm with the new period */
+    }
+}
+
 void boot_power_on(avr_t *avr)
 {
+    avr_io_addr_t a = AVR_DATA_TO_IO(R_WDTCSR);
+    if (avr->io[a].w.c && avr->io[a].w.c != wdtcsr_write) {
+        wdt_write_c = avr->io[a].w.c;
+        wdt_write_param = avr->io[a].w.param;
+        avr->io[a].w.c = wdtcsr_write;
+        avr->io[a].w.param = 0;
+    }
     if (boot_pc) {
         memcpy(avr->flash, flash_kept, FLASH_BYTES);
         avr->reset_pc = boot_pc;
