@@ -11,13 +11,18 @@ APT    := scripts/ensure-apt.sh
 
 # Board toolchains (command:debian-package). The newlib check is a file, not a command.
 # simavr (avr-emu board): the simulator and the headers/library the harness links.
+# Flashing (tested end to end against the emulated boards): avrdude (Nano), stm32flash
+# (bluepill ROM bootloader), and optiboot's sources (arduino-core-avr) to build the Nano's
+# bootloader from.
 TOOLCHAINS := cc:gcc avr-gcc:gcc-avr /usr/lib/avr/include/avr/io.h:avr-libc \
               arm-none-eabi-gcc:gcc-arm-none-eabi \
               /usr/lib/arm-none-eabi/newlib/libc_nano.a:libnewlib-arm-none-eabi \
               clang:clang /usr/lib/llvm-14/lib/clang/14.0.6/lib/linux/libclang_rt.fuzzer-x86_64.a:libclang-rt-14-dev \
-              simavr:simavr /usr/include/simavr/sim_avr.h:libsimavr-dev
+              simavr:simavr /usr/include/simavr/sim_avr.h:libsimavr-dev \
+              avrdude:avrdude stm32flash:stm32flash \
+              /usr/share/arduino/hardware/arduino/avr/bootloaders/optiboot/optiboot.c:arduino-core-avr
 
-.PHONY: demo test emu bench fuzz setup toolchains clean
+.PHONY: demo test emu bench fuzz setup toolchains optiboot clean
 
 setup: $(STAMP)
 
@@ -33,6 +38,10 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 toolchains:
 	@$(APT) $(TOOLCHAINS)
+
+# The Nano's bootloader for avr-emu, built from Debian's optiboot sources into the cache.
+optiboot: $(STAMP) toolchains
+	scripts/build-optiboot.sh
 
 demo: $(STAMP) toolchains
 	$(BIN)/python -m proleg.demo
