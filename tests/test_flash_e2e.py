@@ -93,3 +93,52 @@ def test_proleg_flash_writes_the_emulated_nano_through_optiboot_and_the_new_firm
     assert (info.robot_name, info.board) == ("paper-r1", "arduino-nano")
     assert (info.build_id, info.gait_hash) == (build_id, gait_hash)
     assert re.search(r": 2 opens,", err), err  # avrdude's and the client's: each one an auto-reset
+
+
+@pytest.mark.skipif(shutil.which("stm32flash") is None or shutil.which("arm-none-eabi-gcc") is None,
+                    reason="needs stm32flash and arm-none-eabi-gcc (make toolchains installs them)")
+def test_proleg_flash_writes_the_emulated_bluepill_through_its_rom_bootloader_and_the_new_firmware_answers(tmp_path):
+    pytest.importorskip("unicorn")
+    out = tmp_path / "r1-bluepill"
+    server = PtyServer("proleg.emu.arm.rom_bootloader")  # BOOT0 = 1, erased flash
+    try:
+        flashed = proleg("flash", R1, "--board", "bluepill-f103", "--tool", "stm32flash", "--port", server.path,
+                         "-o", str(out))
+        assert flashed.returncode == 0, flashed.stdout + flashed.stderr
+        assert f"flashed {out / 'firmware.bin'} with stm32flash" in flashed.stdout
+        assert "Device ID    : 0x0410" in flashed.stdout
+        assert "Wrote and verified address" in flashed.stdout
+        assert "Starting execution at address 0x08000000... done." in flashed.stdout
+        info = info_over(server.path)  # GO booted arm-emu from the flash stm32flash wrote
+    finally:
+        err = server.stop()
+    build_id, gait_hash = built_ids(out)
+    assert (info.robot_name, info.board) == ("paper-r1", "bluepill-f103")
+    assert (info.build_id, info.gait_hash) == (build_id, gait_hash)
+    assert "GO 0x08000000: arm-emu booted the flash" in err, err
+
+
+@pytest.mark.skipif(shutil.which("stm32flash") is None, reason="needs stm32flash (make toolchains installs it)")
+def test_stm32flash_uses_extended_erase_when_the_bootloader_offers_it(tmp_path):
+    image = bytes(range(256)) * 20 + b"\x01\x02\x03"  # 5123 bytes: 6 pages, a tail that is not word-sized
+    binfile = tmp_path / "image.bin"
+    binfile.write_bytes(image)
+    readback = tmp_path / "readback.bin"
+    old = tmp_path / "old.bin"
+    old.write_bytes(b"\x00" * 8192)  # programmed flash: writing without an erase would fail
+    server = PtyServer("proleg.emu.arm.rom_bootloader", "--extended-erase", "--image", str(old))
+    try:
+        wrote = subprocess.run(["stm32flash", "-m", "8n1", "-S", f"0x08000000:{len(image)}", "-w", str(binfile), "-v", server.path],
+                               capture_output=True, text=True, timeout=60)
+        assert wrote.returncode == 0, wrote.stdout + wrote.stderr
+        assert "Wrote and verified address 0x08001403" in wrote.stdout
+        read = subprocess.run(["stm32flash", "-m", "8n1", "-S", f"0x08000000:{8192}", "-r", str(readback), server.path],
+                              capture_output=True, text=True, timeout=60)
+        assert read.returncode == 0, read.stdout + read.stderr
+    finally:
+        err = server.stop()
+    data = readback.read_bytes()
+    assert data[: len(image)] == image
+    assert data[len(image) : 6 * 1024] == b"\xff" * (6 * 1024 - len(image))  # erased with the page
+    assert data[6 * 1024 :] == b"\x00" * (8192 - 6 * 1024)  # untouched: only the 6 pages written were erased
+    assert "EXTENDED ERASE 6 pages: 1" in err, err

@@ -1,9 +1,19 @@
-"""Flash a built firmware with the board's flash tool (avrdude, openocd, pyocd)."""
+"""Flash a built firmware with the board's flash tool (avrdude, openocd, pyocd, stm32flash).
+
+The commands come from the board file's ``[[flash]]`` tables. One adjustment is made
+here: a pseudo-terminal (an emulated board's serial port, ``proleg.emu``) cannot carry
+parity — Linux's pty driver clears PARENB on every termios change (drivers/tty/pty.c,
+``pty_set_termios``) — so stm32flash's default 8E1, which the STM32 ROM bootloader needs
+on a real USART, fails stm32flash's own read-back check on a pty ("Failed to set terminal
+flags"). On a pty stm32flash is given ``-m 8n1``; the emulated bootloader needs no parity.
+"""
 
 from __future__ import annotations
 
+import logging
 import os
 import shutil
+import stat
 import subprocess
 from pathlib import Path
 
@@ -25,10 +35,34 @@ def choose_method(board: Board, tool: str | None = None) -> FlashMethod:
     )
 
 
+log = logging.getLogger("proleg")
+
+#: options a tool needs on a pseudo-terminal (see the module docstring), placed after its name
+PTY_OPTIONS: dict[str, tuple[str, ...]] = {"stm32flash": ("-m", "8n1")}
+#: Linux device majors of Unix98 pty slaves (/dev/pts/N): UNIX98_PTY_SLAVE_MAJOR .. + 7
+_PTY_MAJORS = range(136, 144)
+
+
+def is_pseudo_terminal(port: str | None) -> bool:
+    """Whether ``port`` (possibly a symlink) is the slave side of a pseudo-terminal."""
+    if not port:
+        return False
+    try:
+        st = os.stat(port)
+    except OSError:
+        return False
+    return stat.S_ISCHR(st.st_mode) and os.major(st.st_rdev) in _PTY_MAJORS
+
+
 def flash_command(method: FlashMethod, artifact: Path, port: str | None) -> list[str]:
     if method.needs_port and not port:
         raise BuildError(f"{method.tool} needs the board's serial port: give --port (e.g. /dev/ttyUSB0)")
-    return [part.replace("{artifact}", str(artifact)).replace("{port}", port or "") for part in method.command]
+    cmd = [part.replace("{artifact}", str(artifact)).replace("{port}", port or "") for part in method.command]
+    extra = PTY_OPTIONS.get(method.tool, ())
+    if extra and method.needs_port and is_pseudo_terminal(port):
+        log.info("%s is a pseudo-terminal (no parity): %s gets %s", port, method.tool, " ".join(extra))
+        cmd[1:1] = extra
+    return cmd
 
 
 def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
