@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from proleg.cli import main
-from proleg.errors import BoardError, BuildError
+from proleg.errors import BoardError, BuildError, LinkError
 from proleg.firmware.boards import load_board
 from proleg.firmware.build import MANIFEST, build, firmware_gaits, render_project
 from proleg.firmware.flash import choose_method, flash, flash_command
@@ -472,7 +472,8 @@ def test_missing_artifact_and_failing_tool_are_clear_errors(tmp_path, fake_hex):
     method = choose_method(load_board(board))
     with pytest.raises(BuildError, match=r"no firmware to flash \(build it first\)"):
         flash(method, tmp_path / "missing.hex", "/dev/null")
-    with pytest.raises(BuildError, match=r"^false failed with exit status 1$"):
+    # the tool ran and failed (no sync, a verify error): a failure (exit 1), not a usage error (2)
+    with pytest.raises(LinkError, match=r"^false failed with exit status 1 \(its messages are above\)$"):
         flash(method, fake_hex, "/dev/null")
 
 

@@ -17,7 +17,7 @@ import stat
 import subprocess
 from pathlib import Path
 
-from ..errors import BuildError
+from ..errors import BuildError, LinkError
 from .boards import Board, FlashMethod
 
 
@@ -66,7 +66,8 @@ def flash_command(method: FlashMethod, artifact: Path, port: str | None) -> list
 
 
 def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
-    """Run the flash tool; a missing tool, port or artifact is one clear BuildError."""
+    """Run the flash tool; a missing tool, port or artifact is one clear BuildError (usage),
+    a tool that fails (no sync, verify error) a LinkError."""
     cmd = flash_command(method, artifact, port)
     if not Path(artifact).exists():
         raise BuildError(f"{artifact}: no firmware to flash (build it first)")
@@ -76,5 +77,5 @@ def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
     if method.needs_port and port and port.startswith("/") and not os.path.exists(port):
         raise BuildError(f"{port}: no such serial port (is the board plugged in?)")
     proc = subprocess.run(cmd)
-    if proc.returncode != 0:
-        raise BuildError(f"{cmd[0]} failed with exit status {proc.returncode}")
+    if proc.returncode != 0:  # the board did not answer or refused: a failure (exit 1), not a usage error
+        raise LinkError(f"{cmd[0]} failed with exit status {proc.returncode} (its messages are above)")
