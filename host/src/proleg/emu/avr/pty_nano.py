@@ -11,8 +11,9 @@ Nano on /dev/ttyUSB0.
   through a 100 nF capacitor. A pseudo-terminal has no DTR, so the opening itself is the
   signal (``proleg.emu.pty.PtyPort``): the emulated chip gets an external reset.
 - **Real time.** ``proleg.emu.pty.serve_board`` throttles the core to the wall clock
-  (``speed`` × real time, default 1): faster than about 2× real time optiboot's window
-  closes before avrdude, which waits 300 ms after its DTR toggle, syncs.
+  (``speed`` × real time, default 1): unthrottled, optiboot's 1 s window closes before
+  avrdude, which waits 300 ms after its DTR toggle, syncs (measured: ``--speed 10`` fails
+  with "not in sync", 1 and 3 flash).
 
 ``python -m proleg.emu.avr.pty_nano [--elf APP.elf] [--link PATH]`` prints the pty's path
 (``pty: /dev/pts/N``) and serves until SIGINT/SIGTERM. See docs/flashing.md.
@@ -76,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--elf", type=Path, help="application already in flash (default: blank, as a new chip)")
     p.add_argument("--bootloader", type=Path, help="Intel HEX of the bootloader (default: optiboot built from Debian's sources)")
     p.add_argument("--link", help="also make this path a symlink to the pty (e.g. /tmp/ttyNANO)")
-    p.add_argument("--speed", type=float, default=1.0, help="× real time (default 1; above ~2 optiboot closes before avrdude syncs)")
+    p.add_argument("--speed", type=float, default=1.0, help="× real time (default 1; much faster and optiboot's window closes before avrdude syncs)")
     p.add_argument("--seed", type=int, default=1)
     args = p.parse_args(argv)
     try:
