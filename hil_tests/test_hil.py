@@ -22,6 +22,7 @@ def events(received, kind=None):
 # link
 
 
+@pytest.mark.can_link
 def test_boots_and_answers_ping_and_get_info_with_its_robot_board_and_gait_hash(target):
     info = target.client.get_info()
     assert info.robot_name == target.robot.name
@@ -32,6 +33,7 @@ def test_boots_and_answers_ping_and_get_info_with_its_robot_board_and_gait_hash(
     assert target.client.ping() >= 0.0
 
 
+@pytest.mark.can_link
 def test_telemetry_streams_with_consecutive_sequence_numbers(target):
     frames = list(target.client.telemetry(count=20))
     seqs = [f.seq for f in frames]
@@ -100,6 +102,7 @@ def _run_gait(t, direction, gait_index, seconds=None, cycles_wanted: int | None 
 
 
 @pytest.mark.plant
+@pytest.mark.can_link
 @pytest.mark.gait_cases(opposing=False, focused_first=True, xfail={("paper-r3", "+x"): R3_PLUS_X})
 def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_target, robot_name, direction, gait_index):
     """Every optimal gait proleg computes, run by the firmware on the physical plant: every
@@ -157,6 +160,7 @@ def test_a_step_that_raises_one_limb_and_lowers_another_is_synchronised(
     assert max(skews) < 0.1, f"{t.robot.transitions.label(a)} -> {t.robot.transitions.label(b)}: {skews}"
 
 
+@pytest.mark.can_link
 def test_a_robot_with_no_gait_in_a_direction_refuses_to_start_it(open_target):
     from proleg.firmware.build import firmware_gaits
     from proleg.link import CommandRefused
@@ -220,6 +224,7 @@ def _tick_allowance_us(target, ticks: int) -> float:
 
 
 @pytest.mark.plant
+@pytest.mark.can_link
 def test_estop_turns_every_mosfet_off_within_one_control_tick(target, record_property):
     """Within one tick of the ESTOP frame's arrival (its bytes take their time on the wire:
     6 bytes are 521 µs at 115200 baud), plus the tick's busy budget on an MCU."""
