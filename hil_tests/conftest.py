@@ -8,7 +8,7 @@ board on request.
     pytest hil_tests --target avr-emu -m "not emu_long"   # the focused subset `make test` runs
     pytest hil_tests --target serial:/dev/ttyUSB0 --robot robots/paper-r1.toml --board arduino-nano
     pytest hil_tests --link can                        # host-sim's firmware speaking CAN, python-can virtual bus
-    pytest hil_tests --target arm-emu --link can       # the exact bluepill-f103-can image, bxCAN model
+    pytest hil_tests --target arm-emu --link can       # the exact bluepill-can image, bxCAN model
 
 The tests talk to the robot only through ``proleg.link.RobotClient`` (the same client the
 console uses). Tests marked ``plant`` also need the simulated plant's ground truth
@@ -19,7 +19,7 @@ emulated MCUs (which have the plant) and are skipped on hardware. Tests marked
 runs on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
 ``robot("paper-r1")``) is deselected for another. With ``--target sim``, ``--board`` may
 name the simulated board instead (``proleg.sim.simulated_boards.SIMULATED_BOARDS``).
-``--link can`` runs a simulated board's CAN firmware (host-sim-can, bluepill-f103-can): the
+``--link can`` runs a simulated board's CAN firmware (host-sim-can, bluepill-can): the
 client talks to it through python-can's virtual bus (``proleg.link.sim_can_link``), frames
 framed by the firmware's own CAN driver; ``fresh_sim`` boards (tests of the safety envelope
 that drive the bare board) keep the UART. The ``can_link`` marker names the short subset

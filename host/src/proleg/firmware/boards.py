@@ -262,8 +262,11 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         "bus": buses[0].name,
         "imu_addresses": list(buses[0].addresses),
     }
+    name = _need(path, doc, "board", "name", str)
+    if not 1 <= len(name) <= 15 or not name.isascii():
+        raise BoardError(f"{path}: board.name: expected at most 15 ASCII characters (INFO carries 15), got {name!r}")
     return Board(
-        name=_need(path, doc, "board", "name", str),
+        name=name,
         path=path,
         description=doc["board"].get("description", ""),
         family=family,

@@ -6,7 +6,7 @@ framing, ``proleg.protocol.can``) → python-can ``virtual`` bus → ``proleg.si
 → the firmware's CAN driver (its C framing, core/canlink.c) and back. As with ``SimLink``,
 reading advances virtual time until frames arrive, so hil tests run as fast as the CPU
 allows and their timeouts are the board's time. The board must run firmware built for a
-board with ``[link] transport = "can"`` (host-sim-can, bluepill-f103-can).
+board with ``[link] transport = "can"`` (host-sim-can, bluepill-can).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """A simulated board whose firmware speaks CAN itself, on a python-can bus.
 
 The firmware built for a board with ``[link] transport = "can"`` (host-sim-can, or
-bluepill-f103-can on arm-emu) frames the protocol in its own C (core/canlink.c) and its
+bluepill-can on arm-emu) frames the protocol in its own C (core/canlink.c) and its
 CAN controller (hal/sim/can_sim.c, or the bxCAN model of arm-emu) offers the frames as
 ``can_read()`` / ``can_write(id, data)``. ``CanPort`` puts them on a python-can bus and
 back, in step with the simulation: ``advance(dt)`` delivers what arrived on the bus, runs

@@ -80,7 +80,7 @@ SIMULATED_BOARDS: dict[str, SimulatedBoard] = {
         SimulatedBoard("arm-emu", "proleg.emu.arm:ArmEmuRobot", "bluepill-f103",
                        "the exact bluepill firmware.elf on unicorn (STM32F103, 72 MHz)", emulated=True,
                        needs="the Python package unicorn (`make setup`) and gcc-arm-none-eabi (`make toolchains`)",
-                       requires=("py:unicorn", "arm-none-eabi-gcc", "cc"), can_firmware_board="bluepill-f103-can"),
+                       requires=("py:unicorn", "arm-none-eabi-gcc", "cc"), can_firmware_board="bluepill-can"),
     )
 }
 
