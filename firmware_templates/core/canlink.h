@@ -44,4 +44,15 @@ uint8_t canlink_send(const proto_msg_t *m);
 void canlink_isr_rx(uint16_t id, const uint8_t *data, uint8_t dlc);
 int8_t canlink_isr_tx(can_frame_t *out);
 
+/* The HAL's part (hal/<family>/can*.c, in CAN images only; hal.h is the rest of the port).
+ * hal_can_init: the CAN controller at CFG_CAN_BTR on the board's pins, receiving only this
+ * node's command identifier (CANLINK_ID(CANLINK_SLOT_CMD)) into canlink_isr_rx from its
+ * receive interrupt; called by canlink_init, never waits on the bus (a bus that never goes
+ * idle leaves the controller waiting to join, not the core). hal_can_tx_start: frames are
+ * waiting: load the free transmit mailboxes from canlink_isr_tx, in order (the segments of
+ * a message share an identifier and must not overtake each other); the transmit-complete
+ * interrupt takes the rest. Called from the main loop; returns at once. */
+void hal_can_init(void);
+void hal_can_tx_start(void);
+
 #endif /* PROLEG_CANLINK_H */

@@ -70,15 +70,8 @@ void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad);
  * them with uart_isr_tx). Called from the main loop; must return at once. */
 void hal_uart_tx_start(void);
 
-/* Only boards whose host link is CAN (board file [link] transport = "can": CFG_LINK_CAN,
- * core/canlink.h). hal_can_init: the CAN controller at CFG_CAN_BTR on the board's pins,
- * receiving only this node's command identifier (CANLINK_ID(CANLINK_SLOT_CMD)) into
- * canlink_isr_rx from its receive interrupt; called by canlink_init, never waits on the
- * bus (a bus that never goes idle leaves the controller waiting to join, not the core).
- * hal_can_tx_start: frames are waiting: load the free transmit mailboxes from
- * canlink_isr_tx (in order: the segments of a message must not overtake each other); the
- * transmit-complete interrupt takes the rest. Called from the main loop; returns at once. */
-void hal_can_init(void);
-void hal_can_tx_start(void);
+/* A board whose host link is CAN (board file [link] transport = "can") also implements
+ * hal_can_init and hal_can_tx_start, declared with their contract in canlink.h, in a
+ * hal/<family>/can*.c file that only such images contain. */
 
 #endif /* PROLEG_HAL_H */
