@@ -248,3 +248,33 @@ def test_a_can_stream_recorded_from_the_firmware_decodes_with_the_generated_dbc(
                 current = {}
     assert n_tel >= 100 and n_ev >= 3
     assert {"GAIT_STARTED", "FAULT"} <= kinds
+
+
+# --------------------------------------------------------------------------- the console on the bus
+def test_the_console_drives_the_can_firmware_served_in_real_time_on_a_virtual_bus():
+    """``CanPort.start`` serves host-sim-can's firmware on a python-can bus in real time; the
+    console, as `proleg console --can CHANNEL --interface virtual` runs it, connects, shows the
+    telemetry and stops the robot on leaving."""
+    import io
+
+    import can
+
+    from proleg.cli.link_commands import console_main
+    from proleg.sim.can_port import CanPort
+    from proleg.sim.simulators import open_simulated
+
+    robot = load_robot(resolve_robot("paper-r1"))
+    channel = "proleg-console-can"
+    bus = can.Bus(interface="virtual", channel=channel)
+    port = CanPort(open_simulated(robot, "host-sim", link="can"), bus).start(speed=1.0)
+    err, out = io.StringIO(), io.StringIO()
+    try:
+        code = console_main(can_channel=channel, interface="virtual", bitrate=500000, node=0, plain=True,
+                            duration_s=0.5, out=out, err=err)
+    finally:
+        port.stop()
+        bus.shutdown()
+    assert code == 0, err.getvalue()
+    assert out.getvalue().count("seq=") >= 10  # the firmware's telemetry, through the console
+    assert f"robot stopped on CAN {channel} (virtual, 500000 bit/s) node 0" in err.getvalue()
+    assert port.frames_in > 0 and port.frames_out > 0

@@ -12,6 +12,8 @@ driver for a firmware that speaks UART).
 
 from __future__ import annotations
 
+import threading
+import time
 from typing import Any
 
 import can
@@ -49,3 +51,29 @@ class CanPort:
         self.pump_in()
         self.sim.advance(seconds)
         self.pump_out()
+
+    def start(self, speed: float = 1.0, step_s: float = 0.002) -> CanPort:
+        """Serve the bus from a thread, virtual time paced to wall time × ``speed`` (so a host in
+        another process, e.g. ``proleg console --can`` on a shared ``udp_multicast`` or
+        ``socketcan`` bus, talks to the simulated board as to a real one)."""
+        self._running = True
+
+        def run() -> None:
+            t0, virtual = time.monotonic(), 0.0
+            while self._running:
+                self.advance(step_s)
+                virtual += step_s
+                ahead = virtual / speed - (time.monotonic() - t0)
+                if ahead > 0:
+                    time.sleep(ahead)
+
+        self._thread = threading.Thread(target=run, name="proleg-can-port", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._running = False
+        thread = getattr(self, "_thread", None)
+        if thread is not None:
+            thread.join(2.0)
+            self._thread = None
