@@ -145,6 +145,7 @@ class Target:
     client: RobotClient
     sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on a simulated board, None on hardware
     simulated_board: str | None = None  # host-sim, avr-emu, arm-emu; None on hardware
+    link: str = "uart"  # the host link: "uart", or "can" (--link can)
 
     @property
     def emulated(self) -> bool:
@@ -163,6 +164,15 @@ class Target:
     def expected_gait_hash(self) -> int:
         files = render_project(self.robot, self.board, firmware_gaits(self.robot))
         return int(gait_table_hash(files), 16)
+
+    def step(self) -> None:
+        """One plant step of the simulated robot, with its host link carried along (on CAN
+        the frames it sent reach the bus, and the bus's frames reach it)."""
+        board = self.client.link.board if self.link == "can" else None
+        if board is not None:
+            board.advance(self.sim.plant_dt_s)
+        else:
+            self.sim.step()
 
     def wait(self, seconds: float) -> list:
         """Let ``seconds`` pass on the link's clock; every message that arrived, as
@@ -195,7 +205,7 @@ def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str |
         transport = SimLink(sim, description=f"{robot.name} on {board}")
     client = RobotClient(transport, max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
-    return Target(robot, firmware_board, client, sim, board)
+    return Target(robot, firmware_board, client, sim, board, link)
 
 
 def _open_serial(config, robot: Robot) -> Target:

@@ -286,9 +286,9 @@ def test_no_coil_stays_on_longer_than_max_on_ms(target, record_property):
     next_ping = sim.board.time_us
     while sim.board.time_us < t_end:
         if sim.board.time_us >= next_ping:  # a host that stays: the link watchdog (2 s) is fed
-            sim.write(encode(Message.new("PING", token=200)))
+            target.client.link.write(encode(Message.new("PING", token=200)))
             next_ping += 500_000
-        sim.step()
+        target.step()
         now = sim.board.time_us
         for ch in sim.channels:
             if sim.board.pwm(ch) > 0.0:
@@ -322,6 +322,10 @@ def test_dead_actuator_is_reported_as_a_state_timeout(target):
 
 def test_corrupted_and_random_bytes_are_counted_and_valid_commands_still_work(target):
     import random
+
+    if target.link == "can":
+        pytest.skip("junk bytes never leave the host's CAN framing; a frame lost on the bus is "
+                    "tests/test_can_firmware.py::test_a_lost_segment_costs_that_command_only")
 
     rng = random.Random(5)
     client = target.client
