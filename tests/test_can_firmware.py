@@ -278,3 +278,35 @@ def test_the_console_drives_the_can_firmware_served_in_real_time_on_a_virtual_bu
     assert out.getvalue().count("seq=") >= 10  # the firmware's telemetry, through the console
     assert f"robot stopped on CAN {channel} (virtual, 500000 bit/s) node 0" in err.getvalue()
     assert port.frames_in > 0 and port.frames_out > 0
+
+
+# --------------------------------------------------------------------------- the exact bluepill image on arm-emu
+def test_the_bluepill_can_image_frames_every_message_as_the_python_mapping_does_through_the_bxcan_model():
+    """bluepill-can's firmware.elf on arm-emu: commands go in through the bxCAN model's filter
+    and FIFO, the replies, events and telemetry come out of its mailboxes, byte for byte the
+    frames proleg.protocol.can makes of the messages they carry; a frame for another node
+    is dropped by the filter bank the firmware set up."""
+    from proleg.sim.simulated_boards import SIMULATED_BOARDS
+
+    missing = SIMULATED_BOARDS["arm-emu"].missing()
+    if missing:
+        pytest.skip(missing)
+    from proleg.emu.arm import ArmEmuRobot
+
+    robot = load_robot(resolve_robot("paper-r1"))
+    board = ArmEmuRobot(robot, firmware_board="bluepill-can").board
+    ids = CanIds()
+    board.run_us(20_000)
+    assert board.can.on_bus and board.can.bitrate == pytest.approx(500_000)
+    _command(board, Message.new("GET_INFO", token=21), ids)
+    _command(board, Message.new("PING", token=22), CanIds(node=3))  # not this node: filtered
+    _command(board, Message.new("START", token=23, gait=0, direction=1), ids)
+    board.run_us(150_000)
+    frames = board.can_read()
+    messages = _decode(frames, ids)
+    assert frames == [f for m in messages for f in message_frames(m, ids, from_host=False)]
+    replies = [m for m in messages if m.name in ("INFO", "ACK", "NACK")]
+    assert [(m.name, m.token) for m in replies] == [("INFO", 0), ("INFO", 21), ("ACK", 23)]
+    assert replies[1].board == "bluepill-can"
+    assert board.can.dropped_by_filter == 1  # the other node's PING (one segment)
+    assert sum(m.name == "TELEMETRY" for m in messages) >= 5
