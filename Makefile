@@ -57,6 +57,7 @@ emu: $(STAMP) toolchains
 	  echo "hil_tests on $$t (all)"; \
 	  $(BIN)/python -m pytest -n 2 -q hil_tests --target $$t || exit 1; \
 	done
+	$(BIN)/python -m pytest -n 2 -q hil_tests --target arm-emu --link can -m can_link
 
 # Long fuzzing (the short run is part of `make test`) and a longer attacker profile.
 FUZZ_SECONDS ?= 300
