@@ -57,12 +57,16 @@ test: $(STAMP) toolchains
 	  echo "hil_tests on $$t (focused subset)"; \
 	  $(BIN)/python -m pytest -n 2 -q hil_tests --target $$t -m "not emu_long" || exit 1; \
 	done
+	@echo "hil_tests over CAN (python-can virtual bus): host-sim-can, then bluepill-can on arm-emu (no gait walk)"
+	$(BIN)/python -m pytest -q hil_tests --link can -m "can_link and not emu_long"
+	$(BIN)/python -m pytest -q hil_tests --target arm-emu --link can -m "can_link and not emu_long and not gait_cases"
 
 emu: $(STAMP) toolchains
 	@for t in $(EMU_TARGETS); do \
 	  echo "hil_tests on $$t (all)"; \
 	  $(BIN)/python -m pytest -n 2 -q hil_tests --target $$t || exit 1; \
 	done
+	$(BIN)/python -m pytest -n 2 -q hil_tests --target arm-emu --link can -m can_link
 
 # Long fuzzing (the short run is part of `make test`) and a longer attacker profile.
 FUZZ_SECONDS ?= 300

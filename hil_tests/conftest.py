@@ -7,6 +7,8 @@ board on request.
     pytest hil_tests --target arm-emu                  # the exact bluepill firmware.elf on unicorn
     pytest hil_tests --target avr-emu -m "not emu_long"   # the focused subset `make test` runs
     pytest hil_tests --target serial:/dev/ttyUSB0 --robot robots/paper-r1.toml --board arduino-nano
+    pytest hil_tests --link can                        # host-sim's firmware speaking CAN, python-can virtual bus
+    pytest hil_tests --target arm-emu --link can       # the exact bluepill-can image, bxCAN model
 
 The tests talk to the robot only through ``proleg.link.RobotClient`` (the same client the
 console uses). Tests marked ``plant`` also need the simulated plant's ground truth
@@ -17,6 +19,11 @@ emulated MCUs (which have the plant) and are skipped on hardware. Tests marked
 runs on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
 ``robot("paper-r1")``) is deselected for another. With ``--target sim``, ``--board`` may
 name the simulated board instead (``proleg.sim.simulated_boards.SIMULATED_BOARDS``).
+``--link can`` runs a simulated board's CAN firmware (host-sim-can, bluepill-can): the
+client talks to it through python-can's virtual bus (``proleg.link.sim_can_link``), frames
+framed by the firmware's own CAN driver; ``fresh_sim`` boards (tests of the safety envelope
+that drive the bare board) keep the UART. The ``can_link`` marker names the short subset
+``make test`` runs over CAN.
 """
 
 from __future__ import annotations
@@ -42,6 +49,9 @@ def pytest_addoption(parser):
                     help="'sim' or 'host-sim' (default), 'avr-emu', 'arm-emu' (an emulated MCU running the exact "
                          "firmware image), or 'serial:PORT' for a real board")
     group.addoption("--robot", default=None, help="robot file under test (on a real board: the one flashed)")
+    group.addoption("--link", default="uart", choices=("uart", "can"),
+                    help="the simulated board's host link: uart (default) or can (its CAN firmware on python-can's "
+                         "virtual bus)")
     group.addoption("--board", default=None,
                     help="board: of the real robot (e.g. arduino-nano), or with --target sim the simulated one")
 
@@ -49,6 +59,7 @@ def pytest_addoption(parser):
 def pytest_configure(config):
     config.addinivalue_line("markers", "robot(*names): shows these robots' own behaviour (deselected for another --robot)")
     config.addinivalue_line("markers", "gait_cases(opposing): parametrised over the robots' firmware gaits")
+    config.addinivalue_line("markers", "can_link: in the short subset `make test` runs with --link can")
 
 
 def robot_paths(config) -> list[Path]:
@@ -134,6 +145,7 @@ class Target:
     client: RobotClient
     sim: object | None  # proleg.sim.closed_loop.SimulatedRobot on a simulated board, None on hardware
     simulated_board: str | None = None  # host-sim, avr-emu, arm-emu; None on hardware
+    link: str = "uart"  # the host link: "uart", or "can" (--link can)
 
     @property
     def emulated(self) -> bool:
@@ -153,6 +165,15 @@ class Target:
         files = render_project(self.robot, self.board, firmware_gaits(self.robot))
         return int(gait_table_hash(files), 16)
 
+    def step(self) -> None:
+        """One plant step of the simulated robot, with its host link carried along (on CAN
+        the frames it sent reach the bus, and the bus's frames reach it)."""
+        board = self.client.link.board if self.link == "can" else None
+        if board is not None:
+            board.advance(self.sim.plant_dt_s)
+        else:
+            self.sim.step()
+
     def wait(self, seconds: float) -> list:
         """Let ``seconds`` pass on the link's clock; every message that arrived, as
         ``Received`` (message, time, ground truth)."""
@@ -167,15 +188,24 @@ class Target:
                 return out
 
 
-def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str | None = None) -> Target:
+def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str | None = None,
+              link: str = "uart") -> Target:
     from proleg.link.sim_link import SimLink
     from proleg.sim.simulators import open_simulated
 
-    sim = open_simulated(robot, board, seed=seed, plant=plant)  # plant None: the default (physical)
-    client = RobotClient(SimLink(sim, description=f"{robot.name} on {board}"),
-                         max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
+    firmware_board = load_board(SIMULATED_BOARDS[board].firmware_board_for(link))
+    sim = open_simulated(robot, board, seed=seed, plant=plant, link=link)  # plant None: the default (physical)
+    if link == "can":
+        from proleg.link.sim_can_link import sim_can_link
+
+        can = firmware_board.can
+        transport = sim_can_link(sim, node=can.node, base=can.base_id,
+                                 description=f"{robot.name} on {board} over CAN (python-can virtual bus)")
+    else:
+        transport = SimLink(sim, description=f"{robot.name} on {board}")
+    client = RobotClient(transport, max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
-    return Target(robot, load_board(SIMULATED_BOARDS[board].firmware_board), client, sim, board)
+    return Target(robot, firmware_board, client, sim, board, link)
 
 
 def _open_serial(config, robot: Robot) -> Target:
@@ -207,7 +237,7 @@ def open_target(request):
             given = config.getoption("--robot")
             path = Path(given) if given else (
                 Path(robot_name) if robot_name.endswith(".toml") else ROBOTS / f"{robot_name}.toml")
-            t = _open_sim(load_robot(path), board, seed, plant)
+            t = _open_sim(load_robot(path), board, seed, plant, config.getoption("--link"))
         else:
             path = config.getoption("--robot")
             if not path:

@@ -22,6 +22,7 @@ def events(received, kind=None):
 # link
 
 
+@pytest.mark.can_link
 def test_boots_and_answers_ping_and_get_info_with_its_robot_board_and_gait_hash(target):
     info = target.client.get_info()
     assert info.robot_name == target.robot.name
@@ -32,6 +33,7 @@ def test_boots_and_answers_ping_and_get_info_with_its_robot_board_and_gait_hash(
     assert target.client.ping() >= 0.0
 
 
+@pytest.mark.can_link
 def test_telemetry_streams_with_consecutive_sequence_numbers(target):
     frames = list(target.client.telemetry(count=20))
     seqs = [f.seq for f in frames]
@@ -100,6 +102,7 @@ def _run_gait(t, direction, gait_index, seconds=None, cycles_wanted: int | None 
 
 
 @pytest.mark.plant
+@pytest.mark.can_link
 @pytest.mark.gait_cases(opposing=False, focused_first=True, xfail={("paper-r3", "+x"): R3_PLUS_X})
 def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_target, robot_name, direction, gait_index):
     """Every optimal gait proleg computes, run by the firmware on the physical plant: every
@@ -157,6 +160,7 @@ def test_a_step_that_raises_one_limb_and_lowers_another_is_synchronised(
     assert max(skews) < 0.1, f"{t.robot.transitions.label(a)} -> {t.robot.transitions.label(b)}: {skews}"
 
 
+@pytest.mark.can_link
 def test_a_robot_with_no_gait_in_a_direction_refuses_to_start_it(open_target):
     from proleg.firmware.build import firmware_gaits
     from proleg.link import CommandRefused
@@ -220,6 +224,7 @@ def _tick_allowance_us(target, ticks: int) -> float:
 
 
 @pytest.mark.plant
+@pytest.mark.can_link
 def test_estop_turns_every_mosfet_off_within_one_control_tick(target, record_property):
     """Within one tick of the ESTOP frame's arrival (its bytes take their time on the wire:
     6 bytes are 521 µs at 115200 baud), plus the tick's busy budget on an MCU."""
@@ -281,9 +286,9 @@ def test_no_coil_stays_on_longer_than_max_on_ms(target, record_property):
     next_ping = sim.board.time_us
     while sim.board.time_us < t_end:
         if sim.board.time_us >= next_ping:  # a host that stays: the link watchdog (2 s) is fed
-            sim.write(encode(Message.new("PING", token=200)))
+            target.client.link.write(encode(Message.new("PING", token=200)))
             next_ping += 500_000
-        sim.step()
+        target.step()
         now = sim.board.time_us
         for ch in sim.channels:
             if sim.board.pwm(ch) > 0.0:
@@ -317,6 +322,10 @@ def test_dead_actuator_is_reported_as_a_state_timeout(target):
 
 def test_corrupted_and_random_bytes_are_counted_and_valid_commands_still_work(target):
     import random
+
+    if target.link == "can":
+        pytest.skip("junk bytes never leave the host's CAN framing; a frame lost on the bus is "
+                    "tests/test_can_firmware.py::test_a_lost_segment_costs_that_command_only")
 
     rng = random.Random(5)
     client = target.client

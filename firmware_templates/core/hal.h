@@ -70,4 +70,8 @@ void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad);
  * them with uart_isr_tx). Called from the main loop; must return at once. */
 void hal_uart_tx_start(void);
 
+/* A board whose host link is CAN (board file [link] transport = "can") also implements
+ * hal_can_init and hal_can_tx_start, declared with their contract in canlink.h, in a
+ * hal/<family>/can*.c file that only such images contain. */
+
 #endif /* PROLEG_HAL_H */

@@ -4,18 +4,28 @@
 #include <string.h>
 
 #include "app.h"
+#include "robot_config.h"
 #include "uart.h"
+#if CFG_LINK_CAN
+#include "canlink.h"
+#endif
 
 proto_msg_t tx_msg;
 
-static uint8_t txbuf[PROTO_MAX_ENCODED];
 static tx_counts_t count;
+#if !CFG_LINK_CAN
+static uint8_t txbuf[PROTO_MAX_ENCODED];
 static uint8_t pending_delim; /* a frame went out half: start the next with a delimiter */
+#endif
 
 void tx_init(void)
 {
     memset(&count, 0, sizeof count);
+#if CFG_LINK_CAN
+    canlink_init(); /* the host link is the CAN bus (board file [link] transport = "can") */
+#else
     pending_delim = 0;
+#endif
 }
 
 void tx_send(void)
@@ -23,6 +33,16 @@ void tx_send(void)
     tx_send_msg(&tx_msg);
 }
 
+#if CFG_LINK_CAN
+void tx_send_msg(const proto_msg_t *m)
+{
+    if (canlink_send(m)) { /* every frame of it queued, or none */
+        count.tx_frames++;
+    } else {
+        count.tx_dropped++;
+    }
+}
+#else
 void tx_send_msg(const proto_msg_t *m)
 {
     size_t n = proto_encode(m, txbuf, sizeof txbuf);
@@ -47,6 +67,7 @@ void tx_send_msg(const proto_msg_t *m)
         pending_delim = (uint8_t)(w > 0u);
     }
 }
+#endif
 
 void tx_event(uint8_t kind, uint8_t code, uint16_t detail)
 {

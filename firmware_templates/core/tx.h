@@ -5,7 +5,9 @@
  * handler reads every field it needs before it sends anything. tx_send() encodes
  * tx_msg and queues the whole frame with uart_write (uart.h), never waiting: a frame that
  * does not fit is dropped and counted (tx_dropped); when only part of it went out, the
- * next frame starts with a delimiter so the host resynchronises. The helpers build
+ * next frame starts with a delimiter so the host resynchronises. On a board whose host
+ * link is CAN (CFG_LINK_CAN) tx_send() hands the message to canlink.h instead: all of its
+ * frames are queued or it is dropped and counted. The helpers build
  * EVENT, ACK and NACK (NACKs are counted) stamped with the firmware clock (app.h).
  */
 #ifndef PROLEG_TX_H

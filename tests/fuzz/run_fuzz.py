@@ -96,9 +96,10 @@ def sources(spec: list[str], gen: Path) -> list[str]:
     out: list[Path] = []
     for s in spec:
         if s == "*core":
-            out += sorted(p for p in CORE.glob("*.c") if p.name != "main.c")  # host-sim: no main loop
+            out += sorted(p for p in CORE.glob("*.c") if p.name != "main.c"  # host-sim: no main loop
+                          and not p.name.startswith("can"))  # the CAN link: CAN boards only
         elif s == "*sim":
-            out += sorted(SIM.glob("*.c"))
+            out += sorted(p for p in SIM.glob("*.c") if not p.name.startswith("can"))
         elif s.startswith("gen:"):
             out.append(gen / s[4:])
         else:

@@ -25,6 +25,10 @@
 
 #define SIM_API __attribute__((visibility("default")))
 
+#if CFG_LINK_CAN
+void sim_can_drain(void); /* can_sim.c: the CAN bus at its bit rate */
+#endif
+
 #define HOSTQ_SIZE 65536u /* wire → host, until sim_uart_read */
 
 typedef struct {
@@ -216,6 +220,9 @@ SIM_API void sim_run_ticks(uint32_t n)
         app_idle(CFG_TICK_US); /* the wait before the tick: background work (IMU reads, telemetry) */
         app_tick();
         drain_line();
+#if CFG_LINK_CAN
+        sim_can_drain();
+#endif
     }
 }
 

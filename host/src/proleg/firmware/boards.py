@@ -17,6 +17,7 @@ from typing import Any
 
 from ..errors import BoardError
 from ..paths import boards_dir
+from .can_config import CanConfig, can_config, link_transport
 from .families import available_families, hal_root
 
 #: [uart] buffers when a board file does not give them (bytes, powers of two).
@@ -111,6 +112,8 @@ class Board:
     base_flash_bytes: int = 0  # measured firmware of a two-limb robot with tiny tables (0: not estimated)
     base_ram_bytes: int = 0
     budget: TickBudget | None = None  # None: no measurement (host-sim: virtual time)
+    transport: str = "uart"  # [link] transport: the host link on the UART or on CAN
+    can: CanConfig | None = None  # [can]: the CAN controller's pins, bit rate, node (can_config.py)
 
     @property
     def pwm_channels(self) -> tuple[str, ...]:
@@ -146,13 +149,36 @@ def load_board(name_or_path: str | Path) -> Board:
         path = boards_dir() / f"{text}.toml"
         if not path.exists():
             raise BoardError(f"unknown board {text!r} (expected one of: {', '.join(available_boards())})")
+    return _board_from_dict(path, _read_doc(path))
+
+
+def _read_doc(path: Path, seen: tuple[Path, ...] = ()) -> dict:
+    """The board file's tables; ``[board] extends = "NAME"`` takes every table of board NAME
+    and lays this file's over it (tables key by key, lists and values replaced)."""
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise BoardError(f"{path}: no such board file") from None
     except tomllib.TOMLDecodeError as e:
         raise BoardError(f"{path}: not valid TOML: {e}") from None
-    return _board_from_dict(path, doc)
+    parent = doc.get("board", {}).get("extends") if isinstance(doc.get("board"), dict) else None
+    if parent is None:
+        return doc
+    base = boards_dir() / f"{parent}.toml"
+    if not isinstance(parent, str) or not base.exists():
+        raise BoardError(f"{path}: board.extends: expected the name of a board file in {boards_dir()}, got {parent!r}")
+    if base.resolve() in seen or base.resolve() == path.resolve():
+        raise BoardError(f"{path}: board.extends: {parent!r} extends itself")
+    merged = _merge(_read_doc(base, (*seen, path.resolve())), doc)
+    merged["board"].pop("extends", None)
+    return merged
+
+
+def _merge(base: dict, top: dict) -> dict:
+    out = dict(base)
+    for k, v in top.items():
+        out[k] = _merge(base[k], v) if isinstance(v, dict) and isinstance(base.get(k), dict) else v
+    return out
 
 
 def _need(path: Path, doc: dict, table: str, key: str, kind: type | tuple[type, ...]) -> Any:
@@ -207,7 +233,7 @@ def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
 
 
 def _board_from_dict(path: Path, doc: dict) -> Board:
-    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash", "budget"}
+    known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash", "budget", "link", "can"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
@@ -236,8 +262,11 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         "bus": buses[0].name,
         "imu_addresses": list(buses[0].addresses),
     }
+    name = _need(path, doc, "board", "name", str)
+    if not 1 <= len(name) <= 15 or not name.isascii():
+        raise BoardError(f"{path}: board.name: expected at most 15 ASCII characters (INFO carries 15), got {name!r}")
     return Board(
-        name=_need(path, doc, "board", "name", str),
+        name=name,
         path=path,
         description=doc["board"].get("description", ""),
         family=family,
@@ -262,7 +291,16 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
         base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
         budget=_budget(path, doc),
+        **_link(path, doc, family),
     )
+
+
+def _link(path: Path, doc: dict, family: str) -> dict[str, Any]:
+    transport = link_transport(path, doc)
+    can = can_config(path, doc, family)
+    if transport == "can" and can is None:
+        raise BoardError(f"{path}: link.transport = \"can\" needs a [can] table (rx, tx, bitrate, clock_hz)")
+    return {"transport": transport, "can": can}
 
 
 def _optional_int(path: Path, doc: dict, key: str) -> int:

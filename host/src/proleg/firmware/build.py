@@ -76,6 +76,7 @@ def check_buildable(robot: Robot, board: Board) -> None:
                 f"has {channels} channels (0..{channels - 1}: {', '.join(board.pwm_pins)})"
             )
     place_imus(robot, board)  # BuildError when the board cannot carry the robot's IMUs
+    check_can_link(robot, board)
     # Telemetry may use at most half the UART (the firmware's TELEMETRY_MAX_HZ rule).
     frame = 24 + 2 * len(robot.limbs) + 2 * len(robot.actuators)
     link_hz = board.uart_baud // 10 // frame // 2
@@ -94,6 +95,21 @@ def check_buildable(robot: Robot, board: Board) -> None:
     if shutil.which("make") is None:
         raise BuildError("make not found: install the Debian package make")
     check_tick_budget(robot, board)  # last: with enforce = false it only warns
+
+
+def check_can_link(robot: Robot, board: Board) -> None:
+    """On a CAN link, telemetry may use at most half the bus (worst-case stuffed frames)."""
+    from .can_config import FRAME_BITS, telemetry_frames
+
+    if getattr(board, "transport", "uart") != "can" or board.can is None:
+        return
+    bits = telemetry_frames(len(robot.limbs), len(robot.actuators)) * FRAME_BITS
+    bus_hz = board.can.bitrate // bits // 2
+    if robot.control.telemetry_hz > bus_hz:
+        raise BuildError(
+            f"robot {robot.name}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
+            f"board {board.name}'s {board.can.bitrate} bit/s CAN bus (at most {bus_hz} Hz for {bits}-bit telemetry)"
+        )
 
 
 def check_tick_budget(robot: Robot, board: Board) -> None:
@@ -127,13 +143,13 @@ def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:
     tdir = templates_dir()
     files: dict[str, str] = {}
     for src in sorted((tdir / "core").iterdir()):
-        if src.suffix in (".c", ".h") and (board.main_loop or src.name != CORE_MAIN):
+        if src.suffix in (".c", ".h") and (board.main_loop or src.name != CORE_MAIN) and _in_image(board, src.name):
             files[f"core/{src.name}"] = src.read_text(encoding="utf-8")
     hal_dir = tdir / "hal" / board.family
     if not hal_dir.is_dir():
         raise BuildError(f"no HAL for board family {board.family!r} in {hal_dir}")
     for src in sorted(hal_dir.iterdir()):
-        if src.suffix in (".c", ".h", ".S", ".ld"):  # not family.toml: that is data for the renderer
+        if src.suffix in (".c", ".h", ".S", ".ld") and _in_image(board, src.name):  # not family.toml: data
             files[f"hal/{src.name}"] = src.read_text(encoding="utf-8")
     for name, text in render_config(robot, gaits, board).items():
         files[f"gen/{name}"] = text
@@ -152,6 +168,12 @@ def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:
         board_file=_display_path(board.path),
     )
     return files
+
+
+def _in_image(board: Board, name: str) -> bool:
+    """The CAN link's sources (``can*`` in core/ and hal/<family>/) are in the image only when
+    the board's host link is CAN (``[link] transport = "can"``): other boards pay nothing for it."""
+    return not name.startswith("can") or getattr(board, "transport", "uart") == "can"
 
 
 def gait_table_hash(files: dict[str, str]) -> str:

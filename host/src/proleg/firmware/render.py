@@ -57,6 +57,14 @@ class BoardPart:
     clock_hz: int
     pwm_hz: int
     i2c_hz: int
+    link_can: bool = False  # [link] transport = "can": core/canlink.c carries the protocol
+    can_btr: str = "0x00000000UL"  # CAN_BTR from the board's [can] clock and bit rate (can_config.bit_timing)
+    can_timing: str = ""
+    can_bitrate: int = 0
+    can_remap: int = 0
+    can_node: int = 0
+    can_base: str = "0x100u"
+    can_tx_frames: int = 0
 
 
 @dataclass(frozen=True)
@@ -246,7 +254,18 @@ def _board_part(board: Any) -> BoardPart:
         clock_hz=int(_get(board, "clock_hz", 0) or 0),
         pwm_hz=int(_get(board, "pwm_frequency_hz", 1000) or 1000),
         i2c_hz=int(_get(i2c, "hz", 400000) or 400000),
+        **_can_part(board),
     )
+
+
+def _can_part(board: Any) -> dict[str, Any]:
+    """The CAN link's constants (can_config.py computed and checked them when the board file was read)."""
+    can = _get(board, "can", None)
+    if _get(board, "transport", "uart") != "can" or can is None:
+        return {}
+    return dict(link_can=True, can_btr=f"0x{can.timing.btr:08X}UL", can_timing=can.timing.describe(),
+                can_bitrate=can.bitrate, can_remap=can.remap, can_node=can.node, can_base=f"0x{can.base_id:03X}u",
+                can_tx_frames=can.tx_frames)
 
 
 def _thresholds(robot: Any, limb: Any, max_thr: int) -> list[tuple[int, int, int, int]]:

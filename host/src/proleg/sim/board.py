@@ -37,6 +37,12 @@ _SIGNATURES = {
     "sim_imu_set_noise": ([c_uint8, c_double, c_double, c_double], None),
     "sim_imu_peek_reg": ([c_uint8, c_uint8], c_uint8),
 }
+#: Only in images whose host link is CAN (board file [link] transport = "can": hal/sim/can_sim.c).
+_CAN_SIGNATURES = {
+    "sim_can_write": ([c_uint16, POINTER(c_uint8), c_uint8], None),
+    "sim_can_read": ([POINTER(c_uint16), POINTER(c_uint8), POINTER(c_uint8)], c_uint32),
+    "sim_can_bitrate": ([], c_uint32),
+}
 
 
 @runtime_checkable
@@ -104,6 +110,12 @@ class SimBoard:
             except AttributeError:
                 raise SimError(f"{library}: not a host-sim firmware (missing {name})") from None
             fn.argtypes, fn.restype = args, res
+        self.has_can = all(hasattr(self._lib, name) for name in _CAN_SIGNATURES)
+        if self.has_can:
+            for name, (args, res) in _CAN_SIGNATURES.items():
+                fn = getattr(self._lib, name)
+                fn.argtypes, fn.restype = args, res
+        self._can_id, self._can_dlc, self._can_data = c_uint16(), c_uint8(), (c_uint8 * 8)()
         self._rx_buf = (c_uint8 * 4096)()
         self.library = library
         self.tick_us = 0
@@ -162,6 +174,25 @@ class SimBoard:
                 chunks.append(bytes(self._rx_buf[:n]))
             if n < len(self._rx_buf):
                 return b"".join(chunks)
+
+    # -- host link (CAN: images built for a board with [link] transport = "can") ----------
+    def can_write(self, arbitration_id: int, data: bytes) -> None:
+        """A standard frame from the bus; the controller's filter passes this node's commands only."""
+        self._need_can()
+        buf = (c_uint8 * 8).from_buffer_copy(bytes(data[:8]).ljust(8, b"\0"))
+        self._lib.sim_can_write(arbitration_id & 0x7FF, buf, min(8, len(data)))
+
+    def can_read(self) -> list[tuple[int, bytes]]:
+        """Every frame the board has put on the bus since the last read: (identifier, data)."""
+        self._need_can()
+        out = []
+        while self._lib.sim_can_read(ctypes.byref(self._can_id), self._can_data, ctypes.byref(self._can_dlc)):
+            out.append((int(self._can_id.value), bytes(self._can_data[: self._can_dlc.value])))
+        return out
+
+    def _need_can(self) -> None:
+        if not self.has_can:
+            raise SimError(f"{self.library}: this firmware's host link is not CAN (build it for host-sim-can)")
 
     # -- IMUs on the I2C bus ----------------------------------------------------------
     def imu_truth(self, addr: int, psi_deg: float, dpsi_dps: float) -> None:

@@ -83,11 +83,13 @@ def cache_dir() -> Path:
     return Path(root) / "sim"
 
 
-def sim_library(robot: Robot, *, objective: str = "total", max_transitions: int | None = None) -> Path:
-    """The robot's host-sim firmware, built once per distinct rendered project and cached."""
+def sim_library(robot: Robot, *, objective: str = "total", max_transitions: int | None = None,
+                board: str = "host-sim") -> Path:
+    """The robot's host-sim firmware (or that of a host-sim variant such as host-sim-can),
+    built once per distinct rendered project and cached."""
     from ..firmware.build import build, firmware_gaits, render_project
 
-    board = load_board("host-sim")
+    board = load_board(board)
     files = render_project(robot, board, firmware_gaits(robot, objective, max_transitions))
     digest = hashlib.sha256()
     for rel in sorted(files):

@@ -40,6 +40,16 @@ class SimulatedBoard:
     emulated: bool  # an instruction-level MCU emulator (measures the tick budget)
     needs: str = ""  # what to install when something in ``requires`` is missing
     requires: tuple[str, ...] = ()  # commands on PATH, absolute file paths, "py:module" Python modules
+    can_firmware_board: str = ""  # the firmware board whose host link is CAN ([link] transport = "can"); "": none
+
+    def firmware_board_for(self, link: str) -> str:
+        """The firmware board for a host link on ``link`` ("uart" or "can"); ``SimError`` if there is none."""
+        if link == "uart":
+            return self.firmware_board
+        if link == "can" and self.can_firmware_board:
+            return self.can_firmware_board
+        raise SimError(f"simulated board {self.name} has no {link!r} host link (expected uart"
+                       f"{' or can' if self.can_firmware_board else ''})")
 
     def missing(self) -> str | None:
         """What this board needs and this machine lacks, as one line; None if nothing."""
@@ -61,7 +71,8 @@ SIMULATED_BOARDS: dict[str, SimulatedBoard] = {
     b.name: b
     for b in (
         SimulatedBoard("host-sim", "proleg.sim.closed_loop:SimulatedRobot", "host-sim",
-                       "the generated C compiled for the host, in virtual time", emulated=False),
+                       "the generated C compiled for the host, in virtual time", emulated=False,
+                       can_firmware_board="host-sim-can"),
         SimulatedBoard("avr-emu", "proleg.emu.avr:AvrEmuRobot", "arduino-nano",
                        "the exact arduino-nano firmware.elf on simavr (ATmega328P, 16 MHz)", emulated=True,
                        needs="the Debian packages simavr, libsimavr-dev and gcc-avr (`make toolchains`)",
@@ -69,7 +80,7 @@ SIMULATED_BOARDS: dict[str, SimulatedBoard] = {
         SimulatedBoard("arm-emu", "proleg.emu.arm:ArmEmuRobot", "bluepill-f103",
                        "the exact bluepill firmware.elf on unicorn (STM32F103, 72 MHz)", emulated=True,
                        needs="the Python package unicorn (`make setup`) and gcc-arm-none-eabi (`make toolchains`)",
-                       requires=("py:unicorn", "arm-none-eabi-gcc", "cc")),
+                       requires=("py:unicorn", "arm-none-eabi-gcc", "cc"), can_firmware_board="bluepill-can"),
     )
 }
 

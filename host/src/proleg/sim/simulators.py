@@ -21,27 +21,34 @@ def simulated_boards() -> list[str]:
 
 
 def open_simulated(robot: Robot, board: str = "host-sim", *, seed: int = 1, objective: str = "total",
-                   max_transitions: int | None = None, **plant: Any) -> Any:
+                   max_transitions: int | None = None, link: str = "uart", **plant: Any) -> Any:
     """A SimulatedRobot running ``robot``'s firmware on the simulated ``board`` (a name in
     ``proleg.sim.simulated_boards.SIMULATED_BOARDS``); ``plant``: ``plant=`` and
     ``conditions=`` as ``SimulatedRobot`` takes them. The emulated MCUs run the board's
-    default gait selection: another ``objective`` or ``max_transitions`` is host-sim's."""
+    default gait selection: another ``objective`` or ``max_transitions`` is host-sim's.
+    ``link="can"``: the firmware built for the board's CAN variant (its host link on CAN:
+    drive it through ``proleg.sim.can_port`` / ``proleg.link.sim_can_link``)."""
     from .simulated_boards import simulated_board, simulated_robot
 
     entry = simulated_board(board)  # SimError naming the boards there are
+    firmware_board = entry.firmware_board_for(link)
     if board == "host-sim":
-        return open_host_sim(robot, seed=seed, objective=objective, max_transitions=max_transitions, **plant)
+        return open_host_sim(robot, seed=seed, objective=objective, max_transitions=max_transitions,
+                             firmware_board=firmware_board, **plant)
     if objective != "total" or max_transitions is not None:
         raise SimError(f"board {board!r}: --objective and --max-transitions are host-sim's for now "
                        f"({entry.firmware_board} firmware carries the default gait selection)")
-    return simulated_robot(board, robot, seed=seed, **{k: v for k, v in plant.items() if v})
+    options = {k: v for k, v in plant.items() if v}
+    if firmware_board != entry.firmware_board:
+        options["firmware_board"] = firmware_board
+    return simulated_robot(board, robot, seed=seed, **options)
 
 
 def open_host_sim(robot: Robot, *, seed: int = 1, objective: str = "total", max_transitions: int | None = None,
-                  **plant: Any) -> Any:
+                  firmware_board: str = "host-sim", **plant: Any) -> Any:
     """The robot's firmware built for the host (cached), on SimBoard, with its plant."""
     from ..firmware.boards import load_board
     from .closed_loop import SimulatedRobot, sim_library
 
-    library = sim_library(robot, objective=objective, max_transitions=max_transitions)
-    return SimulatedRobot(robot, library, seed=seed, board_info=load_board("host-sim"), **plant)
+    library = sim_library(robot, objective=objective, max_transitions=max_transitions, board=firmware_board)
+    return SimulatedRobot(robot, library, seed=seed, board_info=load_board(firmware_board), **plant)

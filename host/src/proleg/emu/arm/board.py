@@ -29,6 +29,7 @@ from unicorn.unicorn_py3.unicorn import uc_hook_h, uclib
 from ...errors import SimError
 from ...firmware.families import hal_root
 from .bkp import Bkp
+from .bxcan import BxCan
 from .clocks import CPU_HZ, NEVER, Flash, Iwdg, Rcc
 from .core import HARDFAULT, SYSTICK, CortexM
 from .elf import read_elf
@@ -135,9 +136,10 @@ class ArmEmuBoard:
         self.afio = Gpio(0x40010000)
         self.usart = Usart()
         self.bkp = Bkp(self._on_mark)
+        self.can = BxCan(lambda: self.rcc.pclk1)
         self.devices = [self.rcc, self.flash_acr, self.iwdg, self.scs, self.i2c1, self.i2c2, *self.timers.values(),
-                        self.gpioa, self.gpiob, self.afio, self.usart, self.bkp]
-        self._stepped = [self.scs, self.usart, self.i2c1]
+                        self.gpioa, self.gpiob, self.afio, self.usart, self.bkp, self.can]
+        self._stepped = [self.scs, self.usart, self.i2c1, self.can]
         self._soonest = 0
         self._by_addr: dict[int, object] = {}
         pages = set()
@@ -188,6 +190,8 @@ class ArmEmuBoard:
         self.rcc.csr_flags = 0
         self.usart.host_rx.clear()
         self.usart.host_tx.clear()
+        self.can.host_rx.clear()
+        self.can.host_tx.clear()
         self.bus.hold_bits = []
         self._system_reset("power-on")
         self.busy_us: list[float] = []
@@ -241,11 +245,12 @@ class ArmEmuBoard:
         self._soonest = 0
 
     def _next_event(self) -> int:
-        return min(self.scs.next_event(), self.usart.next_event(), self.i2c1.next_event(), self.iwdg.next_event())
+        return min(self.scs.next_event(), self.usart.next_event(), self.i2c1.next_event(), self.iwdg.next_event(),
+                   self.can.next_event())
 
     def _next_interrupt(self) -> int:
         """The next event that can interrupt or reset the core (I2C is polled: not one)."""
-        return min(self.scs.next_event(), self.usart.next_event(), self.iwdg.next_event())
+        return min(self.scs.next_event(), self.usart.next_event(), self.iwdg.next_event(), self.can.next_event())
 
     def _pending(self) -> list[tuple[int, int]]:
         """(priority, exception number) of every pending exception."""
@@ -257,6 +262,9 @@ class ArmEmuBoard:
         usart = self.usart.irq() or self.scs.ispr[USART1_IRQ >> 5] >> (USART1_IRQ & 31) & 1
         if usart and self.scs.irq_enabled(USART1_IRQ):
             out.append((self.scs.irq_priority(USART1_IRQ), 16 + USART1_IRQ))
+        for irq in self.can.irqs():  # bxCAN (bxcan.py): level lines, as USART1's
+            if self.scs.irq_enabled(irq):
+                out.append((self.scs.irq_priority(irq), 16 + irq))
         return out
 
     def _prio(self, exc: int) -> int:
@@ -353,7 +361,7 @@ class ArmEmuBoard:
         d.write((addr - d.BASE) & ~3, value, now)
         if d is self.i2c1:
             self.i2c1.poll_blocked(now)
-        if d is self.usart or d is self.scs or d is self.iwdg or d is self.rcc:
+        if d is self.usart or d is self.scs or d is self.iwdg or d is self.rcc or d is self.can:
             self.native.deadline.value = min(self.native.deadline.value, now + 1)  # re-plan events
 
     def _poll(self, addr: int, value: int) -> bool:
@@ -466,6 +474,20 @@ class ArmEmuBoard:
     def read(self) -> bytes:
         out = bytes(self.usart.host_tx)
         self.usart.host_tx.clear()
+        return out
+
+    # -- host link (bxCAN, images whose host link is CAN) -------------------------------
+    has_can = True
+
+    def can_write(self, arbitration_id: int, data: bytes) -> None:
+        """A standard frame from the host onto the bus; it reaches the controller at the bit rate."""
+        self.can.host_rx.append((arbitration_id & 0x7FF, bytes(data[:8])))
+        self.can.kick(self.native.cycles.value)
+        self._soonest = 0
+
+    def can_read(self) -> list[tuple[int, bytes]]:
+        """Frames the controller has sent since the last read: (identifier, data)."""
+        out, self.can.host_tx[:] = list(self.can.host_tx), []
         return out
 
     # -- IMUs -----------------------------------------------------------------------

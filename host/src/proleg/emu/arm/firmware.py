@@ -13,12 +13,14 @@ from .native import cache_root
 BOARD = "bluepill-f103"
 
 
-def bluepill_elf(robot: Robot, *, objective: str = "total", max_transitions: int | None = None) -> Path:
-    """``firmware.elf`` that ``proleg build ROBOT --board bluepill-f103`` links, cached under
-    ``$PROLEG_CACHE/emu-arm/``, keyed by the rendered project (templates and HAL included)."""
+def bluepill_elf(robot: Robot, *, objective: str = "total", max_transitions: int | None = None,
+                 board: str = BOARD) -> Path:
+    """``firmware.elf`` that ``proleg build ROBOT --board bluepill-f103`` links (or another
+    bluepill variant, e.g. bluepill-can), cached under ``$PROLEG_CACHE/emu-arm/``, keyed by
+    the rendered project (templates and HAL included)."""
     from ...firmware.build import build, firmware_gaits, render_project
 
-    board = load_board(BOARD)
+    board = load_board(board)
     files = render_project(robot, board, firmware_gaits(robot, objective, max_transitions))
     digest = hashlib.sha256()
     for rel in sorted(files):

@@ -27,8 +27,9 @@ def ArmEmuRobot(  # noqa: N802 - a factory that reads like the class it returns
     plant: Plant | None = None,
     plant_dt_s: float = DEFAULT_PLANT_DT_S,
     conditions: Any = None,
+    firmware_board: str = BOARD,
 ) -> SimulatedRobot:
-    board_info = load_board(BOARD)
+    board_info = load_board(firmware_board)
     addrs = tuple(board_info.i2c.get("imu_addresses", [0x68, 0x69]))
-    emu = ArmEmuBoard(elf or bluepill_elf(robot), seed, pwm_pins=board_info.pwm_channels, imu_addresses=addrs)
+    emu = ArmEmuBoard(elf or bluepill_elf(robot, board=firmware_board), seed, pwm_pins=board_info.pwm_channels, imu_addresses=addrs)
     return SimulatedRobot(robot, seed=seed, plant=plant, conditions=conditions, plant_dt_s=plant_dt_s, board=emu, board_info=board_info)
