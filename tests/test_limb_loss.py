@@ -200,3 +200,22 @@ def test_with_the_fallback_off_and_no_replanning_r1_stops_for_good(tmp_path):
     p.write_text(text)
     run, track, _, _ = _walk_with_dead_right_coil(load_robot(p), replanning=False, seconds=30.0)
     assert track.moved_between(22.0, 30.0) < 0.2
+
+
+def test_learned_on_the_physical_plant_walks_at_least_as_fast_as_the_hand_made_matrix(tmp_path):
+    """Learn R1 on the physical plant (R = 3), then walk its learned firmware gait and the
+    hand-made matrix's for 40 s each: the learned one covers at least as much ground (5 %
+    allowance for the plant's noise)."""
+    from proleg.cli.main import main
+    from proleg.report import SimSession
+
+    log = tmp_path / "trials.jsonl"
+    out = tmp_path / "learned.toml"
+    assert main(["learn", str(R1), "--sim", "--plant", "physical", "--log", str(log), "--repeats", "3",
+                 "--out", str(out), "-q"]) == 0
+    speeds = {}
+    for name, path in (("hand", R1), ("learned", out)):
+        run = SimSession(open_host_sim(load_robot(path))).run_gait("+x", 0, 40.0)
+        assert run.cycles >= 3, (name, run)
+        speeds[name] = run.displacement_mm / 40.0
+    assert speeds["learned"] >= 0.95 * speeds["hand"] > 0, speeds
