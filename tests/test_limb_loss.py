@@ -219,3 +219,18 @@ def test_learned_on_the_physical_plant_walks_at_least_as_fast_as_the_hand_made_m
         assert run.cycles >= 3, (name, run)
         speeds[name] = run.displacement_mm / 40.0
     assert speeds["learned"] >= 0.95 * speeds["hand"] > 0, speeds
+
+
+def test_suspect_and_fallback_events_are_shown_by_name():
+    from proleg.console.names import RobotNames, describe_event
+
+    r1 = load_robot(R1)
+    names = RobotNames.for_robot(r1)
+    lab = r1.transitions.label
+    text = describe_event({"time_ms": 20000, "kind": int(EventKind.SUSPECT), "code": 1, "detail": 2 * 4 + 3},
+                          names, lab)
+    assert text.endswith("suspects sma-right (transition 10→11 failed)")
+    text = describe_event({"time_ms": 20000, "kind": int(EventKind.FALLBACK), "code": 1, "detail": 2}, names, lab)
+    assert "FALLBACK without sma-right" in text
+    text = describe_event({"time_ms": 1, "kind": int(EventKind.SUSPECT), "code": 0xFF, "detail": 0xFFFF}, names)
+    assert "suspects no actuator" in text
