@@ -234,3 +234,14 @@ def test_suspect_and_fallback_events_are_shown_by_name():
     assert "FALLBACK without sma-right" in text
     text = describe_event({"time_ms": 1, "kind": int(EventKind.SUSPECT), "code": 0xFF, "detail": 0xFFFF}, names)
     assert "suspects no actuator" in text
+
+
+def test_proleg_run_replans_by_default_and_says_so_in_its_result(capsys):
+    import json
+
+    from proleg.cli.main import main
+
+    assert main(["run", str(R1), "--sim", "--duration", "2", "--format", "jsonl"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["msg"] == "RESULT" and result["replanned"] == []  # nothing lost, nothing done
+    assert main(["run", str(R1), "--sim", "--duration", "1", "--no-replan"]) == 0
