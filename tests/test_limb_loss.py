@@ -231,7 +231,7 @@ def test_suspect_and_fallback_events_are_shown_by_name():
                           names, lab)
     assert text.endswith("suspects sma-right (transition 10→11 failed)")
     text = describe_event({"time_ms": 20000, "kind": int(EventKind.FALLBACK), "code": 1, "detail": 2}, names, lab)
-    assert "FALLBACK without sma-right" in text
+    assert "FALLBACK: gave up sma-right, runs its 2-step fallback gait" in text
     text = describe_event({"time_ms": 1, "kind": int(EventKind.SUSPECT), "code": 0xFF, "detail": 0xFFFF}, names)
     assert "suspects no actuator" in text
 
@@ -245,3 +245,18 @@ def test_proleg_run_replans_by_default_and_says_so_in_its_result(capsys):
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert result["msg"] == "RESULT" and result["replanned"] == []  # nothing lost, nothing done
     assert main(["run", str(R1), "--sim", "--duration", "1", "--no-replan"]) == 0
+
+
+def test_proleg_sim_shows_the_suspect_and_the_fallback_by_name(capsys):
+    from proleg.cli.main import main
+
+    assert main(["sim", str(R1), "--duration", "30", "--inject", "dead-actuator:sma-right+10"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "suspects sma-right (transition 10→11 failed)" in out
+    assert "FALLBACK: gave up sma-right" in out
+
+
+def test_a_replanning_host_leaves_a_firmware_fallback_alone():
+    run, track, said, _ = _walk_with_dead_right_coil(load_robot(R1), replanning=True, seconds=25.0)
+    assert any("fell back by itself" in s and "10→11→10" in s for s in said), said
+    assert not any(s.startswith("loaded and started") for s in said), said

@@ -407,6 +407,10 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
     )
     for f in report.faults:
         lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+    if report.limb_loss:  # EVENT SUSPECT / FALLBACK (issue 15), by name
+        from ..console.names import RobotNames, describe_event
+
+        lines += [f"  {describe_event(e, RobotNames.for_robot(robot), t.label).strip()}" for e in report.limb_loss]
     for e in report.errors:
         lines.append(f"  ERROR: {e}")
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"

@@ -97,6 +97,6 @@ def describe_event(f: dict, names: RobotNames = RobotNames(), state_label: objec
             return f"{t} suspects {who} (transition {lab(detail // n)}→{lab(detail % n)} failed)"
         return f"{t} suspects {who} (transition {'unknown' if detail == 0xFFFF else detail})"
     if k == EventKind.FALLBACK:
-        return f"{t} FALLBACK without {names.actuator(code)}: its {detail}-step fallback gait, remapped"
+        return f"{t} FALLBACK: gave up {names.actuator(code)}, runs its {detail}-step fallback gait"
     return f"{t} boot (reset cause {code})"
 
