@@ -17,7 +17,7 @@ static void fall_back(uint8_t act)
     uint8_t dir = drive_dir();
     uint8_t k = (uint8_t)(act * 2u + (dir == PROTO_DIR_MINUS_X ? 1u : 0u));
     uint8_t n = ROM_U8(&limbmap_fb_len[k]);
-    uint8_t first = ROM_U8(&limbmap_fb_first[k]);
+    uint16_t first = ROM_U16(&limbmap_fb_first[k]);
     uint8_t i;
     if (limbmap_lost() != LIMBMAP_NONE || n == 0u || n > FALLBACK_MAX_STEPS) {
         return;
@@ -29,7 +29,7 @@ static void fall_back(uint8_t act)
     if (seq_load(steps, n, 0) != SEQ_OK) {
         return;
     }
-    limbmap_use(act, limbmap_fb_map[act]);
+    limbmap_use(act, limbmap_fb_map[k]);
     fault_clear();
     guard_ack(); /* the thermal budget (sma.c) is not refunded */
     seq_start(SEQ_DIR_LOADED, 0, imucheck_measured());

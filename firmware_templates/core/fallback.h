@@ -20,10 +20,10 @@
 #define FALLBACK_MAX_STEPS 16u /* proleg.firmware.gaits.MAX_FALLBACK_STEPS */
 
 #if CFG_FALLBACK
-/* Rendered in gait_table.c: per lost actuator the map, per (actuator, direction) a gait. */
+/* Rendered in gait_table.c: per (lost actuator, direction +x/-x) the map and the gait. */
 extern const uint8_t limbmap_fb_map[][CFG_N_LIMBS] ROM;
 extern const cfg_state_t limbmap_fb_steps[] ROM;
-extern const uint8_t limbmap_fb_first[] ROM;
+extern const uint16_t limbmap_fb_first[] ROM;
 extern const uint8_t limbmap_fb_len[] ROM;
 #endif
 

@@ -134,7 +134,7 @@ class GaitPart:
     entry_len: list[int]
     entry_join: list[int]  # the gait step the entry path joins
     fallback: bool  # build-time fallback gaits for a lost actuator (core/limbmap.c)
-    fb_maps: list[list[int]]  # per lost actuator: actuator index per limb to run with
+    fb_maps: list[list[int]]  # per (lost actuator, direction): actuator index per limb to run with
     fb_steps: list[int]  # every fallback gait's steps (open walk), concatenated
     fb_first: list[int]  # per (lost actuator, direction +x/-x): first step in fb_steps
     fb_len: list[int]  # per (lost actuator, direction): steps, 0 = no fallback
@@ -486,31 +486,30 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
 
 
 def _fallback_part(robot: Any) -> dict[str, Any]:
-    """The fallback tables (proleg.firmware.gaits.firmware_fallbacks), flattened."""
+    """The fallback tables (proleg.firmware.gaits.firmware_fallbacks), flattened per
+    (lost actuator, direction +x/-x): the map to run with, the gait's steps."""
     from .gaits import DIRECTIONS, firmware_fallbacks
 
     fbs = firmware_fallbacks(robot)
-    n_act = len(robot.actuators)
-    maps = [[0] * len(robot.limbs) for _ in range(n_act)]
+    compiled = _compiled_map(robot)
+    maps: list[list[int]] = []
     steps: list[int] = []
     first: list[int] = []
     length: list[int] = []
     notes: list[str] = []
-    for a in range(n_act):
+    for a in range(len(robot.actuators)):
         for d in DIRECTIONS:
             fb = fbs.get((a, d))
             first.append(len(steps))
             if fb is None:
+                maps.append(compiled)
                 length.append(0)
                 continue
-            maps[a] = list(fb.actuator_map)
-            walk = list(fb.states[:-1])
+            maps.append([int(x) for x in fb.actuator_map])
+            walk = [int(s) for s in fb.states[:-1]]
             steps += walk
             length.append(len(walk))
             notes.append(f"{d}: {fb.describe(robot)} ({fb.mode})")
-    for a in range(n_act):
-        if not any(length[2 * a: 2 * a + 2]):
-            maps[a] = [int(x) for x in _compiled_map(robot)]
     return dict(fallback=bool(fbs), fb_maps=maps, fb_steps=steps, fb_first=first, fb_len=length, fb_notes=notes)
 
 
