@@ -260,3 +260,21 @@ def test_a_replanning_host_leaves_a_firmware_fallback_alone():
     run, track, said, _ = _walk_with_dead_right_coil(load_robot(R1), replanning=True, seconds=25.0)
     assert any("fell back by itself" in s and "10→11→10" in s for s in said), said
     assert not any(s.startswith("loaded and started") for s in said), said
+
+
+def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
+    from proleg.firmware.gaits import fallback_lines
+
+    r1 = load_robot(R1)
+    assert fallback_lines(r1) == [
+        "fallback without sma-left (-x): 01 11 01 (remap: left→sma-right, right→sma-right)",
+        "fallback without sma-right (+x): 10 11 10 (remap: left→sma-left, right→sma-left)",
+    ]
+    p = tmp_path / "paper-r1.toml"
+    p.write_text(R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = \"yes\""))
+    from proleg.errors import RobotFileError
+
+    with pytest.raises(RobotFileError, match=r"control\.fallback: expected true or false"):
+        load_robot(p)
+    p.write_text(R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = false"))
+    assert fallback_lines(load_robot(p)) == ["fallback gaits: off ([control] fallback = false)"]

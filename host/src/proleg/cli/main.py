@@ -245,6 +245,10 @@ def _build(args: argparse.Namespace):
     for d, gaits in result.gaits.items():
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
         print(f"  {d} gaits: {shown}")
+    from ..firmware.gaits import fallback_lines
+
+    for line in fallback_lines(robot):
+        print(f"  {line}")
     return result
 
 

@@ -134,3 +134,18 @@ def firmware_fallbacks(robot: Robot) -> dict[tuple[int, str], Any]:
             if fb.states is not None and len(fb.states) - 1 <= MAX_FALLBACK_STEPS:
                 out[(a, d)] = fb
     return out
+
+
+def fallback_lines(robot: Robot) -> list[str]:
+    """What ``proleg build`` says about the fallbacks the firmware carries (or why none)."""
+    if not getattr(robot.control, "fallback", True):
+        return ["fallback gaits: off ([control] fallback = false)"]
+    fbs = firmware_fallbacks(robot)
+    if not fbs:
+        return ["fallback gaits: none (one actuator only, or no single-actuator loss leaves a gait that moves it)"]
+    out = []
+    for (a, d), fb in sorted(fbs.items()):
+        walk = " ".join(fb.table.label(s) for s in fb.states)
+        amap = ", ".join(f"{limb.name}→{robot.actuators[x].name}" for limb, x in zip(robot.limbs, fb.actuator_map))
+        out.append(f"fallback without {robot.actuators[a].name} ({d}): {walk} ({fb.mode}: {amap})")
+    return out
