@@ -20,13 +20,14 @@ def test_a_fault_names_the_actuator_to_suspect():
     assert suspect(r1, FaultCode.IMU_NO_ACK, 0) is None
 
 
-def test_without_its_right_coil_r1_keeps_only_what_the_left_coil_does_and_cannot_move_on():
+def test_without_its_right_coil_r1_moves_on_only_with_the_left_coil_raising_both_ends():
     r1 = load_robot(ROOT / "robots" / "paper-r1.toml")
     t = without_actuator(r1, "sma-right")
     pairs = {(t.label(a), t.label(b)) for a, b in zip(t.src, t.dst)}
     assert pairs == {("00", "10"), ("10", "00")}  # brute force: no state with the right limb up
-    plan = replan(r1, "sma-right")
-    assert plan.states is None and "run-time map" in plan.reason
+    plan = replan(r1, "sma-right")  # the compiled map cannot move it; the remapped one can
+    assert plan.states == (2, 3, 2) and plan.actuator_map == (0, 0) and "sma-left" in plan.reason
+    assert replan(r1, "sma-right", "-x").states is None
 
 
 def test_a_robot_with_a_spare_way_to_move_gets_a_gait_for_what_is_left(tmp_path):

@@ -15,7 +15,7 @@ stated ceiling:
 - every coil stays below the steady-state temperature of max_duty plus 5 K.
 
 The three bypasses found in issue 12 are explicit regression tests; a hypothesis
-``RuleBasedStateMachine`` then interleaves STOP/START/ESTOP/CLEAR/LOAD_GAIT/SET_PARAM
+``RuleBasedStateMachine`` then interleaves STOP/START/ESTOP/CLEAR/LOAD_GAIT/SET_PARAM/SET_ACTUATOR_MAP
 within one tick and across ticks with dead coils, stuck or silent IMUs and dropped and
 replayed frames. ``PROLEG_ATTACK_EXAMPLES`` (``make fuzz`` sets it) runs it longer.
 """
@@ -314,6 +314,8 @@ COMMAND = st.one_of(
         st.sampled_from(_PARAMS),
         st.sampled_from([0, 1, 50, 800, 2500, 3000, 6000, 8000, 100000, -1]),
     ),
+    # the run-time limb→actuator map (issue 15): any map, also out of range, never widens the envelope
+    st.builds(lambda a: ("SET_ACTUATOR_MAP", {"actuators": tuple(a)}), st.lists(st.integers(0, 2), max_size=2)),
 )
 
 EXAMPLES = int(os.environ.get("PROLEG_ATTACK_EXAMPLES", "10"))

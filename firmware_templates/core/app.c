@@ -7,6 +7,7 @@
 #include "fault.h"
 #include "hal.h"
 #include "imucheck.h"
+#include "limbmap.h"
 #include "param.h"
 #include "proto.h"
 #include "psi.h"
@@ -53,6 +54,7 @@ void app_init(void)
     guard_init(); /* safety: the step guard on real time */
     psi_init();
     ctl_reset();
+    limbmap_init();
     seq_init();
     cmd_init();
     cmd_send_info(0);

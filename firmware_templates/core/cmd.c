@@ -9,6 +9,7 @@
 #include "fault.h"
 #include "uart.h"
 #include "imucheck.h"
+#include "limbmap.h"
 #include "param.h"
 #include "proto.h"
 #include "rom.h"
@@ -227,6 +228,35 @@ static void cmd_set_telemetry_rate(uint8_t token)
     } else {
         tx_ack(token, PROTO_ID_SET_TELEMETRY_RATE);
     }
+}
+
+static void cmd_set_actuator_map(uint8_t token)
+{
+    uint16_t bad = 0;
+    uint8_t r;
+    if (seq_running()) {
+        tx_nack(token, PROTO_ID_SET_ACTUATOR_MAP, PROTO_ERR_NOT_ALLOWED, 0);
+        return;
+    }
+    r = limbmap_set(msg.u.set_actuator_map.actuators, msg.u.set_actuator_map.actuators_count, &bad);
+    if (r) {
+        tx_nack(token, PROTO_ID_SET_ACTUATOR_MAP, r, bad);
+    } else {
+        tx_ack(token, PROTO_ID_SET_ACTUATOR_MAP);
+    }
+}
+
+static void cmd_get_actuator_map(uint8_t token)
+{
+    uint8_t i;
+    msg.id = PROTO_ID_ACTUATOR_MAP;
+    msg.u.actuator_map.token = token;
+    msg.u.actuator_map.lost = limbmap_lost();
+    msg.u.actuator_map.actuators_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.actuator_map.actuators[i] = limbmap_actuator(i);
+    }
+    tx_send();
 }
 
 static void handle_command(void)

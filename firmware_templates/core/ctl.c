@@ -1,10 +1,9 @@
 /* ctl.c - see ctl.h. */
 #include "ctl.h"
 
+#include "limbmap.h"
 #include "psi.h"
 #include "rom.h"
-
-static const uint8_t limb_actuator[CFG_N_LIMBS] ROM = CFG_LIMB_ACTUATOR;
 
 /* What a limb asks of its actuator, weakest first; an actuator serves the strongest. */
 enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT };
@@ -28,7 +27,7 @@ static ctl_limb_t cl[CFG_N_LIMBS];
 
 uint8_t ctl_limb_actuator(uint8_t limb)
 {
-    return ROM_U8(&limb_actuator[limb]);
+    return limbmap_actuator(limb); /* run-time map (limbmap.h) */
 }
 
 void ctl_reset(void)

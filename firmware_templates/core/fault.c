@@ -2,6 +2,7 @@
 #include "fault.h"
 
 #include "hal.h"
+#include "fallback.h"
 #include "param.h"
 #include "proto.h"
 #include "seq.h"
@@ -45,6 +46,7 @@ void fault_raise(uint8_t code, uint16_t detail)
     st.latched = 1;
     tx_event(PROTO_EV_FAULT, code, detail);
     fault_stop_gait(PROTO_STOP_FAULT);
+    fallback_fault(code, detail);
 }
 
 void fault_raise_stopped(uint8_t code, uint16_t detail)
@@ -53,6 +55,7 @@ void fault_raise_stopped(uint8_t code, uint16_t detail)
     st.latched = 1;
     tx_event(PROTO_EV_FAULT, code, detail);
     tx_event(PROTO_EV_GAIT_STOPPED, PROTO_STOP_FAULT, cycles_u16());
+    fallback_fault(code, detail);
 }
 
 uint8_t fault_latched(void)

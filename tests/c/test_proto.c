@@ -120,6 +120,31 @@ static int run_emit(void)
     m.u.set_param.index = 1;
     m.u.set_param.value = -2147483647l - 1;
     print_frame(&m);
+
+    memset(&m, 0, sizeof m);
+    m.id = PROTO_ID_SET_ACTUATOR_MAP;
+    m.u.set_actuator_map.token = 16;
+    m.u.set_actuator_map.actuators_count = 2;
+    m.u.set_actuator_map.actuators[0] = 0;
+    m.u.set_actuator_map.actuators[1] = 0;
+    print_frame(&m);
+
+    memset(&m, 0, sizeof m);
+    m.id = PROTO_ID_ACTUATOR_MAP;
+    m.u.actuator_map.token = 19;
+    m.u.actuator_map.lost = 1;
+    m.u.actuator_map.actuators_count = 2;
+    m.u.actuator_map.actuators[0] = 1;
+    m.u.actuator_map.actuators[1] = 0;
+    print_frame(&m);
+
+    memset(&m, 0, sizeof m);
+    m.id = PROTO_ID_EVENT;
+    m.u.event.time_ms = 20000ul;
+    m.u.event.kind = PROTO_EV_SUSPECT;
+    m.u.event.code = 1;
+    m.u.event.detail = 2u * 4u + 3u;
+    print_frame(&m);
     return 0;
 }
 

@@ -98,6 +98,7 @@ class Control:
     hold_margin_deg: float = 4.0
     telemetry_hz: int = 50
     overrun_fault: int = 10  # consecutive ticks whose work overran the period: fault TICK_OVERRUN
+    fallback: bool = True  # firmware switches to a build-time fallback gait when it loses an actuator
 
 
 @dataclass(frozen=True, eq=False)
@@ -366,7 +367,10 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
         overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
+        fallback=f.table.get("fallback", d.fallback),
     )
+    if not isinstance(c.fallback, bool):
+        f.fail("fallback", "true or false", c.fallback)
     if c.drive_duty > safety.max_duty:
         f.fail("drive_duty", f"at most safety.max_duty ({safety.max_duty})", c.drive_duty)
     if c.hold_duty > c.drive_duty:

@@ -55,6 +55,9 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
                    help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
+    p.add_argument("--plant", choices=("table", "physical"), default="table",
+                   help="with --sim: the table plant (a matrix drives it: ROBOT's or --truth's, default) or the "
+                        "physical plant (friction mechanics: learn what the robot really does)")
     p.add_argument("--log", required=True, metavar="TRIALS.jsonl",
                    help="append-only trial log; an existing one is resumed, nothing recorded is lost")
     p.add_argument("--repeats", type=_positive_int, default=5, metavar="R", help="trials per transition (default 5)")
@@ -164,7 +167,7 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str) -> None:
     pose = None
     if args.sim:
         try:
-            _sim, client, sim_pose = simulated_robot(robot, truth, seed=args.seed)
+            _sim, client, sim_pose = simulated_robot(robot, truth, seed=args.seed, plant=args.plant)
         except ExplorationError as e:
             raise LearnError(f"learn: {e}") from None
         client.connect()

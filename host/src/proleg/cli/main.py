@@ -245,6 +245,10 @@ def _build(args: argparse.Namespace):
     for d, gaits in result.gaits.items():
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
         print(f"  {d} gaits: {shown}")
+    from ..firmware.gaits import fallback_lines
+
+    for line in fallback_lines(robot):
+        print(f"  {line}")
     return result
 
 
@@ -407,6 +411,10 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
     )
     for f in report.faults:
         lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+    if report.limb_loss:  # EVENT SUSPECT / FALLBACK (issue 15), by name
+        from ..console.names import RobotNames, describe_event
+
+        lines += [f"  {describe_event(e, RobotNames.for_robot(robot), t.label).strip()}" for e in report.limb_loss]
     for e in report.errors:
         lines.append(f"  ERROR: {e}")
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"

@@ -111,9 +111,15 @@ def cmd_run(args: argparse.Namespace) -> int:
             listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
         if args.format == "jsonl":
             listeners.append(JsonlPrinter(meta, sys.stdout))
+        replanner = None
+        if args.replan:
+            from ..learn.replan import Replanner
+
+            replanner = Replanner(robot, client, args.direction, say=lambda t: print(f"  {t}", flush=True)
+                                  if args.format != "jsonl" else log.info(t))
         try:
             run = run_gait_on(client, args.gait, args.direction, args.duration, listeners=listeners,
-                              progress=log.info, progress_every_s=args.progress)
+                              progress=log.info, progress_every_s=args.progress, replanner=replanner)
         finally:
             for listener in listeners:
                 listener.stop()
@@ -125,6 +131,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         "telemetry_lost": run.telemetry_lost,
         "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
         "errors": errors, "ok": run.ok and not errors,
+        "replanned": list(replanner.actions) if replanner is not None else [],
     }
     if args.format == "jsonl":
         print(json.dumps(doc))
@@ -214,6 +221,9 @@ def add_arguments(subparsers: Any) -> None:
     r.add_argument("--progress", type=_positive_float, default=1.0, metavar="S", help="progress every S seconds")
     r.add_argument("--speed", type=_positive_float, default=None,
                    help="with --sim: times real time (default: as fast as possible)")
+    r.add_argument("--no-replan", dest="replan", action="store_false",
+                   help="do not replan after an actuator loss (default: on a fault naming an actuator, "
+                        "load the best gait of what the robot can still do and go on; docs/learning.md)")
     r.set_defaults(run=cmd_run)
 
     lg = subparsers.add_parser("load-gait", help="store a user gait (state labels) on the robot")

@@ -20,13 +20,15 @@ class RobotNames:
 
     limbs: tuple[str, ...] = ()
     actuators: tuple[str, ...] = ()
+    n_states: int = 0  # to read EVENT SUSPECT's transition (0: unknown)
 
     @classmethod
     def for_robot(cls, robot: object | None) -> RobotNames:
         if robot is None:
             return cls()
         return cls(tuple(limb.name for limb in robot.limbs),  # type: ignore[attr-defined]
-                   tuple(a.name for a in robot.actuators))  # type: ignore[attr-defined]
+                   tuple(a.name for a in robot.actuators),  # type: ignore[attr-defined]
+                   int(getattr(robot, "n_states", 0) or 0))
 
     def limb(self, i: int) -> str:
         return self.limbs[i] if 0 <= i < len(self.limbs) else f"limb {i}"
@@ -87,5 +89,14 @@ def describe_event(f: dict, names: RobotNames = RobotNames(), state_label: objec
         return f"{t} E-STOP ({'hardware input' if code else 'command'})"
     if k == EventKind.GAIT_LOADED:
         return f"{t} user gait loaded ({detail} steps)"
+    if k == EventKind.SUSPECT:
+        who = "no actuator" if code == 0xFF else names.actuator(code)
+        n = names.n_states
+        if n and detail != 0xFFFF and detail < n * n:
+            lab = state_label if callable(state_label) else str
+            return f"{t} suspects {who} (transition {lab(detail // n)}→{lab(detail % n)} failed)"
+        return f"{t} suspects {who} (transition {'unknown' if detail == 0xFFFF else detail})"
+    if k == EventKind.FALLBACK:
+        return f"{t} FALLBACK: gave up {names.actuator(code)}, runs its {detail}-step fallback gait"
     return f"{t} boot (reset cause {code})"
 

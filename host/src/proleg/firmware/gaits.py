@@ -113,3 +113,39 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
                 )
             out += [f"gait {i} of {d}: {p.severity}: {p.message}" for p in problems]
     return out
+
+
+#: Steps a fallback gait may have at most (core/limbmap.c copies it into the loaded gait).
+MAX_FALLBACK_STEPS = 16
+
+
+def firmware_fallbacks(robot: Robot) -> dict[tuple[int, str], Any]:
+    """Per (lost actuator index, direction): the fallback the firmware switches to by itself
+    (proleg.limbloss.fallback), when it has a gait of at most MAX_FALLBACK_STEPS steps.
+    Empty when ``[control] fallback = false`` or the robot has a single actuator."""
+    from ..limbloss import fallback
+
+    if not getattr(robot.control, "fallback", True) or len(robot.actuators) < 2:
+        return {}
+    out = {}
+    for a in range(len(robot.actuators)):
+        for d in DIRECTIONS:
+            fb = fallback(robot, a, d)
+            if fb.states is not None and len(fb.states) - 1 <= MAX_FALLBACK_STEPS:
+                out[(a, d)] = fb
+    return out
+
+
+def fallback_lines(robot: Robot) -> list[str]:
+    """What ``proleg build`` says about the fallbacks the firmware carries (or why none)."""
+    if not getattr(robot.control, "fallback", True):
+        return ["fallback gaits: off ([control] fallback = false)"]
+    fbs = firmware_fallbacks(robot)
+    if not fbs:
+        return ["fallback gaits: none (one actuator only, or no single-actuator loss leaves a gait that moves it)"]
+    out = []
+    for (a, d), fb in sorted(fbs.items()):
+        walk = " ".join(fb.table.label(s) for s in fb.states)
+        amap = ", ".join(f"{limb.name}→{robot.actuators[x].name}" for limb, x in zip(robot.limbs, fb.actuator_map))
+        out.append(f"fallback without {robot.actuators[a].name} ({d}): {walk} ({fb.mode}: {amap})")
+    return out

@@ -141,6 +141,12 @@ class GaitPart:
     entry_first: list[int]
     entry_len: list[int]
     entry_join: list[int]  # the gait step the entry path joins
+    fallback: bool  # build-time fallback gaits for a lost actuator (core/limbmap.c)
+    fb_maps: list[list[int]]  # per (lost actuator, direction): actuator index per limb to run with
+    fb_steps: list[int]  # every fallback gait's steps (open walk), concatenated
+    fb_first: list[int]  # per (lost actuator, direction +x/-x): first step in fb_steps
+    fb_len: list[int]  # per (lost actuator, direction): steps, 0 = no fallback
+    fb_notes: list[str]  # one comment line per fallback
 
 
 @dataclass(frozen=True)
@@ -471,6 +477,11 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
     dst = [int(x) for x in table.dst]
     use_bitmap, bitmap, edges = _transition_table(src, dst, n_states)
     entry = entry_tables(robot, rows)
+    fb = _fallback_part(robot)
+    ghash = _gait_hash(n_states, rows, src, dst, entry)
+    if fb["fallback"]:  # the hash covers the fallback tables too
+        text = f"{ghash}|{fb['fb_maps']}|{fb['fb_steps']}|{fb['fb_first']}|{fb['fb_len']}"
+        ghash = int.from_bytes(hashlib.sha256(text.encode()).digest()[:4], "big")
     return GaitPart(
         selection=_selection_text(gaits_by_direction),
         rows=rows,
@@ -484,12 +495,46 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
         edges=edges,
         n_transitions=len(src),
         labels=[table.label(i) for i in range(n_states)] if n_states <= 64 else [],
-        gait_hash=f"0x{_gait_hash(n_states, rows, src, dst, entry):08X}",
+        gait_hash=f"0x{ghash:08X}",
         entry_steps=entry[0],
         entry_first=entry[1],
         entry_len=entry[2],
         entry_join=entry[3],
+        **fb,
     )
+
+
+def _fallback_part(robot: Any) -> dict[str, Any]:
+    """The fallback tables (proleg.firmware.gaits.firmware_fallbacks), flattened per
+    (lost actuator, direction +x/-x): the map to run with, the gait's steps."""
+    from .gaits import DIRECTIONS, firmware_fallbacks
+
+    fbs = firmware_fallbacks(robot)
+    compiled = _compiled_map(robot)
+    maps: list[list[int]] = []
+    steps: list[int] = []
+    first: list[int] = []
+    length: list[int] = []
+    notes: list[str] = []
+    for a in range(len(robot.actuators)):
+        for d in DIRECTIONS:
+            fb = fbs.get((a, d))
+            first.append(len(steps))
+            if fb is None:
+                maps.append(compiled)
+                length.append(0)
+                continue
+            maps.append([int(x) for x in fb.actuator_map])
+            walk = [int(s) for s in fb.states[:-1]]
+            steps += walk
+            length.append(len(walk))
+            notes.append(f"{d}: {fb.describe(robot)} ({fb.mode})")
+    return dict(fallback=bool(fbs), fb_maps=maps, fb_steps=steps, fb_first=first, fb_len=length, fb_notes=notes)
+
+
+def _compiled_map(robot: Any) -> list[int]:
+    index = {a.name: i for i, a in enumerate(robot.actuators)}
+    return [index[limb.actuator] for limb in robot.limbs]
 
 
 def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:

@@ -1,31 +1,35 @@
-"""Limb loss: what the robot can still do when an actuator is suspected dead, and its best gait.
+"""Limb loss on the host: which actuator a fault points at, the best gait of what is left,
+and ``Replanner``, which carries a running gait on after the loss (``proleg run``).
 
-The firmware reports a coil that cannot do its job as SMA_ON_LIMIT (detail: the channel)
-and then STATE_TIMEOUT (detail: the limb that did not reach its level). ``suspect`` turns
-such a fault into the actuator to suspect; ``without_actuator`` is the robot's transition
-table with every transition forbidden that needs that actuator to heat, under the
-firmware's compiled limb→actuator map (each limb is raised and held by its own actuator):
-a state in which a limb of that actuator is above its lowest level can no longer be
-reached nor held, so every transition into such a state goes, and so does every transition
-out of one (the robot cannot be there to make it). ``replan`` is the best gait of what is
-left, in ``direction``, or None with the reason.
+The firmware reports a coil that cannot do its job as FAULT SMA_ON_LIMIT (detail: the
+channel) or STATE_TIMEOUT (detail: the limb off its target), followed by EVENT SUSPECT (code:
+the actuator it suspects, detail: the failed transition from × n_states + to). What the robot
+can still do without that actuator, and with which limb→actuator map, is
+``proleg.limbloss.fallback`` (the same model the firmware's build-time fallbacks come from:
+the limbs of the lost coil either stay down, or the nearest other coil raises them too).
 
-What this cannot do (issue 15): a robot whose remaining coil could raise the other end too
-(R1: the left coil bends the body enough to lift the right end at α ≈ 0.74; the paper's
-one-actuator experiment, robots/paper-r1-one-actuator.toml) needs the limb→actuator map as
-a run-time setting of the firmware; with the compiled map R1 without ``sma-right`` can only
-go 00 ↔ 10, which does not move it on balance.
+``Replanner`` watches the message stream of a run. When the gait stops on such a fault and
+the firmware did not fall back by itself (EVENT FALLBACK: the build's fallback, [control]
+fallback), it marks the transitions that need the lost actuator forbidden, recomputes the
+best gait with the gait engine, and sends SET_ACTUATOR_MAP, LOAD_GAIT, CLEAR(FAULTS) and
+START of the user gait; each step is told by name through ``say``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
-import numpy as np
-
-from ..protocol.definition import FaultCode
+from ..errors import LinkError
+from ..limbloss import Fallback, dead_table, fallback
+from ..link.client import Received, RobotClient
+from ..link.listeners import Listener
+from ..protocol.definition import GAIT_USER, ClearWhat, EventKind, FaultCode, StopReason
 from ..robot import Robot
 from ..transitions import TransitionTable
+
+#: seconds of link time the replanner waits after the gait stopped, for a FALLBACK event
+SETTLE_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -35,6 +39,7 @@ class Replan:
     states: tuple[int, ...] | None    # best closed walk (first state repeated at the end), None: none
     rate: float                       # its reward per transition (0 when none)
     reason: str                       # one line for the user
+    actuator_map: tuple[int, ...] = ()  # actuator index per limb to run with
 
 
 def suspect(robot: Robot, code: int, detail: int) -> str | None:
@@ -46,41 +51,105 @@ def suspect(robot: Robot, code: int, detail: int) -> str | None:
     return None
 
 
-def without_actuator(robot: Robot, actuator: str) -> TransitionTable:
-    """``robot``'s table without the transitions that need ``actuator`` (module docstring)."""
-    from ..states import limb_levels
-
+def describe_transition(robot: Robot, detail: int) -> str:
+    """EVENT SUSPECT's detail (from × n_states + to) as "10→11", or "?"."""
+    n = robot.n_states
+    if detail == 0xFFFF or detail >= n * n:
+        return "?"
     t = robot.transitions
-    driven = [i for i, limb in enumerate(robot.limbs) if limb.actuator == actuator]
-    if not driven:
+    return f"{t.label(detail // n)}→{t.label(detail % n)}"
+
+
+def without_actuator(robot: Robot, actuator: str) -> TransitionTable:
+    """``robot``'s table without the transitions that need ``actuator`` under the compiled map."""
+    names = [a.name for a in robot.actuators]
+    if actuator not in names or not any(limb.actuator == actuator for limb in robot.limbs):
         raise ValueError(f"no limb of {robot.name} is driven by {actuator!r}")
-    lost = np.array([any(limb_levels(s, robot.levels)[i] > 0 for i in driven) for s in range(t.n_states)])
-    keep = ~(lost[t.src] | lost[t.dst])
-    planar = None
-    if t.planar is not None:
-        planar = type(t.planar)(**{k: np.asarray(v)[keep] for k, v in t.planar.given().items()})
-    return TransitionTable(t.levels, t.src[keep], t.dst[keep], t.reward[keep],
-                           None if t.duration is None else t.duration[keep], planar)
+    return dead_table(robot, names.index(actuator))
 
 
 def replan(robot: Robot, actuator: str, direction: str = "+x") -> Replan:
-    """The best gait (rate: reward per transition) of ``robot`` without ``actuator``."""
-    from ..errors import GaitError
-    from ..gait import optimal_gaits
+    """The best gait (rate: reward per transition) of ``robot`` without ``actuator``, with
+    the compiled limb→actuator map or a remapped one, whichever is better."""
+    fb: Fallback = fallback(robot, actuator, direction)
+    if fb.states is None:
+        return Replan(actuator, fb.table, None, 0.0,
+                      f"without {actuator} no gait moves {robot.name} in {direction}, with the compiled "
+                      "limb→actuator map nor with the remaining coils raising the lost coil's limbs",
+                      fb.actuator_map)
+    return Replan(actuator, fb.table, fb.states, fb.rate, fb.describe(robot), fb.actuator_map)
 
-    table = without_actuator(robot, actuator)
-    sign = 1.0 if direction == "+x" else -1.0
-    try:
-        res = optimal_gaits(table, "rate", direction) if table.n_transitions else None
-    except GaitError:
-        res = None
-    if res is None or not res.gaits or res.value is None or sign * float(res.value) <= 0:
-        return Replan(actuator, table, None, 0.0,
-                      f"without {actuator} no gait moves {robot.name} in {direction} with the firmware's compiled "
-                      "limb→actuator map (the remaining coils could only raise their own limbs; a run-time map "
-                      "is needed for a coil to raise another limb)")
-    g = res.gaits[0]
-    states = tuple(g.states) if g.states[0] == g.states[-1] else tuple(g.states) + (g.states[0],)
-    labels = "→".join(table.label(s) for s in states)
-    return Replan(actuator, table, states, float(res.value), f"without {actuator}: gait {labels}, "
-                  f"rate {float(res.value):+.3g} per transition")
+
+@dataclass
+class Replanner(Listener):
+    """Replan a running gait after an actuator loss (module doc). ``direction``: the run's."""
+
+    robot: Robot
+    client: RobotClient
+    direction: str = "+x"
+    say: Callable[[str], None] = print
+    actions: list[str] = field(default_factory=list)   # what it did, one line each
+    _suspect: str | None = None
+    _fault: tuple[int, int] | None = None
+    _stopped_at: float | None = None
+    _fell_back: bool = False
+    _done: set[str] = field(default_factory=set)
+
+    def _tell(self, text: str) -> None:
+        self.actions.append(text)
+        self.say(text)
+
+    def on_message(self, rx: Received) -> None:
+        m = rx.message
+        if m.name != "EVENT":
+            return
+        if m.kind == EventKind.FAULT and m.code in (FaultCode.STATE_TIMEOUT, FaultCode.SMA_ON_LIMIT):
+            self._fault = (m.code, m.detail)
+        elif m.kind == EventKind.SUSPECT:
+            name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else None
+            self._suspect = name
+            self._tell(f"firmware suspects {name or 'no actuator'} "
+                       f"(transition {describe_transition(self.robot, m.detail)} failed)")
+        elif m.kind == EventKind.GAIT_STOPPED and m.code == StopReason.FAULT:
+            self._stopped_at = rx.time
+            self._fell_back = False
+        elif m.kind == EventKind.FALLBACK:
+            name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else str(m.code)
+            fb = fallback(self.robot, m.code, self.direction) if m.code < len(self.robot.actuators) else None
+            self._fell_back = True
+            self._stopped_at = None
+            self._done.add(name)
+            self._tell(f"firmware fell back by itself: {fb.describe(self.robot) if fb else name}")
+
+    def poll(self) -> None:
+        """Act once the stream has been quiet for SETTLE_S after the gait stopped on a fault."""
+        if self._stopped_at is None or self._fell_back:
+            return
+        if self.client.link.clock() - self._stopped_at < SETTLE_S:
+            return
+        self._stopped_at = None
+        actuator = self._suspect
+        if actuator is None and self._fault is not None:
+            actuator = suspect(self.robot, *self._fault)
+        self._suspect, self._fault = None, None
+        if actuator is None:
+            self._tell("gait stopped on a fault that names no actuator: not replanning")
+            return
+        if actuator in self._done:
+            self._tell(f"{actuator} lost again after replanning: giving up")
+            return
+        self._done.add(actuator)
+        plan = replan(self.robot, actuator, self.direction)
+        if plan.states is None:
+            self._tell(f"replanning: {plan.reason}")
+            return
+        self._tell(f"replanning: {plan.reason}")
+        try:
+            self.client.request("SET_ACTUATOR_MAP", retries=2, actuators=tuple(plan.actuator_map))
+            self.client.load_gait(plan.states[:-1])
+            self.client.request("CLEAR", retries=2, what=int(ClearWhat.FAULTS))
+            self.client.request("START", retries=2, gait=GAIT_USER, direction=0 if self.direction == "+x" else 1)
+        except LinkError as e:
+            self._tell(f"replanning failed: {e}")
+            return
+        self._tell(f"loaded and started {'→'.join(plan.table.label(s) for s in plan.states)} in {self.direction}")

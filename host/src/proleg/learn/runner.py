@@ -216,16 +216,23 @@ class Explorer:
 
 
 # ------------------------------------------------------------------------- the simulated robot
-def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1):
+def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, plant: str = "table"):
     """The host-sim firmware of ``robot`` in closed loop with a table plant driven by
     ``truth``'s matrix and ``[plant]`` (its ``noise_mm``, ``step_mm``...; default: ``robot``)
-    — the learner never sees the truth. Returns (SimulatedRobot, RobotClient over SimLink,
-    ground-truth pose callable)."""
+    — the learner never sees the truth; ``plant="physical"``: the physical plant (friction
+    mechanics, no matrix: ``truth`` must be None). Returns (SimulatedRobot, RobotClient over
+    SimLink, ground-truth pose callable)."""
     from ..link import RobotClient
     from ..link.sim_link import SimLink
     from ..sim.closed_loop import SimulatedRobot
     from ..sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
 
+    if plant == "physical":
+        if truth is not None:
+            raise ExplorationError("--truth drives the table plant; the physical plant has no matrix")
+        sim = SimulatedRobot(robot, seed=seed)
+        client = RobotClient(SimLink(sim, description=f"sim {robot.name} (physical plant)"))
+        return sim, client, lambda: (sim.plant.displacement_mm, None, None)
     truth = truth or robot
     if truth.levels != robot.levels:
         raise ExplorationError(f"truth {truth.path} has state levels {truth.levels}, the robot {robot.levels}")
@@ -240,9 +247,9 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1):
 
 
 def explore_simulated(robot: Robot, truth: Robot | None, log: TrialLog, *, repeats: int = 5, seed: int = 1,
-                      on_progress: Callable[[Progress], None] | None = None):
+                      on_progress: Callable[[Progress], None] | None = None, plant: str = "table"):
     """``proleg learn ROBOT --sim --truth TRUTH`` as a function: returns (trials added, sim)."""
-    sim, client, pose = simulated_robot(robot, truth, seed=seed)
+    sim, client, pose = simulated_robot(robot, truth, seed=seed, plant=plant)
     with client:
         client.connect()
         ex = Explorer(client, robot, log, pose, repeats=repeats, source="sim", seed=seed, on_progress=on_progress)

@@ -128,6 +128,11 @@ def _event_signals() -> list[Signal]:
         muxed("state", d, [EventKind.STATE_REACHED], comment="state index (limb levels, first limb most significant)"),
         muxed("code", c, [EventKind.BOOT, EventKind.ESTOP, EventKind.FAULT_CLEARED, EventKind.GAIT_LOADED]),
         muxed("detail", d, [EventKind.BOOT, EventKind.ESTOP, EventKind.FAULT_CLEARED, EventKind.GAIT_LOADED]),
+        muxed("suspect_actuator", c, [EventKind.SUSPECT], comment="actuator index, 255 = none"),
+        muxed("failed_transition", d, [EventKind.SUSPECT],
+              comment="from-state * n_states + to-state, 65535 = not representable"),
+        muxed("lost_actuator", c, [EventKind.FALLBACK], comment="actuator index the firmware's fallback gave up"),
+        muxed("fallback_steps", d, [EventKind.FALLBACK], comment="steps of the fallback gait it runs"),
     ]
     return sigs
 

@@ -109,6 +109,9 @@ class EventKind(IntEnum):
     ESTOP = 5  # code = 0 command / 1 hardware input, detail = 0
     FAULT_CLEARED = 6  # code = ClearWhat bits that were cleared, detail = 0
     GAIT_LOADED = 7  # code = 0, detail = number of steps
+    SUSPECT = 8  # after a FAULT STATE_TIMEOUT / SMA_ON_LIMIT: code = suspected actuator index (0xFF: none),
+    #              detail = the failed transition, from-state × n_states + to-state (0xFFFF: not representable)
+    FALLBACK = 9  # the firmware switched by itself to its fallback gait: code = lost actuator, detail = steps
 
 
 class ResetCause(IntEnum):
@@ -394,6 +397,29 @@ MESSAGES: tuple[MessageSpec, ...] = (
             Field("tick_overruns", "u32", "control ticks whose work did not end within the tick period"),
         ),
         "Reply to GET_STATS: the firmware's link counters and its tick overruns.",
+    ),
+    # ---------------------------------------------------------------- limb→actuator map (issue 15)
+    MessageSpec(
+        0x14,
+        "SET_ACTUATOR_MAP",
+        "h2r",
+        (_TOKEN, Field("actuators", "u8", "actuator index per limb, first limb first; empty: the build's map",
+                       max_count="limbs")),
+        "Set which actuator raises each limb (the safety envelope stays per actuator); NACK NOT_ALLOWED "
+        "while a gait runs, OUT_OF_RANGE (detail = limb index; 0xFFFF: not one per limb) for a bad value.",
+        reply="ACK",
+    ),
+    MessageSpec(0x15, "GET_ACTUATOR_MAP", "h2r", (_TOKEN,), "Answered by ACTUATOR_MAP.", reply="ACTUATOR_MAP"),
+    MessageSpec(
+        0x4A,
+        "ACTUATOR_MAP",
+        "r2h",
+        (
+            _TOKEN,
+            _u8("lost", "actuator the firmware's fallback gave up (FALLBACK event), 0xFF: none"),
+            Field("actuators", "u8", "actuator index per limb, first limb first", max_count="limbs"),
+        ),
+        "Reply to GET_ACTUATOR_MAP: the limb→actuator map in use.",
     ),
 )
 

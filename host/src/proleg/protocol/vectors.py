@@ -109,6 +109,15 @@ def valid_messages() -> list[Message]:
             tx_dropped=0,
             tick_overruns=4294967295,
         ),
+        # limb→actuator map and limb loss (issue 15)
+        Message.new("SET_ACTUATOR_MAP", token=16, actuators=(0, 0)),
+        Message.new("SET_ACTUATOR_MAP", token=17, actuators=()),
+        Message.new("SET_ACTUATOR_MAP", token=18, actuators=(7, 6, 5, 4, 3, 2, 1, 255)),
+        Message.new("GET_ACTUATOR_MAP", token=19),
+        Message.new("ACTUATOR_MAP", token=19, lost=1, actuators=(0, 0)),
+        Message.new("ACTUATOR_MAP", token=20, lost=255, actuators=()),
+        Message.new("EVENT", time_ms=20000, kind=int(EventKind.SUSPECT), code=1, detail=2 * 4 + 3),
+        Message.new("EVENT", time_ms=20001, kind=int(EventKind.FALLBACK), code=1, detail=2),
     ]
     return msgs
 
@@ -160,6 +169,9 @@ C_ENCODED: tuple[Message, ...] = (
         tick_overruns=9,
     ),
     Message.new("SET_PARAM", token=255, param=5, index=1, value=-2147483648),
+    Message.new("SET_ACTUATOR_MAP", token=16, actuators=(0, 0)),
+    Message.new("ACTUATOR_MAP", token=19, lost=1, actuators=(1, 0)),
+    Message.new("EVENT", time_ms=20000, kind=int(EventKind.SUSPECT), code=1, detail=2 * 4 + 3),
 )
 
 

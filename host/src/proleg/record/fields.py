@@ -152,6 +152,10 @@ def describe_event(f: dict[str, Any]) -> str:
         return f"gait {'user' if code == GAIT_USER else code} started {d}"
     if k == EventKind.STATE_REACHED:
         return f"step {code} reached state {detail}"
+    if k == EventKind.SUSPECT:
+        return f"suspects actuator {code} (transition code {detail})" if code != 0xFF else "suspects no actuator"
+    if k == EventKind.FALLBACK:
+        return f"FALLBACK without actuator {code} ({detail}-step gait)"
     return f"{k.name.lower()} code={code} detail={detail}"
 
 

@@ -60,6 +60,7 @@ class GaitRun:
     replies: list[Message] = field(default_factory=list)
     telemetry: list[Message] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)  # commands not acknowledged or refused
+    limb_loss: list[dict] = field(default_factory=list)  # EVENT SUSPECT / FALLBACK fields, in order
 
     @property
     def cycles(self) -> int:
@@ -105,6 +106,8 @@ class GaitRunListener(Listener):
                     self._cycle_start_mm = now
             elif msg.kind == EventKind.FAULT:
                 run.faults.append(Fault(msg.time_ms / 1000.0, FaultCode(msg.code).name, msg.detail))
+            elif msg.kind in (EventKind.SUSPECT, EventKind.FALLBACK):
+                run.limb_loss.append(dict(msg.fields))
         else:
             run.replies.append(msg)
 

@@ -45,11 +45,14 @@ def run_gait_on(
     listeners: Iterable[Listener] = (),
     progress: Callable[[str], None] | None = None,
     progress_every_s: float = 1.0,
+    replanner: Listener | None = None,
 ) -> GaitRun:
+    """``replanner`` (proleg.learn.replan.Replanner): sees every message and is polled
+    between them, so it can carry the gait on after an actuator loss."""
     info = client.info
     run = GaitRun(info.robot_name if info else "", direction, gait, duration_s)
     report = GaitRunListener(run)
-    targets = [*listeners, report]
+    targets = [*listeners, report] + ([replanner] if replanner is not None else [])
     clock = client.link.clock
 
     def pump(seconds: float) -> None:
@@ -63,6 +66,8 @@ def run_gait_on(
             if rx is not None:
                 for listener in targets:
                     listener.on_message(rx)
+            if replanner is not None:
+                replanner.poll()  # type: ignore[attr-defined]
             if progress is not None and clock() >= next_progress - _EPS:
                 next_progress += progress_every_s
                 progress(f"{clock() - t0:6.1f} s: {run.telemetry_frames} frames, "

@@ -1,0 +1,52 @@
+/* limbmap.c - see limbmap.h. */
+#include "limbmap.h"
+
+#include "proto.h"
+
+static const uint8_t compiled[CFG_N_LIMBS] ROM = CFG_LIMB_ACTUATOR;
+static uint8_t map[CFG_N_LIMBS] = CFG_LIMB_ACTUATOR; /* set before limbmap_init too (unit tests) */
+static uint8_t lost = LIMBMAP_NONE;
+
+void limbmap_init(void)
+{
+    limbmap_set(0, 0, 0);
+    lost = LIMBMAP_NONE;
+}
+
+uint8_t limbmap_actuator(uint8_t limb)
+{
+    return map[limb];
+}
+
+uint8_t limbmap_lost(void)
+{
+    return lost;
+}
+
+void limbmap_use(uint8_t lost_actuator, const uint8_t *rom_map)
+{
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        map[i] = ROM_U8(&rom_map[i]);
+    }
+    lost = lost_actuator;
+}
+
+uint8_t limbmap_set(const uint8_t *actuators, uint8_t n, uint16_t *bad)
+{
+    uint8_t i;
+    if (n != 0u && n != CFG_N_LIMBS) {
+        *bad = 0xFFFFu;
+        return PROTO_ERR_OUT_OF_RANGE;
+    }
+    for (i = 0; i < n; i++) {
+        if (actuators[i] >= CFG_N_ACTUATORS) {
+            *bad = i;
+            return PROTO_ERR_OUT_OF_RANGE;
+        }
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        map[i] = n ? actuators[i] : ROM_U8(&compiled[i]);
+    }
+    return 0;
+}

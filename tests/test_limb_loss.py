@@ -1,0 +1,280 @@
+"""Issue 15, limb loss: the fallback model against the paper's one-actuator robot, the
+run-time limb→actuator map in the firmware, and R1 walking on after a dead coil, with the
+host replanning and without a host (the firmware's build-time fallback)."""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import pytest
+
+from proleg.learn.replan import Replanner, replan
+from proleg.limbloss import compiled_map, fallback, remap, remapped_table
+from proleg.link.client import CommandRefused, Received, RobotClient
+from proleg.link.listeners import Listener
+from proleg.link.sim_link import SimLink
+from proleg.protocol.definition import ErrorCode, EventKind
+from proleg.report import run_gait_on
+from proleg.robot import load_robot
+from proleg.sim.simulators import open_host_sim
+from proleg.states import limb_levels
+
+ROOT = Path(__file__).resolve().parents[1]
+R1 = ROOT / "robots" / "paper-r1.toml"
+
+
+def _pairs(t):
+    return {(t.label(int(a)), t.label(int(b))) for a, b in zip(t.src, t.dst)}
+
+
+def test_r1_without_its_right_coil_remapped_is_the_papers_one_actuator_robot():
+    r1 = load_robot(R1)
+    one = load_robot(ROOT / "robots" / "paper-r1-one-actuator.toml")
+    assert remap(r1, 1) == (0, 0)
+    assert _pairs(remapped_table(r1, (0, 0))) == _pairs(one.transitions)
+    fb = fallback(r1, "sma-right", "+x")
+    assert fb.mode == "remap" and fb.actuator_map == (0, 0)
+    assert [fb.table.label(s) for s in fb.states] == ["10", "11", "10"] and fb.rate == pytest.approx(0.5)
+    assert fallback(r1, "sma-right", "-x").states is None
+    assert replan(r1, "sma-right").actuator_map == (0, 0)
+
+
+def test_remapped_table_matches_a_brute_force_of_its_rule():
+    """Foreign limbs rise only after every own limb of their coil, and never together with
+    another limb of that coil: checked state by state on the four-limb caterpillar."""
+    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    own = compiled_map(robot)
+    for lost in range(len(robot.actuators)):
+        new = remap(robot, lost)
+        if new is None:
+            continue
+        got = _pairs(remapped_table(robot, new))
+        t = robot.transitions
+        want = set()
+        for a, b in zip(t.src.tolist(), t.dst.tolist()):
+            la, lb = limb_levels(a, t.levels), limb_levels(b, t.levels)
+            ok = True
+            for coil in set(new):
+                limbs = [i for i in range(len(new)) if new[i] == coil]
+                foreign = [i for i in limbs if own[i] != coil]
+                mine = [i for i in limbs if own[i] == coil]
+                for lv in (la, lb):
+                    if any(lv[f] for f in foreign) and not all(lv[m] for m in mine):
+                        ok = False
+                changed = [i for i in limbs if la[i] != lb[i]]
+                if set(changed) & set(foreign) and len(changed) > 1:
+                    ok = False
+            if ok:
+                want.add((t.label(a), t.label(b)))
+        assert got == want
+
+
+@pytest.fixture
+def r1_sim():
+    return open_host_sim(load_robot(R1))
+
+
+def test_the_actuator_map_is_a_run_time_setting_checked_by_the_firmware(r1_sim):
+    sim = r1_sim
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), max_limbs=2, max_channels=2)
+    client.connect()
+    m = client.request("GET_ACTUATOR_MAP")
+    assert tuple(m.actuators) == (0, 1) and m.lost == 0xFF
+    client.request("SET_ACTUATOR_MAP", actuators=(0, 0))
+    assert tuple(client.request("GET_ACTUATOR_MAP").actuators) == (0, 0)
+    with pytest.raises(CommandRefused) as e:
+        client.request("SET_ACTUATOR_MAP", actuators=(0, 2))
+    assert e.value.error == ErrorCode.OUT_OF_RANGE and e.value.detail == 1
+    with pytest.raises(CommandRefused) as e:
+        client.request("SET_ACTUATOR_MAP", actuators=(0,))
+    assert e.value.error == ErrorCode.OUT_OF_RANGE and e.value.detail == 0xFFFF
+    client.request("START", gait=0, direction=0)
+    with pytest.raises(CommandRefused) as e:
+        client.request("SET_ACTUATOR_MAP", actuators=())
+    assert e.value.error == ErrorCode.NOT_ALLOWED
+    client.request("STOP")
+    client.request("SET_ACTUATOR_MAP", actuators=())
+    assert tuple(client.request("GET_ACTUATOR_MAP").actuators) == (0, 1)
+
+
+def test_with_the_map_swapped_the_right_coil_raises_the_left_limb(r1_sim):
+    """The map is what the controller uses: swapped, the left limb's rise heats channel 1."""
+    sim = r1_sim
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), max_limbs=2, max_channels=2)
+    client.connect()
+    client.request("SET_ACTUATOR_MAP", actuators=(1, 0))
+    client.load_gait([0, 2])  # 00 → 10: raise the left limb
+    client.request("START", gait=0xFF, direction=0)
+    duties = []
+    t_end = client.link.clock() + 0.5
+    while client.link.clock() < t_end:
+        rx = client.recv_received(0.1)
+        if rx is not None and rx.message.name == "TELEMETRY":
+            duties.append(tuple(rx.message.duty))
+    client.request("STOP")
+    assert duties and max(d[1] for d in duties) > 0 and max(d[0] for d in duties) == 0
+
+
+class _Track(Listener):
+    """Injects a fault at a virtual time and records (time, displacement, events)."""
+
+    def __init__(self, sim, at_s: float, fault: str):
+        self.sim, self.at_s, self.fault = sim, at_s, fault
+        self.injected_s: float | None = None
+        self.points: list[tuple[float, float]] = []
+        self.events: list[tuple[float, int, int]] = []
+        self.cycle_s: list[float] = []
+
+    def on_message(self, rx: Received) -> None:
+        t = self.sim.time_s
+        if self.injected_s is None and t >= self.at_s:
+            self.sim.inject(self.fault)
+            self.injected_s = t
+        self.points.append((t, self.sim.plant.displacement_mm))
+        m = rx.message
+        if m.name == "EVENT":
+            self.events.append((t, m.kind, m.code))
+            if m.kind == EventKind.STATE_REACHED and m.code == 0:
+                self.cycle_s.append(t)
+
+    def moved_between(self, t0: float, t1: float) -> float:
+        inside = [x for t, x in self.points if t0 <= t <= t1]
+        return max(inside) - min(inside) if inside else 0.0
+
+    def gain_after(self, t0: float, t1: float) -> float:
+        before = [x for t, x in self.points if t <= t0]
+        after = [x for t, x in self.points if t <= t1]
+        return after[-1] - before[-1]
+
+
+def _walk_with_dead_right_coil(robot, *, replanning: bool, seconds: float = 40.0):
+    sim = open_host_sim(robot)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), max_limbs=2, max_channels=2)
+    client.connect()
+    track = _Track(sim, 10.0, "dead-actuator:sma-right")
+    said: list[str] = []
+    replanner = Replanner(robot, client, "+x", say=said.append) if replanning else None
+    run = run_gait_on(client, 0, "+x", seconds, listeners=[track], replanner=replanner)
+    cycle = (track.cycle_s[2] - track.cycle_s[0]) / 2  # healthy cycle time
+    return run, track, said, cycle
+
+
+def _moving_on(track, cycle):
+    """+x progress in the window that ends three healthy gait cycles after the loss."""
+    t_loss = track.injected_s
+    fault_t = next(t for t, k, _ in track.events if k == EventKind.FAULT and t > t_loss)
+    restart = next(t for t, k, _ in track.events if k == EventKind.GAIT_STARTED and t > fault_t)
+    return restart, track.gain_after(restart, t_loss + 3 * cycle), track.gain_after(restart, track.points[-1][0])
+
+
+def test_without_a_host_the_firmware_falls_back_and_r1_keeps_moving_plus_x():
+    robot = load_robot(R1)
+    run, track, _, cycle = _walk_with_dead_right_coil(robot, replanning=False)
+    kinds = [k for _, k, _ in track.events]
+    assert EventKind.SUSPECT in kinds and EventKind.FALLBACK in kinds
+    assert next(c for _, k, c in track.events if k == EventKind.FALLBACK) == 1  # sma-right
+    restart, within3, total = _moving_on(track, cycle)
+    assert restart - track.injected_s < 3 * cycle
+    assert within3 > 0.5, f"+{within3:.2f} mm within three cycles ({cycle:.1f} s each) of the loss"
+    assert total > 5.0
+
+
+def test_with_the_fallback_off_the_host_replans_and_r1_keeps_moving_plus_x(tmp_path):
+    text = R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = false")
+    p = tmp_path / "paper-r1.toml"
+    p.write_text(text)
+    robot = load_robot(p)
+    run, track, said, cycle = _walk_with_dead_right_coil(robot, replanning=True)
+    assert EventKind.FALLBACK not in [k for _, k, _ in track.events]
+    assert any("suspects sma-right" in s for s in said), said
+    assert any("loaded and started 10→11→10" in s for s in said), said
+    restart, within3, total = _moving_on(track, cycle)
+    assert within3 > 0.5, f"+{within3:.2f} mm within three cycles ({cycle:.1f} s each) of the loss; {said}"
+    assert total > 5.0
+
+
+def test_with_the_fallback_off_and_no_replanning_r1_stops_for_good(tmp_path):
+    text = R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = false")
+    p = tmp_path / "paper-r1.toml"
+    p.write_text(text)
+    run, track, _, _ = _walk_with_dead_right_coil(load_robot(p), replanning=False, seconds=30.0)
+    assert track.moved_between(22.0, 30.0) < 0.2
+
+
+def test_learned_on_the_physical_plant_walks_at_least_as_fast_as_the_hand_made_matrix(tmp_path):
+    """Learn R1 on the physical plant (R = 3), then walk its learned firmware gait and the
+    hand-made matrix's for 40 s each: the learned one covers at least as much ground (5 %
+    allowance for the plant's noise)."""
+    from proleg.cli.main import main
+    from proleg.report import SimSession
+
+    log = tmp_path / "trials.jsonl"
+    out = tmp_path / "learned.toml"
+    assert main(["learn", str(R1), "--sim", "--plant", "physical", "--log", str(log), "--repeats", "3",
+                 "--out", str(out), "-q"]) == 0
+    speeds = {}
+    for name, path in (("hand", R1), ("learned", out)):
+        run = SimSession(open_host_sim(load_robot(path))).run_gait("+x", 0, 40.0)
+        assert run.cycles >= 3, (name, run)
+        speeds[name] = run.displacement_mm / 40.0
+    assert speeds["learned"] >= 0.95 * speeds["hand"] > 0, speeds
+
+
+def test_suspect_and_fallback_events_are_shown_by_name():
+    from proleg.console.names import RobotNames, describe_event
+
+    r1 = load_robot(R1)
+    names = RobotNames.for_robot(r1)
+    lab = r1.transitions.label
+    text = describe_event({"time_ms": 20000, "kind": int(EventKind.SUSPECT), "code": 1, "detail": 2 * 4 + 3},
+                          names, lab)
+    assert text.endswith("suspects sma-right (transition 10→11 failed)")
+    text = describe_event({"time_ms": 20000, "kind": int(EventKind.FALLBACK), "code": 1, "detail": 2}, names, lab)
+    assert "FALLBACK: gave up sma-right, runs its 2-step fallback gait" in text
+    text = describe_event({"time_ms": 1, "kind": int(EventKind.SUSPECT), "code": 0xFF, "detail": 0xFFFF}, names)
+    assert "suspects no actuator" in text
+
+
+def test_proleg_run_replans_by_default_and_says_so_in_its_result(capsys):
+    import json
+
+    from proleg.cli.main import main
+
+    assert main(["run", str(R1), "--sim", "--duration", "2", "--format", "jsonl"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["msg"] == "RESULT" and result["replanned"] == []  # nothing lost, nothing done
+    assert main(["run", str(R1), "--sim", "--duration", "1", "--no-replan"]) == 0
+
+
+def test_proleg_sim_shows_the_suspect_and_the_fallback_by_name(capsys):
+    from proleg.cli.main import main
+
+    assert main(["sim", str(R1), "--duration", "30", "--inject", "dead-actuator:sma-right+10"]) in (0, 1)
+    out = capsys.readouterr().out
+    assert "suspects sma-right (transition 10→11 failed)" in out
+    assert "FALLBACK: gave up sma-right" in out
+
+
+def test_a_replanning_host_leaves_a_firmware_fallback_alone():
+    run, track, said, _ = _walk_with_dead_right_coil(load_robot(R1), replanning=True, seconds=25.0)
+    assert any("fell back by itself" in s and "10→11→10" in s for s in said), said
+    assert not any(s.startswith("loaded and started") for s in said), said
+
+
+def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
+    from proleg.firmware.gaits import fallback_lines
+
+    r1 = load_robot(R1)
+    assert fallback_lines(r1) == [
+        "fallback without sma-left (-x): 01 11 01 (remap: left→sma-right, right→sma-right)",
+        "fallback without sma-right (+x): 10 11 10 (remap: left→sma-left, right→sma-left)",
+    ]
+    p = tmp_path / "paper-r1.toml"
+    p.write_text(R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = \"yes\""))
+    from proleg.errors import RobotFileError
+
+    with pytest.raises(RobotFileError, match=r"control\.fallback: expected true or false"):
+        load_robot(p)
+    p.write_text(R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = false"))
+    assert fallback_lines(load_robot(p)) == ["fallback gaits: off ([control] fallback = false)"]
