@@ -158,7 +158,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         doc["heading"] = {"asked": choice.asked, "ran": choice.heading.name, "loaded": choice.index is None,
                           "states": [robot.transitions.label(s) for s in choice.states]}
     pose = getattr(getattr(getattr(client.link, "board", None), "plant", None), "pose", None)
-    if pose is not None:  # the simulated table plant's planar pose (x, y mm, θ°)
+    if isinstance(pose, (tuple, list)):  # the simulated table plant's planar pose (x, y mm, θ°)
         doc["pose"] = {"x_mm": pose[0], "y_mm": pose[1], "theta_deg": pose[2]}
     if args.format == "jsonl":
         print(json.dumps(doc))
@@ -169,6 +169,7 @@ def cmd_run(args: argparse.Namespace) -> int:
               f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
               f"{len(run.faults)} faults")
         if "pose" in doc:
+            pose = doc["pose"]["x_mm"], doc["pose"]["y_mm"], doc["pose"]["theta_deg"]
             print(f"  pose: x {pose[0]:+.1f} mm, y {pose[1]:+.1f} mm, theta {pose[2]:+.1f} deg")
         for f in run.faults:
             print(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
