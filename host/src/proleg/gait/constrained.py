@@ -41,7 +41,7 @@ import numpy as np
 from ..errors import GaitError
 from .evaluate import canonical_rotation, is_primitive
 from .maxplus import ClosingBound, Graph
-from .simple_search import best_simple_cycles
+from .simple_search import best_simple_cycles, fits_simple_search
 
 #: A search that must list more qualifying walks than this gives up with a GaitError.
 MAX_LISTED_WALKS = 200_000
@@ -89,7 +89,7 @@ def best_constrained(
     if kind not in ("total", "rate"):
         raise GaitError(f"constrained search answers total or rate, not {kind}")
     K = min(int(K), n) if simple else int(K)
-    if simple and not levels:  # branch and bound with simple-path bounds (simple_search.py)
+    if simple and not levels and fits_simple_search(n, K, len(constraints)):  # branch and bound with simple-path bounds (simple_search.py)
         best, ties = best_simple_cycles(n, src, dst, weight, K, kind, constraints, accept, tol)
         return Found(best, ties)
     g = Graph.from_edges(n, src, dst, weight)

@@ -35,7 +35,16 @@ from ..errors import GaitError
 
 #: A search that must keep more tied cycles than this gives up with a GaitError.
 MAX_TIES = 200_000
+#: The per-start walk bounds are dense: n · n · (K + 1) entries per bounded quantity. Above
+#: this many in all (64 MB of float64) constrained.py keeps its own threshold search.
+MAX_BOUND_ENTRIES = 1 << 23
 _NEG = -np.inf
+
+
+def fits_simple_search(n: int, K: int, n_constraints: int) -> bool:
+    """Whether the dense bounds of this search fit MAX_BOUND_ENTRIES."""
+    K = min(int(K), n)
+    return n * n * (K + 1) * (1 + 2 * n_constraints) <= MAX_BOUND_ENTRIES
 
 
 class _Start:
