@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 from typing import Any
 
@@ -88,7 +89,7 @@ def heading_choice(args: argparse.Namespace, robot: Any) -> tuple[Any, Any]:
         spec = library_spec(args.library, **(robot.library.as_kwargs() if robot.library is not None else {}))
     fw = firmware_gaits(robot, library=spec)
     choice = choose_heading(robot, fw, args.heading, args.rotate, exact=args.exact_heading)
-    (log.info if choice.index is not None and "nearest" not in choice.message else log.warning)(choice.message)
+    (log.warning if choice.nearest or choice.index is None else log.info)(choice.message)
     return fw, choice
 
 
@@ -108,11 +109,10 @@ def parse_gait(text: str) -> int:
 
 # --------------------------------------------------------------------------- run
 def cmd_run(args: argparse.Namespace) -> int:
+    from ..protocol.definition import GAIT_USER
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on
     from ..robot import load_robot
-
-    from ..protocol.definition import GAIT_USER
 
     robot = load_robot(args.robot)
     if args.record:
@@ -179,8 +179,6 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _heading(text: str) -> float:
-    import math
-
     try:
         v = float(text)
     except ValueError:

@@ -15,7 +15,7 @@ gait for a heading with START (``proleg run --heading``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from ..robot import Robot
@@ -195,6 +195,7 @@ class HeadingChoice:
     states: tuple[int, ...]
     net: Any  # Pose of one pass
     message: str
+    nearest: bool = False  # the library's nearest heading, not the one asked for
 
 
 def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = None, rotate: str | None = None,
@@ -207,6 +208,7 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
     from ..errors import GaitError
     from ..gait.compose import net_motion
     from ..gait.library import Heading, library_spec, nearest_heading
+    from .render import MAX_LOADED_STEPS
 
     label = robot.transitions.label
     if (heading_deg is None) == (rotate is None):
@@ -216,13 +218,8 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
     if rotate is not None:
         hit = next((lg for h, lg in entries if h.rotate == rotate), None)
     else:
-        near = None if exact else nearest_heading(entries, float(heading_deg))
-        hit = None
-        if near is not None:
-            hit = near[1]
-        else:
-            hit = next((lg for h, lg in entries if h.heading_deg is not None
-                        and abs((h.heading_deg - heading_deg + 180) % 360 - 180) < 1e-9), None)
+        near = nearest_heading(entries, float(heading_deg))
+        hit = near[1] if near is not None and (not exact or near[2] < 1e-9) else None
     if hit is not None:
         off = "" if rotate is not None else abs((hit.heading.heading_deg - heading_deg + 180) % 360 - 180)
         how = ("" if rotate is not None or off < 1e-9 else
@@ -230,18 +227,19 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
         return HeadingChoice(asked, hit.heading, hit.direction, hit.index, tuple(hit.gait.states[:-1]), hit.net,
                              f"{asked}{how}: {hit.direction} gait {hit.index} from the firmware's library, "
                              f"{' '.join(label(s) for s in hit.gait.states)}, per pass dx {hit.net.x:+.3g} "
-                             f"dy {hit.net.y:+.3g} dtheta {hit.net.theta_deg:+.3g}°")
+                             f"dy {hit.net.y:+.3g} dtheta {hit.net.theta_deg:+.3g}°", nearest=bool(how))
     spec = fw.library_spec
     if spec is None:
         spec = library_spec("0")
     heading = Heading(f"{heading_deg:g}", heading_deg=float(heading_deg)) if rotate is None else \
         Heading(f"rot-{rotate}", rotate=rotate)
-    from dataclasses import replace
-
     entry = replace(spec, headings=(heading,)).entries(robot.transitions)[0]
     if entry.gait is None:
         raise GaitError(f"{asked}: {robot.name} has no gait for it (no closed walk qualifies)")
     g = entry.gait
+    if len(g.states) - 1 > MAX_LOADED_STEPS:
+        raise GaitError(f"{asked}: the gait for it has {len(g.states) - 1} steps, LOAD_GAIT takes at most "
+                        f"{MAX_LOADED_STEPS}; put the heading in the robot file's [gaits] library")
     net = net_motion(robot.transitions, g.states)
     why = "not in the firmware's library" if fw.library else "the firmware carries no gait library"
     return HeadingChoice(asked, heading, "+x", None, tuple(g.states[:-1]), net,
