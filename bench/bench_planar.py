@@ -10,7 +10,10 @@ transitions; "dense64" = 6 binary limbs, 64 states, 4,032 transitions. Per trans
 ~ N(0, 0.5) cm, Δθ ~ N(0, 8)°, variances uniform in 0..0.2 cm² / 0..20 deg² (the spread of
 the published TerreSoRo primitives).
 
-  exact — optimal_planar_gaits(..., simple_cycles=True, rotation_cap_deg=5) (constrained.py);
+  exact — optimal_planar_gaits(..., simple_cycles=True, rotation_cap_deg=5): the branch and
+          bound of simple_search.py (simple-path bounds, best-so-far pruning);
+  before — the same question through the threshold search that answered it before
+          (constrained.py, ``levels=True``), run where it finishes in reasonable time;
   plain — every simple cycle of 2..K transitions listed (numpy, no pruning), scored, the best
           within the cap kept; stopped after PLAIN_LIMIT_S (then "> limit", with how many
           cycles it had listed). Where both finish, their values must agree.
@@ -38,16 +41,18 @@ from proleg.gait.planar import planar_scores  # noqa: E402
 from proleg.transitions import PlanarRewards, TransitionTable  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results" / "planar.json"
-PLAIN_LIMIT_S = 60.0
+PLAIN_LIMIT_S = 30.0
 WEIGHTS = (0.25, 0.25, 0.25 * (math.pi / 180) ** 2)
 COST = 0.5
 CAP = 5.0
 
-# (table, K, question, target s)
+# (table, K, question, target s, run "before")
 CASES = [
-    ("dense16", 4, "heading", None), ("dense16", 6, "heading", None), ("dense16", 8, "heading", None),
-    ("dense16", 16, "heading", 1.0), ("dense16", 4, "rot-cw", None), ("dense16", 6, "rot-cw", None),
-    ("dense64", 3, "heading", None), ("dense64", 4, "heading", None), ("dense64", 5, "heading", None),
+    ("dense16", 4, "heading", None, True), ("dense16", 6, "heading", None, True), ("dense16", 8, "heading", None, True),
+    ("dense16", 16, "heading", 1.0, True), ("dense16", 4, "rot-cw", None, True), ("dense16", 6, "rot-cw", None, True),
+    ("dense16", 16, "rot-cw", None, False),
+    ("dense64", 3, "heading", None, True), ("dense64", 4, "heading", None, True), ("dense64", 5, "heading", None, True),
+    ("dense64", 8, "heading", None, False), ("dense64", 16, "heading", None, False),
 ]
 
 
@@ -63,7 +68,20 @@ def table(name: str) -> TransitionTable:
     return TransitionTable.from_edges((2,) * limbs, src, dst, rng.normal(0, 0.5, m), None, planar)
 
 
-def exact(t: TransitionTable, K: int, question: str) -> float | None:
+def exact(t: TransitionTable, K: int, question: str, levels: bool = False) -> float | None:
+    import functools
+
+    import proleg.gait.constrained as constrained
+    import proleg.gait.planar as planar
+
+    planar.best_constrained = functools.partial(constrained.best_constrained, levels=levels)
+    try:
+        return _exact(t, K, question)
+    finally:
+        planar.best_constrained = constrained.best_constrained
+
+
+def _exact(t: TransitionTable, K: int, question: str) -> float | None:
     if question == "heading":
         r = optimal_planar_gaits(t, PlanarObjective(0.0, WEIGHTS, COST), "total", K, CAP, simple_cycles=True)
     else:
@@ -98,7 +116,7 @@ def plain(t: TransitionTable, K: int, question: str) -> tuple[float | None, int,
                 v = float(s[ok].max())
                 best = v if best is None else max(best, v)
             frontier = grown
-            if time.perf_counter() - t0 > PLAIN_LIMIT_S or len(frontier) * n > 60_000_000:
+            if time.perf_counter() - t0 > PLAIN_LIMIT_S or len(frontier) * n > 20_000_000:
                 return best, listed, False
     return best, listed, True
 
@@ -131,19 +149,25 @@ def machine() -> dict:
 
 def main() -> int:
     rows = []
-    print(f"{'table':<8} {'K':>3} {'question':<8} {'exact s':>9} {'value':>10}  {'plain s':>9} {'listed':>12}  target")
-    for name, K, question, target in CASES:
+    print(f"{'table':<8} {'K':>3} {'question':<8} {'exact s':>9} {'before s':>9} {'value':>10}  {'plain s':>9} "
+          f"{'listed':>12}  target")
+    for name, K, question, target, run_before in CASES:
         t = table(name)
         te, ve = timed(exact, t, K, question)
+        tb, vb = timed(exact, t, K, question, True) if run_before else (None, None)
+        if run_before and ((vb is None) != (ve is None) or (ve is not None and abs(ve - vb) > 1e-9)):
+            print(f"MISMATCH {name} K={K} {question}: exact {ve} before {vb}", file=sys.stderr)
+            return 1
         tp, (vp, listed, done) = timed(plain, t, K, question)
         if done and (ve is None) != (vp is None) or (done and ve is not None and abs(ve - vp) > 1e-9):
             print(f"MISMATCH {name} K={K} {question}: exact {ve} plain {vp}", file=sys.stderr)
             return 1
         plain_s = f"{tp:9.3f}" if done else f"> {tp:6.1f}"
         mark = "" if target is None else ("ok" if te <= target else f"OVER {target} s")
-        print(f"{name:<8} {K:>3} {question:<8} {te:9.3f} {ve if ve is not None else float('nan'):10.4f}  {plain_s:>9}"
+        before_s = f"{tb:9.3f}" if tb is not None else f"{'-':>9}"
+        print(f"{name:<8} {K:>3} {question:<8} {te:9.3f} {before_s} {ve if ve is not None else float('nan'):10.4f}  {plain_s:>9}"
               f" {listed:12,d}  {mark}", flush=True)
-        rows.append({"table": name, "max_transitions": K, "question": question, "exact_s": te, "value": ve,
+        rows.append({"table": name, "max_transitions": K, "question": question, "exact_s": te, "before_s": tb, "value": ve,
                      "plain_s": tp, "plain_finished": done, "plain_cycles_listed": listed, "target_s": target})
     RESULTS.write_text(json.dumps({"machine": machine(), "plain_limit_s": PLAIN_LIMIT_S, "cases": rows}, indent=1) + "\n")
     print(f"written {RESULTS}")

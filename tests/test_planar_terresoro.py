@@ -2,26 +2,27 @@
 Vela & Vikas, IROS 2023, doi:10.1109/IROS55552.2023.10341926; data: github.com/clfreeman7/
 Path_Planning, demos/data/experiment_2_motion_primitives.mat).
 
-That repository carries no licence, so neither the data nor statistics derived from it are
-committed here: these tests read a copy the user fetched, named by the environment variable
-PROLEG_TERRESORO_MAT, and are skipped without it (docs/planar.md says how to fetch it).
+That repository carries no licence, so its data is not committed here. The tests read
+tests/fixtures/terresoro-4.toml: per-transition means and sample variances derived from
+the 5 trials (numerical summaries, with attribution in the file's header; no raw trial).
+With PROLEG_TERRESORO_MAT naming a fetched copy of the .mat, one more test checks that the
+converter still turns it into exactly that fixture.
 """
 
 from __future__ import annotations
 
 import math
 import os
+from pathlib import Path
 
 import pytest
 
-pytest.importorskip("scipy.io")
-from proleg.convert.terresoro import read_terresoro, robot_toml  # noqa: E402
-from proleg.gait.compose import gait_path, net_motion  # noqa: E402
-from proleg.gait.planar import PlanarObjective, optimal_planar_gaits  # noqa: E402
-from proleg.robot import load_robot  # noqa: E402
+from proleg.gait.compose import gait_path, net_motion
+from proleg.gait.planar import PlanarObjective, optimal_planar_gaits
+from proleg.robot import load_robot
 
+FIXTURE = Path(__file__).parent / "fixtures" / "terresoro-4.toml"
 MAT = os.environ.get("PROLEG_TERRESORO_MAT", "")
-pytestmark = pytest.mark.skipif(not MAT or not os.path.isfile(MAT), reason="PROLEG_TERRESORO_MAT not set")
 
 #: Their cost per transition, 2·(−Δx) + 0.5·(σ²x + σ²y + σ²θ[rad²]) + 1 (minimised), is
 #: −2 × proleg's score Δx − 0.25·(σ²x + σ²y) − 0.25·(π/180)²·σ²θ[deg²] − 0.5 (maximised).
@@ -31,10 +32,20 @@ THEIR_CAP_DEG = 5.0
 
 
 @pytest.fixture(scope="module")
-def table(tmp_path_factory):
-    path = tmp_path_factory.mktemp("terresoro") / "terresoro.toml"
-    path.write_text(robot_toml(read_terresoro(MAT)))
-    return load_robot(path).transitions
+def table():
+    return load_robot(FIXTURE).transitions
+
+
+@pytest.mark.skipif(not MAT or not os.path.isfile(MAT), reason="PROLEG_TERRESORO_MAT not set")
+def test_the_fixture_is_what_the_converter_makes_of_the_published_file():
+    pytest.importorskip("scipy.io")
+    from proleg.convert.terresoro import read_terresoro, robot_toml
+
+    made = robot_toml(read_terresoro(MAT), name="terresoro-4").splitlines()
+    kept = FIXTURE.read_text().splitlines()
+    # the header names the commit the fixture came from; everything else is identical
+    assert [ln for ln in made if "(commit" not in ln and not ln.startswith("# demos/")] == \
+        [ln for ln in kept if "(commit" not in ln and not ln.startswith("# demos/")]
 
 
 @pytest.mark.parametrize("heading, states, cost", [(0.0, ("0001", "0011"), 0.9745), (180.0, ("0110", "1110"), 0.6804)])

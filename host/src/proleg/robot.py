@@ -114,6 +114,7 @@ class Robot:
     control: Control
     plant: PlantSection | None = None  # the checked [plant] table (defaults when absent)
     n_trials: np.ndarray | None = None  # learned file: trials per allowed transition (aligned with transitions.src)
+    library: Any = None  # [gaits]: the gait library the firmware carries (proleg.gait.library.LibrarySpec), or None
 
     def __post_init__(self) -> None:
         if self.plant is None:
@@ -230,7 +231,8 @@ def nesting_depth(text: str) -> int:
 
 
 def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
-    top = _Fields(path, "robot file", doc, {"robot", "limb", "actuator", "transitions", "safety", "control", "plant"})
+    top = _Fields(path, "robot file", doc, {"robot", "limb", "actuator", "transitions", "safety", "control", "plant",
+                                            "gaits"})
     for key in ("robot", "limb", "actuator", "transitions"):
         if not top.has(key):
             raise RobotFileError(f"{path}: missing [{key}]{' entries' if key in ('limb', 'actuator') else ''}")
@@ -266,7 +268,12 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
-    return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials)
+    library = None
+    if "gaits" in doc:
+        from .gait.library import library_from_robot_file
+
+        library = library_from_robot_file(path, doc["gaits"])
+    return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library)
 
 
 def _array_of_tables(path: Path, value: Any, key: str) -> list[dict]:

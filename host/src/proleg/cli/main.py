@@ -211,6 +211,9 @@ def _firmware_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the firmware carries (default total)")
     p.add_argument("--max-transitions", type=_positive_int, metavar="N")
+    p.add_argument("--library", metavar="HEADINGS",
+                   help="also carry a gait library, e.g. 0,90,180,270,rot-cw (instead of the robot file's [gaits]; "
+                        "docs/planar.md)")
 
 
 def _positive_int(text: str) -> int:
@@ -234,7 +237,13 @@ def _build(args: argparse.Namespace):
 
     robot = load_robot(args.robot)
     board = load_board(args.board)
-    result = build(robot, board, args.out, objective=args.objective, max_transitions=args.max_transitions)
+    library = None
+    if getattr(args, "library", None):
+        from ..gait.library import library_spec
+
+        library = library_spec(args.library, **(robot.library.as_kwargs() if robot.library is not None else {}))
+    result = build(robot, board, args.out, objective=args.objective, max_transitions=args.max_transitions,
+                   library=library)
     print(f"built {robot.name} for {board.name}: {result.artifact}")
     print(f"  {result.size_report()}")
     if result.fit is not None:
@@ -249,6 +258,8 @@ def _build(args: argparse.Namespace):
 
     for line in fallback_lines(robot):
         print(f"  {line}")
+    for lg in getattr(result.gaits, "library", ()):
+        print(f"  library {lg.describe(robot.transitions.label)}")
     return result
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 from typing import Any
 
@@ -66,11 +67,30 @@ def open_client(args: argparse.Namespace, robot_path: str | None = None, *, spee
     return client
 
 
-def gaits_per_direction(robot: Any) -> dict[str, int]:
-    """How many gaits the robot's firmware carries in each direction."""
+def gaits_per_direction(robot: Any, fw: Any = None) -> dict[str, int]:
+    """How many gaits the robot's firmware carries in each direction (``fw``: its
+    ``firmware_gaits``, computed when not given)."""
     from ..firmware.build import firmware_gaits
 
-    return {d: len(g) for d, g in firmware_gaits(robot).items()}
+    return {d: len(g) for d, g in (fw if fw is not None else firmware_gaits(robot)).items()}
+
+
+def heading_choice(args: argparse.Namespace, robot: Any) -> tuple[Any, Any]:
+    """(firmware gaits, HeadingChoice or None) for ``run --heading/--rotate`` (issue 17)."""
+    from ..firmware.gaits import choose_heading, firmware_gaits
+    from ..gait.library import library_spec
+
+    if args.heading is None and args.rotate is None:
+        return None, None
+    if args.gait is not None or args.direction is not None:
+        raise GaitError("--heading/--rotate choose the gait: leave out --gait and --direction")
+    spec = None
+    if args.library:
+        spec = library_spec(args.library, **(robot.library.as_kwargs() if robot.library is not None else {}))
+    fw = firmware_gaits(robot, library=spec)
+    choice = choose_heading(robot, fw, args.heading, args.rotate, exact=args.exact_heading)
+    (log.warning if choice.nearest or choice.index is None else log.info)(choice.message)
+    return fw, choice
 
 
 def parse_gait(text: str) -> int:
@@ -89,6 +109,7 @@ def parse_gait(text: str) -> int:
 
 # --------------------------------------------------------------------------- run
 def cmd_run(args: argparse.Namespace) -> int:
+    from ..protocol.definition import GAIT_USER
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on
     from ..robot import load_robot
@@ -96,13 +117,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     if args.record:
         check_suffix(args.record)
+    fw, choice = heading_choice(args, robot)
+    gait = args.gait if args.gait is not None else 0
+    direction = args.direction or "+x"
+    if choice is not None:
+        gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, "+x")
     client = open_client(args, args.robot, speed=args.speed)
     with client:
         info = client.info
         if info.robot_name != robot.name:
             raise LinkError(f"{client.link.description} runs robot {info.robot_name!r}, not {robot.name!r} "
                             f"({args.robot}); give the robot file it was built from")
-        check_gait(info, args.gait, args.direction, gaits_per_direction(robot))
+        check_gait(info, gait, direction, gaits_per_direction(robot, fw))
+        if choice is not None and choice.index is None:
+            client.load_gait(choice.states)
         meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
         listeners: list[Any] = []
         if args.record:
@@ -115,35 +143,56 @@ def cmd_run(args: argparse.Namespace) -> int:
         if args.replan:
             from ..learn.replan import Replanner
 
-            replanner = Replanner(robot, client, args.direction, say=lambda t: print(f"  {t}", flush=True)
+            replanner = Replanner(robot, client, direction, say=lambda t: print(f"  {t}", flush=True)
                                   if args.format != "jsonl" else log.info(t))
         try:
-            run = run_gait_on(client, args.gait, args.direction, args.duration, listeners=listeners,
+            run = run_gait_on(client, gait, direction, args.duration, listeners=listeners,
                               progress=log.info, progress_every_s=args.progress, replanner=replanner)
         finally:
             for listener in listeners:
                 listener.stop()
     errors = list(run.errors) + [str(w.error) for w in listeners if getattr(w, "error", None)]
     doc = {
-        "msg": "RESULT", "robot": run.robot, "link": client.link.description, "gait": args.gait,
-        "direction": args.direction, "duration_s": args.duration, "cycles": run.cycles,
+        "msg": "RESULT", "robot": run.robot, "link": client.link.description, "gait": gait,
+        "direction": direction, "duration_s": args.duration, "cycles": run.cycles,
         "states_reached": len(run.states_reached), "telemetry_frames": run.telemetry_frames,
         "telemetry_lost": run.telemetry_lost,
         "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
         "errors": errors, "ok": run.ok and not errors,
         "replanned": list(replanner.actions) if replanner is not None else [],
     }
+    if choice is not None:
+        doc["heading"] = {"asked": choice.asked, "ran": choice.heading.name, "loaded": choice.index is None,
+                          "states": [robot.transitions.label(s) for s in choice.states]}
+    pose = getattr(getattr(getattr(client.link, "board", None), "plant", None), "pose", None)
+    if isinstance(pose, (tuple, list)):  # the simulated table plant's planar pose (x, y mm, θ°)
+        doc["pose"] = {"x_mm": pose[0], "y_mm": pose[1], "theta_deg": pose[2]}
     if args.format == "jsonl":
         print(json.dumps(doc))
     else:
-        print(f"{run.robot} on {doc['link']}: gait {args.gait} in {args.direction} for {args.duration:g} s: "
+        if choice is not None:
+            print(choice.message)
+        print(f"{run.robot} on {doc['link']}: gait {gait} in {direction} for {args.duration:g} s: "
               f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
               f"{len(run.faults)} faults")
+        if "pose" in doc:
+            pose = doc["pose"]["x_mm"], doc["pose"]["y_mm"], doc["pose"]["theta_deg"]
+            print(f"  pose: x {pose[0]:+.1f} mm, y {pose[1]:+.1f} mm, theta {pose[2]:+.1f} deg")
         for f in run.faults:
             print(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
     for e in errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     return 0 if doc["ok"] else 1
+
+
+def _heading(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a heading in degrees, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite heading in degrees, got {text}")
+    return v
 
 
 # --------------------------------------------------------------------------- load-gait, set-param
@@ -210,9 +259,18 @@ def add_arguments(subparsers: Any) -> None:
     r = subparsers.add_parser("run", help="run a gait on a robot headless: progress on stderr, exit 1 on faults")
     r.add_argument("robot", metavar="ROBOT", type=robot_arg)
     add_link_options(r, sim_takes_robot=False)
-    r.add_argument("--gait", type=parse_gait, default=0, metavar="N",
+    r.add_argument("--gait", type=parse_gait, default=None, metavar="N",
                    help="gait index in the firmware's table for the direction, or 'user' (default 0)")
-    r.add_argument("--direction", choices=("+x", "-x"), default="+x")
+    r.add_argument("--direction", choices=("+x", "-x"), default=None, help="default +x")
+    steer = r.add_mutually_exclusive_group()
+    steer.add_argument("--heading", type=_heading, metavar="DEG",
+                       help="run the gait library's gait for this heading (0 = +x, 90 = +y; the nearest the "
+                            "library holds), or compute and load one (docs/planar.md)")
+    steer.add_argument("--rotate", choices=("cw", "ccw"), help="run the library's rotation gait (turn on the spot)")
+    r.add_argument("--exact-heading", action="store_true",
+                   help="with --heading: a heading the library does not hold is computed and loaded (LOAD_GAIT)")
+    r.add_argument("--library", metavar="HEADINGS",
+                   help="the library the firmware was built with (proleg build --library), if not the robot file's")
     r.add_argument("--duration", type=_positive_float, default=10.0, metavar="S", help="seconds to run (default 10)")
     r.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
     add_udp_options(r)

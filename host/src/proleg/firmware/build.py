@@ -22,6 +22,7 @@ import subprocess
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import jinja2
 
@@ -190,13 +191,14 @@ def build(
     objective: str = "total",
     max_transitions: int | None = None,
     jobs: int = 2,
+    library: Any = None,
 ) -> BuildResult:
     """Render and compile; on success the project is at ``out_dir``, on failure nothing is."""
     check_buildable(robot, board)
     out_dir = Path(out_dir) if out_dir is not None else default_out_dir(robot, board)
     if out_dir.exists() and not (out_dir / MANIFEST).exists():
         raise BuildError(f"{out_dir} exists and is not a proleg build directory: refusing to replace it")
-    gaits = firmware_gaits(robot, objective, max_transitions)
+    gaits = firmware_gaits(robot, objective, max_transitions, library)  # library: default the robot file's
     fit = check_fit(robot, board, gaits)
     warnings = tuple(gait_warnings(robot, gaits))
     files = render_project(robot, board, gaits)
@@ -235,6 +237,9 @@ def build(
             "gait_selection": gaits.selection.as_json(),
             "gaits": {d: [list(g.states) for g in gs] for d, gs in gaits.items()},
         }
+        if gaits.library_spec is not None:  # issue 17: the gait library, heading → (direction, gait)
+            manifest["gait_library_selection"] = gaits.library_spec.as_json()
+            manifest["gait_library"] = [lg.as_json(robot.transitions.label) for lg in gaits.library]
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
         _replace_dir(tmp, out_dir)
     except BaseException:

@@ -84,12 +84,20 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
     if base_flash:
         flash = base_flash + tables + FLASH_PER_LIMB * extra
         if limit_flash and flash > limit_flash:
+            library = getattr(gaits, "library", ())
+            lib_note = ""
+            if library:
+                own = [lg for lg in library if lg.appended]
+                state_bytes = 1 if robot.n_states <= 256 else 2
+                lib_bytes = sum((len(lg.gait.states) - 1) * state_bytes + 10 for lg in own)
+                lib_note = (f"; its gait library ({len(library)} headings, {len(own)} gaits of their own) takes about "
+                            f"{lib_bytes:,} bytes of that: fewer headings or a smaller max_transitions in [gaits]")
             raise BuildError(
                 f"robot {robot.name} does not fit board {name} (estimated before compiling; fewer gaits: "
                 f"--max-transitions or another objective, or a larger board): its gait and transition tables take "
                 f"{tables:,} bytes ({robot.n_states:,} states, {len(robot.transitions.src):,} transitions), the rest of "
                 f"the firmware about {flash - tables:,}; robot {robot.name} needs {flash:,} bytes of flash, "
-                f"board {name} has {limit_flash:,}"
+                f"board {name} has {limit_flash:,}{lib_note}"
             )
     if base_ram:
         ram = base_ram + RAM_PER_LIMB * extra

@@ -5,11 +5,17 @@ MAX_FIRMWARE_GAITS per direction, the best-ranked), as a
 ``FirmwareGaits`` mapping (``{"+x": (Gait, ...), "-x": (...)}``) that also names its
 ``GaitSelection`` (objective, directions, max_transitions, rank), so the rendered gait
 table and proleg-build.json can say which inputs chose them.
+
+A robot with a gait library (``[gaits] library`` in the robot file, or ``library=``: issue
+17) also carries the library's gaits: each entry's gait is found in the table when it is
+already there (an optimal tie of +x or −x), else appended to the +x gaits after the ties.
+``FirmwareGaits.library`` says where each one is (direction, index), so a host starts the
+gait for a heading with START (``proleg run --heading``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from ..robot import Robot
@@ -57,16 +63,49 @@ class GaitSelection:
         }
 
 
-class FirmwareGaits(dict):
-    """``{direction: (Gait, ...)}`` plus the ``selection`` that produced it."""
+@dataclass(frozen=True)
+class LibraryGait:
+    """One library entry in the firmware's table: START ``direction`` gait ``index`` runs it."""
 
-    def __init__(self, gaits: dict, selection: GaitSelection):
+    heading: Any  # proleg.gait.library.Heading
+    direction: str
+    index: int
+    gait: Any  # proleg.gait.Gait (its reward is the planar score)
+    value: float
+    below_zero: bool
+    net: Any  # proleg.gait.compose.Pose: Δx, Δy, Δθ° of one pass in the start frame
+    appended: bool = False  # a gait of its own in the table (not one of the optimal ties)
+
+    def as_json(self, labels) -> dict[str, Any]:
+        return {
+            "heading": self.heading.name, "heading_deg": self.heading.heading_deg, "rotate": self.heading.rotate,
+            "direction": self.direction, "gait": self.index, "states": [labels(s) for s in self.gait.states],
+            "value": self.value, "below_zero": self.below_zero,
+            "net_motion": {"dx": self.net.x, "dy": self.net.y, "dtheta_deg": self.net.theta_deg},
+        }
+
+    def describe(self, labels) -> str:
+        what = f"heading {self.heading.name} deg" if self.heading.rotate is None else self.heading.name
+        return (f"{what}: {self.direction} gait {self.index} ({' '.join(labels(s) for s in self.gait.states)}), "
+                f"per pass dx {self.net.x:+.4g} dy {self.net.y:+.4g} dtheta {self.net.theta_deg:+.3g} deg"
+                + (" (nothing scores above zero: the best)" if self.below_zero else ""))
+
+
+class FirmwareGaits(dict):
+    """``{direction: (Gait, ...)}`` plus the ``selection`` that produced it and the gait
+    ``library`` (LibraryGait per entry that has a gait; empty without a library)."""
+
+    def __init__(self, gaits: dict, selection: GaitSelection, library: tuple = (), library_spec: Any = None):
         super().__init__(gaits)
         self.selection = selection
+        self.library = tuple(library)
+        self.library_spec = library_spec
 
 
-def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None) -> FirmwareGaits:
-    """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none).
+def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None,
+                   library: Any = None) -> FirmwareGaits:
+    """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none), and
+    the gait library (``library``: a ``LibrarySpec``; default the robot file's ``[gaits]``).
 
     Ties whose steps each move limbs one way only come first (stable otherwise), so that
     gait 0, the one START and ``proleg sim`` run by default, is the easiest to make
@@ -83,7 +122,35 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
         d: ordered(optimal_gaits(robot.transitions, objective, d, max_transitions).gaits)[:MAX_FIRMWARE_GAITS]
         for d in DIRECTIONS
     }
-    return FirmwareGaits(gaits, GaitSelection(objective, max_transitions))
+    spec = library if library is not None else getattr(robot, "library", None)
+    placed: tuple = ()
+    if spec is not None:
+        placed = _place_library(robot, spec, gaits)
+    return FirmwareGaits(gaits, GaitSelection(objective, max_transitions), placed, spec)
+
+
+def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:
+    """Each library entry's gait: where it already is in ``gaits``, else appended to +x
+    (``gaits`` is updated)."""
+    from ..gait.compose import net_motion
+
+    def key(g) -> tuple[int, ...]:
+        return tuple(int(s) for s in g.states)
+
+    out = []
+    for entry in spec.entries(robot.transitions):
+        g = entry.gait
+        if g is None:
+            continue
+        where = next(((d, i) for d in DIRECTIONS for i, h in enumerate(gaits[d]) if key(h) == key(g)), None)
+        appended = where is None
+        if where is None:
+            gaits["+x"] = tuple(gaits["+x"]) + (g,)
+            where = ("+x", len(gaits["+x"]) - 1)
+        value = float(entry.result.value) if entry.result.value is not None else float("nan")
+        out.append(LibraryGait(entry.heading, where[0], where[1], g, value, bool(entry.result.below_zero),
+                               net_motion(robot.transitions, g.states), appended))
+    return tuple(out)
 
 
 #: Feasibility problems that mean the hardware cannot make the gait at all.
@@ -149,3 +216,68 @@ def fallback_lines(robot: Robot) -> list[str]:
         amap = ", ".join(f"{limb.name}→{robot.actuators[x].name}" for limb, x in zip(robot.limbs, fb.actuator_map))
         out.append(f"fallback without {robot.actuators[a].name} ({d}): {walk} ({fb.mode}: {amap})")
     return out
+
+
+@dataclass(frozen=True)
+class HeadingChoice:
+    """How ``proleg run --heading/--rotate`` runs a heading: START ``direction`` gait
+    ``index`` (a library gait in the firmware), or, with ``index`` None, LOAD_GAIT
+    ``states`` (open, start not repeated) and START the user gait. ``message`` says which."""
+
+    asked: str
+    heading: Any  # proleg.gait.library.Heading that was run
+    direction: str
+    index: int | None
+    states: tuple[int, ...]
+    net: Any  # Pose of one pass
+    message: str
+    nearest: bool = False  # the library's nearest heading, not the one asked for
+
+
+def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = None, rotate: str | None = None,
+                   *, exact: bool = False) -> HeadingChoice:
+    """The firmware gait for a heading (degrees) or a rotation ("cw"/"ccw"): the library
+    entry for it; for a heading the library does not hold, the nearest heading it holds
+    (said in ``message``) — unless ``exact`` or the library has none, when the gait for that
+    heading is computed with the library's question (or the plain heading question without
+    a library) to be loaded with LOAD_GAIT. GaitError when no gait exists."""
+    from ..errors import GaitError
+    from ..gait.compose import net_motion
+    from ..gait.library import Heading, library_spec, nearest_heading
+    from .render import MAX_LOADED_STEPS
+
+    label = robot.transitions.label
+    if (heading_deg is None) == (rotate is None):
+        raise GaitError("give a heading in degrees or a rotation (cw/ccw), not both")
+    asked = f"heading {heading_deg:g}°" if heading_deg is not None else f"rotation {rotate}"
+    entries = [(lg.heading, lg) for lg in fw.library]
+    if rotate is not None:
+        hit = next((lg for h, lg in entries if h.rotate == rotate), None)
+    else:
+        near = nearest_heading(entries, float(heading_deg))
+        hit = near[1] if near is not None and (not exact or near[2] < 1e-9) else None
+    if hit is not None:
+        off = "" if rotate is not None else abs((hit.heading.heading_deg - heading_deg + 180) % 360 - 180)
+        how = ("" if rotate is not None or off < 1e-9 else
+               f" (the library's nearest heading, {hit.heading.name}°, {off:g}° off)")
+        return HeadingChoice(asked, hit.heading, hit.direction, hit.index, tuple(hit.gait.states[:-1]), hit.net,
+                             f"{asked}{how}: {hit.direction} gait {hit.index} from the firmware's library, "
+                             f"{' '.join(label(s) for s in hit.gait.states)}, per pass dx {hit.net.x:+.3g} "
+                             f"dy {hit.net.y:+.3g} dtheta {hit.net.theta_deg:+.3g}°", nearest=bool(how))
+    spec = fw.library_spec
+    if spec is None:
+        spec = library_spec("0")
+    heading = Heading(f"{heading_deg:g}", heading_deg=float(heading_deg)) if rotate is None else \
+        Heading(f"rot-{rotate}", rotate=rotate)
+    entry = replace(spec, headings=(heading,)).entries(robot.transitions)[0]
+    if entry.gait is None:
+        raise GaitError(f"{asked}: {robot.name} has no gait for it (no closed walk qualifies)")
+    g = entry.gait
+    if len(g.states) - 1 > MAX_LOADED_STEPS:
+        raise GaitError(f"{asked}: the gait for it has {len(g.states) - 1} steps, LOAD_GAIT takes at most "
+                        f"{MAX_LOADED_STEPS}; put the heading in the robot file's [gaits] library")
+    net = net_motion(robot.transitions, g.states)
+    why = "not in the firmware's library" if fw.library else "the firmware carries no gait library"
+    return HeadingChoice(asked, heading, "+x", None, tuple(g.states[:-1]), net,
+                         f"{asked}: {why}; computed {' '.join(label(s) for s in g.states)} (per pass dx "
+                         f"{net.x:+.3g} dy {net.y:+.3g} dtheta {net.theta_deg:+.3g}°), loaded with LOAD_GAIT")

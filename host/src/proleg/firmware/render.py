@@ -19,7 +19,7 @@ from __future__ import annotations
 import hashlib
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -147,6 +147,8 @@ class GaitPart:
     fb_first: list[int]  # per (lost actuator, direction +x/-x): first step in fb_steps
     fb_len: list[int]  # per (lost actuator, direction): steps, 0 = no fallback
     fb_notes: list[str]  # one comment line per fallback
+    library: list[str] = field(default_factory=list)  # the gait library, one line per entry (header comments)
+    library_selection: str = ""  # the planar question the library answers (LibrarySpec.describe)
 
 
 @dataclass(frozen=True)
@@ -501,6 +503,7 @@ def _gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_st
         entry_len=entry[2],
         entry_join=entry[3],
         **fb,
+        **_library_part(robot, gaits_by_direction, table),
     )
 
 
@@ -535,6 +538,19 @@ def _fallback_part(robot: Any) -> dict[str, Any]:
 def _compiled_map(robot: Any) -> list[int]:
     index = {a.name: i for i, a in enumerate(robot.actuators)}
     return [index[limb.actuator] for limb in robot.limbs]
+
+
+def _library_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], table: Any) -> dict[str, Any]:
+    """The gait library's header lines (issue 17; empty without a library)."""
+    library = getattr(gaits_by_direction, "library", ())
+    if not library:
+        return {}
+    total = sum(len(gaits_by_direction.get(d, ()) or ()) for d in ("+x", "-x"))
+    if total > 255:
+        raise BuildError(f"robot {robot.name}: {total} gaits with the library, at most 255 (fewer headings)")
+    spec = getattr(gaits_by_direction, "library_spec", None)
+    return {"library": [lg.describe(table.label) for lg in library],
+            "library_selection": spec.describe() if spec is not None else ""}
 
 
 def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:

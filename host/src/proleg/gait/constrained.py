@@ -41,6 +41,7 @@ import numpy as np
 from ..errors import GaitError
 from .evaluate import canonical_rotation, is_primitive
 from .maxplus import ClosingBound, Graph
+from .simple_search import best_simple_cycles, fits_simple_search
 
 #: A search that must list more qualifying walks than this gives up with a GaitError.
 MAX_LISTED_WALKS = 200_000
@@ -77,12 +78,20 @@ def best_constrained(
     constraints: Sequence[Constraint] = (),
     accept: Callable[[np.ndarray], np.ndarray] | None = None,
     tol: float = 0.0,
+    *,
+    levels: bool = False,
 ) -> Found:
     """Every walk with the best value (see the module doc). ``accept`` gets the constraint
-    sums of qualifying walks as a [k, len(constraints)] array and returns a bool mask."""
+    sums of qualifying walks as a [k, len(constraints)] array and returns a bool mask.
+    Simple cycles go to ``simple_search.best_simple_cycles`` (branch and bound with
+    simple-path bounds) unless ``levels`` asks for the threshold search below (kept as a
+    second exact method: the benchmark's "before" and a cross-check in the tests)."""
     if kind not in ("total", "rate"):
         raise GaitError(f"constrained search answers total or rate, not {kind}")
     K = min(int(K), n) if simple else int(K)
+    if simple and not levels and fits_simple_search(n, K, len(constraints)):  # branch and bound with simple-path bounds (simple_search.py)
+        best, ties = best_simple_cycles(n, src, dst, weight, K, kind, constraints, accept, tol)
+        return Found(best, ties)
     g = Graph.from_edges(n, src, dst, weight)
     if K < 2 or len(g.src) == 0:
         return Found(None, [])

@@ -13,8 +13,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
-from ..errors import GaitError
+from ..errors import GaitError, RobotFileError
 from ..transitions import TransitionTable
 from .planar import ROTATIONS, PlanarObjective, optimal_planar_gaits
 from .result import Gait, GaitResult
@@ -98,3 +99,145 @@ def library_gaits(entries: Sequence[LibraryEntry]) -> list[tuple[Heading, Gait]]
     """The library as the firmware would carry it: (heading, gait) in order, entries without
     a gait left out."""
     return [(e.heading, e.gait) for e in entries if e.gait is not None]
+
+
+#: The robot file's ``[gaits]`` keys (the library the firmware carries) and what each holds.
+SPEC_KEYS = {
+    "library": "headings in degrees and/or \"rot-cw\", \"rot-ccw\", e.g. [0, 90, 180, 270, \"rot-cw\"]",
+    "objective": "\"total\" or \"rate\"",
+    "max_transitions": "a whole number >= 2",
+    "variance_weight": "a number >= 0 or [λx, λy, λθ]",
+    "transition_cost": "a number",
+    "rotation_cap_deg": "a number of degrees >= 0",
+    "simple_cycles": "true or false",
+    "translation_cap": "a number >= 0 (rotation gaits)",
+}
+#: At most this many library entries (the firmware's gait count is a byte).
+MAX_LIBRARY = 64
+
+
+@dataclass(frozen=True)
+class LibrarySpec:
+    """Which gait library the firmware carries: the headings and the planar question asked
+    for each (``gait_library``'s arguments)."""
+
+    headings: tuple[Heading, ...]
+    objective: str = "total"
+    max_transitions: int | None = None
+    variance_weight: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    transition_cost: float = 0.0
+    rotation_cap_deg: float | None = None
+    simple_cycles: bool = False
+    translation_cap: float | None = None
+
+    def entries(self, table: TransitionTable) -> list[LibraryEntry]:
+        return gait_library(table, self.headings, self.objective, self.max_transitions,
+                            variance_weight=self.variance_weight, transition_cost=self.transition_cost,
+                            rotation_cap_deg=self.rotation_cap_deg, simple_cycles=self.simple_cycles,
+                            translation_cap=self.translation_cap)
+
+    def describe(self) -> str:
+        """One line for generated headers."""
+        parts = [f"headings {','.join(h.name for h in self.headings)}", f"objective {self.objective}"]
+        if self.max_transitions is not None:
+            parts.append(f"max_transitions {self.max_transitions}")
+        if any(self.variance_weight):
+            parts.append("variance weight " + ",".join(f"{w:g}" for w in self.variance_weight))
+        if self.transition_cost:
+            parts.append(f"transition cost {self.transition_cost:g}")
+        if self.rotation_cap_deg is not None:
+            parts.append(f"rotation cap {self.rotation_cap_deg:g} deg")
+        if self.simple_cycles:
+            parts.append("simple cycles")
+        if self.translation_cap is not None:
+            parts.append(f"translation cap {self.translation_cap:g}")
+        return ", ".join(parts)
+
+    def as_kwargs(self) -> dict[str, Any]:
+        """The question's options (everything but the headings), as ``library_spec`` takes them."""
+        out = self.as_json()
+        del out["headings"]
+        return {k: v for k, v in out.items() if v is not None}
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "headings": [h.name for h in self.headings], "objective": self.objective,
+            "max_transitions": self.max_transitions, "variance_weight": list(self.variance_weight),
+            "transition_cost": self.transition_cost, "rotation_cap_deg": self.rotation_cap_deg,
+            "simple_cycles": self.simple_cycles, "translation_cap": self.translation_cap,
+        }
+
+
+def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
+    """A LibrarySpec from headings (``"0,90,rot-cw"`` or a list) and ``gait_library``'s
+    keyword options; GaitError naming what is wrong."""
+    if not isinstance(headings, str):
+        if not isinstance(headings, (list, tuple)) or not all(
+                isinstance(h, (str, int, float)) and not isinstance(h, bool) for h in headings):
+            raise GaitError("library: expected a list of headings in degrees and/or \"rot-cw\", \"rot-ccw\"")
+        headings = ",".join(str(h) for h in headings)
+    parsed = parse_headings(headings)
+    if len(parsed) > MAX_LIBRARY:
+        raise GaitError(f"library: {len(parsed)} headings, at most {MAX_LIBRARY}")
+    vw = options.get("variance_weight", 0.0)
+    if isinstance(vw, (int, float)) and not isinstance(vw, bool):
+        vw = (float(vw),) * 3
+    if not (isinstance(vw, (list, tuple)) and len(vw) == 3 and all(
+            isinstance(w, (int, float)) and not isinstance(w, bool) and math.isfinite(w) and w >= 0 for w in vw)):
+        raise GaitError(f"variance_weight: expected {SPEC_KEYS['variance_weight']}, got {vw!r}")
+    objective = options.get("objective", "total")
+    if objective not in ("total", "rate"):
+        raise GaitError(f"objective: expected {SPEC_KEYS['objective']}, got {objective!r}")
+    mt = options.get("max_transitions")
+    if mt is not None and (not isinstance(mt, int) or isinstance(mt, bool) or mt < 2):
+        raise GaitError(f"max_transitions: expected {SPEC_KEYS['max_transitions']}, got {mt!r}")
+
+    def number(key: str, low: float | None, default: Any) -> Any:
+        v = options.get(key, default)
+        if v is None:
+            return None
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or (low is not None and v < low):
+            raise GaitError(f"{key}: expected {SPEC_KEYS[key]}, got {v!r}")
+        return float(v)
+
+    simple = options.get("simple_cycles", False)
+    if not isinstance(simple, bool):
+        raise GaitError(f"simple_cycles: expected true or false, got {simple!r}")
+    return LibrarySpec(tuple(parsed), objective, mt, tuple(float(w) for w in vw),  # type: ignore[arg-type]
+                       number("transition_cost", None, 0.0), number("rotation_cap_deg", 0.0, None), simple,
+                       number("translation_cap", 0.0, None))
+
+
+def library_from_robot_file(path: Any, value: Any) -> LibrarySpec | None:
+    """The robot file's ``[gaits]`` table → LibrarySpec (None without ``library``);
+    RobotFileError naming file and key."""
+    if not isinstance(value, dict):
+        raise RobotFileError(f"{path}: gaits: expected a table [gaits]")
+    unknown = sorted(set(value) - set(SPEC_KEYS))
+    if unknown:
+        raise RobotFileError(f"{path}: gaits: unknown key {unknown[0]!r} (expected one of: {', '.join(sorted(SPEC_KEYS))})")
+    if "library" not in value:
+        if value:
+            raise RobotFileError(f"{path}: gaits: the keys {', '.join(sorted(value))} describe a library; give gaits.library")
+        return None
+    try:
+        return library_spec(value["library"], **{k: v for k, v in value.items() if k != "library"})
+    except GaitError as e:
+        text = str(e).removeprefix("--library: ")
+        key = text.split(":", 1)[0] if text.split(":", 1)[0] in SPEC_KEYS else "library"
+        text = text.removeprefix(f"{key}: ") if text.startswith(f"{key}: ") else text
+        raise RobotFileError(f"{path}: gaits.{key}: {text}") from None
+
+
+def nearest_heading(entries: Sequence[tuple[Heading, Any]], heading_deg: float) -> tuple[Heading, Any, float] | None:
+    """The entry (among heading entries, not rotations) whose heading is nearest
+    ``heading_deg`` on the circle: (heading, payload, angular distance in degrees), or None
+    when the library has no heading entry."""
+    best = None
+    for h, payload in entries:
+        if h.heading_deg is None:
+            continue
+        d = abs((h.heading_deg - heading_deg + 180.0) % 360.0 - 180.0)
+        if best is None or d < best[2] - 1e-9:
+            best = (h, payload, d)
+    return best

@@ -8,6 +8,7 @@ opener imported only when used (so opening a serial port never imports python-ca
     open_link("can://can0")                           # interface, bit rate from python-can's config
     open_link("can://")                               # channel too (CAN_CHANNEL, ~/.canrc)
     open_link("sim://paper-r1")                       # a bundled robot, or sim://path/to/ROBOT.toml
+    open_link("sim://planar-4?plant=table")           # ... on the table plant (planar pose)
 
 A ``sim://`` link's ``board`` is the ``SimulatedRobot`` (``link.board.robot`` its description).
 An unknown scheme is a ``LinkError`` naming the known ones.
@@ -64,7 +65,8 @@ def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any
     speed = options.get("speed", None)
     if "speed" in query:
         speed = None if query["speed"] == "max" else float(query["speed"])
-    return SimLink(SimulatedRobot(robot, seed=seed), speed=speed, description=f"sim {robot.name}")
+    plant = query.get("plant", options.get("plant"))  # "physical" (default) or "table" (the planar pose)
+    return SimLink(SimulatedRobot(robot, seed=seed, plant=plant), speed=speed, description=f"sim {robot.name}")
 
 
 Opener = Callable[[str, str, dict[str, str], dict[str, Any]], Link]
