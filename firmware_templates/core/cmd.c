@@ -9,6 +9,7 @@
 #include "fault.h"
 #include "uart.h"
 #include "imucheck.h"
+#include "level.h"
 #include "param.h"
 #include "proto.h"
 #include "rom.h"
@@ -229,6 +230,44 @@ static void cmd_set_telemetry_rate(uint8_t token)
     }
 }
 
+/* Level calibration (level.h): only with every coil off and no gait, so the robot is at rest. */
+static void cmd_calibrate_level(uint8_t token)
+{
+    uint16_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
+    if (why == 0u && level_calibrate(msg.u.calibrate_level.ground != 0u) != 0) {
+        why = 4u;
+    }
+    if (why) {
+        tx_nack(token, PROTO_ID_CALIBRATE_LEVEL, PROTO_ERR_NOT_ALLOWED, why);
+    } else {
+        tx_ack(token, PROTO_ID_CALIBRATE_LEVEL);
+    }
+}
+
+static void cmd_get_level(uint8_t token)
+{
+    uint8_t i;
+    msg.id = PROTO_ID_LEVEL;
+    msg.u.level.token = token;
+    msg.u.level.status = level_status();
+    msg.u.level.offset_count = CFG_N_LIMBS;
+    msg.u.level.ground_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.level.offset[i] = level_offset_cdeg(i);
+        msg.u.level.ground[i] = level_ground_cdeg(i);
+    }
+    tx_send();
+}
+
+static void cmd_clear_level(uint8_t token)
+{
+    if (seq_running() || level_clear() != 0) {
+        tx_nack(token, PROTO_ID_CLEAR_LEVEL, PROTO_ERR_NOT_ALLOWED, 0);
+    } else {
+        tx_ack(token, PROTO_ID_CLEAR_LEVEL);
+    }
+}
+
 static void handle_command(void)
 {
     uint8_t token = PROTO_CMD_TOKEN(&msg);
@@ -247,11 +286,13 @@ static void handle_command(void)
 void cmd_init(void)
 {
     proto_rx_init(&rx);
+    level_init();
 }
 
 void cmd_poll(void)
 {
     uint16_t n;
+    level_poll();
     for (n = 0; n < RX_BYTES_PER_TICK; n++) {
         int c = uart_read_byte();
         if (c < 0) {

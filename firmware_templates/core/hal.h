@@ -70,4 +70,20 @@ void hal_pwm_set(uint8_t channel, uint16_t duty_permyriad);
  * them with uart_isr_tx). Called from the main loop; must return at once. */
 void hal_uart_tx_start(void);
 
+/* Non-volatile storage: one small block of HAL_NV_BYTES bytes that survives reset and
+ * power loss (AVR: EEPROM from address 0; STM32F1: the last 1 KiB flash page; host-sim:
+ * memory that sim_reset keeps). Erased bytes read 0xFF. The core keeps its level
+ * calibration there (level.h). hal_nv_read copies the first n bytes at once.
+ * hal_nv_write begins storing n bytes at the block's start (src must stay valid until
+ * hal_nv_poll() no longer returns HAL_NV_BUSY): 0 begun, negative when n > HAL_NV_BYTES or
+ * a write is in flight. hal_nv_poll: HAL_NV_BUSY while writing, 0 done, negative failed.
+ * A write may take milliseconds (AVR: 3.4 ms per changed byte, one byte per poll, never
+ * waiting; STM32: a page erase stalls the CPU for up to 40 ms, so the core writes only when
+ * no gait runs). */
+#define HAL_NV_BYTES 32u
+#define HAL_NV_BUSY 1
+void hal_nv_read(uint8_t *dst, uint8_t n);
+int8_t hal_nv_write(const uint8_t *src, uint8_t n);
+int8_t hal_nv_poll(void);
+
 #endif /* PROLEG_HAL_H */

@@ -172,6 +172,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_link_commands(sub)  # console, plot, dbc
     add_robot_commands(sub)  # run, load-gait, set-param, robots
     __import__("proleg.cli.learn", fromlist=["add_arguments"]).add_arguments(sub)  # learn
+    __import__("proleg.cli.calibrate", fromlist=["add_arguments"]).add_arguments(sub)  # calibrate
     return p
 
 

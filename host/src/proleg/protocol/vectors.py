@@ -21,9 +21,18 @@ from typing import Any
 from cobs import cobs
 
 from proleg.protocol.codec import COUNTERS, FrameDecoder, Message, encode
-from proleg.protocol.definition import GAIT_USER, MAX_GAIT_STEPS, PROTOCOL_VERSION, ErrorCode, EventKind, Flag
+from proleg.protocol.definition import (
+    GAIT_USER,
+    MAX_GAIT_STEPS,
+    PROTOCOL_VERSION,
+    ErrorCode,
+    EventKind,
+    Flag,
+    LevelResult,
+    LevelStatus,
+)
 
-TOKEN_ONLY = ("PING", "GET_INFO", "GET_STATS", "STOP", "ESTOP")
+TOKEN_ONLY = ("PING", "GET_INFO", "GET_STATS", "STOP", "ESTOP", "GET_LEVEL", "CLEAR_LEVEL")
 
 
 def _telemetry(seq: int, psi: tuple[int, ...] = (1234, -567), duty: tuple[int, ...] = (6000, 0)) -> Message:
@@ -109,6 +118,13 @@ def valid_messages() -> list[Message]:
             tx_dropped=0,
             tick_overruns=4294967295,
         ),
+        Message.new("CALIBRATE_LEVEL", token=1, ground=0),
+        Message.new("CALIBRATE_LEVEL", token=255, ground=1),
+        Message.new("LEVEL", token=16, status=int(LevelStatus.STORED), offset=(312, -2000), ground=(1000, -1000)),
+        Message.new("LEVEL", token=255, status=int(LevelStatus.NONE), offset=(0,) * 8, ground=(0,) * 8),
+        Message.new("LEVEL", token=1, status=int(LevelStatus.CORRUPT), offset=(), ground=()),
+        Message.new("LEVEL", token=2, status=int(LevelStatus.CALIBRATING), offset=(-32768, 32767, 1, -1), ground=(7,)),
+        Message.new("EVENT", time_ms=5000, kind=int(EventKind.LEVEL_DONE), code=int(LevelResult.STORED), detail=3),
     ]
     return msgs
 
@@ -160,6 +176,8 @@ C_ENCODED: tuple[Message, ...] = (
         tick_overruns=9,
     ),
     Message.new("SET_PARAM", token=255, param=5, index=1, value=-2147483648),
+    Message.new("LEVEL", token=17, status=int(LevelStatus.STORED), offset=(312, -2000), ground=(-995, 1003)),
+    Message.new("EVENT", time_ms=70000, kind=int(EventKind.LEVEL_DONE), code=int(LevelResult.TOO_TILTED), detail=2),
 )
 
 
