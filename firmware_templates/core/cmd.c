@@ -234,8 +234,10 @@ static void cmd_set_telemetry_rate(uint8_t token)
 static void cmd_calibrate_level(uint8_t token)
 {
     uint16_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
-    if (why == 0u && level_calibrate(msg.u.calibrate_level.ground != 0u) != 0) {
-        why = 4u;
+    int8_t r;
+    if (why == 0u) {
+        r = level_calibrate(msg.u.calibrate_level.ground != 0u);
+        why = r == -1 ? 4u : r < 0 ? 5u : 0u; /* under way / not in this build */
     }
     if (why) {
         tx_nack(token, PROTO_ID_CALIBRATE_LEVEL, PROTO_ERR_NOT_ALLOWED, why);
@@ -261,8 +263,9 @@ static void cmd_get_level(uint8_t token)
 
 static void cmd_clear_level(uint8_t token)
 {
-    if (seq_running() || level_clear() != 0) {
-        tx_nack(token, PROTO_ID_CLEAR_LEVEL, PROTO_ERR_NOT_ALLOWED, 0);
+    int8_t r = seq_running() ? -1 : level_clear();
+    if (r != 0) {
+        tx_nack(token, PROTO_ID_CLEAR_LEVEL, PROTO_ERR_NOT_ALLOWED, r == -2 ? 5u : 0u);
     } else {
         tx_ack(token, PROTO_ID_CLEAR_LEVEL);
     }

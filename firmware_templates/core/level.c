@@ -1,6 +1,11 @@
 /* level.c - see level.h. */
 #include "level.h"
 
+#if CFG_LEVEL_CALIBRATION
+
+#include <stddef.h>
+#include <string.h>
+
 #include "crc16.h"
 #include "fault.h"
 #include "hal.h"
@@ -13,50 +18,57 @@
 #define PH_IDLE 0u
 #define PH_SAMPLING 1u
 #define PH_WRITING 2u
-#define CRC_AT (LEVEL_RECORD_BYTES - 2u)
+#define PH_CLEARING 3u
 
+/* The record as stored: every target is little-endian (AVR, Cortex-M, the host), and the
+ * layout has no padding (two bytes, then 16-bit fields). */
+typedef struct {
+    uint8_t magic;
+    uint8_t limbs;
+    int16_t off[CFG_N_LIMBS];
+    uint16_t crc;
+} level_rec_t;
+typedef char level_rec_is_packed[sizeof(level_rec_t) == LEVEL_RECORD_BYTES ? 1 : -1];
+
+static level_rec_t rec;  /* the record (hal_nv_write keeps a pointer to it while writing) */
 static uint8_t status;   /* PROTO_LEVEL_NONE / STORED / CORRUPT */
 static uint8_t phase;
-static uint8_t clearing; /* the write in flight erases the record */
 static uint8_t left;     /* ticks of sampling left */
-static uint16_t waited;  /* ticks some limb had no sample yet */
 static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
-static int32_t sum[CFG_N_LIMBS]; /* ψ as corrected now, 0.01°, summed over the ticks */
+static uint16_t waited;  /* ticks some limb had no sample yet */
+static int32_t sum[CFG_N_LIMBS];    /* ψ as corrected now, 0.01°, summed over the ticks */
 static int16_t ground[CFG_N_LIMBS]; /* this ground's tilt on top of the record, 0.01° */
-static int16_t rc[CFG_N_LIMBS], rs[CFG_N_LIMBS]; /* Q14 cos/sin of each rest tilt */
-static uint8_t rec[LEVEL_RECORD_BYTES];          /* the record (hal_nv_write keeps the pointer) */
+static int16_t rc[CFG_N_LIMBS], rs[CFG_N_LIMBS]; /* Q14 cos/sin of the whole tilt */
 
 static uint16_t rec_crc(void)
 {
-    return crc16_ccitt(CRC16_INIT, rec, CRC_AT);
+    return crc16_ccitt(CRC16_INIT, (const uint8_t *)&rec, offsetof(level_rec_t, crc));
 }
 
 int16_t level_offset_cdeg(uint8_t limb)
 {
-    return status == PROTO_LEVEL_STORED ? (int16_t)(uint16_t)(rec[2u + 2u * limb] | ((uint16_t)rec[3u + 2u * limb] << 8)) : 0;
-}
-
-/* Read the record back: status, then each limb's rotation (none unless it is valid). */
-static void load(void)
-{
-    uint8_t i;
-    uint16_t crc;
-    hal_nv_read(rec, LEVEL_RECORD_BYTES);
-    crc = rec_crc();
-    status = rec[0] == 0xFFu ? PROTO_LEVEL_NONE
-             : (rec[0] == LEVEL_MAGIC && rec[1] == CFG_N_LIMBS && rec[CRC_AT] == (uint8_t)crc &&
-                rec[CRC_AT + 1u] == (uint8_t)(crc >> 8))
-                 ? PROTO_LEVEL_STORED
-                 : PROTO_LEVEL_CORRUPT;
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        rc[i] = psi_cos_q14((int16_t)(level_offset_cdeg(i) + ground[i]));
-        rs[i] = psi_sin_q14((int16_t)(level_offset_cdeg(i) + ground[i]));
-    }
+    return status == PROTO_LEVEL_STORED ? rec.off[limb] : 0;
 }
 
 int16_t level_ground_cdeg(uint8_t limb)
 {
     return ground[limb];
+}
+
+/* Read the record back: its status, then each limb's rotation (the record's only if valid). */
+static void load(void)
+{
+    uint8_t i;
+    int16_t a;
+    hal_nv_read((uint8_t *)&rec, LEVEL_RECORD_BYTES);
+    status = rec.magic == 0xFFu ? PROTO_LEVEL_NONE
+             : (rec.magic == LEVEL_MAGIC && rec.limbs == CFG_N_LIMBS && rec.crc == rec_crc()) ? PROTO_LEVEL_STORED
+                                                                                             : PROTO_LEVEL_CORRUPT;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        a = (int16_t)(level_offset_cdeg(i) + ground[i]);
+        rc[i] = psi_cos_q14(a);
+        rs[i] = psi_sin_q14(a);
+    }
 }
 
 void level_init(void)
@@ -76,44 +88,36 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 
 int8_t level_calibrate(uint8_t on_this_ground)
 {
-    uint8_t i;
     if (phase != PH_IDLE) {
         return -1;
     }
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        sum[i] = 0;
-    }
+    memset(sum, 0, sizeof sum);
     ground_mode = on_this_ground;
     left = LEVEL_SAMPLES;
     waited = 0;
-    clearing = 0;
     phase = PH_SAMPLING;
     return 0;
 }
 
-static void write(uint8_t n)
+static void write(uint8_t n, uint8_t ph)
 {
-    phase = hal_nv_write(rec, n) == 0 ? PH_WRITING : PH_IDLE;
+    phase = hal_nv_write((const uint8_t *)&rec, n) == 0 ? ph : PH_IDLE;
 }
 
 int8_t level_clear(void)
 {
-    uint8_t i;
     if (phase != PH_IDLE) {
         return -1;
     }
-    rec[0] = 0xFFu; /* the erased magic: no record */
+    rec.magic = 0xFFu; /* the erased magic: no record */
     status = PROTO_LEVEL_NONE;
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        ground[i] = 0;
-    }
-    clearing = 1;
-    write(1);
+    memset(ground, 0, sizeof ground);
+    write(1, PH_CLEARING);
     return 0;
 }
 
-/* The end of a calibration: what is stored now (the old record unless the new one was
- * written and reads back valid), and the EVENT. */
+/* The end of a calibration: what holds now (the old record unless the new one was written
+ * and reads back valid), and the EVENT. */
 static void done(uint8_t result, uint16_t detail)
 {
     phase = PH_IDLE;
@@ -124,12 +128,12 @@ static void done(uint8_t result, uint16_t detail)
     tx_event(PROTO_EV_LEVEL_DONE, result, detail);
 }
 
-/* Sampling is over: each limb's rest tilt, checked, then the write. */
+/* Sampling is over: each limb's tilt (the one in use plus the mean), checked, then applied
+ * (this ground) or stored (flat). */
 static void measured(void)
 {
     uint8_t i, far = 0;
     int16_t o[CFG_N_LIMBS];
-    uint16_t crc;
     for (i = 0; i < CFG_N_LIMBS; i++) {
         o[i] = (int16_t)(ground[i] + (int16_t)(sum[i] / LEVEL_SAMPLES)); /* a shift */
         if (!ground_mode) {
@@ -143,25 +147,17 @@ static void measured(void)
         done(PROTO_LEVEL_RES_TOO_TILTED, far);
         return;
     }
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        if (ground_mode) {
-            ground[i] = o[i];
-        } else {
-            ground[i] = 0;
-            rec[2u + 2u * i] = (uint8_t)o[i];
-            rec[3u + 2u * i] = (uint8_t)((uint16_t)o[i] >> 8);
-        }
-    }
     if (ground_mode) {
-        done(PROTO_LEVEL_RES_STORED, 0); /* applied (not stored: this ground only) */
+        memcpy(ground, o, sizeof ground);
+        done(PROTO_LEVEL_RES_STORED, 0); /* applied (this ground only: not stored) */
         return;
     }
-    rec[0] = LEVEL_MAGIC;
-    rec[1] = CFG_N_LIMBS;
-    crc = rec_crc();
-    rec[CRC_AT] = (uint8_t)crc;
-    rec[CRC_AT + 1u] = (uint8_t)(crc >> 8);
-    write(LEVEL_RECORD_BYTES);
+    memset(ground, 0, sizeof ground);
+    memcpy(rec.off, o, sizeof o);
+    rec.magic = LEVEL_MAGIC;
+    rec.limbs = CFG_N_LIMBS;
+    rec.crc = rec_crc();
+    write(LEVEL_RECORD_BYTES, PH_WRITING);
     if (phase != PH_WRITING) {
         done(PROTO_LEVEL_RES_WRITE_FAILED, 0);
     }
@@ -189,12 +185,12 @@ void level_poll(void)
                 measured();
             }
         }
-    } else if (phase == PH_WRITING) {
+    } else if (phase != PH_IDLE) {
         r = hal_nv_poll();
         if (r == HAL_NV_BUSY) {
             return;
         }
-        if (clearing) {
+        if (phase == PH_CLEARING) {
             phase = PH_IDLE;
             load();
         } else {
@@ -205,5 +201,8 @@ void level_poll(void)
 
 uint8_t level_status(void)
 {
-    return phase != PH_IDLE && !clearing ? PROTO_LEVEL_CALIBRATING : status;
+    return (phase == PH_SAMPLING || phase == PH_WRITING) ? PROTO_LEVEL_CALIBRATING : status;
 }
+#else
+typedef char level_left_out; /* CFG_LEVEL_CALIBRATION = 0 (ISO C wants a declaration) */
+#endif

@@ -33,12 +33,20 @@
 
 #include "robot_config.h"
 
+/* Build switch: 0 leaves level calibration out (about 1.6 KB of AVR flash): the commands
+ * are refused (NACK NOT_ALLOWED, detail 5), GET_LEVEL reports NONE, nothing is applied.
+ * Set it in a board file's cflags (-DCFG_LEVEL_CALIBRATION=0). */
+#ifndef CFG_LEVEL_CALIBRATION
+#define CFG_LEVEL_CALIBRATION 1
+#endif
+
 #define LEVEL_MAGIC 0x4Cu /* 'L': record layout version 1 */
 #define LEVEL_RECORD_BYTES (4u + 2u * CFG_N_LIMBS)
 #define LEVEL_SAMPLES 64 /* ticks averaged: a power of two (the mean is a shift) */
 #define LEVEL_WAIT_TICKS (2u * CFG_TICK_HZ) /* 2 s */
 #define LEVEL_MAX_CDEG 2000 /* 20°: the mounting tilt a limb may have and still be trusted */
 
+#if CFG_LEVEL_CALIBRATION
 /* Load the stored record (status and offsets) and stop any calibration. */
 void level_init(void);
 
@@ -46,7 +54,8 @@ void level_init(void);
 void level_apply(uint8_t limb, int16_t *ax, int16_t *az);
 
 /* Begin sampling: on flat ground (0: the result is stored) or on this ground (1: applied
- * on top of the record until reset). 0, or -1 when a calibration or an erase is under way. */
+ * on top of the record until reset). 0, or -1 when a calibration or an erase is under way
+ * (-2: not in this build). */
 int8_t level_calibrate(uint8_t on_this_ground);
 
 /* Erase the record (begins the write; status NONE at once). 0, or -1 while calibrating. */
@@ -60,5 +69,15 @@ void level_poll(void);
 uint8_t level_status(void);
 int16_t level_offset_cdeg(uint8_t limb);
 int16_t level_ground_cdeg(uint8_t limb);
+#else
+#define level_init() ((void)0)
+#define level_apply(limb, ax, az) ((void)0)
+#define level_calibrate(on_this_ground) ((void)(on_this_ground), (int8_t)-2)
+#define level_clear() ((int8_t)-2)
+#define level_poll() ((void)0)
+#define level_status() ((uint8_t)0) /* PROTO_LEVEL_NONE */
+#define level_offset_cdeg(limb) ((void)(limb), (int16_t)0)
+#define level_ground_cdeg(limb) ((void)(limb), (int16_t)0)
+#endif
 
 #endif /* PROLEG_LEVEL_H */

@@ -17,14 +17,14 @@ from ..errors import LinkError
 def _limb_names(robot: Any, n: int) -> list[str]:
     names = [limb.name for limb in robot.limbs]
     if len(names) != n:
-        raise LinkError(f"the robot reports {n} limbs, {robot.path.name if hasattr(robot, 'path') else 'the robot file'} "
-                        f"has {len(names)}: is this the firmware of this robot file?")
+        raise LinkError(f"the robot reports {n} limbs, {robot.path.name} has {len(names)}: "
+                        f"is this the firmware of this robot file?")
     return names
 
 
-def _table(names: list[str], offsets_cdeg: tuple[int, ...], status: list[str]) -> str:
+def _table(names: list[str], offsets_cdeg: tuple[int, ...], status: list[str], what: str = "rest tilt") -> str:
     w = max(len(n) for n in names)
-    return "\n".join(f"  {n:<{w}}  rest tilt {o / 100:+6.2f}°  {s}" for n, o, s in zip(names, offsets_cdeg, status))
+    return "\n".join(f"  limb {n:<{w}}  {what} {o / 100:+6.2f}°  {s}" for n, o, s in zip(names, offsets_cdeg, status))
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
@@ -47,14 +47,24 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             print(f"{'cleared: ' if args.clear else ''}{what} on {where}")
             if reading.status == LevelStatus.STORED:
                 print(_table(names, reading.offsets_cdeg, ["applied"] * len(names)))
+            if any(reading.ground_cdeg):
+                print("levelled on this ground (until reset):")
+                print(_table(names, reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
             return 0
         try:
-            outcome = calibrate_level(client)
+            outcome = calibrate_level(client, ground=args.ground)
         except CommandRefused as e:
             why = {1: "a gait is running (stop it, let the coils cool)", 2: "an IMU is marked bad (see the fault; clear it)",
-                   3: "a fault is latched (clear it first)", 4: "a calibration is already under way"}
+                   3: "a fault is latched (clear it first)", 4: "a calibration is already under way",
+                   5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)"}
             raise LinkError(f"{where}: robot refused the level calibration: {why.get(e.detail, e)}") from None
         names = _limb_names(robot, len(outcome.reading.offsets_cdeg))
+        if outcome.ok and args.ground:
+            if outcome.reading.status != LevelStatus.STORED:
+                print("note: no flat calibration is stored, so the tilts below include each IMU's mounting tilt")
+            print(f"levelled on this ground on {where} (applied until the board resets; not stored)")
+            print(_table(names, outcome.reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
+            return 0
         if outcome.ok:
             print(f"level calibration stored on {where} (applied from now on, kept across resets)")
             print(_table(names, outcome.reading.offsets_cdeg, ["stored"] * len(names)))
@@ -80,4 +90,7 @@ def add_arguments(subparsers: Any) -> None:
     g = c.add_mutually_exclusive_group()
     g.add_argument("--show", action="store_true", help="print the stored calibration, change nothing")
     g.add_argument("--clear", action="store_true", help="erase the stored calibration (offsets 0)")
+    g.add_argument("--ground", action="store_true",
+                   help="level on the ground the robot rests on now (a slope), on top of the flat calibration; "
+                        "kept in RAM until the board resets")
     c.set_defaults(run=cmd_calibrate)

@@ -336,7 +336,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "Record each IMU's rest tilt (the mean of 64 ticks' samples; robot at rest, coils cold): "
         "on flat ground as its level offset, stored in non-volatile memory; with ground = 1 as "
         "this ground's tilt on top of it, until reset. ACK when sampling begins, then EVENT LEVEL_DONE. NACK NOT_ALLOWED while a gait runs (detail 1), an IMU is bad (2), "
-        "a fault is latched (3) or a calibration is under way (4).",
+        "a fault is latched (3), a calibration is under way (4), or the build leaves level "
+        "calibration out (5).",
         reply="ACK",
     ),
     MessageSpec(0x0C, "GET_LEVEL", "h2r", (_TOKEN,), "Answered by LEVEL.", reply="LEVEL"),
@@ -346,7 +347,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "h2r",
         (_TOKEN,),
         "Erase the stored level record: offsets 0 (NACK NOT_ALLOWED while a gait runs or a "
-        "calibration is under way).",
+        "calibration is under way; detail 5: the build leaves level calibration out).",
         reply="ACK",
     ),
     # ---------------------------------------------------------------- robot → host
