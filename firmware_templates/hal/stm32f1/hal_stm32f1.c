@@ -580,7 +580,9 @@ int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_
  * PM0075 §2.3): unlock with KEY1/KEY2, page erase (PER, AR, STRT), then PG and one
  * half-word store at a time, BSY polled after each (erase ≤ 40 ms, program ≤ 70 µs per
  * half-word: DS5319 table 28; the CPU stalls on its flash fetches meanwhile), lock again.
- * The whole write happens in hal_nv_write: the core writes only while no gait runs. */
+ * The whole write happens in hal_nv_write: the core writes only while no gait runs. The
+ * watchdog (33-67 ms) could bite during a 40 ms erase: its prescaler goes from /8 to /16
+ * (≥ 66 ms) for the write and back after (RM0008 §19.3.4: PR may change while it runs). */
 #define NV_PAGE 0x0800FC00u
 #define FLASH_KEYR REG32(0x40022004u)
 #define FLASH_SR REG32(0x4002200Cu)
@@ -627,6 +629,9 @@ int8_t hal_nv_write(const uint8_t *src, uint8_t n)
     if (n > HAL_NV_BYTES) {
         return -1;
     }
+    IWDG_KR = 0x5555u;
+    IWDG_PR = 2u; /* /16 */
+    IWDG_KR = 0xAAAAu;
     if (FLASH_CR & FLASH_CR_LOCK) {
         FLASH_KEYR = 0x45670123u;
         FLASH_KEYR = 0xCDEF89ABu;
@@ -645,6 +650,9 @@ int8_t hal_nv_write(const uint8_t *src, uint8_t n)
         }
     }
     FLASH_CR = FLASH_CR_LOCK;
+    IWDG_KR = 0xAAAAu;
+    IWDG_KR = 0x5555u;
+    IWDG_PR = 1u; /* /8 again */
     nv_result = r;
     return 0;
 }
