@@ -406,8 +406,10 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
         f"  displacement total: {report.displacement_mm:+.1f} mm over {report.true_transitions} true transitions"
         f" ({report.unexpected_transitions} not in the matrix)"
     )
+    from ..console.names import RobotNames, fault_name_text
+
     for f in report.faults:
-        lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+        lines.append(f"  FAULT at {f.time_s:.3f} s: {fault_name_text(f.code, f.detail, RobotNames.for_robot(robot))}")
     for e in report.errors:
         lines.append(f"  ERROR: {e}")
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"

@@ -132,8 +132,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"{run.robot} on {doc['link']}: gait {args.gait} in {args.direction} for {args.duration:g} s: "
               f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
               f"{len(run.faults)} faults")
+        from ..console.names import RobotNames, fault_name_text
+
+        names = RobotNames.for_robot(robot)
         for f in run.faults:
-            print(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+            print(f"  FAULT at {f.time_s:.3f} s: {fault_name_text(f.code, f.detail, names)}")
     for e in errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     return 0 if doc["ok"] else 1
