@@ -182,3 +182,10 @@ def test_cli_calibrate_prints_each_limb_by_name(capsys):
     assert "level calibration stored" in out and "limb left" in out and "limb right" in out and "°" in out
     assert main(["calibrate", "paper-r1", "--sim", "--show"]) == 0
     assert "no level calibration stored" in capsys.readouterr().out  # a new simulated board each run
+
+
+def test_the_sim_report_names_the_limb_a_fault_is_on(capsys):
+    main(["sim", "paper-r1", "--duration", "15", "--condition", "imu_offset_deg=left:8",
+          "--condition", "imu_offset_deg=right:-8"])
+    out = capsys.readouterr().out
+    assert "FAULT at" in out and "STATE_TIMEOUT on left" in out and "limb/channel" not in out
