@@ -29,6 +29,7 @@ typedef struct {
     uint16_t crc;
 } level_rec_t;
 typedef char level_rec_is_packed[sizeof(level_rec_t) == LEVEL_RECORD_BYTES ? 1 : -1];
+typedef char level_rec_fits_nv[LEVEL_RECORD_BYTES <= HAL_NV_BYTES ? 1 : -1];
 
 static level_rec_t rec;  /* the record (hal_nv_write keeps a pointer to it while writing) */
 static uint8_t status;   /* PROTO_LEVEL_NONE / STORED / CORRUPT */
