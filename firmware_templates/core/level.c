@@ -41,6 +41,10 @@ static int32_t sum[CFG_N_LIMBS];    /* ψ as corrected now, 0.01°, summed over 
 static int16_t ground[CFG_N_LIMBS]; /* this ground's tilt on top of the record, 0.01° */
 static int16_t rc[CFG_N_LIMBS], rs[CFG_N_LIMBS]; /* Q14 cos/sin of the whole tilt */
 
+/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
+ * shift 32 bits 14 times. Exact for |p| < 2^29 (a rotated gravity vector always is). */
+#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
+
 static uint16_t rec_crc(void)
 {
     return crc16_ccitt(CRC16_INIT, (const uint8_t *)&rec, offsetof(level_rec_t, crc));
@@ -82,8 +86,8 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 {
     int16_t x = *ax, z = *az, c = rc[limb], s = rs[limb];
     if (s != 0) { /* a tilt of 0.01° already has sin ≥ 2 in Q14; 16×16→32 products */
-        *ax = (int16_t)(((int32_t)x * c - (int32_t)z * s) >> 14);
-        *az = (int16_t)(((int32_t)z * c + (int32_t)x * s) >> 14);
+        *ax = Q14_TO_I16((int32_t)x * c - (int32_t)z * s);
+        *az = Q14_TO_I16((int32_t)z * c + (int32_t)x * s);
     }
 }
 

@@ -7,8 +7,9 @@
  * averages each limb's ψ (as corrected now) over LEVEL_SAMPLES ticks; the rest tilt o is
  * the offset in use plus that mean, and is stored; from then on level_apply() rotates each
  * sample (ax, az) by −o in the x–z plane (four 16×16→32 products, Q14 cos/sin) before ψ
- * is computed, so a limb at rest reads ψ = 0 again. A tilt beyond LEVEL_MAX_CDEG is
- * refused (not at rest, not on flat ground, or an IMU mounted too crooked to trust).
+ * is computed (imucheck.c, between the sample checks and psi_update), so a limb at rest
+ * reads ψ = 0 again. A tilt beyond LEVEL_MAX_CDEG is refused (not at rest, not on flat
+ * ground, or an IMU mounted too crooked to trust).
  *
  * On a slope. The ground's incline tilts each end's IMU too (the first limb's end up the
  * slope, the last one down), which no flat calibration can know. level_calibrate(1), with

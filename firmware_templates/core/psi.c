@@ -1,8 +1,6 @@
 /* psi.c - see psi.h. */
 #include "psi.h"
 
-#include "level.h"
-
 #include "rom.h"
 
 /* Per limb, per threshold: {cos upper, sin upper, cos lower, sin lower}, Q14, as rendered. */
@@ -260,7 +258,6 @@ static uint8_t inside(uint8_t limb, uint8_t margins)
 uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
 {
     limb_state_t *s = &limbs[limb];
-    level_apply(limb, &ax, &az); /* the stored rest tilt off (level.h) */
     s->ax = ax;
     s->az = az;
     s->hyst = psi_classify(limb, s->hyst, ax, az);
