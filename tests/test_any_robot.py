@@ -199,5 +199,5 @@ def test_eight_binary_limbs_build_for_the_bluepill_and_the_nano_says_why_not(tmp
     result = build(robot, load_board("bluepill-f103"), tmp_path / "bp")
     assert result.flash_used < 65536 and len(result.fit.placements) == 8
     assert result.fit.flash_estimate is not None and abs(result.fit.flash_estimate - result.flash_used) < 4096
-    with pytest.raises(BuildError, match=r"actuator 'a5' on PWM channel 4, but board arduino-nano has 4 channels"):
+    with pytest.raises(BuildError, match=r"actuator 'a5' is on channel = 4, but board arduino-nano has 4 PWM channels: channel = 0 \(D9\)"):
         build(robot, load_board("arduino-nano"), tmp_path / "nano")

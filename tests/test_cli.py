@@ -107,7 +107,7 @@ def test_bad_robot_file_is_one_line_and_exit_2(capsys, tmp_path):
     code, out, err = run(capsys, "gait", str(bad))
     assert code == 2 and out == ""
     assert err.count("\n") == 1
-    assert str(bad) in err and "limb[0].psi_star_deg" in err
+    assert str(bad) in err and "limb 'left': psi_star_deg" in err
 
 
 def test_speed_without_durations_is_a_clear_error(capsys):

@@ -250,10 +250,11 @@ def test_unknown_board_is_one_error_line(capsys, parent):
 
 def test_more_actuator_channels_than_the_board_has_names_the_channel(tmp_path, capsys, parent):
     robot = robot_variant(tmp_path, R1, (r'(name = "sma-right"\s*\nchannel = )1', r"\g<1>5"))
-    with pytest.raises(BuildError, match=r"'sma-right' on PWM channel 5.*arduino-nano has 4 channels \(0\.\.3"):
+    with pytest.raises(BuildError, match=r"actuator 'sma-right' is on channel = 5, but board arduino-nano has 4 PWM channels: "
+                       r"channel = 0 \(D9\), .*channel = 3 \(D3\)$"):
         build(load_robot(robot), load_board("arduino-nano"), parent / "fw")
     code, _, err = cli(capsys, "build", robot, "--board", "arduino-nano", "-o", parent / "fw")
-    assert code == 2 and "channel 5" in one_line(err)
+    assert code == 2 and "channel = 5" in one_line(err)
     assert_nothing_left(parent)
 
 

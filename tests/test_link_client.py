@@ -86,8 +86,9 @@ def test_a_nack_for_another_command_with_the_same_token_does_not_refuse_this_one
 def test_each_command_waits_for_the_reply_the_protocol_definition_names():
     for spec in MESSAGES:
         if spec.direction == "h2r":
-            assert spec.reply in ("ACK", "INFO", "STATS", "ACTUATOR_MAP")
+            assert spec.reply in ("ACK", "INFO", "STATS", "ACTUATOR_MAP", "LEVEL")
     assert BY_NAME["GET_INFO"].reply == "INFO" and BY_NAME["GET_STATS"].reply == "STATS"
+    assert BY_NAME["GET_LEVEL"].reply == "LEVEL" and BY_NAME["CALIBRATE_LEVEL"].reply == "ACK"
     stop = BY_NAME["STOP"]
     assert reply_answers("ACK", {"token": 3, "cmd": stop.id}, stop)
     assert reply_answers("NACK", {"token": 3, "cmd": stop.id}, stop)

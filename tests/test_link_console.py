@@ -177,7 +177,7 @@ def test_a_few_events_are_all_shown():
             await pilot.pause(0.2)
             app.refresh_view()
             text = str(app.query_one("#events").content)
-            assert all(f"step {k} reached" in text for k in (0, 1, 2)), text
+            assert all(f"step {k + 1} reached" in text for k in (0, 1, 2)), text  # shown from 1
             await pilot.press("q")
 
     asyncio.run(scenario())
@@ -232,10 +232,14 @@ def test_events_name_kinds_faults_reasons_limbs_and_actuators_never_raw_codes():
     assert text(EventKind.FAULT, FaultCode.SMA_ON_LIMIT, 1).endswith("FAULT SMA_ON_LIMIT on sma-right")
     assert text(EventKind.FAULT, FaultCode.LINK_WATCHDOG, 0).endswith("FAULT LINK_WATCHDOG")
     assert text(EventKind.GAIT_STOPPED, StopReason.WATCHDOG, 3).endswith("gait stopped: WATCHDOG after 3 cycles")
-    assert text(EventKind.STATE_REACHED, 2, 3).endswith("step 2 reached state 11")
+    assert text(EventKind.STATE_REACHED, 2, 3).endswith("step 3 reached state 11")  # steps shown from 1
+    assert text(EventKind.STATE_REACHED, 255, 1).endswith("entry path reached state 01")
     assert text(EventKind.GAIT_STARTED, 255, 1).endswith("gait user started -x")
     assert text(EventKind.FAULT_CLEARED, 3, 0).endswith("cleared faults estop")
-    assert "limb 7" in describe_event(_event(2, 2, 7).message.fields)  # no robot file: still a word
+    assert "IMU_NO_ACK on limb #8" in describe_event(_event(2, 2, 7).message.fields)  # no robot file: counted from 1
+    assert text(EventKind.LEVEL_DONE, 1, 0b10).endswith("level calibration refused: TOO_TILTED (right)")
+    assert text(EventKind.LEVEL_DONE, 0, 3).endswith("level calibration done")
+    assert text(EventKind.BOOT, 4, 0).endswith("boot (reset cause WATCHDOG)")
     assert "unknown 99" in describe_event(_event(2, 99, 0).message.fields)
 
 

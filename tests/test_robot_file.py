@@ -98,7 +98,7 @@ def test_non_numeric_entry_names_row_and_column(tmp_path):
 
 
 def test_unknown_key_is_rejected_with_the_known_ones(tmp_path):
-    msg = rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\npsi_star = 3'), "limb[0]", "'psi_star'")
+    msg = rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\npsi_star = 3'), "limb 'left': unknown key", "'psi_star'")
     assert "psi_star_deg" in msg
 
 
@@ -107,17 +107,17 @@ def test_unknown_top_level_table(tmp_path):
 
 
 def test_duplicate_limb(tmp_path):
-    rejects(tmp_path, R1.replace('name = "right"', 'name = "left"'), "limb[1].name", "duplicate limb")
+    rejects(tmp_path, R1.replace('name = "right"', 'name = "left"'), "limb 'left': name", "duplicate limb")
 
 
 @pytest.mark.parametrize("angle", ["95.0", "-90.0", "90"])
 def test_psi_star_out_of_range(tmp_path, angle):
-    rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", f"psi_star_deg = [{angle}]", 1), "limb[0].psi_star_deg",
+    rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", f"psi_star_deg = [{angle}]", 1), "limb 'left': psi_star_deg",
             "between -90 and 90")
 
 
 def test_psi_star_count_must_match_levels(tmp_path):
-    rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nlevels = 3', 1), "limb[0].psi_star_deg",
+    rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nlevels = 3', 1), "limb 'left': psi_star_deg",
             "2 critical angle")
 
 
@@ -137,7 +137,11 @@ def test_actuator_that_no_limb_names(tmp_path):
 
 
 def test_limb_naming_an_unknown_actuator(tmp_path):
-    rejects(tmp_path, R1.replace('actuator = "b"', 'actuator = "z"'), "limb[1].actuator", "'z'")
+    rejects(tmp_path, R1.replace('actuator = "b"', 'actuator = "z"'), "limb 'right': actuator", "'z'")
+
+
+def test_an_unnamed_limb_is_counted_from_one(tmp_path):
+    rejects(tmp_path, R1.replace('name = "right"\n', ""), "limb #2: name: expected a string (required)")
 
 
 def test_hold_duty_above_drive_duty(tmp_path):

@@ -102,6 +102,12 @@ TOY_BODIES = {
     "hal_reset_cause": "    return HAL_RESET_POWER_ON; /* the toy only ever powers on */",
     "hal_watchdog_feed": "    /* no watchdog on the toy */",
     "hal_tick_mark": "    (void)busy;",
+    "hal_nv_read": (
+        "    uint8_t i;\n"
+        "    for (i = 0; i < n; i++) {\n        dst[i] = 0xFFu; /* nothing on the toy survives: always erased */\n    }"
+    ),
+    "hal_nv_write": "    (void)src;\n    (void)n;\n    return -1;",
+    "hal_nv_poll": "    return 0;",
 }
 TOY_GLOBALS = (
     "#include <stdio.h>\n#include <stdlib.h>\n#include <time.h>\n\n"
@@ -188,5 +194,5 @@ def test_a_pin_the_new_family_does_not_list_is_one_clear_error(home, tmp_path):
     spec.write_text(spec.read_text().replace('pins = "any"', '[pwm.pins]\nGP0 = [0, 0]\nGP1 = [0, 1]'))
     board_file = tmp_path / "toy-host.toml"
     board_file.write_text(TOY_BOARD)
-    with pytest.raises(BuildError, match=r"PWM pin 'P0' \(channel 0\) is not a PWM output .*GP0, GP1"):
+    with pytest.raises(BuildError, match=r"\[pwm\] pin 'P0' \(channel = 0\) is not a PWM output .*GP0, GP1"):
         build(load_robot(home / "robots" / "paper-r1.toml"), load_board(board_file), tmp_path / "out")

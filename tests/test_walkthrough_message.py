@@ -29,7 +29,7 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None or shutil.which("make
 
 # Step 1: the definition (in definition.py this is one more MessageSpec in MESSAGES).
 ECHO = MessageSpec(
-    0x0B,
+    0x3E,
     "ECHO",
     "h2r",
     (Field("token", "u8", "echoed in the reply"), Field("value", "u8", "ACKed when 42, else NACKed with it")),

@@ -10,6 +10,7 @@
 #include "uart.h"
 #include "imucheck.h"
 #include "limbmap.h"
+#include "level.h"
 #include "param.h"
 #include "proto.h"
 #include "rom.h"
@@ -259,6 +260,47 @@ static void cmd_get_actuator_map(uint8_t token)
     tx_send();
 }
 
+/* Level calibration (level.h): only with every coil off and no gait, so the robot is at rest. */
+static void cmd_calibrate_level(uint8_t token)
+{
+    uint16_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
+    int8_t r;
+    if (why == 0u) {
+        r = level_calibrate(msg.u.calibrate_level.ground != 0u);
+        why = r == -1 ? 4u : r < 0 ? 5u : 0u; /* under way / not in this build */
+    }
+    if (why) {
+        tx_nack(token, PROTO_ID_CALIBRATE_LEVEL, PROTO_ERR_NOT_ALLOWED, why);
+    } else {
+        tx_ack(token, PROTO_ID_CALIBRATE_LEVEL);
+    }
+}
+
+static void cmd_get_level(uint8_t token)
+{
+    uint8_t i;
+    msg.id = PROTO_ID_LEVEL;
+    msg.u.level.token = token;
+    msg.u.level.status = level_status();
+    msg.u.level.offset_count = CFG_N_LIMBS;
+    msg.u.level.ground_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.level.offset[i] = level_offset_cdeg(i);
+        msg.u.level.ground[i] = level_ground_cdeg(i);
+    }
+    tx_send();
+}
+
+static void cmd_clear_level(uint8_t token)
+{
+    int8_t r = seq_running() ? -1 : level_clear();
+    if (r != 0) {
+        tx_nack(token, PROTO_ID_CLEAR_LEVEL, PROTO_ERR_NOT_ALLOWED, r == -2 ? 5u : 0u);
+    } else {
+        tx_ack(token, PROTO_ID_CLEAR_LEVEL);
+    }
+}
+
 static void handle_command(void)
 {
     uint8_t token = PROTO_CMD_TOKEN(&msg);
@@ -277,11 +319,13 @@ static void handle_command(void)
 void cmd_init(void)
 {
     proto_rx_init(&rx);
+    level_init();
 }
 
 void cmd_poll(void)
 {
     uint16_t n;
+    level_poll();
     for (n = 0; n < RX_BYTES_PER_TICK; n++) {
         int c = uart_read_byte();
         if (c < 0) {

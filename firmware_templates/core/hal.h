@@ -74,4 +74,20 @@ void hal_uart_tx_start(void);
  * hal_can_init and hal_can_tx_start, declared with their contract in canlink.h, in a
  * hal/<family>/can*.c file that only such images contain. */
 
+/* Non-volatile storage: one small block of HAL_NV_BYTES bytes that survives reset and
+ * power loss (AVR: EEPROM from address 0; STM32F1: the last 1 KiB flash page; host-sim:
+ * memory that sim_reset keeps). Erased bytes read 0xFF. The core keeps its level
+ * calibration there (level.h). hal_nv_read copies the first n bytes at once.
+ * hal_nv_write begins storing n bytes at the block's start (src must stay valid until
+ * hal_nv_poll() no longer returns HAL_NV_BUSY): 0 begun, negative when n > HAL_NV_BYTES or
+ * a write is in flight. hal_nv_poll: HAL_NV_BUSY while writing, 0 done, negative failed.
+ * A write may take milliseconds (AVR: 3.4 ms per changed byte, one byte per poll, never
+ * waiting; STM32: a page erase stalls the CPU for up to 40 ms, so the core writes only when
+ * no gait runs). */
+#define HAL_NV_BYTES 32u
+#define HAL_NV_BUSY 1
+void hal_nv_read(uint8_t *dst, uint8_t n);
+int8_t hal_nv_write(const uint8_t *src, uint8_t n);
+int8_t hal_nv_poll(void);
+
 #endif /* PROLEG_HAL_H */

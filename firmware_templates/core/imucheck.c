@@ -6,6 +6,7 @@
 #include "fault.h"
 #include "hal.h"
 #include "imubus.h"
+#include "level.h"
 #include "mpu6050.h"
 #include "proto.h"
 #include "psi.h"
@@ -183,6 +184,7 @@ static int8_t sample(uint8_t i)
         imu_fault(i, PROTO_FAULT_IMU_BAD_DATA);
         return -1;
     }
+    level_apply(i, &a.ax, &a.az); /* the stored rest tilt off (level.h) */
     psi_update(i, a.ax, a.az);
     return 0;
 }

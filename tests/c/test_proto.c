@@ -145,6 +145,26 @@ static int run_emit(void)
     m.u.event.code = 1;
     m.u.event.detail = 2u * 4u + 3u;
     print_frame(&m);
+
+    memset(&m, 0, sizeof m);
+    m.id = PROTO_ID_LEVEL;
+    m.u.level.token = 17;
+    m.u.level.status = PROTO_LEVEL_STORED;
+    m.u.level.offset_count = 2;
+    m.u.level.offset[0] = 312;
+    m.u.level.offset[1] = -2000;
+    m.u.level.ground_count = 2;
+    m.u.level.ground[0] = -995;
+    m.u.level.ground[1] = 1003;
+    print_frame(&m);
+
+    memset(&m, 0, sizeof m);
+    m.id = PROTO_ID_EVENT;
+    m.u.event.time_ms = 70000ul;
+    m.u.event.kind = PROTO_EV_LEVEL_DONE;
+    m.u.event.code = PROTO_LEVEL_RES_TOO_TILTED;
+    m.u.event.detail = 2;
+    print_frame(&m);
     return 0;
 }
 

@@ -352,3 +352,63 @@ void hal_init(void)
     wdt_enable(HAL_WDTO);
     sei();
 }
+
+/* ------------------------------------------------------------------ EEPROM (hal_nv_*)
+ * The block is EEPROM 0..HAL_NV_BYTES-1 (ATmega328P datasheet §8.4: 1 KiB, 3.4 ms per
+ * erase+write of one byte, EEMPE then EEPE within four cycles, interrupts off between).
+ * One changed byte begun per poll, never waiting on a write in flight; unchanged bytes
+ * are not rewritten (100,000 cycles per cell). */
+static const uint8_t *nv_src;
+static uint8_t nv_n, nv_i;
+
+void hal_nv_read(uint8_t *dst, uint8_t n)
+{
+    uint8_t i;
+    for (i = 0; i < n && i < HAL_NV_BYTES; i++) {
+        while (EECR & _BV(EEPE)) {
+        } /* bounded: the write in flight ends within 3.4 ms */
+        EEAR = i;
+        EECR |= _BV(EERE);
+        dst[i] = EEDR;
+    }
+}
+
+int8_t hal_nv_write(const uint8_t *src, uint8_t n)
+{
+    if (n > HAL_NV_BYTES || nv_src) {
+        return -1;
+    }
+    nv_src = src;
+    nv_n = n;
+    nv_i = 0;
+    return 0;
+}
+
+int8_t hal_nv_poll(void)
+{
+    uint8_t sreg;
+    if (!nv_src) {
+        return 0;
+    }
+    for (;;) {
+        if (EECR & _BV(EEPE)) {
+            return HAL_NV_BUSY;
+        }
+        if (nv_i >= nv_n) {
+            nv_src = 0;
+            return 0;
+        }
+        EEAR = nv_i;
+        EECR |= _BV(EERE);
+        if (EEDR != nv_src[nv_i]) {
+            EEDR = nv_src[nv_i++];
+            sreg = SREG;
+            cli();
+            EECR = _BV(EEMPE); /* EEPM = 0: erase and write in one operation */
+            EECR |= _BV(EEPE);
+            SREG = sreg;
+            return HAL_NV_BUSY;
+        }
+        nv_i++;
+    }
+}

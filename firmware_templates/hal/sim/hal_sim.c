@@ -324,3 +324,61 @@ SIM_API uint32_t sim_i2c_transactions(void)
 {
     return i2c_count;
 }
+
+/* Non-volatile block (hal.h): memory that sim_reset keeps, as EEPROM survives a reset;
+ * erased (0xFF) when the library is loaded. A write lands at the first poll after it
+ * began (the next tick). */
+static uint8_t nv[HAL_NV_BYTES];
+static uint8_t nv_formatted;
+static const uint8_t *nv_src;
+static uint8_t nv_n;
+
+static void nv_format(void)
+{
+    if (!nv_formatted) {
+        memset(nv, 0xFF, sizeof nv);
+        nv_formatted = 1;
+    }
+}
+
+void hal_nv_read(uint8_t *dst, uint8_t n)
+{
+    nv_format();
+    memcpy(dst, nv, n <= HAL_NV_BYTES ? n : HAL_NV_BYTES);
+}
+
+int8_t hal_nv_write(const uint8_t *src, uint8_t n)
+{
+    if (n > HAL_NV_BYTES || nv_src) {
+        return -1;
+    }
+    nv_src = src;
+    nv_n = n;
+    return 0;
+}
+
+int8_t hal_nv_poll(void)
+{
+    if (!nv_src) {
+        return 0;
+    }
+    nv_format();
+    memcpy(nv, nv_src, nv_n);
+    nv_src = 0;
+    return 0;
+}
+
+/* The host's view of the block (inspect it, keep it in a file, corrupt it in a test). */
+SIM_API uint8_t sim_nv_peek(uint8_t i)
+{
+    nv_format();
+    return i < HAL_NV_BYTES ? nv[i] : 0xFFu;
+}
+
+SIM_API void sim_nv_poke(uint8_t i, uint8_t v)
+{
+    nv_format();
+    if (i < HAL_NV_BYTES) {
+        nv[i] = v;
+    }
+}

@@ -129,3 +129,27 @@ void hal_tick_mark(uint8_t busy)
  * passes every byte to uart_isr_rx(byte); its transmit-empty interrupt does
  *     int b = uart_isr_tx(); if (b < 0) { transmit interrupt off; } else { send (uint8_t)b; }
  * the timer overflow interrupt, if hal_micros needs one, counts overflows. */
+
+/* Non-volatile block (hal.h): HAL_NV_BYTES bytes that survive reset and power loss, erased
+ * = 0xFF. An EEPROM: write one changed byte per hal_nv_poll, never waiting; a flash page:
+ * erase and program it in hal_nv_write (the core writes only while no gait runs). This
+ * stub has none: reads are "erased" and writes fail, so the core reports no calibration. */
+void hal_nv_read(uint8_t *dst, uint8_t n)
+{
+    uint8_t i;
+    for (i = 0; i < n; i++) {
+        dst[i] = 0xFFu;
+    }
+}
+
+int8_t hal_nv_write(const uint8_t *src, uint8_t n)
+{
+    (void)src;
+    (void)n;
+    return -1;
+}
+
+int8_t hal_nv_poll(void)
+{
+    return 0;
+}

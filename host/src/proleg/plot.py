@@ -63,7 +63,7 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
 
     ax = axes[0]
     stars = rec.meta.psi_star_deg
-    limb_names = list(rec.meta.limb_names) or [f"limb {i}" for i in range(rec.limbs)]
+    limb_names = list(rec.meta.limb_names) or [f"limb #{i + 1}" for i in range(rec.limbs)]
     for i in range(rec.limbs):
         ax.plot(t, rec.psi_deg[:, i], color=colors[i], lw=1.2, label=f"ψ {limb_names[i]}")
         for s in stars[i] if i < len(stars) else []:

@@ -139,8 +139,8 @@ class Robot:
 class _Fields:
     """Reads one TOML table, checking types and refusing keys it does not know."""
 
-    def __init__(self, path: Path, where: str, table: Any, known: set[str]):
-        self.path, self.where = path, where
+    def __init__(self, path: Path, where: str, table: Any, known: set[str], sep: str = "."):
+        self.path, self.where, self.sep = path, where, sep
         if not isinstance(table, dict):
             self.fail("", "a table")
         unknown = sorted(set(table) - known)
@@ -151,7 +151,7 @@ class _Fields:
         self.table = table
 
     def fail(self, key: str, expected: str, got: Any = None) -> None:
-        name = f"{self.where}.{key}" if key else self.where
+        name = f"{self.where}{self.sep}{key}" if key else self.where
         shown = "" if got is None else f", got {got!r}"
         raise RobotFileError(f"{self.path}: {name}: expected {expected}{shown}")
 
@@ -282,13 +282,20 @@ def _array_of_tables(path: Path, value: Any, key: str) -> list[dict]:
     return value
 
 
+def _entry(kind: str, i: int, table: Any) -> str:
+    """How an error names the ``i``-th (0-based) ``[[kind]]`` table: by its name when it has
+    one, e.g. ``limb 'left'``, else by its place counted from 1, ``limb #2``."""
+    name = table.get("name") if isinstance(table, dict) else None
+    return f"{kind} {name!r}" if isinstance(name, str) and name else f"{kind} #{i + 1}"
+
+
 def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
     tables = _array_of_tables(path, value, "actuator")
     if len(tables) > MAX_ACTUATORS:
         raise RobotFileError(f"{path}: actuator: at most {MAX_ACTUATORS} actuators, got {len(tables)}")
     out: list[Actuator] = []
     for i, t in enumerate(tables):
-        f = _Fields(path, f"actuator[{i}]", t, {"name", "channel"})
+        f = _Fields(path, _entry("actuator", i, t), t, {"name", "channel"}, sep=": ")
         name = f.string("name")
         if not NAME_RE.match(name):
             f.fail("name", "lowercase letters, digits and '-', 1 to 15 characters", name)
@@ -307,7 +314,8 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         raise RobotFileError(f"{path}: limb: at most {MAX_LIMBS} limbs, got {len(tables)}")
     out: list[Limb] = []
     for i, t in enumerate(tables):
-        f = _Fields(path, f"limb[{i}]", t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu"})
+        f = _Fields(path, _entry("limb", i, t), t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu"},
+                    sep=": ")
         name = f.string("name")
         if any(limb.name == name for limb in out):
             f.fail("name", "a name no other limb has (duplicate limb)", name)
@@ -333,14 +341,14 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         actuator = f.string("actuator")
         if actuator not in actuator_names:
             f.fail("actuator", f"the name of an [[actuator]] ({', '.join(sorted(actuator_names))})", actuator)
-        imu = _imu_spec(path, f"limb[{i}].imu", t["imu"]) if "imu" in t else None
+        imu = _imu_spec(path, f"{f.where}: imu", t["imu"]) if "imu" in t else None
         out.append(Limb(name, levels, psi_t, hyst, actuator, imu))
     return tuple(out)
 
 
 def _imu_spec(path: Path, where: str, value: Any) -> ImuSpec:
     """``imu = { bus = "I2C1", mux = 0x70, channel = 3, address = 0x68 }``, every part optional."""
-    f = _Fields(path, where, value, {"bus", "mux", "channel", "address"})
+    f = _Fields(path, where, value, {"bus", "mux", "channel", "address"}, sep=".")
     bus = f.string("bus") if f.has("bus") else None
     mux = f.integer("mux", 0, MUX_ADDRESSES.start, MUX_ADDRESSES.stop - 1) if f.has("mux") else None
     channel = f.integer("channel", 0, 0, MUX_CHANNELS - 1) if f.has("channel") else None

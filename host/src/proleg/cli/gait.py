@@ -203,7 +203,7 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int) -> str:
             lines.append(f"    {p.severity}: {p.message}")
         if entry is not None and entry.transitions:
             names = " → ".join(t.label(s) for s in entry.states)
-            lines.append(f"    entry: {walk} is entered from rest by {names} (gait step {entry.gait_step})")
+            lines.append(f"    entry: {walk} is entered from rest by {names} (joining at the gait's state {entry.gait_step + 1})")
     return "\n".join(lines)
 
 

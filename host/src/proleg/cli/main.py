@@ -172,6 +172,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_link_commands(sub)  # console, plot, dbc
     add_robot_commands(sub)  # run, load-gait, set-param, robots
     __import__("proleg.cli.learn", fromlist=["add_arguments"]).add_arguments(sub)  # learn
+    __import__("proleg.cli.calibrate", fromlist=["add_arguments"]).add_arguments(sub)  # calibrate
     return p
 
 
@@ -420,10 +421,12 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
         f"  displacement total: {report.displacement_mm:+.1f} mm over {report.true_transitions} true transitions"
         f" ({report.unexpected_transitions} not in the matrix)"
     )
+    from ..console.names import RobotNames, fault_name_text
+
     for f in report.faults:
-        lines.append(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+        lines.append(f"  FAULT at {f.time_s:.3f} s: {fault_name_text(f.code, f.detail, RobotNames.for_robot(robot))}")
     if report.limb_loss:  # EVENT SUSPECT / FALLBACK (issue 15), by name
-        from ..console.names import RobotNames, describe_event
+        from ..console.names import describe_event
 
         lines += [f"  {describe_event(e, RobotNames.for_robot(robot), t.label).strip()}" for e in report.limb_loss]
     for e in report.errors:

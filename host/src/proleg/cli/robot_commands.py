@@ -178,8 +178,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         if "pose" in doc:
             pose = doc["pose"]["x_mm"], doc["pose"]["y_mm"], doc["pose"]["theta_deg"]
             print(f"  pose: x {pose[0]:+.1f} mm, y {pose[1]:+.1f} mm, theta {pose[2]:+.1f} deg")
+        from ..console.names import RobotNames, fault_name_text
+
+        names = RobotNames.for_robot(robot)
         for f in run.faults:
-            print(f"  FAULT at {f.time_s:.3f} s: {f.code} (limb/channel {f.detail})")
+            print(f"  FAULT at {f.time_s:.3f} s: {fault_name_text(f.code, f.detail, names)}")
     for e in errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     return 0 if doc["ok"] else 1
@@ -296,7 +299,8 @@ def add_arguments(subparsers: Any) -> None:
                                epilog="parameters: " + ", ".join(p.name.lower() for p in ParamId))
     sp.add_argument("name", metavar="NAME", type=_param_name, help="parameter name (see below)")
     sp.add_argument("value", metavar="VALUE", type=int, help="value in the parameter's unit (permyriad, ms, 0.01°)")
-    sp.add_argument("--index", type=int, default=0, help="limb or level index for per-limb parameters (default 0)")
+    sp.add_argument("--index", type=int, default=0, help="limb or level index as the firmware counts them, from 0 = the first limb "
+                         "(default 0); replies and messages name limbs instead")
     add_link_options(sp, sim_takes_robot=True)
     sp.set_defaults(run=cmd_set_param)
 

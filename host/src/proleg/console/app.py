@@ -36,7 +36,7 @@ from ..states import label as state_label
 from ..states import limb_levels
 from ..link.client import Received, RobotClient, RobotInfo
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
-from .names import RobotNames, describe_event, direction_text, gait_text
+from .names import RobotNames, describe_event, direction_text, gait_text, step_text
 
 BAR_WIDTH = 24
 
@@ -249,7 +249,7 @@ class ConsoleApp(App[None]):
             state.append("now ")
             state.append(self._label(tel["measured"], n), style="bold green" if ok else "bold yellow")
             state.append(f"  target {self._label(tel['target'], n)}\n")
-            state.append(f"gait {gait_text(tel['gait'])} {direction_text(tel['direction'])} · step {tel['step']}\n")
+            state.append(f"gait {gait_text(tel['gait'])} {direction_text(tel['direction'])} · {step_text(tel['step'])}\n")
             state.append(f"{_flags_text(tel['flags'])}\n",
                          style="bold red" if tel["flags"] & (Flag.ESTOP | Flag.FAULT) else "")
             if "displacement_mm" in truth:

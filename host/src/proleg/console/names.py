@@ -1,13 +1,23 @@
 """Names for what the robot reports as numbers: event kinds, fault codes, stop reasons, and
 the limb and actuator an event's ``detail`` points at (from the robot file when one is
-given, ``limb 0`` / ``actuator 0`` otherwise). The console, its plain mode and its status
-line show these, never a raw code."""
+given, ``limb #1`` / ``actuator #1`` otherwise: counted from 1, in the robot file's order).
+The console, its plain mode, its status line and the run reports show these, never a raw
+code. Every ordinal shown (a gait step, a limb without a name) counts from 1."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..protocol.definition import GAIT_USER, ClearWhat, Direction, EventKind, FaultCode, StopReason
+from ..protocol.definition import (
+    GAIT_USER,
+    ClearWhat,
+    Direction,
+    EventKind,
+    FaultCode,
+    LevelResult,
+    ResetCause,
+    StopReason,
+)
 
 #: faults whose ``detail`` is an actuator index; the other faults name a limb (or nothing)
 _ACTUATOR_FAULTS = frozenset({FaultCode.SMA_ON_LIMIT})
@@ -31,10 +41,15 @@ class RobotNames:
                    int(getattr(robot, "n_states", 0) or 0))
 
     def limb(self, i: int) -> str:
-        return self.limbs[i] if 0 <= i < len(self.limbs) else f"limb {i}"
+        """The name of limb ``i`` (the firmware's 0-based index), else ``limb #i+1``."""
+        return self.limbs[i] if 0 <= i < len(self.limbs) else f"limb #{i + 1}"
 
     def actuator(self, i: int) -> str:
-        return self.actuators[i] if 0 <= i < len(self.actuators) else f"actuator {i}"
+        return self.actuators[i] if 0 <= i < len(self.actuators) else f"actuator #{i + 1}"
+
+    def limb_set(self, mask: int) -> str:
+        """``left, right`` for a bit-per-limb mask."""
+        return ", ".join(self.limb(i) for i in range(8) if mask >> i & 1) or "none"
 
 
 def enum_name(enum: type, value: int) -> str:
@@ -51,6 +66,23 @@ def direction_text(direction: int) -> str:
 
 def gait_text(gait: int) -> str:
     return "user" if gait == GAIT_USER else str(gait)
+
+
+#: the step the firmware reports while it walks the entry path from rest into a gait
+ENTRY_STEPS = (0xFF, 0xFFFF)
+
+
+def step_text(step: int) -> str:
+    """A gait step as shown: ``step 1`` for the firmware's step 0; ``entry path``."""
+    return "entry path" if step in ENTRY_STEPS else f"step {step + 1}"
+
+
+def fault_name_text(code: str, detail: int, names: RobotNames = RobotNames()) -> str:
+    """``fault_text`` for a fault already named (a report's ``Fault.code``)."""
+    try:
+        return fault_text(int(FaultCode[code]), detail, names)
+    except KeyError:
+        return f"{code} (detail {detail})"
 
 
 def fault_text(code: int, detail: int, names: RobotNames = RobotNames()) -> str:
@@ -81,7 +113,7 @@ def describe_event(f: dict, names: RobotNames = RobotNames(), state_label: objec
         return f"{t} gait {gait_text(code)} started {direction_text(detail)}"
     if k == EventKind.STATE_REACHED:
         state = state_label(detail) if callable(state_label) else str(detail)
-        return f"{t} step {code} reached state {state}"
+        return f"{t} {step_text(code)} reached state {state}"
     if k == EventKind.FAULT_CLEARED:
         cleared = " ".join(c.name.lower() for c in ClearWhat if c & code and c.name) or "nothing"
         return f"{t} cleared {cleared}"
@@ -98,5 +130,12 @@ def describe_event(f: dict, names: RobotNames = RobotNames(), state_label: objec
         return f"{t} suspects {who} (transition {'unknown' if detail == 0xFFFF else detail})"
     if k == EventKind.FALLBACK:
         return f"{t} FALLBACK: gave up {names.actuator(code)}, runs its {detail}-step fallback gait"
-    return f"{t} boot (reset cause {code})"
+    if k == EventKind.LEVEL_DONE:
+        if code == LevelResult.STORED:
+            return f"{t} level calibration done"
+        on = f" ({names.limb_set(detail)})" if code in (LevelResult.TOO_TILTED, LevelResult.IMU) else ""
+        return f"{t} level calibration refused: {enum_name(LevelResult, code)}{on}"
+    if k == EventKind.BOOT:
+        return f"{t} boot (reset cause {enum_name(ResetCause, code)})"
+    return f"{t} {k.name.lower()} (code {code}, detail {detail})"
 

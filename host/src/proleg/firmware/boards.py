@@ -11,6 +11,7 @@ a board name (``arduino-nano``) or a path to a board file. See docs/adding-a-boa
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -367,3 +368,12 @@ def _budget(path: Path, doc: dict) -> TickBudget | None:
     if not isinstance(enforce, bool):
         raise BoardError(f"{path}: budget.enforce: expected true or false, got {enforce!r}")
     return TickBudget(values[0], values[1], measured, enforce)
+
+
+def pwm_channel_error(robot: Any, actuator: Any, board_name: str, pins: Sequence[str]) -> str:
+    """The one message for an actuator on a PWM channel the board does not have. Channels are
+    shown as the robot file writes them (``channel = N``, the board's [pwm] pins in order),
+    with the pin each one is."""
+    have = ", ".join(f"channel = {i} ({p})" for i, p in enumerate(pins)) or "none"
+    return (f"robot {robot.name}: actuator {actuator.name!r} is on channel = {actuator.channel}, but board "
+            f"{board_name} has {len(pins)} PWM channels: {have}")

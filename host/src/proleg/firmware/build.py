@@ -30,7 +30,7 @@ from .. import __version__
 from ..errors import BuildError
 from ..paths import home, templates_dir
 from ..robot import Robot
-from .boards import Board
+from .boards import Board, pwm_channel_error
 from .fit import Fit, check_fit
 from .gaits import firmware_gaits, gait_warnings
 from .placement import place_imus
@@ -72,10 +72,7 @@ def check_buildable(robot: Robot, board: Board) -> None:
     channels = len(board.pwm_pins)
     for a in robot.actuators:
         if a.channel >= channels:
-            raise BuildError(
-                f"robot {robot.name} drives actuator {a.name!r} on PWM channel {a.channel}, but board {board.name} "
-                f"has {channels} channels (0..{channels - 1}: {', '.join(board.pwm_pins)})"
-            )
+            raise BuildError(pwm_channel_error(robot, a, board.name, board.pwm_pins))
     place_imus(robot, board)  # BuildError when the board cannot carry the robot's IMUs
     check_can_link(robot, board)
     # Telemetry may use at most half the UART (the firmware's TELEMETRY_MAX_HZ rule).

@@ -30,7 +30,7 @@ class Family:
         key = str(pin).upper()
         if key not in self.pwm_pins:
             raise BuildError(
-                f"board {board_name}: PWM pin {pin!r} (channel {channel}) is not a {self.pin_kind} "
+                f"board {board_name}: [pwm] pin {pin!r} (channel = {channel}) is not a {self.pin_kind} "
                 f"this HAL drives (expected one of: {', '.join(sorted(self.pwm_pins))})"
             )
         return self.pwm_pins[key]

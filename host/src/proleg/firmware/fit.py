@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import BuildError
+from .boards import pwm_channel_error
 from .placement import ImuPlacement, check_tick_budget, i2c_tick_us, mux_selects_per_tick, place_imus
 from .render import BITMAP_MAX_STATES, gait_table_rows
 
@@ -66,10 +67,7 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
     pins = list(_board(board, "pwm_pins", ()) or ())
     for a in robot.actuators:
         if a.channel >= len(pins):
-            raise BuildError(
-                f"robot {robot.name} drives actuator {a.name} on PWM channel {a.channel + 1} (index {a.channel}), "
-                f"but board {name} has {len(pins)} channels ({', '.join(pins)})"
-            )
+            raise BuildError(pwm_channel_error(robot, a, name, pins))
     placements = place_imus(robot, board)
     i2c = _board(board, "i2c", {}) or {}
     hz = int(i2c.get("hz", 400000) or 400000)

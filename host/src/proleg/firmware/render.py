@@ -28,7 +28,7 @@ import jinja2
 from .. import __version__
 from ..errors import BoardError, BuildError
 from ..paths import home, templates_dir
-from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER
+from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
 from .placement import place_imus
 
@@ -296,10 +296,7 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     placements = place_imus(robot, raw_board)
     for a in actuators:
         if not 0 <= a.channel < len(board.pins):
-            raise BuildError(
-                f"robot {robot.name}: actuator {a.name!r} on channel {a.channel}, board {board.board_name} "
-                f"has channels 0..{len(board.pins) - 1}"
-            )
+            raise BuildError(pwm_channel_error(robot, a, board.board_name, board.pins))
     levels = [int(limb.levels) for limb in limbs]
     n_states = math.prod(levels)
     if n_states > 0xFFFF:

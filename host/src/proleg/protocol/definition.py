@@ -112,6 +112,7 @@ class EventKind(IntEnum):
     SUSPECT = 8  # after a FAULT STATE_TIMEOUT / SMA_ON_LIMIT: code = suspected actuator index (0xFF: none),
     #              detail = the failed transition, from-state × n_states + to-state (0xFFFF: not representable)
     FALLBACK = 9  # the firmware switched by itself to its fallback gait: code = lost actuator, detail = steps
+    LEVEL_DONE = 10  # CALIBRATE_LEVEL finished: code = LevelResult, detail = bit per limb stored
 
 
 class ResetCause(IntEnum):
@@ -124,6 +125,25 @@ class ResetCause(IntEnum):
     BROWN_OUT = 3
     WATCHDOG = 4  # the hardware watchdog: a tick or a bus wait hung
     SOFTWARE = 5
+
+
+class LevelStatus(IntEnum):
+    """``LEVEL.status``: what the board's non-volatile level record holds."""
+
+    NONE = 0  # blank (never calibrated, or CLEAR_LEVEL): offsets 0, nothing applied
+    STORED = 1  # a valid record (magic, version, limb count, CRC): its offsets are applied
+    CORRUPT = 2  # a record whose magic/version, limb count or CRC is wrong: ignored, offsets 0
+    CALIBRATING = 3  # CALIBRATE_LEVEL is sampling or writing
+
+
+class LevelResult(IntEnum):
+    """``EVENT.code`` when ``kind == LEVEL_DONE``."""
+
+    STORED = 0  # every limb measured, the record written and read back valid (ground: applied)
+    TOO_TILTED = 1  # a limb's rest tilt is beyond the build's limit (detail = bit per such limb)
+    IMU = 2  # an IMU is bad, or gave no samples (detail = bit per such limb)
+    INTERRUPTED = 3  # a gait started or a fault latched while sampling
+    WRITE_FAILED = 4  # the non-volatile write did not verify
 
 
 class StopReason(IntEnum):
@@ -181,6 +201,8 @@ ENUMS: tuple[tuple[type[IntEnum] | type[IntFlag], str], ...] = (
     (FaultCode, "PROTO_FAULT_"),
     (EventKind, "PROTO_EV_"),
     (StopReason, "PROTO_STOP_"),
+    (LevelStatus, "PROTO_LEVEL_"),
+    (LevelResult, "PROTO_LEVEL_RES_"),
     (ResetCause, "PROTO_RESET_"),
     (ParamId, "PROTO_PARAM_"),
     (Flag, "PROTO_FLAG_"),
@@ -309,6 +331,28 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "Clear latched faults / E-stop / link counters.",
         reply="ACK",
     ),
+    MessageSpec(
+        0x0B,
+        "CALIBRATE_LEVEL",
+        "h2r",
+        (_TOKEN, _u8("ground", "0: on flat ground, store the result; 1: level on this ground (a slope), RAM only")),
+        "Record each IMU's rest tilt (the mean of 64 ticks' samples; robot at rest, coils cold): "
+        "on flat ground as its level offset, stored in non-volatile memory; with ground = 1 as "
+        "this ground's tilt on top of it, until reset. ACK when sampling begins, then EVENT LEVEL_DONE. NACK NOT_ALLOWED while a gait runs (detail 1), an IMU is bad (2), "
+        "a fault is latched (3), a calibration is under way (4), or the build leaves level "
+        "calibration out (5).",
+        reply="ACK",
+    ),
+    MessageSpec(0x0C, "GET_LEVEL", "h2r", (_TOKEN,), "Answered by LEVEL.", reply="LEVEL"),
+    MessageSpec(
+        0x0D,
+        "CLEAR_LEVEL",
+        "h2r",
+        (_TOKEN,),
+        "Erase the stored level record: offsets 0 (NACK NOT_ALLOWED while a gait runs or a "
+        "calibration is under way; detail 5: the build leaves level calibration out).",
+        reply="ACK",
+    ),
     # ---------------------------------------------------------------- robot → host
     MessageSpec(
         0x40,
@@ -420,6 +464,20 @@ MESSAGES: tuple[MessageSpec, ...] = (
             Field("actuators", "u8", "actuator index per limb, first limb first", max_count="limbs"),
         ),
         "Reply to GET_ACTUATOR_MAP: the limb→actuator map in use.",
+    ),
+    MessageSpec(
+        0x46,
+        "LEVEL",
+        "r2h",
+        (
+            _TOKEN,
+            _u8("status", "LevelStatus", LevelStatus),
+            Field("offset", "i16", "stored rest tilt per limb subtracted from ψ, 0.01° (0 unless STORED)",
+                  max_count="limbs"),
+            Field("ground", "i16", "this ground's tilt per limb subtracted on top (CALIBRATE_LEVEL ground = 1; "
+                  "0 after reset), 0.01°", max_count="limbs"),
+        ),
+        "Reply to GET_LEVEL: the level calibration in use.",
     ),
 )
 

@@ -21,9 +21,18 @@ from typing import Any
 from cobs import cobs
 
 from proleg.protocol.codec import COUNTERS, FrameDecoder, Message, encode
-from proleg.protocol.definition import GAIT_USER, MAX_GAIT_STEPS, PROTOCOL_VERSION, ErrorCode, EventKind, Flag
+from proleg.protocol.definition import (
+    GAIT_USER,
+    MAX_GAIT_STEPS,
+    PROTOCOL_VERSION,
+    ErrorCode,
+    EventKind,
+    Flag,
+    LevelResult,
+    LevelStatus,
+)
 
-TOKEN_ONLY = ("PING", "GET_INFO", "GET_STATS", "STOP", "ESTOP")
+TOKEN_ONLY = ("PING", "GET_INFO", "GET_STATS", "STOP", "ESTOP", "GET_LEVEL", "CLEAR_LEVEL")
 
 
 def _telemetry(seq: int, psi: tuple[int, ...] = (1234, -567), duty: tuple[int, ...] = (6000, 0)) -> Message:
@@ -118,6 +127,13 @@ def valid_messages() -> list[Message]:
         Message.new("ACTUATOR_MAP", token=20, lost=255, actuators=()),
         Message.new("EVENT", time_ms=20000, kind=int(EventKind.SUSPECT), code=1, detail=2 * 4 + 3),
         Message.new("EVENT", time_ms=20001, kind=int(EventKind.FALLBACK), code=1, detail=2),
+        Message.new("CALIBRATE_LEVEL", token=1, ground=0),
+        Message.new("CALIBRATE_LEVEL", token=255, ground=1),
+        Message.new("LEVEL", token=16, status=int(LevelStatus.STORED), offset=(312, -2000), ground=(1000, -1000)),
+        Message.new("LEVEL", token=255, status=int(LevelStatus.NONE), offset=(0,) * 8, ground=(0,) * 8),
+        Message.new("LEVEL", token=1, status=int(LevelStatus.CORRUPT), offset=(), ground=()),
+        Message.new("LEVEL", token=2, status=int(LevelStatus.CALIBRATING), offset=(-32768, 32767, 1, -1), ground=(7,)),
+        Message.new("EVENT", time_ms=5000, kind=int(EventKind.LEVEL_DONE), code=int(LevelResult.STORED), detail=3),
     ]
     return msgs
 
@@ -172,6 +188,8 @@ C_ENCODED: tuple[Message, ...] = (
     Message.new("SET_ACTUATOR_MAP", token=16, actuators=(0, 0)),
     Message.new("ACTUATOR_MAP", token=19, lost=1, actuators=(1, 0)),
     Message.new("EVENT", time_ms=20000, kind=int(EventKind.SUSPECT), code=1, detail=2 * 4 + 3),
+    Message.new("LEVEL", token=17, status=int(LevelStatus.STORED), offset=(312, -2000), ground=(-995, 1003)),
+    Message.new("EVENT", time_ms=70000, kind=int(EventKind.LEVEL_DONE), code=int(LevelResult.TOO_TILTED), detail=2),
 )
 
 

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 from typing import Any
 
-from ..protocol.definition import GAIT_USER, Direction, ErrorCode, EventKind, FaultCode, StopReason
+from ..protocol.definition import GAIT_USER, Direction, ErrorCode, EventKind, StopReason
 
 #: TELEMETRY's integer fields, as recorded (no scaling)
 INTEGER_FIELDS = ("seq", "measured", "target", "gait", "direction", "step", "flags")
@@ -76,7 +76,7 @@ class RecordingMeta:
         for limb and actuator names and ψ*) and the link (its description, its ground truth)."""
         limbs = info.limbs if info is not None else len(robot.limbs)
         channels = info.actuators if info is not None else max(a.channel for a in robot.actuators) + 1
-        limb_names = [f"limb{i}" for i in range(limbs)]
+        limb_names = [f"limb{i + 1}" for i in range(limbs)]  # counted from 1, as messages show them
         channel_names = [f"ch{j}" for j in range(channels)]
         stars: tuple[tuple[float, ...], ...] = ()
         if robot is not None and len(robot.limbs) == limbs:
@@ -114,13 +114,14 @@ def telemetry_row(meta: RecordingMeta, host_s: float, f: dict[str, Any], truth: 
     return row
 
 
-def event_row(host_s: float, name: str, f: dict[str, Any]) -> dict[str, Any]:
+def event_row(host_s: float, name: str, f: dict[str, Any], limb_names: tuple[str, ...] = ()) -> dict[str, Any]:
     """Any other message as one events-table row: ``kind``/``code``/``detail`` of an EVENT
-    (kind by name), a NACK's error/detail, 0 otherwise; ``text`` says it in words."""
+    (kind by name), a NACK's error/detail, 0 otherwise; ``text`` says it in words (the
+    limb a fault is on by name, from ``limb_names``)."""
     t_s = f["time_ms"] / 1000 if "time_ms" in f else None
     if name == "EVENT":
         return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": name, "kind": _name(EventKind, f["kind"]),
-                "code": int(f["code"]), "detail": int(f["detail"]), "text": describe_event(f)}
+                "code": int(f["code"]), "detail": int(f["detail"]), "text": describe_event(f, limb_names)}
     code = int(f.get("error", 0)) if name == "NACK" else 0
     detail = int(f.get("detail", 0)) if name == "NACK" else 0
     text = " ".join(f"{k}={v}" for k, v in f.items() if k != "time_ms")
@@ -136,26 +137,29 @@ def injection_row(host_s: float, t_s: float | None, fault: str) -> dict[str, Any
             "text": fault}
 
 
-def describe_event(f: dict[str, Any]) -> str:
-    """An EVENT in words (fault, stop reason and event kind by name)."""
+def describe_event(f: dict[str, Any], limb_names: tuple[str, ...] = ()) -> str:
+    """An EVENT in words (fault, stop reason, event kind and the limb or actuator by name;
+    steps counted from 1)."""
+    from ..console.names import RobotNames, fault_text, step_text
+
     kind, code, detail = f["kind"], f["code"], f["detail"]
     try:
         k = EventKind(kind)
     except ValueError:
         return f"event {kind} code={code} detail={detail}"
     if k == EventKind.FAULT:
-        return f"FAULT {_name(FaultCode, code)} (limb/channel {detail})"
+        return f"FAULT {fault_text(code, detail, RobotNames(tuple(limb_names)))}"
     if k == EventKind.GAIT_STOPPED:
         return f"gait stopped: {_name(StopReason, code)}"
     if k == EventKind.GAIT_STARTED:
         d = "+x" if detail == Direction.PLUS_X else "-x"
         return f"gait {'user' if code == GAIT_USER else code} started {d}"
     if k == EventKind.STATE_REACHED:
-        return f"step {code} reached state {detail}"
+        return f"{step_text(code)} reached state {detail}"
     if k == EventKind.SUSPECT:
-        return f"suspects actuator {code} (transition code {detail})" if code != 0xFF else "suspects no actuator"
+        return f"suspects actuator #{code + 1} (transition code {detail})" if code != 0xFF else "suspects no actuator"
     if k == EventKind.FALLBACK:
-        return f"FALLBACK without actuator {code} ({detail}-step gait)"
+        return f"FALLBACK without actuator #{code + 1} ({detail}-step gait)"
     return f"{k.name.lower()} code={code} detail={detail}"
 
 

@@ -30,9 +30,10 @@ from ...errors import SimError
 from ...firmware.families import hal_root
 from .bkp import Bkp
 from .bxcan import BxCan
-from .clocks import CPU_HZ, NEVER, Flash, Iwdg, Rcc
+from .clocks import CPU_HZ, NEVER, Iwdg, Rcc
 from .core import HARDFAULT, SYSTICK, CortexM
 from .elf import read_elf
+from .fpec import PAGE_SIZE as NV_PAGE_SIZE, Fpec
 from .gpio import Gpio
 from .i2c import Bus, I2c
 from .native import Native
@@ -118,11 +119,12 @@ class ArmEmuBoard:
     def _build_machine(self) -> None:
         uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
         self.uc = uc
-        uc.mem_map(FLASH_BASE, FLASH_SIZE, UC_PROT_ALL)
-        uc.mem_write(FLASH_BASE, bytes(self._flash))
+        uc.mem_map(FLASH_BASE, FLASH_SIZE - NV_PAGE_SIZE, UC_PROT_ALL)  # the last page: the FPEC's (fpec.py)
+        uc.mem_write(FLASH_BASE, bytes(self._flash[:-NV_PAGE_SIZE]))
         uc.mem_map(RAM_BASE, RAM_SIZE, UC_PROT_ALL)
         self.rcc = Rcc()
-        self.flash_acr = Flash()
+        self.flash_acr = self.fpec = Fpec(self._stall)
+        self.fpec.map(uc)
         self.iwdg = Iwdg()
         self.scs = Scs()
         self.bus = Bus()
@@ -168,6 +170,10 @@ class ArmEmuBoard:
         self._wait = sym("wait_tick")
         self._next_tick = sym("next_tick")
         self._ms_count = sym("ms_count")
+
+    def _stall(self, cycles: int) -> None:
+        """The CPU waits (a flash erase or program): its clock moves on."""
+        self.native.cycles.value += cycles
 
     def _vector(self, n: int) -> int:
         vtor = self.scs.regs.get(0xD08, 0) or FLASH_BASE
@@ -523,7 +529,7 @@ class ArmEmuBoard:
         ctx = self.uc.context_save()
         for reg, v in zip((A.UC_ARM_REG_R0, A.UC_ARM_REG_R1, A.UC_ARM_REG_R2, A.UC_ARM_REG_R3), args):
             self.uc.reg_write(reg, v & 0xFFFFFFFF)
-        sentinel = FLASH_BASE + FLASH_SIZE - 16  # erased flash, never executed
+        sentinel = FLASH_BASE + FLASH_SIZE - NV_PAGE_SIZE - 16  # erased flash, never executed
         self.uc.reg_write(A.UC_ARM_REG_LR, sentinel | 1)
         self.native.deadline.value = self.cycles + max_cycles
         try:

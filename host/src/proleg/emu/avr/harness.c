@@ -30,6 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "avr_eeprom.h"
 #include "avr_ioport.h"
 #include "avr_uart.h"
 #include "harness.h"
@@ -495,11 +496,32 @@ EMU_API int emu_open(const char *elf_path, uint32_t freq, uint32_t host_baud)
     return make_core() ? 0 : -2;
 }
 
+/* The EEPROM keeps its bytes through a power cycle: emu_reset carries them from the old
+ * core to the new one (an MCU reset keeps the core, and them, anyway). Erased (0xFF) when
+ * the library is loaded. */
+#define EEPROM_BYTES 1024u
+static uint8_t eeprom_keep[EEPROM_BYTES];
+static int eeprom_kept;
+
+static void eeprom_move(avr_t *avr, int save)
+{
+    avr_eeprom_desc_t d = {eeprom_keep, 0, EEPROM_BYTES};
+    if (save) {
+        if (avr_ioctl(avr, AVR_IOCTL_EEPROM_GET, &d) == 0 && d.ee != eeprom_keep) {
+            memcpy(eeprom_keep, d.ee, EEPROM_BYTES); /* versions that hand back a pointer */
+        }
+        eeprom_kept = 1;
+    } else if (eeprom_kept) {
+        avr_ioctl(avr, AVR_IOCTL_EEPROM_SET, &d);
+    }
+}
+
 /* Power-on reset: a fresh core with the firmware, the devices powered up again with
  * `seed`, time 0, queues empty, counters cleared (markers and the PWM map are kept). */
 EMU_API int emu_reset(uint32_t seed)
 {
     if (E.avr) {
+        eeprom_move(E.avr, 1);
         boot_power_off(E.avr);
         avr_terminate(E.avr);
         free(E.avr);
@@ -517,6 +539,7 @@ EMU_API int emu_reset(uint32_t seed)
     if (!make_core()) {
         return -2;
     }
+    eeprom_move(E.avr, 0);
     on_mcu_reset(0);
     E.mcu_resets = 0;
     return 0;

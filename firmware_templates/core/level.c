@@ -1,0 +1,213 @@
+/* level.c - see level.h. */
+#include "level.h"
+
+#if CFG_LEVEL_CALIBRATION
+
+#include <stddef.h>
+#include <string.h>
+
+#include "crc16.h"
+#include "fault.h"
+#include "hal.h"
+#include "imucheck.h"
+#include "proto.h"
+#include "psi.h"
+#include "seq.h"
+#include "tx.h"
+
+#define PH_IDLE 0u
+#define PH_SAMPLING 1u
+#define PH_WRITING 2u
+#define PH_CLEARING 3u
+
+/* The record as stored: every target is little-endian (AVR, Cortex-M, the host), and the
+ * layout has no padding (two bytes, then 16-bit fields). */
+typedef struct {
+    uint8_t magic;
+    uint8_t limbs;
+    int16_t off[CFG_N_LIMBS];
+    uint16_t crc;
+} level_rec_t;
+typedef char level_rec_is_packed[sizeof(level_rec_t) == LEVEL_RECORD_BYTES ? 1 : -1];
+typedef char level_rec_fits_nv[LEVEL_RECORD_BYTES <= HAL_NV_BYTES ? 1 : -1];
+
+static level_rec_t rec;  /* the record (hal_nv_write keeps a pointer to it while writing) */
+static uint8_t status;   /* PROTO_LEVEL_NONE / STORED / CORRUPT */
+static uint8_t phase;
+static uint8_t left;     /* ticks of sampling left */
+static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
+static uint16_t waited;  /* ticks some limb had no sample yet */
+static int32_t sum[CFG_N_LIMBS];    /* ψ as corrected now, 0.01°, summed over the ticks */
+static int16_t ground[CFG_N_LIMBS]; /* this ground's tilt on top of the record, 0.01° */
+static int16_t rc[CFG_N_LIMBS], rs[CFG_N_LIMBS]; /* Q14 cos/sin of the whole tilt */
+
+/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
+ * shift 32 bits 14 times. Exact for |p| < 2^29 (a rotated gravity vector always is). */
+#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
+
+static uint16_t rec_crc(void)
+{
+    return crc16_ccitt(CRC16_INIT, (const uint8_t *)&rec, offsetof(level_rec_t, crc));
+}
+
+int16_t level_offset_cdeg(uint8_t limb)
+{
+    return status == PROTO_LEVEL_STORED ? rec.off[limb] : 0;
+}
+
+int16_t level_ground_cdeg(uint8_t limb)
+{
+    return ground[limb];
+}
+
+/* Read the record back: its status, then each limb's rotation (the record's only if valid). */
+static void load(void)
+{
+    uint8_t i;
+    int16_t a;
+    hal_nv_read((uint8_t *)&rec, LEVEL_RECORD_BYTES);
+    status = rec.magic == 0xFFu ? PROTO_LEVEL_NONE
+             : (rec.magic == LEVEL_MAGIC && rec.limbs == CFG_N_LIMBS && rec.crc == rec_crc()) ? PROTO_LEVEL_STORED
+                                                                                             : PROTO_LEVEL_CORRUPT;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        a = (int16_t)(level_offset_cdeg(i) + ground[i]);
+        rc[i] = psi_cos_q14(a);
+        rs[i] = psi_sin_q14(a);
+    }
+}
+
+void level_init(void)
+{
+    phase = PH_IDLE;
+    load();
+}
+
+void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
+{
+    int16_t x = *ax, z = *az, c = rc[limb], s = rs[limb];
+    if (s != 0) { /* a tilt of 0.01° already has sin ≥ 2 in Q14; 16×16→32 products */
+        *ax = Q14_TO_I16((int32_t)x * c - (int32_t)z * s);
+        *az = Q14_TO_I16((int32_t)z * c + (int32_t)x * s);
+    }
+}
+
+int8_t level_calibrate(uint8_t on_this_ground)
+{
+    if (phase != PH_IDLE) {
+        return -1;
+    }
+    memset(sum, 0, sizeof sum);
+    ground_mode = on_this_ground;
+    left = LEVEL_SAMPLES;
+    waited = 0;
+    phase = PH_SAMPLING;
+    return 0;
+}
+
+static void write(uint8_t n, uint8_t ph)
+{
+    phase = hal_nv_write((const uint8_t *)&rec, n) == 0 ? ph : PH_IDLE;
+}
+
+int8_t level_clear(void)
+{
+    if (phase != PH_IDLE) {
+        return -1;
+    }
+    rec.magic = 0xFFu; /* the erased magic: no record */
+    status = PROTO_LEVEL_NONE;
+    memset(ground, 0, sizeof ground);
+    write(1, PH_CLEARING);
+    return 0;
+}
+
+/* The end of a calibration: what holds now (the old record unless the new one was written
+ * and reads back valid), and the EVENT. */
+static void done(uint8_t result, uint16_t detail)
+{
+    phase = PH_IDLE;
+    load();
+    if (result == PROTO_LEVEL_RES_STORED && status != PROTO_LEVEL_STORED && !ground_mode) {
+        result = PROTO_LEVEL_RES_WRITE_FAILED;
+    }
+    tx_event(PROTO_EV_LEVEL_DONE, result, detail);
+}
+
+/* Sampling is over: each limb's tilt (the one in use plus the mean), checked, then applied
+ * (this ground) or stored (flat). */
+static void measured(void)
+{
+    uint8_t i, far = 0;
+    int16_t o[CFG_N_LIMBS];
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        o[i] = (int16_t)(ground[i] + (int16_t)(sum[i] / LEVEL_SAMPLES)); /* a shift */
+        if (!ground_mode) {
+            o[i] = (int16_t)(o[i] + level_offset_cdeg(i));
+        }
+        if (o[i] > LEVEL_MAX_CDEG || o[i] < -LEVEL_MAX_CDEG) {
+            far |= (uint8_t)(1u << i);
+        }
+    }
+    if (far) {
+        done(PROTO_LEVEL_RES_TOO_TILTED, far);
+        return;
+    }
+    if (ground_mode) {
+        memcpy(ground, o, sizeof ground);
+        done(PROTO_LEVEL_RES_STORED, 0); /* applied (this ground only: not stored) */
+        return;
+    }
+    memset(ground, 0, sizeof ground);
+    memcpy(rec.off, o, sizeof o);
+    rec.magic = LEVEL_MAGIC;
+    rec.limbs = CFG_N_LIMBS;
+    rec.crc = rec_crc();
+    write(LEVEL_RECORD_BYTES, PH_WRITING);
+    if (phase != PH_WRITING) {
+        done(PROTO_LEVEL_RES_WRITE_FAILED, 0);
+    }
+}
+
+void level_poll(void)
+{
+    uint8_t i, dead = imucheck_bad();
+    int8_t r;
+    if (phase == PH_SAMPLING) {
+        for (i = 0; i < CFG_N_LIMBS; i++) {
+            if (psi_level(i) == PSI_UNKNOWN) {
+                dead |= (uint8_t)(1u << i); /* starting up: wait for it, a while */
+            }
+        }
+        if (imucheck_bad() || (dead && ++waited > LEVEL_WAIT_TICKS)) {
+            done(PROTO_LEVEL_RES_IMU, dead);
+        } else if (seq_running() || fault_latched()) {
+            done(PROTO_LEVEL_RES_INTERRUPTED, 0);
+        } else if (!dead) {
+            for (i = 0; i < CFG_N_LIMBS; i++) {
+                sum[i] += psi_last_centideg(i);
+            }
+            if (--left == 0u) {
+                measured();
+            }
+        }
+    } else if (phase != PH_IDLE) {
+        r = hal_nv_poll();
+        if (r == HAL_NV_BUSY) {
+            return;
+        }
+        if (phase == PH_CLEARING) {
+            phase = PH_IDLE;
+            load();
+        } else {
+            done(r == 0 ? PROTO_LEVEL_RES_STORED : PROTO_LEVEL_RES_WRITE_FAILED, 0);
+        }
+    }
+}
+
+uint8_t level_status(void)
+{
+    return (phase == PH_SAMPLING || phase == PH_WRITING) ? PROTO_LEVEL_CALIBRATING : status;
+}
+#else
+typedef char level_left_out; /* CFG_LEVEL_CALIBRATION = 0 (ISO C wants a declaration) */
+#endif

@@ -1,0 +1,84 @@
+/* level.h - level calibration: each IMU's rest tilt, stored in non-volatile memory and
+ * taken off every accelerometer sample before ψ is computed.
+ *
+ * Contract. At rest on flat ground with every coil cold the body lies straight on its
+ * contacts, so every limb's true ψ is 0 (docs/plant.md); what an IMU reads then is its
+ * mounting tilt plus the accelerometer's bias, seen as an angle. level_calibrate()
+ * averages each limb's ψ (as corrected now) over LEVEL_SAMPLES ticks; the rest tilt o is
+ * the offset in use plus that mean, and is stored; from then on level_apply() rotates each
+ * sample (ax, az) by −o in the x–z plane (four 16×16→32 products, Q14 cos/sin) before ψ
+ * is computed (imucheck.c, between the sample checks and psi_update), so a limb at rest
+ * reads ψ = 0 again. A tilt beyond LEVEL_MAX_CDEG is refused (not at rest, not on flat
+ * ground, or an IMU mounted too crooked to trust).
+ *
+ * On a slope. The ground's incline tilts each end's IMU too (the first limb's end up the
+ * slope, the last one down), which no flat calibration can know. level_calibrate(1), with
+ * the robot at rest on the slope, measures each limb's remaining tilt the same way and
+ * applies it on top of the record, in RAM only (the ground changes; a reset, CLEAR_LEVEL
+ * or a flat calibration sets it back to 0). Relative to a flat calibration this is the
+ * slope itself, as each end sees it; GET_LEVEL reports both.
+ *
+ * Sampling waits for IMUs still starting up (up to LEVEL_WAIT_TICKS); a bad IMU, or one
+ * still without a sample then, fails the calibration (result IMU).
+ *
+ * The record in non-volatile memory (hal_nv_*): a magic byte that carries the layout
+ * version (0x4C 'L' = version 1), the limb count, one i16 offset per limb in 0.01°
+ * (little-endian), CRC-16/CCITT-FALSE over all of that (little-endian). Erased (first byte
+ * 0xFF; CLEAR_LEVEL erases that byte) is PROTO_LEVEL_NONE; a wrong magic, limb count or
+ * CRC is PROTO_LEVEL_CORRUPT; either way the offsets are 0 and nothing is applied.
+ */
+#ifndef PROLEG_LEVEL_H
+#define PROLEG_LEVEL_H
+
+#include <stdint.h>
+
+#include "robot_config.h"
+
+/* Build switch: 0 leaves level calibration out (about 1.6 KB of AVR flash): the commands
+ * are refused (NACK NOT_ALLOWED, detail 5), GET_LEVEL reports NONE, nothing is applied.
+ * Set it in a board file's cflags (-DCFG_LEVEL_CALIBRATION=0). */
+#ifndef CFG_LEVEL_CALIBRATION
+#define CFG_LEVEL_CALIBRATION 1
+#endif
+
+#define LEVEL_MAGIC 0x4Cu /* 'L': record layout version 1 */
+#define LEVEL_RECORD_BYTES (4u + 2u * CFG_N_LIMBS)
+#define LEVEL_SAMPLES 64 /* ticks averaged: a power of two (the mean is a shift) */
+#define LEVEL_WAIT_TICKS (2u * CFG_TICK_HZ) /* 2 s */
+#define LEVEL_MAX_CDEG 2000 /* 20°: the mounting tilt a limb may have and still be trusted */
+
+#if CFG_LEVEL_CALIBRATION
+/* Load the stored record (status and offsets) and stop any calibration. */
+void level_init(void);
+
+/* Rotate a sample of `limb` by its rest tilt (nothing when none is stored). */
+void level_apply(uint8_t limb, int16_t *ax, int16_t *az);
+
+/* Begin sampling: on flat ground (0: the result is stored) or on this ground (1: applied
+ * on top of the record until reset). 0, or -1 when a calibration or an erase is under way
+ * (-2: not in this build). */
+int8_t level_calibrate(uint8_t on_this_ground);
+
+/* Erase the record (begins the write; status NONE at once). 0, or -1 while calibrating. */
+int8_t level_clear(void);
+
+/* Move a calibration on (sampling → checks → write → verify); sends EVENT LEVEL_DONE when
+ * it ends. Called once per tick (cmd_poll). */
+void level_poll(void);
+
+/* PROTO_LEVEL_* status, and the offset in use per limb (0.01°). */
+uint8_t level_status(void);
+int16_t level_offset_cdeg(uint8_t limb);
+int16_t level_ground_cdeg(uint8_t limb);
+#else
+#define level_init() ((void)0)
+#define level_apply(limb, ax, az) ((void)0)
+#define level_calibrate(on_this_ground) ((void)(on_this_ground), (int8_t)-2)
+#define level_clear() ((int8_t)-2)
+#define level_poll() ((void)0)
+#define level_status() ((uint8_t)0) /* PROTO_LEVEL_NONE */
+#define level_offset_cdeg(limb) ((void)(limb), (int16_t)0)
+#define level_ground_cdeg(limb) ((void)(limb), (int16_t)0)
+#endif
+
+#endif /* PROLEG_LEVEL_H */

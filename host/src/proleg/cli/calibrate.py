@@ -1,0 +1,96 @@
+"""``proleg calibrate``: level calibration of a robot's IMUs (docs/calibration.md).
+
+With the robot at rest on flat ground (every coil cold), ``proleg calibrate ROBOT --port …``
+has the firmware record each IMU's rest tilt and store it in the board's non-volatile memory;
+``--show`` prints what is stored, ``--clear`` erases it. Exit 0 when stored (or shown/cleared),
+1 when the robot refuses.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..errors import LinkError
+
+
+def _limb_names(robot: Any, n: int) -> list[str]:
+    names = [limb.name for limb in robot.limbs]
+    if len(names) != n:
+        raise LinkError(f"the robot reports {n} limbs, {robot.path.name} has {len(names)}: "
+                        f"is this the firmware of this robot file?")
+    return names
+
+
+def _table(names: list[str], offsets_cdeg: tuple[int, ...], status: list[str], what: str = "rest tilt") -> str:
+    w = max(len(n) for n in names)
+    return "\n".join(f"  limb {n:<{w}}  {what} {o / 100:+6.2f}°  {s}" for n, o, s in zip(names, offsets_cdeg, status))
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    from ..link.client import CommandRefused
+    from ..link.level import calibrate_level, clear_level, get_level
+    from ..protocol.definition import LevelStatus
+    from ..robot import load_robot
+    from .robot_commands import open_client
+
+    robot = load_robot(args.robot)
+    with open_client(args, args.robot) as client:
+        where = client.link.description
+        if args.show or args.clear:
+            reading = clear_level(client) if args.clear else get_level(client)
+            names = _limb_names(robot, len(reading.offsets_cdeg))
+            what = {LevelStatus.NONE: "no level calibration stored",
+                    LevelStatus.STORED: "level calibration stored",
+                    LevelStatus.CORRUPT: "the stored level calibration is corrupt (ignored: offsets 0); calibrate again",
+                    LevelStatus.CALIBRATING: "a level calibration is under way"}[reading.status]
+            print(f"{'cleared: ' if args.clear else ''}{what} on {where}")
+            if reading.status == LevelStatus.STORED:
+                print(_table(names, reading.offsets_cdeg, ["applied"] * len(names)))
+            if any(reading.ground_cdeg):
+                print("levelled on this ground (until reset):")
+                print(_table(names, reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
+            return 0
+        try:
+            outcome = calibrate_level(client, ground=args.ground)
+        except CommandRefused as e:
+            why = {1: "a gait is running (stop it, let the coils cool)", 2: "an IMU is marked bad (see the fault; clear it)",
+                   3: "a fault is latched (clear it first)", 4: "a calibration is already under way",
+                   5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)"}
+            raise LinkError(f"{where}: robot refused the level calibration: {why.get(e.detail, e)}") from None
+        names = _limb_names(robot, len(outcome.reading.offsets_cdeg))
+        if outcome.ok and args.ground:
+            if outcome.reading.status != LevelStatus.STORED:
+                print("note: no flat calibration is stored, so the tilts below include each IMU's mounting tilt")
+            print(f"levelled on this ground on {where} (applied until the board resets; not stored)")
+            print(_table(names, outcome.reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
+            return 0
+        if outcome.ok:
+            print(f"level calibration stored on {where} (applied from now on, kept across resets)")
+            print(_table(names, outcome.reading.offsets_cdeg, ["stored"] * len(names)))
+            return 0
+        print(f"level calibration refused on {where}: nothing changed")
+        kept = outcome.reading
+        print(_table(names, kept.offsets_cdeg if kept.status == LevelStatus.STORED else (0,) * len(names),
+                     [outcome.limb_text(i) for i in range(len(names))]))
+        return 1
+
+
+def add_arguments(subparsers: Any) -> None:
+    from .main import robot_arg
+    from .robot_commands import add_link_options
+
+    c = subparsers.add_parser(
+        "calibrate", help="level calibration: record each IMU's rest tilt on flat ground and store it on the board",
+        description="Put the robot at rest on flat, level ground with every coil cold, then run this. "
+                    "The firmware averages each IMU for 64 ticks, stores each limb's rest tilt in "
+                    "non-volatile memory (EEPROM / flash) and takes it off every reading from then on.")
+    c.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    add_link_options(c, sim_takes_robot=False)
+    g = c.add_mutually_exclusive_group()
+    g.add_argument("--show", action="store_true", help="print the stored calibration, change nothing")
+    g.add_argument("--clear", action="store_true", help="erase the stored calibration (offsets 0)")
+    g.add_argument("--ground", action="store_true",
+                   help="level on the ground the robot rests on now (a slope), on top of the flat calibration; "
+                        "kept in RAM until the board resets")
+    c.set_defaults(run=cmd_calibrate)

@@ -1,0 +1,191 @@
+"""Level calibration (core/level.c, proleg calibrate): the firmware measures each IMU's rest
+tilt, keeps it in non-volatile memory with a CRC, takes it off every sample, refuses while a
+gait runs, and with the slope levelled too the gait keeps running on ±10° inclines."""
+
+from __future__ import annotations
+
+import pytest
+
+from proleg.cli.main import main
+from proleg.link.client import CommandRefused, RobotClient
+from proleg.link.level import calibrate_level, clear_level, get_level
+from proleg.link.sim_link import SimLink
+from proleg.paths import resolve_robot
+from proleg.protocol.definition import ErrorCode, EventKind, LevelResult, LevelStatus
+from proleg.robot import load_robot
+from proleg.sim.closed_loop import SimulatedRobot, make_plant
+
+MOUNT = ["imu_offset_deg=left:8", "imu_offset_deg=right:-8"]
+
+
+@pytest.fixture(scope="module")
+def r1():
+    return load_robot(resolve_robot("paper-r1"))
+
+
+def connect(sim: SimulatedRobot) -> RobotClient:
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+    client.connect()
+    return client
+
+
+def reset(sim: SimulatedRobot, client: RobotClient) -> RobotClient:
+    """Power-cycle the board (its NV block stays, as EEPROM or flash does) and reconnect."""
+    client.close()
+    sim.board.reset(7)
+    return connect(sim)
+
+
+def wait(client: RobotClient, seconds: float) -> None:
+    end = client.link.clock() + seconds
+    while client.link.clock() < end:
+        client.recv(0.05)
+
+
+def rest_psi_cdeg(client: RobotClient) -> tuple[float, ...]:
+    """Each limb's ψ at rest, the mean of 20 telemetry frames (the IMUs' noise is ±0.3°)."""
+    wait(client, 0.5)  # past the IMUs' start-up
+    frames = [m.psi for m in client.telemetry(count=20)]
+    return tuple(sum(f[i] for f in frames) / len(frames) for i in range(len(frames[0])))
+
+
+def test_a_fresh_board_has_no_calibration_and_applies_none(r1):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    reading = get_level(client)
+    assert reading.status == LevelStatus.NONE and reading.offsets_cdeg == (0, 0) == reading.ground_cdeg
+    left, right = rest_psi_cdeg(client)
+    assert abs(left - 800) < 40 and abs(right + 800) < 40  # the mounting tilt, uncorrected
+
+
+def test_calibration_is_stored_applied_and_survives_a_reset(r1):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    outcome = calibrate_level(client)
+    assert outcome.ok and outcome.result == LevelResult.STORED
+    left, right = outcome.reading.offsets_cdeg
+    assert outcome.reading.status == LevelStatus.STORED
+    assert abs(left - 800) < 15 and abs(right + 800) < 15
+    assert all(abs(p) < 15 for p in rest_psi_cdeg(client))  # at rest, ψ reads 0 again
+    client = reset(sim, client)
+    kept = get_level(client)
+    assert kept.status == LevelStatus.STORED and kept.offsets_cdeg == (left, right)
+    assert all(abs(p) < 15 for p in rest_psi_cdeg(client))
+    # the record in the board's NV block: magic, limbs, offsets (LE), CRC-16/CCITT-FALSE
+    raw = bytes(sim.board._lib.sim_nv_peek(i) for i in range(8))
+    from binascii import crc_hqx
+
+    assert raw[:2] == b"\x4c\x02" and int.from_bytes(raw[2:4], "little", signed=True) == left
+    assert int.from_bytes(raw[6:8], "little") == crc_hqx(raw[:6], 0xFFFF)
+    assert clear_level(client).status == LevelStatus.NONE
+    client = reset(sim, client)
+    assert get_level(client).status == LevelStatus.NONE
+    client.close()
+
+
+@pytest.mark.parametrize("byte, value, status", [(0, 0xFF, LevelStatus.NONE), (3, 0x55, LevelStatus.CORRUPT),
+                                                 (1, 0x03, LevelStatus.CORRUPT), (0, 0x4D, LevelStatus.CORRUPT)])
+def test_a_blank_or_corrupt_record_means_no_calibration_not_garbage(r1, byte, value, status):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    assert calibrate_level(client).ok
+    sim.board._lib.sim_nv_poke(byte, value)
+    client = reset(sim, client)
+    reading = get_level(client)
+    assert reading.status == status and reading.offsets_cdeg == (0, 0)
+    left, _ = rest_psi_cdeg(client)
+    assert abs(left - 800) < 40  # nothing applied
+    client.close()
+
+
+def test_refused_while_a_gait_runs_and_interrupted_by_a_start(r1):
+    sim = SimulatedRobot(r1)
+    client = connect(sim)
+    client.start(0, "+x")
+    for name in ("CALIBRATE_LEVEL", "CLEAR_LEVEL"):
+        with pytest.raises(CommandRefused) as e:
+            client.request(name, **({"ground": 0} if name == "CALIBRATE_LEVEL" else {}))
+        assert e.value.error == ErrorCode.NOT_ALLOWED
+    assert get_level(client).status == LevelStatus.NONE
+    client.stop()
+    client.request("CALIBRATE_LEVEL", ground=0)
+    client.start(0, "+x")  # within the 64 sampling ticks
+    ev = next(m for m in iter(lambda: client.recv(1.0), None) if m.name == "EVENT" and m.kind == EventKind.LEVEL_DONE)
+    assert ev.code == LevelResult.INTERRUPTED
+    assert get_level(client).status == LevelStatus.NONE
+    client.close()
+
+
+def test_a_tilt_beyond_20_degrees_is_refused_and_the_old_record_kept(r1):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    old = calibrate_level(client).reading
+    sim.plant = make_plant(r1, "physical", ["imu_offset_deg=right:-15", "imu_bias_deg=right:-10"])
+    wait(client, 0.3)
+    outcome = calibrate_level(client)
+    assert outcome.result == LevelResult.TOO_TILTED and outcome.limbs_mask == 0b10
+    assert outcome.reading == old
+    client.close()
+
+
+def run_gait(client: RobotClient, sim: SimulatedRobot, direction: str, seconds: float) -> tuple[float, list]:
+    x0 = sim.plant.displacement_mm
+    client.clear()
+    client.start(0, direction)
+    faults = []
+    end = client.link.clock() + seconds
+    while client.link.clock() < end:
+        m = client.recv(0.1)
+        if m is not None and m.name == "EVENT" and m.kind == EventKind.FAULT:
+            faults.append(m.code)
+    client.stop()
+    return sim.plant.displacement_mm - x0, faults
+
+
+def test_crooked_imus_stall_the_gait_until_calibrated_on_the_flat(r1):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    _, faults = run_gait(client, sim, "+x", 25)
+    assert faults  # 8° of mounting tilt: a limb never reaches its sensed ψ*, STATE_TIMEOUT
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    assert calibrate_level(client).ok
+    dx, faults = run_gait(client, sim, "+x", 25)
+    assert not faults and dx > 5
+
+
+@pytest.mark.parametrize("incline", [10, -10])
+def test_calibrated_on_the_flat_then_levelled_on_the_slope_the_gait_keeps_running(r1, incline):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    assert calibrate_level(client).ok
+    sim.plant = make_plant(r1, "physical", MOUNT + [f"incline_deg={incline}"])
+    wait(client, 0.3)
+    _, faults = run_gait(client, sim, "+x", 25)
+    assert faults  # the slope itself tilts each end's IMU by ±10°: the flat calibration cannot know it
+    sim.plant = make_plant(r1, "physical", MOUNT + [f"incline_deg={incline}"])
+    client.clear()
+    wait(client, 3.0)  # coils cool, the robot rests on the slope
+    outcome = calibrate_level(client, ground=True)
+    assert outcome.ok
+    first, last = outcome.reading.ground_cdeg  # the slope as each end sees it: up, down
+    assert abs(first - 100 * incline) < 30 and abs(last + 100 * incline) < 30
+    assert outcome.reading.status == LevelStatus.STORED  # the flat record stays as it was
+    for direction in ("+x", "-x"):
+        _, faults = run_gait(client, sim, direction, 25)
+        assert not faults, direction
+
+
+def test_cli_calibrate_prints_each_limb_by_name(capsys):
+    assert main(["calibrate", "paper-r1", "--sim"]) == 0
+    out = capsys.readouterr().out
+    assert "level calibration stored" in out and "limb left" in out and "limb right" in out and "°" in out
+    assert main(["calibrate", "paper-r1", "--sim", "--show"]) == 0
+    assert "no level calibration stored" in capsys.readouterr().out  # a new simulated board each run
+
+
+def test_the_sim_report_names_the_limb_a_fault_is_on(capsys):
+    main(["sim", "paper-r1", "--duration", "15", "--condition", "imu_offset_deg=left:8",
+          "--condition", "imu_offset_deg=right:-8"])
+    out = capsys.readouterr().out
+    assert "FAULT at" in out and "STATE_TIMEOUT on left" in out and "limb/channel" not in out
