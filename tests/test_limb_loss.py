@@ -180,6 +180,26 @@ def test_without_a_host_the_firmware_falls_back_and_r1_keeps_moving_plus_x():
     assert total > 5.0
 
 
+def test_a_fallback_map_serves_the_fallback_gait_only_a_built_in_gait_runs_the_robot_as_built():
+    """A wrongly suspected (or mended) coil: after the firmware fell back, STARTing a built-in
+    gait again goes back to the build's map instead of running that gait on one coil."""
+    robot = load_robot(R1)
+    sim = open_host_sim(robot)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), max_limbs=2, max_channels=2)
+    client.connect()
+    track = _Track(sim, 10.0, "dead-actuator:sma-right")
+    run_gait_on(client, 0, "+x", 30.0, listeners=[track])
+    assert EventKind.FALLBACK in [k for _, k, _ in track.events]
+    m = client.request("GET_ACTUATOR_MAP")
+    assert tuple(m.actuators) == (0, 0) and m.lost == 1  # the fallback's remap while it runs
+    client.request("STOP")
+    client.clear()
+    client.request("START", gait=0, direction=0)
+    m = client.request("GET_ACTUATOR_MAP")
+    assert tuple(m.actuators) == (0, 1) and m.lost == 0xFF
+    client.request("STOP")
+
+
 def test_with_the_fallback_off_the_host_replans_and_r1_keeps_moving_plus_x(tmp_path):
     text = R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = false")
     p = tmp_path / "paper-r1.toml"

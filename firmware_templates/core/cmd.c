@@ -111,6 +111,9 @@ static void cmd_start(uint8_t token)
         tx_nack(token, PROTO_ID_START, PROTO_ERR_OUT_OF_RANGE, 2);
         return;
     } else {
+        if (limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the robot as built: */
+            limbmap_init();                   /* after a fallback, try the whole robot again */
+        }
         r = seq_start(dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX, gait, imucheck_measured());
     }
     if (r != SEQ_OK) {

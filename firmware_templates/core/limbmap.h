@@ -4,7 +4,9 @@
  * changed while no gait runs (SET_ACTUATOR_MAP): any actuator of the build per limb. It only
  * says which coil the controller heats for a limb; the safety envelope (duty, on-time,
  * cool-down, thermal budget: sma.c) stays per actuator and is never widened by a map.
- * Limb loss (switching to a fallback map): fallback.h.
+ * Limb loss (switching to a fallback map): fallback.h. A fallback's map serves the fallback
+ * gait only: START of a built-in gait goes back to the build's map (cmd.c), so a robot whose
+ * coil was wrongly suspected, or has been mended, walks as built again.
  */
 #ifndef PROLEG_LIMBMAP_H
 #define PROLEG_LIMBMAP_H
