@@ -27,6 +27,7 @@ from pathlib import Path
 import pytest
 
 from proleg.firmware.boards import Board, load_board
+from proleg.errors import BuildError
 from proleg.firmware.build import firmware_gaits, gait_table_hash, render_project
 from proleg.link import RobotClient
 from proleg.robot import Robot, load_robot
@@ -171,7 +172,10 @@ def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str |
     from proleg.link.sim_link import SimLink
     from proleg.sim.simulators import open_simulated
 
-    sim = open_simulated(robot, board, seed=seed, plant=plant)  # plant None: the default (physical)
+    try:
+        sim = open_simulated(robot, board, seed=seed, plant=plant)  # plant None: the default (physical)
+    except BuildError as e:  # the board cannot host this robot (flash, RAM, pins, tick budget): say why
+        pytest.skip(f"{robot.name} does not run on {board}: {str(e).splitlines()[0]}")
     client = RobotClient(SimLink(sim, description=f"{robot.name} on {board}"),
                          max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
     client.connect()
