@@ -20,3 +20,24 @@ R1_NANO_FLASH_TARGET = 14 * 1024
 def test_paper_r1_on_the_nano_stays_within_14_kb_of_flash(tmp_path):
     result = build(load_robot(robots_dir() / "paper-r1.toml"), load_board("arduino-nano"), tmp_path / "fw")
     assert 0 < result.flash_used <= R1_NANO_FLASH_TARGET, result.size_report()
+
+
+def test_the_nano_hal_tables_in_ram_stay_in_ram_for_every_example_robot(tmp_path):
+    """avr-gcc 5.4's identical-constant folding (-fipa-icf) merged hal_avr.c's pwm_map
+    {0, 1, 2, 3} (read with LD from RAM) into sma.c's identical act_channel table in flash
+    (caterpillar-4): the HAL read garbage and no coil came on. The board file turns it off."""
+    import shutil
+    import subprocess
+
+    import pytest
+
+    if shutil.which("avr-nm") is None:
+        pytest.skip("needs avr-nm (binutils-avr)")
+    board = load_board("arduino-nano")
+    for path in sorted(robots_dir().glob("*.toml")):
+        result = build(load_robot(path), board, tmp_path / path.stem)
+        nm = subprocess.run(["avr-nm", str(tmp_path / path.stem / "firmware.elf")],
+                            capture_output=True, text=True, check=True).stdout
+        kinds = {line.split()[2]: line.split()[1] for line in nm.splitlines() if len(line.split()) == 3}
+        for table in ("pwm_map", "oc_com", "oc_bit"):
+            assert kinds.get(table) in ("d", "D"), (path.stem, table, kinds.get(table), result.size_report())
