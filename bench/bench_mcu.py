@@ -15,9 +15,10 @@ does to the firmware's clock.
 
 From the rows each MCU's per-tick cost model is derived, the one ``proleg build`` checks
 a robot's tick_hz against (``[budget]`` in boards/*.toml, written by hand from this
-output): busy p99 = base + per_limb × limbs, per_limb = the I2C time per IMU read (the
-work that grows with the limbs; every example robot has 2 limbs, so the split cannot be
-fitted from the rows alone), base = the rest.
+output): busy p99 ≤ base + per_limb × limbs for every example robot (see cost_model).
+
+``--mcu atmega328p`` (or stm32f103) measures one MCU and keeps the other's section of
+the results file as its last run wrote it (each section has its templates' hash).
 
 Target (issue 11): p99 ≤ 70 % and max ≤ 90 % of the tick period for every example
 robot at its configured rate. Prints a table, writes bench/results/mcu.json (machine,
@@ -26,8 +27,10 @@ inputs' hashes; no timestamps). Exit status 1 if a target is missed.
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -95,20 +98,34 @@ def measure_arm(robot) -> dict:
 
 
 def cost_model(rows: dict[str, dict], robots: dict[str, object]) -> dict | None:
-    """busy p99 ≈ base + per_limb × limbs from the configured-rate rows (the worst robot)."""
-    fits = []
+    """busy p99 ≤ base + per_limb × limbs for every configured-rate row (worst case).
+
+    per_limb: the least-squares slope of busy p99 over the number of limbs when the rows
+    have more than one limb count (never below 0), else the I2C time per IMU read inside
+    the busy time; base: then the smallest value that puts every robot on or under the
+    line, so the model never promises less than a measured robot needed."""
+    points = []
     for name, r in rows.items():
         if "skipped" in r or "@" in name:
             continue
-        limbs = len(robots[name].limbs)
-        per_limb = r["i2c_us"]["mean"] / limbs
-        fits.append((r["tick_busy_us"]["p99"] - per_limb * limbs, per_limb, name))
-    if not fits:
+        points.append((len(robots[name].limbs), r["tick_busy_us"]["p99"], r["i2c_us"]["mean"], name))
+    if not points:
         return None
-    base = max(f[0] for f in fits)
-    per_limb = max(f[1] for f in fits)
-    return {"tick_us_base": round(base), "tick_us_per_limb": round(per_limb),
-            "from": ", ".join(sorted(f[2] for f in fits))}
+    counts = {p[0] for p in points}
+    if len(counts) > 1:
+        mx = sum(p[0] for p in points) / len(points)
+        my = sum(p[1] for p in points) / len(points)
+        slope = sum((p[0] - mx) * (p[1] - my) for p in points) / sum((p[0] - mx) ** 2 for p in points)
+        per_limb = max(0.0, slope)
+        how = "least-squares slope over the limb counts, base raised to the worst robot"
+    else:
+        per_limb = max(p[2] / p[0] for p in points)
+        how = "I2C time per IMU read, base = the worst robot's rest"
+    base = max(p[1] - per_limb * p[0] for p in points)
+    base, per_limb = math.ceil(base), math.ceil(per_limb)
+    worst = max(points, key=lambda p: p[1] - per_limb * p[0])
+    return {"tick_us_base": base, "tick_us_per_limb": per_limb, "how": how, "worst": worst[3],
+            "from": ", ".join(sorted(p[3] for p in points))}
 
 
 def measure(robot) -> dict:
@@ -195,7 +212,17 @@ def table(rows: dict[str, dict]) -> bool:
     return ok
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--mcu", action="append", choices=[m[0] for m in MCUS],
+                        help="measure only this MCU (repeatable); the others' sections of "
+                             "bench/results/mcu.json are kept as their last run wrote them")
+    args = parser.parse_args(argv)
+    selected = set(args.mcu or [m[0] for m in MCUS])
+    try:
+        previous = json.loads(RESULTS.read_text())["mcus"]
+    except (OSError, ValueError, KeyError):
+        previous = {}
     t_start = time.perf_counter()
     robot_files = sorted((ROOT / "robots").glob("*.toml"))
     robots = {p.stem: load_robot(p) for p in robot_files}
@@ -204,6 +231,11 @@ def main() -> int:
     mcus: dict[str, dict] = {}
     ok = True
     for mcu, sim_board, board, measure_one, emulator in MCUS:
+        if mcu not in selected:
+            if mcu in previous:
+                mcus[mcu] = previous[mcu]
+                ok &= all(r.get("meets_target", True) for n, r in previous[mcu]["robots"].items() if "@" not in n)
+            continue
         cases = list(robots.items()) + ([("paper-r1@2000Hz", fast_r1)] if sim_board == "avr-emu" else [])
         rows = run_mcu(measure_one, sim_board, cases)
         print(f"\n{mcu} ({sim_board}: the exact {board} firmware.elf on {emulator})")
@@ -211,8 +243,10 @@ def main() -> int:
         model = cost_model(rows, robots)
         if model:
             print(f"per-tick cost model for boards/{board}.toml [budget]: tick_us_base = {model['tick_us_base']}, "
-                  f"tick_us_per_limb = {model['tick_us_per_limb']} (busy p99, from {model['from']})")
+                  f"tick_us_per_limb = {model['tick_us_per_limb']} (busy p99, {model['how']}; worst "
+                  f"{model['worst']}; from {model['from']})")
         mcus[mcu] = {
+            "firmware_templates_sha256": tree_sha256(ROOT / "firmware_templates"),
             "simulated_board": sim_board,
             "board": board,
             "emulator": emulator,

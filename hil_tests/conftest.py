@@ -34,6 +34,7 @@ from pathlib import Path
 import pytest
 
 from proleg.firmware.boards import Board, load_board
+from proleg.errors import BuildError
 from proleg.firmware.build import firmware_gaits, gait_table_hash, render_project
 from proleg.link import RobotClient
 from proleg.robot import Robot, load_robot
@@ -194,7 +195,10 @@ def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str |
     from proleg.sim.simulators import open_simulated
 
     firmware_board = load_board(SIMULATED_BOARDS[board].firmware_board_for(link))
-    sim = open_simulated(robot, board, seed=seed, plant=plant, link=link)  # plant None: the default (physical)
+    try:
+        sim = open_simulated(robot, board, seed=seed, plant=plant, link=link)  # plant None: the default (physical)
+    except BuildError as e:  # the board cannot host this robot (flash, RAM, pins, tick budget): say why
+        pytest.skip(f"{robot.name} does not run on {board}: {str(e).splitlines()[0]}")
     if link == "can":
         from proleg.link.sim_can_link import sim_can_link
 

@@ -104,3 +104,36 @@ def test_a_budget_not_enforced_yet_warns_with_the_same_numbers_and_builds(tmp_pa
         "(900 + 2 × 250 µs, [budget] of bluepill-f103.toml), more than 70 % of the 1000 µs period; at most 500 Hz "
         "(building anyway: [budget] enforce = false)"
     ]
+
+
+def test_the_nano_enforces_its_budget_takes_every_example_robot_it_hosts_and_refuses_r1_one_hz_too_fast():
+    """arduino-nano's [budget] is measured (bench/bench_mcu.py on avr-emu) and enforced:
+    every example robot builds at its configured rate, and R1 one Hz above the highest
+    rate the budget fits is refused in one line before anything is compiled."""
+    board = load_board("arduino-nano")
+    b = board.budget
+    assert b is not None and b.enforce
+    for path in sorted(robots_dir().glob("*.toml")):
+        check_tick_budget(load_robot(path), board)  # the rate each robot file configures fits
+    r1 = load_robot(R1)
+    fastest = b.max_tick_hz(len(r1.limbs))
+    assert 1000 <= fastest < 2000
+    check_tick_budget(at_rate(r1, fastest), board)
+    with pytest.raises(BuildError) as e:
+        check_tick_budget(at_rate(r1, fastest + 1), board)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith(
+        f"robot paper-r1: control.tick_hz = {fastest + 1} is too fast for board arduino-nano: 2 limbs need ")
+    assert f"[budget] of arduino-nano.toml), more than 70 % of the" in msg and f"at most {fastest} Hz" in msg
+
+
+def test_proleg_build_refuses_r1_on_the_nano_at_a_rate_its_budget_cannot_meet(tmp_path, capsys):
+    board = load_board("arduino-nano")
+    hz = board.budget.max_tick_hz(2) + 1
+    robot = tmp_path / "fast-r1.toml"
+    robot.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", f"tick_hz = {hz}"), encoding="utf-8")
+    code = main(["build", str(robot), "--board", "arduino-nano", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and f"control.tick_hz = {hz} is too fast for board arduino-nano" in err
+    assert not (tmp_path / "out").exists()

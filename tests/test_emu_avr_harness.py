@@ -397,3 +397,132 @@ def test_a_bus_held_low_blocks_start_until_nine_scl_clocks_release_it(tmp_path, 
     run_until_done(board)
     assert board.read_symbol("blocked") == b"\x01"
     assert board.read_symbol("st_after") == (b"\x08" if recovered else b"\xff")
+
+
+# ------------------------------------------------------------------ simavr 1.6's skips
+
+SKIPS = r"""
+volatile uint16_t cpse_eq, cpse_ne, sbrs_set, sbrs_clear, sbis_set, sbis_clear;
+
+/* r = 1, then a skip over `adiw r24, 0x1f` (0x964F: simavr 1.6 takes it for a CALL), then
+ * `adiw r24, 2`: 3 when the skip is taken, 34 when not, 1 if two words are skipped. */
+#define AFTER_SKIP(skip, ...)                                                  \
+    ({                                                                         \
+        uint16_t r;                                                            \
+        __asm__ volatile("ldi r24, 1\n\tldi r25, 0\n\t" skip "\n\t"            \
+                         "adiw r24, 0x1f\n\tadiw r24, 2\n\tmovw %0, r24"       \
+                         : "=r"(r) : __VA_ARGS__ : "r24", "r25");              \
+        r;                                                                     \
+    })
+
+int main(void)
+{
+    volatile uint8_t x = 5, y = 5, z = 6, one = 1, zero = 0;
+    uint8_t a = x, b = y, c = z, s = one, t = zero;
+    cpse_eq = AFTER_SKIP("cpse %1, %2", "r"(a), "r"(b));
+    cpse_ne = AFTER_SKIP("cpse %1, %2", "r"(a), "r"(c));
+    sbrs_set = AFTER_SKIP("sbrs %1, 0", "r"(s));
+    sbrs_clear = AFTER_SKIP("sbrs %1, 0", "r"(t));
+    GPIOR0 = 1;
+    sbis_set = AFTER_SKIP("sbis 0x1e, 0", "r"(t));
+    GPIOR0 = 0;
+    sbis_clear = AFTER_SKIP("sbis 0x1e, 0", "r"(t));
+    done = 1;
+    for (;;) {
+    }
+}
+"""
+
+
+def test_a_skip_over_an_adiw_simavr_takes_for_a_call_skips_one_word(tmp_path):
+    """simavr 1.6 skips two words after CPSE/SBRS/SBIS when the next one-word instruction
+    matches its LDS/STS/JMP/CALL mask (adiw r24,0x1f); the harness runs those skips."""
+    board = make_board(compile_avr(tmp_path, SKIPS))
+    run_until_done(board)
+    got = {name: int.from_bytes(board.read_symbol(name), "little")
+           for name in ("cpse_eq", "cpse_ne", "sbrs_set", "sbrs_clear", "sbis_set", "sbis_clear")}
+    assert got == {"cpse_eq": 3, "cpse_ne": 34, "sbrs_set": 3, "sbrs_clear": 34, "sbis_set": 3, "sbis_clear": 34}
+
+
+# ------------------------------------------------------------------ TCA9548A multiplexer
+
+MUX_PROG = r"""
+volatile uint8_t who_before, who_on, ctrl, who_off;
+
+static uint8_t twi(uint8_t how)
+{
+    TWCR = (uint8_t)(_BV(TWINT) | _BV(TWEN) | how);
+    while (!(TWCR & _BV(TWINT))) {
+    }
+    return TWSR & 0xF8;
+}
+
+static void stop(void)
+{
+    TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO);
+    while (TWCR & _BV(TWSTO)) {
+    }
+}
+
+/* WHO_AM_I of the MPU-6050 at 0x68, or 0 when nothing acknowledges. */
+static uint8_t who(void)
+{
+    uint8_t v = 0;
+    twi(_BV(TWSTA));
+    TWDR = 0x68 << 1;
+    if (twi(0) == 0x18) {
+        TWDR = 0x75;
+        twi(0);
+        twi(_BV(TWSTA));
+        TWDR = (0x68 << 1) | 1;
+        twi(0);
+        twi(0);
+        v = TWDR;
+    }
+    stop();
+    return v;
+}
+
+static void select(uint8_t control)
+{
+    twi(_BV(TWSTA));
+    TWDR = 0x70 << 1;
+    twi(0);
+    TWDR = control;
+    twi(0);
+    stop();
+}
+
+int main(void)
+{
+    TWBR = 12;
+    TWCR = _BV(TWEN);
+    who_before = who();
+    select(1u << 3);
+    who_on = who();
+    twi(_BV(TWSTA));
+    TWDR = (0x70 << 1) | 1;
+    twi(0);
+    twi(0);
+    ctrl = TWDR;
+    stop();
+    select(1u << 2);
+    who_off = who();
+    done = 1;
+    for (;;) {
+    }
+}
+"""
+
+
+def test_an_imu_behind_a_multiplexer_answers_only_while_its_channel_is_connected(tmp_path):
+    from proleg.emu.avr import AvrEmuBoard
+
+    board = AvrEmuBoard(compile_avr(tmp_path, MUX_PROG), tick_hz=1000,
+                        imu_addresses=(0x80,), imu_wiring=((0x68, 0x70, 3),))
+    run_until_done(board)
+    assert board.read_symbol("who_before") == b"\x00"  # channel 3 not connected yet
+    assert board.read_symbol("who_on") == b"\x68"
+    assert board.read_symbol("ctrl") == b"\x08"  # the control register reads back
+    assert board.read_symbol("who_off") == b"\x00"
+    assert board.imu_register(0x80, 0x75) == 0x68  # the host-sim key of limb 0 behind a mux

@@ -148,6 +148,12 @@ void imucheck_service(void)
     }
 }
 
+/* The start-up deadline of limb i has passed. */
+static uint8_t past_deadline(uint8_t i)
+{
+    return (uint32_t)(hal_micros() - st.t0[i]) >= st.wait[i] + START_DEADLINE_US;
+}
+
 /* A start-up step finished: next step, a retry, or (past the deadline) a fault. */
 static void start_up(uint8_t i, uint8_t res)
 {
@@ -158,7 +164,7 @@ static void start_up(uint8_t i, uint8_t res)
     }
     st.why[i] = r;
     st.phase[i] = 0; /* from WHO_AM_I again */
-    if ((uint32_t)(hal_micros() - st.t0[i]) >= st.wait[i] + START_DEADLINE_US) {
+    if (past_deadline(i)) {
         imu_fault(i, r == MPU6050_ERR_BUS ? PROTO_FAULT_IMU_NO_ACK : PROTO_FAULT_IMU_BAD_DATA);
     }
 }
@@ -207,7 +213,7 @@ void imucheck_read(void)
         if (st.phase[i] < PHASE_RUN) {
             if (res != RES_NONE) {
                 start_up(i, res);
-            } else if ((uint32_t)(hal_micros() - st.t0[i]) >= st.wait[i] + START_DEADLINE_US) {
+            } else if (past_deadline(i)) {
                 imu_fault(i, PROTO_FAULT_IMU_NO_ACK); /* the bus never let it through */
             }
             known = 0;

@@ -145,11 +145,15 @@ int16_t psi_sin_q14(int16_t cdeg)
         f = (uint16_t)(r % 9000u);
         a = ROM_I16(&sin_tab[i]);
         b = ROM_I16(&sin_tab[i + 1u]);
-        v = (int16_t)(a + (int16_t)(((int32_t)(b - a) * f + 4500) / 9000));
+        /* b ≥ a (the table rises): unsigned, so only the unsigned division helper is linked */
+        v = (int16_t)(a + (int16_t)(((uint32_t)(uint16_t)(b - a) * f + 4500u) / 9000u));
     }
     return cdeg < 0 ? (int16_t)-v : v;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* six callers: one copy */
+#endif
 int16_t psi_cos_q14(int16_t cdeg)
 {
     int16_t x = (int16_t)(cdeg < 0 ? -cdeg : cdeg);

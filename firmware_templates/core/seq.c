@@ -57,11 +57,19 @@ void seq_set_timeout(uint32_t ticks)
 
 uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b)
 {
+#if CFG_N_STATES <= 256u
+    uint16_t key; /* < 256², and no 32-bit multiply on the 8-bit targets */
+#else
     uint32_t key;
+#endif
     if (a >= n_states || b >= n_states || a == b) {
         return 0;
     }
+#if CFG_N_STATES <= 256u
+    key = (uint16_t)((uint16_t)a * (uint16_t)n_states + b);
+#else
     key = (uint32_t)a * n_states + b;
+#endif
 #if CFG_TRANS_BITMAP
     return (uint8_t)((ROM_U8(&seq_allowed[key >> 3]) >> (key & 7u)) & 1u);
 #else

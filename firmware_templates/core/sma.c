@@ -47,6 +47,9 @@ static uint8_t clamped;
 static const uint32_t min_cooldown = CFG_MIN_COOLDOWN_TICKS;
 static const uint16_t hold_max = CFG_HOLD_MAX_DUTY_PM;
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* four callers: one copy on the 8-bit targets */
+#endif
 uint16_t sma_clamp(uint16_t duty_pm)
 {
     uint16_t ceiling = max_duty < CFG_MAX_DUTY_PM ? max_duty : (uint16_t)CFG_MAX_DUTY_PM;
@@ -96,6 +99,7 @@ static void set_times(uint32_t on_us, uint32_t cooldown_us)
 static void advance_window(uint32_t dt)
 {
     uint8_t n, i;
+    uint32_t *w;
     if (dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
         dt = SMA_SLOT_US * SMA_WIN_SLOTS;
     }
@@ -103,9 +107,10 @@ static void advance_window(uint32_t dt)
     for (n = 0; slot_us >= SMA_SLOT_US && n < SMA_WIN_SLOTS; n++) {
         slot_us -= SMA_SLOT_US;
         slot = (uint8_t)(slot + 1u < SMA_WIN_SLOTS ? slot + 1u : 0u);
+        w = win[slot];
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
-            acts[i].win_total -= win[slot][i];
-            win[slot][i] = 0;
+            acts[i].win_total -= w[i];
+            w[i] = 0;
         }
     }
 }
@@ -137,6 +142,7 @@ uint8_t sma_tick(void)
     uint32_t dt = now - last_us; /* unsigned: right across the 2^32 wrap */
     uint8_t hit = 0;
     uint8_t i;
+    uint32_t *w;
     last_us = now;
     if (dt >= 0x80000000UL) {
         dt = CFG_TICK_US; /* the clock stepped back: count one tick */
@@ -144,6 +150,7 @@ uint8_t sma_tick(void)
         dt = SMA_DT_CAP_US;
     }
     advance_window(dt);
+    w = win[slot];
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         act_state_t *a = &acts[i];
         uint16_t duty = estopped ? 0u : sma_clamp(a->request);
@@ -152,7 +159,7 @@ uint8_t sma_tick(void)
             clamped = 1;
         }
         /* charge the interval since the last tick at the duty the pin carried */
-        win[slot][i] += x >> 10;
+        w[i] += x >> 10;
         a->win_total += x >> 10;
         a->win_rem = (uint16_t)(x & 1023u);
         if (a->charged > hold_max) {

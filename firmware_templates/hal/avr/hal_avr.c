@@ -109,19 +109,20 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
         }
         return;
     }
-    switch (oc) {
-    case HAL_AVR_OC1A:
-        OCR1A = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
-        break;
-    case HAL_AVR_OC1B:
-        OCR1B = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
-        break;
-    case HAL_AVR_OC2A:
-        OCR2A = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
-        break;
-    default:
-        OCR2B = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
-        break;
+    if (oc < HAL_AVR_OC2A) {
+        uint16_t v = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
+        if (oc == HAL_AVR_OC1A) {
+            OCR1A = v;
+        } else {
+            OCR1B = v;
+        }
+    } else {
+        uint8_t v = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
+        if (oc == HAL_AVR_OC2A) {
+            OCR2A = v;
+        } else {
+            OCR2B = v;
+        }
     }
     *tccra |= com;
 }

@@ -51,6 +51,7 @@ _SIGNATURES = {
     "emu_open": ([c_char_p, c_uint32, c_uint32], c_int),
     "emu_reset": ([c_uint32], c_int),
     "emu_imu_attach": ([c_uint8], None),
+    "emu_imu_wire": ([c_uint8, c_uint8, c_uint8, c_uint8], None),
     "emu_run_cycles": ([c_uint64], c_int),
     "emu_cycles": ([], c_uint64),
     "emu_frequency": ([], c_uint32),
@@ -121,6 +122,7 @@ class AvrEmuBoard:
         tick_hz: float | None = None,
         board: Board | None = None,
         imu_addresses: tuple[int, ...] | None = None,
+        imu_wiring: tuple[tuple[int, int, int], ...] | None = None,
     ):
         self.elf = Path(elf_path)
         if not self.elf.exists():
@@ -135,6 +137,10 @@ class AvrEmuBoard:
         if not self.tick_hz > 0:
             raise SimError(f"{self.elf}: tick rate must be > 0 Hz, got {self.tick_hz}")
         self.imu_addresses = tuple(imu_addresses if imu_addresses is not None else self._config_imus())
+        # Per limb (model slot): (address, multiplexer address or 0, channel); None: each of
+        # imu_addresses wired directly. With a wiring, the IMU keys are host-sim's
+        # (proleg.firmware.placement.sim_imu_keys: the address, or 0x80 | limb behind a mux).
+        self.imu_wiring = tuple(imu_wiring) if imu_wiring is not None else None
         self.freq = int(self.board_info.clock_hz)
         self._cycles_per_tick = Fraction(self.freq) / Fraction(self.tick_hz).limit_denominator(10**6)
 
@@ -181,8 +187,12 @@ class AvrEmuBoard:
         """Power-on reset: a fresh MCU, IMUs powered up (asleep), time 0, FIFOs empty."""
         if self._lib.emu_reset(seed & 0xFFFFFFFF) != 0:
             raise SimError(f"{self.elf}: simavr could not reset the core")
-        for addr in self.imu_addresses:
-            self._lib.emu_imu_attach(addr)
+        if self.imu_wiring is not None:
+            for slot, (addr, mux, ch) in enumerate(self.imu_wiring):
+                self._lib.emu_imu_wire(slot, addr, mux, ch)
+        else:
+            for addr in self.imu_addresses:
+                self._lib.emu_imu_attach(addr)
         self._carry = Fraction(0)
         self._records: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._window_cycles = 0

@@ -23,9 +23,10 @@ def nano_build_dir(
     max_transitions: int | None = None,
 ) -> Path:
     """The cached build directory of ``robot`` for ``board`` (default arduino-nano)."""
-    from ...firmware.build import build, firmware_gaits, render_project
+    from ...firmware.build import build, check_tick_budget, firmware_gaits, render_project
 
     board = board or load_board("arduino-nano")
+    check_tick_budget(robot, board)  # a cached build skips build()'s checks: this one depends on the board file
     files = render_project(robot, board, firmware_gaits(robot, objective, max_transitions))
     digest = hashlib.sha256()
     for rel in sorted(files):

@@ -25,6 +25,16 @@
  * wait and the first instruction of the wait): reaching one starts, the other ends the
  * busy time. Each completed tick is recorded: start, busy cycles, and the cycles the I2C
  * bus was owned (START..STOP) during the busy time. The lowest stack pointer seen is kept.
+ *
+ * Skips. simavr 1.6 decides whether the instruction after a skip (CPSE, SBRC, SBRS, SBIC,
+ * SBIS) is one or two words with the mask 0xFC0F, so it also takes ADIW/SBIW with some
+ * operands (0x9[46]xF and 0x9[46]xE, e.g. adiw r24,0x1f = 0x964F), and a few other
+ * opcodes, for LDS/STS/JMP/CALL and skips two words instead of one: the instruction after
+ * the one-word one is skipped too (avr-gcc emits `cpse r15,r1; adiw r24,0x1f` for
+ * `if (x) i += 31;`; it made the Nano start every gait of a 3-limb robot with 0 steps).
+ * The firmware's flash is scanned at load for skips followed by such a one-word
+ * instruction; the run loop executes those skips itself (AVR instruction set manual:
+ * 1 cycle if the condition is false, 2 if it skips a one-word instruction).
  */
 #include <stdarg.h>
 #include <stdlib.h>
@@ -81,6 +91,7 @@ typedef struct {
 
 static uint8_t rxq_mem[RXQ_SIZE], hostq_mem[HOSTQ_SIZE];
 static uint64_t prof_cycles[FLASH_WORDS]; /* cycles spent per instruction address */
+static uint8_t bad_skip[FLASH_WORDS / 8u]; /* word addresses of skips simavr 1.6 gets wrong */
 static uint8_t profiling;
 
 static struct {
@@ -434,6 +445,68 @@ static void on_mcu_reset(struct avr_io_t *io)
     rx_pump_start();
 }
 
+/* -- skips (see the top) ------------------------------------------------------------ */
+
+static uint16_t flash_word(const avr_t *avr, uint32_t w)
+{
+    return (uint16_t)(avr->flash[2u * w] | (avr->flash[2u * w + 1u] << 8));
+}
+
+static int is_skip(uint16_t o)
+{
+    return (o & 0xFC00u) == 0x1000u /* CPSE */ || (o & 0xFC08u) == 0xFC00u /* SBRC, SBRS */ ||
+           (o & 0xFD00u) == 0x9900u /* SBIC, SBIS */;
+}
+
+/* simavr 1.6's sim_core.c _avr_is_instruction_32_bits, and the instruction set's truth. */
+static int simavr_says_two_words(uint16_t o)
+{
+    uint16_t m = (uint16_t)(o & 0xFC0Fu);
+    return m == 0x9200u || m == 0x9000u || m == 0x940Cu || m == 0x940Du || m == 0x940Eu || m == 0x940Fu;
+}
+
+static int is_two_words(uint16_t o)
+{
+    return (o & 0xFE0Fu) == 0x9000u /* LDS */ || (o & 0xFE0Fu) == 0x9200u /* STS */ ||
+           (o & 0xFE0Eu) == 0x940Cu /* JMP */ || (o & 0xFE0Eu) == 0x940Eu /* CALL */;
+}
+
+static void scan_skips(const avr_t *avr)
+{
+    uint32_t w, words = avr->flashend + 1u < 2u * FLASH_WORDS ? (avr->flashend + 1u) / 2u : FLASH_WORDS;
+    memset(bad_skip, 0, sizeof bad_skip);
+    for (w = 0; w + 1u < words; w++) {
+        uint16_t next = flash_word(avr, w + 1u);
+        if (is_skip(flash_word(avr, w)) && simavr_says_two_words(next) && !is_two_words(next)) {
+            bad_skip[w >> 3] = (uint8_t)(bad_skip[w >> 3] | (1u << (w & 7u)));
+        }
+    }
+}
+
+static int at_bad_skip(uint32_t pc)
+{
+    uint32_t w = (pc >> 1) & (FLASH_WORDS - 1u);
+    return (bad_skip[w >> 3] >> (w & 7u)) & 1u;
+}
+
+/* Execute the skip at pc whose next instruction is one word (only from at_bad_skip). */
+static void run_skip(avr_t *avr)
+{
+    uint16_t o = flash_word(avr, avr->pc >> 1);
+    uint8_t d = (uint8_t)((o >> 4) & 0x1Fu), b = (uint8_t)(o & 7u);
+    int skip;
+    if ((o & 0xFC00u) == 0x1000u) { /* CPSE Rd, Rr */
+        skip = avr->data[d] == avr->data[(o & 0x0Fu) | ((o >> 5) & 0x10u)];
+    } else if ((o & 0xFC08u) == 0xFC00u) { /* SBRC / SBRS Rr, b */
+        skip = ((avr->data[d] >> b) & 1u) == ((o >> 9) & 1u);
+    } else { /* SBIC / SBIS A, b: I/O address A = data address A + 0x20 */
+        uint8_t v = avr_core_watch_read(avr, (uint16_t)(((o >> 3) & 0x1Fu) + 0x20u));
+        skip = ((v >> b) & 1u) == ((o >> 9) & 1u);
+    }
+    avr->pc += skip ? 4u : 2u;
+    avr->cycle += skip ? 2u : 1u;
+}
+
 static avr_t *make_core(void)
 {
     avr_t *avr = avr_make_mcu_by_name("atmega328p");
@@ -444,6 +517,7 @@ static avr_t *make_core(void)
     avr_init(avr);
     avr->log = 0;
     avr_load_firmware(avr, &E.fw);
+    scan_skips(avr);
     avr->frequency = E.freq;
     avr->sleep = no_sleep;
     boot_power_on(avr);
@@ -536,6 +610,7 @@ EMU_API int emu_reset(uint32_t seed)
     E.sp_min = 0xFFFFu;
     E.ov_acc = E.ov_last = 0;
     sim_mpu_power_on(seed);
+    twi_unwire_all();
     if (!make_core()) {
         return -2;
     }
@@ -545,9 +620,19 @@ EMU_API int emu_reset(uint32_t seed)
     return 0;
 }
 
+/* An MPU-6050 wired directly at addr (0x68..0x6F), model slot addr - 0x68. */
 EMU_API void emu_imu_attach(uint8_t addr)
 {
-    sim_mpu_attach(addr);
+    if (addr >= SIM_MPU_BASE_ADDR && addr < SIM_MPU_BASE_ADDR + SIM_MPU_MAX) {
+        twi_wire_imu((uint8_t)(addr - SIM_MPU_BASE_ADDR), addr, 0, 0);
+    }
+}
+
+/* Model slot `slot` at addr, behind channel ch of the TCA9548A at mux (0: wired directly);
+ * its key for the emu_imu_* calls is 0x80 | slot (or addr when wired directly). */
+EMU_API void emu_imu_wire(uint8_t slot, uint8_t addr, uint8_t mux, uint8_t ch)
+{
+    twi_wire_imu(slot, addr, mux, ch);
 }
 
 /* Run the core for n cycles of emulated time. Returns simavr's cpu state (cpu_Done or
@@ -570,7 +655,13 @@ EMU_API int emu_run_cycles(uint64_t n)
                 busy_end();
             }
         }
-        if (profiling) {
+        if (at_bad_skip(pc) && avr->state == cpu_Running) {
+            uint64_t c0 = avr->cycle;
+            run_skip(avr);
+            if (profiling) {
+                prof_cycles[(pc >> 1) & (FLASH_WORDS - 1u)] += avr->cycle - c0;
+            }
+        } else if (profiling) {
             uint64_t c0 = avr->cycle;
             avr->run(avr);
             prof_cycles[(pc >> 1) & (FLASH_WORDS - 1u)] += avr->cycle - c0;
@@ -692,29 +783,44 @@ EMU_API uint64_t emu_uart_cycles_per_byte(void)
 
 /* -- IMUs -------------------------------------------------------------------------- */
 
-EMU_API void emu_imu_set_truth(uint8_t addr, double psi_deg, double dpsi_dps)
+/* IMU keys: 0x80 | model slot, or the address of an IMU wired directly (host-sim's keys,
+ * proleg.firmware.placement.sim_imu_keys). An unknown key is ignored. */
+EMU_API void emu_imu_set_truth(uint8_t key, double psi_deg, double dpsi_dps)
 {
-    sim_mpu_set_truth(addr, psi_deg, dpsi_dps);
+    int slot = twi_imu_slot(key);
+    if (slot >= 0) {
+        sim_mpu_set_truth_slot((uint8_t)slot, psi_deg, dpsi_dps);
+    }
 }
 
-EMU_API void emu_imu_set_fault(uint8_t addr, uint8_t mode)
+EMU_API void emu_imu_set_fault(uint8_t key, uint8_t mode)
 {
-    sim_mpu_set_fault(addr, mode);
+    int slot = twi_imu_slot(key);
+    if (slot >= 0) {
+        sim_mpu_set_fault_slot((uint8_t)slot, mode);
+    }
 }
 
-EMU_API void emu_imu_set_noise(uint8_t addr, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
+EMU_API void emu_imu_set_noise(uint8_t key, double accel_ug_rthz, double gyro_dps_rthz, double accel_offset_mg)
 {
-    sim_mpu_set_noise(addr, accel_ug_rthz, gyro_dps_rthz, accel_offset_mg);
+    int slot = twi_imu_slot(key);
+    if (slot >= 0) {
+        sim_mpu_set_noise_slot((uint8_t)slot, accel_ug_rthz, gyro_dps_rthz, accel_offset_mg);
+    }
 }
 
-EMU_API uint8_t emu_imu_peek_reg(uint8_t addr, uint8_t reg)
+EMU_API uint8_t emu_imu_peek_reg(uint8_t key, uint8_t reg)
 {
-    return sim_mpu_peek(addr, reg);
+    int slot = twi_imu_slot(key);
+    return slot >= 0 ? sim_mpu_peek_slot((uint8_t)slot, reg) : 0xFFu;
 }
 
-EMU_API void emu_imu_set_startup_us(uint8_t addr, uint64_t us)
+EMU_API void emu_imu_set_startup_us(uint8_t key, uint64_t us)
 {
-    twi_set_startup_us(addr, us);
+    int slot = twi_imu_slot(key);
+    if (slot >= 0) {
+        twi_set_startup_us((uint8_t)slot, us);
+    }
 }
 
 /* A device holds SDA low until it has seen release_clocks SCL pulses (0 = until

@@ -22,7 +22,10 @@ void twi_reset(void);                             /* power-on state of the perip
 uint64_t twi_transactions(void);                  /* START..STOP sequences seen since reset */
 uint64_t twi_bus_cycles(void);                    /* cycles the bus was owned since reset */
 int twi_bus_owned(void);                          /* a START was sent and no STOP completed yet */
-void twi_set_startup_us(uint8_t addr, uint64_t us); /* device NACKs until this time after reset */
+void twi_set_startup_us(uint8_t slot, uint64_t us); /* model slot NACKs until this time after reset */
+void twi_wire_imu(uint8_t slot, uint8_t addr7, uint8_t mux, uint8_t ch); /* model slot on the bus (mux 0: direct) */
+void twi_unwire_all(void);                        /* power-on: no models, no multiplexers on the bus */
+int twi_imu_slot(uint8_t key);                    /* slot of an IMU key (0x80 | slot, or a direct address); -1 */
 void twi_hold_sda(int held, uint8_t release_clocks); /* a device holds SDA low (kept across MCU resets) */
 
 /* harness.c services the TWI model uses. */

@@ -19,6 +19,8 @@ from ...paths import templates_dir
 HERE = Path(__file__).resolve().parent
 SOURCES = ("harness.c", "twi.c", "boot.c")
 HEADERS = ("harness.h",)
+#: host-sim's device models the bus shares (firmware_templates/hal/sim)
+MODEL_FILES = ("sim_mpu6050.c", "sim_mpu6050.h", "sim_tca9548a.c", "sim_tca9548a.h")
 SIMAVR_INCLUDE = Path("/usr/include/simavr")
 CFLAGS = ("-std=gnu99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-Wall", "-Wextra", "-Werror")
 LIBS = ("-lsimavr", "-lm")
@@ -72,7 +74,7 @@ def harness_library() -> Path:
     include = _simavr_include()
     model = imu_model_dir()
     cc = os.environ.get("CC", "cc")
-    files = [HERE / s for s in SOURCES + HEADERS] + [model / "sim_mpu6050.c", model / "sim_mpu6050.h"]
+    files = [HERE / s for s in SOURCES + HEADERS] + [model / f for f in MODEL_FILES]
     digest = hashlib.sha256()
     for f in files:
         digest.update(f.name.encode() + b"\0" + f.read_bytes() + b"\0")
@@ -93,7 +95,7 @@ def harness_library() -> Path:
         "-I",
         str(model),
         *(str(HERE / s) for s in SOURCES),
-        str(model / "sim_mpu6050.c"),
+        *(str(model / f) for f in MODEL_FILES if f.endswith(".c")),
         "-o",
         tmp,
         *LIBS,
