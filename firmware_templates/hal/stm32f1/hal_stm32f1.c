@@ -49,6 +49,7 @@ static const pwm_pin_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 
 static uint32_t sysclk = 8000000u;
 static volatile uint32_t ms_count;
+static uint32_t systick_load; /* SYST_RVR + 1, set with it in hal_init: one register read less per hal_micros */
 static uint8_t reset_cause;
 
 void SysTick_Handler(void);
@@ -92,7 +93,7 @@ void SysTick_Handler(void)
 uint32_t hal_micros(void)
 {
     uint32_t m0, ms, val;
-    uint32_t load = SYST_RVR + 1u;
+    uint32_t load = systick_load;
     /* Not COUNTFLAG: it is clear-on-read and the SysTick handler never reads it, so it
      * stayed set after the handler ran and the next call counted that ms twice. */
     do {
@@ -300,11 +301,11 @@ static void x_start_read(uint32_t b)
     xf.state = X_SB_R;
 }
 
-/* One step of the transaction on what SR1 says now; 1 when it may move on at once. */
-static uint8_t x_step(uint32_t now)
+/* A transaction waiting on the bus: past its deadline it fails; a failed one's STOP must
+ * free the bus within I2C_STEP_US, or the bus is recovered. */
+static void x_timeout(uint32_t now)
 {
     uint32_t b = xf.base;
-    uint32_t sr1;
     if (xf.state == X_CLOSE) {
         if (!(CR1(b) & (I2C_CR1_START | I2C_CR1_STOP)) && !(SR2(b) & I2C_SR2_BUSY)) {
             xf.state = X_IDLE;
@@ -312,10 +313,19 @@ static uint8_t x_step(uint32_t now)
             i2c_recover(xf.bus); /* a START that never went out or a STOP that cannot: a line is held */
             xf.state = X_IDLE;
         }
-        return 0;
-    }
-    if ((uint32_t)(now - xf.t0) > HAL_I2C_DEADLINE_US) {
+    } else if ((uint32_t)(now - xf.t0) > HAL_I2C_DEADLINE_US) {
         x_fail(now);
+    }
+}
+
+/* One step of the transaction on what the status flags say now: 0 when it waits on the bus
+ * (then hal_i2c_poll checks the time), 1 when it moved on and the next flag may already be
+ * up, 2 when it moved on and the next flag needs the bus. */
+static uint8_t x_step(void)
+{
+    uint32_t b = xf.base;
+    uint32_t sr1;
+    if (xf.state == X_CLOSE) {
         return 0;
     }
     if (xf.state == X_FREE) {
@@ -328,12 +338,12 @@ static uint8_t x_step(uint32_t now)
         } else {
             x_start_read(b);
         }
-        return 0;
+        return 2;
     }
     sr1 = SR1(b);
     if (sr1 & I2C_ERRORS) {
-        x_fail(now);
-        return 0;
+        x_fail(hal_micros());
+        return 2;
     }
     switch (xf.state) {
     case X_SB_W:
@@ -343,7 +353,7 @@ static uint8_t x_step(uint32_t now)
         }
         DR(b) = (uint32_t)(xf.addr << 1) | (xf.state == X_SB_R ? 1u : 0u);
         xf.state++;
-        return 0;
+        return 2;
     case X_ADDR_W:
         if (!(sr1 & I2C_SR1_ADDR)) {
             return 0;
@@ -370,7 +380,7 @@ static uint8_t x_step(uint32_t now)
             xf.result = 0;
             xf.state = X_IDLE;
         }
-        return 0;
+        return 2;
     case X_ADDR_R:
         if (!(sr1 & I2C_SR1_ADDR)) {
             return 0;
@@ -389,7 +399,7 @@ static uint8_t x_step(uint32_t now)
         }
         irq_on();
         xf.state = X_RX;
-        return 0;
+        return 2;
     default: /* X_RX */
     {
         uint8_t left = (uint8_t)(xf.nrx - xf.i);
@@ -400,7 +410,7 @@ static uint8_t x_step(uint32_t now)
             xf.rx[xf.i++] = (uint8_t)DR(b); /* POS is cleared with the next START (no CR1 write while STOP is pending) */
             xf.result = 0;
             xf.state = X_IDLE;
-            return 0;
+            return 2;
         }
         if (left > 3u) {
             if (!(sr1 & I2C_SR1_RXNE)) {
@@ -421,7 +431,7 @@ static uint8_t x_step(uint32_t now)
                 xf.rx[xf.i++] = (uint8_t)DR(b);
                 xf.result = 0;
                 xf.state = X_IDLE;
-                return 0;
+                return 2;
             }
         }
         xf.rx[xf.i++] = (uint8_t)DR(b);
@@ -459,8 +469,16 @@ int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx,
 
 int8_t hal_i2c_poll(void)
 {
-    uint8_t n = 8; /* bounded: at most a few bytes' worth of flags per call */
-    while (xf.state != X_IDLE && x_step(hal_micros()) && --n) {
+    uint8_t n = 8, r; /* bounded: at most a few bytes' worth of flags per call */
+    while (xf.state != X_IDLE) {
+        r = x_step();
+        if (r == 0u) {
+            x_timeout(hal_micros()); /* the clock only when waiting: fewer reads per poll */
+            break;
+        }
+        if (r == 2u || --n == 0u) {
+            break;
+        }
     }
     return xf.state == X_IDLE ? xf.result : HAL_I2C_BUSY;
 }
@@ -544,6 +562,7 @@ void hal_init(void)
     clock_init();
     RCC_APB2ENR |= RCC_APB2_AFIO | RCC_APB2_IOPA | RCC_APB2_IOPB | RCC_APB2_USART1;
     SYST_RVR = sysclk / 1000u - 1u;
+    systick_load = sysclk / 1000u;
     SYST_CVR = 0;
     SYST_CSR = 7u; /* processor clock, interrupt, enable */
     pwm_init();

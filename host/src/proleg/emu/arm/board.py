@@ -50,7 +50,8 @@ POLL_WINDOW = 400  # cycles: two identical status reads closer than this are a p
 CYC_PER_US = CPU_HZ // 1_000_000
 _PC, _LR = A.UC_ARM_REG_PC, A.UC_ARM_REG_LR
 _I2C1_STATUS = {0x40005400, 0x40005414}  # CR1 (START/STOP cleared by hardware), SR1
-_SIDE_EFFECT_READS = {0x40005410, 0x40005418, 0x40013804}  # I2C1 DR, SR2 (clears ADDR), USART1 DR
+_I2C2_STATUS = {0x40005800, 0x40005814}
+_SIDE_EFFECT_READS = {0x40005410, 0x40005418, 0x40005810, 0x40005818, 0x40013804}  # I2C DR, SR2 (clears ADDR), USART1 DR
 _USART_SR = 0x40013800
 _TIME_REGS = {0xE000E010, 0xE000E018, 0xE000ED04}  # SYST_CSR, SYST_CVR, ICSR: reading them is not a poll
 
@@ -137,7 +138,8 @@ class ArmEmuBoard:
         self.bkp = Bkp(self._on_mark)
         self.devices = [self.rcc, self.flash_acr, self.iwdg, self.scs, self.i2c1, self.i2c2, *self.timers.values(),
                         self.gpioa, self.gpiob, self.afio, self.usart, self.bkp]
-        self._stepped = [self.scs, self.usart, self.i2c1]
+        self._i2cs = (self.i2c1, self.i2c2)
+        self._stepped = [self.scs, self.usart, self.i2c1, self.i2c2]
         self._soonest = 0
         self._by_addr: dict[int, object] = {}
         pages = set()
@@ -159,6 +161,7 @@ class ArmEmuBoard:
             raise SimError(f"unicorn: cannot add the cycle-counting hook (error {err})")
         self.cpu = CortexM(uc, self._vector)
         self._regbuf = ctypes.c_uint32()
+        self._membuf = ctypes.create_string_buffer(4)
         self._returns_sinks: list = []
         self.trace: list | None = None  # (cycle, "R"/"W", address, value) of every MMIO access when a list
         # tick markers and the tick-wait fast path
@@ -241,7 +244,8 @@ class ArmEmuBoard:
         self._soonest = 0
 
     def _next_event(self) -> int:
-        return min(self.scs.next_event(), self.usart.next_event(), self.i2c1.next_event(), self.iwdg.next_event())
+        return min(self.scs.next_event(), self.usart.next_event(), self.i2c1.next_event(), self.i2c2.next_event(),
+                   self.iwdg.next_event())
 
     def _next_interrupt(self) -> int:
         """The next event that can interrupt or reset the core (I2C is polled: not one)."""
@@ -312,11 +316,23 @@ class ArmEmuBoard:
     def _device(self, addr: int):
         return self._by_addr.get(addr & ~0x3FF) or self._by_addr.get(addr & ~0xFFF)
 
+    def _word(self, addr: int) -> int:
+        """A RAM word, read through the C API (the binding's mem_read costs more than the read)."""
+        uclib.uc_mem_read(self.uc._uch, addr, self._membuf, 4)
+        return int.from_bytes(self._membuf.raw, "little")
+
     def _reg(self, reg_id: int) -> int:
         uclib.uc_reg_read(self.uc._uch, reg_id, ctypes.byref(self._regbuf))
         return self._regbuf.value
 
     def _mmio_read(self, uc, offset: int, size: int, page: int) -> int:
+        if page == 0xE000E000 and self.trace is None:  # SysTick/NVIC/SCB: the clock, never a poll (fast path)
+            if offset == 0x18 and self._wait is not None:
+                self._wait_skip()
+            now = self.native.cycles.value
+            if now >= self._soonest:
+                self._advance(now)
+            return (self.scs.read(offset & ~3, now) >> (8 * (offset & 3))) & ((1 << (8 * size)) - 1)
         addr = page + offset
         if addr == 0xE000E018 and self._wait is not None:
             self._wait_skip()  # before the read: the firmware sees the time it skipped to
@@ -328,8 +344,8 @@ class ArmEmuBoard:
             return self._unmodelled.get(addr & ~3, 0)
         reg = addr - d.BASE
         v = d.read(reg & ~3, now) >> (8 * (reg & 3))
-        if d is self.i2c1 or d is self.usart:
-            self._soonest = 0
+        if d is self.i2c1 or d is self.i2c2 or d is self.usart:  # a read may start a byte (DR, SR2)
+            self._soonest = min(self._soonest, d.next_event())
         if addr not in _TIME_REGS and addr not in _SIDE_EFFECT_READS and self._poll(addr, v):
             now = self.native.cycles.value  # jumped to where the loop would see a change:
             self._advance(now)  # read again (these registers have no read side effects)
@@ -351,8 +367,8 @@ class ArmEmuBoard:
             self._unmodelled[addr & ~3] = value
             return
         d.write((addr - d.BASE) & ~3, value, now)
-        if d is self.i2c1:
-            self.i2c1.poll_blocked(now)
+        if d is self.i2c1 or d is self.i2c2:
+            d.poll_blocked(now)
         if d is self.usart or d is self.scs or d is self.iwdg or d is self.rcc:
             self.native.deadline.value = min(self.native.deadline.value, now + 1)  # re-plan events
 
@@ -373,6 +389,8 @@ class ArmEmuBoard:
         device = NEVER
         if addr in _I2C1_STATUS:
             device = self.i2c1.next_event()
+        elif addr in _I2C2_STATUS:
+            device = self.i2c2.next_event()
         elif addr == _USART_SR:
             device = self.usart.next_event()
         if device - now <= POLL_JUMP_US * CYC_PER_US:  # waiting for a transfer in flight
@@ -392,13 +410,15 @@ class ArmEmuBoard:
         w = self._wait
         if not (w.value <= pc < w.value + w.size or w.value <= (lr & ~1) < w.value + w.size):
             return
-        if self.i2c1.phase != "idle" or self.i2c1.sr1 & 0x47:  # SB, ADDR, BTF, RXNE: waiting on the core
-            return  # the core's idle wait also moves the I2C transaction on: no skipping it
+        if any(i2c.core_has_work() for i2c in self._i2cs):
+            return  # a flag the core's idle loop acts on (hal_i2c_poll): run it
         now = self.native.cycles.value
+        # Nothing the idle loop polls can change before the next peripheral event (an I2C
+        # byte or STOP completing included): jump to it or to the firmware's next tick.
         target = min(self._next_event(), self._end)
         if self._next_tick and self._ms_count:
-            next_tick = int.from_bytes(self.uc.mem_read(self._next_tick.value, 4), "little")
-            ms = int.from_bytes(self.uc.mem_read(self._ms_count.value, 4), "little")
+            next_tick = self._word(self._next_tick.value)
+            ms = self._word(self._ms_count.value)
             fw_us = ms * 1000 + (self.scs.rvr - self.scs.cvr(now)) // max(1, self.rcc.sysclk // 1_000_000)
             ahead = ((next_tick - fw_us + 2**31) % 2**32) - 2**31
             if ahead > 0:

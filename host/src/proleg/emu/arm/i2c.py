@@ -120,6 +120,13 @@ class I2c:
     def next_event(self) -> int:
         return self.done
 
+    def core_has_work(self) -> bool:
+        """A flag is up that a polling master acts on, with no bus event of its own coming
+        (SB, ADDR, BTF, RxNE, AF/BERR/ARLO, or TXE with no byte in flight while writing)."""
+        if self.sr1 & (SB | ADDR | BTF | RXNE | AF | BERR | ARLO):
+            return True
+        return bool(self.sr1 & TXE) and self.phase == "tx" and self.done == NEVER
+
     # -- the slave side -------------------------------------------------------------
     def _ack_address(self, now: int) -> bool:
         if self.slaves is None:
