@@ -33,7 +33,7 @@ from .clocks import CPU_HZ, NEVER, Flash, Iwdg, Rcc
 from .core import HARDFAULT, SYSTICK, CortexM
 from .elf import read_elf
 from .gpio import Gpio
-from .i2c import Bus, I2c
+from .i2c import Bus, BusSlaves, I2c, imu_slot_key
 from .native import Native
 from .scs import Scs
 from .tim import Timer
@@ -103,7 +103,8 @@ class ArmEmuBoard:
                 raise SimError(f"PWM pin {pin!r} is not a TIM2-TIM4 output (expected one of {sorted(_STM32_PWM)})")
             t, ch, port, p = _STM32_PWM[pin.upper()]
             self.pwm_map.append((t, ch, port, p))
-        self.imu_addresses = tuple(imu_addresses)
+        self.imu_addresses = tuple(imu_addresses)  # native model keys (imu_slot_key), attached at reset
+        self.imu_keymap: dict[int, int] = {}  # host-sim ABI key of a limb's IMU -> native model key
         self.native = Native()
         self._flash = bytearray(FLASH_SIZE)
         for seg in self.elf.segments:
@@ -127,7 +128,7 @@ class ArmEmuBoard:
         self.scs = Scs()
         self.bus = Bus()
         self.i2c1 = I2c(0x40005400, lambda: self.rcc.pclk1, self.bus, self.native)
-        self.i2c2 = I2c(0x40005800, lambda: self.rcc.pclk1)
+        self.i2c2 = I2c(0x40005800, lambda: self.rcc.pclk1, Bus(), BusSlaves(self.native, 1))
         timclk = lambda: self.rcc.pclk1 * (2 if self.rcc.pclk1 != self.rcc.sysclk else 1)  # noqa: E731
         self.timers = {2: Timer(0x40000000, timclk), 3: Timer(0x40000400, timclk), 4: Timer(0x40000800, timclk)}
         self.gpioa = Gpio(0x40010800)
@@ -490,18 +491,18 @@ class ArmEmuBoard:
 
     # -- IMUs -----------------------------------------------------------------------
     def imu_truth(self, addr: int, psi_deg: float, dpsi_dps: float) -> None:
-        self.native.lib.sim_mpu_set_truth(addr, psi_deg, dpsi_dps)
+        self.native.lib.sim_mpu_set_truth(self.imu_keymap.get(addr, addr), psi_deg, dpsi_dps)
 
     def imu_fault(self, addr: int, mode: str) -> None:
         if mode not in IMU_FAULTS:
             raise SimError(f"unknown IMU fault {mode!r} (expected one of: {', '.join(IMU_FAULTS)})")
-        self.native.lib.sim_mpu_set_fault(addr, IMU_FAULTS[mode])
+        self.native.lib.sim_mpu_set_fault(self.imu_keymap.get(addr, addr), IMU_FAULTS[mode])
 
     def imu_noise(self, addr: int, accel_ug_rthz: float, gyro_dps_rthz: float, accel_offset_mg: float) -> None:
-        self.native.lib.sim_mpu_set_noise(addr, accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
+        self.native.lib.sim_mpu_set_noise(self.imu_keymap.get(addr, addr), accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
 
     def imu_register(self, addr: int, reg: int) -> int:
-        return int(self.native.lib.sim_mpu_peek(addr, reg))
+        return int(self.native.lib.sim_mpu_peek(self.imu_keymap.get(addr, addr), reg))
 
     # -- emulator-only fault injection and probes -----------------------------------
     def i2c_hold_sda(self, byte: int = 0x00) -> None:
@@ -594,19 +595,20 @@ class ArmEmuBoard:
 
     # -- bus lines ------------------------------------------------------------------
     def _gpiob_level(self, pin: int) -> int | None:
-        if pin == 7:
-            driven = self.gpiob.is_gp_output(7) and not self.gpiob.odr >> 7 & 1
-            return 0 if self.bus.sda_low or driven else 1
-        if pin == 6:
-            return 0 if self.gpiob.is_gp_output(6) and not self.gpiob.odr >> 6 & 1 else 1
+        for i2c, scl in ((self.i2c1, 6), (self.i2c2, 10)):
+            if pin == scl + 1:
+                driven = self.gpiob.is_gp_output(pin) and not self.gpiob.odr >> pin & 1
+                return 0 if i2c.bus.sda_low or driven else 1
+            if pin == scl:
+                return 0 if self.gpiob.is_gp_output(pin) and not self.gpiob.odr >> pin & 1 else 1
         return None
 
     def _gpio_changed(self) -> None:
         g = self.gpiob
-        scl = 0 if g.is_gp_output(6) and not g.odr >> 6 & 1 else 1
-        self.bus.scl(scl)
-        self.bus.sda_master(0 if g.is_gp_output(7) and not g.odr >> 7 & 1 else 1)
-        self.i2c1.poll_blocked(self.native.cycles.value)
+        for i2c, scl in ((self.i2c1, 6), (self.i2c2, 10)):
+            i2c.bus.scl(0 if g.is_gp_output(scl) and not g.odr >> scl & 1 else 1)
+            i2c.bus.sda_master(0 if g.is_gp_output(scl + 1) and not g.odr >> (scl + 1) & 1 else 1)
+            i2c.poll_blocked(self.native.cycles.value)
 
     @property
     def speed(self) -> float:

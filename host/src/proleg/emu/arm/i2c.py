@@ -47,6 +47,28 @@ SB, ADDR, BTF, RXNE, TXE, BERR, ARLO, AF = 1, 2, 4, 1 << 6, 1 << 7, 1 << 8, 1 <<
 MSL, BUSY, TRA = 1, 2, 4
 
 
+def imu_slot_key(bus: int, addr: int) -> int:
+    """The native MPU-6050 model (8 devices keyed 0x68..0x6F) holding the IMU at ``addr``
+    on I2C bus ``bus``: an MPU-6050 answers only at 0x68 or 0x69 (AD0), so bus 0 keeps its
+    addresses and bus b uses keys 0x68 + 2b, 0x69 + 2b."""
+    if addr not in (0x68, 0x69) or not 0 <= bus < 4:
+        raise ValueError(f"no MPU-6050 model for address 0x{addr:02x} on bus {bus}")
+    return addr + 2 * bus
+
+
+class BusSlaves:
+    """The MPU-6050 models on a bus other than bus 0 (the same native library, its own keys)."""
+
+    def __init__(self, native, bus: int) -> None:
+        self.native = native
+        self.bus = bus
+
+    def mpu_transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+        if addr not in (0x68, 0x69):
+            return None
+        return self.native.mpu_transfer(imu_slot_key(self.bus, addr), tx, nrx, t_us)
+
+
 class Bus:
     """The two wires and who holds SDA."""
 
