@@ -163,6 +163,18 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
         duty = 10000u;
     }
     /* CCR = ARR + 1 is 100 %, 0 is 0 %: no glitch at either end in PWM mode 1. */
+    if (duty == 0u) {
+        /* Off now, not at the end of the running PWM period: with the preload off for the
+         * write, CCR takes the new value at once (RM0008 §15.3.9, OCxPE) and PWM mode 1 drops
+         * the output as CNT >= 0; the counter, so every other channel, is not disturbed. */
+        uint32_t b = timer_base(p->timer);
+        volatile uint32_t *ccmr = p->channel <= 2u ? &TIM_CCMR1(b) : &TIM_CCMR2(b);
+        uint32_t pe = (1u << 3) << ((p->channel & 1u) ? 0u : 8u);
+        *ccmr &= ~pe;
+        TIM_CCR(b, p->channel) = 0;
+        *ccmr |= pe;
+        return;
+    }
     TIM_CCR(timer_base(p->timer), p->channel) = (uint32_t)duty * PWM_COUNTS / 10000u;
 }
 
