@@ -276,14 +276,17 @@ static void i2c_recover(uint8_t bus)
     i2c_setup(bus);
 }
 
-static void irq_off(void)
+/* Interrupts off, and back to what they were (a caller may already have them off). */
+static uint32_t irq_off(void)
 {
-    __asm volatile("cpsid i" ::: "memory");
+    uint32_t primask;
+    __asm volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
+    return primask;
 }
 
-static void irq_on(void)
+static void irq_restore(uint32_t primask)
 {
-    __asm volatile("cpsie i" ::: "memory");
+    __asm volatile("msr primask, %0" ::"r"(primask) : "memory");
 }
 
 static void clear_addr(uint32_t b)
@@ -336,7 +339,7 @@ static void x_timeout(uint32_t now)
 static uint8_t x_step(void)
 {
     uint32_t b = xf.base;
-    uint32_t sr1;
+    uint32_t sr1, primask;
     if (xf.state == X_CLOSE) {
         return 0;
     }
@@ -398,7 +401,7 @@ static uint8_t x_step(void)
             return 0;
         }
         xf.i = 0;
-        irq_off();
+        primask = irq_off();
         if (xf.nrx == 1u) {
             CR1(b) &= ~I2C_CR1_ACK;
             clear_addr(b);
@@ -409,7 +412,7 @@ static uint8_t x_step(void)
                 CR1(b) &= ~I2C_CR1_ACK; /* with POS: NACKs the second byte */
             }
         }
-        irq_on();
+        irq_restore(primask);
         xf.state = X_RX;
         return 2;
     default: /* X_RX */
