@@ -83,7 +83,7 @@ TOY_BODIES = {
         "    (void)addr7;\n    (void)tx;\n    (void)ntx;\n    (void)rx;\n    (void)nrx;\n"
         "    return 0;"
     ),
-    "hal_i2c_write_read_bus": (
+    "hal_i2c_begin_bus": (
         "    (void)bus;\n    (void)addr7;\n    (void)tx;\n    (void)ntx;\n    (void)rx;\n    (void)nrx;\n"
         "    return -1; /* the toy has one bus, and nothing on it */"
     ),

@@ -56,11 +56,12 @@ void hal_watchdog_feed(void);
  * ignores it), so an emulator or a logic probe can time every tick. */
 void hal_tick_mark(uint8_t busy);
 
-/* One whole transaction (write ntx, then read nrx) on the board's I2C bus `bus` (its
- * index in the board file's [[i2c.bus]] list), waited for but bounded like hal_i2c_poll;
- * 0 or negative. Needed only on boards with more than one bus: the core calls it only for
- * IMUs on a second bus (CFG_I2C_BUSES > 1), once per limb between ticks. */
-int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
+/* hal_i2c_begin on the board's I2C bus `bus` (its index in the board file's [[i2c.bus]]
+ * list; hal_i2c_begin is bus 0). One transaction at a time over all buses: hal_i2c_poll()
+ * reports the last one begun, whichever bus it is on; -1 while it is in flight or for a
+ * bus the board lacks. Needed only on boards with more than one bus: the core calls it
+ * only when CFG_I2C_BUSES > 1 (imubus.c), a one-bus HAL need not define it. */
+int8_t hal_i2c_begin_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx);
 
 /* Set the MOSFET PWM duty of an actuator channel, in permyriad (0 = off, 10000 = on);
  * 0 must drive the gate low, not leave a one-count pulse. */

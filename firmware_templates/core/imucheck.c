@@ -99,21 +99,8 @@ static int8_t begin(uint8_t limb)
         ntx = 1;
         nrx = MPU6050_ACCEL_BYTES;
     }
-    /* Behind a multiplexer, its control byte first: one short blocking write, and only when
-     * the channel changes (imubus.h); begin() runs between ticks, with no transaction in flight. */
-    if (imubus_select(limb) != 0) {
-        st.res[limb] = RES_ERR;
-        return -1;
-    }
-#if CFG_I2C_BUSES > 1
-    if (imubus_on_second_bus()) {
-        /* Another bus has no background transfer in the HAL yet: one blocking transaction,
-         * between ticks like the others (its time is in proleg build's I2C-per-tick check). */
-        st.res[limb] = imubus_write_read(ROM_U8(&imu_addr[limb]), st.tx, ntx, st.rx[limb], nrx) == 0 ? RES_OK : RES_ERR;
-        return -1;
-    }
-#endif
-    return hal_i2c_begin(ROM_U8(&imu_addr[limb]), st.tx, ntx, st.rx[limb], nrx) == 0 ? 0 : -1;
+    /* Behind a multiplexer its control byte goes first, in the background too (imubus.h). */
+    return imubus_begin(limb, ROM_U8(&imu_addr[limb]), st.tx, ntx, st.rx[limb], nrx) == 0 ? 0 : -1;
 }
 
 /* From `from` on, begin the next limb's transaction; NO_LIMB when none is left. */
@@ -138,7 +125,7 @@ void imucheck_service(void)
         next(0); /* between ticks: the samples are as fresh as the next tick can have them */
     }
     while (st.cur != NO_LIMB) {
-        r = hal_i2c_poll();
+        r = imubus_poll();
         if (r == HAL_I2C_BUSY) {
             return;
         }

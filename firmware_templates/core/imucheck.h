@@ -1,8 +1,8 @@
 /* imucheck.h - the limbs' IMUs: start, read, check, classify into the robot state.
  *
- * Contract. Nothing here waits on the bus: every IMU transaction is begun with
- * hal_i2c_begin and collected with hal_i2c_poll (bounded by the HAL's per-transaction
- * deadline). imucheck_read() runs once per tick: it takes each limb's result of the
+ * Contract. Nothing here waits on the bus: every IMU transaction (with its multiplexer
+ * select, if any) is begun with imubus_begin and collected with imubus_poll (bounded by
+ * the HAL's per-transaction deadline). imucheck_read() runs once per tick: it takes each limb's result of the
  * transactions begun in the previous tick, then begins this tick's (one per limb, in
  * limb order); imucheck_service() moves them on (called at the tick and from the
  * main loop's idle wait), so the IMUs are read while the rest of the tick works.

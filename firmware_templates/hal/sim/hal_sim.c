@@ -86,7 +86,7 @@ uint32_t hal_micros(void)
  * MPU-6050 model on that bus at that address that is wired directly or sits behind a
  * connected multiplexer channel (limb i's IMU is model slot i). Several devices that
  * answer at once drive the open-drain bus together: the host reads the AND of their bytes. */
-int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+static int bus_transfer(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     uint8_t tmp[255];
     uint8_t i, j, acked = 0;
@@ -134,7 +134,14 @@ static int8_t i2c_result;
  * same bus model as the blocking call (multiplexers, several IMUs). */
 int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
-    i2c_result = hal_i2c_write_read_bus(0, addr7, tx, ntx, rx, nrx) == 0 ? 0 : -1;
+    i2c_result = bus_transfer(0, addr7, tx, ntx, rx, nrx) == 0 ? 0 : -1;
+    return 0;
+}
+
+/* The same on bus `bus`: at once, through the same bus model. */
+int8_t hal_i2c_begin_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    i2c_result = bus_transfer(bus, addr7, tx, ntx, rx, nrx) == 0 ? 0 : -1;
     return 0;
 }
 

@@ -5,7 +5,8 @@
  * SysTick: 1 ms interrupt; hal_micros = ms·1000 + elapsed counts (the core paces the
  * control tick on it). PWM: TIM2/TIM3/TIM4 channels from the board pin map (CFG_PWM_MAP:
  * {timer, channel, port 0=A 1=B, pin}), 1000 counts per period at CFG_PWM_HZ.
- * I2C1 on PB6/PB7 at CFG_I2C_HZ (fast mode), polled, every wait bounded by I2C_STEP_US.
+ * I2C1 on PB6/PB7 (and I2C2 on PB10/PB11) at CFG_I2C_HZ (fast mode): one background
+ * transaction at a time, moved on by hal_i2c_poll (a state machine on the status flags).
  * USART1 on PA9/PA10 at CFG_UART_BAUD; its interrupt moves bytes to and from the core's
  * rings (uart.h). main() is the core's.
  */
@@ -48,6 +49,7 @@ static const pwm_pin_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
 
 static uint32_t sysclk = 8000000u;
 static volatile uint32_t ms_count;
+static uint32_t systick_load; /* SYST_RVR + 1, set with it in hal_init: one register read less per hal_micros */
 static uint8_t reset_cause;
 
 void SysTick_Handler(void);
@@ -91,7 +93,7 @@ void SysTick_Handler(void)
 uint32_t hal_micros(void)
 {
     uint32_t m0, ms, val;
-    uint32_t load = SYST_RVR + 1u;
+    uint32_t load = systick_load;
     /* Not COUNTFLAG: it is clear-on-read and the SysTick handler never reads it, so it
      * stayed set after the handler ran and the next call counted that ms twice. */
     do {
@@ -161,123 +163,92 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
         duty = 10000u;
     }
     /* CCR = ARR + 1 is 100 %, 0 is 0 %: no glitch at either end in PWM mode 1. */
+    if (duty == 0u) {
+        /* Off now, not at the end of the running PWM period: with the preload off for the
+         * write, CCR takes the new value at once (RM0008 §15.3.9, OCxPE) and PWM mode 1 drops
+         * the output as CNT >= 0; the counter, so every other channel, is not disturbed. */
+        uint32_t b = timer_base(p->timer);
+        volatile uint32_t *ccmr = p->channel <= 2u ? &TIM_CCMR1(b) : &TIM_CCMR2(b);
+        uint32_t pe = (1u << 3) << ((p->channel & 1u) ? 0u : 8u);
+        *ccmr &= ~pe;
+        TIM_CCR(b, p->channel) = 0;
+        *ccmr |= pe;
+        return;
+    }
     TIM_CCR(timer_base(p->timer), p->channel) = (uint32_t)duty * PWM_COUNTS / 10000u;
 }
 
-/* ------------------------------------------------------------------ I2C1 */
+/* ------------------------------------------------------------------ I2C1, I2C2
+ * Bus 0 = I2C1 on PB6 (SCL) / PB7 (SDA); bus 1 = I2C2 on PB10 / PB11 (RM0008 §9.3.9, no
+ * remap), only in images whose IMUs use it (CFG_I2C_BUSES > 1; set up on first use, so
+ * hal_init stays as it is). One transaction at a time over both buses, in the background:
+ * hal_i2c_begin_bus() starts it, every hal_i2c_poll() moves it on as far as the status
+ * flags allow and never waits. The receive side follows RM0008 §26.3.3 so that it is right
+ * however late a poll comes (the peripheral stretches SCL while the core is away):
+ *   1 byte:  ACK = 0 before ADDR is cleared, STOP right after, RxNE, read;
+ *   2 bytes: POS = 1 and ACK = 1 before START; clear ADDR, ACK = 0; BTF; STOP; read twice;
+ *   N > 2:   read on RxNE until 3 are left; BTF, ACK = 0, read N-2; BTF, STOP, read N-1;
+ *            RxNE, read N.
+ * The two steps that must follow ADDR within one byte time (≈ 22 µs at 400 kHz) run with
+ * interrupts off. A NACK, a bus error or HAL_I2C_DEADLINE_US without completion ends the
+ * transaction with -1: a STOP, then, if the bus does not come free within I2C_STEP_US,
+ * the 9-clock recovery. START is never requested while a STOP is still pending (§26.6.1). */
 
-/* Until no START/STOP request is pending: RM0008 §26.6.1 forbids any write to CR1 before
- * the hardware has cleared them (the read-modify-write would request a second one). */
-static int8_t i2c_wait_idle(void)
-{
-    uint32_t t0 = hal_micros();
-    while (I2C_CR1 & (I2C_CR1_START | I2C_CR1_STOP)) {
-        if ((uint32_t)(hal_micros() - t0) > I2C_STEP_US) {
-            return -1;
-        }
-    }
-    return 0;
-}
+#define I2C2_BASE 0x40005800u
+#define RCC_APB1_I2C2 (1u << 22)
+#define I2C_CR1_POS (1u << 11)
+#define I2CR(b, off) REG32((b) + (off))
+#define CR1(b) I2CR(b, 0x00u)
+#define DR(b) I2CR(b, 0x10u)
+#define SR1(b) I2CR(b, 0x14u)
+#define SR2(b) I2CR(b, 0x18u)
+#define I2C_ERRORS (I2C_SR1_AF | I2C_SR1_BERR | I2C_SR1_ARLO)
 
-static int8_t i2c_wait(uint32_t mask)
-{
-    uint32_t t0 = hal_micros();
-    while (!(I2C_SR1 & mask)) {
-        if (I2C_SR1 & (I2C_SR1_AF | I2C_SR1_BERR | I2C_SR1_ARLO)) {
-            return -1;
-        }
-        if ((uint32_t)(hal_micros() - t0) > I2C_STEP_US) {
-            return -1;
-        }
-    }
-    return 0;
-}
+enum {
+    X_IDLE,   /* no transaction; `result` is the last one's */
+    X_FREE,   /* waiting for the previous STOP to clear */
+    X_SB_W,   /* START requested (write) */
+    X_ADDR_W, /* address + W sent */
+    X_TX,     /* sending tx */
+    X_SB_R,   /* (repeated) START requested (read) */
+    X_ADDR_R, /* address + R sent */
+    X_RX,     /* receiving */
+    X_CLOSE   /* failed: STOP sent, waiting for the bus to come free */
+};
 
-static void i2c_setup(void)
+static struct {
+    uint32_t base;
+    uint32_t t0; /* hal_micros() at begin, or at the failure for X_CLOSE */
+    const uint8_t *tx;
+    uint8_t *rx;
+    uint8_t addr, ntx, nrx, i, state, bus;
+    int8_t result;
+} xf;
+static uint8_t i2c_ready; /* bit per bus: set up */
+
+static void i2c_setup(uint8_t bus)
 {
+    uint32_t b = bus ? I2C2_BASE : I2C1_BASE;
     uint32_t pclk1 = sysclk == 72000000u ? 36000000u : sysclk;
     uint32_t mhz = pclk1 / 1000000u;
     uint32_t ccr = pclk1 / (3u * CFG_I2C_HZ);
-    I2C_CR1 = I2C_CR1_SWRST;
-    I2C_CR1 = 0;
-    I2C_CR2 = mhz;
-    I2C_CCR = (1u << 15) | (ccr < 1u ? 1u : ccr); /* fast mode, duty 2 */
-    I2C_TRISE = mhz * 300u / 1000u + 1u;
-    I2C_CR1 = I2C_CR1_PE;
-}
-
-static int8_t i2c_start(uint8_t sla)
-{
-    I2C_CR1 |= I2C_CR1_START;
-    if (i2c_wait(I2C_SR1_SB) != 0) {
-        return -1;
-    }
-    I2C_DR = sla;
-    if (i2c_wait(I2C_SR1_ADDR) != 0) {
-        return -1;
-    }
-    return 0;
-}
-
-static void clear_addr(void)
-{
-    volatile uint32_t sr;
-    sr = I2C_SR1;
-    sr = I2C_SR2;
-    (void)sr;
-}
-
-static int8_t i2c_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
-{
-    uint8_t i;
-    if (i2c_wait_idle() != 0) {
-        return -1;
-    }
-    if (ntx || !nrx) {
-        if (i2c_start((uint8_t)(addr7 << 1)) != 0) {
-            return -1;
-        }
-        clear_addr();
-        for (i = 0; i < ntx; i++) {
-            if (i2c_wait(I2C_SR1_TXE) != 0) {
-                return -1;
-            }
-            I2C_DR = tx[i];
-        }
-        if (i2c_wait(I2C_SR1_BTF | (ntx ? 0u : I2C_SR1_TXE)) != 0) {
-            return -1;
-        }
-    }
-    if (nrx) {
-        I2C_CR1 |= I2C_CR1_ACK;
-        if (i2c_start((uint8_t)((addr7 << 1) | 1u)) != 0) {
-            return -1;
-        }
-        if (nrx == 1u) {
-            I2C_CR1 &= ~I2C_CR1_ACK;
-        }
-        clear_addr();
-        for (i = 0; i < nrx; i++) {
-            if (i + 1u == nrx) {
-                /* NACK the last byte and stop after it (set while it is being shifted in). */
-                I2C_CR1 &= ~I2C_CR1_ACK;
-                I2C_CR1 |= I2C_CR1_STOP;
-            }
-            if (i2c_wait(I2C_SR1_RXNE) != 0) {
-                return -1;
-            }
-            rx[i] = (uint8_t)I2C_DR;
-        }
-        return 0;
-    }
-    I2C_CR1 |= I2C_CR1_STOP;
-    return 0;
+    uint8_t scl = bus ? 10u : 6u;
+    RCC_APB1ENR |= bus ? RCC_APB1_I2C2 : RCC_APB1_I2C1;
+    gpio_mode(1, scl, GPIO_AF_OD_50MHZ);
+    gpio_mode(1, (uint8_t)(scl + 1u), GPIO_AF_OD_50MHZ);
+    CR1(b) = I2C_CR1_SWRST;
+    CR1(b) = 0;
+    I2CR(b, 0x04u) = mhz;                                  /* CR2.FREQ */
+    I2CR(b, 0x1Cu) = (1u << 15) | (ccr < 1u ? 1u : ccr);   /* CCR: fast mode, duty 2 */
+    I2CR(b, 0x20u) = mhz * 300u / 1000u + 1u;              /* TRISE: 300 ns */
+    CR1(b) = I2C_CR1_PE;
+    i2c_ready = (uint8_t)(i2c_ready | (1u << bus));
 }
 
 /* Bus recovery (I2C spec UM10204 §3.1.16): a slave cut off mid-byte holds SDA low until it
  * has clocked out its byte. With the peripheral off, clock SCL as GPIO until SDA is released
  * (at most 9 clocks), make a STOP, then set the peripheral up again. A reset of the
- * peripheral alone (SWRST) never frees the bus. */
+ * peripheral alone (SWRST) never frees the bus. Blocks ≈ 100 µs; only after a failure. */
 static void i2c_delay_us(uint32_t us)
 {
     uint32_t t0 = hal_micros();
@@ -285,60 +256,246 @@ static void i2c_delay_us(uint32_t us)
     }
 }
 
-static void i2c_recover(void)
+static void i2c_recover(uint8_t bus)
 {
-    uint8_t i;
-    I2C_CR1 = 0; /* PE off: PB6/PB7 follow their GPIO output latches */
-    GPIO_BSRR(GPIOB_BASE) = (1u << 6) | (1u << 7);
-    gpio_mode(1, 6, GPIO_OUT_OD_50MHZ);
-    gpio_mode(1, 7, GPIO_OUT_OD_50MHZ);
-    for (i = 0; i < 9u && !(GPIO_IDR(GPIOB_BASE) & (1u << 7)); i++) {
-        GPIO_BRR(GPIOB_BASE) = 1u << 6;
+    uint8_t i, scl = bus ? 10u : 6u, sda = (uint8_t)(scl + 1u);
+    CR1(bus ? I2C2_BASE : I2C1_BASE) = 0; /* PE off: the pins follow their GPIO latches */
+    GPIO_BSRR(GPIOB_BASE) = (1u << scl) | (1u << sda);
+    gpio_mode(1, scl, GPIO_OUT_OD_50MHZ);
+    gpio_mode(1, sda, GPIO_OUT_OD_50MHZ);
+    for (i = 0; i < 9u && !(GPIO_IDR(GPIOB_BASE) & (1u << sda)); i++) {
+        GPIO_BRR(GPIOB_BASE) = 1u << scl;
         i2c_delay_us(5u);
-        GPIO_BSRR(GPIOB_BASE) = 1u << 6;
+        GPIO_BSRR(GPIOB_BASE) = 1u << scl;
         i2c_delay_us(5u);
     }
-    GPIO_BRR(GPIOB_BASE) = 1u << 7; /* STOP: SDA rises while SCL is high */
+    GPIO_BRR(GPIOB_BASE) = 1u << sda; /* STOP: SDA rises while SCL is high */
     i2c_delay_us(5u);
-    GPIO_BSRR(GPIOB_BASE) = 1u << 7;
+    GPIO_BSRR(GPIOB_BASE) = 1u << sda;
     i2c_delay_us(5u);
-    gpio_mode(1, 6, GPIO_AF_OD_50MHZ);
-    gpio_mode(1, 7, GPIO_AF_OD_50MHZ);
-    i2c_setup();
+    i2c_setup(bus);
 }
 
-static int8_t i2c_write_read(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+/* Interrupts off, and back to what they were (a caller may already have them off). */
+static uint32_t irq_off(void)
 {
-    if (i2c_transfer(addr7, tx, ntx, rx, nrx) != 0) {
-        if (I2C_CR1 & I2C_CR1_START) {
-            i2c_recover(); /* the START never went out: a line is held low */
-            return -1;
+    uint32_t primask;
+    __asm volatile("mrs %0, primask\n\tcpsid i" : "=r"(primask)::"memory");
+    return primask;
+}
+
+static void irq_restore(uint32_t primask)
+{
+    __asm volatile("msr primask, %0" ::"r"(primask) : "memory");
+}
+
+static void clear_addr(uint32_t b)
+{
+    volatile uint32_t sr;
+    sr = SR1(b);
+    sr = SR2(b);
+    (void)sr;
+}
+
+static void x_fail(uint32_t now)
+{
+    uint32_t b = xf.base;
+    if (!(CR1(b) & (I2C_CR1_START | I2C_CR1_STOP))) {
+        CR1(b) = (CR1(b) & ~(I2C_CR1_ACK | I2C_CR1_POS)) | I2C_CR1_STOP;
+    }
+    SR1(b) = 0; /* clear AF/BERR/ARLO */
+    xf.result = -1;
+    xf.t0 = now;
+    xf.state = X_CLOSE;
+}
+
+static void x_start_read(uint32_t b)
+{
+    /* 2 bytes: POS and ACK before the START (RM0008 §26.3.3); otherwise ACK, POS off. */
+    CR1(b) = (CR1(b) & ~I2C_CR1_POS) | I2C_CR1_ACK | (xf.nrx == 2u ? I2C_CR1_POS : 0u) | I2C_CR1_START;
+    xf.state = X_SB_R;
+}
+
+/* A transaction waiting on the bus: past its deadline it fails; a failed one's STOP must
+ * free the bus within I2C_STEP_US, or the bus is recovered. */
+static void x_timeout(uint32_t now)
+{
+    uint32_t b = xf.base;
+    if (xf.state == X_CLOSE) {
+        if (!(CR1(b) & (I2C_CR1_START | I2C_CR1_STOP)) && !(SR2(b) & I2C_SR2_BUSY)) {
+            xf.state = X_IDLE;
+        } else if ((uint32_t)(now - xf.t0) > I2C_STEP_US) {
+            i2c_recover(xf.bus); /* a START that never went out or a STOP that cannot: a line is held */
+            xf.state = X_IDLE;
         }
-        if (!(I2C_CR1 & I2C_CR1_STOP)) {
-            I2C_CR1 |= I2C_CR1_STOP;
+    } else if ((uint32_t)(now - xf.t0) > HAL_I2C_DEADLINE_US) {
+        x_fail(now);
+    }
+}
+
+/* One step of the transaction on what the status flags say now: 0 when it waits on the bus
+ * (then hal_i2c_poll checks the time), 1 when it moved on and the next flag may already be
+ * up, 2 when it moved on and the next flag needs the bus. */
+static uint8_t x_step(void)
+{
+    uint32_t b = xf.base;
+    uint32_t sr1, primask;
+    if (xf.state == X_CLOSE) {
+        return 0;
+    }
+    if (xf.state == X_FREE) {
+        if (CR1(b) & (I2C_CR1_START | I2C_CR1_STOP)) {
+            return 0;
         }
-        I2C_SR1 = 0; /* clear AF/BERR/ARLO */
-        if (i2c_wait_idle() != 0 || (I2C_SR2 & I2C_SR2_BUSY)) {
-            i2c_recover(); /* bus stuck or a request never completed */
+        if (xf.ntx || !xf.nrx) {
+            CR1(b) = (CR1(b) & ~I2C_CR1_POS) | I2C_CR1_START;
+            xf.state = X_SB_W;
+        } else {
+            x_start_read(b);
         }
+        return 2;
+    }
+    sr1 = SR1(b);
+    if (sr1 & I2C_ERRORS) {
+        x_fail(hal_micros());
+        return 2;
+    }
+    switch (xf.state) {
+    case X_SB_W:
+    case X_SB_R:
+        if (!(sr1 & I2C_SR1_SB)) {
+            return 0;
+        }
+        DR(b) = (uint32_t)(xf.addr << 1) | (xf.state == X_SB_R ? 1u : 0u);
+        xf.state++;
+        return 2;
+    case X_ADDR_W:
+        if (!(sr1 & I2C_SR1_ADDR)) {
+            return 0;
+        }
+        clear_addr(b);
+        xf.i = 0;
+        xf.state = X_TX;
+        return 1;
+    case X_TX:
+        if (xf.i < xf.ntx) {
+            if (!(sr1 & I2C_SR1_TXE)) {
+                return 0;
+            }
+            DR(b) = xf.tx[xf.i++];
+            return 1;
+        }
+        if (!(sr1 & (xf.ntx ? I2C_SR1_BTF : (I2C_SR1_BTF | I2C_SR1_TXE)))) {
+            return 0;
+        }
+        if (xf.nrx) {
+            x_start_read(b); /* repeated START: no STOP is pending here */
+        } else {
+            CR1(b) |= I2C_CR1_STOP;
+            xf.result = 0;
+            xf.state = X_IDLE;
+        }
+        return 2;
+    case X_ADDR_R:
+        if (!(sr1 & I2C_SR1_ADDR)) {
+            return 0;
+        }
+        xf.i = 0;
+        primask = irq_off();
+        if (xf.nrx == 1u) {
+            CR1(b) &= ~I2C_CR1_ACK;
+            clear_addr(b);
+            CR1(b) |= I2C_CR1_STOP;
+        } else {
+            clear_addr(b);
+            if (xf.nrx == 2u) {
+                CR1(b) &= ~I2C_CR1_ACK; /* with POS: NACKs the second byte */
+            }
+        }
+        irq_restore(primask);
+        xf.state = X_RX;
+        return 2;
+    default: /* X_RX */
+    {
+        uint8_t left = (uint8_t)(xf.nrx - xf.i);
+        if (left == 1u) {
+            if (!(sr1 & I2C_SR1_RXNE)) {
+                return 0;
+            }
+            xf.rx[xf.i++] = (uint8_t)DR(b); /* POS is cleared with the next START (no CR1 write while STOP is pending) */
+            xf.result = 0;
+            xf.state = X_IDLE;
+            return 2;
+        }
+        if (left > 3u) {
+            if (!(sr1 & I2C_SR1_RXNE)) {
+                return 0;
+            }
+            xf.rx[xf.i++] = (uint8_t)DR(b);
+            return 1;
+        }
+        if (!(sr1 & I2C_SR1_BTF)) {
+            return 0;
+        }
+        if (left == 3u) {
+            CR1(b) &= ~I2C_CR1_ACK; /* applies to byte N: N-1 is held, already ACKed */
+        } else {
+            CR1(b) |= I2C_CR1_STOP; /* left == 2: both in; N was NACKed */
+            if (xf.nrx == 2u) { /* POS: both bytes in, the second NACKed */
+                xf.rx[xf.i++] = (uint8_t)DR(b);
+                xf.rx[xf.i++] = (uint8_t)DR(b);
+                xf.result = 0;
+                xf.state = X_IDLE;
+                return 2;
+            }
+        }
+        xf.rx[xf.i++] = (uint8_t)DR(b);
+        return 1;
+    }
+    }
+}
+
+int8_t hal_i2c_begin_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+{
+    if (hal_i2c_poll() == HAL_I2C_BUSY || bus >= CFG_I2C_BUSES || bus > 1u) {
         return -1;
     }
+    if (!(i2c_ready & (1u << bus))) {
+        i2c_setup(bus);
+    }
+    xf.base = bus ? I2C2_BASE : I2C1_BASE;
+    xf.bus = bus;
+    xf.addr = addr7;
+    xf.tx = tx;
+    xf.ntx = ntx;
+    xf.rx = rx;
+    xf.nrx = nrx;
+    xf.t0 = hal_micros();
+    xf.result = HAL_I2C_BUSY;
+    xf.state = X_FREE;
+    (void)hal_i2c_poll(); /* the START goes out now if the bus is free */
     return 0;
 }
 
-static int8_t i2c_result;
-
-/* Not yet in the background on this HAL: the transaction runs here, polled, each step
- * bounded by I2C_STEP_US (≈ 220 µs for a 6-byte read at 400 kHz). */
 int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
-    i2c_result = i2c_write_read(addr7, tx, ntx, rx, nrx);
-    return 0;
+    return hal_i2c_begin_bus(0, addr7, tx, ntx, rx, nrx);
 }
 
 int8_t hal_i2c_poll(void)
 {
-    return i2c_result;
+    uint8_t n = 8, r; /* bounded: at most a few bytes' worth of flags per call */
+    while (xf.state != X_IDLE) {
+        r = x_step();
+        if (r == 0u) {
+            x_timeout(hal_micros()); /* the clock only when waiting: fewer reads per poll */
+            break;
+        }
+        if (r == 2u || --n == 0u) {
+            break;
+        }
+    }
+    return xf.state == X_IDLE ? xf.result : HAL_I2C_BUSY;
 }
 
 /* ------------------------------------------------------------------ USART1 */
@@ -419,15 +576,12 @@ void hal_init(void)
     reset_cause_read(); /* first: RMVF clears the flags for the next reset */
     clock_init();
     RCC_APB2ENR |= RCC_APB2_AFIO | RCC_APB2_IOPA | RCC_APB2_IOPB | RCC_APB2_USART1;
-    RCC_APB1ENR |= RCC_APB1_I2C1;
     SYST_RVR = sysclk / 1000u - 1u;
+    systick_load = sysclk / 1000u;
     SYST_CVR = 0;
     SYST_CSR = 7u; /* processor clock, interrupt, enable */
     pwm_init();
-    /* I2C1: PB6 = SCL, PB7 = SDA, alternate open-drain. */
-    gpio_mode(1, 6, GPIO_AF_OD_50MHZ);
-    gpio_mode(1, 7, GPIO_AF_OD_50MHZ);
-    i2c_setup();
+    i2c_setup(0); /* I2C1: PB6 = SCL, PB7 = SDA, alternate open-drain */
     /* USART1: PA9 = TX (AF push-pull), PA10 = RX (input, pull-up). */
     gpio_mode(0, 9, GPIO_AF_PP_50MHZ);
     gpio_mode(0, 10, GPIO_IN_PULL);
@@ -436,142 +590,6 @@ void hal_init(void)
     USART_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE | USART_CR1_RXNEIE;
     NVIC_ISER(USART1_IRQN / 32u) = 1u << (USART1_IRQN % 32u);
     iwdg_start(); /* fed by the core's main loop once per completed tick */
-}
-
-/* ------------------------------------------------------------------ I2C2 (bus 1)
- * The second bus, PB10 = SCL, PB11 = SDA (RM0008 §9.3.9, no remap), polled like I2C1
- * with the same bounded waits. Only in images whose IMUs use bus 1 (CFG_I2C_BUSES > 1);
- * set up on its first transfer so hal_init stays as it is. */
-#if CFG_I2C_BUSES > 1
-#define I2C2_BASE 0x40005800u
-#define I2C2_CR1 REG32(I2C2_BASE + 0x00u)
-#define I2C2_CR2 REG32(I2C2_BASE + 0x04u)
-#define I2C2_DR REG32(I2C2_BASE + 0x10u)
-#define I2C2_SR1 REG32(I2C2_BASE + 0x14u)
-#define I2C2_SR2 REG32(I2C2_BASE + 0x18u)
-#define I2C2_CCR REG32(I2C2_BASE + 0x1Cu)
-#define I2C2_TRISE REG32(I2C2_BASE + 0x20u)
-#define RCC_APB1_I2C2 (1u << 22)
-
-static uint8_t i2c2_ready;
-
-static int8_t i2c2_wait(uint32_t mask)
-{
-    uint32_t t0 = hal_micros();
-    while (!(I2C2_SR1 & mask)) {
-        if ((I2C2_SR1 & (I2C_SR1_AF | I2C_SR1_BERR | I2C_SR1_ARLO)) || (uint32_t)(hal_micros() - t0) > I2C_STEP_US) {
-            return -1;
-        }
-    }
-    return 0;
-}
-
-static void i2c2_setup(void)
-{
-    uint32_t pclk1 = sysclk == 72000000u ? 36000000u : sysclk;
-    uint32_t mhz = pclk1 / 1000000u;
-    uint32_t ccr = pclk1 / (3u * CFG_I2C_HZ);
-    RCC_APB1ENR |= RCC_APB1_I2C2;
-    gpio_mode(1, 10, GPIO_AF_OD_50MHZ);
-    gpio_mode(1, 11, GPIO_AF_OD_50MHZ);
-    I2C2_CR1 = I2C_CR1_SWRST;
-    I2C2_CR1 = 0;
-    I2C2_CR2 = mhz;
-    I2C2_CCR = (1u << 15) | (ccr < 1u ? 1u : ccr); /* fast mode, duty 2 */
-    I2C2_TRISE = mhz * 300u / 1000u + 1u;
-    I2C2_CR1 = I2C_CR1_PE;
-    i2c2_ready = 1;
-}
-
-static int8_t i2c2_start(uint8_t sla)
-{
-    I2C2_CR1 |= I2C_CR1_START;
-    if (i2c2_wait(I2C_SR1_SB) != 0) {
-        return -1;
-    }
-    I2C2_DR = sla;
-    return i2c2_wait(I2C_SR1_ADDR);
-}
-
-static void i2c2_clear_addr(void)
-{
-    volatile uint32_t sr;
-    sr = I2C2_SR1;
-    sr = I2C2_SR2;
-    (void)sr;
-}
-
-static int8_t i2c2_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
-{
-    uint8_t i;
-    if (ntx || !nrx) {
-        if (i2c2_start((uint8_t)(addr7 << 1)) != 0) {
-            return -1;
-        }
-        i2c2_clear_addr();
-        for (i = 0; i < ntx; i++) {
-            if (i2c2_wait(I2C_SR1_TXE) != 0) {
-                return -1;
-            }
-            I2C2_DR = tx[i];
-        }
-        if (i2c2_wait(I2C_SR1_BTF | (ntx ? 0u : I2C_SR1_TXE)) != 0) {
-            return -1;
-        }
-    }
-    if (nrx) {
-        I2C2_CR1 |= I2C_CR1_ACK;
-        if (i2c2_start((uint8_t)((addr7 << 1) | 1u)) != 0) {
-            return -1;
-        }
-        if (nrx == 1u) {
-            I2C2_CR1 &= ~I2C_CR1_ACK;
-        }
-        i2c2_clear_addr();
-        for (i = 0; i < nrx; i++) {
-            if (i + 1u == nrx) {
-                I2C2_CR1 &= ~I2C_CR1_ACK;
-                I2C2_CR1 |= I2C_CR1_STOP;
-            }
-            if (i2c2_wait(I2C_SR1_RXNE) != 0) {
-                return -1;
-            }
-            rx[i] = (uint8_t)I2C2_DR;
-        }
-        return 0;
-    }
-    I2C2_CR1 |= I2C_CR1_STOP;
-    return 0;
-}
-#endif
-
-int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
-{
-    if (bus == 0u) {
-        return i2c_write_read(addr7, tx, ntx, rx, nrx);
-    }
-#if CFG_I2C_BUSES > 1
-    if (bus == 1u) {
-        if (!i2c2_ready) {
-            i2c2_setup();
-        }
-        if (i2c2_transfer(addr7, tx, ntx, rx, nrx) != 0) {
-            I2C2_CR1 |= I2C_CR1_STOP;
-            I2C2_SR1 = 0; /* clear AF/BERR/ARLO */
-            if (I2C2_SR2 & I2C_SR2_BUSY) {
-                i2c2_setup(); /* bus stuck: reset the peripheral */
-            }
-            return -1;
-        }
-        return 0;
-    }
-#endif
-    (void)addr7;
-    (void)tx;
-    (void)ntx;
-    (void)rx;
-    (void)nrx;
-    return -1;
 }
 
 /* ------------------------------------------------------------------ flash page (hal_nv_*)

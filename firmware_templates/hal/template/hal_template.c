@@ -69,11 +69,12 @@ int8_t hal_i2c_poll(void)
     return -1;
 }
 
-/* The same as hal_i2c_begin + waiting for hal_i2c_poll, on I2C bus `bus` (its index in
- * the board file's [[i2c.bus]] list): only for an MCU with a second I2C peripheral. The
- * core calls it only when a robot's IMUs use bus 1 or above (one transaction between
- * ticks, bounded like hal_i2c_poll). Return -1 for a bus you lack. */
-int hal_i2c_write_read_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
+/* hal_i2c_begin on I2C bus `bus` (its index in the board file's [[i2c.bus]] list; bus 0
+ * is hal_i2c_begin's): only for an MCU with a second I2C peripheral. The core calls it only
+ * when a robot's IMUs use bus 1 or above (CFG_I2C_BUSES > 1); one transaction at a time over
+ * all buses, and hal_i2c_poll() reports the last one begun. Return -1 for a bus you lack
+ * or while a transaction is in flight. */
+int8_t hal_i2c_begin_bus(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)
 {
     (void)bus;
     (void)addr7;

@@ -35,7 +35,7 @@ from .core import HARDFAULT, SYSTICK, CortexM
 from .elf import read_elf
 from .fpec import PAGE_SIZE as NV_PAGE_SIZE, Fpec
 from .gpio import Gpio
-from .i2c import Bus, I2c
+from .i2c import Bus, BusSlaves, I2c, imu_slot_key
 from .native import Native
 from .scs import Scs
 from .tim import Timer
@@ -52,7 +52,8 @@ POLL_WINDOW = 400  # cycles: two identical status reads closer than this are a p
 CYC_PER_US = CPU_HZ // 1_000_000
 _PC, _LR = A.UC_ARM_REG_PC, A.UC_ARM_REG_LR
 _I2C1_STATUS = {0x40005400, 0x40005414}  # CR1 (START/STOP cleared by hardware), SR1
-_SIDE_EFFECT_READS = {0x40005410, 0x40005418, 0x40013804}  # I2C1 DR, SR2 (clears ADDR), USART1 DR
+_I2C2_STATUS = {0x40005800, 0x40005814}
+_SIDE_EFFECT_READS = {0x40005410, 0x40005418, 0x40005810, 0x40005818, 0x40013804}  # I2C DR, SR2 (clears ADDR), USART1 DR
 _USART_SR = 0x40013800
 _TIME_REGS = {0xE000E010, 0xE000E018, 0xE000ED04}  # SYST_CSR, SYST_CVR, ICSR: reading them is not a poll
 
@@ -104,7 +105,8 @@ class ArmEmuBoard:
                 raise SimError(f"PWM pin {pin!r} is not a TIM2-TIM4 output (expected one of {sorted(_STM32_PWM)})")
             t, ch, port, p = _STM32_PWM[pin.upper()]
             self.pwm_map.append((t, ch, port, p))
-        self.imu_addresses = tuple(imu_addresses)
+        self.imu_addresses = tuple(imu_addresses)  # native model keys (imu_slot_key), attached at reset
+        self.imu_keymap: dict[int, int] = {}  # host-sim ABI key of a limb's IMU -> native model key
         self.native = Native()
         self._flash = bytearray(FLASH_SIZE)
         for seg in self.elf.segments:
@@ -129,7 +131,7 @@ class ArmEmuBoard:
         self.scs = Scs()
         self.bus = Bus()
         self.i2c1 = I2c(0x40005400, lambda: self.rcc.pclk1, self.bus, self.native)
-        self.i2c2 = I2c(0x40005800, lambda: self.rcc.pclk1)
+        self.i2c2 = I2c(0x40005800, lambda: self.rcc.pclk1, Bus(), BusSlaves(self.native, 1))
         timclk = lambda: self.rcc.pclk1 * (2 if self.rcc.pclk1 != self.rcc.sysclk else 1)  # noqa: E731
         self.timers = {2: Timer(0x40000000, timclk), 3: Timer(0x40000400, timclk), 4: Timer(0x40000800, timclk)}
         self.gpioa = Gpio(0x40010800)
@@ -141,7 +143,8 @@ class ArmEmuBoard:
         self.can = BxCan(lambda: self.rcc.pclk1)
         self.devices = [self.rcc, self.flash_acr, self.iwdg, self.scs, self.i2c1, self.i2c2, *self.timers.values(),
                         self.gpioa, self.gpiob, self.afio, self.usart, self.bkp, self.can]
-        self._stepped = [self.scs, self.usart, self.i2c1, self.can]
+        self._i2cs = (self.i2c1, self.i2c2)
+        self._stepped = [self.scs, self.usart, self.i2c1, self.i2c2, self.can]
         self._soonest = 0
         self._by_addr: dict[int, object] = {}
         pages = set()
@@ -163,6 +166,7 @@ class ArmEmuBoard:
             raise SimError(f"unicorn: cannot add the cycle-counting hook (error {err})")
         self.cpu = CortexM(uc, self._vector)
         self._regbuf = ctypes.c_uint32()
+        self._membuf = ctypes.create_string_buffer(4)
         self._returns_sinks: list = []
         self.trace: list | None = None  # (cycle, "R"/"W", address, value) of every MMIO access when a list
         # tick markers and the tick-wait fast path
@@ -251,8 +255,8 @@ class ArmEmuBoard:
         self._soonest = 0
 
     def _next_event(self) -> int:
-        return min(self.scs.next_event(), self.usart.next_event(), self.i2c1.next_event(), self.iwdg.next_event(),
-                   self.can.next_event())
+        return min(self.scs.next_event(), self.usart.next_event(), self.i2c1.next_event(), self.i2c2.next_event(),
+                   self.iwdg.next_event(), self.can.next_event())
 
     def _next_interrupt(self) -> int:
         """The next event that can interrupt or reset the core (I2C is polled: not one)."""
@@ -326,11 +330,23 @@ class ArmEmuBoard:
     def _device(self, addr: int):
         return self._by_addr.get(addr & ~0x3FF) or self._by_addr.get(addr & ~0xFFF)
 
+    def _word(self, addr: int) -> int:
+        """A RAM word, read through the C API (the binding's mem_read costs more than the read)."""
+        uclib.uc_mem_read(self.uc._uch, addr, self._membuf, 4)
+        return int.from_bytes(self._membuf.raw, "little")
+
     def _reg(self, reg_id: int) -> int:
         uclib.uc_reg_read(self.uc._uch, reg_id, ctypes.byref(self._regbuf))
         return self._regbuf.value
 
     def _mmio_read(self, uc, offset: int, size: int, page: int) -> int:
+        if page == 0xE000E000 and self.trace is None:  # SysTick/NVIC/SCB: the clock, never a poll (fast path)
+            if offset == 0x18 and self._wait is not None:
+                self._wait_skip()
+            now = self.native.cycles.value
+            if now >= self._soonest:
+                self._advance(now)
+            return (self.scs.read(offset & ~3, now) >> (8 * (offset & 3))) & ((1 << (8 * size)) - 1)
         addr = page + offset
         if addr == 0xE000E018 and self._wait is not None:
             self._wait_skip()  # before the read: the firmware sees the time it skipped to
@@ -342,8 +358,8 @@ class ArmEmuBoard:
             return self._unmodelled.get(addr & ~3, 0)
         reg = addr - d.BASE
         v = d.read(reg & ~3, now) >> (8 * (reg & 3))
-        if d is self.i2c1 or d is self.usart:
-            self._soonest = 0
+        if d is self.i2c1 or d is self.i2c2 or d is self.usart:  # a read may start a byte (DR, SR2)
+            self._soonest = min(self._soonest, d.next_event())
         if addr not in _TIME_REGS and addr not in _SIDE_EFFECT_READS and self._poll(addr, v):
             now = self.native.cycles.value  # jumped to where the loop would see a change:
             self._advance(now)  # read again (these registers have no read side effects)
@@ -365,8 +381,8 @@ class ArmEmuBoard:
             self._unmodelled[addr & ~3] = value
             return
         d.write((addr - d.BASE) & ~3, value, now)
-        if d is self.i2c1:
-            self.i2c1.poll_blocked(now)
+        if d is self.i2c1 or d is self.i2c2:
+            d.poll_blocked(now)
         if d is self.usart or d is self.scs or d is self.iwdg or d is self.rcc or d is self.can:
             self.native.deadline.value = min(self.native.deadline.value, now + 1)  # re-plan events
 
@@ -387,6 +403,8 @@ class ArmEmuBoard:
         device = NEVER
         if addr in _I2C1_STATUS:
             device = self.i2c1.next_event()
+        elif addr in _I2C2_STATUS:
+            device = self.i2c2.next_event()
         elif addr == _USART_SR:
             device = self.usart.next_event()
         if device - now <= POLL_JUMP_US * CYC_PER_US:  # waiting for a transfer in flight
@@ -406,13 +424,15 @@ class ArmEmuBoard:
         w = self._wait
         if not (w.value <= pc < w.value + w.size or w.value <= (lr & ~1) < w.value + w.size):
             return
-        if self.i2c1.phase != "idle" or self.i2c1.sr1 & 0x47:  # SB, ADDR, BTF, RXNE: waiting on the core
-            return  # the core's idle wait also moves the I2C transaction on: no skipping it
+        if any(i2c.core_has_work() for i2c in self._i2cs):
+            return  # a flag the core's idle loop acts on (hal_i2c_poll): run it
         now = self.native.cycles.value
+        # Nothing the idle loop polls can change before the next peripheral event (an I2C
+        # byte or STOP completing included): jump to it or to the firmware's next tick.
         target = min(self._next_event(), self._end)
         if self._next_tick and self._ms_count:
-            next_tick = int.from_bytes(self.uc.mem_read(self._next_tick.value, 4), "little")
-            ms = int.from_bytes(self.uc.mem_read(self._ms_count.value, 4), "little")
+            next_tick = self._word(self._next_tick.value)
+            ms = self._word(self._ms_count.value)
             fw_us = ms * 1000 + (self.scs.rvr - self.scs.cvr(now)) // max(1, self.rcc.sysclk // 1_000_000)
             ahead = ((next_tick - fw_us + 2**31) % 2**32) - 2**31
             if ahead > 0:
@@ -498,18 +518,18 @@ class ArmEmuBoard:
 
     # -- IMUs -----------------------------------------------------------------------
     def imu_truth(self, addr: int, psi_deg: float, dpsi_dps: float) -> None:
-        self.native.lib.sim_mpu_set_truth(addr, psi_deg, dpsi_dps)
+        self.native.lib.sim_mpu_set_truth(self.imu_keymap.get(addr, addr), psi_deg, dpsi_dps)
 
     def imu_fault(self, addr: int, mode: str) -> None:
         if mode not in IMU_FAULTS:
             raise SimError(f"unknown IMU fault {mode!r} (expected one of: {', '.join(IMU_FAULTS)})")
-        self.native.lib.sim_mpu_set_fault(addr, IMU_FAULTS[mode])
+        self.native.lib.sim_mpu_set_fault(self.imu_keymap.get(addr, addr), IMU_FAULTS[mode])
 
     def imu_noise(self, addr: int, accel_ug_rthz: float, gyro_dps_rthz: float, accel_offset_mg: float) -> None:
-        self.native.lib.sim_mpu_set_noise(addr, accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
+        self.native.lib.sim_mpu_set_noise(self.imu_keymap.get(addr, addr), accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
 
     def imu_register(self, addr: int, reg: int) -> int:
-        return int(self.native.lib.sim_mpu_peek(addr, reg))
+        return int(self.native.lib.sim_mpu_peek(self.imu_keymap.get(addr, addr), reg))
 
     # -- emulator-only fault injection and probes -----------------------------------
     def i2c_hold_sda(self, byte: int = 0x00) -> None:
@@ -602,19 +622,20 @@ class ArmEmuBoard:
 
     # -- bus lines ------------------------------------------------------------------
     def _gpiob_level(self, pin: int) -> int | None:
-        if pin == 7:
-            driven = self.gpiob.is_gp_output(7) and not self.gpiob.odr >> 7 & 1
-            return 0 if self.bus.sda_low or driven else 1
-        if pin == 6:
-            return 0 if self.gpiob.is_gp_output(6) and not self.gpiob.odr >> 6 & 1 else 1
+        for i2c, scl in ((self.i2c1, 6), (self.i2c2, 10)):
+            if pin == scl + 1:
+                driven = self.gpiob.is_gp_output(pin) and not self.gpiob.odr >> pin & 1
+                return 0 if i2c.bus.sda_low or driven else 1
+            if pin == scl:
+                return 0 if self.gpiob.is_gp_output(pin) and not self.gpiob.odr >> pin & 1 else 1
         return None
 
     def _gpio_changed(self) -> None:
         g = self.gpiob
-        scl = 0 if g.is_gp_output(6) and not g.odr >> 6 & 1 else 1
-        self.bus.scl(scl)
-        self.bus.sda_master(0 if g.is_gp_output(7) and not g.odr >> 7 & 1 else 1)
-        self.i2c1.poll_blocked(self.native.cycles.value)
+        for i2c, scl in ((self.i2c1, 6), (self.i2c2, 10)):
+            i2c.bus.scl(0 if g.is_gp_output(scl) and not g.odr >> scl & 1 else 1)
+            i2c.bus.sda_master(0 if g.is_gp_output(scl + 1) and not g.odr >> (scl + 1) & 1 else 1)
+            i2c.poll_blocked(self.native.cycles.value)
 
     @property
     def speed(self) -> float:

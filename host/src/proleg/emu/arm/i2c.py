@@ -2,10 +2,24 @@
 
 Timing: a bit is CCR·3 (fast mode, DUTY = 0), CCR·25 (DUTY = 1) or CCR·2 (standard
 mode) periods of PCLK1; START, each 9-bit byte and STOP take that many bits. Status
-bits follow the reference manual's master sequences: SB (cleared by reading SR1 then
-writing DR), ADDR (SR1 then SR2), TXE/BTF, RXNE with the ACK bit sampled when a byte
-completes, STOP generated after the byte in flight, AF on a NACKed address, BUSY while
-the master owns the bus or a line is held low.
+bits follow the reference manual's master sequences (RM0008 §26.3.3): SB (cleared by
+reading SR1 then writing DR), ADDR (SR1 then SR2), TXE/BTF, AF on a NACKed address, BUSY
+while the master owns the bus or a line is held low.
+
+Master receiver (RM0008 §26.3.3, "Master receiver" and "Closing the communication"):
+- After each received byte the interface gives the ACK pulse, then sets RxNE. The (N)ACK
+  is decided when the byte's reception ends: with POS = 0 it is CR1.ACK at that moment;
+  with POS = 1 ("the ACK bit controls the (N)ACK of the next byte received in the shift
+  register") it is CR1.ACK as it was when that byte's reception began.
+- A byte that completes while DR still holds an unread byte stays in the shift register:
+  BTF is set and SCL is stretched (after that byte's ACK pulse) until DR is read; the
+  read moves it to DR and, if it was ACKed, the slave's next byte starts. Clearing ACK
+  while BTF is set therefore NACKs the byte after the held one, not the held one (the
+  N > 2 sequence: BTF, ACK = 0, read N-2, BTF, STOP, read N-1, RxNE, read N).
+- STOP is generated after the byte in flight, or at once when none is (BTF stretch, or
+  the clock halted after a NACK). A slave whose last byte was ACKed is already driving
+  the next byte's first bit when the master tries its STOP: if that bit is 0 the STOP
+  never happens and the slave holds SDA (``Bus.strand``), exactly as on a real bus.
 
 The slaves are the MPU-6050 register models (``sim_mpu6050.c``, one transaction per
 address phase: written bytes are committed on a repeated START or STOP; read bytes are
@@ -28,9 +42,31 @@ from collections.abc import Callable
 
 from .clocks import NEVER
 
-CR1_PE, CR1_START, CR1_STOP, CR1_ACK, CR1_SWRST = 1, 1 << 8, 1 << 9, 1 << 10, 1 << 15
+CR1_PE, CR1_START, CR1_STOP, CR1_ACK, CR1_POS, CR1_SWRST = 1, 1 << 8, 1 << 9, 1 << 10, 1 << 11, 1 << 15
 SB, ADDR, BTF, RXNE, TXE, BERR, ARLO, AF = 1, 2, 4, 1 << 6, 1 << 7, 1 << 8, 1 << 9, 1 << 10
 MSL, BUSY, TRA = 1, 2, 4
+
+
+def imu_slot_key(bus: int, addr: int) -> int:
+    """The native MPU-6050 model (8 devices keyed 0x68..0x6F) holding the IMU at ``addr``
+    on I2C bus ``bus``: an MPU-6050 answers only at 0x68 or 0x69 (AD0), so bus 0 keeps its
+    addresses and bus b uses keys 0x68 + 2b, 0x69 + 2b."""
+    if addr not in (0x68, 0x69) or not 0 <= bus < 4:
+        raise ValueError(f"no MPU-6050 model for address 0x{addr:02x} on bus {bus}")
+    return addr + 2 * bus
+
+
+class BusSlaves:
+    """The MPU-6050 models on a bus other than bus 0 (the same native library, its own keys)."""
+
+    def __init__(self, native, bus: int) -> None:
+        self.native = native
+        self.bus = bus
+
+    def mpu_transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+        if addr not in (0x68, 0x69):
+            return None
+        return self.native.mpu_transfer(imu_slot_key(self.bus, addr), tx, nrx, t_us)
 
 
 class Bus:
@@ -88,8 +124,10 @@ class I2c:
         self.reading = False
         self.tx_buf = bytearray()
         self.tx_pending: int | None = None
-        self.rx_shift: int | None = None  # byte being received
-        self.rx_ready: int | None = None  # received byte waiting for DR to empty
+        self.rx_shift: int | None = None  # byte being received (or, writing, sent)
+        self.rx_start_ack = False  # CR1.ACK when the byte in flight began (for POS = 1)
+        self.rx_ready: int | None = None  # a received byte held in the shift register (BTF)
+        self.rx_ready_ack = False  # the (N)ACK that byte was given
         self.dr_rx = 0
         self.t_addr_us = 0
         self.rx_acked = False  # last received byte was ACKed: the slave is sending the next one
@@ -103,6 +141,13 @@ class I2c:
 
     def next_event(self) -> int:
         return self.done
+
+    def core_has_work(self) -> bool:
+        """A flag is up that a polling master acts on, with no bus event of its own coming
+        (SB, ADDR, BTF, RxNE, AF/BERR/ARLO, or TXE with no byte in flight while writing)."""
+        if self.sr1 & (SB | ADDR | BTF | RXNE | AF | BERR | ARLO):
+            return True
+        return bool(self.sr1 & TXE) and self.phase == "tx" and self.done == NEVER
 
     # -- the slave side -------------------------------------------------------------
     def _ack_address(self, now: int) -> bool:
@@ -136,6 +181,7 @@ class I2c:
         elif self.phase == "addr":
             if self._ack_address(t):
                 self.sr1 |= ADDR
+                self.rx_acked = self.reading  # a read: the slave drives its first byte next
                 if self.reading:
                     self.t_addr_us = t // 72
                     self.sr2 &= ~TRA
@@ -158,30 +204,32 @@ class I2c:
                     self._begin_stop(t)
         elif self.phase == "rx":
             byte, self.rx_shift = self.rx_shift, None
-            ack = bool(self.cr1 & CR1_ACK)
-            if self.sr1 & RXNE:
-                self.rx_ready = byte
+            byte = 0xFF if byte is None else byte
+            ack = self.rx_start_ack if self.cr1 & CR1_POS else bool(self.cr1 & CR1_ACK)
+            self.rx_acked = ack  # the ACK pulse goes out now, before any stretch
+            if self.sr1 & RXNE:  # DR still full: hold the byte, stretch SCL
+                self.rx_ready, self.rx_ready_ack = byte, ack
                 self.sr1 |= BTF
-                self.rx_acked = ack
-                return
-            self.dr_rx = byte if byte is not None else 0xFF
-            self.sr1 |= RXNE
-            self._after_rx_byte(t, ack)
+            else:
+                self.dr_rx = byte
+                self.sr1 |= RXNE
+            if self.cr1 & CR1_STOP:
+                self._begin_stop(t)
+            elif self.rx_ready is None and ack:
+                self._rx_next(t)
         elif self.phase == "stop":
             self.cr1 &= ~CR1_STOP
             self.sr2 &= ~(MSL | BUSY | TRA)
-            self.sr1 &= ~(BTF | TXE)
+            self.sr1 &= ~(TXE | (0 if self.rx_ready is not None else BTF))
             self.phase = "idle"
             if self.cr1 & CR1_START:
                 self._begin_start(t)
 
-    def _after_rx_byte(self, t: int, ack: bool) -> None:
-        self.rx_acked = ack
-        if self.cr1 & CR1_STOP:
-            self._begin_stop(t)
-        elif ack:
-            self.rx_shift = self._fetch()
-            self.done = t + 9 * self.bit_cycles()
+    def _rx_next(self, t: int) -> None:
+        """The slave sends its next byte (the last one was ACKed and SCL is free)."""
+        self.rx_shift = self._fetch()
+        self.rx_start_ack = bool(self.cr1 & CR1_ACK)
+        self.done = t + 9 * self.bit_cycles()
 
     def _begin_start(self, now: int) -> None:
         if self.bus.sda_low:
@@ -194,16 +242,20 @@ class I2c:
         self.done = max(now, self.done if self.done != NEVER else now) + self.bit_cycles()
 
     def _begin_stop(self, now: int) -> None:
+        if self.phase == "rx" and self.rx_acked and self.rx_shift is None:
+            nxt = self._fetch()  # the slave already drives the next byte's first bit
+            if not nxt & 0x80:
+                self.bus.strand(nxt)  # SDA low: the STOP cannot happen
         self._commit(now)
         self.phase = "stop"
         self.done = now + self.bit_cycles()
 
     def _abandon(self) -> None:
         """The peripheral is reset or disabled: a slave mid-byte is stranded."""
-        if self.phase == "rx" and self.rx_acked and self.rx_shift is not None:
+        if self.phase == "rx" and self.rx_shift is not None:
             self.bus.strand(self.rx_shift)
-        elif self.phase == "rx" and self.rx_shift is not None:
-            self.bus.strand(self.rx_shift)
+        elif self.phase == "rx" and self.rx_acked:
+            self.bus.strand(self._fetch())
 
     # -- registers ------------------------------------------------------------------
     def read(self, off: int, now: int) -> int:
@@ -219,20 +271,18 @@ class I2c:
                 if self.phase == "tx":
                     self.sr1 |= TXE
                 elif self.phase == "rx":
-                    self.rx_shift = self._fetch()
-                    self.rx_acked = True
-                    self.done = now + 9 * self.bit_cycles()
+                    self._rx_next(now)
             self.sr1_read = False
             return v
         if off == 0x10:
             v = self.dr_rx
             self.sr1 &= ~RXNE
-            if self.sr1 & BTF and self.phase == "rx":
+            if self.rx_ready is not None:  # the held byte moves to DR, SCL is released
                 self.sr1 &= ~BTF
-                if self.rx_ready is not None:  # SCL was stretched before this byte's ACK pulse
-                    self.dr_rx, self.rx_ready = self.rx_ready, None
-                    self.sr1 |= RXNE
-                    self._after_rx_byte(now, bool(self.cr1 & CR1_ACK))
+                self.dr_rx, self.rx_ready = self.rx_ready, None
+                self.sr1 |= RXNE
+                if self.phase == "rx" and self.rx_ready_ack and self.done == NEVER:
+                    self._rx_next(now)
             return v
         return self.regs.get(off, 0)
 
@@ -274,7 +324,7 @@ class I2c:
                 self._begin_stop(now)
             elif self.phase in ("addr",) and self.done == NEVER:
                 self._begin_stop(now)
-            elif self.phase == "rx" and self.done == NEVER and self.rx_ready is None:
+            elif self.phase == "rx" and self.done == NEVER:  # no byte in flight: BTF or NACKed
                 self._begin_stop(now)
 
     def _write_dr(self, b: int, now: int) -> None:
