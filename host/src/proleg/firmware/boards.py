@@ -112,6 +112,7 @@ class Board:
     i2c_buses: tuple[I2cBus, ...] = ()
     base_flash_bytes: int = 0  # measured firmware of a two-limb robot with tiny tables (0: not estimated)
     base_ram_bytes: int = 0
+    stack_bytes: int = 0  # RAM kept free for the stack and interrupts beside static RAM (measured peak + margin)
     budget: TickBudget | None = None  # None: no measurement (host-sim: virtual time)
     transport: str = "uart"  # [link] transport: the host link on the UART or on CAN
     can: CanConfig | None = None  # [can]: the CAN controller's pins, bit rate, node (can_config.py)
@@ -291,6 +292,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         i2c_buses=buses,
         base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
         base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
+        stack_bytes=_optional_int(path, doc, "stack_bytes"),
         budget=_budget(path, doc),
         **_link(path, doc, family),
     )

@@ -275,9 +275,11 @@ def _check_limits(robot: Robot, board: Board, flash_used: int, ram_used: int) ->
         raise BuildError(
             f"robot {robot.name} needs {flash_used:,} bytes of flash, board {board.name} has {board.flash_bytes:,}"
         )
-    if board.ram_bytes and ram_used > board.ram_bytes:
+    if board.ram_bytes and ram_used + board.stack_bytes > board.ram_bytes:
+        stack = f" and {board.stack_bytes:,} for its stack ([board] stack_bytes)" if board.stack_bytes else ""
         raise BuildError(
-            f"robot {robot.name} needs {ram_used:,} bytes of static RAM, board {board.name} has {board.ram_bytes:,}"
+            f"robot {robot.name} needs {ram_used:,} bytes of static RAM{stack}, board {board.name} has "
+            f"{board.ram_bytes:,}"
         )
 
 

@@ -99,9 +99,11 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
             )
     if base_ram:
         ram = base_ram + RAM_PER_LIMB * extra
-        if limit_ram and ram > limit_ram:
+        stack = int(_board(board, "stack_bytes", 0) or 0)
+        if limit_ram and ram + stack > limit_ram:
+            also = f" and {stack:,} for its stack ([board] stack_bytes)" if stack else ""
             raise BuildError(
                 f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs): "
-                f"robot {robot.name} needs {ram:,} bytes of static RAM, board {name} has {limit_ram:,}"
+                f"robot {robot.name} needs {ram:,} bytes of static RAM{also}, board {name} has {limit_ram:,}"
             )
     return Fit(placements, mux_selects_per_tick(placements), i2c_tick_us(placements, hz), tables, flash, ram)
