@@ -405,8 +405,15 @@ int8_t hal_nv_poll(void)
             EEDR = nv_src[nv_i++];
             sreg = SREG;
             cli();
-            EECR = _BV(EEMPE); /* EEPM = 0: erase and write in one operation */
-            EECR |= _BV(EEPE);
+            /* EEMPE, then EEPE within four cycles (ATmega328P datasheet §8.6.3), in asm: C
+             * leaves the instruction choice to the compiler, and with this board's flags
+             * avr-gcc 5.4 once made it st/ld/ori/st through Z (7 cycles), so no byte was ever
+             * written. OUT then SBI: EEPE set 1 cycle after EEMPE. EEPM = 0: erase and write. */
+            __asm__ __volatile__("out %[eecr], %[mpe]\n\t"
+                                 "sbi %[eecr], %[pe]"
+                                 :
+                                 : [eecr] "I"(_SFR_IO_ADDR(EECR)), [mpe] "r"((uint8_t)_BV(EEMPE)), [pe] "I"(EEPE)
+                                 : "memory");
             SREG = sreg;
             return HAL_NV_BUSY;
         }
