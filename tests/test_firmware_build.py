@@ -87,11 +87,23 @@ def one_line(err: str) -> str:
 # every example robot for every board
 
 
+#: (robot, board) pairs the board cannot host, and the reason the build must give.
+#: caterpillar-4 on the Nano: 1,859 B of static RAM leave less than the stack the board
+#: file keeps (stack_bytes, measured on avr-emu plus interrupt frames) of its 2,048 B.
+CANNOT_HOST = {("caterpillar-4", "arduino-nano"): r"needs [\d,]+ bytes of static RAM and [\d,]+ for its stack"}
+
+
 @pytest.mark.parametrize("board_file", BOARD_FILES, ids=lambda p: p.stem)
 @pytest.mark.parametrize("robot_file", ROBOT_FILES, ids=lambda p: p.stem)
 def test_every_robot_builds_for_every_board_within_its_limits(robot_file, board_file, parent):
     robot, board = load_robot(robot_file), load_board(board_file)
     out = parent / "fw"
+    refused = CANNOT_HOST.get((robot.name, board.name))
+    if refused is not None:  # the board cannot host it: the build says why, in one line, and writes nothing
+        with pytest.raises(BuildError, match=refused):
+            build(robot, board, out)
+        assert not out.exists()
+        return
     result = build(robot, board, out)
     print(f"\n{robot.name} on {board.name}: {result.size_report()}")
 
@@ -347,7 +359,7 @@ def test_over_the_flash_limit_says_needed_and_available(tmp_path, parent, board)
 def test_over_the_ram_limit_says_needed_and_available(tmp_path, parent, board):
     variant = board_variant(tmp_path, board, (r"^flash_bytes = \d+", "flash_bytes = 1000000"),
                             (r"^ram_bytes = \d+", "ram_bytes = 16"))
-    with pytest.raises(BuildError, match=r"needs [\d,]+ bytes of static RAM, board \S+ has 16$"):
+    with pytest.raises(BuildError, match=r"needs [\d,]+ bytes of static RAM( and [\d,]+ for its stack \(\[board\] stack_bytes\))?, board \S+ has 16$"):
         build(load_robot(R1), load_board(variant), parent / "fw")
     assert_nothing_left(parent)
 

@@ -26,6 +26,7 @@ def test_the_nano_hal_tables_in_ram_stay_in_ram_for_every_example_robot(tmp_path
     """avr-gcc 5.4's identical-constant folding (-fipa-icf) merged hal_avr.c's pwm_map
     {0, 1, 2, 3} (read with LD from RAM) into sma.c's identical act_channel table in flash
     (caterpillar-4): the HAL read garbage and no coil came on. The board file turns it off."""
+    import dataclasses
     import shutil
     import subprocess
 
@@ -35,7 +36,11 @@ def test_the_nano_hal_tables_in_ram_stay_in_ram_for_every_example_robot(tmp_path
         pytest.skip("needs avr-nm (binutils-avr)")
     board = load_board("arduino-nano")
     for path in sorted(robots_dir().glob("*.toml")):
-        result = build(load_robot(path), board, tmp_path / path.stem)
+        robot = load_robot(path)
+        # caterpillar-4 (the robot that showed the folding) no longer leaves the Nano room for
+        # its stack and is refused; its code is what matters here, so build it without that reserve
+        fits = board if robot.name != "caterpillar-4" else dataclasses.replace(board, stack_bytes=0)
+        result = build(robot, fits, tmp_path / path.stem)
         nm = subprocess.run(["avr-nm", str(tmp_path / path.stem / "firmware.elf")],
                             capture_output=True, text=True, check=True).stdout
         kinds = {line.split()[2]: line.split()[1] for line in nm.splitlines() if len(line.split()) == 3}
