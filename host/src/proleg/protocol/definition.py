@@ -31,7 +31,9 @@ from dataclasses import dataclass
 from enum import IntEnum, IntFlag
 from typing import Literal
 
-PROTOCOL_VERSION = 1
+#: 2: STATS.tick_overruns; CALIBRATE_LEVEL / GET_LEVEL / CLEAR_LEVEL and LEVEL; SET_ACTUATOR_MAP /
+#: GET_ACTUATOR_MAP and ACTUATOR_MAP; EVENT kinds SUSPECT, FALLBACK, LEVEL_DONE.
+PROTOCOL_VERSION = 2
 
 #: Largest frame before COBS (msg_id + payload + crc) for any build of up to
 #: ``LIMB_CEILING`` limbs and ``CHANNEL_CEILING`` channels. The C receive buffer has this size.
