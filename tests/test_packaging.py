@@ -7,6 +7,7 @@ working directory.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -40,6 +41,26 @@ def installed(wheel, tmp_path_factory) -> Path:
     with zipfile.ZipFile(wheel) as z:
         z.extractall(target)
     return target
+
+
+@pytest.fixture(scope="module")
+def venv_python(wheel, tmp_path_factory) -> Path:
+    """A fresh virtual environment with the wheel installed by pip (its dependencies come from
+    this test environment's site-packages through a .pth file: no network, no source tree)."""
+    import sysconfig
+    import venv
+
+    env_dir = tmp_path_factory.mktemp("venv") / "env"
+    venv.create(env_dir, with_pip=False)
+    python = env_dir / "bin" / "python"
+    site = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    Path(site, "_test_deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    proc = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "-q", "--no-deps",
+                           "--no-index", str(wheel)], capture_output=True, text=True)
+    if proc.returncode:
+        pytest.fail(f"installing the wheel failed:\n{proc.stdout}\n{proc.stderr}")
+    return python
 
 
 def _run(installed: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess:
@@ -84,3 +105,26 @@ def test_a_bundled_robot_is_found_by_name():
     assert paths.resolve_robot("paper-r1") == paths.robots_dir() / "paper-r1.toml"
     assert paths.resolve_robot("no-such-robot") == Path("no-such-robot")
     assert paths.resolve_robot("x/paper-r1.toml") == Path("x/paper-r1.toml")
+
+
+def test_the_wheel_in_a_fresh_venv_gives_version_build_and_sim_from_another_directory(venv_python, tmp_path):
+    import proleg
+
+    env = {k: v for k, v in os.environ.items() if k not in ("PROLEG_HOME", "PYTHONPATH")}
+    env["PROLEG_CACHE"] = str(tmp_path / "cache")
+
+    def run(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([str(venv_python.parent / "proleg"), *args], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=600)
+
+    where = subprocess.run([str(venv_python), "-c", "import proleg; print(proleg.__file__)"], cwd=tmp_path,
+                           env=env, capture_output=True, text=True, check=True).stdout
+    assert str(ROOT) not in where  # the installed copy, not the source tree
+    version = run("--version")
+    assert version.returncode == 0 and proleg.__version__ in version.stdout, version
+    build = run("build", "paper-r1", "--board", "host-sim", "-o", str(tmp_path / "fw"))
+    assert build.returncode == 0, build.stderr
+    sim = run("sim", "paper-r1", "--duration", "10", "--json")
+    assert sim.returncode == 0, sim.stderr
+    report = json.loads(sim.stdout)
+    assert report["cycles"] >= 1 and not report["faults"], report

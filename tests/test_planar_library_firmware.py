@@ -169,3 +169,13 @@ def test_without_a_library_the_gait_for_the_heading_is_computed_and_loaded(capsy
     assert result["heading"]["loaded"] and result["gait"] == 255
     off = abs((direction_deg(result["pose"]) - 90 + 180) % 360 - 180)
     assert off < 25.0 and math.hypot(result["pose"]["x_mm"], result["pose"]["y_mm"]) > 10.0, result["pose"]
+
+
+def test_a_board_built_with_another_library_is_refused_not_steered_by_index(capsys):
+    """The library gait is started by its index: with a library other than the one the board
+    was built with (its gait hash in INFO), that index may be another gait. proleg run says so."""
+    url = f"sim://{PLANAR}?plant=table"  # built with the robot file's [gaits] library
+    code = main(["run", str(PLANAR), "--port", url, "--heading", "0", "--library", "0,180", "--duration", "2"])
+    _, err = capsys.readouterr()
+    assert code == 1
+    assert "is not the one" in err and "--exact-heading" in err and "Traceback" not in err

@@ -93,6 +93,19 @@ def heading_choice(args: argparse.Namespace, robot: Any) -> tuple[Any, Any]:
     return fw, choice
 
 
+def check_library_hash(info: Any, robot: Any, fw: Any, where: str) -> None:
+    """A library gait is started by its index: refuse unless the board's gait table is the one
+    this robot file and library give (its hash in INFO), else the index may name another gait."""
+    from ..firmware.boards import load_board
+    from ..firmware.render import render_context
+
+    want = int(render_context(robot, fw, load_board("host-sim")).gait.gait_hash, 16)  # board-independent
+    if want != info.gait_hash:
+        raise LinkError(f"{where}: the board's gait table (hash {info.gait_hash:08x}) is not the one {robot.path} "
+                        f"and this gait library give ({want:08x}); build and flash with the same [gaits] library "
+                        f"(or --library), or run with --exact-heading to compute and load the gait")
+
+
 def parse_gait(text: str) -> int:
     from ..protocol.definition import GAIT_USER
 
@@ -129,6 +142,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             raise LinkError(f"{client.link.description} runs robot {info.robot_name!r}, not {robot.name!r} "
                             f"({args.robot}); give the robot file it was built from")
         check_gait(info, gait, direction, gaits_per_direction(robot, fw))
+        if choice is not None and choice.index is not None:
+            check_library_hash(info, robot, fw, client.link.description)
         if choice is not None and choice.index is None:
             client.load_gait(choice.states)
         meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
