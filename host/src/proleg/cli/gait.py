@@ -25,7 +25,7 @@ PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_d
 
 def add_gait_parser(sub) -> None:
     """Register ``proleg gait`` on the one parser's subcommands."""
-    from .main import robot_arg  # a robot file or a bundled example's name
+    from .main import _positive_int, robot_arg  # robot_arg: a robot file or a bundled example's name
 
     g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
     g.add_argument("robot", metavar="ROBOT", type=robot_arg)
@@ -48,16 +48,6 @@ def add_gait_parser(sub) -> None:
     p.add_argument("--cycles", type=_positive_int, default=10, metavar="N", help="passes in the composed path (default 10)")
     p.add_argument("--plot", metavar="FILE.png", help="draw each answer's gait 0 composed over --cycles passes")
     g.set_defaults(run=cmd_gait)
-
-
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
-    return v
 
 
 def _finite_float(text: str) -> float:
