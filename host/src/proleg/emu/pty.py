@@ -22,6 +22,7 @@ from __future__ import annotations
 import errno
 import os
 import select
+import signal
 import time
 import tty
 from collections.abc import Callable
@@ -182,3 +183,12 @@ def serve_board(
     port.stats.emulated_s += board.time_s - emu0
     port.stats.wall_s += time.perf_counter() - t0
     return port.stats
+
+
+def stop_on_signals() -> Callable[[], bool]:
+    """A ``stop`` for the serving loops that turns true on SIGINT or SIGTERM (the command-line
+    servers end cleanly and print their counts instead of dying mid-frame)."""
+    stopping: list[bool] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stopping.append(True))
+    return lambda: bool(stopping)

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import struct
 import sys
 import tempfile
@@ -44,7 +43,7 @@ from collections.abc import Generator
 from pathlib import Path
 
 from ...errors import SimError
-from ..pty import PtyPort, serve_board
+from ..pty import PtyPort, serve_board, stop_on_signals
 
 ACK, NACK = 0x79, 0x1F
 INIT = 0x7F
@@ -342,17 +341,15 @@ def main(argv: list[str] | None = None) -> int:
     except (SimError, OSError) as e:
         print(f"proleg: {e}", file=sys.stderr)
         return 1
-    stopping: list[bool] = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stopping.append(True))
+    stop = stop_on_signals()
     print(f"pty: {port.path}", flush=True)
     try:
-        if serve_rom(rom, port, stop=lambda: bool(stopping)):
+        if serve_rom(rom, port, stop=stop):
             t0 = time.perf_counter()
             board = boot_board(rom.flash, seed=args.seed)
             print(f"GO 0x{rom.go_address:08x}: arm-emu booted the flash in {time.perf_counter() - t0:.1f} s",
                   file=sys.stderr, flush=True)
-            serve_board(board, port, speed=args.speed, stop=lambda: bool(stopping))
+            serve_board(board, port, speed=args.speed, stop=stop)
     except SimError as e:
         print(f"proleg: {e}", file=sys.stderr)
         return 1

@@ -22,12 +22,11 @@ Nano on /dev/ttyUSB0.
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 
 from ...errors import SimError
-from ..pty import PtyPort, PtyStats, serve_board
+from ..pty import PtyPort, PtyStats, serve_board, stop_on_signals
 from .board import AvrEmuBoard, _config_value
 from .optiboot import BOOT_START, build_optiboot, check_boot_image, read_ihex
 
@@ -86,12 +85,10 @@ def main(argv: list[str] | None = None) -> int:
     except (SimError, OSError) as e:
         print(f"proleg: {e}", file=sys.stderr)
         return 1
-    stopping: list[bool] = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stopping.append(True))
+    stop = stop_on_signals()
     print(f"pty: {nano.path}", flush=True)
     try:
-        st = nano.serve(stop=lambda: bool(stopping))
+        st = nano.serve(stop=stop)
     except SimError as e:
         print(f"proleg: {e}", file=sys.stderr)
         return 1
