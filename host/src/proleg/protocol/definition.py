@@ -8,6 +8,12 @@ Change a message here, bump ``PROTOCOL_VERSION``, regenerate ``tests/vectors/pro
 Wire format of one frame: ``COBS(msg_id:u8 | payload | crc16:u16-le) 0x00``, CRC-16/CCITT-FALSE
 over msg_id + payload, payload fields little-endian and packed, in the order listed here.
 
+The definition spans three modules: this one (``PROTOCOL_VERSION``, frame and field sizes, the
+message table ``MESSAGES``, which reply answers which command), ``enums.py`` (the value sets:
+``EventKind``, ``ErrorCode``, ``Flag``... and ``ENUMS``, the ones rendered into C) and
+``layout.py`` (field types, ``Field``, ``MessageSpec``, the limb/channel ceilings). Import
+everything from here.
+
 Field kinds
 - scalar: ``u8 u16 u32 i16 i32``
 - text: ``char`` with a fixed ``length`` (NUL-padded; at most ``length - 1`` characters, ASCII)
@@ -27,9 +33,25 @@ Conventions
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import IntEnum, IntFlag
-from typing import Literal
+
+# The value sets and the layout classes live in their own modules; every name is re-exported
+# here, so ``from proleg.protocol.definition import EventKind, Field, LIMB_CEILING`` still works.
+from .enums import (
+    ENUMS,
+    ClearWhat,
+    Direction,
+    ErrorCode,
+    EventKind,
+    FaultCode,
+    Flag,
+    LevelResult,
+    LevelStatus,
+    ParamId,
+    ResetCause,
+    StopReason,
+)
+from .layout import CHANNEL_CEILING, LIMB_CEILING, TYPES, Field, MessageSpec, ScalarType
 
 #: 2: STATS.tick_overruns; CALIBRATE_LEVEL / GET_LEVEL / CLEAR_LEVEL and LEVEL; SET_ACTUATOR_MAP /
 #: GET_ACTUATOR_MAP and ACTUATOR_MAP; EVENT kinds SUSPECT, FALLBACK, LEVEL_DONE.
@@ -40,9 +62,6 @@ PROTOCOL_VERSION = 2
 MAX_FRAME = 64
 #: Largest frame on the wire: COBS adds one byte per 254 (here: one), plus the 0x00 delimiter.
 MAX_ENCODED_FRAME = MAX_FRAME + 2
-#: Limits the protocol is sized for (a build may use fewer).
-LIMB_CEILING = 8
-CHANNEL_CEILING = 8
 #: Longest state sequence LOAD_GAIT carries (states are u16).
 MAX_GAIT_STEPS = 24
 #: ``START.gait`` value that selects the sequence sent by LOAD_GAIT.
@@ -50,221 +69,6 @@ GAIT_USER = 0xFF
 #: Fixed text field sizes (bytes incl. the terminating NUL).
 ROBOT_NAME_LEN = 16
 BOARD_NAME_LEN = 16
-
-ScalarType = Literal["u8", "u16", "u32", "i16", "i32", "char"]
-
-#: (size in bytes, struct format char, minimum, maximum)
-TYPES: dict[str, tuple[int, str, int, int]] = {
-    "u8": (1, "B", 0, 0xFF),
-    "u16": (2, "H", 0, 0xFFFF),
-    "u32": (4, "I", 0, 0xFFFFFFFF),
-    "i16": (2, "h", -0x8000, 0x7FFF),
-    "i32": (4, "i", -0x80000000, 0x7FFFFFFF),
-    "char": (1, "s", 0, 0x7F),
-}
-
-
-# ----------------------------------------------------------------------------- enums
-class Direction(IntEnum):
-    """Which way a gait moves the robot (the gait table holds gaits per direction)."""
-
-    PLUS_X = 0
-    MINUS_X = 1
-
-
-class ErrorCode(IntEnum):
-    """``NACK.error``: why a command was refused."""
-
-    UNKNOWN_MESSAGE = 1  # CRC-valid frame with an id this firmware does not decode
-    BAD_CRC = 2  # reserved: frames with a bad CRC are dropped silently (counted), never NACKed
-    BAD_LENGTH = 3  # payload length does not match the message layout
-    OUT_OF_RANGE = 4  # a value outside its allowed range (detail = param id / field index)
-    FORBIDDEN_TRANSITION = 5  # LOAD_GAIT step not an allowed transition (detail = step index)
-    TOO_LONG = 6  # array count above this build's maximum
-    NOT_ALLOWED = 7  # not allowed in the current mode (e.g. LOAD_GAIT while running)
-    SAFETY_LIMIT = 8  # would widen the build's safety envelope
-    NO_GAIT = 9  # START of a gait index that does not exist / user gait not loaded
-    ESTOP_LATCHED = 10  # E-stop latched: CLEAR it first
-
-
-class FaultCode(IntEnum):
-    """``EVENT.code`` when ``kind == FAULT`` (``detail`` = limb or channel index)."""
-
-    NONE = 0
-    STATE_TIMEOUT = 1  # target state not reached within state_timeout_ms
-    IMU_NO_ACK = 2  # IMU stopped answering on I2C
-    IMU_BAD_DATA = 3  # IMU answers nonsense (WHO_AM_I, stuck, implausible |g|)
-    SMA_ON_LIMIT = 4  # SMA on-time hit max_on_ms (cool-down enforced)
-    LINK_WATCHDOG = 5  # no valid frame within link_watchdog_ms
-    INTERNAL = 6  # firmware invariant violated
-    TICK_OVERRUN = 7  # [control] overrun_fault consecutive ticks overran their period (detail = 0)
-
-
-class EventKind(IntEnum):
-    """``EVENT.kind``; the meaning of ``code``/``detail`` per kind is in the comment."""
-
-    BOOT = 0  # code = ResetCause, detail = 0
-    STATE_REACHED = 1  # code = gait step index, detail = state index
-    FAULT = 2  # code = FaultCode, detail = limb/channel index
-    GAIT_STARTED = 3  # code = gait index, detail = Direction
-    GAIT_STOPPED = 4  # code = StopReason, detail = completed cycles (saturating)
-    ESTOP = 5  # code = 0 command / 1 hardware input, detail = 0
-    FAULT_CLEARED = 6  # code = ClearWhat bits that were cleared, detail = 0
-    GAIT_LOADED = 7  # code = 0, detail = number of steps
-    SUSPECT = 8  # after a FAULT STATE_TIMEOUT / SMA_ON_LIMIT: code = suspected actuator index (0xFF: none),
-    #              detail = the failed transition, from-state × n_states + to-state (0xFFFF: not representable)
-    FALLBACK = 9  # the firmware switched by itself to its fallback gait: code = lost actuator, detail = steps
-    LEVEL_DONE = 10  # CALIBRATE_LEVEL finished: code = LevelResult, detail = bit per limb stored
-
-
-class ResetCause(IntEnum):
-    """``EVENT.code`` when ``kind == BOOT``: why the MCU last reset (its reset flags; a
-    board that cannot tell reports UNKNOWN, host-sim POWER_ON)."""
-
-    UNKNOWN = 0
-    POWER_ON = 1
-    EXTERNAL = 2  # reset pin
-    BROWN_OUT = 3
-    WATCHDOG = 4  # the hardware watchdog: a tick or a bus wait hung
-    SOFTWARE = 5
-
-
-class LevelStatus(IntEnum):
-    """``LEVEL.status``: what the board's non-volatile level record holds."""
-
-    NONE = 0  # blank (never calibrated, or CLEAR_LEVEL): offsets 0, nothing applied
-    STORED = 1  # a valid record (magic, version, limb count, CRC): its offsets are applied
-    CORRUPT = 2  # a record whose magic/version, limb count or CRC is wrong: ignored, offsets 0
-    CALIBRATING = 3  # CALIBRATE_LEVEL is sampling or writing
-
-
-class LevelResult(IntEnum):
-    """``EVENT.code`` when ``kind == LEVEL_DONE``."""
-
-    STORED = 0  # every limb measured, the record written and read back valid (ground: applied)
-    TOO_TILTED = 1  # a limb's rest tilt is beyond the build's limit (detail = bit per such limb)
-    IMU = 2  # an IMU is bad, or gave no samples (detail = bit per such limb)
-    INTERRUPTED = 3  # a gait started or a fault latched while sampling
-    WRITE_FAILED = 4  # the non-volatile write did not verify
-
-
-class StopReason(IntEnum):
-    """``EVENT.code`` when ``kind == GAIT_STOPPED``."""
-
-    COMMAND = 0
-    FAULT = 1
-    ESTOP = 2
-    WATCHDOG = 3
-
-
-class ParamId(IntEnum):
-    """``SET_PARAM.param`` whitelist. The firmware checks each value against the build's
-    safety envelope (NACK SAFETY_LIMIT) and sane ranges (NACK OUT_OF_RANGE)."""
-
-    DRIVE_DUTY = 1  # permyriad, ≤ build max_duty
-    HOLD_MS = 2
-    DEBOUNCE_TICKS = 3
-    STATE_TIMEOUT_MS = 4  # ≤ build value
-    PSI_STAR_CDEG = 5  # index = limb*(levels-1) + level; 0.01°
-    HYSTERESIS_CDEG = 6  # index = limb; 0.01°
-    MAX_ON_MS = 7  # may only shrink
-    MIN_COOLDOWN_MS = 8  # may only grow
-    LINK_WATCHDOG_MS = 9  # may only shrink (0 only if the build has it off)
-    HOLD_DUTY = 10  # permyriad, ≤ build max_duty; 0 = hold by bang-bang only
-
-
-class Flag(IntFlag):
-    """``TELEMETRY.flags`` bits."""
-
-    RUNNING = 1 << 0  # a gait is running
-    HOLDING = 1 << 1  # target state reached, holding before the next step
-    FAULT = 1 << 2  # a fault is latched (see the FAULT event)
-    ESTOP = 1 << 3  # E-stop latched, all MOSFETs off
-    COOLDOWN = 1 << 4  # a channel is in enforced cool-down
-    DUTY_CLAMPED = 1 << 5  # a requested duty was clamped to the envelope
-    IMU_FAULT = 1 << 6
-    LINK_WATCHDOG = 1 << 7  # stopped by the link watchdog
-    USER_GAIT = 1 << 8  # a LOAD_GAIT sequence is stored
-    STATE_UNKNOWN = 1 << 9  # measured state not yet debounced
-
-
-class ClearWhat(IntFlag):
-    """``CLEAR.what`` bits."""
-
-    FAULTS = 1 << 0
-    ESTOP = 1 << 1
-    COUNTERS = 1 << 2
-
-
-#: Enums rendered into C: (class, C prefix). Flags render as bit masks.
-ENUMS: tuple[tuple[type[IntEnum] | type[IntFlag], str], ...] = (
-    (Direction, "PROTO_DIR_"),
-    (ErrorCode, "PROTO_ERR_"),
-    (FaultCode, "PROTO_FAULT_"),
-    (EventKind, "PROTO_EV_"),
-    (StopReason, "PROTO_STOP_"),
-    (LevelStatus, "PROTO_LEVEL_"),
-    (LevelResult, "PROTO_LEVEL_RES_"),
-    (ResetCause, "PROTO_RESET_"),
-    (ParamId, "PROTO_PARAM_"),
-    (Flag, "PROTO_FLAG_"),
-    (ClearWhat, "PROTO_CLEAR_"),
-)
-
-
-# ----------------------------------------------------------------------------- messages
-@dataclass(frozen=True)
-class Field:
-    """One payload field. ``length``: fixed text size; ``max_count``: variable array."""
-
-    name: str
-    type: ScalarType
-    doc: str = ""
-    length: int | None = None
-    max_count: int | Literal["limbs", "channels"] | None = None
-    enum: type[IntEnum] | type[IntFlag] | None = None
-
-    @property
-    def size(self) -> int:
-        return TYPES[self.type][0]
-
-    @property
-    def is_array(self) -> bool:
-        return self.max_count is not None
-
-    def resolved_max(self, max_limbs: int, max_channels: int) -> int:
-        """Array capacity for a build with these limits (0 for non-arrays)."""
-        if self.max_count is None:
-            return 0
-        if self.max_count == "limbs":
-            return max_limbs
-        if self.max_count == "channels":
-            return max_channels
-        return int(self.max_count)
-
-    def max_wire_size(self, max_limbs: int, max_channels: int) -> int:
-        if self.length is not None:
-            return self.length
-        if self.max_count is not None:
-            return 1 + self.size * self.resolved_max(max_limbs, max_channels)
-        return self.size
-
-
-@dataclass(frozen=True)
-class MessageSpec:
-    """One message: ``direction`` is ``"h2r"`` (host→robot command) or ``"r2h"``."""
-
-    id: int
-    name: str
-    direction: Literal["h2r", "r2h"]
-    fields: tuple[Field, ...]
-    doc: str
-    #: commands only: the message that answers it when accepted (NACK may always answer)
-    reply: str | None = None
-
-    def max_frame(self, max_limbs: int = LIMB_CEILING, max_channels: int = CHANNEL_CEILING) -> int:
-        """Largest frame before COBS: id + payload + crc."""
-        return 1 + sum(f.max_wire_size(max_limbs, max_channels) for f in self.fields) + 2
 
 
 def _u8(name: str, doc: str = "", enum: type[IntEnum] | type[IntFlag] | None = None) -> Field:
@@ -482,6 +286,40 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "Reply to GET_LEVEL: the level calibration in use.",
     ),
 )
+
+__all__ = [
+    "BOARD_NAME_LEN",
+    "BY_ID",
+    "BY_NAME",
+    "CHANNEL_CEILING",
+    "ENUMS",
+    "GAIT_USER",
+    "LIMB_CEILING",
+    "MAX_ENCODED_FRAME",
+    "MAX_FRAME",
+    "MAX_GAIT_STEPS",
+    "MESSAGES",
+    "PROTOCOL_VERSION",
+    "REPLIES_WITH_CMD",
+    "ROBOT_NAME_LEN",
+    "TYPES",
+    "ClearWhat",
+    "Direction",
+    "ErrorCode",
+    "EventKind",
+    "FaultCode",
+    "Field",
+    "Flag",
+    "LevelResult",
+    "LevelStatus",
+    "MessageSpec",
+    "ParamId",
+    "ResetCause",
+    "ScalarType",
+    "StopReason",
+    "check_definition",
+    "reply_answers",
+]
 
 BY_NAME: dict[str, MessageSpec] = {m.name: m for m in MESSAGES}
 BY_ID: dict[int, MessageSpec] = {m.id: m for m in MESSAGES}
