@@ -32,7 +32,6 @@ import threading
 import time
 from collections import deque
 from collections.abc import Iterator, Sequence
-from dataclasses import asdict, dataclass, field
 from types import TracebackType
 
 from ..errors import LinkError
@@ -46,12 +45,27 @@ from ..protocol.definition import (
     PROTOCOL_VERSION,
     ClearWhat,
     Direction,
-    ErrorCode,
     MessageSpec,
     ParamId,
     reply_answers,
 )
 from .base import Link, LinkDisconnected
+
+# The reply values and the receive side's values live in their own modules; re-exported here so
+# ``from proleg.link.client import RobotInfo, Received`` keeps working.
+from .received import LinkStats, Received
+from .replies import CommandRefused, FirmwareStats, ReplyTimeout, RobotInfo
+
+__all__ = [
+    "CommandRefused",
+    "FirmwareStats",
+    "LinkStats",
+    "Received",
+    "ReplyTimeout",
+    "RobotClient",
+    "RobotInfo",
+    "parse_direction",
+]
 
 DEFAULT_TIMEOUT = 0.5
 #: how long ``connect`` keeps asking GET_INFO (link clock, seconds)
@@ -66,116 +80,6 @@ _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
 #: messages that can answer a command (the declared replies plus NACK)
 _REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
 _PING = BY_NAME["PING"]
-
-
-class CommandRefused(LinkError):
-    """The robot answered a command with NACK."""
-
-    def __init__(self, command: str, error: int, detail: int, where: str):
-        try:
-            self.error: ErrorCode | int = ErrorCode(error)
-            code = self.error.name
-        except ValueError:
-            self.error = error
-            code = f"error {error}"
-        self.command = command
-        self.detail = detail
-        super().__init__(f"{where}: robot refused {command}: {code} (detail {detail})")
-
-
-class ReplyTimeout(LinkError):
-    """A command got no reply in time (after its retries)."""
-
-
-@dataclass(frozen=True)
-class RobotInfo:
-    """The robot's answer to GET_INFO."""
-
-    robot_name: str
-    board: str
-    build_id: int
-    gait_hash: int
-    protocol_version: int
-    limbs: int
-    actuators: int
-    gaits: int
-    max_gait_steps: int
-    tick_hz: int
-    telemetry_hz: int
-
-    @classmethod
-    def from_message(cls, msg: Message) -> RobotInfo:
-        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__ if k in msg.fields})  # type: ignore[arg-type]
-
-    def header(self) -> dict[str, str]:
-        """Key/value pairs for a recording's header."""
-        return {
-            "robot": self.robot_name,
-            "board": self.board,
-            "firmware_build_id": f"{self.build_id:08x}",
-            "gait_table_hash": f"{self.gait_hash:08x}",
-            "protocol_version": str(self.protocol_version),
-            "limbs": str(self.limbs),
-            "channels": str(self.actuators),
-            "tick_hz": str(self.tick_hz),
-            "telemetry_hz": str(self.telemetry_hz),
-        }
-
-
-@dataclass(frozen=True)
-class FirmwareStats:
-    """The firmware's link counters (reply to GET_STATS)."""
-
-    rx_ok: int
-    crc_errors: int
-    framing_errors: int
-    unknown_ids: int
-    bad_length: int
-    bad_value: int
-    nacks: int
-    tx_frames: int
-    tx_dropped: int
-    tick_overruns: int = 0  # control ticks that overran their period (issue 11)
-
-    @classmethod
-    def from_message(cls, msg: Message) -> FirmwareStats:
-        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__ if k in msg.fields})  # type: ignore[arg-type]
-
-
-@dataclass
-class LinkStats:
-    """Host-side counters of one client."""
-
-    frames_ok: int = 0
-    crc_errors: int = 0
-    framing_errors: int = 0
-    unknown_ids: int = 0
-    bad_length: int = 0
-    bad_value: int = 0
-    telemetry: int = 0
-    lost: int = 0  # TELEMETRY frames missing from the sequence numbers
-    seq_restarts: int = 0
-    reconnects: int = 0
-    nacks: int = 0
-    timeouts: int = 0  # commands that got no reply (after their retries)
-    retries: int = 0  # commands sent again after a try got no reply
-
-    @property
-    def corrupt(self) -> int:
-        return self.crc_errors + self.framing_errors + self.unknown_ids + self.bad_length + self.bad_value
-
-    def as_dict(self) -> dict[str, int]:
-        return {**asdict(self), "corrupt": self.corrupt}
-
-
-@dataclass(slots=True)
-class Received:
-    """One decoded message with the host's time of receipt (link clock) and whatever ground
-    truth the link knew then (the simulated robot's displacement...)."""
-
-    message: Message
-    time: float
-    truth: dict[str, float] = field(default_factory=dict)
 
 
 class RobotClient:

@@ -1,0 +1,87 @@
+"""What a robot answers to the client's commands, as values: ``RobotInfo`` (INFO),
+``FirmwareStats`` (STATS), ``CommandRefused`` (a NACK) and ``ReplyTimeout`` (no answer).
+
+``RobotClient`` (``client.py``) makes them; ``proleg.link.client`` re-exports every name here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import LinkError
+from ..protocol.codec import Message
+from ..protocol.definition import ErrorCode
+
+
+class CommandRefused(LinkError):
+    """The robot answered a command with NACK."""
+
+    def __init__(self, command: str, error: int, detail: int, where: str):
+        try:
+            self.error: ErrorCode | int = ErrorCode(error)
+            code = self.error.name
+        except ValueError:
+            self.error = error
+            code = f"error {error}"
+        self.command = command
+        self.detail = detail
+        super().__init__(f"{where}: robot refused {command}: {code} (detail {detail})")
+
+
+class ReplyTimeout(LinkError):
+    """A command got no reply in time (after its retries)."""
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """The robot's answer to GET_INFO."""
+
+    robot_name: str
+    board: str
+    build_id: int
+    gait_hash: int
+    protocol_version: int
+    limbs: int
+    actuators: int
+    gaits: int
+    max_gait_steps: int
+    tick_hz: int
+    telemetry_hz: int
+
+    @classmethod
+    def from_message(cls, msg: Message) -> RobotInfo:
+        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__ if k in msg.fields})  # type: ignore[arg-type]
+
+    def header(self) -> dict[str, str]:
+        """Key/value pairs for a recording's header."""
+        return {
+            "robot": self.robot_name,
+            "board": self.board,
+            "firmware_build_id": f"{self.build_id:08x}",
+            "gait_table_hash": f"{self.gait_hash:08x}",
+            "protocol_version": str(self.protocol_version),
+            "limbs": str(self.limbs),
+            "channels": str(self.actuators),
+            "tick_hz": str(self.tick_hz),
+            "telemetry_hz": str(self.telemetry_hz),
+        }
+
+
+@dataclass(frozen=True)
+class FirmwareStats:
+    """The firmware's link counters (reply to GET_STATS)."""
+
+    rx_ok: int
+    crc_errors: int
+    framing_errors: int
+    unknown_ids: int
+    bad_length: int
+    bad_value: int
+    nacks: int
+    tx_frames: int
+    tx_dropped: int
+    tick_overruns: int = 0  # control ticks that overran their period (issue 11)
+
+    @classmethod
+    def from_message(cls, msg: Message) -> FirmwareStats:
+        return cls(**{k: msg.fields[k] for k in cls.__dataclass_fields__ if k in msg.fields})  # type: ignore[arg-type]
