@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 
 from ..errors import GaitError
+from .number_args import finite_float, non_negative_float, positive_int
 
 DIRECTIONS = ("+x", "-x")
 PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_deg", "simple_cycles", "rotate", "library")
@@ -25,53 +26,36 @@ PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_d
 
 def add_gait_parser(sub) -> None:
     """Register ``proleg gait`` on the one parser's subcommands."""
-    from .main import _positive_int, robot_arg  # robot_arg: a robot file or a bundled example's name
+    from .main import robot_arg  # a robot file or a bundled example's name
 
     g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
     g.add_argument("robot", metavar="ROBOT", type=robot_arg)
     g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
     g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
-    g.add_argument("--max-transitions", type=_positive_int, metavar="N")
+    g.add_argument("--max-transitions", type=positive_int, metavar="N")
     g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
     g.add_argument("--json", action="store_true", help="print one JSON object")
     p = g.add_argument_group("planar gaits (robot files with dy / dtheta_deg / var_*; docs/planar.md)")
-    p.add_argument("--heading", type=_finite_float, metavar="DEG", help="score motion along this heading (0 = +x, 90 = +y)")
+    p.add_argument("--heading", type=finite_float, metavar="DEG", help="score motion along this heading (0 = +x, 90 = +y)")
     p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
                    help="subtract λ·(var_dx + var_dy + var_dtheta_deg), or each with its own weight")
-    p.add_argument("--transition-cost", type=_finite_float, metavar="κ", help="subtract κ per transition")
-    p.add_argument("--rotation-cap-deg", type=_non_negative, metavar="DEG", help="only gaits turning at most this much per pass")
+    p.add_argument("--transition-cost", type=finite_float, metavar="κ", help="subtract κ per transition")
+    p.add_argument("--rotation-cap-deg", type=non_negative_float, metavar="DEG", help="only gaits turning at most this much per pass")
     p.add_argument("--simple-cycles", action="store_true", help="only simple cycles (each state once per pass)")
     p.add_argument("--rotate", choices=("cw", "ccw"), help="the gait that turns the most this way")
-    p.add_argument("--translation-cap", type=_non_negative, metavar="D",
+    p.add_argument("--translation-cap", type=non_negative_float, metavar="D",
                    help="with --rotate: at most this translation per pass (default: one mean step)")
     p.add_argument("--library", metavar="HEADINGS", help="best gait per heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
-    p.add_argument("--cycles", type=_positive_int, default=10, metavar="N", help="passes in the composed path (default 10)")
+    p.add_argument("--cycles", type=positive_int, default=10, metavar="N", help="passes in the composed path (default 10)")
     p.add_argument("--plot", metavar="FILE.png", help="draw each answer's gait 0 composed over --cycles passes")
     g.set_defaults(run=cmd_gait)
-
-
-def _finite_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return v
-
-
-def _non_negative(text: str) -> float:
-    v = _finite_float(text)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return v
 
 
 def _weights(text: str) -> tuple[float, float, float]:
     parts = [p.strip() for p in text.split(",")]
     if len(parts) not in (1, 3):
         raise argparse.ArgumentTypeError(f"expected λ or λx,λy,λθ, got {text!r}")
-    values = [_non_negative(p) for p in parts]
+    values = [non_negative_float(p) for p in parts]
     return (values[0],) * 3 if len(values) == 1 else (values[0], values[1], values[2])
 
 

@@ -37,7 +37,8 @@ class LearnError(ProlegError):
 
 
 def add_arguments(subparsers: Any) -> None:
-    from .main import _positive_float, _positive_int, robot_arg
+    from .main import robot_arg
+    from .number_args import int_auto, positive_float, positive_int
     from .robot_commands import DEFAULT_BAUDRATE
 
     p = subparsers.add_parser(
@@ -50,7 +51,7 @@ def add_arguments(subparsers: Any) -> None:
     src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
     src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board with a table plant")
     p.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
-    p.add_argument("--node", type=lambda t: int(t, 0), default=0, help="CAN node id of the robot (default 0)")
+    p.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot (default 0)")
     p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
     p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
@@ -60,7 +61,7 @@ def add_arguments(subparsers: Any) -> None:
                         "physical plant (friction mechanics: learn what the robot really does)")
     p.add_argument("--log", required=True, metavar="TRIALS.jsonl",
                    help="append-only trial log; an existing one is resumed, nothing recorded is lost")
-    p.add_argument("--repeats", type=_positive_int, default=5, metavar="R", help="trials per transition (default 5)")
+    p.add_argument("--repeats", type=positive_int, default=5, metavar="R", help="trials per transition (default 5)")
     p.add_argument("--source", choices=("sim", "tracker", "manual"),
                    help="position source (default: sim with --sim; required otherwise)")
     p.add_argument("--track", metavar="FILE.csv", help="tracker CSV (time,x,y,theta) for trials without motion")
@@ -68,7 +69,7 @@ def add_arguments(subparsers: Any) -> None:
                    help="tracker time − firmware time from a sync event (default: estimated)")
     p.add_argument("--adaptive", action="store_true",
                    help="spend the R × transitions budget where the intervals are widest (2 trials each first)")
-    p.add_argument("--half-width", type=_positive_float, metavar="H",
+    p.add_argument("--half-width", type=positive_float, metavar="H",
                    help="report the extra trials each transition needs for a 95 %% interval of ± H")
     p.add_argument("--more", action="store_true", help="with --half-width and a link: run those extra trials")
     p.add_argument("--report", action="store_true", help="print the estimates (always printed after exploring)")
@@ -76,7 +77,7 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--variance-weight", type=float, default=0.0, metavar="λ",
                    help="report the best gait for mean − λ·σ per transition (default 0: the mean)")
     p.add_argument("--seed", type=int, default=1, help="tour randomisation and simulator seed (default 1)")
-    p.add_argument("--max-pieces", type=_positive_int, metavar="N",
+    p.add_argument("--max-pieces", type=positive_int, metavar="N",
                    help="stop after N pieces (resume later with the same --log)")
     p.set_defaults(run=cmd_learn)
 

@@ -8,7 +8,6 @@ function taking the parsed namespace, which calls ``console_main`` / ``plot_main
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Sequence
 from typing import Any, TextIO
@@ -16,6 +15,7 @@ from typing import Any, TextIO
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
+from .number_args import int_auto
 
 
 def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str | None = None,
@@ -133,13 +133,6 @@ def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_
 
 
 # --------------------------------------------------------------------------- argparse
-def _int_auto(text: str) -> int:
-    try:
-        return int(text, 0)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
-
-
 def _robot(text: str) -> str:
     from .main import robot_arg
 
@@ -159,7 +152,7 @@ def add_arguments(subparsers: Any) -> None:
     c.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
                                        "else socketcan)")
     c.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
-    c.add_argument("--node", type=_int_auto, default=0, help="CAN node id of the robot, 0..15 (default 0)")
+    c.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot, 0..15 (default 0)")
     c.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
     c.add_argument("--robot", metavar="ROBOT", type=_robot, help="robot file for limb names and ψ* (with --port/--can)")
     c.add_argument("--record", metavar="FILE", help="record every frame to FILE (.csv, .jsonl or .mcap)")
@@ -185,8 +178,8 @@ def add_arguments(subparsers: Any) -> None:
 
     d = subparsers.add_parser("dbc", help="write a DBC file describing the robot's CAN frames")
     d.add_argument("-o", "--out", required=True, metavar="FILE.dbc")
-    d.add_argument("--node", type=_int_auto, action="append", metavar="N",
+    d.add_argument("--node", type=int_auto, action="append", metavar="N",
                    help="robot node id(s) on the bus (repeatable; default 0)")
-    d.add_argument("--base", type=_int_auto, default=0x100, help="base CAN id (default 0x100)")
+    d.add_argument("--base", type=int_auto, default=0x100, help="base CAN id (default 0x100)")
     d.add_argument("--robot", metavar="ROBOT", type=_robot, help="name ψ and duty signals after its limbs and actuators")
     d.set_defaults(run=lambda a: dbc_main(out=a.out, nodes=a.node or [0], base=a.base, robot_file=a.robot))

@@ -23,6 +23,7 @@ from pathlib import Path
 from .. import __version__
 from ..errors import LinkError, ProlegError
 from .gait import add_gait_parser
+from .number_args import positive_float, positive_int
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
@@ -146,7 +147,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
     s.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    s.add_argument("--duration", type=_positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
+    s.add_argument("--duration", type=positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
     s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
     add_sim_board_options(s)
@@ -160,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print the report as one JSON object")
     s.add_argument("--pty", action="store_true",
                    help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
-    s.add_argument("--speed", type=_positive_float, default=1.0, help="with --pty: times real time (default 1)")
+    s.add_argument("--speed", type=positive_float, default=1.0, help="with --pty: times real time (default 1)")
     from .sim_plant import add_plant_options
 
     add_plant_options(s)  # --plant, --condition, --measure-matrix
@@ -185,7 +186,7 @@ def add_sim_board_options(p: argparse.ArgumentParser) -> None:
                         "arduino-nano / bluepill firmware.elf on an emulated MCU (--json adds the tick budget)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the simulated firmware carries (default total)")
-    p.add_argument("--max-transitions", type=_positive_int, metavar="N",
+    p.add_argument("--max-transitions", type=positive_int, metavar="N",
                    help="longest gait considered (default: the build's, see docs/gait-selection.md)")
 
 
@@ -195,36 +196,16 @@ def add_udp_options(p: argparse.ArgumentParser) -> None:
                    help="plotjuggler: one JSON object per datagram (default); teleplot: >name:timestamp_ms:value lines")
 
 
-def _positive_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"expected a number above 0, got {text}")
-    return v
-
-
 def _firmware_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("robot", metavar="ROBOT", type=robot_arg)
     p.add_argument("--board", required=True, help="board name (boards/NAME.toml) or a board file")
     p.add_argument("-o", "--out", metavar="DIR", help="project directory (default build/ROBOT-BOARD)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the firmware carries (default total)")
-    p.add_argument("--max-transitions", type=_positive_int, metavar="N")
+    p.add_argument("--max-transitions", type=positive_int, metavar="N")
     p.add_argument("--library", metavar="HEADINGS",
                    help="also carry a gait library, e.g. 0,90,180,270,rot-cw (instead of the robot file's [gaits]; "
                         "docs/planar.md)")
-
-
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected at least 1, got {v}")
-    return v
 
 
 # ---------------------------------------------------------------------------------------

@@ -12,12 +12,12 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import sys
 from typing import Any
 
 from ..errors import GaitError, LinkError
 from ..link.serial_link import DEFAULT_BAUDRATE
+from .number_args import heading_deg, int_auto, positive_float
 
 log = logging.getLogger("proleg")
 
@@ -34,7 +34,7 @@ def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> No
         src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board")
     p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, else socketcan)")
     p.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
-    p.add_argument("--node", type=lambda t: int(t, 0), default=0, help="CAN node id of the robot (default 0)")
+    p.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot (default 0)")
     p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
     p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
 
@@ -203,16 +203,6 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0 if doc["ok"] else 1
 
 
-def _heading(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a heading in degrees, got {text!r}") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"expected a finite heading in degrees, got {text}")
-    return v
-
-
 # --------------------------------------------------------------------------- load-gait, set-param
 def cmd_load_gait(args: argparse.Namespace) -> int:
     from ..robot import load_robot
@@ -272,7 +262,7 @@ def cmd_robots(args: argparse.Namespace) -> int:
 
 # --------------------------------------------------------------------------- argparse
 def add_arguments(subparsers: Any) -> None:
-    from .main import _positive_float, add_udp_options, robot_arg
+    from .main import add_udp_options, robot_arg
 
     r = subparsers.add_parser("run", help="run a gait on a robot headless: progress on stderr, exit 1 on faults")
     r.add_argument("robot", metavar="ROBOT", type=robot_arg)
@@ -281,7 +271,7 @@ def add_arguments(subparsers: Any) -> None:
                    help="gait index in the firmware's table for the direction, or 'user' (default 0)")
     r.add_argument("--direction", choices=("+x", "-x"), default=None, help="default +x")
     steer = r.add_mutually_exclusive_group()
-    steer.add_argument("--heading", type=_heading, metavar="DEG",
+    steer.add_argument("--heading", type=heading_deg, metavar="DEG",
                        help="run the gait library's gait for this heading (0 = +x, 90 = +y; the nearest the "
                             "library holds), or compute and load one (docs/planar.md)")
     steer.add_argument("--rotate", choices=("cw", "ccw"), help="run the library's rotation gait (turn on the spot)")
@@ -289,13 +279,13 @@ def add_arguments(subparsers: Any) -> None:
                    help="with --heading: a heading the library does not hold is computed and loaded (LOAD_GAIT)")
     r.add_argument("--library", metavar="HEADINGS",
                    help="the library the firmware was built with (proleg build --library), if not the robot file's")
-    r.add_argument("--duration", type=_positive_float, default=10.0, metavar="S", help="seconds to run (default 10)")
+    r.add_argument("--duration", type=positive_float, default=10.0, metavar="S", help="seconds to run (default 10)")
     r.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
     add_udp_options(r)
     r.add_argument("--format", choices=("text", "jsonl"), default="text",
                    help="text: a summary; jsonl: every message as a JSON line, then a RESULT line")
-    r.add_argument("--progress", type=_positive_float, default=1.0, metavar="S", help="progress every S seconds")
-    r.add_argument("--speed", type=_positive_float, default=None,
+    r.add_argument("--progress", type=positive_float, default=1.0, metavar="S", help="progress every S seconds")
+    r.add_argument("--speed", type=positive_float, default=None,
                    help="with --sim: times real time (default: as fast as possible)")
     r.add_argument("--no-replan", dest="replan", action="store_false",
                    help="do not replan after an actuator loss (default: on a fault naming an actuator, "

@@ -1,0 +1,71 @@
+"""The CLI's number parsers: argparse ``type=`` functions for numeric options.
+
+Each takes the option's text and returns the number, or raises ``argparse.ArgumentTypeError``
+with one line saying what was expected (argparse prints it after the option's name and exits 2):
+``proleg sim R1 --duration 0`` → ``argument --duration: expected a number above 0, got 0``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+
+def positive_int(text: str) -> int:
+    """A whole number ≥ 1 (``--max-transitions``, ``--cycles``, ``--repeats``...)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected at least 1, got {v}")
+    return v
+
+
+def int_auto(text: str) -> int:
+    """An integer in any base Python reads (``16``, ``0x10``, ``0o20``): CAN node ids and ids."""
+    try:
+        return int(text, 0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
+
+
+def finite_float(text: str) -> float:
+    """Any finite number (not ``nan``/``inf``)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return v
+
+
+def non_negative_float(text: str) -> float:
+    """A finite number ≥ 0."""
+    v = finite_float(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return v
+
+
+def positive_float(text: str) -> float:
+    """A number > 0 (durations, periods, speed factors)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected a number above 0, got {text}")
+    return v
+
+
+def heading_deg(text: str) -> float:
+    """A heading in degrees, any finite value (0 = +x, 90 = +y; taken modulo 360 by its user)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a heading in degrees, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite heading in degrees, got {text}")
+    return v

@@ -1,0 +1,80 @@
+"""The CLI's number parsers (``proleg.cli.number_args``): what each accepts, and the one line a
+user gets for a bad value of every option that uses one (exit 2, nothing run)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import pytest
+
+from proleg.cli import main
+from proleg.cli.number_args import (
+    finite_float,
+    heading_deg,
+    int_auto,
+    non_negative_float,
+    positive_float,
+    positive_int,
+)
+
+R1 = str(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+
+
+@pytest.mark.parametrize(
+    "parse, text, value",
+    [
+        (positive_int, "3", 3),
+        (int_auto, "0x10", 16),
+        (int_auto, "-2", -2),
+        (finite_float, "-1.5", -1.5),
+        (non_negative_float, "0", 0.0),
+        (positive_float, "0.25", 0.25),
+        (heading_deg, "-450", -450.0),
+    ],
+)
+def test_each_parser_returns_the_number_it_reads(parse, text, value):
+    assert parse(text) == value
+
+
+@pytest.mark.parametrize(
+    "parse, text",
+    [
+        (positive_int, "0"),
+        (positive_int, "1.5"),
+        (int_auto, "ten"),
+        (finite_float, "inf"),
+        (non_negative_float, "-0.1"),
+        (positive_float, "nan"),
+        (positive_float, "-1"),
+        (heading_deg, "nan"),
+    ],
+)
+def test_each_parser_refuses_what_it_does_not_take(parse, text):
+    with pytest.raises(argparse.ArgumentTypeError):
+        parse(text)
+
+
+@pytest.mark.parametrize(
+    "argv, line",
+    [
+        (["sim", R1, "--duration", "0"], "argument --duration: expected a number above 0, got 0"),
+        (["build", R1, "--board", "host-sim", "--max-transitions", "x"],
+         "argument --max-transitions: expected a whole number, got 'x'"),
+        (["gait", R1, "--cycles", "0"], "argument --cycles: expected at least 1, got 0"),
+        (["gait", R1, "--heading", "inf"], "argument --heading: expected a finite number, got 'inf'"),
+        (["gait", R1, "--rotation-cap-deg", "-1"], "argument --rotation-cap-deg: expected a number >= 0, got '-1'"),
+        (["run", R1, "--heading", "north"], "argument --heading: expected a heading in degrees, got 'north'"),
+        (["run", R1, "--duration", "soon"], "argument --duration: expected a number, got 'soon'"),
+        (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),
+        (["learn", R1, "--node", "one"], "argument --node: expected an integer (0x.. for hex), got 'one'"),
+        (["learn", R1, "--repeats", "-3"], "argument --repeats: expected at least 1, got -3"),
+    ],
+)
+def test_a_bad_number_is_one_line_naming_the_option_and_exit_2(capsys, argv, line):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    _, err = capsys.readouterr()
+    assert exit_.value.code == 2
+    assert err.strip().splitlines()[-1].endswith(line)
+
