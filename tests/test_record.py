@@ -214,3 +214,38 @@ def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
     with pytest.raises(LinkError, match="does not exist"):
         dbc_main(out=str(tmp_path / "no" / "robot.dbc"))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
+def test_recorded_events_name_the_actuator_as_the_console_does(tmp_path, suffix):
+    from proleg.console.names import RobotNames, event_text
+    from proleg.link.received import Received
+    from proleg.protocol.codec import Message
+    from proleg.protocol.definition import EventKind, FaultCode
+
+    if suffix == ".mcap":
+        pytest.importorskip("mcap")
+    meta = RecordingMeta.for_robot(robot=ROBOT, board="fake")
+    assert meta.actuator_names == ("sma-left", "sma-right")
+    events = [
+        {"time_ms": 20000, "kind": int(EventKind.SUSPECT), "code": 1, "detail": 11},
+        {"time_ms": 20001, "kind": int(EventKind.FALLBACK), "code": 1, "detail": 2},
+        {"time_ms": 20002, "kind": int(EventKind.FAULT), "code": int(FaultCode.SMA_ON_LIMIT), "detail": 0},
+        {"time_ms": 20003, "kind": int(EventKind.GAIT_STOPPED), "code": 1, "detail": 3},
+    ]
+    rec = Logger(tmp_path / f"run{suffix}", meta)
+    telemetry = {"seq": 0, "time_ms": 19999, "measured": 0, "target": 1, "gait": 0, "direction": 0, "step": 0,
+                 "flags": 1, "psi": (0, 0), "duty": (0, 0)}
+    rec.on_message(Received(Message("TELEMETRY", telemetry), 19.9))  # a recording holds telemetry
+    for i, f in enumerate(events):
+        rec.on_message(Received(Message("EVENT", f), 20.0 + i))
+    rec.stop()
+    texts = [e["text"] for e in read_recording(tmp_path / f"run{suffix}").events]
+    assert texts == [
+        "suspects sma-right (transition 11)",
+        "FALLBACK: gave up sma-right, runs its 2-step fallback gait",
+        "FAULT SMA_ON_LIMIT on sma-left",
+        "gait stopped: FAULT after 3 cycles",
+    ]
+    names = RobotNames(meta.limb_names, meta.actuator_names)
+    assert texts == [event_text(f, names) for f in events]  # one implementation: the console's

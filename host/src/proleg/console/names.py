@@ -98,44 +98,49 @@ def fault_text(code: int, detail: int, names: RobotNames = RobotNames()) -> str:
 
 
 def describe_event(f: dict, names: RobotNames = RobotNames(), state_label: object = None) -> str:
-    """One line for an EVENT's fields: time, then what happened in words."""
-    t = f"{f['time_ms'] / 1000:8.3f}s"
+    """One line for an EVENT's fields: time, then what happened in words (``event_text``)."""
+    return f"{f['time_ms'] / 1000:8.3f}s {event_text(f, names, state_label)}"
+
+
+def event_text(f: dict, names: RobotNames = RobotNames(), state_label: object = None) -> str:
+    """What an EVENT says, in words: kinds, faults and reasons by name, the limb or actuator by
+    its name in ``names``, states through ``state_label``. The console and recordings' ``text``."""
     kind, code, detail = f["kind"], f["code"], f["detail"]
     try:
         k = EventKind(kind)
     except ValueError:
-        return f"{t} unknown event {kind} (code {code}, detail {detail})"
+        return f"unknown event {kind} (code {code}, detail {detail})"
     if k == EventKind.FAULT:
-        return f"{t} FAULT {fault_text(code, detail, names)}"
+        return f"FAULT {fault_text(code, detail, names)}"
     if k == EventKind.GAIT_STOPPED:
-        return f"{t} gait stopped: {enum_name(StopReason, code)} after {detail} cycles"
+        return f"gait stopped: {enum_name(StopReason, code)} after {detail} cycles"
     if k == EventKind.GAIT_STARTED:
-        return f"{t} gait {gait_text(code)} started {direction_text(detail)}"
+        return f"gait {gait_text(code)} started {direction_text(detail)}"
     if k == EventKind.STATE_REACHED:
         state = state_label(detail) if callable(state_label) else str(detail)
-        return f"{t} {step_text(code)} reached state {state}"
+        return f"{step_text(code)} reached state {state}"
     if k == EventKind.FAULT_CLEARED:
         cleared = " ".join(c.name.lower() for c in ClearWhat if c & code and c.name) or "nothing"
-        return f"{t} cleared {cleared}"
+        return f"cleared {cleared}"
     if k == EventKind.ESTOP:
-        return f"{t} E-STOP ({'hardware input' if code else 'command'})"
+        return f"E-STOP ({'hardware input' if code else 'command'})"
     if k == EventKind.GAIT_LOADED:
-        return f"{t} user gait loaded ({detail} steps)"
+        return f"user gait loaded ({detail} steps)"
     if k == EventKind.SUSPECT:
         who = "no actuator" if code == 0xFF else names.actuator(code)
         n = names.n_states
         if n and detail != 0xFFFF and detail < n * n:
             lab = state_label if callable(state_label) else str
-            return f"{t} suspects {who} (transition {lab(detail // n)}→{lab(detail % n)} failed)"
-        return f"{t} suspects {who} (transition {'unknown' if detail == 0xFFFF else detail})"
+            return f"suspects {who} (transition {lab(detail // n)}→{lab(detail % n)} failed)"
+        return f"suspects {who} (transition {'unknown' if detail == 0xFFFF else detail})"
     if k == EventKind.FALLBACK:
-        return f"{t} FALLBACK: gave up {names.actuator(code)}, runs its {detail}-step fallback gait"
+        return f"FALLBACK: gave up {names.actuator(code)}, runs its {detail}-step fallback gait"
     if k == EventKind.LEVEL_DONE:
         if code == LevelResult.STORED:
-            return f"{t} level calibration done"
+            return "level calibration done"
         on = f" ({names.limb_set(detail)})" if code in (LevelResult.TOO_TILTED, LevelResult.IMU) else ""
-        return f"{t} level calibration refused: {enum_name(LevelResult, code)}{on}"
+        return f"level calibration refused: {enum_name(LevelResult, code)}{on}"
     if k == EventKind.BOOT:
-        return f"{t} boot (reset cause {enum_name(ResetCause, code)})"
-    return f"{t} {k.name.lower()} (code {code}, detail {detail})"
+        return f"boot (reset cause {enum_name(ResetCause, code)})"
+    return f"{k.name.lower()} (code {code}, detail {detail})"
 

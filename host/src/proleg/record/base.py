@@ -61,7 +61,7 @@ class Writer(Listener, ABC):
         if m.name == "TELEMETRY":
             self._guard(self.write_telemetry, telemetry_row(self.meta, rx.time, m.fields, rx.truth))
         else:
-            self._guard(self.write_event, event_row(rx.time, m.name, m.fields, self.meta.limb_names))
+            self._guard(self.write_event, event_row(rx.time, m.name, m.fields, self.meta))
 
     def mark(self, host_s: float, t_s: float | None, text: str) -> None:
         """Record a fault injected by the simulator (plots draw it as a marker)."""

@@ -1,7 +1,8 @@
 """What a recording holds, in physical units with named fields — shared by every format.
 
 ``RecordingMeta``: who was recorded (robot, board, firmware ids, limb and actuator names, ψ*,
-the wall-clock start time in ISO 8601 UTC). ``telemetry_row`` turns one TELEMETRY frame into
+the wall-clock start time in ISO 8601 UTC). ``event_row`` puts an EVENT in words the way the
+console does (``proleg.console.names.event_text``, one implementation for both). ``telemetry_row`` turns one TELEMETRY frame into
 a flat row: ``t_host_s`` (host receipt time on the link's clock), ``t_s`` (firmware time),
 the integer fields as integers, ``psi_<limb>_deg`` per limb, ``duty_<actuator>_pct`` per
 channel and the link's ground truth (``displacement_mm`` on the simulated robot). Every
@@ -16,7 +17,7 @@ from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 from typing import Any
 
-from ..protocol.definition import GAIT_USER, Direction, ErrorCode, EventKind, StopReason
+from ..protocol.definition import ErrorCode, EventKind
 
 #: TELEMETRY's integer fields, as recorded (no scaling)
 INTEGER_FIELDS = ("seq", "measured", "target", "gait", "direction", "step", "flags")
@@ -45,6 +46,8 @@ class RecordingMeta:
     psi_star_deg: tuple[tuple[float, ...], ...] = ()
     truth: tuple[str, ...] = ()  # ground-truth columns the link provides (displacement_mm)
     info: dict[str, str] = field(default_factory=dict)  # firmware build id, gait hash, link, rates...
+    #: actuator names in the firmware's actuator order (the robot file's), for events that name one
+    actuator_names: tuple[str, ...] = ()
 
     def columns(self) -> list[str]:
         """The telemetry columns, in order."""
@@ -68,6 +71,7 @@ class RecordingMeta:
             robot=str(d.get("robot", "")), board=str(d.get("board", "")), start_utc=str(d.get("start_utc", "")),
             psi_star_deg=tuple(tuple(float(x) for x in v) for v in d.get("psi_star_deg", ())),
             truth=tuple(d.get("truth", ())), info={str(k): str(v) for k, v in d.get("info", {}).items()},
+            actuator_names=tuple(d.get("actuator_names", ())),
         )
 
     @classmethod
@@ -79,12 +83,14 @@ class RecordingMeta:
         limb_names = [f"limb{i + 1}" for i in range(limbs)]  # counted from 1, as messages show them
         channel_names = [f"ch{j}" for j in range(channels)]
         stars: tuple[tuple[float, ...], ...] = ()
+        actuator_names: tuple[str, ...] = ()
         if robot is not None and len(robot.limbs) == limbs:
             limb_names = [limb.name for limb in robot.limbs]
             stars = tuple(tuple(limb.psi_star_deg) for limb in robot.limbs)
             for a in robot.actuators:
                 if a.channel < channels:
                     channel_names[a.channel] = a.name
+            actuator_names = tuple(a.name for a in robot.actuators)
         extra = dict(info.header()) if info is not None else {}
         for k in ("robot", "board", "limbs", "channels"):
             extra.pop(k, None)
@@ -94,7 +100,7 @@ class RecordingMeta:
             limb_names=tuple(limb_names), channel_names=tuple(channel_names),
             robot=info.robot_name if info is not None else robot.name,
             board=info.board if info is not None else kw.pop("board", ""),
-            psi_star_deg=stars, info=extra,
+            psi_star_deg=stars, info=extra, actuator_names=actuator_names,
             truth=kw.pop("truth", tuple(sorted(link.truth())) if link is not None else ()), **kw,
         )
 
@@ -114,14 +120,18 @@ def telemetry_row(meta: RecordingMeta, host_s: float, f: dict[str, Any], truth: 
     return row
 
 
-def event_row(host_s: float, name: str, f: dict[str, Any], limb_names: tuple[str, ...] = ()) -> dict[str, Any]:
+def event_row(host_s: float, name: str, f: dict[str, Any], meta: RecordingMeta | None = None) -> dict[str, Any]:
     """Any other message as one events-table row: ``kind``/``code``/``detail`` of an EVENT
-    (kind by name), a NACK's error/detail, 0 otherwise; ``text`` says it in words (the
-    limb a fault is on by name, from ``limb_names``)."""
+    (kind by name), a NACK's error/detail, 0 otherwise; ``text`` says it in words, as the
+    console does (``proleg.console.names.event_text``), naming the limb or actuator an event
+    points at by the recording's ``meta`` names."""
     t_s = f["time_ms"] / 1000 if "time_ms" in f else None
     if name == "EVENT":
+        from ..console.names import RobotNames, event_text
+
+        names = RobotNames() if meta is None else RobotNames(meta.limb_names, meta.actuator_names)
         return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": name, "kind": _name(EventKind, f["kind"]),
-                "code": int(f["code"]), "detail": int(f["detail"]), "text": describe_event(f, limb_names)}
+                "code": int(f["code"]), "detail": int(f["detail"]), "text": event_text(f, names)}
     code = int(f.get("error", 0)) if name == "NACK" else 0
     detail = int(f.get("detail", 0)) if name == "NACK" else 0
     text = " ".join(f"{k}={v}" for k, v in f.items() if k != "time_ms")
@@ -135,32 +145,6 @@ def injection_row(host_s: float, t_s: float | None, fault: str) -> dict[str, Any
     """A fault the simulator injected (``proleg sim --inject``), for plots' markers."""
     return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": "INJECT", "kind": "INJECT", "code": 0, "detail": 0,
             "text": fault}
-
-
-def describe_event(f: dict[str, Any], limb_names: tuple[str, ...] = ()) -> str:
-    """An EVENT in words (fault, stop reason, event kind and the limb or actuator by name;
-    steps counted from 1)."""
-    from ..console.names import RobotNames, fault_text, step_text
-
-    kind, code, detail = f["kind"], f["code"], f["detail"]
-    try:
-        k = EventKind(kind)
-    except ValueError:
-        return f"event {kind} code={code} detail={detail}"
-    if k == EventKind.FAULT:
-        return f"FAULT {fault_text(code, detail, RobotNames(tuple(limb_names)))}"
-    if k == EventKind.GAIT_STOPPED:
-        return f"gait stopped: {_name(StopReason, code)}"
-    if k == EventKind.GAIT_STARTED:
-        d = "+x" if detail == Direction.PLUS_X else "-x"
-        return f"gait {'user' if code == GAIT_USER else code} started {d}"
-    if k == EventKind.STATE_REACHED:
-        return f"{step_text(code)} reached state {detail}"
-    if k == EventKind.SUSPECT:
-        return f"suspects actuator #{code + 1} (transition code {detail})" if code != 0xFF else "suspects no actuator"
-    if k == EventKind.FALLBACK:
-        return f"FALLBACK without actuator #{code + 1} ({detail}-step gait)"
-    return f"{k.name.lower()} code={code} detail={detail}"
 
 
 def _name(enum: Any, value: int) -> str:

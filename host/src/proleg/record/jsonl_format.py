@@ -85,7 +85,7 @@ class JsonlPrinter(Listener):
         if m.name == "TELEMETRY":
             obj = {"msg": "TELEMETRY", **telemetry_row(self.meta, rx.time, m.fields, rx.truth)}
         else:
-            obj = event_row(rx.time, m.name, m.fields, self.meta.limb_names)
+            obj = event_row(rx.time, m.name, m.fields, self.meta)
         try:
             self.out.write(dumps(obj) + "\n")
             self.out.flush()
