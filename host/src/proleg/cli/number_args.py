@@ -32,10 +32,7 @@ def int_auto(text: str) -> int:
 
 def finite_float(text: str) -> float:
     """Any finite number (not ``nan``/``inf``)."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    v = _float(text, "a number")
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
     return v
@@ -51,21 +48,22 @@ def non_negative_float(text: str) -> float:
 
 def positive_float(text: str) -> float:
     """A number > 0 (durations, periods, speed factors)."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    v = _float(text, "a number")
     if not v > 0:
         raise argparse.ArgumentTypeError(f"expected a number above 0, got {text}")
     return v
 
 
 def heading_deg(text: str) -> float:
-    """A heading in degrees, any finite value (0 = +x, 90 = +y; taken modulo 360 by its user)."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a heading in degrees, got {text!r}") from None
+    """A heading in degrees, any finite value (0 = +x, 90 = +y)."""
+    v = _float(text, "a heading in degrees")
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"expected a finite heading in degrees, got {text}")
     return v
+
+
+def _float(text: str, expected: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
