@@ -4,6 +4,8 @@ An installed wheel carries them inside the package (``proleg/_data/``, copied th
 ``setup.py`` when the wheel is built) and finds them with ``importlib.resources``; a
 source checkout (or an editable install) uses the directories at the top of the tree.
 ``PROLEG_HOME`` points elsewhere, e.g. at a lab's own tree of boards and templates.
+``cache_dir`` is where builds proleg makes for itself (host-sim firmware, emulator helpers)
+are kept: ``$PROLEG_CACHE``, else ``$XDG_CACHE_HOME/proleg`` (default ``~/.cache/proleg``).
 """
 
 from __future__ import annotations
@@ -42,6 +44,15 @@ def templates_dir() -> Path:
 
 def robots_dir() -> Path:
     return home() / "robots"
+
+
+def cache_dir(name: str = "") -> Path:
+    """``$PROLEG_CACHE/<name>`` (else ``$XDG_CACHE_HOME/proleg/<name>``, ``~/.cache`` when unset):
+    where the simulator and the emulators cache what they build (``sim``, ``avr-emu``...)."""
+    root = os.environ.get("PROLEG_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "proleg"
+    )
+    return Path(root) / name
 
 
 def bundled_robots() -> list[str]:

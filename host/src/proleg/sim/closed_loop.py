@@ -20,12 +20,12 @@ console, the recorder and hil_tests) talk to.
 from __future__ import annotations
 
 import hashlib
-import os
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .. import paths
 from ..errors import SimError
 from ..firmware.boards import Board, load_board
 from ..firmware.placement import place_imus, sim_imu_keys
@@ -77,10 +77,7 @@ def _merge(base: Any, top: Any) -> Any:
 
 
 def cache_dir() -> Path:
-    root = os.environ.get("PROLEG_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "proleg"
-    )
-    return Path(root) / "sim"
+    return paths.cache_dir("sim")
 
 
 def sim_library(robot: Robot, *, objective: str = "total", max_transitions: int | None = None,

@@ -14,7 +14,7 @@ import tempfile
 from pathlib import Path
 
 from ...errors import SimError
-from ...paths import templates_dir
+from ...paths import cache_dir, templates_dir
 
 HERE = Path(__file__).resolve().parent
 SOURCES = ("harness.c", "twi.c", "boot.c")
@@ -28,10 +28,7 @@ PACKAGES = "simavr libsimavr-dev"
 
 
 def cache_root() -> Path:
-    root = os.environ.get("PROLEG_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "proleg"
-    )
-    return Path(root) / "avr-emu"
+    return cache_dir("avr-emu")
 
 
 def imu_model_dir() -> Path:
