@@ -12,14 +12,12 @@ several boards, each with its own firmware globals, can run in one process.
 from __future__ import annotations
 
 import ctypes
-import os
-import shutil
-import tempfile
 from ctypes import POINTER, c_double, c_uint8, c_uint16, c_uint32, c_uint64
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 from ..errors import SimError
+from .private_library import load_private_copy
 
 #: IMU fault modes understood by the C MPU-6050 model.
 IMU_FAULTS = {"ok": 0, "no-ack": 1, "stuck": 2, "garbage": 3}
@@ -95,15 +93,7 @@ class SimBoard:
         library = Path(library)
         if not library.exists():
             raise SimError(f"{library}: no host-sim firmware (build it with: proleg build ROBOT --board host-sim)")
-        fd, copy = tempfile.mkstemp(prefix="proleg-sim-", suffix=".so")
-        os.close(fd)
-        try:
-            shutil.copyfile(library, copy)
-            self._lib = ctypes.CDLL(copy, mode=os.RTLD_LOCAL)
-        except OSError as e:
-            raise SimError(f"{library}: cannot load the simulated board: {e}") from None
-        finally:
-            os.unlink(copy)  # the loaded image stays mapped; nothing is left on disk
+        self._lib = load_private_copy(library, prefix="proleg-sim-", what="the simulated board")
         for name, (args, res) in _SIGNATURES.items():
             try:
                 fn = getattr(self._lib, name)

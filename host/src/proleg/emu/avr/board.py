@@ -17,11 +17,7 @@ file-global), so several boards can run in one process.
 
 from __future__ import annotations
 
-import ctypes
-import os
 import re
-import shutil
-import tempfile
 import time
 from ctypes import POINTER, c_char, c_char_p, c_double, c_int, c_uint8, c_uint16, c_uint32, c_uint64
 from fractions import Fraction
@@ -31,6 +27,7 @@ import numpy as np
 
 from ...errors import SimError
 from ...firmware.boards import Board, load_board
+from ...sim.private_library import load_private_copy
 from .budget import TickBudget, summarize
 from .elf import TickMarkers, find_symbol, symbols, tick_markers
 from .library import harness_library
@@ -99,18 +96,6 @@ def _config_value(elf: Path, name: str) -> str | None:
     return None
 
 
-def _load_private_copy(library: Path) -> ctypes.CDLL:
-    fd, copy = tempfile.mkstemp(prefix="proleg-avr-emu-", suffix=".so")
-    os.close(fd)
-    try:
-        shutil.copyfile(library, copy)
-        return ctypes.CDLL(copy, mode=os.RTLD_LOCAL)
-    except OSError as e:
-        raise SimError(f"{library}: cannot load the avr-emu harness: {e}") from None
-    finally:
-        os.unlink(copy)  # the loaded image stays mapped
-
-
 class AvrEmuBoard:
     """An emulated arduino-nano running one ``firmware.elf``."""
 
@@ -144,7 +129,7 @@ class AvrEmuBoard:
         self.freq = int(self.board_info.clock_hz)
         self._cycles_per_tick = Fraction(self.freq) / Fraction(self.tick_hz).limit_denominator(10**6)
 
-        self._lib = _load_private_copy(harness_library())
+        self._lib = load_private_copy(harness_library(), prefix="proleg-avr-emu-", what="the avr-emu harness")
         for name, (args, res) in _SIGNATURES.items():
             fn = getattr(self._lib, name)
             fn.argtypes, fn.restype = args, res
