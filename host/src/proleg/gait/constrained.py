@@ -195,12 +195,7 @@ class _Search:
             if len(paths) > chunk:
                 stack.append((paths[chunk:], reward[chunk:], sums[chunk:]))
                 paths, reward, sums = paths[:chunk], reward[:chunk], sums[:chunk]
-            cur = paths[:, -1]
-            lo, hi = g.ptr[cur], g.ptr[cur + 1]
-            deg = hi - lo
-            rows = np.repeat(np.arange(len(cur)), deg)
-            first = np.cumsum(deg) - deg
-            edge = lo[rows] + (np.arange(len(rows)) - first[rows])
+            rows, edge = g.out_edges(paths[:, -1])
             nxt = g.dst[edge]
             new_reward = reward[rows] + g.weight[edge]
             new_sums = sums[rows] + np.stack([c.weight[edge] for c in self.c_graph], axis=1) if nc else sums[rows]

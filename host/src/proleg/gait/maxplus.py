@@ -52,6 +52,15 @@ class Graph:
         ptr = np.searchsorted(src, np.arange(n + 1))
         return cls(n, src, dst, w, ptr, src * n + dst)
 
+    def out_edges(self, cur: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every edge leaving each state of ``cur`` (vectorised): (row of ``cur`` it leaves
+        from, edge index), rows ascending, each row's edges in CSR order."""
+        lo, hi = self.ptr[cur], self.ptr[cur + 1]
+        deg = hi - lo
+        rows = np.repeat(np.arange(len(cur)), deg)
+        first = np.cumsum(deg) - deg
+        return rows, lo[rows] + (np.arange(len(rows)) - first[rows])
+
     def edge_weight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Reward of a → b, −∞ where there is no such transition (vectorised)."""
         want = a * self.n + b

@@ -193,9 +193,5 @@ def _closed_walks(
 
 def _expand(g: Graph, cur: np.ndarray, reward: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every one-transition extension: (frontier row, next state, reward so far)."""
-    lo, hi = g.ptr[cur], g.ptr[cur + 1]
-    deg = hi - lo
-    rows = np.repeat(np.arange(len(cur)), deg)
-    first = np.cumsum(deg) - deg
-    edge = lo[rows] + (np.arange(len(rows)) - first[rows])
+    rows, edge = g.out_edges(cur)
     return rows, g.dst[edge], reward[rows] + g.weight[edge]
