@@ -46,6 +46,17 @@ def robots_dir() -> Path:
     return home() / "robots"
 
 
+def display_path(path: str | Path) -> str:
+    """A path as generated files and build records show it: relative to ``home()`` when it is
+    inside it (``robots/paper-r1.toml``), else absolute. Keeps renders byte-identical across
+    checkouts."""
+    p = Path(path).resolve()
+    try:
+        return str(p.relative_to(home()))
+    except ValueError:
+        return str(p)
+
+
 def cache_dir(name: str = "") -> Path:
     """``$PROLEG_CACHE/<name>`` (else ``$XDG_CACHE_HOME/proleg/<name>``, ``~/.cache`` when unset):
     where the simulator and the emulators cache what they build (``sim``, ``avr-emu``...)."""

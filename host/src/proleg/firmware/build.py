@@ -28,7 +28,7 @@ import jinja2
 
 from .. import __version__
 from ..errors import BuildError
-from ..paths import home, templates_dir
+from ..paths import display_path, templates_dir
 from ..robot import Robot
 from .boards import Board, pwm_channel_error
 from .fit import Fit, check_fit
@@ -162,8 +162,8 @@ def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:
         version=__version__,
         robot=robot,
         board=board,
-        robot_file=_display_path(robot.path),
-        board_file=_display_path(board.path),
+        robot_file=display_path(robot.path),
+        board_file=display_path(board.path),
     )
     return files
 
@@ -214,10 +214,10 @@ def build(
         manifest = {
             "generator": f"proleg {__version__}",
             "robot": robot.name,
-            "robot_file": _display_path(robot.path),
+            "robot_file": display_path(robot.path),
             "robot_sha256": _sha256(robot.path),
             "board": board.name,
-            "board_file": _display_path(board.path),
+            "board_file": display_path(board.path),
             "artifact": board.artifact,
             "flash_used": flash_used,
             "ram_used": ram_used,
@@ -298,9 +298,3 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def _display_path(path: Path) -> str:
-    p = Path(path).resolve()
-    try:
-        return str(p.relative_to(home()))
-    except ValueError:
-        return str(p)

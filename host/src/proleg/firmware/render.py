@@ -27,7 +27,7 @@ import jinja2
 
 from .. import __version__
 from ..errors import BoardError, BuildError
-from ..paths import home, templates_dir
+from ..paths import display_path, templates_dir
 from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
 from .placement import place_imus
@@ -204,13 +204,7 @@ def _file_sha256(path: Any) -> str:
 
 
 def _display_path(path: Any) -> str:
-    if path is None:
-        return "(no file)"
-    p = Path(path).resolve()
-    try:
-        return str(p.relative_to(home()))
-    except ValueError:
-        return str(p)
+    return "(no file)" if path is None else display_path(path)
 
 
 def _chunks(values: Sequence[Any], per_line: int = 16) -> list[str]:
