@@ -7,13 +7,12 @@ not with the host's links (which it would otherwise import upward); the host sid
 
 from __future__ import annotations
 
-import threading
-import time
 from typing import Any
 
 import can
 
 from ..protocol.can import DEFAULT_BASE, CanIds, CanToWire, WireToCan
+from .paced import PacedLoop
 
 
 class CanBoardBridge:
@@ -31,8 +30,7 @@ class CanBoardBridge:
         self.step_s = step_s
         self._rx = CanToWire(self.ids, from_host=True)
         self._tx = WireToCan(self.ids, from_host=False)
-        self._thread: threading.Thread | None = None
-        self._running = False
+        self._loop = PacedLoop(self.step, step_s, "proleg-can-bridge")
         self.frames_sent = 0
 
     def step(self, dt: float) -> None:
@@ -54,24 +52,8 @@ class CanBoardBridge:
 
     def start(self, speed: float = 1.0) -> CanBoardBridge:
         """Run ``step`` on a thread, virtual time paced to wall time × ``speed``."""
-        self._running = True
-
-        def run() -> None:
-            t0 = time.monotonic()
-            virtual = 0.0
-            while self._running:
-                self.step(self.step_s)
-                virtual += self.step_s
-                ahead = virtual / speed - (time.monotonic() - t0)
-                if ahead > 0:
-                    time.sleep(ahead)
-
-        self._thread = threading.Thread(target=run, name="proleg-can-bridge", daemon=True)
-        self._thread.start()
+        self._loop.start(speed)
         return self
 
     def stop(self) -> None:
-        self._running = False
-        if self._thread is not None:
-            self._thread.join(2.0)
-            self._thread = None
+        self._loop.stop()

@@ -12,11 +12,11 @@ driver for a firmware that speaks UART).
 
 from __future__ import annotations
 
-import threading
-import time
 from typing import Any
 
 import can
+
+from .paced import PacedLoop
 
 
 class CanPort:
@@ -29,6 +29,7 @@ class CanPort:
         self.bus = bus
         self.frames_in = 0
         self.frames_out = 0
+        self._loop: PacedLoop | None = None
 
     def pump_in(self) -> None:
         """Every frame waiting on the bus into the board's controller."""
@@ -56,24 +57,10 @@ class CanPort:
         """Serve the bus from a thread, virtual time paced to wall time × ``speed`` (so a host in
         another process, e.g. ``proleg console --can`` on a shared ``udp_multicast`` or
         ``socketcan`` bus, talks to the simulated board as to a real one)."""
-        self._running = True
-
-        def run() -> None:
-            t0, virtual = time.monotonic(), 0.0
-            while self._running:
-                self.advance(step_s)
-                virtual += step_s
-                ahead = virtual / speed - (time.monotonic() - t0)
-                if ahead > 0:
-                    time.sleep(ahead)
-
-        self._thread = threading.Thread(target=run, name="proleg-can-port", daemon=True)
-        self._thread.start()
+        self._loop = PacedLoop(self.advance, step_s, "proleg-can-port").start(speed)
         return self
 
     def stop(self) -> None:
-        self._running = False
-        thread = getattr(self, "_thread", None)
-        if thread is not None:
-            thread.join(2.0)
-            self._thread = None
+        if self._loop is not None:
+            self._loop.stop()
+            self._loop = None
