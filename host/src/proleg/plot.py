@@ -1,7 +1,8 @@
 """``proleg plot FILE -o OUT.png``: ψ per limb (by name) against ψ*, robot state (measured
 and target), SMA duty per actuator (by name) and — when the recording has it — displacement,
 over firmware time; faults, E-stops and injected faults as vertical markers on every panel. matplotlib with the Agg backend; written to a temp file and renamed, so a failed plot
-leaves no half-written output.
+leaves no half-written output. ``figure_problem``, ``new_figure`` and ``save_figure`` do that
+for every figure proleg draws (``proleg gait --plot`` too).
 """
 
 from __future__ import annotations
@@ -9,10 +10,47 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
 
 from .errors import LinkError
 from .states import label
 from .record import Recording, read_recording
+
+#: the figure formats proleg writes (matplotlib's Agg backend), chosen by the file's suffix
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
+
+def figure_problem(out: Path) -> str | None:
+    """Why no figure can be written to ``out`` (its suffix, a missing directory), else None."""
+    if out.suffix.lower().lstrip(".") not in FIGURE_FORMATS:
+        return "the file must end in .png, .svg or .pdf"
+    directory = out.parent if str(out.parent) else Path(".")
+    if not directory.is_dir():
+        return f"directory {directory} does not exist"
+    return None
+
+
+def new_figure(width_in: float, height_in: float) -> Any:
+    """A matplotlib ``Figure`` on the Agg backend (no display needed), constrained layout."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width_in, height_in), layout="constrained")
+
+
+def save_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
+    """Write ``fig`` to ``out`` in the format its suffix names, through a temporary file in the
+    same directory renamed over ``out``: a failed write leaves nothing. ``OSError`` propagates."""
+    ext = out.suffix.lower().lstrip(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=f".{ext}", dir=out.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, format=ext, dpi=dpi)
+        os.replace(tmp, out)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
 
 
 def _levels(rec: Recording) -> tuple[int, ...]:
@@ -43,20 +81,12 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     """Plot recording ``path`` into ``out`` (format from its extension: png, svg, pdf)."""
     rec = read_recording(path)
     out = Path(out)
-    ext = out.suffix.lower().lstrip(".")
-    if ext not in ("png", "svg", "pdf"):
-        raise LinkError(f"{out}: plot format must be .png, .svg or .pdf")
-    directory = out.parent if str(out.parent) else Path(".")
-    if not directory.is_dir():
-        raise LinkError(f"{out}: directory {directory} does not exist")
-
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    from matplotlib.figure import Figure
+    problem = figure_problem(out)
+    if problem:
+        raise LinkError(f"{out}: {problem}")
 
     panels = 4 if rec.displacement_mm is not None else 3
-    fig = Figure(figsize=(10, 2.4 * panels), layout="constrained")
+    fig = new_figure(10, 2.4 * panels)
     axes = fig.subplots(panels, 1, sharex=True)
     t = rec.time_s
     colors = [f"C{i}" for i in range(max(rec.limbs, rec.channels))]
@@ -106,13 +136,8 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     axes[-1].set_xlabel("firmware time (s)")
     fig.suptitle(title or f"{rec.meta.robot} {rec.meta.board} — {rec.path.name}".strip())
 
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=f".{ext}", dir=directory)
-    os.close(fd)
     try:
-        fig.savefig(tmp, format=ext, dpi=110)
-        os.replace(tmp, out)
+        save_figure(fig, out, dpi=110)
     except OSError as e:
         raise LinkError(f"cannot write plot {out}: {e.strerror or e}") from None
-    finally:
-        Path(tmp).unlink(missing_ok=True)
     return out

@@ -13,8 +13,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 from ..errors import GaitError
@@ -252,20 +250,14 @@ def _result_json(robot, name: str, r, planar: bool, cycles: int) -> dict:
 def _plot(robot, answers, cycles: int, out: str) -> None:
     """Each answer's gait 0 composed over ``cycles`` passes, in one plane, PNG/SVG/PDF."""
     from ..gait.compose import gait_path
+    from ..plot import figure_problem, new_figure, save_figure
 
     path = Path(out)
-    if path.suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise GaitError(f"--plot {out}: the file must end in .png, .svg or .pdf")
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise GaitError(f"--plot {out}: directory {directory} does not exist")
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    from matplotlib.figure import Figure
-
+    problem = figure_problem(path)
+    if problem:
+        raise GaitError(f"--plot {out}: {problem}")
     t = robot.transitions
-    fig = Figure(figsize=(7, 7), layout="constrained")
+    fig = new_figure(7, 7)
     ax = fig.subplots()
     for i, (name, r) in enumerate(answers):
         if not r.gaits:
@@ -287,14 +279,7 @@ def _plot(robot, answers, cycles: int, out: str) -> None:
     ax.set_title(f"{robot.name}: {cycles} passes of each gait (dots: one pass)")
     ax.grid(True, lw=0.3)
     ax.legend(loc="best", fontsize="small")
-    fd, tmp = tempfile.mkstemp(suffix=path.suffix, dir=directory)
-    os.close(fd)
-    try:
-        fig.savefig(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    save_figure(fig, path)
 
 
 def _print_evaluation(robot, args) -> int:
