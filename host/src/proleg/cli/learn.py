@@ -276,7 +276,8 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
           f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
     extra = est.extra_trials(args.half_width) if args.half_width else None
     head = f"{'transition':>12} {'n':>3} {'mean Δx':>9} {'var':>8} {'interval':>19}"
-    if "dy" in est.components and np.any(est.components["dy"].n > 0):
+    planar = "dy" in est.components and bool(np.any(est.components["dy"].n > 0))
+    if planar:
         head += f" {'mean Δy':>8} {'mean Δθ':>8}"
     if extra is not None:
         head += f" {'more':>5}"
@@ -285,7 +286,7 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
         lab = f"{t.label(a)}->{t.label(b)}"
         ci = "-" if math.isnan(dx.half_width[e]) else f"[{dx.low[e]:.2f}, {dx.high[e]:.2f}]"
         row = f"{lab:>12} {int(dx.n[e]):>3} {_fmt(dx.mean[e]):>9} {_fmt(dx.var[e]):>8} {ci:>19}"
-        if "dy" in est.components and np.any(est.components["dy"].n > 0):
+        if planar:
             row += f" {_fmt(est.components['dy'].mean[e]):>8} {_fmt(est.components['dtheta_deg'].mean[e], 1):>8}"
         if extra is not None:
             row += f" {int(extra[e]):>5}"
