@@ -11,6 +11,7 @@ import pytest
 from proleg.cli import main
 from proleg.cli.number_args import (
     finite_float,
+    gait_index,
     heading_deg,
     int_auto,
     non_negative_float,
@@ -31,6 +32,8 @@ R1 = str(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
         (non_negative_float, "0", 0.0),
         (positive_float, "0.25", 0.25),
         (heading_deg, "-450", -450.0),
+        (gait_index, "0", 0),
+        (gait_index, " User ", 0xFF),
     ],
 )
 def test_each_parser_returns_the_number_it_reads(parse, text, value):
@@ -48,6 +51,8 @@ def test_each_parser_returns_the_number_it_reads(parse, text, value):
         (positive_float, "nan"),
         (positive_float, "-1"),
         (heading_deg, "nan"),
+        (gait_index, "-1"),
+        (gait_index, "first"),
     ],
 )
 def test_each_parser_refuses_what_it_does_not_take(parse, text):
@@ -65,6 +70,8 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["gait", R1, "--heading", "inf"], "argument --heading: expected a finite number, got 'inf'"),
         (["gait", R1, "--rotation-cap-deg", "-1"], "argument --rotation-cap-deg: expected a number >= 0, got '-1'"),
         (["run", R1, "--heading", "north"], "argument --heading: expected a heading in degrees, got 'north'"),
+        (["run", R1, "--gait", "-1"], "argument --gait: expected a gait index ≥ 0, got -1"),
+        (["run", R1, "--gait", "x"], "argument --gait: expected a gait index or 'user', got 'x'"),
         (["run", R1, "--duration", "soon"], "argument --duration: expected a number, got 'soon'"),
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),
         (["learn", R1, "--node", "one"], "argument --node: expected an integer (0x.. for hex), got 'one'"),

@@ -10,15 +10,24 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..protocol.definition import GAIT_USER
+
 
 def positive_int(text: str) -> int:
     """A whole number ≥ 1 (``--max-transitions``, ``--cycles``, ``--repeats``...)."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    v = _int(text, "a whole number")
     if v < 1:
         raise argparse.ArgumentTypeError(f"expected at least 1, got {v}")
+    return v
+
+
+def gait_index(text: str) -> int:
+    """A gait table index ≥ 0, or ``user`` for the LOAD_GAIT sequence (``GAIT_USER``)."""
+    if text.strip().lower() == "user":
+        return GAIT_USER
+    v = _int(text, "a gait index or 'user'")
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
     return v
 
 
@@ -65,5 +74,12 @@ def heading_deg(text: str) -> float:
 def _float(text: str, expected: str) -> float:
     try:
         return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+
+
+def _int(text: str, expected: str) -> int:
+    try:
+        return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None

@@ -17,7 +17,7 @@ from typing import Any
 
 from ..errors import GaitError, LinkError
 from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import heading_deg, int_auto, positive_float
+from .number_args import gait_index, heading_deg, int_auto, positive_float
 
 log = logging.getLogger("proleg")
 
@@ -104,20 +104,6 @@ def check_library_hash(info: Any, robot: Any, fw: Any, where: str) -> None:
         raise LinkError(f"{where}: the board's gait table (hash {info.gait_hash:08x}) is not the one {robot.path} "
                         f"and this gait library give ({want:08x}); build and flash with the same [gaits] library "
                         f"(or --library), or run with --exact-heading to compute and load the gait")
-
-
-def parse_gait(text: str) -> int:
-    from ..protocol.definition import GAIT_USER
-
-    if text.strip().lower() == "user":
-        return GAIT_USER
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a gait index or 'user', got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
-    return v
 
 
 # --------------------------------------------------------------------------- run
@@ -267,7 +253,7 @@ def add_arguments(subparsers: Any) -> None:
     r = subparsers.add_parser("run", help="run a gait on a robot headless: progress on stderr, exit 1 on faults")
     r.add_argument("robot", metavar="ROBOT", type=robot_arg)
     add_link_options(r, sim_takes_robot=False)
-    r.add_argument("--gait", type=parse_gait, default=None, metavar="N",
+    r.add_argument("--gait", type=gait_index, default=None, metavar="N",
                    help="gait index in the firmware's table for the direction, or 'user' (default 0)")
     r.add_argument("--direction", choices=("+x", "-x"), default=None, help="default +x")
     steer = r.add_mutually_exclusive_group()
