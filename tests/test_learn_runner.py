@@ -69,3 +69,44 @@ def test_a_transition_no_piece_can_reach_is_named_before_the_robot_moves(tmp_pat
         with pytest.raises(ExplorationError, match=r"from 000, where the robot rests, no piece within the "
                                                     r"thermal limits .* reaches 111->110"):
             ex.next_piece(t.index("000"), demand)
+
+
+class _Idle:
+    """A board that says nothing (SimLink's duck type)."""
+
+    def write(self, data: bytes) -> None:
+        pass
+
+    def read(self) -> bytes:
+        return b""
+
+    def advance(self, seconds: float) -> None:
+        pass
+
+
+def test_a_rest_on_a_simulated_link_ends_whatever_the_clock_reads(tmp_path):
+    """The simulated link counts whole nanoseconds: a rest whose end fell a fraction of one
+    after the clock's last tick waited for ever (inchworm-3's proof hung in a rest from 7.158 s)."""
+    from proleg.link import RobotClient
+    from proleg.link.sim_link import SimLink
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    link = SimLink(_Idle())
+    client = RobotClient(link)
+    calls = []
+    recv = client.recv
+
+    def counting(timeout=0.0):
+        calls.append(timeout)
+        if len(calls) > 100:
+            raise AssertionError("the rest does not end")
+        return recv(timeout)
+
+    client.recv = counting
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = Explorer(client, robot, log, None)
+        for start_ns in (7_158_000_000, *range(1_000_000, 40_000_000, 1_000_000)):  # 7.158 + 2.25 > 9.408
+            link._t_ns = start_ns
+            calls.clear()
+            ex._rest_on_link(2.25)
+            assert link.clock() == pytest.approx(start_ns / 1e9 + 2.25, abs=1e-6)

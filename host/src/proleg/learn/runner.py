@@ -41,6 +41,8 @@ from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
 
 
+#: seconds of link time that count as "now" when waiting for a moment on the link's clock
+CLOCK_EPS_S = 1e-6
 #: pieces in a row without a transition still to do before ``Explorer.run`` gives up
 STALL_PIECES = 5
 #: random tours ``Explorer.next_piece`` tries for a first piece that makes progress
@@ -108,7 +110,9 @@ class Explorer:
 
     def _rest_on_link(self, seconds: float) -> None:
         end = self._clock() + seconds
-        while self._clock() < end:
+        # stop within CLOCK_EPS_S of the end: a simulated link counts whole nanoseconds, so
+        # a wait shorter than half of one does not advance its clock (this loop then never ended)
+        while end - self._clock() > CLOCK_EPS_S:
             self.client.recv(min(0.2, end - self._clock()))
 
     def measured_state(self) -> int:
@@ -225,7 +229,7 @@ class Explorer:
         try:
             while len(reached) < goal + 1 or pending is not None:
                 now = self._clock()
-                if pending is not None and now >= pending[0] - 1e-9:
+                if pending is not None and now >= pending[0] - CLOCK_EPS_S:
                     _due, t_ev, state, t_seen = pending
                     pending = None
                     pose = self.pose() if self.pose is not None else None
