@@ -57,8 +57,8 @@ class ExplorationError(RuntimeError):
 class Progress:
     done: int          # trials counted toward the goal (at most the goal per transition)
     to_do: int         # trials still needed
-    elapsed_s: float   # link clock since the start
-    eta_s: float       # estimated time left at the pace so far
+    elapsed_s: float   # wall-clock seconds since the start (a simulated robot runs faster than real time)
+    eta_s: float       # estimated wall-clock time left at the pace so far
 
 
 def _closing_gait(robot: Robot, piece: Piece, max_steps: int) -> tuple[int, ...]:
@@ -101,7 +101,7 @@ class Explorer:
         self.ask = ask
         self.on_progress = on_progress
         self._rest = rest or self._rest_on_link
-        self._t0 = self._clock()
+        self._t0 = _time.monotonic()
         self._trials0 = len(log.trials)  # the pace counts this run's trials only (a resumed log)
         self.pieces_run = 0
 
@@ -197,17 +197,21 @@ class Explorer:
                 f"max_on_ms, min_cooldown_ms; the transition durations) reaches {', '.join(left)}")
         return best
 
-    def _report(self) -> None:
-        if self.on_progress is None:
-            return
+    def tally(self) -> tuple[int, int]:
+        """(trials recorded toward the goal, trials still to do); transitions no closed tour
+        can make are left out of both."""
         t = self.robot.transitions
         goal = self.goal if self.goal is not None else np.full(t.n_transitions, self.repeats)
         for a, b in exploration(t, 1).uncoverable:
             goal = np.where(np.arange(t.n_transitions) == t.lookup(a, b), 0, goal)
         have = counts(t, self.log.trials)
-        todo = int(np.maximum(0, goal - have).sum())
-        done = int(np.minimum(goal, have).sum())
-        el = self._clock() - self._t0
+        return int(np.minimum(goal, have).sum()), int(np.maximum(0, goal - have).sum())
+
+    def _report(self) -> None:
+        if self.on_progress is None:
+            return
+        done, todo = self.tally()
+        el = _time.monotonic() - self._t0
         pace = el / max(1, len(self.log.trials) - self._trials0)
         self.on_progress(Progress(done, todo, el, pace * todo))
 
