@@ -64,3 +64,27 @@ def test_two_trials_each_already_find_the_four_limb_caterpillars_best_gait(tmp_p
     _robot, _truth, est, eff = _learn("caterpillar-4", 2, tmp_path)
     acc = accuracy(eff, est)
     assert acc.sign == 1.0 and acc.gait_ratio >= 0.95, acc
+
+
+@pytest.mark.parametrize("name", ["paper-r1", "caterpillar-4"])
+def test_a_truth_file_merges_its_noise_into_the_robots_own_plant_table(name, tmp_path):
+    """caterpillar-4 has a [plant] table (with step_mm = 3): the truth file must set the keys
+    there, not add a second [plant] (a TOML error); paper-r1 has none: one is added."""
+    import tomllib
+
+    robot = load_robot(ROBOTS / f"{name}.toml")
+    path = write_truth(robot, tmp_path / "truth.toml", noise_mm=0.7)
+    text = path.read_text()
+    assert text.count("[plant]") == 1
+    plant = tomllib.loads(text)["plant"]
+    assert plant["step_mm"] == 1 and plant["noise_mm"] == 0.7
+    original = tomllib.loads((ROBOTS / f"{name}.toml").read_text()).get("plant", {})
+    assert {k: v for k, v in plant.items() if k not in ("step_mm", "noise_mm")} == \
+        {k: v for k, v in original.items() if k not in ("step_mm", "noise_mm")}
+    truth = load_robot(path)
+    t, tt = robot.transitions, truth.transitions
+    assert truth.units == "mm" and truth.plant.noise_mm == 0.7
+    assert (t.src.tolist(), t.dst.tolist()) == (tt.src.tolist(), tt.dst.tolist())
+    step = robot.plant.step_mm if robot.units == "steps" else 1.0
+    assert np.all(np.abs(tt.reward - t.reward * step) <= 0.1 * np.abs(t.reward * step) + 1e-3)
+    assert np.any(tt.reward != t.reward * step)  # moved, hidden from a learner that knows the file

@@ -25,19 +25,9 @@ REPEATS = 5
 
 def _truth_file(tmp: Path) -> Path:
     """paper-r1 with its matrix in mm (4 mm per step, each entry ±10 %), noise per transition."""
-    robot = load_robot(R1)
-    rng = np.random.default_rng(15)
-    reward, allowed = robot.transitions.dense()
-    mm = reward * 4.0 * (1 + 0.1 * rng.uniform(-1, 1, reward.shape))
-    rows = ",\n".join("  [" + ", ".join(f"{v:.3f}" if allowed[a, b] or a == b else '"x"' for b, v in enumerate(row)) + "]"
-                      for a, row in enumerate(mm))
-    text = R1.read_text().replace('units = "steps"', 'units = "mm"')
-    start = text.index("matrix = [")
-    end = text.index("\n]\n", start) + 2
-    text = text[:start] + f"matrix = [\n{rows},\n]" + text[end:] + f"\n[plant]\nstep_mm = 1.0\nnoise_mm = {NOISE_MM}\n"
-    out = tmp / "truth.toml"
-    out.write_text(text)
-    return out
+    from proleg.learn.truth import write_truth
+
+    return write_truth(R1, tmp / "truth.toml", noise_mm=NOISE_MM)
 
 
 @pytest.fixture(scope="module")
