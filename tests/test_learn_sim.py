@@ -179,3 +179,16 @@ def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
     for tr in with_motion:
         truth = sum(p.reward_mm for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05)
         assert tr.dx == pytest.approx(truth, abs=0.2)
+
+
+def test_a_fault_during_exploration_is_told_by_name_and_what_to_do(tmp_path):
+    from proleg.learn.runner import ExplorationError, Explorer, simulated_robot
+
+    robot = load_robot(R1)
+    sim, client, pose = simulated_robot(robot, seed=1)
+    with client, TrialLog(tmp_path / "t.jsonl") as log:
+        client.connect()
+        sim.inject("dead-actuator:sma-right")
+        with pytest.raises(ExplorationError, match=r"the robot stopped: FAULT SMA_ON_LIMIT on sma-right "
+                                                    r"\(firmware time [\d.]+s\); look at the robot"):
+            Explorer(client, robot, log, pose, repeats=2, seed=1).run()

@@ -261,8 +261,13 @@ class Explorer:
                     continue
                 kind = int(msg.kind)
                 if kind in (EventKind.FAULT, EventKind.ESTOP) or (kind == EventKind.GAIT_STOPPED and int(msg.code) != 0):
-                    raise ExplorationError(f"the robot stopped: {EventKind(kind).name} code {int(msg.code)} "
-                                           f"detail {int(msg.detail)}")
+                    from ..console.names import RobotNames, describe_event
+
+                    what = describe_event(msg.fields, RobotNames.for_robot(self.robot), t.label).strip()
+                    hint = ("; look at the robot (proleg console), then clear the fault (key c there)"
+                            if kind in (EventKind.FAULT, EventKind.ESTOP) else "")
+                    when, _, what = what.partition(" ")
+                    raise ExplorationError(f"the robot stopped: {what} (firmware time {when}){hint}")
                 if kind != EventKind.STATE_REACHED:
                     continue
                 state = int(msg.detail)
