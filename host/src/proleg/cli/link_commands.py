@@ -52,6 +52,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         check_suffix(record)  # reject an unknown extension before opening anything
     if udp is not None:
         parse_endpoint(udp)
+    timed = [parse_injection(spec) for spec in inject]  # a mistake fails before anything is opened
     out = out or sys.stdout
     err = err or sys.stderr
     robot = None
@@ -63,7 +64,6 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                               bitrate=bitrate), baudrate=baudrate, speed=1.0)
     if robot is None:
         robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
-    timed = [parse_injection(spec) for spec in inject]
     if timed and not hasattr(getattr(link, "board", None), "inject"):
         link.close()
         raise SimError("--inject needs --sim ROBOT (faults are injected into the simulated robot)")
