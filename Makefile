@@ -52,7 +52,7 @@ demo: $(STAMP) toolchains
 EMU_TARGETS := avr-emu arm-emu
 
 test: $(STAMP) toolchains
-	$(BIN)/python -m pytest -n 2 -q
+	$(BIN)/python -m pytest -n 2 -q -m "not long"
 	@for t in $(EMU_TARGETS); do \
 	  echo "hil_tests on $$t (focused subset)"; \
 	  $(BIN)/python -m pytest -n 2 -q hil_tests --target $$t -m "not emu_long" || exit 1; \
@@ -75,6 +75,7 @@ fuzz: $(STAMP) toolchains
 	PROLEG_ATTACK_EXAMPLES=200 PROLEG_ATTACK_STEPS=40 $(BIN)/python -m pytest -q tests/test_safety_attacker.py
 
 bench: $(STAMP) toolchains
+	$(BIN)/python -m pytest -q -m long tests
 	$(BIN)/python bench/run_all.py
 
 clean:

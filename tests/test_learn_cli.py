@@ -110,3 +110,30 @@ def test_the_progress_bar_counts_and_tells_the_time_left():
     bar.update(3, 12, 75.0)
     assert s.getvalue() == "[##........] 3/12 transitions, 1:15 left\n"
     assert ProgressBar._clock(3725) == "1:02:05"
+
+
+def test_ctrl_c_stops_the_robot_keeps_every_trial_and_says_how_to_go_on(tmp_path, capsys, monkeypatch):
+    from proleg.learn.runner import Explorer
+
+    log = tmp_path / "trials.jsonl"
+    real = Explorer.run_piece
+    calls = []
+
+    def interrupted(self, piece, record=True):
+        calls.append(piece)
+        if len(calls) == 2:  # Ctrl-C as the second piece ends
+            real(self, piece, record)
+            raise KeyboardInterrupt
+        return real(self, piece, record)
+
+    monkeypatch.setattr(Explorer, "run_piece", interrupted)
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2")
+    assert code == 130
+    kept = _lines(log)
+    assert "exploring paper-r1" in err and "Ctrl-C pauses" in err
+    assert f"paused by Ctrl-C (robot stopped): {len(kept)} trials kept in {log}" in err
+    assert "run the same command to go on" in err and "Traceback" not in err
+    monkeypatch.setattr(Explorer, "run_piece", real)
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2")
+    assert code == 0 and _lines(log)[:len(kept)] == kept and "exploration done" in err
+    assert "add --out LEARNED.toml" in err

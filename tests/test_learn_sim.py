@@ -25,19 +25,9 @@ REPEATS = 5
 
 def _truth_file(tmp: Path) -> Path:
     """paper-r1 with its matrix in mm (4 mm per step, each entry ±10 %), noise per transition."""
-    robot = load_robot(R1)
-    rng = np.random.default_rng(15)
-    reward, allowed = robot.transitions.dense()
-    mm = reward * 4.0 * (1 + 0.1 * rng.uniform(-1, 1, reward.shape))
-    rows = ",\n".join("  [" + ", ".join(f"{v:.3f}" if allowed[a, b] or a == b else '"x"' for b, v in enumerate(row)) + "]"
-                      for a, row in enumerate(mm))
-    text = R1.read_text().replace('units = "steps"', 'units = "mm"')
-    start = text.index("matrix = [")
-    end = text.index("\n]\n", start) + 2
-    text = text[:start] + f"matrix = [\n{rows},\n]" + text[end:] + f"\n[plant]\nstep_mm = 1.0\nnoise_mm = {NOISE_MM}\n"
-    out = tmp / "truth.toml"
-    out.write_text(text)
-    return out
+    from proleg.learn.truth import write_truth
+
+    return write_truth(R1, tmp / "truth.toml", noise_mm=NOISE_MM)
 
 
 @pytest.fixture(scope="module")
@@ -83,10 +73,11 @@ def test_at_least_90_percent_of_the_means_are_within_their_95_percent_interval(l
     robot, truth, trials, sim, _tmp = learned
     est = estimate(robot.transitions, trials)
     eff = _effective_truth(robot, truth, trials, sim)
-    # the single-limb transitions are exactly the truth file's entries
+    # the single-limb transitions are the truth file's entries (up to a limb that falls, rises
+    # again and falls within one trial: the plant then adds all three of its changes)
     single = [sum(x != y for x, y in zip(robot.transitions.label(a), robot.transitions.label(b))) == 1
               for a, b in zip(robot.transitions.src, robot.transitions.dst)]
-    assert np.allclose(eff[single], truth.transitions.reward[single])
+    assert np.allclose(eff[single], truth.transitions.reward[single], atol=0.25)
     inside = np.abs(est.dx.mean - eff) <= est.dx.half_width
     assert inside.mean() >= 0.9, (est.dx.mean, eff, est.dx.half_width)
 
@@ -188,3 +179,16 @@ def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
     for tr in with_motion:
         truth = sum(p.reward_mm for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05)
         assert tr.dx == pytest.approx(truth, abs=0.2)
+
+
+def test_a_fault_during_exploration_is_told_by_name_and_what_to_do(tmp_path):
+    from proleg.learn.runner import ExplorationError, Explorer, simulated_robot
+
+    robot = load_robot(R1)
+    sim, client, pose = simulated_robot(robot, seed=1)
+    with client, TrialLog(tmp_path / "t.jsonl") as log:
+        client.connect()
+        sim.inject("dead-actuator:sma-right")
+        with pytest.raises(ExplorationError, match=r"the robot stopped: FAULT SMA_ON_LIMIT on sma-right "
+                                                    r"\(firmware time [\d.]+s\); look at the robot"):
+            Explorer(client, robot, log, pose, repeats=2, seed=1).run()

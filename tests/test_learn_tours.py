@@ -153,8 +153,10 @@ def test_a_partial_demand_is_joined_into_one_closed_tour_from_the_start_state():
 
 
 @settings(max_examples=80, deadline=None)
-@given(st.integers(2, 3), st.integers(1, 3), st.floats(1.0, 4.0), st.integers(0, 1000))
-def test_no_coil_is_planned_on_longer_than_its_limit(limbs, r, coil_s, seed):
+@given(st.integers(2, 3), st.integers(1, 3), st.floats(1.0, 4.0), st.floats(0.5, 4.0), st.integers(0, 1000))
+def test_no_coil_is_planned_past_the_firmwares_on_time_budget(limbs, r, coil_s, payback, seed):
+    """Oracle: the firmware's debt budget (docs/safety.md) replayed transition by transition:
+    a coil is on while it raises its limb, every second not on pays back ``payback`` s."""
     from proleg import states
 
     levels = (2,) * limbs
@@ -162,13 +164,44 @@ def test_no_coil_is_planned_on_longer_than_its_limit(limbs, r, coil_s, seed):
     src = [a for a in range(n) for b in range(n) if a != b]
     dst = [b for a in range(n) for b in range(n) if a != b]
     table = TransitionTable.from_edges(levels, src, dst, np.zeros(len(src)))
-    limits = PieceLimits(max_transitions=20, coil_of_limb=tuple(range(limbs)), max_coil_on_s=coil_s)
+    limits = PieceLimits(max_transitions=20, coil_of_limb=tuple(range(limbs)), max_coil_on_s=coil_s,
+                         coil_payback=payback)
     for tour in exploration(table, r, seed=seed).tours:
         for p in split(table, tour.states, limits):
             if len(p.transitions) == 1:
                 continue
-            run = [0.0] * limbs
-            for _a, b in p.transitions:
-                up = states.limb_levels(b, levels)
-                run = [x + 1.0 if u else 0.0 for x, u in zip(run, up)]
-                assert max(run) <= coil_s
+            debt = [0.0] * limbs
+            for a, b in p.transitions:
+                up_a, up_b = states.limb_levels(a, levels), states.limb_levels(b, levels)
+                debt = [x + 1.0 if y > w else max(0.0, x - payback) for x, w, y in zip(debt, up_a, up_b)]
+                assert max(debt) <= coil_s + 1e-9
+
+
+def test_a_held_limb_is_not_on_time_so_inchworm_3_reaches_every_state_in_one_piece_from_rest():
+    """The regression behind issue 15's endless inchworm-3 exploration: counting a held limb as
+    on-time made every state with three limbs up unreachable from the rest state 000."""
+    from proleg.learn.pieces import limits_for
+    from proleg.learn.tours import _bfs_path
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    succ = [[b for a2, b in zip(t.src.tolist(), t.dst.tolist()) if a2 == a] for a in range(t.n_states)]
+    limits = limits_for(robot)
+    for a, b in zip(t.src.tolist(), t.dst.tolist()):
+        way = _bfs_path(t.n_states, succ, 0, a) + [b]
+        pieces = split(t, way, limits)
+        assert len(pieces) == 1 and pieces[0].loadable, (t.label(a), t.label(b), pieces)
+
+
+def test_a_piece_is_loadable_when_its_way_back_fits_the_gait_table():
+    """Pieces need not end next to their start: the runner closes them by the shortest way
+    back, so ``split`` keeps them long (the old rule cut them to a direct closing step)."""
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    walk = [t.index(s) for s in ("000", "100", "110", "111")]
+    (piece,) = split(t, walk, PieceLimits())
+    assert piece.loadable and piece.states == tuple(walk)
+    g = piece.gait()
+    assert g[:4] == tuple(walk) and all(t.lookup(a, b) is not None for a, b in zip(g, g[1:] + g[:1]))
+    short = split(t, walk, PieceLimits(max_gait_steps=4))  # 000 100 110 111 + 2 back > 4 states
+    assert len(short) > 1 and all(p.loadable and len(p.gait()) <= 4 for p in short)

@@ -198,6 +198,12 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str) -> None:
     with client:
         ex = Explorer(client, robot, trial_log, pose, repeats=args.repeats, source=source, seed=args.seed,
                       on_progress=progress, ask=ask)
+        done, todo = ex.tally()
+        lim = ex.limits
+        log.info("learn: exploring %s on %s: %d allowed transitions × %d = %d trials, %d to do; pieces of up to "
+                 "%d transitions, %.1f s rest after each; Ctrl-C pauses (nothing recorded is lost: run the same "
+                 "command to go on)", robot.name, client.link.description, t.n_transitions, args.repeats,
+                 done + todo, todo, lim.max_transitions, lim.rest_s)
         try:
             if args.adaptive:
                 _adaptive(ex, args, t, trial_log, estimate, adaptive_demand)
@@ -209,9 +215,25 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str) -> None:
         except ExplorationError as e:
             raise LinkError(f"learn: {e} (the {len(trial_log.trials)} trials recorded are kept in {args.log}; "
                             "run the same command to resume)") from None
+        except KeyboardInterrupt:
+            if bar is not None:
+                bar.close()
+            from ..console.leave import stop_robot
+
+            what = stop_robot(client)  # run_piece stops it too; a Ctrl-C may have cut that short
+            done, todo = ex.tally()
+            print(f"proleg: learn: paused by Ctrl-C ({what}): {len(trial_log.trials)} trials kept in {args.log}, "
+                  f"{done} of {done + todo} done; run the same command to go on", file=sys.stderr, flush=True)
+            raise
         finally:
             if bar is not None:
                 bar.close()
+        done, todo = ex.tally()
+        if todo == 0 or args.max_pieces is None:
+            log.info("learn: exploration done: %d trials in %s", len(trial_log.trials), args.log)
+        else:
+            log.info("learn: stopped after %d pieces (--max-pieces): %d of %d done; run the same command "
+                     "to go on", ex.pieces_run, done, done + todo)
 
 
 def _counts(table, trials) -> np.ndarray:
@@ -313,4 +335,9 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
             raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
         path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True)
         print(f"wrote {path}", file=out)
+        log.info("learn: next: proleg gait %s shows the best gaits of the learned matrix; proleg build/flash %s "
+                 "puts them on the robot", path, path)
+    elif int(dx.n.sum()):
+        log.info("learn: next: add --out LEARNED.toml to write the robot file with the learned matrix (the "
+                 "trials are in %s; nothing is explored again)", args.log)
     return 0

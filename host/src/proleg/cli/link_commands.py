@@ -23,7 +23,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                  record: str | None = None, plain: bool = False, duration_s: float | None = None,
                  timeout: float = 0.5, out: TextIO | None = None, fmt: str = "text",
                  udp: str | None = None, udp_format: str = "plotjuggler", bitrate: int | None = None,
-                 force: bool = False, leave_running: bool = False, err: TextIO | None = None) -> int:
+                 force: bool = False, leave_running: bool = False, err: TextIO | None = None,
+                 replan: bool = True, inject: Sequence[str] = ()) -> int:
     """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame
     (``fmt="jsonl"``: one JSON object per frame, the recordings' field names); ``udp`` streams
     every frame to PlotJuggler or Teleplot.
@@ -31,8 +32,17 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     With ``robot_file`` the board's INFO must match it (robot name, gait table hash, build id;
     ``force`` overrides). Leaving — q, Ctrl-C, the window closed, the link lost, ``duration_s``
     over — sends STOP (ESTOP if unacknowledged) unless ``leave_running``; what happened is
-    written to ``err``."""
+    written to ``err``.
+
+    ``replan`` (with a robot file, or the simulated robot's): after a limb loss, load and
+    start the best gait of what the robot can still do (``proleg.console.replan``), telling
+    each step. ``inject`` (simulator only): faults ``FAULT[+T]`` injected T simulated seconds
+    after the start (``proleg.console.inject``)."""
     from ..console import ConsoleApp, LimbView, RobotNames, run_plain
+    from ..console.app import replan_state
+    from ..console.inject import Injector, parse_injection
+    from ..console.replan import ReplanWorker
+    from ..errors import SimError
     from ..console.identity import check_identity
     from ..console.leave import hangup_as_exception, stop_robot
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
@@ -42,6 +52,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         check_suffix(record)  # reject an unknown extension before opening anything
     if udp is not None:
         parse_endpoint(udp)
+    timed = [parse_injection(spec) for spec in inject]  # a mistake fails before anything is opened
     out = out or sys.stdout
     err = err or sys.stderr
     robot = None
@@ -53,6 +64,9 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                               bitrate=bitrate), baudrate=baudrate, speed=1.0)
     if robot is None:
         robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
+    if timed and not hasattr(getattr(link, "board", None), "inject"):
+        link.close()
+        raise SimError("--inject needs --sim ROBOT (faults are injected into the simulated robot)")
     app: ConsoleApp | None = None
 
     def hang_up() -> None:
@@ -79,6 +93,15 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             if plain or fmt == "jsonl" or not out.isatty():
                 from ..states import label
 
+                def say(text: str) -> None:
+                    print(f"proleg: {text}", file=err, flush=True)
+
+                if robot is not None:  # without a robot file there is nothing to replan with: stay quiet
+                    say(replan_state(replan, True))
+                if timed:
+                    listeners.append(Injector(link.board, timed, say))  # type: ignore[attr-defined]
+                if replan and robot is not None:
+                    listeners.append(ReplanWorker(robot, client, say))
                 if fmt == "jsonl":
                     listeners.append(JsonlPrinter(meta, out, telemetry_only=False))
                 try:
@@ -89,7 +112,9 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             else:
                 limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
                 app = ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners,
-                                 names=RobotNames.for_robot(robot))
+                                 names=RobotNames.for_robot(robot), robot=robot, replan=replan)
+                if timed:
+                    app.extra_listeners.append(Injector(link.board, timed, app.host_says))  # type: ignore[attr-defined]
                 app.run()
                 if app.model.link_error is not None:
                     raise app.model.link_error
@@ -165,10 +190,18 @@ def add_arguments(subparsers: Any) -> None:
                    help="connect even when the board's INFO does not match --robot (name, gait hash, build id)")
     c.add_argument("--leave-running", action="store_true",
                    help="do not STOP the robot when the console ends (default: STOP, ESTOP if unanswered)")
+    c.add_argument("--no-replan", dest="replan", action="store_false",
+                   help="do not replan after an actuator loss (default, with --robot or --sim: when a gait stops "
+                        "on a fault naming an actuator, load and start the best gait of what the robot can "
+                        "still do; docs/learning.md)")
+    c.add_argument("--inject", action="append", default=[], metavar="FAULT",
+                   help="with --sim: inject a fault, optionally T simulated seconds after the start "
+                        "(e.g. dead-actuator:sma-right+10; the names of proleg sim --inject)")
     c.set_defaults(run=lambda a: console_main(
         port=a.port, can_channel=a.can, interface=a.interface, node=a.node, sim=a.sim, robot_file=a.robot,
         baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration, fmt=a.format,
-        udp=a.udp, udp_format=a.udp_format, bitrate=a.bitrate, force=a.force, leave_running=a.leave_running))
+        udp=a.udp, udp_format=a.udp_format, bitrate=a.bitrate, force=a.force, leave_running=a.leave_running,
+        replan=a.replan, inject=a.inject))
 
     p = subparsers.add_parser("plot", help="plot a recording: ψ vs ψ*, states, SMA duty, displacement")
     p.add_argument("record_file", metavar="FILE", help="recording (.csv, .jsonl or .mcap) from --record")

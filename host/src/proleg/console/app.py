@@ -11,6 +11,12 @@ q (or Ctrl-C) quit. ``g`` offers only the gaits INFO says the firmware has (and 
 a user gait is loaded). Events name their kind, fault, stop reason, limb and actuator
 (``proleg.console.names``). The layout fits an 80×24 terminal. Leaving stops the robot: that
 is ``console_main``'s job (``proleg.console.leave``), whatever ended the UI.
+
+Given the robot file (``robot``), the console replans after a limb loss unless told not to
+(``replan=False``, ``--no-replan``): when a gait stops on a fault that names an actuator and
+the firmware did not fall back by itself, ``proleg.console.replan.ReplanWorker`` loads and
+starts the best gait of what the robot can still do. Each step shows in the events panel as
+``host: …`` and in the status line; the "link · host" panel says whether replanning is on.
 """
 
 from __future__ import annotations
@@ -36,7 +42,9 @@ from ..states import label as state_label
 from ..states import limb_levels
 from ..link.client import Received, RobotClient, RobotInfo
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
+from ..robot import Robot
 from .names import RobotNames, describe_event, direction_text, gait_text, step_text
+from .replan import ReplanWorker
 
 BAR_WIDTH = 24
 
@@ -83,6 +91,11 @@ class ConsoleModel:
     def on_error(self, exc: Exception) -> None:
         self.error = str(exc)
         self.link_error = exc
+
+    def note(self, text: str) -> None:
+        """A line from the host itself (replanning, injected faults) in the events panel."""
+        with self._lock:
+            self.events.append(text)
 
     def frame_rate(self, window_s: float = 2.0) -> float:
         with self._lock:
@@ -137,7 +150,8 @@ class ConsoleApp(App[None]):
     ]
 
     def __init__(self, client: RobotClient, *, limbs: Sequence[LimbView] = (), levels: Sequence[int] = (),
-                 listeners: Sequence[Listener] = (), refresh_s: float = 0.1, names: RobotNames | None = None):
+                 listeners: Sequence[Listener] = (), refresh_s: float = 0.1, names: RobotNames | None = None,
+                 robot: Robot | None = None, replan: bool = True):
         super().__init__()
         self.client = client
         self.limb_views = list(limbs)
@@ -151,6 +165,11 @@ class ConsoleApp(App[None]):
         self.direction = Direction.PLUS_X
         self.status = ""
         self.notifier: Notifier | None = None
+        self.robot = robot
+        self.replan = replan and robot is not None
+        #: what the counters panel says about replanning (``replan_state``)
+        self.replan_state = replan_state(replan, robot is not None)
+        self.replanner: ReplanWorker | None = None
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -169,10 +188,13 @@ class ConsoleApp(App[None]):
         info = self.client.info
         self.title = f"proleg console — {info.robot_name if info else self.client.link.description}"
         for wid, title in (("limbs", "limbs: ψ vs ψ*"), ("state", "robot state"), ("duty", "SMA duty"),
-                           ("events", "events & faults"), ("counters", "link")):
+                           ("events", "events & faults"), ("counters", "link · host")):
             self.query_one(f"#{wid}", Static).border_title = title
+        if self.replan and self.robot is not None:
+            self.replanner = ReplanWorker(self.robot, self.client, say=self.host_says)
         self.notifier = Notifier(self.client, [CallbackListener(self.model.on_message, self.model.on_error),
-                                               *self.extra_listeners])
+                                               *self.extra_listeners,
+                                               *([self.replanner] if self.replanner is not None else [])])
         self.refresh_view()
         self._timer = self.set_interval(self.refresh_s, self.refresh_view)
 
@@ -181,7 +203,12 @@ class ConsoleApp(App[None]):
         if timer is not None:
             timer.stop()
         if self.notifier is not None:
-            self.notifier.stop()
+            self.notifier.stop()  # stops the listeners too, the replan worker among them
+
+    def host_says(self, text: str) -> None:
+        """A line from the host (the replan worker's thread): events panel and status line."""
+        self.model.note(f"host: {text}")
+        self.status = text
 
     # ------------------------------------------------------------------ view
     def _n_limbs(self, tel: dict | None) -> int:
@@ -283,7 +310,8 @@ class ConsoleApp(App[None]):
             f"telemetry {self.model.frame_rate():5.1f} fps\n"
             f"frames ok {st.frames_ok}\n"
             f"lost {st.lost} · corrupt {st.corrupt}\n"
-            f"reconnects {st.reconnects} · timeouts {st.timeouts}"
+            f"reconnects {st.reconnects} · timeouts {st.timeouts}\n"
+            f"{self.replan_state}"
         )
         self.query_one("#counters", Static).update(counters)
         status = self.model.error or self.status
@@ -338,6 +366,15 @@ class ConsoleApp(App[None]):
     def action_direction(self) -> None:
         self.direction = Direction.MINUS_X if self.direction == Direction.PLUS_X else Direction.PLUS_X
         self.refresh_view()
+
+
+def replan_state(replan: bool, have_robot: bool) -> str:
+    """One line: does the console replan after a limb loss, and if not, why not."""
+    if not replan:
+        return "replan: off (--no-replan)"
+    if not have_robot:
+        return "replan: off (needs --robot)"
+    return "replan on limb loss: on"
 
 
 def _prod(levels: Sequence[int]) -> int:

@@ -13,10 +13,17 @@ the firmware did not fall back by itself (EVENT FALLBACK: the build's fallback, 
 fallback), it marks the transitions that need the lost actuator forbidden, recomputes the
 best gait with the gait engine, and sends SET_ACTUATOR_MAP, LOAD_GAIT, CLEAR(FAULTS) and
 START of the user gait; each step is told by name through ``say``.
+
+Threads: ``on_message`` may run on a ``Notifier``'s thread while ``poll`` runs on another
+(the console's replan worker, ``proleg.console.replan``): the state they share is guarded
+by a lock, and ``poll`` sends its commands outside it. ``due()`` says, without blocking,
+whether ``poll`` would act now. ``direction=None`` replans for the direction the stopped
+gait ran in (from TELEMETRY), as the console needs; ``proleg run`` gives its own.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -24,7 +31,7 @@ from ..errors import LinkError
 from ..limbloss import Fallback, dead_table, fallback
 from ..link.client import Received, RobotClient
 from ..link.listeners import Listener
-from ..protocol.definition import GAIT_USER, ClearWhat, EventKind, FaultCode, StopReason
+from ..protocol.definition import GAIT_USER, ClearWhat, Direction, EventKind, FaultCode, Flag, StopReason
 from ..robot import Robot
 from ..transitions import TransitionTable
 
@@ -82,18 +89,21 @@ def replan(robot: Robot, actuator: str, direction: str = "+x") -> Replan:
 
 @dataclass
 class Replanner(Listener):
-    """Replan a running gait after an actuator loss (module doc). ``direction``: the run's."""
+    """Replan a running gait after an actuator loss (module doc). ``direction``: the run's,
+    or None to follow the running gait's."""
 
     robot: Robot
     client: RobotClient
-    direction: str = "+x"
+    direction: str | None = "+x"
     say: Callable[[str], None] = print
     actions: list[str] = field(default_factory=list)   # what it did, one line each
     _suspect: str | None = None
     _fault: tuple[int, int] | None = None
     _stopped_at: float | None = None
     _fell_back: bool = False
+    _ran: str = "+x"                                    # the direction the gait ran in (telemetry)
     _done: set[str] = field(default_factory=set)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def _tell(self, text: str) -> None:
         self.actions.append(text)
@@ -101,55 +111,77 @@ class Replanner(Listener):
 
     def on_message(self, rx: Received) -> None:
         m = rx.message
+        if m.name == "TELEMETRY":
+            if m.flags & Flag.RUNNING:
+                self._ran = "+x" if m.direction == Direction.PLUS_X else "-x"
+            return
         if m.name != "EVENT":
             return
-        if m.kind == EventKind.FAULT and m.code in (FaultCode.STATE_TIMEOUT, FaultCode.SMA_ON_LIMIT):
-            self._fault = (m.code, m.detail)
-        elif m.kind == EventKind.SUSPECT:
-            name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else None
-            self._suspect = name
-            self._tell(f"firmware suspects {name or 'no actuator'} "
-                       f"(transition {describe_transition(self.robot, m.detail)} failed)")
-        elif m.kind == EventKind.GAIT_STOPPED and m.code == StopReason.FAULT:
-            self._stopped_at = rx.time
-            self._fell_back = False
-        elif m.kind == EventKind.FALLBACK:
-            name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else str(m.code)
-            fb = fallback(self.robot, m.code, self.direction) if m.code < len(self.robot.actuators) else None
-            self._fell_back = True
-            self._stopped_at = None
-            self._done.add(name)
-            self._tell(f"firmware fell back by itself: {fb.describe(self.robot) if fb else name}")
+        told = None
+        with self._lock:
+            if m.kind == EventKind.FAULT and m.code in (FaultCode.STATE_TIMEOUT, FaultCode.SMA_ON_LIMIT):
+                self._fault = (m.code, m.detail)
+            elif m.kind == EventKind.SUSPECT:
+                name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else None
+                self._suspect = name
+                told = (f"firmware suspects {name or 'no actuator'} "
+                        f"(transition {describe_transition(self.robot, m.detail)} failed)")
+            elif m.kind == EventKind.GAIT_STOPPED and m.code == StopReason.FAULT:
+                self._stopped_at = rx.time
+                self._fell_back = False
+            elif m.kind == EventKind.FALLBACK:
+                name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else str(m.code)
+                ok = m.code < len(self.robot.actuators)
+                fb = fallback(self.robot, m.code, self._direction()) if ok else None
+                self._fell_back = True
+                self._stopped_at = None
+                self._done.add(name)
+                told = f"firmware fell back by itself: {fb.describe(self.robot) if fb else name}"
+        if told is not None:
+            self._tell(told)
+
+    def _direction(self) -> str:
+        return self.direction or self._ran
+
+    def due(self) -> bool:
+        """Whether ``poll`` would act now: the gait stopped on a fault SETTLE_S ago and the
+        firmware did not fall back by itself."""
+        with self._lock:
+            return (self._stopped_at is not None and not self._fell_back
+                    and self.client.link.clock() - self._stopped_at >= SETTLE_S)
 
     def poll(self) -> None:
         """Act once the stream has been quiet for SETTLE_S after the gait stopped on a fault."""
-        if self._stopped_at is None or self._fell_back:
-            return
-        if self.client.link.clock() - self._stopped_at < SETTLE_S:
-            return
-        self._stopped_at = None
-        actuator = self._suspect
-        if actuator is None and self._fault is not None:
-            actuator = suspect(self.robot, *self._fault)
-        self._suspect, self._fault = None, None
+        with self._lock:
+            if self._stopped_at is None or self._fell_back:
+                return
+            if self.client.link.clock() - self._stopped_at < SETTLE_S:
+                return
+            self._stopped_at = None
+            actuator = self._suspect
+            if actuator is None and self._fault is not None:
+                actuator = suspect(self.robot, *self._fault)
+            self._suspect, self._fault = None, None
+            again = actuator in self._done
+            if actuator is not None:
+                self._done.add(actuator)
+            direction = self._direction()
         if actuator is None:
             self._tell("gait stopped on a fault that names no actuator: not replanning")
             return
-        if actuator in self._done:
+        if again:
             self._tell(f"{actuator} lost again after replanning: giving up")
             return
-        self._done.add(actuator)
-        plan = replan(self.robot, actuator, self.direction)
-        if plan.states is None:
-            self._tell(f"replanning: {plan.reason}")
-            return
+        plan = replan(self.robot, actuator, direction)
         self._tell(f"replanning: {plan.reason}")
+        if plan.states is None:
+            return
         try:
             self.client.request("SET_ACTUATOR_MAP", retries=2, actuators=tuple(plan.actuator_map))
             self.client.load_gait(plan.states[:-1])
             self.client.request("CLEAR", retries=2, what=int(ClearWhat.FAULTS))
-            self.client.request("START", retries=2, gait=GAIT_USER, direction=0 if self.direction == "+x" else 1)
+            self.client.request("START", retries=2, gait=GAIT_USER, direction=0 if direction == "+x" else 1)
         except LinkError as e:
             self._tell(f"replanning failed: {e}")
             return
-        self._tell(f"loaded and started {'→'.join(plan.table.label(s) for s in plan.states)} in {self.direction}")
+        self._tell(f"loaded and started {'→'.join(plan.table.label(s) for s in plan.states)} in {direction}")

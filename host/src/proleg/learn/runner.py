@@ -9,6 +9,13 @@ again after each piece is what makes a run resumable (an interrupted run's log i
 demand already met) and robust to what a piece really did (a timeout, the robot relaxing
 into another state while its coils cool).
 
+The first piece of a random tour may make none of what is still to do (only transitions
+that balance or join the tour): ``next_piece`` tries a few tours, then takes the shortest
+way to a transition still to do, and names the transitions no piece from the rest state
+can reach within the thermal limits. A run whose pieces keep making nothing it needs (the
+robot does not do what was planned) stops after ``STALL_PIECES`` of them with what is
+left, instead of running for ever.
+
 A piece ``p0 → … → pk`` runs as a user gait: LOAD_GAIT of the piece closed by the
 shortest way back to p0 (the firmware accepts closed walks only), START, and STOP once
 the firmware's STATE_REACHED event says ``pk`` was reached the k-th time. Each reached
@@ -34,6 +41,14 @@ from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
 
 
+#: seconds of link time that count as "now" when waiting for a moment on the link's clock
+CLOCK_EPS_S = 1e-6
+#: pieces in a row without a transition still to do before ``Explorer.run`` gives up
+STALL_PIECES = 5
+#: random tours ``Explorer.next_piece`` tries for a first piece that makes progress
+PLAN_TRIES = 8
+
+
 class ExplorationError(RuntimeError):
     """The robot stopped (fault, E-stop, timeout); the log keeps every trial made."""
 
@@ -42,26 +57,27 @@ class ExplorationError(RuntimeError):
 class Progress:
     done: int          # trials counted toward the goal (at most the goal per transition)
     to_do: int         # trials still needed
-    elapsed_s: float   # link clock since the start
-    eta_s: float       # estimated time left at the pace so far
+    elapsed_s: float   # wall-clock seconds since the start (a simulated robot runs faster than real time)
+    eta_s: float       # estimated wall-clock time left at the pace so far
 
 
 def _closing_gait(robot: Robot, piece: Piece, max_steps: int) -> tuple[int, ...]:
+    """The piece closed by its shortest way back (``Piece.gait``), as LOAD_GAIT takes it."""
     t = robot.transitions
-    s = list(piece.states)
-    if s[-1] == s[0]:
-        walk = s[:-1]
-    else:
-        succ: list[list[int]] = [[] for _ in range(t.n_states)]
-        for a, b in zip(t.src.tolist(), t.dst.tolist()):
-            succ[a].append(b)
-        back = _bfs_path(t.n_states, succ, s[-1], s[0])
-        if back is None:
+    s = piece.states
+    if not piece.loadable:
+        if s[-1] != s[0] and _bfs_path(t.n_states, _successors(t), s[-1], s[0]) is None:
             raise ExplorationError(f"no way back from {t.label(s[-1])} to {t.label(s[0])} to close the piece")
-        walk = s + back[1:-1]
-    if len(walk) > max_steps:
-        raise ExplorationError(f"piece needs {len(walk)} gait steps, the firmware takes {max_steps}")
-    return tuple(walk)
+        raise ExplorationError(f"piece {'→'.join(t.label(x) for x in s)} and its way back need more gait steps "
+                               f"than the firmware takes ({max_steps})")
+    return piece.gait()
+
+
+def _successors(t) -> list[list[int]]:
+    succ: list[list[int]] = [[] for _ in range(t.n_states)]
+    for a, b in zip(t.src.tolist(), t.dst.tolist()):
+        succ[a].append(b)
+    return succ
 
 
 class Explorer:
@@ -81,11 +97,11 @@ class Explorer:
         base = limits or limits_for(robot)
         # manual entry (``ask``): one transition per piece, the operator measures while the robot rests
         k = 1 if ask is not None else min(base.max_transitions, self.max_steps - 1)
-        self.limits = replace(base, max_transitions=k)
+        self.limits = replace(base, max_transitions=k, max_gait_steps=self.max_steps)
         self.ask = ask
         self.on_progress = on_progress
         self._rest = rest or self._rest_on_link
-        self._t0 = self._clock()
+        self._t0 = _time.monotonic()
         self._trials0 = len(log.trials)  # the pace counts this run's trials only (a resumed log)
         self.pieces_run = 0
 
@@ -94,7 +110,9 @@ class Explorer:
 
     def _rest_on_link(self, seconds: float) -> None:
         end = self._clock() + seconds
-        while self._clock() < end:
+        # stop within CLOCK_EPS_S of the end: a simulated link counts whole nanoseconds, so
+        # a wait shorter than half of one does not advance its clock (this loop then never ended)
+        while end - self._clock() > CLOCK_EPS_S:
             self.client.recv(min(0.2, end - self._clock()))
 
     def measured_state(self) -> int:
@@ -110,9 +128,12 @@ class Explorer:
         return remaining(self.robot.transitions, self.log.trials, self.repeats)
 
     def run(self, max_pieces: int | None = None) -> list[Trial]:
-        """Explore until done (or ``max_pieces``); returns the trials added by this run."""
+        """Explore until done (or ``max_pieces``); returns the trials added by this run.
+        Raises ``ExplorationError`` when ``STALL_PIECES`` pieces in a row make none of the
+        transitions still to do (the robot does not do what was planned), naming them."""
         added: list[Trial] = []
         t = self.robot.transitions
+        stalled = 0
         while max_pieces is None or self.pieces_run < max_pieces:
             demand = self.to_do()
             ex = exploration(t, 1)  # which transitions any closed tour can make
@@ -121,36 +142,76 @@ class Explorer:
             if demand.sum() == 0:
                 break
             start = self.measured_state()
-            plan = exploration(t, demand=demand, start=start, seed=None if self.seed is None else self.seed + self.pieces_run)
-            tour = next((x for x in plan.tours if x.states[0] == start), None)
-            if tour is None:
-                raise ExplorationError(f"the robot rests in {t.label(start)}, from where the transitions still to do "
-                                       "cannot be reached (see the uncoverable transitions)")
-            piece = split(t, tour.states, self.limits)[0]
+            piece = self.next_piece(start, demand)
+            made = self.run_piece(piece, record=self.ask is None)
             if self.ask is None:
-                added += self.run_piece(piece)
+                added += made
             else:
-                for tr in self.run_piece(piece, record=False):
+                for tr in made:
                     asked = manual_trial(tr.src, tr.dst, tr.t_start, tr.t_end, ask=self.ask, units=self.robot.units)
                     if asked is not None:
                         self.log.append(asked)
                         added.append(asked)
+            progress = any(demand[t.lookup(t.index(tr.src), t.index(tr.dst))] > 0 for tr in made)
+            stalled = 0 if progress else stalled + 1
             self.pieces_run += 1
             self._report()
+            if stalled >= STALL_PIECES:
+                left = [f"{t.label(a)}->{t.label(b)}" for a, b, k in zip(t.src, t.dst, demand) if k > 0]
+                raise ExplorationError(
+                    f"{stalled} pieces in a row made none of the transitions still to do ({', '.join(left)}); "
+                    f"the robot did not follow the planned states (last piece "
+                    f"{'→'.join(t.label(x) for x in piece.states)}): check it with proleg console, then run "
+                    "again with the same --log to go on")
             self._rest(self.limits.rest_s)
         return added
 
-    def _report(self) -> None:
-        if self.on_progress is None:
-            return
+    def next_piece(self, start: int, demand: np.ndarray) -> Piece:
+        """The first piece of a random tour from ``start`` that makes at least one transition
+        still to do (a few tours are tried); else the shortest way to one of them. Raises
+        ``ExplorationError`` naming the transitions no piece from ``start`` can reach within
+        the thermal limits."""
+        t = self.robot.transitions
+        for attempt in range(PLAN_TRIES):
+            seed = None if self.seed is None else (self.seed + self.pieces_run) * PLAN_TRIES + attempt
+            plan = exploration(t, demand=demand, start=start, seed=seed)
+            tour = next((x for x in plan.tours if x.states[0] == start), None)
+            if tour is None:
+                break
+            piece = split(t, tour.states, self.limits)[0]
+            if piece.loadable and any(demand[t.lookup(a, b)] > 0 for a, b in piece.transitions):
+                return piece
+        succ = _successors(t)
+        best: Piece | None = None
+        for (a, b), k in zip(zip(t.src.tolist(), t.dst.tolist()), demand.tolist()):
+            way = _bfs_path(t.n_states, succ, start, a) if k > 0 else None
+            if way is None:
+                continue
+            pieces = split(t, way + [b], self.limits)
+            if len(pieces) == 1 and pieces[0].loadable and (best is None or len(pieces[0].states) < len(best.states)):
+                best = pieces[0]
+        if best is None:
+            left = [f"{t.label(a)}->{t.label(b)}" for a, b, k in zip(t.src, t.dst, demand) if k > 0]
+            raise ExplorationError(
+                f"from {t.label(start)}, where the robot rests, no piece within the thermal limits ([safety] "
+                f"max_on_ms, min_cooldown_ms; the transition durations) reaches {', '.join(left)}")
+        return best
+
+    def tally(self) -> tuple[int, int]:
+        """(trials recorded toward the goal, trials still to do); transitions no closed tour
+        can make are left out of both."""
         t = self.robot.transitions
         goal = self.goal if self.goal is not None else np.full(t.n_transitions, self.repeats)
         for a, b in exploration(t, 1).uncoverable:
             goal = np.where(np.arange(t.n_transitions) == t.lookup(a, b), 0, goal)
         have = counts(t, self.log.trials)
-        todo = int(np.maximum(0, goal - have).sum())
-        done = int(np.minimum(goal, have).sum())
-        el = self._clock() - self._t0
+        return int(np.minimum(goal, have).sum()), int(np.maximum(0, goal - have).sum())
+
+    def _report(self) -> None:
+        if self.on_progress is None:
+            return
+        done, todo = self.tally()
+        el = _time.monotonic() - self._t0
         pace = el / max(1, len(self.log.trials) - self._trials0)
         self.on_progress(Progress(done, todo, el, pace * todo))
 
@@ -172,7 +233,7 @@ class Explorer:
         try:
             while len(reached) < goal + 1 or pending is not None:
                 now = self._clock()
-                if pending is not None and now >= pending[0] - 1e-9:
+                if pending is not None and now >= pending[0] - CLOCK_EPS_S:
                     _due, t_ev, state, t_seen = pending
                     pending = None
                     pose = self.pose() if self.pose is not None else None
@@ -200,8 +261,13 @@ class Explorer:
                     continue
                 kind = int(msg.kind)
                 if kind in (EventKind.FAULT, EventKind.ESTOP) or (kind == EventKind.GAIT_STOPPED and int(msg.code) != 0):
-                    raise ExplorationError(f"the robot stopped: {EventKind(kind).name} code {int(msg.code)} "
-                                           f"detail {int(msg.detail)}")
+                    from ..console.names import RobotNames, describe_event
+
+                    what = describe_event(msg.fields, RobotNames.for_robot(self.robot), t.label).strip()
+                    hint = ("; look at the robot (proleg console), then clear the fault (key c there)"
+                            if kind in (EventKind.FAULT, EventKind.ESTOP) else "")
+                    when, _, what = what.partition(" ")
+                    raise ExplorationError(f"the robot stopped: {what} (firmware time {when}){hint}")
                 if kind != EventKind.STATE_REACHED:
                     continue
                 state = int(msg.detail)

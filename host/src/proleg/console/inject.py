@@ -1,0 +1,52 @@
+"""Faults injected into a simulated robot while the console watches it (``proleg console
+--sim ROBOT --inject dead-actuator:sma-right+10``), to see what the firmware and the
+console do about them. ``FAULT`` names are the simulator's (``proleg.sim.closed_loop.FAULTS``);
+``+T``: T seconds of simulated time after the console started (default: at once).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from ..errors import SimError
+from ..link.client import Received
+from ..link.listeners import Listener
+
+
+def parse_injection(spec: str) -> tuple[float, str]:
+    """``FAULT[+T]`` → (T seconds, FAULT); ``SimError`` naming the spec when the fault is
+    unknown or T is no number ≥ 0."""
+    from ..sim.closed_loop import FAULTS
+
+    fault, plus, at = spec.rpartition("+")
+    t = 0.0
+    if not plus:
+        fault = spec
+    else:
+        try:
+            t = float(at)
+        except ValueError:
+            raise SimError(f"--inject {spec}: expected FAULT+SECONDS after '+', got {at!r}") from None
+        if not t >= 0:
+            raise SimError(f"--inject {spec}: the time after '+' must be ≥ 0 s, got {at!r}")
+    if fault.partition(":")[0] not in FAULTS:
+        raise SimError(f"--inject {spec}: unknown fault (expected one of: {', '.join(sorted(FAULTS))})")
+    return t, fault
+
+
+class Injector(Listener):
+    """Injects each ``(at_s, fault)`` into ``sim`` (a ``SimulatedRobot``) once its clock has run
+    ``at_s`` past where it stood at construction; ``say`` tells each injection."""
+
+    def __init__(self, sim, faults: Sequence[tuple[float, str]], say: Callable[[str], None] = print):
+        self.sim = sim
+        self.t0 = float(sim.time_s)
+        self.due = sorted(faults)
+        self.say = say
+
+    def on_message(self, rx: Received) -> None:
+        now = float(self.sim.time_s)
+        while self.due and now - self.t0 >= self.due[0][0]:
+            at, fault = self.due.pop(0)
+            self.sim.inject(fault)
+            self.say(f"injected {fault} at {now:.1f} s (simulated)")

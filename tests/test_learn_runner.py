@@ -1,0 +1,112 @@
+"""The exploration loop's planning and its guard against endless runs (no robot needed:
+the piece runner is replaced, so these check the loop's decisions only)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from proleg.learn.measure import TrialLog
+from proleg.learn.runner import STALL_PIECES, ExplorationError, Explorer
+from proleg.robot import load_robot
+
+ROBOTS = Path(__file__).resolve().parent.parent / "robots"
+
+
+class _Offline(Explorer):
+    """An Explorer whose robot rests in ``rest`` and never moves (run_piece makes nothing)."""
+
+    def __init__(self, robot, log, rest: int = 0, **kw):
+        client = SimpleNamespace(info=None, link=SimpleNamespace(clock=lambda: 0.0))
+        super().__init__(client, robot, log, None, rest=lambda s: None, **kw)
+        self.rest_state = rest
+        self.ran: list[tuple[int, ...]] = []
+
+    def measured_state(self) -> int:
+        return self.rest_state
+
+    def run_piece(self, piece, record=True):
+        self.ran.append(piece.states)
+        return []
+
+
+def test_a_robot_that_does_not_follow_the_plan_ends_the_run_with_what_is_left(tmp_path):
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = _Offline(robot, log, repeats=1, seed=1)
+        with pytest.raises(ExplorationError, match=r"5 pieces in a row made none of the transitions still to do "
+                                                    r"\(000->001, .*111->110\).*same --log"):
+            ex.run()
+    assert len(ex.ran) == STALL_PIECES
+
+
+def test_every_piece_starts_where_the_robot_rests_and_makes_a_transition_still_to_do(tmp_path):
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = _Offline(robot, log, rest=t.index("000"), repeats=1, seed=2)
+        demand = np.zeros(t.n_transitions, dtype=np.int64)
+        demand[t.lookup(t.index("111"), t.index("110"))] = 1  # only the far corner is left
+        for _ in range(20):
+            piece = ex.next_piece(t.index("000"), demand)
+            ex.pieces_run += 1
+            assert piece.states[0] == t.index("000") and piece.loadable
+            assert (t.index("111"), t.index("110")) in piece.transitions
+
+
+def test_a_transition_no_piece_can_reach_is_named_before_the_robot_moves(tmp_path):
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = _Offline(robot, log, repeats=1)
+        ex.limits = replace(ex.limits, max_on_s=1.0)  # one 0.8 s transition per piece
+        demand = np.zeros(t.n_transitions, dtype=np.int64)
+        demand[t.lookup(t.index("111"), t.index("110"))] = 1
+        with pytest.raises(ExplorationError, match=r"from 000, where the robot rests, no piece within the "
+                                                    r"thermal limits .* reaches 111->110"):
+            ex.next_piece(t.index("000"), demand)
+
+
+class _Idle:
+    """A board that says nothing (SimLink's duck type)."""
+
+    def write(self, data: bytes) -> None:
+        pass
+
+    def read(self) -> bytes:
+        return b""
+
+    def advance(self, seconds: float) -> None:
+        pass
+
+
+def test_a_rest_on_a_simulated_link_ends_whatever_the_clock_reads(tmp_path):
+    """The simulated link counts whole nanoseconds: a rest whose end fell a fraction of one
+    after the clock's last tick waited for ever (inchworm-3's proof hung in a rest from 7.158 s)."""
+    from proleg.link import RobotClient
+    from proleg.link.sim_link import SimLink
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    link = SimLink(_Idle())
+    client = RobotClient(link)
+    calls = []
+    recv = client.recv
+
+    def counting(timeout=0.0):
+        calls.append(timeout)
+        if len(calls) > 100:
+            raise AssertionError("the rest does not end")
+        return recv(timeout)
+
+    client.recv = counting
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = Explorer(client, robot, log, None)
+        for start_ns in (7_158_000_000, *range(1_000_000, 40_000_000, 1_000_000)):  # 7.158 + 2.25 > 9.408
+            link._t_ns = start_ns
+            calls.clear()
+            ex._rest_on_link(2.25)
+            assert link.clock() == pytest.approx(start_ns / 1e9 + 2.25, abs=1e-6)
