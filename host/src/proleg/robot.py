@@ -22,7 +22,7 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_plant import PlantSection, default_plant_section, plant_section
+from .robot_plant import PlantSection, default_plant_section, limb_friction, plant_section
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
 NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
@@ -71,6 +71,8 @@ class Limb:
     hysteresis_deg: float
     actuator: str
     imu: ImuSpec | None = None  # None: placed automatically by the build
+    #: friction mechanism: "D1"/"D2" or one material per level (None: the plant infers it)
+    friction: str | tuple[str, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -314,7 +316,7 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         raise RobotFileError(f"{path}: limb: at most {MAX_LIMBS} limbs, got {len(tables)}")
     out: list[Limb] = []
     for i, t in enumerate(tables):
-        f = _Fields(path, _entry("limb", i, t), t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu"},
+        f = _Fields(path, _entry("limb", i, t), t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu", "friction"},
                     sep=": ")
         name = f.string("name")
         if any(limb.name == name for limb in out):
@@ -342,7 +344,13 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         if actuator not in actuator_names:
             f.fail("actuator", f"the name of an [[actuator]] ({', '.join(sorted(actuator_names))})", actuator)
         imu = _imu_spec(path, f"{f.where}: imu", t["imu"]) if "imu" in t else None
-        out.append(Limb(name, levels, psi_t, hyst, actuator, imu))
+        friction = limb_friction(path, f.where, t["friction"], levels) if "friction" in t else None
+        out.append(Limb(name, levels, psi_t, hyst, actuator, imu, friction))
+    declared = [limb.friction is not None for limb in out]
+    if any(declared) and not all(declared):
+        missing = next(limb.name for limb in out if limb.friction is None)
+        raise RobotFileError(f"{path}: limb {missing!r}: friction: expected on every limb or on none "
+                             f"(the others give it; without it the simulator infers every limb's mechanism)")
     return tuple(out)
 
 

@@ -303,3 +303,29 @@ def _true_matrix(path: Path, m: Any, n: int) -> np.ndarray:
             else:
                 out[a, b] = _value(path, spec, f"true_matrix[{a + 1}][{b + 1}]", x)
     return out
+
+
+# -- [[limb]] friction: which friction mechanism a limb carries ----------------------------------
+#: Contact materials the physical plant knows (``proleg.sim.physical.materials`` holds their
+#: friction coefficients) and the paper's two mechanisms: the material touching at each level,
+#: level 0 (ψ < ψ*) first. D1: soft/sticky then hard/slippery; D2 the reverse.
+FRICTION_MATERIALS = ("soft", "hard")
+FRICTION_MECHANISMS = {"D1": ("soft", "hard"), "D2": ("hard", "soft")}
+
+
+def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tuple[str, ...]:
+    """A limb's ``friction``: ``"D1"``/``"D2"`` (two-level limbs) or a list of ``levels``
+    material names, lowest level first; one line naming the limb otherwise."""
+    if isinstance(value, str):
+        if value not in FRICTION_MECHANISMS:
+            raise RobotFileError(f"{path}: {where}: friction: expected one of {', '.join(FRICTION_MECHANISMS)} "
+                                 f"or a list of materials ({', '.join(FRICTION_MATERIALS)}), got {value!r}")
+        if levels != 2:
+            raise RobotFileError(f"{path}: {where}: friction: {value} describes 2 levels, the limb has {levels}; "
+                                 f"give a list of {levels} materials ({', '.join(FRICTION_MATERIALS)})")
+        return value
+    if (not isinstance(value, list) or len(value) != levels
+            or any(not isinstance(m, str) or m not in FRICTION_MATERIALS for m in value)):
+        raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
+                             f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {value!r}")
+    return tuple(value)

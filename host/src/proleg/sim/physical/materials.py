@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ...robot_plant import FRICTION_MECHANISMS
+
 # --- NiTi (Nitinol / Toki BioMetal) ------------------------------------------------------------
 # Density 6.45 g/cm³, specific heat 0.20 cal/(g·K) = 0.837 J/(g·K), latent heat of
 # transformation 5.78 cal/g = 24.2 J/g, resistivity 76 µΩ·cm (martensite) / 82 µΩ·cm
@@ -54,4 +56,5 @@ HARD = Material("hard", mu_static=0.35, mu_kinetic=0.25)
 MATERIALS = {"soft": SOFT, "hard": HARD}
 
 # The paper's two friction mechanisms: the material touching at each level (level 0 = ψ < ψ*).
-MECHANISMS = {"D1": ("soft", "hard"), "D2": ("hard", "soft")}
+# The names are the robot file's (``[[limb]] friction``, checked by proleg.robot_plant).
+MECHANISMS = dict(FRICTION_MECHANISMS)

@@ -2,8 +2,8 @@
 
 The paper's mechanisms: D1 (material M1, touching at ψ < ψ*, is soft/sticky; M2 hard/slippery)
 and D2 (the reverse). A robot file may say so per limb (``friction = "D1"`` or a list of
-material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``). Today's
-robot files do not have that key; then the mechanisms are inferred from the sign pattern of
+material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``; checked by
+``proleg.robot``, on every limb or none). A robot file without that key has its mechanisms inferred from the sign pattern of
 the robot's transition matrix: every assignment of D1/D2 to the limbs is swept kinematically
 through every allowed transition (``measure.kinematic_signs``) and the assignment whose signs
 agree with the most non-zero matrix entries wins (ties: D1 first). Multi-level limbs without

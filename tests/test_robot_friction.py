@@ -1,0 +1,95 @@
+"""The robot file says which friction mechanism each limb carries (issue 13): ``[[limb]]
+friction = "D1" | "D2"`` or one material per level; the physical plant then uses it instead of
+inferring the mechanisms from the matrix's signs."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from proleg.errors import RobotFileError
+from proleg.paths import robots_dir
+from proleg.robot import load_robot
+from proleg.robot_plant import FRICTION_MATERIALS, FRICTION_MECHANISMS
+from proleg.sim.physical import PhysicalPlant, measure_matrix
+from proleg.sim.physical import materials
+
+
+def with_friction(tmp_path: Path, name: str, *values: str | None) -> Path:
+    """``robots/<name>.toml`` with ``friction = value`` added to each [[limb]] (None: left out)."""
+    text = (robots_dir() / f"{name}.toml").read_text()
+    parts = text.split("[[limb]]")
+    assert len(parts) == len(values) + 1
+    out = parts[0]
+    for part, value in zip(parts[1:], values):
+        head, nl, rest = part.partition("\n")
+        out += "[[limb]]" + head + nl + ("" if value is None else f"friction = {value}\n") + rest
+    path = tmp_path / f"{name}.toml"
+    path.write_text(out)
+    return path
+
+
+def test_the_robot_files_names_are_the_plants_materials():
+    assert set(FRICTION_MATERIALS) == set(materials.MATERIALS)
+    assert FRICTION_MECHANISMS == materials.MECHANISMS
+
+
+def test_declared_mechanisms_reach_the_physical_plant(tmp_path):
+    r = load_robot(with_friction(tmp_path, "paper-r1", '"D1"', '"D2"'))
+    assert [limb.friction for limb in r.limbs] == ["D1", "D2"]
+    plant = PhysicalPlant(r)
+    assert plant.mechanisms == ("D1", "D2")
+    assert plant.mechanism_source == "robot file"
+
+
+def test_without_the_key_the_mechanisms_are_still_inferred():
+    r = load_robot(robots_dir() / "paper-r1.toml")
+    assert all(limb.friction is None for limb in r.limbs)
+    assert PhysicalPlant(r).mechanism_source == "inferred from the matrix"
+
+
+def test_declaring_d2_makes_r1_move_like_r2():
+    """R1's matrix with D2 pads declared: the measured 00->10 and 00->01 take R2's signs
+    (the paper: R1 00->10 = +1, R2 00->10 = -1), so the declaration is what moves the body."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        r1_d2 = load_robot(with_friction(Path(d), "paper-r1", '"D2"', '"D2"'))
+    r1 = load_robot(robots_dir() / "paper-r1.toml")
+    as_d1 = measure_matrix(r1, repeats=1)
+    as_d2 = measure_matrix(r1_d2, repeats=1)
+    i00, i01, i10 = (as_d1.states.index(s) for s in ("00", "01", "10"))
+    assert np.sign(as_d1.matrix_mm[i00, i10]) == +1 and np.sign(as_d2.matrix_mm[i00, i10]) == -1
+    assert np.sign(as_d1.matrix_mm[i00, i01]) == -1 and np.sign(as_d2.matrix_mm[i00, i01]) == +1
+
+
+def test_a_multi_level_limb_takes_one_material_per_level(tmp_path):
+    levels = [limb.levels for limb in load_robot(robots_dir() / "caterpillar-4.toml").limbs]
+    values = [str(["soft", "hard", "soft"][:k] if k <= 3 else ["soft"] * k).replace("'", '"') for k in levels]
+    r = load_robot(with_friction(tmp_path, "caterpillar-4", *values))
+    assert [len(limb.friction) for limb in r.limbs] == levels
+    assert PhysicalPlant(r).mechanism_source == "robot file"
+
+
+@pytest.mark.parametrize("values, words", [
+    (('"D3"', '"D1"'), "limb 'left': friction: expected one of D1, D2 or a list of materials (soft, hard), got 'D3'"),
+    (('["soft"]', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials from soft, hard"),
+    (('["soft", "rubber"]', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials"),
+    (('1', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials"),
+    (('"D1"', None), "limb 'right': friction: expected on every limb or on none"),
+])
+def test_a_bad_friction_is_one_line_naming_the_limb(tmp_path, values, words):
+    with pytest.raises(RobotFileError, match=re.escape(words)) as e:
+        load_robot(with_friction(tmp_path, "paper-r1", *values))
+    assert "\n" not in str(e.value)
+
+
+def test_d1_on_a_three_level_limb_says_to_list_the_materials(tmp_path):
+    levels = [limb.levels for limb in load_robot(robots_dir() / "caterpillar-4.toml").limbs]
+    assert 3 in levels
+    values = ['"D1"' if k == 3 else '"D2"' for k in levels]
+    with pytest.raises(RobotFileError, match="friction: D1 describes 2 levels, the limb has 3; give a list of 3"):
+        load_robot(with_friction(tmp_path, "caterpillar-4", *values))
