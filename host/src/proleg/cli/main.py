@@ -299,18 +299,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
                          max_transitions=args.max_transitions, **plant_kwargs(args))
     timed = []
     for spec in args.inject:
-        fault, plus, at = spec.rpartition("+") if "+" in spec else ("", "", "")
-        if plus:
-            try:
-                timed.append((float(at), fault))
-            except ValueError:
-                from ..errors import SimError
+        if "+" in spec:  # FAULT+T: checked now, injected T simulated seconds after the start
+            from ..console.inject import parse_injection
 
-                raise SimError(f"--inject {spec}: expected FAULT+SECONDS after '+', got {at!r}") from None
+            timed.append(parse_injection(spec))
         else:
             sim.inject(spec)
     if args.pty:
-        return _serve_pty(sim, args)
+        return _serve_pty(sim, args, timed)
     recorder = _recorder(robot, args.record, args.board) if args.record else None
     listeners = [recorder] if recorder else []
     if args.udp:
@@ -342,16 +338,20 @@ def cmd_sim(args: argparse.Namespace) -> int:
     return EXIT_OK if report.ok else EXIT_FAILED
 
 
-def _serve_pty(sim, args) -> int:
+def _serve_pty(sim, args, timed=()) -> int:
     from ..sim.pty import PtyServer
 
-    with PtyServer(sim, speed=args.speed) as server:
+    say = lambda line: print(line, flush=True)  # noqa: E731
+    with PtyServer(sim, speed=args.speed, faults=timed, say=say) as server:
         print(f"simulated {sim.robot.name} on {server.path} (115200 8N1; Ctrl-C to stop)", flush=True)
         print(f"  connect with: proleg console --port {server.path}", flush=True)
         try:
             server.serve(args.duration if args.duration != 60.0 else None)
         except KeyboardInterrupt:
             pass
+        for at, fault in server.due:  # never dropped silently
+            print(f"proleg: not injected: {fault}+{at:g} (the simulation stopped at "
+                  f"{server.elapsed_s:.1f} s)", file=sys.stderr)
     return 0
 
 

@@ -10,12 +10,15 @@ and lets them fall when it cools, so:
   another needs a heating and a cooling crossing to coincide; the controller synchronises
   them as well as it can, but the robot may pass through an intermediate state (warning
   ``opposing``; ``proleg.states.opposing_steps``).
-* **Hold time vs on-time** — a coil is on in every state where a limb it drives is raised
-  (level > 0). Run cyclically, a gait keeps a coil on for the longest cyclic run of such
-  states; each state lasts at least ``control.hold_ms`` (the firmware holds a reached
-  state that long before it advances), or the duration of the transition out of it when
-  the table has durations. Longer than ``safety.max_on_ms`` is an error (``on-time``); a
-  coil on in every state of the gait never cools down (error ``never-cools``).
+* **Hold time vs on-time** — the firmware keeps an on-time *debt* per coil
+  (``gait.coil_debt``, docs/safety.md): a coil adds on-time while it raises one of its
+  limbs (for the transition's duration, or ``DEFAULT_DRIVE_S``); holding a raised limb,
+  lowering one and the ``control.hold_ms`` the firmware holds each reached state pay it
+  back at ``max_on_ms`` / ``min_cooldown_ms``. Run cyclically from cool coils, a debt that
+  passes ``safety.max_on_ms`` is cut by the firmware (error ``on-time``); a coil that drives
+  up more debt per cycle than the cycle pays back is cut sooner or later (error
+  ``never-cools``). Holding a limb up for the whole gait is fine (docs/safety.md: the
+  one-coil gait 10 -> 11 -> 10).
 * **Entry** — the firmware starts from rest (every limb at level 0, state 0) and must reach
   the gait over allowed transitions that the hardware can make (``entry_path``); no such
   path is an error (``no-entry``).
@@ -32,6 +35,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..errors import GaitError
+from .coil_debt import EPS_S, Step, coil_budget, cycle_debt
 from ..states import limb_levels
 from ..transitions import TransitionTable
 
@@ -39,6 +43,7 @@ if TYPE_CHECKING:  # the robot layer sits above the gait engine; only its shape 
     from ..robot import Robot
 
 REST = 0  # every limb at level 0
+DEFAULT_DRIVE_S = 1.0  # a transition's drive time when the table has no durations: R1 takes 0.7–1.2 s
 
 
 @dataclass(frozen=True)
@@ -100,47 +105,51 @@ def step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]:
     return out
 
 
-def _on_states(robot: "Robot", cycle: list[int], actuator: str) -> list[bool]:
-    idx = [i for i, limb in enumerate(robot.limbs) if limb.actuator == actuator]
-    return [any(limb_levels(s, robot.levels)[i] > 0 for i in idx) for s in cycle]
+def _rising_coils(robot: "Robot", a: int, b: int) -> tuple[bool, ...]:
+    """Which actuators drive during a -> b: those raising one of their limbs."""
+    la, lb = limb_levels(a, robot.levels), limb_levels(b, robot.levels)
+    return tuple(
+        any(y > x for limb, x, y in zip(robot.limbs, la, lb) if limb.actuator == act.name)
+        for act in robot.actuators
+    )
 
 
-def _state_times_ms(robot: "Robot", cycle: list[int]) -> list[float]:
-    """How long each state of the cycle lasts, at least: hold_ms, or the transition's duration."""
+def coil_steps(robot: "Robot", cycle: Sequence[int]) -> list[Step]:
+    """The gait's steps as the coils see them: a -> b drives the raising coils for the
+    transition's duration (``DEFAULT_DRIVE_S`` when the table has none), then the firmware
+    holds b for ``control.hold_ms`` before it advances."""
+    cycle = _open(cycle)
     table = robot.transitions
-    hold = float(robot.control.hold_ms)
-    if table.duration is None:
-        return [hold] * len(cycle)
-    keys = {(int(a), int(b)): float(d) for a, b, d in zip(table.src, table.dst, table.duration)}
-    return [max(hold, 1000.0 * keys.get((a, b), 0.0)) for a, b in zip(cycle, cycle[1:] + cycle[:1])]
+    durations = {}
+    if table.duration is not None:
+        durations = {(int(a), int(b)): float(d) for a, b, d in zip(table.src, table.dst, table.duration)}
+    hold = robot.control.hold_ms / 1000.0
+    return [
+        Step(_rising_coils(robot, a, b), durations.get((a, b), DEFAULT_DRIVE_S), hold)
+        for a, b in zip(cycle, cycle[1:] + cycle[:1])
+    ]
 
 
 def on_time_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
-    """The longest continuous on-time of each coil, run cyclically, against max_on_ms."""
+    """Each coil's on-time debt, run cyclically, against the firmware's budget."""
     out = []
-    times = _state_times_ms(robot, cycle)
     gait = _name(robot, cycle + cycle[:1])
-    for act in robot.actuators:
-        on = _on_states(robot, cycle, act.name)
-        if all(on):
+    budget = coil_budget(robot.safety.max_on_ms, robot.safety.min_cooldown_ms, robot.control.tick_hz)
+    steps = coil_steps(robot, cycle)
+    for act, debt in zip(robot.actuators, cycle_debt(steps, budget.payback)):
+        if debt.growth_s > 0:
             out.append(Problem(
                 "never-cools", "error",
-                f"gait {gait}: actuator {act.name!r} is on in every state (a limb it drives is raised "
-                f"throughout), so it never cools down",
+                f"gait {gait}: actuator {act.name!r} gains {1000 * debt.growth_s:.0f} ms of on-time debt every cycle "
+                f"(it drives longer than holding and lowering pay back at max_on_ms / min_cooldown_ms), "
+                f"so the firmware cuts it (SMA_ON_LIMIT) after a few cycles",
             ))
-            continue
-        longest, run, where = 0.0, 0.0, None
-        start = on.index(False) + 1  # walk the cycle from just after an off state
-        for k in range(len(cycle)):
-            i = (start + k) % len(cycle)
-            run = run + times[i] if on[i] else 0.0
-            if run > longest:
-                longest, where = run, i
-        if longest > robot.safety.max_on_ms:
+        elif debt.peak_s > budget.max_on_s + EPS_S:
+            label = robot.transitions.label(cycle[(debt.at_step + 1) % len(cycle)])
             out.append(Problem(
                 "on-time", "error",
-                f"gait {gait}: actuator {act.name!r} stays on for at least {longest:g} ms up to state "
-                f"{robot.transitions.label(cycle[where])}, above safety.max_on_ms = {robot.safety.max_on_ms}",
+                f"gait {gait}: actuator {act.name!r} carries {1000 * debt.peak_s:.0f} ms of on-time debt on reaching "
+                f"state {label}, above safety.max_on_ms = {robot.safety.max_on_ms}: the firmware cuts it (SMA_ON_LIMIT)",
             ))
     return out
 

@@ -34,6 +34,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from .. import states as _states
+from ..gait.coil_debt import charge  # one model of the firmware's on-time budget (gait feasibility too)
 from ..protocol.definition import MAX_GAIT_STEPS
 from ..transitions import TransitionTable
 
@@ -185,7 +186,7 @@ def _step_debt(table: TransitionTable, a: int, b: int, debt: list[float],
         return debt, 0.0
     d = _duration(table, a, b, limits.default_duration_s)
     debt = debt or [0.0] * len(on)
-    after = [x + d if c else max(0.0, x - d * limits.coil_payback) for x, c in zip(debt, on)]
+    after = charge(debt, on, d, limits.coil_payback)
     return after, max(after)
 
 

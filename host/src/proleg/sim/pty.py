@@ -13,15 +13,24 @@ import os
 import select
 import time
 import tty
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from .closed_loop import SimulatedRobot
 
 
 class PtyServer:
-    def __init__(self, sim: SimulatedRobot, speed: float = 1.0, link: str | Path | None = None):
+    """``faults``: ``(at_s, FAULT)`` pairs injected once ``at_s`` of simulated time has passed
+    since ``serve`` was first called (``proleg sim --pty --inject FAULT+T``, as without --pty and in
+    ``proleg console --sim``); ``say`` tells each injection."""
+
+    def __init__(self, sim: SimulatedRobot, speed: float = 1.0, link: str | Path | None = None,
+                 faults: Sequence[tuple[float, str]] = (), say: Callable[[str], None] = print):
         self.sim = sim
+        self.due = sorted((float(at), str(f)) for at, f in faults)
+        self.elapsed_s = 0.0  # simulated seconds served by the last serve()
+        self._t0: float | None = None  # simulated time at the first serve(): timed faults count from it
+        self.say = say
         self.speed = speed
         self.master, self._slave = os.openpty()  # the slave stays open: clients may come and go
         tty.setraw(self._slave)
@@ -54,8 +63,9 @@ class PtyServer:
         sim = self.sim
         wall0, sim0 = time.monotonic(), sim.time_s
         pending = b""
+        t0 = self._t0 = sim0 if self._t0 is None else self._t0
         while not should_stop():
-            elapsed = sim.time_s - sim0
+            elapsed = self.elapsed_s = sim.time_s - sim0
             if duration_s is not None and elapsed >= duration_s:
                 return
             ready, _, _ = select.select([self.master], [], [], sim.plant_dt_s / self.speed)
@@ -72,6 +82,10 @@ class PtyServer:
             target = (time.monotonic() - wall0) * self.speed
             while sim.time_s - sim0 < target:
                 sim.step()
+                while self.due and sim.time_s - t0 >= self.due[0][0]:
+                    at, fault = self.due.pop(0)
+                    sim.inject(fault)
+                    self.say(f"injected {fault} at {sim.time_s - t0:.1f} s (simulated)")
             pending += sim.read()
             if pending:
                 pending = self._write(pending)

@@ -1,0 +1,47 @@
+"""``proleg sim --pty --inject FAULT+T``: timed injections are made T simulated seconds after
+the pty starts serving (as without --pty and in ``proleg console --sim``), never dropped
+silently; a bad one is refused before the pty opens."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from proleg.cli.main import main
+from proleg.robot import load_robot
+from proleg.sim.pty import PtyServer
+from proleg.sim.simulators import open_simulated
+
+R1 = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
+
+
+def test_the_pty_server_injects_a_timed_fault_once_its_time_has_come():
+    sim = open_simulated(load_robot(R1), "host-sim")
+    said: list[str] = []
+    with PtyServer(sim, speed=20.0, faults=[(0.6, "link-drop:0.5"), (9.0, "link-corrupt:0.5")],
+                   say=said.append) as server:
+        server.serve(0.4)
+        assert sim.link_faults.drop == 0 and said == []  # not yet
+        server.serve(0.4)  # times count from the first serve: 0.8 s in all
+        assert sim.link_faults.drop == 0.5
+        assert said == ["injected link-drop:0.5 at 0.6 s (simulated)"]
+        assert sim.link_faults.corrupt == 0 and server.due == [(9.0, "link-corrupt:0.5")]
+
+
+def test_proleg_sim_pty_injects_timed_faults_and_names_those_it_could_not(capsys):
+    rc = main(["sim", str(R1), "--pty", "--duration", "1", "--speed", "20",
+               "--inject", "link-drop:0.5+0.5", "--inject", "dead-actuator:sma-right+5"])
+    out, err = capsys.readouterr()
+    assert rc == 0
+    assert "injected link-drop:0.5 at 0.5 s (simulated)" in out
+    assert "dead-actuator" not in out
+    assert "proleg: not injected: dead-actuator:sma-right+5 (the simulation stopped at 1." in err
+
+
+def test_a_timed_injection_naming_no_fault_is_refused_before_serving(capsys):
+    rc = main(["sim", str(R1), "--pty", "--duration", "1", "--inject", "melt:sma-right+1"])
+    out, err = capsys.readouterr()
+    assert rc != 0 and "simulated" not in out
+    assert err.strip().splitlines() == [
+        "proleg: error: --inject melt:sma-right+1: unknown fault (expected one of: dead-actuator, drift, "
+        "imu-garbage, imu-silent, imu-stuck, link-corrupt, link-drop)"
+    ]
