@@ -35,7 +35,7 @@ from .core import HARDFAULT, SYSTICK, CortexM
 from .elf import read_elf
 from .fpec import PAGE_SIZE as NV_PAGE_SIZE, Fpec
 from .gpio import Gpio
-from .i2c import Bus, BusSlaves, I2c, imu_slot_key
+from .i2c import Bus, BusDevices, I2c
 from .native import Native
 from .scs import Scs
 from .tim import Timer
@@ -96,7 +96,8 @@ class ArmEmuBoard:
     """One emulated bluepill running one firmware image."""
 
     def __init__(self, elf_path: str | Path, seed: int = 1, *, tick_us: int | None = None,
-                 pwm_pins: tuple[str, ...] = ("PA0", "PA1", "PA2", "PA3"), imu_addresses=(0x68, 0x69)):
+                 pwm_pins: tuple[str, ...] = ("PA0", "PA1", "PA2", "PA3"), imu_addresses=(0x68, 0x69),
+                 imu_wiring: tuple[tuple[int, int, int, int], ...] | None = None):
         self.elf = read_elf(elf_path)
         self.tick_us = tick_us or _tick_us_from_build(self.elf.path)
         self.pwm_map = []
@@ -105,8 +106,15 @@ class ArmEmuBoard:
                 raise SimError(f"PWM pin {pin!r} is not a TIM2-TIM4 output (expected one of {sorted(_STM32_PWM)})")
             t, ch, port, p = _STM32_PWM[pin.upper()]
             self.pwm_map.append((t, ch, port, p))
-        self.imu_addresses = tuple(imu_addresses)  # native model keys (imu_slot_key), attached at reset
-        self.imu_keymap: dict[int, int] = {}  # host-sim ABI key of a limb's IMU -> native model key
+        # The IMUs: model slot i is wired at imu_wiring[i] = (bus, address, multiplexer
+        # address or 0, channel) and named by imu_addresses[i], host-sim's key for it
+        # (proleg.firmware.placement.sim_imu_keys: the address on I2C1 directly, else
+        # 0x80 | limb). Without a wiring, each of imu_addresses sits on I2C1 directly.
+        self.imu_addresses = tuple(imu_addresses)
+        self.imu_wiring = tuple(imu_wiring) if imu_wiring is not None else tuple((0, a, 0, 0) for a in self.imu_addresses)
+        if len(self.imu_wiring) != len(self.imu_addresses):
+            raise SimError(f"arm-emu: {len(self.imu_addresses)} IMU keys for {len(self.imu_wiring)} wired IMUs")
+        self.imu_keymap: dict[int, int] = {k: slot for slot, k in enumerate(self.imu_addresses)}  # key -> model slot
         self.native = Native()
         self._flash = bytearray(FLASH_SIZE)
         for seg in self.elf.segments:
@@ -129,9 +137,10 @@ class ArmEmuBoard:
         self.fpec.map(uc)
         self.iwdg = Iwdg()
         self.scs = Scs()
-        self.bus = Bus()
-        self.i2c1 = I2c(0x40005400, lambda: self.rcc.pclk1, self.bus, self.native)
-        self.i2c2 = I2c(0x40005800, lambda: self.rcc.pclk1, Bus(), BusSlaves(self.native, 1))
+        bus1, bus2 = BusDevices(self.native, 0), BusDevices(self.native, 1)
+        self.bus = Bus(bus1.stop)
+        self.i2c1 = I2c(0x40005400, lambda: self.rcc.pclk1, self.bus, bus1)
+        self.i2c2 = I2c(0x40005800, lambda: self.rcc.pclk1, Bus(bus2.stop), bus2)
         timclk = lambda: self.rcc.pclk1 * (2 if self.rcc.pclk1 != self.rcc.sysclk else 1)  # noqa: E731
         self.timers = {2: Timer(0x40000000, timclk), 3: Timer(0x40000400, timclk), 4: Timer(0x40000800, timclk)}
         self.gpioa = Gpio(0x40010800)
@@ -194,8 +203,9 @@ class ArmEmuBoard:
         self.seed = seed
         self.native.cycles.value = 0
         self.native.lib.sim_mpu_power_on(seed & 0xFFFFFFFF)
-        for a in self.imu_addresses:
-            self.native.lib.sim_mpu_attach(a)
+        self.native.lib.emu_i2c_unwire()  # multiplexers too: power-on, no channel connected
+        for slot, (bus, addr, mux, ch) in enumerate(self.imu_wiring):
+            self.native.lib.emu_i2c_wire(slot, bus, addr, mux, ch)
         self.uc.mem_write(RAM_BASE, bytes(RAM_SIZE))
         self.rcc.csr_flags = 0
         self.usart.host_rx.clear()
@@ -517,19 +527,39 @@ class ArmEmuBoard:
         return out
 
     # -- IMUs -----------------------------------------------------------------------
+    # ``addr`` is the IMU's key (imu_addresses); a key no IMU has is ignored (reads 0xFF),
+    # as on avr-emu and host-sim.
     def imu_truth(self, addr: int, psi_deg: float, dpsi_dps: float) -> None:
-        self.native.lib.sim_mpu_set_truth(self.imu_keymap.get(addr, addr), psi_deg, dpsi_dps)
+        if addr in self.imu_keymap:
+            self.native.lib.sim_mpu_set_truth_slot(self.imu_keymap[addr], psi_deg, dpsi_dps)
 
     def imu_fault(self, addr: int, mode: str) -> None:
         if mode not in IMU_FAULTS:
             raise SimError(f"unknown IMU fault {mode!r} (expected one of: {', '.join(IMU_FAULTS)})")
-        self.native.lib.sim_mpu_set_fault(self.imu_keymap.get(addr, addr), IMU_FAULTS[mode])
+        if addr in self.imu_keymap:
+            self.native.lib.sim_mpu_set_fault_slot(self.imu_keymap[addr], IMU_FAULTS[mode])
 
     def imu_noise(self, addr: int, accel_ug_rthz: float, gyro_dps_rthz: float, accel_offset_mg: float) -> None:
-        self.native.lib.sim_mpu_set_noise(self.imu_keymap.get(addr, addr), accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
+        if addr in self.imu_keymap:
+            self.native.lib.sim_mpu_set_noise_slot(self.imu_keymap[addr], accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
 
     def imu_register(self, addr: int, reg: int) -> int:
-        return int(self.native.lib.sim_mpu_peek(self.imu_keymap.get(addr, addr), reg))
+        if addr not in self.imu_keymap:
+            return 0xFF
+        return int(self.native.lib.sim_mpu_peek_slot(self.imu_keymap[addr], reg))
+
+    def mux_control(self, bus: int, addr: int) -> int:
+        """The control register of the multiplexer at ``addr`` on ``bus`` (0 = I2C1); 0: none there."""
+        return int(self.native.lib.sim_tca_control(bus, addr))
+
+    def mux_active(self, bus: int, addr: int) -> int:
+        """The channels that multiplexer connects now (its control register as of the last STOP)."""
+        return int(self.native.lib.emu_i2c_mux_active(bus, addr))
+
+    @property
+    def mux_writes(self) -> int:
+        """Control-register writes to every multiplexer since power-on (channel switches)."""
+        return int(self.native.lib.sim_tca_writes())
 
     # -- emulator-only fault injection and probes -----------------------------------
     def i2c_hold_sda(self, byte: int = 0x00) -> None:
