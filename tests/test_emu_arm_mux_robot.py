@@ -89,3 +89,48 @@ def test_a_robot_behind_the_multiplexer_walks_and_a_lost_imu_names_its_limb(robo
     faults = _faults(b)
     assert faults and all(f.code == FaultCode.IMU_NO_ACK and f.detail == 1 for f in faults), faults
     assert all(b.pwm(ch) == 0.0 for ch in range(2))
+
+
+def test_at_the_fastest_tick_the_build_allows_every_tick_still_reads_both_imus(tmp_path):
+    """The build's I2C rule counts the channel switches (placement.i2c_tick_us: 84 bit times a
+    read, 20 a switch, at most 75 % of the tick). At the fastest tick_hz it accepts, the
+    background selects and reads still finish every tick on the bluepill image, where the
+    bus time is what the I2C peripheral model takes, START to STOP, polls included."""
+    from proleg.emu.arm import ArmEmuRobot, bluepill_elf
+    from proleg.firmware.boards import load_board
+    from proleg.firmware.placement import I2C_TICK_SHARE, i2c_tick_us, place_imus
+    from proleg.robot import load_robot
+
+    board = load_board("bluepill-f103")
+    need_us = i2c_tick_us(place_imus(load_robot(ROBOT), board), int(board.i2c.get("hz", 400000)))
+    hz = int(I2C_TICK_SHARE * 1e6 / need_us)  # the build's own limit (check_tick_budget)
+    path = tmp_path / "paper-r1-mux-fast.toml"
+    path.write_text(ROBOT.read_text().replace("tick_hz = 1000", f"tick_hz = {hz}"))
+    robot = load_robot(path)
+    assert robot.control.tick_hz == hz > 1000
+    sim = ArmEmuRobot(robot, bluepill_elf(robot))
+    b = sim.board
+    b.run_ticks(400)
+    assert _faults(b) == []
+    owned: list[int] = []  # cycles the I2C1 peripheral owns the bus (START to STOP done)
+    i2c = b.i2c1
+    start, complete = i2c._begin_start, i2c._complete
+
+    def begin_start(now: int) -> None:
+        if i2c.phase == "idle":
+            owned.append(-now)
+        start(now)
+
+    def done(t: int) -> None:
+        stopping = i2c.phase == "stop"
+        complete(t)
+        if stopping and owned and owned[-1] < 0:
+            owned[-1] += t
+
+    i2c._begin_start, i2c._complete = begin_start, done
+    writes, transfers = b.mux_writes, i2c.transfers
+    b.run_ticks(300)
+    assert b.mux_writes - writes == 600 and i2c.transfers - transfers == 1200  # every tick: 2 selects, 2 reads
+    bus_us = sum(c for c in owned if c > 0) / 72 / 300
+    assert need_us < bus_us < b.tick_us, (need_us, bus_us, b.tick_us)  # the rule's estimate is a floor; it fits
+    assert _faults(b) == []
