@@ -63,7 +63,8 @@ def test_imus_on_the_second_bus_start_and_are_read_in_the_background():
     robot, elf = _elf("inchworm-3")
     sim = ArmEmuRobot(robot, elf)
     b = sim.board
-    assert len(robot.limbs) == 3 and b.imu_addresses == (0x68, 0x69, 0x6A)  # the head on I2C2 at 0x68
+    assert len(robot.limbs) == 3 and b.imu_addresses == (0x68, 0x69, 0x82)  # the head (limb 2) on I2C2
+    assert b.imu_wiring[2] == (1, 0x68, 0, 0)  # I2C2 at 0x68, directly
     b.run_ticks(200)
     msgs = FrameDecoder().feed(b.read())
     assert [m for m in msgs if m.name == "EVENT" and m.kind == EventKind.FAULT] == []

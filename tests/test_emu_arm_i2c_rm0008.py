@@ -27,7 +27,7 @@ class Slave:
         self.data = data
         self.sent = 0
 
-    def mpu_transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+    def transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
         if addr != MPU:
             return None
         if nrx == 0:

@@ -21,9 +21,12 @@ Master receiver (RM0008 §26.3.3, "Master receiver" and "Closing the communicati
   the next byte's first bit when the master tries its STOP: if that bit is 0 the STOP
   never happens and the slave holds SDA (``Bus.strand``), exactly as on a real bus.
 
-The slaves are the MPU-6050 register models (``sim_mpu6050.c``, one transaction per
-address phase: written bytes are committed on a repeated START or STOP; read bytes are
-fetched one at a time at the time of the address phase).
+The slaves are the MPU-6050 register models (``sim_mpu6050.c``) and TCA9548A
+multiplexers (``sim_tca9548a.c``), routed by ``i2cbus.c`` (``BusDevices``): one
+transaction per address phase: written bytes are committed on a repeated START or STOP;
+read bytes are fetched one at a time at the time of the address phase. Every STOP on the
+bus (the peripheral's, or one made with the pins as GPIO) is passed on: a multiplexer
+connects the channels its control register names only then (TCA9548A §8.5.4).
 
 Bus faults: a slave that is sending a byte when the master abandons the transfer
 (SWRST or PE cleared mid-read) keeps driving SDA with that byte's bits, advancing one
@@ -47,36 +50,31 @@ SB, ADDR, BTF, RXNE, TXE, BERR, ARLO, AF = 1, 2, 4, 1 << 6, 1 << 7, 1 << 8, 1 <<
 MSL, BUSY, TRA = 1, 2, 4
 
 
-def imu_slot_key(bus: int, addr: int) -> int:
-    """The native MPU-6050 model (8 devices keyed 0x68..0x6F) holding the IMU at ``addr``
-    on I2C bus ``bus``: an MPU-6050 answers only at 0x68 or 0x69 (AD0), so bus 0 keeps its
-    addresses and bus b uses keys 0x68 + 2b, 0x69 + 2b."""
-    if addr not in (0x68, 0x69) or not 0 <= bus < 4:
-        raise ValueError(f"no MPU-6050 model for address 0x{addr:02x} on bus {bus}")
-    return addr + 2 * bus
-
-
-class BusSlaves:
-    """The MPU-6050 models on a bus other than bus 0 (the same native library, its own keys)."""
+class BusDevices:
+    """What answers on one of the board's buses (0 = I2C1, 1 = I2C2): the MPU-6050 and
+    TCA9548A models wired there (``i2cbus.c`` in the native library)."""
 
     def __init__(self, native, bus: int) -> None:
         self.native = native
         self.bus = bus
 
-    def mpu_transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
-        if addr not in (0x68, 0x69):
-            return None
-        return self.native.mpu_transfer(imu_slot_key(self.bus, addr), tx, nrx, t_us)
+    def transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+        return self.native.bus_transfer(self.bus, addr, tx, nrx, t_us)
+
+    def stop(self) -> None:
+        """A STOP condition: a multiplexer connects the channels it was told to (TCA9548A §8.5.4)."""
+        self.native.lib.emu_i2c_stop(self.bus)
 
 
 class Bus:
     """The two wires and who holds SDA."""
 
-    def __init__(self) -> None:
+    def __init__(self, on_stop: Callable[[], None] | None = None) -> None:
         self.hold_bits: list[int] = []  # bits a stranded slave still drives on SDA
         self.scl_gpio = 1
         self.sda_gpio = 1
         self.recoveries = 0
+        self.on_stop = on_stop  # the slaves see a STOP condition made with the pins as GPIO
 
     @property
     def sda_low(self) -> bool:
@@ -88,9 +86,12 @@ class Bus:
 
     def sda_master(self, level: int) -> None:
         """SDA driven by GPIO: rising while SCL is high is a STOP, which resets every slave."""
-        if level and not self.sda_gpio and self.scl_gpio and self.hold_bits and not self.sda_low:
-            self.hold_bits = []
-            self.recoveries += 1
+        if level and not self.sda_gpio and self.scl_gpio and not self.sda_low:
+            if self.hold_bits:
+                self.hold_bits = []
+                self.recoveries += 1
+            if self.on_stop is not None:
+                self.on_stop()
         self.sda_gpio = level
 
     def scl(self, level: int) -> None:
@@ -107,7 +108,7 @@ class I2c:
         self.BASE = base
         self.pclk1 = pclk1
         self.bus = bus or Bus()
-        self.slaves = slaves  # Native (mpu_transfer) or None: nobody on this bus
+        self.slaves = slaves  # BusDevices (transfer, stop) or None: nobody on this bus
         self.violations = 0
         self.transfers = 0
         self.reset()
@@ -153,16 +154,16 @@ class I2c:
     def _ack_address(self, now: int) -> bool:
         if self.slaves is None:
             return False
-        return self.slaves.mpu_transfer(self.addr, b"", 0, now // 72) is not None
+        return self.slaves.transfer(self.addr, b"", 0, now // 72) is not None
 
     def _commit(self, now: int) -> None:
         if self.tx_buf and self.slaves is not None and not self.reading:
-            self.slaves.mpu_transfer(self.addr, bytes(self.tx_buf), 0, now // 72)
+            self.slaves.transfer(self.addr, bytes(self.tx_buf), 0, now // 72)
             self.transfers += 1
         self.tx_buf = bytearray()
 
     def _fetch(self) -> int:
-        rx = self.slaves.mpu_transfer(self.addr, b"", 1, self.t_addr_us) if self.slaves else None
+        rx = self.slaves.transfer(self.addr, b"", 1, self.t_addr_us) if self.slaves else None
         return rx[0] if rx else 0xFF
 
     # -- events ---------------------------------------------------------------------
@@ -218,6 +219,8 @@ class I2c:
             elif self.rx_ready is None and ack:
                 self._rx_next(t)
         elif self.phase == "stop":
+            if self.slaves is not None and hasattr(self.slaves, "stop"):
+                self.slaves.stop()
             self.cr1 &= ~CR1_STOP
             self.sr2 &= ~(MSL | BUSY | TRA)
             self.sr1 &= ~(TXE | (0 if self.rx_ready is not None else BTF))

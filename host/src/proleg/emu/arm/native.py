@@ -1,8 +1,10 @@
-"""The arm-emu board's native helper: the cycle-counting block hook and the MPU-6050 models.
+"""The arm-emu board's native helper: the cycle-counting block hook and the I2C devices.
 
-``cycles.c`` (next to this file) and the shared register-level MPU-6050 model of every
-simulated board (``firmware_templates/hal/sim/sim_mpu6050.c``) are compiled with ``cc``
-into one small shared library, cached under ``$PROLEG_CACHE/emu-arm/<hash>/``. Each
+``cycles.c`` and ``i2cbus.c`` (next to this file: which device answers where on the two
+buses) and the shared register-level models of every simulated board
+(``firmware_templates/hal/sim/``: ``sim_mpu6050.c``, and ``sim_tca9548a.c``, the
+TCA9548A multiplexer host-sim and avr-emu use too) are compiled with ``cc`` into one
+small shared library, cached under ``$PROLEG_CACHE/emu-arm/<hash>/``. Each
 emulated board loads its own copy (the library holds that board's cycle counter and IMU
 states in C globals), like ``proleg.sim.board.SimBoard`` does.
 """
@@ -26,12 +28,18 @@ _HERE = Path(__file__).resolve().parent
 _SIGNATURES = {
     "emu_setup": ([POINTER(c_uint32), c_uint32, c_uint32, POINTER(c_uint16), c_void_p], None),
     "sim_mpu_power_on": ([c_uint32], None),
-    "sim_mpu_attach": ([c_uint8], None),
-    "sim_mpu_transfer": ([c_uint8, POINTER(c_uint8), c_uint8, POINTER(c_uint8), c_uint8, c_uint64], c_int),
-    "sim_mpu_set_truth": ([c_uint8, c_double, c_double], None),
-    "sim_mpu_set_fault": ([c_uint8, c_uint8], None),
-    "sim_mpu_set_noise": ([c_uint8, c_double, c_double, c_double], None),
-    "sim_mpu_peek": ([c_uint8, c_uint8], c_uint8),
+    "sim_mpu_set_truth_slot": ([c_uint8, c_double, c_double], None),
+    "sim_mpu_set_fault_slot": ([c_uint8, c_uint8], None),
+    "sim_mpu_set_noise_slot": ([c_uint8, c_double, c_double, c_double], None),
+    "sim_mpu_peek_slot": ([c_uint8, c_uint8], c_uint8),
+    "sim_tca_control": ([c_uint8, c_uint8], c_uint8),
+    "sim_tca_writes": ([], c_uint32),
+    "emu_i2c_unwire": ([], None),
+    "emu_i2c_wire": ([c_uint8, c_uint8, c_uint8, c_uint8, c_uint8], None),
+    "emu_i2c_add_mux": ([c_uint8, c_uint8], None),
+    "emu_i2c_transfer": ([c_uint8, c_uint8, POINTER(c_uint8), c_uint8, POINTER(c_uint8), c_uint8, c_uint64], c_int),
+    "emu_i2c_stop": ([c_uint8], None),
+    "emu_i2c_mux_active": ([c_uint8, c_uint8], c_uint8),
 }
 
 
@@ -42,9 +50,14 @@ def cache_root() -> Path:
     return Path(root)
 
 
+def _sim_dir() -> Path:
+    return templates_dir() / "hal" / "sim"
+
+
 def _sources() -> list[Path]:
-    sim = templates_dir() / "hal" / "sim"
-    return [_HERE / "cycles.c", sim / "sim_mpu6050.c", sim / "sim_mpu6050.h"]
+    sim = _sim_dir()
+    return [_HERE / "cycles.c", _HERE / "i2cbus.c", sim / "sim_mpu6050.c", sim / "sim_mpu6050.h",
+            sim / "sim_tca9548a.c", sim / "sim_tca9548a.h"]
 
 
 def native_library() -> Path:
@@ -59,7 +72,8 @@ def native_library() -> Path:
     out.mkdir(parents=True, exist_ok=True)
     tmp = out / f".libarmemu.{os.getpid()}.so"
     srcs = [str(s) for s in _sources() if s.suffix == ".c"]
-    cmd = ["cc", "-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", "-o", str(tmp), *srcs, "-lm"]
+    cmd = ["cc", "-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", f"-I{_sim_dir()}", "-o", str(tmp),
+           *srcs, "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SimError("cannot build the arm-emu helper library:\n  " + (proc.stdout + proc.stderr).strip())
@@ -96,10 +110,11 @@ class Native:
         self._keep = [cum, img]
         self.lib.emu_setup(cum, base, len(table), img, c_void_p(stop_fn))
 
-    # -- the MPU-6050 models ----------------------------------------------------------
-    def mpu_transfer(self, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+    # -- the I2C devices (i2cbus.c) ----------------------------------------------------
+    def bus_transfer(self, bus: int, addr: int, tx: bytes, nrx: int, t_us: int) -> bytes | None:
+        """One transaction on ``bus`` (0 = I2C1) with whatever answers at ``addr``; None: NACK."""
         txb = (c_uint8 * max(1, len(tx))).from_buffer_copy(tx or b"\0")
         rxb = (c_uint8 * max(1, nrx))()
-        if self.lib.sim_mpu_transfer(addr, txb, len(tx), rxb, nrx, t_us) != 0:
+        if self.lib.emu_i2c_transfer(bus, addr, txb, len(tx), rxb, nrx, t_us) != 0:
             return None
         return bytes(rxb[:nrx])

@@ -11,14 +11,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ...errors import SimError
 from ...firmware.boards import load_board
 from ...firmware.placement import place_imus, sim_imu_keys
 from ...robot import Robot
 from ...sim.closed_loop import DEFAULT_PLANT_DT_S, SimulatedRobot
 from ...sim.plant import Plant
 from .board import ArmEmuBoard
-from .i2c import imu_slot_key
 from .firmware import BOARD, bluepill_elf
 
 
@@ -34,11 +32,7 @@ def ArmEmuRobot(  # noqa: N802 - a factory that reads like the class it returns
 ) -> SimulatedRobot:
     board_info = load_board(firmware_board)
     places = place_imus(robot, board_info)
-    for p in places:
-        if p.mux is not None:
-            raise SimError(f"arm-emu: limb {p.limb}'s IMU sits behind a multiplexer, which arm-emu does not model "
-                           "(place it on I2C1 or I2C2)")
-    keys = tuple(imu_slot_key(p.bus, p.address) for p in places)
-    emu = ArmEmuBoard(elf or bluepill_elf(robot, board=firmware_board), seed, pwm_pins=board_info.pwm_channels, imu_addresses=keys)
-    emu.imu_keymap = dict(zip(sim_imu_keys(places), keys))
+    wiring = tuple((p.bus, p.address, p.mux or 0, p.channel or 0) for p in places)  # I2C1/I2C2, maybe behind a mux
+    emu = ArmEmuBoard(elf or bluepill_elf(robot, board=firmware_board), seed, pwm_pins=board_info.pwm_channels,
+                      imu_addresses=sim_imu_keys(places), imu_wiring=wiring)
     return SimulatedRobot(robot, seed=seed, plant=plant, conditions=conditions, plant_dt_s=plant_dt_s, board=emu, board_info=board_info)
