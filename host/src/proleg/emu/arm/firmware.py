@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ...firmware.boards import load_board
 from ...robot import Robot
-from .native import cache_root
+from ...paths import cache_dir
 
 BOARD = "bluepill-f103"
 
@@ -25,7 +25,7 @@ def bluepill_elf(robot: Robot, *, objective: str = "total", max_transitions: int
     digest = hashlib.sha256()
     for rel in sorted(files):
         digest.update(rel.encode() + b"\0" + files[rel].encode() + b"\0")
-    out = cache_root() / "emu-arm" / f"{robot.name}-{digest.hexdigest()[:16]}"
+    out = cache_dir("emu-arm") / f"{robot.name}-{digest.hexdigest()[:16]}"
     elf = out / "firmware.elf"
     if elf.exists():
         return elf

@@ -14,14 +14,13 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
-import shutil
 import subprocess
-import tempfile
 from ctypes import POINTER, c_double, c_int, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
 from pathlib import Path
 
 from ...errors import SimError
-from ...paths import templates_dir
+from ...paths import cache_dir, templates_dir
+from ...sim.private_library import load_private_copy
 
 _HERE = Path(__file__).resolve().parent
 
@@ -43,13 +42,6 @@ _SIGNATURES = {
 }
 
 
-def cache_root() -> Path:
-    root = os.environ.get("PROLEG_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "proleg"
-    )
-    return Path(root)
-
-
 def _sim_dir() -> Path:
     return templates_dir() / "hal" / "sim"
 
@@ -65,7 +57,7 @@ def native_library() -> Path:
     digest = hashlib.sha256()
     for src in _sources():
         digest.update(src.name.encode() + b"\0" + src.read_bytes())
-    out = cache_root() / "emu-arm" / digest.hexdigest()[:16]
+    out = cache_dir("emu-arm") / digest.hexdigest()[:16]
     lib = out / "libarmemu.so"
     if lib.exists():
         return lib
@@ -85,16 +77,7 @@ class Native:
     """One loaded copy of the helper library: this board's cycle counter and IMU models."""
 
     def __init__(self) -> None:
-        path = native_library()
-        fd, copy = tempfile.mkstemp(prefix="proleg-armemu-", suffix=".so")
-        os.close(fd)
-        try:
-            shutil.copyfile(path, copy)
-            self.lib = ctypes.CDLL(copy, mode=os.RTLD_LOCAL)
-        except OSError as e:
-            raise SimError(f"{path}: cannot load the arm-emu helper library: {e}") from None
-        finally:
-            os.unlink(copy)
+        self.lib = load_private_copy(native_library(), prefix="proleg-armemu-", what="the arm-emu helper library")
         for name, (args, res) in _SIGNATURES.items():
             fn = getattr(self.lib, name)
             fn.argtypes, fn.restype = args, res
