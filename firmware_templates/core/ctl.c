@@ -6,7 +6,7 @@
 #include "rom.h"
 
 /* What a limb asks of its actuator, weakest first; an actuator serves the strongest. */
-enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT };
+enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT, WANT_BOOST };
 /* A limb's part in the current step. */
 enum { STAY, RISE, FALL, SAG };
 
@@ -153,9 +153,16 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
              * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
                                    : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
-            w = wait ? WANT_HOLD : WANT_HEAT;
+            w = wait ? WANT_HOLD : cl[i].ticks >= TICKS(CTL_BOOST_MS) ? WANT_BOOST : WANT_HEAT;
         } else if (move[i] == FALL) {
-            w = sagging ? WANT_HOLD : WANT_RELEASE; /* it may be what holds a sagging limb up */
+            /* It may be what holds a sagging limb up: kept warm while one sags, for at most
+             * CTL_SAG_WAIT_MS in this step (with several limbs held one of them nearly always
+             * sags, and a falling coil kept warm for good would never cross). */
+            w = WANT_RELEASE;
+            if (sagging && cl[i].ticks < TICKS(CTL_SAG_WAIT_MS)) {
+                cl[i].ticks++;
+                w = WANT_HOLD;
+            }
         } else if (move[i] == SAG) {
             w = WANT_HEAT;
         } else if (level == PSI_UNKNOWN) {
@@ -166,7 +173,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             w = WANT_NOTHING; /* held level between hold edge and top: coil off (bang-bang) */
         }
         if (level != PSI_UNKNOWN) {
-            watch(i, target[i], level, (uint8_t)(w == WANT_HEAT && move[i] == RISE), to_go[i]);
+            watch(i, target[i], level, (uint8_t)(w >= WANT_HEAT && move[i] == RISE), to_go[i]);
             if (cl[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {
                 w = WANT_NOTHING; /* cannot get there: stop heating, let it cool */
             }
@@ -177,6 +184,6 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
     }
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        duty[i] = want[i] == WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
+        duty[i] = want[i] == WANT_BOOST ? (uint16_t)CFG_MAX_DUTY_PM : want[i] == WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
     }
 }

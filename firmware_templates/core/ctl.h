@@ -60,8 +60,10 @@
 
 /* Stall detector (see above). */
 #define CTL_OSC_CROSSINGS 3u
-#define CTL_HOVER_MS 1000u
+#define CTL_HOVER_MS 300u
 #define CTL_STALL_MS 5000u
+#define CTL_BOOST_MS 700u
+#define CTL_SAG_WAIT_MS 150u
 #define CTL_STALL_NONE 0u
 #define CTL_STALL_OSCILLATING 1u
 #define CTL_STALL_UNREACHABLE 2u
