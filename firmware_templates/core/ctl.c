@@ -21,6 +21,7 @@ typedef struct {
     int16_t best;      /* best psi_to_go_cdeg while rising in this step */
     uint8_t stall;     /* CTL_STALL_* */
     uint16_t ticks;    /* rising without progress / at the target level unsettled */
+    uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
 } ctl_limb_t;
 
 static ctl_limb_t cl[CFG_N_LIMBS];
@@ -41,6 +42,7 @@ void ctl_reset(void)
         cl[i].best = 0;
         cl[i].stall = 0;
         cl[i].ticks = 0;
+        cl[i].boost = 0;
         psi_relax(i, 0);
     }
 }
@@ -153,7 +155,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
              * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
                                    : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
-            w = wait ? WANT_HOLD : cl[i].ticks >= TICKS(CTL_BOOST_MS) ? WANT_BOOST : WANT_HEAT;
+            if (cl[i].ticks >= TICKS(CTL_BOOST_MS)) {
+                cl[i].boost = 1;
+            }
+            w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;
         } else if (move[i] == FALL) {
             /* It may be what holds a sagging limb up: kept warm while one sags, for at most
              * CTL_SAG_WAIT_MS in this step (with several limbs held one of them nearly always
@@ -164,7 +169,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 w = WANT_HOLD;
             }
         } else if (move[i] == SAG) {
-            w = WANT_HEAT;
+            w = WANT_HEAT + cl[i].boost;
         } else if (level == PSI_UNKNOWN) {
             w = WANT_NOTHING;
         } else if (!psi_settled(i)) {

@@ -243,7 +243,7 @@ static void test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off(v
     CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
 }
 
-static void test_a_rising_limb_without_progress_is_boosted_to_the_duty_ceiling(void)
+static void test_a_limb_whose_rise_lags_is_boosted_to_the_duty_ceiling_until_the_next_start(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     uint32_t k, n = (uint32_t)CTL_BOOST_MS * CFG_TICK_HZ / 1000u;
@@ -257,8 +257,16 @@ static void test_a_rising_limb_without_progress_is_boosted_to_the_duty_ceiling(v
     demand(1, 0, duty);
     CHECK_EQ(duty[0], CFG_MAX_DUTY_PM); /* no progress edge for CTL_BOOST_MS: the build's ceiling */
     CHECK_EQ(duty[1], 0);
-    put(0, 10.0); /* progress: back to the drive duty */
+    put(0, 10.0); /* progress: the limb keeps the ceiling (its coil lags: it will again) */
     demand(1, 0, duty);
+    CHECK_EQ(duty[0], CFG_MAX_DUTY_PM);
+    put(0, 30.0); /* held: a sag below the hold edge re-heats at the ceiling too */
+    demand(1, 0, duty);
+    put(0, 21.5);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], CFG_MAX_DUTY_PM);
+    ctl_reset(); /* a new START: the drive duty again */
+    put(0, 5.0);
     demand(1, 0, duty);
     CHECK_EQ(duty[0], DRIVE);
 }
@@ -272,7 +280,7 @@ int main(void)
     RUN(test_a_limb_crossing_back_and_forth_is_oscillating_and_settles_on_the_band);
     RUN(test_a_limb_hovering_unsettled_at_its_level_is_oscillating);
     RUN(test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off);
-    RUN(test_a_rising_limb_without_progress_is_boosted_to_the_duty_ceiling);
+    RUN(test_a_limb_whose_rise_lags_is_boosted_to_the_duty_ceiling_until_the_next_start);
     RUN(test_limbs_rising_together_wait_for_the_farthest);
     RUN(test_a_limb_rising_while_another_falls_waits_near_its_crossing);
     RUN(test_a_falling_limb_waits_warm_while_a_held_limb_sags_but_not_for_long);
