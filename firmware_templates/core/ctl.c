@@ -20,7 +20,7 @@ typedef struct {
     uint8_t crossings; /* level changes in this step */
     int16_t best;      /* best psi_to_go_cdeg while rising in this step */
     uint8_t stall;     /* CTL_STALL_* */
-    uint16_t ticks;    /* rising without progress / at the target level unsettled */
+    uint16_t ticks;    /* rising without progress / at the target level unsettled / falling: kept warm */
     uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
 } ctl_limb_t;
 
@@ -155,7 +155,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
              * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
                                    : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
-            if (cl[i].ticks >= TICKS(CTL_BOOST_MS)) {
+            if (cl[i].target == target[i] && cl[i].ticks >= TICKS(CTL_BOOST_MS)) { /* this step's clock */
                 cl[i].boost = 1;
             }
             w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;
