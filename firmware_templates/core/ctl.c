@@ -25,6 +25,8 @@ typedef struct {
 } ctl_limb_t;
 
 static ctl_limb_t cl[CFG_N_LIMBS];
+/* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
+static const uint16_t boost_ticks = TICKS(CTL_BOOST_MS);
 
 uint8_t ctl_limb_actuator(uint8_t limb)
 {
@@ -155,7 +157,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
              * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
                                    : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
-            if (cl[i].target == target[i] && cl[i].ticks >= TICKS(CTL_BOOST_MS)) { /* this step's clock */
+            if (boost_ticks != 0u && cl[i].target == target[i] && cl[i].ticks >= boost_ticks) {
                 cl[i].boost = 1;
             }
             w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;

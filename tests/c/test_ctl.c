@@ -243,6 +243,7 @@ static void test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off(v
     CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
 }
 
+#if CTL_BOOST_MS
 static void test_a_limb_whose_rise_lags_is_boosted_to_the_duty_ceiling_until_the_next_start(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
@@ -271,6 +272,8 @@ static void test_a_limb_whose_rise_lags_is_boosted_to_the_duty_ceiling_until_the
     CHECK_EQ(duty[0], DRIVE);
 }
 
+#endif
+
 int main(void)
 {
     RUN(test_limb_that_must_go_up_gets_the_drive_duty);
@@ -280,7 +283,9 @@ int main(void)
     RUN(test_a_limb_crossing_back_and_forth_is_oscillating_and_settles_on_the_band);
     RUN(test_a_limb_hovering_unsettled_at_its_level_is_oscillating);
     RUN(test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off);
+#if CTL_BOOST_MS
     RUN(test_a_limb_whose_rise_lags_is_boosted_to_the_duty_ceiling_until_the_next_start);
+#endif
     RUN(test_limbs_rising_together_wait_for_the_farthest);
     RUN(test_a_limb_rising_while_another_falls_waits_near_its_crossing);
     RUN(test_a_falling_limb_waits_warm_while_a_held_limb_sags_but_not_for_long);
