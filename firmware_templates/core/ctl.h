@@ -77,7 +77,11 @@
 #ifndef CTL_BOOST_MS
 #define CTL_BOOST_MS 0u
 #endif
-#define CTL_SAG_WAIT_MS 150u /* longest wait of a falling limb per step */
+/* Longest wait of a falling limb per step: a held coil whose ψ sags has cooled through its
+ * transformation and needs ≈ 0.3-0.4 s at the drive duty to re-heat to As (≈ 45 → 64 °C at
+ * ≈ 60 K/s on R1); released earlier, the falling end drags it below ψ* (11 → 00 → 10 on the
+ * table plant instead of 11 → 10). */
+#define CTL_SAG_WAIT_MS 500u
 #define CTL_STALL_NONE 0u
 #define CTL_STALL_OSCILLATING 1u
 #define CTL_STALL_UNREACHABLE 2u
