@@ -69,11 +69,9 @@
 #define CTL_OSC_CROSSINGS 3u
 #define CTL_HOVER_MS 300u
 #define CTL_STALL_MS 5000u
-/* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default:
- * at 700 ms it gives the heating-limited conditions back their speed (docs/control.md), but
- * proleg learn's explorer on the simulator then never finishes
- * (tests/test_learn_sim.py::test_an_interrupted_exploration_resumes_from_its_log_and_loses_nothing),
- * not yet understood. */
+/* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default
+ * (flash; the default controller passes the hil central-claim points without it): at 700 ms
+ * it gives heating-limited conditions back speed (docs/control.md). */
 #ifndef CTL_BOOST_MS
 #define CTL_BOOST_MS 0u
 #endif
