@@ -169,7 +169,8 @@ def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
         trials = list(log.trials)
     # the telemetry saw each new state before the firmware confirmed it settled (STATE_REACHED)
     assert all(tr.t_seen is not None and tr.t_start < tr.t_seen <= tr.t_end for tr in trials)
-    assert max(tr.t_end - tr.t_seen for tr in trials) > 0.3  # a cooling limb settles late
+    # a cooling limb settles late (a limb still unsettled after CTL_HOVER_MS = 300 ms settles on its band edges)
+    assert max(tr.t_end - tr.t_seen for tr in trials) > 0.2
     t, x = np.array(path).T
     keep = np.arange(0, len(t), 17)  # ~30 fps
     track = Track(t[keep] + 42.0, x[keep])

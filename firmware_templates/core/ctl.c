@@ -6,7 +6,7 @@
 #include "rom.h"
 
 /* What a limb asks of its actuator, weakest first; an actuator serves the strongest. */
-enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT };
+enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT, WANT_BOOST };
 /* A limb's part in the current step. */
 enum { STAY, RISE, FALL, SAG };
 
@@ -20,10 +20,13 @@ typedef struct {
     uint8_t crossings; /* level changes in this step */
     int16_t best;      /* best psi_to_go_cdeg while rising in this step */
     uint8_t stall;     /* CTL_STALL_* */
-    uint16_t ticks;    /* rising without progress / at the target level unsettled */
+    uint16_t ticks;    /* rising without progress / at the target level unsettled / falling: kept warm */
+    uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
 } ctl_limb_t;
 
 static ctl_limb_t cl[CFG_N_LIMBS];
+/* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
+static const uint16_t boost_ticks = TICKS(CTL_BOOST_MS);
 
 uint8_t ctl_limb_actuator(uint8_t limb)
 {
@@ -41,6 +44,7 @@ void ctl_reset(void)
         cl[i].best = 0;
         cl[i].stall = 0;
         cl[i].ticks = 0;
+        cl[i].boost = 0;
         psi_relax(i, 0);
     }
 }
@@ -153,11 +157,21 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
              * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
                                    : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
-            w = wait ? WANT_HOLD : WANT_HEAT;
+            if (boost_ticks != 0u && cl[i].target == target[i] && cl[i].ticks >= boost_ticks) {
+                cl[i].boost = 1;
+            }
+            w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;
         } else if (move[i] == FALL) {
-            w = sagging ? WANT_HOLD : WANT_RELEASE; /* it may be what holds a sagging limb up */
+            /* It may be what holds a sagging limb up: kept warm while one sags, for at most
+             * CTL_SAG_WAIT_MS in this step (with several limbs held one of them nearly always
+             * sags, and a falling coil kept warm for good would never cross). */
+            w = WANT_RELEASE;
+            if (sagging && cl[i].ticks < TICKS(CTL_SAG_WAIT_MS)) {
+                cl[i].ticks++;
+                w = WANT_HOLD;
+            }
         } else if (move[i] == SAG) {
-            w = WANT_HEAT;
+            w = WANT_HEAT + cl[i].boost;
         } else if (level == PSI_UNKNOWN) {
             w = WANT_NOTHING;
         } else if (!psi_settled(i)) {
@@ -166,7 +180,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             w = WANT_NOTHING; /* held level between hold edge and top: coil off (bang-bang) */
         }
         if (level != PSI_UNKNOWN) {
-            watch(i, target[i], level, (uint8_t)(w == WANT_HEAT && move[i] == RISE), to_go[i]);
+            watch(i, target[i], level, (uint8_t)(w >= WANT_HEAT && move[i] == RISE), to_go[i]);
             if (cl[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {
                 w = WANT_NOTHING; /* cannot get there: stop heating, let it cool */
             }
@@ -177,6 +191,6 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
     }
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        duty[i] = want[i] == WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
+        duty[i] = want[i] == WANT_BOOST ? (uint16_t)CFG_MAX_DUTY_PM : want[i] == WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
     }
 }

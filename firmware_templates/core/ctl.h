@@ -1,7 +1,11 @@
 /* ctl.h - from (measured levels, target levels) to a duty per actuator.
  *
  * Contract, per limb, in order:
- * - rising (target above its level) → the drive duty: heat, ψ rises;
+ * - rising (target above its level) → the drive duty: heat, ψ rises. A limb that heats
+ *   CTL_BOOST_MS without getting one progress edge closer (psi_to_go_cdeg) lags (weak
+ *   supply, draught, cold start, worn coil): from then on until ctl_reset (START) its rises
+ *   and hold re-heats use the build's duty ceiling CFG_MAX_DUTY_PM (sma.c clamps and counts
+ *   it like any other duty);
  * - falling (target below) → off: the body's elasticity lowers ψ;
  * - holding a level L ≥ 1: closed loop on ψ, bang-bang with hysteresis. Below the hold
  *   edge of threshold L−1 (its upper band edge plus CFG_HOLD_MARGIN_CDEG) the coil heats
@@ -32,6 +36,8 @@
  * - While any held raised limb sags below its hold edge, falling limbs wait at the hold
  *   duty: through the body they may be what holds it up (a step like 11 → 01 on coupled
  *   coils), and a coil kept warm stops relaxing until the sagging limb's coil caught it.
+ *   At most CTL_SAG_WAIT_MS per limb and step: with several limbs held, one of them is
+ *   nearly always in a hold pulse, and a falling coil kept warm for good never crosses.
  * hold_pm is only used for these waits.
  *
  * Stall detector, per limb and step (a step = an unchanged target level):
@@ -44,8 +50,9 @@
  *   sequencer's state timeout reports the fault).
  * ctl_stall() tells which; both clear when the limb's target changes.
  *
- * An actuator that drives several limbs serves the strongest demand of its limbs: heat
- * over release over hold. Levels come from psi.h.
+ * An actuator that drives several limbs serves the strongest demand of its limbs: boost
+ * over heat over release over hold. Levels come from psi.h. Why and where the time goes:
+ * docs/control.md.
  */
 #ifndef PROLEG_CTL_H
 #define PROLEG_CTL_H
@@ -60,8 +67,19 @@
 
 /* Stall detector (see above). */
 #define CTL_OSC_CROSSINGS 3u
-#define CTL_HOVER_MS 1000u
+#define CTL_HOVER_MS 300u
 #define CTL_STALL_MS 5000u
+/* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default
+ * (flash; the default controller passes the hil central-claim points without it): at 700 ms
+ * it gives heating-limited conditions back speed (docs/control.md). */
+#ifndef CTL_BOOST_MS
+#define CTL_BOOST_MS 0u
+#endif
+/* Longest wait of a falling limb per step: a held coil whose ψ sags has cooled through its
+ * transformation and needs ≈ 0.3-0.4 s at the drive duty to re-heat to As (≈ 45 → 64 °C at
+ * ≈ 60 K/s on R1); released earlier, the falling end drags it below ψ* (11 → 00 → 10 on the
+ * table plant instead of 11 → 10). */
+#define CTL_SAG_WAIT_MS 500u
 #define CTL_STALL_NONE 0u
 #define CTL_STALL_OSCILLATING 1u
 #define CTL_STALL_UNREACHABLE 2u

@@ -14,6 +14,7 @@ time (1.0 = real time, for the console); ``None`` runs flat out.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from typing import Any, Protocol
@@ -59,7 +60,10 @@ class SimLink(Link):
             data = self.board.read()
             if data:
                 return bytes(data)
-            deadline = self._t_ns + round(max(0.0, timeout) * 1e9)
+            # Rounded up: a positive timeout below 0.5 ns must still advance the clock, or a
+            # caller waiting "until clock() >= end" (end = clock() + s, in float seconds) reads
+            # a remaining sub-nanosecond forever without time moving (proleg learn hung so).
+            deadline = self._t_ns + math.ceil(max(0.0, timeout) * 1e9)
             while True:
                 step = min(self._step_ns, deadline - self._t_ns)
                 if step <= 0:
