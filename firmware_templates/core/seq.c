@@ -261,20 +261,28 @@ uint32_t seq_cycles(void)
     return s.cycles;
 }
 
+/* State numbers below CFG_N_STATES: 16-bit arithmetic when they fit (an 8-bit MCU then
+ * carries no 32-bit multiply or compare here). */
+#if CFG_N_STATES <= 65536UL
+typedef uint16_t state_num_t;
+#else
+typedef uint32_t state_num_t;
+#endif
+
 /* The mixed-radix digits of `state`, most significant (limb 0) first, by subtracting
  * place values (a digit is below its limb's level count): no division in the tick. */
 void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 {
-    uint32_t place[CFG_N_LIMBS];
-    uint32_t v = state;
+    state_num_t place[CFG_N_LIMBS];
+    state_num_t v = (state_num_t)state;
     uint8_t i, d;
     place[CFG_N_LIMBS - 1] = 1u;
     for (i = CFG_N_LIMBS - 1u; i > 0u; i--) {
-        place[i - 1u] = place[i] * psi_levels(i);
+        place[i - 1u] = (state_num_t)(place[i] * psi_levels(i));
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         for (d = 0; v >= place[i] && d < 0xFFu; d++) {
-            v -= place[i];
+            v = (state_num_t)(v - place[i]);
         }
         levels[i] = d;
     }
@@ -282,10 +290,10 @@ void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 
 cfg_state_t seq_state_index(const uint8_t levels[CFG_N_LIMBS])
 {
-    uint32_t v = 0;
+    state_num_t v = 0;
     uint8_t i;
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        v = v * psi_levels(i) + levels[i];
+        v = (state_num_t)(v * psi_levels(i) + levels[i]);
     }
     return (cfg_state_t)v;
 }
