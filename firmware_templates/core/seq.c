@@ -155,7 +155,7 @@ static cfg_state_t target_state(void)
 
 int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
 {
-    uint16_t i;
+    uint16_t i, g = 0; /* g: the rendered gait's row in the tables */
     if (dir == SEQ_DIR_LOADED) {
         if (loaded_n == 0u || index != 0u) {
             return SEQ_ERR_NO_GAIT;
@@ -163,7 +163,6 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         s.first = 0;
         s.n = loaded_n;
     } else {
-        uint16_t g;
         if (dir > SEQ_DIR_MX || index >= seq_gait_count(dir)) {
             return SEQ_ERR_NO_GAIT;
         }
@@ -181,10 +180,9 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         }
     }
     if (i == s.n && measured == 0u && dir != SEQ_DIR_LOADED) { /* from rest: the entry path */
-        i = (uint16_t)(dir == SEQ_DIR_PX ? index : CFG_N_GAITS_PX + index);
-        s.step = ROM_U16(&seq_entry_join[i]);
-        s.entry_at = ROM_U16(&seq_entry_first[i]);
-        s.entry_left = ROM_U16(&seq_entry_len[i]);
+        s.step = ROM_U16(&seq_entry_join[g]);
+        s.entry_at = ROM_U16(&seq_entry_first[g]);
+        s.entry_left = ROM_U16(&seq_entry_len[g]);
     }
     s.step_ticks = 0;
     s.held = 0;
