@@ -90,7 +90,7 @@ void fault_watchdog_tick(void)
     if (st.rx_stale) {
         since = 0xFFFFFFFFUL;
     }
-    if (param_watchdog_ticks() && seq_running() && since >= param_watchdog_ticks() * CFG_TICK_US) {
+    if (param_watchdog_us() && seq_running() && since >= param_watchdog_us()) {
         sma_all_off();
         st.watchdog_tripped = 1;
         tx_event(PROTO_EV_FAULT, PROTO_FAULT_LINK_WATCHDOG, 0);

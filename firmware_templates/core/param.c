@@ -14,7 +14,7 @@
 static struct {
     uint16_t drive_pm, hold_pm;
     uint32_t max_on_ticks, cooldown_ticks;
-    uint32_t watchdog_ticks;
+    uint32_t watchdog_us; /* the link watchdog, in ticks of CFG_TICK_US as set, µs */
 } st;
 
 static uint32_t ms_to_ticks(uint32_t ms)
@@ -140,7 +140,7 @@ static uint8_t set_cooldown(uint8_t index, int32_t ticks)
 static uint8_t set_watchdog(uint8_t index, int32_t ticks)
 {
     (void)index;
-    st.watchdog_ticks = (uint32_t)ticks;
+    st.watchdog_us = (uint32_t)ticks * CFG_TICK_US; /* ≤ 600 s: fits */
     return 0;
 }
 
@@ -203,7 +203,7 @@ void param_init(void)
     st.hold_pm = CFG_HOLD_DUTY_PM;
     st.max_on_ticks = CFG_MAX_ON_TICKS;
     st.cooldown_ticks = CFG_MIN_COOLDOWN_TICKS;
-    st.watchdog_ticks = CFG_LINK_WATCHDOG_TICKS;
+    st.watchdog_us = CFG_LINK_WATCHDOG_TICKS * CFG_TICK_US;
 }
 
 uint16_t param_drive_pm(void)
@@ -216,7 +216,7 @@ uint16_t param_hold_pm(void)
     return st.hold_pm;
 }
 
-uint32_t param_watchdog_ticks(void)
+uint32_t param_watchdog_us(void)
 {
-    return st.watchdog_ticks;
+    return st.watchdog_us;
 }
