@@ -232,29 +232,29 @@ int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx,
 int8_t hal_i2c_poll(void)
 {
     int8_t r = tw.result;
-    uint8_t late;
-    if (r != HAL_I2C_BUSY && !(TWCR & _BV(TWSTO))) {
-        if (r < 0 && !tw.checked) {
-            tw.checked = 1;
-            if (!(PINC & _BV(PC4))) {
-                twi_recover(); /* a slave kept SDA low */
-            }
-        }
-        return r;
-    }
-    /* the transfer, or its STOP, is still going out */
-    late = (uint32_t)(hal_micros() - tw.t0) > HAL_I2C_DEADLINE_US;
-    if (!late) {
-        return HAL_I2C_BUSY;
-    }
     if (r == HAL_I2C_BUSY) {
+        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+            return HAL_I2C_BUSY;
+        }
         TWCR = 0; /* abort: the interrupt cannot run again */
         tw.result = r = -1;
         tw.checked = 1;
-    } else {
-        r = -1; /* the STOP never went out */
+        twi_recover();
+        return r;
     }
-    twi_recover();
+    if (TWCR & _BV(TWSTO)) {
+        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+            return HAL_I2C_BUSY; /* the STOP is still going out */
+        }
+        twi_recover();
+        return -1;
+    }
+    if (r < 0 && !tw.checked) {
+        tw.checked = 1;
+        if (!(PINC & _BV(PC4))) {
+            twi_recover(); /* a slave kept SDA low */
+        }
+    }
     return r;
 }
 
