@@ -334,7 +334,7 @@ int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {
     const limb_state_t *l = &limbs[limb];
     const int16_t *e = &bands[limb][thr].t[rising ? 0 : 2];
-    uint8_t k, lo, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
+    uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
     /* The sample in the frame of the band edge θ (upper when rising, lower when falling):
      * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above), and
      * ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔ u·cos d − v·sin d ≥ 0. |g| < 2^15 (every
@@ -349,19 +349,13 @@ int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
     if (rising) {
         z16 = (int16_t)-z16; /* the edges below the upper edge: turn the other way */
     }
-    /* The first edge the sample is past. Past one edge is past every farther one (ψ is
-     * within 180° of them on this side of the band edge), so a binary search finds the
-     * edge a scan from the nearest would: four products instead of up to thirteen. */
-    lo = 0;
-    while (lo < n) {
-        k = (uint8_t)((lo + n) / 2u);
-        if ((dot(ROM_I16(&progress[k][1]), ROM_I16(&progress[k][2]), u16, z16) >= 0) == !!rising) {
-            n = k;
-        } else {
-            lo = (uint8_t)(k + 1u);
+    for (k = 0; k < n; k++) {
+        const int16_t *p = progress[k];
+        if ((dot(ROM_I16(&p[1]), ROM_I16(&p[2]), u16, z16) >= 0) == !!rising) {
+            return ROM_I16(&p[0]);
         }
     }
-    return lo < (rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES) ? ROM_I16(&progress[lo][0]) : PSI_FAR;
+    return PSI_FAR;
 }
 
 uint8_t psi_settled(uint8_t limb)
