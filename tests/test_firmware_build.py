@@ -87,10 +87,10 @@ def one_line(err: str) -> str:
 # every example robot for every board
 
 
-#: (robot, board) pairs the board cannot host, and the reason the build must give.
-#: caterpillar-4 on the Nano: 1,859 B of static RAM leave less than the stack the board
-#: file keeps (stack_bytes, measured on avr-emu plus interrupt frames) of its 2,048 B.
-CANNOT_HOST = {("caterpillar-4", "arduino-nano"): r"needs [\d,]+ bytes of static RAM and [\d,]+ for its stack"}
+#: (robot, board) pairs the board cannot host, and the reason the build must give. None
+#: today: caterpillar-4 on the Nano (1,859 B of static RAM, too little left for the stack the
+#: board file keeps) fits since its ψ progress edges left RAM (1,375 B).
+CANNOT_HOST: dict[tuple[str, str], str] = {}
 
 
 @pytest.mark.parametrize("board_file", BOARD_FILES, ids=lambda p: p.stem)

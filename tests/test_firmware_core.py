@@ -134,8 +134,8 @@ CONFIGS = {"inch-entry": _inchworm_entry, "r1-fast": _r1_fast, "r1-1act": _r1_on
 C_TESTS = {
     "test_psi.c": ("r1-fast", ["psi.c"], [], []),
     "test_psi_multilevel.c": ("multi", ["psi.c", "seq.c"], ["gait_table.c"], []),
-    "test_sma.c": ("r1-fast", ["sma.c"], [], []),
-    "test_safety.c": ("r1-fast", ["safety.c"], [], []),
+    "test_sma.c": ("r1-fast", ["sma.c", "elapsed.c"], [], []),
+    "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c"], ["gait_table.c"], []),

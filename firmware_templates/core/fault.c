@@ -40,22 +40,28 @@ void fault_stop_gait(uint8_t reason)
     tx_event(PROTO_EV_GAIT_STOPPED, reason, cycles);
 }
 
-void fault_raise(uint8_t code, uint16_t detail)
+/* Latch `code`; the gait (still running, or stopped by the sequencer itself: `stopped`)
+ * is reported stopped; then the fallback may take over (fallback.h). */
+static void raise(uint8_t code, uint16_t detail, uint8_t stopped)
 {
     sma_all_off();
     st.latched = 1;
     tx_event(PROTO_EV_FAULT, code, detail);
-    fault_stop_gait(PROTO_STOP_FAULT);
+    if (stopped || seq_running()) {
+        seq_stop();
+        tx_event(PROTO_EV_GAIT_STOPPED, PROTO_STOP_FAULT, cycles_u16());
+    }
     fallback_fault(code, detail);
+}
+
+void fault_raise(uint8_t code, uint16_t detail)
+{
+    raise(code, detail, 0);
 }
 
 void fault_raise_stopped(uint8_t code, uint16_t detail)
 {
-    sma_all_off();
-    st.latched = 1;
-    tx_event(PROTO_EV_FAULT, code, detail);
-    tx_event(PROTO_EV_GAIT_STOPPED, PROTO_STOP_FAULT, cycles_u16());
-    fallback_fault(code, detail);
+    raise(code, detail, 1);
 }
 
 uint8_t fault_latched(void)
@@ -84,7 +90,7 @@ void fault_watchdog_tick(void)
     if (st.rx_stale) {
         since = 0xFFFFFFFFUL;
     }
-    if (param_watchdog_ticks() && seq_running() && since >= param_watchdog_ticks() * CFG_TICK_US) {
+    if (param_watchdog_us() && seq_running() && since >= param_watchdog_us()) {
         sma_all_off();
         st.watchdog_tripped = 1;
         tx_event(PROTO_EV_FAULT, PROTO_FAULT_LINK_WATCHDOG, 0);

@@ -30,23 +30,26 @@
 
 static const uint8_t imu_addr[CFG_N_LIMBS] ROM = CFG_LIMB_IMU_ADDR;
 
+/* Per limb, in one record: on an 8-bit MCU a function then computes the limb's address once. */
+typedef struct {
+    uint8_t rx[MPU6050_ACCEL_BYTES]; /* the transaction's reply */
+    uint8_t res;                     /* RES_*: what the limb's last transaction gave */
+    uint8_t phase;                   /* start-up step, PHASE_RUN: reading */
+    uint32_t t0;                     /* hal_micros() at (re)start */
+    uint32_t wait;                   /* µs after t0 before the first transaction */
+    uint8_t err;                     /* failed reads in a row */
+    uint16_t stuck;                  /* identical samples in a row */
+    mpu6050_accel_t last;
+} limb_t;
+
 static struct {
     uint8_t bad; /* bit per limb: IMU faulted, not read until CLEAR(FAULTS) */
-    uint8_t err[CFG_N_LIMBS];
-    uint16_t stuck[CFG_N_LIMBS];
-    mpu6050_accel_t last[CFG_N_LIMBS];
     uint32_t measured; /* debounced robot state, IMUCHECK_UNKNOWN until every limb has one */
-    /* start-up */
-    uint8_t phase[CFG_N_LIMBS];
-    int8_t why[CFG_N_LIMBS];    /* the last start-up failure (MPU6050_ERR_*) */
-    uint32_t t0[CFG_N_LIMBS];   /* hal_micros() at (re)start */
-    uint32_t wait[CFG_N_LIMBS]; /* µs after t0 before the first transaction */
     /* the transactions of this tick: one per limb, in limb order, in the background */
-    uint8_t cur;                /* limb whose transaction is in flight, or NO_LIMB */
-    uint8_t res[CFG_N_LIMBS];   /* RES_*: what that limb's last transaction gave */
+    uint8_t cur; /* limb whose transaction is in flight, or NO_LIMB */
     uint8_t tx[2];
-    uint8_t rx[CFG_N_LIMBS][MPU6050_ACCEL_BYTES];
     uint8_t due; /* this period's transactions are still to begin */
+    limb_t limb[CFG_N_LIMBS];
 } st;
 
 static void imu_fault(uint8_t limb, uint8_t code)
@@ -65,13 +68,13 @@ void imucheck_init(void)
 
 static void restart(uint8_t limb, uint32_t wait_us)
 {
-    st.err[limb] = 0;
-    st.stuck[limb] = 0;
-    st.phase[limb] = 0;
-    st.why[limb] = MPU6050_ERR_BUS;
-    st.res[limb] = RES_NONE;
-    st.t0[limb] = hal_micros();
-    st.wait[limb] = wait_us;
+    limb_t *l = &st.limb[limb];
+    l->err = 0;
+    l->stuck = 0;
+    l->phase = 0;
+    l->res = RES_NONE;
+    l->t0 = hal_micros();
+    l->wait = wait_us;
 }
 
 void imucheck_power_up(uint8_t limb)
@@ -88,19 +91,20 @@ void imucheck_start(uint8_t limb)
  * 0 if begun. A limb that is bad or still in its power-up wait has none. */
 static int8_t begin(uint8_t limb)
 {
+    limb_t *l = &st.limb[limb];
     uint8_t ntx, nrx;
-    if ((st.bad & (1u << limb)) || (uint32_t)(hal_micros() - st.t0[limb]) < st.wait[limb]) {
+    if ((st.bad & (1u << limb)) || (uint32_t)(hal_micros() - l->t0) < l->wait) {
         return -1;
     }
-    if (st.phase[limb] < PHASE_RUN) {
-        mpu6050_init_step(st.phase[limb], st.tx, &ntx, &nrx);
+    if (l->phase < PHASE_RUN) {
+        mpu6050_init_step(l->phase, st.tx, &ntx, &nrx);
     } else {
         st.tx[0] = MPU6050_REG_ACCEL_XOUT_H;
         ntx = 1;
         nrx = MPU6050_ACCEL_BYTES;
     }
     /* Behind a multiplexer its control byte goes first, in the background too (imubus.h). */
-    return imubus_begin(limb, ROM_U8(&imu_addr[limb]), st.tx, ntx, st.rx[limb], nrx) == 0 ? 0 : -1;
+    return imubus_begin(limb, ROM_U8(&imu_addr[limb]), st.tx, ntx, l->rx, nrx) == 0 ? 0 : -1;
 }
 
 /* From `from` on, begin the next limb's transaction; NO_LIMB when none is left. */
@@ -130,7 +134,7 @@ void imucheck_service(void)
             return;
         }
         limb = st.cur;
-        st.res[limb] = r == 0 ? RES_OK : RES_ERR;
+        st.limb[limb].res = r == 0 ? RES_OK : RES_ERR;
         next((uint8_t)(limb + 1u));
     }
 }
@@ -138,19 +142,20 @@ void imucheck_service(void)
 /* The start-up deadline of limb i has passed. */
 static uint8_t past_deadline(uint8_t i)
 {
-    return (uint32_t)(hal_micros() - st.t0[i]) >= st.wait[i] + START_DEADLINE_US;
+    const limb_t *l = &st.limb[i];
+    return (uint32_t)(hal_micros() - l->t0) >= l->wait + START_DEADLINE_US;
 }
 
 /* A start-up step finished: next step, a retry, or (past the deadline) a fault. */
 static void start_up(uint8_t i, uint8_t res)
 {
-    int8_t r = res == RES_OK ? mpu6050_init_check(st.phase[i], st.rx[i][0]) : MPU6050_ERR_BUS;
+    limb_t *l = &st.limb[i];
+    int8_t r = res == RES_OK ? mpu6050_init_check(l->phase, l->rx[0]) : MPU6050_ERR_BUS;
     if (r == MPU6050_OK) {
-        st.phase[i]++;
+        l->phase++;
         return;
     }
-    st.why[i] = r;
-    st.phase[i] = 0; /* from WHO_AM_I again */
+    l->phase = 0; /* from WHO_AM_I again */
     if (past_deadline(i)) {
         imu_fault(i, r == MPU6050_ERR_BUS ? PROTO_FAULT_IMU_NO_ACK : PROTO_FAULT_IMU_BAD_DATA);
     }
@@ -159,19 +164,20 @@ static void start_up(uint8_t i, uint8_t res)
 /* A good accelerometer sample of limb i: checks, then the ψ classifier. 0 if usable. */
 static int8_t sample(uint8_t i)
 {
+    limb_t *l = &st.limb[i];
     mpu6050_accel_t a;
     uint32_t g2;
-    st.err[i] = 0;
-    mpu6050_accel(st.rx[i], &a);
-    if (a.ax == st.last[i].ax && a.ay == st.last[i].ay && a.az == st.last[i].az) {
-        if (++st.stuck[i] >= CFG_IMU_STUCK_SAMPLES) {
+    l->err = 0;
+    mpu6050_accel(l->rx, &a);
+    if (a.ax == l->last.ax && a.ay == l->last.ay && a.az == l->last.az) {
+        if (++l->stuck >= CFG_IMU_STUCK_SAMPLES) {
             imu_fault(i, PROTO_FAULT_IMU_BAD_DATA);
             return -1;
         }
     } else {
-        st.stuck[i] = 0;
+        l->stuck = 0;
     }
-    st.last[i] = a;
+    l->last = a;
     g2 = (uint32_t)((int32_t)a.ax * a.ax) + (uint32_t)((int32_t)a.ay * a.ay) + (uint32_t)((int32_t)a.az * a.az);
     if (g2 < G2_MIN || g2 > G2_MAX) {
         imu_fault(i, PROTO_FAULT_IMU_BAD_DATA);
@@ -188,16 +194,17 @@ void imucheck_read(void)
     uint8_t i, res, known = 1;
     imucheck_service();
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        res = st.res[i];
+        limb_t *l = &st.limb[i];
+        res = l->res;
         if (i == st.cur) {
             res = RES_NONE; /* still on the bus: its result counts next tick */
         }
-        st.res[i] = RES_NONE;
+        l->res = RES_NONE;
         if (st.bad & (1u << i)) {
             known = 0;
             continue;
         }
-        if (st.phase[i] < PHASE_RUN) {
+        if (l->phase < PHASE_RUN) {
             if (res != RES_NONE) {
                 start_up(i, res);
             } else if (past_deadline(i)) {
@@ -207,7 +214,7 @@ void imucheck_read(void)
             continue;
         }
         if (res == RES_ERR) {
-            if (++st.err[i] >= 2u) {
+            if (++l->err >= 2u) {
                 imu_fault(i, PROTO_FAULT_IMU_NO_ACK);
                 known = 0;
                 continue;

@@ -37,9 +37,11 @@ static uint8_t phase;
 static uint8_t left;     /* ticks of sampling left */
 static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
 static uint16_t waited;  /* ticks some limb had no sample yet */
-static int32_t sum[CFG_N_LIMBS];    /* ψ as corrected now, 0.01°, summed over the ticks */
-static int16_t ground[CFG_N_LIMBS]; /* this ground's tilt on top of the record, 0.01° */
-static int16_t rc[CFG_N_LIMBS], rs[CFG_N_LIMBS]; /* Q14 cos/sin of the whole tilt */
+static struct {
+    int32_t sum;    /* ψ as corrected now, 0.01°, summed over the ticks */
+    int16_t ground; /* this ground's tilt on top of the record, 0.01° */
+    int16_t rc, rs; /* Q14 cos/sin of the whole tilt */
+} lm[CFG_N_LIMBS]; /* per limb, in one record */
 
 /* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
  * shift 32 bits 14 times. Exact for |p| < 2^29 (a rotated gravity vector always is). */
@@ -57,7 +59,7 @@ int16_t level_offset_cdeg(uint8_t limb)
 
 int16_t level_ground_cdeg(uint8_t limb)
 {
-    return ground[limb];
+    return lm[limb].ground;
 }
 
 /* Read the record back: its status, then each limb's rotation (the record's only if valid). */
@@ -70,9 +72,9 @@ static void load(void)
              : (rec.magic == LEVEL_MAGIC && rec.limbs == CFG_N_LIMBS && rec.crc == rec_crc()) ? PROTO_LEVEL_STORED
                                                                                              : PROTO_LEVEL_CORRUPT;
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        a = (int16_t)(level_offset_cdeg(i) + ground[i]);
-        rc[i] = psi_cos_q14(a);
-        rs[i] = psi_sin_q14(a);
+        a = (int16_t)(level_offset_cdeg(i) + lm[i].ground);
+        lm[i].rc = psi_cos_q14(a);
+        lm[i].rs = psi_sin_q14(a);
     }
 }
 
@@ -84,7 +86,7 @@ void level_init(void)
 
 void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 {
-    int16_t x = *ax, z = *az, c = rc[limb], s = rs[limb];
+    int16_t x = *ax, z = *az, c = lm[limb].rc, s = lm[limb].rs;
     if (s != 0) { /* a tilt of 0.01° already has sin ≥ 2 in Q14; 16×16→32 products */
         *ax = Q14_TO_I16((int32_t)x * c - (int32_t)z * s);
         *az = Q14_TO_I16((int32_t)z * c + (int32_t)x * s);
@@ -93,15 +95,27 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 
 int8_t level_calibrate(uint8_t on_this_ground)
 {
+    uint8_t i;
     if (phase != PH_IDLE) {
         return -1;
     }
-    memset(sum, 0, sizeof sum);
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        lm[i].sum = 0;
+    }
     ground_mode = on_this_ground;
     left = LEVEL_SAMPLES;
     waited = 0;
     phase = PH_SAMPLING;
     return 0;
+}
+
+/* This ground's tilt per limb: `o`, or 0 with o = 0. */
+static void set_ground(const int16_t *o)
+{
+    uint8_t i;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        lm[i].ground = o ? o[i] : 0;
+    }
 }
 
 static void write(uint8_t n, uint8_t ph)
@@ -116,7 +130,7 @@ int8_t level_clear(void)
     }
     rec.magic = 0xFFu; /* the erased magic: no record */
     status = PROTO_LEVEL_NONE;
-    memset(ground, 0, sizeof ground);
+    set_ground(0);
     write(1, PH_CLEARING);
     return 0;
 }
@@ -140,7 +154,7 @@ static void measured(void)
     uint8_t i, far = 0;
     int16_t o[CFG_N_LIMBS];
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        o[i] = (int16_t)(ground[i] + (int16_t)(sum[i] / LEVEL_SAMPLES)); /* a shift */
+        o[i] = (int16_t)(lm[i].ground + (int16_t)(lm[i].sum / LEVEL_SAMPLES)); /* a shift */
         if (!ground_mode) {
             o[i] = (int16_t)(o[i] + level_offset_cdeg(i));
         }
@@ -153,11 +167,11 @@ static void measured(void)
         return;
     }
     if (ground_mode) {
-        memcpy(ground, o, sizeof ground);
+        set_ground(o);
         done(PROTO_LEVEL_RES_STORED, 0); /* applied (this ground only: not stored) */
         return;
     }
-    memset(ground, 0, sizeof ground);
+    set_ground(0);
     memcpy(rec.off, o, sizeof o);
     rec.magic = LEVEL_MAGIC;
     rec.limbs = CFG_N_LIMBS;
@@ -184,7 +198,7 @@ void level_poll(void)
             done(PROTO_LEVEL_RES_INTERRUPTED, 0);
         } else if (!dead) {
             for (i = 0; i < CFG_N_LIMBS; i++) {
-                sum[i] += psi_last_centideg(i);
+                lm[i].sum += psi_last_centideg(i);
             }
             if (--left == 0u) {
                 measured();

@@ -14,7 +14,7 @@
 static struct {
     uint16_t drive_pm, hold_pm;
     uint32_t max_on_ticks, cooldown_ticks;
-    uint32_t watchdog_ticks;
+    uint32_t watchdog_us; /* the link watchdog, in ticks of CFG_TICK_US as set, µs */
 } st;
 
 static uint32_t ms_to_ticks(uint32_t ms)
@@ -24,24 +24,29 @@ static uint32_t ms_to_ticks(uint32_t ms)
 
 /* ---- where each parameter lives: v is in range and scaled; 0 or a PROTO_ERR_* code */
 
-static uint8_t set_drive_duty(uint8_t index, int32_t v)
+/* A duty (permyriad) into *dst, at most the ceiling in force. */
+#if defined(__GNUC__)
+__attribute__((noinline)) /* two callers: one copy */
+#endif
+static uint8_t set_duty(uint16_t *dst, int32_t v)
 {
-    (void)index;
     if (v > (int32_t)sma_max_duty()) {
         return PROTO_ERR_SAFETY_LIMIT;
     }
-    st.drive_pm = (uint16_t)v;
+    *dst = (uint16_t)v;
     return 0;
+}
+
+static uint8_t set_drive_duty(uint8_t index, int32_t v)
+{
+    (void)index;
+    return set_duty(&st.drive_pm, v);
 }
 
 static uint8_t set_hold_duty(uint8_t index, int32_t v)
 {
     (void)index;
-    if (v > (int32_t)sma_max_duty()) {
-        return PROTO_ERR_SAFETY_LIMIT;
-    }
-    st.hold_pm = (uint16_t)v;
-    return 0;
+    return set_duty(&st.hold_pm, v);
 }
 
 static uint8_t set_hold(uint8_t index, int32_t ticks)
@@ -106,30 +111,36 @@ static uint8_t set_hysteresis(uint8_t index, int32_t v)
     return 0;
 }
 
+/* On-time and cool-down (ticks) into the envelope, which refuses to widen it. */
+#if defined(__GNUC__)
+__attribute__((noinline)) /* two callers: one copy */
+#endif
+static uint8_t set_on_times(uint32_t max_on_ticks, uint32_t cooldown_ticks)
+{
+    if (sma_set_limits(sma_max_duty(), max_on_ticks, cooldown_ticks) != 0) {
+        return PROTO_ERR_SAFETY_LIMIT;
+    }
+    st.max_on_ticks = max_on_ticks;
+    st.cooldown_ticks = cooldown_ticks;
+    return 0;
+}
+
 static uint8_t set_max_on(uint8_t index, int32_t ticks)
 {
     (void)index;
-    if (sma_set_limits(sma_max_duty(), (uint32_t)ticks, st.cooldown_ticks) != 0) {
-        return PROTO_ERR_SAFETY_LIMIT;
-    }
-    st.max_on_ticks = (uint32_t)ticks;
-    return 0;
+    return set_on_times((uint32_t)ticks, st.cooldown_ticks);
 }
 
 static uint8_t set_cooldown(uint8_t index, int32_t ticks)
 {
     (void)index;
-    if (sma_set_limits(sma_max_duty(), st.max_on_ticks, (uint32_t)ticks) != 0) {
-        return PROTO_ERR_SAFETY_LIMIT;
-    }
-    st.cooldown_ticks = (uint32_t)ticks;
-    return 0;
+    return set_on_times(st.max_on_ticks, (uint32_t)ticks);
 }
 
 static uint8_t set_watchdog(uint8_t index, int32_t ticks)
 {
     (void)index;
-    st.watchdog_ticks = (uint32_t)ticks;
+    st.watchdog_us = (uint32_t)ticks * CFG_TICK_US; /* ≤ 600 s: fits */
     return 0;
 }
 
@@ -192,7 +203,7 @@ void param_init(void)
     st.hold_pm = CFG_HOLD_DUTY_PM;
     st.max_on_ticks = CFG_MAX_ON_TICKS;
     st.cooldown_ticks = CFG_MIN_COOLDOWN_TICKS;
-    st.watchdog_ticks = CFG_LINK_WATCHDOG_TICKS;
+    st.watchdog_us = CFG_LINK_WATCHDOG_TICKS * CFG_TICK_US;
 }
 
 uint16_t param_drive_pm(void)
@@ -205,7 +216,7 @@ uint16_t param_hold_pm(void)
     return st.hold_pm;
 }
 
-uint32_t param_watchdog_ticks(void)
+uint32_t param_watchdog_us(void)
 {
-    return st.watchdog_ticks;
+    return st.watchdog_us;
 }

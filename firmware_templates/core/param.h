@@ -21,6 +21,6 @@ uint8_t param_set(uint8_t param, uint8_t index, int32_t value);
 
 uint16_t param_drive_pm(void);
 uint16_t param_hold_pm(void);
-uint32_t param_watchdog_ticks(void); /* 0 = off */
+uint32_t param_watchdog_us(void); /* the link watchdog (whole ticks of CFG_TICK_US), 0 = off */
 
 #endif /* PROLEG_PARAM_H */

@@ -9,12 +9,17 @@ static const uint8_t limb_levels[CFG_N_LIMBS] ROM = CFG_LIMB_LEVELS;
 static const int16_t psi_star_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS] ROM = CFG_LIMB_PSI_STAR_CDEG;
 static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
 
-/* The thresholds in use (SET_PARAM may move them) and their angles in 0.01°. */
-static int16_t thresholds[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][4];
-static int16_t band_lo[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
-static int16_t band_hi[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
-static int16_t star[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
-static int16_t hyst[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
+/* Per limb and threshold, in one record (an 8-bit MCU computes its address once): the
+ * threshold in use (SET_PARAM may move it), its angles in 0.01°, and its hold and settle
+ * edges (below). */
+typedef struct {
+    int16_t t[4];             /* {cos, sin} Q14 of the upper band edge, then of the lower */
+    int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
+    int16_t star, hyst;       /* ψ* and the band width */
+    int16_t hold[2], top[2];  /* hold edge, hold top */
+    int16_t settle[2];        /* settle edge */
+} band_t;
+static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 
 /* Holding a level, the controller keeps ψ above the band's upper edge plus this margin:
  * the SMA's thermal lag makes ψ dip after each heating pulse, and a dip below ψ* would
@@ -22,16 +27,17 @@ static int16_t hyst[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 #ifndef CFG_HOLD_MARGIN_CDEG
 #define CFG_HOLD_MARGIN_CDEG 0
 #endif
-/* {cos, sin} Q14 of the hold edge ψ* + h/2 + margin, the hold top (the hold edge plus
- * PSI_HOLD_BAND_CDEG), the settle edge ψ* − h/2 − margin, and the progress edges
- * PSI_PROGRESS_CDEG inside each band edge (below the upper edge for rising, above the
- * lower edge for falling), per limb and threshold. */
-static int16_t hold_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
-static int16_t hold_top[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
-static int16_t settle_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][2];
-static int16_t rise_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][PSI_PROGRESS_EDGES][2];
-static int16_t fall_edge[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][PSI_FALL_EDGES][2];
-static const int16_t progress_cdeg[PSI_PROGRESS_EDGES] ROM = PSI_PROGRESS_CDEG;
+/* band_t's hold, top and settle: {cos, sin} Q14 of the hold edge ψ* + h/2 + margin, the
+ * hold top (the hold edge plus PSI_HOLD_BAND_CDEG) and the settle edge ψ* − h/2 − margin. */
+/* Per progress distance d of PSI_PROGRESS_CDEG: d, then {cos d, sin d} in Q14 (round(16384·cos d),
+ * round(16384·sin d)). The progress edges are the band edge turned by d (psi_to_go_cdeg), so no
+ * per-limb table of them is kept (RAM: 60 B per limb and threshold). */
+static const int16_t progress[PSI_PROGRESS_EDGES][3] ROM = {
+    {100, 16382, 286},   {200, 16374, 572},   {300, 16362, 857},   {400, 16344, 1143},  {500, 16322, 1428},
+    {600, 16294, 1713},  {800, 16225, 2280},  {1000, 16135, 2845}, {1200, 16026, 3406}, {1500, 15826, 4240},
+    {2000, 15396, 5604}, {2500, 14849, 6924}, {3000, 14189, 8192},
+};
+typedef char progress_matches_psi_h[PSI_PROGRESS_EDGES == 13 && PSI_FALL_EDGES <= 13 ? 1 : -1];
 
 /* {cos, sin} Q14 of `cdeg` clamped to ±89°. */
 static void edge_at(int16_t cdeg, int16_t edge[2])
@@ -43,28 +49,30 @@ static void edge_at(int16_t cdeg, int16_t edge[2])
 
 static void set_hold_edge(uint8_t limb, uint8_t thr)
 {
-    uint8_t k;
-    int16_t hi = band_hi[limb][thr], lo = band_lo[limb][thr];
-    edge_at((int16_t)(hi + CFG_HOLD_MARGIN_CDEG), hold_edge[limb][thr]);
-    edge_at((int16_t)(hi + CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG), hold_top[limb][thr]);
-    edge_at((int16_t)(lo - CFG_HOLD_MARGIN_CDEG), settle_edge[limb][thr]);
-    for (k = 0; k < PSI_PROGRESS_EDGES; k++) {
-        int16_t d = ROM_I16(&progress_cdeg[k]);
-        edge_at((int16_t)(hi - d), rise_edge[limb][thr][k]);
-        if (k < PSI_FALL_EDGES) {
-            edge_at((int16_t)(lo + d), fall_edge[limb][thr][k]);
-        }
-    }
+    band_t *b = &bands[limb][thr];
+    edge_at((int16_t)(b->hi + CFG_HOLD_MARGIN_CDEG), b->hold);
+    edge_at((int16_t)(b->hi + CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG), b->top);
+    edge_at((int16_t)(b->lo - CFG_HOLD_MARGIN_CDEG), b->settle);
 }
 
-/* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Called from many places; kept
- * out of line so that the 8-bit targets carry the two 32-bit products once. */
+/* x·cos θ − z·sin θ for a Q14 {cos θ, sin θ}: g·sin(ψ − θ) for the sample (x, z) = g·(sin ψ,
+ * cos ψ). Called from many places; kept out of line so that the 8-bit targets carry the two
+ * 32-bit products once. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static int32_t dot(int16_t c, int16_t s, int16_t x, int16_t z)
+{
+    return (int32_t)x * c - (int32_t)z * s;
+}
+
+/* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Out of line too (many callers). */
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
 static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
 {
-    return (int32_t)ax * edge[0] - (int32_t)az * edge[1] >= 0;
+    return dot(edge[0], edge[1], ax, az) >= 0;
 }
 
 /* sin(i · 90°/64) in Q14, i = 0..64. */
@@ -118,12 +126,12 @@ void psi_init(void)
         for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
             int16_t p = ROM_I16(&psi_star_rom[i][j]);
             for (k = 0; k < 4u; k++) {
-                thresholds[i][j][k] = ROM_I16(&thresholds_rom[i][j][k]);
+                bands[i][j].t[k] = ROM_I16(&thresholds_rom[i][j][k]);
             }
-            star[i][j] = p;
-            hyst[i][j] = h;
-            band_lo[i][j] = (int16_t)(p - h / 2);
-            band_hi[i][j] = (int16_t)(p + (h - h / 2));
+            bands[i][j].star = p;
+            bands[i][j].hyst = h;
+            bands[i][j].lo = (int16_t)(p - h / 2);
+            bands[i][j].hi = (int16_t)(p + (h - h / 2));
             set_hold_edge(i, j);
         }
     }
@@ -164,6 +172,7 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
 {
     int16_t lo, hi;
     int16_t *t;
+    band_t *b;
     if (limb >= CFG_N_LIMBS || thr >= CFG_MAX_THRESHOLDS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
         psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
         return -1;
@@ -173,33 +182,34 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     if (lo <= -9000 || hi >= 9000) {
         return -1;
     }
-    if (thr > 0u && lo <= band_hi[limb][thr - 1u]) {
+    if (thr > 0u && lo <= bands[limb][thr - 1u].hi) {
         return -1;
     }
-    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= band_lo[limb][thr + 1u]) {
+    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= bands[limb][thr + 1u].lo) {
         return -1;
     }
-    t = thresholds[limb][thr];
+    b = &bands[limb][thr];
+    t = b->t;
     t[0] = psi_cos_q14(hi);
     t[1] = psi_sin_q14(hi);
     t[2] = psi_cos_q14(lo);
     t[3] = psi_sin_q14(lo);
-    band_lo[limb][thr] = lo;
-    band_hi[limb][thr] = hi;
-    star[limb][thr] = psi_star_cdeg;
-    hyst[limb][thr] = hyst_cdeg;
+    b->lo = lo;
+    b->hi = hi;
+    b->star = psi_star_cdeg;
+    b->hyst = hyst_cdeg;
     set_hold_edge(limb, thr);
     return 0;
 }
 
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr)
 {
-    return star[limb][thr];
+    return bands[limb][thr].star;
 }
 
 int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr)
 {
-    return hyst[limb][thr];
+    return bands[limb][thr].hyst;
 }
 
 void psi_set_debounce(uint16_t samples)
@@ -214,7 +224,7 @@ uint8_t psi_levels(uint8_t limb)
 
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az)
 {
-    return at_or_above(&thresholds[limb][thr][edge == PSI_EDGE_LOWER ? 2 : 0], ax, az);
+    return at_or_above(&bands[limb][thr].t[edge == PSI_EDGE_LOWER ? 2 : 0], ax, az);
 }
 
 uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
@@ -245,13 +255,13 @@ static uint8_t inside(uint8_t limb, uint8_t margins)
         return 0;
     }
     if (level > 0u) {
-        e = margins ? hold_edge[limb][level - 1u] : &thresholds[limb][level - 1u][0];
+        e = margins ? bands[limb][level - 1u].hold : &bands[limb][level - 1u].t[0];
         if (!at_or_above(e, l->ax, l->az)) {
             return 0;
         }
     }
     if (level + 1u < psi_levels(limb)) {
-        e = margins ? settle_edge[limb][level] : &thresholds[limb][level][2];
+        e = margins ? bands[limb][level].settle : &bands[limb][level].t[2];
         if (at_or_above(e, l->ax, l->az)) {
             return 0;
         }
@@ -308,26 +318,41 @@ uint8_t psi_level(uint8_t limb)
 
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
 {
-    return at_or_above(hold_edge[limb][thr], limbs[limb].ax, limbs[limb].az);
+    return at_or_above(bands[limb][thr].hold, limbs[limb].ax, limbs[limb].az);
 }
 
 uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 {
-    return at_or_above(hold_top[limb][thr], limbs[limb].ax, limbs[limb].az);
+    return at_or_above(bands[limb][thr].top, limbs[limb].ax, limbs[limb].az);
 }
+
+/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
+ * shift 32 bits 14 times. Exact for |p| < 2^29. */
+#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
 
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {
     const limb_state_t *l = &limbs[limb];
+    const int16_t *e = &bands[limb][thr].t[rising ? 0 : 2];
     uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
-    /* rising: crossed at the upper edge, edges run downwards; falling: the mirror */
-    if (psi_at_or_above(limb, thr, rising ? PSI_EDGE_UPPER : PSI_EDGE_LOWER, l->ax, l->az) == !!rising) {
-        return 0;
+    /* The sample in the frame of the band edge θ (upper when rising, lower when falling):
+     * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above), and
+     * ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔ u·cos d − v·sin d ≥ 0. |g| < 2^15 (every
+     * sample imucheck.c passes is within 1.5 g) keeps |u|, |v| below 2^29 for Q14_TO_I16. */
+    int32_t u = dot(e[0], e[1], l->ax, l->az);
+    int16_t u16, z16;
+    if ((u >= 0) == !!rising) {
+        return 0; /* rising: at or above the upper edge; falling: below the lower edge */
+    }
+    u16 = Q14_TO_I16(u);
+    z16 = Q14_TO_I16(dot(e[1], (int16_t)-e[0], l->ax, l->az)); /* v */
+    if (rising) {
+        z16 = (int16_t)-z16; /* the edges below the upper edge: turn the other way */
     }
     for (k = 0; k < n; k++) {
-        const int16_t *e = rising ? rise_edge[limb][thr][k] : fall_edge[limb][thr][k];
-        if (at_or_above(e, l->ax, l->az) == !!rising) {
-            return ROM_I16(&progress_cdeg[k]);
+        const int16_t *p = progress[k];
+        if ((dot(ROM_I16(&p[1]), ROM_I16(&p[2]), u16, z16) >= 0) == !!rising) {
+            return ROM_I16(&p[0]);
         }
     }
     return PSI_FAR;

@@ -1,8 +1,8 @@
 /* safety.c - see safety.h. */
 #include "safety.h"
 
+#include "elapsed.h"
 #include "hal.h"
-#define GUARD_DT_CAP_US 400000UL /* as sma.c: a longer gap counts as this */
 
 static uint32_t last_us;
 static uint32_t unreached_us;
@@ -24,15 +24,8 @@ void guard_set_timeout_ms(uint32_t ms)
 
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)
 {
-    uint32_t now = hal_micros();
-    uint32_t dt = now - last_us; /* unsigned: right across the 2^32 wrap */
+    uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
     uint8_t i;
-    last_us = now;
-    if (dt >= 0x80000000UL) {
-        dt = CFG_TICK_US; /* the clock stepped back: count one tick */
-    } else if (dt > GUARD_DT_CAP_US) {
-        dt = GUARD_DT_CAP_US;
-    }
     if (reached) {
         unreached_us = 0;
         hits_since_reached = 0;

@@ -155,7 +155,7 @@ static cfg_state_t target_state(void)
 
 int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
 {
-    uint16_t i;
+    uint16_t i, g = 0; /* g: the rendered gait's row in the tables */
     if (dir == SEQ_DIR_LOADED) {
         if (loaded_n == 0u || index != 0u) {
             return SEQ_ERR_NO_GAIT;
@@ -163,7 +163,6 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         s.first = 0;
         s.n = loaded_n;
     } else {
-        uint16_t g;
         if (dir > SEQ_DIR_MX || index >= seq_gait_count(dir)) {
             return SEQ_ERR_NO_GAIT;
         }
@@ -181,10 +180,9 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         }
     }
     if (i == s.n && measured == 0u && dir != SEQ_DIR_LOADED) { /* from rest: the entry path */
-        i = (uint16_t)(dir == SEQ_DIR_PX ? index : CFG_N_GAITS_PX + index);
-        s.step = ROM_U16(&seq_entry_join[i]);
-        s.entry_at = ROM_U16(&seq_entry_first[i]);
-        s.entry_left = ROM_U16(&seq_entry_len[i]);
+        s.step = ROM_U16(&seq_entry_join[g]);
+        s.entry_at = ROM_U16(&seq_entry_first[g]);
+        s.entry_left = ROM_U16(&seq_entry_len[g]);
     }
     s.step_ticks = 0;
     s.held = 0;
@@ -261,20 +259,28 @@ uint32_t seq_cycles(void)
     return s.cycles;
 }
 
+/* State numbers below CFG_N_STATES: 16-bit arithmetic when they fit (an 8-bit MCU then
+ * carries no 32-bit multiply or compare here). */
+#if CFG_N_STATES <= 65536UL
+typedef uint16_t state_num_t;
+#else
+typedef uint32_t state_num_t;
+#endif
+
 /* The mixed-radix digits of `state`, most significant (limb 0) first, by subtracting
  * place values (a digit is below its limb's level count): no division in the tick. */
 void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 {
-    uint32_t place[CFG_N_LIMBS];
-    uint32_t v = state;
+    state_num_t place[CFG_N_LIMBS];
+    state_num_t v = (state_num_t)state;
     uint8_t i, d;
     place[CFG_N_LIMBS - 1] = 1u;
     for (i = CFG_N_LIMBS - 1u; i > 0u; i--) {
-        place[i - 1u] = place[i] * psi_levels(i);
+        place[i - 1u] = (state_num_t)(place[i] * psi_levels(i));
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         for (d = 0; v >= place[i] && d < 0xFFu; d++) {
-            v -= place[i];
+            v = (state_num_t)(v - place[i]);
         }
         levels[i] = d;
     }
@@ -282,10 +288,10 @@ void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 
 cfg_state_t seq_state_index(const uint8_t levels[CFG_N_LIMBS])
 {
-    uint32_t v = 0;
+    state_num_t v = 0;
     uint8_t i;
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        v = v * psi_levels(i) + levels[i];
+        v = (state_num_t)(v * psi_levels(i) + levels[i]);
     }
     return (cfg_state_t)v;
 }

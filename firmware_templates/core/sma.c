@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "elapsed.h"
 #include "hal.h"
 #include "rom.h"
 
@@ -138,17 +139,10 @@ void sma_request(uint8_t act, uint16_t duty_pm)
 
 uint8_t sma_tick(void)
 {
-    uint32_t now = hal_micros();
-    uint32_t dt = now - last_us; /* unsigned: right across the 2^32 wrap */
+    uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped */
     uint8_t hit = 0;
     uint8_t i;
     uint32_t *w;
-    last_us = now;
-    if (dt >= 0x80000000UL) {
-        dt = CFG_TICK_US; /* the clock stepped back: count one tick */
-    } else if (dt > SMA_DT_CAP_US) {
-        dt = SMA_DT_CAP_US;
-    }
     advance_window(dt);
     w = win[slot];
     for (i = 0; i < CFG_N_ACTUATORS; i++) {

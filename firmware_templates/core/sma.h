@@ -28,6 +28,7 @@
 
 #include <stdint.h>
 
+#include "elapsed.h"
 #include "robot_config.h"
 
 /* Defaults for builds whose robot_config.h predates these keys (see docs/safety.md). */
@@ -43,7 +44,7 @@
 
 /* A gap between two sma_tick calls longer than this is charged as this long (a stalled
  * loop is the hardware watchdog's job); a backwards step of the clock as one tick. */
-#define SMA_DT_CAP_US 400000UL
+#define SMA_DT_CAP_US ELAPSED_CAP_US
 
 void sma_init(void);
 

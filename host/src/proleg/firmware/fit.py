@@ -22,9 +22,12 @@ from .placement import ImuPlacement, check_tick_budget, i2c_tick_us, mux_selects
 from .render import BITMAP_MAX_STATES, gait_table_rows
 
 #: Flash and static RAM one more limb (beyond the two of the measured base) adds: its
-#: thresholds, IMU placement, ψ classifier and IMU-check state (measured: under 50 bytes each).
+#: thresholds, IMU placement, ψ classifier and IMU-check state, and its actuator's thermal
+#: budget (RAM measured on the Nano, 2026-11-23: paper-r1 969 B, inchworm-3 1,123 B,
+#: planar-4 1,263 B, i.e. 147-154 B per limb with its actuator; caterpillar-4, with two
+#: thresholds on some limbs, 1,375 B: the exact check after compiling catches that rest).
 FLASH_PER_LIMB = 64
-RAM_PER_LIMB = 48
+RAM_PER_LIMB = 155
 BASE_LIMBS = 2
 
 
