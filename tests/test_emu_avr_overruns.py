@@ -59,11 +59,12 @@ def test_ticks_that_keep_overrunning_are_counted_and_latch_tick_overrun_after_ov
         faults += [m for m in msgs if m.name == "EVENT" and m.kind == EventKind.FAULT]
         assert board.time_us < 200_000, "no fault within 200 ms of 4 kHz ticks the Nano cannot keep"
     assert [(f.code, f.detail) for f in faults] == [(FaultCode.TICK_OVERRUN, 0)]
-    # after overrun_fault of them, not the default 10: the firmware's count (GET_STATS's
-    # tick_overruns, app.c) when the fault reached the host, a few ms of UART later (with
-    # overrun_fault = 10 it reads 19 here). Once latched, the ticks are light again.
+    # not before overrun_fault of them (not the default 10): the firmware's count (GET_STATS's
+    # tick_overruns, app.c) when the fault reached the host. It may be well above 100: a
+    # lighter tick between overruns starts the run in a row again, and the count goes on
+    # until the fault reaches the host over the UART. Once latched, the ticks are light again.
     counted = int.from_bytes(board.read_symbol("overruns"), "little")
-    assert OVERRUN_FAULT <= counted < OVERRUN_FAULT + 40
+    assert counted >= OVERRUN_FAULT
     assert not any(board.pwm_permyriad(ch) for ch in range(4))
 
     with RobotClient(SimLink(board, step_s=0.001, description="avr-emu")) as client:

@@ -107,8 +107,10 @@ def test_client_runs_over_a_virtual_can_bus_shared_with_another_robot():
         with RobotClient(CanLink(channel, "virtual", node=2)) as client:
             assert client.connect().build_id == 0xB0
             client.start(0, "-x")
-            frames = list(client.telemetry(count=5))
-            assert all(f.direction == 1 for f in frames[1:])
+            # frames sent before START reached the board (a loaded machine delays the bridge's
+            # thread) still say 0; from the first that says -x on, every one does
+            dirs = [f.direction for f in client.telemetry(count=8)]
+            assert 1 in dirs and all(d == 1 for d in dirs[dirs.index(1):]), dirs
             assert client.stats.lost == 0 and client.stats.corrupt == 0
         assert [m.name for m in boards[0].received] == []  # robot 1 heard nothing meant for robot 2
         assert [m.name for m in boards[1].received][-1] == "START"
