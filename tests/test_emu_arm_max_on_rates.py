@@ -89,12 +89,7 @@ def test_the_fastest_accepted_rate_is_the_fastest_the_build_accepts():
 
 @pytest.mark.parametrize("tick_hz, idle_skip", [
     (200, False),
-    pytest.param(200, True, marks=pytest.mark.xfail(strict=True, reason=(
-        "arm-emu bug, not the firmware's: below 500 Hz, with the fast path over the tick wait "
-        "(emu/arm _wait_skip, which jumps up to a whole tick, several SysTick periods) the "
-        "firmware's clock runs slow, apparently SysTick interrupts lost in the jump (0.67x real time at 200 Hz, 0.71x at 250, "
-        "0.79x at 400; 1.0x at 500 and 1000) and a coil stays on ~735 ms for max_on 500; "
-        "with every cycle run (idle_skip=False) it holds"))),
+    (200, True),  # was a strict xfail: the tick-wait fast path lost SysTick wraps (mmio.py _wait_skip)
     (_fastest_r1_rate(), True),
 ])
 def test_max_on_ms_holds_in_real_time_on_the_bluepill_at_the_accepted_tick_rates(tick_hz, idle_skip):

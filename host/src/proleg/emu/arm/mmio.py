@@ -135,14 +135,23 @@ class MmioAccess:
             return
         if any(i2c.core_has_work() for i2c in self._i2cs):
             return  # a flag the core's idle loop acts on (hal_i2c_poll): run it
+        if self.scs.systick_pending:
+            return  # a wrap whose interrupt is not taken yet: the firmware's ms_count lags (see below)
         now = self.native.cycles.value
         # Nothing the idle loop polls can change before the next peripheral event (an I2C
         # byte or STOP completing included): jump to it or to the firmware's next tick.
+        # Never past a SysTick wrap (it is an event), and never while one is pending: a
+        # jump from a pending wrap to the next would fold two wraps into one interrupt and
+        # the firmware's clock (ms_count, counted in SysTick_Handler) would lose a ms. That
+        # was the 0.59-0.8x slow clock below 500 Hz: hal_micros reads SYST_CVR a second
+        # time after seeing PENDSTSET, and the skip on that read took ms_count, not yet
+        # incremented, for the firmware's time, 1 ms behind.
         target = min(self._next_event(), self._end)
         if self._next_tick and self._ms_count:
             next_tick = self._word(self._next_tick.value)
             ms = self._word(self._ms_count.value)
-            fw_us = ms * 1000 + (self.scs.rvr - self.scs.cvr(now)) // max(1, self.rcc.sysclk // 1_000_000)
+            cvr = self.scs.cvr(now)  # as hal_micros: the count 0 is where the next ms starts
+            fw_us = ms * 1000 + (self.scs.rvr + 1 - cvr if cvr else 0) // max(1, self.rcc.sysclk // 1_000_000)
             ahead = ((next_tick - fw_us + 2**31) % 2**32) - 2**31
             if ahead > 0:
                 target = min(target, now + ahead * CYC_PER_US)
