@@ -31,12 +31,21 @@ def _walk(name: str, direction: str, seconds: float = 40.0):
 
 @pytest.mark.parametrize("direction", ["+x", "-x"])
 def test_inchworm_walks_both_ways_on_the_physical_plant_without_faults(direction):
+    """What is asserted of each cycle is the steady cycles' direction, not the first one's: the
+    first starts from rest with every coil at ambient, and in +x it earns much less (measured:
+    +0.13 mm against +0.37..+0.84 for the next nine; 000→100 +0.14 mm against +0.26 and
+    110→111 −0.20 against −0.02..−0.08; with an earlier controller it was −0.05..−0.14): a
+    cold coil takes longer to reach As while the held limbs sag, and no earlier cycle's
+    settling motion falls into its window (a cycle runs from one report of step 0 to the
+    next). In −x the first cycle is not smaller (−0.56 against −0.52, −0.38). The whole run
+    is asserted to move the robot its way. docs/robot-file.md, 'Example robots'."""
     report = _walk("inchworm-3", direction)
     sign = 1 if direction == "+x" else -1
     assert report.faults == [] and report.errors == []
     assert report.cycles >= 3, report.cycles
     assert sign * report.displacement_mm > 0, report.displacement_mm
-    assert sum(sign * d > 0 for d in report.cycle_displacements_mm) >= len(report.cycle_displacements_mm) - 1
+    first, *steady = report.cycle_displacements_mm
+    assert all(sign * d > 0 for d in steady), report.cycle_displacements_mm
 
 
 @pytest.mark.parametrize("direction", ["+x", "-x"])
