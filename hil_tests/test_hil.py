@@ -106,22 +106,38 @@ def _run_gait(t, direction, gait_index, seconds=None, cycles_wanted: int | None 
 @pytest.mark.gait_cases(opposing=False, focused_first=True, xfail={("paper-r3", "+x"): R3_PLUS_X})
 def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_target, robot_name, direction, gait_index):
     """Every optimal gait proleg computes, run by the firmware on the physical plant: every
-    cycle moves the robot in the gait's direction, the mean within ``BAND`` of the sum of the
-    measured matrix's entries along the gait, with no fault."""
+    steady cycle moves the robot in the gait's direction, their mean within ``BAND`` of the
+    sum of the measured matrix's entries along the gait, with no fault.
+
+    The first cycle is not asserted: it starts from rest with every coil at ambient, and a
+    cold coil reaching As late while the held limbs sag can cost it its displacement
+    (inchworm-3 +x: −0.01..+0.13 mm, against +0.4..+0.9 for the cycles after it; docs/robot-file.md,
+    'Example robots'). A gait that the robot file's matrix ties with the best but that the
+    plant's measured matrix says does not move the robot its way is skipped with the
+    numbers: the example robots' matrices are models (made by a rule, not measured), and
+    for such a gait there is no prediction to compare with."""
     from proleg.firmware.build import firmware_gaits
 
     t = open_target(robot_name)
     gait = firmware_gaits(t.robot)[direction][gait_index]
     m = measured_matrix(t.robot).matrix_mm
-    predicted = sum(m[a, b] for a, b in zip(gait.states, gait.states[1:]))
+    steps = list(zip(gait.states, gait.states[1:]))
+    unmeasured = [f"{t.robot.transitions.label(a)}->{t.robot.transitions.label(b)}" for a, b in steps
+                  if not m[a, b] == m[a, b]]
+    assert not unmeasured, f"the measured matrix has no value for {', '.join(unmeasured)} (state not reached)"
+    predicted = sum(m[a, b] for a, b in steps)
     sign = 1 if direction == "+x" else -1
+    if sign * predicted <= 0 and gait_index > 0:
+        pytest.skip(f"{t.robot.name}: the robot file's matrix ties this gait with gait 0, but the physical "
+                    f"plant's measured matrix says {predicted:+.2f} mm per cycle in {direction}")
     assert sign * predicted > 0, f"the measured matrix says {predicted:+.2f} mm per cycle"
 
     cycles, received = _run_gait(t, direction, gait_index)
-    assert len(cycles) >= 3, f"only {len(cycles)} cycles"
     assert not events(received, EventKind.FAULT)
-    assert all(sign * c > 0 for c in cycles), cycles
-    mean = sum(cycles) / len(cycles)
+    steady = cycles[1:]
+    assert len(steady) >= 3, f"only {len(cycles)} cycles"
+    assert all(sign * c > 0 for c in steady), cycles
+    mean = sum(steady) / len(steady)
     assert BAND[0] <= mean / predicted <= BAND[1], f"predicted {predicted:+.2f} mm per cycle, measured {cycles}"
 
 
