@@ -229,13 +229,21 @@ def open_target(request):
     """Factory: ``open_target("paper-r1")`` → a connected Target (closed after the test);
     ``plant="table"`` on a simulated board for tests where the lookup plant is the point.
 
-    The robot is the one given with --robot, whatever the test asks for, on every target;
+    The robot is the one given with --robot, whatever the test asks for, on every target,
+    except in a test of named robots' own behaviour (marker ``robot``): asking there for a
+    robot other than --robot's skips the test, with that reason;
     without --robot, a simulated board runs the robot the test names (a name in robots/ or
     a robot file's path)."""
     config = request.config
     opened: list[Target] = []
+    own = request.node.get_closest_marker("robot")  # a test of these robots' own behaviour
 
     def open_(robot_name: str = "paper-r1", seed: int = 1, plant: str | None = None) -> Target:
+        given = config.getoption("--robot")
+        if own is not None and given and not robot_name.endswith(".toml"):
+            name = load_robot(given).name
+            if robot_name != name:  # e.g. a comparison of R1 with R2 under --robot R1: R2 is not here
+                pytest.skip(f"--robot {name}: this test also needs {robot_name}'s own behaviour")
         board = simulated_board_name(config)
         if board is not None:
             given = config.getoption("--robot")

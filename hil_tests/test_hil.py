@@ -106,22 +106,42 @@ def _run_gait(t, direction, gait_index, seconds=None, cycles_wanted: int | None 
 @pytest.mark.gait_cases(opposing=False, focused_first=True, xfail={("paper-r3", "+x"): R3_PLUS_X})
 def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_target, robot_name, direction, gait_index):
     """Every optimal gait proleg computes, run by the firmware on the physical plant: every
-    cycle moves the robot in the gait's direction, the mean within ``BAND`` of the sum of the
-    measured matrix's entries along the gait, with no fault."""
+    steady cycle moves the robot in the gait's direction, their mean within ``BAND`` of the
+    sum of the measured matrix's entries along the gait, with no fault.
+
+    The first cycle is not asserted: it starts from rest with every coil at ambient, and a
+    cold coil reaching As late while the held limbs sag can cost it its displacement
+    (inchworm-3 +x: −0.01..+0.13 mm, against +0.4..+0.9 for the cycles after it; docs/robot-file.md,
+    'Example robots'). A gait that the robot file's matrix ties with the best but that the
+    plant's measured matrix says does not move the robot its way is skipped with the
+    numbers: the example robots' matrices are models (made by a rule, not measured), and
+    for such a gait there is no prediction to compare with."""
     from proleg.firmware.build import firmware_gaits
 
     t = open_target(robot_name)
+    if t.robot.transitions.planar is not None:
+        pytest.skip(f"{t.robot.name} is a planar robot (its matrix has Δy/Δθ statistics): the physical plant is a "
+                    "body with its contacts in a row along x; its gaits are checked on the planar table plant "
+                    "(tests/test_planar_plant.py)")
     gait = firmware_gaits(t.robot)[direction][gait_index]
     m = measured_matrix(t.robot).matrix_mm
-    predicted = sum(m[a, b] for a, b in zip(gait.states, gait.states[1:]))
+    steps = list(zip(gait.states, gait.states[1:]))
+    unmeasured = [f"{t.robot.transitions.label(a)}->{t.robot.transitions.label(b)}" for a, b in steps
+                  if not m[a, b] == m[a, b]]
+    assert not unmeasured, f"the measured matrix has no value for {', '.join(unmeasured)} (state not reached)"
+    predicted = sum(m[a, b] for a, b in steps)
     sign = 1 if direction == "+x" else -1
+    if sign * predicted <= 0 and gait_index > 0:
+        pytest.skip(f"{t.robot.name}: the robot file's matrix ties this gait with gait 0, but the physical "
+                    f"plant's measured matrix says {predicted:+.2f} mm per cycle in {direction}")
     assert sign * predicted > 0, f"the measured matrix says {predicted:+.2f} mm per cycle"
 
     cycles, received = _run_gait(t, direction, gait_index)
-    assert len(cycles) >= 3, f"only {len(cycles)} cycles"
     assert not events(received, EventKind.FAULT)
-    assert all(sign * c > 0 for c in cycles), cycles
-    mean = sum(cycles) / len(cycles)
+    steady = cycles[1:]
+    assert len(steady) >= 3, f"only {len(cycles)} cycles"
+    assert all(sign * c > 0 for c in steady), cycles
+    mean = sum(steady) / len(steady)
     assert BAND[0] <= mean / predicted <= BAND[1], f"predicted {predicted:+.2f} mm per cycle, measured {cycles}"
 
 
@@ -268,6 +288,16 @@ def test_imu_returning_nonsense_is_a_fault_with_all_mosfets_off(target, fault):
     assert _all_off(sim)
 
 
+def _controller_stall_ms() -> int:
+    """CTL_STALL_MS of the firmware templates' controller (core/ctl.h)."""
+    import re
+
+    from proleg.paths import templates_dir
+
+    text = (templates_dir() / "core" / "ctl.h").read_text()
+    return int(re.search(r"#define CTL_STALL_MS (\d+)u?", text).group(1))
+
+
 @pytest.mark.plant
 def test_no_coil_stays_on_longer_than_max_on_ms(target, record_property):
     """Both coils dead (they heat, nothing moves): the gait's first step keeps asking for
@@ -275,6 +305,15 @@ def test_no_coil_stays_on_longer_than_max_on_ms(target, record_property):
     every plant step (2 ms): a sampled on-period is never longer than the true one."""
     sim = target.sim
     robot = target.robot
+    if robot.safety.state_timeout_ms <= robot.safety.max_on_ms:
+        pytest.skip(f"{robot.name}: state_timeout_ms ({robot.safety.state_timeout_ms}) ≤ max_on_ms "
+                    f"({robot.safety.max_on_ms}): a step whose coils do not move is stopped by the state "
+                    "timeout first (test_dead_actuator_is_reported_as_a_state_timeout)")
+    stall_ms = _controller_stall_ms()
+    if stall_ms <= robot.safety.max_on_ms:
+        pytest.skip(f"{robot.name}: max_on_ms ({robot.safety.max_on_ms}) ≥ the controller's stall cut "
+                    f"(CTL_STALL_MS {stall_ms} ms, core/ctl.h): a coil that heats and moves nothing is switched "
+                    "off by the stall detector first; the on-time limit guards coils held over several steps")
     max_on_us = robot.safety.max_on_ms * 1000
     for a in robot.actuators:
         sim.inject(f"dead-actuator:{a.name}")
@@ -311,9 +350,16 @@ def test_dead_actuator_is_reported_as_a_state_timeout(target):
         sim.inject(f"dead-actuator:{a.name}")
     target.client.start(0, "+x")
     received = target.wait(target.robot.safety.state_timeout_ms / 1000 + 2.0)
-    faults = [r.message for r in events(received, EventKind.FAULT)]
-    assert any(f.code == FaultCode.STATE_TIMEOUT for f in faults), faults
-    assert _all_off(sim)
+    faults = [r for r in events(received, EventKind.FAULT)]
+    assert any(f.message.code == FaultCode.STATE_TIMEOUT for f in faults), [f.message for f in faults]
+    fallback = events(received, EventKind.FALLBACK)
+    if fallback:
+        # The firmware suspected the coil and went on with the build's fallback gait without
+        # it (control.fallback, docs/learning.md): coils on now are that gait's (test_hil_limbloss).
+        assert fallback[0].time >= faults[0].time
+        assert any(e.time >= fallback[0].time for e in events(received, EventKind.GAIT_STARTED))
+    else:
+        assert _all_off(sim)
 
 
 # ---------------------------------------------------------------------------------------

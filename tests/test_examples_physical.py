@@ -1,26 +1,23 @@
 """The example robots beyond the paper on the default (physical) plant, with the controller's
 default hold (issue 14): several limbs are held at once while others fall, and no robot file
-needs ``hold_duty = 0`` for that any more."""
+needs ``hold_duty = 0`` for that any more. And the robot-file check that a limb's top level is
+within its own coil's reach on the simulated body (``proleg.body``)."""
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import pytest
 
+from proleg.body import body_geometry, default_length_mm, own_reach_deg
+from proleg.errors import RobotFileError
 from proleg.report import SimSession
 from proleg.robot import load_robot
 from proleg.sim.physical import PhysicalPlant
 from proleg.sim.simulators import open_simulated
 
 ROOT = Path(__file__).resolve().parents[1]
-
-CATERPILLAR_REACH = (
-    "caterpillar-4's three-level pads need ψ ≥ 35° + h/2 + hold margin for their top level, and "
-    "the physical plant's 80 mm body with four contacts bends a pad to at most ≈ 22° with its own "
-    "coil (≈ 29° with a neighbour's): the robot file's ψ* are a plausible model for the table "
-    "plant, not for this body (test_caterpillar_pads_cannot_reach_their_top_level_on_this_body)")
-
 
 def _walk(name: str, direction: str, seconds: float = 40.0):
     robot = load_robot(ROOT / "robots" / f"{name}.toml")
@@ -34,32 +31,97 @@ def _walk(name: str, direction: str, seconds: float = 40.0):
 
 @pytest.mark.parametrize("direction", ["+x", "-x"])
 def test_inchworm_walks_both_ways_on_the_physical_plant_without_faults(direction):
+    """What is asserted of each cycle is the steady cycles' direction, not the first one's: the
+    first starts from rest with every coil at ambient, and in +x it earns much less (measured:
+    +0.13 mm against +0.37..+0.84 for the next nine; 000→100 +0.14 mm against +0.26 and
+    110→111 −0.20 against −0.02..−0.08; with an earlier controller it was −0.05..−0.14): a
+    cold coil takes longer to reach As while the held limbs sag, and no earlier cycle's
+    settling motion falls into its window (a cycle runs from one report of step 0 to the
+    next). In −x the first cycle is not smaller (−0.56 against −0.52, −0.38). The whole run
+    is asserted to move the robot its way. docs/robot-file.md, 'Example robots'."""
     report = _walk("inchworm-3", direction)
     sign = 1 if direction == "+x" else -1
     assert report.faults == [] and report.errors == []
     assert report.cycles >= 3, report.cycles
     assert sign * report.displacement_mm > 0, report.displacement_mm
-    assert sum(sign * d > 0 for d in report.cycle_displacements_mm) >= len(report.cycle_displacements_mm) - 1
+    first, *steady = report.cycle_displacements_mm
+    assert all(sign * d > 0 for d in steady), report.cycle_displacements_mm
 
 
-@pytest.mark.xfail(strict=True, reason=CATERPILLAR_REACH)
 @pytest.mark.parametrize("direction", ["+x", "-x"])
 def test_caterpillar_walks_both_ways_on_the_physical_plant_without_faults(direction):
-    report = _walk("caterpillar-4", direction, 30.0)
-    assert report.faults == [] and report.cycles >= 3
+    """Its gait 0 is twelve steps (~15 s a cycle in +x): 60 s give at least three cycles."""
+    report = _walk("caterpillar-4", direction, 60.0)
+    sign = 1 if direction == "+x" else -1
+    assert report.faults == [] and report.errors == []
+    assert report.cycles >= 3, report.cycles
+    assert all(sign * d > 0 for d in report.cycle_displacements_mm), report.cycle_displacements_mm
 
 
-def test_caterpillar_pads_cannot_reach_their_top_level_on_this_body():
-    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "robots").glob("*.toml")))
+def test_every_example_robot_reaches_its_top_levels_with_its_own_coils_without_a_warning(name, caplog):
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(ROOT / "robots" / f"{name}.toml")
+    assert [r.getMessage() for r in caplog.records] == []
     plant = PhysicalPlant(robot)
-    n = len(robot.actuators)
-    rear = [lb.name for lb in robot.limbs].index("rear")
-    best = 0.0
-    for j in range(n):
-        for k in range(n):
-            c = [0.0] * n
-            c[j] = c[k] = 1.0
-            plant.pose(c)
-            best = max(best, float(plant.psi_deg[rear]))
-    top = robot.limbs[rear].psi_star_deg[-1] + robot.limbs[rear].hysteresis_deg / 2
-    assert best < top, (best, top)
+    names = [a.name for a in robot.actuators]
+    for i, limb in enumerate(robot.limbs):
+        c = [0.0] * len(names)
+        c[names.index(limb.actuator)] = 1.0
+        plant.pose(c)
+        assert plant.psi_deg[i] >= limb.psi_star_deg[-1] + limb.hysteresis_deg / 2, (limb.name, plant.psi_deg[i])
+
+
+def test_the_reach_the_check_computes_is_what_the_plant_bends():
+    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    acts = [a.name for a in robot.actuators]
+    limb_acts = [acts.index(lb.actuator) for lb in robot.limbs]
+    reach = own_reach_deg(body_geometry(limb_acts, len(acts), robot.plant.length_mm, [8.0] * len(acts)), limb_acts)
+    plant = PhysicalPlant(robot)
+    assert plant.geometry.length_mm == robot.plant.length_mm == 120.0  # 40 mm between four contacts
+    for i, j in enumerate(limb_acts):
+        c = [0.0] * len(acts)
+        c[j] = 1.0
+        plant.pose(c)
+        assert plant.psi_deg[i] == pytest.approx(reach[i], abs=1e-6)
+
+
+def _caterpillar_text(**replace: str) -> str:
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text()
+    for old, new in replace.items():
+        assert old in text
+        text = text.replace(old, new)
+    return text
+
+
+def test_a_top_level_out_of_its_own_coils_reach_is_one_warning_line_per_limb(tmp_path, caplog):
+    """The old caterpillar-4 (prolegs at ψ* 15°/35°) on an 80 mm body: each proleg's coil
+    bends it to ≈ 22°, short of 36°."""
+    path = tmp_path / "cat.toml"
+    path.write_text(_caterpillar_text(**{"[12.0, 24.0]": "[15.0, 35.0]",
+                                         "cross_gain_deg = 12.0": "cross_gain_deg = 12.0\nlength_mm = 80"}))
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    lines = [r.getMessage() for r in caplog.records]
+    assert robot.plant.length_mm == 80.0
+    assert len(lines) == 2 and all("\n" not in line for line in lines), lines
+    for line, limb in zip(lines, ("rear", "front")):
+        assert f"limb {limb!r}" in line and "needs ψ ≥ 36.0°" in line and "80 mm body" in line, line
+        reach = float(line.split("bends it to ")[1].split("°")[0])
+        assert 20.0 < reach < 25.0, line
+    # a longer body reaches them: no warning
+    path.write_text(_caterpillar_text(**{"[12.0, 24.0]": "[15.0, 35.0]",
+                                         "cross_gain_deg = 12.0": "cross_gain_deg = 12.0\nlength_mm = 150"}))
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    assert caplog.records == []
+
+
+def test_body_length_defaults_from_the_number_of_contacts_and_is_checked(tmp_path):
+    assert default_length_mm(2) == 80.0 and default_length_mm(3) == 80.0
+    assert default_length_mm(4) == 120.0 and default_length_mm(8) == 280.0
+    path = tmp_path / "cat.toml"
+    path.write_text(_caterpillar_text(**{"cross_gain_deg = 12.0": "cross_gain_deg = 12.0\nlength_mm = 5"}))
+    with pytest.raises(RobotFileError, match=r"plant\.length_mm: expected a number in \[20, 2000\] mm, got 5"):
+        load_robot(path)

@@ -15,7 +15,7 @@ ROOT = Path(proleg.__file__).resolve().parent
 LAYERS: list[set[str]] = [
     {"__init__", "errors", "paths", "states"},
     {"transitions", "protocol"},
-    {"robot", "robot_plant", "gait", "convert", "limbloss"},
+    {"body", "robot", "robot_plant", "gait", "convert", "limbloss"},
     {"firmware"},
     {"sim", "emu"},
     {"link"},

@@ -11,6 +11,7 @@ expected; it never clamps or guesses.
 from __future__ import annotations
 
 import csv
+import logging
 import math
 import re
 import tomllib
@@ -22,8 +23,10 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_plant import PlantSection, default_plant_section, limb_friction, plant_section
+from .robot_plant import PlantSection, default_plant_section, limb_friction, plant_section, unreachable_levels
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
+
+log = logging.getLogger(__name__)
 
 NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
 #: Robot names may be longer than the 15 characters the firmware reports (GET_INFO's
@@ -270,6 +273,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
+    for line in unreachable_levels(path, list(limbs), [a.name for a in actuators], plant):
+        log.warning("warning: %s", line)
     library = None
     if "gaits" in doc:
         from .gait.library import library_from_robot_file

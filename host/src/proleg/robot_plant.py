@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from .body import DEFAULT_OVERLAP_MM, body_geometry, default_length_mm, own_reach_deg
 from .errors import RobotFileError
 
 FORBIDDEN = "x"
@@ -129,10 +130,15 @@ _KEYS = (
              doc="true critical angle ψ* − the configured one"),
     PlantKey("friction", "×", 0.2, 3.0, 1.0, plants=PHYS, doc="scale of every friction coefficient (the ground)"),
     PlantKey("mass_g", "g", 1.0, 20.0, 3.3, plants=PHYS, doc="robot mass"),
+    PlantKey("length_mm", "mm", 20.0, 2000.0, None, plants=PHYS,
+             doc="body length, first contact to last (contacts evenly spaced); default 80 for two limbs, "
+                 "40 per gap between neighbouring limbs for more"),
 )
 PLANT_KEYS: dict[str, PlantKey] = {k.name: k for k in _KEYS}
 PER_ACTUATOR = tuple(k.name for k in _KEYS if k.per == "actuator" and "table" in k.plants)
-PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants)
+PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants and k.name not in ("length_mm",))
+# The body's own dimensions: physical-plant keys of the robot file, not run conditions.
+BODY_KEYS = ("length_mm",)
 SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
 
 
@@ -161,6 +167,8 @@ class PlantSection:
     physical: dict[str, float | tuple[float, ...]] = field(default_factory=dict)
     """The physical plant's keys the file gives (``supply_v`` and ``ambient_c`` included):
     one number, or one per actuator / per limb for a per-actuator / per-limb key."""
+    length_mm: float = 80.0
+    """The physical plant's body length (given, or ``proleg.body.default_length_mm``)."""
 
     def scalars(self) -> dict[str, float]:
         return {k: getattr(self, k) for k in SCALARS}
@@ -233,10 +241,40 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
             physical[k] = vals if isinstance(table[k], list) else vals[0]
         else:
             physical[k] = _scalar(path, spec, table[k])
+    length = _scalar(path, PLANT_KEYS["length_mm"], table["length_mm"]) if "length_mm" in table \
+        else default_length_mm(n_limbs)
     return PlantSection(
         actuator=per_act, psi_rest_deg=rest, coupling_deg=coupling, true_matrix=truth,
-        given=frozenset(table), physical=physical, **scalars,
+        given=frozenset(table), physical=physical, length_mm=length, **scalars,
     )
+
+
+def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection) -> list[str]:
+    """One line per limb whose top level its own coil cannot reach on the physical plant's body
+    (``proleg.body``): the top level is entered at ψ*_top + hysteresis/2, and the reach is ψ
+    with the limb's coil at full stroke and every other coil cold (a state with only this limb
+    raised must be reachable). Short of ψ*_top + hysteresis/2 + ``hold_margin_deg`` the hold
+    simply keeps heating, so the margin is not required. The body is the model's (``length_mm``, ``overlap_mm``),
+    so this is a warning about the simulator and the plausibility of the file, not a refusal:
+    a real body may bend further."""
+    limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
+    if len(limbs) < 2:
+        return []
+    overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
+    overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * len(actuators)
+    geo = body_geometry(limb_actuators, len(actuators), section.length_mm, overlaps)
+    reach = own_reach_deg(geo, limb_actuators)
+    out = []
+    for lb, r in zip(limbs, reach):
+        need = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
+        if need > r:
+            out.append(
+                f"{path}: limb {lb.name!r}: its top level needs ψ ≥ {need:.1f}° "
+                f"(ψ* {_g(lb.psi_star_deg[-1])}° + hysteresis/2), its own coil "
+                f"{lb.actuator!r} bends it to {r:.1f}° on the simulated {_g(section.length_mm)} mm body: "
+                f"lower psi_star_deg or give [plant] length_mm")
+    return out
+
 
 
 def _fail(path: Path, key: str, expected: str, got: Any) -> None:

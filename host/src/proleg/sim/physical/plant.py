@@ -37,7 +37,7 @@ from ...errors import SimError
 from ...states import limb_levels
 from ..sma import Hysteresis
 from . import materials as mat
-from .body import BodyGeometry, Shape, default_spans
+from ...body import Shape, body_geometry, default_length_mm
 from .conditions import Conditions
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
@@ -69,7 +69,7 @@ class FatigueLaw:
 class PhysicalParams:
     coil: CoilGeometry = CoilGeometry()
     body_thermal: BodyThermal = BodyThermal()
-    length_mm: float = 80.0
+    length_mm: float | None = None     # None: the robot file's [plant] length_mm (default from its contacts)
     coil_offset_mm: float = 2.0
     working_strain: float = 0.06
     mech_tau_s: float = 0.03
@@ -111,6 +111,12 @@ class PlantView:
     step_mm: float = 1.0
 
 
+def _robot_length_mm(robot: Any, n_limbs: int) -> float:
+    section = getattr(robot, "plant", None)
+    length = getattr(section, "length_mm", None)
+    return float(length) if length is not None else default_length_mm(n_limbs)
+
+
 class PhysicalPlant:
     """A robot body that moves by friction mechanics. ``robot``: a loaded ``proleg.robot.Robot``
     (limbs, ψ*, actuators, channels; its matrix only to infer D1/D2 when the file does not
@@ -149,14 +155,10 @@ class PhysicalPlant:
         self._band = p.friction_band_deg
 
         # -- geometry -------------------------------------------------------------------------
-        homes = []
-        for j, a in enumerate(acts):
-            named = [i for i, lb in enumerate(limbs) if lb.actuator == a.name]
-            homes.append(j if j in named else (named[0] if named else 0))
         overlap = [cond.for_index("overlap_mm", j, anames) for j in range(na)]
-        contacts = tuple(float(x) for x in np.linspace(0.0, p.length_mm, nl))
-        geo = BodyGeometry(p.length_mm, p.coil_offset_mm, p.working_strain,
-                           default_spans(nl, homes, p.length_mm, overlap), contacts)
+        length = p.length_mm if p.length_mm is not None else _robot_length_mm(robot, nl)
+        geo = body_geometry([anames.index(lb.actuator) for lb in limbs], na, length, overlap,
+                            p.coil_offset_mm, p.working_strain)
         self.geometry = geo
         self._shape = Shape(geo)
 

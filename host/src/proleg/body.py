@@ -17,6 +17,15 @@ the two contacts by the lever rule about its centre of mass (statics of a two-su
 For one or two coils the shape quantities are tabulated on a grid of contractions when the
 plant is built and interpolated bilinearly while it runs (the hot path stays small); for
 more coils they are computed directly.
+
+How long the body is, when the robot file does not say (``[plant] length_mm``): the paper's
+80 mm body for two contacts, and 40 mm between neighbouring contacts for more
+(``default_length_mm``): a body with more contacts is longer, not more finely divided. A
+coil bends the section on either side of its contact, so the angle it can give its contact
+is about κ_max × section / 2 (the tangent–chord angle of an arc); squeezing four contacts
+into 80 mm would leave each contact ≈ 22° of reach, less than most mechanisms need.
+``own_reach_deg`` gives each contact's reach with its own coil alone, at full stroke: what
+the robot-file check compares with the limb's critical angles (``proleg.robot``).
 """
 
 from __future__ import annotations
@@ -27,6 +36,9 @@ import numpy as np
 
 N_SEGMENTS = 64
 GRID = 41
+PAPER_LENGTH_MM = 80.0     # the paper's two-contact body (R1-class, 80 × 8 × 4 mm)
+SECTION_MM = 40.0          # between neighbouring contacts of a longer body: about one coil (30 mm) and its anchors
+DEFAULT_OVERLAP_MM = 8.0   # [plant] overlap_mm's default
 
 
 @dataclass(frozen=True)
@@ -54,6 +66,40 @@ def default_spans(n_contacts: int, homes: list[int], length_mm: float, overlap_m
     return tuple(out)
 
 
+def default_length_mm(n_contacts: int) -> float:
+    """The body length a robot file without ``[plant] length_mm`` gets (see the module text)."""
+    return max(PAPER_LENGTH_MM, SECTION_MM * (n_contacts - 1))
+
+
+def coil_homes(limb_actuators: list[int], n_actuators: int) -> list[int]:
+    """The contact each coil bends: the limb of the same index when that limb names the coil,
+    else the first limb that names it (a shared coil), else contact 0."""
+    homes = []
+    for j in range(n_actuators):
+        named = [i for i, a in enumerate(limb_actuators) if a == j]
+        homes.append(j if j in named else (named[0] if named else 0))
+    return homes
+
+
+def body_geometry(limb_actuators: list[int], n_actuators: int, length_mm: float,
+                  overlap_mm: list[float], coil_offset_mm: float = 2.0, working_strain: float = 0.06) -> BodyGeometry:
+    """Contacts evenly along ``length_mm`` in limb order, each coil over its home contact's sections."""
+    n = len(limb_actuators)
+    contacts = tuple(float(x) for x in np.linspace(0.0, length_mm, n))
+    spans = default_spans(n, coil_homes(limb_actuators, n_actuators), length_mm, overlap_mm)
+    return BodyGeometry(length_mm, coil_offset_mm, working_strain, spans, contacts)
+
+
+def own_reach_deg(geo: BodyGeometry, limb_actuators: list[int]) -> list[float]:
+    """Per contact: ψ with its own coil at full stroke and every other coil cold."""
+    shape = Shape(geo, tabulate=False)
+    c = np.zeros((len(limb_actuators), shape.n_coils))
+    for i, j in enumerate(limb_actuators):
+        c[i, j] = 1.0
+    psi = shape.compute(c)[0]
+    return [float(psi[i, i]) for i in range(len(limb_actuators))]
+
+
 class Shape:
     """Shape quantities as functions of the coils' contractions c ∈ [0, 1]^n.
 
@@ -61,7 +107,7 @@ class Shape:
     contact (sums to 1), centre-of-mass position along the ground measured from contact 0 in mm).
     """
 
-    def __init__(self, geo: BodyGeometry):
+    def __init__(self, geo: BodyGeometry, tabulate: bool = True):
         self.geo = geo
         n = N_SEGMENTS
         self.ds = geo.length_mm / n
@@ -72,7 +118,7 @@ class Shape:
         self.n_contacts = len(self._cnode)
         self.n_coils = len(geo.spans)
         self._table = None
-        if self.n_coils <= 2:
+        if tabulate and self.n_coils <= 2:
             self._build_table()
 
     # -- exact computation (vectorised over a batch of contraction vectors) ------------------
