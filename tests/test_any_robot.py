@@ -40,7 +40,9 @@ def test_example_robot_walks_both_ways_on_the_simulator_without_faults(name, dir
     sim = open_simulated(robot, plant="table")  # the matrix is the truth here: the lookup plant
     session = SimSession(sim)
     session.advance(0.2)
-    report = session.run_gait(direction, 0, 40.0)
+    # caterpillar-4's gait 0 takes ~20 s a cycle on the table plant: a falling limb waits up
+    # to CTL_SAG_WAIT_MS (500 ms) for each of its held, sagging neighbours at every step
+    report = session.run_gait(direction, 0, 80.0)
     gait = firmware_gaits(robot)[direction][0]
     per_cycle = evaluate_sequence(robot.transitions, gait.states).reward
     assert report.faults == [] and report.errors == []
@@ -122,7 +124,7 @@ def test_sim_takes_board_objective_and_max_transitions(capsys):
                        "--duration", "1")
     assert code == 2 and "board 'avr-emu': --objective and --max-transitions are host-sim's" in err
     code, out, _ = cli(capsys, "sim", ROOT / "robots" / "caterpillar-4.toml", "--board", "host-sim",
-                       "--objective", "rate", "--duration", "12", "--plant", "table", "--json")
+                       "--objective", "rate", "--duration", "30", "--plant", "table", "--json")
     report = json.loads(out)
     assert code == 0 and report["board"] == "host-sim" and report["cycles"] >= 1 and report["faults"] == []
     code, out, _ = cli(capsys, "sim", ROOT / "robots" / "paper-r2.toml", "--max-transitions", "4",
