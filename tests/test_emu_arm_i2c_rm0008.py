@@ -12,10 +12,10 @@ import pytest
 
 pytest.importorskip("unicorn")
 
+from arm_i2c_master import CR1_ACK, CR1_POS, CR1_START, CR1_STOP, RegisterMaster  # noqa: E402
 from proleg.emu.arm.clocks import NEVER  # noqa: E402
 from proleg.emu.arm.i2c import ADDR, AF, BTF, RXNE, SB, Bus, I2c  # noqa: E402
 
-CR1_PE, CR1_START, CR1_STOP, CR1_ACK, CR1_POS = 1, 1 << 8, 1 << 9, 1 << 10, 1 << 11
 MPU = 0x68
 BYTE_US = 9 * 2.5  # 400 kHz: one 9-bit byte
 
@@ -37,42 +37,15 @@ class Slave:
         return bytes([b])
 
 
-class Rig:
+class Rig(RegisterMaster):
     def __init__(self, data: bytes = bytes([0x91, 0xA2, 0xB3, 0xC4, 0xD5, 0xE6, 0x17, 0x28])) -> None:
         self.bus = Bus()
         self.slave = Slave(data)
-        self.i2c = I2c(0x40005400, lambda: 36_000_000, self.bus, self.slave)
-        self.now = 0
-        self.i2c.write(0x1C, (1 << 15) | 30, 0)  # fast mode, the HAL's CCR at 400 kHz
-        self.i2c.write(0x00, CR1_PE, 0)
-
-    def _at(self) -> int:
-        self.i2c.advance(self.now)
-        return self.now
-
-    def cr1(self, set_: int = 0, clear: int = 0) -> None:
-        v = self.i2c.read(0x00, self._at())
-        self.i2c.write(0x00, (v & ~clear) | set_, self.now)
-
-    def sr1(self) -> int:
-        return self.i2c.read(0x14, self._at())
-
-    def sr2(self) -> int:
-        return self.i2c.read(0x18, self._at())
-
-    def dr(self) -> int:
-        return self.i2c.read(0x10, self._at())
+        super().__init__(I2c(0x40005400, lambda: 36_000_000, self.bus, self.slave))
 
     def sleep(self, us: float) -> None:
         self.now += int(us * 72)
         self.i2c.advance(self.now)
-
-    def wait(self, mask: int) -> None:
-        """Poll SR1 until a bit of mask is set; fail if nothing on the bus could set it."""
-        while not self.sr1() & mask:
-            nxt = self.i2c.next_event()
-            assert nxt != NEVER, f"SR1 {self.i2c.sr1:#x}: the bus stopped, {mask:#x} never sets"
-            self.now = max(self.now + 1, nxt)
 
     def address_read(self) -> None:
         self.cr1(CR1_START)

@@ -18,43 +18,20 @@ import pytest
 
 pytest.importorskip("unicorn")
 
-from proleg.emu.arm.clocks import NEVER  # noqa: E402
+from arm_i2c_master import CR1_ACK, CR1_PE, CR1_START, CR1_STOP, RegisterMaster  # noqa: E402
 from proleg.emu.arm.i2c import ADDR, AF, BTF, RXNE, SB, TXE, Bus, BusDevices, I2c  # noqa: E402
 from proleg.emu.arm.native import Native  # noqa: E402
-
-CR1_PE, CR1_START, CR1_STOP, CR1_ACK = 1, 1 << 8, 1 << 9, 1 << 10
 MUX, IMU = 0x70, 0x68
 WHO_AM_I, PWR_MGMT_1 = 0x75, 0x6B
 
 
-class Master:
+class Master(RegisterMaster):
     """Firmware-like polled transfers on one I2C peripheral model, in manual time."""
 
     def __init__(self, native: Native, bus: int) -> None:
         devices = BusDevices(native, bus)
         self.bus = Bus(devices.stop)
-        self.i2c = I2c(0x40005400 + 0x400 * bus, lambda: 36_000_000, self.bus, devices)
-        self.now = 0
-        self.i2c.write(0x1C, (1 << 15) | 30, 0)  # fast mode, 400 kHz
-        self.i2c.write(0x00, CR1_PE, 0)
-
-    def _at(self) -> int:
-        self.i2c.advance(self.now)
-        return self.now
-
-    def cr1(self, set_: int = 0, clear: int = 0) -> None:
-        v = self.i2c.read(0x00, self._at())
-        self.i2c.write(0x00, (v & ~clear) | set_, self.now)
-
-    def sr1(self) -> int:
-        return self.i2c.read(0x14, self._at())
-
-    def wait(self, mask: int) -> int:
-        while not (v := self.sr1()) & mask:
-            nxt = self.i2c.next_event()
-            assert nxt != NEVER, f"SR1 {v:#x}: the bus stopped, {mask:#x} never sets"
-            self.now = max(self.now + 1, nxt)
-        return v
+        super().__init__(I2c(0x40005400 + 0x400 * bus, lambda: 36_000_000, self.bus, devices))
 
     def idle(self) -> None:
         self.now += 50 * 72
