@@ -4,8 +4,12 @@ errors (``proleg.report.claim.grid()``: every mode singly and in pairs, two stre
 
 For every condition, from a cold robot, the paper's R1 walking +x for ``RUN_S`` simulated
 seconds:
-- ψ-feedback: the robot's own firmware (host-sim build) on the simulated board; completed, or
-  stopped with the firmware's fault; mm/s; the hottest coil 2 s after the run;
+- ψ-feedback: the robot's own firmware (host-sim build) on the simulated board, started as a
+  user would: a flat level calibration at rest (proleg calibrate: IMU mounting offset and bias),
+  then the condition's ground; completed, or stopped with the firmware's fault; mm/s; the hottest
+  coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
+- ψ-feedback walking the learn-then-walk gait (the optimal gait of the matrix that
+  ``proleg sim --measure-matrix`` measures on the fresh robot, loaded with LOAD_GAIT);
 - open loop: the best timed drive (all 7 parameters free), tuned ONCE on the fresh robot by a
   coordinate search of at most ``BUDGET`` candidate drives, each scored on its worst speed over
   ±10 % heating power (so that no knife-edge timing wins); completed (still cycles through the
