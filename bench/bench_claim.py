@@ -4,8 +4,12 @@ errors (``proleg.report.claim.grid()``: every mode singly and in pairs, two stre
 
 For every condition, from a cold robot, the paper's R1 walking +x for ``RUN_S`` simulated
 seconds:
-- ψ-feedback: the robot's own firmware (host-sim build) on the simulated board; completed, or
-  stopped with the firmware's fault; mm/s; the hottest coil 2 s after the run;
+- ψ-feedback: the robot's own firmware (host-sim build) on the simulated board, started as a
+  user would: a flat level calibration at rest (proleg calibrate: IMU mounting offset and bias),
+  then the condition's ground; completed, or stopped with the firmware's fault; mm/s; the hottest
+  coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
+- ψ-feedback walking the learn-then-walk gait (the optimal gait of the matrix that
+  ``proleg sim --measure-matrix`` measures on the fresh robot, loaded with LOAD_GAIT);
 - open loop: the best timed drive (all 7 parameters free), tuned ONCE on the fresh robot by a
   coordinate search of at most ``BUDGET`` candidate drives, each scored on its worst speed over
   ±10 % heating power (so that no knife-edge timing wins); completed (still cycles through the
@@ -49,13 +53,13 @@ BUDGET = 150
 
 
 def _worker(args: tuple) -> dict:
-    point, drive = args
+    point, drive, learned = args
     try:
         os.nice(10)
     except OSError:
         pass
     robot = load_robot(ROBOT)
-    return claim.run_condition(robot, drive, point).to_json()
+    return claim.run_condition(robot, drive, point, learned=learned).to_json()
 
 
 def _drive_json(d: OpenLoopDrive) -> dict:
@@ -88,11 +92,17 @@ def main() -> int:
           f"S {d.strength}, T_active {d.t_active_s} s, T_cycle {d.t_cycle_s[0]:g} s, φ12 {d.phase_s[1] - d.phase_s[0]:g} s; "
           f"worst speed over ±10 % power {tuned.worst_speed_mm_s:+.3f} mm/s", flush=True)
 
+    t0 = time.perf_counter()
+    learned, measured = claim.learned_gait(robot, "+x")
+    label = "→".join(robot.transitions.label(s) for s in learned)
+    print(f"learn-then-walk: the matrix measured on the fresh R1 ({time.perf_counter() - t0:.0f} s) gives the "
+          f"+x gait {label}", flush=True)
+
     points = claim.grid()
     if args.quick:
         points = points[::4]
     t1 = time.perf_counter()
-    jobs = [(claim.NOMINAL, d)] + [(p, d) for p in points]
+    jobs = [(claim.NOMINAL, d, learned)] + [(p, d, learned) for p in points]
     if args.jobs > 1:
         from multiprocessing import get_context
 
@@ -109,16 +119,23 @@ def main() -> int:
     def back(r: dict) -> ConditionResult:
         p = GridPoint(r["name"], tuple(r["modes"]), r["strength"], tuple(r["conditions"]), tuple(r["faults"]))
         return ConditionResult(p, r["physically_possible"], r["why_not"], DriveOutcome(**r["feedback"]),
-                               DriveOutcome(**r["open_loop"]))
+                               DriveOutcome(**r["open_loop"]),
+                               {k: r[k] for k in ("learned_gait", "levelled_on_ground") if k in r})
 
     summary = claim.summarise([back(r) for r in rows], back(nominal))
     nom_fb = nominal["feedback"]["speed_mm_s"]
-    print(f"\n{'condition':<44} {'possible':<8} {'ψ-feedback mm/s':<34} {'% nom':>6}  {'open loop mm/s':<40}")
+    nom_lg = nominal["learned_gait"]["feedback"]["speed_mm_s"]
+    print(f"\n{'condition':<44} {'possible':<8} {'ψ-feedback gait 0 mm/s':<34} {'% nom':>6}  "
+          f"{'ψ-feedback learned ' + label:<34} {'% nom':>6}  {'open loop mm/s':<40}")
     for r in [nominal] + rows:
-        fb, ol = r["feedback"], r["open_loop"]
+        fb, ol, lg = r["feedback"], r["open_loop"], r["learned_gait"]["feedback"]
         pct = 100 * fb["speed_mm_s"] / nom_fb if nom_fb else 0.0
+        lpct = 100 * lg["speed_mm_s"] / nom_lg if nom_lg else 0.0
         print(f"{r['name'][:44]:<44} {'yes' if r['physically_possible'] else 'NO':<8} {_cell(fb)[:34]:<34} "
-              f"{pct:6.0f}  {_cell(ol)[:60]}")
+              f"{pct:6.0f}  {_cell(lg)[:34]:<34} {lpct:6.0f}  {_cell(ol)[:60]}")
+        if "levelled_on_ground" in r:
+            print(f"{'':<44} after `proleg calibrate --ground` on the slope too: "
+                  f"{_cell(r['levelled_on_ground']['feedback'])}")
         if not r["physically_possible"]:
             print(f"{'':<44} why: {r['why_not']}; coil {fb['coil_max_end_c']:.0f} °C 2 s after the stop")
     print()
@@ -132,6 +149,10 @@ def main() -> int:
     out = {
         "machine": machine(), "load_average": list(os.getloadavg()),
         "inputs": {"robot": "paper-r1", "direction": "+x", "gait": 0, "run_s": claim.RUN_S,
+                   "feedback_workflow": "flat level calibration (proleg calibrate) at rest, then the condition's ground",
+                   "learned_gait": {"states": [robot.transitions.label(s) for s in learned],
+                                    "from": "proleg sim --measure-matrix on the fresh robot, optimal gait (total)",
+                                    "measured_matrix": measured.to_json()},
                    "open_loop_budget": args.budget, "open_loop_powers": [0.9, 1.0, 1.1], "quick": args.quick},
         "open_loop_drive": _drive_json(d), "open_loop_tuned_worst_mm_s": round(tuned.worst_speed_mm_s, 4),
         "open_loop_tuned_by_power": {str(k): round(v, 4) for k, v in tuned.speed_by_power.items()},

@@ -19,6 +19,12 @@ CLAIM_POINTS = (
     "coil mismatch + source resistance (mild)",     # wire lengths ±10 %, 3 Ω supply
     "fatigue + supply sag (strong)",                # 30 000 cycles of wear, power ×0.7
 )
+#: sensor and world errors: the ψ-feedback run starts with a flat level calibration as a user's
+#: does (proleg calibrate); the open loop reads no sensor, so only the feedback side is asserted
+CLAIM_SENSOR_POINTS = (
+    "imu mounting offset + imu noise (strong)",     # front IMU 6° crooked, 1.5° rms noise
+    "decline (mild)",                               # 5° downhill, calibrated on the flat
+)
 
 
 @pytest.mark.plant
@@ -52,6 +58,13 @@ def test_psi_feedback_keeps_walking_under_drift_where_the_best_open_loop_timing_
         assert fb.completed and not fb.fault, lines[-1]
         assert fb.speed_mm_s >= 0.75 * fb0.speed_mm_s, lines[-1]
         assert not ol.completed or ol.speed_mm_s < 0.75 * ol0.speed_mm_s, lines[-1]
+    for name in CLAIM_SENSOR_POINTS:
+        r = claim.run_condition(robot, drive, claim.point(name))
+        fb = r.feedback
+        lines.append(f"{name}: psi feedback {fb.speed_mm_s:+.3f} ({fb.fault or fb.note or 'ok'})")
+        assert r.possible, (name, r.why_not)
+        assert fb.completed and not fb.fault and not fb.note, lines[-1]
+        assert fb.speed_mm_s >= 0.75 * fb0.speed_mm_s, lines[-1]
     print("\n" + "\n".join(lines))
     record_property("central_claim", lines)
 

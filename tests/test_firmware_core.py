@@ -138,6 +138,7 @@ C_TESTS = {
     "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "limbmap.c"], [], []),
+    "test_ctl_chain.c": ("inch-entry", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c"], ["gait_table.c"], []),
     "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c"], ["gait_table.c"], []),
     "test_seq_edges.c": ("big", ["seq.c", "psi.c"], ["gait_table.c"], []),

@@ -92,3 +92,35 @@ def test_an_open_loop_run_reports_why_it_did_not_complete():
     idle = OpenLoopDrive((0.0, 0.0), (0.5, 0.5), (2.0, 2.0), (0.0, 1.0))
     out = claim.open_loop_run(robot, idle, claim.NOMINAL, duration_s=6.0)
     assert not out.completed and out.note.startswith("stalled") and out.fault == ""
+
+
+@pytest.mark.slow
+def test_the_feedback_run_calibrates_on_the_flat_first_like_a_user():
+    """A front IMU mounted 6° crooked: uncalibrated the firmware cannot see state 10 (it stops);
+    after the flat calibration the bench does first (proleg calibrate) it walks."""
+    robot = load_robot(R1)
+    point = claim.point("imu mounting offset (strong)")
+    raw = claim.feedback_run(robot, point, duration_s=20.0, calibrate=False)
+    cal = claim.feedback_run(robot, point, duration_s=20.0)
+    assert cal.completed and cal.speed_mm_s > 0 and not cal.note
+    assert cal.speed_mm_s > raw.speed_mm_s
+
+
+@pytest.mark.slow
+def test_the_slope_is_not_seen_by_the_flat_calibration_and_ground_levelling_fixes_it():
+    """Decline 10°: calibrated on the flat only, each end's IMU reads ψ ∓ 10° and no true pose
+    reads as state 10 (STATE_TIMEOUT, cold coils); levelled on the slope (--ground) it walks.
+    (When the firmware learns to level itself on a slope, the first half of this test changes.)"""
+    robot = load_robot(R1)
+    point = claim.point("decline (strong)")
+    flat = claim.feedback_run(robot, point, duration_s=20.0)
+    assert not flat.completed and "STATE_TIMEOUT" in flat.fault and flat.coil_max_end_c < 50.0
+    levelled = claim.feedback_run(robot, point, duration_s=20.0, level_on_ground=True)
+    assert levelled.fault == "" and not levelled.note
+
+
+def test_learn_then_walk_gives_a_gait_the_measured_matrix_says_goes_plus_x():
+    robot = load_robot(R1)
+    states, m = claim.learned_gait(robot, "+x")
+    assert states[0] == states[-1] and len(states) >= 3
+    assert sum(m.matrix_mm[a][b] for a, b in zip(states, states[1:])) > 0

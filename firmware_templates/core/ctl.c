@@ -10,6 +10,19 @@ enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT, WANT_BOOST };
 /* A limb's part in the current step. */
 enum { STAY, RISE, FALL, SAG };
 
+/* Held limbs sagging below their hold edge, for the falling limbs' wait: bit i+1 is limb i, so
+ * a falling limb i looks at its neighbours i-1 and i+1 (bits i and i+2). With two limbs the
+ * other one is the only neighbour: one flag, the same rule, no bytes spent on the Nano. */
+#if CFG_N_LIMBS > 2
+typedef uint16_t sag_t;
+#define SAG_MARK(i) ((sag_t)(2u << (i)))
+#define SAG_NEAR(s, i) (((s) >> (i)) & 5u)
+#else
+typedef uint8_t sag_t;
+#define SAG_MARK(i) 1u
+#define SAG_NEAR(s, i) (s)
+#endif
+
 #define TICKS(ms) ((uint16_t)(((uint32_t)(ms) * CFG_TICK_HZ + 999u) / 1000u))
 
 /* Per limb: the step it is in (target), and what the hold and the stall detector know. */
@@ -100,7 +113,8 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t want[CFG_N_ACTUATORS];
     uint8_t move[CFG_N_LIMBS];
     int16_t to_go[CFG_N_LIMBS];
-    uint8_t falling = 0, sagging = 0, far_fall = 0;
+    uint8_t falling = 0, far_fall = 0;
+    sag_t sagging = 0;
     int16_t farthest = -1;
     uint8_t i;
 
@@ -121,7 +135,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 uint8_t thr = (uint8_t)(level - 1u);
                 if (!psi_last_at_or_above_hold(i, thr)) {
                     cl[i].heat = 1;
-                    sagging = 1;
+                    sagging |= SAG_MARK(i);
                 } else if (psi_last_at_or_above_hold_top(i, thr)) {
                     cl[i].heat = 0;
                 }
@@ -162,11 +176,13 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             }
             w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;
         } else if (move[i] == FALL) {
-            /* It may be what holds a sagging limb up: kept warm while one sags, for at most
+            /* It may be what holds a sagging neighbour (limb i-1 or i+1: the coils that
+             * bend the same body section) up: kept warm while one sags, for at most
              * CTL_SAG_WAIT_MS in this step (with several limbs held one of them nearly always
-             * sags, and a falling coil kept warm for good would never cross). */
+             * sags, and a falling coil kept warm for good would never cross). A limb further
+             * away does not wait: its coil barely moves that end. */
             w = WANT_RELEASE;
-            if (sagging && cl[i].ticks < TICKS(CTL_SAG_WAIT_MS)) {
+            if (SAG_NEAR(sagging, i) != 0u && cl[i].ticks < TICKS(CTL_SAG_WAIT_MS)) {
                 cl[i].ticks++;
                 w = WANT_HOLD;
             }

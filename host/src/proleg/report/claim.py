@@ -142,17 +142,43 @@ class ConditionResult:
         return {"name": self.point.name, "modes": list(self.point.modes), "strength": self.point.strength,
                 "conditions": list(self.point.conditions), "faults": list(self.point.faults),
                 "physically_possible": self.possible, "why_not": self.why_not,
-                "feedback": _round(asdict(self.feedback)), "open_loop": _round(asdict(self.open_loop))}
+                "feedback": _round(asdict(self.feedback)), "open_loop": _round(asdict(self.open_loop)),
+                **self.extra}
 
 
 def _round(d: dict) -> dict:
     return {k: round(v, 4) if isinstance(v, float) else v for k, v in d.items()}
 
 
-def gait_states(robot: Any, direction: str = "+x", gait: int = 0) -> tuple[int, ...]:
+def gait_states(robot: Any, direction: str = "+x", gait: int | Sequence[int] = 0) -> tuple[int, ...]:
+    """The states of firmware gait ``gait``, or ``gait`` itself when it is a state sequence."""
+    if not isinstance(gait, int):
+        return tuple(gait)
     from ..firmware.build import firmware_gaits
 
     return tuple(firmware_gaits(robot)[direction][gait].states)
+
+
+def learned_gait(robot: Any, direction: str = "+x") -> tuple[tuple[int, ...], Any]:
+    """The gait a user gets from learn-then-walk on the fresh robot: the reward matrix the
+    simulator measures (``proleg sim ROBOT --measure-matrix``: every allowed transition driven
+    to its state, mm and seconds), then the optimal gait of that matrix (objective "total",
+    the firmware's default). Returns (closed state sequence, MeasuredMatrix)."""
+    import numpy as np
+
+    from ..gait.optimal import optimal_gaits
+    from ..sim.physical.measure import measure_matrix
+    from ..transitions import TransitionTable
+
+    m = measure_matrix(robot)
+    _, allowed = robot.transitions.dense()
+    ok = np.isfinite(m.matrix_mm)
+    table = TransitionTable.from_dense(robot.levels, np.where(ok, m.matrix_mm, 0.0), np.asarray(allowed) & ok,
+                                       np.where(np.isfinite(m.duration_s), m.duration_s, 1.0))
+    gaits = list(optimal_gaits(table, "total", direction).gaits)
+    if not gaits:
+        raise SimError(f"claim: the measured matrix of {robot.name} has no gait in {direction}")
+    return tuple(gaits[0].states), m
 
 
 def _plant(robot: Any, point: GridPoint, extra: Sequence[str] = ()) -> Any:
@@ -177,7 +203,8 @@ def _plant_fault(robot: Any, plant: Any, fault: str) -> None:
         raise SimError(f"claim grid: fault {fault!r} is not a plant fault")
 
 
-def physically_possible(robot: Any, point: GridPoint, direction: str = "+x", gait: int = 0) -> tuple[bool, str]:
+def physically_possible(robot: Any, point: GridPoint, direction: str = "+x",
+                        gait: int | Sequence[int] = 0) -> tuple[bool, str]:
     """Can the coils complete the gait's transformations under ``point`` at all? An idealised
     drive (true ψ, true ψ*, the firmware's drive duty) walks the gait; if it cannot reach a
     state, or the gait then moves the wrong way, the reason: the hottest steady temperature the supply gives the coil against
@@ -207,14 +234,48 @@ def physically_possible(robot: Any, point: GridPoint, direction: str = "+x", gai
     return False, "the coils transform, but the ends do not reach ψ* (stroke lost or ψ* out of reach)"
 
 
-def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: int = 0,
-                 duration_s: float = RUN_S, seed: int = 1) -> DriveOutcome:
-    """The ψ-feedback firmware on the simulated board, physical plant under ``point``."""
+def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: int | Sequence[int] = 0,
+                 duration_s: float = RUN_S, seed: int = 1, calibrate: bool = True,
+                 level_on_ground: bool = False) -> DriveOutcome:
+    """The ψ-feedback firmware on the simulated board, physical plant under ``point``.
+
+    ``gait``: a firmware gait index, or a state sequence loaded with LOAD_GAIT (learn-then-walk).
+    ``calibrate``: first what a user does (docs/calibration.md): the robot on FLAT ground, at
+    rest, ``proleg calibrate`` (the firmware records each IMU's rest tilt: mounting offset and
+    bias); then it is put on the condition's ground (incline) and walks. ``level_on_ground``:
+    on that ground, at rest, ``proleg calibrate --ground`` too (the slope, in RAM)."""
+    from ..link.level import calibrate_level
+    from ..protocol.definition import GAIT_USER
     from ..sim.closed_loop import SimulatedRobot
     from .gait_run import SimSession
 
-    sim = SimulatedRobot(robot, seed=seed, plant=_plant(robot, point))
+    flat = GridPoint(point.name, point.modes, point.strength,
+                     tuple(c for c in point.conditions if not c.startswith("incline_deg=")), point.faults)
+    sim = SimulatedRobot(robot, seed=seed, plant=_plant(robot, flat if calibrate else point))
     session = SimSession(sim)
+    cal_note = ""
+    if calibrate:
+        session.advance(0.2)
+        try:
+            outcome = calibrate_level(session.client)
+            if not outcome.ok:
+                cal_note = f"flat calibration refused: {outcome}"
+        except Exception as e:  # noqa: BLE001 - a refused calibration is a result, reported
+            cal_note = f"flat calibration failed: {e}"
+        if flat != point:
+            sim.plant = _plant(robot, point)  # onto the slope, cold and at rest
+            if level_on_ground:
+                session.advance(0.3)
+                try:
+                    outcome = calibrate_level(session.client, ground=True)
+                    if not outcome.ok:
+                        cal_note = f"ground levelling refused: {outcome}"
+                except Exception as e:  # noqa: BLE001 - reported, like the flat calibration
+                    cal_note = f"ground levelling failed: {e}"
+    if not isinstance(gait, int):
+        states = list(gait)
+        session.client.load_gait(states[:-1] if len(states) > 1 and states[0] == states[-1] else states)
+        gait = GAIT_USER
     peak = [0.0]
     step = sim.step
     temps = sim.plant._temp  # the coil temperatures, read once per plant step
@@ -236,6 +297,8 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     note = ""
     if not faults and not completed:
         note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
+    if cal_note:
+        note = (note + "; " if note else "") + cal_note
     return DriveOutcome(completed, speed, run.displacement_mm, faults, note,
                         float(max(sim.plant.temperature_c)), peak[0])
 
@@ -283,11 +346,23 @@ def tune_open_loop_for(robot: Any, direction: str = "+x", *, budget: int = 150, 
 
 
 def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, direction: str = "+x",
-                  gait: int = 0, duration_s: float = RUN_S) -> ConditionResult:
+                  gait: int = 0, duration_s: float = RUN_S,
+                  learned: Sequence[int] | None = None) -> ConditionResult:
+    """Both drives under ``point``; ``learned``: also the ψ-feedback firmware walking that
+    state sequence (the learn-then-walk gait, ``learned_gait``), reported in ``extra``."""
     possible, why = physically_possible(robot, point, direction, gait)
     fb = feedback_run(robot, point, direction=direction, gait=gait, duration_s=duration_s)
     ol = open_loop_run(robot, drive, point, direction=direction, gait=gait, duration_s=duration_s)
-    return ConditionResult(point, possible, why, fb, ol)
+    extra: dict[str, Any] = {}
+    if any(c.startswith("incline_deg=") for c in point.conditions):
+        gfb = feedback_run(robot, point, direction=direction, gait=gait, duration_s=duration_s, level_on_ground=True)
+        extra["levelled_on_ground"] = {"feedback": _round(asdict(gfb))}
+    if learned is not None:
+        lp, lwhy = physically_possible(robot, point, direction, learned)
+        lfb = feedback_run(robot, point, direction=direction, gait=learned, duration_s=duration_s)
+        extra["learned_gait"] = {"states": list(learned), "physically_possible": lp, "why_not": lwhy,
+                                 "feedback": _round(asdict(lfb))}
+    return ConditionResult(point, possible, why, fb, ol, extra)
 
 
 def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
@@ -299,7 +374,25 @@ def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> d
     kept = [r for r in done if math.copysign(1, nom) * r.feedback.speed_mm_s >= 0.75 * abs(nom)]
     clean_stops = [r for r in impossible if not r.feedback.completed and r.feedback.fault
                    and r.feedback.coil_max_end_c < 50.0]
+    learned: dict[str, Any] = {}
+    if "learned_gait" in nominal.extra:
+        lnom = nominal.extra["learned_gait"]["feedback"]["speed_mm_s"]
+        lposs = [r.extra["learned_gait"] for r in results if r.extra["learned_gait"]["physically_possible"]]
+        ldone = [g for g in lposs if g["feedback"]["completed"]]
+        lkept = [g for g in ldone if math.copysign(1, lnom) * g["feedback"]["speed_mm_s"] >= 0.75 * abs(lnom)]
+        learned = {"learned_gait_states": nominal.extra["learned_gait"]["states"],
+                   "learned_nominal_feedback_mm_s": round(lnom, 4),
+                   "learned_physically_possible": len(lposs),
+                   "learned_feedback_completed_where_possible": len(ldone),
+                   "learned_feedback_kept_75pct_where_possible": len(lkept)}
+    sloped = [r for r in results if "levelled_on_ground" in r.extra]
+    if sloped:
+        learned["slope_conditions"] = len(sloped)
+        learned["slope_completed_flat_calibration_only"] = sum(r.feedback.completed for r in sloped)
+        learned["slope_completed_after_ground_levelling"] = sum(
+            r.extra["levelled_on_ground"]["feedback"]["completed"] for r in sloped)
     return {
+        **learned,
         "conditions": len(results),
         "physically_possible": len(possible),
         "feedback_completed_where_possible": len(done),

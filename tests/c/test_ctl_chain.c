@@ -1,0 +1,94 @@
+/* Host unit tests of core/ctl.c on a chain of three limbs (robots/inchworm-3.toml: tail,
+ * middle, head; ψ* = 20°, band 19..21°, limb i driven by actuator i): a falling limb waits
+ * warm only for a sagging NEIGHBOUR (the coils that bend its body section), not for every
+ * held limb of the robot. */
+#include <math.h>
+
+#include "ctl.h"
+#include "psi.h"
+#include "unit.h"
+
+#define PI_D 3.14159265358979323846
+#define DRIVE 6000u
+#define HOLD 2500u
+
+static void put(uint8_t limb, double deg)
+{
+    psi_update(limb, (int16_t)lround(8192.0 * sin(deg * PI_D / 180.0)),
+               (int16_t)lround(8192.0 * cos(deg * PI_D / 180.0)));
+}
+
+static void demand3(uint8_t t0, uint8_t t1, uint8_t t2, uint16_t duty[CFG_N_ACTUATORS])
+{
+    uint8_t target[CFG_N_LIMBS];
+    target[0] = t0;
+    target[1] = t1;
+    target[2] = t2;
+    ctl_demand(target, DRIVE, HOLD, duty);
+}
+
+static void setup(void)
+{
+    psi_init();
+    psi_set_debounce(1);
+    ctl_reset();
+}
+
+static void test_a_falling_limb_does_not_wait_for_a_sagging_limb_two_sections_away(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 30.0);
+    put(1, 30.0);
+    put(2, 30.0);
+    demand3(1, 1, 0, duty); /* tail and middle held (above their tops: off), head falls */
+    CHECK_EQ(duty[0], 0);
+    CHECK_EQ(duty[1], 0);
+    CHECK_EQ(duty[2], 0);
+    put(0, 20.5); /* the tail sags below its hold edge (still level 1) */
+    CHECK_EQ(psi_level(0), 1);
+    demand3(1, 1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE); /* the tail re-heats its own coil */
+    CHECK_EQ(duty[2], 0);     /* the head is not what holds the tail up: it goes on falling */
+}
+
+static void test_a_falling_limb_waits_warm_for_a_sagging_neighbour(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 30.0);
+    put(1, 30.0);
+    put(2, 30.0);
+    demand3(1, 1, 0, duty);
+    put(1, 20.5); /* the middle, next to the falling head, sags */
+    CHECK_EQ(psi_level(1), 1);
+    demand3(1, 1, 0, duty);
+    CHECK_EQ(duty[1], DRIVE);
+    CHECK_EQ(duty[2], HOLD); /* kept warm: it may be what holds the middle up */
+    CHECK_EQ(duty[0], 0);
+}
+
+static void test_a_falling_first_limb_waits_for_its_only_neighbour(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 30.0);
+    put(1, 30.0);
+    put(2, 30.0);
+    demand3(0, 1, 1, duty); /* the tail falls, middle and head held */
+    put(2, 20.5);           /* the head (two sections away) sags: no wait */
+    demand3(0, 1, 1, duty);
+    CHECK_EQ(duty[2], DRIVE);
+    CHECK_EQ(duty[0], 0);
+    put(1, 20.5); /* now the middle sags too */
+    demand3(0, 1, 1, duty);
+    CHECK_EQ(duty[0], HOLD);
+}
+
+int main(void)
+{
+    RUN(test_a_falling_limb_does_not_wait_for_a_sagging_limb_two_sections_away);
+    RUN(test_a_falling_limb_waits_warm_for_a_sagging_neighbour);
+    RUN(test_a_falling_first_limb_waits_for_its_only_neighbour);
+    return UNIT_EXIT();
+}
