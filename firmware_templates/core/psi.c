@@ -9,16 +9,19 @@ static const uint8_t limb_levels[CFG_N_LIMBS] ROM = CFG_LIMB_LEVELS;
 static const int16_t psi_star_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS] ROM = CFG_LIMB_PSI_STAR_CDEG;
 static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
 
-/* Per limb and threshold, in one record (an 8-bit MCU computes its address once): the
- * threshold in use (SET_PARAM may move it), its angles in 0.01°, and its hold and settle
- * edges (below). */
+/* Per limb and threshold, in one record (an 8-bit MCU computes its address once): its
+ * edges, the threshold in use (SET_PARAM may move it) and its angles in 0.01°. */
+#define E_UPPER 0u  /* the band's upper edge ψ* + h/2 (= PSI_EDGE_UPPER) */
+#define E_LOWER 1u  /* its lower edge ψ* − h/2 (= PSI_EDGE_LOWER) */
+#define E_HOLD 2u   /* the hold edge (below) */
+#define E_TOP 3u    /* the hold top */
+#define E_SETTLE 4u /* the settle edge */
 typedef struct {
-    int16_t t[4];             /* {cos, sin} Q14 of the upper band edge, then of the lower */
+    int16_t e[5][2];          /* {cos, sin} Q14 of each E_* edge */
     int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
     int16_t star, hyst;       /* ψ* and the band width */
-    int16_t hold[2], top[2];  /* hold edge, hold top */
-    int16_t settle[2];        /* settle edge */
 } band_t;
+typedef char edge_numbers_match_psi_h[PSI_EDGE_UPPER == E_UPPER && PSI_EDGE_LOWER == E_LOWER ? 1 : -1];
 static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 
 /* Holding a level, the controller keeps ψ above the band's upper edge plus this margin:
@@ -27,8 +30,8 @@ static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 #ifndef CFG_HOLD_MARGIN_CDEG
 #define CFG_HOLD_MARGIN_CDEG 0
 #endif
-/* band_t's hold, top and settle: {cos, sin} Q14 of the hold edge ψ* + h/2 + margin, the
- * hold top (the hold edge plus PSI_HOLD_BAND_CDEG) and the settle edge ψ* − h/2 − margin. */
+/* band_t's E_HOLD, E_TOP and E_SETTLE: {cos, sin} Q14 of the hold edge ψ* + h/2 + margin,
+ * the hold top (the hold edge plus PSI_HOLD_BAND_CDEG) and the settle edge ψ* − h/2 − margin. */
 /* Per progress distance d of PSI_PROGRESS_CDEG: d, then {cos d, sin d} in Q14 (round(16384·cos d),
  * round(16384·sin d)). The progress edges are the band edge turned by d (psi_to_go_cdeg), so no
  * per-limb table of them is kept (RAM: 60 B per limb and threshold). */
@@ -39,20 +42,42 @@ static const int16_t progress[PSI_PROGRESS_EDGES][3] ROM = {
 };
 typedef char progress_matches_psi_h[PSI_PROGRESS_EDGES == 13 && PSI_FALL_EDGES <= 13 ? 1 : -1];
 
-/* {cos, sin} Q14 of `cdeg` clamped to ±89°. */
-static void edge_at(int16_t cdeg, int16_t edge[2])
+#if defined(__GNUC__)
+#define NOINLINE __attribute__((noinline)) /* many callers: one copy on the 8-bit targets */
+#else
+#define NOINLINE
+#endif
+
+/* The record of threshold `thr` of `limb`: one copy of the address arithmetic. */
+static NOINLINE band_t *band(uint8_t limb, uint8_t thr)
 {
-    cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
+    return &bands[limb][thr];
+}
+
+/* {cos, sin} Q14 of `cdeg`, −9000 < cdeg < 9000. */
+static NOINLINE void edge_of(int16_t cdeg, int16_t edge[2])
+{
     edge[0] = psi_cos_q14(cdeg);
     edge[1] = psi_sin_q14(cdeg);
 }
 
-static void set_hold_edge(uint8_t limb, uint8_t thr)
+/* Threshold ψ* with band width h (both in range) into `b`: its band edges in 0.01° and its
+ * hold, hold-top and settle edges (clamped to ±89°). */
+static void set_angles(band_t *b, int16_t star, int16_t hyst)
 {
-    band_t *b = &bands[limb][thr];
-    edge_at((int16_t)(b->hi + CFG_HOLD_MARGIN_CDEG), b->hold);
-    edge_at((int16_t)(b->hi + CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG), b->top);
-    edge_at((int16_t)(b->lo - CFG_HOLD_MARGIN_CDEG), b->settle);
+    static const int16_t from_hi[3] ROM = {CFG_HOLD_MARGIN_CDEG, CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG,
+                                           -CFG_HOLD_MARGIN_CDEG};
+    uint8_t k;
+    b->star = star;
+    b->hyst = hyst;
+    b->lo = (int16_t)(star - hyst / 2);
+    b->hi = (int16_t)(star + (hyst - hyst / 2));
+    for (k = 0; k < 3u; k++) {
+        /* hold and top above the upper edge, settle below the lower one */
+        int16_t cdeg = (int16_t)((k < 2u ? b->hi : b->lo) + ROM_I16(&from_hi[k]));
+        cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
+        edge_of(cdeg, b->e[E_HOLD + k]);
+    }
 }
 
 /* x·cos θ − z·sin θ for a Q14 {cos θ, sin θ}: g·sin(ψ − θ) for the sample (x, z) = g·(sin ψ,
@@ -75,6 +100,26 @@ static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
     return dot(edge[0], edge[1], ax, az) >= 0;
 }
 
+typedef struct {
+    int16_t ax, az;  /* last sample */
+    uint8_t hyst;    /* hysteresis level, PSI_UNKNOWN before the first sample */
+    uint8_t level;   /* debounced level */
+    uint16_t count;  /* samples the hysteresis level has differed from `level` */
+    uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
+    uint8_t relaxed; /* settle on the band edges instead of the margin edges */
+    uint16_t dwell;  /* samples clear of the margins while not yet settled */
+} limb_state_t;
+
+static limb_state_t limbs[CFG_N_LIMBS];
+static uint16_t debounce = CFG_DEBOUNCE_TICKS;
+
+/* The last sample of `limb` against edge `e` (E_*) of threshold `thr`: ψ ≥ the edge. */
+static NOINLINE uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)
+{
+    const limb_state_t *l = &limbs[limb];
+    return at_or_above(band(limb, thr)->e[e], l->ax, l->az);
+}
+
 /* sin(i · 90°/64) in Q14, i = 0..64. */
 static const int16_t sin_tab[65] ROM = {
     0,     402,   804,   1205,  1606,  2006,  2404,  2801,  3196,  3590,  3981,  4370,  4756,
@@ -89,19 +134,6 @@ static const int16_t atan_tab[33] ROM = {
     0,    179,  358,  536,  713,  888,  1062, 1234, 1404, 1571, 1735, 1897, 2056, 2211, 2363, 2511, 2657,
     2798, 2936, 3070, 3201, 3327, 3451, 3571, 3687, 3800, 3909, 4016, 4119, 4218, 4315, 4409, 4500,
 };
-
-typedef struct {
-    int16_t ax, az;  /* last sample */
-    uint8_t hyst;    /* hysteresis level, PSI_UNKNOWN before the first sample */
-    uint8_t level;   /* debounced level */
-    uint16_t count;  /* samples the hysteresis level has differed from `level` */
-    uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
-    uint8_t relaxed; /* settle on the band edges instead of the margin edges */
-    uint16_t dwell;  /* samples clear of the margins while not yet settled */
-} limb_state_t;
-
-static limb_state_t limbs[CFG_N_LIMBS];
-static uint16_t debounce = CFG_DEBOUNCE_TICKS;
 
 void psi_reset(void)
 {
@@ -122,17 +154,12 @@ void psi_init(void)
 {
     uint8_t i, j, k;
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        int16_t h = ROM_I16(&hyst_rom[i]);
         for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
-            int16_t p = ROM_I16(&psi_star_rom[i][j]);
+            band_t *b = band(i, j);
             for (k = 0; k < 4u; k++) {
-                bands[i][j].t[k] = ROM_I16(&thresholds_rom[i][j][k]);
+                b->e[k >> 1][k & 1u] = ROM_I16(&thresholds_rom[i][j][k]); /* upper edge, then lower */
             }
-            bands[i][j].star = p;
-            bands[i][j].hyst = h;
-            bands[i][j].lo = (int16_t)(p - h / 2);
-            bands[i][j].hi = (int16_t)(p + (h - h / 2));
-            set_hold_edge(i, j);
+            set_angles(b, ROM_I16(&psi_star_rom[i][j]), ROM_I16(&hyst_rom[i]));
         }
     }
     debounce = CFG_DEBOUNCE_TICKS;
@@ -171,7 +198,6 @@ int16_t psi_cos_q14(int16_t cdeg)
 int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg)
 {
     int16_t lo, hi;
-    int16_t *t;
     band_t *b;
     if (limb >= CFG_N_LIMBS || thr >= CFG_MAX_THRESHOLDS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
         psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
@@ -182,34 +208,27 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     if (lo <= -9000 || hi >= 9000) {
         return -1;
     }
-    if (thr > 0u && lo <= bands[limb][thr - 1u].hi) {
+    b = band(limb, thr);
+    if (thr > 0u && lo <= b[-1].hi) {
         return -1;
     }
-    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= bands[limb][thr + 1u].lo) {
+    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= b[1].lo) {
         return -1;
     }
-    b = &bands[limb][thr];
-    t = b->t;
-    t[0] = psi_cos_q14(hi);
-    t[1] = psi_sin_q14(hi);
-    t[2] = psi_cos_q14(lo);
-    t[3] = psi_sin_q14(lo);
-    b->lo = lo;
-    b->hi = hi;
-    b->star = psi_star_cdeg;
-    b->hyst = hyst_cdeg;
-    set_hold_edge(limb, thr);
+    edge_of(hi, b->e[E_UPPER]);
+    edge_of(lo, b->e[E_LOWER]);
+    set_angles(b, psi_star_cdeg, hyst_cdeg);
     return 0;
 }
 
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr)
 {
-    return bands[limb][thr].star;
+    return band(limb, thr)->star;
 }
 
 int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr)
 {
-    return bands[limb][thr].hyst;
+    return band(limb, thr)->hyst;
 }
 
 void psi_set_debounce(uint16_t samples)
@@ -224,7 +243,7 @@ uint8_t psi_levels(uint8_t limb)
 
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az)
 {
-    return at_or_above(&bands[limb][thr].t[edge == PSI_EDGE_LOWER ? 2 : 0], ax, az);
+    return at_or_above(band(limb, thr)->e[edge == PSI_EDGE_LOWER], ax, az);
 }
 
 uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
@@ -248,23 +267,15 @@ uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
  * its thresholds (margins = 0) or of the hold and settle edges (margins = 1). */
 static uint8_t inside(uint8_t limb, uint8_t margins)
 {
-    const limb_state_t *l = &limbs[limb];
-    uint8_t level = l->level;
-    const int16_t *e;
+    uint8_t level = limbs[limb].level;
     if (level == PSI_UNKNOWN) {
         return 0;
     }
-    if (level > 0u) {
-        e = margins ? bands[limb][level - 1u].hold : &bands[limb][level - 1u].t[0];
-        if (!at_or_above(e, l->ax, l->az)) {
-            return 0;
-        }
+    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), margins ? E_HOLD : E_UPPER)) {
+        return 0;
     }
-    if (level + 1u < psi_levels(limb)) {
-        e = margins ? bands[limb][level].settle : &bands[limb][level].t[2];
-        if (at_or_above(e, l->ax, l->az)) {
-            return 0;
-        }
+    if (level + 1u < psi_levels(limb) && last_above(limb, level, margins ? E_SETTLE : E_LOWER)) {
+        return 0;
     }
     return 1;
 }
@@ -318,12 +329,12 @@ uint8_t psi_level(uint8_t limb)
 
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
 {
-    return at_or_above(bands[limb][thr].hold, limbs[limb].ax, limbs[limb].az);
+    return last_above(limb, thr, E_HOLD);
 }
 
 uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 {
-    return at_or_above(bands[limb][thr].top, limbs[limb].ax, limbs[limb].az);
+    return last_above(limb, thr, E_TOP);
 }
 
 /* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
@@ -333,7 +344,7 @@ uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {
     const limb_state_t *l = &limbs[limb];
-    const int16_t *e = &bands[limb][thr].t[rising ? 0 : 2];
+    const int16_t *e = band(limb, thr)->e[rising ? E_UPPER : E_LOWER];
     uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
     /* The sample in the frame of the band edge θ (upper when rising, lower when falling):
      * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above), and
