@@ -171,7 +171,7 @@ int16_t psi_sin_q14(int16_t cdeg)
     uint32_t r;
     uint16_t i, f;
     int16_t a, b, v;
-    uint16_t x = (uint16_t)(cdeg < 0 ? -(int32_t)cdeg : cdeg);
+    uint16_t x = cdeg < 0 ? (uint16_t)(0u - (uint16_t)cdeg) : (uint16_t)cdeg;
     if (x >= 9000u) {
         v = 16384;
     } else {
@@ -391,13 +391,12 @@ static int16_t atan_frac(uint16_t n, uint16_t d)
         r = 32768u;
     } else {
         for (k = 0; k < 15u; k++) {
-            uint32_t t = (uint32_t)rem << 1; /* rem < d ≤ 32768: fits 17 bits */
+            rem = (uint16_t)(rem << 1); /* rem < d ≤ 32768: 2·rem < 2^16 */
             r = (uint16_t)(r << 1);
-            if (t >= d) {
-                t -= d;
+            if (rem >= d) {
+                rem = (uint16_t)(rem - d);
                 r |= 1u;
             }
-            rem = (uint16_t)t;
         }
     }
     uint16_t i = (uint16_t)(r >> 10);
@@ -408,13 +407,14 @@ static int16_t atan_frac(uint16_t n, uint16_t d)
     }
     a = ROM_I16(&atan_tab[i]);
     b = ROM_I16(&atan_tab[i + 1u]);
-    return (int16_t)(a + (int16_t)(((int32_t)(b - a) * f + 512) >> 10));
+    /* b ≥ a (atan rises), b − a ≤ 179: unsigned 16×16→32 */
+    return (int16_t)(a + (int16_t)(((uint32_t)(uint16_t)(b - a) * f + 512u) >> 10));
 }
 
 int16_t psi_centideg(int16_t ax, int16_t az)
 {
-    uint16_t x = (uint16_t)(ax < 0 ? -(int32_t)ax : ax);
-    uint16_t z = (uint16_t)(az < 0 ? -(int32_t)az : az);
+    uint16_t x = ax < 0 ? (uint16_t)(0u - (uint16_t)ax) : (uint16_t)ax; /* |−32768| = 32768 */
+    uint16_t z = az < 0 ? (uint16_t)(0u - (uint16_t)az) : (uint16_t)az;
     int16_t a;
     if (x == 0u && z == 0u) {
         return 0;
