@@ -43,15 +43,14 @@ static struct {
     int16_t rc, rs; /* Q14 cos/sin of the whole tilt */
 } lm[CFG_N_LIMBS]; /* per limb, in one record */
 
-/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
- * shift 32 bits 14 times. Exact for |p| < 2^29 (a rotated gravity vector always is). */
-#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
-
 static uint16_t rec_crc(void)
 {
     return crc16_ccitt(CRC16_INIT, (const uint8_t *)&rec, offsetof(level_rec_t, crc));
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* four callers: one copy */
+#endif
 int16_t level_offset_cdeg(uint8_t limb)
 {
     return status == PROTO_LEVEL_STORED ? rec.off[limb] : 0;
@@ -88,8 +87,8 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 {
     int16_t x = *ax, z = *az, c = lm[limb].rc, s = lm[limb].rs;
     if (s != 0) { /* a tilt of 0.01° already has sin ≥ 2 in Q14; 16×16→32 products */
-        *ax = Q14_TO_I16((int32_t)x * c - (int32_t)z * s);
-        *az = Q14_TO_I16((int32_t)z * c + (int32_t)x * s);
+        *ax = psi_turn_q14(c, s, x, z);            /* x·c − z·s */
+        *az = psi_turn_q14(c, (int16_t)-s, z, x); /* z·c + x·s */
     }
 }
 

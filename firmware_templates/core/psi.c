@@ -91,6 +91,15 @@ static int32_t dot(int16_t c, int16_t s, int16_t x, int16_t z)
     return (int32_t)x * c - (int32_t)z * s;
 }
 
+/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
+ * shift 32 bits 14 times. Exact for |p| < 2^29. */
+#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
+
+NOINLINE int16_t psi_turn_q14(int16_t c, int16_t s, int16_t x, int16_t z)
+{
+    return Q14_TO_I16(dot(c, s, x, z));
+}
+
 /* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Out of line too (many callers). */
 #if defined(__GNUC__)
 __attribute__((noinline))
@@ -337,10 +346,6 @@ uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
     return last_above(limb, thr, E_TOP);
 }
 
-/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
- * shift 32 bits 14 times. Exact for |p| < 2^29. */
-#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
-
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {
     const limb_state_t *l = &limbs[limb];
@@ -356,7 +361,7 @@ int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
         return 0; /* rising: at or above the upper edge; falling: below the lower edge */
     }
     u16 = Q14_TO_I16(u);
-    z16 = Q14_TO_I16(dot(e[1], (int16_t)-e[0], l->ax, l->az)); /* v */
+    z16 = psi_turn_q14(e[1], (int16_t)-e[0], l->ax, l->az); /* v */
     if (rising) {
         z16 = (int16_t)-z16; /* the edges below the upper edge: turn the other way */
     }

@@ -63,6 +63,11 @@ int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr);
 int16_t psi_sin_q14(int16_t cdeg);
 int16_t psi_cos_q14(int16_t cdeg);
 
+/* (x·c − z·s) / 2^14 for a Q14 {c, s} = {cos θ, sin θ}: the x of (x, z) turned by −θ (the
+ * z is psi_turn_q14(c, −s, z, x)). Exact for |x·c − z·s| < 2^29: a vector shorter than 2^15
+ * (every sample imucheck.c passes is within 1.5 g) turned by a Q14 unit {c, s}. */
+int16_t psi_turn_q14(int16_t c, int16_t s, int16_t x, int16_t z);
+
 /* 1 when the gravity vector (ax, az) of `limb` is at or above the `edge` of threshold `thr`. */
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az);
 
