@@ -9,8 +9,7 @@ static uint8_t lost = LIMBMAP_NONE;
 
 void limbmap_init(void)
 {
-    limbmap_set(0, 0, 0);
-    lost = LIMBMAP_NONE;
+    limbmap_use(LIMBMAP_NONE, compiled);
 }
 
 uint8_t limbmap_actuator(uint8_t limb)
@@ -45,8 +44,12 @@ uint8_t limbmap_set(const uint8_t *actuators, uint8_t n, uint16_t *bad)
             return PROTO_ERR_OUT_OF_RANGE;
         }
     }
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        map[i] = n ? actuators[i] : ROM_U8(&compiled[i]);
+    if (n) {
+        for (i = 0; i < CFG_N_LIMBS; i++) {
+            map[i] = actuators[i];
+        }
+    } else {
+        limbmap_use(lost, compiled); /* the compiled map; what was lost stays lost */
     }
     return 0;
 }

@@ -12,9 +12,8 @@ static uint8_t hits_since_reached;
 void guard_init(void)
 {
     last_us = hal_micros();
-    unreached_us = 0;
-    timeout_us = CFG_STATE_TIMEOUT_MS * 1000UL;
-    hits_since_reached = 0;
+    guard_ack();
+    guard_set_timeout_ms(CFG_STATE_TIMEOUT_MS);
 }
 
 void guard_set_timeout_ms(uint32_t ms)
@@ -42,7 +41,8 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
         return GUARD_ON_LIMIT;
     }
     if (demanding) {
-        unreached_us = unreached_us > 0xFFFFFFFFUL - dt ? 0xFFFFFFFFUL : unreached_us + dt;
+        uint32_t u = unreached_us + dt;
+        unreached_us = u < dt ? 0xFFFFFFFFUL : u; /* saturates: the sum wrapped iff it is below dt */
         if (unreached_us >= timeout_us) {
             return GUARD_TIMEOUT;
         }

@@ -10,6 +10,12 @@
 #define ROM_STATE(p) ((cfg_state_t)ROM_U16(p))
 #endif
 
+#if defined(__GNUC__)
+#define NOINLINE __attribute__((noinline)) /* several callers: one copy on the 8-bit targets */
+#else
+#define NOINLINE
+#endif
+
 /* Variables, not macros, so range checks never compare against a type's limits. */
 static const uint32_t n_states = CFG_N_STATES;
 
@@ -32,6 +38,12 @@ static struct {
 
 static uint32_t hold_ticks = CFG_HOLD_TICKS;
 static uint32_t timeout_ticks = CFG_STATE_TIMEOUT_TICKS;
+
+/* One 32-bit increment: on an 8-bit MCU a call is shorter than each inline copy. */
+static NOINLINE void inc32(uint32_t *n)
+{
+    ++*n;
+}
 
 void seq_init(void)
 {
@@ -203,20 +215,20 @@ uint8_t seq_tick(cfg_state_t measured)
     if (!s.running) {
         return 0;
     }
-    s.step_ticks++;
+    inc32(&s.step_ticks);
     if (measured == target_state()) {
         if (!s.reached) {
             s.reached = 1;
             ev |= SEQ_EV_REACHED;
         }
-        s.held++;
+        inc32(&s.held);
         if (s.held >= hold_ticks) {
             if (s.entry_left) {
                 s.entry_left--;
                 s.entry_at++;
             } else if (++s.step >= s.n) {
                 s.step = 0;
-                s.cycles++;
+                inc32(&s.cycles);
                 ev |= SEQ_EV_CYCLE;
             }
             s.step_ticks = 0;

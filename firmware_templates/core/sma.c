@@ -231,7 +231,7 @@ uint16_t sma_duty(uint8_t act)
 
 uint8_t sma_cooling(uint8_t act)
 {
-    return (uint8_t)(acts[act].forced || acts[act].blocked);
+    return (uint8_t)(acts[act].forced | acts[act].blocked); /* each 0 or 1 */
 }
 
 uint32_t sma_debt_us(uint8_t act)
