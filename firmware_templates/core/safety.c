@@ -16,6 +16,9 @@ void guard_init(void)
     guard_set_timeout_ms(CFG_STATE_TIMEOUT_MS);
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* guard_init and SET_PARAM: one copy */
+#endif
 void guard_set_timeout_ms(uint32_t ms)
 {
     timeout_us = (ms < CFG_STATE_TIMEOUT_MS ? ms : CFG_STATE_TIMEOUT_MS) * 1000UL;
@@ -26,8 +29,7 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
     uint8_t i;
     if (reached) {
-        unreached_us = 0;
-        hits_since_reached = 0;
+        guard_ack();
     }
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         if (hits & (1u << i)) {
@@ -50,6 +52,9 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
     return GUARD_OK;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* four callers: one copy */
+#endif
 void guard_ack(void)
 {
     unreached_us = 0;
