@@ -352,15 +352,15 @@ int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
     const int16_t *e = band(limb, thr)->e[rising ? E_UPPER : E_LOWER];
     uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
     /* The sample in the frame of the band edge θ (upper when rising, lower when falling):
-     * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above), and
-     * ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔ u·cos d − v·sin d ≥ 0. |g| < 2^15 (every
-     * sample imucheck.c passes is within 1.5 g) keeps |u|, |v| below 2^29 for Q14_TO_I16. */
-    int32_t u = dot(e[0], e[1], l->ax, l->az);
-    int16_t u16, z16;
-    if ((u >= 0) == !!rising) {
+     * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above: u / 2^14
+     * rounds down, so its sign is u's), and ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔
+     * u·cos d − v·sin d ≥ 0. |g| < 2^15 (every sample imucheck.c passes is within 1.5 g)
+     * keeps |u|, |v| below 2^29 for psi_turn_q14. */
+    int16_t u16 = psi_turn_q14(e[0], e[1], l->ax, l->az);
+    int16_t z16;
+    if ((u16 >= 0) == !!rising) {
         return 0; /* rising: at or above the upper edge; falling: below the lower edge */
     }
-    u16 = Q14_TO_I16(u);
     z16 = psi_turn_q14(e[1], (int16_t)-e[0], l->ax, l->az); /* v */
     if (rising) {
         z16 = (int16_t)-z16; /* the edges below the upper edge: turn the other way */
