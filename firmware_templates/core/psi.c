@@ -1,6 +1,8 @@
 /* psi.c - see psi.h. */
 #include "psi.h"
 
+#include <string.h>
+
 #include "rom.h"
 
 /* Per limb, per threshold: {cos upper, sin upper, cos lower, sin lower}, Q14, as rendered. */
@@ -147,15 +149,10 @@ static const int16_t atan_tab[33] ROM = {
 void psi_reset(void)
 {
     uint8_t i;
+    memset(limbs, 0, sizeof limbs);
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        limbs[i].ax = 0;
-        limbs[i].az = 0;
         limbs[i].hyst = PSI_UNKNOWN;
         limbs[i].level = PSI_UNKNOWN;
-        limbs[i].count = 0;
-        limbs[i].settled = 0;
-        limbs[i].relaxed = 0;
-        limbs[i].dwell = 0;
     }
 }
 

@@ -45,6 +45,14 @@ static NOINLINE void inc32(uint32_t *n)
     ++*n;
 }
 
+/* A new step: nothing held, not reached, its time from 0. */
+static NOINLINE void new_step(void)
+{
+    s.step_ticks = 0;
+    s.held = 0;
+    s.reached = 0;
+}
+
 void seq_init(void)
 {
     s.running = 0;
@@ -196,9 +204,7 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         s.entry_at = ROM_U16(&seq_entry_first[g]);
         s.entry_left = ROM_U16(&seq_entry_len[g]);
     }
-    s.step_ticks = 0;
-    s.held = 0;
-    s.reached = 0;
+    new_step();
     s.cycles = 0;
     s.running = 1;
     return SEQ_OK;
@@ -231,9 +237,7 @@ uint8_t seq_tick(cfg_state_t measured)
                 inc32(&s.cycles);
                 ev |= SEQ_EV_CYCLE;
             }
-            s.step_ticks = 0;
-            s.held = 0;
-            s.reached = 0;
+            new_step();
             return (uint8_t)(ev | SEQ_EV_ADVANCED);
         }
     } else {
