@@ -43,6 +43,9 @@ static struct {
     int16_t rc, rs; /* Q14 cos/sin of the whole tilt */
 } lm[CFG_N_LIMBS]; /* per limb, in one record */
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* three callers: one copy */
+#endif
 static uint16_t rec_crc(void)
 {
     return crc16_ccitt(CRC16_INIT, (const uint8_t *)&rec, offsetof(level_rec_t, crc));
@@ -117,6 +120,9 @@ static void set_ground(const int16_t *o)
     }
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* two callers: one copy */
+#endif
 static void write(uint8_t n, uint8_t ph)
 {
     phase = hal_nv_write((const uint8_t *)&rec, n) == 0 ? ph : PH_IDLE;

@@ -7,11 +7,17 @@ static const uint8_t compiled[CFG_N_LIMBS] ROM = CFG_LIMB_ACTUATOR;
 static uint8_t map[CFG_N_LIMBS] = CFG_LIMB_ACTUATOR; /* set before limbmap_init too (unit tests) */
 static uint8_t lost = LIMBMAP_NONE;
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured) */
+#endif
 void limbmap_init(void)
 {
     limbmap_use(LIMBMAP_NONE, compiled);
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* several callers: one copy */
+#endif
 uint8_t limbmap_actuator(uint8_t limb)
 {
     return map[limb];

@@ -376,7 +376,7 @@ uint8_t psi_settled(uint8_t limb)
     return limbs[limb].settled;
 }
 
-int16_t psi_last_centideg(uint8_t limb)
+NOINLINE int16_t psi_last_centideg(uint8_t limb)
 {
     if (limbs[limb].hyst == PSI_UNKNOWN) {
         return 0;

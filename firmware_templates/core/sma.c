@@ -219,6 +219,9 @@ int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cool
     return 0;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured) */
+#endif
 uint16_t sma_max_duty(void)
 {
     return sma_clamp(0xFFFFu);
