@@ -57,7 +57,7 @@ static NOINLINE band_t *band(uint8_t limb, uint8_t thr)
 }
 
 /* {cos, sin} Q14 of `cdeg`, −9000 < cdeg < 9000. */
-static NOINLINE void edge_of(int16_t cdeg, int16_t edge[2])
+static void edge_of(int16_t cdeg, int16_t edge[2])
 {
     edge[0] = psi_cos_q14(cdeg);
     edge[1] = psi_sin_q14(cdeg);
@@ -125,7 +125,7 @@ static limb_state_t limbs[CFG_N_LIMBS];
 static uint16_t debounce = CFG_DEBOUNCE_TICKS;
 
 /* The last sample of `limb` against edge `e` (E_*) of threshold `thr`: ψ ≥ the edge. */
-static NOINLINE uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)
+static uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)
 {
     const limb_state_t *l = &limbs[limb];
     return at_or_above(band(limb, thr)->e[e], l->ax, l->az);
@@ -242,8 +242,19 @@ void psi_set_debounce(uint16_t samples)
     debounce = samples ? samples : 1u;
 }
 
+/* Every limb has CFG_MAX_LEVELS levels exactly when their product, CFG_N_STATES, is
+ * CFG_MAX_LEVELS^CFG_N_LIMBS (no limb has more): then the count is a constant the compiler
+ * folds into every caller (R1, R3, inchworm-3). Up to 8 limbs; more read the table. */
+#define PSI_POW_(k) (CFG_N_LIMBS > (k) ? (unsigned long)CFG_MAX_LEVELS : 1UL)
+#define PSI_UNIFORM_LEVELS                                                                                    \
+    (CFG_N_LIMBS <= 8u && (unsigned long)CFG_N_STATES == PSI_POW_(0) * PSI_POW_(1) * PSI_POW_(2) * PSI_POW_(3) * \
+                              PSI_POW_(4) * PSI_POW_(5) * PSI_POW_(6) * PSI_POW_(7))
+
 uint8_t psi_levels(uint8_t limb)
 {
+    if (PSI_UNIFORM_LEVELS) {
+        return CFG_MAX_LEVELS;
+    }
     return ROM_U8(&limb_levels[limb]);
 }
 

@@ -193,8 +193,10 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
     s.dir = dir;
     s.step = 0;
     s.entry_left = 0;
-    for (i = 0; i < s.n; i++) {
-        if (step_state(i) == measured) {
+    /* every step's state is below n_states: an unknown measured state matches none, and a
+     * known one compares in cfg_state_t (no 32-bit compare per step) */
+    for (i = 0; measured < n_states && i < s.n; i++) {
+        if (step_state(i) == (cfg_state_t)measured) {
             s.step = i;
             break;
         }
