@@ -31,6 +31,9 @@ typedef struct {
 typedef char level_rec_is_packed[sizeof(level_rec_t) == LEVEL_RECORD_BYTES ? 1 : -1];
 typedef char level_rec_fits_nv[LEVEL_RECORD_BYTES <= HAL_NV_BYTES ? 1 : -1];
 
+#define LEVEL_SAMPLES_LOG2 6
+typedef char level_samples_is_2_to_the_log2[LEVEL_SAMPLES == (1 << LEVEL_SAMPLES_LOG2) ? 1 : -1];
+
 static level_rec_t rec;  /* the record (hal_nv_write keeps a pointer to it while writing) */
 static uint8_t status;   /* PROTO_LEVEL_NONE / STORED / CORRUPT */
 static uint8_t phase;
@@ -159,7 +162,11 @@ static void measured(void)
     uint8_t i, far = 0;
     int16_t o[CFG_N_LIMBS];
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        o[i] = (int16_t)(lm[i].ground + (int16_t)(lm[i].sum / LEVEL_SAMPLES)); /* a shift */
+        /* sum / LEVEL_SAMPLES (C rounds towards 0) as a shift of the magnitude: the signed
+         * division would link libgcc's __divmodsi4. |sum| ≤ 64 × 18000 < 2^21. */
+        int32_t sum = lm[i].sum;
+        uint32_t mag = (uint32_t)(sum < 0 ? -sum : sum) >> LEVEL_SAMPLES_LOG2;
+        o[i] = (int16_t)(lm[i].ground + (sum < 0 ? -(int16_t)mag : (int16_t)mag));
         if (!ground_mode) {
             o[i] = (int16_t)(o[i] + level_offset_cdeg(i));
         }

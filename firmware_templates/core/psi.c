@@ -53,7 +53,7 @@ typedef char progress_matches_psi_h[PSI_PROGRESS_EDGES == 13 && PSI_FALL_EDGES <
 /* The record of threshold `thr` of `limb`: one copy of the address arithmetic. */
 static NOINLINE band_t *band(uint8_t limb, uint8_t thr)
 {
-    return &bands[limb][thr];
+    return &bands[limb][CFG_MAX_THRESHOLDS > 1u ? thr : 0u]; /* one threshold per limb: thr is 0 */
 }
 
 /* {cos, sin} Q14 of `cdeg`, −9000 < cdeg < 9000. */
