@@ -122,7 +122,7 @@ typedef struct {
 } limb_state_t;
 
 static limb_state_t limbs[CFG_N_LIMBS];
-static uint16_t debounce = CFG_DEBOUNCE_TICKS;
+static uint16_t debounce; /* set by psi_init (no initial value: no .data bytes in flash) */
 
 /* The last sample of `limb` against edge `e` (E_*) of threshold `thr`: ψ ≥ the edge. */
 static uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)

@@ -6,7 +6,7 @@
 
 static uint32_t last_us;
 static uint32_t unreached_us;
-static uint32_t timeout_us = CFG_STATE_TIMEOUT_MS * 1000UL;
+static uint32_t timeout_us; /* set by guard_init (no .data bytes in flash) */
 static uint8_t hits_since_reached;
 
 #if defined(__GNUC__)

@@ -1,6 +1,8 @@
 /* seq.c - see seq.h. */
 #include "seq.h"
 
+#include <string.h>
+
 #include "psi.h"
 #include "rom.h"
 
@@ -36,8 +38,8 @@ static struct {
     uint16_t entry_left; /* entry states still to reach before the gait's join step */
 } s;
 
-static uint32_t hold_ticks = CFG_HOLD_TICKS;
-static uint32_t timeout_ticks = CFG_STATE_TIMEOUT_TICKS;
+static uint32_t hold_ticks; /* both set by seq_init (no .data bytes in flash) */
+static uint32_t timeout_ticks;
 
 /* One 32-bit increment: on an 8-bit MCU a call is shorter than each inline copy. */
 static NOINLINE void inc32(uint32_t *n)
@@ -153,9 +155,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
     if (s.running && s.dir == SEQ_DIR_LOADED) {
         s.running = 0; /* never run a half-replaced walk */
     }
-    for (i = 0; i < n; i++) {
-        loaded[i] = states[i];
-    }
+    memcpy(loaded, states, n * sizeof loaded[0]);
     loaded_n = n;
     return SEQ_OK;
 }

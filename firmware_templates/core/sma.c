@@ -39,8 +39,8 @@ static uint32_t last_us;
 static uint32_t slot_us;
 static uint8_t slot;
 static uint8_t estopped;
-static uint16_t max_duty = CFG_MAX_DUTY_PM;
-static uint32_t max_on_us = CFG_MAX_ON_TICKS * CFG_TICK_US;
+static uint16_t max_duty;  /* max_duty, max_on_us: set by sma_init (no .data bytes in flash) */
+static uint32_t max_on_us;
 static uint16_t refill_q8;     /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
 static uint16_t limit_hits;
 static uint8_t clamped;
