@@ -242,14 +242,6 @@ void psi_set_debounce(uint16_t samples)
     debounce = samples ? samples : 1u;
 }
 
-/* Every limb has CFG_MAX_LEVELS levels exactly when their product, CFG_N_STATES, is
- * CFG_MAX_LEVELS^CFG_N_LIMBS (no limb has more): then the count is a constant the compiler
- * folds into every caller (R1, R3, inchworm-3). Up to 8 limbs; more read the table. */
-#define PSI_POW_(k) (CFG_N_LIMBS > (k) ? (unsigned long)CFG_MAX_LEVELS : 1UL)
-#define PSI_UNIFORM_LEVELS                                                                                    \
-    (CFG_N_LIMBS <= 8u && (unsigned long)CFG_N_STATES == PSI_POW_(0) * PSI_POW_(1) * PSI_POW_(2) * PSI_POW_(3) * \
-                              PSI_POW_(4) * PSI_POW_(5) * PSI_POW_(6) * PSI_POW_(7))
-
 uint8_t psi_levels(uint8_t limb)
 {
     if (PSI_UNIFORM_LEVELS) {

@@ -100,6 +100,15 @@ uint8_t psi_settled(uint8_t limb);
 /* Settle on the band edges alone (on = 1) or with the margins (0, the default). */
 void psi_relax(uint8_t limb, uint8_t on);
 
+/* Every limb has CFG_MAX_LEVELS levels exactly when their product, CFG_N_STATES, is
+ * CFG_MAX_LEVELS^CFG_N_LIMBS (no limb has more): then psi_levels() is a constant the compiler
+ * folds into every caller (R1, R3, inchworm-3). Up to 8 limbs; more read the table. Usable
+ * in #if. */
+#define PSI_POW_(k) (CFG_N_LIMBS > (k) ? CFG_MAX_LEVELS : 1UL)
+#define PSI_UNIFORM_LEVELS                                                                                  \
+    (CFG_N_LIMBS <= 8u && CFG_N_STATES == PSI_POW_(0) * PSI_POW_(1) * PSI_POW_(2) * PSI_POW_(3) * PSI_POW_(4) * \
+                              PSI_POW_(5) * PSI_POW_(6) * PSI_POW_(7))
+
 /* Number of levels of `limb`. */
 uint8_t psi_levels(uint8_t limb);
 

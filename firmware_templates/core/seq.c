@@ -289,6 +289,17 @@ typedef uint32_t state_num_t;
  * place values (a digit is below its limb's level count): no division in the tick. */
 void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 {
+#if PSI_UNIFORM_LEVELS && CFG_MAX_LEVELS == 2u && CFG_STATE_BYTES == 1 && CFG_N_LIMBS >= 2u
+    /* Two levels per limb: the digits are the bits. Limb 0 takes every higher bit, as the
+     * subtraction below does for a state past the last (8-bit states and at least two limbs:
+     * its digit stays below 0xFF, so the subtraction's cap never applies). */
+    uint8_t v = (uint8_t)state, i;
+    for (i = CFG_N_LIMBS - 1u; i > 0u; i--) {
+        levels[i] = (uint8_t)(v & 1u);
+        v = (uint8_t)(v >> 1);
+    }
+    levels[0] = v;
+#else
     state_num_t place[CFG_N_LIMBS];
     state_num_t v = (state_num_t)state;
     uint8_t i, d;
@@ -302,6 +313,7 @@ void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
         }
         levels[i] = d;
     }
+#endif
 }
 
 cfg_state_t seq_state_index(const uint8_t levels[CFG_N_LIMBS])
