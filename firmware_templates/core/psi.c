@@ -23,6 +23,7 @@ typedef struct {
     int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
     int16_t star, hyst;       /* ψ* and the band width */
 } band_t;
+typedef char rendered_edges_are_e_upper_then_e_lower[E_UPPER == 0u && E_LOWER == 1u ? 1 : -1];
 typedef char edge_numbers_match_psi_h[PSI_EDGE_UPPER == E_UPPER && PSI_EDGE_LOWER == E_LOWER ? 1 : -1];
 static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 
@@ -158,13 +159,11 @@ void psi_reset(void)
 
 void psi_init(void)
 {
-    uint8_t i, j, k;
+    uint8_t i, j;
     for (i = 0; i < CFG_N_LIMBS; i++) {
         for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
             band_t *b = band(i, j);
-            for (k = 0; k < 4u; k++) {
-                b->e[k >> 1][k & 1u] = ROM_I16(&thresholds_rom[i][j][k]); /* upper edge, then lower */
-            }
+            ROM_COPY(b->e, thresholds_rom[i][j], sizeof thresholds_rom[i][j]); /* e[E_UPPER], e[E_LOWER] */
             set_angles(b, ROM_I16(&psi_star_rom[i][j]), ROM_I16(&hyst_rom[i]));
         }
     }
