@@ -130,7 +130,10 @@ def test_at_the_fastest_tick_the_build_allows_every_tick_still_reads_both_imus(t
     i2c._begin_start, i2c._complete = begin_start, done
     writes, transfers = b.mux_writes, i2c.transfers
     b.run_ticks(300)
-    assert b.mux_writes - writes == 600 and i2c.transfers - transfers == 1200  # every tick: 2 selects, 2 reads
+    # every tick: 2 selects, 2 reads; the window's ends may cut a round in flight at either end,
+    # so one round (2 selects, 4 transfers) more or less than 300 ticks' worth
+    assert 598 <= b.mux_writes - writes <= 602 and 1196 <= i2c.transfers - transfers <= 1204, (
+        b.mux_writes - writes, i2c.transfers - transfers)
     bus_us = sum(c for c in owned if c > 0) / 72 / 300
     assert need_us < bus_us < b.tick_us, (need_us, bus_us, b.tick_us)  # the rule's estimate is a floor; it fits
     assert _faults(b) == []

@@ -27,7 +27,8 @@ pytestmark = pytest.mark.skipif(
     reason="needs simavr/libsimavr-dev and avr-gcc (make toolchains installs them)",
 )
 
-OVERRUN_FAULT = 100  # not the default (10): the fault must come from the robot file's number
+OVERRUN_FAULT = 30  # not the default (10): the fault must come from the robot file's number; 100 in a row
+# is no longer reached at 4 kHz once the tick got lighter (issue 11 flash work): some ticks fit
 
 
 @pytest.fixture(scope="module")

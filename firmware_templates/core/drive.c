@@ -90,6 +90,9 @@ void drive_step(void)
     }
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line: less register pressure in the tick (measured) */
+#endif
 void drive_apply(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];

@@ -6,6 +6,7 @@
 #include "imucheck.h"
 #include "limbmap.h"
 #include "proto.h"
+#include "rom.h"
 #include "safety.h"
 #include "seq.h"
 #include "tx.h"
@@ -18,14 +19,10 @@ static void fall_back(uint8_t act)
     uint8_t k = (uint8_t)(act * 2u + (dir == PROTO_DIR_MINUS_X ? 1u : 0u));
     uint8_t n = ROM_U8(&limbmap_fb_len[k]);
     uint16_t first = ROM_U16(&limbmap_fb_first[k]);
-    uint8_t i;
     if (limbmap_lost() != LIMBMAP_NONE || n == 0u || n > FALLBACK_MAX_STEPS) {
         return;
     }
-    for (i = 0; i < n; i++) {
-        steps[i] = (cfg_state_t)(CFG_STATE_BYTES == 1 ? ROM_U8(&limbmap_fb_steps[first + i])
-                                                       : ROM_U16(&limbmap_fb_steps[first + i]));
-    }
+    ROM_COPY(steps, &limbmap_fb_steps[first], n * sizeof steps[0]); /* both cfg_state_t */
     if (seq_load(steps, n, 0) != SEQ_OK) {
         return;
     }

@@ -31,6 +31,9 @@ typedef struct {
 typedef char level_rec_is_packed[sizeof(level_rec_t) == LEVEL_RECORD_BYTES ? 1 : -1];
 typedef char level_rec_fits_nv[LEVEL_RECORD_BYTES <= HAL_NV_BYTES ? 1 : -1];
 
+#define LEVEL_SAMPLES_LOG2 6
+typedef char level_samples_is_2_to_the_log2[LEVEL_SAMPLES == (1 << LEVEL_SAMPLES_LOG2) ? 1 : -1];
+
 static level_rec_t rec;  /* the record (hal_nv_write keeps a pointer to it while writing) */
 static uint8_t status;   /* PROTO_LEVEL_NONE / STORED / CORRUPT */
 static uint8_t phase;
@@ -43,15 +46,17 @@ static struct {
     int16_t rc, rs; /* Q14 cos/sin of the whole tilt */
 } lm[CFG_N_LIMBS]; /* per limb, in one record */
 
-/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
- * shift 32 bits 14 times. Exact for |p| < 2^29 (a rotated gravity vector always is). */
-#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
-
+#if defined(__GNUC__)
+__attribute__((noinline)) /* three callers: one copy */
+#endif
 static uint16_t rec_crc(void)
 {
     return crc16_ccitt(CRC16_INIT, (const uint8_t *)&rec, offsetof(level_rec_t, crc));
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* four callers: one copy */
+#endif
 int16_t level_offset_cdeg(uint8_t limb)
 {
     return status == PROTO_LEVEL_STORED ? rec.off[limb] : 0;
@@ -88,8 +93,8 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 {
     int16_t x = *ax, z = *az, c = lm[limb].rc, s = lm[limb].rs;
     if (s != 0) { /* a tilt of 0.01° already has sin ≥ 2 in Q14; 16×16→32 products */
-        *ax = Q14_TO_I16((int32_t)x * c - (int32_t)z * s);
-        *az = Q14_TO_I16((int32_t)z * c + (int32_t)x * s);
+        *ax = psi_turn_q14(c, s, x, z);            /* x·c − z·s */
+        *az = psi_turn_q14(c, (int16_t)-s, z, x); /* z·c + x·s */
     }
 }
 
@@ -118,6 +123,9 @@ static void set_ground(const int16_t *o)
     }
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* two callers: one copy */
+#endif
 static void write(uint8_t n, uint8_t ph)
 {
     phase = hal_nv_write((const uint8_t *)&rec, n) == 0 ? ph : PH_IDLE;
@@ -154,7 +162,11 @@ static void measured(void)
     uint8_t i, far = 0;
     int16_t o[CFG_N_LIMBS];
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        o[i] = (int16_t)(lm[i].ground + (int16_t)(lm[i].sum / LEVEL_SAMPLES)); /* a shift */
+        /* sum / LEVEL_SAMPLES (C rounds towards 0) as a shift of the magnitude: the signed
+         * division would link libgcc's __divmodsi4. |sum| ≤ 64 × 18000 < 2^21. */
+        int32_t sum = lm[i].sum;
+        uint32_t mag = (uint32_t)(sum < 0 ? -sum : sum) >> LEVEL_SAMPLES_LOG2;
+        o[i] = (int16_t)(lm[i].ground + (sum < 0 ? -(int16_t)mag : (int16_t)mag));
         if (!ground_mode) {
             o[i] = (int16_t)(o[i] + level_offset_cdeg(i));
         }

@@ -7,12 +7,17 @@ static const uint8_t compiled[CFG_N_LIMBS] ROM = CFG_LIMB_ACTUATOR;
 static uint8_t map[CFG_N_LIMBS] = CFG_LIMB_ACTUATOR; /* set before limbmap_init too (unit tests) */
 static uint8_t lost = LIMBMAP_NONE;
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured) */
+#endif
 void limbmap_init(void)
 {
-    limbmap_set(0, 0, 0);
-    lost = LIMBMAP_NONE;
+    limbmap_use(LIMBMAP_NONE, compiled);
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* several callers: one copy */
+#endif
 uint8_t limbmap_actuator(uint8_t limb)
 {
     return map[limb];
@@ -45,8 +50,12 @@ uint8_t limbmap_set(const uint8_t *actuators, uint8_t n, uint16_t *bad)
             return PROTO_ERR_OUT_OF_RANGE;
         }
     }
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        map[i] = n ? actuators[i] : ROM_U8(&compiled[i]);
+    if (n) {
+        for (i = 0; i < CFG_N_LIMBS; i++) {
+            map[i] = actuators[i];
+        }
+    } else {
+        limbmap_use(lost, compiled); /* the compiled map; what was lost stays lost */
     }
     return 0;
 }

@@ -1,6 +1,8 @@
 /* psi.c - see psi.h. */
 #include "psi.h"
 
+#include <string.h>
+
 #include "rom.h"
 
 /* Per limb, per threshold: {cos upper, sin upper, cos lower, sin lower}, Q14, as rendered. */
@@ -9,16 +11,20 @@ static const uint8_t limb_levels[CFG_N_LIMBS] ROM = CFG_LIMB_LEVELS;
 static const int16_t psi_star_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS] ROM = CFG_LIMB_PSI_STAR_CDEG;
 static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
 
-/* Per limb and threshold, in one record (an 8-bit MCU computes its address once): the
- * threshold in use (SET_PARAM may move it), its angles in 0.01°, and its hold and settle
- * edges (below). */
+/* Per limb and threshold, in one record (an 8-bit MCU computes its address once): its
+ * edges, the threshold in use (SET_PARAM may move it) and its angles in 0.01°. */
+#define E_UPPER 0u  /* the band's upper edge ψ* + h/2 (= PSI_EDGE_UPPER) */
+#define E_LOWER 1u  /* its lower edge ψ* − h/2 (= PSI_EDGE_LOWER) */
+#define E_HOLD 2u   /* the hold edge (below) */
+#define E_TOP 3u    /* the hold top */
+#define E_SETTLE 4u /* the settle edge */
 typedef struct {
-    int16_t t[4];             /* {cos, sin} Q14 of the upper band edge, then of the lower */
+    int16_t e[5][2];          /* {cos, sin} Q14 of each E_* edge */
     int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
     int16_t star, hyst;       /* ψ* and the band width */
-    int16_t hold[2], top[2];  /* hold edge, hold top */
-    int16_t settle[2];        /* settle edge */
 } band_t;
+typedef char rendered_edges_are_e_upper_then_e_lower[E_UPPER == 0u && E_LOWER == 1u ? 1 : -1];
+typedef char edge_numbers_match_psi_h[PSI_EDGE_UPPER == E_UPPER && PSI_EDGE_LOWER == E_LOWER ? 1 : -1];
 static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 
 /* Holding a level, the controller keeps ψ above the band's upper edge plus this margin:
@@ -27,8 +33,8 @@ static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 #ifndef CFG_HOLD_MARGIN_CDEG
 #define CFG_HOLD_MARGIN_CDEG 0
 #endif
-/* band_t's hold, top and settle: {cos, sin} Q14 of the hold edge ψ* + h/2 + margin, the
- * hold top (the hold edge plus PSI_HOLD_BAND_CDEG) and the settle edge ψ* − h/2 − margin. */
+/* band_t's E_HOLD, E_TOP and E_SETTLE: {cos, sin} Q14 of the hold edge ψ* + h/2 + margin,
+ * the hold top (the hold edge plus PSI_HOLD_BAND_CDEG) and the settle edge ψ* − h/2 − margin. */
 /* Per progress distance d of PSI_PROGRESS_CDEG: d, then {cos d, sin d} in Q14 (round(16384·cos d),
  * round(16384·sin d)). The progress edges are the band edge turned by d (psi_to_go_cdeg), so no
  * per-limb table of them is kept (RAM: 60 B per limb and threshold). */
@@ -39,20 +45,42 @@ static const int16_t progress[PSI_PROGRESS_EDGES][3] ROM = {
 };
 typedef char progress_matches_psi_h[PSI_PROGRESS_EDGES == 13 && PSI_FALL_EDGES <= 13 ? 1 : -1];
 
-/* {cos, sin} Q14 of `cdeg` clamped to ±89°. */
-static void edge_at(int16_t cdeg, int16_t edge[2])
+#if defined(__GNUC__)
+#define NOINLINE __attribute__((noinline)) /* many callers: one copy on the 8-bit targets */
+#else
+#define NOINLINE
+#endif
+
+/* The record of threshold `thr` of `limb`: one copy of the address arithmetic. */
+static NOINLINE band_t *band(uint8_t limb, uint8_t thr)
 {
-    cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
+    return &bands[limb][CFG_MAX_THRESHOLDS > 1u ? thr : 0u]; /* one threshold per limb: thr is 0 */
+}
+
+/* {cos, sin} Q14 of `cdeg`, −9000 < cdeg < 9000. */
+static void edge_of(int16_t cdeg, int16_t edge[2])
+{
     edge[0] = psi_cos_q14(cdeg);
     edge[1] = psi_sin_q14(cdeg);
 }
 
-static void set_hold_edge(uint8_t limb, uint8_t thr)
+/* Threshold ψ* with band width h (both in range) into `b`: its band edges in 0.01° and its
+ * hold, hold-top and settle edges (clamped to ±89°). */
+static void set_angles(band_t *b, int16_t star, int16_t hyst)
 {
-    band_t *b = &bands[limb][thr];
-    edge_at((int16_t)(b->hi + CFG_HOLD_MARGIN_CDEG), b->hold);
-    edge_at((int16_t)(b->hi + CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG), b->top);
-    edge_at((int16_t)(b->lo - CFG_HOLD_MARGIN_CDEG), b->settle);
+    static const int16_t from_hi[3] ROM = {CFG_HOLD_MARGIN_CDEG, CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG,
+                                           -CFG_HOLD_MARGIN_CDEG};
+    uint8_t k;
+    b->star = star;
+    b->hyst = hyst;
+    b->lo = (int16_t)(star - hyst / 2);
+    b->hi = (int16_t)(star + (hyst - hyst / 2));
+    for (k = 0; k < 3u; k++) {
+        /* hold and top above the upper edge, settle below the lower one */
+        int16_t cdeg = (int16_t)((k < 2u ? b->hi : b->lo) + ROM_I16(&from_hi[k]));
+        cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
+        edge_of(cdeg, b->e[E_HOLD + k]);
+    }
 }
 
 /* x·cos θ − z·sin θ for a Q14 {cos θ, sin θ}: g·sin(ψ − θ) for the sample (x, z) = g·(sin ψ,
@@ -66,6 +94,15 @@ static int32_t dot(int16_t c, int16_t s, int16_t x, int16_t z)
     return (int32_t)x * c - (int32_t)z * s;
 }
 
+/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
+ * shift 32 bits 14 times. Exact for |p| < 2^29. */
+#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
+
+NOINLINE int16_t psi_turn_q14(int16_t c, int16_t s, int16_t x, int16_t z)
+{
+    return Q14_TO_I16(dot(c, s, x, z));
+}
+
 /* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Out of line too (many callers). */
 #if defined(__GNUC__)
 __attribute__((noinline))
@@ -73,6 +110,26 @@ __attribute__((noinline))
 static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
 {
     return dot(edge[0], edge[1], ax, az) >= 0;
+}
+
+typedef struct {
+    int16_t ax, az;  /* last sample */
+    uint8_t hyst;    /* hysteresis level, PSI_UNKNOWN before the first sample */
+    uint8_t level;   /* debounced level */
+    uint16_t count;  /* samples the hysteresis level has differed from `level` */
+    uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
+    uint8_t relaxed; /* settle on the band edges instead of the margin edges */
+    uint16_t dwell;  /* samples clear of the margins while not yet settled */
+} limb_state_t;
+
+static limb_state_t limbs[CFG_N_LIMBS];
+static uint16_t debounce; /* set by psi_init (no initial value: no .data bytes in flash) */
+
+/* The last sample of `limb` against edge `e` (E_*) of threshold `thr`: ψ ≥ the edge. */
+static uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)
+{
+    const limb_state_t *l = &limbs[limb];
+    return at_or_above(band(limb, thr)->e[e], l->ax, l->az);
 }
 
 /* sin(i · 90°/64) in Q14, i = 0..64. */
@@ -90,49 +147,24 @@ static const int16_t atan_tab[33] ROM = {
     2798, 2936, 3070, 3201, 3327, 3451, 3571, 3687, 3800, 3909, 4016, 4119, 4218, 4315, 4409, 4500,
 };
 
-typedef struct {
-    int16_t ax, az;  /* last sample */
-    uint8_t hyst;    /* hysteresis level, PSI_UNKNOWN before the first sample */
-    uint8_t level;   /* debounced level */
-    uint16_t count;  /* samples the hysteresis level has differed from `level` */
-    uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
-    uint8_t relaxed; /* settle on the band edges instead of the margin edges */
-    uint16_t dwell;  /* samples clear of the margins while not yet settled */
-} limb_state_t;
-
-static limb_state_t limbs[CFG_N_LIMBS];
-static uint16_t debounce = CFG_DEBOUNCE_TICKS;
-
 void psi_reset(void)
 {
     uint8_t i;
+    memset(limbs, 0, sizeof limbs);
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        limbs[i].ax = 0;
-        limbs[i].az = 0;
         limbs[i].hyst = PSI_UNKNOWN;
         limbs[i].level = PSI_UNKNOWN;
-        limbs[i].count = 0;
-        limbs[i].settled = 0;
-        limbs[i].relaxed = 0;
-        limbs[i].dwell = 0;
     }
 }
 
 void psi_init(void)
 {
-    uint8_t i, j, k;
+    uint8_t i, j;
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        int16_t h = ROM_I16(&hyst_rom[i]);
         for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
-            int16_t p = ROM_I16(&psi_star_rom[i][j]);
-            for (k = 0; k < 4u; k++) {
-                bands[i][j].t[k] = ROM_I16(&thresholds_rom[i][j][k]);
-            }
-            bands[i][j].star = p;
-            bands[i][j].hyst = h;
-            bands[i][j].lo = (int16_t)(p - h / 2);
-            bands[i][j].hi = (int16_t)(p + (h - h / 2));
-            set_hold_edge(i, j);
+            band_t *b = band(i, j);
+            ROM_COPY(b->e, thresholds_rom[i][j], sizeof thresholds_rom[i][j]); /* e[E_UPPER], e[E_LOWER] */
+            set_angles(b, ROM_I16(&psi_star_rom[i][j]), ROM_I16(&hyst_rom[i]));
         }
     }
     debounce = CFG_DEBOUNCE_TICKS;
@@ -144,7 +176,7 @@ int16_t psi_sin_q14(int16_t cdeg)
     uint32_t r;
     uint16_t i, f;
     int16_t a, b, v;
-    uint16_t x = (uint16_t)(cdeg < 0 ? -(int32_t)cdeg : cdeg);
+    uint16_t x = cdeg < 0 ? (uint16_t)(0u - (uint16_t)cdeg) : (uint16_t)cdeg;
     if (x >= 9000u) {
         v = 16384;
     } else {
@@ -171,7 +203,6 @@ int16_t psi_cos_q14(int16_t cdeg)
 int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg)
 {
     int16_t lo, hi;
-    int16_t *t;
     band_t *b;
     if (limb >= CFG_N_LIMBS || thr >= CFG_MAX_THRESHOLDS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
         psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
@@ -182,34 +213,27 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     if (lo <= -9000 || hi >= 9000) {
         return -1;
     }
-    if (thr > 0u && lo <= bands[limb][thr - 1u].hi) {
+    b = band(limb, thr);
+    if (thr > 0u && lo <= b[-1].hi) {
         return -1;
     }
-    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= bands[limb][thr + 1u].lo) {
+    if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= b[1].lo) {
         return -1;
     }
-    b = &bands[limb][thr];
-    t = b->t;
-    t[0] = psi_cos_q14(hi);
-    t[1] = psi_sin_q14(hi);
-    t[2] = psi_cos_q14(lo);
-    t[3] = psi_sin_q14(lo);
-    b->lo = lo;
-    b->hi = hi;
-    b->star = psi_star_cdeg;
-    b->hyst = hyst_cdeg;
-    set_hold_edge(limb, thr);
+    edge_of(hi, b->e[E_UPPER]);
+    edge_of(lo, b->e[E_LOWER]);
+    set_angles(b, psi_star_cdeg, hyst_cdeg);
     return 0;
 }
 
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr)
 {
-    return bands[limb][thr].star;
+    return band(limb, thr)->star;
 }
 
 int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr)
 {
-    return bands[limb][thr].hyst;
+    return band(limb, thr)->hyst;
 }
 
 void psi_set_debounce(uint16_t samples)
@@ -219,12 +243,15 @@ void psi_set_debounce(uint16_t samples)
 
 uint8_t psi_levels(uint8_t limb)
 {
+    if (PSI_UNIFORM_LEVELS) {
+        return CFG_MAX_LEVELS;
+    }
     return ROM_U8(&limb_levels[limb]);
 }
 
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az)
 {
-    return at_or_above(&bands[limb][thr].t[edge == PSI_EDGE_LOWER ? 2 : 0], ax, az);
+    return at_or_above(band(limb, thr)->e[edge == PSI_EDGE_LOWER], ax, az);
 }
 
 uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
@@ -248,23 +275,15 @@ uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
  * its thresholds (margins = 0) or of the hold and settle edges (margins = 1). */
 static uint8_t inside(uint8_t limb, uint8_t margins)
 {
-    const limb_state_t *l = &limbs[limb];
-    uint8_t level = l->level;
-    const int16_t *e;
+    uint8_t level = limbs[limb].level;
     if (level == PSI_UNKNOWN) {
         return 0;
     }
-    if (level > 0u) {
-        e = margins ? bands[limb][level - 1u].hold : &bands[limb][level - 1u].t[0];
-        if (!at_or_above(e, l->ax, l->az)) {
-            return 0;
-        }
+    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), margins ? E_HOLD : E_UPPER)) {
+        return 0;
     }
-    if (level + 1u < psi_levels(limb)) {
-        e = margins ? bands[limb][level].settle : &bands[limb][level].t[2];
-        if (at_or_above(e, l->ax, l->az)) {
-            return 0;
-        }
+    if (level + 1u < psi_levels(limb) && last_above(limb, level, margins ? E_SETTLE : E_LOWER)) {
+        return 0;
     }
     return 1;
 }
@@ -318,34 +337,30 @@ uint8_t psi_level(uint8_t limb)
 
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr)
 {
-    return at_or_above(bands[limb][thr].hold, limbs[limb].ax, limbs[limb].az);
+    return last_above(limb, thr, E_HOLD);
 }
 
 uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 {
-    return at_or_above(bands[limb][thr].top, limbs[limb].ax, limbs[limb].az);
+    return last_above(limb, thr, E_TOP);
 }
-
-/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
- * shift 32 bits 14 times. Exact for |p| < 2^29. */
-#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
 
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {
     const limb_state_t *l = &limbs[limb];
-    const int16_t *e = &bands[limb][thr].t[rising ? 0 : 2];
+    const int16_t *e = band(limb, thr)->e[rising ? E_UPPER : E_LOWER];
     uint8_t k, n = rising ? PSI_PROGRESS_EDGES : PSI_FALL_EDGES;
     /* The sample in the frame of the band edge θ (upper when rising, lower when falling):
-     * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above), and
-     * ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔ u·cos d − v·sin d ≥ 0. |g| < 2^15 (every
-     * sample imucheck.c passes is within 1.5 g) keeps |u|, |v| below 2^29 for Q14_TO_I16. */
-    int32_t u = dot(e[0], e[1], l->ax, l->az);
-    int16_t u16, z16;
-    if ((u >= 0) == !!rising) {
+     * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above: u / 2^14
+     * rounds down, so its sign is u's), and ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔
+     * u·cos d − v·sin d ≥ 0. |g| < 2^15 (every sample imucheck.c passes is within 1.5 g)
+     * keeps |u|, |v| below 2^29 for psi_turn_q14. */
+    int16_t u16 = psi_turn_q14(e[0], e[1], l->ax, l->az);
+    int16_t z16;
+    if ((u16 >= 0) == !!rising) {
         return 0; /* rising: at or above the upper edge; falling: below the lower edge */
     }
-    u16 = Q14_TO_I16(u);
-    z16 = Q14_TO_I16(dot(e[1], (int16_t)-e[0], l->ax, l->az)); /* v */
+    z16 = psi_turn_q14(e[1], (int16_t)-e[0], l->ax, l->az); /* v */
     if (rising) {
         z16 = (int16_t)-z16; /* the edges below the upper edge: turn the other way */
     }
@@ -363,7 +378,7 @@ uint8_t psi_settled(uint8_t limb)
     return limbs[limb].settled;
 }
 
-int16_t psi_last_centideg(uint8_t limb)
+NOINLINE int16_t psi_last_centideg(uint8_t limb)
 {
     if (limbs[limb].hyst == PSI_UNKNOWN) {
         return 0;
@@ -380,13 +395,12 @@ static int16_t atan_frac(uint16_t n, uint16_t d)
         r = 32768u;
     } else {
         for (k = 0; k < 15u; k++) {
-            uint32_t t = (uint32_t)rem << 1; /* rem < d ≤ 32768: fits 17 bits */
+            rem = (uint16_t)(rem << 1); /* rem < d ≤ 32768: 2·rem < 2^16 */
             r = (uint16_t)(r << 1);
-            if (t >= d) {
-                t -= d;
+            if (rem >= d) {
+                rem = (uint16_t)(rem - d);
                 r |= 1u;
             }
-            rem = (uint16_t)t;
         }
     }
     uint16_t i = (uint16_t)(r >> 10);
@@ -397,13 +411,14 @@ static int16_t atan_frac(uint16_t n, uint16_t d)
     }
     a = ROM_I16(&atan_tab[i]);
     b = ROM_I16(&atan_tab[i + 1u]);
-    return (int16_t)(a + (int16_t)(((int32_t)(b - a) * f + 512) >> 10));
+    /* b ≥ a (atan rises), b − a ≤ 179: unsigned 16×16→32 */
+    return (int16_t)(a + (int16_t)(((uint32_t)(uint16_t)(b - a) * f + 512u) >> 10));
 }
 
 int16_t psi_centideg(int16_t ax, int16_t az)
 {
-    uint16_t x = (uint16_t)(ax < 0 ? -(int32_t)ax : ax);
-    uint16_t z = (uint16_t)(az < 0 ? -(int32_t)az : az);
+    uint16_t x = ax < 0 ? (uint16_t)(0u - (uint16_t)ax) : (uint16_t)ax; /* |−32768| = 32768 */
+    uint16_t z = az < 0 ? (uint16_t)(0u - (uint16_t)az) : (uint16_t)az;
     int16_t a;
     if (x == 0u && z == 0u) {
         return 0;

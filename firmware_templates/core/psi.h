@@ -63,6 +63,11 @@ int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr);
 int16_t psi_sin_q14(int16_t cdeg);
 int16_t psi_cos_q14(int16_t cdeg);
 
+/* (x·c − z·s) / 2^14 for a Q14 {c, s} = {cos θ, sin θ}: the x of (x, z) turned by −θ (the
+ * z is psi_turn_q14(c, −s, z, x)). Exact for |x·c − z·s| < 2^29: a vector shorter than 2^15
+ * (every sample imucheck.c passes is within 1.5 g) turned by a Q14 unit {c, s}. */
+int16_t psi_turn_q14(int16_t c, int16_t s, int16_t x, int16_t z);
+
 /* 1 when the gravity vector (ax, az) of `limb` is at or above the `edge` of threshold `thr`. */
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az);
 
@@ -94,6 +99,15 @@ uint8_t psi_settled(uint8_t limb);
 
 /* Settle on the band edges alone (on = 1) or with the margins (0, the default). */
 void psi_relax(uint8_t limb, uint8_t on);
+
+/* Every limb has CFG_MAX_LEVELS levels exactly when their product, CFG_N_STATES, is
+ * CFG_MAX_LEVELS^CFG_N_LIMBS (no limb has more): then psi_levels() is a constant the compiler
+ * folds into every caller (R1, R3, inchworm-3). Up to 8 limbs; more read the table. Usable
+ * in #if. */
+#define PSI_POW_(k) (CFG_N_LIMBS > (k) ? CFG_MAX_LEVELS : 1UL)
+#define PSI_UNIFORM_LEVELS                                                                                  \
+    (CFG_N_LIMBS <= 8u && CFG_N_STATES == PSI_POW_(0) * PSI_POW_(1) * PSI_POW_(2) * PSI_POW_(3) * PSI_POW_(4) * \
+                              PSI_POW_(5) * PSI_POW_(6) * PSI_POW_(7))
 
 /* Number of levels of `limb`. */
 uint8_t psi_levels(uint8_t limb);

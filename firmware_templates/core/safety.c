@@ -6,17 +6,22 @@
 
 static uint32_t last_us;
 static uint32_t unreached_us;
-static uint32_t timeout_us = CFG_STATE_TIMEOUT_MS * 1000UL;
+static uint32_t timeout_us; /* set by guard_init (no .data bytes in flash) */
 static uint8_t hits_since_reached;
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured) */
+#endif
 void guard_init(void)
 {
     last_us = hal_micros();
-    unreached_us = 0;
-    timeout_us = CFG_STATE_TIMEOUT_MS * 1000UL;
-    hits_since_reached = 0;
+    guard_ack();
+    guard_set_timeout_ms(CFG_STATE_TIMEOUT_MS);
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* guard_init and SET_PARAM: one copy */
+#endif
 void guard_set_timeout_ms(uint32_t ms)
 {
     timeout_us = (ms < CFG_STATE_TIMEOUT_MS ? ms : CFG_STATE_TIMEOUT_MS) * 1000UL;
@@ -27,8 +32,7 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
     uint8_t i;
     if (reached) {
-        unreached_us = 0;
-        hits_since_reached = 0;
+        guard_ack();
     }
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         if (hits & (1u << i)) {
@@ -42,7 +46,8 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
         return GUARD_ON_LIMIT;
     }
     if (demanding) {
-        unreached_us = unreached_us > 0xFFFFFFFFUL - dt ? 0xFFFFFFFFUL : unreached_us + dt;
+        uint32_t u = unreached_us + dt;
+        unreached_us = u < dt ? 0xFFFFFFFFUL : u; /* saturates: the sum wrapped iff it is below dt */
         if (unreached_us >= timeout_us) {
             return GUARD_TIMEOUT;
         }
@@ -50,6 +55,9 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
     return GUARD_OK;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* four callers: one copy */
+#endif
 void guard_ack(void)
 {
     unreached_us = 0;

@@ -1,6 +1,8 @@
 /* seq.c - see seq.h. */
 #include "seq.h"
 
+#include <string.h>
+
 #include "psi.h"
 #include "rom.h"
 
@@ -8,6 +10,12 @@
 #define ROM_STATE(p) ((cfg_state_t)ROM_U8(p))
 #else
 #define ROM_STATE(p) ((cfg_state_t)ROM_U16(p))
+#endif
+
+#if defined(__GNUC__)
+#define NOINLINE __attribute__((noinline)) /* several callers: one copy on the 8-bit targets */
+#else
+#define NOINLINE
 #endif
 
 /* Variables, not macros, so range checks never compare against a type's limits. */
@@ -30,8 +38,22 @@ static struct {
     uint16_t entry_left; /* entry states still to reach before the gait's join step */
 } s;
 
-static uint32_t hold_ticks = CFG_HOLD_TICKS;
-static uint32_t timeout_ticks = CFG_STATE_TIMEOUT_TICKS;
+static uint32_t hold_ticks; /* both set by seq_init (no .data bytes in flash) */
+static uint32_t timeout_ticks;
+
+/* One 32-bit increment: on an 8-bit MCU a call is shorter than each inline copy. */
+static NOINLINE void inc32(uint32_t *n)
+{
+    ++*n;
+}
+
+/* A new step: nothing held, not reached, its time from 0. */
+static NOINLINE void new_step(void)
+{
+    s.step_ticks = 0;
+    s.held = 0;
+    s.reached = 0;
+}
 
 void seq_init(void)
 {
@@ -133,9 +155,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
     if (s.running && s.dir == SEQ_DIR_LOADED) {
         s.running = 0; /* never run a half-replaced walk */
     }
-    for (i = 0; i < n; i++) {
-        loaded[i] = states[i];
-    }
+    memcpy(loaded, states, n * sizeof loaded[0]);
     loaded_n = n;
     return SEQ_OK;
 }
@@ -173,8 +193,10 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
     s.dir = dir;
     s.step = 0;
     s.entry_left = 0;
-    for (i = 0; i < s.n; i++) {
-        if (step_state(i) == measured) {
+    /* every step's state is below n_states: an unknown measured state matches none, and a
+     * known one compares in cfg_state_t (no 32-bit compare per step) */
+    for (i = 0; measured < n_states && i < s.n; i++) {
+        if (step_state(i) == (cfg_state_t)measured) {
             s.step = i;
             break;
         }
@@ -184,9 +206,7 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         s.entry_at = ROM_U16(&seq_entry_first[g]);
         s.entry_left = ROM_U16(&seq_entry_len[g]);
     }
-    s.step_ticks = 0;
-    s.held = 0;
-    s.reached = 0;
+    new_step();
     s.cycles = 0;
     s.running = 1;
     return SEQ_OK;
@@ -203,25 +223,23 @@ uint8_t seq_tick(cfg_state_t measured)
     if (!s.running) {
         return 0;
     }
-    s.step_ticks++;
+    inc32(&s.step_ticks);
     if (measured == target_state()) {
         if (!s.reached) {
             s.reached = 1;
             ev |= SEQ_EV_REACHED;
         }
-        s.held++;
+        inc32(&s.held);
         if (s.held >= hold_ticks) {
             if (s.entry_left) {
                 s.entry_left--;
                 s.entry_at++;
             } else if (++s.step >= s.n) {
                 s.step = 0;
-                s.cycles++;
+                inc32(&s.cycles);
                 ev |= SEQ_EV_CYCLE;
             }
-            s.step_ticks = 0;
-            s.held = 0;
-            s.reached = 0;
+            new_step();
             return (uint8_t)(ev | SEQ_EV_ADVANCED);
         }
     } else {
@@ -271,6 +289,17 @@ typedef uint32_t state_num_t;
  * place values (a digit is below its limb's level count): no division in the tick. */
 void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
 {
+#if PSI_UNIFORM_LEVELS && CFG_MAX_LEVELS == 2u && CFG_STATE_BYTES == 1 && CFG_N_LIMBS >= 2u
+    /* Two levels per limb: the digits are the bits. Limb 0 takes every higher bit, as the
+     * subtraction below does for a state past the last (8-bit states and at least two limbs:
+     * its digit stays below 0xFF, so the subtraction's cap never applies). */
+    uint8_t v = (uint8_t)state, i;
+    for (i = CFG_N_LIMBS - 1u; i > 0u; i--) {
+        levels[i] = (uint8_t)(v & 1u);
+        v = (uint8_t)(v >> 1);
+    }
+    levels[0] = v;
+#else
     state_num_t place[CFG_N_LIMBS];
     state_num_t v = (state_num_t)state;
     uint8_t i, d;
@@ -284,6 +313,7 @@ void seq_state_levels(cfg_state_t state, uint8_t levels[CFG_N_LIMBS])
         }
         levels[i] = d;
     }
+#endif
 }
 
 cfg_state_t seq_state_index(const uint8_t levels[CFG_N_LIMBS])

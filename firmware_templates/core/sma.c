@@ -39,9 +39,9 @@ static uint32_t last_us;
 static uint32_t slot_us;
 static uint8_t slot;
 static uint8_t estopped;
-static uint16_t max_duty = CFG_MAX_DUTY_PM;
-static uint32_t max_on_us = CFG_MAX_ON_TICKS * CFG_TICK_US;
-static uint32_t refill_q8;     /* on-time paid back per µs of cool-down, × 256, rounded down */
+static uint16_t max_duty;  /* max_duty, max_on_us: set by sma_init (no .data bytes in flash) */
+static uint32_t max_on_us;
+static uint16_t refill_q8;     /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
 static uint16_t limit_hits;
 static uint8_t clamped;
 /* Variables, not the macros: comparing against a constant 0 would warn (-Wtype-limits). */
@@ -89,11 +89,9 @@ static void every_channel_off(void)
  * (a min_cooldown below 1/39 of max_on counts as 1/39): paid back no faster than that. */
 static void set_times(uint32_t on_us, uint32_t cooldown_us)
 {
+    uint32_t q = on_us / ((cooldown_us >> 8) + 1u);
     max_on_us = on_us;
-    refill_q8 = on_us / ((cooldown_us >> 8) + 1u);
-    if (refill_q8 > 10000u) {
-        refill_q8 = 10000u;
-    }
+    refill_q8 = (uint16_t)(q > 10000u ? 10000u : q);
 }
 
 /* Move the window on by dt: slots older than the window fall out. */
@@ -159,7 +157,7 @@ uint8_t sma_tick(void)
         if (a->charged > hold_max) {
             a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
         } else {
-            uint32_t paid = (dt * refill_q8) >> 8; /* ≤ 400000 × 10000 */
+            uint32_t paid = (dt * refill_q8) >> 8; /* ≤ 400000 × 10000: 32 × 16 bits, no 32 × 32 multiply */
             a->debt_us = a->debt_us > paid ? a->debt_us - paid : 0u;
             if (a->debt_us == 0u) {
                 a->forced = 0;
@@ -219,6 +217,9 @@ int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cool
     return 0;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured) */
+#endif
 uint16_t sma_max_duty(void)
 {
     return sma_clamp(0xFFFFu);
@@ -231,7 +232,7 @@ uint16_t sma_duty(uint8_t act)
 
 uint8_t sma_cooling(uint8_t act)
 {
-    return (uint8_t)(acts[act].forced || acts[act].blocked);
+    return (uint8_t)(acts[act].forced | acts[act].blocked); /* each 0 or 1 */
 }
 
 uint32_t sma_debt_us(uint8_t act)

@@ -20,8 +20,35 @@ static void test_big_robot_allowed_transitions_match_the_table(void)
     }
 }
 
+/* Seven two-level limbs in 8-bit states: seq_state_levels takes the binary digits (seq.c).
+ * Oracle: the mixed-radix subtraction it replaces, for every 8-bit value, past the last
+ * state too (limb 0 then takes every higher bit); and the round trip through
+ * seq_state_index for every state. */
+static void test_binary_state_digits_match_the_subtraction_for_every_byte(void)
+{
+    uint16_t st, v, place;
+    uint8_t got[CFG_N_LIMBS], i, d;
+    CHECK(PSI_UNIFORM_LEVELS && CFG_MAX_LEVELS == 2u && CFG_STATE_BYTES == 1);
+    psi_init();
+    for (st = 0; st < 256u; st++) {
+        seq_state_levels((cfg_state_t)st, got);
+        v = st;
+        for (i = 0; i < CFG_N_LIMBS; i++) {
+            place = (uint16_t)(1u << (CFG_N_LIMBS - 1u - i));
+            for (d = 0; v >= place && d < 0xFFu; d++) {
+                v = (uint16_t)(v - place);
+            }
+            CHECK_EQ(got[i], d);
+        }
+        if (st < CFG_N_STATES) {
+            CHECK_EQ(seq_state_index(got), st);
+        }
+    }
+}
+
 int main(void)
 {
     RUN(test_big_robot_allowed_transitions_match_the_table);
+    RUN(test_binary_state_digits_match_the_subtraction_for_every_byte);
     return UNIT_EXIT();
 }
