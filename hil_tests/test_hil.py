@@ -72,8 +72,11 @@ CYCLES = 5  # complete gait cycles a gait test stops after (at most `seconds`)
 
 def _run_gait(t, direction, gait_index, seconds=None, cycles_wanted: int | None = CYCLES):
     """Run a gait until ``cycles_wanted`` cycles are complete (at most ``seconds``; by default
-    long enough for six cycles at about a second per step, at least 40 s): the plant's true
-    displacement in each cycle, and what the firmware sent.
+    2 s per step for the entry and each of ``CYCLES`` + 1 cycles, at least 40 s: caterpillar-4's
+    twelve-step cycles take 15–20 s on the physical plant, and 6 s per step, the old budget,
+    gave them three cycles), the plant's true displacement in each cycle, and what the firmware
+    sent. A gait that completes its cycles ends at once, so the budget only costs time when a
+    gait stalls.
 
     A cycle runs from one report of reaching step 0 to the next (as received); it holds the true
     transitions that began inside it (the transition into step 0 began before the report,
@@ -82,7 +85,7 @@ def _run_gait(t, direction, gait_index, seconds=None, cycles_wanted: int | None 
         from proleg.firmware.build import firmware_gaits
 
         steps = len(firmware_gaits(t.robot)[direction][gait_index].states) - 1
-        seconds = max(40.0, 6.0 * steps)
+        seconds = max(40.0, 2.0 * steps * (CYCLES + 2))
     t.client.start(gait_index, direction)
     received, waited = [], 0.0
     while waited < seconds:

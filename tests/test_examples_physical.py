@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -125,3 +126,64 @@ def test_body_length_defaults_from_the_number_of_contacts_and_is_checked(tmp_pat
     path.write_text(_caterpillar_text(**{"cross_gain_deg = 12.0": "cross_gain_deg = 12.0\nlength_mm = 5"}))
     with pytest.raises(RobotFileError, match=r"plant\.length_mm: expected a number in \[20, 2000\] mm, got 5"):
         load_robot(path)
+
+
+def test_a_proleg_between_raised_limbs_is_lifted_a_state_the_file_allows_is_one_warning_naming_them(tmp_path, caplog):
+    """caterpillar-4's 1020 (rear proleg at level 0 between the raised tail and the front
+    proleg at level 2) cannot be held on the simulated body: the neighbours' coils, held
+    where the controller holds them, bend the rear proleg past its first edge. The example
+    file marks such states "x"; a file that allows 1000 -> 1020 gets one warning line naming
+    the state, the lifted limb and the raised limbs, and the plant, driven there, reads
+    the rear proleg at level 1."""
+    from proleg.robot_plant import coupled_states
+    from proleg.sim.physical.measure import IdealDrive, _run_to
+
+    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    t = robot.transitions
+    check = dict(limbs=list(robot.limbs), actuators=[a.name for a in robot.actuators], section=robot.plant,
+                 hold_margin_deg=robot.control.hold_margin_deg)
+    assert coupled_states(table=t, **check) == {}  # the example forbids them all
+    # the plant agrees: held at 1010 and the front proleg raised to level 2, the rear one reads level 1
+    plant = PhysicalPlant(robot)
+    drive = IdealDrive(robot, plant, robot.control.hold_margin_deg)
+    assert _run_to(plant, drive, t.index("1010"), robot.control.drive_duty, 0.002, 12.0, 1.0) is not None
+    assert _run_to(plant, drive, t.index("1020"), robot.control.drive_duty, 0.002, 12.0, 1.0) is None
+    assert t.label(plant.true_state)[1] == "1", t.label(plant.true_state)
+    # a file that allows 1000 <-> 1020 (made-up entries) is warned about in one line
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text()
+    lines = text.splitlines()
+    labels = [t.label(i) for i in range(t.n_states)]
+    a, b = labels.index("1000"), labels.index("1020")
+    for row, col in ((a, b), (b, a)):
+        k = next(i for i, ln in enumerate(lines) if ln.rstrip().endswith(f"# from {labels[row]}"))
+        body, comment = lines[k].split("],")
+        cells = body.strip().lstrip("[").split(",")
+        cells[col] = " 1"
+        lines[k] = "  [" + ",".join(cells) + "]," + comment
+    path = tmp_path / "cat.toml"
+    path.write_text("\n".join(lines) + "\n")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        allowed = load_robot(path)
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 1 and "\n" not in warned[0], warned
+    assert "state 1020" in warned[0] and "limb 'rear' (level 0)" in warned[0], warned[0]
+    assert "'tail', 'front'" in warned[0] and '"x"' in warned[0], warned[0]
+    hits = coupled_states(table=allowed.transitions, **check)
+    assert list(hits) == [b] and [(i, raising) for i, raising, _ in hits[b]] == [(1, [0, 2])]
+
+
+@pytest.mark.parametrize("name", ["inchworm-3", "caterpillar-4"])
+def test_no_firmware_gait_of_an_example_robot_passes_through_a_state_its_body_cannot_hold(name):
+    from proleg.firmware.build import firmware_gaits
+    from proleg.robot_plant import coupled_states
+
+    robot = load_robot(ROOT / "robots" / f"{name}.toml")
+    n = robot.transitions.n_states
+    every = SimpleNamespace(n_states=n, src=[0] * n, dst=list(range(n)))  # every state entered
+    bad = set(coupled_states(list(robot.limbs), [a.name for a in robot.actuators], robot.plant, every,
+                             robot.control.hold_margin_deg))
+    assert bad == ({robot.transitions.index(s) for s in ("0201", "1020", "1021", "1201")}
+                   if name == "caterpillar-4" else set())
+    for gaits in firmware_gaits(robot).values():
+        for g in gaits:
+            assert not bad.intersection(int(s) for s in g.states)

@@ -60,7 +60,7 @@ def test_after_five_trials_each_the_learned_matrix_is_right_and_its_gait_fast(na
 
 
 def test_two_trials_each_already_find_the_four_limb_caterpillars_best_gait(tmp_path):
-    """The four-limb example in CI: 36 states, 168 transitions, R = 2 (~4 CPU-s)."""
+    """The four-limb example in CI: 36 states, 140 transitions, R = 2 (~4 CPU-s)."""
     _robot, _truth, est, eff = _learn("caterpillar-4", 2, tmp_path)
     acc = accuracy(eff, est)
     assert acc.sign == 1.0 and acc.gait_ratio >= 0.95, acc

@@ -23,7 +23,8 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_plant import PlantSection, default_plant_section, limb_friction, plant_section, unreachable_levels
+from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, limb_friction, plant_section,
+                          unreachable_levels)
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
 log = logging.getLogger(__name__)
@@ -274,6 +275,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
     for line in unreachable_levels(path, list(limbs), [a.name for a in actuators], plant):
+        log.warning("warning: %s", line)
+    for line in coupling_warnings(path, list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg):
         log.warning("warning: %s", line)
     library = None
     if "gaits" in doc:

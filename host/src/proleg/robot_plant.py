@@ -367,3 +367,84 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
         raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
                              f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {value!r}")
     return tuple(value)
+
+
+#: Above this many states the coupling check is skipped (one shape per state; the largest
+#: example robots have 36).
+COUPLING_CHECK_MAX_STATES = 4096
+
+
+def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
+                   hold_margin_deg: float) -> dict[int, list[tuple[int, list[int], float]]]:
+    """States the physical plant's body cannot hold because neighbour coupling lifts a limb:
+    ``{state: [(limb, raising limbs, ψ°), ...]}`` for every state the matrix lets the robot
+    enter (an allowed transition into it from another state).
+
+    Each raised limb's coil is set to the contraction that holds it where the controller
+    holds it, ψ*(its level) + ``hold_margin_deg`` (a fraction of its own coil's full-stroke
+    reach, ``own_reach_deg``); every other coil is cold. A limb below its top level whose ψ
+    then reaches the next level's entry edge (ψ* + hysteresis/2) with its own coil cold reads
+    that level: the state is not reachable on this body (e.g. caterpillar-4's 1020: the rear
+    proleg between the raised tail and the front proleg at level 2 bends to ≈ 14° > 13°)."""
+    from .body import Shape
+    from .states import limb_levels
+
+    n = table.n_states
+    if len(limbs) < 3 or n > COUPLING_CHECK_MAX_STATES:
+        return {}
+    limb_act = [actuators.index(lb.actuator) for lb in limbs]
+    overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
+    overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * len(actuators)
+    geo = body_geometry(limb_act, len(actuators), section.length_mm, overlaps)
+    reach = own_reach_deg(geo, limb_act)
+    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
+    levels = tuple(lb.levels for lb in limbs)
+    rows, wants = [], []
+    for s in entered:
+        want = limb_levels(s, levels)
+        c = np.zeros(len(actuators))
+        for i, k in enumerate(want):
+            if k > 0 and reach[i] > 0:
+                hold = limbs[i].psi_star_deg[k - 1] + hold_margin_deg
+                c[limb_act[i]] = max(c[limb_act[i]], min(1.0, hold / reach[i]))
+        rows.append(c)
+        wants.append(want)
+    if not rows:
+        return {}
+    psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    out: dict[int, list[tuple[int, list[int], float]]] = {}
+    for s, want, c, p in zip(entered, wants, rows, psi):
+        for i, k in enumerate(want):
+            lb = limbs[i]
+            if k >= lb.levels - 1 or c[limb_act[i]] > 0.0:
+                continue  # at its top level, or its own coil is on (shared with a raised limb)
+            edge = lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0
+            psi_i = (float(p[i]) + 180.0) % 360.0 - 180.0  # a body curled past 180° wraps the chord angle
+            if psi_i >= edge:
+                raising = [j for j, kj in enumerate(want) if kj > 0]
+                out.setdefault(s, []).append((i, raising, psi_i))
+    return out
+
+
+def coupling_warnings(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
+                      hold_margin_deg: float) -> list[str]:
+    """One line per state of ``coupled_states``, naming the state, the lifted limb and the
+    raised limbs that lift it."""
+    out = []
+    for s, hits in coupled_states(limbs, actuators, section, table, hold_margin_deg).items():
+        for i, raising, psi in hits:
+            lb = limbs[i]
+            k = limb_levels_of(s, limbs)[i]
+            names = ", ".join(repr(limbs[j].name) for j in raising)
+            out.append(
+                f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° by the "
+                f"raised limbs {names} on the simulated {_g(section.length_mm)} mm body, past its level-{k + 1} "
+                f"edge {lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:.1f}° (ψ* + hysteresis/2): the state reads "
+                f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)")
+    return out
+
+
+def limb_levels_of(state: int, limbs: list[Any]) -> tuple[int, ...]:
+    from .states import limb_levels
+
+    return tuple(limb_levels(state, tuple(lb.levels for lb in limbs)))
