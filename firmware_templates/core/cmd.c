@@ -3,6 +3,7 @@
 
 #include "app.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "drive.h"
@@ -22,9 +23,6 @@
 
 #define RX_BYTES_PER_TICK (2u * PROTO_MAX_ENCODED)
 
-static const char robot_name[] ROM = CFG_ROBOT_NAME;
-static const char board_name[] ROM = CFG_BOARD_NAME;
-
 static proto_rx_t rx;
 
 #define msg tx_msg /* the command being handled, then each reply (fields read first) */
@@ -34,33 +32,19 @@ static proto_rx_t rx;
 #define DECLARE_HANDLER(id, handler) static void handler(uint8_t token);
 PROTO_COMMANDS(DECLARE_HANDLER)
 
-static void copy_rom_text(char *dst, const char *src, uint8_t cap)
-{
-    uint8_t i = 0;
-    char c;
-    while (i + 1u < cap && (c = (char)ROM_U8(&src[i])) != '\0') {
-        dst[i++] = c;
-    }
-    while (i < cap) {
-        dst[i++] = '\0';
-    }
-}
+/* INFO's fields that are fixed at build time, in ROM: cmd_send_info copies the whole
+ * struct and fills in the token and the telemetry rate. */
+#define INFO_GAITS (CFG_N_GAITS_PX + CFG_N_GAITS_MX)
+static const proto_info_t info_rom ROM = {
+    0, PROTO_VERSION, CFG_BUILD_ID, CFG_GAIT_TABLE_HASH, CFG_ROBOT_NAME_INFO, CFG_BOARD_NAME_INFO,
+    CFG_N_LIMBS, CFG_N_ACTUATORS, (uint8_t)(INFO_GAITS > 255u ? 255u : INFO_GAITS),
+    CFG_MAX_LOADED_STEPS, (uint16_t)CFG_TICK_HZ, 0};
 
 void cmd_send_info(uint8_t token)
 {
-    uint16_t gaits = (uint16_t)(CFG_N_GAITS_PX + CFG_N_GAITS_MX);
+    ROM_COPY(&msg.u.info, &info_rom, sizeof info_rom);
     msg.id = PROTO_ID_INFO;
     msg.u.info.token = token;
-    msg.u.info.protocol_version = PROTO_VERSION;
-    msg.u.info.build_id = CFG_BUILD_ID;
-    msg.u.info.gait_hash = CFG_GAIT_TABLE_HASH;
-    copy_rom_text(msg.u.info.robot_name, robot_name, PROTO_ROBOT_NAME_LEN);
-    copy_rom_text(msg.u.info.board, board_name, PROTO_BOARD_NAME_LEN);
-    msg.u.info.limbs = CFG_N_LIMBS;
-    msg.u.info.actuators = CFG_N_ACTUATORS;
-    msg.u.info.gaits = (uint8_t)(gaits > 255u ? 255u : gaits);
-    msg.u.info.max_gait_steps = CFG_MAX_LOADED_STEPS;
-    msg.u.info.tick_hz = (uint16_t)CFG_TICK_HZ;
     msg.u.info.telemetry_hz = telemetry_rate();
     tx_send();
 }
@@ -75,18 +59,20 @@ static void cmd_get_stats(uint8_t token)
     const tx_counts_t *c = tx_counts();
     msg.id = PROTO_ID_STATS;
     msg.u.stats.token = token;
-    msg.u.stats.rx_ok = rx.count.frames_ok;
-    msg.u.stats.crc_errors = rx.count.crc_errors;
-    msg.u.stats.framing_errors = rx.count.framing_errors;
-    msg.u.stats.unknown_ids = rx.count.unknown_ids;
-    msg.u.stats.bad_length = rx.count.bad_length;
-    msg.u.stats.bad_value = rx.count.bad_value;
-    msg.u.stats.nacks = c->nacks;
-    msg.u.stats.tx_frames = c->tx_frames;
-    msg.u.stats.tx_dropped = c->tx_dropped;
+    /* rx_ok..bad_value are proto_counters_t's fields and nacks..tx_dropped tx_counts_t's,
+     * in the same order (checked below): one copy each. */
+    memcpy(&msg.u.stats.rx_ok, &rx.count, sizeof rx.count);
+    memcpy(&msg.u.stats.nacks, c, sizeof *c);
     msg.u.stats.tick_overruns = app_overruns();
     tx_send();
 }
+
+typedef char cmd_stats_layout_ok[(offsetof(proto_stats_t, bad_value) - offsetof(proto_stats_t, rx_ok) ==
+                                   offsetof(proto_counters_t, bad_value) &&
+                                   sizeof(proto_counters_t) == 6u * sizeof(uint32_t) &&
+                                   offsetof(proto_stats_t, tx_dropped) - offsetof(proto_stats_t, nacks) ==
+                                   offsetof(tx_counts_t, tx_dropped) &&
+                                   sizeof(tx_counts_t) == 3u * sizeof(uint32_t)) ? 1 : -1];
 
 static void cmd_start(uint8_t token)
 {
