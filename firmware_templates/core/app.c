@@ -25,8 +25,7 @@ typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG 
                                      HAL_RESET_SOFTWARE == PROTO_RESET_SOFTWARE) ? 1 : -1];
 
 static uint32_t ms;      /* firmware time: real time (hal_micros), not a tick count */
-static uint32_t us_acc;  /* µs of the current ms */
-static uint32_t last_us; /* hal_micros() at the last tick */
+static uint32_t ms_us;   /* hal_micros() at which `ms` last counted a whole ms */
 static uint32_t overruns; /* ticks whose work ended after the next tick was due */
 static uint16_t overrun_run; /* ... of them in a row */
 
@@ -39,8 +38,7 @@ void app_init(void)
 {
     uint8_t i;
     ms = 0;
-    us_acc = 0;
-    last_us = hal_micros();
+    ms_us = hal_micros();
     overruns = 0;
     overrun_run = 0;
     uart_init();
@@ -98,10 +96,8 @@ void app_idle(uint32_t until_next_tick_us)
 void app_tick(void)
 {
     uint32_t now = hal_micros();
-    us_acc += now - last_us; /* wrap-safe; no division: about one ms per tick */
-    last_us = now;
-    while (us_acc >= 1000u) {
-        us_acc -= 1000u;
+    while ((uint32_t)(now - ms_us) >= 1000u) { /* wrap-safe; no division: about one ms per tick */
+        ms_us += 1000u;
         ms++;
     }
     cmd_poll();            /* 1. commands (ESTOP: MOSFETs off first) */

@@ -106,7 +106,11 @@ static uint8_t walk(const desc_t *d, const uint8_t *src, uint8_t *dst, uint8_t l
 }
 #else
 /* The same walk over the message's layout string: mem runs through the struct, pos through
- * the wire; a struct is its wire bytes with each array at its capacity. */
+ * the wire; a struct is its wire bytes with each array at its capacity. Not inlined: packing
+ * (tx) and unpacking (rx) share one copy. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 static uint8_t walk(const desc_t *d, const uint8_t *src, uint8_t *dst, uint8_t limit, uint8_t packing,
                     uint8_t *end)
 {
