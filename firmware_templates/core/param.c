@@ -17,9 +17,16 @@ static struct {
     uint32_t watchdog_us; /* the link watchdog, in ticks of CFG_TICK_US as set, µs */
 } st;
 
+/* ceil(ms * CFG_TICK_HZ / 1000), ms ≤ INT32_MAX (param_set's ranges). */
 static uint32_t ms_to_ticks(uint32_t ms)
 {
+#if 1000u % CFG_TICK_HZ == 0u
+    /* a whole number K of ms per tick (1, 2, 4, 5 ... ms): ceil(ms / K), the same value
+     * without the 32-bit divisions by 1000 (+ K - 1 cannot wrap: ms ≤ INT32_MAX) */
+    return (ms + (1000u / CFG_TICK_HZ - 1u)) / (1000u / CFG_TICK_HZ);
+#else
     return (ms / 1000u) * CFG_TICK_HZ + ((ms % 1000u) * CFG_TICK_HZ + 999u) / 1000u;
+#endif
 }
 
 /* ---- where each parameter lives: v is in range and scaled; 0 or a PROTO_ERR_* code */
@@ -67,7 +74,11 @@ static uint8_t set_timeout(uint8_t index, int32_t ticks)
 {
     (void)index;
     seq_set_timeout((uint32_t)ticks);
+#if CFG_TICK_US % 1000u == 0u
+    guard_set_timeout_ms((uint32_t)ticks * (CFG_TICK_US / 1000u)); /* safety: the real-time timeout */
+#else
     guard_set_timeout_ms((uint32_t)ticks * CFG_TICK_US / 1000u); /* safety: the real-time timeout */
+#endif
     return 0;
 }
 
