@@ -245,7 +245,7 @@ int proto_rx_byte(proto_rx_t *rx, uint8_t byte, proto_msg_t *msg)
     } else {
         uint8_t n = (uint8_t)(rx->len - 2);
         uint16_t crc = crc16_ccitt(CRC16_INIT, rx->buf, n);
-        if ((uint8_t)crc != rx->buf[n] || (uint8_t)(crc >> 8) != rx->buf[n + 1]) {
+        if (crc != (uint16_t)(rx->buf[n] | (uint16_t)rx->buf[n + 1] << 8)) { /* little-endian */
             counter = &rx->count.crc_errors;
         } else {
             err = proto_unpack(rx->buf, n, msg);
