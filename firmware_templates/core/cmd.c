@@ -28,9 +28,26 @@ static proto_rx_t rx;
 #define msg tx_msg /* the command being handled, then each reply (fields read first) */
 
 /* One handler per command of the protocol definition (proto_gen.h's PROTO_COMMANDS):
- * a command added there does not compile until its cmd_<name> is written here. */
-#define DECLARE_HANDLER(id, handler) static void handler(uint8_t token);
+ * a command added there does not compile until its cmd_<name>(void) is written here
+ * (the command's token and id: `cur`). */
+#define DECLARE_HANDLER(id, handler) static void handler(void);
 PROTO_COMMANDS(DECLARE_HANDLER)
+
+/* The command being handled (handle_command): its ACK and NACK take its token and id from
+ * here, one copy of the argument set-up instead of one per reply site. */
+static struct {
+    uint8_t token, id;
+} cur;
+
+static void ack(void)
+{
+    tx_ack(cur.token, cur.id);
+}
+
+static void nack(uint8_t error, uint16_t detail)
+{
+    tx_nack(cur.token, cur.id, error, detail);
+}
 
 /* INFO's fields that are fixed at build time, in ROM: cmd_send_info copies the whole
  * struct and fills in the token and the telemetry rate. */
@@ -49,16 +66,16 @@ void cmd_send_info(uint8_t token)
     tx_send();
 }
 
-static void cmd_get_info(uint8_t token)
+static void cmd_get_info(void)
 {
-    cmd_send_info(token);
+    cmd_send_info(cur.token);
 }
 
-static void cmd_get_stats(uint8_t token)
+static void cmd_get_stats(void)
 {
     const tx_counts_t *c = tx_counts();
     msg.id = PROTO_ID_STATS;
-    msg.u.stats.token = token;
+    msg.u.stats.token = cur.token;
     /* rx_ok..bad_value are proto_counters_t's fields and nacks..tx_dropped tx_counts_t's,
      * in the same order (checked below): one copy each. */
     memcpy(&msg.u.stats.rx_ok, &rx.count, sizeof rx.count);
@@ -74,27 +91,27 @@ typedef char cmd_stats_layout_ok[(offsetof(proto_stats_t, bad_value) - offsetof(
                                    offsetof(tx_counts_t, tx_dropped) &&
                                    sizeof(tx_counts_t) == 3u * sizeof(uint32_t)) ? 1 : -1];
 
-static void cmd_start(uint8_t token)
+static void cmd_start(void)
 {
     uint8_t gait = msg.u.start.gait;
     uint8_t dir = msg.u.start.direction;
     int8_t r;
     if (sma_estopped()) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_ESTOP_LATCHED, 0);
+        nack(PROTO_ERR_ESTOP_LATCHED, 0);
         return;
     }
     if (fault_latched()) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 0);
+        nack(PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
     if (seq_running()) { /* safety: a restart would restart the step; STOP first */
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 1);
+        nack(PROTO_ERR_NOT_ALLOWED, 1);
         return;
     }
     if (gait == PROTO_GAIT_USER) {
         r = seq_start(SEQ_DIR_LOADED, 0, imucheck_measured());
     } else if (dir > PROTO_DIR_MINUS_X) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_OUT_OF_RANGE, 2);
+        nack(PROTO_ERR_OUT_OF_RANGE, 2);
         return;
     } else {
         if (limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the robot as built: */
@@ -103,16 +120,16 @@ static void cmd_start(uint8_t token)
         r = seq_start(dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX, gait, imucheck_measured());
     }
     if (r != SEQ_OK) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_NO_GAIT, gait);
+        nack(PROTO_ERR_NO_GAIT, gait);
         return;
     }
     drive_started(gait, dir);
     fault_watchdog_rearm();
-    tx_ack(token, PROTO_ID_START);
+    ack();
     tx_event(PROTO_EV_GAIT_STARTED, gait, dir);
 }
 
-static void cmd_load_gait(uint8_t token)
+static void cmd_load_gait(void)
 {
     cfg_state_t states[PROTO_MAX_GAIT_STEPS];
     uint8_t n = msg.u.load_gait.states_count;
@@ -120,34 +137,34 @@ static void cmd_load_gait(uint8_t token)
     uint8_t i;
     int8_t r;
     if (seq_running()) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_NOT_ALLOWED, 0);
+        nack(PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
     if (n > PROTO_MAX_GAIT_STEPS) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_TOO_LONG, n);
+        nack(PROTO_ERR_TOO_LONG, n);
         return;
     }
     for (i = 0; i < n; i++) {
         if (msg.u.load_gait.states[i] >= CFG_N_STATES) {
-            tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_OUT_OF_RANGE, i);
+            nack(PROTO_ERR_OUT_OF_RANGE, i);
             return;
         }
         states[i] = (cfg_state_t)msg.u.load_gait.states[i];
     }
     r = seq_load(states, n, &bad);
     if (r == SEQ_ERR_FORBIDDEN) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_FORBIDDEN_TRANSITION, bad);
+        nack(PROTO_ERR_FORBIDDEN_TRANSITION, bad);
     } else if (r == SEQ_ERR_LENGTH) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, n > CFG_MAX_LOADED_STEPS ? PROTO_ERR_TOO_LONG : PROTO_ERR_OUT_OF_RANGE, n);
+        nack(n > CFG_MAX_LOADED_STEPS ? PROTO_ERR_TOO_LONG : PROTO_ERR_OUT_OF_RANGE, n);
     } else if (r != SEQ_OK) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_OUT_OF_RANGE, bad);
+        nack(PROTO_ERR_OUT_OF_RANGE, bad);
     } else {
-        tx_ack(token, PROTO_ID_LOAD_GAIT);
+        ack();
         tx_event(PROTO_EV_GAIT_LOADED, 0, n);
     }
 }
 
-static void cmd_clear(uint8_t token)
+static void cmd_clear(void)
 {
     uint8_t what = msg.u.clear.what;
     uint8_t done = 0;
@@ -162,7 +179,7 @@ static void cmd_clear(uint8_t token)
         sma_clear_estop();
         done |= PROTO_CLEAR_ESTOP;
     }
-    tx_ack(token, PROTO_ID_CLEAR);
+    ack();
     if ((what & PROTO_CLEAR_FAULTS) && fault_latched()) {
         bad = imucheck_take_bad();
         fault_clear();
@@ -181,58 +198,58 @@ static void cmd_clear(uint8_t token)
     }
 }
 
-static void cmd_estop(uint8_t token)
+static void cmd_estop(void)
 {
     sma_estop(); /* first: every MOSFET off now */
-    tx_ack(token, PROTO_ID_ESTOP);
+    ack();
     tx_event(PROTO_EV_ESTOP, 0, 0);
     fault_stop_gait(PROTO_STOP_ESTOP);
 }
 
-static void cmd_ping(uint8_t token)
+static void cmd_ping(void)
 {
-    tx_ack(token, PROTO_ID_PING);
+    ack();
 }
 
-static void cmd_stop(uint8_t token)
+static void cmd_stop(void)
 {
     sma_all_off();
-    tx_ack(token, PROTO_ID_STOP);
+    ack();
     fault_stop_gait(PROTO_STOP_COMMAND);
 }
 
-static void cmd_set_param(uint8_t token)
+static void cmd_set_param(void)
 {
     uint8_t r = param_set(msg.u.set_param.param, msg.u.set_param.index, msg.u.set_param.value);
     if (r) {
-        tx_nack(token, PROTO_ID_SET_PARAM, r, msg.u.set_param.param);
+        nack(r, msg.u.set_param.param);
     } else {
-        tx_ack(token, PROTO_ID_SET_PARAM);
+        ack();
     }
 }
 
-static void cmd_set_telemetry_rate(uint8_t token)
+static void cmd_set_telemetry_rate(void)
 {
     if (telemetry_set_rate(msg.u.set_telemetry_rate.hz) != 0u) {
-        tx_nack(token, PROTO_ID_SET_TELEMETRY_RATE, PROTO_ERR_OUT_OF_RANGE, 0);
+        nack(PROTO_ERR_OUT_OF_RANGE, 0);
     } else {
-        tx_ack(token, PROTO_ID_SET_TELEMETRY_RATE);
+        ack();
     }
 }
 
-static void cmd_set_actuator_map(uint8_t token)
+static void cmd_set_actuator_map(void)
 {
     uint16_t bad = 0;
     uint8_t r;
     if (seq_running()) {
-        tx_nack(token, PROTO_ID_SET_ACTUATOR_MAP, PROTO_ERR_NOT_ALLOWED, 0);
+        nack(PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
     r = limbmap_set(msg.u.set_actuator_map.actuators, msg.u.set_actuator_map.actuators_count, &bad);
     if (r) {
-        tx_nack(token, PROTO_ID_SET_ACTUATOR_MAP, r, bad);
+        nack(r, bad);
     } else {
-        tx_ack(token, PROTO_ID_SET_ACTUATOR_MAP);
+        ack();
     }
 }
 
@@ -260,17 +277,17 @@ static void fill_per_limb(uint8_t *count, void *array, uint8_t size, uint8_t col
     }
 }
 
-static void cmd_get_actuator_map(uint8_t token)
+static void cmd_get_actuator_map(void)
 {
     msg.id = PROTO_ID_ACTUATOR_MAP;
-    msg.u.actuator_map.token = token;
+    msg.u.actuator_map.token = cur.token;
     msg.u.actuator_map.lost = limbmap_lost();
     fill_per_limb(&msg.u.actuator_map.actuators_count, msg.u.actuator_map.actuators, 1, COL_ACTUATOR);
     tx_send();
 }
 
 /* Level calibration (level.h): only with every coil off and no gait, so the robot is at rest. */
-static void cmd_calibrate_level(uint8_t token)
+static void cmd_calibrate_level(void)
 {
     uint16_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
     int8_t r;
@@ -279,43 +296,44 @@ static void cmd_calibrate_level(uint8_t token)
         why = r == -1 ? 4u : r < 0 ? 5u : 0u; /* under way / not in this build */
     }
     if (why) {
-        tx_nack(token, PROTO_ID_CALIBRATE_LEVEL, PROTO_ERR_NOT_ALLOWED, why);
+        nack(PROTO_ERR_NOT_ALLOWED, why);
     } else {
-        tx_ack(token, PROTO_ID_CALIBRATE_LEVEL);
+        ack();
     }
 }
 
-static void cmd_get_level(uint8_t token)
+static void cmd_get_level(void)
 {
     msg.id = PROTO_ID_LEVEL;
-    msg.u.level.token = token;
+    msg.u.level.token = cur.token;
     msg.u.level.status = level_status();
     fill_per_limb(&msg.u.level.offset_count, msg.u.level.offset, 2, COL_OFFSET);
     fill_per_limb(&msg.u.level.ground_count, msg.u.level.ground, 2, COL_GROUND);
     tx_send();
 }
 
-static void cmd_clear_level(uint8_t token)
+static void cmd_clear_level(void)
 {
     int8_t r = seq_running() ? -1 : level_clear();
     if (r != 0) {
-        tx_nack(token, PROTO_ID_CLEAR_LEVEL, PROTO_ERR_NOT_ALLOWED, r == -2 ? 5u : 0u);
+        nack(PROTO_ERR_NOT_ALLOWED, r == -2 ? 5u : 0u);
     } else {
-        tx_ack(token, PROTO_ID_CLEAR_LEVEL);
+        ack();
     }
 }
 
 static void handle_command(void)
 {
-    uint8_t token = PROTO_CMD_TOKEN(&msg);
+    cur.token = PROTO_CMD_TOKEN(&msg);
+    cur.id = msg.id;
     switch (msg.id) {
 #define DISPATCH(id, handler) \
     case id:                  \
-        handler(token);       \
+        handler();            \
         break;
         PROTO_COMMANDS(DISPATCH)
     default: /* a robot->host message sent to the robot */
-        tx_nack(token, msg.id, PROTO_ERR_UNKNOWN_MESSAGE, 0);
+        nack(PROTO_ERR_UNKNOWN_MESSAGE, 0);
         break;
     }
 }

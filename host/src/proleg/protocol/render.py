@@ -90,7 +90,7 @@ def _commands(messages: Sequence[MessageSpec]) -> str:
             if m.direction == "h2r"]
     return (
         "/* Commands (host->robot), by id: X(id, handler). core/cmd.c declares and dispatches\n"
-        " * through this list; each handler is static void cmd_<name>(uint8_t token). */\n"
+        " * through this list; each handler is static void cmd_<name>(void). */\n"
         "#define PROTO_COMMANDS(X) \\\n" + " \\\n".join(rows) + "\n"
     )
 
