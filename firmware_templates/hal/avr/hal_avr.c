@@ -229,11 +229,17 @@ int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx,
     return 0;
 }
 
+/* The transaction (or its STOP) is past its deadline. One copy for both checks. */
+static uint8_t __attribute__((noinline)) twi_late(void)
+{
+    return (uint32_t)(hal_micros() - tw.t0) > HAL_I2C_DEADLINE_US;
+}
+
 int8_t hal_i2c_poll(void)
 {
     int8_t r = tw.result;
     if (r == HAL_I2C_BUSY) {
-        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+        if (!twi_late()) {
             return HAL_I2C_BUSY;
         }
         TWCR = 0; /* abort: the interrupt cannot run again */
@@ -243,7 +249,7 @@ int8_t hal_i2c_poll(void)
         return r;
     }
     if (TWCR & _BV(TWSTO)) {
-        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+        if (!twi_late()) {
             return HAL_I2C_BUSY; /* the STOP is still going out */
         }
         twi_recover();
