@@ -93,8 +93,8 @@ typedef char cmd_stats_layout_ok[(offsetof(proto_stats_t, bad_value) - offsetof(
 
 static void cmd_start(void)
 {
-    uint8_t gait = msg.u.start.gait;
-    uint8_t dir = msg.u.start.direction;
+    uint8_t gait = msg.u.start.gait, index = gait;
+    uint8_t dir = msg.u.start.direction, sdir;
     int8_t r;
     if (sma_estopped()) {
         nack(PROTO_ERR_ESTOP_LATCHED, 0);
@@ -109,7 +109,8 @@ static void cmd_start(void)
         return;
     }
     if (gait == PROTO_GAIT_USER) {
-        r = seq_start(SEQ_DIR_LOADED, 0, imucheck_measured());
+        sdir = SEQ_DIR_LOADED;
+        index = 0;
     } else if (dir > PROTO_DIR_MINUS_X) {
         nack(PROTO_ERR_OUT_OF_RANGE, 2);
         return;
@@ -117,8 +118,9 @@ static void cmd_start(void)
         if (limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the robot as built: */
             limbmap_init();                   /* after a fallback, try the whole robot again */
         }
-        r = seq_start(dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX, gait, imucheck_measured());
+        sdir = dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX;
     }
+    r = seq_start(sdir, index, imucheck_measured());
     if (r != SEQ_OK) {
         nack(PROTO_ERR_NO_GAIT, gait);
         return;
@@ -289,7 +291,7 @@ static void cmd_get_actuator_map(void)
 /* Level calibration (level.h): only with every coil off and no gait, so the robot is at rest. */
 static void cmd_calibrate_level(void)
 {
-    uint16_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
+    uint8_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
     int8_t r;
     if (why == 0u) {
         r = level_calibrate(msg.u.calibrate_level.ground != 0u);
