@@ -255,36 +255,16 @@ static void cmd_set_actuator_map(void)
     }
 }
 
-/* The per-limb replies (ACTUATOR_MAP, LEVEL): one array field at a time, its count and one
- * value per limb, into elements of `size` bytes (1: uint8_t, 2: int16_t). */
-#define COL_ACTUATOR 0u /* the limb's actuator (limbmap.h) */
-#define COL_OFFSET 1u   /* its stored rest tilt (level.h) */
-#define COL_GROUND 2u   /* this ground's tilt on top */
-
-static void fill_per_limb(uint8_t *count, void *array, uint8_t size, uint8_t col)
-{
-    uint8_t i;
-    uint8_t *dst = (uint8_t *)array;
-    *count = CFG_N_LIMBS;
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        int16_t v = col == COL_ACTUATOR ? (int16_t)limbmap_actuator(i)
-                    : col == COL_OFFSET ? level_offset_cdeg(i)
-                                        : level_ground_cdeg(i);
-        if (size == 2u) {
-            *(int16_t *)(void *)dst = v; /* `array` is an int16_t array */
-        } else {
-            *dst = (uint8_t)v;
-        }
-        dst += size;
-    }
-}
-
 static void cmd_get_actuator_map(void)
 {
+    uint8_t i;
     msg.id = PROTO_ID_ACTUATOR_MAP;
     msg.u.actuator_map.token = cur.token;
     msg.u.actuator_map.lost = limbmap_lost();
-    fill_per_limb(&msg.u.actuator_map.actuators_count, msg.u.actuator_map.actuators, 1, COL_ACTUATOR);
+    msg.u.actuator_map.actuators_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.actuator_map.actuators[i] = limbmap_actuator(i);
+    }
     tx_send();
 }
 
@@ -306,11 +286,16 @@ static void cmd_calibrate_level(void)
 
 static void cmd_get_level(void)
 {
+    uint8_t i;
     msg.id = PROTO_ID_LEVEL;
     msg.u.level.token = cur.token;
     msg.u.level.status = level_status();
-    fill_per_limb(&msg.u.level.offset_count, msg.u.level.offset, 2, COL_OFFSET);
-    fill_per_limb(&msg.u.level.ground_count, msg.u.level.ground, 2, COL_GROUND);
+    msg.u.level.offset_count = CFG_N_LIMBS;
+    msg.u.level.ground_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.level.offset[i] = level_offset_cdeg(i);
+        msg.u.level.ground[i] = level_ground_cdeg(i);
+    }
     tx_send();
 }
 
