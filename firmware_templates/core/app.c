@@ -70,7 +70,7 @@ void app_tick_done(uint8_t overran)
         st.overrun_run = 0;
         return;
     }
-    st.overruns++;
+    tx_count(&st.overruns);
     if (st.overrun_run < 0xFFFFu) {
         st.overrun_run++;
     }
