@@ -333,7 +333,7 @@ void cmd_init(void)
 
 void cmd_poll(void)
 {
-    uint16_t n;
+    uint8_t n; /* RX_BYTES_PER_TICK = 132 fits */
     level_poll();
     for (n = 0; n < RX_BYTES_PER_TICK; n++) {
         int c = uart_read_byte();
