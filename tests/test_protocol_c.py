@@ -58,7 +58,12 @@ class CDriver:
         return StreamResult(frames, rejects, counters)
 
 
-def build_driver(out: Path, max_limbs: int, max_channels: int) -> CDriver:
+#: proto.c's two table layouts: per-field descriptors (ARM, host-sim) and, where structs have
+#: no padding (AVR), per-message byte strings; on the host the second packs the structs.
+LAYOUTS = {"fields": [], "packed": ["-DPROTO_PACKED_LAYOUT=1"]}
+
+
+def build_driver(out: Path, max_limbs: int, max_channels: int, layout: str = "fields") -> CDriver:
     out.mkdir(parents=True, exist_ok=True)
     for name, text in render_c(max_limbs, max_channels).items():
         (out / name).write_text(text)
@@ -67,20 +72,20 @@ def build_driver(out: Path, max_limbs: int, max_channels: int) -> CDriver:
     shutil.copy(ROOT / "tests" / "c" / "test_proto.c", out / "test_proto.c")
     exe = out / "test_proto"
     subprocess.run(
-        ["cc", *CFLAGS, "-o", str(exe), "test_proto.c", *RUNTIME], cwd=out, check=True, capture_output=True, timeout=120
+        ["cc", *CFLAGS, *LAYOUTS[layout], "-o", str(exe), "test_proto.c", *RUNTIME], cwd=out, check=True, capture_output=True, timeout=120
     )
     return CDriver(exe)
 
 
-@pytest.fixture(scope="module")
-def c8(tmp_path_factory) -> CDriver:
+@pytest.fixture(scope="module", params=sorted(LAYOUTS))
+def c8(tmp_path_factory, request) -> CDriver:
     """Driver built for the protocol ceilings (8 limbs, 8 channels), like the vectors."""
-    return build_driver(tmp_path_factory.mktemp("proto8"), 8, 8)
+    return build_driver(tmp_path_factory.mktemp("proto8"), 8, 8, request.param)
 
 
-@pytest.fixture(scope="module")
-def c2(tmp_path_factory) -> CDriver:
-    return build_driver(tmp_path_factory.mktemp("proto2"), 2, 2)
+@pytest.fixture(scope="module", params=sorted(LAYOUTS))
+def c2(tmp_path_factory, request) -> CDriver:
+    return build_driver(tmp_path_factory.mktemp("proto2"), 2, 2, request.param)
 
 
 def test_c_runtime_selftest_passes(c8: CDriver) -> None:

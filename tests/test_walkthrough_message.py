@@ -39,12 +39,12 @@ TOY_MESSAGES = MESSAGES + (ECHO,)
 
 # Step 2: the handler, in core/cmd.c.
 HANDLER = """
-static void cmd_echo(uint8_t token)
+static void cmd_echo(void)
 {
     if (msg.u.echo.value == 42u) {
-        tx_ack(token, PROTO_ID_ECHO);
+        ack();
     } else {
-        tx_nack(token, PROTO_ID_ECHO, PROTO_ERR_OUT_OF_RANGE, msg.u.echo.value);
+        nack(PROTO_ERR_OUT_OF_RANGE, msg.u.echo.value);
     }
 }
 """

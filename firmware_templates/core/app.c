@@ -1,6 +1,8 @@
 /* app.c - see app.h: the order of one tick; each step is its own module. */
 #include "app.h"
 
+#include <string.h>
+
 #include "cmd.h"
 #include "ctl.h"
 #include "drive.h"
@@ -24,25 +26,25 @@ typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG 
                                      HAL_RESET_BROWN_OUT == PROTO_RESET_BROWN_OUT &&
                                      HAL_RESET_SOFTWARE == PROTO_RESET_SOFTWARE) ? 1 : -1];
 
-static uint32_t ms;      /* firmware time: real time (hal_micros), not a tick count */
-static uint32_t us_acc;  /* µs of the current ms */
-static uint32_t last_us; /* hal_micros() at the last tick */
-static uint32_t overruns; /* ticks whose work ended after the next tick was due */
-static uint16_t overrun_run; /* ... of them in a row */
+static struct {
+    uint32_t ms;          /* firmware time: real time (hal_micros), not a tick count */
+    uint32_t ms_us;       /* hal_micros() at which `ms` last counted a whole ms */
+    uint16_t overrun_run; /* overruns in a row */
+} st;
+static uint32_t overruns; /* ticks whose work ended after the next tick was due (its own
+                           * symbol: the avr-emu tests read it) */
 
 uint32_t app_time_ms(void)
 {
-    return ms;
+    return st.ms;
 }
 
 void app_init(void)
 {
     uint8_t i;
-    ms = 0;
-    us_acc = 0;
-    last_us = hal_micros();
+    memset(&st, 0, sizeof st); /* again on host-sim's reset */
     overruns = 0;
-    overrun_run = 0;
+    st.ms_us = hal_micros();
     uart_init();
     tx_init();
     fault_init();
@@ -67,14 +69,14 @@ void app_init(void)
 void app_tick_done(uint8_t overran)
 {
     if (!overran) {
-        overrun_run = 0;
+        st.overrun_run = 0;
         return;
     }
-    overruns++;
-    if (overrun_run < 0xFFFFu) {
-        overrun_run++;
+    tx_count(&overruns);
+    if (st.overrun_run < 0xFFFFu) {
+        st.overrun_run++;
     }
-    if (overrun_run >= CFG_OVERRUN_FAULT && !fault_latched()) {
+    if (st.overrun_run >= CFG_OVERRUN_FAULT && !fault_latched()) {
         fault_raise(PROTO_FAULT_TICK_OVERRUN, 0); /* the timing the envelope assumes is gone */
     }
 }
@@ -98,11 +100,9 @@ void app_idle(uint32_t until_next_tick_us)
 void app_tick(void)
 {
     uint32_t now = hal_micros();
-    us_acc += now - last_us; /* wrap-safe; no division: about one ms per tick */
-    last_us = now;
-    while (us_acc >= 1000u) {
-        us_acc -= 1000u;
-        ms++;
+    while ((uint32_t)(now - st.ms_us) >= 1000u) { /* wrap-safe; no division: about one ms per tick */
+        st.ms_us += 1000u;
+        st.ms++;
     }
     cmd_poll();            /* 1. commands (ESTOP: MOSFETs off first) */
     imucheck_read();       /* 2. IMUs -> measured state */

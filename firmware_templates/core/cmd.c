@@ -3,6 +3,7 @@
 
 #include "app.h"
 
+#include <stddef.h>
 #include <string.h>
 
 #include "drive.h"
@@ -22,111 +23,115 @@
 
 #define RX_BYTES_PER_TICK (2u * PROTO_MAX_ENCODED)
 
-static const char robot_name[] ROM = CFG_ROBOT_NAME;
-static const char board_name[] ROM = CFG_BOARD_NAME;
-
 static proto_rx_t rx;
 
 #define msg tx_msg /* the command being handled, then each reply (fields read first) */
 
 /* One handler per command of the protocol definition (proto_gen.h's PROTO_COMMANDS):
- * a command added there does not compile until its cmd_<name> is written here. */
-#define DECLARE_HANDLER(id, handler) static void handler(uint8_t token);
+ * a command added there does not compile until its cmd_<name>(void) is written here
+ * (the command's token and id: `cur`). */
+#define DECLARE_HANDLER(id, handler) static void handler(void);
 PROTO_COMMANDS(DECLARE_HANDLER)
 
-static void copy_rom_text(char *dst, const char *src, uint8_t cap)
+/* The command being handled (handle_command): its ACK and NACK take its token and id from
+ * here, one copy of the argument set-up instead of one per reply site. */
+static struct {
+    uint8_t token, id;
+} cur;
+
+static void ack(void)
 {
-    uint8_t i = 0;
-    char c;
-    while (i + 1u < cap && (c = (char)ROM_U8(&src[i])) != '\0') {
-        dst[i++] = c;
-    }
-    while (i < cap) {
-        dst[i++] = '\0';
-    }
+    tx_ack(cur.token, cur.id);
 }
+
+static void nack(uint8_t error, uint16_t detail)
+{
+    tx_nack(cur.token, cur.id, error, detail);
+}
+
+/* INFO's fields that are fixed at build time, in ROM: cmd_send_info copies the whole
+ * struct and fills in the token and the telemetry rate. */
+#define INFO_GAITS (CFG_N_GAITS_PX + CFG_N_GAITS_MX)
+static const proto_info_t info_rom ROM = {
+    0, PROTO_VERSION, CFG_BUILD_ID, CFG_GAIT_TABLE_HASH, CFG_ROBOT_NAME_INFO, CFG_BOARD_NAME_INFO,
+    CFG_N_LIMBS, CFG_N_ACTUATORS, (uint8_t)(INFO_GAITS > 255u ? 255u : INFO_GAITS),
+    CFG_MAX_LOADED_STEPS, (uint16_t)CFG_TICK_HZ, 0};
 
 void cmd_send_info(uint8_t token)
 {
-    uint16_t gaits = (uint16_t)(CFG_N_GAITS_PX + CFG_N_GAITS_MX);
+    ROM_COPY(&msg.u.info, &info_rom, sizeof info_rom);
     msg.id = PROTO_ID_INFO;
     msg.u.info.token = token;
-    msg.u.info.protocol_version = PROTO_VERSION;
-    msg.u.info.build_id = CFG_BUILD_ID;
-    msg.u.info.gait_hash = CFG_GAIT_TABLE_HASH;
-    copy_rom_text(msg.u.info.robot_name, robot_name, PROTO_ROBOT_NAME_LEN);
-    copy_rom_text(msg.u.info.board, board_name, PROTO_BOARD_NAME_LEN);
-    msg.u.info.limbs = CFG_N_LIMBS;
-    msg.u.info.actuators = CFG_N_ACTUATORS;
-    msg.u.info.gaits = (uint8_t)(gaits > 255u ? 255u : gaits);
-    msg.u.info.max_gait_steps = CFG_MAX_LOADED_STEPS;
-    msg.u.info.tick_hz = (uint16_t)CFG_TICK_HZ;
     msg.u.info.telemetry_hz = telemetry_rate();
     tx_send();
 }
 
-static void cmd_get_info(uint8_t token)
+static void cmd_get_info(void)
 {
-    cmd_send_info(token);
+    cmd_send_info(cur.token);
 }
 
-static void cmd_get_stats(uint8_t token)
+static void cmd_get_stats(void)
 {
     const tx_counts_t *c = tx_counts();
     msg.id = PROTO_ID_STATS;
-    msg.u.stats.token = token;
-    msg.u.stats.rx_ok = rx.count.frames_ok;
-    msg.u.stats.crc_errors = rx.count.crc_errors;
-    msg.u.stats.framing_errors = rx.count.framing_errors;
-    msg.u.stats.unknown_ids = rx.count.unknown_ids;
-    msg.u.stats.bad_length = rx.count.bad_length;
-    msg.u.stats.bad_value = rx.count.bad_value;
-    msg.u.stats.nacks = c->nacks;
-    msg.u.stats.tx_frames = c->tx_frames;
-    msg.u.stats.tx_dropped = c->tx_dropped;
+    msg.u.stats.token = cur.token;
+    /* rx_ok..bad_value are proto_counters_t's fields and nacks..tx_dropped tx_counts_t's,
+     * in the same order (checked below): one copy each. */
+    memcpy(&msg.u.stats.rx_ok, &rx.count, sizeof rx.count);
+    memcpy(&msg.u.stats.nacks, c, sizeof *c);
     msg.u.stats.tick_overruns = app_overruns();
     tx_send();
 }
 
-static void cmd_start(uint8_t token)
+typedef char cmd_stats_layout_ok[(offsetof(proto_stats_t, bad_value) - offsetof(proto_stats_t, rx_ok) ==
+                                   offsetof(proto_counters_t, bad_value) &&
+                                   sizeof(proto_counters_t) == 6u * sizeof(uint32_t) &&
+                                   offsetof(proto_stats_t, tx_dropped) - offsetof(proto_stats_t, nacks) ==
+                                   offsetof(tx_counts_t, tx_dropped) &&
+                                   sizeof(tx_counts_t) == 3u * sizeof(uint32_t)) ? 1 : -1];
+
+static void cmd_start(void)
 {
-    uint8_t gait = msg.u.start.gait;
-    uint8_t dir = msg.u.start.direction;
+    uint8_t gait = msg.u.start.gait, index = gait;
+    uint8_t dir = msg.u.start.direction, sdir;
     int8_t r;
     if (sma_estopped()) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_ESTOP_LATCHED, 0);
+        nack(PROTO_ERR_ESTOP_LATCHED, 0);
         return;
     }
     if (fault_latched()) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 0);
+        nack(PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
     if (seq_running()) { /* safety: a restart would restart the step; STOP first */
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_NOT_ALLOWED, 1);
+        nack(PROTO_ERR_NOT_ALLOWED, 1);
         return;
     }
     if (gait == PROTO_GAIT_USER) {
-        r = seq_start(SEQ_DIR_LOADED, 0, imucheck_measured());
+        sdir = SEQ_DIR_LOADED;
+        index = 0;
     } else if (dir > PROTO_DIR_MINUS_X) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_OUT_OF_RANGE, 2);
+        nack(PROTO_ERR_OUT_OF_RANGE, 2);
         return;
     } else {
         if (limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the robot as built: */
             limbmap_init();                   /* after a fallback, try the whole robot again */
         }
-        r = seq_start(dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX, gait, imucheck_measured());
+        sdir = dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX;
     }
+    r = seq_start(sdir, index, imucheck_measured());
     if (r != SEQ_OK) {
-        tx_nack(token, PROTO_ID_START, PROTO_ERR_NO_GAIT, gait);
+        nack(PROTO_ERR_NO_GAIT, gait);
         return;
     }
     drive_started(gait, dir);
     fault_watchdog_rearm();
-    tx_ack(token, PROTO_ID_START);
+    ack();
     tx_event(PROTO_EV_GAIT_STARTED, gait, dir);
 }
 
-static void cmd_load_gait(uint8_t token)
+static void cmd_load_gait(void)
 {
     cfg_state_t states[PROTO_MAX_GAIT_STEPS];
     uint8_t n = msg.u.load_gait.states_count;
@@ -134,34 +139,34 @@ static void cmd_load_gait(uint8_t token)
     uint8_t i;
     int8_t r;
     if (seq_running()) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_NOT_ALLOWED, 0);
+        nack(PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
     if (n > PROTO_MAX_GAIT_STEPS) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_TOO_LONG, n);
+        nack(PROTO_ERR_TOO_LONG, n);
         return;
     }
     for (i = 0; i < n; i++) {
         if (msg.u.load_gait.states[i] >= CFG_N_STATES) {
-            tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_OUT_OF_RANGE, i);
+            nack(PROTO_ERR_OUT_OF_RANGE, i);
             return;
         }
         states[i] = (cfg_state_t)msg.u.load_gait.states[i];
     }
     r = seq_load(states, n, &bad);
     if (r == SEQ_ERR_FORBIDDEN) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_FORBIDDEN_TRANSITION, bad);
+        nack(PROTO_ERR_FORBIDDEN_TRANSITION, bad);
     } else if (r == SEQ_ERR_LENGTH) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, n > CFG_MAX_LOADED_STEPS ? PROTO_ERR_TOO_LONG : PROTO_ERR_OUT_OF_RANGE, n);
+        nack(n > CFG_MAX_LOADED_STEPS ? PROTO_ERR_TOO_LONG : PROTO_ERR_OUT_OF_RANGE, n);
     } else if (r != SEQ_OK) {
-        tx_nack(token, PROTO_ID_LOAD_GAIT, PROTO_ERR_OUT_OF_RANGE, bad);
+        nack(PROTO_ERR_OUT_OF_RANGE, bad);
     } else {
-        tx_ack(token, PROTO_ID_LOAD_GAIT);
+        ack();
         tx_event(PROTO_EV_GAIT_LOADED, 0, n);
     }
 }
 
-static void cmd_clear(uint8_t token)
+static void cmd_clear(void)
 {
     uint8_t what = msg.u.clear.what;
     uint8_t done = 0;
@@ -176,7 +181,7 @@ static void cmd_clear(uint8_t token)
         sma_clear_estop();
         done |= PROTO_CLEAR_ESTOP;
     }
-    tx_ack(token, PROTO_ID_CLEAR);
+    ack();
     if ((what & PROTO_CLEAR_FAULTS) && fault_latched()) {
         bad = imucheck_take_bad();
         fault_clear();
@@ -195,141 +200,127 @@ static void cmd_clear(uint8_t token)
     }
 }
 
-static void cmd_estop(uint8_t token)
+static void cmd_estop(void)
 {
     sma_estop(); /* first: every MOSFET off now */
-    tx_ack(token, PROTO_ID_ESTOP);
+    ack();
     tx_event(PROTO_EV_ESTOP, 0, 0);
     fault_stop_gait(PROTO_STOP_ESTOP);
 }
 
-static void cmd_ping(uint8_t token)
+static void cmd_ping(void)
 {
-    tx_ack(token, PROTO_ID_PING);
+    ack();
 }
 
-static void cmd_stop(uint8_t token)
+static void cmd_stop(void)
 {
     sma_all_off();
-    tx_ack(token, PROTO_ID_STOP);
+    ack();
     fault_stop_gait(PROTO_STOP_COMMAND);
 }
 
-static void cmd_set_param(uint8_t token)
+static void cmd_set_param(void)
 {
     uint8_t r = param_set(msg.u.set_param.param, msg.u.set_param.index, msg.u.set_param.value);
     if (r) {
-        tx_nack(token, PROTO_ID_SET_PARAM, r, msg.u.set_param.param);
+        nack(r, msg.u.set_param.param);
     } else {
-        tx_ack(token, PROTO_ID_SET_PARAM);
+        ack();
     }
 }
 
-static void cmd_set_telemetry_rate(uint8_t token)
+static void cmd_set_telemetry_rate(void)
 {
     if (telemetry_set_rate(msg.u.set_telemetry_rate.hz) != 0u) {
-        tx_nack(token, PROTO_ID_SET_TELEMETRY_RATE, PROTO_ERR_OUT_OF_RANGE, 0);
+        nack(PROTO_ERR_OUT_OF_RANGE, 0);
     } else {
-        tx_ack(token, PROTO_ID_SET_TELEMETRY_RATE);
+        ack();
     }
 }
 
-static void cmd_set_actuator_map(uint8_t token)
+static void cmd_set_actuator_map(void)
 {
     uint16_t bad = 0;
     uint8_t r;
     if (seq_running()) {
-        tx_nack(token, PROTO_ID_SET_ACTUATOR_MAP, PROTO_ERR_NOT_ALLOWED, 0);
+        nack(PROTO_ERR_NOT_ALLOWED, 0);
         return;
     }
     r = limbmap_set(msg.u.set_actuator_map.actuators, msg.u.set_actuator_map.actuators_count, &bad);
     if (r) {
-        tx_nack(token, PROTO_ID_SET_ACTUATOR_MAP, r, bad);
+        nack(r, bad);
     } else {
-        tx_ack(token, PROTO_ID_SET_ACTUATOR_MAP);
+        ack();
     }
 }
 
-/* The per-limb replies (ACTUATOR_MAP, LEVEL): one array field at a time, its count and one
- * value per limb, into elements of `size` bytes (1: uint8_t, 2: int16_t). */
-#define COL_ACTUATOR 0u /* the limb's actuator (limbmap.h) */
-#define COL_OFFSET 1u   /* its stored rest tilt (level.h) */
-#define COL_GROUND 2u   /* this ground's tilt on top */
-
-static void fill_per_limb(uint8_t *count, void *array, uint8_t size, uint8_t col)
+static void cmd_get_actuator_map(void)
 {
     uint8_t i;
-    uint8_t *dst = (uint8_t *)array;
-    *count = CFG_N_LIMBS;
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        int16_t v = col == COL_ACTUATOR ? (int16_t)limbmap_actuator(i)
-                    : col == COL_OFFSET ? level_offset_cdeg(i)
-                                        : level_ground_cdeg(i);
-        if (size == 2u) {
-            *(int16_t *)(void *)dst = v; /* `array` is an int16_t array */
-        } else {
-            *dst = (uint8_t)v;
-        }
-        dst += size;
-    }
-}
-
-static void cmd_get_actuator_map(uint8_t token)
-{
     msg.id = PROTO_ID_ACTUATOR_MAP;
-    msg.u.actuator_map.token = token;
+    msg.u.actuator_map.token = cur.token;
     msg.u.actuator_map.lost = limbmap_lost();
-    fill_per_limb(&msg.u.actuator_map.actuators_count, msg.u.actuator_map.actuators, 1, COL_ACTUATOR);
+    msg.u.actuator_map.actuators_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.actuator_map.actuators[i] = limbmap_actuator(i);
+    }
     tx_send();
 }
 
 /* Level calibration (level.h): only with every coil off and no gait, so the robot is at rest. */
-static void cmd_calibrate_level(uint8_t token)
+static void cmd_calibrate_level(void)
 {
-    uint16_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
+    uint8_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
     int8_t r;
     if (why == 0u) {
         r = level_calibrate(msg.u.calibrate_level.ground != 0u);
         why = r == -1 ? 4u : r < 0 ? 5u : 0u; /* under way / not in this build */
     }
     if (why) {
-        tx_nack(token, PROTO_ID_CALIBRATE_LEVEL, PROTO_ERR_NOT_ALLOWED, why);
+        nack(PROTO_ERR_NOT_ALLOWED, why);
     } else {
-        tx_ack(token, PROTO_ID_CALIBRATE_LEVEL);
+        ack();
     }
 }
 
-static void cmd_get_level(uint8_t token)
+static void cmd_get_level(void)
 {
+    uint8_t i;
     msg.id = PROTO_ID_LEVEL;
-    msg.u.level.token = token;
+    msg.u.level.token = cur.token;
     msg.u.level.status = level_status();
-    fill_per_limb(&msg.u.level.offset_count, msg.u.level.offset, 2, COL_OFFSET);
-    fill_per_limb(&msg.u.level.ground_count, msg.u.level.ground, 2, COL_GROUND);
+    msg.u.level.offset_count = CFG_N_LIMBS;
+    msg.u.level.ground_count = CFG_N_LIMBS;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        msg.u.level.offset[i] = level_offset_cdeg(i);
+        msg.u.level.ground[i] = level_ground_cdeg(i);
+    }
     tx_send();
 }
 
-static void cmd_clear_level(uint8_t token)
+static void cmd_clear_level(void)
 {
     int8_t r = seq_running() ? -1 : level_clear();
     if (r != 0) {
-        tx_nack(token, PROTO_ID_CLEAR_LEVEL, PROTO_ERR_NOT_ALLOWED, r == -2 ? 5u : 0u);
+        nack(PROTO_ERR_NOT_ALLOWED, r == -2 ? 5u : 0u);
     } else {
-        tx_ack(token, PROTO_ID_CLEAR_LEVEL);
+        ack();
     }
 }
 
 static void handle_command(void)
 {
-    uint8_t token = PROTO_CMD_TOKEN(&msg);
+    cur.token = PROTO_CMD_TOKEN(&msg);
+    cur.id = msg.id;
     switch (msg.id) {
 #define DISPATCH(id, handler) \
     case id:                  \
-        handler(token);       \
+        handler();            \
         break;
         PROTO_COMMANDS(DISPATCH)
     default: /* a robot->host message sent to the robot */
-        tx_nack(token, msg.id, PROTO_ERR_UNKNOWN_MESSAGE, 0);
+        nack(PROTO_ERR_UNKNOWN_MESSAGE, 0);
         break;
     }
 }
@@ -342,7 +333,7 @@ void cmd_init(void)
 
 void cmd_poll(void)
 {
-    uint16_t n;
+    uint8_t n; /* RX_BYTES_PER_TICK = 132 fits */
     level_poll();
     for (n = 0; n < RX_BYTES_PER_TICK; n++) {
         int c = uart_read_byte();

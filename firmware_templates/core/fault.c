@@ -30,14 +30,21 @@ void fault_init(void)
     st.rx_stale = 0;
 }
 
+/* Stop the sequencer and report it: GAIT_STOPPED(reason, cycles). One copy for both callers. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static void stop_gait(uint8_t reason)
+{
+    seq_stop();
+    tx_event(PROTO_EV_GAIT_STOPPED, reason, cycles_u16());
+}
+
 void fault_stop_gait(uint8_t reason)
 {
-    uint16_t cycles = cycles_u16();
-    if (!seq_running()) {
-        return;
+    if (seq_running()) {
+        stop_gait(reason);
     }
-    seq_stop();
-    tx_event(PROTO_EV_GAIT_STOPPED, reason, cycles);
 }
 
 /* Latch `code`; the gait (still running, or stopped by the sequencer itself: `stopped`)
@@ -48,8 +55,7 @@ static void raise(uint8_t code, uint16_t detail, uint8_t stopped)
     st.latched = 1;
     tx_event(PROTO_EV_FAULT, code, detail);
     if (stopped || seq_running()) {
-        seq_stop();
-        tx_event(PROTO_EV_GAIT_STOPPED, PROTO_STOP_FAULT, cycles_u16());
+        stop_gait(PROTO_STOP_FAULT);
     }
     fallback_fault(code, detail);
 }

@@ -43,8 +43,10 @@ void __attribute__((noinline)) wait_tick(void)
 int main(void)
 {
     hal_init();
-    next_tick = hal_micros() + CFG_TICK_US;
     app_init();
+    /* the schedule starts once everything is initialised: app_init's time (about 1 ms on
+     * the Nano: psi_init's tables) is not a late first tick, nor a first-tick overrun */
+    next_tick = hal_micros() + CFG_TICK_US;
     for (;;) {
         wait_tick();
         hal_tick_mark(1);

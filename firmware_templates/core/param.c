@@ -17,9 +17,16 @@ static struct {
     uint32_t watchdog_us; /* the link watchdog, in ticks of CFG_TICK_US as set, µs */
 } st;
 
+/* ceil(ms * CFG_TICK_HZ / 1000), ms ≤ INT32_MAX (param_set's ranges). */
 static uint32_t ms_to_ticks(uint32_t ms)
 {
+#if 1000u % CFG_TICK_HZ == 0u
+    /* a whole number K of ms per tick (1, 2, 4, 5 ... ms): ceil(ms / K), the same value
+     * without the 32-bit divisions by 1000 (+ K - 1 cannot wrap: ms ≤ INT32_MAX) */
+    return (ms + (1000u / CFG_TICK_HZ - 1u)) / (1000u / CFG_TICK_HZ);
+#else
     return (ms / 1000u) * CFG_TICK_HZ + ((ms % 1000u) * CFG_TICK_HZ + 999u) / 1000u;
+#endif
 }
 
 /* ---- where each parameter lives: v is in range and scaled; 0 or a PROTO_ERR_* code */
@@ -67,7 +74,11 @@ static uint8_t set_timeout(uint8_t index, int32_t ticks)
 {
     (void)index;
     seq_set_timeout((uint32_t)ticks);
+#if CFG_TICK_US % 1000u == 0u
+    guard_set_timeout_ms((uint32_t)ticks * (CFG_TICK_US / 1000u)); /* safety: the real-time timeout */
+#else
     guard_set_timeout_ms((uint32_t)ticks * CFG_TICK_US / 1000u); /* safety: the real-time timeout */
+#endif
     return 0;
 }
 
@@ -164,23 +175,26 @@ typedef struct {
 #define WATCHDOG_SAFE_MAX ANY
 #endif
 
+/* Indexed by id - 1 (ids start at 1: no empty row 0). */
+#define ROW(id) [PROTO_PARAM_##id - 1]
 static const param_desc_t table[] ROM = {
     /* id                          scale  min    max           safe_min  safe_max */
-    [PROTO_PARAM_DRIVE_DUTY] = {AS_IS, 1, ANY, 0, ANY, set_drive_duty}, /* ≤ sma_max_duty() */
-    [PROTO_PARAM_HOLD_DUTY] = {AS_IS, 0, ANY, 0, ANY, set_hold_duty},   /* ≤ sma_max_duty() */
-    [PROTO_PARAM_HOLD_MS] = {MS, 0, MAX_PARAM_MS, 0, ANY, set_hold},
-    [PROTO_PARAM_DEBOUNCE_TICKS] = {AS_IS, 1, 1000, 0, ANY, set_debounce},
-    [PROTO_PARAM_STATE_TIMEOUT_MS] = {MS, 1, ANY, 0, (int32_t)CFG_STATE_TIMEOUT_MS, set_timeout},
-    [PROTO_PARAM_PSI_STAR_CDEG] = {AS_IS, -8999, 8999, -8999, ANY, set_psi_star},
-    [PROTO_PARAM_HYSTERESIS_CDEG] = {AS_IS, 0, 2000, 0, ANY, set_hysteresis},
-    [PROTO_PARAM_MAX_ON_MS] = {MS, 1, ANY, 0, (int32_t)CFG_MAX_ON_MS, set_max_on},
-    [PROTO_PARAM_MIN_COOLDOWN_MS] = {MS, 0, MAX_PARAM_MS, (int32_t)CFG_MIN_COOLDOWN_MS, ANY, set_cooldown},
-    [PROTO_PARAM_LINK_WATCHDOG_MS] = {MS, 0, MAX_PARAM_MS, WATCHDOG_SAFE_MIN, WATCHDOG_SAFE_MAX, set_watchdog},
+    ROW(DRIVE_DUTY) = {AS_IS, 1, ANY, 0, ANY, set_drive_duty}, /* ≤ sma_max_duty() */
+    ROW(HOLD_DUTY) = {AS_IS, 0, ANY, 0, ANY, set_hold_duty},   /* ≤ sma_max_duty() */
+    ROW(HOLD_MS) = {MS, 0, MAX_PARAM_MS, 0, ANY, set_hold},
+    ROW(DEBOUNCE_TICKS) = {AS_IS, 1, 1000, 0, ANY, set_debounce},
+    ROW(STATE_TIMEOUT_MS) = {MS, 1, ANY, 0, (int32_t)CFG_STATE_TIMEOUT_MS, set_timeout},
+    ROW(PSI_STAR_CDEG) = {AS_IS, -8999, 8999, -8999, ANY, set_psi_star},
+    ROW(HYSTERESIS_CDEG) = {AS_IS, 0, 2000, 0, ANY, set_hysteresis},
+    ROW(MAX_ON_MS) = {MS, 1, ANY, 0, (int32_t)CFG_MAX_ON_MS, set_max_on},
+    ROW(MIN_COOLDOWN_MS) = {MS, 0, MAX_PARAM_MS, (int32_t)CFG_MIN_COOLDOWN_MS, ANY, set_cooldown},
+    ROW(LINK_WATCHDOG_MS) = {MS, 0, MAX_PARAM_MS, WATCHDOG_SAFE_MIN, WATCHDOG_SAFE_MAX, set_watchdog},
 };
 
 uint8_t param_set(uint8_t param, uint8_t index, int32_t v)
 {
     param_desc_t d;
+    param = (uint8_t)(param - 1u); /* 0 wraps to 255: out of range */
     if (param >= sizeof table / sizeof table[0]) {
         return PROTO_ERR_OUT_OF_RANGE;
     }

@@ -7,6 +7,11 @@
 #include "cobs.h"
 #include "crc16.h"
 
+#if PROTO_PACKED_LAYOUT
+typedef proto_msglayout_t desc_t;
+#else
+typedef proto_msgdesc_t desc_t;
+
 static uint8_t type_size(uint8_t t)
 {
     switch (t & 0x0Fu) {
@@ -21,8 +26,10 @@ static uint8_t type_size(uint8_t t)
     }
 }
 
+#endif
+
 /* Descriptor of message id, or NULL. */
-static const proto_msgdesc_t *find_desc(uint8_t id)
+static const desc_t *find_desc(uint8_t id)
 {
     uint8_t i;
     for (i = 0; i < PROTO_N_MESSAGES; i++) {
@@ -33,6 +40,7 @@ static const proto_msgdesc_t *find_desc(uint8_t id)
     return NULL;
 }
 
+#if !PROTO_PACKED_LAYOUT
 /* Copy count elements of size bytes between the little-endian wire and native memory.
  * The same operation in both directions; the endianness test folds to a constant. */
 static void copy_elems(uint8_t *dst, const uint8_t *src, uint8_t count, uint8_t size)
@@ -56,7 +64,7 @@ static void copy_elems(uint8_t *dst, const uint8_t *src, uint8_t count, uint8_t 
  * unpacking: src = wire, dst = struct. wire[0] is the id, fields start at wire[1], the wire
  * holds at most limit bytes. Returns 0 and sets *end to the wire length after the last
  * field, or PROTO_ERR_BAD_LENGTH (out of wire bytes) / PROTO_ERR_TOO_LONG (count > max). */
-static uint8_t walk(const proto_msgdesc_t *d, const uint8_t *src, uint8_t *dst, uint8_t limit, uint8_t packing,
+static uint8_t walk(const desc_t *d, const uint8_t *src, uint8_t *dst, uint8_t limit, uint8_t packing,
                     uint8_t *end)
 {
     const proto_field_t *f = &proto_fields[PROTO_READ_BYTE(&d->first)];
@@ -96,10 +104,59 @@ static uint8_t walk(const proto_msgdesc_t *d, const uint8_t *src, uint8_t *dst, 
     *end = pos;
     return 0;
 }
+#else
+/* The same walk over the message's layout string: mem runs through the struct, pos through
+ * the wire; a struct is its wire bytes with each array at its capacity. Not inlined: packing
+ * (tx) and unpacking (rx) share one copy. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static uint8_t walk(const desc_t *d, const uint8_t *src, uint8_t *dst, uint8_t limit, uint8_t packing,
+                    uint8_t *end)
+{
+    const uint8_t *l = &proto_layouts[PROTO_READ_BYTE(&d->first)];
+    uint8_t *mem = (uint8_t *)(packing ? src : dst);
+    uint8_t *wire = packing ? dst : (uint8_t *)src;
+    uint8_t pos = 1, b;
+    while ((b = PROTO_READ_BYTE(l++)) != 0u) {
+        uint8_t n = b, cap = b; /* wire bytes, struct bytes */
+        if (b & PROTO_L_ARRAY) {
+            uint8_t size = (uint8_t)(b & 0x7Fu), max = PROTO_READ_BYTE(l++), count;
+            if (pos >= limit) {
+                return PROTO_ERR_BAD_LENGTH;
+            }
+            if (packing) {
+                wire[pos] = *mem;
+            } else {
+                *mem = wire[pos];
+            }
+            count = *mem++;
+            pos++;
+            if (count > max) {
+                return PROTO_ERR_TOO_LONG;
+            }
+            n = (uint8_t)(count * size); /* ≤ 24 × 4: capacities and sizes are the definition's */
+            cap = (uint8_t)(max * size);
+        }
+        if ((uint8_t)(limit - pos) < n) {
+            return PROTO_ERR_BAD_LENGTH;
+        }
+        if (packing) {
+            memcpy(wire + pos, mem, n);
+        } else {
+            memcpy(mem, wire + pos, n);
+        }
+        pos = (uint8_t)(pos + n);
+        mem += cap;
+    }
+    *end = pos;
+    return 0;
+}
+#endif
 
 uint8_t proto_unpack(const uint8_t *frame, size_t n, proto_msg_t *msg)
 {
-    const proto_msgdesc_t *d;
+    const desc_t *d;
     uint8_t end, err;
     if (n < 1 || (d = find_desc(frame[0])) == NULL) {
         return PROTO_ERR_UNKNOWN_MESSAGE;
@@ -118,7 +175,7 @@ uint8_t proto_unpack(const uint8_t *frame, size_t n, proto_msg_t *msg)
 
 size_t proto_pack(const proto_msg_t *msg, uint8_t *out, size_t cap)
 {
-    const proto_msgdesc_t *d = find_desc(msg->id);
+    const desc_t *d = find_desc(msg->id);
     uint8_t end;
     if (d == NULL || cap < 1) {
         return 0;
@@ -188,7 +245,7 @@ int proto_rx_byte(proto_rx_t *rx, uint8_t byte, proto_msg_t *msg)
     } else {
         uint8_t n = (uint8_t)(rx->len - 2);
         uint16_t crc = crc16_ccitt(CRC16_INIT, rx->buf, n);
-        if ((uint8_t)crc != rx->buf[n] || (uint8_t)(crc >> 8) != rx->buf[n + 1]) {
+        if (crc != (uint16_t)(rx->buf[n] | (uint16_t)rx->buf[n + 1] << 8)) { /* little-endian */
             counter = &rx->count.crc_errors;
         } else {
             err = proto_unpack(rx->buf, n, msg);

@@ -47,6 +47,17 @@
 #define PROTO_READ_BYTE(p) (*(const uint8_t *)(p))
 #endif
 
+/* PROTO_PACKED_LAYOUT: structs without padding, little-endian (AVR): a message's struct is
+ * its wire bytes with each array at its capacity, and proto_gen.c's tables are per-message
+ * byte strings (proto_layouts) instead of per-field descriptors. A host test may set it
+ * (proto_gen.h then packs the structs). */
+#if defined(__AVR__) && !defined(PROTO_PACKED_LAYOUT)
+#define PROTO_PACKED_LAYOUT 1
+#endif
+#ifndef PROTO_PACKED_LAYOUT
+#define PROTO_PACKED_LAYOUT 0
+#endif
+
 #include "cobs.h"
 #include "proto_gen.h" /* PROTO_ID_*, PROTO_ERR_* ..., proto_<msg>_t, proto_msg_t */
 
@@ -67,8 +78,18 @@ typedef struct {
     uint8_t first; /* index of the first field in proto_fields */
     uint8_t n;     /* number of fields */
 } proto_msgdesc_t;
+#if PROTO_PACKED_LAYOUT
+enum { PROTO_L_ARRAY = 0x80 }; /* proto_layouts: 1..127 = bytes as is; ARRAY | size, capacity */
+typedef struct {
+    uint8_t id;    /* PROTO_ID_* */
+    uint8_t first; /* index of its 0-terminated layout in proto_layouts */
+} proto_msglayout_t;
+extern PROTO_CONST uint8_t proto_layouts[];
+extern PROTO_CONST proto_msglayout_t proto_messages[PROTO_N_MESSAGES];
+#else
 extern PROTO_CONST proto_field_t proto_fields[];
 extern PROTO_CONST proto_msgdesc_t proto_messages[PROTO_N_MESSAGES];
+#endif
 
 /* ---- receiving ---- */
 typedef struct {

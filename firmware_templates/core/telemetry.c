@@ -148,7 +148,10 @@ void telemetry_idle(uint32_t until_next_tick_us)
     tx_send_msg(&st.frame);
     st.pending = 0;
     dt = hal_micros() - t0;
-    if (dt > st.cost_us) {
-        st.cost_us = (uint16_t)(dt > 0xFFFFu ? 0xFFFFu : dt);
+    if (dt > 0xFFFFu) {
+        dt = 0xFFFFu;
+    }
+    if ((uint16_t)dt > st.cost_us) {
+        st.cost_us = (uint16_t)dt;
     }
 }

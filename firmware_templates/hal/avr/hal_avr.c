@@ -139,10 +139,10 @@ static struct {
     uint8_t *rx;
     uint8_t sla, ntx, nrx, i;
     uint8_t reading;
-    uint8_t checked;        /* the bus was looked at after this transaction failed */
+    uint8_t unchecked;      /* this transaction's failure is yet to be looked at on the bus */
     volatile int8_t result; /* HAL_I2C_BUSY, 0 or -1 */
     uint32_t t0;
-} tw = {0, 0, 0, 0, 0, 0, 0, 1, 0, 0};
+} tw; /* all 0 (.bss, nothing copied at reset): no transaction, nothing to check */
 
 static void twi_done(int8_t r)
 {
@@ -223,34 +223,40 @@ int8_t hal_i2c_begin(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx,
     tw.i = 0;
     tw.reading = ntx ? 0u : 1u;
     tw.t0 = hal_micros();
-    tw.checked = 0;
+    tw.unchecked = 1;
     tw.result = HAL_I2C_BUSY;
     TWCR = TWCR_GO | _BV(TWSTA);
     return 0;
+}
+
+/* The transaction (or its STOP) is past its deadline. One copy for both checks. */
+static uint8_t __attribute__((noinline)) twi_late(void)
+{
+    return (uint32_t)(hal_micros() - tw.t0) > HAL_I2C_DEADLINE_US;
 }
 
 int8_t hal_i2c_poll(void)
 {
     int8_t r = tw.result;
     if (r == HAL_I2C_BUSY) {
-        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+        if (!twi_late()) {
             return HAL_I2C_BUSY;
         }
         TWCR = 0; /* abort: the interrupt cannot run again */
         tw.result = r = -1;
-        tw.checked = 1;
+        tw.unchecked = 0;
         twi_recover();
         return r;
     }
     if (TWCR & _BV(TWSTO)) {
-        if ((uint32_t)(hal_micros() - tw.t0) <= HAL_I2C_DEADLINE_US) {
+        if (!twi_late()) {
             return HAL_I2C_BUSY; /* the STOP is still going out */
         }
         twi_recover();
         return -1;
     }
-    if (r < 0 && !tw.checked) {
-        tw.checked = 1;
+    if (r < 0 && tw.unchecked) {
+        tw.unchecked = 0;
         if (!(PINC & _BV(PC4))) {
             twi_recover(); /* a slave kept SDA low */
         }
@@ -359,8 +365,10 @@ void hal_init(void)
  * erase+write of one byte, EEMPE then EEPE within four cycles, interrupts off between).
  * One changed byte begun per poll, never waiting on a write in flight; unchanged bytes
  * are not rewritten (100,000 cycles per cell). */
-static const uint8_t *nv_src;
-static uint8_t nv_n, nv_i;
+static struct {
+    const uint8_t *src; /* the block being written, 0: none */
+    uint8_t n, i;
+} nv;
 
 void hal_nv_read(uint8_t *dst, uint8_t n)
 {
@@ -376,33 +384,33 @@ void hal_nv_read(uint8_t *dst, uint8_t n)
 
 int8_t hal_nv_write(const uint8_t *src, uint8_t n)
 {
-    if (n > HAL_NV_BYTES || nv_src) {
+    if (n > HAL_NV_BYTES || nv.src) {
         return -1;
     }
-    nv_src = src;
-    nv_n = n;
-    nv_i = 0;
+    nv.src = src;
+    nv.n = n;
+    nv.i = 0;
     return 0;
 }
 
 int8_t hal_nv_poll(void)
 {
     uint8_t sreg;
-    if (!nv_src) {
+    if (!nv.src) {
         return 0;
     }
     for (;;) {
         if (EECR & _BV(EEPE)) {
             return HAL_NV_BUSY;
         }
-        if (nv_i >= nv_n) {
-            nv_src = 0;
+        if (nv.i >= nv.n) {
+            nv.src = 0;
             return 0;
         }
-        EEAR = nv_i;
+        EEAR = nv.i;
         EECR |= _BV(EERE);
-        if (EEDR != nv_src[nv_i]) {
-            EEDR = nv_src[nv_i++];
+        if (EEDR != nv.src[nv.i]) {
+            EEDR = nv.src[nv.i++];
             sreg = SREG;
             cli();
             /* EEMPE, then EEPE within four cycles (ATmega328P datasheet §8.6.3), in asm: C
@@ -417,6 +425,6 @@ int8_t hal_nv_poll(void)
             SREG = sreg;
             return HAL_NV_BUSY;
         }
-        nv_i++;
+        nv.i++;
     }
 }

@@ -90,7 +90,7 @@ def _commands(messages: Sequence[MessageSpec]) -> str:
             if m.direction == "h2r"]
     return (
         "/* Commands (host->robot), by id: X(id, handler). core/cmd.c declares and dispatches\n"
-        " * through this list; each handler is static void cmd_<name>(uint8_t token). */\n"
+        " * through this list; each handler is static void cmd_<name>(void). */\n"
         "#define PROTO_COMMANDS(X) \\\n" + " \\\n".join(rows) + "\n"
     )
 
@@ -121,12 +121,17 @@ def render_h(max_limbs: int, max_channels: int, messages: Sequence[MessageSpec] 
     )
     out.append(_commands(messages))
     out.append("\n\n".join(_enum_block(cls, prefix) for cls, prefix in ENUMS) + "\n")
+    out.append(
+        "/* A host test of proto.c's packed tables (PROTO_PACKED_LAYOUT, native on AVR) packs them. */\n"
+        "#if defined(PROTO_PACKED_LAYOUT) && PROTO_PACKED_LAYOUT && !defined(__AVR__)\n#pragma pack(push, 1)\n#endif\n"
+    )
     out.append("\n\n".join(_struct(m) for m in messages) + "\n")
     members = "\n".join(f"        proto_{m.name.lower()}_t {m.name.lower()};" for m in messages)
     out.append(
         "/* One decoded message: id selects the union member (lower-case message name). */\n"
         "typedef struct {\n    uint8_t id;\n    union {\n"
         f"{members}\n    }} u;\n}} proto_msg_t;\n"
+        "#if defined(PROTO_PACKED_LAYOUT) && PROTO_PACKED_LAYOUT && !defined(__AVR__)\n#pragma pack(pop)\n#endif\n"
     )
     out.append("\n#endif /* PROLEG_PROTO_GEN_H */\n")
     return "\n".join(out)
@@ -152,9 +157,58 @@ def render_c_tables(max_limbs: int, max_channels: int, messages: Sequence[Messag
             else:
                 row = f"{{{_T_CODES[f.type]}, offsetof({st}, {f.name}), 0, 0}}"
             rows.append(f"    {row}, /* {m.name}.{f.name} */")
+    out.append("#if PROTO_PACKED_LAYOUT\n" + _packed_layouts(messages) + "#else\n")
     out.append(f"PROTO_CONST proto_field_t proto_fields[{len(rows)}] = {{\n" + "\n".join(rows) + "\n};\n")
     out.append("PROTO_CONST proto_msgdesc_t proto_messages[PROTO_N_MESSAGES] = {\n" + "\n".join(descs) + "\n};\n")
+    out.append("#endif /* PROTO_PACKED_LAYOUT */\n")
     return "\n".join(out)
+
+
+_SIZES = {"u8": 1, "u16": 2, "u32": 4, "i16": 2, "i32": 4, "char": 1}
+
+
+def _find(data: list[str], items: list[str]) -> int:
+    for i in range(len(data) - len(items) + 1):
+        if data[i : i + len(items)] == items:
+            return i
+    return -1
+
+
+def _packed_layouts(messages: Sequence[MessageSpec]) -> str:
+    """``proto_layouts`` for a target whose structs have no padding and are little-endian
+    (AVR; proto.h's PROTO_PACKED_LAYOUT): there a struct is its wire bytes, except that an
+    array takes its capacity. Per message, 0-terminated: a run of n (1..127) bytes copied
+    as is (every scalar and text field in a row), or an array as two bytes,
+    ``PROTO_L_ARRAY | element size`` and its capacity (its u8 count comes first)."""
+    data: list[str] = []
+    descs: list[str] = []
+    for m in messages:
+        items: list[str] = []
+        run = 0
+        for f in m.fields:
+            if f.is_array:
+                if run:
+                    items.append(str(run))
+                    run = 0
+                items += [f"PROTO_L_ARRAY | {_SIZES[f.type]}", _array_max(f)]
+            else:
+                run += f.length if f.length is not None else _SIZES[f.type]
+                if run > 127:
+                    raise ProtocolError(f"{m.name}: {run} bytes of fixed fields in a row, the packed layout holds 127")
+        if run:
+            items.append(str(run))
+        items.append("0")
+        at = _find(data, items)  # the same bytes already there (a whole layout or its tail)
+        if at < 0:
+            at = len(data)
+            data += items
+        descs.append(f"    {{PROTO_ID_{m.name}, {at}}}, /* {m.name}: {', '.join(items)} */")
+    if len(data) > 255:
+        raise ProtocolError(f"packed layouts take {len(data)} bytes, their index is a u8")
+    return (
+        f"PROTO_CONST uint8_t proto_layouts[{len(data)}] = {{\n    " + ", ".join(data) + "\n};\n"
+        "PROTO_CONST proto_msglayout_t proto_messages[PROTO_N_MESSAGES] = {\n" + "\n".join(descs) + "\n};\n"
+    )
 
 
 def render_c(max_limbs: int, max_channels: int, messages: Sequence[MessageSpec] = MESSAGES) -> dict[str, str]:
