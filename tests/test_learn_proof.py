@@ -26,13 +26,17 @@ from proleg.robot import load_robot
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 SEED = 3
+#: The 95 % intervals are a statistical claim: over 24 entries, 3 or more fall outside by chance
+#: in about one run in nine (binomial, p = 0.05), so coverage is asserted over three runs pooled.
+COVERAGE_SEEDS = (1, 2, 3)
 
 
-def _learn(name: str, repeats: int, tmp: Path):
+def _learn(name: str, repeats: int, tmp: Path, seed: int = SEED):
+    tmp.mkdir(parents=True, exist_ok=True)
     robot = load_robot(ROBOTS / f"{name}.toml")
     truth = load_robot(write_truth(robot, tmp / "truth.toml"))
     with TrialLog(tmp / "trials.jsonl") as log:
-        _added, sim = explore_simulated(robot, truth, log, repeats=repeats, seed=SEED)
+        _added, sim = explore_simulated(robot, truth, log, repeats=repeats, seed=seed)
         trials = list(log.trials)
     t = robot.transitions
     assert counts(t, trials).min() >= repeats
@@ -46,11 +50,15 @@ def _learn(name: str, repeats: int, tmp: Path):
     pytest.param("caterpillar-4", marks=pytest.mark.long),
 ])
 def test_after_five_trials_each_the_learned_matrix_is_right_and_its_gait_fast(name, tmp_path):
-    robot, truth, est, eff = _learn(name, 5, tmp_path)
-    acc = accuracy(eff, est)
-    assert acc.sign == 1.0, acc
-    assert acc.coverage >= 0.9, acc
-    assert acc.gait_ratio >= 0.95, acc
+    inside = total = 0
+    for seed in COVERAGE_SEEDS:
+        robot, truth, est, eff = _learn(name, 5, tmp_path / str(seed), seed)
+        acc = accuracy(eff, est)
+        assert acc.sign == 1.0, (seed, acc)
+        assert acc.gait_ratio >= 0.95, (seed, acc)
+        inside += round(acc.coverage * acc.transitions)
+        total += acc.transitions
+    assert inside >= 0.9 * total, (inside, total)
     t = robot.transitions
     if all(sum(x != y for x, y in zip(t.label(a), t.label(b))) == 1 for a, b in zip(t.src, t.dst)):
         # one limb per transition (not R3): the truth file itself, up to rare bounces
