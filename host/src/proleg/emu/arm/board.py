@@ -156,6 +156,7 @@ class ArmEmuBoard(MmioAccess, TickMarks, FirmwareProbes):
         self._wait = sym("wait_tick")
         self._next_tick = sym("next_tick")
         self._ms_count = sym("ms_count")
+        self._watch_idle()
 
     def _stall(self, cycles: int) -> None:
         """The CPU waits (a flash erase or program): its clock moves on."""
