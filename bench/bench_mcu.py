@@ -148,8 +148,12 @@ def limb_fit(rows: dict[str, dict], robots: dict[str, object]) -> dict | None:
     per_limb = max((worst[b] - worst[a]) / (b - a) for a, b in zip(counts, counts[1:]))
     per_limb = max(0.0, per_limb)
     base = max(worst[n] - per_limb * n for n in counts)
+    top = max(counts, key=lambda n: worst[n] - per_limb * n)
+    kept = {n: r for n, r in rows.items() if "skipped" not in r and "@" not in n}
+    worst_robot = max((n for n in kept if len(robots[n].limbs) == top), key=lambda n: kept[n]["tick_busy_us"]["p99"])
     return {"tick_us_base": math.ceil(base), "tick_us_per_limb": math.ceil(per_limb),
-            "from": ", ".join(sorted(n for n, r in rows.items() if "skipped" not in r and "@" not in n))}
+            "how": "steepest rise of the worst p99 between limb counts, base what the worst row leaves",
+            "worst": worst_robot, "from": ", ".join(sorted(kept))}
 
 
 def measure(robot) -> dict:

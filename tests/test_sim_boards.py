@@ -80,7 +80,10 @@ def test_proleg_sim_on_an_emulated_mcu_walks_injects_faults_and_reports_the_tick
     doc = json.loads(out)
     assert doc["board"] == board
     assert doc["states_reached"][:2] == ["00", "10"] and doc["true_transitions"] >= 1  # it walked
-    assert [f["code"] for f in doc["faults"]][:1] == ["IMU_NO_ACK"]  # the injection reached the bus
+    # the injection reached the bus: between reads the IMU's address is not ACKed (IMU_NO_ACK);
+    # silenced in the middle of a burst read, the rest of the bytes read 0xFF from the pull-ups,
+    # |g| out of range (IMU_BAD_DATA). Which one depends on where the reads fall against t = 1.0 s.
+    assert [f["code"] for f in doc["faults"]][:1] in (["IMU_NO_ACK"], ["IMU_BAD_DATA"])
     assert code == 1  # a faulted run fails
     _check_budget(doc, 1.5)
 

@@ -45,10 +45,12 @@ typedef struct {
 static struct {
     uint8_t bad; /* bit per limb: IMU faulted, not read until CLEAR(FAULTS) */
     uint32_t measured; /* debounced robot state, IMUCHECK_UNKNOWN until every limb has one */
-    /* the transactions of this tick: one per limb, in limb order, in the background */
+    /* One transaction at a time in the background, limbs taken in turn. A limb is begun
+     * again only once the tick has taken its last result, so a result is never overwritten
+     * or dropped, and each IMU is read once a tick while the bus has the time. */
     uint8_t cur; /* limb whose transaction is in flight, or NO_LIMB */
+    uint8_t turn; /* the limb to try first when the bus is free */
     uint8_t tx[2];
-    uint8_t due; /* this period's transactions are still to begin */
     limb_t limb[CFG_N_LIMBS];
 } st;
 
@@ -69,10 +71,7 @@ void imucheck_init(void)
 static void restart(uint8_t limb, uint32_t wait_us)
 {
     limb_t *l = &st.limb[limb];
-    l->err = 0;
-    l->stuck = 0;
-    l->phase = 0;
-    l->res = RES_NONE;
+    memset(l, 0, sizeof *l); /* no result, start-up step 0, no errors */
     l->t0 = hal_micros();
     l->wait = wait_us;
 }
@@ -88,12 +87,13 @@ void imucheck_start(uint8_t limb)
 }
 
 /* Begin the transaction of `limb` (its start-up step or its accelerometer read);
- * 0 if begun. A limb that is bad or still in its power-up wait has none. */
+ * 0 if begun. A limb whose last result is not taken yet, that is bad or still in its
+ * power-up wait has none. */
 static int8_t begin(uint8_t limb)
 {
     limb_t *l = &st.limb[limb];
     uint8_t ntx, nrx;
-    if ((st.bad & (1u << limb)) || (uint32_t)(hal_micros() - l->t0) < l->wait) {
+    if (l->res != RES_NONE || (st.bad & (1u << limb)) || (uint32_t)(hal_micros() - l->t0) < l->wait) {
         return -1;
     }
     if (l->phase < PHASE_RUN) {
@@ -107,35 +107,34 @@ static int8_t begin(uint8_t limb)
     return imubus_begin(limb, ROM_U8(&imu_addr[limb]), st.tx, ntx, l->rx, nrx) == 0 ? 0 : -1;
 }
 
-/* From `from` on, begin the next limb's transaction; NO_LIMB when none is left. */
-static void next(uint8_t from)
-{
-    uint8_t i;
-    for (i = from; i < CFG_N_LIMBS; i++) {
-        if (begin(i) == 0) {
-            st.cur = i;
-            return;
-        }
-    }
-    st.cur = NO_LIMB;
-}
-
 void imucheck_service(void)
 {
     int8_t r;
-    uint8_t limb;
-    if (st.due && st.cur == NO_LIMB) {
-        st.due = 0;
-        next(0); /* between ticks: the samples are as fresh as the next tick can have them */
-    }
-    while (st.cur != NO_LIMB) {
-        r = imubus_poll();
-        if (r == HAL_I2C_BUSY) {
+    uint8_t k, t, i = st.cur;
+    for (;;) {
+        if (i != NO_LIMB) {
+            r = imubus_poll();
+            if (r == HAL_I2C_BUSY) {
+                return;
+            }
+            st.limb[i].res = r == 0 ? RES_OK : RES_ERR;
+        }
+        /* the next limb in turn that can be begun; none: the bus rests until the tick */
+        i = NO_LIMB;
+        for (k = 0; k < CFG_N_LIMBS; k++) {
+            t = st.turn;
+            if (++st.turn == CFG_N_LIMBS) {
+                st.turn = 0;
+            }
+            if (begin(t) == 0) {
+                i = t;
+                break;
+            }
+        }
+        st.cur = i;
+        if (i == NO_LIMB) {
             return;
         }
-        limb = st.cur;
-        st.limb[limb].res = r == 0 ? RES_OK : RES_ERR;
-        next((uint8_t)(limb + 1u));
     }
 }
 
@@ -146,17 +145,23 @@ static uint8_t past_deadline(uint8_t i)
     return (uint32_t)(hal_micros() - l->t0) >= l->wait + START_DEADLINE_US;
 }
 
-/* A start-up step finished: next step, a retry, or (past the deadline) a fault. */
+/* A start-up step finished (or, RES_NONE, is still to be done): next step, a retry, or
+ * (past the deadline) a fault. */
 static void start_up(uint8_t i, uint8_t res)
 {
     limb_t *l = &st.limb[i];
-    int8_t r = res == RES_OK ? mpu6050_init_check(l->phase, l->rx[0]) : MPU6050_ERR_BUS;
-    if (r == MPU6050_OK) {
-        l->phase++;
-        return;
+    int8_t r = MPU6050_ERR_BUS;
+    if (res == RES_OK) {
+        r = mpu6050_init_check(l->phase, l->rx[0]);
+        if (r == MPU6050_OK) {
+            l->phase++;
+            return;
+        }
     }
-    l->phase = 0; /* from WHO_AM_I again */
-    if (past_deadline(i)) {
+    if (res != RES_NONE) {
+        l->phase = 0; /* from WHO_AM_I again */
+    }
+    if (past_deadline(i)) { /* no answer, a wrong one, or the bus never let it through */
         imu_fault(i, r == MPU6050_ERR_BUS ? PROTO_FAULT_IMU_NO_ACK : PROTO_FAULT_IMU_BAD_DATA);
     }
 }
@@ -195,21 +200,14 @@ void imucheck_read(void)
     imucheck_service();
     for (i = 0; i < CFG_N_LIMBS; i++) {
         limb_t *l = &st.limb[i];
-        res = l->res;
-        if (i == st.cur) {
-            res = RES_NONE; /* still on the bus: its result counts next tick */
-        }
+        res = l->res; /* RES_NONE while on the bus: it counts next tick */
         l->res = RES_NONE;
         if (st.bad & (1u << i)) {
             known = 0;
             continue;
         }
         if (l->phase < PHASE_RUN) {
-            if (res != RES_NONE) {
-                start_up(i, res);
-            } else if (past_deadline(i)) {
-                imu_fault(i, PROTO_FAULT_IMU_NO_ACK); /* the bus never let it through */
-            }
+            start_up(i, res);
             known = 0;
             continue;
         }
@@ -229,7 +227,6 @@ void imucheck_read(void)
         }
     }
     st.measured = known ? (uint32_t)seq_state_index(levels) : IMUCHECK_UNKNOWN;
-    st.due = 1;
 }
 
 uint32_t imucheck_measured(void)

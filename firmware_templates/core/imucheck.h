@@ -2,10 +2,11 @@
  *
  * Contract. Nothing here waits on the bus: every IMU transaction (with its multiplexer
  * select, if any) is begun with imubus_begin and collected with imubus_poll (bounded by
- * the HAL's per-transaction deadline). imucheck_read() runs once per tick: it takes each limb's result of the
- * transactions begun in the previous tick, then begins this tick's (one per limb, in
- * limb order); imucheck_service() moves them on (called at the tick and from the
- * main loop's idle wait), so the IMUs are read while the rest of the tick works.
+ * the HAL's per-transaction deadline). imucheck_service() (at the tick and from the main
+ * loop's idle wait) keeps one transaction on the bus, limbs in turn; a limb is begun again
+ * only after imucheck_read() (once per tick) has taken its last result, so no result is
+ * dropped or overwritten and each IMU is read once a tick while the bus has the time. A
+ * transaction still on the bus at the tick counts at the next tick.
  * Start-up: imucheck_power_up(limb) waits the MPU-6050's typical start-up time, then
  * runs its start-up steps (mpu6050.h), one per tick, WHO_AM_I retried until the
  * maximum start-up time plus margin; then a bus error latches IMU_NO_ACK, a wrong answer

@@ -156,6 +156,7 @@ class ArmEmuBoard(MmioAccess, TickMarks, FirmwareProbes):
         self._wait = sym("wait_tick")
         self._next_tick = sym("next_tick")
         self._ms_count = sym("ms_count")
+        self._watch_idle()
 
     def _stall(self, cycles: int) -> None:
         """The CPU waits (a flash erase or program): its clock moves on."""
@@ -365,6 +366,13 @@ class ArmEmuBoard(MmioAccess, TickMarks, FirmwareProbes):
     def imu_noise(self, addr: int, accel_ug_rthz: float, gyro_dps_rthz: float, accel_offset_mg: float) -> None:
         if addr in self.imu_keymap:
             self.native.lib.sim_mpu_set_noise_slot(self.imu_keymap[addr], accel_ug_rthz, gyro_dps_rthz, accel_offset_mg)
+
+    def imu_startup(self, addr: int, us: float) -> None:
+        """The IMU at key ``addr`` does not acknowledge until ``us`` after power-on (kept
+        across resets; call ``reset()`` after it to boot with it), as avr-emu's."""
+        if addr not in self.imu_keymap:
+            raise SimError(f"arm-emu: no IMU at {addr:#04x} (IMUs: {', '.join(f'{k:#04x}' for k in self.imu_keymap)})")
+        self.native.lib.emu_i2c_set_startup_us(self.imu_keymap[addr], max(0, round(us)))
 
     def imu_register(self, addr: int, reg: int) -> int:
         if addr not in self.imu_keymap:

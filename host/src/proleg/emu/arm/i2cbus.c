@@ -28,6 +28,10 @@ static struct {
     uint8_t used, bus, addr, mux, ch;
 } wire[SIM_MPU_MAX];
 
+/* Per model slot: no ACK before this many µs after power-on (an IMU that answers late,
+ * MPU-6050 start-up time: mpu6050.h). Kept across unwire/power-on, as avr-emu's twi.c. */
+static uint64_t startup_us[SIM_MPU_MAX];
+
 /* The connected channels of each multiplexer, as of the last STOP on its bus. */
 static struct {
     uint8_t used, bus, addr, active;
@@ -106,9 +110,9 @@ int emu_i2c_transfer(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t ntx,
         return 0;
     }
     for (i = 0; i < SIM_MPU_MAX; i++) {
-        if (!wire[i].used || wire[i].bus != bus || wire[i].addr != addr7 ||
+        if (!wire[i].used || wire[i].bus != bus || wire[i].addr != addr7 || t_us < startup_us[i] ||
             (wire[i].mux && !active(bus, wire[i].mux, wire[i].ch))) {
-            continue; /* elsewhere, or its channel is not connected */
+            continue; /* elsewhere, still powering up, or its channel is not connected */
         }
         n = acked && nrx > sizeof tmp ? (uint8_t)sizeof tmp : nrx;
         if (sim_mpu_transfer_slot(i, tx, ntx, acked ? tmp : rx, n, t_us) != 0) {
@@ -145,4 +149,12 @@ uint8_t emu_i2c_mux_active(uint8_t bus, uint8_t addr7)
         }
     }
     return 0;
+}
+
+/* Model slot `slot` acknowledges only from `us` after power-on (0: at once). */
+void emu_i2c_set_startup_us(uint8_t slot, uint64_t us)
+{
+    if (slot < SIM_MPU_MAX) {
+        startup_us[slot] = us;
+    }
 }

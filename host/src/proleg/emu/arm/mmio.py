@@ -9,13 +9,15 @@ with no write in between) jumps time forward to that event, at most ``POLL_SKIP_
 time, so that software timeouts still expire close to when they would on the chip
 (``_poll``); and the core's tick wait (``wait_tick`` in core/main.c polling ``hal_micros``)
 skips straight to the firmware's next tick when the symbols ``wait_tick`` and
-``next_tick`` exist (``_wait_skip``).
+``next_tick`` exist (``_wait_skip``), once the core's ``app_idle`` has run after the tick's
+work and after the last skip (it begins work of its own, not only on events).
 """
 
 from __future__ import annotations
 
 import ctypes
 
+from unicorn import UC_HOOK_CODE
 from unicorn import arm_const as A
 from unicorn.unicorn_py3.unicorn import uclib
 
@@ -126,6 +128,24 @@ class MmioAccess:
             return True
         return False
 
+    def _watch_idle(self) -> None:
+        """Note each entry to the core's ``app_idle``. On the chip the tick wait calls it over
+        and over, and it begins work of its own (the next IMU read once the tick has taken
+        the last, telemetry), not only in answer to a peripheral event; so the skip waits
+        for one call after each tick's work and after each skip (``_wait_skip``)."""
+        self._idle_ran = True
+        self._idle_hook = None
+        idle = self.elf.symbol("app_idle")
+        if self._wait is None or idle is None or not idle.size:
+            return
+        self._idle_ran = False
+        entry = idle.value & ~1
+
+        def hook(uc, address, size, user) -> None:
+            self._idle_ran = True
+
+        self._idle_hook = self.uc.hook_add(UC_HOOK_CODE, hook, None, entry, entry)
+
     def _wait_skip(self) -> None:
         """In the tick wait: jump to just before the firmware's next tick (or the next event)."""
         pc = self._reg(_PC)
@@ -133,6 +153,8 @@ class MmioAccess:
         w = self._wait
         if not (w.value <= pc < w.value + w.size or w.value <= (lr & ~1) < w.value + w.size):
             return
+        if not self._idle_ran:
+            return  # the idle loop has work of its own to begin (an IMU read, telemetry): run it once
         if any(i2c.core_has_work() for i2c in self._i2cs):
             return  # a flag the core's idle loop acts on (hal_i2c_poll): run it
         if self.scs.systick_pending:
@@ -161,3 +183,4 @@ class MmioAccess:
             target = min(target, now + POLL_SKIP_US * CYC_PER_US)
         if target > now:
             self.native.cycles.value = target
+            self._idle_ran = self._idle_hook is None

@@ -39,6 +39,7 @@ _SIGNATURES = {
     "emu_i2c_transfer": ([c_uint8, c_uint8, POINTER(c_uint8), c_uint8, POINTER(c_uint8), c_uint8, c_uint64], c_int),
     "emu_i2c_stop": ([c_uint8], None),
     "emu_i2c_mux_active": ([c_uint8, c_uint8], c_uint8),
+    "emu_i2c_set_startup_us": ([c_uint8, c_uint64], None),
 }
 
 

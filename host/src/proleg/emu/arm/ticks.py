@@ -33,6 +33,7 @@ class TickMarks:
     def _on_mark(self, busy: int, now: int) -> None:
         if busy:
             self._tick_start = now
+            self._idle_ran = self._idle_hook is None  # the wait after this tick runs the idle loop once
         elif self._tick_start is not None:
             self.busy_us.append((now - self._tick_start) / CYC_PER_US)
             self._tick_start = None
