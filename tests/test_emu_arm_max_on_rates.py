@@ -94,5 +94,7 @@ def test_the_fastest_accepted_rate_is_the_fastest_the_build_accepts():
 ])
 def test_max_on_ms_holds_in_real_time_on_the_bluepill_at_the_accepted_tick_rates(tick_hz, idle_skip):
     longest = _longest_on_ms(_r1_at(tick_hz), 0.9, idle_skip=idle_skip)
-    # + one tick at most; sampled once per tick, and cut up to 3 ms early as on the Nano
-    assert MAX_ON_MS - 3 - 1000 / tick_hz <= longest <= MAX_ON_MS + 1000 / tick_hz
+    # + one tick at most; cut up to 3 ms early as on the Nano. Sampled once per tick, the
+    # measured period starts up to a tick after the coil came on and ends up to a tick before
+    # it went off: up to two ticks short (200 Hz: on 200-205 → off 695-700 ms reads 490 ms)
+    assert MAX_ON_MS - 3 - 2 * 1000 / tick_hz <= longest <= MAX_ON_MS + 1000 / tick_hz
