@@ -132,13 +132,16 @@ static uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)
     return at_or_above(band(limb, thr)->e[e], l->ax, l->az);
 }
 
-/* sin(i · 90°/64) in Q14, i = 0..64. */
-static const int16_t sin_tab[65] ROM = {
-    0,     402,   804,   1205,  1606,  2006,  2404,  2801,  3196,  3590,  3981,  4370,  4756,
-    5139,  5520,  5897,  6270,  6639,  7005,  7366,  7723,  8076,  8423,  8765,  9102,  9434,
-    9760,  10080, 10394, 10702, 11003, 11297, 11585, 11866, 12140, 12406, 12665, 12916, 13160,
-    13395, 13623, 13842, 14053, 14256, 14449, 14635, 14811, 14978, 15137, 15286, 15426, 15557,
-    15679, 15791, 15893, 15986, 16069, 16143, 16207, 16261, 16305, 16340, 16364, 16379, 16384,
+/* sin(min(i · 1.28°, 90°)) in Q14, i = 0..71: a power-of-two step of 128 × 0.01°, so the
+ * lookup is a shift and a mask (no 32-bit division). Linear interpolation between entries
+ * is within 2 LSB of sin everywhere (checked for every 0.01° in tests/c/test_psi.c). */
+static const int16_t sin_tab[72] ROM = {
+    0,     366,   732,   1097,  1462,  1826,  2190,  2552,  2913,  3272,  3630,  3986,
+    4340,  4692,  5041,  5388,  5732,  6074,  6412,  6747,  7079,  7408,  7732,  8053,
+    8370,  8682,  8990,  9294,  9593,  9888,  10177, 10461, 10740, 11014, 11282, 11545,
+    11802, 12052, 12297, 12536, 12769, 12995, 13214, 13428, 13634, 13833, 14026, 14212,
+    14390, 14562, 14726, 14883, 15032, 15174, 15308, 15435, 15554, 15665, 15768, 15864,
+    15951, 16031, 16102, 16166, 16221, 16269, 16308, 16339, 16362, 16377, 16384, 16384,
 };
 
 /* atan(i/32) in 0.01°, i = 0..32. */
@@ -173,20 +176,17 @@ void psi_init(void)
 
 int16_t psi_sin_q14(int16_t cdeg)
 {
-    uint32_t r;
-    uint16_t i, f;
-    int16_t a, b, v;
+    uint16_t i, f, a;
+    int16_t v;
     uint16_t x = cdeg < 0 ? (uint16_t)(0u - (uint16_t)cdeg) : (uint16_t)cdeg;
     if (x >= 9000u) {
         v = 16384;
     } else {
-        r = (uint32_t)x * 64u;
-        i = (uint16_t)(r / 9000u);
-        f = (uint16_t)(r % 9000u);
-        a = ROM_I16(&sin_tab[i]);
-        b = ROM_I16(&sin_tab[i + 1u]);
-        /* b ≥ a (the table rises): unsigned, so only the unsigned division helper is linked */
-        v = (int16_t)(a + (int16_t)(((uint32_t)(uint16_t)(b - a) * f + 4500u) / 9000u));
+        i = x >> 7;   /* ≤ 70 */
+        f = x & 127u;
+        a = (uint16_t)ROM_I16(&sin_tab[i]);
+        /* the table rises by at most 366 per entry: 366 × 127 + 64 fits in 16 bits */
+        v = (int16_t)(a + ((((uint16_t)ROM_I16(&sin_tab[i + 1u]) - a) * f + 64u) >> 7));
     }
     return cdeg < 0 ? (int16_t)-v : v;
 }

@@ -144,7 +144,7 @@ static void test_integer_atan2_is_within_0_02_deg_of_float_all_round(void)
 static void test_integer_sin_cos_match_float_within_2_lsb(void)
 {
     int32_t cd;
-    for (cd = -9000; cd <= 9000; cd += 7) {
+    for (cd = -9000; cd <= 9000; cd++) { /* every 0.01° */
         double r = cd / 100.0 * PI_D / 180.0;
         CHECK(labs((long)psi_sin_q14((int16_t)cd) - lround(sin(r) * 16384.0)) <= 2);
         CHECK(labs((long)psi_cos_q14((int16_t)cd) - lround(cos(r) * 16384.0)) <= 2);
