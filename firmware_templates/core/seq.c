@@ -21,16 +21,24 @@
 /* Variables, not macros, so range checks never compare against a type's limits. */
 static const uint32_t n_states = CFG_N_STATES;
 
+/* A step's place in a walk: one byte when every rendered gait step and every loadable step
+ * is numbered below 255 (an 8-bit MCU then indexes and compares in single bytes). */
+#if CFG_N_GAIT_STEPS + CFG_MAX_LOADED_STEPS < 255u
+typedef uint8_t step_ix_t;
+#else
+typedef uint16_t step_ix_t;
+#endif
+
 static cfg_state_t loaded[CFG_MAX_LOADED_STEPS];
-static uint16_t loaded_n;
+static step_ix_t loaded_n;
 
 static struct {
     uint8_t running;
     uint8_t reached;
     uint8_t dir;
-    uint16_t first; /* offset into seq_steps (rendered gaits) */
-    uint16_t n;     /* steps in the walk */
-    uint16_t step;
+    step_ix_t first; /* offset into seq_steps (rendered gaits) */
+    step_ix_t n;     /* steps in the walk */
+    step_ix_t step;
     uint32_t step_ticks;
     uint32_t held;
     uint32_t cycles;
@@ -156,11 +164,11 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
         s.running = 0; /* never run a half-replaced walk */
     }
     memcpy(loaded, states, n * sizeof loaded[0]);
-    loaded_n = n;
+    loaded_n = (step_ix_t)n;
     return SEQ_OK;
 }
 
-static cfg_state_t step_state(uint16_t step)
+static cfg_state_t step_state(step_ix_t step)
 {
     if (s.dir == SEQ_DIR_LOADED) {
         return loaded[step];
@@ -175,7 +183,8 @@ static cfg_state_t target_state(void)
 
 int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
 {
-    uint16_t i, g = 0; /* g: the rendered gait's row in the tables */
+    step_ix_t i;
+    uint16_t g = 0; /* g: the rendered gait's row in the tables */
     if (dir == SEQ_DIR_LOADED) {
         if (loaded_n == 0u || index != 0u) {
             return SEQ_ERR_NO_GAIT;
@@ -187,8 +196,8 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
             return SEQ_ERR_NO_GAIT;
         }
         g = (uint16_t)(dir == SEQ_DIR_PX ? index : CFG_N_GAITS_PX + index);
-        s.first = ROM_U16(&seq_gait_first[g]);
-        s.n = ROM_U16(&seq_gait_len[g]);
+        s.first = (step_ix_t)ROM_U16(&seq_gait_first[g]);
+        s.n = (step_ix_t)ROM_U16(&seq_gait_len[g]);
     }
     s.dir = dir;
     s.step = 0;
@@ -202,7 +211,7 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
         }
     }
     if (i == s.n && measured == 0u && dir != SEQ_DIR_LOADED) { /* from rest: the entry path */
-        s.step = ROM_U16(&seq_entry_join[g]);
+        s.step = (step_ix_t)ROM_U16(&seq_entry_join[g]);
         s.entry_at = ROM_U16(&seq_entry_first[g]);
         s.entry_left = ROM_U16(&seq_entry_len[g]);
     }
