@@ -5,8 +5,6 @@
 
 #include "rom.h"
 
-/* Per limb, per threshold: {cos upper, sin upper, cos lower, sin lower}, Q14, as rendered. */
-static const int16_t thresholds_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS][4] ROM = CFG_LIMB_THRESHOLDS_Q14;
 static const uint8_t limb_levels[CFG_N_LIMBS] ROM = CFG_LIMB_LEVELS;
 static const int16_t psi_star_rom[CFG_N_LIMBS][CFG_MAX_THRESHOLDS] ROM = CFG_LIMB_PSI_STAR_CDEG;
 static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
@@ -23,7 +21,6 @@ typedef struct {
     int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
     int16_t star, hyst;       /* ψ* and the band width */
 } band_t;
-typedef char rendered_edges_are_e_upper_then_e_lower[E_UPPER == 0u && E_LOWER == 1u ? 1 : -1];
 typedef char edge_numbers_match_psi_h[PSI_EDGE_UPPER == E_UPPER && PSI_EDGE_LOWER == E_LOWER ? 1 : -1];
 static band_t bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS];
 
@@ -64,22 +61,27 @@ static void edge_of(int16_t cdeg, int16_t edge[2])
     edge[1] = psi_sin_q14(cdeg);
 }
 
-/* Threshold ψ* with band width h (both in range) into `b`: its band edges in 0.01° and its
- * hold, hold-top and settle edges (clamped to ±89°). */
+/* Threshold ψ* with band width h (both in range) into `b`: its band edges in 0.01° and the
+ * {cos, sin} of every E_* edge: the band's upper and lower edges, and the hold, hold-top
+ * and settle edges (those clamped to ±89°). One computation for the rendered thresholds
+ * (psi_init) and moved ones (psi_set_band): an edge is within 2 LSB of its exact Q14 value. */
 static void set_angles(band_t *b, int16_t star, int16_t hyst)
 {
-    static const int16_t from_hi[3] ROM = {CFG_HOLD_MARGIN_CDEG, CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG,
-                                           -CFG_HOLD_MARGIN_CDEG};
+    /* per E_* edge: its offset from the band edge it is measured from */
+    static const int16_t offset[5] ROM = {0, 0, CFG_HOLD_MARGIN_CDEG, CFG_HOLD_MARGIN_CDEG + PSI_HOLD_BAND_CDEG,
+                                          -CFG_HOLD_MARGIN_CDEG};
     uint8_t k;
     b->star = star;
     b->hyst = hyst;
     b->lo = (int16_t)(star - hyst / 2);
     b->hi = (int16_t)(star + (hyst - hyst / 2));
-    for (k = 0; k < 3u; k++) {
-        /* hold and top above the upper edge, settle below the lower one */
-        int16_t cdeg = (int16_t)((k < 2u ? b->hi : b->lo) + ROM_I16(&from_hi[k]));
-        cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
-        edge_of(cdeg, b->e[E_HOLD + k]);
+    for (k = 0; k < 5u; k++) {
+        /* the upper, hold and top edges above the upper band edge, the others below the lower */
+        int16_t cdeg = (int16_t)((k == E_LOWER || k == E_SETTLE ? b->lo : b->hi) + ROM_I16(&offset[k]));
+        if (k >= E_HOLD) {
+            cdeg = cdeg > 8900 ? 8900 : cdeg < -8900 ? -8900 : cdeg;
+        }
+        edge_of(cdeg, b->e[k]);
     }
 }
 
@@ -165,9 +167,7 @@ void psi_init(void)
     uint8_t i, j;
     for (i = 0; i < CFG_N_LIMBS; i++) {
         for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
-            band_t *b = band(i, j);
-            ROM_COPY(b->e, thresholds_rom[i][j], sizeof thresholds_rom[i][j]); /* e[E_UPPER], e[E_LOWER] */
-            set_angles(b, ROM_I16(&psi_star_rom[i][j]), ROM_I16(&hyst_rom[i]));
+            set_angles(band(i, j), ROM_I16(&psi_star_rom[i][j]), ROM_I16(&hyst_rom[i]));
         }
     }
     debounce = CFG_DEBOUNCE_TICKS;
@@ -220,8 +220,6 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     if (thr + 1u < CFG_MAX_THRESHOLDS && thr + 2u < psi_levels(limb) && hi >= b[1].lo) {
         return -1;
     }
-    edge_of(hi, b->e[E_UPPER]);
-    edge_of(lo, b->e[E_LOWER]);
     set_angles(b, psi_star_cdeg, hyst_cdeg);
     return 0;
 }
