@@ -70,7 +70,7 @@ void drive_step(void)
     uint8_t ev;
     uint16_t step;
     cfg_state_t target;
-    uint32_t measured = imucheck_measured();
+    uint16_t measured = imucheck_measured();
     reached = 0;
     if (!seq_running() || measured == IMUCHECK_UNKNOWN) {
         return;

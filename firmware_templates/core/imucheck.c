@@ -29,6 +29,8 @@
 #define NO_LIMB 0xFFu
 
 static const uint8_t imu_addr[CFG_N_LIMBS] ROM = CFG_LIMB_IMU_ADDR;
+/* A state number is below CFG_N_STATES ≤ 65535 (proleg build refuses more): never UNKNOWN. */
+typedef char unknown_is_no_state[CFG_N_STATES <= IMUCHECK_UNKNOWN ? 1 : -1];
 
 /* Per limb, in one record: on an 8-bit MCU a function then computes the limb's address once. */
 typedef struct {
@@ -44,7 +46,7 @@ typedef struct {
 
 static struct {
     uint8_t bad; /* bit per limb: IMU faulted, not read until CLEAR(FAULTS) */
-    uint32_t measured; /* debounced robot state, IMUCHECK_UNKNOWN until every limb has one */
+    uint16_t measured; /* debounced robot state, IMUCHECK_UNKNOWN until every limb has one */
     /* One transaction at a time in the background, limbs taken in turn. A limb is begun
      * again only once the tick has taken its last result, so a result is never overwritten
      * or dropped, and each IMU is read once a tick while the bus has the time. */
@@ -226,10 +228,10 @@ void imucheck_read(void)
             known = 0;
         }
     }
-    st.measured = known ? (uint32_t)seq_state_index(levels) : IMUCHECK_UNKNOWN;
+    st.measured = known ? (uint16_t)seq_state_index(levels) : IMUCHECK_UNKNOWN;
 }
 
-uint32_t imucheck_measured(void)
+uint16_t imucheck_measured(void)
 {
     return st.measured;
 }

@@ -38,7 +38,7 @@ void imucheck_read(void);
 void imucheck_service(void);
 
 /* The debounced robot state (seq_state_index), or IMUCHECK_UNKNOWN. */
-uint32_t imucheck_measured(void);
+uint16_t imucheck_measured(void);
 
 /* Bit per limb: the IMU is marked bad. */
 uint8_t imucheck_bad(void);

@@ -18,8 +18,10 @@
 #define NOINLINE
 #endif
 
-/* Variables, not macros, so range checks never compare against a type's limits. */
-static const uint32_t n_states = CFG_N_STATES;
+/* Variables, not macros, so range checks never compare against a type's limits. At most
+ * 65535 states (proleg build refuses more): state numbers compare in 16 bits. */
+static const uint16_t n_states = CFG_N_STATES;
+typedef char at_most_65535_states[CFG_N_STATES <= 0xFFFFUL ? 1 : -1];
 
 /* A step's place in a walk: one byte when every rendered gait step and every loadable step
  * is numbered below 255 (an 8-bit MCU then indexes and compares in single bytes). */
@@ -181,7 +183,7 @@ static cfg_state_t target_state(void)
     return s.entry_left ? ROM_STATE(&seq_entry_steps[s.entry_at]) : step_state(s.step);
 }
 
-int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured)
+int8_t seq_start(uint8_t dir, uint8_t index, uint16_t measured)
 {
     step_ix_t i;
     uint16_t g = 0; /* g: the rendered gait's row in the tables */

@@ -69,7 +69,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad);
 
 /* Start gait `index` of `dir`, or the loaded gait with SEQ_DIR_LOADED; `measured` is
  * the current state (any value ≥ CFG_N_STATES: unknown, start at step 0). */
-int8_t seq_start(uint8_t dir, uint8_t index, uint32_t measured);
+int8_t seq_start(uint8_t dir, uint8_t index, uint16_t measured);
 void seq_stop(void);
 
 /* One control tick with the measured state; returns SEQ_EV_* flags. */

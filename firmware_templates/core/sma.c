@@ -97,13 +97,15 @@ static void set_times(uint32_t on_us, uint32_t cooldown_us)
 /* Move the window on by dt: slots older than the window fall out. */
 static void advance_window(uint32_t dt)
 {
-    uint8_t n, i;
+    uint8_t i;
     uint32_t *w;
     if (dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
         dt = SMA_SLOT_US * SMA_WIN_SLOTS;
     }
+    /* slot_us < one slot before, so below SMA_WIN_SLOTS + 1 slots now: at most
+     * SMA_WIN_SLOTS slots fall out, each cleared once */
     slot_us += dt;
-    for (n = 0; slot_us >= SMA_SLOT_US && n < SMA_WIN_SLOTS; n++) {
+    while (slot_us >= SMA_SLOT_US) {
         slot_us -= SMA_SLOT_US;
         slot = (uint8_t)(slot + 1u < SMA_WIN_SLOTS ? slot + 1u : 0u);
         w = win[slot];

@@ -2,6 +2,7 @@
  * transition allowed), hold 10 ms = 10 ticks, state timeout 200 ms = 200 ticks; gait
  * table +x: #0 = 00 10 11 01, #1 = 00 10; -x: none. */
 #include "psi.h"
+#include "imucheck.h"
 #include "seq.h"
 #include "unit.h"
 
@@ -25,7 +26,7 @@ static void test_gait_table_holds_the_rendered_gaits(void)
     setup();
     CHECK_EQ(seq_gait_count(SEQ_DIR_PX), 2);
     CHECK_EQ(seq_gait_count(SEQ_DIR_MX), 0);
-    CHECK_EQ(seq_start(SEQ_DIR_PX, 0, 0xFFFFFFFFu), SEQ_OK);
+    CHECK_EQ(seq_start(SEQ_DIR_PX, 0, IMUCHECK_UNKNOWN), SEQ_OK);
     CHECK_EQ(seq_target(), 0);
 }
 
