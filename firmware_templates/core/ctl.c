@@ -1,6 +1,8 @@
 /* ctl.c - see ctl.h. */
 #include "ctl.h"
 
+#include <string.h>
+
 #include "limbmap.h"
 #include "psi.h"
 #include "rom.h"
@@ -49,15 +51,10 @@ uint8_t ctl_limb_actuator(uint8_t limb)
 void ctl_reset(void)
 {
     uint8_t i;
+    memset(cl, 0, sizeof cl); /* not heating, no crossings, no stall, no boost */
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
         cl[i].level = PSI_UNKNOWN;
-        cl[i].heat = 0;
-        cl[i].crossings = 0;
-        cl[i].best = 0;
-        cl[i].stall = 0;
-        cl[i].ticks = 0;
-        cl[i].boost = 0;
         psi_relax(i, 0);
     }
 }
@@ -170,7 +167,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
              * falls, in the zone below the crossing until every falling limb is about
              * to cross. */
             uint8_t wait = falling ? to_go[i] <= CTL_SYNC_ZONE_CDEG && far_fall
-                                   : (int32_t)to_go[i] + CTL_SYNC_CDEG < farthest;
+                                   : to_go[i] < farthest - CTL_SYNC_CDEG; /* −201 ≤ farthest − 200: no overflow */
             if (boost_ticks != 0u && cl[i].target == target[i] && cl[i].ticks >= boost_ticks) {
                 cl[i].boost = 1;
             }
