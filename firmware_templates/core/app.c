@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "cmd.h"
+#include "count.h"
 #include "ctl.h"
 #include "drive.h"
 #include "fault.h"
@@ -72,7 +73,7 @@ void app_tick_done(uint8_t overran)
         st.overrun_run = 0;
         return;
     }
-    tx_count(&overruns);
+    count_up(&overruns);
     if (st.overrun_run < 0xFFFFu) {
         st.overrun_run++;
     }

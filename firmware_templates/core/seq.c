@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "count.h"
 #include "psi.h"
 #include "rom.h"
 
@@ -50,12 +51,6 @@ static struct {
 
 static uint32_t hold_ticks; /* both set by seq_init (no .data bytes in flash) */
 static uint32_t timeout_ticks;
-
-/* One 32-bit increment: on an 8-bit MCU a call is shorter than each inline copy. */
-static NOINLINE void inc32(uint32_t *n)
-{
-    ++*n;
-}
 
 /* A new step: nothing held, not reached, its time from 0. */
 static NOINLINE void new_step(void)
@@ -234,20 +229,20 @@ uint8_t seq_tick(cfg_state_t measured)
     if (!s.running) {
         return 0;
     }
-    inc32(&s.step_ticks);
+    count_up(&s.step_ticks);
     if (measured == target_state()) {
         if (!s.reached) {
             s.reached = 1;
             ev |= SEQ_EV_REACHED;
         }
-        inc32(&s.held);
+        count_up(&s.held);
         if (s.held >= hold_ticks) {
             if (s.entry_left) {
                 s.entry_left--;
                 s.entry_at++;
             } else if (++s.step >= s.n) {
                 s.step = 0;
-                inc32(&s.cycles);
+                count_up(&s.cycles);
                 ev |= SEQ_EV_CYCLE;
             }
             new_step();

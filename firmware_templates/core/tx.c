@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "count.h"
 #include "robot_config.h"
 #include "uart.h"
 #if CFG_LINK_CAN
@@ -17,14 +18,6 @@ static tx_counts_t count;
 static uint8_t txbuf[PROTO_MAX_ENCODED];
 static uint8_t pending_delim; /* a frame went out half: start the next with a delimiter */
 #endif
-
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-void tx_count(uint32_t *counter)
-{
-    (*counter)++;
-}
 
 void tx_init(void)
 {
@@ -45,9 +38,9 @@ void tx_send(void)
 void tx_send_msg(const proto_msg_t *m)
 {
     if (canlink_send(m)) { /* every frame of it queued, or none */
-        tx_count(&count.tx_frames);
+        count_up(&count.tx_frames);
     } else {
-        tx_count(&count.tx_dropped);
+        count_up(&count.tx_dropped);
     }
 }
 #else
@@ -56,22 +49,22 @@ void tx_send_msg(const proto_msg_t *m)
     size_t n = proto_encode(m, txbuf, sizeof txbuf);
     uint16_t w;
     if (n == 0u) {
-        tx_count(&count.tx_dropped);
+        count_up(&count.tx_dropped);
         return;
     }
     if (pending_delim) {
         uint8_t zero = 0;
         if (uart_write(&zero, 1) != 1u) {
-            tx_count(&count.tx_dropped);
+            count_up(&count.tx_dropped);
             return;
         }
         pending_delim = 0;
     }
     w = uart_write(txbuf, (uint16_t)n);
     if (w == n) {
-        tx_count(&count.tx_frames);
+        count_up(&count.tx_frames);
     } else {
-        tx_count(&count.tx_dropped);
+        count_up(&count.tx_dropped);
         pending_delim = (uint8_t)(w > 0u);
     }
 }
@@ -97,7 +90,7 @@ void tx_ack(uint8_t token, uint8_t cmd)
 
 void tx_nack(uint8_t token, uint8_t cmd, uint8_t error, uint16_t detail)
 {
-    tx_count(&count.nacks);
+    count_up(&count.nacks);
     tx_msg.id = PROTO_ID_NACK;
     tx_msg.u.nack.token = token;
     tx_msg.u.nack.cmd = cmd;

@@ -31,10 +31,6 @@ void tx_event(uint8_t kind, uint8_t code, uint16_t detail);
 void tx_ack(uint8_t token, uint8_t cmd);
 void tx_nack(uint8_t token, uint8_t cmd, uint8_t error, uint16_t detail);
 
-/* (*counter)++: one copy of the 32-bit increment for the firmware's counters (inline,
- * each costs about 26 B on AVR). */
-void tx_count(uint32_t *counter);
-
 /* NACKs sent, frames sent, frames dropped since tx_init or tx_clear_counts. */
 const tx_counts_t *tx_counts(void);
 void tx_clear_counts(void);
