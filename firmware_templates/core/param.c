@@ -160,13 +160,7 @@ static uint8_t set_watchdog(uint8_t index, int32_t ticks)
 #define AS_IS 0u
 #define MS 1u /* value in ms, applied in ticks (rounded up) */
 
-typedef struct {
-    uint8_t scale;              /* AS_IS or MS */
-    int32_t min, max;           /* outside: OUT_OF_RANGE */
-    int32_t safe_min, safe_max; /* outside: SAFETY_LIMIT (the build's envelope) */
-    uint8_t (*apply)(uint8_t index, int32_t v);
-} param_desc_t;
-
+/* Every bound a row names, once (a row holds their numbers: 7 bytes a row, not 19). */
 #if CFG_LINK_WATCHDOG_MS != 0
 #define WATCHDOG_SAFE_MIN 1 /* a build with a watchdog cannot turn it off */
 #define WATCHDOG_SAFE_MAX ((int32_t)CFG_LINK_WATCHDOG_MS)
@@ -174,22 +168,43 @@ typedef struct {
 #define WATCHDOG_SAFE_MIN 0
 #define WATCHDOG_SAFE_MAX ANY
 #endif
+enum { B_0, B_1, B_ANY, B_MAX_MS, B_1000, B_2000, B_M8999, B_8999, B_TIMEOUT, B_MAX_ON, B_COOLDOWN, B_WD_MIN, B_WD_MAX };
+static const int32_t bounds[] ROM = {
+    [B_0] = 0, [B_1] = 1, [B_ANY] = ANY, [B_MAX_MS] = MAX_PARAM_MS, [B_1000] = 1000, [B_2000] = 2000,
+    [B_M8999] = -8999, [B_8999] = 8999, [B_TIMEOUT] = (int32_t)CFG_STATE_TIMEOUT_MS, [B_MAX_ON] = (int32_t)CFG_MAX_ON_MS,
+    [B_COOLDOWN] = (int32_t)CFG_MIN_COOLDOWN_MS, [B_WD_MIN] = WATCHDOG_SAFE_MIN, [B_WD_MAX] = WATCHDOG_SAFE_MAX,
+};
+
+typedef struct {
+    uint8_t scale;              /* AS_IS or MS */
+    uint8_t min, max;           /* outside: OUT_OF_RANGE (B_*) */
+    uint8_t safe_min, safe_max; /* outside: SAFETY_LIMIT, the build's envelope (B_*) */
+    uint8_t (*apply)(uint8_t index, int32_t v);
+} param_desc_t;
 
 /* Indexed by id - 1 (ids start at 1: no empty row 0). */
 #define ROW(id) [PROTO_PARAM_##id - 1]
 static const param_desc_t table[] ROM = {
-    /* id                          scale  min    max           safe_min  safe_max */
-    ROW(DRIVE_DUTY) = {AS_IS, 1, ANY, 0, ANY, set_drive_duty}, /* ≤ sma_max_duty() */
-    ROW(HOLD_DUTY) = {AS_IS, 0, ANY, 0, ANY, set_hold_duty},   /* ≤ sma_max_duty() */
-    ROW(HOLD_MS) = {MS, 0, MAX_PARAM_MS, 0, ANY, set_hold},
-    ROW(DEBOUNCE_TICKS) = {AS_IS, 1, 1000, 0, ANY, set_debounce},
-    ROW(STATE_TIMEOUT_MS) = {MS, 1, ANY, 0, (int32_t)CFG_STATE_TIMEOUT_MS, set_timeout},
-    ROW(PSI_STAR_CDEG) = {AS_IS, -8999, 8999, -8999, ANY, set_psi_star},
-    ROW(HYSTERESIS_CDEG) = {AS_IS, 0, 2000, 0, ANY, set_hysteresis},
-    ROW(MAX_ON_MS) = {MS, 1, ANY, 0, (int32_t)CFG_MAX_ON_MS, set_max_on},
-    ROW(MIN_COOLDOWN_MS) = {MS, 0, MAX_PARAM_MS, (int32_t)CFG_MIN_COOLDOWN_MS, ANY, set_cooldown},
-    ROW(LINK_WATCHDOG_MS) = {MS, 0, MAX_PARAM_MS, WATCHDOG_SAFE_MIN, WATCHDOG_SAFE_MAX, set_watchdog},
+    /* id                     scale  min   max       safe_min    safe_max */
+    ROW(DRIVE_DUTY) = {AS_IS, B_1, B_ANY, B_0, B_ANY, set_drive_duty}, /* ≤ sma_max_duty() */
+    ROW(HOLD_DUTY) = {AS_IS, B_0, B_ANY, B_0, B_ANY, set_hold_duty},   /* ≤ sma_max_duty() */
+    ROW(HOLD_MS) = {MS, B_0, B_MAX_MS, B_0, B_ANY, set_hold},
+    ROW(DEBOUNCE_TICKS) = {AS_IS, B_1, B_1000, B_0, B_ANY, set_debounce},
+    ROW(STATE_TIMEOUT_MS) = {MS, B_1, B_ANY, B_0, B_TIMEOUT, set_timeout},
+    ROW(PSI_STAR_CDEG) = {AS_IS, B_M8999, B_8999, B_M8999, B_ANY, set_psi_star},
+    ROW(HYSTERESIS_CDEG) = {AS_IS, B_0, B_2000, B_0, B_ANY, set_hysteresis},
+    ROW(MAX_ON_MS) = {MS, B_1, B_ANY, B_0, B_MAX_ON, set_max_on},
+    ROW(MIN_COOLDOWN_MS) = {MS, B_0, B_MAX_MS, B_COOLDOWN, B_ANY, set_cooldown},
+    ROW(LINK_WATCHDOG_MS) = {MS, B_0, B_MAX_MS, B_WD_MIN, B_WD_MAX, set_watchdog},
 };
+
+#if defined(__GNUC__)
+__attribute__((noinline)) /* four uses: one copy */
+#endif
+static int32_t bound(uint8_t b)
+{
+    return (int32_t)ROM_U32(&bounds[b]);
+}
 
 uint8_t param_set(uint8_t param, uint8_t index, int32_t v)
 {
@@ -199,10 +214,10 @@ uint8_t param_set(uint8_t param, uint8_t index, int32_t v)
         return PROTO_ERR_OUT_OF_RANGE;
     }
     ROM_COPY(&d, &table[param], sizeof d);
-    if (d.apply == 0 || v < d.min || v > d.max) {
+    if (d.apply == 0 || v < bound(d.min) || v > bound(d.max)) {
         return PROTO_ERR_OUT_OF_RANGE;
     }
-    if (v < d.safe_min || v > d.safe_max) {
+    if (v < bound(d.safe_min) || v > bound(d.safe_max)) {
         return PROTO_ERR_SAFETY_LIMIT;
     }
     if (d.scale == MS) {
