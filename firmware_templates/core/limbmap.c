@@ -4,8 +4,8 @@
 #include "proto.h"
 
 static const uint8_t compiled[CFG_N_LIMBS] ROM = CFG_LIMB_ACTUATOR;
-static uint8_t map[CFG_N_LIMBS] = CFG_LIMB_ACTUATOR; /* set before limbmap_init too (unit tests) */
-static uint8_t lost = LIMBMAP_NONE;
+static uint8_t map[CFG_N_LIMBS]; /* both set by limbmap_init (no .data bytes in flash) */
+static uint8_t lost;
 
 #if defined(__GNUC__)
 __attribute__((noinline)) /* smaller out of line (measured) */

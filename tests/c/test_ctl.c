@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "ctl.h"
+#include "limbmap.h"
 #include "psi.h"
 #include "unit.h"
 
@@ -30,6 +31,7 @@ static void setup(void)
 {
     psi_init();
     psi_set_debounce(1);
+    limbmap_init();
     ctl_reset();
 }
 

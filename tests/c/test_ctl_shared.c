@@ -3,6 +3,7 @@
 #include <math.h>
 
 #include "ctl.h"
+#include "limbmap.h"
 #include "psi.h"
 #include "unit.h"
 
@@ -39,6 +40,7 @@ static void test_shared_actuator_lets_an_unsettled_limb_settle_before_holding_th
     uint8_t target[CFG_N_LIMBS] = {1, 0};
     psi_init();
     psi_set_debounce(1);
+    limbmap_init();
     ctl_reset();
     put(0, 40.0);
     put(1, 30.0);

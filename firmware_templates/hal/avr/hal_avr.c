@@ -12,6 +12,7 @@
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
+#include <avr/pgmspace.h>
 #include <avr/wdt.h>
 #include <stdint.h>
 
@@ -32,7 +33,7 @@ enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 #error "AVR: the UART rings must be at most 128 bytes (8-bit indices are the only atomic ones)"
 #endif
 
-static const uint8_t pwm_map[CFG_PWM_CHANNELS] = CFG_PWM_MAP;
+static const uint8_t pwm_map[CFG_PWM_CHANNELS] PROGMEM = CFG_PWM_MAP; /* flash: no .data bytes */
 
 /* ------------------------------------------------------------------ time */
 
@@ -66,9 +67,9 @@ uint32_t hal_micros(void)
 #define T1_SCALE ((uint16_t)(((uint32_t)T1_TOP * 65536u + 9999u) / 10000u))
 #define T2_SCALE ((uint16_t)((255UL * 65536u + 9999u) / 10000u))
 
-/* Per output: its compare-output enable bit in TCCRnA, its port pin. */
-static const uint8_t oc_com[4] = {_BV(COM1A1), _BV(COM1B1), _BV(COM2A1), _BV(COM2B1)};
-static const uint8_t oc_bit[4] = {_BV(PB1), _BV(PB2), _BV(PB3), _BV(PD3)};
+/* Per output: its compare-output enable bit in TCCRnA (COMnA1 or COMnB1: the same bit
+ * numbers in Timer1 and Timer2) and its port pin (PB1, PB2, PB3; OC2B is PD3). */
+typedef char com_bits_match[COM1A1 == COM2A1 && COM1B1 == COM2B1 && PB2 == PB1 + 1 && PB3 == PB1 + 2 ? 1 : -1];
 
 static void pwm_init(void)
 {
@@ -94,9 +95,9 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
     if (channel >= CFG_PWM_CHANNELS) {
         return;
     }
-    oc = pwm_map[channel];
-    com = oc_com[oc];
-    bit = oc_bit[oc];
+    oc = pgm_read_byte(&pwm_map[channel]);
+    com = (oc == HAL_AVR_OC1A || oc == HAL_AVR_OC2A) ? _BV(COM1A1) : _BV(COM1B1);
+    bit = oc == HAL_AVR_OC2B ? _BV(PD3) : (uint8_t)(_BV(PB1) << oc);
     tccra = oc < HAL_AVR_OC2A ? &TCCR1A : &TCCR2A;
     port = oc == HAL_AVR_OC2B ? &PORTD : &PORTB;
     if (duty == 0u || duty >= 10000u) {
