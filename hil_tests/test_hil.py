@@ -273,7 +273,12 @@ def test_imu_that_stops_answering_faults_and_turns_all_mosfets_off_within_two_ti
     record_property("imu_loss_to_pins_us", _us_until_all_off(target, _tick_allowance_us(target, 2)))
     received = target.wait(0.2)
     faults = [r.message for r in events(received, EventKind.FAULT)]
-    assert any(f.code == FaultCode.IMU_NO_ACK for f in faults), faults
+    # Silenced between transactions the IMU NACKs its address (IMU_NO_ACK); silenced in the
+    # middle of a read, the bytes still to come read 0xFF and the sample is out of range
+    # (IMU_BAD_DATA). Which one depends on where in the tick the inject lands on an MCU.
+    silenced = len(target.robot.limbs) - 1
+    assert any(f.code in (FaultCode.IMU_NO_ACK, FaultCode.IMU_BAD_DATA) and f.detail == silenced
+               for f in faults), faults
     tel = [r.message for r in received if r.message.name == "TELEMETRY"]
     assert tel and tel[-1].flags & Flag.FAULT
 
