@@ -2,8 +2,9 @@
 
 ``render_config(robot, gaits_by_direction, board)`` fills ``firmware_templates/robot_config.h.j2``
 and ``gait_table.c.j2``. Only data is rendered (STYLE.md: generate data, keep logic
-hand-written): limb levels, the Q14 cos/sin of every hysteresis band edge (so the control
-path classifies ψ with two multiplications, no atan2), actuator channels and the board's
+hand-written): limb levels, ψ* and the hysteresis band of every threshold (the firmware
+turns them into the Q14 cos/sin of each band edge at start-up, so the control path
+classifies ψ with two multiplications, no atan2), actuator channels and the board's
 PWM pin map (each pin's entry from its HAL family's ``family.toml``), the UART buffers,
 the safety envelope in ticks, the gait step tables of both directions, the allowed-
 transition bitmap and the gait selection that chose the gaits. Same inputs, same bytes:
@@ -32,7 +33,6 @@ from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_
 from .families import Family, load_family
 from .placement import place_imus
 
-Q14 = 1 << 14
 #: LOAD_GAIT capacity (the protocol's MAX_GAIT_STEPS).
 MAX_LOADED_STEPS = 24
 #: Largest state space whose allowed-transition table is a bitmap (n*n bits); above, a sorted key list.
@@ -86,7 +86,6 @@ class LimbPart:
     n_i2c_buses: int
     mux_used: bool
     placement: list[str]  # one line per limb, for the header comment
-    thresholds: list[list[tuple[int, int, int, int]]]  # per limb: (up_c, up_s, lo_c, lo_s), padded
     psi_cdeg: list[list[int]]
     hyst_cdeg: list[int]
     actuators: list[Any]
@@ -191,11 +190,6 @@ def _ticks(ms: float, tick_hz: int) -> int:
     return int(math.ceil(ms * tick_hz / 1000.0 - 1e-9))
 
 
-def _q14(deg: float) -> tuple[int, int]:
-    r = math.radians(deg)
-    return round(math.cos(r) * Q14), round(math.sin(r) * Q14)
-
-
 def _file_sha256(path: Any) -> str:
     try:
         return hashlib.sha256(Path(path).read_bytes()).hexdigest()
@@ -270,9 +264,8 @@ def _can_part(board: Any) -> dict[str, Any]:
                 can_tx_frames=can.tx_frames)
 
 
-def _thresholds(robot: Any, limb: Any, max_thr: int) -> list[tuple[int, int, int, int]]:
-    """Q14 (cos, sin) of the upper and lower band edge of each of a limb's thresholds, padded."""
-    rows = []
+def _check_bands(robot: Any, limb: Any) -> None:
+    """Each of a limb's hysteresis bands lies strictly inside (-90, 90) deg (psi.c's edges)."""
     h = float(limb.hysteresis_deg)
     for p in limb.psi_star_deg:
         up, lo = p + h / 2.0, p - h / 2.0
@@ -281,8 +274,6 @@ def _thresholds(robot: Any, limb: Any, max_thr: int) -> list[tuple[int, int, int
                 f"robot {robot.name}: limb {limb.name!r}: band {lo:g}..{up:g} deg around psi* {p:g} "
                 "must lie strictly inside (-90, 90)"
             )
-        rows.append((*_q14(up), *_q14(lo)))
-    return rows + [(0, 0, 0, 0)] * (max_thr - len(rows))
 
 
 def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
@@ -296,6 +287,8 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     if n_states > 0xFFFF:
         raise BuildError(f"robot {robot.name}: {n_states} states, the firmware supports at most 65535")
     max_thr = max(k - 1 for k in levels)
+    for limb in limbs:
+        _check_bands(robot, limb)
     act_index = {a.name: i for i, a in enumerate(actuators)}
     return LimbPart(
         n_limbs=len(limbs),
@@ -315,7 +308,6 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
         n_i2c_buses=max(p.bus for p in placements) + 1,
         mux_used=any(p.mux is not None for p in placements),
         placement=[p.describe() for p in placements],
-        thresholds=[_thresholds(robot, limb, max_thr) for limb in limbs],
         psi_cdeg=[[round(p * 100) for p in limb.psi_star_deg] + [0] * (max_thr - len(limb.psi_star_deg))
                   for limb in limbs],
         hyst_cdeg=[round(float(limb.hysteresis_deg) * 100) for limb in limbs],
