@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from proleg.learn.estimate import estimate
-from proleg.learn.evaluate import accuracy, effective_truth
+from proleg.learn.evaluate import WINDOW_SHIFT_S, accuracy, effective_truth
 from proleg.learn.measure import TrialLog, counts
 from proleg.learn.runner import explore_simulated
 from proleg.learn.truth import write_truth
@@ -41,35 +41,60 @@ def _learn(name: str, repeats: int, tmp: Path, seed: int = SEED):
     t = robot.transitions
     assert counts(t, trials).min() >= repeats
     eff = effective_truth(t, np.nan_to_num(truth.transitions.dense()[0]), trials, sim.plant.transitions)
-    return robot, truth, estimate(t, trials), eff
+    return robot, truth, estimate(t, trials), eff, direct_share(t, trials, sim.plant.transitions)
 
 
-@pytest.mark.parametrize("name", [
-    "paper-r3",
-    "inchworm-3",
-    pytest.param("caterpillar-4", marks=pytest.mark.long),
+def direct_share(table, trials, plant_transitions) -> float:
+    """The share of trials in which the plant made exactly the firmware's transition, one state
+    change and nothing else (the windows of ``effective_truth``)."""
+    changes = sorted(plant_transitions, key=lambda p: p.t_s)
+    times = np.array([p.t_s for p in changes])
+    direct = 0
+    for tr in trials:
+        lo = np.searchsorted(times, tr.t_start + WINDOW_SHIFT_S, side="right")
+        hi = np.searchsorted(times, tr.t_end + WINDOW_SHIFT_S, side="right")
+        seen = [(changes[k].src, changes[k].dst) for k in range(lo, hi)]
+        direct += seen == [(table.index(tr.src), table.index(tr.dst))]
+    return direct / len(trials)
+
+
+#: Per robot, whether the table plant makes each firmware transition directly (the truth file is
+#: then what the learner should find): R3 changes two limbs at once (an intermediate state in
+#: the plant), inchworm-3 one limb at a time, and on caterpillar-4 a neighbour's coil lifts a
+#: proleg held at level 1 past its second edge (the firmware's 1110 -> 1111 is
+#: 1110 -> 1211 -> 1221 -> 1111 on the plant), so its effective truth sums entries the truth
+#: file forbids. Learning is judged against the effective truth for all three. Measured share of
+#: trials made directly (seeds 1-3): R3 0.78-0.83, inchworm-3 0.986-0.993, caterpillar-4 0.77-0.79.
+@pytest.mark.parametrize("name, direct", [
+    ("paper-r3", False),
+    ("inchworm-3", True),
+    pytest.param("caterpillar-4", False, marks=pytest.mark.long),
 ])
-def test_after_five_trials_each_the_learned_matrix_is_right_and_its_gait_fast(name, tmp_path):
+def test_after_five_trials_each_the_learned_matrix_is_right_and_its_gait_fast(name, direct, tmp_path):
     inside = total = 0
+    shares = []
     for seed in COVERAGE_SEEDS:
-        robot, truth, est, eff = _learn(name, 5, tmp_path / str(seed), seed)
+        robot, truth, est, eff, share = _learn(name, 5, tmp_path / str(seed), seed)
+        shares.append(share)
         acc = accuracy(eff, est)
         assert acc.sign == 1.0, (seed, acc)
         assert acc.gait_ratio >= 0.95, (seed, acc)
         inside += round(acc.coverage * acc.transitions)
         total += acc.transitions
     assert inside >= 0.9 * total, (inside, total)
-    t = robot.transitions
-    if all(sum(x != y for x, y in zip(t.label(a), t.label(b))) == 1 for a, b in zip(t.src, t.dst)):
-        # one limb per transition (not R3): the truth file itself, up to rare bounces
+    if direct:
+        # every transition made as the firmware made it, up to rare bounces: the truth file itself
+        assert min(shares) >= 0.95, shares
         assert np.abs(eff.reward - truth.transitions.reward).max() < 0.5
-        direct = accuracy(truth.transitions, est)
-        assert direct.sign == 1.0 and direct.gait_ratio >= 0.95, direct
+        against_file = accuracy(truth.transitions, est)
+        assert against_file.sign == 1.0 and against_file.gait_ratio >= 0.95, against_file
+    else:
+        assert min(shares) < 0.95, f"{name}: the plant now makes its transitions directly ({shares}): mark it direct"
 
 
 def test_two_trials_each_already_find_the_four_limb_caterpillars_best_gait(tmp_path):
     """The four-limb example in CI: 36 states, 140 transitions, R = 2 (~4 CPU-s)."""
-    _robot, _truth, est, eff = _learn("caterpillar-4", 2, tmp_path)
+    _robot, _truth, est, eff, _share = _learn("caterpillar-4", 2, tmp_path)
     acc = accuracy(eff, est)
     assert acc.sign == 1.0 and acc.gait_ratio >= 0.95, acc
 
