@@ -168,6 +168,15 @@ static void start_up(uint8_t i, uint8_t res)
     }
 }
 
+/* v² (< 2^30 + 1). One out-of-line copy: three 16×16→32 products inline cost more (issue 11). */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static uint32_t square(int16_t v)
+{
+    return (uint32_t)((int32_t)v * v);
+}
+
 /* A good accelerometer sample of limb i: checks, then the ψ classifier. 0 if usable. */
 static int8_t sample(uint8_t i)
 {
@@ -185,7 +194,7 @@ static int8_t sample(uint8_t i)
         l->stuck = 0;
     }
     l->last = a;
-    g2 = (uint32_t)((int32_t)a.ax * a.ax) + (uint32_t)((int32_t)a.ay * a.ay) + (uint32_t)((int32_t)a.az * a.az);
+    g2 = square(a.ax) + square(a.ay) + square(a.az);
     if (g2 < G2_MIN || g2 > G2_MAX) {
         imu_fault(i, PROTO_FAULT_IMU_BAD_DATA);
         return -1;
