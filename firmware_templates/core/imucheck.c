@@ -70,6 +70,9 @@ void imucheck_init(void)
     imubus_init();
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured, issue 11) */
+#endif
 static void restart(uint8_t limb, uint32_t wait_us)
 {
     limb_t *l = &st.limb[limb];
