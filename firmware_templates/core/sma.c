@@ -24,7 +24,6 @@ static const uint8_t act_channel[CFG_N_ACTUATORS] ROM = CFG_ACTUATOR_CHANNELS;
 
 typedef struct {
     uint32_t debt_us;  /* on-time not yet paid back by cool-down */
-    uint32_t win_total; /* sum of this actuator's window slots */
     uint16_t win_rem;  /* remainder of the last charge, below 1024 */
     uint16_t request;  /* wanted duty */
     uint16_t applied;  /* last output (0 after all_off/estop) */
@@ -98,7 +97,6 @@ static void set_times(uint32_t on_us, uint32_t cooldown_us)
 static void advance_window(uint32_t dt)
 {
     uint8_t i;
-    uint32_t *w;
     if (dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
         dt = SMA_SLOT_US * SMA_WIN_SLOTS;
     }
@@ -108,12 +106,23 @@ static void advance_window(uint32_t dt)
     while (slot_us >= SMA_SLOT_US) {
         slot_us -= SMA_SLOT_US;
         slot = (uint8_t)(slot + 1u < SMA_WIN_SLOTS ? slot + 1u : 0u);
-        w = win[slot];
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
-            acts[i].win_total -= w[i];
-            w[i] = 0;
+            win[slot][i] = 0;
         }
     }
+}
+
+/* Actuator `act`'s window: the sum of its slots, the value a running total of them would
+ * hold (added to with each charge, reduced as a slot falls out). Summed when needed rather
+ * than kept: the running total's bookkeeping cost more flash than nine additions (issue 11). */
+static uint32_t window_sum(uint8_t act)
+{
+    uint32_t t = 0;
+    uint8_t k;
+    for (k = 0; k < SMA_WIN_SLOTS; k++) {
+        t += win[k][act];
+    }
+    return t;
 }
 
 void sma_init(void)
@@ -154,7 +163,6 @@ uint8_t sma_tick(void)
         }
         /* charge the interval since the last tick at the duty the pin carried */
         w[i] += x >> 10;
-        a->win_total += x >> 10;
         a->win_rem = (uint16_t)(x & 1023u);
         if (a->charged > hold_max) {
             a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
@@ -178,7 +186,7 @@ uint8_t sma_tick(void)
                 }
             }
         }
-        a->blocked = (uint8_t)(duty > 0u && a->win_total + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
+        a->blocked = (uint8_t)(duty > 0u && window_sum(i) + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
         if (a->blocked) {
             duty = 0;
         }
