@@ -18,6 +18,8 @@
 #define SMA_SLOT_US (CFG_DUTY_WINDOW_MS * 1000UL / (SMA_WIN_SLOTS - 1u))
 /* Window sums count permyriad × µs / 1024. */
 #define SMA_WIN_LIMIT ((uint32_t)CFG_MEAN_DUTY_PM * ((CFG_DUTY_WINDOW_MS * 1000UL) >> 10))
+/* The longest interval elapsed_us returns (elapsed.h): the cap, or one tick for a backwards step. */
+#define SMA_DT_MAX (ELAPSED_CAP_US > CFG_TICK_US ? ELAPSED_CAP_US : (uint32_t)CFG_TICK_US)
 #define SMA_TICK_CHARGE(d) (((uint32_t)(d) * CFG_TICK_US + 1023UL) >> 10)
 
 static const uint8_t act_channel[CFG_N_ACTUATORS] ROM = CFG_ACTUATOR_CHANNELS;
@@ -97,7 +99,8 @@ static void set_times(uint32_t on_us, uint32_t cooldown_us)
 static void advance_window(uint32_t dt)
 {
     uint8_t i;
-    if (dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
+    /* elapsed_us returns at most SMA_DT_MAX: the test is compiled only where a window is shorter */
+    if (SMA_DT_MAX > SMA_SLOT_US * SMA_WIN_SLOTS && dt > SMA_SLOT_US * SMA_WIN_SLOTS) {
         dt = SMA_SLOT_US * SMA_WIN_SLOTS;
     }
     /* slot_us < one slot before, so below SMA_WIN_SLOTS + 1 slots now: at most
