@@ -134,6 +134,7 @@ uint8_t seq_gait_count(uint8_t dir)
 int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
 {
     uint16_t i;
+    int8_t err = SEQ_ERR_STATE;
     if (n >= 2u && states[n - 1u] == states[0]) {
         n--; /* closed form */
     }
@@ -142,19 +143,14 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
     }
     for (i = 0; i < n; i++) {
         if (states[i] >= n_states) {
-            if (bad) {
-                *bad = i;
-            }
-            return SEQ_ERR_STATE;
+            goto refused;
         }
     }
+    err = SEQ_ERR_FORBIDDEN;
     for (i = 0; i < n; i++) {
         cfg_state_t next = states[(uint16_t)(i + 1u) == n ? 0u : (uint16_t)(i + 1u)];
         if (!seq_allowed_transition(states[i], next)) {
-            if (bad) {
-                *bad = i;
-            }
-            return SEQ_ERR_FORBIDDEN;
+            goto refused;
         }
     }
     if (s.running && s.dir == SEQ_DIR_LOADED) {
@@ -163,6 +159,11 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
     memcpy(loaded, states, n * sizeof loaded[0]);
     loaded_n = (step_ix_t)n;
     return SEQ_OK;
+refused: /* one exit for both refusals (issue 11: one copy of the store) */
+    if (bad) {
+        *bad = i;
+    }
+    return err;
 }
 
 static cfg_state_t step_state(step_ix_t step)
