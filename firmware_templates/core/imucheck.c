@@ -81,11 +81,17 @@ static void restart(uint8_t limb, uint32_t wait_us)
     l->wait = wait_us;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured, issue 11) */
+#endif
 void imucheck_power_up(uint8_t limb)
 {
     restart(limb, START_FIRST_US);
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured, issue 11) */
+#endif
 void imucheck_start(uint8_t limb)
 {
     restart(limb, 0);

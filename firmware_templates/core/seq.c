@@ -274,6 +274,9 @@ cfg_state_t seq_target(void)
     return s.n ? target_state() : 0u;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* smaller out of line (measured, issue 11) */
+#endif
 uint16_t seq_step(void)
 {
     return s.entry_left ? SEQ_STEP_ENTRY : s.step;
