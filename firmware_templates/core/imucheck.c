@@ -56,6 +56,15 @@ static struct {
     limb_t limb[CFG_N_LIMBS];
 } st;
 
+/* Limb `limb` is marked bad (its bit in st.bad). One copy of the variable shift (issue 11). */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static uint8_t is_bad(uint8_t limb)
+{
+    return (uint8_t)((st.bad >> limb) & 1u);
+}
+
 static void imu_fault(uint8_t limb, uint8_t code)
 {
     st.bad = (uint8_t)(st.bad | (1u << limb));
@@ -104,7 +113,7 @@ static int8_t begin(uint8_t limb)
 {
     limb_t *l = &st.limb[limb];
     uint8_t ntx, nrx;
-    if (l->res != RES_NONE || (st.bad & (1u << limb)) || (uint32_t)(hal_micros() - l->t0) < l->wait) {
+    if (l->res != RES_NONE || is_bad(limb) || (uint32_t)(hal_micros() - l->t0) < l->wait) {
         return -1;
     }
     if (l->phase < PHASE_RUN) {
@@ -222,7 +231,7 @@ void imucheck_read(void)
         limb_t *l = &st.limb[i];
         res = l->res; /* RES_NONE while on the bus: it counts next tick */
         l->res = RES_NONE;
-        if (st.bad & (1u << i)) {
+        if (is_bad(i)) {
             known = 0;
             continue;
         }
