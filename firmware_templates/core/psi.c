@@ -146,10 +146,11 @@ static const int16_t sin_tab[72] ROM = {
     15951, 16031, 16102, 16166, 16221, 16269, 16308, 16339, 16362, 16377, 16384, 16384,
 };
 
-/* atan(i/32) in 0.01°, i = 0..32. */
-static const int16_t atan_tab[33] ROM = {
-    0,    179,  358,  536,  713,  888,  1062, 1234, 1404, 1571, 1735, 1897, 2056, 2211, 2363, 2511, 2657,
-    2798, 2936, 3070, 3201, 3327, 3451, 3571, 3687, 3800, 3909, 4016, 4119, 4218, 4315, 4409, 4500,
+/* atan((i+1)/32) − atan(i/32) in 0.01°, i = 0..31: atan(i/32) is the sum of the first i
+ * (0, 179, 358, 536, … 4409, 4500). Steps below 256: half the bytes of the sums (issue 11). */
+static const uint8_t atan_step[32] ROM = {
+    179, 179, 178, 177, 175, 174, 172, 170, 167, 164, 162, 159, 155, 152, 148, 146,
+    141, 138, 134, 131, 126, 124, 120, 116, 113, 109, 107, 103, 99,  97,  94,  91,
 };
 
 void psi_reset(void)
@@ -401,16 +402,18 @@ static int16_t atan_frac(uint16_t n, uint16_t d)
             }
         }
     }
-    uint16_t i = (uint16_t)(r >> 10);
+    uint8_t i = (uint8_t)(r >> 10); /* 0..32 */
     uint16_t f = (uint16_t)(r & 1023u);
-    int16_t a, b;
-    if (i >= 32u) {
-        return ROM_I16(&atan_tab[32]);
+    uint8_t step = 0;
+    int16_t a = 0;
+    for (k = 0; k < i; k++) {
+        a = (int16_t)(a + ROM_U8(&atan_step[k])); /* atan(i/32) */
     }
-    a = ROM_I16(&atan_tab[i]);
-    b = ROM_I16(&atan_tab[i + 1u]);
-    /* b ≥ a (atan rises), b − a ≤ 179: unsigned 16×16→32 */
-    return (int16_t)(a + (int16_t)(((uint32_t)(uint16_t)(b - a) * f + 512u) >> 10));
+    if (i < 32u) {
+        step = ROM_U8(&atan_step[i]); /* to atan((i+1)/32); r = 32768 (i = 32) has f = 0 */
+    }
+    /* step ≤ 179: unsigned 16×16→32 */
+    return (int16_t)(a + (int16_t)(((uint32_t)step * f + 512u) >> 10));
 }
 
 int16_t psi_centideg(int16_t ax, int16_t az)

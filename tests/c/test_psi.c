@@ -141,6 +141,72 @@ static void test_integer_atan2_is_within_0_02_deg_of_float_all_round(void)
     CHECK(worst <= 2.0);
 }
 
+/* psi_centideg as it was before its atan table became 8-bit steps (issue 11): the oracle
+ * for the exhaustive test below. */
+static const int16_t old_atan_tab[33] = {
+    0,    179,  358,  536,  713,  888,  1062, 1234, 1404, 1571, 1735, 1897, 2056, 2211, 2363, 2511, 2657,
+    2798, 2936, 3070, 3201, 3327, 3451, 3571, 3687, 3800, 3909, 4016, 4119, 4218, 4315, 4409, 4500,
+};
+
+static int16_t old_atan_frac(uint16_t n, uint16_t d)
+{
+    uint16_t r = 0, rem = n, i, f;
+    uint8_t k;
+    int16_t a, b;
+    if (n >= d) {
+        r = 32768u;
+    } else {
+        for (k = 0; k < 15u; k++) {
+            rem = (uint16_t)(rem << 1);
+            r = (uint16_t)(r << 1);
+            if (rem >= d) {
+                rem = (uint16_t)(rem - d);
+                r |= 1u;
+            }
+        }
+    }
+    i = (uint16_t)(r >> 10);
+    f = (uint16_t)(r & 1023u);
+    if (i >= 32u) {
+        return old_atan_tab[32];
+    }
+    a = old_atan_tab[i];
+    b = old_atan_tab[i + 1u];
+    return (int16_t)(a + (int16_t)(((uint32_t)(uint16_t)(b - a) * f + 512u) >> 10));
+}
+
+static int16_t old_centideg(int16_t ax, int16_t az)
+{
+    uint16_t x = ax < 0 ? (uint16_t)(0u - (uint16_t)ax) : (uint16_t)ax;
+    uint16_t z = az < 0 ? (uint16_t)(0u - (uint16_t)az) : (uint16_t)az;
+    int16_t a;
+    if (x == 0u && z == 0u) {
+        return 0;
+    }
+    a = (x <= z) ? old_atan_frac(x, z) : (int16_t)(9000 - old_atan_frac(z, x));
+    if (az < 0) {
+        a = (int16_t)(18000 - a);
+    }
+    return ax < 0 ? (int16_t)-a : a;
+}
+
+/* Every ax against a few az, both ways round: with |az| = 32768 the Q15 ratio takes every
+ * value 0..32768, so every table step and every fraction is checked. */
+static void test_atan_steps_give_the_old_table_result_for_every_ratio(void)
+{
+    static const int16_t others[] = {-32768, 32767, 1000, -7, 0};
+    long bad = 0;
+    unsigned k;
+    int32_t v;
+    for (k = 0; k < sizeof others / sizeof others[0]; k++) {
+        for (v = -32768; v <= 32767; v++) {
+            bad += psi_centideg((int16_t)v, others[k]) != old_centideg((int16_t)v, others[k]);
+            bad += psi_centideg(others[k], (int16_t)v) != old_centideg(others[k], (int16_t)v);
+        }
+    }
+    CHECK_EQ(bad, 0);
+}
+
 static void test_integer_sin_cos_match_float_within_2_lsb(void)
 {
     int32_t cd;
@@ -265,6 +331,7 @@ int main(void)
     RUN(test_debounce_one_reports_every_change_at_once);
     RUN(test_limbs_are_classified_independently);
     RUN(test_integer_atan2_is_within_0_02_deg_of_float_all_round);
+    RUN(test_atan_steps_give_the_old_table_result_for_every_ratio);
     RUN(test_integer_sin_cos_match_float_within_2_lsb);
     RUN(test_moved_threshold_classifies_like_a_rendered_one);
     RUN(test_threshold_band_reaching_90_deg_is_refused);
