@@ -108,7 +108,9 @@ static void advance_window(uint32_t dt)
     slot_us += dt;
     while (slot_us >= SMA_SLOT_US) {
         slot_us -= SMA_SLOT_US;
-        slot = (uint8_t)(slot + 1u < SMA_WIN_SLOTS ? slot + 1u : 0u);
+        if (++slot >= SMA_WIN_SLOTS) { /* in 8 bits (issue 11) */
+            slot = 0;
+        }
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
             win[slot][i] = 0;
         }
