@@ -73,8 +73,8 @@ static void set_angles(band_t *b, int16_t star, int16_t hyst)
     uint8_t k;
     b->star = star;
     b->hyst = hyst;
-    b->lo = (int16_t)(star - hyst / 2);
-    b->hi = (int16_t)(star + (hyst - hyst / 2));
+    b->lo = (int16_t)(star - (int16_t)((uint16_t)hyst >> 1)); /* 0 ≤ h ≤ 2000 (robot.py, psi_set_band): /2 as a shift */
+    b->hi = (int16_t)(star + (hyst - (int16_t)((uint16_t)hyst >> 1)));
     for (k = 0; k < 5u; k++) {
         /* the upper, hold and top edges above the upper band edge, the others below the lower */
         int16_t cdeg = (int16_t)((k == E_LOWER || k == E_SETTLE ? b->lo : b->hi) + ROM_I16(&offset[k]));
@@ -209,8 +209,8 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
         psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
         return -1;
     }
-    lo = (int16_t)(psi_star_cdeg - hyst_cdeg / 2);
-    hi = (int16_t)(psi_star_cdeg + (hyst_cdeg - hyst_cdeg / 2));
+    lo = (int16_t)(psi_star_cdeg - (int16_t)((uint16_t)hyst_cdeg >> 1)); /* hyst_cdeg ≥ 0: /2 as a shift */
+    hi = (int16_t)(psi_star_cdeg + (hyst_cdeg - (int16_t)((uint16_t)hyst_cdeg >> 1)));
     if (lo <= -9000 || hi >= 9000) {
         return -1;
     }
