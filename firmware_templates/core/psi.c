@@ -175,11 +175,17 @@ void psi_init(void)
     psi_reset();
 }
 
+/* |v| as uint16 (|−32768| = 32768). One out-of-line copy for sin, cos and atan2. */
+static NOINLINE uint16_t mag(int16_t v)
+{
+    return v < 0 ? (uint16_t)(0u - (uint16_t)v) : (uint16_t)v;
+}
+
 int16_t psi_sin_q14(int16_t cdeg)
 {
     uint16_t i, f, a;
     int16_t v;
-    uint16_t x = cdeg < 0 ? (uint16_t)(0u - (uint16_t)cdeg) : (uint16_t)cdeg;
+    uint16_t x = mag(cdeg);
     if (x >= 9000u) {
         v = 16384;
     } else {
@@ -197,8 +203,7 @@ __attribute__((noinline)) /* six callers: one copy */
 #endif
 int16_t psi_cos_q14(int16_t cdeg)
 {
-    int16_t x = (int16_t)(cdeg < 0 ? -cdeg : cdeg);
-    return psi_sin_q14((int16_t)(9000 - x));
+    return psi_sin_q14((int16_t)(9000 - mag(cdeg))); /* sin(90° − |cdeg|) */
 }
 
 int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg)
@@ -418,8 +423,8 @@ static int16_t atan_frac(uint16_t n, uint16_t d)
 
 int16_t psi_centideg(int16_t ax, int16_t az)
 {
-    uint16_t x = ax < 0 ? (uint16_t)(0u - (uint16_t)ax) : (uint16_t)ax; /* |−32768| = 32768 */
-    uint16_t z = az < 0 ? (uint16_t)(0u - (uint16_t)az) : (uint16_t)az;
+    uint16_t x = mag(ax); /* |−32768| = 32768 */
+    uint16_t z = mag(az);
     int16_t a;
     if (x == 0u && z == 0u) {
         return 0;
