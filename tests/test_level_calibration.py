@@ -155,25 +155,77 @@ def test_crooked_imus_stall_the_gait_until_calibrated_on_the_flat(r1):
 
 
 @pytest.mark.parametrize("incline", [10, -10])
-def test_calibrated_on_the_flat_then_levelled_on_the_slope_the_gait_keeps_running(r1, incline):
+def test_calibrated_on_the_flat_a_robot_started_at_rest_on_a_slope_levels_itself(r1, incline):
     sim = SimulatedRobot(r1, conditions=MOUNT)
     client = connect(sim)
     assert calibrate_level(client).ok
-    sim.plant = make_plant(r1, "physical", MOUNT + [f"incline_deg={incline}"])
-    wait(client, 0.3)
+    on_slope = MOUNT + [f"incline_deg={incline}"]
+    sim.plant = make_plant(r1, "physical", on_slope)
+    wait(client, 0.3)  # started before the firmware has seen it at rest for 2 s: the flat record alone
     _, faults = run_gait(client, sim, "+x", 25)
     assert faults  # the slope itself tilts each end's IMU by ±10°: the flat calibration cannot know it
-    sim.plant = make_plant(r1, "physical", MOUNT + [f"incline_deg={incline}"])
+    assert get_level(client).ground_cdeg == (0, 0)
+    sim.plant = make_plant(r1, "physical", on_slope)  # cold again, at rest on the slope
     client.clear()
-    wait(client, 3.0)  # coils cool, the robot rests on the slope
-    outcome = calibrate_level(client, ground=True)
-    assert outcome.ok
-    first, last = outcome.reading.ground_cdeg  # the slope as each end sees it: up, down
-    assert abs(first - 100 * incline) < 30 and abs(last + 100 * incline) < 30
-    assert outcome.reading.status == LevelStatus.STORED  # the flat record stays as it was
+    wait(client, 2.5)
     for direction in ("+x", "-x"):
         _, faults = run_gait(client, sim, direction, 25)
         assert not faults, direction
+        reading = get_level(client)
+        first, last = reading.ground_cdeg  # the slope as each end sees it: up, down
+        assert abs(first - 100 * incline) < 40 and abs(last + 100 * incline) < 40, reading
+        assert reading.status == LevelStatus.STORED  # the flat record stays as it was
+
+
+def test_levelling_at_start_needs_the_robot_at_rest_and_a_flat_record(r1):
+    """START levels only after 2 s at rest: a START soon after STOP (a limb still cooling
+    back) keeps the ground in use; after a rest on the flat the ground it finds is flat. With
+    no flat record there is nothing to measure the ground against and nothing is applied."""
+    sim = SimulatedRobot(r1, conditions=MOUNT + ["incline_deg=8"])
+    client = connect(sim)
+    wait(client, 3.0)
+    client.start(0, "+x")
+    wait(client, 1.0)
+    client.stop()
+    assert get_level(client).ground_cdeg == (0, 0)  # no record: the 8° on top of the mounting stays
+
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    assert calibrate_level(client).ok
+    sim.plant = make_plant(r1, "physical", MOUNT + ["incline_deg=-10"])
+    wait(client, 2.5)
+    client.start(0, "+x")
+    wait(client, 8.0)
+    client.stop()
+    levelled = get_level(client).ground_cdeg
+    assert abs(levelled[0] + 1000) < 40 and abs(levelled[1] - 1000) < 40
+    for pause in (0.0, 0.5, 1.5):  # not yet at rest for 2 s: the ground stays
+        sim.plant = make_plant(r1, "physical", MOUNT)  # back on the flat, mid-stride
+        wait(client, pause)
+        client.start(0, "+x")
+        wait(client, 3.0)
+        client.stop()
+        assert get_level(client).ground_cdeg == levelled, pause
+    wait(client, 6.0)  # the coils cool, the limbs come back down and rest
+    client.start(0, "+x")
+    client.stop()
+    assert all(abs(g) < 60 for g in get_level(client).ground_cdeg)  # the flat ground, within 0.6°
+    client.close()
+
+
+def test_levelled_by_hand_on_the_slope_the_gait_keeps_running(r1):
+    sim = SimulatedRobot(r1, conditions=MOUNT + ["incline_deg=10"])
+    client = connect(sim)
+    sim.plant = make_plant(r1, "physical", MOUNT)
+    assert calibrate_level(client).ok
+    sim.plant = make_plant(r1, "physical", MOUNT + ["incline_deg=10"])
+    wait(client, 0.5)  # at once: not yet at rest long enough to level by itself
+    outcome = calibrate_level(client, ground=True)
+    assert outcome.ok
+    first, last = outcome.reading.ground_cdeg
+    assert abs(first - 1000) < 30 and abs(last + 1000) < 30
+    _, faults = run_gait(client, sim, "+x", 25)
+    assert not faults
 
 
 def test_cli_calibrate_prints_each_limb_by_name(capsys):

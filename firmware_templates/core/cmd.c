@@ -120,6 +120,7 @@ static void cmd_start(void)
         }
         sdir = dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX;
     }
+    level_at_start(); /* from rest: level on this ground first (level.h) */
     r = seq_start(sdir, index, imucheck_measured());
     if (r != SEQ_OK) {
         nack(PROTO_ERR_NO_GAIT, gait);

@@ -39,11 +39,17 @@ static uint8_t status;   /* PROTO_LEVEL_NONE / STORED / CORRUPT */
 static uint8_t phase;
 static uint8_t left;     /* ticks of sampling left */
 static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
+#if LEVEL_AT_REST
+static uint16_t rest_ticks; /* ticks the robot has been at rest (up to LEVEL_REST_TICKS) */
+#endif
 static uint16_t waited;  /* ticks some limb had no sample yet */
 static struct {
     int32_t sum;    /* ψ as corrected now, 0.01°, summed over the ticks */
     int16_t ground; /* this ground's tilt on top of the record, 0.01° */
     int16_t rc, rs; /* Q14 cos/sin of the whole tilt */
+#if LEVEL_AT_REST
+    int16_t rest;   /* ψ at rest as corrected now, low-passed over 2^LEVEL_REST_SHIFT ticks */
+#endif
 } lm[CFG_N_LIMBS]; /* per limb, in one record */
 
 #if defined(__GNUC__)
@@ -67,11 +73,15 @@ int16_t level_ground_cdeg(uint8_t limb)
     return lm[limb].ground;
 }
 
-/* Read the record back: its status, then each limb's rotation (the record's only if valid). */
+/* Read the record back: its status, then each limb's rotation (the record's only if valid).
+ * The tilts tracked at rest were against the old rotation: tracking starts over. */
 static void load(void)
 {
     uint8_t i;
     int16_t a;
+#if LEVEL_AT_REST
+    rest_ticks = 0;
+#endif
     hal_nv_read((uint8_t *)&rec, LEVEL_RECORD_BYTES);
     status = rec.magic == 0xFFu ? PROTO_LEVEL_NONE
              : (rec.magic == LEVEL_MAGIC && rec.limbs == CFG_N_LIMBS && rec.crc == rec_crc()) ? PROTO_LEVEL_STORED
@@ -194,6 +204,48 @@ static void measured(void)
     }
 }
 
+#if LEVEL_AT_REST
+/* Between gaits: how long has the robot been at rest, and what does each limb read there?
+ * At rest = no gait, no fault, every limb at level 0 within LEVEL_MAX_CDEG of the record's
+ * zero; each limb's ψ is then low-passed (first order, τ = 2^LEVEL_REST_SHIFT ticks; at
+ * 1.5° of IMU noise the estimate's σ is 0.13°). Anything else starts over. */
+static void track_rest(void)
+{
+    uint8_t i, moving = seq_running() | fault_latched();
+    int16_t a;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        a = psi_last_centideg(i);
+        if (psi_level(i) != 0u || a > LEVEL_MAX_CDEG || a < -LEVEL_MAX_CDEG) { /* or no sample yet */
+            moving = 1;
+        }
+    }
+    if (moving) {
+        rest_ticks = 0;
+        return;
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        a = psi_last_centideg(i);
+        /* >> of a negative int16: an arithmetic shift on every compiler proleg uses */
+        lm[i].rest = rest_ticks ? (int16_t)(lm[i].rest + ((int16_t)(a - lm[i].rest) >> LEVEL_REST_SHIFT)) : a;
+    }
+    if (rest_ticks < LEVEL_REST_TICKS) {
+        rest_ticks++;
+    }
+}
+
+void level_at_start(void)
+{
+    uint8_t i;
+    if (rest_ticks < LEVEL_REST_TICKS || status != PROTO_LEVEL_STORED) {
+        return; /* not known to be at rest, or no flat record to measure the ground against */
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        lm[i].ground = (int16_t)(lm[i].ground + lm[i].rest);
+    }
+    load();
+}
+#endif
+
 void level_poll(void)
 {
     uint8_t i, dead = imucheck_bad();
@@ -216,7 +268,11 @@ void level_poll(void)
                 measured();
             }
         }
-    } else if (phase != PH_IDLE) {
+    } else if (phase == PH_IDLE) {
+#if LEVEL_AT_REST
+        track_rest();
+#endif
+    } else {
         r = hal_nv_poll();
         if (r == HAL_NV_BUSY) {
             return;

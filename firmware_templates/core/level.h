@@ -18,6 +18,14 @@
  * or a flat calibration sets it back to 0). Relative to a flat calibration this is the
  * slope itself, as each end sees it; GET_LEVEL reports both.
  *
+ * At rest, by itself (LEVEL_AT_REST). Between gaits the firmware watches for rest: no
+ * gait, no fault, every limb at level 0 and within LEVEL_MAX_CDEG, for LEVEL_REST_TICKS;
+ * meanwhile each limb's ψ is low-passed. START then adds those readings to the ground in
+ * use (level_at_start(): what level_calibrate(1) would measure), when a flat record is
+ * stored; otherwise (not at rest that long, no record) the ground in use stays. So after a
+ * flat calibration a robot started at rest on a slope levels itself. A slope that changes
+ * during a gait is not seen: no limb is known to be at rest then.
+ *
  * Sampling waits for IMUs still starting up (up to LEVEL_WAIT_TICKS); a bad IMU, or one
  * still without a sample then, fails the calibration (result IMU).
  *
@@ -46,6 +54,13 @@
 #define LEVEL_SAMPLES 64 /* ticks averaged: a power of two (the mean is a shift) */
 #define LEVEL_WAIT_TICKS (2u * CFG_TICK_HZ) /* 2 s */
 #define LEVEL_MAX_CDEG 2000 /* 20°: the mounting tilt a limb may have and still be trusted */
+#define LEVEL_REST_TICKS (2u * CFG_TICK_HZ) /* 2 s at rest (a lowered limb's coil cools back in
+                                              * about that: docs/calibration.md) */
+#define LEVEL_REST_SHIFT 6                    /* the at-rest low-pass: τ = 64 ticks */
+/* Build switch: 0 leaves out levelling at rest on START (level_at_start does nothing). */
+#ifndef LEVEL_AT_REST
+#define LEVEL_AT_REST 1
+#endif
 
 #if CFG_LEVEL_CALIBRATION
 /* Load the stored record (status and offsets) and stop any calibration. */
@@ -66,6 +81,13 @@ int8_t level_clear(void);
  * it ends. Called once per tick (cmd_poll). */
 void level_poll(void);
 
+/* START from rest: take this ground's tilt from the last at-rest windows (see above). */
+#if LEVEL_AT_REST
+void level_at_start(void);
+#else
+#define level_at_start() ((void)0)
+#endif
+
 /* PROTO_LEVEL_* status, and the offset in use per limb (0.01°). */
 uint8_t level_status(void);
 int16_t level_offset_cdeg(uint8_t limb);
@@ -76,6 +98,7 @@ int16_t level_ground_cdeg(uint8_t limb);
 #define level_calibrate(on_this_ground) ((void)(on_this_ground), (int8_t)-2)
 #define level_clear() ((int8_t)-2)
 #define level_poll() ((void)0)
+#define level_at_start() ((void)0)
 #define level_status() ((uint8_t)0) /* PROTO_LEVEL_NONE */
 #define level_offset_cdeg(limb) ((void)(limb), (int16_t)0)
 #define level_ground_cdeg(limb) ((void)(limb), (int16_t)0)
