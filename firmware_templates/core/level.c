@@ -211,17 +211,16 @@ static void measured(void)
  * 1.5° of IMU noise the estimate's σ is 0.13°). Anything else starts over. */
 static void track_rest(void)
 {
-    uint8_t i, moving = seq_running() | fault_latched();
+    uint8_t i;
     int16_t a;
+    if (seq_running() || fault_latched()) {
+        goto moving; /* (before any ψ is computed: a gait's ticks pay nothing for this) */
+    }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         a = psi_last_centideg(i);
         if (psi_level(i) != 0u || a > LEVEL_MAX_CDEG || a < -LEVEL_MAX_CDEG) { /* or no sample yet */
-            moving = 1;
+            goto moving;
         }
-    }
-    if (moving) {
-        rest_ticks = 0;
-        return;
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         a = psi_last_centideg(i);
@@ -231,6 +230,9 @@ static void track_rest(void)
     if (rest_ticks < LEVEL_REST_TICKS) {
         rest_ticks++;
     }
+    return;
+moving:
+    rest_ticks = 0;
 }
 
 void level_at_start(void)
