@@ -6,7 +6,8 @@ For every condition, from a cold robot, the paper's R1 walking +x for ``RUN_S`` 
 seconds:
 - ψ-feedback: the robot's own firmware (host-sim build) on the simulated board, started as a
   user would: a flat level calibration at rest (proleg calibrate: IMU mounting offset and bias),
-  then the condition's ground; completed, or stopped with the firmware's fault; mm/s; the hottest
+  then the condition's ground, at rest there for claim.REST_ON_GROUND_S before START (the
+  firmware levels itself on a ground it has rested on for 2 s); completed, or stopped with the firmware's fault; mm/s; the hottest
   coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
 - ψ-feedback walking the learn-then-walk gait (the optimal gait of the matrix that
   ``proleg sim --measure-matrix`` measures on the fresh robot, loaded with LOAD_GAIT);
@@ -149,7 +150,8 @@ def main() -> int:
     out = {
         "machine": machine(), "load_average": list(os.getloadavg()),
         "inputs": {"robot": "paper-r1", "direction": "+x", "gait": 0, "run_s": claim.RUN_S,
-                   "feedback_workflow": "flat level calibration (proleg calibrate) at rest, then the condition's ground",
+                   "feedback_workflow": "flat level calibration (proleg calibrate) at rest, then the condition's ground, "
+                                     f"{claim.REST_ON_GROUND_S} s at rest there, START",
                    "learned_gait": {"states": [robot.transitions.label(s) for s in learned],
                                     "from": "proleg sim --measure-matrix on the fresh robot, optimal gait (total)",
                                     "measured_matrix": measured.to_json()},

@@ -234,6 +234,11 @@ def physically_possible(robot: Any, point: GridPoint, direction: str = "+x",
     return False, "the coils transform, but the ends do not reach ψ* (stroke lost or ψ* out of reach)"
 
 
+#: Seconds the robot rests on the condition's ground before START (as a user puts it down and
+#: starts it): longer than the 2 s the firmware needs to level itself there.
+REST_ON_GROUND_S = 2.5
+
+
 def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: int | Sequence[int] = 0,
                  duration_s: float = RUN_S, seed: int = 1, calibrate: bool = True,
                  level_on_ground: bool = False) -> DriveOutcome:
@@ -242,7 +247,8 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     ``gait``: a firmware gait index, or a state sequence loaded with LOAD_GAIT (learn-then-walk).
     ``calibrate``: first what a user does (docs/calibration.md): the robot on FLAT ground, at
     rest, ``proleg calibrate`` (the firmware records each IMU's rest tilt: mounting offset and
-    bias); then it is put on the condition's ground (incline) and walks. ``level_on_ground``:
+    bias); then it is put on the condition's ground (incline), rests there REST_ON_GROUND_S,
+    and walks. ``level_on_ground``:
     on that ground, at rest, ``proleg calibrate --ground`` too (the slope, in RAM)."""
     from ..link.level import calibrate_level
     from ..protocol.definition import GAIT_USER
@@ -264,6 +270,9 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
             cal_note = f"flat calibration failed: {e}"
         if flat != point:
             sim.plant = _plant(robot, point)  # onto the slope, cold and at rest
+            # put down, a moment's rest before START: the firmware levels itself on a ground
+            # it has rested on for 2 s (docs/calibration.md, "On a slope")
+            session.advance(REST_ON_GROUND_S)
             if level_on_ground:
                 session.advance(0.3)
                 try:
