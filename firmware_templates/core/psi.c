@@ -65,6 +65,16 @@ static void edge_of(int16_t cdeg, int16_t edge[2])
  * {cos, sin} of every E_* edge: the band's upper and lower edges, and the hold, hold-top
  * and settle edges (those clamped to ±89°). One computation for the rendered thresholds
  * (psi_init) and moved ones (psi_set_band): an edge is within 2 LSB of its exact Q14 value. */
+/* The band's lower edge: ψ* less half the width (0 ≤ h ≤ 2000: robot.py, psi_set_band; /2 as
+ * a shift); the upper edge is lo + h. One copy for both callers. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static int16_t band_lo(int16_t star, int16_t hyst)
+{
+    return (int16_t)(star - (int16_t)((uint16_t)hyst >> 1));
+}
+
 static void set_angles(band_t *b, int16_t star, int16_t hyst)
 {
     /* per E_* edge: its offset from the band edge it is measured from */
@@ -73,8 +83,8 @@ static void set_angles(band_t *b, int16_t star, int16_t hyst)
     uint8_t k;
     b->star = star;
     b->hyst = hyst;
-    b->lo = (int16_t)(star - (int16_t)((uint16_t)hyst >> 1)); /* 0 ≤ h ≤ 2000 (robot.py, psi_set_band): /2 as a shift */
-    b->hi = (int16_t)(star + (hyst - (int16_t)((uint16_t)hyst >> 1)));
+    b->lo = band_lo(star, hyst);
+    b->hi = (int16_t)(b->lo + hyst);
     for (k = 0; k < 5u; k++) {
         /* the upper, hold and top edges above the upper band edge, the others below the lower */
         int16_t cdeg = (int16_t)((k == E_LOWER || k == E_SETTLE ? b->lo : b->hi) + ROM_I16(&offset[k]));
@@ -214,8 +224,8 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
         psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
         return -1;
     }
-    lo = (int16_t)(psi_star_cdeg - (int16_t)((uint16_t)hyst_cdeg >> 1)); /* hyst_cdeg ≥ 0: /2 as a shift */
-    hi = (int16_t)(psi_star_cdeg + (hyst_cdeg - (int16_t)((uint16_t)hyst_cdeg >> 1)));
+    lo = band_lo(psi_star_cdeg, hyst_cdeg);
+    hi = (int16_t)(lo + hyst_cdeg);
     if (lo <= -9000 || hi >= 9000) {
         return -1;
     }
