@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from proleg.learn.estimate import estimate
-from proleg.learn.evaluate import WINDOW_SHIFT_S, accuracy, effective_truth
+from proleg.learn.evaluate import accuracy, effective_truth, plant_changes
 from proleg.learn.measure import TrialLog, counts
 from proleg.learn.runner import explore_simulated
 from proleg.learn.truth import write_truth
@@ -47,15 +47,8 @@ def _learn(name: str, repeats: int, tmp: Path, seed: int = SEED):
 def direct_share(table, trials, plant_transitions) -> float:
     """The share of trials in which the plant made exactly the firmware's transition, one state
     change and nothing else (the windows of ``effective_truth``)."""
-    changes = sorted(plant_transitions, key=lambda p: p.t_s)
-    times = np.array([p.t_s for p in changes])
-    direct = 0
-    for tr in trials:
-        lo = np.searchsorted(times, tr.t_start + WINDOW_SHIFT_S, side="right")
-        hi = np.searchsorted(times, tr.t_end + WINDOW_SHIFT_S, side="right")
-        seen = [(changes[k].src, changes[k].dst) for k in range(lo, hi)]
-        direct += seen == [(table.index(tr.src), table.index(tr.dst))]
-    return direct / len(trials)
+    seen = plant_changes(trials, plant_transitions)
+    return sum(s == [(table.index(tr.src), table.index(tr.dst))] for tr, s in zip(trials, seen)) / len(trials)
 
 
 #: Per robot, whether the table plant makes each firmware transition directly (the truth file is

@@ -11,6 +11,7 @@ import pytest
 from proleg.gait import optimal_gaits
 from proleg.gait.evaluate import evaluate_sequence
 from proleg.learn.estimate import estimate, penalised_table
+from proleg.learn.evaluate import effective_truth
 from proleg.learn.measure import TrialLog, counts
 from proleg.learn.robotfile import write_learned_robot
 from proleg.learn.runner import explore_simulated
@@ -45,13 +46,7 @@ def _effective_truth(robot, truth, trials, sim) -> np.ndarray:
     through an intermediate state in the plant, whose truth entries then add up (the table
     plant looks up every state change it sees)."""
     mm = np.nan_to_num(truth.transitions.dense()[0]) * 1.0
-    plant = sim.plant.transitions
-    t = robot.transitions
-    sums = [[] for _ in range(t.n_transitions)]
-    for tr in trials:
-        e = t.lookup(t.index(tr.src), t.index(tr.dst))
-        sums[e].append(sum(mm[p.src, p.dst] for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05))
-    return np.array([np.mean(s) for s in sums])
+    return effective_truth(robot.transitions, mm, trials, sim.plant.transitions).reward
 
 
 def test_every_allowed_transition_is_measured_at_least_r_times(learned):

@@ -83,6 +83,21 @@ def accuracy(truth: TransitionTable, est: Estimates, *, moving_mm: float = MOVIN
     )
 
 
+def plant_changes(trials: Sequence[Trial], plant_transitions: Sequence) -> list[list[tuple[int, int]]]:
+    """Per trial, the plant's state changes (src, dst) inside its window (the trial's start and
+    end, each shifted by WINDOW_SHIFT_S: a change the plant logs just after the firmware's
+    report belongs to the trial it ended). ``plant_transitions``: the plant's log (``.t_s``,
+    ``.src``, ``.dst``), in any order."""
+    changes = sorted(plant_transitions, key=lambda p: p.t_s)
+    times = np.array([p.t_s for p in changes])
+    out = []
+    for tr in trials:
+        lo = np.searchsorted(times, tr.t_start + WINDOW_SHIFT_S, side="right")
+        hi = np.searchsorted(times, tr.t_end + WINDOW_SHIFT_S, side="right")
+        out.append([(changes[k].src, changes[k].dst) for k in range(lo, hi)])
+    return out
+
+
 def effective_truth(table: TransitionTable, truth_mm: np.ndarray, trials: Sequence[Trial],
                     plant_transitions: Sequence) -> TransitionTable:
     """Noise-free mm per firmware transition as the table plant made them (module docstring):
@@ -90,15 +105,10 @@ def effective_truth(table: TransitionTable, truth_mm: np.ndarray, trials: Sequen
     averaged over the transition's trials; a transition without trials keeps the direct
     entry. ``plant_transitions``: the plant's log (``.t_s``, ``.src``, ``.dst``)."""
     sums: list[list[float]] = [[] for _ in range(table.n_transitions)]
-    changes = sorted(plant_transitions, key=lambda p: p.t_s)
-    times = np.array([p.t_s for p in changes])
-    for tr in trials:
+    for tr, seen in zip(trials, plant_changes(trials, plant_transitions)):
         e = table.lookup(table.index(tr.src), table.index(tr.dst))
-        if e is None:
-            continue
-        lo = np.searchsorted(times, tr.t_start + WINDOW_SHIFT_S, side="right")
-        hi = np.searchsorted(times, tr.t_end + WINDOW_SHIFT_S, side="right")
-        sums[e].append(float(sum(truth_mm[changes[k].src, changes[k].dst] for k in range(lo, hi))))
+        if e is not None:
+            sums[e].append(float(sum(truth_mm[a, b] for a, b in seen)))
     direct = truth_mm[table.src, table.dst]
     eff = np.array([np.mean(s) if s else direct[e] for e, s in enumerate(sums)])
     return TransitionTable(table.levels, table.src, table.dst, eff, table.duration)
