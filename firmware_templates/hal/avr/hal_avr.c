@@ -12,12 +12,12 @@
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
-#include <avr/pgmspace.h>
 #include <avr/wdt.h>
 #include <stdint.h>
 
 #include "hal.h"
 #include "ring.h"
+#include "rom.h"
 #include "uart.h"
 
 enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
@@ -33,7 +33,7 @@ enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 #error "AVR: the UART rings must be at most 128 bytes (8-bit indices are the only atomic ones)"
 #endif
 
-static const uint8_t pwm_map[CFG_PWM_CHANNELS] PROGMEM = CFG_PWM_MAP; /* flash: no .data bytes */
+static const uint8_t pwm_map[CFG_PWM_CHANNELS] ROM = CFG_PWM_MAP; /* flash: no .data bytes */
 
 /* ------------------------------------------------------------------ time */
 
@@ -95,7 +95,7 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
     if (channel >= CFG_PWM_CHANNELS) {
         return;
     }
-    oc = pgm_read_byte(&pwm_map[channel]);
+    oc = ROM_U8(&pwm_map[channel]);
     com = (oc == HAL_AVR_OC1A || oc == HAL_AVR_OC2A) ? _BV(COM1A1) : _BV(COM1B1);
     bit = oc == HAL_AVR_OC2B ? _BV(PD3) : (uint8_t)(_BV(PB1) << oc);
     tccra = oc < HAL_AVR_OC2A ? &TCCR1A : &TCCR2A;
