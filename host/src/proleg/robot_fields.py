@@ -1,0 +1,76 @@
+"""Checking a robot file's fields: every reader raises RobotFileError naming the file and the
+field (``Fields``), and files are read with a size limit (``read_text``). Shared by the robot
+file's sections (``proleg.robot``, ``proleg.robot_transitions``)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from .errors import RobotFileError
+
+
+class Fields:
+    """Reads one TOML table, checking types and refusing keys it does not know."""
+
+    def __init__(self, path: Path, where: str, table: Any, known: set[str], sep: str = "."):
+        self.path, self.where, self.sep = path, where, sep
+        if not isinstance(table, dict):
+            self.fail("", "a table")
+        unknown = sorted(set(table) - known)
+        if unknown:
+            raise RobotFileError(
+                f"{path}: {where}: unknown key {unknown[0]!r} (expected one of: {', '.join(sorted(known))})"
+            )
+        self.table = table
+
+    def fail(self, key: str, expected: str, got: Any = None) -> None:
+        name = f"{self.where}{self.sep}{key}" if key else self.where
+        shown = "" if got is None else f", got {got!r}"
+        raise RobotFileError(f"{self.path}: {name}: expected {expected}{shown}")
+
+    def has(self, key: str) -> bool:
+        return key in self.table
+
+    def string(self, key: str, default: str | None = None) -> str:
+        if key not in self.table:
+            if default is None:
+                self.fail(key, "a string (required)")
+            return default
+        v = self.table[key]
+        if not isinstance(v, str):
+            self.fail(key, "a string", v)
+        return v
+
+    def integer(self, key: str, default: int, lo: int, hi: int) -> int:
+        v = self.table.get(key, default)
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            self.fail(key, f"an integer in {lo}..{hi}", v)
+        return v
+
+    def number(self, key: str, default: float | None, lo: float, hi: float, *, open_lo: bool = False) -> float:
+        if key not in self.table and default is None:
+            self.fail(key, "a number (required)")
+        v = self.table.get(key, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            self.fail(key, "a number", v)
+        if (v <= lo if open_lo else v < lo) or v > hi:
+            self.fail(key, f"a number in {'(' if open_lo else '['}{lo}, {hi}]", v)
+        return float(v)
+
+
+def read_text(path: Path, limit: int, what: str) -> str:
+    try:
+        size = path.stat().st_size
+        if size > limit:
+            raise RobotFileError(f"{path}: {what} of {size:,} bytes, expected at most {limit:,}")
+        with path.open("rb") as fh:
+            data = fh.read(limit + 1)  # the file may have grown since stat
+        if len(data) > limit:
+            raise RobotFileError(f"{path}: {what} larger than {limit:,} bytes")
+        return data.decode("utf-8")
+    except FileNotFoundError:
+        raise RobotFileError(f"{path}: no such {what}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise RobotFileError(f"{path}: cannot read: {e}") from None

@@ -1,0 +1,296 @@
+"""A robot file's [transitions]: the reward matrix inline or in an external CSV, per-transition
+durations, the planar statistics of a learned file, the forbidden-transition marks. Every
+problem is a RobotFileError naming the file, the field and what was expected
+(``transitions_section``, called by ``proleg.robot.robot_from_dict``)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import states
+from .errors import RobotFileError
+from .robot_fields import Fields
+from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
+
+#: The mark of a forbidden transition in a matrix ("x").
+FORBIDDEN = "x"
+#: A transition CSV larger than this is refused before it is read.
+MAX_CSV_BYTES = 256 * 1024 * 1024
+
+
+def transitions_section(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[TransitionTable, str]:
+    f = Fields(
+        path, "transitions", value,
+        {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", "n_trials",
+         *PLANAR_FIELDS},
+    )
+    units = f.string("units", "steps")
+    n = states.state_count(levels)
+    if f.has("matrix") == f.has("file"):
+        raise RobotFileError(f"{path}: transitions: expected exactly one of 'matrix' or 'file'")
+    if f.has("states"):
+        expected = [states.label(i, levels) for i in range(n)]
+        if value["states"] != expected:
+            f.fail("states", f"the state order {expected}", value["states"])
+
+    if f.has("matrix"):
+        reward, allowed = _matrix(path, value["matrix"], n)
+        src, dst = np.nonzero(allowed)
+        rew = reward[src, dst]
+        dur_matrix = _durations_matrix(path, value.get("durations_s"), n, allowed) if f.has("durations_s") else None
+        dur = None if dur_matrix is None else dur_matrix[src, dst]
+        planar = _planar(path, value, n, allowed)
+    else:
+        if f.has("durations_s"):
+            f.fail("durations_s", "durations in the CSV's 4th column when the table is a file")
+        for key in (*PLANAR_FIELDS, "n_trials"):
+            if f.has(key):
+                f.fail(key, "an inline 'matrix' (planar statistics are not read from a CSV table yet)")
+        planar = None
+        src, dst, rew, dur = _csv(path, f.string("file"), levels)
+
+    if f.has("forbidden"):
+        _check_forbidden(path, value["forbidden"], levels, src, dst)
+
+    if f.has("default_duration_s"):
+        default = f.number("default_duration_s", None, 0.0, 3600.0, open_lo=True)
+        if dur is None:
+            dur = np.full(len(src), default)
+        else:
+            dur = np.where(np.isnan(dur), default, dur)
+    if dur is not None and np.isnan(dur).any():
+        raise RobotFileError(
+            f"{path}: transitions: some allowed transitions have no duration (give them, or set default_duration_s)"
+        )
+    return TransitionTable.from_edges(levels, src, dst, rew, dur, planar), units
+
+
+def _planar(path: Path, value: dict, n: int, allowed: np.ndarray) -> PlanarRewards | None:
+    """dy, dtheta_deg (means) and var_dx, var_dy, var_dtheta_deg (variances, >= 0): n × n like
+    the matrix, 'x' exactly where the matrix forbids a transition, the diagonal ignored.
+    ``nan`` marks an allowed transition not measured (a learned file, ``proleg learn``): for
+    gait selection a mean not measured counts as 0 and a variance not measured as the
+    largest one measured for that key (an unknown transition is not taken for a sure one;
+    0 when none is measured)."""
+    given = {}
+    src, dst = np.nonzero(allowed)
+    for key in PLANAR_FIELDS:
+        if key in value:
+            m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed,
+                                   variance=key.startswith("var_"), allow_nan=True)
+            v = m[src, dst]
+            known = v[~np.isnan(v)]
+            fill = float(known.max()) if key.startswith("var_") and len(known) else 0.0
+            given[key] = np.where(np.isnan(v), fill, v)
+    return PlanarRewards(**given) if given else None
+
+
+def n_trials_section(path: Path, value: dict, n: int, allowed: np.ndarray) -> np.ndarray | None:
+    """``n_trials`` (a learned file): whole numbers >= 0 like the matrix, 'x' where forbidden."""
+    if "n_trials" not in value:
+        return None
+    m = _same_shape_matrix(path, "transitions.n_trials", value["n_trials"], n, allowed, variance=True)
+    src, dst = np.nonzero(allowed)
+    v = m[src, dst]
+    bad = [(int(a), int(b)) for a, b, x in zip(src, dst, v) if x != int(x)]
+    if bad:
+        a, b = bad[0]
+        raise RobotFileError(f"{path}: transitions.n_trials[{a + 1}][{b + 1}]: expected a whole number of trials, "
+                             f"got {m[a, b]!r}")
+    return v.astype(np.int64)
+
+
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
+                       allow_nan: bool = False) -> np.ndarray:
+    where = f"{path}: {name}"
+    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
+    if not isinstance(rows, list) or len(rows) != n:
+        got = len(rows) if isinstance(rows, list) else type(rows).__name__
+        raise RobotFileError(f"{where}: expected {n} rows like the matrix, got {got}")
+    out = np.full((n, n), np.nan)
+    for a, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != n:
+            got = len(row) if isinstance(row, list) else type(row).__name__
+            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries, got {got}")
+        for b, v in enumerate(row):
+            if a == b:
+                continue  # the diagonal is not a transition
+            cell = f"{where}[{a + 1}][{b + 1}]"
+            if v == FORBIDDEN:
+                if allowed[a, b]:
+                    raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
+                continue
+            unknown = allow_nan and isinstance(v, float) and math.isnan(v)
+            if not unknown and (not _is_number(v) or (variance and v < 0)):
+                raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
+            if not allowed[a, b]:
+                raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")
+            out[a, b] = float(v)
+    return out
+
+
+def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) -> None:
+    """``forbidden = ["01->11", ...]`` states what the robot cannot do; the table must agree."""
+    where = f"{path}: transitions.forbidden"
+    if not isinstance(marks, list) or not all(isinstance(m, str) for m in marks):
+        raise RobotFileError(f"{where}: expected a list of transitions like \"01->11\"")
+    given = set(zip(np.asarray(src).tolist(), np.asarray(dst).tolist()))
+    n = states.state_count(levels)
+    for k, mark in enumerate(marks):
+        parts = [p.strip() for p in mark.split("->")]
+        if len(parts) != 2:
+            raise RobotFileError(f"{where}[{k}]: expected FROM->TO, got {mark!r}")
+        a = _state_ref(parts[0], levels, n, f"{where}[{k}]")
+        b = _state_ref(parts[1], levels, n, f"{where}[{k}]")
+        if (a, b) in given:
+            raise RobotFileError(
+                f"{where}[{k}]: {mark} is marked forbidden but the table also gives it a reward (expected 'x' there)"
+            )
+
+
+def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+    where = f"{path}: transitions.matrix"
+    if not isinstance(rows, list) or len(rows) != n:
+        got = len(rows) if isinstance(rows, list) else type(rows).__name__
+        raise RobotFileError(f"{where}: expected {n} rows (one per state, {n} = product of limb levels), got {got}")
+    reward = np.zeros((n, n))
+    allowed = np.zeros((n, n), dtype=bool)
+    for a, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != n:
+            got = len(row) if isinstance(row, list) else type(row).__name__
+            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries, got {got}")
+        for b, v in enumerate(row):
+            if a == b:
+                if not (v == FORBIDDEN or _is_number(v)):
+                    raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a number or 'x', got {v!r}")
+                continue  # the diagonal is not a transition
+            if v == FORBIDDEN:
+                continue
+            if not _is_number(v):
+                raise RobotFileError(
+                    f"{where}[{a + 1}][{b + 1}]: expected a number or 'x' (forbidden), got {v!r}"
+                )
+            reward[a, b] = float(v)
+            allowed[a, b] = True
+    return reward, allowed
+
+
+def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.ndarray:
+    where = f"{path}: transitions.durations_s"
+    if not isinstance(rows, list) or len(rows) != n:
+        raise RobotFileError(f"{where}: expected {n} rows like the matrix")
+    out = np.full((n, n), np.nan)
+    for a, row in enumerate(rows):
+        if not isinstance(row, list) or len(row) != n:
+            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries")
+        for b, v in enumerate(row):
+            if a == b:
+                continue
+            if v == FORBIDDEN:
+                if allowed[a, b]:
+                    raise RobotFileError(
+                        f"{where}[{a + 1}][{b + 1}]: transition is allowed in the matrix, expected a duration > 0"
+                    )
+                continue
+            if not _is_number(v) or not v > 0:
+                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration > 0 seconds or 'x', got {v!r}")
+            if not allowed[a, b]:
+                raise RobotFileError(
+                    f"{where}[{a + 1}][{b + 1}]: transition is forbidden in the matrix, expected 'x', got {v!r}"
+                )
+            out[a, b] = float(v)
+    return out
+
+
+def _csv(path: Path, name: str, levels: tuple[int, ...]):
+    csv_path = (path.parent / name).resolve()
+    n = states.state_count(levels)
+    src: list[int] = []
+    dst: list[int] = []
+    rew: list[float] = []
+    dur: list[float] = []
+    seen: set[tuple[int, int]] = set()
+    try:
+        size = csv_path.stat().st_size
+        fh = csv_path.open(newline="", encoding="utf-8")
+    except OSError as e:
+        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
+    if size > MAX_CSV_BYTES:
+        fh.close()
+        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
+    with fh:
+        has_duration = None
+        for lineno, row in enumerate(_csv_rows(fh, csv_path), start=1):
+            if not row or row[0].lstrip().startswith("#"):
+                continue
+            cells = [c.strip() for c in row]
+            if lineno == 1 and cells[:3] == ["from", "to", "reward"]:
+                continue  # header
+            where = f"{csv_path}:{lineno}"
+            if len(cells) not in (3, 4):
+                raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {len(cells)} fields")
+            if has_duration is None:
+                has_duration = len(cells) == 4
+            elif has_duration != (len(cells) == 4):
+                raise RobotFileError(f"{where}: every row must have a duration, or none")
+            a = _state_ref(cells[0], levels, n, f"{where}: from")
+            b = _state_ref(cells[1], levels, n, f"{where}: to")
+            if a == b:
+                raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
+            if (a, b) in seen:
+                raise RobotFileError(f"{where}: transition {cells[0]} -> {cells[1]} is given twice")
+            seen.add((a, b))
+            try:
+                r = float(cells[2])
+            except ValueError:
+                raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
+            if not math.isfinite(r):
+                raise RobotFileError(f"{where}: reward: expected a finite number, got {cells[2]!r}")
+            src.append(a)
+            dst.append(b)
+            rew.append(r)
+            if has_duration:
+                try:
+                    d = float(cells[3])
+                except ValueError:
+                    d = -1.0
+                if not d > 0 or not math.isfinite(d):
+                    raise RobotFileError(f"{where}: duration_s: expected a number > 0, got {cells[3]!r}")
+                dur.append(d)
+    if not src:
+        raise RobotFileError(f"{csv_path}: no transitions (expected rows from,to,reward)")
+    return src, dst, rew, (dur if dur else None)
+
+
+def _csv_rows(fh, csv_path: Path):
+    """csv.reader's rows, its errors (NUL bytes, a field over its size limit) as RobotFileError."""
+    reader = csv.reader(fh)
+    while True:
+        try:
+            yield next(reader)
+        except StopIteration:
+            return
+        except (csv.Error, UnicodeDecodeError) as e:
+            raise RobotFileError(f"{csv_path}:{reader.line_num}: not a readable CSV row: {e}") from None
+
+
+def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
+    """A state in a CSV row or a forbidden mark: a label (one digit per limb), else an index."""
+    expected = f"{where}: expected a state label of {len(levels)} digits or an index 0..{n - 1}, got {text!r}"
+    if len(text) == len(levels):
+        try:
+            return states.index(text, levels)
+        except ValueError as e:
+            raise RobotFileError(f"{expected} ({e})") from None
+    if text.isdigit() and int(text) < n:
+        return int(text)
+    raise RobotFileError(expected)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
