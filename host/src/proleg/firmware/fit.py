@@ -19,7 +19,7 @@ from typing import Any
 from ..errors import BuildError
 from .boards import pwm_channel_error
 from .placement import ImuPlacement, check_tick_budget, i2c_tick_us, mux_selects_per_tick, place_imus
-from .render import BITMAP_MAX_STATES, gait_table_rows
+from .render_gaits import BITMAP_MAX_STATES, gait_table_rows
 
 #: Flash and static RAM one more limb (beyond the two of the measured base) adds: its
 #: thresholds, IMU placement, ψ classifier and IMU-check state, and its actuator's thermal
