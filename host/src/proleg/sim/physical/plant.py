@@ -28,7 +28,6 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -37,84 +36,13 @@ from ...errors import SimError
 from ...states import limb_levels
 from ..sma import Hysteresis
 from . import materials as mat
-from ...body import Shape, body_geometry, default_length_mm
+from ...body import Shape, body_geometry
 from .conditions import Conditions
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
-from .thermal import BodyThermal, CoilGeometry
+from .params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm
 
 SHAPE_EPS = 3e-4   # contraction change (fraction of stroke) that triggers a shape update (≈ 0.013° of ψ)
-
-
-@dataclass(frozen=True)
-class FatigueLaw:
-    """Functional fatigue of NiTi under thermal cycling: recoverable stroke falls and the
-    transformation temperatures drift, both saturating (Lagoudas (ed.), "Shape Memory Alloys",
-    Springer 2008, ch. 7; Mammano & Dragoni, Int. J. Fatigue 2014: a few % to tens of % stroke
-    loss and several K of shift over 10³–10⁵ cycles). Representative values."""
-
-    stroke_loss: float = 0.25        # fraction lost after many cycles
-    stroke_cycles: float = 20000.0   # e-folding cycles of the loss
-    shift_c: float = 6.0             # transformation temperatures rise by this much
-    shift_cycles: float = 5000.0
-
-    def stroke(self, n: float) -> float:
-        return 1.0 - self.stroke_loss * (1.0 - math.exp(-n / self.stroke_cycles))
-
-    def shift(self, n: float) -> float:
-        return self.shift_c * (1.0 - math.exp(-n / self.shift_cycles))
-
-
-@dataclass(frozen=True)
-class PhysicalParams:
-    coil: CoilGeometry = CoilGeometry()
-    body_thermal: BodyThermal = BodyThermal()
-    length_mm: float | None = None     # None: the robot file's [plant] length_mm (default from its contacts)
-    coil_offset_mm: float = 2.0
-    working_strain: float = 0.06
-    mech_tau_s: float = 0.03
-    friction_band_deg: float = 12.0     # soft pad peel / bed-in range (estimate)
-    materials: dict = field(default_factory=lambda: dict(mat.MATERIALS))
-    fatigue: FatigueLaw = FatigueLaw()
-    simultaneous_s: float = 0.03
-
-
-@dataclass(frozen=True)
-class Transition:
-    t_s: float
-    src: int
-    dst: int
-    reward_mm: float    # centre-of-mass displacement since the previous transition
-
-    def __iter__(self):
-        return iter((self.t_s, self.src, self.dst, self.reward_mm))
-
-
-@dataclass(frozen=True)
-class _Act:
-    name: str
-    channel: int
-
-
-@dataclass(frozen=True)
-class _LimbView:
-    name: str
-    psi_star_deg: tuple[float, ...]
-
-
-@dataclass(frozen=True)
-class PlantView:
-    """What callers of the table plant read from ``plant.params``."""
-
-    actuators: tuple[_Act, ...]
-    limbs: tuple[_LimbView, ...]
-    step_mm: float = 1.0
-
-
-def _robot_length_mm(robot: Any, n_limbs: int) -> float:
-    section = getattr(robot, "plant", None)
-    length = getattr(section, "length_mm", None)
-    return float(length) if length is not None else default_length_mm(n_limbs)
 
 
 class PhysicalPlant:
@@ -135,8 +63,8 @@ class PhysicalPlant:
         anames = [a.name for a in acts]
         cond.check_names(lnames, anames)
         self.levels = tuple(len(lb.psi_star_deg) + 1 for lb in limbs)
-        self.params = PlantView(tuple(_Act(a.name, a.channel) for a in acts),
-                              tuple(_LimbView(lb.name, tuple(lb.psi_star_deg)) for lb in limbs))
+        self.params = PlantView(tuple(ActView(a.name, a.channel) for a in acts),
+                              tuple(LimbView(lb.name, tuple(lb.psi_star_deg)) for lb in limbs))
         self._rng = random.Random(seed)
         nl, na = len(limbs), len(acts)
         if nl < 2:
@@ -156,7 +84,7 @@ class PhysicalPlant:
 
         # -- geometry -------------------------------------------------------------------------
         overlap = [cond.for_index("overlap_mm", j, anames) for j in range(na)]
-        length = p.length_mm if p.length_mm is not None else _robot_length_mm(robot, nl)
+        length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
         geo = body_geometry([anames.index(lb.actuator) for lb in limbs], na, length, overlap,
                             p.coil_offset_mm, p.working_strain)
         self.geometry = geo
