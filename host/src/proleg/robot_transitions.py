@@ -105,18 +105,24 @@ def n_trials_section(path: Path, value: dict, n: int, allowed: np.ndarray) -> np
     return v.astype(np.int64)
 
 
-def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
-                       allow_nan: bool = False) -> np.ndarray:
-    where = f"{path}: {name}"
-    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
+def _square(where: str, rows: Any, n: int, rows_are: str = "like the matrix") -> list[list[Any]]:
+    """``rows`` checked to be n lists of n entries (RobotFileError naming the row otherwise)."""
     if not isinstance(rows, list) or len(rows) != n:
         got = len(rows) if isinstance(rows, list) else type(rows).__name__
-        raise RobotFileError(f"{where}: expected {n} rows like the matrix, got {got}")
-    out = np.full((n, n), np.nan)
+        raise RobotFileError(f"{where}: expected {n} rows {rows_are}, got {got}")
     for a, row in enumerate(rows):
         if not isinstance(row, list) or len(row) != n:
             got = len(row) if isinstance(row, list) else type(row).__name__
             raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries, got {got}")
+    return rows
+
+
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
+                       allow_nan: bool = False) -> np.ndarray:
+    where = f"{path}: {name}"
+    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
+    out = np.full((n, n), np.nan)
+    for a, row in enumerate(_square(where, rows, n)):
         for b, v in enumerate(row):
             if a == b:
                 continue  # the diagonal is not a transition
@@ -155,15 +161,9 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) 
 
 def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
     where = f"{path}: transitions.matrix"
-    if not isinstance(rows, list) or len(rows) != n:
-        got = len(rows) if isinstance(rows, list) else type(rows).__name__
-        raise RobotFileError(f"{where}: expected {n} rows (one per state, {n} = product of limb levels), got {got}")
     reward = np.zeros((n, n))
     allowed = np.zeros((n, n), dtype=bool)
-    for a, row in enumerate(rows):
-        if not isinstance(row, list) or len(row) != n:
-            got = len(row) if isinstance(row, list) else type(row).__name__
-            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries, got {got}")
+    for a, row in enumerate(_square(where, rows, n, f"(one per state, {n} = product of limb levels)")):
         for b, v in enumerate(row):
             if a == b:
                 if not (v == FORBIDDEN or _is_number(v)):
@@ -182,12 +182,8 @@ def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.ndarray:
     where = f"{path}: transitions.durations_s"
-    if not isinstance(rows, list) or len(rows) != n:
-        raise RobotFileError(f"{where}: expected {n} rows like the matrix")
     out = np.full((n, n), np.nan)
-    for a, row in enumerate(rows):
-        if not isinstance(row, list) or len(row) != n:
-            raise RobotFileError(f"{where}: row {a + 1}: expected {n} entries")
+    for a, row in enumerate(_square(where, rows, n)):
         for b, v in enumerate(row):
             if a == b:
                 continue
