@@ -41,6 +41,7 @@ static uint8_t left;     /* ticks of sampling left */
 static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
 #if LEVEL_AT_REST
 static uint16_t rest_ticks; /* ticks the robot has been at rest (up to LEVEL_REST_TICKS) */
+static uint8_t rest_limb;   /* the limb whose reading this tick low-passes */
 #endif
 static uint16_t waited;  /* ticks some limb had no sample yet */
 static struct {
@@ -207,8 +208,9 @@ static void measured(void)
 #if LEVEL_AT_REST
 /* Between gaits: how long has the robot been at rest, and what does each limb read there?
  * At rest = no gait, no fault, every limb at level 0 within LEVEL_MAX_CDEG of the record's
- * zero; each limb's ψ is then low-passed (first order, τ = 2^LEVEL_REST_SHIFT ticks; at
- * 1.5° of IMU noise the estimate's σ is 0.13°). Anything else starts over. */
+ * zero; the limbs' readings are then low-passed in turn, one limb a tick (first order over
+ * 2^LEVEL_REST_SHIFT of its samples; at 1.5° of IMU noise the estimate's σ is 0.13°).
+ * Anything else starts over. */
 static void track_rest(void)
 {
     uint8_t i;
@@ -217,22 +219,26 @@ static void track_rest(void)
         goto moving; /* (before any ψ is computed: a gait's ticks pay nothing for this) */
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        a = psi_last_centideg(i);
-        if (psi_level(i) != 0u || a > LEVEL_MAX_CDEG || a < -LEVEL_MAX_CDEG) { /* or no sample yet */
+        if (psi_level(i) != 0u) { /* raised, or no sample yet (PSI_UNKNOWN) */
             goto moving;
         }
     }
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        a = psi_last_centideg(i);
-        /* >> of a negative int16: an arithmetic shift on every compiler proleg uses */
-        lm[i].rest = rest_ticks ? (int16_t)(lm[i].rest + ((int16_t)(a - lm[i].rest) >> LEVEL_REST_SHIFT)) : a;
+    i = rest_limb;
+    /* One limb a tick (one atan2, not one per limb: an idle tick stays short). */
+    a = psi_last_centideg(i);
+    if (a > LEVEL_MAX_CDEG || a < -LEVEL_MAX_CDEG) {
+        goto moving;
     }
+    /* >> of a negative int16: an arithmetic shift on every compiler proleg uses */
+    lm[i].rest = rest_ticks >= CFG_N_LIMBS ? (int16_t)(lm[i].rest + ((int16_t)(a - lm[i].rest) >> LEVEL_REST_SHIFT)) : a;
+    rest_limb = (uint8_t)(i + 1u < CFG_N_LIMBS ? i + 1u : 0u);
     if (rest_ticks < LEVEL_REST_TICKS) {
         rest_ticks++;
     }
     return;
 moving:
     rest_ticks = 0;
+    rest_limb = 0;
 }
 
 void level_at_start(void)

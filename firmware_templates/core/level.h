@@ -20,7 +20,7 @@
  *
  * At rest, by itself (LEVEL_AT_REST). Between gaits the firmware watches for rest: no
  * gait, no fault, every limb at level 0 and within LEVEL_MAX_CDEG, for LEVEL_REST_TICKS;
- * meanwhile each limb's ψ is low-passed. START then adds those readings to the ground in
+ * meanwhile the limbs' ψ are low-passed, one limb a tick. START then adds those readings to the ground in
  * use (level_at_start(): what level_calibrate(1) would measure), when a flat record is
  * stored; otherwise (not at rest that long, no record) the ground in use stays. So after a
  * flat calibration a robot started at rest on a slope levels itself. A slope that changes
@@ -56,7 +56,7 @@
 #define LEVEL_MAX_CDEG 2000 /* 20°: the mounting tilt a limb may have and still be trusted */
 #define LEVEL_REST_TICKS (2u * CFG_TICK_HZ) /* 2 s at rest (a lowered limb's coil cools back in
                                               * about that: docs/calibration.md) */
-#define LEVEL_REST_SHIFT 6                    /* the at-rest low-pass: τ = 64 ticks */
+#define LEVEL_REST_SHIFT 6                    /* the at-rest low-pass: τ = 64 of a limb's samples */
 /* Build switch: 0 leaves out levelling at rest on START (level_at_start does nothing). */
 #ifndef LEVEL_AT_REST
 #define LEVEL_AT_REST 1
