@@ -213,6 +213,24 @@ def test_levelling_at_start_needs_the_robot_at_rest_and_a_flat_record(r1):
     client.close()
 
 
+def test_levelling_at_start_refuses_a_tilt_beyond_20_degrees_and_keeps_the_ground(r1):
+    """At rest, but one end reads 22° below the flat record's zero (a knocked IMU: mounted −8°,
+    now −20° and biased −10°): START keeps the ground in use, as a calibration on this ground
+    refuses it (TOO_TILTED)."""
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    assert calibrate_level(client).ok
+    sim.plant = make_plant(r1, "physical", ["imu_offset_deg=left:8", "imu_offset_deg=right:-20", "imu_bias_deg=right:-10"])
+    wait(client, 3.0)
+    client.start(0, "+x")
+    wait(client, 0.5)
+    client.stop()
+    assert get_level(client).ground_cdeg == (0, 0)
+    outcome = calibrate_level(client, ground=True)
+    assert outcome.result == LevelResult.TOO_TILTED  # the same verdict by hand
+    client.close()
+
+
 def test_levelled_by_hand_on_the_slope_the_gait_keeps_running(r1):
     sim = SimulatedRobot(r1, conditions=MOUNT + ["incline_deg=10"])
     client = connect(sim)
