@@ -5,7 +5,7 @@ module takes exceptions itself, between emulation runs. Entry (ARMv7-M ARM B1.5.
 push r0-r3, r12, lr, return address and xPSR on the main stack (8-byte aligned, with
 xPSR bit 9 recording the padding, CCR.STKALIGN = 1 as on r2p1), LR = EXC_RETURN
 (0xFFFFFFF9 from thread mode, 0xFFFFFFF1 when nested), IPSR = exception number,
-PC = the vector. Return: unicorn raises its EXCEPTION_EXIT interrupt when a handler
+PC = the vector, the If-Then state cleared (it stays in the stacked xPSR). Return: unicorn raises its EXCEPTION_EXIT interrupt when a handler
 branches to an EXC_RETURN value; the frame is popped here. An exception preempts when
 its priority is strictly higher (lower number) than the running one, PRIMASK blocks
 all but HardFault, and among the pending ones the lowest priority number, then the
@@ -25,6 +25,9 @@ from unicorn import arm_const as A
 HARDFAULT = 3
 SYSTICK = 15
 EXCP_EXCEPTION_EXIT = 8
+#: EPSR.IT[1:0] (xPSR bits 26:25) and IT[7:2] (bits 15:10): the If-Then state of the code an
+#: exception interrupts, kept in the stacked xPSR and cleared for the handler.
+XPSR_IT = 0x0600FC00
 _FRAME_REGS = (A.UC_ARM_REG_R0, A.UC_ARM_REG_R1, A.UC_ARM_REG_R2, A.UC_ARM_REG_R3, A.UC_ARM_REG_R12, A.UC_ARM_REG_LR)
 
 
@@ -81,7 +84,10 @@ class CortexM:
         uc.mem_write(sp, struct.pack("<8I", *[v & 0xFFFFFFFF for v in frame]))
         uc.reg_write(A.UC_ARM_REG_SP, sp)
         uc.reg_write(A.UC_ARM_REG_LR, 0xFFFFFFF1 if self.active else 0xFFFFFFF9)
-        uc.reg_write(A.UC_ARM_REG_XPSR, (xpsr & ~0x1FF) | exc)
+        # ExceptionTaken (ARMv7-M ARM B1.5.6): IPSR = the exception, EPSR.IT = 0. An exception
+        # taken inside an IT block must not hand the block's remaining conditions to the handler
+        # (its first instructions would run conditionally); the return restores them from the frame.
+        uc.reg_write(A.UC_ARM_REG_XPSR, (xpsr & ~(0x1FF | XPSR_IT)) | exc)
         uc.reg_write(A.UC_ARM_REG_PC, self.read_vector(exc) & ~1)
         self.active.append(exc)
         self.exceptions_taken += 1
