@@ -49,7 +49,7 @@ static struct {
     int16_t ground; /* this ground's tilt on top of the record, 0.01° */
     int16_t rc, rs; /* Q14 cos/sin of the whole tilt */
 #if LEVEL_AT_REST
-    int16_t rest;   /* ψ at rest as corrected now, low-passed over 2^LEVEL_REST_SHIFT ticks */
+    int16_t rest;   /* ψ at rest as corrected now, low-passed over 2^LEVEL_REST_SHIFT of its samples */
 #endif
 } lm[CFG_N_LIMBS]; /* per limb, in one record */
 
@@ -207,10 +207,9 @@ static void measured(void)
 
 #if LEVEL_AT_REST
 /* Between gaits: how long has the robot been at rest, and what does each limb read there?
- * At rest = no gait, no fault, every limb at level 0 within LEVEL_MAX_CDEG of the record's
- * zero; the limbs' readings are then low-passed in turn, one limb a tick (first order over
- * 2^LEVEL_REST_SHIFT of its samples; at 1.5° of IMU noise the estimate's σ is 0.13°).
- * Anything else starts over. */
+ * At rest = no gait, no fault, every limb at level 0; the limbs' readings are then
+ * low-passed in turn, one limb a tick (first order over 2^LEVEL_REST_SHIFT of its samples;
+ * at 1.5° of IMU noise the estimate's σ is 0.13°). Anything else starts over. */
 static void track_rest(void)
 {
     uint8_t i;
@@ -224,11 +223,7 @@ static void track_rest(void)
         }
     }
     i = rest_limb;
-    /* One limb a tick (one atan2, not one per limb: an idle tick stays short). */
-    a = psi_last_centideg(i);
-    if (a > LEVEL_MAX_CDEG || a < -LEVEL_MAX_CDEG) {
-        goto moving;
-    }
+    a = psi_last_centideg(i); /* one atan2 a tick, not one per limb: an idle tick stays short */
     /* >> of a negative int16: an arithmetic shift on every compiler proleg uses */
     lm[i].rest = rest_ticks >= CFG_N_LIMBS ? (int16_t)(lm[i].rest + ((int16_t)(a - lm[i].rest) >> LEVEL_REST_SHIFT)) : a;
     rest_limb = (uint8_t)(i + 1u < CFG_N_LIMBS ? i + 1u : 0u);
@@ -244,8 +239,15 @@ moving:
 void level_at_start(void)
 {
     uint8_t i;
+    int16_t o;
     if (rest_ticks < LEVEL_REST_TICKS || status != PROTO_LEVEL_STORED) {
         return; /* not known to be at rest, or no flat record to measure the ground against */
+    }
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        o = (int16_t)(lm[i].ground + lm[i].rest); /* |ground| ≤ 2000, |rest| ≤ 18000: no overflow */
+        if (o > LEVEL_MAX_CDEG || o < -LEVEL_MAX_CDEG) {
+            return; /* not a ground to level on (level_calibrate(1) refuses it too): keep the one in use */
+        }
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         lm[i].ground = (int16_t)(lm[i].ground + lm[i].rest);

@@ -19,12 +19,13 @@
  * slope itself, as each end sees it; GET_LEVEL reports both.
  *
  * At rest, by itself (LEVEL_AT_REST). Between gaits the firmware watches for rest: no
- * gait, no fault, every limb at level 0 and within LEVEL_MAX_CDEG, for LEVEL_REST_TICKS;
- * meanwhile the limbs' ψ are low-passed, one limb a tick. START then adds those readings to the ground in
- * use (level_at_start(): what level_calibrate(1) would measure), when a flat record is
- * stored; otherwise (not at rest that long, no record) the ground in use stays. So after a
- * flat calibration a robot started at rest on a slope levels itself. A slope that changes
- * during a gait is not seen: no limb is known to be at rest then.
+ * gait, no fault, every limb at level 0, for LEVEL_REST_TICKS; meanwhile the limbs' ψ are
+ * low-passed, one limb a tick. START then adds those readings to the ground in use
+ * (level_at_start(): what level_calibrate(1) would measure), when a flat record is stored
+ * and every limb's ground stays within LEVEL_MAX_CDEG; otherwise (not at rest that long, no
+ * record, too steep) the ground in use stays. So after a flat calibration a robot started
+ * at rest on a slope levels itself. A slope that changes during a gait is not seen: no limb
+ * is known to be at rest then.
  *
  * Sampling waits for IMUs still starting up (up to LEVEL_WAIT_TICKS); a bad IMU, or one
  * still without a sample then, fails the calibration (result IMU).
