@@ -7,8 +7,8 @@ seconds:
 - ψ-feedback: the robot's own firmware (host-sim build) on the simulated board, started as a
   user would: a flat level calibration at rest (proleg calibrate: IMU mounting offset and bias),
   then the condition's ground, at rest there for claim.REST_ON_GROUND_S before START (the
-  firmware levels itself on a ground it has rested on for 2 s); completed, or stopped with the firmware's fault; mm/s; the hottest
-  coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
+  firmware levels itself on a ground it has rested on for 2 s); completed, or stopped with
+  the firmware's fault; mm/s; the hottest coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
 - ψ-feedback walking the learn-then-walk gait (the optimal gait of the matrix that
   ``proleg sim --measure-matrix`` measures on the fresh robot, loaded with LOAD_GAIT);
 - open loop: the best timed drive (all 7 parameters free), tuned ONCE on the fresh robot by a

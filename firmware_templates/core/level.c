@@ -125,6 +125,12 @@ int8_t level_calibrate(uint8_t on_this_ground)
     return 0;
 }
 
+/* A tilt no calibration takes: beyond LEVEL_MAX_CDEG either way (flat or this ground). */
+static uint8_t too_tilted(int16_t o)
+{
+    return o > LEVEL_MAX_CDEG || o < -LEVEL_MAX_CDEG;
+}
+
 /* This ground's tilt per limb: `o`, or 0 with o = 0. */
 static void set_ground(const int16_t *o)
 {
@@ -181,7 +187,7 @@ static void measured(void)
         if (!ground_mode) {
             o[i] = (int16_t)(o[i] + level_offset_cdeg(i));
         }
-        if (o[i] > LEVEL_MAX_CDEG || o[i] < -LEVEL_MAX_CDEG) {
+        if (too_tilted(o[i])) {
             far |= (uint8_t)(1u << i);
         }
     }
@@ -245,7 +251,7 @@ void level_at_start(void)
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         o = (int16_t)(lm[i].ground + lm[i].rest); /* |ground| ≤ 2000, |rest| ≤ 18000: no overflow */
-        if (o > LEVEL_MAX_CDEG || o < -LEVEL_MAX_CDEG) {
+        if (too_tilted(o)) {
             return; /* not a ground to level on (level_calibrate(1) refuses it too): keep the one in use */
         }
     }

@@ -82,7 +82,7 @@ int8_t level_clear(void);
  * it ends. Called once per tick (cmd_poll). */
 void level_poll(void);
 
-/* START from rest: take this ground's tilt from the last at-rest windows (see above). */
+/* START from rest: take this ground's tilt from the readings tracked at rest (see above). */
 #if LEVEL_AT_REST
 void level_at_start(void);
 #else

@@ -61,10 +61,6 @@ static void edge_of(int16_t cdeg, int16_t edge[2])
     edge[1] = psi_sin_q14(cdeg);
 }
 
-/* Threshold ψ* with band width h (both in range) into `b`: its band edges in 0.01° and the
- * {cos, sin} of every E_* edge: the band's upper and lower edges, and the hold, hold-top
- * and settle edges (those clamped to ±89°). One computation for the rendered thresholds
- * (psi_init) and moved ones (psi_set_band): an edge is within 2 LSB of its exact Q14 value. */
 /* The band's lower edge: ψ* less half the width (0 ≤ h ≤ 2000: robot.py, psi_set_band; /2 as
  * a shift); the upper edge is lo + h. One copy for both callers. */
 #if defined(__GNUC__)
@@ -75,6 +71,10 @@ static int16_t band_lo(int16_t star, int16_t hyst)
     return (int16_t)(star - (int16_t)((uint16_t)hyst >> 1));
 }
 
+/* Threshold ψ* with band width h (both in range) into `b`: its band edges in 0.01° and the
+ * {cos, sin} of every E_* edge: the band's upper and lower edges, and the hold, hold-top
+ * and settle edges (those clamped to ±89°). One computation for the rendered thresholds
+ * (psi_init) and moved ones (psi_set_band): an edge is within 2 LSB of its exact Q14 value. */
 static void set_angles(band_t *b, int16_t star, int16_t hyst)
 {
     /* per E_* edge: its offset from the band edge it is measured from */

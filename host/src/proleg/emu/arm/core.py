@@ -5,8 +5,9 @@ module takes exceptions itself, between emulation runs. Entry (ARMv7-M ARM B1.5.
 push r0-r3, r12, lr, return address and xPSR on the main stack (8-byte aligned, with
 xPSR bit 9 recording the padding, CCR.STKALIGN = 1 as on r2p1), LR = EXC_RETURN
 (0xFFFFFFF9 from thread mode, 0xFFFFFFF1 when nested), IPSR = exception number,
-PC = the vector, the If-Then state cleared (it stays in the stacked xPSR). Return: unicorn raises its EXCEPTION_EXIT interrupt when a handler
-branches to an EXC_RETURN value; the frame is popped here. An exception preempts when
+PC = the vector, the If-Then state cleared (it stays in the stacked xPSR). Return:
+unicorn raises its EXCEPTION_EXIT interrupt when a handler branches to an EXC_RETURN
+value; the frame is popped here. An exception preempts when
 its priority is strictly higher (lower number) than the running one, PRIMASK blocks
 all but HardFault, and among the pending ones the lowest priority number, then the
 lowest exception number, wins. Only the main stack is used (the firmware never
