@@ -213,6 +213,24 @@ def test_levelling_at_start_needs_the_robot_at_rest_and_a_flat_record(r1):
     client.close()
 
 
+def test_a_refused_start_does_not_level(r1):
+    """A START the firmware refuses (no gait loaded) changes nothing, the ground included; the
+    next START that runs levels as usual."""
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    assert calibrate_level(client).ok
+    sim.plant = make_plant(r1, "physical", MOUNT + ["incline_deg=10"])
+    wait(client, 2.5)
+    with pytest.raises(CommandRefused) as e:
+        client.start("user", "+x")
+    assert e.value.error == ErrorCode.NO_GAIT
+    assert get_level(client).ground_cdeg == (0, 0)
+    client.start(0, "+x")
+    first, last = get_level(client).ground_cdeg
+    assert abs(first - 1000) < 40 and abs(last + 1000) < 40
+    client.close()
+
+
 def test_levelling_at_start_refuses_a_tilt_beyond_20_degrees_and_keeps_the_ground(r1):
     """At rest, but one end reads 22° below the flat record's zero (a knocked IMU: mounted −8°,
     now −20° and biased −10°): START keeps the ground in use, as a calibration on this ground

@@ -120,12 +120,12 @@ static void cmd_start(void)
         }
         sdir = dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX;
     }
-    level_at_start(); /* from rest: level on this ground first (level.h) */
     r = seq_start(sdir, index, imucheck_measured());
     if (r != SEQ_OK) {
         nack(PROTO_ERR_NO_GAIT, gait);
-        return;
+        return; /* refused: nothing changed, the ground in use included */
     }
+    level_at_start(); /* started from rest: level on this ground (level.h) */
     drive_started(gait, dir);
     fault_watchdog_rearm();
     ack();
