@@ -27,3 +27,69 @@ def test_a_sub_nanosecond_timeout_still_advances_the_clock():
     assert link.read(1e-10) == b""
     assert link.clock() > before
 
+
+
+# --- the simulated robot keeps its caller's clock --------------------------------------------
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+
+class _TickBoard:
+    """A board that only counts ticks (SimulatedRobot's board interface, no firmware)."""
+
+    def __init__(self, tick_us: int) -> None:
+        self.tick_us = tick_us
+        self.ticks = 0
+
+    def run_ticks(self, n: int) -> None:
+        self.ticks += n
+
+    def pwm(self, channel: int) -> float:
+        return 0.0
+
+    def imu_truth(self, *args) -> None:
+        pass
+
+    @property
+    def time_s(self) -> float:
+        return self.ticks * self.tick_us / 1e6
+
+    def write(self, data: bytes) -> None:
+        pass
+
+    def read(self) -> bytes:
+        return b""
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(tick_hz=st.sampled_from([300, 500, 600, 750, 800, 1000, 1200, 2000]),
+       link_step_ms=st.sampled_from([0.5, 1.0, 2.0, 2.5, 3.0, 7.0]),
+       waits=st.lists(st.floats(min_value=0.0, max_value=0.25), min_size=1, max_size=40))
+def test_the_simulated_robot_runs_as_much_virtual_time_as_its_link_asks(tick_hz, link_step_ms, waits):
+    """Whatever the robot's tick and the link's step, firmware and plant stay within one plant
+    step of the link's clock. (They ran one whole plant step per link step: an 800 Hz robot's
+    2.5 ms step on every 2 ms step of the link, so marks on the link's clock, e.g. hil_tests'
+    cycle marks, fell 25 % behind the plant's transitions.)"""
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    robot = _robot()
+    board = _TickBoard(round(1e6 / tick_hz))
+    sim = SimulatedRobot(robot, plant="table", board=board)
+    link = SimLink(sim, step_s=link_step_ms / 1e3)
+    for w in waits:
+        link.read(w)
+        assert -1e-9 <= link.clock() - board.time_s < sim.plant_dt_s + 1e-9
+
+
+_ROBOT = []
+
+
+def _robot():
+    from pathlib import Path
+
+    from proleg.robot import load_robot
+
+    if not _ROBOT:
+        _ROBOT.append(load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"))
+    return _ROBOT[0]

@@ -158,6 +158,7 @@ class SimulatedRobot:
         self.ticks_per_step = max(1, round(plant_dt_s * 1e6 / self.board.tick_us))
         self.plant_dt_s = self.ticks_per_step * self.board.tick_us / 1e6
         self.link_faults = LinkFaults()
+        self._pending_s = 0.0  # virtual time asked of advance() not yet run (under one plant step)
         self._push_truth()
 
     # -- the board interface SimLink drives (write/read/advance) -------------------------
@@ -168,8 +169,15 @@ class SimulatedRobot:
         return self.link_faults.apply(self.board.read())
 
     def advance(self, seconds: float) -> None:
-        """Run firmware and plant together for ``seconds`` of virtual time."""
-        for _ in range(max(1, round(seconds / self.plant_dt_s))):
+        """Run firmware and plant together for ``seconds`` of virtual time: the whole plant
+        steps that fit, a remainder shorter than a step carried over to the next call (as
+        ``SimBoard.advance`` carries ticks). Rounding each call instead let the board's clock
+        drift from its caller's: a link stepping 2 ms ran an 800 Hz robot's 2.5 ms plant step
+        on every call, 1.25 s of firmware and plant per second of link clock."""
+        self._pending_s += seconds
+        n = int(self._pending_s / self.plant_dt_s + 1e-9)
+        self._pending_s -= n * self.plant_dt_s
+        for _ in range(n):
             self.step()
 
     @property
