@@ -114,8 +114,8 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
 
     The first cycle is not asserted: it starts from rest with every coil at ambient, and a
     cold coil reaching As late while the held limbs sag can cost it its displacement
-    (inchworm-3 +x: −0.01..+0.13 mm, against +0.4..+0.9 for the cycles after it; docs/robot-file.md,
-    'Example robots'). A gait that the robot file's matrix ties with the best but that the
+    (inchworm-3 +x gait 0: +0.05 mm, against +0.45..+0.65 for the cycles after it;
+    docs/robot-file.md, 'Example robots'). A gait that the robot file's matrix ties with the best but that the
     plant's measured matrix says does not move the robot its way is skipped with the
     numbers: the example robots' matrices are models (made by a rule, not measured), and
     for such a gait there is no prediction to compare with."""
