@@ -100,6 +100,11 @@ def own_reach_deg(geo: BodyGeometry, limb_actuators: list[int]) -> list[float]:
     return [float(psi[i, i]) for i in range(len(limb_actuators))]
 
 
+def _wrap_deg(a: np.ndarray) -> np.ndarray:
+    """Angles in degrees into (−180, 180]."""
+    return 180.0 - np.mod(180.0 - a, 360.0)
+
+
 class Shape:
     """Shape quantities as functions of the coils' contractions c ∈ [0, 1]^n.
 
@@ -147,8 +152,12 @@ class Shape:
             vx, vy = x[:, q] - x[:, p], y[:, q] - y[:, p]
             g = np.hypot(vx, vy)
             chi = np.arctan2(vy, vx)
-            psi_p = np.degrees(phi_nodes[:, p] - chi)
-            psi_q = np.degrees(chi - phi_nodes[:, q])
+            # Both differences into (−180°, 180°]: the tangent's angle accumulates along the
+            # body, the chord's comes from atan2, and once the body has turned more than 180°
+            # in all (a long body with several coils drawn) they differ by a whole turn; an
+            # interior contact averages two of them, so an unwrapped turn read as ±180° there.
+            psi_p = _wrap_deg(np.degrees(phi_nodes[:, p] - chi))
+            psi_q = _wrap_deg(np.degrees(chi - phi_nodes[:, q]))
             psi[:, k] += psi_p if k == 0 else psi_p / 2.0
             psi[:, k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
             ux, uy = vx / g, vy / g
