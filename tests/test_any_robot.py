@@ -206,3 +206,31 @@ def test_eight_binary_limbs_build_for_the_bluepill_and_the_nano_says_why_not(tmp
     assert result.fit.flash_estimate is not None and abs(result.fit.flash_estimate - result.flash_used) < 4096
     with pytest.raises(BuildError, match=r"actuator 'a5' is on channel = 4, but board arduino-nano has 4 PWM channels: channel = 0 \(D9\)"):
         build(robot, load_board("arduino-nano"), tmp_path / "nano")
+
+
+def test_a_five_limb_robot_without_friction_takes_d1_says_so_and_walks(tmp_path, capsys, caplog):
+    """More than four limbs: the plant does not sweep the 2^n D1/D2 assignments (3.5 min for
+    five limbs, hours for eight) but takes D1, warns once when the file is loaded, and the
+    robot walks (with three of its five limbs raised, a fourth rises: the body has turned
+    more than 180 deg in all, which the contact angles once read 180 deg off)."""
+    from proleg.sim.physical.plant import PhysicalPlant
+
+    path = _worm(tmp_path, 5)
+    with caplog.at_level("WARNING"):
+        robot = load_robot(path)
+    warned = [r.getMessage() for r in caplog.records if "friction" in r.getMessage()]
+    assert len(warned) == 1 and "5 limbs" in warned[0] and 'friction = "D1" or "D2"' in warned[0]
+    plant = PhysicalPlant(robot)
+    assert plant.mechanisms == ("D1",) * 5 and plant.mechanism_source.startswith("default")
+    for direction, sign in (("+x", 1), ("-x", -1)):
+        code, out, _ = cli(capsys, "sim", path, "--direction", direction, "--duration", "40", "--json")
+        result = json.loads(out)
+        assert code == 0 and result["faults"] == [], result["faults"]
+        assert result["cycles"] >= 2 and sign * result["displacement_mm"] > 0
+
+    declared = path.read_text().replace('actuator = "a', 'friction = "D1"\nactuator = "a')
+    path.write_text(declared)
+    caplog.clear()
+    with caplog.at_level("WARNING"):
+        load_robot(path)
+    assert not [r for r in caplog.records if "friction" in r.getMessage()]

@@ -21,7 +21,7 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, limb_friction, plant_section,
+from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, inference_warning, limb_friction, plant_section,
                           unreachable_levels)
 from .robot_fields import Fields, read_text
 from .robot_transitions import n_trials_section, transitions_section
@@ -205,6 +205,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     for line in unreachable_levels(path, list(limbs), [a.name for a in actuators], plant):
         log.warning("warning: %s", line)
     for line in coupling_warnings(path, list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg):
+        log.warning("warning: %s", line)
+    if (line := inference_warning(path, list(limbs))) is not None:
         log.warning("warning: %s", line)
     library = None
     if "gaits" in doc:

@@ -7,7 +7,9 @@ material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``;
 the robot's transition matrix: every assignment of D1/D2 to the limbs is swept kinematically
 through every allowed transition (``measure.kinematic_signs``) and the assignment whose signs
 agree with the most non-zero matrix entries wins (ties: D1 first). Multi-level limbs without
-the key alternate soft/hard from level 0.
+the key alternate soft/hard from level 0. Robots of more than ``INFER_MAX_LIMBS`` limbs are
+not inferred (the sweep grows as 4^n): they take D1 on every limb, and loading such a file
+without ``friction`` warns.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimError
+from ...robot_plant import INFER_MAX_LIMBS
 from . import materials as mat
 
 
@@ -60,6 +63,9 @@ def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None) -> Mechan
     if any(k != 2 for k in levels) or getattr(robot, "transitions", None) is None:
         mats = tuple(tuple("soft" if lv % 2 == 0 else "hard" for lv in range(k)) for k in levels)
         return Mechanisms(tuple("D1" if k == 2 else "custom" for k in levels), mats, "default")
+    if len(limbs) > INFER_MAX_LIMBS:  # 2^n assignments × n·2^n transitions: too many (robot_plant)
+        return Mechanisms(("D1",) * len(limbs), (mat.MECHANISMS["D1"],) * len(limbs),
+                          f"default (not inferred for more than {INFER_MAX_LIMBS} limbs)")
     names = _infer(robot)
     return Mechanisms(names, tuple(mat.MECHANISMS[n] for n in names), "inferred from the matrix")
 
