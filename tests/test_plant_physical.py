@@ -273,3 +273,53 @@ def test_a_coil_that_cannot_reach_its_state_is_cold_soon_after_the_state_timeout
     assert faults and faults[0].time_s <= 8.3
     assert after and all(a == 0.0 and b == 0.0 for a, b, _ in after)
     assert after[-1][2] < 40.0   # ambient 25 °C; at the ceiling duty it sits near 68 °C
+
+
+def _signs_by_sweeping(robot, mechanisms, margin_deg=4.0, rate_per_s=1.0, dt_s=0.005):
+    """The oracle: the plant built with ``mechanisms`` swept pose by pose (what
+    kinematic_signs did for each assignment before it replayed one sweep)."""
+    from proleg.sim.physical.measure import IdealDrive
+
+    plant = PhysicalPlant(robot, Conditions(), mechanisms=mechanisms)
+    drive = IdealDrive(robot, plant, margin_deg)
+    _, allowed = robot.transitions.dense()
+    n = len(allowed)
+    out = np.zeros((n, n))
+    c = [0.0] * drive.n_act
+
+    def go(target):
+        for _ in range(int(4.0 / dt_s)):
+            cmd = drive.command(plant.psi_deg.tolist(), target)
+            for j, x in enumerate(cmd):
+                c[j] = min(1.0, max(0.0, c[j] + x * rate_per_s * dt_s))
+            plant.pose(c)
+            if plant.true_state == target and all(x != 1 for x in cmd) and all(
+                    x == 0 or c[j] == 0.0 for j, x in enumerate(cmd)):
+                plant.pose(c)
+                return True
+        return False
+
+    for a in range(n):
+        for b in range(n):
+            if a != b and allowed[a][b] and go(a):
+                x0 = plant.displacement_mm
+                if go(b):
+                    out[a, b] = plant.displacement_mm - x0
+    return out
+
+
+@pytest.mark.parametrize("name", ["paper-r1", "paper-r2", "inchworm-3"])
+def test_one_kinematic_sweep_replayed_per_assignment_is_the_sweep_of_each_assignment(name):
+    """The D1/D2 inference scores every assignment from one sweep of the body (the poses do
+    not depend on friction) with the anchor/slip solve replayed per assignment: it must give
+    exactly what sweeping the plant built with each assignment gives."""
+    import itertools
+
+    from proleg.sim.physical.measure import kinematic_signs_all
+
+    robot = load_robot(ROBOTS / f"{name}.toml")
+    combos = list(itertools.product(("D1", "D2"), repeat=len(robot.limbs)))
+    if len(combos) > 4:
+        combos = [combos[0], combos[3], combos[5], combos[-1]]
+    for combo, got in zip(combos, kinematic_signs_all(robot, combos)):
+        assert np.array_equal(got, _signs_by_sweeping(robot, combo)), combo

@@ -23,6 +23,7 @@ import numpy as np
 
 from ...states import limb_levels
 from .conditions import Conditions
+from .friction import mu_at
 from .plant import PhysicalParams, PhysicalPlant
 
 
@@ -147,36 +148,122 @@ def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float 
                     rate_per_s: float = 1.0, dt_s: float = 0.005) -> np.ndarray:
     """Displacement per allowed transition (mm) with the coils' contractions moved directly
     at ``rate_per_s`` (no thermal model, no lag): the pattern ``mechanisms`` predict."""
-    plant = PhysicalPlant(robot, Conditions(), mechanisms=mechanisms)
+    return kinematic_signs_all(robot, [mechanisms], margin_deg=margin_deg, rate_per_s=rate_per_s, dt_s=dt_s)[0]
+
+
+def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, margin_deg: float = 4.0,
+                        rate_per_s: float = 1.0, dt_s: float = 0.005) -> list[np.ndarray]:
+    """``kinematic_signs`` for several D1/D2 assignments at the cost of about one.
+
+    The sweep's poses do not depend on the friction mechanisms (the drive and the state read
+    the shape only), so the body is swept once, recording per pose the contact angles, the
+    gap changes, the loads and the centre of mass's offset; each assignment then replays only
+    the anchor/slip solve (``PhysicalPlant._move``, same arithmetic in the same order),
+    vectorised over the assignments."""
+    names = [tuple(a) for a in assignments]
+    plant = PhysicalPlant(robot, Conditions(), mechanisms=names[0])
     drive = IdealDrive(robot, plant, margin_deg)
     _, allowed = robot.transitions.dense()
     n = len(allowed)
-    out = np.zeros((n, n))
     c = [0.0] * drive.n_act
     step = rate_per_s * dt_s
+    poses: list[tuple[list[float], list[float], list[float]]] = []   # (ψ, Δgaps, loads) per pose
+    com_off: list[float] = []                                          # after each pose
+
+    def pose() -> None:
+        gaps_old = plant._gaps
+        plant.pose(c)
+        poses.append((list(plant._psi), [g1 - g0 for g0, g1 in zip(gaps_old, plant._gaps)], list(plant._load)))
+        com_off.append(plant._com_off)
 
     def go(target: int) -> bool:
         for _ in range(int(4.0 / dt_s)):
             cmd = drive.command(plant.psi_deg.tolist(), target)
             for j, x in enumerate(cmd):
                 c[j] = min(1.0, max(0.0, c[j] + x * step))
-            plant.pose(c)
+            pose()
             if plant.true_state == target and all(x != 1 for x in cmd) and all(
                     x == 0 or c[j] == 0.0 for j, x in enumerate(cmd)):
-                plant.pose(c)  # a pause: the body comes to rest
+                pose()  # a pause: the body comes to rest
                 return True
         return False
 
+    spans: list[tuple[int, int, int, int]] = []   # (a, b, poses before a→b, poses after it)
     for a in range(n):
         for b in range(n):
             if a == b or not allowed[a][b]:
                 continue
             if not go(a):
                 continue
-            x0 = plant.displacement_mm
+            k0 = len(poses)
             if go(b):
-                out[a, b] = plant.displacement_mm - x0
-    return out
+                spans.append((a, b, k0, len(poses)))
+
+    x0 = _replay(plant, robot, names, poses)                  # (assignments, poses + 1)
+    outs = [np.zeros((n, n)) for _ in names]
+    for a, b, k0, k1 in spans:
+        for m, out in enumerate(outs):
+            out[a, b] = (x0[m, k1] + com_off[k1 - 1]) - (x0[m, k0] + com_off[k0 - 1])
+    return outs
+
+
+def _replay(plant: PhysicalPlant, robot: Any, names: Sequence[tuple[str, ...]],
+            poses: Sequence[tuple[list[float], list[float], list[float]]]) -> np.ndarray:
+    """The body's rigid translation x0 after each recorded pose, for every assignment: the
+    anchor/slip solve of ``PhysicalPlant._move`` replayed with each assignment's friction
+    coefficients (``friction.solve_translation``'s weighted median, vectorised: the same sums
+    in the same order, contacts at one point taken in ascending capacity as its sort takes
+    them). Returns (assignments, len(poses) + 1). Reads the plant's own fields: one package."""
+    k, nl = len(names), len(robot.limbs)
+    mus = {}  # per mechanism name: (static, kinetic) coefficients per limb, as the plant builds them
+    for name in {m for a in names for m in a}:
+        p = PhysicalPlant(robot, Conditions(), mechanisms=[name] * nl)
+        mus[name] = (p._mu_s, p._mu_k)
+    th, band, push, normal = plant._true_th, plant._band, plant._push, plant._normal_n
+    stuck = np.ones((k, nl), dtype=bool)
+    x0 = np.zeros((k, len(poses) + 1))
+    x = np.zeros(k)
+    for t, (psi, dgaps, load) in enumerate(poses):
+        offsets = [0.0]
+        for dg in dgaps:
+            offsets.append(offsets[-1] + dg)
+        if all(abs(o) < 1e-12 for o in offsets):
+            stuck[:] = True
+            x0[:, t + 1] = x
+            continue
+        caps = np.empty((k, nl))    # caps[m, i]: limb i's capacity under assignment m (static if it stuck)
+        for i in range(nl):
+            cache: dict[tuple[str, bool], float] = {}
+            for m in range(k):
+                key = (names[m][i], bool(stuck[m, i]))
+                if key not in cache:
+                    s_mu, k_mu = mus[key[0]]
+                    cache[key] = mu_at(psi[i], th[i], s_mu[i] if key[1] else k_mu[i], band) * load[i] * normal
+                caps[m, i] = cache[key]
+        pts = [-o for o in offsets]
+        total = np.zeros(k)
+        for i in range(nl):
+            total = total + caps[:, i]
+        points = sorted(set(pts))
+        delta = np.full(k, np.nan)
+        delta[push >= total] = points[0]
+        delta[-push >= total] = points[-1]
+        slope = -total + push
+        for g, point in enumerate(points):
+            group = np.sort(caps[:, [i for i in range(nl) if pts[i] == point]], axis=1)
+            for j in range(group.shape[1]):
+                last = j == group.shape[1] - 1
+                nxt = (points[g + 1] if g + 1 < len(points) else point) if last else point
+                new = slope + 2.0 * group[:, j]
+                open_ = np.isnan(delta)
+                delta[open_ & (new > 1e-12)] = point
+                delta[open_ & (new <= 1e-12) & (new >= -1e-12)] = (point + nxt) / 2.0
+                slope = new
+        delta[np.isnan(delta)] = points[-1]
+        x = x + delta
+        stuck = np.abs(delta[:, None] + np.array(offsets)[None, :]) < 1e-9
+        x0[:, t + 1] = x
+    return x0
 
 
 def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditions: Conditions | None = None,

@@ -5,10 +5,10 @@ and D2 (the reverse). A robot file may say so per limb (``friction = "D1"`` or a
 material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``; checked by
 ``proleg.robot``, on every limb or none). A robot file without that key has its mechanisms inferred from the sign pattern of
 the robot's transition matrix: every assignment of D1/D2 to the limbs is swept kinematically
-through every allowed transition (``measure.kinematic_signs``) and the assignment whose signs
+through every allowed transition (``measure.kinematic_signs_all``: one sweep, replayed per assignment) and the assignment whose signs
 agree with the most non-zero matrix entries wins (ties: D1 first). Multi-level limbs without
 the key alternate soft/hard from level 0. Robots of more than ``INFER_MAX_LIMBS`` limbs are
-not inferred (the sweep grows as 4^n): they take D1 on every limb, and loading such a file
+not inferred (the work grows as 4^n): they take D1 on every limb, and loading such a file
 without ``friction`` warns.
 """
 
@@ -88,13 +88,13 @@ def _infer_cached(key: tuple, robot: Any) -> tuple[str, ...]:
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
-    from .measure import kinematic_signs
+    from .measure import kinematic_signs_all
 
     reward, allowed = robot.transitions.dense()
     reward = np.asarray(reward, dtype=float)
     best, best_score = None, -1
-    for combo in itertools.product(("D1", "D2"), repeat=len(robot.limbs)):
-        signs = kinematic_signs(robot, combo)
+    combos = list(itertools.product(("D1", "D2"), repeat=len(robot.limbs)))
+    for combo, signs in zip(combos, kinematic_signs_all(robot, combos)):
         score = 0
         for a in range(len(reward)):
             for b in range(len(reward)):
