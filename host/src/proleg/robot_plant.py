@@ -353,7 +353,7 @@ FRICTION_MECHANISMS = {"D1": ("soft", "hard"), "D2": ("hard", "soft")}
 #: The physical plant infers D1/D2 from the matrix's signs for robots of at most this many
 #: limbs when the file gives no ``friction``: every one of the 2^n assignments is scored over
 #: every transition (n·2^n of them; one kinematic sweep, replayed per assignment). Measured on
-#: this machine: 0.1 s for two limbs, 0.9 s for three, 3.2 s for four, 11 s for five, and
+#: this machine: 0.1 s for two limbs, 0.9 s for three, 3.7 s for four, 15 s for five, and
 #: about four times as long per limb beyond. Larger robots take D1 on every limb (the example
 #: robots' convention) and say so.
 INFER_MAX_LIMBS = 4

@@ -23,7 +23,6 @@ import numpy as np
 
 from ...states import limb_levels
 from .conditions import Conditions
-from .friction import mu_at
 from .plant import PhysicalParams, PhysicalPlant
 
 
@@ -158,8 +157,7 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
     The sweep's poses do not depend on the friction mechanisms (the drive and the state read
     the shape only), so the body is swept once, recording per pose the contact angles, the
     gap changes, the loads and the centre of mass's offset; each assignment then replays only
-    the anchor/slip solve (``PhysicalPlant._move``, same arithmetic in the same order),
-    vectorised over the assignments."""
+    the anchor/slip solve (``PhysicalPlant._move`` itself, on a plant of its own)."""
     names = [tuple(a) for a in assignments]
     plant = PhysicalPlant(robot, Conditions(), mechanisms=names[0])
     drive = IdealDrive(robot, plant, margin_deg)
@@ -199,7 +197,7 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
             if go(b):
                 spans.append((a, b, k0, len(poses)))
 
-    x0 = _replay(plant, robot, names, poses)                  # (assignments, poses + 1)
+    x0 = _replay(robot, names, poses)                        # (assignments, poses + 1)
     outs = [np.zeros((n, n)) for _ in names]
     for a, b, k0, k1 in spans:
         for m, out in enumerate(outs):
@@ -207,62 +205,21 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
     return outs
 
 
-def _replay(plant: PhysicalPlant, robot: Any, names: Sequence[tuple[str, ...]],
+def _replay(robot: Any, names: Sequence[tuple[str, ...]],
             poses: Sequence[tuple[list[float], list[float], list[float]]]) -> np.ndarray:
-    """The body's rigid translation x0 after each recorded pose, for every assignment: the
-    anchor/slip solve of ``PhysicalPlant._move`` replayed with each assignment's friction
-    coefficients (``friction.solve_translation``'s weighted median, vectorised: the same sums
-    in the same order, contacts at one point taken in ascending capacity as its sort takes
-    them). Returns (assignments, len(poses) + 1). Reads the plant's own fields: one package."""
-    k, nl = len(names), len(robot.limbs)
-    mus = {}  # per mechanism name: (static, kinetic) coefficients per limb, as the plant builds them
-    for name in {m for a in names for m in a}:
-        p = PhysicalPlant(robot, Conditions(), mechanisms=[name] * nl)
-        mus[name] = (p._mu_s, p._mu_k)
-    th, band, push, normal = plant._true_th, plant._band, plant._push, plant._normal_n
-    stuck = np.ones((k, nl), dtype=bool)
-    x0 = np.zeros((k, len(poses) + 1))
-    x = np.zeros(k)
-    for t, (psi, dgaps, load) in enumerate(poses):
-        offsets = [0.0]
-        for dg in dgaps:
-            offsets.append(offsets[-1] + dg)
-        if all(abs(o) < 1e-12 for o in offsets):
-            stuck[:] = True
-            x0[:, t + 1] = x
-            continue
-        caps = np.empty((k, nl))    # caps[m, i]: limb i's capacity under assignment m (static if it stuck)
-        for i in range(nl):
-            cache: dict[tuple[str, bool], float] = {}
-            for m in range(k):
-                key = (names[m][i], bool(stuck[m, i]))
-                if key not in cache:
-                    s_mu, k_mu = mus[key[0]]
-                    cache[key] = mu_at(psi[i], th[i], s_mu[i] if key[1] else k_mu[i], band) * load[i] * normal
-                caps[m, i] = cache[key]
-        pts = [-o for o in offsets]
-        total = np.zeros(k)
-        for i in range(nl):
-            total = total + caps[:, i]
-        points = sorted(set(pts))
-        delta = np.full(k, np.nan)
-        delta[push >= total] = points[0]
-        delta[-push >= total] = points[-1]
-        slope = -total + push
-        for g, point in enumerate(points):
-            group = np.sort(caps[:, [i for i in range(nl) if pts[i] == point]], axis=1)
-            for j in range(group.shape[1]):
-                last = j == group.shape[1] - 1
-                nxt = (points[g + 1] if g + 1 < len(points) else point) if last else point
-                new = slope + 2.0 * group[:, j]
-                open_ = np.isnan(delta)
-                delta[open_ & (new > 1e-12)] = point
-                delta[open_ & (new <= 1e-12) & (new >= -1e-12)] = (point + nxt) / 2.0
-                slope = new
-        delta[np.isnan(delta)] = points[-1]
-        x = x + delta
-        stuck = np.abs(delta[:, None] + np.array(offsets)[None, :]) < 1e-9
-        x0[:, t + 1] = x
+    """The body's rigid translation x0 after each recorded pose, for every assignment: one
+    plant per assignment takes each pose's contact angles and loads and runs its own
+    anchor/slip solve (``PhysicalPlant._move``) on the pose's gap changes, so the numbers are
+    the plant's by construction. Returns (assignments, len(poses) + 1). Sets the plant's own
+    fields: one package."""
+    plants = [PhysicalPlant(robot, Conditions(), mechanisms=name) for name in names]
+    x0 = np.zeros((len(names), len(poses) + 1))
+    for m, p in enumerate(plants):
+        x0[m, 0] = p._x0
+        for t, (psi, dgaps, load) in enumerate(poses):
+            p._psi, p._load = psi, load
+            p._move(dgaps)
+            x0[m, t + 1] = p._x0
     return x0
 
 
