@@ -3,6 +3,11 @@ float deadline once made proleg learn's explorer rest for ever on the simulator)
 
 from __future__ import annotations
 
+import functools
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
 from proleg.link.sim_link import SimLink
 
 
@@ -30,9 +35,6 @@ def test_a_sub_nanosecond_timeout_still_advances_the_clock():
 
 
 # --- the simulated robot keeps its caller's clock --------------------------------------------
-
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 
 class _TickBoard:
@@ -82,17 +84,13 @@ def test_the_simulated_robot_runs_as_much_virtual_time_as_its_link_asks(tick_hz,
         assert -1e-9 <= link.clock() - board.time_s < sim.plant_dt_s + 1e-9
 
 
-_ROBOT = []
-
-
+@functools.cache
 def _robot():
     from pathlib import Path
 
     from proleg.robot import load_robot
 
-    if not _ROBOT:
-        _ROBOT.append(load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"))
-    return _ROBOT[0]
+    return load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
 
 
 def test_an_800_hz_robots_firmware_clock_keeps_the_link_clock_while_it_walks():

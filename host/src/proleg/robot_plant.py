@@ -359,11 +359,17 @@ FRICTION_MECHANISMS = {"D1": ("soft", "hard"), "D2": ("hard", "soft")}
 INFER_MAX_LIMBS = 4
 
 
+def too_many_to_infer(limbs: list[Any]) -> bool:
+    """The file gives no friction, every limb has two levels (what inference covers), and
+    there are more than INFER_MAX_LIMBS of them: the plant takes D1 instead."""
+    return (len(limbs) > INFER_MAX_LIMBS and all(len(lb.psi_star_deg) == 1 for lb in limbs)
+            and all(getattr(lb, "friction", None) is None for lb in limbs))
+
+
 def inference_warning(path: Path, limbs: list[Any]) -> str | None:
     """The warning for a robot too large to have its friction mechanisms inferred (None if
     the file gives them, or the plant infers them)."""
-    two_level = all(len(lb.psi_star_deg) == 1 for lb in limbs)
-    if len(limbs) <= INFER_MAX_LIMBS or not two_level or any(lb.friction is not None for lb in limbs):
+    if not too_many_to_infer(limbs):
         return None
     return (f"{path}: {len(limbs)} limbs and no [[limb]] friction: the physical plant takes D1 (soft at rest) on "
             f"every limb; it infers D1/D2 from the matrix's signs only up to {INFER_MAX_LIMBS} limbs. "

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimError
-from ...robot_plant import INFER_MAX_LIMBS
+from ...robot_plant import INFER_MAX_LIMBS, too_many_to_infer
 from . import materials as mat
 
 
@@ -63,7 +63,7 @@ def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None) -> Mechan
     if any(k != 2 for k in levels) or getattr(robot, "transitions", None) is None:
         mats = tuple(tuple("soft" if lv % 2 == 0 else "hard" for lv in range(k)) for k in levels)
         return Mechanisms(tuple("D1" if k == 2 else "custom" for k in levels), mats, "default")
-    if len(limbs) > INFER_MAX_LIMBS:  # 2^n assignments × n·2^n transitions: too many (robot_plant)
+    if too_many_to_infer(limbs):  # 2^n assignments × n·2^n transitions (robot_plant)
         return Mechanisms(("D1",) * len(limbs), (mat.MECHANISMS["D1"],) * len(limbs),
                           f"default (not inferred for more than {INFER_MAX_LIMBS} limbs)")
     names = _infer(robot)
