@@ -21,8 +21,8 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, inference_warning, limb_friction, plant_section,
-                          unreachable_levels)
+from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, inference_warning, limb_friction,
+                          plant_section, unreachable_levels)
 from .robot_fields import Fields, read_text
 from .robot_transitions import n_trials_section, transitions_section
 from .transitions import TransitionTable
