@@ -81,6 +81,26 @@ def test_measure_matrix_json_has_states_matrix_in_mm_and_sample_counts(capsys):
                     assert m["matrix"][a][b] * paper[a][b] > 0, (a, b)
 
 
+def test_measure_matrix_hold_range_brackets_the_matrix_and_says_its_margins(capsys):
+    rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--hold-range", "--json")
+    m = json.loads(out)
+    assert rc == 0 and m["hold_margins_deg"] == [2.0, 4.0, 8.0]
+    spans = []
+    for a in range(4):
+        for b in range(4):
+            if a != b:
+                assert m["low"][a][b] <= m["matrix"][a][b] <= m["high"][a][b], (a, b)
+                spans.append(m["high"][a][b] - m["low"][a][b])
+    assert max(spans) > 0.1  # the hold moves R1's entries (docs/plant.md)
+    rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--hold-range")
+    assert rc == 0 and "range over hold margins 2/4/8° past psi*" in out
+
+
+def test_hold_range_without_measure_matrix_is_a_one_line_error(capsys):
+    rc, _, err = run(capsys, "sim", str(R1), "--hold-range")
+    assert rc != 0 and "--hold-range: it is an option of --measure-matrix" in err and "Traceback" not in err
+
+
 def test_the_robot_file_plant_table_sets_conditions_and_the_command_line_goes_on_top(tmp_path):
     text = R1.read_text() + "\n[plant]\npower = 0.8\nimu_bias_deg = [1.0, -2.0]\nsupply_v = [7.0, 6.0]\n"
     path = tmp_path / "r1-tired.toml"

@@ -288,6 +288,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
         return EXIT_OK
     if args.measure_matrix:
         return cmd_measure_matrix(args, robot)
+    if args.hold_range:
+        from ..errors import SimError
+
+        raise SimError("--hold-range: it is an option of --measure-matrix (measure the matrix at several hold margins)")
     if not args.pty:
         have = len(firmware_gaits(robot, args.objective, args.max_transitions).get(args.direction, ()))
         if args.gait >= have:

@@ -1,4 +1,4 @@
-"""``proleg sim``'s plant options: ``--plant``, ``--condition``, ``--measure-matrix``.
+"""``proleg sim``'s plant options: ``--plant``, ``--condition``, ``--measure-matrix`` (``--hold-range``).
 
 Kept apart from the rest of the sim subcommand (``cli/main.py``) so that other options can be
 added there without touching these. The keys ``--condition`` takes are the physical keys of
@@ -25,6 +25,9 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                         "--condition help lists every key with its unit and range")
     s.add_argument("--measure-matrix", action="store_true",
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
+    s.add_argument("--hold-range", action="store_true",
+                   help="with --measure-matrix: measure it again holding raised limbs 2° and 8° past psi* (the "
+                        "matrix is measured at 4°) and print each entry's range: how much it depends on the hold")
 
 
 def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
@@ -49,19 +52,41 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 
     if args.plant != "physical":
         raise SimError("--measure-matrix: the matrix is measured on the physical plant (the table plant is the matrix)")
-    m = measure_matrix(robot, plant_conditions(robot, args.condition), seed=args.seed)
+    conditions = plant_conditions(robot, args.condition)
+    rng = None
+    if args.hold_range:
+        from ..sim.physical.measure import HOLD_RANGE_DEG, measure_matrix_range
+
+        rng = measure_matrix_range(robot, HOLD_RANGE_DEG, conditions=conditions, seed=args.seed)
+        m = rng.measured[HOLD_RANGE_DEG.index(4.0)]
+    else:
+        m = measure_matrix(robot, conditions, seed=args.seed)
     if args.json:
+        extra = {} if rng is None else {"hold_margins_deg": list(rng.margins_deg),
+                                        "low": _clean(rng.low_mm), "high": _clean(rng.high_mm)}
         print(json.dumps({"robot": robot.name, "plant": "physical", "conditions": list(args.condition),
-                          **m.to_json()}))
+                          **m.to_json(), **extra}))
         return 0
-    width = max(6, *(len(s) for s in m.states))
     print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
-    print(" " * width + "".join(f"{s:>{width + 3}}" for s in m.states))
-    for a, row in enumerate(m.matrix_mm):
-        cells = []
-        for b, x in enumerate(row):
-            cells.append(f"{'-' if x != x else f'{x:+.2f}':>{width + 3}}" if a != b else f"{'.':>{width + 3}}")
-        print(f"{m.states[a]:<{width}}" + "".join(cells))
+    _table(m.states, [[None if x != x else f"{x:+.2f}" for x in row] for row in m.matrix_mm])
     print(f"samples per entry: {int(m.samples.max()) if m.samples.size else 0} (entries without a sample: '-')")
+    if rng is not None:
+        print(f"\neach entry's range over hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi* "
+              "(mm, low..high):")
+        _table(m.states, [[None if lo != lo else f"{lo:+.2f}..{hi:+.2f}" for lo, hi in zip(rl, rh)]
+                          for rl, rh in zip(rng.low_mm, rng.high_mm)])
     return 0
+
+
+def _clean(m: Any) -> list:
+    return [[None if x != x else round(float(x), 4) for x in row] for row in m]
+
+
+def _table(states: list[str], cells: list[list[str | None]]) -> None:
+    """Rows and columns named by state; '.' on the diagonal, '-' where there is no value."""
+    width = max(6, *(len(s) for s in states), *(len(c) for row in cells for c in row if c))
+    print(" " * width + "".join(f"{s:>{width + 2}}" for s in states))
+    for a, row in enumerate(cells):
+        text = ["." if a == b else c or "-" for b, c in enumerate(row)]
+        print(f"{states[a]:<{width}}" + "".join(f"{t:>{width + 2}}" for t in text))

@@ -8,8 +8,8 @@ See docs/plant.md for the model, its constants and their sources.
 
 from .conditions import KEYS as CONDITION_KEYS
 from .conditions import Conditions, describe_keys, parse_conditions
-from .measure import MeasuredMatrix, measure_matrix
+from .measure import MatrixRange, MeasuredMatrix, measure_matrix, measure_matrix_range
 from .plant import PhysicalParams, PhysicalPlant
 
-__all__ = ["CONDITION_KEYS", "Conditions", "MeasuredMatrix", "PhysicalParams", "PhysicalPlant",
-           "describe_keys", "measure_matrix", "parse_conditions"]
+__all__ = ["CONDITION_KEYS", "Conditions", "MatrixRange", "MeasuredMatrix", "PhysicalParams", "PhysicalPlant",
+           "describe_keys", "measure_matrix", "measure_matrix_range", "parse_conditions"]

@@ -1,0 +1,91 @@
+"""The measured matrix over hold margins (``measure_matrix_range``): what `hil_tests` compare a
+gait's walk with. Its range must contain every margin's own measurement, entry by entry and
+for any walk, and one margin must give back ``measure_matrix`` itself."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from proleg.robot import load_robot
+from proleg.sim.physical import measure_matrix, measure_matrix_range
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+
+
+@functools.cache
+def r1():
+    return load_robot(ROBOTS / "paper-r1.toml")
+
+
+@functools.cache
+def r1_range():
+    return measure_matrix_range(r1(), (2.0, 4.0, 8.0), repeats=1)
+
+
+def test_one_margin_gives_back_the_measured_matrix():
+    one = measure_matrix_range(r1(), (4.0,), repeats=1)
+    plain = measure_matrix(r1(), repeats=1)
+    np.testing.assert_array_equal(one.low_mm, plain.matrix_mm)
+    np.testing.assert_array_equal(one.high_mm, plain.matrix_mm)
+
+
+def test_the_hold_margin_changes_r1s_entries():
+    """The reason for a range: how far past ψ* the held limbs sit moves R1's entries by tenths
+    of a millimetre (so a range that collapsed to one value would be a bug, not physics)."""
+    rng = r1_range()
+    spread = np.nanmax(rng.high_mm - rng.low_mm)
+    assert spread > 0.2, spread
+
+
+@st.composite
+def walks(draw):
+    _, allowed = r1().transitions.dense()
+    n = len(allowed)
+    state = draw(st.integers(0, n - 1))
+    out = [state]
+    for _ in range(draw(st.integers(1, 10))):
+        nxt = [b for b in range(n) if b != state and allowed[state][b]]
+        state = draw(st.sampled_from(nxt))
+        out.append(state)
+    return out
+
+
+@settings(max_examples=60, deadline=None)
+@given(walks())
+def test_a_walks_range_holds_what_every_margin_measures_along_it(walk):
+    rng = r1_range()
+    low, high = rng.cycle_range(walk)
+    assert low <= high
+    for m in rng.measured:
+        along = sum(m.matrix_mm[a, b] for a, b in zip(walk, walk[1:]))
+        assert low - 1e-9 <= along <= high + 1e-9
+
+
+def test_an_entry_reached_at_only_some_margins_keeps_those_values(monkeypatch):
+    """NaN (not reached) at one margin does not hide what the others measured; an entry no
+    margin reached stays NaN."""
+    from proleg.sim.physical import measure as measure_mod
+
+    nan = float("nan")
+    by_margin = {2.0: [[nan, -0.4], [nan, nan]], 4.0: [[nan, nan], [0.5, nan]], 8.0: [[nan, -0.1], [0.7, nan]]}
+
+    def fake(robot, *, margin_deg, **kwargs):
+        m = np.array(by_margin[margin_deg])
+        return measure_mod.MeasuredMatrix(["0", "1"], m, m * 0, np.isfinite(m).astype(int), m * 0, (), "test")
+
+    monkeypatch.setattr(measure_mod, "measure_matrix", fake)
+    rng = measure_mod.measure_matrix_range(None, (2.0, 4.0, 8.0))
+    assert rng.low_mm[0, 1] == -0.4 and rng.high_mm[0, 1] == -0.1
+    assert rng.low_mm[1, 0] == 0.5 and rng.high_mm[1, 0] == 0.7
+    assert np.isnan(rng.low_mm[0, 0]) and np.isnan(rng.high_mm[1, 1])
+
+
+def test_no_margins_is_an_error():
+    with pytest.raises(ValueError, match="no hold margins"):
+        measure_matrix_range(r1(), ())
