@@ -44,14 +44,16 @@ def test_telemetry_streams_with_consecutive_sequence_numbers(target):
 
 # ---------------------------------------------------------------------------------------
 # gaits: physical outcomes on the default (physical) plant — direction, displacement per cycle
-# within a band of what the plant's *measured* matrix predicts for the gait, no fault
+# within a band of the range the plant's *measured* matrix gives the gait, no fault
 
 #: the firmware's cycle against the measured matrix's range (``measure_matrix_range``: the idealised
 #: drive holds a raised limb 2°, 4° or 8° past ψ* with perfect sensing and waits 2.5 s; the firmware
 #: settles on its own margins and hysteresis, its raised limbs overshoot through that range, and it
-#: moves on at once). The mean of the steady cycles lies within
-#: [BAND[0] × the range's low end, BAND[1] × its high end] of the gait's pass. Measured ratios to the
-#: 4° matrix: R1 ≈ 1.07, R1 one-actuator ≈ 1.0, R2 ≈ 0.51, R3 −x ≈ 1.0 and 1.67.
+#: moves on at once). The mean of the steady cycles lies within [BAND[0] × the range's low end,
+#: BAND[1] × its high end]; where the low end is at or below zero there is no minimum speed beyond
+#: every steady cycle going the gait's way. Measured ratios to the 4° matrix's sum: R1 ≈ 1.07,
+#: R1 one-actuator ≈ 1.0, R2 ≈ 0.51, R3 −x ≈ 1.0 and 1.67; to the range's high end, at most 1.49
+#: (inchworm-3's 100→110→111→101).
 BAND = (0.45, 1.75)
 R3_PLUS_X = ("on the physical plant the firmware walks R3's +x gait 00→11→01→00 backwards (about −1.2 mm "
              "per cycle after the first) while the idealised drive's measured matrix predicts +1.5: the "
@@ -62,7 +64,7 @@ _MEASURED: dict[str, object] = {}
 
 def measured_matrix(robot):
     """The robot's reward matrix measured on the physical plant at each hold margin of
-    ``HOLD_RANGE_DEG`` (a ``MatrixRange``; its 4° matrix is ``measured[1]``), once per robot."""
+    ``HOLD_RANGE_DEG`` (a ``MatrixRange``), once per robot."""
     from proleg.sim.physical import measure_matrix_range
 
     if robot.name not in _MEASURED:
@@ -117,11 +119,14 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
     fault.
 
     Why a range and not the 4° matrix's sum: how far past ψ* the held limbs sit decides which
-    contact slides, most of all on bodies of three or more contacts. inchworm-3's
-    100→110→111→101 sums +0.09 mm at 4° and +0.16 at 8°, and the firmware, whose raised limbs
-    pass through both on their way down from the overshoot, walks it at +0.6 (its 110→111
-    measures −0.20 settled at 4° and walks +0.20 in the gait). docs/robot-file.md, 'Example
-    robots', has the numbers for every gait.
+    contact slides, most of all on bodies of three or more contacts, and the firmware's raised
+    limbs pass through 2–8° on their way down from the overshoot. Even the range does not
+    predict such a body's gaits: inchworm-3's 100→110→111→101 sums +0.09 mm at 4° and spans
+    −0.09..+0.41, and the firmware walks it at +0.61 (its 110→111 measures −0.20 at 4° and
+    walks +0.20 inside the gait; the steps interact). So where the range's low end is at or
+    below zero (most gaits of inchworm-3 and a third of caterpillar-4's, none of the paper
+    robots') the test asserts no minimum speed, only that every steady cycle goes the gait's
+    way. docs/robot-file.md, 'Example robots', has the numbers.
 
     The first cycle is not asserted: it starts from rest with every coil at ambient, and a
     cold coil reaching As late while the held limbs sag can cost it its displacement
@@ -139,7 +144,7 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
                     "(tests/test_planar_plant.py)")
     gait = firmware_gaits(t.robot)[direction][gait_index]
     measured = measured_matrix(t.robot)
-    m = measured.measured[measured.margins_deg.index(4.0)].matrix_mm
+    m = measured.at(4.0).matrix_mm
     steps = list(zip(gait.states, gait.states[1:]))
     unmeasured = [f"{t.robot.transitions.label(a)}->{t.robot.transitions.label(b)}" for a, b in steps
                   if not m[a, b] == m[a, b]]
@@ -150,7 +155,8 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
         pytest.skip(f"{t.robot.name}: the robot file's matrix ties this gait with gait 0, but the physical "
                     f"plant's measured matrix says {predicted:+.2f} mm per cycle in {direction}")
     assert sign * predicted > 0, f"the measured matrix says {predicted:+.2f} mm per cycle"
-    low, high = sorted(sign * x for x in measured.cycle_range(gait.states))  # in the gait's direction
+    lo, hi = measured.cycle_range(gait.states)
+    slowest, fastest = sorted((sign * lo, sign * hi))  # along the gait's direction
 
     cycles, received = _run_gait(t, direction, gait_index)
     assert not events(received, EventKind.FAULT)
@@ -158,9 +164,10 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
     assert len(steady) >= 3, f"only {len(cycles)} cycles"
     assert all(sign * c > 0 for c in steady), cycles
     mean = sign * sum(steady) / len(steady)
-    assert BAND[0] * low <= mean <= BAND[1] * high, (
-        f"the measured matrix gives {sign * low:+.2f}..{sign * high:+.2f} mm per cycle over hold margins "
-        f"{measured.margins_deg}° ({predicted:+.2f} at 4°); measured {cycles}")
+    at_least = BAND[0] * slowest if slowest > 0 else 0.0  # no minimum beyond the direction
+    assert at_least <= mean <= BAND[1] * fastest, (
+        f"the measured matrix gives {lo:+.2f}..{hi:+.2f} mm per cycle over hold margins "
+        f"{'/'.join(f'{x:g}' for x in measured.margins_deg)}° ({predicted:+.2f} at 4°); measured {cycles}")
 
 
 @pytest.mark.plant

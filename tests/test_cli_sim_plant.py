@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from proleg.cli.main import main
@@ -81,10 +82,13 @@ def test_measure_matrix_json_has_states_matrix_in_mm_and_sample_counts(capsys):
                     assert m["matrix"][a][b] * paper[a][b] > 0, (a, b)
 
 
-def test_measure_matrix_hold_range_brackets_the_matrix_and_says_its_margins(capsys):
+def test_measure_matrix_hold_range_brackets_the_4_degree_matrix_and_says_its_margins(capsys):
+    rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--json")
+    plain = json.loads(out)
     rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--hold-range", "--json")
     m = json.loads(out)
     assert rc == 0 and m["hold_margins_deg"] == [2.0, 4.0, 8.0]
+    assert m["matrix"] == plain["matrix"] and m["samples"] == plain["samples"]  # the 4° measurement
     spans = []
     for a in range(4):
         for b in range(4):
@@ -92,8 +96,18 @@ def test_measure_matrix_hold_range_brackets_the_matrix_and_says_its_margins(caps
                 assert m["low"][a][b] <= m["matrix"][a][b] <= m["high"][a][b], (a, b)
                 spans.append(m["high"][a][b] - m["low"][a][b])
     assert max(spans) > 0.1  # the hold moves R1's entries (docs/plant.md)
+
+
+def test_measure_matrix_hold_range_prints_each_entrys_low_and_high(capsys, monkeypatch):
+    from proleg.sim.physical import measure as measure_mod
+
+    rng = measure_mod.MatrixRange((2.0, 4.0, 8.0), (None, measure_mod.measure_matrix(load_robot(R1), repeats=1), None),
+                                  np.full((4, 4), -0.25), np.full((4, 4), 1.5))
+    monkeypatch.setattr(measure_mod, "measure_matrix_range", lambda *a, **k: rng)
     rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--hold-range")
-    assert rc == 0 and "range over hold margins 2/4/8° past psi*" in out
+    lines = out.splitlines()
+    at = lines.index(next(x for x in lines if "range over hold margins 2/4/8° past psi*" in x))
+    assert rc == 0 and lines[at + 2].split() == ["00", ".", "-0.25..+1.50", "-0.25..+1.50", "-0.25..+1.50"]
 
 
 def test_hold_range_without_measure_matrix_is_a_one_line_error(capsys):

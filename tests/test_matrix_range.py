@@ -35,6 +35,26 @@ def test_one_margin_gives_back_the_measured_matrix():
     np.testing.assert_array_equal(one.high_mm, plain.matrix_mm)
 
 
+def test_a_walks_range_takes_each_step_at_its_own_extreme():
+    """Hand-built: two margins that disagree on different steps. The range of 0→1→0 is the
+    sum of the per-step extremes (-1 + -3 .. 2 + 1), wider than either margin's own sum."""
+    from proleg.sim.physical.measure import MatrixRange
+
+    low = np.array([[np.nan, -1.0], [-3.0, np.nan]])
+    high = np.array([[np.nan, 2.0], [1.0, np.nan]])
+    rng = MatrixRange((2.0, 8.0), (), low, high)
+    assert rng.cycle_range([0, 1, 0]) == (-4.0, 3.0)
+    assert rng.cycle_range([1, 0, 1, 0]) == (-7.0, 4.0)
+    assert rng.cycle_range([0]) == (0.0, 0.0)
+
+
+def test_one_margins_range_is_its_own_sum_along_any_walk():
+    one = measure_matrix_range(r1(), (4.0,), repeats=1)
+    walk = [0, 2, 1, 0, 1, 3, 2, 0]
+    along = sum(one.at(4.0).matrix_mm[a, b] for a, b in zip(walk, walk[1:]))
+    assert one.cycle_range(walk) == pytest.approx((along, along))
+
+
 def test_the_hold_margin_changes_r1s_entries():
     """The reason for a range: how far past ψ* the held limbs sit moves R1's entries by tenths
     of a millimetre (so a range that collapsed to one value would be a bug, not physics)."""

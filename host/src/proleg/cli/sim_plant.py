@@ -27,7 +27,8 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
     s.add_argument("--hold-range", action="store_true",
                    help="with --measure-matrix: measure it again holding raised limbs 2° and 8° past psi* (the "
-                        "matrix is measured at 4°) and print each entry's range: how much it depends on the hold")
+                        "matrix is measured at 4°) and print each entry's range: how much it depends on the hold "
+                        "(three measurements, so three times as long)")
 
 
 def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
@@ -58,12 +59,11 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         from ..sim.physical.measure import HOLD_RANGE_DEG, measure_matrix_range
 
         rng = measure_matrix_range(robot, HOLD_RANGE_DEG, conditions=conditions, seed=args.seed)
-        m = rng.measured[HOLD_RANGE_DEG.index(4.0)]
+        m = rng.at(4.0)
     else:
         m = measure_matrix(robot, conditions, seed=args.seed)
     if args.json:
-        extra = {} if rng is None else {"hold_margins_deg": list(rng.margins_deg),
-                                        "low": _clean(rng.low_mm), "high": _clean(rng.high_mm)}
+        extra = {} if rng is None else rng.to_json()
         print(json.dumps({"robot": robot.name, "plant": "physical", "conditions": list(args.condition),
                           **m.to_json(), **extra}))
         return 0
@@ -79,14 +79,10 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     return 0
 
 
-def _clean(m: Any) -> list:
-    return [[None if x != x else round(float(x), 4) for x in row] for row in m]
-
-
 def _table(states: list[str], cells: list[list[str | None]]) -> None:
     """Rows and columns named by state; '.' on the diagonal, '-' where there is no value."""
     width = max(6, *(len(s) for s in states), *(len(c) for row in cells for c in row if c))
-    print(" " * width + "".join(f"{s:>{width + 2}}" for s in states))
+    print(" " * width + "".join(f"{s:>{width + 3}}" for s in states))
     for a, row in enumerate(cells):
         text = ["." if a == b else c or "-" for b, c in enumerate(row)]
-        print(f"{states[a]:<{width}}" + "".join(f"{t:>{width + 2}}" for t in text))
+        print(f"{states[a]:<{width}}" + "".join(f"{t:>{width + 3}}" for t in text))

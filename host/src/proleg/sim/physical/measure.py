@@ -67,12 +67,15 @@ class MeasuredMatrix:
     mechanism_source: str
 
     def to_json(self) -> dict:
-        def clean(m: np.ndarray) -> list:
-            return [[None if not np.isfinite(x) else round(float(x), 4) for x in row] for row in m]
-        return {"states": self.states, "matrix": clean(self.matrix_mm), "units": "mm",
-                "std": clean(self.std_mm), "samples": self.samples.tolist(),
-                "duration_s": clean(self.duration_s), "mechanisms": list(self.mechanisms),
+        return {"states": self.states, "matrix": json_matrix(self.matrix_mm), "units": "mm",
+                "std": json_matrix(self.std_mm), "samples": self.samples.tolist(),
+                "duration_s": json_matrix(self.duration_s), "mechanisms": list(self.mechanisms),
                 "mechanism_source": self.mechanism_source}
+
+
+def json_matrix(m: np.ndarray) -> list:
+    """A matrix for JSON: rounded to 0.1 µm, null where there is no (finite) value."""
+    return [[None if not np.isfinite(x) else round(float(x), 4) for x in row] for row in m]
 
 
 def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, dt: float,
@@ -152,19 +155,28 @@ HOLD_RANGE_DEG = (2.0, 4.0, 8.0)
 
 @dataclass
 class MatrixRange:
-    """The matrix measured at several hold margins: per entry, the lowest and highest mean."""
+    """The matrix measured at several hold margins: per entry, the lowest and highest mean
+    over the margins at which it was measured (NaN where none reached it)."""
 
     margins_deg: tuple[float, ...]
     measured: tuple[MeasuredMatrix, ...]
     low_mm: np.ndarray
     high_mm: np.ndarray
 
+    def at(self, margin_deg: float) -> MeasuredMatrix:
+        """The matrix measured at ``margin_deg`` (one of ``margins_deg``)."""
+        return self.measured[self.margins_deg.index(margin_deg)]
+
     def cycle_range(self, states: Sequence[int]) -> tuple[float, float]:
-        """(lowest, highest) displacement per pass along ``states``, each step at its own extreme:
-        within a gait each step's held limbs may sit anywhere in the range, independently."""
+        """(lowest, highest) displacement along ``states``, each step at its own extreme: within a
+        gait, each step's held limbs may sit anywhere in the range, independently of the others."""
         steps = list(zip(states, states[1:]))
         return (float(sum(self.low_mm[a, b] for a, b in steps)),
                 float(sum(self.high_mm[a, b] for a, b in steps)))
+
+    def to_json(self) -> dict:
+        return {"hold_margins_deg": list(self.margins_deg), "low": json_matrix(self.low_mm),
+                "high": json_matrix(self.high_mm)}
 
 
 def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_DEG,
@@ -172,13 +184,13 @@ def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_D
     """``measure_matrix`` once per hold margin, and each entry's range over them.
 
     How far past ψ* the held limbs are changes the body's shape and the load on each contact,
-    and with it which end slides: R1's 11 → 00 measures −0.90 mm at 2° and +0.01 at 8°. A gait's
-    displacement under a drive that holds anywhere in that range lies within ``cycle_range``."""
+    and with it which end slides: R1's 11 → 00 measures −0.90 mm at 2°, +0.01 at 4° and −0.07
+    at 8°. The range says how much the matrix depends on the hold; it is not a bound on what
+    a drive that holds within it walks (a gait's steps interact: docs/plant.md)."""
     if not margins_deg:
         raise ValueError("measure_matrix_range: no hold margins given")
     measured = tuple(measure_matrix(robot, margin_deg=m, **kwargs) for m in margins_deg)
     stack = np.array([m.matrix_mm for m in measured])
-    # over the margins at which the entry was measured (NaN only where none reached it)
     return MatrixRange(tuple(float(m) for m in margins_deg), measured,
                        np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0))
 
