@@ -106,6 +106,25 @@ def test_an_entry_reached_at_only_some_margins_keeps_those_values(monkeypatch):
     assert np.isnan(rng.low_mm[0, 0]) and np.isnan(rng.high_mm[1, 1])
 
 
+def test_a_level_narrower_than_two_margins_is_held_in_its_middle():
+    """A three-level limb with critical angles 12° and 18°, held 8° past: level 1 (12..18°)
+    cannot be 8° inside both edges, so the drive holds it at 15° instead of cooling it out of
+    the level (which made every state with that level unreachable at 8°)."""
+    from types import SimpleNamespace
+
+    from proleg.sim.physical.measure import IdealDrive
+
+    robot = SimpleNamespace(actuators=[SimpleNamespace(name="a")], limbs=[SimpleNamespace(actuator="a")])
+    plant = SimpleNamespace(levels=(3,), true_psi_star_deg=[[12.0, 18.0]])
+    drive = IdealDrive(robot, plant, margin_deg=8.0)
+    assert drive.command([13.0], 1) == [1]    # below the middle: heat
+    assert drive.command([15.0], 1) == [0]    # at it: hold
+    assert drive.command([17.0], 1) == [-1]   # above it: cool
+    assert drive.command([20.0], 2) == [1]    # level 2 is open above: 18 + 8 = 26° to reach
+    wide = IdealDrive(robot, SimpleNamespace(levels=(3,), true_psi_star_deg=[[12.0, 40.0]]), margin_deg=8.0)
+    assert wide.command([19.0], 1) == [1] and wide.command([25.0], 1) == [0] and wide.command([33.0], 1) == [-1]
+
+
 def test_no_margins_is_an_error():
     with pytest.raises(ValueError, match="no hold margins"):
         measure_matrix_range(r1(), ())

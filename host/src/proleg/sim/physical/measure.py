@@ -2,7 +2,8 @@
 
 ``measure_matrix`` drives the plant with an idealised state-tracking drive: perfect sensing
 (true ψ, true ψ*), each limb's own coil heated at ``duty`` until its end reaches the target
-level by ``margin_deg``, then held there bang-bang; coils whose limbs are all to be at level 0
+level by ``margin_deg`` (the middle of a level narrower than two margins), then held there
+bang-bang; coils whose limbs are all to be at level 0
 are switched off and cool freely (as the firmware does). For every allowed transition a → b it
 goes to a, settles, records the centre of mass, drives to b, settles again and records the
 displacement; ``repeats`` times. A transition the drive cannot reach within ``timeout_s`` gets
@@ -47,6 +48,8 @@ class IdealDrive:
             th = self.th[i]
             lo = th[k - 1] + self.margin if k > 0 else -math.inf
             hi = th[k] - self.margin if k < len(th) else math.inf
+            if lo > hi:  # a middle level narrower than two margins: hold in its middle
+                lo = hi = (th[k - 1] + th[k]) / 2
             if p > hi:
                 cool[j] = True
             elif p < lo:
