@@ -136,6 +136,7 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
     models (made by a rule, not measured), and for such a gait there is no prediction to
     compare with."""
     from proleg.firmware.build import firmware_gaits
+    from proleg.sim.physical.measure import MARGIN_DEG
 
     t = open_target(robot_name)
     if t.robot.transitions.planar is not None:
@@ -144,7 +145,7 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
                     "(tests/test_planar_plant.py)")
     gait = firmware_gaits(t.robot)[direction][gait_index]
     measured = measured_matrix(t.robot)
-    m = measured.at(4.0).matrix_mm
+    m = measured.at(MARGIN_DEG).matrix_mm
     steps = list(zip(gait.states, gait.states[1:]))
     unmeasured = [f"{t.robot.transitions.label(a)}->{t.robot.transitions.label(b)}" for a, b in steps
                   if not m[a, b] == m[a, b]]

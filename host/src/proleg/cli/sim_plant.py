@@ -56,10 +56,10 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     conditions = plant_conditions(robot, args.condition)
     rng = None
     if args.hold_range:
-        from ..sim.physical.measure import HOLD_RANGE_DEG, measure_matrix_range
+        from ..sim.physical.measure import MARGIN_DEG, measure_matrix_range
 
-        rng = measure_matrix_range(robot, HOLD_RANGE_DEG, conditions=conditions, seed=args.seed)
-        m = rng.at(4.0)
+        rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed)
+        m = rng.at(MARGIN_DEG)
     else:
         m = measure_matrix(robot, conditions, seed=args.seed)
     if args.json:

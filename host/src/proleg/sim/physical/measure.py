@@ -27,6 +27,11 @@ from .conditions import Conditions
 from .plant import PhysicalParams, PhysicalPlant
 
 
+#: How far past a level's critical angle the idealised drive holds a limb (°): the margin the
+#: measured matrix is defined at.
+MARGIN_DEG = 4.0
+
+
 class IdealDrive:
     """Per actuator: +1 heat, 0 hold, −1 cool, towards a target robot state."""
 
@@ -110,7 +115,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
 
 
 def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats: int = 2,
-                   duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 2.5,
+                   duty: float | None = None, margin_deg: float = MARGIN_DEG, settle_s: float = 2.5,
                    timeout_s: float = 12.0, dt_s: float = 0.002, seed: int = 0,
                    params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None) -> MeasuredMatrix:
     """The reward matrix of ``robot`` measured on the physical plant (mm, row = from)."""
@@ -153,7 +158,7 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
 #: raised limb anywhere from half to twice the idealised drive's 4°, and the firmware's raised limbs
 #: pass through all of it in a gait (they overshoot to about ψ* + 13° before they settle on their
 #: hold edge, ψ* + h/2 + ``control.hold_margin_deg``).
-HOLD_RANGE_DEG = (2.0, 4.0, 8.0)
+HOLD_RANGE_DEG = (MARGIN_DEG / 2, MARGIN_DEG, 2 * MARGIN_DEG)
 
 
 @dataclass
@@ -198,14 +203,14 @@ def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_D
                        np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0))
 
 
-def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float = 4.0,
+def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float = MARGIN_DEG,
                     rate_per_s: float = 1.0, dt_s: float = 0.005) -> np.ndarray:
     """Displacement per allowed transition (mm) with the coils' contractions moved directly
     at ``rate_per_s`` (no thermal model, no lag): the pattern ``mechanisms`` predict."""
     return kinematic_signs_all(robot, [mechanisms], margin_deg=margin_deg, rate_per_s=rate_per_s, dt_s=dt_s)[0]
 
 
-def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, margin_deg: float = 4.0,
+def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, margin_deg: float = MARGIN_DEG,
                         rate_per_s: float = 1.0, dt_s: float = 0.005) -> list[np.ndarray]:
     """``kinematic_signs`` for several D1/D2 assignments at the cost of about one.
 
@@ -279,7 +284,7 @@ def _replay(robot: Any, names: Sequence[tuple[str, ...]],
 
 
 def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditions: Conditions | None = None,
-                 duty: float | None = None, margin_deg: float = 4.0, settle_s: float = 0.3,
+                 duty: float | None = None, margin_deg: float = MARGIN_DEG, settle_s: float = 0.3,
                  timeout_s: float = 12.0, dt_s: float = 0.002, plant: PhysicalPlant | None = None) -> tuple[float, float]:
     """Walk the closed sequence ``states`` (first state repeated at the end or not) with the
     idealised drive, ``cycles`` times after one warm-up cycle; return (mm per cycle, s per
