@@ -80,6 +80,15 @@ def _r1_fast():
     return robot, {"+x": [_gait(0, 2, 3, 1, 0), _gait(0, 2, 0)], "-x": []}, SIM_BOARD
 
 
+def _r1_stroke():
+    """R1 with full strokes ([[limb]] stroke_deg: left 60°, right 50°; test_ctl_stroke.c)."""
+    doc = _robot_doc()
+    doc["limb"][0]["stroke_deg"] = 60.0
+    doc["limb"][1]["stroke_deg"] = 50.0
+    robot = robot_from_dict(doc, Path("tests/r1-stroke.toml"))
+    return robot, {"+x": [_gait(0, 3, 0)], "-x": []}, SIM_BOARD
+
+
 def _r1_one_actuator():
     doc = _robot_doc(
         actuator=[{"name": "a0", "channel": 0}],
@@ -128,7 +137,7 @@ def _inchworm_entry():
     return robot, {"+x": [_gait(3, 7, 3), _gait(7, 3, 7)], "-x": [_gait(1, 5, 1)]}, board
 
 
-CONFIGS = {"inch-entry": _inchworm_entry, "r1-fast": _r1_fast, "r1-1act": _r1_one_actuator, "multi": _multi_level, "big": _big}
+CONFIGS = {"inch-entry": _inchworm_entry, "r1-fast": _r1_fast, "r1-stroke": _r1_stroke, "r1-1act": _r1_one_actuator, "multi": _multi_level, "big": _big}
 
 # C test → (config, core sources, extra sources, defines)
 C_TESTS = {
@@ -138,6 +147,7 @@ C_TESTS = {
     "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "limbmap.c"], [], []),
+    "test_ctl_stroke.c": ("r1-stroke", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_ctl_chain.c": ("inch-entry", ["ctl.c", "psi.c", "limbmap.c"], [], []),
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c", "count.c"], ["gait_table.c"], []),
     "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c", "count.c"], ["gait_table.c"], []),

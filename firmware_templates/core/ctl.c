@@ -37,6 +37,10 @@ typedef struct {
     uint8_t stall;     /* CTL_STALL_* */
     uint16_t ticks;    /* rising without progress / at the target level unsettled / falling: kept warm */
     uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
+#ifdef CFG_LIMB_STROKE_CDEG
+    int16_t peak;      /* highest ψ (0.01°) since the hover clock last restarted */
+    uint16_t waited;   /* ticks waited warm in this step for a larger stroke to cross */
+#endif
 } ctl_limb_t;
 
 static ctl_limb_t cl[CFG_N_LIMBS];
@@ -64,6 +68,42 @@ uint8_t ctl_stall(uint8_t limb)
     return cl[limb].stall;
 }
 
+#ifdef CFG_LIMB_STROKE_CDEG
+/* A limb with a stroke on its way up to it: ψ rose CTL_CLIMB_CDEG since the last time this
+ * said so. Its hover clock restarts, so it settles at the stroke or where it stops climbing. */
+static uint8_t climbing(uint8_t i, ctl_limb_t *c)
+{
+    int16_t p;
+    if (psi_stroke_cdeg(i) == 0) {
+        return 0;
+    }
+    p = psi_last_centideg(i);
+    if (c->ticks == 0u || p >= c->peak + CTL_CLIMB_CDEG) {
+        c->peak = p; /* a new level, a settled limb or a new high: measure from here */
+        return c->ticks != 0u;
+    }
+    return 0;
+}
+
+/* How far limb i, climbing to its stroke on its top level, has got: 0 at its top band's upper
+ * edge, CTL_SHARE_FULL at the stroke. */
+static int16_t share(uint8_t i)
+{
+    uint8_t thr = (uint8_t)(psi_levels(i) - 2u);
+    int16_t lo = (int16_t)(psi_star_cdeg(i, thr) + (psi_hyst_cdeg(i, thr) >> 1));
+    int16_t span = (int16_t)(psi_stroke_cdeg(i) - lo);
+    int32_t got = (int32_t)(psi_last_centideg(i) - lo) * CTL_SHARE_FULL;
+    if (span <= 0 || got <= 0) {
+        return 0;
+    }
+    got /= span;
+    return got > CTL_SHARE_FULL ? CTL_SHARE_FULL : (int16_t)got;
+}
+#define CLIMBS_TO_STROKE(i, level) (psi_stroke_cdeg(i) != 0 && (level) + 1u == psi_levels(i) && cl[i].stall == CTL_STALL_NONE)
+#else
+#define climbing(i, c) 0
+#endif
+
 /* Stall detector of limb i for this tick (ctl.h). */
 static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int16_t progress)
 {
@@ -90,6 +130,8 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
     if (level == target) {
         if (psi_settled(i)) {
             c->ticks = 0;
+        } else if (climbing(i, c)) {
+            c->ticks = 1;
         } else if (++c->ticks > TICKS(CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
             c->stall = CTL_STALL_OSCILLATING;
             psi_relax(i, 1);
@@ -114,11 +156,19 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     sag_t sagging = 0;
     int16_t farthest = -1;
     uint8_t i;
+#ifdef CFG_LIMB_STROKE_CDEG
+    int16_t got[CFG_N_LIMBS];
+    int16_t least = CTL_SHARE_FULL;
+    int16_t first = 0; /* the largest stroke of a limb still rising to it: that one crosses first */
+#endif
 
     for (i = 0; i < CFG_N_LIMBS; i++) {
         uint8_t level = psi_level(i);
         move[i] = STAY;
         to_go[i] = 0;
+#ifdef CFG_LIMB_STROKE_CDEG
+        got[i] = 0;
+#endif
         if (level == PSI_UNKNOWN) {
             continue;
         }
@@ -138,11 +188,30 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 }
                 if (cl[i].heat) {
                     move[i] = SAG;
+#ifdef CFG_LIMB_STROKE_CDEG
+                    if (CLIMBS_TO_STROKE(i, level)) {
+                        got[i] = share(i);
+                        if (got[i] < least) {
+                            least = got[i];
+                        }
+                    }
+#endif
                 }
             }
             continue;
         }
         move[i] = target[i] > level ? RISE : FALL;
+#ifdef CFG_LIMB_STROKE_CDEG
+        if (target[i] != cl[i].target) {
+            cl[i].waited = 0;
+        }
+        if (move[i] == RISE && CLIMBS_TO_STROKE(i, target[i])) {
+            least = 0; /* not past its band yet: nothing of its climb to the stroke covered */
+            if (psi_stroke_cdeg(i) > first) {
+                first = psi_stroke_cdeg(i);
+            }
+        }
+#endif
         to_go[i] = psi_to_go_cdeg(i, move[i] == RISE ? level : (uint8_t)(level - 1u), (uint8_t)(move[i] == RISE));
         if (to_go[i] > farthest) {
             farthest = to_go[i];
@@ -171,7 +240,19 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             if (boost_ticks != 0u && cl[i].target == target[i] && cl[i].ticks >= boost_ticks) {
                 cl[i].boost = 1;
             }
-            w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;
+#ifdef CFG_LIMB_STROKE_CDEG
+            if (CLIMBS_TO_STROKE(i, target[i]) && !falling) {
+                /* all rising: instead of crossing together, the limb with the largest stroke
+                 * crosses first and the others wait, warm for at most CTL_SAG_WAIT_MS (ctl.h) */
+                wait = psi_stroke_cdeg(i) < first;
+                if (wait && cl[i].waited >= TICKS(CTL_SAG_WAIT_MS)) {
+                    wait = 2u; /* waited long enough warm: off until it has crossed */
+                } else if (wait) {
+                    cl[i].waited++;
+                }
+            }
+#endif
+            w = wait == 1u ? WANT_HOLD : wait ? WANT_RELEASE : WANT_HEAT + cl[i].boost;
         } else if (move[i] == FALL) {
             /* It may be what holds a sagging neighbour (limb i-1 or i+1: the coils that
              * bend the same body section) up: kept warm while one sags, for at most
@@ -185,6 +266,11 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             }
         } else if (move[i] == SAG) {
             w = WANT_HEAT + cl[i].boost;
+#ifdef CFG_LIMB_STROKE_CDEG
+            if (CLIMBS_TO_STROKE(i, level) && got[i] > least + CTL_SHARE_SYNC) {
+                w = WANT_HOLD; /* ahead of another limb's climb: wait for it (ctl.h) */
+            }
+#endif
         } else if (level == PSI_UNKNOWN) {
             w = WANT_NOTHING;
         } else if (!psi_settled(i)) {

@@ -38,13 +38,29 @@
  *   coils), and a coil kept warm stops relaxing until the sagging limb's coil caught it.
  *   At most CTL_SAG_WAIT_MS per limb and step: with several limbs held, one of them is
  *   nearly always in a hold pulse, and a falling coil kept warm for good never crosses.
+ *
+ * Full strokes (robot file [[limb]] stroke_deg, built in only when a limb has one): such a
+ * limb is held at its stroke on its top level (psi.h: the hold edge of its top threshold),
+ * not just past ψ*, so the step reaches that level only once the limb got there. Driven this
+ * far a coil bends the whole body, and which end leads decides which end slides while it
+ * bends (docs/control.md, "Full strokes"); an end that started to slide keeps sliding
+ * (kinetic friction is below static). So limbs rising to their strokes together:
+ * - all rising: instead of crossing together, the limb with the largest stroke crosses
+ *   first; the others wait until it has: at the hold duty (warming their coils) for at most
+ *   CTL_SAG_WAIT_MS, then off (a coil that cannot heat must not keep another one on);
+ * - then they climb in step: a limb that has covered more than CTL_SHARE_SYNC /
+ *   CTL_SHARE_FULL (5 %) more of its climb (from its top band's upper edge to its stroke)
+ *   than another waits at the hold duty; a limb not across its band yet has covered none.
  * hold_pm is only used for these waits.
  *
  * Stall detector, per limb and step (a step = an unchanged target level):
  * - oscillating at the threshold: the level changed CTL_OSC_CROSSINGS times in this step,
  *   or the limb sat at its target level without settling for CTL_HOVER_MS. Recovery: the
  *   limb settles on the band edges alone (psi_relax), so the sequencer can go on, and
- *   the bang-bang hold keeps it above ψ*;
+ *   the bang-bang hold keeps it above ψ*. A limb climbing to its stroke (below) is not
+ *   hovering while it still climbs: its clock restarts whenever ψ gained CTL_CLIMB_CDEG, so
+ *   it is relaxed (and the step goes on) once it stops climbing short of the stroke - a
+ *   weak supply or a worn coil still walks, with less stroke;
  * - cannot reach the state: rising and heating at the drive duty without getting one
  *   progress edge closer (psi_to_go_cdeg) for CTL_STALL_MS. The coil is switched off (cold coils when the
  *   sequencer's state timeout reports the fault).
@@ -68,6 +84,10 @@
 /* Stall detector (see above). */
 #define CTL_OSC_CROSSINGS 3u
 #define CTL_HOVER_MS 300u
+#define CTL_CLIMB_CDEG 100
+/* Limbs climbing to their strokes together (see above): shares of the climb, 0..FULL. */
+#define CTL_SHARE_FULL 256
+#define CTL_SHARE_SYNC 13
 #define CTL_STALL_MS 5000u
 /* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default
  * (flash; the default controller passes the hil central-claim points without it): at 700 ms

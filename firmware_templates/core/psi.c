@@ -61,6 +61,32 @@ static void edge_of(int16_t cdeg, int16_t edge[2])
     edge[1] = psi_sin_q14(cdeg);
 }
 
+#ifdef CFG_LIMB_STROKE_CDEG
+/* Per limb, 0.01°: where it is held on its top level (robot file [[limb]] stroke_deg), 0: just
+ * past its top band (CFG_HOLD_MARGIN_CDEG). */
+static const int16_t stroke_rom[CFG_N_LIMBS] ROM = CFG_LIMB_STROKE_CDEG;
+
+/* The hold edge and hold top of `limb`'s top threshold `thr` at its stroke, if it has one
+ * above the band (a SET_PARAM that moves ψ* past the stroke gives back the margin edges). */
+static void set_stroke(uint8_t limb, uint8_t thr)
+{
+    int16_t s = ROM_I16(&stroke_rom[limb]);
+    band_t *b = band(limb, thr);
+    if (s != 0 && thr + 2u == psi_levels(limb) && s > b->hi) {
+        edge_of(s, b->e[E_HOLD]);
+        edge_of((int16_t)(s + PSI_HOLD_BAND_CDEG), b->e[E_TOP]);
+    }
+}
+
+int16_t psi_stroke_cdeg(uint8_t limb)
+{
+    return ROM_I16(&stroke_rom[limb]);
+}
+#define SET_STROKE(limb, thr) set_stroke(limb, thr)
+#else
+#define SET_STROKE(limb, thr) ((void)0)
+#endif
+
 /* The band's lower edge: ψ* less half the width (0 ≤ h ≤ 2000: robot.py, psi_set_band; /2 as
  * a shift); the upper edge is lo + h. One copy for both callers. */
 #if defined(__GNUC__)
@@ -179,6 +205,7 @@ void psi_init(void)
     for (i = 0; i < CFG_N_LIMBS; i++) {
         for (j = 0; j < CFG_MAX_THRESHOLDS; j++) {
             set_angles(band(i, j), ROM_I16(&psi_star_rom[i][j]), ROM_I16(&hyst_rom[i]));
+            SET_STROKE(i, j);
         }
     }
     debounce = CFG_DEBOUNCE_TICKS;
@@ -237,6 +264,7 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
         return -1;
     }
     set_angles(b, psi_star_cdeg, hyst_cdeg);
+    SET_STROKE(limb, thr);
     return 0;
 }
 

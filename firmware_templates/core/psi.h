@@ -81,8 +81,16 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az);
 uint8_t psi_level(uint8_t limb);
 
 /* 1 when the last sample of `limb` is at or above the hold edge of threshold `thr`:
- * the upper edge plus CFG_HOLD_MARGIN_CDEG, where the controller holds a raised level. */
+ * the upper edge plus CFG_HOLD_MARGIN_CDEG, where the controller holds a raised level;
+ * for the top threshold of a limb with a stroke (CFG_LIMB_STROKE_CDEG, robot file
+ * [[limb]] stroke_deg) the stroke itself, so the limb settles on its top level only once
+ * it got there (or once it stopped climbing: ctl.h). */
 uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr);
+
+#ifdef CFG_LIMB_STROKE_CDEG
+/* The stroke of `limb` in 0.01° (0: none). */
+int16_t psi_stroke_cdeg(uint8_t limb);
+#endif
 
 /* 1 when the last sample of `limb` is at or above the hold top of threshold `thr`: the
  * hold edge plus PSI_HOLD_BAND_CDEG. */

@@ -65,6 +65,10 @@ MUX_ADDRESSES = range(0x70, 0x78)
 MUX_CHANNELS = 8
 
 
+#: The highest ``[[limb]] stroke_deg``: the firmware's hold band above it stays below 89° (psi.c).
+STROKE_MAX_DEG = 85.0
+
+
 @dataclass(frozen=True)
 class Limb:
     name: str
@@ -75,6 +79,9 @@ class Limb:
     imu: ImuSpec | None = None  # None: placed automatically by the build
     #: friction mechanism: "D1"/"D2" or one material per level (None: the plant infers it)
     friction: str | tuple[str, ...] | None = None
+    #: how far the controller raises the limb when its top level is wanted (°): heated until ψ
+    #: reaches it and held there, instead of just past the top critical angle (None)
+    stroke_deg: float | None = None
 
 
 @dataclass(frozen=True)
@@ -254,7 +261,8 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         raise RobotFileError(f"{path}: limb: at most {MAX_LIMBS} limbs, got {len(tables)}")
     out: list[Limb] = []
     for i, t in enumerate(tables):
-        f = Fields(path, _entry("limb", i, t), t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu", "friction"},
+        f = Fields(path, _entry("limb", i, t), t, {"name", "levels", "psi_star_deg", "hysteresis_deg", "actuator", "imu", "friction",
+                                                   "stroke_deg"},
                     sep=": ")
         name = f.string("name")
         if any(limb.name == name for limb in out):
@@ -283,7 +291,15 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
             f.fail("actuator", f"the name of an [[actuator]] ({', '.join(sorted(actuator_names))})", actuator)
         imu = _imu_spec(path, f"{f.where}: imu", t["imu"]) if "imu" in t else None
         friction = limb_friction(path, f.where, t["friction"], levels) if "friction" in t else None
-        out.append(Limb(name, levels, psi_t, hyst, actuator, imu, friction))
+        stroke = None
+        if f.has("stroke_deg"):
+            stroke = f.number("stroke_deg", 0.0, -90.0, 90.0)
+            edge = psi_t[-1] + hyst / 2
+            if not edge < stroke <= STROKE_MAX_DEG:
+                # the firmware holds it between stroke_deg and 1° above (psi.c: edges within ±89°)
+                f.fail("stroke_deg", f"an angle above the top band's upper edge psi* + hysteresis/2 = {edge:g} "
+                                     f"and at most {STROKE_MAX_DEG:g} degrees", stroke)
+        out.append(Limb(name, levels, psi_t, hyst, actuator, imu, friction, stroke))
     declared = [limb.friction is not None for limb in out]
     if any(declared) and not all(declared):
         missing = next(limb.name for limb in out if limb.friction is None)

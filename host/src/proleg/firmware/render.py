@@ -87,6 +87,7 @@ class LimbPart:
     placement: list[str]  # one line per limb, for the header comment
     psi_cdeg: list[list[int]]
     hyst_cdeg: list[int]
+    stroke_cdeg: list[int]  # empty: no limb has a stroke (the table is not rendered)
     actuators: list[Any]
     act_channels: list[int]
 
@@ -238,6 +239,14 @@ def _check_bands(robot: Any, limb: Any) -> None:
             )
 
 
+def _strokes(limbs: Sequence[Any]) -> list[int]:
+    """Each limb's ``stroke_deg`` in 0.01° (0: none), or [] when no limb has one."""
+    strokes = [getattr(limb, "stroke_deg", None) for limb in limbs]
+    if all(s is None for s in strokes):
+        return []
+    return [0 if s is None else round(float(s) * 100) for s in strokes]
+
+
 def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     limbs, actuators = list(robot.limbs), list(robot.actuators)
     placements = place_imus(robot, raw_board)
@@ -273,6 +282,7 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
         psi_cdeg=[[round(p * 100) for p in limb.psi_star_deg] + [0] * (max_thr - len(limb.psi_star_deg))
                   for limb in limbs],
         hyst_cdeg=[round(float(limb.hysteresis_deg) * 100) for limb in limbs],
+        stroke_cdeg=_strokes(limbs),
         actuators=actuators,
         act_channels=[a.channel for a in actuators],
     )

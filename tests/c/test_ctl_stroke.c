@@ -1,0 +1,239 @@
+/* Host unit tests of full strokes in core/psi.c and core/ctl.c ([[limb]] stroke_deg).
+ * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1°; limb 0 ("left") with a stroke of
+ * 60°, limb 1 ("right") 50°, limb i driven by actuator i. Shares of the climb from the band's
+ * upper edge 21°: limb 0 (ψ − 21) / 39, limb 1 (ψ − 21) / 29. */
+#include <math.h>
+
+#include "ctl.h"
+#include "limbmap.h"
+#include "psi.h"
+#include "unit.h"
+
+#define PI_D 3.14159265358979323846
+#define DRIVE 6000u
+#define HOLD 2500u
+#define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
+
+static void put(uint8_t limb, double deg)
+{
+    psi_update(limb, (int16_t)lround(8192.0 * sin(deg * PI_D / 180.0)),
+               (int16_t)lround(8192.0 * cos(deg * PI_D / 180.0)));
+}
+
+static void demand(uint8_t t0, uint8_t t1, uint16_t duty[CFG_N_ACTUATORS])
+{
+    uint8_t target[CFG_N_LIMBS];
+    target[0] = t0;
+    target[1] = t1;
+    ctl_demand(target, DRIVE, HOLD, duty);
+}
+
+static void setup(void)
+{
+    psi_init();
+    psi_set_debounce(1);
+    limbmap_init();
+    ctl_reset();
+}
+
+static void test_the_config_has_the_strokes(void)
+{
+    CHECK_EQ(psi_stroke_cdeg(0), 6000);
+    CHECK_EQ(psi_stroke_cdeg(1), 5000);
+    CHECK_EQ(CFG_HOLD_MARGIN_CDEG, 100);
+}
+
+static void test_a_raised_limb_is_held_at_its_stroke_not_past_its_band(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(1, 0.0);
+    put(0, 30.0); /* level 1, far past the margin hold edge (22°), below the stroke */
+    CHECK_EQ(psi_level(0), 1);
+    CHECK(!psi_last_at_or_above_hold(0, 0));
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE); /* climbs on */
+    put(0, 59.9);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 60.5); /* between the stroke and the hold top (61°), going up: keeps heating */
+    CHECK(psi_last_at_or_above_hold(0, 0));
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 61.2); /* the hold top: off */
+    CHECK(psi_last_at_or_above_hold_top(0, 0));
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+    put(0, 60.4); /* sagging, still above the stroke: off */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+    put(0, 59.5); /* below the stroke: heat */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
+}
+
+static void test_a_limb_settles_on_its_top_level_only_at_its_stroke(void)
+{
+    setup();
+    put(1, 0.0);
+    put(0, 40.0);
+    put(0, 40.0);
+    CHECK_EQ(psi_level(0), 1);
+    CHECK(!psi_settled(0)); /* level 1 but short of the stroke */
+    put(0, 60.2);
+    put(0, 60.2);
+    CHECK(psi_settled(0));
+    put(0, 45.0); /* settled stays latched inside the band's edges */
+    CHECK(psi_settled(0));
+}
+
+static void test_the_settle_edge_below_the_band_keeps_the_margin(void)
+{
+    setup();
+    put(0, 18.5); /* level 0, between the band's lower edge 19° and the settle edge 18° */
+    put(0, 18.5);
+    CHECK_EQ(psi_level(0), 0);
+    CHECK(!psi_settled(0));
+    put(0, 17.5);
+    put(0, 17.5);
+    CHECK(psi_settled(0));
+}
+
+static void test_moving_psi_star_past_the_stroke_gives_back_the_margin_hold(void)
+{
+    setup();
+    CHECK_EQ(psi_set_band(1, 0, 5500, 200), 0); /* ψ* 55° > stroke 50°: hold edge 57° */
+    put(1, 56.5);
+    CHECK_EQ(psi_level(1), 1);
+    CHECK(!psi_last_at_or_above_hold(1, 0));
+    put(1, 57.2);
+    CHECK(psi_last_at_or_above_hold(1, 0));
+    CHECK(!psi_last_at_or_above_hold_top(1, 0));
+    CHECK_EQ(psi_set_band(1, 0, 2000, 200), 0); /* back below the stroke: held at 50° again */
+    put(1, 45.0);
+    CHECK(!psi_last_at_or_above_hold(1, 0));
+    put(1, 50.2);
+    CHECK(psi_last_at_or_above_hold(1, 0));
+}
+
+static void test_the_larger_stroke_crosses_first_and_the_others_wait_warm(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 5.0);
+    put(1, 10.0); /* nearer its crossing than limb 0: without strokes limb 0 would lead */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    CHECK_EQ(duty[1], HOLD);
+    put(0, 20.5); /* in the band: not crossed yet */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    CHECK_EQ(duty[1], HOLD);
+    put(0, 21.5); /* crossed (share 1 %): limb 1 goes; limb 0 is within 5 % of limb 1's 0 */
+    demand(1, 1, duty);
+    CHECK_EQ(psi_level(0), 1);
+    CHECK_EQ(duty[1], DRIVE);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 24.0); /* share 8 %: ahead of a limb that has not crossed: waits warm */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], HOLD);
+    CHECK_EQ(duty[1], DRIVE);
+}
+
+static void test_a_limb_waiting_for_a_larger_stroke_is_kept_warm_only_for_a_while(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, warm = (uint32_t)CTL_SAG_WAIT_MS * CFG_TICK_HZ / 1000u;
+    setup();
+    put(0, 5.0); /* its coil dead, say: it never crosses */
+    put(1, 5.0);
+    for (k = 0; k < warm; k++) {
+        demand(1, 1, duty);
+        CHECK_EQ(duty[1], HOLD);
+    }
+    for (k = 0; k < 3u * warm; k++) {
+        demand(1, 1, duty);
+        CHECK_EQ(duty[1], 0); /* then off: no coil stays on because another cannot heat */
+    }
+    demand(0, 0, duty); /* a new step */
+    put(0, 21.5);       /* ... and the next rise: limb 0 has crossed, limb 1 goes at once */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[1], DRIVE);
+}
+
+static void test_limbs_climb_to_their_strokes_in_step(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 40.0); /* share 49 % */
+    put(1, 30.0); /* share 31 % */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], HOLD);
+    CHECK_EQ(duty[1], DRIVE);
+    put(1, 35.0); /* 48 %: within 5 %, both climb */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    CHECK_EQ(duty[1], DRIVE);
+    put(1, 50.5); /* at its stroke, below its hold top: ahead of limb 0, it waits warm */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[1], HOLD);
+    CHECK_EQ(duty[0], DRIVE);
+    put(1, 51.2); /* its hold top: off, and no longer in the climb; limb 0 climbs on alone */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[1], 0);
+    CHECK_EQ(duty[0], DRIVE);
+}
+
+static void test_a_limb_still_climbing_to_its_stroke_is_not_hovering(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    double psi = 25.0;
+    setup();
+    put(1, 0.0);
+    put(0, psi);
+    for (k = 0; k < 4u * HOVER_TICKS; k++) {
+        if (k % (HOVER_TICKS / 2u) == 0u) {
+            psi += 1.5; /* 1.5° every half hover time */
+            put(0, psi);
+        }
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+    CHECK(!psi_settled(0));
+}
+
+static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(1, 0.0);
+    put(0, 35.0);
+    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
+        put(0, 35.0 + 0.5 * (double)(k % 2u)); /* noise, no climb */
+        demand(1, 0, duty);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    put(0, 35.0);
+    put(0, 35.0);
+    CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE); /* and the hold still heats it towards the stroke */
+}
+
+int main(void)
+{
+    RUN(test_the_config_has_the_strokes);
+    RUN(test_a_raised_limb_is_held_at_its_stroke_not_past_its_band);
+    RUN(test_a_limb_settles_on_its_top_level_only_at_its_stroke);
+    RUN(test_the_settle_edge_below_the_band_keeps_the_margin);
+    RUN(test_moving_psi_star_past_the_stroke_gives_back_the_margin_hold);
+    RUN(test_the_larger_stroke_crosses_first_and_the_others_wait_warm);
+    RUN(test_a_limb_waiting_for_a_larger_stroke_is_kept_warm_only_for_a_while);
+    RUN(test_limbs_climb_to_their_strokes_in_step);
+    RUN(test_a_limb_still_climbing_to_its_stroke_is_not_hovering);
+    RUN(test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there);
+    return UNIT_EXIT();
+}
