@@ -2,7 +2,8 @@
 
 ``measure_matrix`` drives the plant with an idealised state-tracking drive: perfect sensing
 (true ψ, true ψ*), each limb's own coil heated at ``duty`` until its end reaches the target
-level by ``margin_deg`` (the middle of a level narrower than two margins), then held there
+level by ``margin_deg`` (the middle of a level narrower than two margins; a limb's top level at
+its ``stroke_deg`` if it has one), then held there
 bang-bang; coils whose limbs are all to be at level 0
 are switched off and cool freely (as the firmware does). For every allowed transition a → b it
 goes to a, settles, records the centre of mass, drives to b, settles again and records the
@@ -42,12 +43,21 @@ class IdealDrive:
         self.levels = plant.levels
         self.th = plant.true_psi_star_deg
         self.margin = margin_deg
+        self.stroke = [getattr(lb, "stroke_deg", None) for lb in robot.limbs]
+        self.has_strokes = any(s is not None for s in self.stroke)
 
     def command(self, psi: Sequence[float], target: int) -> list[int]:
         want = limb_levels(target, self.levels)
         heat = [False] * self.n_act
         cool = [False] * self.n_act
         active = [False] * self.n_act
+        # Limbs rising to their strokes together (no limb falling): the one with the largest stroke
+        # crosses first, the others wait for it (as the firmware: ctl.h).
+        below: list[int] = []
+        if self.has_strokes and not any(sum(p >= t for t in th) > k for p, k, th in zip(psi, want, self.th)):
+            below = [i for i, k in enumerate(want) if k == len(self.th[i]) and self.stroke[i] is not None
+                     and psi[i] < self.th[i][-1]]
+        first = max((self.stroke[i] for i in below), default=None)
         for i, (p, k) in enumerate(zip(psi, want)):
             j = self.limb_act[i]
             th = self.th[i]
@@ -55,9 +65,12 @@ class IdealDrive:
             hi = th[k] - self.margin if k < len(th) else math.inf
             if lo > hi:  # a middle level narrower than two margins: hold in its middle
                 lo = hi = (th[k - 1] + th[k]) / 2
+            if k == len(th) and self.stroke[i] is not None:  # raised to its stroke (as the firmware)
+                lo = max(lo, self.stroke[i])
+            waits = i in below and self.stroke[i] < first
             if p > hi:
                 cool[j] = True
-            elif p < lo:
+            elif p < lo and not waits:
                 heat[j] = True
             if k > 0:
                 active[j] = True
