@@ -22,10 +22,15 @@ Targets (reported, not tuned to): ψ-feedback completes every physically possibl
 keeps ≥ 75 % of its nominal speed in ≥ 90 % of them; where impossible it stops with a fault
 and cold coils; nominal ψ-feedback at least as fast as the best open loop.
 
-    python bench/bench_claim.py [--budget N] [--jobs N] [--quick]
+    python bench/bench_claim.py [--robot FILE] [--budget N] [--jobs N] [--quick]
 
-Prints a table and writes bench/results/claim.json (exit status 0: the table is the result,
-a missed target is reported, not an error). Uses at most two worker processes, at low priority.
+``--robot``: another robot file on the same grid (its own open loop, tuned on its plant), e.g.
+robots/paper-r1-stroke.toml: R1's body and coils with the controller raising each limb to a full
+stroke (docs/control.md, "Full strokes").
+
+Prints a table and writes bench/results/claim.json (R1), claim-ROBOT.json (another robot; exit
+status 0: the table is the result, a missed target is reported, not an error). Uses at most two
+worker processes, at low priority.
 """
 
 from __future__ import annotations
@@ -48,18 +53,18 @@ from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.closed_loop import sim_library  # noqa: E402
 from proleg.sim.openloop import OpenLoopDrive  # noqa: E402
 
-RESULTS = ROOT / "bench" / "results" / "claim.json"
+RESULTS = ROOT / "bench" / "results"
 ROBOT = ROOT / "robots" / "paper-r1.toml"
 BUDGET = 150
 
 
 def _worker(args: tuple) -> dict:
-    point, drive, learned = args
+    path, point, drive, learned = args
     try:
         os.nice(10)
     except OSError:
         pass
-    robot = load_robot(ROBOT)
+    robot = load_robot(path)
     return claim.run_condition(robot, drive, point, learned=learned).to_json()
 
 
@@ -75,6 +80,7 @@ def _cell(o: dict) -> str:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--robot", type=Path, default=ROBOT, help="robot file (default robots/paper-r1.toml)")
     ap.add_argument("--budget", type=int, default=BUDGET, help="open-loop search budget (candidate drives)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2, the machine is shared)")
     ap.add_argument("--quick", action="store_true", help="every 4th grid point only (a smoke run)")
@@ -83,27 +89,27 @@ def main() -> int:
         os.nice(5)
     except OSError:
         pass
-    robot = load_robot(ROBOT)
+    robot = load_robot(args.robot)
     sim_library(robot)  # build the firmware once, before the workers start
     t0 = time.perf_counter()
     tuned = claim.tune_open_loop_for(robot, "+x", budget=args.budget)
     tune_s = time.perf_counter() - t0
     d = tuned.drive
-    print(f"open loop tuned on the fresh R1 in {tune_s:.0f} s ({tuned.evaluations} drives × 3 powers): "
+    print(f"open loop tuned on the fresh {robot.name} in {tune_s:.0f} s ({tuned.evaluations} drives × 3 powers): "
           f"S {d.strength}, T_active {d.t_active_s} s, T_cycle {d.t_cycle_s[0]:g} s, φ12 {d.phase_s[1] - d.phase_s[0]:g} s; "
           f"worst speed over ±10 % power {tuned.worst_speed_mm_s:+.3f} mm/s", flush=True)
 
     t0 = time.perf_counter()
     learned, measured = claim.learned_gait(robot, "+x")
     label = "→".join(robot.transitions.label(s) for s in learned)
-    print(f"learn-then-walk: the matrix measured on the fresh R1 ({time.perf_counter() - t0:.0f} s) gives the "
+    print(f"learn-then-walk: the matrix measured on the fresh {robot.name} ({time.perf_counter() - t0:.0f} s) gives the "
           f"+x gait {label}", flush=True)
 
     points = claim.grid()
     if args.quick:
         points = points[::4]
     t1 = time.perf_counter()
-    jobs = [(claim.NOMINAL, d, learned)] + [(p, d, learned) for p in points]
+    jobs = [(args.robot, claim.NOMINAL, d, learned)] + [(args.robot, p, d, learned) for p in points]
     if args.jobs > 1:
         from multiprocessing import get_context
 
@@ -149,7 +155,7 @@ def main() -> int:
 
     out = {
         "machine": machine(), "load_average": list(os.getloadavg()),
-        "inputs": {"robot": "paper-r1", "direction": "+x", "gait": 0, "run_s": claim.RUN_S,
+        "inputs": {"robot": robot.name, "direction": "+x", "gait": 0, "run_s": claim.RUN_S,
                    "feedback_workflow": "flat level calibration (proleg calibrate) at rest, then the condition's ground, "
                                      f"{claim.REST_ON_GROUND_S} s at rest there, START",
                    "learned_gait": {"states": [robot.transitions.label(s) for s in learned],
@@ -161,8 +167,10 @@ def main() -> int:
         "open_loop_evaluations": tuned.evaluations, "tune_wall_s": round(tune_s, 1), "grid_wall_s": round(grid_s, 1),
         "nominal": nominal, "summary": summary, "conditions": rows,
     }
-    RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps(out, indent=1, ensure_ascii=False) + "\n")
+    RESULTS.mkdir(exist_ok=True)
+    path = RESULTS / ("claim.json" if robot.name == "paper-r1" else f"claim-{robot.name}.json")
+    path.write_text(json.dumps(out, indent=1, ensure_ascii=False) + "\n")
+    print(f"wrote {path.relative_to(ROOT)}")
     return 0
 
 
