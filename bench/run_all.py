@@ -1,5 +1,5 @@
-"""``make bench``: run every bench/bench_*.py in turn; each prints its table and writes
-bench/results/<name>.json. Exits non-zero if a benchmark script itself fails."""
+"""``make bench``: run every bench/bench_*.py in turn (some more than once: ``RUNS``); each
+prints its table and writes bench/results/<name>.json. Exits non-zero if a benchmark script itself fails."""
 
 from __future__ import annotations
 
@@ -9,13 +9,18 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
+#: Scripts run more than once, with these arguments (default: once, without any).
+RUNS = {"bench_claim.py": [[], ["--robot", "robots/paper-r1-stroke.toml"]]}
+
 
 def main() -> int:
     failed = []
     for script in sorted(HERE.glob("bench_*.py")):
-        print(f"\n=== {script.name} ===", flush=True)
-        if subprocess.run([sys.executable, str(script)], cwd=HERE.parent).returncode:
-            failed.append(script.name)
+        for args in RUNS.get(script.name, [[]]):
+            name = " ".join([script.name, *args])
+            print(f"\n=== {name} ===", flush=True)
+            if subprocess.run([sys.executable, str(script), *args], cwd=HERE.parent).returncode:
+                failed.append(name)
     if failed:
         print(f"\nbenchmarks that failed to run: {', '.join(failed)}", file=sys.stderr)
         return 1
