@@ -2,22 +2,8 @@
  * middle, head; ψ* = 20°, band 19..21°, limb i driven by actuator i): a falling limb waits
  * warm only for a sagging NEIGHBOUR (the coils that bend its body section), not for every
  * held limb of the robot. */
-#include <math.h>
-
-#include "ctl.h"
-#include "limbmap.h"
-#include "psi.h"
+#include "ctl_unit.h"
 #include "unit.h"
-
-#define PI_D 3.14159265358979323846
-#define DRIVE 6000u
-#define HOLD 2500u
-
-static void put(uint8_t limb, double deg)
-{
-    psi_update(limb, (int16_t)lround(8192.0 * sin(deg * PI_D / 180.0)),
-               (int16_t)lround(8192.0 * cos(deg * PI_D / 180.0)));
-}
 
 static void demand3(uint8_t t0, uint8_t t1, uint8_t t2, uint16_t duty[CFG_N_ACTUATORS])
 {
@@ -26,14 +12,6 @@ static void demand3(uint8_t t0, uint8_t t1, uint8_t t2, uint16_t duty[CFG_N_ACTU
     target[1] = t1;
     target[2] = t2;
     ctl_demand(target, DRIVE, HOLD, duty);
-}
-
-static void setup(void)
-{
-    psi_init();
-    psi_set_debounce(1);
-    limbmap_init();
-    ctl_reset();
 }
 
 static void test_a_falling_limb_does_not_wait_for_a_sagging_limb_two_sections_away(void)

@@ -1,19 +1,7 @@
 /* Host unit tests of an actuator that drives several limbs (the paper's R1 with one
  * coil): both limbs on actuator 0. */
-#include <math.h>
-
-#include "ctl.h"
-#include "limbmap.h"
-#include "psi.h"
+#include "ctl_unit.h"
 #include "unit.h"
-
-#define PI_D 3.14159265358979323846
-
-static void put(uint8_t limb, double deg)
-{
-    psi_update(limb, (int16_t)lround(8192.0 * sin(deg * PI_D / 180.0)),
-               (int16_t)lround(8192.0 * cos(deg * PI_D / 180.0)));
-}
 
 static void test_shared_actuator_heats_if_any_of_its_limbs_must_go_up(void)
 {

@@ -2,39 +2,10 @@
  * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1°; limb 0 ("left") with a stroke of
  * 60°, limb 1 ("right") 50°, limb i driven by actuator i. Shares of the climb from the band's
  * upper edge 21°: limb 0 (ψ − 21) / 39, limb 1 (ψ − 21) / 29. */
-#include <math.h>
-
-#include "ctl.h"
-#include "limbmap.h"
-#include "psi.h"
+#include "ctl_unit.h"
 #include "unit.h"
 
-#define PI_D 3.14159265358979323846
-#define DRIVE 6000u
-#define HOLD 2500u
 #define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
-
-static void put(uint8_t limb, double deg)
-{
-    psi_update(limb, (int16_t)lround(8192.0 * sin(deg * PI_D / 180.0)),
-               (int16_t)lround(8192.0 * cos(deg * PI_D / 180.0)));
-}
-
-static void demand(uint8_t t0, uint8_t t1, uint16_t duty[CFG_N_ACTUATORS])
-{
-    uint8_t target[CFG_N_LIMBS];
-    target[0] = t0;
-    target[1] = t1;
-    ctl_demand(target, DRIVE, HOLD, duty);
-}
-
-static void setup(void)
-{
-    psi_init();
-    psi_set_debounce(1);
-    limbmap_init();
-    ctl_reset();
-}
 
 static void test_the_config_has_the_strokes(void)
 {
