@@ -81,10 +81,12 @@ def _r1_fast():
 
 
 def _r1_stroke():
-    """R1 with full strokes ([[limb]] stroke_deg: left 60°, right 50°; test_ctl_stroke.c)."""
+    """R1 with full strokes ([[limb]] stroke_deg: left 60°, right 50°, the right leading the way
+    down; test_ctl_stroke.c)."""
     doc = _robot_doc()
     doc["limb"][0]["stroke_deg"] = 60.0
     doc["limb"][1]["stroke_deg"] = 50.0
+    doc["control"]["stroke_fall_lead"] = "right"
     robot = robot_from_dict(doc, Path("tests/r1-stroke.toml"))
     return robot, {"+x": [_gait(0, 3, 0)], "-x": []}, SIM_BOARD
 

@@ -15,7 +15,7 @@ import pytest
 from proleg.errors import RobotFileError
 from proleg.firmware.render import render_config
 from proleg.report import SimSession
-from proleg.robot import load_robot
+from proleg.robot import load_robot, stroke_leads
 from proleg.sim.physical import PhysicalPlant
 from proleg.sim.physical.measure import IdealDrive, measure_matrix
 from proleg.sim.simulators import open_simulated
@@ -55,15 +55,17 @@ def test_stroke_deg_is_read_per_limb_and_absent_means_none(tmp_path):
     assert [lb.stroke_deg for lb in load_robot(with_strokes(tmp_path, 70, None)).limbs] == [70.0, None]
 
 
-RANGE = "expected an angle above the top band's upper edge psi* + hysteresis/2 = 21 and at most 85 degrees"
+RANGE = ("expected an angle from 26 (1° above where it is held without one: psi* + hysteresis/2 + "
+         "control.hold_margin_deg) to 85 degrees")
 
 
 @pytest.mark.parametrize("value, expected", [
-    ("21.0", f"{RANGE}, got 21.0"),    # at the band's upper edge: nothing to climb
-    ("12", f"{RANGE}, got 12.0"),
+    ("25.9", f"{RANGE}, got 25.9"),    # not above the hold edge's band (ψ* + h/2 + 4° = 25°)
+    ("-12", f"{RANGE}, got -12"),
     ("85.5", f"{RANGE}, got 85.5"),    # the hold band above it would pass 89°
     ('"full"', "expected a number, got 'full'"),
     ("true", "expected a number, got True"),
+    ("nan", "expected a number, got nan"),
 ])
 def test_a_stroke_outside_its_range_is_a_one_line_error_naming_the_limb(tmp_path, value, expected):
     path = with_strokes(tmp_path, value, 72)
@@ -72,14 +74,41 @@ def test_a_stroke_outside_its_range_is_a_one_line_error_naming_the_limb(tmp_path
     assert str(info.value) == f"{path}: limb 'left': stroke_deg: {expected}"
 
 
+@pytest.mark.parametrize("extra, expected", [
+    ('stroke_fall_lead = "middle"', "control.stroke_fall_lead: expected the name of a limb with a stroke_deg "
+                                    "(left, right), got 'middle'"),
+    ('stroke_rise_lead = 3', "control.stroke_rise_lead: expected a string, got 3"),
+])
+def test_a_stroke_lead_that_is_not_a_limb_with_a_stroke_is_a_one_line_error(tmp_path, extra, expected):
+    path = with_strokes(tmp_path, 76, 72)
+    path.write_text(path.read_text(encoding="utf-8").replace("hold_ms = 100\n", f"hold_ms = 100\n{extra}\n"))
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    assert str(info.value) == f"{path}: {expected}"
+    r1 = tmp_path / "r1.toml"
+    r1.write_text(R1.read_text(encoding="utf-8").replace("hold_ms = 100\n", 'hold_ms = 100\nstroke_rise_lead = "left"\n'))
+    with pytest.raises(RobotFileError, match="no \\[\\[limb\\]\\] has a stroke_deg to lead with"):
+        load_robot(r1)
+
+
+def test_the_leads_default_to_the_largest_stroke_up_and_none_down(tmp_path):
+    assert stroke_leads(load_robot(STROKE).limbs, load_robot(STROKE).control) == (0, None)
+    robot = load_robot(with_strokes(tmp_path, 70, 74))
+    assert stroke_leads(robot.limbs, robot.control) == (1, None)
+    robot = load_robot(with_strokes(tmp_path, 74, 74))
+    assert stroke_leads(robot.limbs, robot.control) == (0, None)   # a tie: the first limb
+    assert stroke_leads(load_robot(R1).limbs, load_robot(R1).control) is None
+
+
 def test_the_firmware_carries_a_stroke_table_only_when_a_limb_has_a_stroke(tmp_path):
     gaits = {"+x": [], "-x": []}
     plain = render_config(load_robot(R1), gaits, SIM_BOARD)["robot_config.h"]
     assert "CFG_LIMB_STROKE_CDEG" not in plain  # the paper's R1 builds exactly as before
     both = render_config(load_robot(STROKE), gaits, SIM_BOARD)["robot_config.h"]
     assert "#define CFG_LIMB_STROKE_CDEG { 7600, 7200 }" in both
+    assert "#define CFG_STROKE_RISE_LEAD 0u" in both and "CFG_STROKE_FALL_LEAD" not in both
     one = render_config(load_robot(with_strokes(tmp_path, 70.25, None)), gaits, SIM_BOARD)["robot_config.h"]
-    assert "#define CFG_LIMB_STROKE_CDEG { 7025, 0 }" in one
+    assert "#define CFG_LIMB_STROKE_CDEG { 7025, PSI_NO_STROKE }" in one
 
 
 def test_the_ideal_drive_raises_to_the_strokes_the_larger_stroke_crossing_first():
@@ -87,14 +116,14 @@ def test_the_ideal_drive_raises_to_the_strokes_the_larger_stroke_crossing_first(
     plant = PhysicalPlant(robot)
     drive = IdealDrive(robot, plant, 4.0)
     eleven = robot.transitions.labels().index("11")
-    assert drive.command([5.0, 15.0], eleven) == [1, 0]     # the right waits for the left to cross
+    assert drive.command([5.0, 15.0], eleven) == [1, 0]     # the right waits for the rise lead to cross
     assert drive.command([25.0, 15.0], eleven) == [1, 1]    # crossed: both climb
     assert drive.command([75.0, 40.0], eleven) == [1, 1]    # short of its stroke (76°): heats on
     assert drive.command([76.5, 72.5], eleven) == [0, 0]    # at both strokes: held
     assert drive.command([30.0, 30.0], 0) == [-1, -1]
 
 
-@pytest.mark.parametrize("left, right", [(76, 72), (66, 76)])
+@pytest.mark.parametrize("left, right", [(76, 72), (72, 76), (66, 76)])
 def test_learn_then_walk_on_full_strokes_goes_the_way_the_measured_matrix_says(tmp_path, left, right):
     """Only 00 and 11 can be held at full strokes (either end at its stroke lifts the other past
     ψ* through the body); the measured 00 → 11 → 00 decides the direction. The firmware walks
@@ -126,17 +155,55 @@ def test_learn_then_walk_on_full_strokes_goes_the_way_the_measured_matrix_says(t
         assert 0.45 * abs(per_cycle) <= sign * d <= 1.75 * abs(per_cycle), (run.cycle_displacements_mm, per_cycle)
 
 
-def test_a_stroke_beyond_the_coils_reach_is_held_where_the_limb_stops_climbing(tmp_path):
-    """84° is past what R1's left coil bends its end to (about 80°): the firmware does not wait
-    for it for ever, it settles where the limb stops climbing, and the robot walks on."""
-    robot = load_robot(with_strokes(tmp_path, 84, 72))
-    session = SimSession(open_simulated(robot))
+def _walk_tracking_psi(robot, direction: str = "+x", seconds: float = 25.0):
+    """The firmware walking gait 0; also the highest true ψ of each limb over the run."""
+    sim = open_simulated(robot)
+    highest = [-90.0] * len(robot.limbs)
+    step = sim.step
+
+    def stepping() -> None:
+        step()
+        for i, p in enumerate(sim.plant.psi_deg):
+            highest[i] = max(highest[i], float(p))
+
+    sim.step = stepping
+    session = SimSession(sim)
     session.advance(0.2)
-    run = session.run_gait("+x", 0, 25.0)
+    return session.run_gait(direction, 0, seconds), highest
+
+
+def test_a_limb_is_raised_to_its_stroke_and_one_out_of_reach_as_far_as_it_goes(tmp_path):
+    """76°/72°: each limb gets to its stroke. 84° is past what R1's left coil bends its end to
+    (about 80°): the firmware keeps heating while the limb still climbs (it is not 'hovering'
+    then), settles where it stops, and the robot walks on."""
+    run, highest = _walk_tracking_psi(load_robot(STROKE))
+    assert run.faults == [] and highest[0] >= 76.0 and highest[1] >= 72.0, highest
+    run, highest = _walk_tracking_psi(load_robot(with_strokes(tmp_path, 84, 72)))
     assert run.faults == [] and run.errors == []
-    assert max(session.sim.plant.psi_deg) < 84.0
+    assert 78.0 <= highest[0] < 84.0, highest
     first, *steady = run.cycle_displacements_mm
     assert len(steady) >= 3 and all(d > 5.0 for d in steady), run.cycle_displacements_mm
+
+
+def test_a_fall_lead_makes_r2s_pads_ratchet(tmp_path):
+    """R2's pads (D2: hard below ψ*, soft above) need the same end to lead on the way up and on
+    the way down: with strokes 72°/76° the right end crosses ψ* first (the larger stroke); only
+    with control.stroke_fall_lead = "right" does it also go down first, and the robot walks."""
+    text = (R1.parent / "paper-r2.toml").read_text(encoding="utf-8")
+    text = text.replace('actuator = "sma-left"\n', 'actuator = "sma-left"\nfriction = "D2"\nstroke_deg = 72\n', 1)
+    text = text.replace('actuator = "sma-right"\n', 'actuator = "sma-right"\nfriction = "D2"\nstroke_deg = 76\n', 1)
+    text = text.replace("drive_duty = 0.6", "drive_duty = 0.8")
+    text = re.sub(r"matrix = \[\n(.*\n)*?\]\n", 'matrix = [[0, "x", "x", 1], ["x", 0, "x", "x"], ["x", "x", 0, "x"], '
+                  '[1, "x", "x", 0]]\n', text)
+    cycles = {}
+    for name, extra in (("unordered", ""), ("fall lead", 'stroke_fall_lead = "right"\n')):
+        path = tmp_path / f"{name.replace(' ', '-')}.toml"
+        path.write_text(text.replace("hold_ms = 100\n", f"hold_ms = 100\n{extra}"), encoding="utf-8")
+        run, _ = _walk_tracking_psi(load_robot(path), seconds=30.0)
+        assert run.faults == [] and run.errors == []
+        cycles[name] = run.cycle_displacements_mm[1:]
+    assert all(abs(d) < 1.0 for d in cycles["unordered"]), cycles
+    assert len(cycles["fall lead"]) >= 3 and all(d > 4.0 for d in cycles["fall lead"]), cycles
 
 
 def test_the_example_robots_matrix_is_what_the_simulator_measures():

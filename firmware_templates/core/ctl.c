@@ -38,8 +38,10 @@ typedef struct {
     uint16_t ticks;    /* rising without progress / at the target level unsettled / falling: kept warm */
     uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
 #ifdef CFG_LIMB_STROKE_CDEG
-    int16_t peak;      /* highest ψ (0.01°) since the hover clock last restarted */
-    uint16_t waited;   /* ticks waited warm in this step for a larger stroke to cross */
+    int16_t peak;      /* ψ (0.01°) when the hover clock last restarted on a climb */
+    uint16_t clock;    /* ticks since this step began (saturating) */
+    uint8_t climb;     /* this step raises it to its stroke (it began below its top level) */
+    uint8_t shortfall; /* stopped climbing short of its stroke: held without it until it leaves its top level */
 #endif
 } ctl_limb_t;
 
@@ -69,12 +71,20 @@ uint8_t ctl_stall(uint8_t limb)
 }
 
 #ifdef CFG_LIMB_STROKE_CDEG
-/* A limb with a stroke on its way up to it: ψ rose CTL_CLIMB_CDEG since the last time this
- * said so. Its hover clock restarts, so it settles at the stroke or where it stops climbing. */
+#define STROKE(i) (psi_stroke_cdeg(i) != PSI_NO_STROKE)
+#define TOP(i, level) ((level) + 1u == psi_levels(i))
+/* Limb i rises to its stroke in this step and is still at it (not relaxed, not cut off). */
+#define CLIMBS_TO_STROKE(i, level) (STROKE(i) && TOP(i, level) && cl[i].climb && cl[i].stall == CTL_STALL_NONE)
+/* Limb i falls from its stroke: it has one and is still on its top level. */
+#define FROM_STROKE(i, level) (STROKE(i) && TOP(i, level))
+
+/* A limb climbing to its stroke: ψ rose CTL_CLIMB_CDEG since the last time this said so, within
+ * CTL_CLIMB_MAX_MS of the step's start. Its hover clock restarts, so it settles at the stroke
+ * or where it stops climbing. */
 static uint8_t climbing(uint8_t i, ctl_limb_t *c)
 {
     int16_t p;
-    if (psi_stroke_cdeg(i) == 0) {
+    if (!CLIMBS_TO_STROKE(i, psi_level(i)) || c->clock >= TICKS(CTL_CLIMB_MAX_MS)) {
         return 0;
     }
     p = psi_last_centideg(i);
@@ -99,9 +109,22 @@ static int16_t share(uint8_t i)
     got /= span;
     return got > CTL_SHARE_FULL ? CTL_SHARE_FULL : (int16_t)got;
 }
-#define CLIMBS_TO_STROKE(i, level) (psi_stroke_cdeg(i) != 0 && (level) + 1u == psi_levels(i) && cl[i].stall == CTL_STALL_NONE)
+
+/* Held on threshold thr: at or above its hold edge (top = 0) or its hold top (1). A limb
+ * that stopped short of its stroke is held at the edges it has without one. */
+static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
+{
+    if (STROKE(i) && TOP(i, level) && cl[i].shortfall) {
+        return psi_last_at_or_above_short_hold(i, thr, top);
+    }
+    return top ? psi_last_at_or_above_hold_top(i, thr) : psi_last_at_or_above_hold(i, thr);
+}
+#define ABOVE_HOLD(i, thr, level) above_hold(i, thr, level, 0u)
+#define ABOVE_TOP(i, thr, level) above_hold(i, thr, level, 1u)
 #else
 #define climbing(i, c) 0
+#define ABOVE_HOLD(i, thr, level) psi_last_at_or_above_hold(i, thr)
+#define ABOVE_TOP(i, thr, level) psi_last_at_or_above_hold_top(i, thr)
 #endif
 
 /* Stall detector of limb i for this tick (ctl.h). */
@@ -135,6 +158,9 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         } else if (++c->ticks > TICKS(CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
             c->stall = CTL_STALL_OSCILLATING;
             psi_relax(i, 1);
+#ifdef CFG_LIMB_STROKE_CDEG
+            c->shortfall = (uint8_t)(c->climb && STROKE(i) && TOP(i, level));
+#endif
         }
     } else if (heating) {
         if (progress < c->best) {
@@ -159,7 +185,11 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #ifdef CFG_LIMB_STROKE_CDEG
     int16_t got[CFG_N_LIMBS];
     int16_t least = CTL_SHARE_FULL;
-    int16_t first = 0; /* the largest stroke of a limb still rising to it: that one crosses first */
+    uint8_t lead_below = 0; /* the rise lead is rising to its stroke and has not crossed ψ* yet */
+#endif
+#ifdef CFG_STROKE_FALL_LEAD
+    uint8_t lead_down = 0; /* the fall lead is falling from its stroke */
+    uint8_t rising = 0;
 #endif
 
     for (i = 0; i < CFG_N_LIMBS; i++) {
@@ -168,6 +198,15 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         to_go[i] = 0;
 #ifdef CFG_LIMB_STROKE_CDEG
         got[i] = 0;
+        if (target[i] != cl[i].target) { /* a new step */
+            cl[i].clock = 0;
+            cl[i].climb = (uint8_t)(level != PSI_UNKNOWN && level < target[i]);
+        } else if (cl[i].clock != 0xFFFFu) {
+            cl[i].clock++;
+        }
+        if (level == PSI_UNKNOWN || !TOP(i, level)) {
+            cl[i].shortfall = 0;
+        }
 #endif
         if (level == PSI_UNKNOWN) {
             continue;
@@ -180,10 +219,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 /* Bang-bang hold with hysteresis: heat from below the hold edge up to the
                  * hold top, then off until it sags below the hold edge again. */
                 uint8_t thr = (uint8_t)(level - 1u);
-                if (!psi_last_at_or_above_hold(i, thr)) {
+                if (!ABOVE_HOLD(i, thr, level)) {
                     cl[i].heat = 1;
                     sagging |= SAG_MARK(i);
-                } else if (psi_last_at_or_above_hold_top(i, thr)) {
+                } else if (ABOVE_TOP(i, thr, level)) {
                     cl[i].heat = 0;
                 }
                 if (cl[i].heat) {
@@ -202,15 +241,14 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
         move[i] = target[i] > level ? RISE : FALL;
 #ifdef CFG_LIMB_STROKE_CDEG
-        if (target[i] != cl[i].target) {
-            cl[i].waited = 0;
-        }
         if (move[i] == RISE && CLIMBS_TO_STROKE(i, target[i])) {
             least = 0; /* not past its band yet: nothing of its climb to the stroke covered */
-            if (psi_stroke_cdeg(i) > first) {
-                first = psi_stroke_cdeg(i);
-            }
+            lead_below |= (uint8_t)(i == CFG_STROKE_RISE_LEAD);
         }
+#endif
+#ifdef CFG_STROKE_FALL_LEAD
+        rising |= (uint8_t)(move[i] == RISE);
+        lead_down |= (uint8_t)(i == CFG_STROKE_FALL_LEAD && move[i] == FALL && FROM_STROKE(i, level));
 #endif
         to_go[i] = psi_to_go_cdeg(i, move[i] == RISE ? level : (uint8_t)(level - 1u), (uint8_t)(move[i] == RISE));
         if (to_go[i] > farthest) {
@@ -242,17 +280,17 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             }
 #ifdef CFG_LIMB_STROKE_CDEG
             if (CLIMBS_TO_STROKE(i, target[i]) && !falling) {
-                /* all rising: instead of crossing together, the limb with the largest stroke
-                 * crosses first and the others wait, warm for at most CTL_SAG_WAIT_MS (ctl.h) */
-                wait = psi_stroke_cdeg(i) < first;
-                if (wait && cl[i].waited >= TICKS(CTL_SAG_WAIT_MS)) {
+                /* all rising: instead of crossing together, the rise lead crosses first and
+                 * the others wait, warm for at most CTL_SAG_WAIT_MS (ctl.h) */
+                wait = lead_below && i != CFG_STROKE_RISE_LEAD;
+                if (wait && cl[i].clock >= TICKS(CTL_SAG_WAIT_MS)) {
                     wait = 2u; /* waited long enough warm: off until it has crossed */
-                } else if (wait) {
-                    cl[i].waited++;
                 }
             }
-#endif
             w = wait == 1u ? WANT_HOLD : wait ? WANT_RELEASE : WANT_HEAT + cl[i].boost;
+#else
+            w = wait ? WANT_HOLD : WANT_HEAT + cl[i].boost;
+#endif
         } else if (move[i] == FALL) {
             /* It may be what holds a sagging neighbour (limb i-1 or i+1: the coils that
              * bend the same body section) up: kept warm while one sags, for at most
@@ -264,11 +302,19 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 cl[i].ticks++;
                 w = WANT_HOLD;
             }
+#ifdef CFG_STROKE_FALL_LEAD
+            if (!rising && lead_down && i != CFG_STROKE_FALL_LEAD && FROM_STROKE(i, level) &&
+                cl[i].clock < TICKS(CTL_FALL_WAIT_MS)) {
+                /* all falling from strokes: held at its stroke until the fall lead is down (ctl.h) */
+                w = psi_last_at_or_above_hold(i, (uint8_t)(level - 1u)) ? WANT_NOTHING : WANT_HEAT;
+            }
+#endif
         } else if (move[i] == SAG) {
             w = WANT_HEAT + cl[i].boost;
 #ifdef CFG_LIMB_STROKE_CDEG
             if (CLIMBS_TO_STROKE(i, level) && got[i] > least + CTL_SHARE_SYNC) {
-                w = WANT_HOLD; /* ahead of another limb's climb: wait for it (ctl.h) */
+                w = WANT_HOLD;     /* ahead of another limb's climb: wait for it (ctl.h) */
+                cl[i].ticks = 0u;  /* not hovering: waiting */
             }
 #endif
         } else if (level == PSI_UNKNOWN) {

@@ -45,12 +45,18 @@
  * far a coil bends the whole body, and which end leads decides which end slides while it
  * bends (docs/control.md, "Full strokes"); an end that started to slide keeps sliding
  * (kinetic friction is below static). So limbs rising to their strokes together:
- * - all rising: instead of crossing together, the limb with the largest stroke crosses
- *   first; the others wait until it has: at the hold duty (warming their coils) for at most
- *   CTL_SAG_WAIT_MS, then off (a coil that cannot heat must not keep another one on);
+ * - all rising: instead of crossing together, the rise lead (CFG_STROKE_RISE_LEAD: robot
+ *   file control.stroke_rise_lead, by default the largest stroke) crosses first; the others
+ *   wait until it has: at the hold duty (warming their coils) for at most CTL_SAG_WAIT_MS,
+ *   then off (a coil that cannot heat must not keep another one on);
  * - then they climb in step: a limb that has covered more than CTL_SHARE_SYNC /
  *   CTL_SHARE_FULL (5 %) more of its climb (from its top band's upper edge to its stroke)
  *   than another waits at the hold duty; a limb not across its band yet has covered none.
+ * Falling from their strokes together (no limb rising), they fall as their coils cool: the
+ * one bent least comes down first. With a fall lead (CFG_STROKE_FALL_LEAD: robot file
+ * control.stroke_fall_lead, built in only when given) the others are held at their strokes
+ * (bang-bang at the drive duty) until the fall lead has left its top level, for at most
+ * CTL_FALL_WAIT_MS: on R2's pads the same end must lead up and down.
  * hold_pm is only used for these waits.
  *
  * Stall detector, per limb and step (a step = an unchanged target level):
@@ -88,6 +94,8 @@
 /* Limbs climbing to their strokes together (see above): shares of the climb, 0..FULL. */
 #define CTL_SHARE_FULL 256
 #define CTL_SHARE_SYNC 13
+#define CTL_FALL_WAIT_MS 2000u
+#define CTL_CLIMB_MAX_MS 3000u
 #define CTL_STALL_MS 5000u
 /* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default
  * (flash; the default controller passes the hil central-claim points without it): at 700 ms

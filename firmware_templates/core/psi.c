@@ -16,8 +16,14 @@ static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
 #define E_HOLD 2u   /* the hold edge (below) */
 #define E_TOP 3u    /* the hold top */
 #define E_SETTLE 4u /* the settle edge */
+#ifdef CFG_LIMB_STROKE_CDEG
+#define E_SHORT 5u  /* the hold edge and top without the stroke: for a limb that stopped short of it */
+#define N_EDGES 7u
+#else
+#define N_EDGES 5u
+#endif
 typedef struct {
-    int16_t e[5][2];          /* {cos, sin} Q14 of each E_* edge */
+    int16_t e[N_EDGES][2];    /* {cos, sin} Q14 of each E_* edge */
     int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
     int16_t star, hyst;       /* ψ* and the band width */
 } band_t;
@@ -62,26 +68,30 @@ static void edge_of(int16_t cdeg, int16_t edge[2])
 }
 
 #ifdef CFG_LIMB_STROKE_CDEG
-/* Per limb, 0.01°: where it is held on its top level (robot file [[limb]] stroke_deg), 0: just
- * past its top band (CFG_HOLD_MARGIN_CDEG). */
+/* Per limb, 0.01°: where it is held on its top level (robot file [[limb]] stroke_deg),
+ * PSI_NO_STROKE: just past its top band (CFG_HOLD_MARGIN_CDEG). */
 static const int16_t stroke_rom[CFG_N_LIMBS] ROM = CFG_LIMB_STROKE_CDEG;
 
-/* The hold edge and hold top of `limb`'s top threshold `thr` at its stroke, if it has one
- * above the band (a SET_PARAM that moves ψ* past the stroke gives back the margin edges). */
-static void set_stroke(uint8_t limb, uint8_t thr)
+int16_t psi_stroke_cdeg(uint8_t limb)
 {
     int16_t s = ROM_I16(&stroke_rom[limb]);
+    /* a SET_PARAM that moved the top ψ* up to the stroke or past it turns the stroke off */
+    return s != PSI_NO_STROKE && s > band(limb, (uint8_t)(psi_levels(limb) - 2u))->hi ? s : PSI_NO_STROKE;
+}
+
+/* Threshold `thr` of `limb`: keep its margin hold edge and top as E_SHORT and E_SHORT + 1,
+ * then, for the top threshold of a limb with a stroke, move the hold edge and top to it. */
+static void set_stroke(uint8_t limb, uint8_t thr)
+{
     band_t *b = band(limb, thr);
-    if (s != 0 && thr + 2u == psi_levels(limb) && s > b->hi) {
+    int16_t s = psi_stroke_cdeg(limb);
+    memcpy(b->e[E_SHORT], b->e[E_HOLD], 2u * sizeof b->e[0]); /* E_HOLD, E_TOP are adjacent */
+    if (s != PSI_NO_STROKE && thr + 2u == psi_levels(limb)) {
         edge_of(s, b->e[E_HOLD]);
         edge_of((int16_t)(s + PSI_HOLD_BAND_CDEG), b->e[E_TOP]);
     }
 }
 
-int16_t psi_stroke_cdeg(uint8_t limb)
-{
-    return ROM_I16(&stroke_rom[limb]);
-}
 #define SET_STROKE(limb, thr) set_stroke(limb, thr)
 #else
 #define SET_STROKE(limb, thr) ((void)0)
@@ -386,6 +396,13 @@ uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 {
     return last_above(limb, thr, E_TOP);
 }
+
+#ifdef CFG_LIMB_STROKE_CDEG
+uint8_t psi_last_at_or_above_short_hold(uint8_t limb, uint8_t thr, uint8_t top)
+{
+    return last_above(limb, thr, (uint8_t)(E_SHORT + (top != 0u)));
+}
+#endif
 
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {

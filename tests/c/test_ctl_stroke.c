@@ -1,7 +1,9 @@
 /* Host unit tests of full strokes in core/psi.c and core/ctl.c ([[limb]] stroke_deg).
- * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1°; limb 0 ("left") with a stroke of
- * 60°, limb 1 ("right") 50°, limb i driven by actuator i. Shares of the climb from the band's
- * upper edge 21°: limb 0 (ψ − 21) / 39, limb 1 (ψ − 21) / 29. */
+ * Config: two limbs, ψ* = 20°, band 19..21°, hold margin 1° (without a stroke: hold edge 22°,
+ * top 23°); limb 0 ("left") with a stroke of 60°, limb 1 ("right") 50°, limb i driven by
+ * actuator i; the rise lead is limb 0 (the larger stroke), the fall lead limb 1
+ * (control.stroke_fall_lead). Shares of the climb from the band's upper edge 21°: limb 0
+ * (ψ − 21) / 39, limb 1 (ψ − 21) / 29. */
 #include "ctl_unit.h"
 #include "unit.h"
 
@@ -12,6 +14,8 @@ static void test_the_config_has_the_strokes(void)
     CHECK_EQ(psi_stroke_cdeg(0), 6000);
     CHECK_EQ(psi_stroke_cdeg(1), 5000);
     CHECK_EQ(CFG_HOLD_MARGIN_CDEG, 100);
+    CHECK_EQ(CFG_STROKE_RISE_LEAD, 0);
+    CHECK_EQ(CFG_STROKE_FALL_LEAD, 1);
 }
 
 static void test_a_raised_limb_is_held_at_its_stroke_not_past_its_band(void)
@@ -80,7 +84,9 @@ static void test_moving_psi_star_past_the_stroke_gives_back_the_margin_hold(void
     put(1, 57.2);
     CHECK(psi_last_at_or_above_hold(1, 0));
     CHECK(!psi_last_at_or_above_hold_top(1, 0));
+    CHECK_EQ(psi_stroke_cdeg(1), PSI_NO_STROKE); /* for the controller's rules too */
     CHECK_EQ(psi_set_band(1, 0, 2000, 200), 0); /* back below the stroke: held at 50° again */
+    CHECK_EQ(psi_stroke_cdeg(1), 5000);
     put(1, 45.0);
     CHECK(!psi_last_at_or_above_hold(1, 0));
     put(1, 50.2);
@@ -126,9 +132,26 @@ static void test_a_limb_waiting_for_a_larger_stroke_is_kept_warm_only_for_a_whil
         demand(1, 1, duty);
         CHECK_EQ(duty[1], 0); /* then off: no coil stays on because another cannot heat */
     }
-    demand(0, 0, duty); /* a new step */
-    put(0, 21.5);       /* ... and the next rise: limb 0 has crossed, limb 1 goes at once */
+    demand(0, 0, duty); /* a new step, and the next rise: warm again for a while */
     demand(1, 1, duty);
+    CHECK_EQ(duty[1], HOLD);
+    put(0, 21.5); /* limb 0 has crossed: limb 1 goes */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[1], DRIVE);
+}
+
+static void test_a_limb_already_at_its_stroke_is_held_there_while_another_rises(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 60.5); /* step 10: limb 0 at its stroke */
+    put(0, 60.5);
+    put(1, 5.0);
+    demand(1, 0, duty);
+    CHECK(psi_settled(0));
+    put(0, 55.0); /* step 11: limb 1 rises; limb 0 sags (share 87 %, far ahead of limb 1's 0) */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE); /* its hold, not a wait: it is not climbing in this step */
     CHECK_EQ(duty[1], DRIVE);
 }
 
@@ -136,6 +159,9 @@ static void test_limbs_climb_to_their_strokes_in_step(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     setup();
+    put(0, 5.0); /* the step begins with both below their bands */
+    put(1, 5.0);
+    demand(1, 1, duty);
     put(0, 40.0); /* share 49 % */
     put(1, 30.0); /* share 31 % */
     demand(1, 1, duty);
@@ -162,6 +188,8 @@ static void test_a_limb_still_climbing_to_its_stroke_is_not_hovering(void)
     double psi = 25.0;
     setup();
     put(1, 0.0);
+    put(0, 5.0); /* the step begins below the band */
+    demand(1, 0, duty);
     put(0, psi);
     for (k = 0; k < 4u * HOVER_TICKS; k++) {
         if (k % (HOVER_TICKS / 2u) == 0u) {
@@ -181,6 +209,8 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     uint32_t k;
     setup();
     put(1, 0.0);
+    put(0, 5.0);
+    demand(1, 0, duty);
     put(0, 35.0);
     for (k = 0; k <= HOVER_TICKS + 1u; k++) {
         put(0, 35.0 + 0.5 * (double)(k % 2u)); /* noise, no climb */
@@ -191,7 +221,90 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     put(0, 35.0);
     CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], DRIVE); /* and the hold still heats it towards the stroke */
+    CHECK_EQ(duty[0], 0); /* held at the edges it has without a stroke (22..23°): no heat at 35° */
+    put(0, 21.5);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 23.2);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+}
+
+static void test_a_climb_is_not_waited_for_longer_than_the_climb_limit(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, n = (uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u + 2u * HOVER_TICKS;
+    double psi = 21.5;
+    setup();
+    put(1, 0.0);
+    put(0, 5.0);
+    demand(1, 0, duty);
+    for (k = 0; k < n; k++) {
+        if (k % (HOVER_TICKS / 2u) == 0u) {
+            psi += 0.8 * 1.25; /* 1° per 0.4 hover times: a slow climb that never gets there */
+            put(0, psi);
+        }
+        demand(1, 0, duty);
+    }
+    CHECK(psi < 60.0);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+}
+
+static void test_a_limb_waiting_for_another_in_step_is_not_hovering(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(0, 5.0);
+    put(1, 5.0);
+    demand(1, 1, duty);
+    put(0, 50.0); /* share 74 % */
+    for (k = 0; k < 3u * HOVER_TICKS; k++) {
+        if (k % (HOVER_TICKS / 2u) == 0u) {
+            put(1, 25.0 + 1.5 * (double)(k / (HOVER_TICKS / 2u))); /* climbing, 14..45 %: limb 0 waits */
+        }
+        demand(1, 1, duty);
+        CHECK_EQ(duty[0], HOLD);
+        CHECK_EQ(duty[1], DRIVE);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+    CHECK_EQ(ctl_stall(1), CTL_STALL_NONE);
+}
+
+static void test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, wait = (uint32_t)CTL_FALL_WAIT_MS * CFG_TICK_HZ / 1000u;
+    setup();
+    put(0, 60.5);
+    put(1, 50.5);
+    demand(1, 1, duty);
+    put(0, 59.5); /* both lowered: limb 1 (the fall lead) goes down, limb 0 is held at 60° */
+    demand(0, 0, duty);
+    CHECK_EQ(duty[1], 0);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 60.2);
+    demand(0, 0, duty);
+    CHECK_EQ(duty[0], 0);
+    put(0, 59.5);
+    put(1, 15.0); /* the lead has left its top level: limb 0 goes down too */
+    put(1, 15.0);
+    CHECK_EQ(psi_level(1), 0);
+    demand(0, 0, duty);
+    CHECK_EQ(duty[0], 0);
+    put(0, 60.5); /* again, with a lead that never comes down: held for CTL_FALL_WAIT_MS at most */
+    put(1, 50.5);
+    put(1, 50.5);
+    demand(1, 1, duty);
+    put(0, 59.5);
+    for (k = 0; k < wait; k++) {
+        demand(0, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    for (k = 0; k < 100u; k++) {
+        demand(0, 0, duty);
+        CHECK_EQ(duty[0], 0);
+    }
 }
 
 int main(void)
@@ -203,8 +316,12 @@ int main(void)
     RUN(test_moving_psi_star_past_the_stroke_gives_back_the_margin_hold);
     RUN(test_the_larger_stroke_crosses_first_and_the_others_wait_warm);
     RUN(test_a_limb_waiting_for_a_larger_stroke_is_kept_warm_only_for_a_while);
+    RUN(test_a_limb_already_at_its_stroke_is_held_there_while_another_rises);
     RUN(test_limbs_climb_to_their_strokes_in_step);
     RUN(test_a_limb_still_climbing_to_its_stroke_is_not_hovering);
     RUN(test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there);
+    RUN(test_a_climb_is_not_waited_for_longer_than_the_climb_limit);
+    RUN(test_a_limb_waiting_for_another_in_step_is_not_hovering);
+    RUN(test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down);
     return UNIT_EXIT();
 }

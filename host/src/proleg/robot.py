@@ -11,8 +11,10 @@ expected; it never clamps or guesses.
 from __future__ import annotations
 
 import logging
+import math
 import re
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -110,6 +112,11 @@ class Control:
     telemetry_hz: int = 50
     overrun_fault: int = 10  # consecutive ticks whose work overran the period: fault TICK_OVERRUN
     fallback: bool = True  # firmware switches to a build-time fallback gait when it loses an actuator
+    #: limbs raised to their strokes together: which crosses psi* first (None: the largest stroke);
+    #: lowered together: which goes down first while the others are held at their strokes (None:
+    #: they fall as they cool). Limb names.
+    stroke_rise_lead: str | None = None
+    stroke_fall_lead: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,6 +213,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
+    _check_strokes(path, control, limbs)
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
@@ -291,14 +299,7 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
             f.fail("actuator", f"the name of an [[actuator]] ({', '.join(sorted(actuator_names))})", actuator)
         imu = _imu_spec(path, f"{f.where}: imu", t["imu"]) if "imu" in t else None
         friction = limb_friction(path, f.where, t["friction"], levels) if "friction" in t else None
-        stroke = None
-        if f.has("stroke_deg"):
-            stroke = f.number("stroke_deg", 0.0, -90.0, 90.0)
-            edge = psi_t[-1] + hyst / 2
-            if not edge < stroke <= STROKE_MAX_DEG:
-                # the firmware holds it between stroke_deg and 1° above (psi.c: edges within ±89°)
-                f.fail("stroke_deg", f"an angle above the top band's upper edge psi* + hysteresis/2 = {edge:g} "
-                                     f"and at most {STROKE_MAX_DEG:g} degrees", stroke)
+        stroke = f.number("stroke_deg", 0.0, -math.inf, math.inf) if f.has("stroke_deg") else None  # range: _check_strokes
         out.append(Limb(name, levels, psi_t, hyst, actuator, imu, friction, stroke))
     declared = [limb.friction is not None for limb in out]
     if any(declared) and not all(declared):
@@ -306,6 +307,44 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         raise RobotFileError(f"{path}: limb {missing!r}: friction: expected on every limb or on none "
                              f"(the others give it; without it the simulator infers every limb's mechanism)")
     return tuple(out)
+
+
+def _check_strokes(path: Path, control: Control, limbs: Sequence[Limb]) -> None:
+    """Each ``stroke_deg`` lies at least 1° above where the limb is held without one (so that
+    its hold band starts above that hold's, and rounds to a distinct edge) and at most
+    STROKE_MAX_DEG; ``stroke_rise_lead`` / ``stroke_fall_lead`` name a limb that has one."""
+    for lb in limbs:
+        if lb.stroke_deg is None:
+            continue
+        lo = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2 + control.hold_margin_deg + 1.0
+        if not lo <= lb.stroke_deg <= STROKE_MAX_DEG:
+            # the firmware holds it between stroke_deg and 1° above (psi.c: edges within ±89°)
+            raise RobotFileError(
+                f"{path}: limb {lb.name!r}: stroke_deg: expected an angle from {lo:g} (1° above where it is held "
+                f"without one: psi* + hysteresis/2 + control.hold_margin_deg) to {STROKE_MAX_DEG:g} degrees, "
+                f"got {lb.stroke_deg:g}")
+    with_stroke = [lb.name for lb in limbs if lb.stroke_deg is not None]
+    for key in ("stroke_rise_lead", "stroke_fall_lead"):
+        name = getattr(control, key)
+        if name is not None and not with_stroke:
+            raise RobotFileError(f"{path}: control.{key}: {name!r}, but no [[limb]] has a stroke_deg to lead with")
+        if name is not None and name not in with_stroke:
+            raise RobotFileError(f"{path}: control.{key}: expected the name of a limb with a stroke_deg "
+                                 f"({', '.join(with_stroke)}), got {name!r}")
+
+
+def stroke_leads(limbs: Sequence[Any], control: Any) -> tuple[int, int | None] | None:
+    """(rise lead, fall lead or None) as limb indices, or None when no limb has a stroke: the
+    control keys; without ``stroke_rise_lead`` the limb with the largest stroke (the first such
+    in the file), without ``stroke_fall_lead`` no fall lead (limbs fall as their coils cool)."""
+    strokes = [getattr(lb, "stroke_deg", None) for lb in limbs]
+    idx = [i for i, st in enumerate(strokes) if st is not None]
+    if not idx:
+        return None
+    names = [lb.name for lb in limbs]
+    rise, fall = getattr(control, "stroke_rise_lead", None), getattr(control, "stroke_fall_lead", None)
+    return (names.index(rise) if rise else max(idx, key=lambda i: (strokes[i], -i)),
+            names.index(fall) if fall else None)
 
 
 def _imu_spec(path: Path, where: str, value: Any) -> ImuSpec:
@@ -345,6 +384,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
         overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
         fallback=f.table.get("fallback", d.fallback),
+        stroke_rise_lead=f.string("stroke_rise_lead") if f.has("stroke_rise_lead") else None,
+        stroke_fall_lead=f.string("stroke_fall_lead") if f.has("stroke_fall_lead") else None,
     )
     if not isinstance(c.fallback, bool):
         f.fail("fallback", "true or false", c.fallback)

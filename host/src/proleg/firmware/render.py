@@ -28,6 +28,7 @@ import jinja2
 
 from .. import __version__
 from ..errors import BoardError, BuildError
+from ..robot import stroke_leads
 from ..paths import display_path, templates_dir
 from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
@@ -87,7 +88,8 @@ class LimbPart:
     placement: list[str]  # one line per limb, for the header comment
     psi_cdeg: list[list[int]]
     hyst_cdeg: list[int]
-    stroke_cdeg: list[int]  # empty: no limb has a stroke (the table is not rendered)
+    stroke_cdeg: list[str]  # empty: no limb has a stroke (the table is not rendered)
+    stroke_leads: tuple[int, int | None] | None  # (rise lead, fall lead) limb indices (robot.stroke_leads)
     actuators: list[Any]
     act_channels: list[int]
 
@@ -239,12 +241,12 @@ def _check_bands(robot: Any, limb: Any) -> None:
             )
 
 
-def _strokes(limbs: Sequence[Any]) -> list[int]:
-    """Each limb's ``stroke_deg`` in 0.01° (0: none), or [] when no limb has one."""
+def _strokes(limbs: Sequence[Any]) -> list[str]:
+    """Each limb's ``stroke_deg`` in 0.01° (PSI_NO_STROKE: none), or [] when no limb has one."""
     strokes = [getattr(limb, "stroke_deg", None) for limb in limbs]
     if all(s is None for s in strokes):
         return []
-    return [0 if s is None else round(float(s) * 100) for s in strokes]
+    return ["PSI_NO_STROKE" if s is None else str(round(float(s) * 100)) for s in strokes]
 
 
 def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
@@ -283,6 +285,7 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
                   for limb in limbs],
         hyst_cdeg=[round(float(limb.hysteresis_deg) * 100) for limb in limbs],
         stroke_cdeg=_strokes(limbs),
+        stroke_leads=stroke_leads(limbs, robot.control),
         actuators=actuators,
         act_channels=[a.channel for a in actuators],
     )

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ...robot import stroke_leads
 from ...states import limb_levels
 from .conditions import Conditions
 from .plant import PhysicalParams, PhysicalPlant
@@ -33,8 +34,20 @@ from .plant import PhysicalParams, PhysicalPlant
 MARGIN_DEG = 4.0
 
 
+#: The firmware's stroke rules (core/ctl.h) the idealised drive follows: how long a limb falling
+#: behind the fall lead is held at its stroke at most (CTL_FALL_WAIT_MS), and when a limb rising
+#: to its stroke has stopped climbing (CTL_CLIMB_CDEG in CTL_HOVER_MS).
+FALL_WAIT_S = 2.0
+CLIMB_STOP_DPS = 1.0 / 0.3
+
+
 class IdealDrive:
-    """Per actuator: +1 heat, 0 hold, −1 cool, towards a target robot state."""
+    """Per actuator: +1 heat, 0 hold, −1 cool, towards a target robot state.
+
+    Limbs with a ``stroke_deg`` follow the firmware's rules (core/ctl.h): raised to the stroke
+    on their top level; rising together, the rise lead crosses ψ* first while the others wait;
+    falling together with a fall lead, the others are held at their strokes until it has left
+    its top level (at most ``FALL_WAIT_S``, counted from the ``dt_s`` given to ``command``)."""
 
     def __init__(self, robot: Any, plant: PhysicalPlant, margin_deg: float):
         names = [a.name for a in robot.actuators]
@@ -44,37 +57,63 @@ class IdealDrive:
         self.th = plant.true_psi_star_deg
         self.margin = margin_deg
         self.stroke = [getattr(lb, "stroke_deg", None) for lb in robot.limbs]
-        self.has_strokes = any(s is not None for s in self.stroke)
+        leads = stroke_leads(robot.limbs, getattr(robot, "control", None))
+        self.rise_lead, self.fall_lead = leads if leads else (None, None)
+        self._step: tuple[int, float] = (-1, 0.0)   # (target, seconds in it) for the fall hold
 
-    def command(self, psi: Sequence[float], target: int) -> list[int]:
+    def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
+        waits, held = self._stroke_rules(psi, want, target, dt_s) if self.rise_lead is not None else ((), ())
         heat = [False] * self.n_act
         cool = [False] * self.n_act
         active = [False] * self.n_act
-        # Limbs rising to their strokes together (no limb falling): the one with the largest stroke
-        # crosses first, the others wait for it (as the firmware: ctl.h).
-        below: list[int] = []
-        if self.has_strokes and not any(sum(p >= t for t in th) > k for p, k, th in zip(psi, want, self.th)):
-            below = [i for i, k in enumerate(want) if k == len(self.th[i]) and self.stroke[i] is not None
-                     and psi[i] < self.th[i][-1]]
-        first = max((self.stroke[i] for i in below), default=None)
         for i, (p, k) in enumerate(zip(psi, want)):
             j = self.limb_act[i]
             th = self.th[i]
+            if i in held:   # held at its stroke while the fall lead goes down
+                k = len(th)
             lo = th[k - 1] + self.margin if k > 0 else -math.inf
             hi = th[k] - self.margin if k < len(th) else math.inf
             if lo > hi:  # a middle level narrower than two margins: hold in its middle
                 lo = hi = (th[k - 1] + th[k]) / 2
             if k == len(th) and self.stroke[i] is not None:  # raised to its stroke (as the firmware)
                 lo = max(lo, self.stroke[i])
-            waits = i in below and self.stroke[i] < first
             if p > hi:
                 cool[j] = True
-            elif p < lo and not waits:
+            elif p < lo and i not in waits:
                 heat[j] = True
             if k > 0:
                 active[j] = True
         return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
+
+    def _stroke_rules(self, psi: Sequence[float], want: Sequence[int], target: int,
+                      dt_s: float) -> tuple[set[int], set[int]]:
+        """(limbs waiting for the rise lead to cross, limbs held at their strokes for the fall lead)."""
+        t, spent = self._step
+        self._step = (target, spent + dt_s if t == target else 0.0)
+        level = [sum(p >= x for x in th) for p, th in zip(psi, self.th)]
+        tops = [i for i, s in enumerate(self.stroke) if s is not None]
+        rising = [i for i in range(len(psi)) if want[i] > level[i]]
+        falling = [i for i in range(len(psi)) if want[i] < level[i]]
+        waits: set[int] = set()
+        held: set[int] = set()
+        lead = self.rise_lead
+        if not falling and lead in rising and want[lead] == len(self.th[lead]):
+            waits = {i for i in rising if i in tops and i != lead and want[i] == len(self.th[i])}
+        lead = self.fall_lead
+        if (lead is not None and not rising and lead in falling and level[lead] == len(self.th[lead])
+                and self._step[1] < FALL_WAIT_S):
+            held = {i for i in falling if i in tops and i != lead and level[i] == len(self.th[i])}
+        return waits, held
+
+    def at_strokes(self, psi: Sequence[float], dpsi: Sequence[float], target: int) -> bool:
+        """Every limb wanted on its top level that has a stroke is there, or has stopped climbing
+        (the firmware counts a step reached only then)."""
+        if self.rise_lead is None:
+            return True   # no strokes
+        want = limb_levels(target, self.levels)
+        return all(s is None or k < len(th) or p >= s or d < CLIMB_STOP_DPS
+                   for s, k, th, p, d in zip(self.stroke, want, self.th, psi, dpsi))
 
 
 @dataclass
@@ -102,20 +141,24 @@ def json_matrix(m: np.ndarray) -> list:
 def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, dt: float,
             timeout_s: float, settle_s: float) -> float | None:
     """Drive to ``target`` until the robot has stayed in it for ``settle_s``; return the time
-    it first reached it (None if it did not settle there within ``timeout_s``)."""
+    it first reached it (None if it did not settle there within ``timeout_s``). With strokes it
+    has reached it once its limbs got to their strokes (``IdealDrive.at_strokes``; latched while
+    the state holds, as the firmware's settled flag)."""
     chans = [a.channel for a in plant.params.actuators]
     nch = max(chans) + 1
     t0 = plant.time_s
     first = since = None
+    arrived = False
     while True:
-        cmd = drive.command(plant.psi_deg.tolist(), target)
+        cmd = drive.command(plant.psi_deg.tolist(), target, dt)
         duties = [0.0] * nch
         for j, c in enumerate(cmd):
             if c > 0:
                 duties[chans[j]] = duty
         plant.step(dt, duties)
         now = plant.time_s - t0
-        if plant.true_state == target:
+        arrived = plant.true_state == target and (arrived or drive.at_strokes(plant.psi_deg, plant.dpsi_dps, target))
+        if arrived:
             if since is None:
                 since = now
                 first = now if first is None else first

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimError
+from ...robot import stroke_leads
 from ...robot_plant import INFER_MAX_LIMBS, too_many_to_infer
 from . import materials as mat
 
@@ -74,8 +75,10 @@ def _infer(robot: Any) -> tuple[str, ...]:
     reward, allowed = robot.transitions.dense()
     key = (tuple(tuple(float(x) for x in row) for row in np.asarray(reward)),
            tuple(tuple(bool(x) for x in row) for row in np.asarray(allowed)),
-           tuple((lb.name, tuple(lb.psi_star_deg), lb.actuator) for lb in robot.limbs),
-           tuple((a.name, a.channel) for a in robot.actuators))
+           tuple((lb.name, tuple(lb.psi_star_deg), lb.actuator, getattr(lb, "stroke_deg", None))
+                 for lb in robot.limbs),
+           tuple((a.name, a.channel) for a in robot.actuators),
+           stroke_leads(robot.limbs, getattr(robot, "control", None)))  # the drive follows strokes
     return _infer_cached(key, robot)
 
 
