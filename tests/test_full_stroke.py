@@ -111,14 +111,18 @@ def test_the_firmware_carries_a_stroke_table_only_when_a_limb_has_a_stroke(tmp_p
     assert "#define CFG_LIMB_STROKE_CDEG { 7025, PSI_NO_STROKE }" in one
 
 
-def test_the_ideal_drive_raises_to_the_strokes_the_larger_stroke_crossing_first():
+def test_the_ideal_drive_follows_the_firmwares_stroke_rules():
+    """The rise lead (the left: the larger stroke) crosses ψ* first, then they climb in step
+    (shares of the climb from the band's upper edge 21°: left (ψ − 21) / 55, right / 51)."""
     robot = load_robot(STROKE)
     plant = PhysicalPlant(robot)
     drive = IdealDrive(robot, plant, 4.0)
     eleven = robot.transitions.labels().index("11")
     assert drive.command([5.0, 15.0], eleven) == [1, 0]     # the right waits for the rise lead to cross
-    assert drive.command([25.0, 15.0], eleven) == [1, 1]    # crossed: both climb
-    assert drive.command([75.0, 40.0], eleven) == [1, 1]    # short of its stroke (76°): heats on
+    assert drive.command([21.5, 15.0], eleven) == [1, 1]    # crossed (1 %): both climb
+    assert drive.command([25.0, 15.0], eleven) == [0, 1]    # 7 % ahead of a limb at 0: waits for it
+    assert drive.command([60.0, 60.0], eleven) == [1, 0]    # 71 % against 76 %: the right waits
+    assert drive.command([75.5, 40.0], eleven) == [0, 1]    # 99 % against 37 %
     assert drive.command([76.5, 72.5], eleven) == [0, 0]    # at both strokes: held
     assert drive.command([30.0, 30.0], 0) == [-1, -1]
 

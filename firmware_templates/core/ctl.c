@@ -41,7 +41,7 @@ typedef struct {
     int16_t peak;      /* ψ (0.01°) when the hover clock last restarted on a climb */
     uint16_t clock;    /* ticks since this step began (saturating) */
     uint8_t climb;     /* this step raises it to its stroke (it began below its top level) */
-    uint8_t shortfall; /* stopped climbing short of its stroke: held without it until it leaves its top level */
+    uint8_t shortfall; /* stopped climbing short of its stroke: held where it stopped until it leaves its top level */
 #endif
 } ctl_limb_t;
 
@@ -111,11 +111,12 @@ static int16_t share(uint8_t i)
 }
 
 /* Held on threshold thr: at or above its hold edge (top = 0) or its hold top (1). A limb
- * that stopped short of its stroke is held at the edges it has without one. */
+ * that stopped short of its stroke is held where it stopped: its hold top is the ψ of its
+ * last climbing degree (peak), its hold edge 1° below (ctl.h). */
 static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 {
-    if (STROKE(i) && TOP(i, level) && cl[i].shortfall) {
-        return psi_last_at_or_above_short_hold(i, thr, top);
+    if (STROKE(i) && TOP(i, level) && cl[i].shortfall && !cl[i].climb) {
+        return psi_last_centideg(i) >= cl[i].peak - (top ? 0 : CTL_CLIMB_CDEG);
     }
     return top ? psi_last_at_or_above_hold_top(i, thr) : psi_last_at_or_above_hold(i, thr);
 }
@@ -186,21 +187,29 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     int16_t got[CFG_N_LIMBS];
     int16_t least = CTL_SHARE_FULL;
     uint8_t lead_below = 0; /* the rise lead is rising to its stroke and has not crossed ψ* yet */
+    uint8_t new_step = 0;   /* some limb's target changed: the robot's next step */
 #endif
 #ifdef CFG_STROKE_FALL_LEAD
     uint8_t lead_down = 0; /* the fall lead is falling from its stroke */
     uint8_t rising = 0;
 #endif
 
+#ifdef CFG_LIMB_STROKE_CDEG
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        new_step |= (uint8_t)(target[i] != cl[i].target && psi_level(i) != PSI_UNKNOWN);
+    }
+#endif
     for (i = 0; i < CFG_N_LIMBS; i++) {
         uint8_t level = psi_level(i);
         move[i] = STAY;
         to_go[i] = 0;
 #ifdef CFG_LIMB_STROKE_CDEG
         got[i] = 0;
-        if (target[i] != cl[i].target) { /* a new step */
+        if (target[i] != cl[i].target) { /* a new step for this limb */
             cl[i].clock = 0;
             cl[i].climb = (uint8_t)(level != PSI_UNKNOWN && level < target[i]);
+        } else if (new_step) {
+            cl[i].climb = 0; /* the robot's next step, which leaves this limb where it is */
         } else if (cl[i].clock != 0xFFFFu) {
             cl[i].clock++;
         }
@@ -227,15 +236,15 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 }
                 if (cl[i].heat) {
                     move[i] = SAG;
-#ifdef CFG_LIMB_STROKE_CDEG
-                    if (CLIMBS_TO_STROKE(i, level)) {
-                        got[i] = share(i);
-                        if (got[i] < least) {
-                            least = got[i];
-                        }
-                    }
-#endif
                 }
+#ifdef CFG_LIMB_STROKE_CDEG
+                if (cl[i].heat && CLIMBS_TO_STROKE(i, level)) {
+                    got[i] = share(i);
+                    if (got[i] < least) {
+                        least = got[i];
+                    }
+                }
+#endif
             }
             continue;
         }
@@ -248,7 +257,8 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #endif
 #ifdef CFG_STROKE_FALL_LEAD
         rising |= (uint8_t)(move[i] == RISE);
-        lead_down |= (uint8_t)(i == CFG_STROKE_FALL_LEAD && move[i] == FALL && FROM_STROKE(i, level));
+        lead_down |= (uint8_t)(i == CFG_STROKE_FALL_LEAD && move[i] == FALL && FROM_STROKE(i, level) &&
+                               share(i) > CTL_FALL_SHARE);
 #endif
         to_go[i] = psi_to_go_cdeg(i, move[i] == RISE ? level : (uint8_t)(level - 1u), (uint8_t)(move[i] == RISE));
         if (to_go[i] > farthest) {
@@ -312,7 +322,8 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         } else if (move[i] == SAG) {
             w = WANT_HEAT + cl[i].boost;
 #ifdef CFG_LIMB_STROKE_CDEG
-            if (CLIMBS_TO_STROKE(i, level) && got[i] > least + CTL_SHARE_SYNC) {
+            if (CLIMBS_TO_STROKE(i, level) && got[i] > least + CTL_SHARE_SYNC &&
+                cl[i].clock < TICKS(CTL_CLIMB_MAX_MS)) {
                 w = WANT_HOLD;     /* ahead of another limb's climb: wait for it (ctl.h) */
                 cl[i].ticks = 0u;  /* not hovering: waiting */
             }

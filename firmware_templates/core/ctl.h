@@ -51,7 +51,10 @@
  *   then off (a coil that cannot heat must not keep another one on);
  * - then they climb in step: a limb that has covered more than CTL_SHARE_SYNC /
  *   CTL_SHARE_FULL (5 %) more of its climb (from its top band's upper edge to its stroke)
- *   than another waits at the hold duty; a limb not across its band yet has covered none.
+ *   than another waits at the hold duty (not hovering meanwhile), until CTL_CLIMB_MAX_MS
+ *   after the step began (a limb that cannot rise must not hold the others down); a limb
+ *   not across its band yet has covered none. Only limbs the step raises climb in step: one
+ *   already at its stroke when the step began is held as usual.
  * Falling from their strokes together (no limb rising), they fall as their coils cool: the
  * one bent least comes down first. With a fall lead (CFG_STROKE_FALL_LEAD: robot file
  * control.stroke_fall_lead, built in only when given) the others are held at their strokes
@@ -65,8 +68,11 @@
  *   limb settles on the band edges alone (psi_relax), so the sequencer can go on, and
  *   the bang-bang hold keeps it above ψ*. A limb climbing to its stroke (below) is not
  *   hovering while it still climbs: its clock restarts whenever ψ gained CTL_CLIMB_CDEG, so
- *   it is relaxed (and the step goes on) once it stops climbing short of the stroke - a
- *   weak supply or a worn coil still walks, with less stroke;
+ *   it is relaxed (and the step goes on) once it stops climbing short of the stroke, or
+ *   CTL_CLIMB_MAX_MS after the step began; in the steps after, until it leaves its top level,
+ *   it is held where it stopped (1° band below its last climbing degree), so that its coil
+ *   is not heated without a break - a weak supply or a worn coil still walks, with less
+ *   stroke;
  * - cannot reach the state: rising and heating at the drive duty without getting one
  *   progress edge closer (psi_to_go_cdeg) for CTL_STALL_MS. The coil is switched off (cold coils when the
  *   sequencer's state timeout reports the fault).
@@ -95,6 +101,9 @@
 #define CTL_SHARE_FULL 256
 #define CTL_SHARE_SYNC 13
 #define CTL_FALL_WAIT_MS 2000u
+#ifndef CTL_FALL_SHARE
+#define CTL_FALL_SHARE 128
+#endif
 #define CTL_CLIMB_MAX_MS 3000u
 #define CTL_STALL_MS 5000u
 /* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default

@@ -16,14 +16,8 @@ static const int16_t hyst_rom[CFG_N_LIMBS] ROM = CFG_LIMB_HYST_CDEG;
 #define E_HOLD 2u   /* the hold edge (below) */
 #define E_TOP 3u    /* the hold top */
 #define E_SETTLE 4u /* the settle edge */
-#ifdef CFG_LIMB_STROKE_CDEG
-#define E_SHORT 5u  /* the hold edge and top without the stroke: for a limb that stopped short of it */
-#define N_EDGES 7u
-#else
-#define N_EDGES 5u
-#endif
 typedef struct {
-    int16_t e[N_EDGES][2];    /* {cos, sin} Q14 of each E_* edge */
+    int16_t e[5][2];          /* {cos, sin} Q14 of each E_* edge */
     int16_t lo, hi;           /* band edges ψ* − h/2, ψ* + h/2 */
     int16_t star, hyst;       /* ψ* and the band width */
 } band_t;
@@ -79,13 +73,11 @@ int16_t psi_stroke_cdeg(uint8_t limb)
     return s != PSI_NO_STROKE && s > band(limb, (uint8_t)(psi_levels(limb) - 2u))->hi ? s : PSI_NO_STROKE;
 }
 
-/* Threshold `thr` of `limb`: keep its margin hold edge and top as E_SHORT and E_SHORT + 1,
- * then, for the top threshold of a limb with a stroke, move the hold edge and top to it. */
+/* The hold edge and hold top of `limb`'s top threshold `thr` at its stroke, if it has one. */
 static void set_stroke(uint8_t limb, uint8_t thr)
 {
     band_t *b = band(limb, thr);
     int16_t s = psi_stroke_cdeg(limb);
-    memcpy(b->e[E_SHORT], b->e[E_HOLD], 2u * sizeof b->e[0]); /* E_HOLD, E_TOP are adjacent */
     if (s != PSI_NO_STROKE && thr + 2u == psi_levels(limb)) {
         edge_of(s, b->e[E_HOLD]);
         edge_of((int16_t)(s + PSI_HOLD_BAND_CDEG), b->e[E_TOP]);
@@ -396,13 +388,6 @@ uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr)
 {
     return last_above(limb, thr, E_TOP);
 }
-
-#ifdef CFG_LIMB_STROKE_CDEG
-uint8_t psi_last_at_or_above_short_hold(uint8_t limb, uint8_t thr, uint8_t top)
-{
-    return last_above(limb, thr, (uint8_t)(E_SHORT + (top != 0u)));
-}
-#endif
 
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
 {

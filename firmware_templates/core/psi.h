@@ -94,10 +94,6 @@ uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr);
 /* The stroke of `limb` in 0.01°, or PSI_NO_STROKE: it has none, or its top ψ* was moved
  * (SET_PARAM) up to it or past it. */
 int16_t psi_stroke_cdeg(uint8_t limb);
-
-/* Like psi_last_at_or_above_hold (top = 0) and _hold_top (1), against the hold edge and top
- * the threshold has without a stroke: where a limb that stopped short of its stroke is held. */
-uint8_t psi_last_at_or_above_short_hold(uint8_t limb, uint8_t thr, uint8_t top);
 #endif
 
 /* 1 when the last sample of `limb` is at or above the hold top of threshold `thr`: the

@@ -221,13 +221,26 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     put(0, 35.0);
     CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], 0); /* held at the edges it has without a stroke (22..23°): no heat at 35° */
-    put(0, 21.5);
-    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE); /* this step ends soon: heated on, as far as it goes */
+    put(1, 30.0);             /* the next step raises limb 1; limb 0 stays up */
+    put(0, 35.2);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], 0); /* held where it stopped (34..35°), not heated on towards 60° */
+    put(0, 33.5);
+    demand(1, 1, duty);
     CHECK_EQ(duty[0], DRIVE);
-    put(0, 23.2);
-    demand(1, 0, duty);
+    put(0, 34.5); /* going up again inside the band: keeps heating */
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 35.1);
+    demand(1, 1, duty);
     CHECK_EQ(duty[0], 0);
+    put(0, 15.0); /* down: the next time it is raised it climbs to its stroke again */
+    put(0, 15.0);
+    demand(0, 1, duty);
+    put(0, 40.0);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
 }
 
 static void test_a_climb_is_not_waited_for_longer_than_the_climb_limit(void)

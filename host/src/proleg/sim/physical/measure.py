@@ -39,6 +39,7 @@ MARGIN_DEG = 4.0
 #: to its stroke has stopped climbing (CTL_CLIMB_CDEG in CTL_HOVER_MS).
 FALL_WAIT_S = 2.0
 CLIMB_STOP_DPS = 1.0 / 0.3
+SHARE_SYNC = 13 / 256  # CTL_SHARE_SYNC / CTL_SHARE_FULL
 
 
 class IdealDrive:
@@ -57,9 +58,11 @@ class IdealDrive:
         self.th = plant.true_psi_star_deg
         self.margin = margin_deg
         self.stroke = [getattr(lb, "stroke_deg", None) for lb in robot.limbs]
+        self.half_band = [getattr(lb, "hysteresis_deg", 0.0) / 2 for lb in robot.limbs]
         leads = stroke_leads(robot.limbs, getattr(robot, "control", None))
         self.rise_lead, self.fall_lead = leads if leads else (None, None)
         self._step: tuple[int, float] = (-1, 0.0)   # (target, seconds in it) for the fall hold
+        self._raised: set[int] = set()              # limbs the current step raises to their strokes
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
@@ -93,6 +96,8 @@ class IdealDrive:
         self._step = (target, spent + dt_s if t == target else 0.0)
         level = [sum(p >= x for x in th) for p, th in zip(psi, self.th)]
         tops = [i for i, s in enumerate(self.stroke) if s is not None]
+        if t != target:
+            self._raised = {i for i in tops if level[i] < want[i] == len(self.th[i])}
         rising = [i for i in range(len(psi)) if want[i] > level[i]]
         falling = [i for i in range(len(psi)) if want[i] < level[i]]
         waits: set[int] = set()
@@ -100,11 +105,22 @@ class IdealDrive:
         lead = self.rise_lead
         if not falling and lead in rising and want[lead] == len(self.th[lead]):
             waits = {i for i in rising if i in tops and i != lead and want[i] == len(self.th[i])}
+        # then they climb in step: a limb more than 5 % of its climb ahead of another waits
+        climbing = [i for i in self._raised if psi[i] < self.stroke[i]]
+        if not falling and len(climbing) > 1:
+            share = {i: self._share(i, psi[i]) for i in climbing}
+            least = min(share.values())
+            waits |= {i for i in climbing if share[i] > least + SHARE_SYNC}
         lead = self.fall_lead
         if (lead is not None and not rising and lead in falling and level[lead] == len(self.th[lead])
                 and self._step[1] < FALL_WAIT_S):
             held = {i for i in falling if i in tops and i != lead and level[i] == len(self.th[i])}
         return waits, held
+
+    def _share(self, i: int, psi: float) -> float:
+        """How much of its climb limb i has covered: 0 at its top band's upper edge, 1 at its stroke."""
+        lo = self.th[i][-1] + self.half_band[i]
+        return min(1.0, max(0.0, (psi - lo) / (self.stroke[i] - lo)))
 
     def at_strokes(self, psi: Sequence[float], dpsi: Sequence[float], target: int) -> bool:
         """Every limb wanted on its top level that has a stroke is there, or has stopped climbing
