@@ -160,6 +160,10 @@ typedef struct {
     uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
     uint8_t relaxed; /* settle on the band edges instead of the margin edges */
     uint16_t dwell;  /* samples clear of the margins while not yet settled */
+#ifdef CFG_LIMB_STROKE_CDEG
+    int16_t cdeg;    /* ψ of the last sample in 0.01° once computed (the stroke rules ask for it */
+    uint8_t fresh;   /* several times a tick: one atan2 per sample on the 8-bit targets) */
+#endif
 } limb_state_t;
 
 static limb_state_t limbs[CFG_N_LIMBS];
@@ -337,6 +341,9 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
     limb_state_t *s = &limbs[limb];
     s->ax = ax;
     s->az = az;
+#ifdef CFG_LIMB_STROKE_CDEG
+    s->fresh = 0;
+#endif
     s->hyst = psi_classify(limb, s->hyst, ax, az);
     if (s->level == PSI_UNKNOWN) {
         s->level = s->hyst;
@@ -424,10 +431,19 @@ uint8_t psi_settled(uint8_t limb)
 
 NOINLINE int16_t psi_last_centideg(uint8_t limb)
 {
-    if (limbs[limb].hyst == PSI_UNKNOWN) {
+    limb_state_t *l = &limbs[limb];
+    if (l->hyst == PSI_UNKNOWN) {
         return 0;
     }
-    return psi_centideg(limbs[limb].ax, limbs[limb].az);
+#ifdef CFG_LIMB_STROKE_CDEG
+    if (!l->fresh) {
+        l->cdeg = psi_centideg(l->ax, l->az);
+        l->fresh = 1;
+    }
+    return l->cdeg;
+#else
+    return psi_centideg(l->ax, l->az);
+#endif
 }
 
 /* atan(n/d) in 0.01° for 0 ≤ n ≤ d, d > 0: table plus linear interpolation. */
