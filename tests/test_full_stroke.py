@@ -127,6 +127,20 @@ def test_the_ideal_drive_follows_the_firmwares_stroke_rules():
     assert drive.command([30.0, 30.0], 0) == [-1, -1]
 
 
+def test_the_ideal_drive_holds_the_others_until_the_fall_lead_is_halfway_down(tmp_path):
+    path = with_strokes(tmp_path, 76, 72)
+    path.write_text(path.read_text(encoding="utf-8").replace("hold_ms = 100\n", 'hold_ms = 100\nstroke_fall_lead = "right"\n'))
+    robot = load_robot(path)
+    drive = IdealDrive(robot, PhysicalPlant(robot), 4.0)
+    assert drive.command([75.0, 72.5], 0, 0.002) == [1, -1]    # the left held at its stroke (76°)
+    assert drive.command([76.5, 50.0], 0, 0.002) == [0, -1]    # the lead 57 % up its climb: still held
+    assert drive.command([75.0, 40.0], 0, 0.002) == [-1, -1]   # 37 %: past halfway down, both fall
+    assert drive.command([75.0, 72.5], 3, 0.002) == [1, 0]     # another step ...
+    for _ in range(1100):                                       # ... and a lead that never comes down
+        cmd = drive.command([75.0, 72.5], 0, 0.002)
+    assert cmd == [-1, -1]                                      # held for at most 2 s
+
+
 @pytest.mark.parametrize("left, right", [(76, 72), (72, 76), (66, 76)])
 def test_learn_then_walk_on_full_strokes_goes_the_way_the_measured_matrix_says(tmp_path, left, right):
     """Only 00 and 11 can be held at full strokes (either end at its stroke lifts the other past

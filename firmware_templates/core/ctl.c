@@ -111,12 +111,17 @@ static int16_t share(uint8_t i)
 }
 
 /* Held on threshold thr: at or above its hold edge (top = 0) or its hold top (1). A limb
- * that stopped short of its stroke is held where it stopped: its hold top is the ψ of its
- * last climbing degree (peak), its hold edge 1° below (ctl.h). */
+ * that stopped short of its stroke is held where it stopped (ctl.h): its hold edge 1° below
+ * where it stopped (peak), but never below the hold edge it has without a stroke. */
 static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 {
     if (STROKE(i) && TOP(i, level) && cl[i].shortfall && !cl[i].climb) {
-        return psi_last_centideg(i) >= cl[i].peak - (top ? 0 : CTL_CLIMB_CDEG);
+        int16_t edge = (int16_t)(cl[i].peak - CTL_CLIMB_CDEG);
+        int16_t least_edge = (int16_t)(psi_star_cdeg(i, thr) + (psi_hyst_cdeg(i, thr) >> 1) + CFG_HOLD_MARGIN_CDEG);
+        if (edge < least_edge) {
+            edge = least_edge;
+        }
+        return psi_last_centideg(i) >= edge + (top ? PSI_HOLD_BAND_CDEG : 0);
     }
     return top ? psi_last_at_or_above_hold_top(i, thr) : psi_last_at_or_above_hold(i, thr);
 }
@@ -161,6 +166,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
             psi_relax(i, 1);
 #ifdef CFG_LIMB_STROKE_CDEG
             c->shortfall = (uint8_t)(c->climb && STROKE(i) && TOP(i, level));
+            c->peak = psi_last_centideg(i); /* where it stopped (climbing() may not have run) */
 #endif
         }
     } else if (heating) {
@@ -316,7 +322,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             if (!rising && lead_down && i != CFG_STROKE_FALL_LEAD && FROM_STROKE(i, level) &&
                 cl[i].clock < TICKS(CTL_FALL_WAIT_MS)) {
                 /* all falling from strokes: held at its stroke until the fall lead is down (ctl.h) */
-                w = psi_last_at_or_above_hold(i, (uint8_t)(level - 1u)) ? WANT_NOTHING : WANT_HEAT;
+                w = ABOVE_HOLD(i, (uint8_t)(level - 1u), level) ? WANT_NOTHING : WANT_HEAT;
             }
 #endif
         } else if (move[i] == SAG) {

@@ -58,8 +58,9 @@
  * Falling from their strokes together (no limb rising), they fall as their coils cool: the
  * one bent least comes down first. With a fall lead (CFG_STROKE_FALL_LEAD: robot file
  * control.stroke_fall_lead, built in only when given) the others are held at their strokes
- * (bang-bang at the drive duty) until the fall lead has left its top level, for at most
- * CTL_FALL_WAIT_MS: on R2's pads the same end must lead up and down.
+ * (or where they stopped short: bang-bang at the drive duty) until the fall lead is halfway
+ * down its climb (CTL_FALL_SHARE / CTL_SHARE_FULL), for at most CTL_FALL_WAIT_MS: on R2's
+ * pads the same end must lead up and down.
  * hold_pm is only used for these waits.
  *
  * Stall detector, per limb and step (a step = an unchanged target level):
@@ -69,10 +70,11 @@
  *   the bang-bang hold keeps it above ψ*. A limb climbing to its stroke (below) is not
  *   hovering while it still climbs: its clock restarts whenever ψ gained CTL_CLIMB_CDEG, so
  *   it is relaxed (and the step goes on) once it stops climbing short of the stroke, or
- *   CTL_CLIMB_MAX_MS after the step began; in the steps after, until it leaves its top level,
- *   it is held where it stopped (1° band below its last climbing degree), so that its coil
- *   is not heated without a break - a weak supply or a worn coil still walks, with less
- *   stroke;
+ *   CTL_CLIMB_MAX_MS after the step began. In that step it is heated on, as far as it goes
+ *   (the step ends once every limb settled; sma.c's on-time limit bounds it); in the robot's
+ *   later steps that leave it raised it is held where it stopped (1° band, its edge 1° below
+ *   where it stopped but not below the hold edge it has without a stroke) - a weak supply or
+ *   a worn coil still walks, with less stroke;
  * - cannot reach the state: rising and heating at the drive duty without getting one
  *   progress edge closer (psi_to_go_cdeg) for CTL_STALL_MS. The coil is switched off (cold coils when the
  *   sequencer's state timeout reports the fault).

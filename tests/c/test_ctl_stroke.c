@@ -284,6 +284,76 @@ static void test_a_limb_waiting_for_another_in_step_is_not_hovering(void)
     CHECK_EQ(ctl_stall(1), CTL_STALL_NONE);
 }
 
+static void test_a_limb_that_stops_just_past_its_band_is_held_at_the_hold_it_has_without_a_stroke(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(1, 0.0);
+    put(0, 5.0);
+    demand(1, 0, duty);
+    put(0, 21.5); /* stops just past its band (upper edge 21°) */
+    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
+        demand(1, 0, duty);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    put(1, 30.0); /* the next step leaves limb 0 raised */
+    put(0, 21.8);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE); /* below 22° (ψ* + h/2 + the 1° hold margin), not held at 20.5..21.5° */
+    put(0, 22.5);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 23.1);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], 0);
+}
+
+static void test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, late = (uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u + 100u;
+    setup();
+    put(1, 0.0);
+    put(0, 5.0);
+    for (k = 0; k < late; k++) { /* a slow start: past the climb limit before it crosses */
+        demand(1, 0, duty);
+    }
+    put(0, 40.0); /* then up to 40° and no further */
+    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
+        demand(1, 0, duty);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    put(1, 30.0); /* the next step leaves it raised: held at 39..40° */
+    put(0, 38.5);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(0, 40.2);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], 0);
+}
+
+static void test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, limit = (uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u;
+    setup();
+    put(0, 5.0);
+    put(1, 5.0);
+    demand(1, 1, duty);
+    put(0, 50.0); /* share 74 %: far ahead of limb 1 */
+    for (k = 1; k < limit + 10u; k++) {
+        if (k % (HOVER_TICKS / 2u) == 0u) {
+            put(1, 22.0 + (double)k / 250.0); /* limb 1 climbs 1.2° in 0.3 s, and stays far behind */
+        }
+        demand(1, 1, duty);
+        if (k + 1u < limit) {
+            CHECK_EQ(duty[0], HOLD);
+        }
+    }
+    CHECK_EQ(duty[0], DRIVE); /* the climb limit has passed: limb 0 goes on to its stroke */
+}
+
 static void test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
@@ -300,9 +370,11 @@ static void test_falling_together_the_others_are_held_at_their_strokes_until_the
     demand(0, 0, duty);
     CHECK_EQ(duty[0], 0);
     put(0, 59.5);
-    put(1, 15.0); /* the lead has left its top level: limb 0 goes down too */
-    put(1, 15.0);
-    CHECK_EQ(psi_level(1), 0);
+    put(1, 40.0); /* the lead 65 % up its climb (21..50°): still held */
+    demand(0, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    put(1, 34.0); /* 45 %: past halfway down, still on its top level: limb 0 goes down too */
+    CHECK_EQ(psi_level(1), 1);
     demand(0, 0, duty);
     CHECK_EQ(duty[0], 0);
     put(0, 60.5); /* again, with a lead that never comes down: held for CTL_FALL_WAIT_MS at most */
@@ -335,6 +407,9 @@ int main(void)
     RUN(test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there);
     RUN(test_a_climb_is_not_waited_for_longer_than_the_climb_limit);
     RUN(test_a_limb_waiting_for_another_in_step_is_not_hovering);
+    RUN(test_a_limb_that_stops_just_past_its_band_is_held_at_the_hold_it_has_without_a_stroke);
+    RUN(test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped);
+    RUN(test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit);
     RUN(test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down);
     return UNIT_EXIT();
 }

@@ -35,9 +35,12 @@ MARGIN_DEG = 4.0
 
 
 #: The firmware's stroke rules (core/ctl.h) the idealised drive follows: how long a limb falling
-#: behind the fall lead is held at its stroke at most (CTL_FALL_WAIT_MS), and when a limb rising
-#: to its stroke has stopped climbing (CTL_CLIMB_CDEG in CTL_HOVER_MS).
+#: behind the fall lead is held at its stroke at most (CTL_FALL_WAIT_MS) and how far down the
+#: lead is by then (CTL_FALL_SHARE), how long limbs climb in step at most (CTL_CLIMB_MAX_MS),
+#: and when a limb rising to its stroke has stopped climbing (CTL_CLIMB_CDEG in CTL_HOVER_MS).
 FALL_WAIT_S = 2.0
+FALL_SHARE = 0.5
+CLIMB_MAX_S = 3.0
 CLIMB_STOP_DPS = 1.0 / 0.3
 SHARE_SYNC = 13 / 256  # CTL_SHARE_SYNC / CTL_SHARE_FULL
 
@@ -46,9 +49,12 @@ class IdealDrive:
     """Per actuator: +1 heat, 0 hold, −1 cool, towards a target robot state.
 
     Limbs with a ``stroke_deg`` follow the firmware's rules (core/ctl.h): raised to the stroke
-    on their top level; rising together, the rise lead crosses ψ* first while the others wait;
-    falling together with a fall lead, the others are held at their strokes until it has left
-    its top level (at most ``FALL_WAIT_S``, counted from the ``dt_s`` given to ``command``)."""
+    on their top level; rising together, the rise lead crosses ψ* first while the others wait,
+    then they climb in step (for at most ``CLIMB_MAX_S``); falling together with a fall lead,
+    the others are held at their strokes until it is halfway down its climb (at most
+    ``FALL_WAIT_S``; times counted from the ``dt_s`` given to ``command``). Where the firmware
+    keeps a waiting coil warm at the hold duty, this drive switches it off; a limb that stopped
+    short of its stroke is driven towards it again in later steps (no on-time limit here)."""
 
     def __init__(self, robot: Any, plant: PhysicalPlant, margin_deg: float):
         names = [a.name for a in robot.actuators]
@@ -63,10 +69,12 @@ class IdealDrive:
         self.rise_lead, self.fall_lead = leads if leads else (None, None)
         self._step: tuple[int, float] = (-1, 0.0)   # (target, seconds in it) for the fall hold
         self._raised: set[int] = set()              # limbs the current step raises to their strokes
+        self._waits: set[int] = set()               # limbs waiting in the last command
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
-        waits, held = self._stroke_rules(psi, want, target, dt_s) if self.rise_lead is not None else ((), ())
+        waits, held = self._stroke_rules(psi, want, target, dt_s) if self.rise_lead is not None else (set(), set())
+        self._waits = waits
         heat = [False] * self.n_act
         cool = [False] * self.n_act
         active = [False] * self.n_act
@@ -107,13 +115,13 @@ class IdealDrive:
             waits = {i for i in rising if i in tops and i != lead and want[i] == len(self.th[i])}
         # then they climb in step: a limb more than 5 % of its climb ahead of another waits
         climbing = [i for i in self._raised if psi[i] < self.stroke[i]]
-        if not falling and len(climbing) > 1:
+        if len(climbing) > 1 and self._step[1] < CLIMB_MAX_S:
             share = {i: self._share(i, psi[i]) for i in climbing}
             least = min(share.values())
-            waits |= {i for i in climbing if share[i] > least + SHARE_SYNC}
+            waits |= {i for i in climbing if share[i] > least + SHARE_SYNC and level[i] == want[i]}
         lead = self.fall_lead
         if (lead is not None and not rising and lead in falling and level[lead] == len(self.th[lead])
-                and self._step[1] < FALL_WAIT_S):
+                and self._share(lead, psi[lead]) > FALL_SHARE and self._step[1] < FALL_WAIT_S):
             held = {i for i in falling if i in tops and i != lead and level[i] == len(self.th[i])}
         return waits, held
 
@@ -128,8 +136,8 @@ class IdealDrive:
         if self.rise_lead is None:
             return True   # no strokes
         want = limb_levels(target, self.levels)
-        return all(s is None or k < len(th) or p >= s or d < CLIMB_STOP_DPS
-                   for s, k, th, p, d in zip(self.stroke, want, self.th, psi, dpsi))
+        return all(s is None or k < len(th) or p >= s or (d < CLIMB_STOP_DPS and i not in self._waits)
+                   for i, (s, k, th, p, d) in enumerate(zip(self.stroke, want, self.th, psi, dpsi)))
 
 
 @dataclass
