@@ -99,8 +99,7 @@ static uint8_t climbing(uint8_t i, ctl_limb_t *c)
  * edge, CTL_SHARE_FULL at the stroke. */
 static int16_t share(uint8_t i)
 {
-    uint8_t thr = (uint8_t)(psi_levels(i) - 2u);
-    int16_t lo = (int16_t)(psi_star_cdeg(i, thr) + (psi_hyst_cdeg(i, thr) >> 1));
+    int16_t lo = psi_upper_cdeg(i, (uint8_t)(psi_levels(i) - 2u));
     int16_t span = (int16_t)(psi_stroke_cdeg(i) - lo);
     int32_t got = (int32_t)(psi_last_centideg(i) - lo) * CTL_SHARE_FULL;
     if (span <= 0 || got <= 0) {
@@ -117,7 +116,7 @@ static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 {
     if (STROKE(i) && TOP(i, level) && cl[i].shortfall && !cl[i].climb) {
         int16_t edge = (int16_t)(cl[i].peak - CTL_CLIMB_CDEG);
-        int16_t least_edge = (int16_t)(psi_star_cdeg(i, thr) + (psi_hyst_cdeg(i, thr) >> 1) + CFG_HOLD_MARGIN_CDEG);
+        int16_t least_edge = (int16_t)(psi_upper_cdeg(i, thr) + CFG_HOLD_MARGIN_CDEG);
         if (edge < least_edge) {
             edge = least_edge;
         }

@@ -66,11 +66,16 @@ static void edge_of(int16_t cdeg, int16_t edge[2])
  * PSI_NO_STROKE: just past its top band (CFG_HOLD_MARGIN_CDEG). */
 static const int16_t stroke_rom[CFG_N_LIMBS] ROM = CFG_LIMB_STROKE_CDEG;
 
+int16_t psi_upper_cdeg(uint8_t limb, uint8_t thr)
+{
+    return band(limb, thr)->hi;
+}
+
 int16_t psi_stroke_cdeg(uint8_t limb)
 {
     int16_t s = ROM_I16(&stroke_rom[limb]);
     /* a SET_PARAM that moved the top ψ* up to the stroke or past it turns the stroke off */
-    return s != PSI_NO_STROKE && s > band(limb, (uint8_t)(psi_levels(limb) - 2u))->hi ? s : PSI_NO_STROKE;
+    return s != PSI_NO_STROKE && s > psi_upper_cdeg(limb, (uint8_t)(psi_levels(limb) - 2u)) ? s : PSI_NO_STROKE;
 }
 
 /* The hold edge and hold top of `limb`'s top threshold `thr` at its stroke, if it has one. */

@@ -91,6 +91,9 @@ uint8_t psi_last_at_or_above_hold(uint8_t limb, uint8_t thr);
 #define PSI_NO_STROKE (-32767 - 1)
 
 #ifdef CFG_LIMB_STROKE_CDEG
+/* The upper edge ψ* + h/2 of threshold `thr`'s band in use, 0.01°. */
+int16_t psi_upper_cdeg(uint8_t limb, uint8_t thr);
+
 /* The stroke of `limb` in 0.01°, or PSI_NO_STROKE: it has none, or its top ψ* was moved
  * (SET_PARAM) up to it or past it. */
 int16_t psi_stroke_cdeg(uint8_t limb);

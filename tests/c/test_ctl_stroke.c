@@ -8,6 +8,27 @@
 #include "unit.h"
 
 #define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
+#define CLIMB_TICKS ((uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u)
+
+/* Step 10 from 00 after `wait` ticks below the band: limb 0 goes up to `deg` (± `noise`, never
+ * a climbing degree) and stays there until the controller relaxes it: stopped short. */
+static void stop_short_at(double deg, double noise, uint32_t wait)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(1, 0.0);
+    put(0, 5.0);
+    for (k = 0; k < wait; k++) {
+        demand(1, 0, duty);
+    }
+    put(0, deg);
+    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
+        put(0, deg + noise * (double)(k % 2u));
+        demand(1, 0, duty);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+}
 
 static void test_the_config_has_the_strokes(void)
 {
@@ -206,17 +227,7 @@ static void test_a_limb_still_climbing_to_its_stroke_is_not_hovering(void)
 static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
-    uint32_t k;
-    setup();
-    put(1, 0.0);
-    put(0, 5.0);
-    demand(1, 0, duty);
-    put(0, 35.0);
-    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
-        put(0, 35.0 + 0.5 * (double)(k % 2u)); /* noise, no climb */
-        demand(1, 0, duty);
-    }
-    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    stop_short_at(35.0, 0.5, 1u); /* noise, no climb */
     put(0, 35.0);
     put(0, 35.0);
     CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
@@ -246,7 +257,7 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
 static void test_a_climb_is_not_waited_for_longer_than_the_climb_limit(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
-    uint32_t k, n = (uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u + 2u * HOVER_TICKS;
+    uint32_t k, n = CLIMB_TICKS + 2u * HOVER_TICKS;
     double psi = 21.5;
     setup();
     put(1, 0.0);
@@ -287,16 +298,7 @@ static void test_a_limb_waiting_for_another_in_step_is_not_hovering(void)
 static void test_a_limb_that_stops_just_past_its_band_is_held_at_the_hold_it_has_without_a_stroke(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
-    uint32_t k;
-    setup();
-    put(1, 0.0);
-    put(0, 5.0);
-    demand(1, 0, duty);
-    put(0, 21.5); /* stops just past its band (upper edge 21°) */
-    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
-        demand(1, 0, duty);
-    }
-    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    stop_short_at(21.5, 0.0, 1u); /* stops just past its band (upper edge 21°) */
     put(1, 30.0); /* the next step leaves limb 0 raised */
     put(0, 21.8);
     demand(1, 1, duty);
@@ -312,18 +314,7 @@ static void test_a_limb_that_stops_just_past_its_band_is_held_at_the_hold_it_has
 static void test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
-    uint32_t k, late = (uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u + 100u;
-    setup();
-    put(1, 0.0);
-    put(0, 5.0);
-    for (k = 0; k < late; k++) { /* a slow start: past the climb limit before it crosses */
-        demand(1, 0, duty);
-    }
-    put(0, 40.0); /* then up to 40° and no further */
-    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
-        demand(1, 0, duty);
-    }
-    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    stop_short_at(40.0, 0.0, CLIMB_TICKS + 100u); /* past the climb limit before it crosses */
     put(1, 30.0); /* the next step leaves it raised: held at 39..40° */
     put(0, 38.5);
     demand(1, 1, duty);
@@ -336,7 +327,7 @@ static void test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped
 static void test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
-    uint32_t k, limit = (uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u;
+    uint32_t k, limit = CLIMB_TICKS;
     setup();
     put(0, 5.0);
     put(1, 5.0);
