@@ -126,6 +126,16 @@ static void cmd_start(void)
         return; /* refused: nothing changed, the ground in use included */
     }
     level_at_start(); /* started from rest: level on this ground (level.h) */
+#ifdef CFG_MAX_CLIMB_CDEG
+    if (sdir != SEQ_DIR_LOADED) { /* the climb guard (a loaded gait's direction is not known) */
+        uint16_t climb = level_too_steep(sdir == SEQ_DIR_MX);
+        if (climb) {
+            seq_stop(); /* refused before any coil heats */
+            nack(PROTO_ERR_TOO_STEEP, climb);
+            return;
+        }
+    }
+#endif
     drive_started(gait, dir);
     fault_watchdog_rearm();
     ack();

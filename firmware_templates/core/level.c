@@ -74,6 +74,18 @@ int16_t level_ground_cdeg(uint8_t limb)
     return lm[limb].ground;
 }
 
+#ifdef CFG_MAX_CLIMB_CDEG
+uint16_t level_too_steep(uint8_t minus_x)
+{
+    /* twice the rise; |ground| ≤ LEVEL_MAX_CDEG each: fits */
+    int16_t rise2 = (int16_t)(lm[0].ground - lm[CFG_N_LIMBS - 1u].ground);
+    if (minus_x) {
+        rise2 = (int16_t)-rise2;
+    }
+    return status == PROTO_LEVEL_STORED && rise2 > 2 * CFG_MAX_CLIMB_CDEG ? (uint16_t)rise2 >> 1 : 0u;
+}
+#endif
+
 /* Read the record back: its status, then each limb's rotation (the record's only if valid).
  * The tilts tracked at rest were against the old rotation: tracking starts over. */
 static void load(void)

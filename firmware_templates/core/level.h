@@ -89,6 +89,16 @@ void level_at_start(void);
 #define level_at_start() ((void)0)
 #endif
 
+#ifdef CFG_MAX_CLIMB_CDEG
+/* The climb guard ([control] max_climb_deg): how far the ground in use rises in the gait's
+ * direction (towards -x when `minus_x`), 0.01°, if that is more than CFG_MAX_CLIMB_CDEG; else
+ * 0. Against a flat record the first limb's end reads the slope rising towards +x and the last
+ * limb's end its negative (above), so the rise is half their difference. The ground in use is
+ * the one START levelled on at rest, or level_calibrate(1)'s. 0 without a flat record: the
+ * ground cannot be told from the IMUs' mounting tilt. */
+uint16_t level_too_steep(uint8_t minus_x);
+#endif
+
 /* PROTO_LEVEL_* status, and the offset in use per limb (0.01°). */
 uint8_t level_status(void);
 int16_t level_offset_cdeg(uint8_t limb);
@@ -103,6 +113,7 @@ int16_t level_ground_cdeg(uint8_t limb);
 #define level_status() ((uint8_t)0) /* PROTO_LEVEL_NONE */
 #define level_offset_cdeg(limb) ((void)(limb), (int16_t)0)
 #define level_ground_cdeg(limb) ((void)(limb), (int16_t)0)
+#define level_too_steep(minus_x) ((void)(minus_x), (uint16_t)0)
 #endif
 
 #endif /* PROLEG_LEVEL_H */

@@ -117,6 +117,9 @@ class Control:
     #: they fall as they cool). Limb names.
     stroke_rise_lead: str | None = None
     stroke_fall_lead: str | None = None
+    #: the steepest ground (degrees, rising in the gait's direction) a built-in gait is started
+    #: on: START steeper uphill is refused (NACK TOO_STEEP). None: no guard (docs/calibration.md)
+    max_climb_deg: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -371,6 +374,13 @@ def _safety(path: Path, value: Any) -> Safety:
     )
 
 
+#: max_climb_deg's range. Below 0.5° the slope the firmware measures at rest (σ ≈ 0.1°: two
+#: ends' readings, each low-passed to 0.13°, level.h) would refuse START on flat ground now and
+#: then; beyond 20° it levels on no ground (level.h LEVEL_MAX_CDEG), so it sees no steeper slope.
+MIN_CLIMB_DEG = 0.5
+MAX_CLIMB_DEG = 20.0
+
+
 def _control(path: Path, value: Any, safety: Safety) -> Control:
     f = Fields(path, "control", value, set(Control.__dataclass_fields__))
     d = Control()
@@ -386,6 +396,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         fallback=f.table.get("fallback", d.fallback),
         stroke_rise_lead=f.string("stroke_rise_lead") if f.has("stroke_rise_lead") else None,
         stroke_fall_lead=f.string("stroke_fall_lead") if f.has("stroke_fall_lead") else None,
+        max_climb_deg=(f.number("max_climb_deg", None, MIN_CLIMB_DEG, MAX_CLIMB_DEG)
+                       if f.has("max_climb_deg") else None),
     )
     if not isinstance(c.fallback, bool):
         f.fail("fallback", "true or false", c.fallback)

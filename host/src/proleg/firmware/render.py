@@ -121,6 +121,7 @@ class ControlPart:
     stuck_samples: int
     max_loaded: int
     overrun_fault: int
+    max_climb_cdeg: int | None  # [control] max_climb_deg in 0.01°; None: no climb guard
 
 
 
@@ -354,6 +355,8 @@ def _control_part(robot: Any) -> ControlPart:
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
         overrun_fault=int(getattr(ctl, "overrun_fault", 10)),
+        max_climb_cdeg=(None if getattr(ctl, "max_climb_deg", None) is None
+                        else round(float(ctl.max_climb_deg) * 100)),
     )
 
 

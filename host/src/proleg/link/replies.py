@@ -25,7 +25,16 @@ class CommandRefused(LinkError):
             code = f"error {error}"
         self.command = command
         self.detail = detail
-        super().__init__(f"{where}: robot refused {command}: {code} (detail {detail})")
+        why = _explain(self.error, detail)
+        super().__init__(f"{where}: robot refused {command}: {code} ({why or f'detail {detail}'})")
+
+
+def _explain(error: ErrorCode | int, detail: int) -> str:
+    """What a NACK's detail means, where it is a measurement rather than an index."""
+    if error == ErrorCode.TOO_STEEP:
+        return (f"the ground rises {detail / 100:.2f}° in the gait's direction, more than the robot file's "
+                f"[control] max_climb_deg; on a gentler slope, or downhill, it starts")
+    return ""
 
 
 class ReplyTimeout(LinkError):

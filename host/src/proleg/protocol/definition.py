@@ -91,7 +91,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
             _u8("gait", "gait table index, or GAIT_USER (0xFF) for the LOAD_GAIT sequence"),
             _u8("direction", "Direction", Direction),
         ),
-        "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED.",
+        "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED / TOO_STEEP (the ground rises more than "
+        "the build's max_climb_deg in the gait's direction: detail = that climb in 0.01°).",
         reply="ACK",
     ),
     MessageSpec(0x05, "STOP", "h2r", (_TOKEN,), "Stop the gait, all actuators off.", reply="ACK"),

@@ -31,6 +31,7 @@ class ErrorCode(IntEnum):
     SAFETY_LIMIT = 8  # would widen the build's safety envelope
     NO_GAIT = 9  # START of a gait index that does not exist / user gait not loaded
     ESTOP_LATCHED = 10  # E-stop latched: CLEAR it first
+    TOO_STEEP = 11  # START uphill steeper than the build's [control] max_climb_deg (detail = the climb, 0.01°)
 
 
 class FaultCode(IntEnum):

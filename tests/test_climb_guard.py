@@ -1,0 +1,249 @@
+"""The climb guard: ``[control] max_climb_deg``. The firmware refuses START (NACK TOO_STEEP,
+detail = the climb in 0.01°) when the ground it levelled on at rest rises more than that in
+the gait's direction, before any coil heats (docs/calibration.md, "Too steep to climb").
+
+The oracle is the physical plant's true incline: after a flat calibration and 2.5 s at rest
+on the slope, START of a built-in gait is refused exactly when the slope rises more than the
+limit in the gait's direction (outside a band of 0.3° around the limit, where the firmware's
+estimate of the slope, σ ≈ 0.1°, may fall either side)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.stateful import RuleBasedStateMachine, precondition, rule, run_state_machine_as_test
+
+from proleg.errors import RobotFileError
+from proleg.firmware.boards import load_board
+from proleg.firmware.build import firmware_gaits, render_project
+from proleg.link.replies import CommandRefused
+from proleg.paths import robots_dir
+from proleg.protocol.definition import ErrorCode
+from proleg.report.claim import GridPoint, feedback_run
+from proleg.robot import load_robot
+
+R1 = robots_dir() / "paper-r1.toml"
+BAND_DEG = 0.3
+
+
+def _r1_with(tmp: Path, value: str | None) -> Path:
+    text = R1.read_text(encoding="utf-8")
+    if value is not None:
+        text = text.replace("telemetry_hz = 50\n", f"telemetry_hz = 50\nmax_climb_deg = {value}\n", 1)
+    out = tmp / f"r1-climb-{value}.toml"
+    out.write_text(text, encoding="utf-8")
+    return out
+
+
+_ROBOTS: dict[float, object] = {}
+
+
+def _r1_limited(limit: float, tmp_path_factory) -> object:
+    if limit not in _ROBOTS:
+        _ROBOTS[limit] = load_robot(_r1_with(tmp_path_factory.mktemp("climb"), f"{limit:g}"))
+    return _ROBOTS[limit]
+
+
+def _start_on(robot, incline_deg: float, direction: str = "+x", **kw):
+    """Flat calibration, then `incline_deg`, 2.5 s at rest there, START, 3 s of gait."""
+    point = GridPoint("slope", ("incline",), "mild", (f"incline_deg={incline_deg:g}",))
+    return feedback_run(robot, point, direction=direction, duration_s=3.0, **kw)
+
+
+def _refused(outcome) -> bool:
+    return "TOO_STEEP" in outcome.fault
+
+
+@pytest.mark.parametrize("value, expected", [
+    ("0.2", "[0.5, 20.0]"), ("25", "[0.5, 20.0]"), ('"steep"', "a number"), ("true", "a number"),
+])
+def test_a_limit_out_of_range_is_one_line_naming_the_key(tmp_path, value, expected):
+    with pytest.raises(RobotFileError) as e:
+        load_robot(_r1_with(tmp_path, value))
+    message = str(e.value)
+    assert "max_climb_deg" in message and expected in message and "\n" not in message
+
+
+def test_the_guard_is_built_only_when_the_robot_file_sets_it(tmp_path):
+    board = load_board("arduino-nano")
+    for path, line in ((R1, None), (_r1_with(tmp_path, "2.5"), "#define CFG_MAX_CLIMB_CDEG 250 ")):
+        robot = load_robot(path)
+        config = render_project(robot, board, firmware_gaits(robot))["gen/robot_config.h"]
+        if line is None:
+            assert "CFG_MAX_CLIMB_CDEG" not in config
+        else:
+            assert line in config
+
+
+@settings(max_examples=12, deadline=None)
+@given(limit=st.sampled_from([1.5, 4.0]),
+       incline=st.floats(-9.0, 9.0).map(lambda v: round(v, 2)),
+       direction=st.sampled_from(["+x", "-x"]))
+def test_start_is_refused_exactly_when_the_gait_would_climb_more_than_the_limit(
+        tmp_path_factory, limit, incline, direction):
+    climb = incline if direction == "+x" else -incline
+    if abs(climb - limit) < BAND_DEG:
+        return  # the firmware's slope estimate may fall either side of the limit
+    outcome = _start_on(_r1_limited(limit, tmp_path_factory), incline, direction)
+    if climb > limit:
+        assert _refused(outcome), outcome
+        assert f"rises {climb:.1f}"[:-1] in outcome.fault  # the detail is the measured climb
+        assert outcome.displacement_mm == 0.0 and outcome.coil_peak_c < 26.0  # no coil ever heated
+    else:
+        assert not _refused(outcome), outcome
+        assert outcome.coil_peak_c > 40.0  # it walked: the coils heated
+
+
+def test_the_refusal_reports_the_climb_it_measured(tmp_path_factory):
+    outcome = _start_on(_r1_limited(1.5, tmp_path_factory), 6.0, "+x")
+    detail = float(outcome.fault.split("rises ")[1].split("°")[0])
+    assert detail == pytest.approx(6.0, abs=0.3)
+
+
+def test_without_a_flat_calibration_the_slope_is_not_known_and_start_is_not_refused(tmp_path_factory):
+    """The IMUs' mounting tilt cannot be told from the slope without a flat record."""
+    outcome = _start_on(_r1_limited(1.5, tmp_path_factory), 6.0, "+x", calibrate=False)
+    assert not _refused(outcome), outcome
+
+
+def test_a_loaded_gait_is_not_guarded(tmp_path_factory):
+    """LOAD_GAIT carries states, not a direction: the firmware cannot tell uphill from down."""
+    outcome = _start_on(_r1_limited(1.5, tmp_path_factory), 6.0, "+x", gait=[0, 2, 1, 0])
+    assert not _refused(outcome), outcome
+
+
+def test_four_limbs_read_the_slope_from_the_first_and_last_ends():
+    robot = load_robot(robots_dir() / "caterpillar-4.toml")  # max_climb_deg = 1.5
+    assert _refused(_start_on(robot, 4.0, "+x"))
+    assert _refused(_start_on(robot, -4.0, "-x"))
+    assert not _refused(_start_on(robot, -4.0, "+x"))  # downhill
+
+
+def test_the_host_says_what_too_steep_means():
+    e = CommandRefused("START", int(ErrorCode.TOO_STEEP), 512, "robot on /dev/ttyUSB0")
+    assert e.error == ErrorCode.TOO_STEEP
+    assert "rises 5.12° in the gait's direction" in str(e) and "max_climb_deg" in str(e)
+
+
+def test_levelling_on_the_ground_without_a_flat_record_does_not_arm_the_guard(tmp_path_factory):
+    """`proleg calibrate --ground` without a flat record measures each IMU's mounting tilt
+    with the ground: here IMUs mounted +4° and −4° on flat ground, which the guard would take
+    for a 4° slope."""
+    from proleg.link.level import calibrate_level
+    from proleg.report.gait_run import SimSession
+    from proleg.sim.closed_loop import SimulatedRobot, make_plant
+
+    robot = _r1_limited(1.5, tmp_path_factory)
+    sim = SimulatedRobot(robot, seed=1, plant=make_plant(robot, "physical", ["imu_offset_deg=0:4", "imu_offset_deg=1:-4"]))
+    session = SimSession(sim)
+    session.advance(0.3)
+    assert calibrate_level(session.client, ground=True).ok
+    run = session.run_gait("+x", 0, 3.0)
+    assert not any("TOO_STEEP" in e for e in run.errors), run.errors
+    assert run.displacement_mm != 0.0
+
+
+class ClimbGuardMachine(RuleBasedStateMachine):
+    """An operator who moves the robot between slopes, rests it or not, starts both ways,
+    stops, calibrates and clears, in any order. Whatever the order: a START the board accepts
+    after a flat calibration and 2.5 s at rest on this ground never climbs more than the
+    limit; a START it refuses as TOO_STEEP heats no coil; and on a ground measured at rest the
+    refusal is right (outside the 0.3° band)."""
+
+    LIMIT = 1.5
+
+    def __init__(self):
+        super().__init__()
+        from proleg.report.gait_run import SimSession
+        from proleg.sim.closed_loop import SimulatedRobot, make_plant
+
+        self.make_plant = make_plant
+        self.robot = _MACHINE_ROBOT[0]
+        self.sim = SimulatedRobot(self.robot, seed=3, plant=make_plant(self.robot, "physical"))
+        self.session = SimSession(self.sim)
+        self.session.advance(0.3)
+        from proleg.link.level import calibrate_level
+
+        assert calibrate_level(self.session.client).ok  # what a user does first
+        self.incline = 0.0
+        self.rested_s = 0.5      # at rest on this ground, no gait since
+        self.flat_record = True
+        self.running = False
+        self.ran = False         # a gait has run since the robot was put down
+
+    def _climb(self, direction: str) -> float:
+        return self.incline if direction == "+x" else -self.incline
+
+    @precondition(lambda self: not self.running)
+    @rule(incline=st.sampled_from([-6.0, -2.0, 0.0, 0.8, 2.0, 3.5, 6.0]))
+    def put_down_on(self, incline):
+        self.sim.plant = self.make_plant(self.robot, "physical", [f"incline_deg={incline:g}"])
+        self.incline, self.rested_s, self.ran = incline, 0.0, False  # cold again
+
+    @precondition(lambda self: not self.running)
+    @rule(seconds=st.sampled_from([0.5, 2.5]))
+    def rest(self, seconds):
+        self.session.advance(seconds)
+        self.rested_s += seconds
+
+    @precondition(lambda self: not self.running and self.incline == 0.0 and (self.rested_s >= 2.5 or not self.ran))
+    @rule()
+    def calibrate_on_the_flat(self):
+        """On the flat, at rest: cold, or 2.5 s after a gait (docs/calibration.md)."""
+        from proleg.link.level import calibrate_level
+
+        assert calibrate_level(self.session.client).ok
+        self.flat_record = True
+        self.rested_s += 0.2
+
+    @precondition(lambda self: not self.running)
+    @rule()
+    def clear_the_record(self):
+        self.session.request("CLEAR_LEVEL")
+        self.session.advance(0.05)
+        self.flat_record = False
+
+    @precondition(lambda self: not self.running)
+    @rule(direction=st.sampled_from(["+x", "-x"]))
+    def start(self, direction):
+        before = float(max(self.sim.plant.temperature_c))
+        try:
+            self.session.request("START", gait=0, direction=0 if direction == "+x" else 1)
+        except CommandRefused as e:
+            assert e.error == ErrorCode.TOO_STEEP, e
+            assert self.flat_record, "refused without a flat record"
+            self.session.advance(1.0)
+            assert float(max(self.sim.plant.temperature_c)) <= before + 0.01  # no coil heated
+            if self.rested_s >= 2.5:
+                assert self._climb(direction) > self.LIMIT - BAND_DEG, (self.incline, direction, e)
+            self.rested_s += 1.0
+            return
+        measured_here = self.flat_record and self.rested_s >= 2.5
+        assert not (measured_here and self._climb(direction) > self.LIMIT + BAND_DEG), (self.incline, direction)
+        self.running = self.ran = True
+        self.session.advance(1.5)
+
+    @precondition(lambda self: self.running)
+    @rule()
+    def stop(self):
+        self.session.request("STOP")
+        self.session.advance(0.2)
+        self.running, self.rested_s = False, 0.0
+
+
+_MACHINE_ROBOT: list = []
+
+
+@pytest.fixture(scope="module")
+def machine_robot(tmp_path_factory):
+    if not _MACHINE_ROBOT:
+        _MACHINE_ROBOT.append(_r1_limited(ClimbGuardMachine.LIMIT, tmp_path_factory))
+    return _MACHINE_ROBOT[0]
+
+
+def test_no_sequence_of_operator_steps_gets_a_gait_started_up_too_steep_a_slope(machine_robot):
+    run_state_machine_as_test(ClimbGuardMachine, settings=settings(max_examples=40, stateful_step_count=15,
+                                                                    deadline=None))
