@@ -26,6 +26,7 @@ import numpy as np
 from ...robot import stroke_leads
 from ...states import limb_levels
 from .conditions import Conditions
+from .envelope import Envelope, EnvelopeLatched
 from .plant import PhysicalParams, PhysicalPlant
 
 
@@ -163,11 +164,12 @@ def json_matrix(m: np.ndarray) -> list:
 
 
 def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, dt: float,
-            timeout_s: float, settle_s: float) -> float | None:
+            timeout_s: float, settle_s: float, envelope: Envelope | None = None) -> float | None:
     """Drive to ``target`` until the robot has stayed in it for ``settle_s``; return the time
     it first reached it (None if it did not settle there within ``timeout_s``). With strokes it
     has reached it once its limbs got to their strokes (``IdealDrive.at_strokes``; latched while
-    the state holds, as the firmware's settled flag)."""
+    the state holds, as the firmware's settled flag). ``envelope``: the duties go through the
+    firmware's safety envelope, and a fault it would latch raises ``EnvelopeLatched``."""
     chans = [a.channel for a in plant.params.actuators]
     nch = max(chans) + 1
     t0 = plant.time_s
@@ -179,17 +181,25 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
         for j, c in enumerate(cmd):
             if c > 0:
                 duties[chans[j]] = duty
+        if envelope is not None:
+            duties = envelope.gate(duties)
         plant.step(dt, duties)
         now = plant.time_s - t0
         arrived = plant.true_state == target and (arrived or drive.at_strokes(plant.psi_deg, plant.dpsi_dps, target))
         if arrived:
             if since is None:
                 since = now
+                if first is None and envelope is not None:
+                    envelope.reached()
                 first = now if first is None else first
             if now - since >= settle_s:
                 return first
         else:
             since = None
+            if envelope is not None and first is None and now > envelope.state_timeout_s:
+                raise EnvelopeLatched("STATE_TIMEOUT", (
+                    f"the safety envelope's state timeout: state {target} not reached within state_timeout_ms "
+                    f"({envelope.state_timeout_s * 1000:.0f} ms)"))
         if now > timeout_s:
             return None
 
@@ -365,10 +375,12 @@ def _replay(robot: Any, names: Sequence[tuple[str, ...]],
 
 def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditions: Conditions | None = None,
                  duty: float | None = None, margin_deg: float = MARGIN_DEG, settle_s: float = 0.3,
-                 timeout_s: float = 12.0, dt_s: float = 0.002, plant: PhysicalPlant | None = None) -> tuple[float, float]:
+                 timeout_s: float = 12.0, dt_s: float = 0.002, plant: PhysicalPlant | None = None,
+                 envelope: bool = False) -> tuple[float, float]:
     """Walk the closed sequence ``states`` (first state repeated at the end or not) with the
     idealised drive, ``cycles`` times after one warm-up cycle; return (mm per cycle, s per
-    cycle). Raises SimError if a state cannot be reached."""
+    cycle). Raises SimError if a state cannot be reached; with ``envelope`` the drive keeps to
+    the firmware's safety envelope and raises ``EnvelopeLatched`` where it would latch a fault."""
     from ...errors import SimError
 
     plant = plant or PhysicalPlant(robot, conditions)
@@ -377,13 +389,14 @@ def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditio
     seq = list(states)
     if len(seq) > 1 and seq[0] == seq[-1]:
         seq = seq[:-1]
+    gate = Envelope(robot, max(a.channel for a in plant.params.actuators) + 1, dt_s) if envelope else None
 
     def one_cycle() -> None:
         for s in seq[1:] + seq[:1]:
-            if _run_to(plant, drive, s, duty, dt_s, timeout_s, settle_s) is None:
+            if _run_to(plant, drive, s, duty, dt_s, timeout_s, settle_s, gate) is None:
                 raise SimError(f"run_sequence: state {s} not reached within {timeout_s} s")
 
-    if _run_to(plant, drive, seq[0], duty, dt_s, timeout_s, settle_s) is None:
+    if _run_to(plant, drive, seq[0], duty, dt_s, timeout_s, settle_s, gate) is None:
         raise SimError(f"run_sequence: start state {seq[0]} not reached")
     one_cycle()
     x0, t0 = plant.displacement_mm, plant.time_s

@@ -1,0 +1,88 @@
+"""The firmware's safety envelope, for the idealised drive (``measure._run_to``).
+
+The claim bench asks whether the coils *can* complete a gait under a condition
+(``report.claim.physically_possible``). The firmware may only try within its safety envelope
+(docs/safety.md), so the idealised drive is held to the same rules, per coil:
+
+- *on-time debt*: every second on (a duty above the hold ceiling) adds a second, every second
+  not on pays back ``max_on_ms / min_cooldown_ms`` seconds; a request that would take the debt
+  past ``max_on_ms`` is an on-limit hit: the coil is cut and stays off until the debt is paid;
+  ``on_limit_latch`` hits without a target reached in between latch the fault SMA_ON_LIMIT;
+- *mean duty*: the duty integrated over any window of ``duty_window_ms`` stays at most
+  ``max_mean_duty`` × the window (a request that would not fit gets 0);
+- *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
+  latches STATE_TIMEOUT (``_run_to`` checks that one).
+
+The numbers are the ones the firmware is built with (``firmware.render.thermal_budget`` and the
+robot file's ``[safety]``). A sliding window stands in for the firmware's slotted one.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+from typing import Any
+
+
+class EnvelopeLatched(Exception):
+    """The envelope latched a fault: ``code`` is the firmware's fault name."""
+
+    def __init__(self, code: str, why: str):
+        super().__init__(why)
+        self.code = code
+
+
+class Envelope:
+    """Per channel, the duties the envelope lets through (``gate``), stepped at ``dt_s``."""
+
+    def __init__(self, robot: Any, n_channels: int, dt_s: float):
+        from ...firmware.render import thermal_budget
+
+        safety, ctl = robot.safety, robot.control
+        budget = thermal_budget(robot.name, safety, ctl)
+        self.dt = dt_s
+        self.max_on_s = safety.max_on_ms / 1000.0
+        self.payback = safety.max_on_ms / max(safety.min_cooldown_ms, 1)  # debt paid per second off
+        self.hold_ceiling = budget["hold_max_duty_pm"] / 10000.0
+        self.latch = budget["on_limit_latch"]
+        self.state_timeout_s = safety.state_timeout_ms / 1000.0
+        self.window_s = budget["duty_window_ms"] / 1000.0
+        self.mean_cap = budget["mean_duty_pm"] / 10000.0 * self.window_s
+        n = max(1, round(self.window_s / dt_s))
+        self.debt = [0.0] * n_channels
+        self.cut = [False] * n_channels
+        self.hits = [0] * n_channels
+        self.window = [deque([0.0] * n, maxlen=n) for _ in range(n_channels)]
+        self.in_window = [0.0] * n_channels
+
+    def reached(self) -> None:
+        """A target was reached: on-limit hits start counting again (as the firmware)."""
+        self.hits = [0] * len(self.hits)
+
+    def gate(self, duties: Sequence[float]) -> list[float]:
+        """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
+        out = []
+        for ch, d in enumerate(duties):
+            on = d > self.hold_ceiling
+            if on and not self.cut[ch] and self.debt[ch] + self.dt > self.max_on_s:
+                self.cut[ch] = True
+                self.hits[ch] += 1
+                if self.hits[ch] >= self.latch:
+                    raise EnvelopeLatched("SMA_ON_LIMIT", (
+                        f"the safety envelope's on-time limit: channel {ch} needs more than max_on_ms "
+                        f"({self.max_on_s * 1000:.0f} ms) of heating, {self.latch} times without reaching the state"))
+            if self.cut[ch]:
+                d, on = 0.0, False
+            if d > 0.0 and self.in_window[ch] + d * self.dt > self.mean_cap:
+                d, on = 0.0, False  # does not fit the mean-duty window: 0 (not a hit)
+            if on:
+                self.debt[ch] += self.dt
+            else:
+                self.debt[ch] = max(0.0, self.debt[ch] - self.dt * self.payback)
+                if self.debt[ch] == 0.0:
+                    self.cut[ch] = False
+            w = self.window[ch]
+            self.in_window[ch] += d * self.dt - w[0]
+            w.append(d * self.dt)
+            out.append(d)
+        return out
