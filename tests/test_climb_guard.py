@@ -9,6 +9,7 @@ estimate of the slope, σ ≈ 0.1°, may fall either side)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -251,3 +252,48 @@ def machine_robot(tmp_path_factory):
 def test_no_sequence_of_operator_steps_gets_a_gait_started_up_too_steep_a_slope(machine_robot):
     run_state_machine_as_test(ClimbGuardMachine, settings=settings(max_examples=40, stateful_step_count=15,
                                                                     deadline=None))
+
+
+# --------------------------------------------------------------------------- proleg sim --calibrated
+
+def _cli(capsys, *argv: str) -> tuple[int, str, str]:
+    from proleg.cli.main import main
+
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+R2 = robots_dir() / "paper-r2.toml"  # max_climb_deg = 2.5
+
+
+def test_sim_calibrated_refuses_too_steep_a_climb_and_exits_1(capsys):
+    rc, out, err = _cli(capsys, "sim", str(R2), "--calibrated", "--condition", "incline_deg=4",
+                        "--duration", "5", "--json")
+    assert rc == 1
+    assert "TOO_STEEP" in err and "rises 4.0" in err
+    assert json.loads(out)["displacement_mm"] == 0.0
+
+
+def test_sim_calibrated_walks_downhill_and_up_a_gentle_slope(capsys):
+    for incline in ("-4", "1"):
+        rc, out, err = _cli(capsys, "sim", str(R2), "--calibrated", "--condition", f"incline_deg={incline}",
+                            "--duration", "15", "--json")
+        report = json.loads(out)
+        assert rc == 0 and report["faults"] == [] and report["displacement_mm"] > 0.0, (incline, err)
+
+
+def test_sim_calibrated_calibrates_away_a_crooked_imu(capsys):
+    """IMUs mounted 8° crooked (docs/calibration.md): uncalibrated the board cannot see R1's
+    states (STATE_TIMEOUT); calibrated on the flat first, as --calibrated does, it walks."""
+    crooked = ("--condition", "imu_offset_deg=0:8", "--condition", "imu_offset_deg=1:-8", "--duration", "15", "--json")
+    rc, out, _ = _cli(capsys, "sim", str(R1), *crooked)
+    assert rc == 1 and json.loads(out)["cycles"] == 0
+    rc, out, _ = _cli(capsys, "sim", str(R1), "--calibrated", *crooked)
+    assert rc == 0 and json.loads(out)["cycles"] >= 2
+
+
+def test_sim_without_calibrated_never_refuses(capsys):
+    """The board of a plain `proleg sim` was never calibrated: a gauge, not the guard."""
+    rc, out, err = _cli(capsys, "sim", str(R2), "--condition", "incline_deg=4", "--duration", "5", "--json")
+    assert "TOO_STEEP" not in err

@@ -282,7 +282,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..sim.simulated_boards import clear_ticks, simulated_robot, tick_budget
 
     robot = load_robot(args.robot)
-    from .sim_plant import cmd_measure_matrix, plant_kwargs, wants_help
+    from .sim_plant import calibrate_then_put_down, cmd_measure_matrix, flat_conditions, plant_kwargs, wants_help
 
     if wants_help(args):
         return EXIT_OK
@@ -299,15 +299,25 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
             shown = f"gaits 0..{have - 1}" if have else "no gait"
             raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
+    plant = plant_kwargs(args)
+    if args.calibrated:
+        if args.pty:
+            from ..errors import SimError
+
+            raise SimError("--calibrated: not with --pty (calibrate through the pseudo-terminal: proleg calibrate)")
+        plant["conditions"] = flat_conditions(args)  # calibrated on the flat, put down on the slope below
     sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
-                         max_transitions=args.max_transitions, **plant_kwargs(args))
-    timed = []
+                         max_transitions=args.max_transitions, **plant)
+    timed, at_once = [], []
     for spec in args.inject:
         if "+" in spec:  # FAULT+T: checked now, injected T simulated seconds after the start
             from ..console.inject import parse_injection
 
             timed.append(parse_injection(spec))
         else:
+            at_once.append(spec)
+    if not args.calibrated:
+        for spec in at_once:
             sim.inject(spec)
     if args.pty:
         return _serve_pty(sim, args, timed)
@@ -321,6 +331,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
     session = SimSession(sim, listeners=listeners)
     try:
         session.advance(0.2)  # boot
+        if args.calibrated:
+            calibrate_then_put_down(session, sim, robot, args)
+            for spec in at_once:  # on the plant the robot walks on
+                sim.inject(spec)
         clear_ticks(sim)  # the tick budget is measured over the gait run
         start = sim.time_s
         for at, fault in timed:

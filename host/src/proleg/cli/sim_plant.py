@@ -1,4 +1,5 @@
-"""``proleg sim``'s plant options: ``--plant``, ``--condition``, ``--measure-matrix`` (``--hold-range``).
+"""``proleg sim``'s plant options: ``--plant``, ``--condition``, ``--calibrated``, ``--measure-matrix``
+(``--hold-range``).
 
 Kept apart from the rest of the sim subcommand (``cli/main.py``) so that other options can be
 added there without touching these. The keys ``--condition`` takes are the physical keys of
@@ -23,6 +24,12 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                    help="a physical-plant condition, repeatable, on top of the robot file's [plant] "
                         "(e.g. power=0.8, ambient_c=30, imu_bias_deg=front:3, incline_deg=5); "
                         "--condition help lists every key with its unit and range")
+    s.add_argument("--calibrated", action="store_true",
+                   help="start as a user does (docs/calibration.md): the board calibrated at rest on flat ground "
+                        "first (proleg calibrate), then the robot put on the condition's ground (incline_deg) "
+                        "for 2.5 s at rest, then START; the firmware levels itself there, and a robot file's "
+                        "[control] max_climb_deg refuses too steep a climb (without it the board was never "
+                        "calibrated: it cannot tell a slope from the IMUs' mounting tilt)")
     s.add_argument("--measure-matrix", action="store_true",
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
     s.add_argument("--hold-range", action="store_true",
@@ -34,6 +41,28 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
 def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     """``SimulatedRobot`` keyword arguments for the chosen plant and conditions."""
     return {"plant": args.plant, "conditions": list(args.condition)}
+
+
+def flat_conditions(args: argparse.Namespace) -> list[str]:
+    """``--condition`` on flat ground: without incline_deg, and level over the robot file's
+    [plant] (the ground a ``--calibrated`` board is calibrated on)."""
+    return [c for c in args.condition if c.partition("=")[0].strip() != "incline_deg"] + ["incline_deg=0"]
+
+
+def calibrate_then_put_down(session: Any, sim: Any, robot: Any, args: argparse.Namespace) -> None:
+    """``--calibrated``: the flat calibration (the board at rest on flat ground), then the robot
+    on the condition's ground, at rest for ``claim.REST_ON_GROUND_S`` (the firmware levels on a
+    ground it has rested on for 2 s). A refused calibration is a SimError saying why."""
+    from ..errors import SimError
+    from ..link.level import calibrate_level
+    from ..report.claim import REST_ON_GROUND_S
+    from ..sim.closed_loop import make_plant
+
+    outcome = calibrate_level(session.client)
+    if not outcome.ok:
+        raise SimError(f"--calibrated: the flat calibration was refused: {outcome}")
+    sim.plant = make_plant(robot, args.plant, list(args.condition), seed=args.seed)
+    session.advance(REST_ON_GROUND_S)
 
 
 def wants_help(args: argparse.Namespace) -> bool:
