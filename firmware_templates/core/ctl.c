@@ -351,7 +351,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             want[a] = w;
         }
     }
+    /* Without CTL_BOOST_MS no limb is ever boosted (boost stays 0: WANT_HEAT is the strongest
+     * want), so the ceiling's case is compiled out and heat is "at least WANT_HEAT": the same
+     * duties, R1 24 B smaller on the Nano. */
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        duty[i] = want[i] == WANT_BOOST ? (uint16_t)CFG_MAX_DUTY_PM : want[i] == WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
+        duty[i] = (CTL_BOOST_MS && want[i] == WANT_BOOST) ? (uint16_t)CFG_MAX_DUTY_PM : want[i] >= WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
     }
 }
