@@ -58,16 +58,14 @@ uint16_t sma_clamp(uint16_t duty_pm)
     return duty_pm > ceiling ? ceiling : duty_pm;
 }
 
-/* The only call of hal_pwm_set for actuators. */
+/* The only call of hal_pwm_set for actuators. Its one caller, sma_tick, passes 0 or a duty
+ * it clamped (and counted) already in this call, and a clamped duty clamps to itself: no
+ * clamp again here (R1 18 B smaller on the Nano). */
 static void output(uint8_t act, uint16_t duty_pm)
 {
-    uint16_t d = sma_clamp(duty_pm);
-    if (d != duty_pm) {
-        clamped = 1;
-    }
-    acts[act].applied = d;
-    acts[act].charged = d;
-    hal_pwm_set(ROM_U8(&act_channel[act]), d);
+    acts[act].applied = duty_pm;
+    acts[act].charged = duty_pm;
+    hal_pwm_set(ROM_U8(&act_channel[act]), duty_pm);
 }
 
 /* Pins off now. `charged` keeps the duty the pin had: the time until the next sma_tick is
