@@ -120,7 +120,10 @@ void drive_apply(void)
         fault_raise(PROTO_FAULT_SMA_ON_LIMIT, act); /* repeated hits on one step: latched */
         return;
     }
-    if (guard == GUARD_TIMEOUT && !fault_latched() && seq_running()) {
+    /* GUARD_TIMEOUT comes only with `demanding` (safety.h): a gait running and no fault
+     * latched, just now; guard_tick changes neither, so they are not tested again here (R1 16 B
+     * smaller on the Nano). */
+    if (guard == GUARD_TIMEOUT) {
         fault_raise(PROTO_FAULT_STATE_TIMEOUT, limb_off_target(seq_target()));
         return;
     }

@@ -31,7 +31,8 @@ void guard_set_timeout_ms(uint32_t ms);
 
 /* Once per tick after the sequencer. demanding: a gait is running and its current target
  * is not yet reached; reached: the sequencer reported REACHED this tick; hits: on-limit
- * bits from sma_tick. Returns GUARD_*; *act is the actuator of the last hit. */
+ * bits from sma_tick. Returns GUARD_*; *act is the actuator of the last hit. GUARD_TIMEOUT
+ * only when `demanding` (drive.c relies on it). */
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act);
 
 /* The operator acknowledged a fault: the step's time and hit count start again. */

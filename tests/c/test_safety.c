@@ -67,6 +67,16 @@ static void test_time_not_demanding_does_not_count_but_a_restart_does_not_reset_
     CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US - 150u * CFG_TICK_US);
 }
 
+/* drive.c latches the timeout without testing again that a gait runs and no fault is
+ * latched: the guard says GUARD_TIMEOUT only while `demanding`, even past its timeout. */
+static void test_past_the_timeout_a_tick_not_demanding_is_ok(void)
+{
+    setup(0);
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+    CHECK_EQ(tick(0, 0, 0), GUARD_OK);
+    CHECK_EQ(tick(1, 0, 0), GUARD_TIMEOUT); /* the time still counts */
+}
+
 static void test_reaching_a_target_starts_the_next_step_afresh(void)
 {
     uint32_t k;
@@ -127,6 +137,7 @@ int main(void)
     RUN(test_an_unreached_target_times_out_on_real_time);
     RUN(test_the_timeout_is_right_across_the_clock_wrap_and_with_slow_ticks);
     RUN(test_time_not_demanding_does_not_count_but_a_restart_does_not_reset_it);
+    RUN(test_past_the_timeout_a_tick_not_demanding_is_ok);
     RUN(test_reaching_a_target_starts_the_next_step_afresh);
     RUN(test_repeated_on_limit_hits_without_progress_latch);
     RUN(test_hits_on_different_steps_do_not_latch);
