@@ -230,7 +230,7 @@ static void measured(void)
  * at 1.5° of IMU noise the estimate's σ is 0.13°). Anything else starts over. */
 static void track_rest(void)
 {
-    uint8_t i;
+    uint8_t i, shift;
     int16_t a;
     if (seq_running() || fault_latched()) {
         goto moving; /* (before any ψ is computed: a gait's ticks pay nothing for this) */
@@ -242,8 +242,12 @@ static void track_rest(void)
     }
     i = rest_limb;
     a = psi_last_centideg(i); /* one atan2 a tick, not one per limb: an idle tick stays short */
-    /* >> of a negative int16: an arithmetic shift on every compiler proleg uses */
-    lm[i].rest = rest_ticks >= CFG_N_LIMBS ? (int16_t)(lm[i].rest + ((int16_t)(a - lm[i].rest) >> LEVEL_REST_SHIFT)) : a;
+    /* >> of a negative int16: an arithmetic shift on every compiler proleg uses. Each limb's
+     * first sample is taken as it is: a shift of 0 (rest + (a − rest) is a, also where the
+     * int16 difference wraps: the sum wraps back). One expression, not two: avr-gcc computed
+     * lm[i]'s address twice for the two (R1 20 B smaller on the Nano). */
+    shift = rest_ticks >= CFG_N_LIMBS ? LEVEL_REST_SHIFT : 0u;
+    lm[i].rest = (int16_t)(lm[i].rest + ((int16_t)(a - lm[i].rest) >> shift));
     rest_limb = (uint8_t)(i + 1u < CFG_N_LIMBS ? i + 1u : 0u);
     if (rest_ticks < LEVEL_REST_TICKS) {
         rest_ticks++;
