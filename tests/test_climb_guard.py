@@ -35,9 +35,11 @@ BAND_DEG = 0.3
 
 
 def _r1_with(tmp: Path, value: str | None) -> Path:
-    text = R1.read_text(encoding="utf-8")
-    if value is not None:
-        text = text.replace("telemetry_hz = 50\n", f"telemetry_hz = 50\nmax_climb_deg = {value}\n", 1)
+    """R1's file with `max_climb_deg = value` (None: without the key)."""
+    lines = R1.read_text(encoding="utf-8").splitlines(keepends=True)
+    at = next(i for i, line in enumerate(lines) if line.startswith("max_climb_deg"))
+    lines[at] = "" if value is None else f"max_climb_deg = {value}\n"
+    text = "".join(lines)
     out = tmp / f"r1-climb-{value}.toml"
     out.write_text(text, encoding="utf-8")
     return out
@@ -63,7 +65,7 @@ def _refused(outcome) -> bool:
 
 
 @pytest.mark.parametrize("value, expected", [
-    ("0.2", "[0.5, 20.0]"), ("25", "[0.5, 20.0]"), ('"steep"', "a number"), ("true", "a number"),
+    ("0.2", "[0.5, 19.5]"), ("20", "[0.5, 19.5]"), ('"steep"', "a number"), ("true", "a number"),
 ])
 def test_a_limit_out_of_range_is_one_line_naming_the_key(tmp_path, value, expected):
     with pytest.raises(RobotFileError) as e:
@@ -74,7 +76,7 @@ def test_a_limit_out_of_range_is_one_line_naming_the_key(tmp_path, value, expect
 
 def test_the_guard_is_built_only_when_the_robot_file_sets_it(tmp_path):
     board = load_board("arduino-nano")
-    for path, line in ((R1, None), (_r1_with(tmp_path, "2.5"), "#define CFG_MAX_CLIMB_CDEG 250 ")):
+    for path, line in ((_r1_with(tmp_path, None), None), (_r1_with(tmp_path, "2.5"), "#define CFG_MAX_CLIMB_CDEG 250 ")):
         robot = load_robot(path)
         config = render_project(robot, board, firmware_gaits(robot))["gen/robot_config.h"]
         if line is None:
@@ -95,17 +97,66 @@ def test_start_is_refused_exactly_when_the_gait_would_climb_more_than_the_limit(
     outcome = _start_on(_r1_limited(limit, tmp_path_factory), incline, direction)
     if climb > limit:
         assert _refused(outcome), outcome
-        assert f"rises {climb:.1f}"[:-1] in outcome.fault  # the detail is the measured climb
+        assert _detail_deg(outcome) == pytest.approx(climb, abs=BAND_DEG)  # the detail is the measured climb
         assert outcome.displacement_mm == 0.0 and outcome.coil_peak_c < 26.0  # no coil ever heated
     else:
         assert not _refused(outcome), outcome
         assert outcome.coil_peak_c > 40.0  # it walked: the coils heated
 
 
+def _detail_deg(outcome) -> float:
+    return float(outcome.fault.split("rises ")[1].split("°")[0])
+
+
 def test_the_refusal_reports_the_climb_it_measured(tmp_path_factory):
     outcome = _start_on(_r1_limited(1.5, tmp_path_factory), 6.0, "+x")
-    detail = float(outcome.fault.split("rises ")[1].split("°")[0])
-    assert detail == pytest.approx(6.0, abs=0.3)
+    assert _detail_deg(outcome) == pytest.approx(6.0, abs=0.3)
+
+
+def _start_after_a_knock(robot, knock: list[str], direction: str):
+    """Flat calibration; down a 12° slope (-x, levelled there at START); stopped, then the robot
+    put down again under `knock` (an IMU knocked since, another slope), 2.5 s at rest, START in
+    `direction`: the run's errors and the coils' hottest temperature from there."""
+    from proleg.link.level import calibrate_level
+    from proleg.report.gait_run import SimSession
+    from proleg.sim.closed_loop import SimulatedRobot, make_plant
+
+    sim = SimulatedRobot(robot, seed=1, plant=make_plant(robot, "physical"))
+    session = SimSession(sim)
+    session.advance(0.3)
+    assert calibrate_level(session.client).ok
+    sim.plant = make_plant(robot, "physical", ["incline_deg=12"])
+    session.advance(2.5)
+    assert not session.run_gait("-x", 0, 2.0).errors  # downhill: levelled on ±12°, walks
+    sim.plant = make_plant(robot, "physical", knock)  # cold, at rest
+    session.advance(2.5)
+    run = session.run_gait(direction, 0, 2.0)
+    return " ".join(run.errors), float(max(sim.plant.temperature_c))
+
+
+def test_ground_beyond_what_the_board_levels_on_is_refused_either_way(tmp_path_factory):
+    """An end tilted more than 20° from the flat record at rest (levelled on 12° before, then
+    an IMU knocked 10°: it reads 10° against the ground in use, at rest, 22° in all): the board
+    levels on no such ground, so it cannot measure the climb; the guard refuses it uphill and
+    down (detail 0xFFFF)."""
+    robot = _r1_limited(4.0, tmp_path_factory)
+    for direction in ("+x", "-x"):
+        errors, hottest = _start_after_a_knock(robot, ["incline_deg=12", "imu_offset_deg=0:10"], direction)
+        assert "TOO_STEEP" in errors and "more than 20°" in errors, errors
+        assert hottest < 26.0
+    errors, _ = _start_after_a_knock(robot, ["incline_deg=12", "imu_offset_deg=0:4"], "-x")
+    assert "TOO_STEEP" not in errors, errors  # 16°: levelled on, and downhill
+
+
+def test_a_robot_with_a_gait_library_cannot_carry_the_guard(tmp_path):
+    """planar-4's [gaits] library walks headings and turns: no +x / -x for the guard to climb."""
+    planar = robots_dir() / "planar-4.toml"
+    path = tmp_path / "planar-climb.toml"
+    path.write_text(planar.read_text(encoding="utf-8").replace("[control]\n", "[control]\nmax_climb_deg = 2\n", 1),
+                    encoding="utf-8")
+    with pytest.raises(RobotFileError) as e:
+        load_robot(path)
+    assert "not with a [gaits] library" in str(e.value) and "max_climb_deg" in str(e.value)
 
 
 def test_without_a_flat_calibration_the_slope_is_not_known_and_start_is_not_refused(tmp_path_factory):

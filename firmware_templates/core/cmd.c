@@ -130,7 +130,7 @@ static void cmd_start(void)
     if (sdir != SEQ_DIR_LOADED) { /* the climb guard (a loaded gait's direction is not known) */
         uint16_t climb = level_too_steep(sdir == SEQ_DIR_MX);
         if (climb) {
-            seq_stop(); /* refused before any coil heats */
+            seq_stop(); /* refused before any coil heats (the ground just levelled on stays in use) */
             nack(PROTO_ERR_TOO_STEEP, climb);
             return;
         }

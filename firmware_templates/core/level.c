@@ -75,15 +75,23 @@ int16_t level_ground_cdeg(uint8_t limb)
 }
 
 #ifdef CFG_MAX_CLIMB_CDEG
+static uint8_t tilted; /* this START, from rest, found an end beyond LEVEL_MAX_CDEG (level_at_start) */
+
 uint16_t level_too_steep(uint8_t minus_x)
 {
     /* twice the rise; |ground| ≤ LEVEL_MAX_CDEG each: fits */
     int16_t rise2 = (int16_t)(lm[0].ground - lm[CFG_N_LIMBS - 1u].ground);
+    if (tilted) {
+        return LEVEL_TOO_TILTED; /* a ground no calibration takes: uphill or down, not one to walk */
+    }
     if (minus_x) {
         rise2 = (int16_t)-rise2;
     }
     return status == PROTO_LEVEL_STORED && rise2 > 2 * CFG_MAX_CLIMB_CDEG ? (uint16_t)rise2 >> 1 : 0u;
 }
+#define SET_TILTED(v) (tilted = (v))
+#else
+#define SET_TILTED(v) ((void)0)
 #endif
 
 /* Read the record back: its status, then each limb's rotation (the record's only if valid).
@@ -262,12 +270,14 @@ void level_at_start(void)
 {
     uint8_t i;
     int16_t o;
+    SET_TILTED(0);
     if (rest_ticks < LEVEL_REST_TICKS || status != PROTO_LEVEL_STORED) {
         return; /* not known to be at rest, or no flat record to measure the ground against */
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
         o = (int16_t)(lm[i].ground + lm[i].rest); /* |ground| ≤ 2000, |rest| ≤ 18000: no overflow */
         if (too_tilted(o)) {
+            SET_TILTED(1); /* the climb guard refuses it */
             return; /* not a ground to level on (level_calibrate(1) refuses it too): keep the one in use */
         }
     }

@@ -231,7 +231,22 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         from .gait.library import library_from_robot_file
 
         library = library_from_robot_file(path, doc["gaits"])
+    _check_climb(path, control, limbs, library)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library)
+
+
+def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:
+    """The climb guard reads the slope along x from the first and last limbs' ends (a chain of
+    limbs from +x to -x) and knows a built-in gait's direction only as +x / -x: a robot with a
+    [gaits] library (headings and turns in the plane) or fewer than two limbs cannot use it."""
+    if control.max_climb_deg is None:
+        return
+    if len(limbs) < 2:
+        raise RobotFileError(f"{path}: control.max_climb_deg: the climb guard needs at least two limbs "
+                             f"(it reads the slope from the first and last ends), this robot has {len(limbs)}")
+    if library is not None:
+        raise RobotFileError(f"{path}: control.max_climb_deg: not with a [gaits] library (its gaits walk headings "
+                             f"in the plane and turn; the guard knows only +x and -x along a chain of limbs)")
 
 
 def _array_of_tables(path: Path, value: Any, key: str) -> list[dict]:
@@ -376,9 +391,10 @@ def _safety(path: Path, value: Any) -> Safety:
 
 #: max_climb_deg's range. Below 0.5° the slope the firmware measures at rest (σ ≈ 0.1°: two
 #: ends' readings, each low-passed to 0.13°, level.h) would refuse START on flat ground now and
-#: then; beyond 20° it levels on no ground (level.h LEVEL_MAX_CDEG), so it sees no steeper slope.
+#: then; it levels on no ground beyond 20° (level.h LEVEL_MAX_CDEG, refused as too tilted), so
+#: a limit of 20° or more could never refuse a slope it measures.
 MIN_CLIMB_DEG = 0.5
-MAX_CLIMB_DEG = 20.0
+MAX_CLIMB_DEG = 19.5
 
 
 def _control(path: Path, value: Any, safety: Safety) -> Control:

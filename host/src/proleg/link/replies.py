@@ -32,9 +32,16 @@ class CommandRefused(LinkError):
 def _explain(error: ErrorCode | int, detail: int) -> str:
     """What a NACK's detail means, where it is a measurement rather than an index."""
     if error == ErrorCode.TOO_STEEP:
-        return (f"the ground rises {detail / 100:.2f}° in the gait's direction, more than the robot file's "
-                f"[control] max_climb_deg; on a gentler slope, or downhill, it starts")
+        if detail == TOO_TILTED:
+            return ("an end tilts more than 20° at rest: beyond any ground the board levels on, uphill or down "
+                    "(docs/calibration.md)")
+        return (f"the ground rises {detail / 100:.2f}° in the gait's direction, more than the limit the firmware "
+                f"was built with ([control] max_climb_deg); on a gentler slope, or downhill, it starts")
     return ""
+
+
+#: TOO_STEEP's detail when an end tilts beyond the 20° the board levels on (core/level.h LEVEL_TOO_TILTED)
+TOO_TILTED = 0xFFFF
 
 
 class ReplyTimeout(LinkError):

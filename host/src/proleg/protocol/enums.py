@@ -31,7 +31,7 @@ class ErrorCode(IntEnum):
     SAFETY_LIMIT = 8  # would widen the build's safety envelope
     NO_GAIT = 9  # START of a gait index that does not exist / user gait not loaded
     ESTOP_LATCHED = 10  # E-stop latched: CLEAR it first
-    TOO_STEEP = 11  # START uphill steeper than the build's [control] max_climb_deg (detail = the climb, 0.01°)
+    TOO_STEEP = 11  # START uphill steeper than the build's [control] max_climb_deg (detail = the climb, 0.01°; 0xFFFF: an end beyond the 20° levelled on)
 
 
 class FaultCode(IntEnum):
