@@ -79,7 +79,21 @@ def test_repeated_on_limit_hits_latch_sma_on_limit():
     env = Envelope(_robot(max_on_ms=200, cooldown_ms=100, mean=1.0, latch=3), 1, DT)
     with pytest.raises(EnvelopeLatched) as e:
         _run(env, [0.6] * 1000)
-    assert e.value.code == "SMA_ON_LIMIT" and "max_on_ms (200 ms)" in str(e.value)
+    assert e.value.code == "SMA_ON_LIMIT" and "max_on_ms 200 ms" in str(e.value)
+
+
+def test_hits_on_different_coils_count_together_as_in_the_firmware():
+    """core/safety.c counts on-limit hits of every actuator in one tally (hits_since_reached)."""
+    env = Envelope(_robot(max_on_ms=200, cooldown_ms=100, mean=1.0, latch=3), 2, DT)
+    with pytest.raises(EnvelopeLatched):
+        for _ in range(100):  # both coils asked to heat: both hit at 0.2 s, paid back 0.1 s later, one more hit ends it
+            env.gate([0.6, 0.6])
+    assert env.hits == 3
+
+
+def test_the_payback_is_capped_as_sma_c_caps_refill():
+    env = Envelope(_robot(max_on_ms=60_000, cooldown_ms=10, mean=1.0), 1, DT)
+    assert env.payback == pytest.approx(10000 / 256)
 
 
 def test_reaching_a_state_resets_the_hit_count():
@@ -108,7 +122,7 @@ def test_a_gait_the_state_timeout_forbids_is_impossible_and_says_so(tmp_path):
 def test_a_gait_the_on_time_limit_forbids_is_impossible_and_says_so(tmp_path):
     robot = _r1_with_safety(tmp_path, max_on_ms=60, min_cooldown_ms=2000)
     possible, why = claim.physically_possible(robot, claim.NOMINAL)
-    assert not possible and "max_on_ms (60 ms)" in why and "SMA_ON_LIMIT" in why
+    assert not possible and "max_on_ms 60 ms" in why and "SMA_ON_LIMIT" in why
 
 
 def test_the_nominal_robot_is_possible_within_its_envelope():

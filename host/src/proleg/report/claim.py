@@ -385,10 +385,12 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
     if learned is not None:
         lp, lwhy = physically_possible(robot, point, direction, learned)
         lfb = feedback_run(robot, point, direction=direction, gait=learned, duration_s=duration_s)
+        lextra: dict[str, Any] = {}
         if not lp and lfb.completed:  # as above
+            lextra = {"possible_by": "the firmware's own run", "idealised_drive_why_not": lwhy}
             lp, lwhy = True, ""
         extra["learned_gait"] = {"states": list(learned), "physically_possible": lp, "why_not": lwhy,
-                                 "feedback": _round(asdict(lfb))}
+                                 "feedback": _round(asdict(lfb)), **lextra}
     return ConditionResult(point, possible, why, fb, ol, extra)
 
 

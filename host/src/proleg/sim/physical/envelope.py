@@ -5,16 +5,21 @@ The claim bench asks whether the coils *can* complete a gait under a condition
 (docs/safety.md), so the idealised drive is held to the same rules, per coil:
 
 - *on-time debt*: every second on (a duty above the hold ceiling) adds a second, every second
-  not on pays back ``max_on_ms / min_cooldown_ms`` seconds; a request that would take the debt
-  past ``max_on_ms`` is an on-limit hit: the coil is cut and stays off until the debt is paid;
-  ``on_limit_latch`` hits without a target reached in between latch the fault SMA_ON_LIMIT;
+  not on pays back ``max_on_ms / min_cooldown_ms`` seconds (at most 39: sma.c's refill_q8 ≤
+  10000); a request that would take the debt past ``max_on_ms`` is an on-limit hit: the coil is
+  cut and stays off until the debt is paid; ``on_limit_latch`` hits, on any coils together,
+  without a target reached in between latch the fault SMA_ON_LIMIT (core/safety.c);
 - *mean duty*: the duty integrated over any window of ``duty_window_ms`` stays at most
   ``max_mean_duty`` × the window (a request that would not fit gets 0);
 - *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
   latches STATE_TIMEOUT (``_run_to`` checks that one).
 
 The numbers are the ones the firmware is built with (``firmware.render.thermal_budget`` and the
-robot file's ``[safety]``). A sliding window stands in for the firmware's slotted one.
+robot file's ``[safety]``). Where this is looser than the firmware: an exact sliding window
+stands in for the firmware's slotted one (which spans 1 to 9/8 of a window and rounds each
+tick's charge up), and the idealised drive switches a waiting coil off where the firmware keeps
+it at the hold duty, which fills the firmware's window a little more. So a condition this calls
+possible may still be one the firmware's envelope stops; the bench reports what the firmware does.
 """
 
 from __future__ import annotations
@@ -42,7 +47,8 @@ class Envelope:
         budget = thermal_budget(robot.name, safety, ctl)
         self.dt = dt_s
         self.max_on_s = safety.max_on_ms / 1000.0
-        self.payback = safety.max_on_ms / max(safety.min_cooldown_ms, 1)  # debt paid per second off
+        # debt paid per second off: sma.c's refill_q8 = max_on / (cooldown / 256 + 1), capped at 10000
+        self.payback = min(safety.max_on_ms / max(safety.min_cooldown_ms, 1), 10000 / 256)
         self.hold_ceiling = budget["hold_max_duty_pm"] / 10000.0
         self.latch = budget["on_limit_latch"]
         self.state_timeout_s = safety.state_timeout_ms / 1000.0
@@ -51,13 +57,13 @@ class Envelope:
         n = max(1, round(self.window_s / dt_s))
         self.debt = [0.0] * n_channels
         self.cut = [False] * n_channels
-        self.hits = [0] * n_channels
+        self.hits = 0  # on-limit hits since a target was reached, every coil together (safety.c)
         self.window = [deque([0.0] * n, maxlen=n) for _ in range(n_channels)]
         self.in_window = [0.0] * n_channels
 
     def reached(self) -> None:
         """A target was reached: on-limit hits start counting again (as the firmware)."""
-        self.hits = [0] * len(self.hits)
+        self.hits = 0
 
     def gate(self, duties: Sequence[float]) -> list[float]:
         """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
@@ -66,11 +72,11 @@ class Envelope:
             on = d > self.hold_ceiling
             if on and not self.cut[ch] and self.debt[ch] + self.dt > self.max_on_s:
                 self.cut[ch] = True
-                self.hits[ch] += 1
-                if self.hits[ch] >= self.latch:
+                self.hits += 1
+                if self.hits >= self.latch:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
-                        f"the safety envelope's on-time limit: channel {ch} needs more than max_on_ms "
-                        f"({self.max_on_s * 1000:.0f} ms) of heating, {self.latch} times without reaching the state"))
+                        f"the safety envelope's on-time limit: {self.latch} on-limit hits (max_on_ms "
+                        f"{self.max_on_s * 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
             if self.cut[ch]:
                 d, on = 0.0, False
             if d > 0.0 and self.in_window[ch] + d * self.dt > self.mean_cap:
