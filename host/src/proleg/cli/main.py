@@ -287,6 +287,11 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if wants_help(args):
         return EXIT_OK
     if args.measure_matrix:
+        if args.calibrated:
+            from ..errors import SimError
+
+            raise SimError("--calibrated: not with --measure-matrix (the matrix is measured by an idealised drive "
+                           "with true psi, no firmware to calibrate)")
         return cmd_measure_matrix(args, robot)
     if args.hold_range:
         from ..errors import SimError

@@ -45,7 +45,10 @@ def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
 
 def flat_conditions(args: argparse.Namespace) -> list[str]:
     """``--condition`` on flat ground: without incline_deg, and level over the robot file's
-    [plant] (the ground a ``--calibrated`` board is calibrated on)."""
+    [plant] (the ground a ``--calibrated`` board is calibrated on). The table plant takes no
+    conditions (and has no slope): as given."""
+    if args.plant != "physical":
+        return list(args.condition)
     return [c for c in args.condition if c.partition("=")[0].strip() != "incline_deg"] + ["incline_deg=0"]
 
 
