@@ -9,7 +9,9 @@ What must hold whatever the order:
   ground in use;
 - with no flat record the ground is 0 (nothing to measure it against);
 - a START after a long rest on a slope of θ levels each end to ±θ (within 0.5°);
-- the ground in use never passes the 20° a calibration accepts.
+- the ground in use never passes the 20° a calibration accepts;
+- START is refused (TOO_STEEP) exactly when the ground in use rises more than R1's
+  max_climb_deg in the gait's direction, and then nothing starts.
 """
 
 from __future__ import annotations
@@ -20,11 +22,11 @@ from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, precondition, rule
 
-from proleg.link.client import RobotClient
+from proleg.link.client import CommandRefused, RobotClient
 from proleg.link.level import calibrate_level, clear_level, get_level
 from proleg.link.sim_link import SimLink
 from proleg.paths import resolve_robot
-from proleg.protocol.definition import LevelStatus
+from proleg.protocol.definition import ErrorCode, LevelStatus
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import SimulatedRobot, make_plant
 
@@ -32,6 +34,7 @@ R1 = load_robot(resolve_robot("paper-r1"))
 MOUNT = ["imu_offset_deg=left:5", "imu_offset_deg=right:-3"]
 REST_S = 2.0          # LEVEL_REST_TICKS at R1's 1 kHz
 LEVEL_MAX_CDEG = 2000
+MAX_CLIMB_CDEG = round(R1.control.max_climb_deg * 100)
 
 
 def _plant(incline: int):
@@ -85,9 +88,11 @@ class LevellingAtRest(RuleBasedStateMachine):
         soon = self._now() - self.last_motion < REST_S
         long_rest = self._now() - self.rested_since > 8.0
         self.client.clear()
-        self.client.start(0, direction)
-        self.running = True
-        self.last_motion = self._now()
+        try:
+            self.client.start(0, direction)
+            refused = None
+        except CommandRefused as e:
+            refused = e
         reading = self._reading()
         if soon or reading.status != LevelStatus.STORED:
             assert reading.ground_cdeg == self.ground, "levelled without 2 s of rest or a flat record"
@@ -95,6 +100,17 @@ class LevellingAtRest(RuleBasedStateMachine):
             first, last = reading.ground_cdeg
             assert abs(first - 100 * self.incline) < 50 and abs(last + 100 * self.incline) < 50, reading
         self.ground = reading.ground_cdeg
+        # R1's climb guard ([control] max_climb_deg, docs/calibration.md) on the ground just levelled:
+        # refused exactly when that ground rises more than the limit in the gait's direction
+        first, last = reading.ground_cdeg
+        climb2 = (first - last) * (1 if direction == "+x" else -1)  # twice the climb, 0.01°
+        steep = reading.status == LevelStatus.STORED and climb2 > 2 * MAX_CLIMB_CDEG
+        assert (refused is not None) == steep, (reading, direction, refused)
+        if refused is not None:
+            assert refused.error == ErrorCode.TOO_STEEP and refused.detail == climb2 // 2
+            return  # nothing started: no motion, the robot still rests
+        self.running = True
+        self.last_motion = self._now()
 
     @precondition(lambda self: self.running)
     @rule()
