@@ -19,8 +19,18 @@ MOUNT = ["imu_offset_deg=left:8", "imu_offset_deg=right:-8"]
 
 
 @pytest.fixture(scope="module")
-def r1():
-    return load_robot(resolve_robot("paper-r1"))
+def r1(tmp_path_factory):
+    """R1 without its climb guard ([control] max_climb_deg): these tests start it up slopes it
+    cannot climb to see the levelling itself (tests/test_climb_guard.py checks the guard, and
+    test_level_at_rest_stateful.py both together)."""
+    text = resolve_robot("paper-r1").read_text(encoding="utf-8")
+    kept = [line for line in text.splitlines(keepends=True) if not line.startswith("max_climb_deg")]
+    assert len(kept) == len(text.splitlines()) - 1
+    path = tmp_path_factory.mktemp("r1") / "paper-r1.toml"
+    path.write_text("".join(kept), encoding="utf-8")
+    robot = load_robot(path)
+    assert robot.control.max_climb_deg is None
+    return robot
 
 
 def connect(sim: SimulatedRobot) -> RobotClient:
