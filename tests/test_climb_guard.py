@@ -348,3 +348,58 @@ def test_sim_without_calibrated_never_refuses(capsys):
     """The board of a plain `proleg sim` was never calibrated: a gauge, not the guard."""
     rc, out, err = _cli(capsys, "sim", str(R2), "--condition", "incline_deg=4", "--duration", "5", "--json")
     assert "TOO_STEEP" not in err
+
+
+# --------------------------------------------------------------------------- proleg sim --measure-climb
+
+@settings(max_examples=60, deadline=None)
+@given(threshold=st.floats(-1.0, 13.0))
+def test_the_bisection_finds_the_steepest_grade_a_brute_force_scan_finds(threshold):
+    """A gait that climbs every grade up to `threshold` and none steeper: the bisection's answer
+    is the scan's over the same 0.25° grid."""
+    from unittest import mock
+
+    from proleg.sim.physical import climb
+
+    calls = []
+
+    def walks(robot, states, direction, grade, conditions=()):
+        calls.append(grade)
+        return grade <= threshold
+
+    with mock.patch.object(climb, "walks_up", walks):
+        got = climb.steepest_climb(None, (0, 3), "+x")
+    grid = [k * climb.RESOLUTION_DEG for k in range(round(climb.TOP_DEG / climb.RESOLUTION_DEG) + 1)]
+    climbed = [g for g in grid if g <= threshold]
+    assert got == (max(climbed) if climbed else None)
+    assert len(calls) <= 2 + 6  # 48 steps: bisection, not a scan
+
+
+def test_the_suggested_limit_is_the_smaller_climb_on_the_half_degree_and_at_least_half_a_degree():
+    from proleg.sim.physical.climb import suggested_limit
+
+    assert suggested_limit([2.75, 3.0]) == 2.5
+    assert suggested_limit([None, 2.75]) == 2.5
+    assert suggested_limit([0.0]) == 0.5
+    assert suggested_limit([12.0, 12.0]) == 12.0
+    assert suggested_limit([None, None]) is None
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in robots_dir().glob("*.toml")
+                                        if "max_climb_deg = " in p.read_text(encoding="utf-8")))
+def test_every_example_robots_limit_is_what_measure_climb_suggests(capsys, name):
+    """The robot files' max_climb_deg are measured, not chosen: --measure-climb gives them back."""
+    rc, out, _ = _cli(capsys, "sim", str(robots_dir() / f"{name}.toml"), "--measure-climb", "--json")
+    report = json.loads(out)
+    assert rc == 0
+    assert report["suggested_max_climb_deg"] == report["max_climb_deg"], report
+
+
+@pytest.mark.parametrize("argv, text", [
+    (("planar-4", "--measure-climb"), "cannot carry [control] max_climb_deg"),
+    (("paper-r2", "--measure-climb", "--condition", "incline_deg=2"), "leave incline_deg out"),
+    (("paper-r2", "--measure-climb", "--plant", "table"), "physical plant"),
+])
+def test_measure_climb_says_what_it_cannot_do(capsys, argv, text):
+    rc, _, err = _cli(capsys, "sim", str(robots_dir() / f"{argv[0]}.toml"), *argv[1:])
+    assert rc == 2 and text in err and "Traceback" not in err

@@ -10,7 +10,6 @@ from types import SimpleNamespace
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from proleg.paths import robots_dir
 from proleg.report import claim
 from proleg.robot import load_robot

@@ -286,6 +286,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
     if wants_help(args):
         return EXIT_OK
+    if args.measure_climb:
+        from .sim_plant import cmd_measure_climb
+
+        return cmd_measure_climb(args, robot)
     if args.measure_matrix:
         if args.calibrated:
             from ..errors import SimError

@@ -1,5 +1,5 @@
 """``proleg sim``'s plant options: ``--plant``, ``--condition``, ``--calibrated``, ``--measure-matrix``
-(``--hold-range``).
+(``--hold-range``), ``--measure-climb``.
 
 Kept apart from the rest of the sim subcommand (``cli/main.py``) so that other options can be
 added there without touching these. The keys ``--condition`` takes are the physical keys of
@@ -30,6 +30,9 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                         "for 2.5 s at rest, then START; the firmware levels itself there, and a robot file's "
                         "[control] max_climb_deg refuses too steep a climb (without it the board was never "
                         "calibrated: it cannot tell a slope from the IMUs' mounting tilt)")
+    s.add_argument("--measure-climb", action="store_true",
+                   help="measure the steepest grade gait 0 of each direction climbs on the physical plant "
+                        "(idealised drive, within the safety envelope) and suggest [control] max_climb_deg")
     s.add_argument("--measure-matrix", action="store_true",
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
     s.add_argument("--hold-range", action="store_true",
@@ -108,6 +111,53 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
               "(mm, low..high):")
         _table(m.states, [[None if lo != lo else f"{lo:+.2f}..{hi:+.2f}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
+    return 0
+
+
+def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
+    """``proleg sim ROBOT --measure-climb [--json]``: the steepest grade each direction's gait 0
+    climbs, and the ``max_climb_deg`` that suggests (docs/calibration.md)."""
+    from ..errors import SimError
+    from ..firmware.build import firmware_gaits
+    from ..sim.physical.climb import (
+        RESOLUTION_DEG,
+        TOP_DEG,
+        steepest_climb,
+        suggested_limit,
+    )
+
+    if args.plant != "physical":
+        raise SimError("--measure-climb: grades are climbed on the physical plant (the table plant has no slope)")
+    if any(c.partition("=")[0].strip() == "incline_deg" for c in args.condition):
+        raise SimError("--measure-climb: it sets the incline itself; leave incline_deg out of --condition")
+    if robot.library is not None or len(robot.limbs) < 2:
+        raise SimError(f"--measure-climb: {robot.name} cannot carry [control] max_climb_deg (a [gaits] library or "
+                       f"one limb: docs/calibration.md, 'Too steep to climb')")
+    gaits = firmware_gaits(robot)
+    climbs: dict[str, float | None] = {}
+    for direction in ("+x", "-x"):
+        if gaits.get(direction):
+            climbs[direction] = steepest_climb(robot, gaits[direction][0].states, direction, list(args.condition))
+    limit = suggested_limit(list(climbs.values()))
+    if args.json:
+        print(json.dumps({"robot": robot.name, "conditions": list(args.condition), "resolution_deg": RESOLUTION_DEG,
+                          "climb_deg": climbs, "suggested_max_climb_deg": limit,
+                          "max_climb_deg": robot.control.max_climb_deg}))
+        return 0
+    print(f"{robot.name}: the steepest grade gait 0 climbs on the physical plant (idealised drive within the "
+          f"safety envelope, {RESOLUTION_DEG:g}° steps up to {TOP_DEG:g}°)")
+    for direction, climb in climbs.items():
+        text = ("does not move that way even on the flat" if climb is None
+                else f"{climb:g}° or more" if climb >= TOP_DEG else f"{climb:g}° (not {climb + RESOLUTION_DEG:g}°)")
+        print(f"  {direction}: {text}")
+    if limit is None:
+        print("no gait moves: no max_climb_deg to suggest")
+        return 0
+    have = robot.control.max_climb_deg
+    floor = " (the smallest the firmware takes: this gait barely climbs at all)" if min(
+        c for c in climbs.values() if c is not None) < limit else ""
+    print(f"suggested: [control] max_climb_deg = {limit:g}{floor}   (the robot file: "
+          f"{'none' if have is None else f'{have:g}'})")
     return 0
 
 

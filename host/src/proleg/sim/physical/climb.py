@@ -1,0 +1,68 @@
+"""How steep a grade a robot's gait climbs on the physical plant: the number the robot file's
+``[control] max_climb_deg`` wants (docs/calibration.md, "Too steep to climb").
+
+``steepest_climb`` walks the gait with the idealised drive (true ψ, the firmware's duties, within
+its safety envelope: ``measure.run_sequence(envelope=True)``) up ever steeper ground, by
+bisection, and returns the steepest grade on which it still moves up the slope. Bisection
+assumes a gait that slides back on a grade also slides back on every steeper one (true of every
+example robot measured half a degree at a time, docs/calibration.md).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from ...errors import SimError
+from .envelope import EnvelopeLatched
+from .measure import run_sequence
+
+#: The plant's steepest ground (conditions.py: incline_deg in −12..12).
+TOP_DEG = 12.0
+#: The bisection stops at this width (°).
+RESOLUTION_DEG = 0.25
+#: The smallest max_climb_deg the firmware takes (robot.MIN_CLIMB_DEG), and the grid it is rounded to.
+SUGGEST_STEP_DEG = 0.5
+
+
+def walks_up(robot: Any, states: Sequence[int], direction: str, grade_deg: float,
+             conditions: Sequence[str] = ()) -> bool:
+    """Does the idealised drive move the robot up a grade of ``grade_deg`` walking ``states``
+    in ``direction`` (the ground rising that way)?"""
+    from ..closed_loop import make_plant
+
+    sign = 1 if direction == "+x" else -1
+    plant = make_plant(robot, "physical", [*conditions, f"incline_deg={sign * grade_deg:g}"])
+    try:
+        mm, _ = run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
+    except (SimError, EnvelopeLatched):
+        return False
+    return sign * mm > 0
+
+
+def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions: Sequence[str] = (), *,
+                   resolution_deg: float = RESOLUTION_DEG, top_deg: float = TOP_DEG) -> float | None:
+    """The steepest grade (°, a multiple of ``resolution_deg``) the gait still climbs; None if
+    it does not move ``direction`` even on the flat; ``top_deg`` if it climbs that too."""
+    if not walks_up(robot, states, direction, 0.0, conditions):
+        return None
+    if walks_up(robot, states, direction, top_deg, conditions):
+        return top_deg
+    lo, hi = 0, round(top_deg / resolution_deg)  # in steps: climbs lo, slides back at hi
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if walks_up(robot, states, direction, mid * resolution_deg, conditions):
+            lo = mid
+        else:
+            hi = mid
+    return lo * resolution_deg
+
+
+def suggested_limit(climbs: Sequence[float | None]) -> float | None:
+    """``max_climb_deg`` for these directions' steepest climbs: the smallest, rounded down to
+    half a degree, at least the smallest the firmware takes (0.5°); None if no gait moves."""
+    known = [c for c in climbs if c is not None]
+    if not known:
+        return None
+    return max(SUGGEST_STEP_DEG, math.floor(min(known) / SUGGEST_STEP_DEG) * SUGGEST_STEP_DEG)
