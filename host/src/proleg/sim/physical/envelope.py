@@ -38,7 +38,11 @@ class EnvelopeLatched(Exception):
 
 
 class Envelope:
-    """Per channel, the duties the envelope lets through (``gate``), stepped at ``dt_s``."""
+    """Per channel, the duties the envelope lets through (``gate``), stepped at ``dt_s``. In
+    sma.c's order and integer units: first the interval since the last step is charged at the
+    duty the coil carried (µs of debt, or paid back at sma.c's rate), then the new duty is
+    decided (cut while the debt is being paid; cut, as a hit, if one more step would pass
+    max_on_ms)."""
 
     def __init__(self, robot: Any, n_channels: int, dt_s: float):
         from ...firmware.render import thermal_budget
@@ -46,16 +50,21 @@ class Envelope:
         safety, ctl = robot.safety, robot.control
         budget = thermal_budget(robot.name, safety, ctl)
         self.dt = dt_s
-        self.max_on_s = safety.max_on_ms / 1000.0
-        # debt paid per second off: sma.c's refill_q8 = max_on / (cooldown / 256 + 1), capped at 10000
-        self.payback = min(safety.max_on_ms / max(safety.min_cooldown_ms, 1), 10000 / 256)
-        self.hold_ceiling = budget["hold_max_duty_pm"] / 10000.0
+        self.dt_us = round(dt_s * 1e6)
+        self.max_on_us = safety.max_on_ms * 1000
+        # sma.c set_times: refill_q8 = max_on_us / (cooldown_us / 256 + 1), at most 10000; each
+        # µs off pays back refill_q8 / 256 µs of debt
+        self.refill_q8 = min(10000, self.max_on_us // ((safety.min_cooldown_ms * 1000 >> 8) + 1))
+        self.payback = self.refill_q8 / 256
+        self.hold_ceiling_pm = budget["hold_max_duty_pm"]
+        self.hold_ceiling = self.hold_ceiling_pm / 10000.0
         self.latch = budget["on_limit_latch"]
         self.state_timeout_s = safety.state_timeout_ms / 1000.0
         self.window_s = budget["duty_window_ms"] / 1000.0
         self.mean_cap = budget["mean_duty_pm"] / 10000.0 * self.window_s
         n = max(1, round(self.window_s / dt_s))
-        self.debt = [0.0] * n_channels
+        self.debt = [0] * n_channels      # µs
+        self.charged = [0] * n_channels   # ‱ the coil carried over the last step
         self.cut = [False] * n_channels
         self.hits = 0  # on-limit hits since a target was reached, every coil together (safety.c)
         self.window = [deque([0.0] * n, maxlen=n) for _ in range(n_channels)]
@@ -68,25 +77,28 @@ class Envelope:
     def gate(self, duties: Sequence[float]) -> list[float]:
         """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
         out = []
-        for ch, d in enumerate(duties):
-            on = d > self.hold_ceiling
-            if on and not self.cut[ch] and self.debt[ch] + self.dt > self.max_on_s:
+        for ch, duty in enumerate(duties):
+            if self.charged[ch] > self.hold_ceiling_pm:
+                self.debt[ch] += self.dt_us
+            else:
+                self.debt[ch] = max(0, self.debt[ch] - (self.dt_us * self.refill_q8 >> 8))
+                if self.debt[ch] == 0:
+                    self.cut[ch] = False
+            pm = round(duty * 10000)
+            if self.cut[ch]:
+                pm = 0  # cooling after an on-limit hit: off until the debt is paid
+            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.dt_us > self.max_on_us:
+                pm = 0
                 self.cut[ch] = True
                 self.hits += 1
                 if self.hits >= self.latch:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
                         f"the safety envelope's on-time limit: {self.latch} on-limit hits (max_on_ms "
-                        f"{self.max_on_s * 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
-            if self.cut[ch]:
-                d, on = 0.0, False
+                        f"{self.max_on_us / 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
+            d = pm / 10000.0
             if d > 0.0 and self.in_window[ch] + d * self.dt > self.mean_cap:
-                d, on = 0.0, False  # does not fit the mean-duty window: 0 (not a hit)
-            if on:
-                self.debt[ch] += self.dt
-            else:
-                self.debt[ch] = max(0.0, self.debt[ch] - self.dt * self.payback)
-                if self.debt[ch] == 0.0:
-                    self.cut[ch] = False
+                d, pm = 0.0, 0  # does not fit the mean-duty window: 0 (not a hit)
+            self.charged[ch] = pm
             w = self.window[ch]
             self.in_window[ch] += d * self.dt - w[0]
             w.append(d * self.dt)
