@@ -399,6 +399,8 @@ def test_every_example_robots_limit_is_what_measure_climb_suggests(capsys, name)
     (("planar-4", "--measure-climb"), "cannot carry [control] max_climb_deg"),
     (("paper-r2", "--measure-climb", "--condition", "incline_deg=2"), "leave incline_deg out"),
     (("paper-r2", "--measure-climb", "--plant", "table"), "physical plant"),
+    (("paper-r2", "--measure-climb", "--board", "avr-emu"), "not with --board"),
+    (("paper-r2", "--measure-climb", "--calibrated"), "not with --calibrated"),
 ])
 def test_measure_climb_says_what_it_cannot_do(capsys, argv, text):
     rc, _, err = _cli(capsys, "sim", str(robots_dir() / f"{argv[0]}.toml"), *argv[1:])

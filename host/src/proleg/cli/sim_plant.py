@@ -32,7 +32,11 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                         "calibrated: it cannot tell a slope from the IMUs' mounting tilt)")
     s.add_argument("--measure-climb", action="store_true",
                    help="measure the steepest grade gait 0 of each direction climbs on the physical plant "
-                        "(idealised drive, within the safety envelope) and suggest [control] max_climb_deg")
+                        "(idealised drive, within the safety envelope) and suggest [control] max_climb_deg; "
+                        "--all-gaits: every built-in gait")
+    s.add_argument("--all-gaits", action="store_true",
+                   help="with --measure-climb: every gait the firmware carries, not gait 0 alone (minutes for robots "
+                        "with tens of tied gaits)")
     s.add_argument("--measure-matrix", action="store_true",
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
     s.add_argument("--hold-range", action="store_true",
@@ -115,49 +119,53 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 
 
 def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
-    """``proleg sim ROBOT --measure-climb [--json]``: the steepest grade each direction's gait 0
-    climbs, and the ``max_climb_deg`` that suggests (docs/calibration.md)."""
+    """``proleg sim ROBOT --measure-climb [--all-gaits] [--json]``: the steepest grade gait 0 of
+    each direction (or every built-in gait) climbs, and the ``max_climb_deg`` that suggests (the
+    smallest over the gaits measured that move at all). The guard holds every built-in gait to
+    it, so tie gaits that climb less are worth measuring (docs/calibration.md)."""
     from ..errors import SimError
     from ..firmware.build import firmware_gaits
-    from ..sim.physical.climb import (
-        RESOLUTION_DEG,
-        TOP_DEG,
-        steepest_climb,
-        suggested_limit,
-    )
+    from ..sim.physical.climb import RESOLUTION_DEG, TOP_DEG, steepest_climb, suggested_limit
 
     if args.plant != "physical":
         raise SimError("--measure-climb: grades are climbed on the physical plant (the table plant has no slope)")
+    for flag, given in (("--calibrated", args.calibrated), ("--measure-matrix", args.measure_matrix),
+                        ("--hold-range", args.hold_range), ("--pty", args.pty), ("--board", args.board != "host-sim")):
+        if given:
+            raise SimError(f"--measure-climb: not with {flag} (an idealised drive on the plant climbs, no board)")
     if any(c.partition("=")[0].strip() == "incline_deg" for c in args.condition):
         raise SimError("--measure-climb: it sets the incline itself; leave incline_deg out of --condition")
     if robot.library is not None or len(robot.limbs) < 2:
         raise SimError(f"--measure-climb: {robot.name} cannot carry [control] max_climb_deg (a [gaits] library or "
                        f"one limb: docs/calibration.md, 'Too steep to climb')")
-    gaits = firmware_gaits(robot)
-    climbs: dict[str, float | None] = {}
-    for direction in ("+x", "-x"):
-        if gaits.get(direction):
-            climbs[direction] = steepest_climb(robot, gaits[direction][0].states, direction, list(args.condition))
-    limit = suggested_limit(list(climbs.values()))
+    every = firmware_gaits(robot, args.objective, args.max_transitions)
+    gaits = {d: list(every.get(d, ())) if args.all_gaits else list(every.get(d, ()))[:1] for d in ("+x", "-x")}
+    climbs: dict[str, list[float | None]] = {
+        d: [steepest_climb(robot, g.states, d, list(args.condition)) for g in gs] for d, gs in gaits.items() if gs}
+    limit = suggested_limit([c for per in climbs.values() for c in per])
     if args.json:
         print(json.dumps({"robot": robot.name, "conditions": list(args.condition), "resolution_deg": RESOLUTION_DEG,
                           "climb_deg": climbs, "suggested_max_climb_deg": limit,
                           "max_climb_deg": robot.control.max_climb_deg}))
         return 0
-    print(f"{robot.name}: the steepest grade gait 0 climbs on the physical plant (idealised drive within the "
+    which = "every built-in gait" if args.all_gaits else "gait 0 of each direction (--all-gaits: every one)"
+    print(f"{robot.name}: the steepest grade {which} climbs on the physical plant (idealised drive within the "
           f"safety envelope, {RESOLUTION_DEG:g}° steps up to {TOP_DEG:g}°)")
-    for direction, climb in climbs.items():
-        text = ("does not move that way even on the flat" if climb is None
-                else f"{climb:g}° or more" if climb >= TOP_DEG else f"{climb:g}° (not {climb + RESOLUTION_DEG:g}°)")
-        print(f"  {direction}: {text}")
+    for direction, per in climbs.items():
+        for i, climb in enumerate(per):
+            text = ("does not move that way even on the flat (not counted)" if climb is None
+                    else f"{climb:g}° or more" if climb >= TOP_DEG else f"{climb:g}° (not {climb + RESOLUTION_DEG:g}°)")
+            print(f"  {direction} gait {i}: {text}")
     if limit is None:
         print("no gait moves: no max_climb_deg to suggest")
         return 0
     have = robot.control.max_climb_deg
-    floor = " (the smallest the firmware takes: this gait barely climbs at all)" if min(
-        c for c in climbs.values() if c is not None) < limit else ""
+    floor = " (the smallest the firmware takes: a gait barely climbs at all)" if min(
+        c for per in climbs.values() for c in per if c is not None) < limit else ""
     print(f"suggested: [control] max_climb_deg = {limit:g}{floor}   (the robot file: "
-          f"{'none' if have is None else f'{have:g}'})")
+          f"{'none' if have is None else f'{have:g}'}; the guard holds every built-in gait to it)")
+    if not args.all_gaits and any(len(every.get(d, ())) > 1 for d in ("+x", "-x")):
+        print("note: the firmware carries other gaits too; they may climb less (--all-gaits measures each)")
     return 0
 
 

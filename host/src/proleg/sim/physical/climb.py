@@ -45,6 +45,9 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
                    resolution_deg: float = RESOLUTION_DEG, top_deg: float = TOP_DEG) -> float | None:
     """The steepest grade (°, a multiple of ``resolution_deg``) the gait still climbs; None if
     it does not move ``direction`` even on the flat; ``top_deg`` if it climbs that too."""
+    steps = top_deg / resolution_deg
+    if abs(steps - round(steps)) > 1e-9:
+        raise ValueError(f"top_deg {top_deg} is not a whole number of {resolution_deg}° steps")
     if not walks_up(robot, states, direction, 0.0, conditions):
         return None
     if walks_up(robot, states, direction, top_deg, conditions):

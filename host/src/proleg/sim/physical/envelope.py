@@ -56,6 +56,7 @@ class Envelope:
         # µs off pays back refill_q8 / 256 µs of debt
         self.refill_q8 = min(10000, self.max_on_us // ((safety.min_cooldown_ms * 1000 >> 8) + 1))
         self.payback = self.refill_q8 / 256
+        self.max_duty_pm = round(safety.max_duty * 10000)
         self.hold_ceiling_pm = budget["hold_max_duty_pm"]
         self.hold_ceiling = self.hold_ceiling_pm / 10000.0
         self.latch = budget["on_limit_latch"]
@@ -67,6 +68,7 @@ class Envelope:
         self.charged = [0] * n_channels   # ‱ the coil carried over the last step
         self.cut = [False] * n_channels
         self.hits = 0  # on-limit hits since a target was reached, every coil together (safety.c)
+        self.hit_bits = 0
         self.window = [deque([0.0] * n, maxlen=n) for _ in range(n_channels)]
         self.in_window = [0.0] * n_channels
 
@@ -77,6 +79,7 @@ class Envelope:
     def gate(self, duties: Sequence[float]) -> list[float]:
         """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
         out = []
+        self.hit_bits = 0  # the coils that hit the on-time limit in this step (sma_tick's return)
         for ch, duty in enumerate(duties):
             if self.charged[ch] > self.hold_ceiling_pm:
                 self.debt[ch] += self.dt_us
@@ -84,12 +87,13 @@ class Envelope:
                 self.debt[ch] = max(0, self.debt[ch] - (self.dt_us * self.refill_q8 >> 8))
                 if self.debt[ch] == 0:
                     self.cut[ch] = False
-            pm = round(duty * 10000)
+            pm = min(round(duty * 10000), self.max_duty_pm)  # sma_clamp: the duty ceiling first
             if self.cut[ch]:
                 pm = 0  # cooling after an on-limit hit: off until the debt is paid
             elif pm > self.hold_ceiling_pm and self.debt[ch] + self.dt_us > self.max_on_us:
                 pm = 0
                 self.cut[ch] = True
+                self.hit_bits |= 1 << ch
                 self.hits += 1
                 if self.hits >= self.latch:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
