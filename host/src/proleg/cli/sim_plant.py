@@ -125,7 +125,12 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     it, so tie gaits that climb less are worth measuring (docs/calibration.md)."""
     from ..errors import SimError
     from ..firmware.build import firmware_gaits
-    from ..sim.physical.climb import RESOLUTION_DEG, TOP_DEG, steepest_climb, suggested_limit
+    from ..sim.physical.climb import (
+        RESOLUTION_DEG,
+        TOP_DEG,
+        steepest_climb,
+        suggested_limit,
+    )
 
     if args.plant != "physical":
         raise SimError("--measure-climb: grades are climbed on the physical plant (the table plant has no slope)")
