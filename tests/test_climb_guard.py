@@ -287,7 +287,9 @@ class ClimbGuardMachine(RuleBasedStateMachine):
     def stop(self):
         self.session.request("STOP")
         self.session.advance(0.2)
-        self.running, self.rested_s = False, 0.0
+        # its limbs come down and cool for up to 1.7 s (docs/calibration.md) before the rest
+        # the firmware levels on begins: a known rest only 2.5 s after that
+        self.running, self.rested_s = False, -2.5
 
 
 _MACHINE_ROBOT: list = []
