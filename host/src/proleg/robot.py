@@ -235,18 +235,23 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library)
 
 
-def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:
-    """The climb guard reads the slope along x from the first and last limbs' ends (a chain of
-    limbs from +x to -x) and knows a built-in gait's direction only as +x / -x: a robot with a
-    [gaits] library (headings and turns in the plane) or fewer than two limbs cannot use it."""
-    if control.max_climb_deg is None:
-        return
-    if len(limbs) < 2:
-        raise RobotFileError(f"{path}: control.max_climb_deg: the climb guard needs at least two limbs "
-                             f"(it reads the slope from the first and last ends), this robot has {len(limbs)}")
+def climb_guard_refusal(n_limbs: int, library: Any) -> str:
+    """Why a robot cannot carry the climb guard ("" if it can). The guard reads the slope along
+    x from the first and last limbs' ends (a chain of limbs from +x to -x) and knows a built-in
+    gait's direction only as +x / -x: not a robot with a [gaits] library (headings and turns in
+    the plane) or fewer than two limbs."""
+    if n_limbs < 2:
+        return (f"the climb guard needs at least two limbs (it reads the slope from the first and last ends), "
+                f"this robot has {n_limbs}")
     if library is not None:
-        raise RobotFileError(f"{path}: control.max_climb_deg: not with a [gaits] library (its gaits walk headings "
-                             f"in the plane and turn; the guard knows only +x and -x along a chain of limbs)")
+        return ("not with a [gaits] library (its gaits walk headings in the plane and turn; the guard knows only "
+                "+x and -x along a chain of limbs)")
+    return ""
+
+
+def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:
+    if control.max_climb_deg is not None and (why := climb_guard_refusal(len(limbs), library)):
+        raise RobotFileError(f"{path}: control.max_climb_deg: {why}")
 
 
 def _array_of_tables(path: Path, value: Any, key: str) -> list[dict]:

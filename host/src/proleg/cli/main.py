@@ -282,13 +282,12 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..sim.simulated_boards import clear_ticks, simulated_robot, tick_budget
 
     robot = load_robot(args.robot)
-    from .sim_plant import calibrate_then_put_down, cmd_measure_matrix, flat_conditions, plant_kwargs, wants_help
+    from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,
+                            plant_kwargs, wants_help)
 
     if wants_help(args):
         return EXIT_OK
     if args.measure_climb:
-        from .sim_plant import cmd_measure_climb
-
         return cmd_measure_climb(args, robot)
     if args.measure_matrix:
         if args.calibrated:

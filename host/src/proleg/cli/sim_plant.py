@@ -125,6 +125,7 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     it, so tie gaits that climb less are worth measuring (docs/calibration.md)."""
     from ..errors import SimError
     from ..firmware.build import firmware_gaits
+    from ..robot import climb_guard_refusal
     from ..sim.physical.climb import (
         RESOLUTION_DEG,
         TOP_DEG,
@@ -140,9 +141,8 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
             raise SimError(f"--measure-climb: not with {flag} (an idealised drive on the plant climbs, no board)")
     if any(c.partition("=")[0].strip() == "incline_deg" for c in args.condition):
         raise SimError("--measure-climb: it sets the incline itself; leave incline_deg out of --condition")
-    if robot.library is not None or len(robot.limbs) < 2:
-        raise SimError(f"--measure-climb: {robot.name} cannot carry [control] max_climb_deg (a [gaits] library or "
-                       f"one limb: docs/calibration.md, 'Too steep to climb')")
+    if why := climb_guard_refusal(len(robot.limbs), robot.library):
+        raise SimError(f"--measure-climb: {robot.name} cannot carry [control] max_climb_deg: {why}")
     every = firmware_gaits(robot, args.objective, args.max_transitions)
     gaits = {d: list(every.get(d, ())) if args.all_gaits else list(every.get(d, ()))[:1] for d in ("+x", "-x")}
     climbs: dict[str, list[float | None]] = {

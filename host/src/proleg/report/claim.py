@@ -213,18 +213,10 @@ def physically_possible(robot: Any, point: GridPoint, direction: str = "+x",
     a dead coil, the hottest steady temperature the supply gives the coil against its
     transformation temperatures, the envelope's rule that stops it, or else the end's angle
     the stroke reaches."""
-    from ..sim.physical.envelope import EnvelopeLatched
-    from ..sim.physical.measure import run_sequence
+    from ..sim.physical.measure import walk_within_envelope
 
     plant = _plant(robot, point)
-    latched = ""
-    try:
-        mm, _ = run_sequence(robot, gait_states(robot, direction, gait), cycles=2, plant=plant, timeout_s=10.0,
-                             envelope=True)
-    except EnvelopeLatched as e:
-        mm, latched = None, f"{e} ({e.code})"
-    except SimError:
-        mm = None
+    mm, latched = walk_within_envelope(robot, gait_states(robot, direction, gait), plant)
     if mm is not None:
         if (1 if direction == "+x" else -1) * mm > 0:
             return True, ""
@@ -365,6 +357,14 @@ def tune_open_loop_for(robot: Any, direction: str = "+x", *, budget: int = 150, 
                                  max_duty=robot.safety.max_duty, budget=budget, dt_s=dt_s, run_s=run_s)
 
 
+def _proved_by_the_firmware(possible: bool, why: str, fb: DriveOutcome) -> tuple[bool, str, dict[str, Any]]:
+    """The firmware keeps to the envelope too: its own completed run proves a condition
+    possible whatever the idealised drive said (the row says so, with the drive's reason)."""
+    if possible or not fb.completed:
+        return possible, why, {}
+    return True, "", {"possible_by": "the firmware's own run", "idealised_drive_why_not": why}
+
+
 def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, direction: str = "+x",
                   gait: int = 0, duration_s: float = RUN_S,
                   learned: Sequence[int] | None = None) -> ConditionResult:
@@ -373,22 +373,14 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
     possible, why = physically_possible(robot, point, direction, gait)
     fb = feedback_run(robot, point, direction=direction, gait=gait, duration_s=duration_s)
     ol = open_loop_run(robot, drive, point, direction=direction, gait=gait, duration_s=duration_s)
-    extra: dict[str, Any] = {}
-    if not possible and fb.completed:
-        # the firmware keeps to the envelope too: its own completed run proves the condition possible
-        extra["possible_by"] = "the firmware's own run"
-        extra["idealised_drive_why_not"] = why
-        possible, why = True, ""
+    possible, why, extra = _proved_by_the_firmware(possible, why, fb)
     if any(c.startswith("incline_deg=") for c in point.conditions):
         gfb = feedback_run(robot, point, direction=direction, gait=gait, duration_s=duration_s, level_on_ground=True)
         extra["levelled_on_ground"] = {"feedback": _round(asdict(gfb))}
     if learned is not None:
         lp, lwhy = physically_possible(robot, point, direction, learned)
         lfb = feedback_run(robot, point, direction=direction, gait=learned, duration_s=duration_s)
-        lextra: dict[str, Any] = {}
-        if not lp and lfb.completed:  # as above
-            lextra = {"possible_by": "the firmware's own run", "idealised_drive_why_not": lwhy}
-            lp, lwhy = True, ""
+        lp, lwhy, lextra = _proved_by_the_firmware(lp, lwhy, lfb)
         extra["learned_gait"] = {"states": list(learned), "physically_possible": lp, "why_not": lwhy,
                                  "feedback": _round(asdict(lfb)), **lextra}
     return ConditionResult(point, possible, why, fb, ol, extra)

@@ -2,7 +2,7 @@
 ``[control] max_climb_deg`` wants (docs/calibration.md, "Too steep to climb").
 
 ``steepest_climb`` walks the gait with the idealised drive (true ψ, the firmware's duties, within
-its safety envelope: ``measure.run_sequence(envelope=True)``) up ever steeper ground, by
+its safety envelope: ``measure.walk_within_envelope``) up ever steeper ground, by
 bisection, and returns the steepest grade on which it still moves up the slope. Bisection
 assumes a gait that slides back on a grade also slides back on every steeper one (true of every
 example robot measured half a degree at a time, docs/calibration.md).
@@ -14,9 +14,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from ...errors import SimError
-from .envelope import EnvelopeLatched
-from .measure import run_sequence
+from .measure import walk_within_envelope
 
 #: The plant's steepest ground (conditions.py: incline_deg in −12..12).
 TOP_DEG = 12.0
@@ -34,11 +32,8 @@ def walks_up(robot: Any, states: Sequence[int], direction: str, grade_deg: float
 
     sign = 1 if direction == "+x" else -1
     plant = make_plant(robot, "physical", [*conditions, f"incline_deg={sign * grade_deg:g}"])
-    try:
-        mm, _ = run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
-    except (SimError, EnvelopeLatched):
-        return False
-    return sign * mm > 0
+    mm, _ = walk_within_envelope(robot, states, plant)
+    return mm is not None and sign * mm > 0
 
 
 def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions: Sequence[str] = (), *,

@@ -403,3 +403,19 @@ def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditio
     for _ in range(cycles):
         one_cycle()
     return (plant.displacement_mm - x0) / cycles, (plant.time_s - t0) / cycles
+
+
+def walk_within_envelope(robot: Any, states: Sequence[int], plant: PhysicalPlant) -> tuple[float | None, str]:
+    """The claim bench's and ``--measure-climb``'s question: mm per cycle the idealised drive
+    walks ``states`` on ``plant`` within the firmware's safety envelope (two cycles after a
+    warm-up, 10 s at most per state); None if it cannot, with the fault the envelope would
+    latch ("" when a state is simply not reached)."""
+    from ...errors import SimError
+
+    try:
+        mm, _ = run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
+    except EnvelopeLatched as e:
+        return None, f"{e} ({e.code})"
+    except SimError:
+        return None, ""
+    return mm, ""
