@@ -18,7 +18,9 @@ seconds:
 - whether the coils can physically complete the gait at all within the firmware's safety
   envelope (an idealised drive with perfect sensing, held to the envelope's rules), and if not,
   why; a condition the firmware itself completes is possible ("yes, fw" in the table, with the
-  idealised drive's reason).
+  idealised drive's reason). The idealised drive's own speed ("ideal" in the table) tells how
+  much a condition slows the gait itself, whatever drives it: where it keeps < 75 % of its
+  nominal speed, the condition, not the controller, costs the speed (the summary lists them).
 
 Targets (reported, not tuned to): ψ-feedback completes every physically possible condition and
 keeps ≥ 75 % of its nominal speed in ≥ 90 % of them; where impossible it stops with a fault
@@ -129,19 +131,24 @@ def main() -> int:
         p = GridPoint(r["name"], tuple(r["modes"]), r["strength"], tuple(r["conditions"]), tuple(r["faults"]))
         return ConditionResult(p, r["physically_possible"], r["why_not"], DriveOutcome(**r["feedback"]),
                                DriveOutcome(**r["open_loop"]),
-                               {k: r[k] for k in ("learned_gait", "levelled_on_ground") if k in r})
+                               {k: r[k] for k in ("learned_gait", "levelled_on_ground") if k in r},
+                               r["idealised_drive_mm_s"])
 
     summary = claim.summarise([back(r) for r in rows], back(nominal))
     nom_fb = nominal["feedback"]["speed_mm_s"]
     nom_lg = nominal["learned_gait"]["feedback"]["speed_mm_s"]
-    print(f"\n{'condition':<44} {'possible':<8} {'ψ-feedback gait 0 mm/s':<34} {'% nom':>6}  "
+    nom_id = nominal["idealised_drive_mm_s"]
+    print(f"\n{'condition':<44} {'possible':<8} {'ideal':>6} {'% nom':>6}  {'ψ-feedback gait 0 mm/s':<34} {'% nom':>6}  "
           f"{'ψ-feedback learned ' + label:<34} {'% nom':>6}  {'open loop mm/s':<40}")
     for r in [nominal] + rows:
         fb, ol, lg = r["feedback"], r["open_loop"], r["learned_gait"]["feedback"]
         pct = 100 * fb["speed_mm_s"] / nom_fb if nom_fb else 0.0
         lpct = 100 * lg["speed_mm_s"] / nom_lg if nom_lg else 0.0
         possible = ("yes, fw" if "possible_by" in r else "yes") if r["physically_possible"] else "NO"
-        print(f"{r['name'][:44]:<44} {possible:<8} {_cell(fb)[:34]:<34} "
+        ideal = r["idealised_drive_mm_s"]
+        ideal_cells = (f"{ideal:+6.2f} {100 * ideal / nom_id if nom_id else 0.0:6.0f}" if ideal is not None
+                       else f"{'-':>6} {'-':>6}")
+        print(f"{r['name'][:44]:<44} {possible:<8} {ideal_cells}  {_cell(fb)[:34]:<34} "
               f"{pct:6.0f}  {_cell(lg)[:34]:<34} {lpct:6.0f}  {_cell(ol)[:60]}")
         if "possible_by" in r:
             print(f"{'':<44} possible: the firmware walked it; the idealised drive did not ({r['idealised_drive_why_not']})")

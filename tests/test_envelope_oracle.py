@@ -121,7 +121,7 @@ def test_the_nominal_robot_is_possible_within_its_envelope():
 
 def test_a_condition_the_firmware_completes_is_possible_whatever_the_oracle_says(monkeypatch):
     robot = load_robot(R1)
-    monkeypatch.setattr(claim, "physically_possible", lambda *a, **k: (False, "the oracle says no"))
+    monkeypatch.setattr(claim, "idealised_walk", lambda *a, **k: claim.IdealisedWalk(False, "the oracle says no", None))
     drive = claim.OpenLoopDrive((0.0, 0.0), (0.5, 0.5), (2.0, 2.0), (0.0, 1.0))
     result = claim.run_condition(robot, drive, claim.NOMINAL, duration_s=12.0)
     assert result.feedback.completed

@@ -138,13 +138,19 @@ class ConditionResult:
     feedback: DriveOutcome
     open_loop: DriveOutcome
     extra: dict[str, Any] = field(default_factory=dict)
+    idealised_mm_s: float | None = None   # the idealised drive's speed (``idealised_walk``)
 
     def to_json(self) -> dict:
         return {"name": self.point.name, "modes": list(self.point.modes), "strength": self.point.strength,
                 "conditions": list(self.point.conditions), "faults": list(self.point.faults),
                 "physically_possible": self.possible, "why_not": self.why_not,
+                "idealised_drive_mm_s": _speed(self.idealised_mm_s),
                 "feedback": _round(asdict(self.feedback)), "open_loop": _round(asdict(self.open_loop)),
                 **self.extra}
+
+
+def _speed(v: float | None) -> float | None:
+    return None if v is None else round(v, 4)
 
 
 def _round(d: dict) -> dict:
@@ -204,37 +210,63 @@ def _plant_fault(robot: Any, plant: Any, fault: str) -> None:
         raise SimError(f"claim grid: fault {fault!r} is not a plant fault")
 
 
+@dataclass(frozen=True)
+class IdealisedWalk:
+    """What the idealised drive did under a condition (``idealised_walk``)."""
+
+    possible: bool
+    why_not: str
+    speed_mm_s: float | None   # its steady speed, None where it could not reach a state
+
+
 def physically_possible(robot: Any, point: GridPoint, direction: str = "+x",
                         gait: int | Sequence[int] = 0) -> tuple[bool, str]:
     """Can the coils complete the gait's transformations under ``point`` at all, within the
-    firmware's safety envelope? An idealised drive (true ψ, true ψ*, the firmware's drive duty,
-    the envelope's on-time debt, mean-duty window and state timeout: ``sim.physical.envelope``)
-    walks the gait; if it cannot reach a state, or the gait then moves the wrong way, the reason:
-    a dead coil, the hottest steady temperature the supply gives the coil against its
-    transformation temperatures, the envelope's rule that stops it, or else the end's angle
-    the stroke reaches."""
-    from ..sim.physical.measure import walk_within_envelope
+    firmware's safety envelope? (``idealised_walk``'s verdict and reason.)"""
+    walk = idealised_walk(robot, point, direction, gait)
+    return walk.possible, walk.why_not
+
+
+def idealised_walk(robot: Any, point: GridPoint, direction: str = "+x",
+                   gait: int | Sequence[int] = 0) -> IdealisedWalk:
+    """An idealised drive (true ψ, true ψ*, the firmware's drive duty, the envelope's on-time
+    debt, mean-duty window and state timeout: ``sim.physical.envelope``) walks the gait under
+    ``point``: its speed, and whether the coils can complete the gait's transformations at all.
+    If it cannot reach a state, or the gait then moves the wrong way, the reason: a dead coil,
+    the hottest steady temperature the supply gives the coil against its transformation
+    temperatures, the envelope's rule that stops it, or else the end's angle the stroke reaches.
+
+    The speed is not a ceiling (the drive settles 0.3 s in every state and holds 4° past ψ*,
+    or at the strokes), but it has no sensing errors and no stall rules: how much a condition
+    slows the gait itself, whatever drives it."""
+    from ..sim.physical.measure import timed_walk_within_envelope
 
     plant = _plant(robot, point)
-    mm, latched = walk_within_envelope(robot, gait_states(robot, direction, gait), plant)
-    if mm is not None:
+    walk = timed_walk_within_envelope(robot, gait_states(robot, direction, gait), plant)
+    if not isinstance(walk, str):
+        mm, s = walk
+        speed = mm / s if s > 0 else 0.0
         if (1 if direction == "+x" else -1) * mm > 0:
-            return True, ""
-        return False, (f"the coils complete the gait, but even an ideal drive (true ψ) moves {mm:+.2f} mm per "
-                       f"cycle: under this condition the gait does not go {direction}")
+            return IdealisedWalk(True, "", speed)
+        return IdealisedWalk(False, f"the coils complete the gait, but even an ideal drive (true ψ) moves {mm:+.2f} "
+                                    f"mm per cycle: under this condition the gait does not go {direction}", speed)
+    return IdealisedWalk(False, _why_not_walked(robot, plant, walk), None)
+
+
+def _why_not_walked(robot: Any, plant: Any, latched: str) -> str:
     duty = robot.control.drive_duty
     hot = plant.steady_coil_temperature_c(duty)
     tr = plant.transformation_c()
     for j, a in enumerate(robot.actuators):
         as_c, af_c = tr[j]
         if not plant.alive[j]:
-            return False, f"coil {a.name} does not heat (dead coil): its limb cannot leave level 0"
+            return f"coil {a.name} does not heat (dead coil): its limb cannot leave level 0"
         if hot[j] < as_c + 0.5 * (af_c - as_c):
-            return False, (f"the supply heats coil {a.name} to at most {hot[j]:.0f} °C at duty {duty:g} "
-                           f"(As {as_c:.0f} °C, Af {af_c:.0f} °C): it cannot transform far enough")
+            return (f"the supply heats coil {a.name} to at most {hot[j]:.0f} °C at duty {duty:g} "
+                    f"(As {as_c:.0f} °C, Af {af_c:.0f} °C): it cannot transform far enough")
     if latched:
-        return False, f"the coils could transform, but not within {latched}"
-    return False, "the coils transform, but the ends do not reach ψ* (stroke lost or ψ* out of reach)"
+        return f"the coils could transform, but not within {latched}"
+    return "the coils transform, but the ends do not reach ψ* (stroke lost or ψ* out of reach)"
 
 
 #: Seconds the robot rests on the condition's ground before START (as a user puts it down and
@@ -370,7 +402,8 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
                   learned: Sequence[int] | None = None) -> ConditionResult:
     """Both drives under ``point``; ``learned``: also the ψ-feedback firmware walking that
     state sequence (the learn-then-walk gait, ``learned_gait``), reported in ``extra``."""
-    possible, why = physically_possible(robot, point, direction, gait)
+    ideal = idealised_walk(robot, point, direction, gait)
+    possible, why = ideal.possible, ideal.why_not
     fb = feedback_run(robot, point, direction=direction, gait=gait, duration_s=duration_s)
     ol = open_loop_run(robot, drive, point, direction=direction, gait=gait, duration_s=duration_s)
     possible, why, extra = _proved_by_the_firmware(possible, why, fb)
@@ -378,12 +411,13 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
         gfb = feedback_run(robot, point, direction=direction, gait=gait, duration_s=duration_s, level_on_ground=True)
         extra["levelled_on_ground"] = {"feedback": _round(asdict(gfb))}
     if learned is not None:
-        lp, lwhy = physically_possible(robot, point, direction, learned)
+        lideal = idealised_walk(robot, point, direction, learned)
         lfb = feedback_run(robot, point, direction=direction, gait=learned, duration_s=duration_s)
-        lp, lwhy, lextra = _proved_by_the_firmware(lp, lwhy, lfb)
+        lp, lwhy, lextra = _proved_by_the_firmware(lideal.possible, lideal.why_not, lfb)
         extra["learned_gait"] = {"states": list(learned), "physically_possible": lp, "why_not": lwhy,
+                                 "idealised_drive_mm_s": _speed(lideal.speed_mm_s),
                                  "feedback": _round(asdict(lfb)), **lextra}
-    return ConditionResult(point, possible, why, fb, ol, extra)
+    return ConditionResult(point, possible, why, fb, ol, extra, ideal.speed_mm_s)
 
 
 def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
@@ -406,6 +440,18 @@ def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> d
                    "learned_physically_possible": len(lposs),
                    "learned_feedback_completed_where_possible": len(ldone),
                    "learned_feedback_kept_75pct_where_possible": len(lkept)}
+    ideal_nom = nominal.idealised_mm_s
+    if ideal_nom:
+        sign = math.copysign(1, ideal_nom)
+        walked = [r for r in possible if r.idealised_mm_s is not None]
+        learned["idealised_nominal_mm_s"] = round(ideal_nom, 4)
+        learned["idealised_kept_75pct_where_possible"] = sum(
+            sign * r.idealised_mm_s >= 0.75 * abs(ideal_nom) for r in walked)
+        learned["idealised_walked_where_possible"] = len(walked)
+        learned["feedback_kept_75pct_of_idealised_where_possible"] = sum(
+            r.feedback.completed and sign * r.feedback.speed_mm_s >= 0.75 * sign * r.idealised_mm_s for r in walked)
+        learned["slowed_by_the_condition_itself"] = [
+            r.point.name for r in walked if sign * r.idealised_mm_s < 0.75 * abs(ideal_nom)]
     sloped = [r for r in results if "levelled_on_ground" in r.extra]
     if sloped:
         learned["slope_conditions"] = len(sloped)

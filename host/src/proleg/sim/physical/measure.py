@@ -410,12 +410,21 @@ def walk_within_envelope(robot: Any, states: Sequence[int], plant: PhysicalPlant
     walks ``states`` on ``plant`` within the firmware's safety envelope (two cycles after a
     warm-up, 10 s at most per state); None if it cannot, with the fault the envelope would
     latch ("" when a state is simply not reached)."""
+    walk = timed_walk_within_envelope(robot, states, plant)
+    if isinstance(walk, str):
+        return None, walk
+    return walk[0], ""
+
+
+def timed_walk_within_envelope(robot: Any, states: Sequence[int],
+                               plant: PhysicalPlant) -> tuple[float, float] | str:
+    """``walk_within_envelope`` with the time it takes: (mm per cycle, s per cycle), or the
+    fault the envelope would latch ("" when a state is simply not reached)."""
     from ...errors import SimError
 
     try:
-        mm, _ = run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
+        return run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
     except EnvelopeLatched as e:
-        return None, f"{e} ({e.code})"
+        return f"{e} ({e.code})"
     except SimError:
-        return None, ""
-    return mm, ""
+        return ""
