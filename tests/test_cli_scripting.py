@@ -228,6 +228,9 @@ def test_load_gait_on_the_simulated_board(capsys):
     code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,10,11,01,00")
     assert code == 0, err
     assert "loaded 00 → 10 → 11 → 01 → 00 as the user gait" in out
+    assert "matrix says it walks +x: run it with --gait user --direction +x" in out  # J = +3
+    code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,01,11,10")
+    assert code == 0 and "matrix says it walks -x" in out, err
     code, _, err = run(capsys, "load-gait", "paper-r1-one-actuator", "--sim", "00,01,11")
     assert code == 1 and "FORBIDDEN_TRANSITION" in err and err.count("\n") == 1
     code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,12")

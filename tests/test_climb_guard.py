@@ -26,7 +26,7 @@ from proleg.firmware.boards import load_board
 from proleg.firmware.build import firmware_gaits, render_project
 from proleg.link.replies import CommandRefused
 from proleg.paths import robots_dir
-from proleg.protocol.definition import ErrorCode
+from proleg.protocol.definition import DIR_UNSTATED, GAIT_USER, ErrorCode
 from proleg.report.claim import GridPoint, feedback_run
 from proleg.robot import load_robot
 
@@ -165,10 +165,44 @@ def test_without_a_flat_calibration_the_slope_is_not_known_and_start_is_not_refu
     assert not _refused(outcome), outcome
 
 
-def test_a_loaded_gait_is_not_guarded(tmp_path_factory):
-    """LOAD_GAIT carries states, not a direction: the firmware cannot tell uphill from down."""
-    outcome = _start_on(_r1_limited(1.5, tmp_path_factory), 6.0, "+x", gait=[0, 2, 1, 0])
-    assert not _refused(outcome), outcome
+def test_a_loaded_gait_is_guarded_in_the_way_its_start_states(tmp_path_factory):
+    """LOAD_GAIT carries states; START of the loaded sequence says which way it walks (the
+    learn-then-walk gait 00→10→01→00 here), and the guard checks that way."""
+    robot = _r1_limited(1.5, tmp_path_factory)
+    up = _start_on(robot, 6.0, "+x", gait=[0, 2, 1, 0])
+    assert _refused(up) and _detail_deg(up) == pytest.approx(6.0, abs=BAND_DEG), up
+    assert not _refused(_start_on(robot, -6.0, "+x", gait=[0, 2, 1, 0]))  # downhill
+
+
+def test_a_loaded_gait_whose_way_start_leaves_unstated_is_not_guarded(tmp_path_factory):
+    """A learning probe or a planar heading walks neither +x nor -x: START says so
+    (DIR_UNSTATED) and the firmware does not refuse it on any ground."""
+    from proleg.link.client import UNSTATED
+    from proleg.report.gait_run import SimSession
+    from proleg.sim.closed_loop import SimulatedRobot, make_plant
+    from proleg.link.level import calibrate_level
+
+    robot = _r1_limited(1.5, tmp_path_factory)
+    sim = SimulatedRobot(robot, seed=1, plant=make_plant(robot, "physical"))
+    session = SimSession(sim)
+    session.advance(0.3)
+    assert calibrate_level(session.client).ok
+    sim.plant = make_plant(robot, "physical", ["incline_deg=6"])
+    session.advance(2.5)
+    session.client.load_gait([0, 2, 1])
+    run = session.run_gait(UNSTATED, GAIT_USER, 3.0)
+    assert not run.errors, run.errors
+    assert max(sim.plant.temperature_c) > 40.0  # it ran: a coil heated
+
+
+def test_only_the_loaded_gait_may_leave_its_way_unstated():
+    from proleg.errors import LinkError
+    from proleg.link.client import UNSTATED, direction_code
+
+    assert direction_code(UNSTATED, GAIT_USER) == DIR_UNSTATED
+    assert direction_code("-x", GAIT_USER) == 1
+    with pytest.raises(LinkError, match="only the loaded sequence"):
+        direction_code(UNSTATED, 0)
 
 
 def test_four_limbs_read_the_slope_from_the_first_and_last_ends():
@@ -203,8 +237,9 @@ def test_levelling_on_the_ground_without_a_flat_record_does_not_arm_the_guard(tm
 
 
 class ClimbGuardMachine(RuleBasedStateMachine):
-    """An operator who moves the robot between slopes, rests it or not, starts both ways,
-    stops, calibrates and clears, in any order. Whatever the order: a START the board accepts
+    """An operator who moves the robot between slopes, rests it or not, starts gait 0 or a
+    loaded gait (its way stated or not) both ways, stops, calibrates and clears, in any
+    order. Whatever the order: a START the board accepts
     after a flat calibration and 2.5 s at rest on this ground never climbs more than the
     limit; a START it refuses as TOO_STEEP heats no coil; and on a ground measured at rest the
     refusal is right (outside the 0.3° band)."""
@@ -263,13 +298,21 @@ class ClimbGuardMachine(RuleBasedStateMachine):
         self.flat_record = False
 
     @precondition(lambda self: not self.running)
-    @rule(direction=st.sampled_from(["+x", "-x"]))
-    def start(self, direction):
+    @rule(direction=st.sampled_from(["+x", "-x", "unstated"]), loaded=st.booleans())
+    def start(self, direction, loaded):
+        """Gait 0, or the loaded learn-then-walk sequence (00→10→01→00, +x) with its way
+        stated (either way: a wrong one is the operator's) or unstated."""
+        from proleg.report.gait_run import DIRECTION_CODE
+
+        loaded = loaded or direction == "unstated"
+        if loaded:
+            self.session.client.load_gait([0, 2, 1])
         before = float(max(self.sim.plant.temperature_c))
         try:
-            self.session.request("START", gait=0, direction=0 if direction == "+x" else 1)
+            self.session.request("START", gait=GAIT_USER if loaded else 0, direction=DIRECTION_CODE[direction])
         except CommandRefused as e:
             assert e.error == ErrorCode.TOO_STEEP, e
+            assert direction != "unstated", "refused a gait whose way START left unstated"
             assert self.flat_record, "refused without a flat record"
             self.session.advance(1.0)
             assert float(max(self.sim.plant.temperature_c)) <= before + 0.01  # no coil heated
@@ -277,7 +320,7 @@ class ClimbGuardMachine(RuleBasedStateMachine):
                 assert self._climb(direction) > self.LIMIT - BAND_DEG, (self.incline, direction, e)
             self.rested_s += 1.0
             return
-        measured_here = self.flat_record and self.rested_s >= 2.5
+        measured_here = self.flat_record and self.rested_s >= 2.5 and direction != "unstated"
         assert not (measured_here and self._climb(direction) > self.LIMIT + BAND_DEG), (self.incline, direction)
         self.running = self.ran = True
         self.session.advance(1.5)

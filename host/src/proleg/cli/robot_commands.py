@@ -108,6 +108,7 @@ def check_library_hash(info: Any, robot: Any, fw: Any, where: str) -> None:
 
 # --------------------------------------------------------------------------- run
 def cmd_run(args: argparse.Namespace) -> int:
+    from ..link.client import UNSTATED
     from ..protocol.definition import GAIT_USER
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on
@@ -118,9 +119,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         check_suffix(args.record)
     fw, choice = heading_choice(args, robot)
     gait = args.gait if args.gait is not None else 0
-    direction = args.direction or "+x"
+    # the loaded sequence's way is stated only by --direction (the climb guard checks it)
+    direction = args.direction or (UNSTATED if gait == GAIT_USER else "+x")
     if choice is not None:
-        gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, "+x")
+        gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
     client = open_client(args, args.robot, speed=args.speed)
     with client:
         info = client.info
@@ -207,8 +209,23 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
     with open_client(args, args.robot) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(labels)} as the user gait on {client.link.description} "
-              f"(run it with --gait user)")
+              f"({_way_hint(table, states)})")
     return 0
+
+
+def _way_hint(table: Any, states: list[int]) -> str:
+    """How to run a loaded sequence: with the way the robot file's matrix says it walks
+    stated, so that the climb guard checks it (docs/calibration.md)."""
+    from ..gait import evaluate_sequence
+
+    try:
+        reward = evaluate_sequence(table, [*states, states[0]]).reward
+    except GaitError:
+        return "run it with --gait user"
+    if reward == 0:
+        return "the robot file's matrix says it walks neither way; run it with --gait user"
+    way = "+x" if reward > 0 else "-x"
+    return f"the robot file's matrix says it walks {way}: run it with --gait user --direction {way}"
 
 
 def cmd_set_param(args: argparse.Namespace) -> int:
@@ -255,7 +272,9 @@ def add_arguments(subparsers: Any) -> None:
     add_link_options(r, sim_takes_robot=False)
     r.add_argument("--gait", type=gait_index, default=None, metavar="N",
                    help="gait index in the firmware's table for the direction, or 'user' (default 0)")
-    r.add_argument("--direction", choices=("+x", "-x"), default=None, help="default +x")
+    r.add_argument("--direction", choices=("+x", "-x"), default=None,
+                   help="default +x; with --gait user, the way the loaded sequence walks, which the "
+                        "firmware's climb guard checks ([control] max_climb_deg; unstated by default)")
     steer = r.add_mutually_exclusive_group()
     steer.add_argument("--heading", type=heading_deg, metavar="DEG",
                        help="run the gait library's gait for this heading (0 = +x, 90 = +y; the nearest the "

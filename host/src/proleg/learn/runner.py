@@ -34,6 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..link.client import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
 from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
@@ -222,7 +223,7 @@ class Explorer:
         client = self.client
         gait = _closing_gait(self.robot, piece, self.max_steps)
         client.load_gait(gait)
-        client.start(GAIT_USER, "+x")
+        client.start(GAIT_USER, UNSTATED)  # a probe of transitions walks neither way: not climb-guarded
         goal = len(piece.transitions)
         timeout = (goal + 2) * self.robot.safety.state_timeout_ms / 1000.0
         deadline = self._clock() + timeout

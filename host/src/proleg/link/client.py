@@ -40,6 +40,7 @@ from ..protocol.definition import (
     BY_NAME,
     CHANNEL_CEILING,
     MESSAGES,
+    DIR_UNSTATED,
     GAIT_USER,
     LIMB_CEILING,
     PROTOCOL_VERSION,
@@ -176,9 +177,10 @@ class RobotClient:
 
     def start(self, gait: int = 0, direction: Direction | int | str = Direction.PLUS_X) -> None:
         """Run gait ``gait`` (``GAIT_USER`` / ``"user"`` for the loaded one) in ``direction``
-        (``Direction``, 0/1, ``"+x"``/``"-x"``)."""
+        (``Direction``, 0/1, ``"+x"``/``"-x"``; for the loaded one, the way it walks, which the
+        climb guard checks, or ``UNSTATED``)."""
         g = GAIT_USER if gait == "user" else int(gait)
-        self.request("START", gait=g, direction=int(parse_direction(direction)))
+        self.request("START", gait=g, direction=direction_code(direction, g))
 
     def stop(self) -> None:
         self.request("STOP")
@@ -426,6 +428,21 @@ class RobotClient:
             self.link.write(b"\0" + encode(Message("GET_INFO", {"token": token})))
         except LinkError:
             pass  # gone again: the next read notices
+
+
+#: The way of a LOAD_GAIT sequence that the host does not state (a learning probe, a planar
+#: heading): START sends DIR_UNSTATED and the firmware's climb guard does not check it.
+UNSTATED = "unstated"
+
+
+def direction_code(direction: Direction | int | str, gait: int) -> int:
+    """START's direction byte for ``gait``: ``UNSTATED`` only for the loaded sequence."""
+    if direction in (UNSTATED, DIR_UNSTATED):
+        if gait != GAIT_USER:
+            raise LinkError(f"gait {gait}: a built-in gait runs +x or -x; only the loaded sequence (user) "
+                            "may leave its way unstated")
+        return DIR_UNSTATED
+    return int(parse_direction(direction))
 
 
 def parse_direction(direction: Direction | int | str) -> Direction:

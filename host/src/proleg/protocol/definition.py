@@ -66,6 +66,10 @@ MAX_ENCODED_FRAME = MAX_FRAME + 2
 MAX_GAIT_STEPS = 24
 #: ``START.gait`` value that selects the sequence sent by LOAD_GAIT.
 GAIT_USER = 0xFF
+#: ``START.direction`` of a LOAD_GAIT sequence whose way the host does not state (a learning
+#: probe, a planar heading): the climb guard does not check it. PLUS_X / MINUS_X there state
+#: which way the loaded sequence walks, and the guard checks that way as for a built-in gait.
+DIR_UNSTATED = 0xFF
 #: Fixed text field sizes (bytes incl. the terminating NUL).
 ROBOT_NAME_LEN = 16
 BOARD_NAME_LEN = 16
@@ -89,7 +93,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
         (
             _TOKEN,
             _u8("gait", "gait table index, or GAIT_USER (0xFF) for the LOAD_GAIT sequence"),
-            _u8("direction", "Direction", Direction),
+            _u8("direction", "Direction; with GAIT_USER the way the loaded sequence walks, or DIR_UNSTATED "
+                "(0xFF): not stated, not climb-guarded", Direction),
         ),
         "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED / TOO_STEEP (the ground rises more than "
         "the build's max_climb_deg in the gait's direction: detail = that climb in 0.01°).",
@@ -293,6 +298,7 @@ __all__ = [
     "BY_ID",
     "BY_NAME",
     "CHANNEL_CEILING",
+    "DIR_UNSTATED",
     "ENUMS",
     "GAIT_USER",
     "LIMB_CEILING",

@@ -19,6 +19,7 @@ from proleg.errors import ProtocolError
 from proleg.protocol.definition import (
     BOARD_NAME_LEN,
     CHANNEL_CEILING,
+    DIR_UNSTATED,
     ENUMS,
     GAIT_USER,
     LIMB_CEILING,
@@ -107,6 +108,7 @@ def render_h(max_limbs: int, max_channels: int, messages: Sequence[MessageSpec] 
                 f"#define PROTO_MAX_CHANNELS {max_channels}",
                 f"#define PROTO_MAX_GAIT_STEPS {MAX_GAIT_STEPS}",
                 f"#define PROTO_GAIT_USER 0x{GAIT_USER:02X}",
+                f"#define PROTO_DIR_UNSTATED 0x{DIR_UNSTATED:02X} /* START of GAIT_USER: its way not stated */",
                 f"#define PROTO_MAX_FRAME {MAX_FRAME}      /* bytes before COBS: id + payload + crc */",
                 f"#define PROTO_MAX_ENCODED {MAX_ENCODED_FRAME}    /* bytes on the wire incl. 0x00 */",
                 f"#define PROTO_ROBOT_NAME_LEN {ROBOT_NAME_LEN}",

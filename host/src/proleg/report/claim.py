@@ -420,6 +420,11 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
     return ConditionResult(point, possible, why, fb, ol, extra, ideal.speed_mm_s)
 
 
+def _clean_stop(fb: DriveOutcome) -> bool:
+    """Stopped with a fault (a refused START included) and its coils below 50 °C 2 s later."""
+    return not fb.completed and bool(fb.fault) and fb.coil_max_end_c < 50.0
+
+
 def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
     """The targets of issue 13, counted honestly."""
     nom = nominal.feedback.speed_mm_s
@@ -427,19 +432,22 @@ def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> d
     impossible = [r for r in results if not r.possible]
     done = [r for r in possible if r.feedback.completed]
     kept = [r for r in done if math.copysign(1, nom) * r.feedback.speed_mm_s >= 0.75 * abs(nom)]
-    clean_stops = [r for r in impossible if not r.feedback.completed and r.feedback.fault
-                   and r.feedback.coil_max_end_c < 50.0]
+    clean_stops = [r for r in impossible if _clean_stop(r.feedback)]
     learned: dict[str, Any] = {}
     if "learned_gait" in nominal.extra:
         lnom = nominal.extra["learned_gait"]["feedback"]["speed_mm_s"]
         lposs = [r.extra["learned_gait"] for r in results if r.extra["learned_gait"]["physically_possible"]]
         ldone = [g for g in lposs if g["feedback"]["completed"]]
         lkept = [g for g in ldone if math.copysign(1, lnom) * g["feedback"]["speed_mm_s"] >= 0.75 * abs(lnom)]
+        limposs = [r.extra["learned_gait"] for r in results if not r.extra["learned_gait"]["physically_possible"]]
+        lclean = [g for g in limposs if _clean_stop(DriveOutcome(**g["feedback"]))]
         learned = {"learned_gait_states": nominal.extra["learned_gait"]["states"],
                    "learned_nominal_feedback_mm_s": round(lnom, 4),
                    "learned_physically_possible": len(lposs),
                    "learned_feedback_completed_where_possible": len(ldone),
-                   "learned_feedback_kept_75pct_where_possible": len(lkept)}
+                   "learned_feedback_kept_75pct_where_possible": len(lkept),
+                   "learned_impossible": len(limposs),
+                   "learned_impossible_stopped_with_fault_and_cold_coils": len(lclean)}
     ideal_nom = nominal.idealised_mm_s
     if ideal_nom:
         sign = math.copysign(1, ideal_nom)

@@ -18,14 +18,14 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from ..errors import LinkError
-from ..link.client import Received, RobotClient
+from ..link.client import UNSTATED, Received, RobotClient
 from ..link.listeners import Listener
 from ..link.sim_link import SimLink
 from ..protocol.codec import Message
-from ..protocol.definition import Direction, EventKind, FaultCode
+from ..protocol.definition import DIR_UNSTATED, Direction, EventKind, FaultCode
 from ..sim.closed_loop import SimulatedRobot
 
-DIRECTION_CODE = {"+x": int(Direction.PLUS_X), "-x": int(Direction.MINUS_X)}
+DIRECTION_CODE = {"+x": int(Direction.PLUS_X), "-x": int(Direction.MINUS_X), UNSTATED: DIR_UNSTATED}
 #: a START/STOP is sent again this many times when no reply comes within the client's timeout
 COMMAND_RETRIES = 4
 #: virtual seconds the run goes on after STOP (telemetry is counted until then)

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from ..errors import GaitError, LinkError
-from ..link.client import RobotClient, RobotInfo
+from ..link.client import UNSTATED, RobotClient, RobotInfo, direction_code
 from ..link.listeners import Listener
 from ..protocol.definition import GAIT_USER
 from .gait_run import GaitRun, GaitRunListener
@@ -82,9 +82,11 @@ def run_gait_on(
             return False
 
     t0 = clock()
-    if command("START", gait=gait, direction=0 if direction == "+x" else 1):
+    if command("START", gait=gait, direction=direction_code(direction, gait)):
         if progress is not None:
-            progress(f"started gait {gait} in {direction} for {duration_s:g} s on {client.link.description}")
+            what = "the loaded gait" if gait == GAIT_USER else f"gait {gait}"
+            way = "its way unstated" if direction == UNSTATED else f"in {direction}"
+            progress(f"started {what} {way} for {duration_s:g} s on {client.link.description}")
         pump(duration_s)
     t_stop = clock()
     if not command("STOP"):
