@@ -483,6 +483,16 @@ def test_load_gait_with_a_forbidden_transition_is_nacked(sim_so):
     b.client.start("user", "+x")
 
 
+@pytest.mark.parametrize("gait, direction", [(0, 2), (0, d.DIR_UNSTATED), (d.GAIT_USER, 2), (d.GAIT_USER, 0xFE)])
+def test_start_takes_plus_x_minus_x_or_for_the_loaded_gait_unstated(board, gait, direction):
+    board.client.load_gait((0, 2, 1))
+    nack = board.refused("START", gait=gait, direction=direction)
+    assert nack.error == d.ErrorCode.OUT_OF_RANGE and nack.detail == 2
+    board.client.start("user", "unstated")
+    board.run(50)
+    assert any(m.spec.name == "EVENT" and m.kind == d.EventKind.GAIT_STARTED for m in board.log)
+
+
 def test_telemetry_comes_at_the_configured_rate(board):
     board.run(1000)
     tel = [m for m in board.log if m.spec.name == "TELEMETRY"]

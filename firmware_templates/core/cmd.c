@@ -108,12 +108,13 @@ static void cmd_start(void)
         nack(PROTO_ERR_NOT_ALLOWED, 1);
         return;
     }
+    if (dir > PROTO_DIR_MINUS_X && (dir != PROTO_DIR_UNSTATED || gait != PROTO_GAIT_USER)) {
+        nack(PROTO_ERR_OUT_OF_RANGE, 2); /* +x, -x, or (the loaded gait only) unstated */
+        return;
+    }
     if (gait == PROTO_GAIT_USER) {
         sdir = SEQ_DIR_LOADED;
         index = 0;
-    } else if (dir > PROTO_DIR_MINUS_X) {
-        nack(PROTO_ERR_OUT_OF_RANGE, 2);
-        return;
     } else {
         if (limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the robot as built: */
             limbmap_init();                   /* after a fallback, try the whole robot again */
