@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from proleg.paths import robots_dir
 from proleg.report import claim
-from proleg.robot import load_robot
+from proleg.robot import Control, load_robot
 from proleg.sim.physical.envelope import Envelope, EnvelopeLatched
 
 R1 = robots_dir() / "paper-r1.toml"
@@ -23,7 +23,7 @@ def _robot(max_on_ms=3000, cooldown_ms=800, timeout_ms=8000, mean=0.5, window_ms
     safety = SimpleNamespace(max_on_ms=max_on_ms, min_cooldown_ms=cooldown_ms, max_duty=0.8,
                              state_timeout_ms=timeout_ms, link_watchdog_ms=0, hold_max_duty=None,
                              max_mean_duty=mean, duty_window_ms=window_ms, on_limit_latch=latch)
-    ctl = SimpleNamespace(hold_duty=0.25, drive_duty=0.6)
+    ctl = Control(hold_duty=0.25, drive_duty=0.6)  # 1 kHz
     return SimpleNamespace(name="test", safety=safety, control=ctl)
 
 

@@ -1,12 +1,14 @@
 """The claim bench's envelope model (``sim.physical.envelope``) against the firmware's own
 ``core/sma.c``, compiled for the host: the same per-tick duty requests through both, and tick
-by tick the duties let through and the on-limit hits must be the same. The mean-duty window
-is out of reach here (the sequences are at most 3.6 s; the window takes 5 s of full duty):
-the model's window is exact where the firmware's is slotted (envelope.py says so)."""
+by tick the duties let through and the on-limit hits must be the same. With R1's
+window (10 s: out of reach of these sequences), with a 200 ms window at a 30 % mean that the
+bursts run into all the time, and at 600 Hz, a tick that does not divide a millisecond."""
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
+from types import SimpleNamespace
 
 import pytest
 from hypothesis import given, settings
@@ -19,9 +21,22 @@ from test_firmware_core import CC, CDIR, CFLAGS, CORE, SIM, _r1_fast
 pytestmark = pytest.mark.skipif(CC is None, reason="no host C compiler")
 
 
-@pytest.fixture(scope="module")
-def replay(tmp_path_factory):
+def _short_window(robot):
+    """The robot with a 200 ms mean-duty window at 30 % (docs/safety.md's thermal budget)."""
+    s = robot.safety
+    safety = SimpleNamespace(max_on_ms=s.max_on_ms, min_cooldown_ms=s.min_cooldown_ms, max_duty=s.max_duty,
+                             state_timeout_ms=s.state_timeout_ms, link_watchdog_ms=s.link_watchdog_ms,
+                             duty_window_ms=200, max_mean_duty=0.3)
+    return dataclasses.replace(robot, safety=safety)
+
+
+@pytest.fixture(scope="module", params=["r1-window", "short-window", "600-hz"])
+def replay(request, tmp_path_factory):
     robot, gaits, board = _r1_fast()  # max_on 50 ms, cooldown 20 ms, 1 kHz
+    if request.param == "short-window":
+        robot = _short_window(robot)
+    elif request.param == "600-hz":  # a tick of 1667 µs: max_on is 30 ticks, 50,010 µs
+        robot = dataclasses.replace(robot, control=dataclasses.replace(robot.control, tick_hz=600))
     gen = tmp_path_factory.mktemp("gen")
     for name, text in {**render_config(robot, gaits, board), **render_c(2, 2)}.items():
         (gen / name).write_text(text)
@@ -62,3 +77,14 @@ def test_the_model_cuts_where_the_firmware_cuts(replay, bursts):
     fw = run(requests)
     model = _model(robot, requests)
     assert fw == model  # tick by tick: the duty each coil gets and the on-limit hits
+
+
+@pytest.mark.parametrize("replay", ["short-window"], indirect=True)
+def test_the_short_window_is_in_reach(replay):
+    """The second robot's window does cut: a guard against comparing two envelopes that never
+    block anything."""
+    robot, run = replay
+    requests = [(3000, 0)] * 600  # 0.3 duty, below the hold ceiling: never on-time, only the window
+    fw = run([(8000, 0)] * 30 + [(0, 0)] * 10 + requests)
+    assert fw == _model(robot, [(8000, 0)] * 30 + [(0, 0)] * 10 + requests)
+    assert any(a == 0 for a, _, _ in fw[40:]), "the window never blocked"

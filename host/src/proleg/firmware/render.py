@@ -11,7 +11,7 @@ transition bitmap and the gait selection that chose the gaits. Same inputs, same
 no timestamps.
 
 The work is a chain of small functions, each filling one part of a ``RenderContext``:
-``_board_part`` (board and family), ``_limb_part`` (thresholds), ``_control_part`` (tick,
+``_board_part`` (board and family), ``_limb_part`` (thresholds), ``control_part`` (tick,
 duties, safety envelope), ``render_gaits.gait_part`` (step tables, transitions, hashes).
 """
 
@@ -327,7 +327,8 @@ def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
     )
 
 
-def _control_part(robot: Any) -> ControlPart:
+def control_part(robot: Any) -> ControlPart:
+    """The robot's control and safety numbers as the firmware is built with them (whole ticks)."""
     ctl, safety = robot.control, robot.safety
     tick_hz = int(ctl.tick_hz)
     if tick_hz < 200:
@@ -390,7 +391,7 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
     """Everything the templates need, checked (BuildError when the robot does not fit)."""
     board_part = _board_part(board)
     limb_part = _limb_part(robot, board_part, board)
-    control_part = _control_part(robot)
+    control = control_part(robot)
     gaits = gait_part(robot, gaits_by_direction, limb_part.n_states)
     robot_sha = _file_sha256(getattr(robot, "path", None))
     return RenderContext(
@@ -401,7 +402,7 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
         build_id=_build_id(robot_sha, board_part, gaits.gait_hash),
         board=board_part,
         limb=limb_part,
-        control=control_part,
+        control=control,
         gait=gaits,
     )
 

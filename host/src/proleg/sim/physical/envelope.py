@@ -9,24 +9,31 @@ The claim bench asks whether the coils *can* complete a gait under a condition
   10000); a request that would take the debt past ``max_on_ms`` is an on-limit hit: the coil is
   cut and stays off until the debt is paid; ``on_limit_latch`` hits, on any coils together,
   without a target reached in between latch the fault SMA_ON_LIMIT (core/safety.c);
-- *mean duty*: the duty integrated over any window of ``duty_window_ms`` stays at most
-  ``max_mean_duty`` × the window (a request that would not fit gets 0);
+- *mean duty*: the duty charged to a coil over the last window of ``duty_window_ms`` stays at
+  most ``max_mean_duty`` × the window (a request that would not fit gets 0, not a hit). As in
+  sma.c the window is 9 slots of 1/8 window (their sum spans 1 to 9/8 windows) and the charge
+  is counted in ‱·µs / 1024, rounded as the firmware rounds it;
 - *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
   latches STATE_TIMEOUT (``_run_to`` checks that one).
 
-The numbers are the ones the firmware is built with (``firmware.render.thermal_budget`` and the
-robot file's ``[safety]``). Where this is looser than the firmware: an exact sliding window
-stands in for the firmware's slotted one (which spans 1 to 9/8 of a window and rounds each
-tick's charge up), and the idealised drive switches a waiting coil off where the firmware keeps
-it at the hold duty, which fills the firmware's window a little more. So a condition this calls
-possible may still be one the firmware's envelope stops; the bench reports what the firmware does.
+The numbers are the ones the firmware is built with (``firmware.render``: the robot file's
+``[safety]`` in whole ticks, as sma.c takes max_on and the cool-down, and the thermal budget).
+Stepped at the firmware's tick this is sma.c tick for tick (``tests/test_envelope_vs_sma.py``);
+the idealised drive steps at 2 ms, twice the example robots' tick, which only makes a cut
+come up to one step earlier. Where it is still looser than the firmware: the idealised drive
+switches a waiting coil off where the firmware keeps it at the hold duty, which fills the
+firmware's window a little more. So a condition this calls possible may still be one the
+firmware's envelope stops; the bench reports what the firmware does.
 """
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Sequence
 from typing import Any
+
+
+#: sma.c's SMA_WIN_SLOTS: the window as 8 slots plus the one being filled.
+WIN_SLOTS = 9
 
 
 class EnvelopeLatched(Exception):
@@ -45,32 +52,33 @@ class Envelope:
     max_on_ms)."""
 
     def __init__(self, robot: Any, n_channels: int, dt_s: float):
-        from ...firmware.render import thermal_budget
+        from ...firmware.render import control_part
 
-        safety, ctl = robot.safety, robot.control
-        budget = thermal_budget(robot.name, safety, ctl)
+        c = control_part(robot)
         self.dt = dt_s
         self.dt_us = round(dt_s * 1e6)
-        self.max_on_us = safety.max_on_ms * 1000
-        # sma.c set_times: refill_q8 = max_on_us / (cooldown_us / 256 + 1), at most 10000; each
-        # µs off pays back refill_q8 / 256 µs of debt
-        self.refill_q8 = min(10000, self.max_on_us // ((safety.min_cooldown_ms * 1000 >> 8) + 1))
+        # sma.c set_times(CFG_MAX_ON_TICKS × CFG_TICK_US, CFG_MIN_COOLDOWN_TICKS × CFG_TICK_US):
+        # refill_q8 = on_us / (cooldown_us / 256 + 1), at most 10000; each µs off pays back
+        # refill_q8 / 256 µs of debt
+        self.max_on_us = c.max_on_ticks * c.tick_us
+        self.refill_q8 = min(10000, self.max_on_us // ((c.cooldown_ticks * c.tick_us >> 8) + 1))
         self.payback = self.refill_q8 / 256
-        self.max_duty_pm = round(safety.max_duty * 10000)
-        self.hold_ceiling_pm = budget["hold_max_duty_pm"]
+        self.max_duty_pm = c.max_duty_pm
+        self.hold_ceiling_pm = c.hold_max_duty_pm
         self.hold_ceiling = self.hold_ceiling_pm / 10000.0
-        self.latch = budget["on_limit_latch"]
-        self.state_timeout_s = safety.state_timeout_ms / 1000.0
-        self.window_s = budget["duty_window_ms"] / 1000.0
-        self.mean_cap = budget["mean_duty_pm"] / 10000.0 * self.window_s
-        n = max(1, round(self.window_s / dt_s))
+        self.latch = c.on_limit_latch
+        self.state_timeout_s = c.timeout_ms / 1000.0
+        window_us = c.duty_window_ms * 1000
+        self.slot_len_us = window_us // (WIN_SLOTS - 1)
+        self.win_limit = c.mean_duty_pm * (window_us >> 10)  # SMA_WIN_LIMIT
         self.debt = [0] * n_channels      # µs
         self.charged = [0] * n_channels   # ‱ the coil carried over the last step
         self.cut = [False] * n_channels
         self.hits = 0  # on-limit hits since a target was reached, every coil together (safety.c)
         self.hit_bits = 0
-        self.window = [deque([0.0] * n, maxlen=n) for _ in range(n_channels)]
-        self.in_window = [0.0] * n_channels
+        self.win = [[0] * n_channels for _ in range(WIN_SLOTS)]
+        self.win_rem = [0] * n_channels
+        self.slot, self.slot_us = 0, 0
 
     def reached(self) -> None:
         """A target was reached: on-limit hits start counting again (as the firmware)."""
@@ -80,7 +88,12 @@ class Envelope:
         """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
         out = []
         self.hit_bits = 0  # the coils that hit the on-time limit in this step (sma_tick's return)
+        self._advance_window()
+        w = self.win[self.slot]
         for ch, duty in enumerate(duties):
+            x = self.charged[ch] * self.dt_us + self.win_rem[ch]  # charge the step just gone
+            w[ch] += x >> 10
+            self.win_rem[ch] = x & 1023
             if self.charged[ch] > self.hold_ceiling_pm:
                 self.debt[ch] += self.dt_us
             else:
@@ -99,12 +112,16 @@ class Envelope:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
                         f"the safety envelope's on-time limit: {self.latch} on-limit hits (max_on_ms "
                         f"{self.max_on_us / 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
-            d = pm / 10000.0
-            if d > 0.0 and self.in_window[ch] + d * self.dt > self.mean_cap:
-                d, pm = 0.0, 0  # does not fit the mean-duty window: 0 (not a hit)
+            if pm > 0 and sum(s[ch] for s in self.win) + ((pm * self.dt_us + 1023) >> 10) > self.win_limit:
+                pm = 0  # does not fit the mean-duty window: 0 (not a hit)
             self.charged[ch] = pm
-            w = self.window[ch]
-            self.in_window[ch] += d * self.dt - w[0]
-            w.append(d * self.dt)
-            out.append(d)
+            out.append(pm / 10000.0)
         return out
+
+    def _advance_window(self) -> None:
+        """sma.c advance_window: slots older than the window fall out."""
+        self.slot_us += min(self.dt_us, self.slot_len_us * WIN_SLOTS)
+        while self.slot_us >= self.slot_len_us:
+            self.slot_us -= self.slot_len_us
+            self.slot = (self.slot + 1) % WIN_SLOTS
+            self.win[self.slot] = [0] * len(self.win_rem)
