@@ -48,9 +48,11 @@ def _r1_with(tmp: Path, value: str | None) -> Path:
 _ROBOTS: dict[float, object] = {}
 
 
-def _r1_limited(limit: float, tmp_path_factory) -> object:
+def _r1_limited(limit: float | tuple[float, float], tmp_path_factory) -> object:
+    """R1 with max_climb_deg = limit, or (+x, -x) = limit."""
     if limit not in _ROBOTS:
-        _ROBOTS[limit] = load_robot(_r1_with(tmp_path_factory.mktemp("climb"), f"{limit:g}"))
+        value = f"{limit:g}" if isinstance(limit, float) else f'{{ "+x" = {limit[0]:g}, "-x" = {limit[1]:g} }}'
+        _ROBOTS[limit] = load_robot(_r1_with(tmp_path_factory.mktemp("climb"), value))
     return _ROBOTS[limit]
 
 
@@ -66,6 +68,9 @@ def _refused(outcome) -> bool:
 
 @pytest.mark.parametrize("value, expected", [
     ("0.2", "[0.5, 19.5]"), ("20", "[0.5, 19.5]"), ('"steep"', "a number"), ("true", "a number"),
+    ('{ "+x" = 2, "-x" = 25 }', "max_climb_deg.-x: expected a number in [0.5, 19.5]"),
+    ('{ "+x" = 2 }', "max_climb_deg.-x: expected a number (required)"),
+    ('{ "+x" = 2, "-x" = 3, "+y" = 1 }', "unknown key '+y'"),
 ])
 def test_a_limit_out_of_range_is_one_line_naming_the_key(tmp_path, value, expected):
     with pytest.raises(RobotFileError) as e:
@@ -76,25 +81,29 @@ def test_a_limit_out_of_range_is_one_line_naming_the_key(tmp_path, value, expect
 
 def test_the_guard_is_built_only_when_the_robot_file_sets_it(tmp_path):
     board = load_board("arduino-nano")
-    for path, line in ((_r1_with(tmp_path, None), None), (_r1_with(tmp_path, "2.5"), "#define CFG_MAX_CLIMB_CDEG 250 ")):
-        robot = load_robot(path)
+    for value, lines in ((None, ()), ("2.5", ("#define CFG_MAX_CLIMB_CDEG 250 ",)),
+                         ('{ "+x" = 2.5, "-x" = 2.5 }', ("#define CFG_MAX_CLIMB_CDEG 250 ",)),
+                         ('{ "+x" = 1.5, "-x" = 3 }', ("#define CFG_MAX_CLIMB_CDEG 150 ",
+                                                       "#define CFG_MAX_CLIMB_MX_CDEG 300 "))):
+        robot = load_robot(_r1_with(tmp_path, value))
         config = render_project(robot, board, firmware_gaits(robot))["gen/robot_config.h"]
-        if line is None:
-            assert "CFG_MAX_CLIMB_CDEG" not in config
-        else:
-            assert line in config
+        assert [line for line in config.splitlines() if "CFG_MAX_CLIMB" in line and "#define" in line] == [
+            next(line for line in config.splitlines() if line.startswith(want)) for want in lines]
 
 
-@settings(max_examples=12, deadline=None)
-@given(limit=st.sampled_from([1.5, 4.0]),
+@settings(max_examples=16, deadline=None)
+@given(limit=st.sampled_from([1.5, 4.0, (1.5, 4.0), (5.0, 2.0)]),
        incline=st.floats(-9.0, 9.0).map(lambda v: round(v, 2)),
        direction=st.sampled_from(["+x", "-x"]))
 def test_start_is_refused_exactly_when_the_gait_would_climb_more_than_the_limit(
         tmp_path_factory, limit, incline, direction):
+    """One limit both ways, or each its own (+x, -x)."""
     climb = incline if direction == "+x" else -incline
+    robot = _r1_limited(limit, tmp_path_factory)
+    limit = robot.control.max_climb_deg.toward(direction)
     if abs(climb - limit) < BAND_DEG:
         return  # the firmware's slope estimate may fall either side of the limit
-    outcome = _start_on(_r1_limited(limit, tmp_path_factory), incline, direction)
+    outcome = _start_on(robot, incline, direction)
     if climb > limit:
         assert _refused(outcome), outcome
         assert _detail_deg(outcome) == pytest.approx(climb, abs=BAND_DEG)  # the detail is the measured climb
@@ -206,10 +215,12 @@ def test_only_the_loaded_gait_may_leave_its_way_unstated():
 
 
 def test_four_limbs_read_the_slope_from_the_first_and_last_ends():
-    robot = load_robot(robots_dir() / "caterpillar-4.toml")  # max_climb_deg = 1.5
+    robot = load_robot(robots_dir() / "caterpillar-4.toml")  # max_climb_deg = { "+x" = 1.5, "-x" = 3 }
     assert _refused(_start_on(robot, 4.0, "+x"))
     assert _refused(_start_on(robot, -4.0, "-x"))
     assert not _refused(_start_on(robot, -4.0, "+x"))  # downhill
+    assert _refused(_start_on(robot, 2.2, "+x"))  # 2.2° up: more than +x climbs
+    assert not _refused(_start_on(robot, -2.2, "-x"))  # 2.2° up: -x climbs it
 
 
 def test_the_host_says_what_too_steep_means():
@@ -418,6 +429,17 @@ def test_the_bisection_finds_the_steepest_grade_a_brute_force_scan_finds(thresho
     climbed = [g for g in grid if g <= threshold]
     assert got == (max(climbed) if climbed else None)
     assert len(calls) <= 2 + 6  # 48 steps: bisection, not a scan
+
+
+def test_each_direction_is_suggested_its_own_limit_and_one_that_does_not_move_takes_the_others():
+    from proleg.robot import ClimbLimit
+    from proleg.sim.physical.climb import suggested_limits
+
+    assert suggested_limits({"+x": [1.5, 1.25], "-x": [3.0]}) == ClimbLimit(1.0, 3.0)
+    assert suggested_limits({"+x": [None], "-x": [2.75]}) == ClimbLimit(2.5, 2.5)
+    assert suggested_limits({"+x": [2.0]}) == ClimbLimit(2.0, 2.0)
+    assert suggested_limits({"+x": [None], "-x": [None]}) is None
+    assert str(ClimbLimit(1.5, 3.0)) == '{ "+x" = 1.5, "-x" = 3 }' and str(ClimbLimit(2.5, 2.5)) == "2.5"
 
 
 def test_the_suggested_limit_is_the_smaller_climb_on_the_half_degree_and_at_least_half_a_degree():

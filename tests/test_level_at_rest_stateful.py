@@ -34,7 +34,7 @@ R1 = load_robot(resolve_robot("paper-r1"))
 MOUNT = ["imu_offset_deg=left:5", "imu_offset_deg=right:-3"]
 REST_S = 2.0          # LEVEL_REST_TICKS at R1's 1 kHz
 LEVEL_MAX_CDEG = 2000
-MAX_CLIMB_CDEG = round(R1.control.max_climb_deg * 100)
+MAX_CLIMB_CDEG = round(R1.control.max_climb_deg.plus_x * 100)  # the same both ways
 
 
 def _plant(incline: int):

@@ -75,6 +75,9 @@ int16_t level_ground_cdeg(uint8_t limb)
 }
 
 #ifdef CFG_MAX_CLIMB_CDEG
+#ifndef CFG_MAX_CLIMB_MX_CDEG
+#define CFG_MAX_CLIMB_MX_CDEG CFG_MAX_CLIMB_CDEG /* one limit both ways */
+#endif
 static uint8_t tilted; /* this START, from rest, found an end beyond LEVEL_MAX_CDEG (level_at_start) */
 
 uint16_t level_too_steep(uint8_t minus_x)
@@ -87,7 +90,9 @@ uint16_t level_too_steep(uint8_t minus_x)
     if (minus_x) {
         rise2 = (int16_t)-rise2;
     }
-    return status == PROTO_LEVEL_STORED && rise2 > 2 * CFG_MAX_CLIMB_CDEG ? (uint16_t)rise2 >> 1 : 0u;
+    return status == PROTO_LEVEL_STORED && rise2 > 2 * (minus_x ? CFG_MAX_CLIMB_MX_CDEG : CFG_MAX_CLIMB_CDEG)
+               ? (uint16_t)rise2 >> 1
+               : 0u;
 }
 #define SET_TILTED(v) (tilted = (v))
 #else

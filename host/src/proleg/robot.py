@@ -17,7 +17,7 @@ import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -101,6 +101,26 @@ class Safety:
     link_watchdog_ms: int = 2000  # on by default: a host that goes away stops the robot (docs/safety.md)
 
 
+class ClimbLimit(NamedTuple):
+    """``[control] max_climb_deg``: the steepest climb (°) START accepts walking +x and -x; the
+    file gives one number for both, or ``{ "+x" = …, "-x" = … }``."""
+
+    plus_x: float
+    minus_x: float
+
+    def toward(self, direction: str) -> float:
+        return self.plus_x if direction == "+x" else self.minus_x
+
+    def to_json(self) -> float | dict[str, float]:
+        """One number when both ways are the same, as a robot file would say it."""
+        return self.plus_x if self.plus_x == self.minus_x else {"+x": self.plus_x, "-x": self.minus_x}
+
+    def __str__(self) -> str:
+        if self.plus_x == self.minus_x:
+            return f"{self.plus_x:g}"
+        return f'{{ "+x" = {self.plus_x:g}, "-x" = {self.minus_x:g} }}'
+
+
 @dataclass(frozen=True)
 class Control:
     tick_hz: int = 1000
@@ -117,9 +137,10 @@ class Control:
     #: they fall as they cool). Limb names.
     stroke_rise_lead: str | None = None
     stroke_fall_lead: str | None = None
-    #: the steepest ground (degrees, rising in the gait's direction) a built-in gait is started
-    #: on: START steeper uphill is refused (NACK TOO_STEEP). None: no guard (docs/calibration.md)
-    max_climb_deg: float | None = None
+    #: the steepest ground (degrees, rising in the gait's direction) a gait is started on, per
+    #: direction: START steeper uphill is refused (NACK TOO_STEEP). None: no guard
+    #: (docs/calibration.md)
+    max_climb_deg: ClimbLimit | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -402,6 +423,20 @@ MIN_CLIMB_DEG = 0.5
 MAX_CLIMB_DEG = 19.5
 
 
+def _climb_limit(f: Fields) -> ClimbLimit | None:
+    """``max_climb_deg``: a number for both directions or a table of both."""
+    if not f.has("max_climb_deg"):
+        return None
+    value = f.table["max_climb_deg"]
+    if isinstance(value, dict):
+        ways = Fields(f.path, f"{f.where}.max_climb_deg", value, {"+x", "-x"})
+        return ClimbLimit(*(ways.number(d, None, MIN_CLIMB_DEG, MAX_CLIMB_DEG) for d in ("+x", "-x")))
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        f.fail("max_climb_deg", 'a number, or a table { "+x" = …, "-x" = … }', value)
+    limit = f.number("max_climb_deg", None, MIN_CLIMB_DEG, MAX_CLIMB_DEG)
+    return ClimbLimit(limit, limit)
+
+
 def _control(path: Path, value: Any, safety: Safety) -> Control:
     f = Fields(path, "control", value, set(Control.__dataclass_fields__))
     d = Control()
@@ -417,8 +452,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         fallback=f.table.get("fallback", d.fallback),
         stroke_rise_lead=f.string("stroke_rise_lead") if f.has("stroke_rise_lead") else None,
         stroke_fall_lead=f.string("stroke_fall_lead") if f.has("stroke_fall_lead") else None,
-        max_climb_deg=(f.number("max_climb_deg", None, MIN_CLIMB_DEG, MAX_CLIMB_DEG)
-                       if f.has("max_climb_deg") else None),
+        max_climb_deg=_climb_limit(f),
     )
     if not isinstance(c.fallback, bool):
         f.fail("fallback", "true or false", c.fallback)

@@ -120,9 +120,10 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 
 def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     """``proleg sim ROBOT --measure-climb [--all-gaits] [--json]``: the steepest grade gait 0 of
-    each direction (or every built-in gait) climbs, and the ``max_climb_deg`` that suggests (the
-    smallest over the gaits measured that move at all). The guard holds every built-in gait to
-    it, so tie gaits that climb less are worth measuring (docs/calibration.md)."""
+    each direction (or every built-in gait) climbs, and the ``max_climb_deg`` that suggests (per
+    direction, the smallest over that direction's gaits that move at all). The guard holds every
+    gait of a direction to its limit, so tie gaits that climb less are worth measuring
+    (docs/calibration.md)."""
     from ..errors import SimError
     from ..firmware.build import firmware_gaits
     from ..robot import climb_guard_refusal
@@ -130,7 +131,7 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
         RESOLUTION_DEG,
         TOP_DEG,
         steepest_climb,
-        suggested_limit,
+        suggested_limits,
     )
 
     if args.plant != "physical":
@@ -147,11 +148,12 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     gaits = {d: list(every.get(d, ())) if args.all_gaits else list(every.get(d, ()))[:1] for d in ("+x", "-x")}
     climbs: dict[str, list[float | None]] = {
         d: [steepest_climb(robot, g.states, d, list(args.condition)) for g in gs] for d, gs in gaits.items() if gs}
-    limit = suggested_limit([c for per in climbs.values() for c in per])
+    limit = suggested_limits(climbs)
+    have = robot.control.max_climb_deg
     if args.json:
         print(json.dumps({"robot": robot.name, "conditions": list(args.condition), "resolution_deg": RESOLUTION_DEG,
-                          "climb_deg": climbs, "suggested_max_climb_deg": limit,
-                          "max_climb_deg": robot.control.max_climb_deg}))
+                          "climb_deg": climbs, "suggested_max_climb_deg": None if limit is None else limit.to_json(),
+                          "max_climb_deg": None if have is None else have.to_json()}))
         return 0
     which = "every built-in gait" if args.all_gaits else "gait 0 of each direction (--all-gaits: every one)"
     print(f"{robot.name}: the steepest grade {which} climbs on the physical plant (idealised drive within the "
@@ -164,11 +166,10 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     if limit is None:
         print("no gait moves: no max_climb_deg to suggest")
         return 0
-    have = robot.control.max_climb_deg
-    floor = " (the smallest the firmware takes: a gait barely climbs at all)" if min(
-        c for per in climbs.values() for c in per if c is not None) < limit else ""
-    print(f"suggested: [control] max_climb_deg = {limit:g}{floor}   (the robot file: "
-          f"{'none' if have is None else f'{have:g}'}; the guard holds every built-in gait to it)")
+    floor = " (the smallest the firmware takes: a gait barely climbs at all)" if any(
+        c is not None and c < limit.toward(d) for d, per in climbs.items() for c in per) else ""
+    print(f"suggested: [control] max_climb_deg = {limit}{floor}   (the robot file: "
+          f"{'none' if have is None else have}; the guard holds every gait of a direction to its limit)")
     if not args.all_gaits and any(len(every.get(d, ())) > 1 for d in ("+x", "-x")):
         print("note: the firmware carries other gaits too; they may climb less (--all-gaits measures each)")
     return 0

@@ -121,7 +121,8 @@ class ControlPart:
     stuck_samples: int
     max_loaded: int
     overrun_fault: int
-    max_climb_cdeg: int | None  # [control] max_climb_deg in 0.01°; None: no climb guard
+    max_climb_cdeg: int | None  # [control] max_climb_deg (+x) in 0.01°; None: no climb guard
+    max_climb_mx_cdeg: int | None  # its -x limit where that differs (None: the same)
 
 
 
@@ -327,6 +328,14 @@ def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
     )
 
 
+def _climb_cdeg(limit: Any) -> dict[str, int | None]:
+    """The climb guard's limits in 0.01°: +x, and -x only where it differs."""
+    if limit is None:
+        return {"max_climb_cdeg": None, "max_climb_mx_cdeg": None}
+    plus, minus = round(limit.plus_x * 100), round(limit.minus_x * 100)
+    return {"max_climb_cdeg": plus, "max_climb_mx_cdeg": None if minus == plus else minus}
+
+
 def control_part(robot: Any) -> ControlPart:
     """The robot's control and safety numbers as the firmware is built with them (whole ticks)."""
     ctl, safety = robot.control, robot.safety
@@ -356,8 +365,7 @@ def control_part(robot: Any) -> ControlPart:
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
         overrun_fault=int(getattr(ctl, "overrun_fault", 10)),
-        max_climb_cdeg=(None if getattr(ctl, "max_climb_deg", None) is None
-                        else round(float(ctl.max_climb_deg) * 100)),
+        **_climb_cdeg(getattr(ctl, "max_climb_deg", None)),
     )
 
 

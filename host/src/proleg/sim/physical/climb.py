@@ -57,6 +57,19 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
     return lo * resolution_deg
 
 
+def suggested_limits(climbs: dict[str, Sequence[float | None]]) -> Any:
+    """``max_climb_deg`` per direction (a ``robot.ClimbLimit``) for each direction's gaits'
+    steepest climbs (``suggested_limit`` of each); a direction none of whose gaits moves takes
+    the other's (it has nothing to walk). None if no gait moves at all."""
+    from ...robot import ClimbLimit
+
+    per = {d: suggested_limit(climbs.get(d, ())) for d in ("+x", "-x")}
+    if per["+x"] is None and per["-x"] is None:
+        return None
+    return ClimbLimit(per["+x"] if per["+x"] is not None else per["-x"],
+                      per["-x"] if per["-x"] is not None else per["+x"])
+
+
 def suggested_limit(climbs: Sequence[float | None]) -> float | None:
     """``max_climb_deg`` for these directions' steepest climbs: the smallest, rounded down to
     half a degree, at least the smallest the firmware takes (0.5°); None if no gait moves."""
