@@ -151,3 +151,18 @@ def test_sim_exits_1_when_the_run_faulted(capsys):
                        "--inject", "dead-actuator:sma-right+2")
     assert code == 1
     assert "FAULT at" in out
+
+
+def test_sim_says_when_start_came_so_fault_times_read_from_it(capsys):
+    """--calibrated spends ~2.7 s calibrating and resting before START; fault times are on the
+    board's clock from boot, and the report says where START was on it."""
+    code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "12", "--calibrated", "--json",
+                       "--inject", "dead-actuator:sma-left")
+    doc = json.loads(out)
+    assert code == 1 and doc["faults"]
+    assert 2.5 < doc["start_time_s"] < 3.5
+    assert all(f["time_s"] > doc["start_time_s"] for f in doc["faults"])
+    code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "12", "--calibrated",
+                       "--inject", "dead-actuator:sma-left")
+    first = doc["faults"][0]["time_s"]
+    assert f"FAULT at {first:.3f} s ({first - doc['start_time_s']:.3f} s after START)" in out
