@@ -30,13 +30,15 @@ def _short_window(robot):
     return dataclasses.replace(robot, safety=safety)
 
 
-@pytest.fixture(scope="module", params=["r1-window", "short-window", "600-hz"])
+@pytest.fixture(scope="module", params=["r1-window", "short-window", "600-hz", "250-hz"])
 def replay(request, tmp_path_factory):
     robot, gaits, board = _r1_fast()  # max_on 50 ms, cooldown 20 ms, 1 kHz
     if request.param == "short-window":
         robot = _short_window(robot)
     elif request.param == "600-hz":  # a tick of 1667 µs: max_on is 30 ticks, 50,010 µs
         robot = dataclasses.replace(robot, control=dataclasses.replace(robot.control, tick_hz=600))
+    elif request.param == "250-hz":  # 4 ms ticks, and the short window
+        robot = dataclasses.replace(_short_window(robot), control=dataclasses.replace(robot.control, tick_hz=250))
     gen = tmp_path_factory.mktemp("gen")
     for name, text in {**render_config(robot, gaits, board), **render_c(2, 2)}.items():
         (gen / name).write_text(text)
@@ -77,6 +79,25 @@ def test_the_model_cuts_where_the_firmware_cuts(replay, bursts):
     fw = run(requests)
     model = _model(robot, requests)
     assert fw == model  # tick by tick: the duty each coil gets and the on-limit hits
+
+
+@pytest.mark.parametrize("replay", ["250-hz"], indirect=True)
+def test_stepped_finer_than_the_tick_the_model_cuts_no_later_than_the_firmware(replay):
+    """The idealised drive steps at 2 ms; at 250 Hz the firmware decides for 4 ms ticks. The
+    same requests through both: the model's first on-limit cut and first mean-duty block come
+    no later than the firmware's."""
+    robot, run = replay
+    requests = [(8000, 0)] * 30 + [(0, 0)] * 5 + [(3000, 0)] * 200  # heat, rest, then hold against the window
+    fw = run(requests)
+    env = Envelope(robot, 2, 0.002)
+    model = [env.gate([a / 10000, 0.0])[0] for a, _ in requests for _ in range(2)]
+
+    def first_off_us(out, step_us, start):
+        return next(k for k in range(start, len(out)) if out[k] == 0) * step_us
+
+    assert first_off_us(model, 2000, 0) <= first_off_us([a for a, _, _ in fw], 4000, 0)  # the on-limit
+    blocked_fw = first_off_us([a for a, _, _ in fw], 4000, 35)                             # the window
+    assert first_off_us(model, 2000, 70) <= blocked_fw < 235 * 4000
 
 
 @pytest.mark.parametrize("replay", ["short-window"], indirect=True)

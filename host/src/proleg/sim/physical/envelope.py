@@ -18,9 +18,10 @@ The claim bench asks whether the coils *can* complete a gait under a condition
 
 The numbers are the ones the firmware is built with (``firmware.render``: the robot file's
 ``[safety]`` in whole ticks, as sma.c takes max_on and the cool-down, and the thermal budget).
-Stepped at the firmware's tick this is sma.c tick for tick (``tests/test_envelope_vs_sma.py``);
-the idealised drive steps at 2 ms, twice the example robots' tick, which only makes a cut
-come up to one step earlier. Where it is still looser than the firmware: the idealised drive
+Stepped at the firmware's tick this is sma.c tick for tick (``tests/test_envelope_vs_sma.py``).
+The idealised drive steps at 2 ms, which is not every robot's tick (R1's is 1 ms, inchworm-3's
+1.25 ms, caterpillar-4's 2 ms, and a robot file may ask for 200 Hz): the model looks one step or
+one tick ahead, whichever is longer, so that it cuts no later than the firmware would. Where it is still looser than the firmware: the idealised drive
 switches a waiting coil off where the firmware keeps it at the hold duty, which fills the
 firmware's window a little more. So a condition this calls possible may still be one the
 firmware's envelope stops; the bench reports what the firmware does.
@@ -55,17 +56,16 @@ class Envelope:
         from ...firmware.render import control_part
 
         c = control_part(robot)
-        self.dt = dt_s
         self.dt_us = round(dt_s * 1e6)
+        # sma.c decides for the tick to come: a step longer than the tick looks that far ahead
+        self.ahead_us = max(self.dt_us, c.tick_us)
         # sma.c set_times(CFG_MAX_ON_TICKS × CFG_TICK_US, CFG_MIN_COOLDOWN_TICKS × CFG_TICK_US):
         # refill_q8 = on_us / (cooldown_us / 256 + 1), at most 10000; each µs off pays back
         # refill_q8 / 256 µs of debt
         self.max_on_us = c.max_on_ticks * c.tick_us
         self.refill_q8 = min(10000, self.max_on_us // ((c.cooldown_ticks * c.tick_us >> 8) + 1))
-        self.payback = self.refill_q8 / 256
         self.max_duty_pm = c.max_duty_pm
         self.hold_ceiling_pm = c.hold_max_duty_pm
-        self.hold_ceiling = self.hold_ceiling_pm / 10000.0
         self.latch = c.on_limit_latch
         self.state_timeout_s = c.timeout_ms / 1000.0
         window_us = c.duty_window_ms * 1000
@@ -103,7 +103,7 @@ class Envelope:
             pm = min(round(duty * 10000), self.max_duty_pm)  # sma_clamp: the duty ceiling first
             if self.cut[ch]:
                 pm = 0  # cooling after an on-limit hit: off until the debt is paid
-            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.dt_us > self.max_on_us:
+            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.ahead_us > self.max_on_us:
                 pm = 0
                 self.cut[ch] = True
                 self.hit_bits |= 1 << ch
@@ -112,7 +112,7 @@ class Envelope:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
                         f"the safety envelope's on-time limit: {self.latch} on-limit hits (max_on_ms "
                         f"{self.max_on_us / 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
-            if pm > 0 and sum(s[ch] for s in self.win) + ((pm * self.dt_us + 1023) >> 10) > self.win_limit:
+            if pm > 0 and sum(s[ch] for s in self.win) + ((pm * self.ahead_us + 1023) >> 10) > self.win_limit:
                 pm = 0  # does not fit the mean-duty window: 0 (not a hit)
             self.charged[ch] = pm
             out.append(pm / 10000.0)
