@@ -53,6 +53,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_firmware import machine  # noqa: E402
 
 from proleg.report import claim  # noqa: E402
+from proleg.report.claim_summary import summarise  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.closed_loop import sim_library  # noqa: E402
 from proleg.sim.openloop import OpenLoopDrive  # noqa: E402
@@ -134,7 +135,7 @@ def main() -> int:
                                {k: r[k] for k in ("learned_gait", "levelled_on_ground") if k in r},
                                r["idealised_drive_mm_s"])
 
-    summary = claim.summarise([back(r) for r in rows], back(nominal))
+    summary = summarise([back(r) for r in rows], back(nominal))
     nom_fb = nominal["feedback"]["speed_mm_s"]
     nom_lg = nominal["learned_gait"]["feedback"]["speed_mm_s"]
     nom_id = nominal["idealised_drive_mm_s"]

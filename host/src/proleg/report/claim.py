@@ -15,13 +15,12 @@ tune_open_loop_robust`` (all 4N − 1 timing parameters free, scored on its wors
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from ..errors import SimError
-from ..sim.openloop import OpenLoopDrive, run_open_loop, tune_open_loop_robust
+from ..sim.openloop import OpenLoopDrive, tune_open_loop_robust
 
 RUN_S = 40.0        # each run, from a cold robot
 OVERHEAT_C = 120.0  # an open-loop coil above this is ruined (NiTi wire: anneal/fatigue; Dynalloy
@@ -418,72 +417,3 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
                                  "idealised_drive_mm_s": _speed(lideal.speed_mm_s),
                                  "feedback": _round(asdict(lfb)), **lextra}
     return ConditionResult(point, possible, why, fb, ol, extra, ideal.speed_mm_s)
-
-
-def _clean_stop(fb: DriveOutcome) -> bool:
-    """Stopped with a fault (a refused START included) and its coils below 50 °C 2 s later."""
-    return not fb.completed and bool(fb.fault) and fb.coil_max_end_c < 50.0
-
-
-def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
-    """The targets of issue 13, counted honestly."""
-    nom = nominal.feedback.speed_mm_s
-    possible = [r for r in results if r.possible]
-    impossible = [r for r in results if not r.possible]
-    done = [r for r in possible if r.feedback.completed]
-    kept = [r for r in done if math.copysign(1, nom) * r.feedback.speed_mm_s >= 0.75 * abs(nom)]
-    clean_stops = [r for r in impossible if _clean_stop(r.feedback)]
-    learned: dict[str, Any] = {}
-    if "learned_gait" in nominal.extra:
-        lnom = nominal.extra["learned_gait"]["feedback"]["speed_mm_s"]
-        lposs = [r.extra["learned_gait"] for r in results if r.extra["learned_gait"]["physically_possible"]]
-        ldone = [g for g in lposs if g["feedback"]["completed"]]
-        lkept = [g for g in ldone if math.copysign(1, lnom) * g["feedback"]["speed_mm_s"] >= 0.75 * abs(lnom)]
-        limposs = [r.extra["learned_gait"] for r in results if not r.extra["learned_gait"]["physically_possible"]]
-        lclean = [g for g in limposs if _clean_stop(DriveOutcome(**g["feedback"]))]
-        learned = {"learned_gait_states": nominal.extra["learned_gait"]["states"],
-                   "learned_nominal_feedback_mm_s": round(lnom, 4),
-                   "learned_physically_possible": len(lposs),
-                   "learned_feedback_completed_where_possible": len(ldone),
-                   "learned_feedback_kept_75pct_where_possible": len(lkept),
-                   "learned_impossible": len(limposs),
-                   "learned_impossible_stopped_with_fault_and_cold_coils": len(lclean)}
-    ideal_nom = nominal.idealised_mm_s
-    if ideal_nom:
-        sign = math.copysign(1, ideal_nom)
-        walked = [r for r in possible if r.idealised_mm_s is not None]
-        learned["idealised_nominal_mm_s"] = round(ideal_nom, 4)
-        learned["idealised_kept_75pct_where_possible"] = sum(
-            sign * r.idealised_mm_s >= 0.75 * abs(ideal_nom) for r in walked)
-        learned["idealised_walked_where_possible"] = len(walked)
-        learned["feedback_kept_75pct_of_idealised_where_possible"] = sum(
-            r.feedback.completed and sign * r.feedback.speed_mm_s >= 0.75 * sign * r.idealised_mm_s for r in walked)
-        learned["slowed_by_the_condition_itself"] = [
-            r.point.name for r in walked if sign * r.idealised_mm_s < 0.75 * abs(ideal_nom)]
-    sloped = [r for r in results if "levelled_on_ground" in r.extra]
-    if sloped:
-        learned["slope_conditions"] = len(sloped)
-        learned["slope_completed_flat_calibration_only"] = sum(r.feedback.completed for r in sloped)
-        learned["slope_completed_after_ground_levelling"] = sum(
-            r.extra["levelled_on_ground"]["feedback"]["completed"] for r in sloped)
-    return {
-        **learned,
-        "conditions": len(results),
-        "physically_possible": len(possible),
-        "feedback_completed_where_possible": len(done),
-        "feedback_kept_75pct_where_possible": len(kept),
-        "feedback_kept_75pct_fraction": round(len(kept) / len(possible), 4) if possible else None,
-        "impossible": len(impossible),
-        "impossible_stopped_with_fault_and_cold_coils": len(clean_stops),
-        "open_loop_completed": sum(r.open_loop.completed for r in results),
-        "open_loop_kept_75pct": sum(r.open_loop.completed and r.open_loop.speed_mm_s * math.copysign(1, nom)
-                                    >= 0.75 * abs(nominal.open_loop.speed_mm_s) for r in results),
-        "nominal_feedback_mm_s": round(nom, 4),
-        "nominal_open_loop_mm_s": round(nominal.open_loop.speed_mm_s, 4),
-        "targets": {
-            "feedback completes every possible condition": len(done) == len(possible),
-            "feedback keeps >= 75 % in >= 90 % of possible": bool(possible) and len(kept) >= 0.9 * len(possible),
-            "impossible conditions stop with a fault and cold coils": len(clean_stops) == len(impossible),
-            "nominal feedback at least as fast as open loop": abs(nom) >= abs(nominal.open_loop.speed_mm_s),
-        },
-    }
