@@ -124,7 +124,7 @@ def _explicit(robot: Any, bname: str, buses: Sequence[I2cBus], limb: str, spec: 
             raise BuildError(f"{where}: a multiplexer channel is named, but no bus of board {bname} can carry a multiplexer")
     else:
         bus = buses[0]
-    mux = channel = None
+    mux = None
     if behind:
         if not bus.mux_addresses:
             raise BuildError(f"{where}: bus {bus.name} of board {bname} carries no multiplexer (no mux_addresses)")

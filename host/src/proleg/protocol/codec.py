@@ -27,7 +27,6 @@ from cobs import cobs as _cobs
 
 from proleg.errors import ProtocolError
 from proleg.protocol.definition import (
-    BY_ID,
     BY_NAME,
     CHANNEL_CEILING,
     LIMB_CEILING,

@@ -131,7 +131,6 @@ class ArmEmuBoard(MmioAccess, TickMarks, FirmwareProbes):
         self._by_addr: dict[int, object] = {}
         pages = set()
         for d in self.devices:
-            size = 0x1000 if d is self.scs else 0x400
             self._by_addr[d.BASE] = d
             pages.add(d.BASE & ~0xFFF)
         self._unmodelled: dict[int, int] = {}
