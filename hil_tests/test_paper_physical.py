@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import pytest
 
+from proleg.link.client import UNSTATED
 from proleg.protocol.definition import EventKind
 
 C_T1 = ("00", "10", "01")          # 00 → 10 → 01 → 00
@@ -20,7 +21,7 @@ def _per_cycle(t, labels, seconds=36.0) -> list[float]:
     cycle (from one report of reaching step 0 to the next); no fault allowed."""
     table = t.robot.transitions
     t.client.load_gait([table.index(s) for s in labels])
-    t.client.start("user", "+x")
+    t.client.start("user", UNSTATED)  # which way it walks is what the experiment finds
     received = t.wait(seconds)
     t.client.stop()
     events = [r for r in received if r.message.name == "EVENT"]

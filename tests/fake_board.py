@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from proleg.protocol.codec import FrameDecoder, Message, encode
 from proleg.protocol.definition import (
     BY_NAME,
+    DIR_UNSTATED,
     GAIT_USER,
     MAX_GAIT_STEPS,
     PROTOCOL_VERSION,
@@ -207,9 +208,9 @@ class FakeBoard:
         elif name == "START":
             if self.estop:
                 return self._nack(msg, ErrorCode.ESTOP_LATCHED)
-            if msg.direction not in (0, 1):
-                return self._nack(msg, ErrorCode.OUT_OF_RANGE, 2)
-            direction = Direction(msg.direction)
+            if msg.direction not in (0, 1) and not (msg.direction == DIR_UNSTATED and msg.gait == GAIT_USER):
+                return self._nack(msg, ErrorCode.OUT_OF_RANGE, 2)  # as cmd.c
+            direction = msg.direction
             if msg.gait == GAIT_USER:
                 if not self.user_gait:
                     return self._nack(msg, ErrorCode.NO_GAIT)

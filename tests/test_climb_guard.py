@@ -313,14 +313,15 @@ class ClimbGuardMachine(RuleBasedStateMachine):
     def start(self, direction, loaded):
         """Gait 0, or the loaded learn-then-walk sequence (00→10→01→00, +x) with its way
         stated (either way: a wrong one is the operator's) or unstated."""
-        from proleg.report.gait_run import DIRECTION_CODE
+        from proleg.link.client import direction_code
 
         loaded = loaded or direction == "unstated"
         if loaded:
             self.session.client.load_gait([0, 2, 1])
         before = float(max(self.sim.plant.temperature_c))
         try:
-            self.session.request("START", gait=GAIT_USER if loaded else 0, direction=DIRECTION_CODE[direction])
+            gait = GAIT_USER if loaded else 0
+            self.session.request("START", gait=gait, direction=direction_code(direction, gait))
         except CommandRefused as e:
             assert e.error == ErrorCode.TOO_STEEP, e
             assert direction != "unstated", "refused a gait whose way START left unstated"

@@ -222,6 +222,30 @@ def test_with_the_fallback_off_and_no_replanning_r1_stops_for_good(tmp_path):
     assert track.moved_between(22.0, 30.0) < 0.2
 
 
+def test_a_loaded_gait_whose_way_is_unstated_neither_falls_back_nor_is_replanned():
+    """A learning probe (START of the loaded gait, its way unstated) walks neither way: on an
+    actuator loss the firmware keeps the fault latched instead of walking a +x fallback, and
+    the host does not replan a gait of no known direction."""
+    from proleg.link.client import UNSTATED
+    from proleg.protocol.definition import GAIT_USER
+
+    robot = load_robot(R1)  # fallback on
+    sim = open_host_sim(robot)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), max_limbs=2, max_channels=2)
+    client.connect()
+    client.load_gait([0, 2, 1])
+    track = _Track(sim, 5.0, "dead-actuator:sma-right")
+    said: list[str] = []
+    replanner = Replanner(robot, client, None, say=said.append)
+    run_gait_on(client, GAIT_USER, UNSTATED, 30.0, listeners=[track], replanner=replanner)
+    kinds = [k for _, k, _ in track.events]
+    assert EventKind.FAULT in kinds and EventKind.FALLBACK not in kinds
+    assert kinds.count(EventKind.GAIT_STARTED) == 1, kinds  # nothing restarted it
+    assert any("way was not stated" in s and "not replanning" in s for s in said), said
+    with pytest.raises(ValueError, match=r"expected \+x, -x or None"):
+        Replanner(robot, client, UNSTATED)
+
+
 def test_learned_on_the_physical_plant_walks_at_least_as_fast_as_the_hand_made_matrix(tmp_path):
     """Learn R1 on the physical plant (R = 3), then walk its learned firmware gait and the
     hand-made matrix's for 40 s each: the learned one covers at least as much ground (5 %

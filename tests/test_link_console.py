@@ -203,6 +203,40 @@ def test_g_cycles_through_the_gaits_info_reports_and_no_others():
     assert seen == [1, 2, 0, 1, 2, 0, 1]
 
 
+def test_the_loaded_gait_starts_with_its_way_unstated_until_d_states_it():
+    """The console does not know which way a loaded sequence walks: selecting it leaves the
+    way unstated (no climb guard), and d cycles +x, -x, unstated for it."""
+    from proleg.protocol.definition import DIR_UNSTATED, GAIT_USER
+
+    board = FakeBoard(gaits={0: ((0, 2, 3, 1),), 1: ()})
+    client = _client(board)
+    client.load_gait([0, 2, 1])
+    app = ConsoleApp(client)
+    ways = []
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.pause(0.3)  # telemetry says a user gait is loaded
+            while app.gait != GAIT_USER:
+                await pilot.press("g")
+            ways.append(app.direction)
+            await pilot.press("s")
+            await pilot.pause(0.3)
+            await pilot.press("x")
+            for _ in range(3):
+                await pilot.press("d")
+                ways.append(app.direction)
+            await pilot.press("g")  # back to gait 0: a built-in gait has a way
+            ways.append(app.direction)
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+    assert ways == [DIR_UNSTATED, 0, 1, DIR_UNSTATED, 0]
+    start = next(m for m in board.received if m.name == "START")
+    assert (start.gait, start.direction) == (GAIT_USER, DIR_UNSTATED)
+
+
 def test_a_firmware_without_gaits_offers_none_and_starts_nothing():
     board = FakeBoard(gaits={0: (), 1: ()})
     client = _client(board)

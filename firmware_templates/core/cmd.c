@@ -128,7 +128,8 @@ static void cmd_start(void)
     }
     level_at_start(); /* started from rest: level on this ground (level.h) */
 #ifdef CFG_MAX_CLIMB_CDEG
-    if (dir <= PROTO_DIR_MINUS_X) { /* the climb guard: a built-in gait's way, or the one START states for a loaded gait */
+    /* the climb guard: a built-in gait's way, or the one START states for a loaded gait */
+    if (dir <= PROTO_DIR_MINUS_X) {
         uint16_t climb = level_too_steep(dir == PROTO_DIR_MINUS_X);
         if (climb) {
             seq_stop(); /* refused before any coil heats (the ground just levelled on stays in use) */

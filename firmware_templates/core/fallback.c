@@ -19,8 +19,8 @@ static void fall_back(uint8_t act)
     uint8_t k = (uint8_t)(act * 2u + (dir == PROTO_DIR_MINUS_X ? 1u : 0u));
     uint8_t n = ROM_U8(&limbmap_fb_len[k]);
     uint16_t first = ROM_U16(&limbmap_fb_first[k]);
-    if (limbmap_lost() != LIMBMAP_NONE || n == 0u || n > FALLBACK_MAX_STEPS) {
-        return;
+    if (dir > PROTO_DIR_MINUS_X || limbmap_lost() != LIMBMAP_NONE || n == 0u || n > FALLBACK_MAX_STEPS) {
+        return; /* a loaded gait whose way START left unstated (a learning probe) stops on its fault */
     }
     ROM_COPY(steps, &limbmap_fb_steps[first], n * sizeof steps[0]); /* both cfg_state_t */
     if (seq_load(steps, n, 0) != SEQ_OK) {

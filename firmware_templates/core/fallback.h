@@ -7,7 +7,8 @@
  * (gait_table.c, proleg.limbloss), it then switches by itself, once per boot: the map
  * becomes the fallback's, the fallback gait is loaded (it replaces a LOAD_GAIT gait) and
  * started from the measured state, the fault is cleared, and EVENT FALLBACK + GAIT_STARTED
- * say so. A second loss, or one without a fallback, stays latched for the host.
+ * say so. A second loss, one without a fallback, or one in a loaded gait whose way START left
+ * unstated (PROTO_DIR_UNSTATED: a learning probe walks neither way) stays latched for the host.
  */
 #ifndef PROLEG_FALLBACK_H
 #define PROLEG_FALLBACK_H

@@ -92,8 +92,9 @@ void level_at_start(void);
 #ifdef CFG_MAX_CLIMB_CDEG
 /* The climb guard ([control] max_climb_deg): how far the ground in use rises in the gait's
  * direction (towards -x when `minus_x`), 0.01°, if that is more than CFG_MAX_CLIMB_CDEG
- * (walking -x: CFG_MAX_CLIMB_MX_CDEG where the robot file gives -x its own); else 0. Against a flat record the first limb's end reads the slope rising
- * towards +x and the last limb's end its negative (above), so the rise is half their difference.
+ * (walking -x: CFG_MAX_CLIMB_MX_CDEG where the robot file gives -x its own); else 0. Against
+ * a flat record the first limb's end reads the slope rising towards +x and the last limb's end
+ * its negative (above), so the rise is half their difference.
  * The ground in use is the one START levelled on at rest, or level_calibrate(1)'s. 0 without a
  * flat record: the ground cannot be told from the IMUs' mounting tilt. LEVEL_TOO_TILTED when
  * this START, from rest, found an end tilted beyond LEVEL_MAX_CDEG: a ground no calibration

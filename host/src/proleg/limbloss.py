@@ -142,6 +142,8 @@ def fallback(robot, lost: int | str, direction: str = "+x") -> Fallback:
             raise ValueError(f"robot {robot.name} has no actuator {lost!r} (it has {', '.join(names)})")
         lost = names.index(lost)
     name = robot.actuators[lost].name
+    if direction not in ("+x", "-x"):
+        raise ValueError(f"fallback: direction {direction!r}: expected +x or -x")
     sign = 1.0 if direction == "+x" else -1.0
     amap = compiled_map(robot)
     t = dead_table(robot, lost)

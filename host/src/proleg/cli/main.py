@@ -279,7 +279,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..robot import load_robot
     from ..firmware.gaits import firmware_gaits
     from ..sim.simulators import open_simulated
-    from ..sim.simulated_boards import clear_ticks, simulated_robot, tick_budget
+    from ..sim.simulated_boards import clear_ticks, tick_budget
 
     robot = load_robot(args.robot)
     from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,

@@ -146,8 +146,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         if args.replan:
             from ..learn.replan import Replanner
 
-            replanner = Replanner(robot, client, direction, say=lambda t: print(f"  {t}", flush=True)
-                                  if args.format != "jsonl" else log.info(t))
+            replanner = Replanner(robot, client, None if direction == UNSTATED else direction,
+                                  say=lambda t: print(f"  {t}", flush=True) if args.format != "jsonl" else log.info(t))
         try:
             run = run_gait_on(client, gait, direction, args.duration, listeners=listeners,
                               progress=log.info, progress_every_s=args.progress, replanner=replanner)

@@ -37,7 +37,7 @@ from textual.css.query import NoMatches
 from textual.widgets import Footer, Static
 
 from ..errors import LinkError
-from ..protocol.definition import GAIT_USER, Direction, EventKind, Flag
+from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, EventKind, Flag
 from ..states import label as state_label
 from ..states import limb_levels
 from ..link.client import Received, RobotClient, RobotInfo
@@ -361,10 +361,18 @@ class ConsoleApp(App[None]):
         else:
             idx = choices.index(self.gait) if self.gait in choices else -1
             self.gait = choices[(idx + 1) % len(choices)]
+            # the loaded gait's way is not known here: unstated until d states it (the climb
+            # guard checks a stated way); a built-in gait runs +x or -x
+            if self.gait == GAIT_USER:
+                self.direction = DIR_UNSTATED
+            elif self.direction == DIR_UNSTATED:
+                self.direction = Direction.PLUS_X
         self.refresh_view()
 
     def action_direction(self) -> None:
-        self.direction = Direction.MINUS_X if self.direction == Direction.PLUS_X else Direction.PLUS_X
+        """+x → -x (→ unstated, for the loaded gait) → +x."""
+        ways = [Direction.PLUS_X, Direction.MINUS_X] + ([DIR_UNSTATED] if self.gait == GAIT_USER else [])
+        self.direction = ways[(ways.index(self.direction) + 1) % len(ways)] if self.direction in ways else ways[0]
         self.refresh_view()
 
 

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..link.client import direction_text  # noqa: F401 - the console's names, in one place
 from ..protocol.definition import (
     GAIT_USER,
     ClearWhat,
-    Direction,
     EventKind,
     FaultCode,
     LevelResult,
@@ -58,10 +58,6 @@ def enum_name(enum: type, value: int) -> str:
         return enum(value).name
     except ValueError:
         return f"unknown {value}"
-
-
-def direction_text(direction: int) -> str:
-    return "+x" if direction == Direction.PLUS_X else "-x"
 
 
 def gait_text(gait: int) -> str:

@@ -29,9 +29,9 @@ from dataclasses import dataclass, field
 
 from ..errors import LinkError
 from ..limbloss import Fallback, dead_table, fallback
-from ..link.client import Received, RobotClient
+from ..link.client import Received, RobotClient, direction_code, direction_text
 from ..link.listeners import Listener
-from ..protocol.definition import GAIT_USER, ClearWhat, Direction, EventKind, FaultCode, Flag, StopReason
+from ..protocol.definition import GAIT_USER, ClearWhat, EventKind, FaultCode, Flag, StopReason
 from ..robot import Robot
 from ..transitions import TransitionTable
 
@@ -89,8 +89,9 @@ def replan(robot: Robot, actuator: str, direction: str = "+x") -> Replan:
 
 @dataclass
 class Replanner(Listener):
-    """Replan a running gait after an actuator loss (module doc). ``direction``: the run's,
-    or None to follow the running gait's."""
+    """Replan a running gait after an actuator loss (module doc). ``direction``: the run's
+    (+x or -x), or None to follow the running gait's. A loaded gait whose way START left
+    unstated is not replanned: which way should the new gait go?"""
 
     robot: Robot
     client: RobotClient
@@ -101,7 +102,7 @@ class Replanner(Listener):
     _fault: tuple[int, int] | None = None
     _stopped_at: float | None = None
     _fell_back: bool = False
-    _ran: str = "+x"                                    # the direction the gait ran in (telemetry)
+    _ran: str | None = "+x"                             # the direction the gait ran in (telemetry; None: unstated)
     _done: set[str] = field(default_factory=set)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
@@ -113,7 +114,8 @@ class Replanner(Listener):
         m = rx.message
         if m.name == "TELEMETRY":
             if m.flags & Flag.RUNNING:
-                self._ran = "+x" if m.direction == Direction.PLUS_X else "-x"
+                way = direction_text(m.direction)
+                self._ran = way if way in ("+x", "-x") else None
             return
         if m.name != "EVENT":
             return
@@ -132,7 +134,8 @@ class Replanner(Listener):
             elif m.kind == EventKind.FALLBACK:
                 name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else str(m.code)
                 ok = m.code < len(self.robot.actuators)
-                fb = fallback(self.robot, m.code, self._direction()) if ok else None
+                way = self._direction()
+                fb = fallback(self.robot, m.code, way) if ok and way is not None else None
                 self._fell_back = True
                 self._stopped_at = None
                 self._done.add(name)
@@ -140,7 +143,11 @@ class Replanner(Listener):
         if told is not None:
             self._tell(told)
 
-    def _direction(self) -> str:
+    def __post_init__(self) -> None:
+        if self.direction not in ("+x", "-x", None):
+            raise ValueError(f"Replanner: direction {self.direction!r}: expected +x, -x or None")
+
+    def _direction(self) -> str | None:
         return self.direction or self._ran
 
     def due(self) -> bool:
@@ -169,6 +176,9 @@ class Replanner(Listener):
         if actuator is None:
             self._tell("gait stopped on a fault that names no actuator: not replanning")
             return
+        if direction is None:
+            self._tell("the loaded gait's way was not stated (START without +x/-x): not replanning")
+            return
         if again:
             self._tell(f"{actuator} lost again after replanning: giving up")
             return
@@ -180,7 +190,7 @@ class Replanner(Listener):
             self.client.request("SET_ACTUATOR_MAP", retries=2, actuators=tuple(plan.actuator_map))
             self.client.load_gait(plan.states[:-1])
             self.client.request("CLEAR", retries=2, what=int(ClearWhat.FAULTS))
-            self.client.request("START", retries=2, gait=GAIT_USER, direction=0 if direction == "+x" else 1)
+            self.client.request("START", retries=2, gait=GAIT_USER, direction=direction_code(direction, GAIT_USER))
         except LinkError as e:
             self._tell(f"replanning failed: {e}")
             return

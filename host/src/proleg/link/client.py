@@ -39,10 +39,10 @@ from ..protocol.codec import FrameDecoder, Message, encode
 from ..protocol.definition import (
     BY_NAME,
     CHANNEL_CEILING,
-    MESSAGES,
     DIR_UNSTATED,
     GAIT_USER,
     LIMB_CEILING,
+    MESSAGES,
     PROTOCOL_VERSION,
     ClearWhat,
     Direction,
@@ -445,6 +445,14 @@ def direction_code(direction: Direction | int | str, gait: int) -> int:
     return int(parse_direction(direction))
 
 
+def direction_text(direction: int) -> str:
+    """A direction byte as text: +x, -x, or "unstated" (DIR_UNSTATED: the loaded gait started
+    without its way)."""
+    if direction == Direction.PLUS_X:
+        return "+x"
+    return "-x" if direction == Direction.MINUS_X else UNSTATED if direction == DIR_UNSTATED else f"?{direction}"
+
+
 def parse_direction(direction: Direction | int | str) -> Direction:
     if isinstance(direction, str):
         text = direction.strip().lower()
@@ -452,7 +460,7 @@ def parse_direction(direction: Direction | int | str) -> Direction:
             return Direction.PLUS_X
         if text in ("-x", "minus_x", "-"):
             return Direction.MINUS_X
-        raise LinkError(f"unknown direction {direction!r}; expected +x or -x")
+        raise LinkError(f"unknown direction {direction!r}; expected +x or -x (or, for the loaded gait, {UNSTATED})")
     try:
         return Direction(int(direction))
     except ValueError:

@@ -16,8 +16,8 @@ from collections.abc import Callable, Iterable
 from typing import TextIO
 
 from ..errors import LinkError
-from ..protocol.definition import Direction, EventKind, Flag
-from .client import Received, RobotClient
+from ..protocol.definition import EventKind, Flag
+from .client import Received, RobotClient, direction_text
 
 
 class Listener(ABC):
@@ -76,9 +76,8 @@ def format_message(rx: Received, labels: Callable[[int], str] | None = None) -> 
         psi = " ".join(f"{p / 100:7.2f}" for p in f["psi"])
         duty = " ".join(f"{d / 100:5.1f}" for d in f["duty"])
         flags = _flag_names(f["flags"])
-        direction = "+x" if f["direction"] == Direction.PLUS_X else "-x"
         line = (f"{f['time_ms'] / 1000:9.3f} seq={f['seq']:5d} state={lab(f['measured'])}"
-                f" target={lab(f['target'])} gait={f['gait']}{direction} step={f['step']}"
+                f" target={lab(f['target'])} gait={f['gait']} {direction_text(f['direction'])} step={f['step']}"
                 f" psi=[{psi}] duty%=[{duty}] flags={flags}")
         if "displacement_mm" in rx.truth:
             line += f" x={rx.truth['displacement_mm']:.1f}mm"

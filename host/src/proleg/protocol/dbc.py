@@ -27,7 +27,7 @@ from ..errors import LinkError
 import re
 from typing import Any
 
-from .definition import PROTOCOL_VERSION, BY_NAME, Direction, EventKind, FaultCode, Flag, StopReason
+from .definition import DIR_UNSTATED, PROTOCOL_VERSION, BY_NAME, Direction, EventKind, FaultCode, Flag, StopReason
 from .can import EVENT_FRAME, SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
 
 HOST = "HOST"
@@ -79,6 +79,11 @@ def _choices(enum: type) -> dict[int, str]:
     return {int(v): v.name for v in enum}
 
 
+def _directions() -> dict[int, str]:
+    """Direction, and DIR_UNSTATED: a loaded gait started without its way stated."""
+    return {**_choices(Direction), DIR_UNSTATED: "UNSTATED"}
+
+
 def _ident(name: str) -> str:
     """A DBC identifier from a limb/actuator name (``sma-left`` → ``sma_left``)."""
     return re.sub(r"[^A-Za-z0-9_]", "_", name)
@@ -97,7 +102,7 @@ def _telemetry_signals(frame: Any, limbs: Sequence[str], actuators: Sequence[str
             name = f"psi_{_ident(limbs[s.index])}"
         elif s.field == "duty" and s.index is not None and s.index < len(actuators):
             name = f"duty_{_ident(actuators[s.index])}"
-        choices = _choices(Direction) if s.field == "direction" else None
+        choices = _directions() if s.field == "direction" else None
         sigs.append(_signal(name, s.start_bit, s.length, s.signed, s.scale, s.unit,
                             comment=_FIELD_DOCS.get(s.field) or None, choices=choices, receivers=[HOST]))
     return sigs
@@ -123,7 +128,7 @@ def _event_signals() -> list[Signal]:
         muxed("stop_reason", c, [EventKind.GAIT_STOPPED], _choices(StopReason)),
         muxed("cycles", d, [EventKind.GAIT_STOPPED], comment="completed gait cycles (saturating)"),
         muxed("gait", c, [EventKind.GAIT_STARTED], comment="gait index, 255 = the loaded user gait"),
-        muxed("direction", d, [EventKind.GAIT_STARTED], _choices(Direction)),
+        muxed("direction", d, [EventKind.GAIT_STARTED], _directions()),
         muxed("step", c, [EventKind.STATE_REACHED], comment="gait step index"),
         muxed("state", d, [EventKind.STATE_REACHED], comment="state index (limb levels, first limb most significant)"),
         muxed("code", c, [EventKind.BOOT, EventKind.ESTOP, EventKind.FAULT_CLEARED, EventKind.GAIT_LOADED]),

@@ -53,7 +53,7 @@ class EventKind(IntEnum):
     BOOT = 0  # code = ResetCause, detail = 0
     STATE_REACHED = 1  # code = gait step index, detail = state index
     FAULT = 2  # code = FaultCode, detail = limb/channel index
-    GAIT_STARTED = 3  # code = gait index, detail = Direction
+    GAIT_STARTED = 3  # code = gait index, detail = Direction (DIR_UNSTATED for a loaded gait's unstated way)
     GAIT_STOPPED = 4  # code = StopReason, detail = completed cycles (saturating)
     ESTOP = 5  # code = 0 command / 1 hardware input, detail = 0
     FAULT_CLEARED = 6  # code = ClearWhat bits that were cleared, detail = 0

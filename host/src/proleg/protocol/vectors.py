@@ -22,6 +22,7 @@ from cobs import cobs
 
 from proleg.protocol.codec import COUNTERS, FrameDecoder, Message, encode
 from proleg.protocol.definition import (
+    DIR_UNSTATED,
     GAIT_USER,
     MAX_GAIT_STEPS,
     PROTOCOL_VERSION,
@@ -58,6 +59,7 @@ def valid_messages() -> list[Message]:
         Message.new("PING", token=0),
         Message.new("START", token=3, gait=1, direction=1),
         Message.new("START", token=4, gait=GAIT_USER, direction=0),
+        Message.new("START", token=7, gait=GAIT_USER, direction=DIR_UNSTATED),
         Message.new("LOAD_GAIT", token=5, states=(0, 1, 3, 2)),
         Message.new("LOAD_GAIT", token=6, states=()),
         Message.new("LOAD_GAIT", token=7, states=tuple(range(65535, 65535 - MAX_GAIT_STEPS, -1))),

@@ -18,14 +18,13 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from ..errors import LinkError
-from ..link.client import UNSTATED, Received, RobotClient
+from ..link.client import Received, RobotClient, direction_code
 from ..link.listeners import Listener
 from ..link.sim_link import SimLink
 from ..protocol.codec import Message
-from ..protocol.definition import DIR_UNSTATED, Direction, EventKind, FaultCode
+from ..protocol.definition import EventKind, FaultCode
 from ..sim.closed_loop import SimulatedRobot
 
-DIRECTION_CODE = {"+x": int(Direction.PLUS_X), "-x": int(Direction.MINUS_X), UNSTATED: DIR_UNSTATED}
 #: a START/STOP is sent again this many times when no reply comes within the client's timeout
 COMMAND_RETRIES = 4
 #: virtual seconds the run goes on after STOP (telemetry is counted until then)
@@ -167,7 +166,7 @@ class SimSession:
         self.listeners.append(listener)
         try:
             t0 = self.link.clock()
-            if self._command(run, "START", gait=gait, direction=DIRECTION_CODE[direction]):
+            if self._command(run, "START", gait=gait, direction=direction_code(direction, gait)):
                 self.advance(duration_s - (self.link.clock() - t0))
             t_stop = self.link.clock()
             if not self._command(run, "STOP"):

@@ -14,6 +14,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from ...robot import ClimbLimit
 from .measure import walk_within_envelope
 
 #: The plant's steepest ground (conditions.py: incline_deg in −12..12).
@@ -57,12 +58,10 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
     return lo * resolution_deg
 
 
-def suggested_limits(climbs: dict[str, Sequence[float | None]]) -> Any:
+def suggested_limits(climbs: dict[str, Sequence[float | None]]) -> ClimbLimit | None:
     """``max_climb_deg`` per direction (a ``robot.ClimbLimit``) for each direction's gaits'
     steepest climbs (``suggested_limit`` of each); a direction none of whose gaits moves takes
     the other's (it has nothing to walk). None if no gait moves at all."""
-    from ...robot import ClimbLimit
-
     per = {d: suggested_limit(climbs.get(d, ())) for d in ("+x", "-x")}
     if per["+x"] is None and per["-x"] is None:
         return None
