@@ -304,7 +304,9 @@ def test_the_link_watchdog_stops_a_gait_the_host_went_quiet_on(tmp_path):
 
 _PARAMS = [int(p) for p in ParamId]
 COMMAND = st.one_of(
-    st.builds(lambda g, d: ("START", {"gait": g, "direction": d}), st.sampled_from([0, 1, GAIT_USER]), st.integers(0, 1)),
+    # +x, -x, a byte that is neither, and the loaded gait's "unstated" (on any gait)
+    st.builds(lambda g, d: ("START", {"gait": g, "direction": d}), st.sampled_from([0, 1, GAIT_USER]),
+              st.sampled_from([0, 1, 2, 0xFF])),
     st.just(("STOP", {})),
     st.just(("ESTOP", {})),
     st.builds(lambda w: ("CLEAR", {"what": w}), st.sampled_from([int(ClearWhat.ESTOP), int(ClearWhat.FAULTS), 7])),
