@@ -106,6 +106,16 @@ void imucheck_start(uint8_t limb)
     restart(limb, 0);
 }
 
+/* µs since limb l's (re)start (wrap-safe). One out-of-line copy for begin and
+ * past_deadline. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static uint32_t since_start(const limb_t *l)
+{
+    return (uint32_t)(hal_micros() - l->t0);
+}
+
 /* Begin the transaction of `limb` (its start-up step or its accelerometer read);
  * 0 if begun. A limb whose last result is not taken yet, that is bad or still in its
  * power-up wait has none. */
@@ -113,7 +123,7 @@ static int8_t begin(uint8_t limb)
 {
     limb_t *l = &st.limb[limb];
     uint8_t ntx, nrx;
-    if (l->res != RES_NONE || is_bad(limb) || (uint32_t)(hal_micros() - l->t0) < l->wait) {
+    if (l->res != RES_NONE || is_bad(limb) || since_start(l) < l->wait) {
         return -1;
     }
     if (l->phase < PHASE_RUN) {
@@ -162,7 +172,7 @@ void imucheck_service(void)
 static uint8_t past_deadline(uint8_t i)
 {
     const limb_t *l = &st.limb[i];
-    return (uint32_t)(hal_micros() - l->t0) >= l->wait + START_DEADLINE_US;
+    return since_start(l) >= l->wait + START_DEADLINE_US;
 }
 
 /* A start-up step finished (or, RES_NONE, is still to be done): next step, a retry, or
