@@ -37,13 +37,19 @@ typedef struct {
 static act_state_t acts[CFG_N_ACTUATORS];
 static uint32_t win[SMA_WIN_SLOTS][CFG_N_ACTUATORS];
 static uint32_t last_us;
-static uint32_t slot_us;
-static uint8_t slot;
-static uint8_t estopped;
-static uint16_t max_duty;  /* max_duty, max_on_us: set by sma_init (no .data bytes in flash) */
-static uint32_t max_on_us;
-static uint16_t refill_q8;     /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
-static uint16_t limit_hits;
+/* What sma_init sets, in one record it copies from one ROM block (no .data bytes in flash;
+ * on AVR a 16 B block and one copy call instead of storing each value: R1 66 B smaller on
+ * the Nano, issue 11). */
+typedef struct {
+    uint32_t max_on_us; /* the limits in force (SET_PARAM may narrow them) */
+    uint16_t max_duty;
+    uint16_t refill_q8; /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
+    uint32_t slot_us;   /* time in the slot being filled */
+    uint16_t limit_hits;
+    uint8_t slot;       /* the slot being filled */
+    uint8_t estopped;
+} sma_vars_t;
+static sma_vars_t st;
 static uint8_t clamped;
 /* Variables, not the macros: comparing against a constant 0 would warn (-Wtype-limits). */
 static const uint32_t min_cooldown = CFG_MIN_COOLDOWN_TICKS;
@@ -54,7 +60,7 @@ __attribute__((noinline)) /* four callers: one copy on the 8-bit targets */
 #endif
 uint16_t sma_clamp(uint16_t duty_pm)
 {
-    uint16_t ceiling = max_duty < CFG_MAX_DUTY_PM ? max_duty : (uint16_t)CFG_MAX_DUTY_PM;
+    uint16_t ceiling = st.max_duty < CFG_MAX_DUTY_PM ? st.max_duty : (uint16_t)CFG_MAX_DUTY_PM;
     return duty_pm > ceiling ? ceiling : duty_pm;
 }
 
@@ -86,12 +92,20 @@ static void every_channel_off(void)
 /* Cool-down pays back max_on / min_cooldown µs of on-time per µs, i.e. an on-period of L
  * is paid back by L × min_cooldown / max_on of cool-down. Rounded down, and at most 39×
  * (a min_cooldown below 1/39 of max_on counts as 1/39): paid back no faster than that. */
+#define REFILL_QUOT(on_us, cooldown_us) ((on_us) / (((cooldown_us) >> 8) + 1u))
+#define REFILL_Q8(on_us, cooldown_us) \
+    ((uint16_t)(REFILL_QUOT(on_us, cooldown_us) > 10000u ? 10000u : REFILL_QUOT(on_us, cooldown_us)))
 static void set_times(uint32_t on_us, uint32_t cooldown_us)
 {
-    uint32_t q = on_us / ((cooldown_us >> 8) + 1u);
-    max_on_us = on_us;
-    refill_q8 = (uint16_t)(q > 10000u ? 10000u : q);
+    st.max_on_us = on_us;
+    st.refill_q8 = REFILL_Q8(on_us, cooldown_us);
 }
+
+/* At start: the build's limits (what set_times makes of its max_on and min_cooldown), the
+ * window at its first slot, no hits, no ESTOP. */
+#define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
+#define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
+static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0, 0, 0, 0};
 
 /* Move the window on by dt: slots older than the window fall out. */
 static void advance_window(uint32_t dt)
@@ -103,14 +117,14 @@ static void advance_window(uint32_t dt)
     }
     /* slot_us < one slot before, so below SMA_WIN_SLOTS + 1 slots now: at most
      * SMA_WIN_SLOTS slots fall out, each cleared once */
-    slot_us += dt;
-    while (slot_us >= SMA_SLOT_US) {
-        slot_us -= SMA_SLOT_US;
-        if (++slot >= SMA_WIN_SLOTS) { /* in 8 bits (issue 11) */
-            slot = 0;
+    st.slot_us += dt;
+    while (st.slot_us >= SMA_SLOT_US) {
+        st.slot_us -= SMA_SLOT_US;
+        if (++st.slot >= SMA_WIN_SLOTS) { /* in 8 bits (issue 11) */
+            st.slot = 0;
         }
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
-            win[slot][i] = 0;
+            win[st.slot][i] = 0;
         }
     }
 }
@@ -133,12 +147,7 @@ void sma_init(void)
     memset(acts, 0, sizeof acts);
     memset(win, 0, sizeof win);
     last_us = hal_micros();
-    slot_us = 0;
-    slot = 0;
-    estopped = 0;
-    max_duty = CFG_MAX_DUTY_PM;
-    set_times(CFG_MAX_ON_TICKS * CFG_TICK_US, CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US);
-    limit_hits = 0;
+    ROM_COPY(&st, &st_init, sizeof st);
     every_channel_off();
 }
 
@@ -156,12 +165,12 @@ uint8_t sma_tick(void)
     uint8_t i;
     uint32_t *w;
     advance_window(dt);
-    w = win[slot];
+    w = win[st.slot];
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         act_state_t *a = &acts[i];
-        uint16_t duty = estopped ? 0u : sma_clamp(a->request);
+        uint16_t duty = st.estopped ? 0u : sma_clamp(a->request);
         uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
-        if (!estopped && duty != a->request) {
+        if (!st.estopped && duty != a->request) {
             clamped = 1;
         }
         /* charge the interval since the last tick at the duty the pin carried */
@@ -170,7 +179,7 @@ uint8_t sma_tick(void)
         if (a->charged > hold_max) {
             a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
         } else {
-            uint32_t paid = (dt * refill_q8) >> 8; /* ≤ 400000 × 10000: 32 × 16 bits, no 32 × 32 multiply */
+            uint32_t paid = (dt * st.refill_q8) >> 8; /* ≤ 400000 × 10000: 32 × 16 bits, no 32 × 32 multiply */
             a->debt_us = a->debt_us > paid ? a->debt_us - paid : 0u;
             if (a->debt_us == 0u) {
                 a->forced = 0;
@@ -180,12 +189,12 @@ uint8_t sma_tick(void)
         if (a->forced) {
             duty = 0; /* cooling after an on-limit hit: off until the debt is paid */
         } else if (duty > hold_max) {
-            if (a->debt_us + CFG_TICK_US > max_on_us) {
+            if (a->debt_us + CFG_TICK_US > st.max_on_us) {
                 duty = 0; /* cut before the next tick would pass max_on */
                 a->forced = 1;
                 hit = (uint8_t)(hit | (1u << i));
-                if (limit_hits < 0xFFFFu) {
-                    limit_hits++;
+                if (st.limit_hits < 0xFFFFu) {
+                    st.limit_hits++;
                 }
             }
         }
@@ -205,18 +214,18 @@ void sma_all_off(void)
 
 void sma_estop(void)
 {
-    estopped = 1;
+    st.estopped = 1;
     every_channel_off();
 }
 
 void sma_clear_estop(void)
 {
-    estopped = 0;
+    st.estopped = 0;
 }
 
 uint8_t sma_estopped(void)
 {
-    return estopped;
+    return st.estopped;
 }
 
 int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cooldown_ticks)
@@ -225,7 +234,7 @@ int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cool
         cooldown_ticks > 0xFFFFFFFFUL / CFG_TICK_US) {
         return -1;
     }
-    max_duty = max_duty_pm;
+    st.max_duty = max_duty_pm;
     set_times(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US);
     return 0;
 }
@@ -262,5 +271,5 @@ uint8_t sma_take_clamped(void)
 
 uint16_t sma_limit_hits(void)
 {
-    return limit_hits;
+    return st.limit_hits;
 }
