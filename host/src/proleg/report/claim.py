@@ -417,3 +417,10 @@ def run_condition(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
                                  "idealised_drive_mm_s": _speed(lideal.speed_mm_s),
                                  "feedback": _round(asdict(lfb)), **lextra}
     return ConditionResult(point, possible, why, fb, ol, extra, ideal.speed_mm_s)
+
+
+def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
+    """The targets of issue 13, counted (``claim_summary.summarise``)."""
+    from .claim_summary import summarise as counts
+
+    return counts(results, nominal)
