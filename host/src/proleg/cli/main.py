@@ -353,9 +353,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
             listener.stop()
     budget = tick_budget(sim)
     if args.json:
-        print(json.dumps({**_report_json(robot, report, args.board, start), **(budget or {})}))
+        print(json.dumps({**_report_json(robot, report, args.board), **(budget or {})}))
     else:
-        print(_report_text(robot, report, args.board, budget, start))
+        print(_report_text(robot, report, args.board, budget))
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     if recorder is not None and recorder.error is not None:
@@ -387,8 +387,7 @@ def _recorder(robot, path: str, board: str = "host-sim"):
     return Logger(path, RecordingMeta.for_robot(robot=robot, board=board, truth=("displacement_mm",)))
 
 
-def _report_json(robot, report, board: str = "host-sim", start_s: float = 0.0) -> dict:
-    """``start_s``: the board's clock at START (fault times are on that clock, from its boot)."""
+def _report_json(robot, report, board: str = "host-sim") -> dict:
     t = robot.transitions
     return {
         "robot": robot.name,
@@ -404,7 +403,7 @@ def _report_json(robot, report, board: str = "host-sim", start_s: float = 0.0) -
         "states_reached": [t.label(s) for s in report.states_reached],
         "true_transitions": report.true_transitions,
         "unexpected_transitions": report.unexpected_transitions,
-        "start_time_s": start_s,
+        "start_time_s": report.started_s,  # the board's clock at START: fault times are on it
         "faults": [{"time_s": f.time_s, "code": f.code, "detail": f.detail} for f in report.faults],
         "telemetry_frames": report.telemetry_frames,
         "telemetry_lost": report.telemetry_lost,
@@ -413,7 +412,7 @@ def _report_json(robot, report, board: str = "host-sim", start_s: float = 0.0) -
     }
 
 
-def _report_text(robot, report, board: str = "host-sim", budget: dict | None = None, start_s: float = 0.0) -> str:
+def _report_text(robot, report, board: str = "host-sim", budget: dict | None = None) -> str:
     t = robot.transitions
     seq = [t.label(s) for s in report.states_reached]
     shown = " → ".join(seq[:13]) + (" …" if len(seq) > 13 else "")
@@ -433,7 +432,7 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
     from ..console.names import RobotNames, fault_name_text
 
     for f in report.faults:
-        lines.append(f"  FAULT at {f.time_s:.3f} s ({f.time_s - start_s:.3f} s after START): "
+        lines.append(f"  FAULT at {f.time_s:.3f} s{report.after_start(f.time_s)}: "
                      f"{fault_name_text(f.code, f.detail, RobotNames.for_robot(robot))}")
     if report.limb_loss:  # EVENT SUSPECT / FALLBACK (issue 15), by name
         from ..console.names import describe_event

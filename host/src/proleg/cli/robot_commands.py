@@ -161,6 +161,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         "states_reached": len(run.states_reached), "telemetry_frames": run.telemetry_frames,
         "telemetry_lost": run.telemetry_lost,
         "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
+        "start_time_s": run.started_s,  # the board's clock at START: fault times are on it
         "errors": errors, "ok": run.ok and not errors,
         "replanned": list(replanner.actions) if replanner is not None else [],
     }
@@ -185,7 +186,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         names = RobotNames.for_robot(robot)
         for f in run.faults:
-            print(f"  FAULT at {f.time_s:.3f} s: {fault_name_text(f.code, f.detail, names)}")
+            print(f"  FAULT at {f.time_s:.3f} s{run.after_start(f.time_s)}: {fault_name_text(f.code, f.detail, names)}")
     for e in errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     return 0 if doc["ok"] else 1

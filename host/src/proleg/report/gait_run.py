@@ -60,6 +60,11 @@ class GaitRun:
     telemetry: list[Message] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)  # commands not acknowledged or refused
     limb_loss: list[dict] = field(default_factory=list)  # EVENT SUSPECT / FALLBACK fields, in order
+    started_s: float | None = None  # the board's clock (s from boot) at its first GAIT_STARTED
+
+    def after_start(self, time_s: float) -> str:
+        """For a board time: ' (6.600 s after START)', or '' when START was never reported."""
+        return "" if self.started_s is None else f" ({time_s - self.started_s:.3f} s after START)"
 
     @property
     def cycles(self) -> int:
@@ -107,6 +112,8 @@ class GaitRunListener(Listener):
                 run.faults.append(Fault(msg.time_ms / 1000.0, FaultCode(msg.code).name, msg.detail))
             elif msg.kind in (EventKind.SUSPECT, EventKind.FALLBACK):
                 run.limb_loss.append(dict(msg.fields))
+            elif msg.kind == EventKind.GAIT_STARTED and run.started_s is None:
+                run.started_s = msg.time_ms / 1000.0
         else:
             run.replies.append(msg)
 
