@@ -8,7 +8,7 @@ threads, so the UI never blocks on a reply.
 
 Keys: s start · x stop · e E-stop · c clear faults and E-stop · g next gait · d direction ·
 q (or Ctrl-C) quit. ``g`` offers only the gaits INFO says the firmware has (and ``user`` once
-a user gait is loaded). Events name their kind, fault, stop reason, limb and actuator
+a user gait is loaded, selected with its way unstated; ``d`` then cycles +x, -x, unstated). Events name their kind, fault, stop reason, limb and actuator
 (``proleg.console.names``). The layout fits an 80×24 terminal. Leaving stops the robot: that
 is ``console_main``'s job (``proleg.console.leave``), whatever ended the UI.
 
