@@ -122,10 +122,9 @@ def test_the_refusal_reports_the_climb_it_measured(tmp_path_factory):
     assert _detail_deg(outcome) == pytest.approx(6.0, abs=0.3)
 
 
-def _start_after_a_knock(robot, knock: list[str], direction: str):
-    """Flat calibration; down a 12° slope (-x, levelled there at START); stopped, then the robot
-    put down again under `knock` (an IMU knocked since, another slope), 2.5 s at rest, START in
-    `direction`: the run's errors and the coils' hottest temperature from there."""
+def _calibrated_then_put_on(robot, conditions: list[str]):
+    """A simulated board calibrated at rest on the flat, then put down under `conditions` and
+    left 2.5 s at rest there: (the simulated robot, its session)."""
     from proleg.link.level import calibrate_level
     from proleg.report.gait_run import SimSession
     from proleg.sim.closed_loop import SimulatedRobot, make_plant
@@ -134,8 +133,18 @@ def _start_after_a_knock(robot, knock: list[str], direction: str):
     session = SimSession(sim)
     session.advance(0.3)
     assert calibrate_level(session.client).ok
-    sim.plant = make_plant(robot, "physical", ["incline_deg=12"])
+    sim.plant = make_plant(robot, "physical", conditions)
     session.advance(2.5)
+    return sim, session
+
+
+def _start_after_a_knock(robot, knock: list[str], direction: str):
+    """Flat calibration; down a 12° slope (-x, levelled there at START); stopped, then the robot
+    put down again under `knock` (an IMU knocked since, another slope), 2.5 s at rest, START in
+    `direction`: the run's errors and the coils' hottest temperature from there."""
+    from proleg.sim.closed_loop import make_plant
+
+    sim, session = _calibrated_then_put_on(robot, ["incline_deg=12"])
     assert not session.run_gait("-x", 0, 2.0).errors  # downhill: levelled on ±12°, walks
     sim.plant = make_plant(robot, "physical", knock)  # cold, at rest
     session.advance(2.5)
@@ -187,17 +196,8 @@ def test_a_loaded_gait_whose_way_start_leaves_unstated_is_not_guarded(tmp_path_f
     """A learning probe or a planar heading walks neither +x nor -x: START says so
     (DIR_UNSTATED) and the firmware does not refuse it on any ground."""
     from proleg.link.client import UNSTATED
-    from proleg.report.gait_run import SimSession
-    from proleg.sim.closed_loop import SimulatedRobot, make_plant
-    from proleg.link.level import calibrate_level
 
-    robot = _r1_limited(1.5, tmp_path_factory)
-    sim = SimulatedRobot(robot, seed=1, plant=make_plant(robot, "physical"))
-    session = SimSession(sim)
-    session.advance(0.3)
-    assert calibrate_level(session.client).ok
-    sim.plant = make_plant(robot, "physical", ["incline_deg=6"])
-    session.advance(2.5)
+    sim, session = _calibrated_then_put_on(_r1_limited(1.5, tmp_path_factory), ["incline_deg=6"])
     session.client.load_gait([0, 2, 1])
     run = session.run_gait(UNSTATED, GAIT_USER, 3.0)
     assert not run.errors, run.errors
