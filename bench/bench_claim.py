@@ -164,6 +164,11 @@ def main() -> int:
             print(f"{k:<48} {v}")
     for k, v in summary["targets"].items():
         print(f"target: {k:<56} {'MET' if v else 'NOT MET'}")
+    if "idealised_kept_75pct_where_possible" in summary:
+        print(f"the idealised drive (true ψ, no stall rules) keeps 75 % of its own nominal speed in "
+              f"{summary['idealised_kept_75pct_where_possible']} of the {summary['physically_possible']} possible "
+              f"conditions, the firmware in {summary['feedback_kept_75pct_where_possible']} (docs/plant.md, "
+              "\"How much of the loss is the condition's own\")")
     print(f"\n{len(rows)} conditions in {grid_s:.0f} s wall ({args.jobs} jobs), tuning {tune_s:.0f} s")
 
     out = {
