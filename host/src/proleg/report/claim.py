@@ -238,18 +238,18 @@ def idealised_walk(robot: Any, point: GridPoint, direction: str = "+x",
     The speed is not a ceiling (the drive settles 0.3 s in every state and holds 4° past ψ*,
     or at the strokes), but it has no sensing errors and no stall rules: how much a condition
     slows the gait itself, whatever drives it."""
-    from ..sim.physical.measure import timed_walk_within_envelope
+    from ..sim.physical.measure import walk_within_envelope
 
     plant = _plant(robot, point)
-    walk = timed_walk_within_envelope(robot, gait_states(robot, direction, gait), plant)
-    if not isinstance(walk, str):
-        mm, s = walk
-        speed = mm / s if s > 0 else 0.0
+    walk = walk_within_envelope(robot, gait_states(robot, direction, gait), plant)
+    mm, s = walk.mm_per_cycle, walk.s_per_cycle
+    if mm is not None:
+        speed = mm / s if s else 0.0
         if (1 if direction == "+x" else -1) * mm > 0:
             return IdealisedWalk(True, "", speed)
         return IdealisedWalk(False, f"the coils complete the gait, but even an ideal drive (true ψ) moves {mm:+.2f} "
                                     f"mm per cycle: under this condition the gait does not go {direction}", speed)
-    return IdealisedWalk(False, _why_not_walked(robot, plant, walk), None)
+    return IdealisedWalk(False, _why_not_walked(robot, plant, walk.latched), None)
 
 
 def _why_not_walked(robot: Any, plant: Any, latched: str) -> str:

@@ -405,26 +405,26 @@ def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditio
     return (plant.displacement_mm - x0) / cycles, (plant.time_s - t0) / cycles
 
 
-def walk_within_envelope(robot: Any, states: Sequence[int], plant: PhysicalPlant) -> tuple[float | None, str]:
-    """The claim bench's and ``--measure-climb``'s question: mm per cycle the idealised drive
-    walks ``states`` on ``plant`` within the firmware's safety envelope (two cycles after a
-    warm-up, 10 s at most per state); None if it cannot, with the fault the envelope would
-    latch ("" when a state is simply not reached)."""
-    walk = timed_walk_within_envelope(robot, states, plant)
-    if isinstance(walk, str):
-        return None, walk
-    return walk[0], ""
+@dataclass(frozen=True)
+class EnvelopeWalk:
+    """What ``walk_within_envelope`` found: mm and seconds per cycle, or (None) why not."""
+
+    mm_per_cycle: float | None  # None: a state was not reached, or the envelope latched a fault
+    s_per_cycle: float | None
+    latched: str = ""           # the fault the envelope would latch ("" when none)
 
 
-def timed_walk_within_envelope(robot: Any, states: Sequence[int],
-                               plant: PhysicalPlant) -> tuple[float, float] | str:
-    """``walk_within_envelope`` with the time it takes: (mm per cycle, s per cycle), or the
-    fault the envelope would latch ("" when a state is simply not reached)."""
+def walk_within_envelope(robot: Any, states: Sequence[int], plant: PhysicalPlant) -> EnvelopeWalk:
+    """The claim bench's and ``--measure-climb``'s question: how far and how fast the idealised
+    drive walks ``states`` on ``plant`` within the firmware's safety envelope (two cycles after
+    a warm-up, 10 s at most per state); if it cannot, the fault the envelope would latch ("" when
+    a state is simply not reached)."""
     from ...errors import SimError
 
     try:
-        return run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
+        mm, s = run_sequence(robot, states, cycles=2, plant=plant, timeout_s=10.0, envelope=True)
     except EnvelopeLatched as e:
-        return f"{e} ({e.code})"
+        return EnvelopeWalk(None, None, f"{e} ({e.code})")
     except SimError:
-        return ""
+        return EnvelopeWalk(None, None)
+    return EnvelopeWalk(mm, s)
