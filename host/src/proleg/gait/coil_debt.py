@@ -29,6 +29,12 @@ class CoilBudget:
     payback: float   # seconds of debt paid back per second not on, rounded as sma.c rounds it
 
 
+def refill_q8(on_us: int, cooldown_us: int) -> int:
+    """sma.c set_times: on-time paid back per µs not on, × 256, rounded down, at most 10000
+    (39×)."""
+    return min(10_000, on_us // ((cooldown_us >> 8) + 1))
+
+
 def coil_budget(max_on_ms: float, min_cooldown_ms: float, tick_hz: int) -> CoilBudget:
     """The budget the firmware builds from ``[safety]`` (render.py turns the times into whole
     ticks, sma.c's set_times the pay-back into a ×256 rate, rounded down and at most 39×,
@@ -36,8 +42,7 @@ def coil_budget(max_on_ms: float, min_cooldown_ms: float, tick_hz: int) -> CoilB
     tick_us = round(1_000_000 / tick_hz)
     on_us = math.ceil(max_on_ms * tick_hz / 1000.0 - 1e-9) * tick_us
     cooldown_us = math.ceil(min_cooldown_ms * tick_hz / 1000.0 - 1e-9) * tick_us
-    refill_q8 = min(10_000, on_us // ((cooldown_us >> 8) + 1))
-    return CoilBudget(on_us / 1e6, ((tick_us * refill_q8) >> 8) / tick_us)
+    return CoilBudget(on_us / 1e6, ((tick_us * refill_q8(on_us, cooldown_us)) >> 8) / tick_us)
 
 
 def charge(debt: Sequence[float], on: Sequence[bool], seconds: float, payback: float) -> list[float]:

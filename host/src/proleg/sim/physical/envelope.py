@@ -54,16 +54,16 @@ class Envelope:
 
     def __init__(self, robot: Any, n_channels: int, dt_s: float):
         from ...firmware.render import control_part
+        from ...gait.coil_debt import refill_q8
 
         c = control_part(robot)
         self.dt_us = round(dt_s * 1e6)
         # sma.c decides for the tick to come: a step longer than the tick looks that far ahead
         self.ahead_us = max(self.dt_us, c.tick_us)
         # sma.c set_times(CFG_MAX_ON_TICKS × CFG_TICK_US, CFG_MIN_COOLDOWN_TICKS × CFG_TICK_US):
-        # refill_q8 = on_us / (cooldown_us / 256 + 1), at most 10000; each µs off pays back
-        # refill_q8 / 256 µs of debt
+        # each µs off pays back refill_q8 / 256 µs of debt
         self.max_on_us = c.max_on_ticks * c.tick_us
-        self.refill_q8 = min(10000, self.max_on_us // ((c.cooldown_ticks * c.tick_us >> 8) + 1))
+        self.refill_q8 = refill_q8(self.max_on_us, c.cooldown_ticks * c.tick_us)
         self.max_duty_pm = c.max_duty_pm
         self.hold_ceiling_pm = c.hold_max_duty_pm
         self.latch = c.on_limit_latch
