@@ -8,9 +8,10 @@ threads, so the UI never blocks on a reply.
 
 Keys: s start · x stop · e E-stop · c clear faults and E-stop · g next gait · d direction ·
 q (or Ctrl-C) quit. ``g`` offers only the gaits INFO says the firmware has (and ``user`` once
-a user gait is loaded, selected with its way unstated; ``d`` then cycles +x, -x, unstated). Events name their kind, fault, stop reason, limb and actuator
-(``proleg.console.names``). The layout fits an 80×24 terminal. Leaving stops the robot: that
-is ``console_main``'s job (``proleg.console.leave``), whatever ended the UI.
+a user gait is loaded, selected with its way unstated; ``d`` then cycles +x, -x, unstated).
+Events name their kind, fault, stop reason, limb and actuator (``proleg.console.names``). The
+layout fits an 80×24 terminal. Leaving stops the robot: that is ``console_main``'s job
+(``proleg.console.leave``), whatever ended the UI.
 
 Given the robot file (``robot``), the console replans after a limb loss unless told not to
 (``replan=False``, ``--no-replan``): when a gait stops on a fault that names an actuator and
@@ -40,10 +41,10 @@ from ..errors import LinkError
 from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, EventKind, Flag
 from ..states import label as state_label
 from ..states import limb_levels
-from ..link.client import Received, RobotClient, RobotInfo
+from ..link.client import Received, RobotClient, RobotInfo, direction_text
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
 from ..robot import Robot
-from .names import RobotNames, describe_event, direction_text, gait_text, step_text
+from .names import RobotNames, describe_event, gait_text, step_text
 from .replan import ReplanWorker
 
 BAR_WIDTH = 24

@@ -54,8 +54,9 @@ from .enums import (
 from .layout import CHANNEL_CEILING, LIMB_CEILING, TYPES, Field, MessageSpec, ScalarType
 
 #: 2: STATS.tick_overruns; CALIBRATE_LEVEL / GET_LEVEL / CLEAR_LEVEL and LEVEL; SET_ACTUATOR_MAP /
-#: GET_ACTUATOR_MAP and ACTUATOR_MAP; EVENT kinds SUSPECT, FALLBACK, LEVEL_DONE.
-PROTOCOL_VERSION = 3  # 3: START of the loaded gait states its way (or DIR_UNSTATED) for the climb guard
+#: GET_ACTUATOR_MAP and ACTUATOR_MAP; EVENT kinds SUSPECT, FALLBACK, LEVEL_DONE. 3: START of the
+#: loaded gait states its way (or DIR_UNSTATED), which the climb guard checks.
+PROTOCOL_VERSION = 3
 
 #: Largest frame before COBS (msg_id + payload + crc) for any build of up to
 #: ``LIMB_CEILING`` limbs and ``CHANNEL_CEILING`` channels. The C receive buffer has this size.

@@ -14,14 +14,14 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from ...robot import ClimbLimit
+from ...robot import MIN_CLIMB_DEG, ClimbLimit
 from .measure import walk_within_envelope
 
 #: The plant's steepest ground (conditions.py: incline_deg in −12..12).
 TOP_DEG = 12.0
 #: The bisection stops at this width (°).
 RESOLUTION_DEG = 0.25
-#: The smallest max_climb_deg the firmware takes (robot.MIN_CLIMB_DEG), and the grid it is rounded to.
+#: The grid a suggested max_climb_deg is rounded down to (at least robot.MIN_CLIMB_DEG, the smallest it takes).
 SUGGEST_STEP_DEG = 0.5
 
 
@@ -33,7 +33,7 @@ def walks_up(robot: Any, states: Sequence[int], direction: str, grade_deg: float
 
     sign = 1 if direction == "+x" else -1
     plant = make_plant(robot, "physical", [*conditions, f"incline_deg={sign * grade_deg:g}"])
-    mm, _ = walk_within_envelope(robot, states, plant)
+    mm = walk_within_envelope(robot, states, plant).mm_per_cycle
     return mm is not None and sign * mm > 0
 
 
@@ -48,7 +48,7 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
         return None
     if walks_up(robot, states, direction, top_deg, conditions):
         return top_deg
-    lo, hi = 0, round(top_deg / resolution_deg)  # in steps: climbs lo, slides back at hi
+    lo, hi = 0, round(steps)  # in steps: climbs lo, slides back at hi
     while hi - lo > 1:
         mid = (lo + hi) // 2
         if walks_up(robot, states, direction, mid * resolution_deg, conditions):
@@ -75,4 +75,4 @@ def suggested_limit(climbs: Sequence[float | None]) -> float | None:
     known = [c for c in climbs if c is not None]
     if not known:
         return None
-    return max(SUGGEST_STEP_DEG, math.floor(min(known) / SUGGEST_STEP_DEG) * SUGGEST_STEP_DEG)
+    return max(MIN_CLIMB_DEG, math.floor(min(known) / SUGGEST_STEP_DEG) * SUGGEST_STEP_DEG)
