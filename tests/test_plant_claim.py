@@ -5,6 +5,8 @@ with a firmware fault and cold coils."""
 
 from __future__ import annotations
 
+import json
+from dataclasses import asdict
 from pathlib import Path
 
 import pytest
@@ -85,6 +87,17 @@ def test_a_supply_that_cannot_heat_the_coils_is_explained_and_ends_in_a_fault_wi
     assert not possible and "cannot transform far enough" in why and "°C" in why
     fb = claim.feedback_run(robot, point, duration_s=20.0)
     assert not fb.completed and fb.fault and fb.coil_max_end_c < 50.0
+
+
+def test_a_claim_row_of_a_three_limb_robot_is_plain_json():
+    """The bench writes every row with json.dumps: a numpy bool from a numpy displacement
+    (inchworm-3's plant gave one) stopped `bench_claim.py --robot robots/inchworm-3.toml`
+    after the whole grid had run."""
+    robot = load_robot(R1.parent / "inchworm-3.toml")
+    out = claim.feedback_run(robot, claim.NOMINAL, duration_s=6.0)
+    row = json.loads(json.dumps(asdict(out)))
+    assert row["completed"] is out.completed
+    assert type(out.displacement_mm) is float and type(out.speed_mm_s) is float  # not numpy's
 
 
 def test_an_open_loop_run_reports_why_it_did_not_complete():

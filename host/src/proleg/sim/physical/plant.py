@@ -490,7 +490,7 @@ class PhysicalPlant:
     @property
     def displacement_mm(self) -> float:
         """Centre of mass along the ground (+x = from the first limb towards the last)."""
-        return self._com - self._com0
+        return float(self._com - self._com0)
 
     @property
     def transitions(self) -> list[Transition]:
