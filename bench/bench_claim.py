@@ -101,7 +101,8 @@ def main() -> int:
     tune_s = time.perf_counter() - t0
     d = tuned.drive
     print(f"open loop tuned on the fresh {robot.name} in {tune_s:.0f} s ({tuned.evaluations} drives × 3 powers): "
-          f"S {d.strength}, T_active {d.t_active_s} s, T_cycle {d.t_cycle_s[0]:g} s, φ12 {d.phase_s[1] - d.phase_s[0]:g} s; "
+          f"S {d.strength}, T_active {d.t_active_s} s, T_cycle {d.t_cycle_s[0]:g} s, "
+          f"phases {tuple(round(p - d.phase_s[0], 6) for p in d.phase_s)} s; "
           f"worst speed over ±10 % power {tuned.worst_speed_mm_s:+.3f} mm/s", flush=True)
 
     t0 = time.perf_counter()

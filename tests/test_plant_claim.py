@@ -9,6 +9,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from proleg.report import claim
@@ -98,6 +99,22 @@ def test_a_claim_row_of_a_three_limb_robot_is_plain_json():
     row = json.loads(json.dumps(asdict(out)))
     assert row["completed"] is out.completed
     assert type(out.displacement_mm) is float and type(out.speed_mm_s) is float  # not numpy's
+
+
+def test_learn_then_walk_on_a_larger_robot_takes_the_firmwares_bound_on_the_cycle():
+    """caterpillar-4 has 36 states: the "total" objective needs a bound there, and the bench's
+    learned gait stopped with a GaitError before the grid. With the robot file's own matrix as
+    if measured, the gait is the firmware's gait 0 (the same objective and bound)."""
+    from types import SimpleNamespace
+
+    from proleg.firmware.gaits import firmware_gaits
+
+    robot = load_robot(R1.parent / "caterpillar-4.toml")
+    reward, allowed = robot.transitions.dense()
+    measured = SimpleNamespace(matrix_mm=np.where(allowed, reward, np.nan), duration_s=np.ones_like(reward))
+    want = firmware_gaits(robot)["+x"][0]
+    got = claim.optimal_gait_of(robot, measured, "+x")
+    assert got == tuple(want.states)
 
 
 def test_an_open_loop_run_reports_why_it_did_not_complete():

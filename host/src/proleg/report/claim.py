@@ -169,22 +169,32 @@ def learned_gait(robot: Any, direction: str = "+x") -> tuple[tuple[int, ...], An
     """The gait a user gets from learn-then-walk on the fresh robot: the reward matrix the
     simulator measures (``proleg sim ROBOT --measure-matrix``: every allowed transition driven
     to its state, mm and seconds), then the optimal gait of that matrix (objective "total",
-    the firmware's default). Returns (closed state sequence, MeasuredMatrix)."""
-    import numpy as np
-
-    from ..gait.optimal import optimal_gaits
+    the firmware's default, with its bound on the cycle's length). Returns (closed state
+    sequence, MeasuredMatrix)."""
     from ..sim.physical.measure import measure_matrix
-    from ..transitions import TransitionTable
 
     m = measure_matrix(robot)
+    return optimal_gait_of(robot, m, direction), m
+
+
+def optimal_gait_of(robot: Any, measured: Any, direction: str = "+x") -> tuple[int, ...]:
+    """The optimal gait (objective "total", bounded as the firmware bounds it on a larger
+    robot) of a matrix the simulator measured: its allowed entries that have a value."""
+    import numpy as np
+
+    from ..firmware.gaits import default_max_transitions
+    from ..gait.optimal import optimal_gaits
+    from ..transitions import TransitionTable
+
     _, allowed = robot.transitions.dense()
-    ok = np.isfinite(m.matrix_mm)
-    table = TransitionTable.from_dense(robot.levels, np.where(ok, m.matrix_mm, 0.0), np.asarray(allowed) & ok,
-                                       np.where(np.isfinite(m.duration_s), m.duration_s, 1.0))
-    gaits = list(optimal_gaits(table, "total", direction).gaits)
+    ok = np.isfinite(measured.matrix_mm)
+    table = TransitionTable.from_dense(robot.levels, np.where(ok, measured.matrix_mm, 0.0),
+                                       np.asarray(allowed) & ok,
+                                       np.where(np.isfinite(measured.duration_s), measured.duration_s, 1.0))
+    gaits = list(optimal_gaits(table, "total", direction, default_max_transitions(robot, "total")).gaits)
     if not gaits:
         raise SimError(f"claim: the measured matrix of {robot.name} has no gait in {direction}")
-    return tuple(gaits[0].states), m
+    return tuple(gaits[0].states)
 
 
 def _plant(robot: Any, point: GridPoint, extra: Sequence[str] = ()) -> Any:
