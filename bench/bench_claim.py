@@ -111,6 +111,12 @@ def main() -> int:
     print(f"learn-then-walk: the matrix measured on the fresh {robot.name} ({time.perf_counter() - t0:.0f} s) gives the "
           f"+x gait {label}", flush=True)
 
+    ideal = claim.idealised_walk(robot, claim.NOMINAL, "+x", 0)
+    if not ideal.possible:
+        print(f"note: on the nominal plant gait 0 does not walk +x ({ideal.why_not}). The robot file's matrix "
+              f"does not describe this plant, so most rows below count as impossible; `proleg sim {args.robot} "
+              "--measure-matrix` measures the matrix it walks by (the learned gait's columns use it)", flush=True)
+
     points = claim.grid()
     if args.quick:
         points = points[::4]
