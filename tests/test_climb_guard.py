@@ -79,6 +79,79 @@ def test_a_limit_out_of_range_is_one_line_naming_the_key(tmp_path, value, expect
     assert "max_climb_deg" in message and expected in message and "\n" not in message
 
 
+@pytest.mark.parametrize("value, expected", [
+    ('{ "+x" = [], "-x" = 2 }', "max_climb_deg.+x: expected a number, or a list"),
+    ('{ "+x" = 2, "-x" = [3, 0.2] }', "max_climb_deg.-x[1]: expected a number in [0.5, 19.5]"),
+    ('{ "+x" = [2, "x"], "-x" = 2 }', "max_climb_deg.+x[1]: expected a number"),
+    ("[2, 3]", 'a number, or a table { "+x" = …, "-x" = … }'),
+])
+def test_a_bad_per_gait_list_is_one_line_naming_the_entry(tmp_path, value, expected):
+    with pytest.raises(RobotFileError) as e:
+        load_robot(_r1_with(tmp_path, value))
+    assert expected in str(e.value) and "\n" not in str(e.value)
+
+
+@settings(max_examples=200, deadline=None)
+@given(plus=st.one_of(st.sampled_from([0.5, 2.0, 3.5]), st.lists(st.sampled_from([0.5, 1.0, 2.5, 4.0]), min_size=1,
+                                                                  max_size=5)),
+       minus=st.lists(st.sampled_from([1.0, 1.5, 6.0]), min_size=1, max_size=4))
+def test_each_gait_takes_its_listed_limit_and_the_rest_the_smallest_of_the_list(plus, minus):
+    """Oracle: the list as written. The limit keeps it short (trailing repeats of the smallest go)
+    and says it back as a robot file would; every gait, listed or past the list, and the loaded
+    gait (None) get the same limit from both."""
+    from proleg.robot import ClimbLimit
+
+    def written(v, gait):
+        if isinstance(v, float):
+            return v
+        return v[gait] if gait is not None and gait < len(v) else min(v)
+
+    limit = ClimbLimit.of(plus, minus)
+    for d, v in (("+x", plus), ("-x", minus)):
+        for gait in (None, *range(7)):
+            assert limit.toward(d, gait) == written(v, gait)
+    # said back in the file's form, it reads as the same limit
+    assert ClimbLimit.of(*(_read_back(limit.to_json(), d) for d in ("+x", "-x"))) == limit
+
+
+def _read_back(j, d):
+    way = j if not isinstance(j, dict) else j[d]
+    return way if isinstance(way, float) else tuple(way)
+
+
+def test_a_per_gait_list_is_built_into_the_firmware_and_may_not_name_more_gaits_than_it_carries(tmp_path):
+    from proleg.errors import BuildError
+
+    board = load_board("arduino-nano")
+    r3 = robots_dir() / "paper-r3.toml"  # gaits: +x one, -x three
+    path = tmp_path / "r3.toml"
+    path.write_text(r3.read_text(encoding="utf-8").replace(
+        "max_climb_deg = 2.5", 'max_climb_deg = { "+x" = 2.5, "-x" = [6, 1.5] }'), encoding="utf-8")
+    robot = load_robot(path)
+    config = render_project(robot, board, firmware_gaits(robot))["gen/robot_config.h"]
+    assert "#define CFG_MAX_CLIMB_GAITS_MX 600, 150 " in config and "CFG_MAX_CLIMB_GAITS_PX" not in config
+    assert "#define CFG_MAX_CLIMB_MX_CDEG 150 " in config  # the loaded gait, and -x gait 2: the smallest
+    path.write_text(r3.read_text(encoding="utf-8").replace(
+        "max_climb_deg = 2.5", 'max_climb_deg = { "+x" = [2.5, 1], "-x" = 3 }'), encoding="utf-8")
+    robot = load_robot(path)
+    with pytest.raises(BuildError, match=r"max_climb_deg\.\+x: 2 limits, but the firmware carries 1 gait walking \+x"):
+        render_project(robot, board, firmware_gaits(robot))
+
+
+def test_each_built_in_gait_is_refused_by_its_own_limit_and_the_rest_by_the_smallest(tmp_path_factory):
+    """R3 walking -x up 4°: gait 0 (limit 6°) starts; gait 1 (1.5°) and gait 2, past the list
+    (the smallest, 1.5°), are refused, and so is the loaded gait stated -x."""
+    r3 = robots_dir() / "paper-r3.toml"
+    path = tmp_path_factory.mktemp("pergait") / "r3.toml"
+    path.write_text(r3.read_text(encoding="utf-8").replace(
+        "max_climb_deg = 2.5", 'max_climb_deg = { "+x" = 2.5, "-x" = [6, 1.5] }'), encoding="utf-8")
+    robot = load_robot(path)
+    assert not _refused(_start_on(robot, -4.0, "-x", gait=0))
+    for gait in (1, 2, [0, 1, 3, 0]):
+        out = _start_on(robot, -4.0, "-x", gait=gait)
+        assert _refused(out) and _detail_deg(out) == pytest.approx(4.0, abs=BAND_DEG), (gait, out)
+
+
 def test_the_guard_is_built_only_when_the_robot_file_sets_it(tmp_path):
     board = load_board("arduino-nano")
     for value, lines in ((None, ()), ("2.5", ("#define CFG_MAX_CLIMB_CDEG 250 ",)),
@@ -215,12 +288,14 @@ def test_only_the_loaded_gait_may_leave_its_way_unstated():
 
 
 def test_four_limbs_read_the_slope_from_the_first_and_last_ends():
-    robot = load_robot(robots_dir() / "caterpillar-4.toml")  # max_climb_deg = { "+x" = 1.5, "-x" = 3 }
+    robot = load_robot(robots_dir() / "caterpillar-4.toml")  # { "+x" = [1.5, 1], "-x" = [3, 3.5] }
     assert _refused(_start_on(robot, 4.0, "+x"))
     assert _refused(_start_on(robot, -4.0, "-x"))
     assert not _refused(_start_on(robot, -4.0, "+x"))  # downhill
     assert _refused(_start_on(robot, 2.2, "+x"))  # 2.2° up: more than +x climbs
     assert not _refused(_start_on(robot, -2.2, "-x"))  # 2.2° up: -x climbs it
+    assert not _refused(_start_on(robot, 1.25, "+x"))  # limits 1.5° for gait 0, 1° for gait 1
+    assert _refused(_start_on(robot, 1.25, "+x", gait=1))
 
 
 def test_the_host_says_what_too_steep_means():
@@ -436,7 +511,10 @@ def test_each_direction_is_suggested_its_own_limit_and_one_that_does_not_move_ta
     from proleg.robot import ClimbLimit
     from proleg.sim.physical.climb import suggested_limits
 
-    assert suggested_limits({"+x": [1.5, 1.25], "-x": [3.0]}) == ClimbLimit(1.0, 3.0)
+    assert suggested_limits({"+x": [1.5], "-x": [3.0]}) == ClimbLimit(1.5, 3.0)
+    assert suggested_limits({"+x": [1.5, 1.25], "-x": [3.0]}) == ClimbLimit.of([1.5, 1.0], 3.0)  # each gait its own
+    assert suggested_limits({"+x": [1.25, 1.75, 1.0], "-x": [3.0, 3.2]}) == ClimbLimit.of([1.0, 1.5], 3.0)
+    assert suggested_limits({"+x": [2.0, None], "-x": [2.0]}) == ClimbLimit.of([2.0, 0.5], 2.0)  # one goes back
     assert suggested_limits({"+x": [None], "-x": [2.75]}) == ClimbLimit(2.5, 2.5)
     assert suggested_limits({"+x": [2.0]}) == ClimbLimit(2.0, 2.0)
     assert suggested_limits({"+x": [None], "-x": [None]}) is None
@@ -456,8 +534,12 @@ def test_the_suggested_limit_is_the_smaller_climb_on_the_half_degree_and_at_leas
 @pytest.mark.parametrize("name", sorted(p.stem for p in robots_dir().glob("*.toml")
                                         if "max_climb_deg = " in p.read_text(encoding="utf-8")))
 def test_every_example_robots_limit_is_what_measure_climb_suggests(capsys, name):
-    """The robot files' max_climb_deg are measured, not chosen: --measure-climb gives them back."""
-    rc, out, _ = _cli(capsys, "sim", str(robots_dir() / f"{name}.toml"), "--measure-climb", "--json")
+    """The robot files' max_climb_deg are measured, not chosen: --measure-climb gives them back
+    (over as many gaits of each way as the file lists limits for)."""
+    path = robots_dir() / f"{name}.toml"
+    limit = load_robot(path).control.max_climb_deg
+    listed = max(1, *(len(limit.gaits_toward(d)) for d in ("+x", "-x")))
+    rc, out, _ = _cli(capsys, "sim", str(path), "--measure-climb", "--json", "--climb-gaits", str(listed))
     report = json.loads(out)
     assert rc == 0
     assert report["suggested_max_climb_deg"] == report["max_climb_deg"], report

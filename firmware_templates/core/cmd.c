@@ -130,7 +130,7 @@ static void cmd_start(void)
 #ifdef CFG_MAX_CLIMB_CDEG
     /* the climb guard: a built-in gait's way, or the one START states for a loaded gait */
     if (dir <= PROTO_DIR_MINUS_X) {
-        uint16_t climb = level_too_steep(dir == PROTO_DIR_MINUS_X);
+        uint16_t climb = level_too_steep(dir == PROTO_DIR_MINUS_X, gait);
         if (climb) {
             seq_stop(); /* refused before any coil heats (the ground just levelled on stays in use) */
             nack(PROTO_ERR_TOO_STEEP, climb);

@@ -80,7 +80,35 @@ int16_t level_ground_cdeg(uint8_t limb)
 #endif
 static uint8_t tilted; /* this START, from rest, found an end beyond LEVEL_MAX_CDEG (level_at_start) */
 
-uint16_t level_too_steep(uint8_t minus_x)
+#if defined(CFG_MAX_CLIMB_GAITS_PX) || defined(CFG_MAX_CLIMB_GAITS_MX)
+#include "rom.h"
+#ifdef CFG_MAX_CLIMB_GAITS_PX
+static const uint16_t climb_px[] ROM = {CFG_MAX_CLIMB_GAITS_PX};
+#endif
+#ifdef CFG_MAX_CLIMB_GAITS_MX
+static const uint16_t climb_mx[] ROM = {CFG_MAX_CLIMB_GAITS_MX};
+#endif
+
+/* A built-in gait's own limit where the robot file lists one per gait; else its way's. */
+static uint16_t climb_limit(uint8_t minus_x, uint8_t gait)
+{
+#ifdef CFG_MAX_CLIMB_GAITS_PX
+    if (!minus_x && gait < sizeof climb_px / sizeof climb_px[0]) {
+        return ROM_U16(&climb_px[gait]);
+    }
+#endif
+#ifdef CFG_MAX_CLIMB_GAITS_MX
+    if (minus_x && gait < sizeof climb_mx / sizeof climb_mx[0]) {
+        return ROM_U16(&climb_mx[gait]);
+    }
+#endif
+    return minus_x ? CFG_MAX_CLIMB_MX_CDEG : CFG_MAX_CLIMB_CDEG;
+}
+#else
+#define climb_limit(minus_x, gait) ((void)(gait), (minus_x) ? CFG_MAX_CLIMB_MX_CDEG : CFG_MAX_CLIMB_CDEG)
+#endif
+
+uint16_t level_too_steep(uint8_t minus_x, uint8_t gait)
 {
     /* twice the rise; |ground| ≤ LEVEL_MAX_CDEG each: fits */
     int16_t rise2 = (int16_t)(lm[0].ground - lm[CFG_N_LIMBS - 1u].ground);
@@ -90,7 +118,7 @@ uint16_t level_too_steep(uint8_t minus_x)
     if (minus_x) {
         rise2 = (int16_t)-rise2;
     }
-    return status == PROTO_LEVEL_STORED && rise2 > 2 * (minus_x ? CFG_MAX_CLIMB_MX_CDEG : CFG_MAX_CLIMB_CDEG)
+    return status == PROTO_LEVEL_STORED && rise2 > 2 * (int16_t)climb_limit(minus_x, gait)
                ? (uint16_t)rise2 >> 1
                : 0u;
 }

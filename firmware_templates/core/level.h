@@ -92,7 +92,9 @@ void level_at_start(void);
 #ifdef CFG_MAX_CLIMB_CDEG
 /* The climb guard ([control] max_climb_deg): how far the ground in use rises in the gait's
  * direction (towards -x when `minus_x`), 0.01°, if that is more than CFG_MAX_CLIMB_CDEG
- * (walking -x: CFG_MAX_CLIMB_MX_CDEG where the robot file gives -x its own); else 0. Against
+ * (walking -x: CFG_MAX_CLIMB_MX_CDEG where the robot file gives -x its own; built-in gait
+ * `gait` of that way: its entry of CFG_MAX_CLIMB_GAITS_PX / _MX where the file lists one per
+ * gait; PROTO_GAIT_USER, the loaded gait: the way's limit, the smallest of its list); else 0. Against
  * a flat record the first limb's end reads the slope rising towards +x and the last limb's end
  * its negative (above), so the rise is half their difference.
  * The ground in use is the one START levelled on at rest, or level_calibrate(1)'s. 0 without a
@@ -101,7 +103,7 @@ void level_at_start(void);
  * takes, uphill or down (the gait would run on ψ misread by that much). Call it after
  * level_at_start(). */
 #define LEVEL_TOO_TILTED 0xFFFFu
-uint16_t level_too_steep(uint8_t minus_x);
+uint16_t level_too_steep(uint8_t minus_x, uint8_t gait);
 #endif
 
 /* PROTO_LEVEL_* status, and the offset in use per limb (0.01°). */
@@ -118,7 +120,7 @@ int16_t level_ground_cdeg(uint8_t limb);
 #define level_status() ((uint8_t)0) /* PROTO_LEVEL_NONE */
 #define level_offset_cdeg(limb) ((void)(limb), (int16_t)0)
 #define level_ground_cdeg(limb) ((void)(limb), (int16_t)0)
-#define level_too_steep(minus_x) ((void)(minus_x), (uint16_t)0)
+#define level_too_steep(minus_x, gait) ((void)(minus_x), (void)(gait), (uint16_t)0)
 #endif
 
 #endif /* PROLEG_LEVEL_H */

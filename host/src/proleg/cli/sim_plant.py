@@ -13,6 +13,8 @@ import argparse
 import json
 from typing import Any
 
+from .number_args import positive_int
+
 PLANT_CHOICES = ("physical", "table")
 
 
@@ -33,10 +35,14 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
     s.add_argument("--measure-climb", action="store_true",
                    help="measure the steepest grade gait 0 of each direction climbs on the physical plant "
                         "(idealised drive, within the safety envelope) and suggest [control] max_climb_deg; "
-                        "--all-gaits: every built-in gait")
+                        "--climb-gaits N / --all-gaits: more of each direction's built-in gaits, each its own "
+                        "limit where they differ")
     s.add_argument("--all-gaits", action="store_true",
                    help="with --measure-climb: every gait the firmware carries, not gait 0 alone (minutes for robots "
                         "with tens of tied gaits)")
+    s.add_argument("--climb-gaits", type=positive_int, metavar="N", default=None,
+                   help="with --measure-climb: the first N gaits of each direction (in the firmware's order, "
+                        "as proleg build lists them); the gaits past them take the smallest limit")
     s.add_argument("--measure-matrix", action="store_true",
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
     s.add_argument("--hold-range", action="store_true",
@@ -121,9 +127,8 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     """``proleg sim ROBOT --measure-climb [--all-gaits] [--json]``: the steepest grade gait 0 of
     each direction (or every built-in gait) climbs, and the ``max_climb_deg`` that suggests (per
-    direction, the smallest over that direction's gaits that move at all). The guard holds every
-    gait of a direction to its limit, so tie gaits that climb less are worth measuring
-    (docs/calibration.md)."""
+    direction; with --all-gaits one per gait where they differ). A number holds every gait of a
+    direction to it, so tie gaits that climb less are worth measuring (docs/calibration.md)."""
     from ..errors import SimError
     from ..firmware.build import firmware_gaits
     from ..robot import climb_guard_refusal
@@ -144,8 +149,11 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
         raise SimError("--measure-climb: it sets the incline itself; leave incline_deg out of --condition")
     if why := climb_guard_refusal(len(robot.limbs), robot.library):
         raise SimError(f"--measure-climb: {robot.name} cannot carry [control] max_climb_deg: {why}")
+    if args.all_gaits and args.climb_gaits is not None:
+        raise SimError("--measure-climb: --all-gaits or --climb-gaits N, not both")
     every = firmware_gaits(robot, args.objective, args.max_transitions)
-    gaits = {d: list(every.get(d, ())) if args.all_gaits else list(every.get(d, ()))[:1] for d in ("+x", "-x")}
+    first = None if args.all_gaits else (args.climb_gaits or 1)
+    gaits = {d: list(every.get(d, ()))[:first] for d in ("+x", "-x")}
     climbs: dict[str, list[float | None]] = {
         d: [steepest_climb(robot, g.states, d, list(args.condition)) for g in gs] for d, gs in gaits.items() if gs}
     limit = suggested_limits(climbs)
@@ -155,8 +163,10 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
                           "climb_deg": climbs, "suggested_max_climb_deg": None if limit is None else limit.to_json(),
                           "max_climb_deg": None if have is None else have.to_json()}))
         return 0
-    which = "every built-in gait" if args.all_gaits else "gait 0 of each direction (--all-gaits: every one)"
-    print(f"{robot.name}: the steepest grade {which} climbs on the physical plant (idealised drive within the "
+    which = ("every built-in gait" if first is None else
+             "gait 0 of each direction (--climb-gaits N: the first N; --all-gaits: every one)" if first == 1 else
+             f"the first {first} gaits of each direction")
+    print(f"{robot.name}: the steepest grade climbed by {which} on the physical plant (idealised drive within the "
           f"safety envelope, {RESOLUTION_DEG:g}° steps up to {TOP_DEG:g}°)")
     for direction, per in climbs.items():
         for i, climb in enumerate(per):
@@ -167,11 +177,14 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
         print("no gait moves: no max_climb_deg to suggest")
         return 0
     floor = " (the smallest the firmware takes: a gait barely climbs at all)" if any(
-        c is not None and c < limit.toward(d) for d, per in climbs.items() for c in per) else ""
+        c is not None and c < limit.toward(d, i if limit.gaits_toward(d) else None)
+        for d, per in climbs.items() for i, c in enumerate(per)) else ""
     print(f"suggested: [control] max_climb_deg = {limit}{floor}   (the robot file: "
-          f"{'none' if have is None else have}; the guard holds every gait of a direction to its limit)")
-    if not args.all_gaits and any(len(every.get(d, ())) > 1 for d in ("+x", "-x")):
-        print("note: the firmware carries other gaits too; they may climb less (--all-gaits measures each)")
+          f"{'none' if have is None else have}; a list gives each gait of that way its own limit, "
+          "a number holds them all to it)")
+    if any(len(every.get(d, ())) > len(gaits[d]) for d in ("+x", "-x")):
+        print("note: the firmware carries other gaits too; they take the smallest limit of their direction, and "
+              "they may climb less (--all-gaits measures each)")
     return 0
 
 

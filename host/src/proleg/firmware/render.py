@@ -29,7 +29,7 @@ import jinja2
 from .. import __version__
 from ..errors import BoardError, BuildError
 from ..paths import display_path, templates_dir
-from ..robot import stroke_leads
+from ..robot import check_climb_limit, stroke_leads
 from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
 from .placement import place_imus
@@ -123,6 +123,8 @@ class ControlPart:
     overrun_fault: int
     max_climb_cdeg: int | None  # [control] max_climb_deg (+x) in 0.01°; None: no climb guard
     max_climb_mx_cdeg: int | None  # its -x limit where that differs (None: the same)
+    max_climb_gaits_px: tuple[int, ...] = ()  # each built-in +x gait's own limit (): the way's for all
+    max_climb_gaits_mx: tuple[int, ...] = ()
 
 
 
@@ -329,11 +331,15 @@ def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
 
 
 def _climb_cdeg(limit: Any) -> dict[str, int | None]:
-    """The climb guard's limits in 0.01°: +x, and -x only where it differs."""
+    """The climb guard's limits in 0.01°: +x, -x only where it differs, and each way's per-gait
+    list where the robot file gives one (its length is checked against the gaits in
+    ``render_context``)."""
     if limit is None:
         return {"max_climb_cdeg": None, "max_climb_mx_cdeg": None}
     plus, minus = round(limit.plus_x * 100), round(limit.minus_x * 100)
-    return {"max_climb_cdeg": plus, "max_climb_mx_cdeg": None if minus == plus else minus}
+    return {"max_climb_cdeg": plus, "max_climb_mx_cdeg": None if minus == plus else minus,
+            "max_climb_gaits_px": tuple(round(v * 100) for v in limit.plus_x_gaits),
+            "max_climb_gaits_mx": tuple(round(v * 100) for v in limit.minus_x_gaits)}
 
 
 def control_part(robot: Any) -> ControlPart:
@@ -401,6 +407,8 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
     limb_part = _limb_part(robot, board_part, board)
     control = control_part(robot)
     gaits = gait_part(robot, gaits_by_direction, limb_part.n_states)
+    if why := check_climb_limit(getattr(robot.control, "max_climb_deg", None), gaits_by_direction):
+        raise BuildError(f"robot {robot.name}: {why}")
     robot_sha = _file_sha256(getattr(robot, "path", None))
     return RenderContext(
         version=__version__,

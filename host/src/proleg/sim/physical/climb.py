@@ -59,14 +59,20 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
 
 
 def suggested_limits(climbs: dict[str, Sequence[float | None]]) -> ClimbLimit | None:
-    """``max_climb_deg`` per direction (a ``robot.ClimbLimit``) for each direction's gaits'
-    steepest climbs (``suggested_limit`` of each); a direction none of whose gaits moves takes
-    the other's (it has nothing to walk). None if no gait moves at all."""
-    per = {d: suggested_limit(climbs.get(d, ())) for d in ("+x", "-x")}
+    """``max_climb_deg`` (a ``robot.ClimbLimit``) for each direction's gaits' steepest climbs
+    (gait 0 first): per direction one limit per gait where they differ (each ``suggested_limit``
+    of its own climb; a gait that does not move that way gets the smallest the firmware takes),
+    else one number. A direction none of whose gaits moves takes the other's smallest (it has
+    nothing to walk). None if no gait moves at all."""
+    per: dict[str, tuple[float, ...] | None] = {}
+    for d in ("+x", "-x"):
+        got = climbs.get(d, ())
+        per[d] = (tuple(suggested_limit([c]) or MIN_CLIMB_DEG for c in got)
+                  if suggested_limit(got) is not None else None)
     if per["+x"] is None and per["-x"] is None:
         return None
-    return ClimbLimit(per["+x"] if per["+x"] is not None else per["-x"],
-                      per["-x"] if per["-x"] is not None else per["+x"])
+    return ClimbLimit.of(per["+x"] if per["+x"] is not None else min(per["-x"]),
+                         per["-x"] if per["-x"] is not None else min(per["+x"]))
 
 
 def suggested_limit(climbs: Sequence[float | None]) -> float | None:
