@@ -37,6 +37,22 @@ def test_gait_json_is_one_object_with_the_documented_shape(capsys):
             assert g["rate"] == pytest.approx(g["reward"] / g["transitions"])
 
 
+def test_gait_on_a_larger_robot_takes_the_bound_the_firmware_build_takes(capsys):
+    """caterpillar-4 (36 states): `proleg gait` refused the example robot for want of a
+    --max-transitions; the build bounds it by one whole-body wave (firmware.gaits)."""
+    from proleg.firmware.build import firmware_gaits
+    from proleg.robot import load_robot
+
+    path = ROBOTS / "caterpillar-4.toml"
+    code, out, err = run(capsys, "gait", str(path), "--direction", "+x", "--json")
+    assert code == 0, err
+    (result,) = json.loads(out)["results"]
+    carried = firmware_gaits(load_robot(path))
+    assert result["max_transitions"] == carried.selection.max_transitions == 12
+    assert {tuple(g["states"]) for g in result["gaits"]} >= {
+        tuple(load_robot(path).transitions.label(s) for s in g.states) for g in carried["+x"]}
+
+
 def test_gaits_with_a_step_that_raises_one_limb_and_lowers_another_are_flagged(capsys):
     code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r3.toml"), "--direction", "-x", "--json")
     assert code == 0

@@ -67,10 +67,14 @@ def cmd_gait(args: argparse.Namespace) -> int:
     if not planar:
         if args.translation_cap is not None:
             raise GaitError("--translation-cap only applies with --rotate or rot-cw/rot-ccw in --library")
+        from ..firmware.gaits import default_max_transitions
         from ..gait import optimal_gaits
 
         directions = DIRECTIONS if args.direction == "both" else (args.direction,)
-        answers = [(d, optimal_gaits(robot.transitions, args.objective, d, args.max_transitions)) for d in directions]
+        # without --max-transitions, the bound the firmware build uses (caterpillar-4: 36 states)
+        bound = args.max_transitions if args.max_transitions is not None else default_max_transitions(
+            robot, args.objective)
+        answers = [(d, optimal_gaits(robot.transitions, args.objective, d, bound)) for d in directions]
     else:
         answers = _planar_answers(robot, args)
     if args.plot:
