@@ -103,7 +103,8 @@ def main() -> int:
     print(f"open loop tuned on the fresh {robot.name} in {tune_s:.0f} s ({tuned.evaluations} drives × 3 powers): "
           f"S {d.strength}, T_active {d.t_active_s} s, T_cycle {d.t_cycle_s[0]:g} s, "
           f"phases {tuple(round(p - d.phase_s[0], 6) for p in d.phase_s)} s; "
-          f"worst speed over ±10 % power {tuned.worst_speed_mm_s:+.3f} mm/s", flush=True)
+          f"worst speed over ±10 % power {tuned.worst_speed_mm_s:+.3f} mm/s, hottest coil {tuned.peak_coil_c:.0f} °C "
+          f"(drives above {claim.OVERHEAT_C:.0f} °C are out)", flush=True)
 
     t0 = time.perf_counter()
     learned, measured = claim.learned_gait(robot, "+x")
@@ -188,6 +189,7 @@ def main() -> int:
                                     "measured_matrix": measured.to_json()},
                    "open_loop_budget": args.budget, "open_loop_powers": [0.9, 1.0, 1.1], "quick": args.quick},
         "open_loop_drive": _drive_json(d), "open_loop_tuned_worst_mm_s": round(tuned.worst_speed_mm_s, 4),
+        "open_loop_tuned_peak_coil_c": round(tuned.peak_coil_c, 1), "open_loop_max_coil_c": claim.OVERHEAT_C,
         "open_loop_tuned_by_power": {str(k): round(v, 4) for k, v in tuned.speed_by_power.items()},
         "open_loop_evaluations": tuned.evaluations, "tune_wall_s": round(tune_s, 1), "grid_wall_s": round(grid_s, 1),
         "nominal": nominal, "summary": summary, "conditions": rows,

@@ -74,3 +74,23 @@ def test_the_summary_counts_rows_the_condition_itself_slows_as_a_recount_does(sp
     assert s["idealised_barely_moves"] == barely
     assert s["feedback_kept_75pct_of_idealised_where_it_walks"] == kept_of_ideal
     assert math.isclose(s["idealised_nominal_mm_s"], round(nom_ideal, 4))
+
+
+@settings(max_examples=300, deadline=None)
+@given(rows, st.floats(-2, 2), st.floats(-8, 8), st.booleans(), st.sampled_from(["+x", "-x"]))
+def test_the_targets_count_speed_in_the_benchs_direction_only(spec, nom_fb, nom_ol, ol_completed, direction):
+    """Recount: a firmware that walks the wrong way nominally keeps nothing and is not faster;
+    an open loop whose nominal run did not complete (overheated, stalled, backwards) sets no bar."""
+    results = [_row(i, *r) for i, r in enumerate(spec)]
+    fb = claim.DriveOutcome(True, nom_fb, nom_fb * 40)
+    ol = claim.DriveOutcome(ol_completed, nom_ol, nom_ol * 40)
+    nominal = claim.ConditionResult(claim.NOMINAL, True, "", fb, ol, {}, None)
+    s = summarise(results, nominal, direction)
+    sign = 1 if direction == "+x" else -1
+    ahead = sign * nom_fb
+    kept = sum(1 for r in results if r.possible and r.feedback.completed and ahead > 0
+               and sign * r.feedback.speed_mm_s >= 0.75 * ahead)
+    bar = sign * nom_ol if ol_completed else 0.0
+    assert s["feedback_kept_75pct_where_possible"] == kept
+    assert s["targets"]["nominal feedback at least as fast as open loop"] == (ahead > 0 and ahead >= bar)
+    assert s["nominal_open_loop_completed"] is ol_completed

@@ -54,9 +54,11 @@ class _FakePlant:
             actuators = (_A(),)
 
         self.params = _P()
+        self.temperature_c = [25.0]
 
     def step(self, dt: float, duties: list[float]) -> None:
         s = duties[0]
+        self.temperature_c = [max(self.temperature_c[0], 25.0 + 100.0 * s)]  # its hottest: 25 + 100 × duty °C
         if s == 0.0:
             return
         if abs(s - 0.7) < 1e-9:
@@ -73,6 +75,17 @@ def test_the_robust_tuner_scores_the_worst_power_so_a_knife_edge_does_not_win():
     assert res.worst_speed_mm_s == pytest.approx(min(res.speed_by_power.values()))
     assert set(res.speed_by_power) == {0.9, 1.0, 1.1}
     assert res.evaluations <= 200
+
+
+def test_a_drive_that_overheats_its_coil_does_not_win_the_tuning():
+    """Duty 0.8 is the fastest but heats the fake coil to 105 °C; 0.7 is the knife edge; so
+    with a 100 °C ceiling the best is 0.6 (85 °C), whatever the search order."""
+    free = tune_open_loop_robust(_FakePlant, (0,), +1, max_duty=0.8, run_s=4.0, dt_s=0.05, budget=200)
+    capped = tune_open_loop_robust(_FakePlant, (0,), +1, max_duty=0.8, run_s=4.0, dt_s=0.05, budget=200,
+                                   max_coil_c=100.0)
+    assert free.drive.strength[0] == pytest.approx(0.8) and free.peak_coil_c == pytest.approx(105.0)
+    assert capped.drive.strength[0] == pytest.approx(0.6) and capped.peak_coil_c == pytest.approx(85.0)
+    assert capped.worst_speed_mm_s == pytest.approx(min(capped.speed_by_power.values()))
 
 
 def test_the_robust_tuner_keeps_to_its_budget():

@@ -387,7 +387,8 @@ def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
 
 def tune_open_loop_for(robot: Any, direction: str = "+x", *, budget: int = 150, dt_s: float = 0.01,
                        run_s: float = RUN_S):
-    """The best timed drive on the fresh robot (``openloop.tune_open_loop_robust``)."""
+    """The best timed drive on the fresh robot (``openloop.tune_open_loop_robust``) among
+    those that keep every coil at or below ``OVERHEAT_C``, as ``open_loop_run`` judges them."""
     from ..sim.closed_loop import make_plant
 
     def factory(power: float) -> Any:
@@ -395,7 +396,8 @@ def tune_open_loop_for(robot: Any, direction: str = "+x", *, budget: int = 150, 
 
     channels = tuple(a.channel for a in robot.actuators)
     return tune_open_loop_robust(factory, channels, +1 if direction == "+x" else -1,
-                                 max_duty=robot.safety.max_duty, budget=budget, dt_s=dt_s, run_s=run_s)
+                                 max_duty=robot.safety.max_duty, budget=budget, dt_s=dt_s, run_s=run_s,
+                                 max_coil_c=OVERHEAT_C)
 
 
 def _proved_by_the_firmware(possible: bool, why: str, fb: DriveOutcome) -> tuple[bool, str, dict[str, Any]]:

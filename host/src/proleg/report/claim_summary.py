@@ -4,7 +4,6 @@ the impossible ones stop, the learn-then-walk gait's and the idealised drive's c
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -21,14 +20,15 @@ def _clean_stop(fb: DriveOutcome) -> bool:
 IDEALISED_FLOOR = 0.05
 
 
-def _learned_summary(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
-    """The learn-then-walk gait's counts (``run_condition(learned=…)``)."""
+def _learned_summary(results: Sequence[ConditionResult], nominal: ConditionResult, sign: float) -> dict[str, Any]:
+    """The learn-then-walk gait's counts (``run_condition(learned=…)``), in the bench's
+    direction (``sign``)."""
     if "learned_gait" not in nominal.extra:
         return {}
     lnom = nominal.extra["learned_gait"]["feedback"]["speed_mm_s"]
     lposs = [r.extra["learned_gait"] for r in results if r.extra["learned_gait"]["physically_possible"]]
     ldone = [g for g in lposs if g["feedback"]["completed"]]
-    lkept = [g for g in ldone if math.copysign(1, lnom) * g["feedback"]["speed_mm_s"] >= 0.75 * abs(lnom)]
+    lkept = [g for g in ldone if sign * lnom > 0 and sign * g["feedback"]["speed_mm_s"] >= 0.75 * sign * lnom]
     limposs = [r.extra["learned_gait"] for r in results if not r.extra["learned_gait"]["physically_possible"]]
     lclean = [g for g in limposs if _clean_stop(DriveOutcome(**g["feedback"]))]
     return {"learned_gait_states": nominal.extra["learned_gait"]["states"],
@@ -40,14 +40,14 @@ def _learned_summary(results: Sequence[ConditionResult], nominal: ConditionResul
             "learned_impossible_stopped_with_fault_and_cold_coils": len(lclean)}
 
 
-def _idealised_summary(possible: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
+def _idealised_summary(possible: Sequence[ConditionResult], nominal: ConditionResult, sign: float) -> dict[str, Any]:
     """How the idealised drive's own speed compares (``idealised_walk``): the rows a condition
     slows by itself, and how often the firmware keeps 75 % of what the idealised drive makes
-    in the same row (counted only where that drive walks the row: ``IDEALISED_FLOOR``)."""
+    in the same row (counted only where that drive walks the row: ``IDEALISED_FLOOR``). Not
+    counted when the idealised drive does not walk the bench's direction (``sign``) nominally."""
     ideal_nom = nominal.idealised_mm_s
-    if not ideal_nom:
+    if not ideal_nom or sign * ideal_nom <= 0:
         return {}
-    sign = math.copysign(1, ideal_nom)
     measured = [r for r in possible if r.idealised_mm_s is not None]
     walked = [r for r in measured if sign * r.idealised_mm_s >= IDEALISED_FLOOR * abs(ideal_nom)]
     return {
@@ -72,17 +72,24 @@ def _slope_summary(results: Sequence[ConditionResult]) -> dict[str, Any]:
                 r.extra["levelled_on_ground"]["feedback"]["completed"] for r in sloped)}
 
 
-def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> dict[str, Any]:
-    """The targets of issue 13, counted honestly."""
+def summarise(results: Sequence[ConditionResult], nominal: ConditionResult, direction: str = "+x") -> dict[str, Any]:
+    """The targets of issue 13, counted honestly, in ``direction`` (the way the bench walks).
+
+    Speeds count in that direction only: a nominal firmware run that walks the other way keeps
+    nothing, and the open loop's nominal speed is what it makes there if that run completed
+    (an open loop that overheats a coil, stalls or walks backwards sets no bar)."""
+    sign = 1.0 if direction == "+x" else -1.0
     nom = nominal.feedback.speed_mm_s
+    ahead = sign * nom  # the nominal firmware's speed in the bench's direction
+    ol_nom = sign * nominal.open_loop.speed_mm_s if nominal.open_loop.completed else 0.0
     possible = [r for r in results if r.possible]
     impossible = [r for r in results if not r.possible]
     done = [r for r in possible if r.feedback.completed]
-    kept = [r for r in done if math.copysign(1, nom) * r.feedback.speed_mm_s >= 0.75 * abs(nom)]
+    kept = [r for r in done if ahead > 0 and sign * r.feedback.speed_mm_s >= 0.75 * ahead]
     clean_stops = [r for r in impossible if _clean_stop(r.feedback)]
     return {
-        **_learned_summary(results, nominal),
-        **_idealised_summary(possible, nominal),
+        **_learned_summary(results, nominal, sign),
+        **_idealised_summary(possible, nominal, sign),
         **_slope_summary(results),
         "conditions": len(results),
         "physically_possible": len(possible),
@@ -92,14 +99,15 @@ def summarise(results: Sequence[ConditionResult], nominal: ConditionResult) -> d
         "impossible": len(impossible),
         "impossible_stopped_with_fault_and_cold_coils": len(clean_stops),
         "open_loop_completed": sum(r.open_loop.completed for r in results),
-        "open_loop_kept_75pct": sum(r.open_loop.completed and r.open_loop.speed_mm_s * math.copysign(1, nom)
-                                    >= 0.75 * abs(nominal.open_loop.speed_mm_s) for r in results),
+        "open_loop_kept_75pct": sum(ol_nom > 0 and r.open_loop.completed and sign * r.open_loop.speed_mm_s
+                                    >= 0.75 * ol_nom for r in results),
         "nominal_feedback_mm_s": round(nom, 4),
         "nominal_open_loop_mm_s": round(nominal.open_loop.speed_mm_s, 4),
+        "nominal_open_loop_completed": nominal.open_loop.completed,
         "targets": {
             "feedback completes every possible condition": len(done) == len(possible),
             "feedback keeps >= 75 % in >= 90 % of possible": bool(possible) and len(kept) >= 0.9 * len(possible),
             "impossible conditions stop with a fault and cold coils": len(clean_stops) == len(impossible),
-            "nominal feedback at least as fast as open loop": abs(nom) >= abs(nominal.open_loop.speed_mm_s),
+            "nominal feedback at least as fast as open loop": ahead > 0 and ahead >= ol_nom,
         },
     }

@@ -212,6 +212,7 @@ class RobustTuneResult:
     worst_speed_mm_s: float          # in the tuned direction, over the powers scored
     speed_by_power: dict[float, float]
     evaluations: int
+    peak_coil_c: float = math.nan    # the hottest coil over the powers scored
 
 
 def tune_open_loop_robust(
@@ -225,6 +226,7 @@ def tune_open_loop_robust(
     dt_s: float = 0.005,
     budget: int = 400,
     start: OpenLoopDrive | None = None,
+    max_coil_c: float | None = None,
 ) -> RobustTuneResult:
     """The best open-loop pulse trains (all 4N − 1 parameters free: per actuator strength,
     active time and phase, and the cycle time) found by a coordinate search of at most
@@ -234,23 +236,27 @@ def tune_open_loop_robust(
     run has one), in ``direction``. Scoring on the worst speed over a ±10 % power band keeps a
     knife-edge timing (one that only works at exactly the nominal power) from winning.
     The search: a coarse pass over cycle time × phase × active time, then coordinate sweeps
-    over each parameter in turn until no improvement or the budget is spent."""
+    over each parameter in turn until no improvement or the budget is spent. ``max_coil_c``:
+    a drive that heats a coil past it at any of the powers loses to every one that does not
+    (a drive that ruins its coils is no competitor)."""
     if direction not in (1, -1):
         raise SimError(f"tune_open_loop_robust: direction must be +1 or -1, got {direction!r}")
     n = len(channels)
     strengths = tuple(s for s in _STRENGTHS if s <= max_duty + 1e-12) or (max_duty,)
-    cache: dict[tuple, tuple[float, dict[float, float]]] = {}
+    cache: dict[tuple, tuple[float, dict[float, float], float]] = {}
 
     def evaluate(d: OpenLoopDrive) -> float:
         key = (d.strength, d.t_active_s, d.t_cycle_s, d.phase_s)
         if key not in cache:
             if len(cache) >= budget:
                 return -math.inf
-            by_power = {}
+            by_power, peak = {}, -math.inf
             for p in powers:
                 plant = plant_factory(p)
-                by_power[p] = direction * run_open_loop(plant, d, run_s, dt_s) / run_s
-            cache[key] = (min(by_power.values()), by_power)
+                mm, hottest = _run_with_peak(plant, d, run_s, dt_s)
+                by_power[p], peak = direction * mm / run_s, max(peak, hottest)
+            worst = min(by_power.values())
+            cache[key] = (worst if max_coil_c is None or peak <= max_coil_c else -math.inf, by_power, peak)
         return cache[key][0]
 
     if start is None:
@@ -298,5 +304,20 @@ def tune_open_loop_robust(
                     consider(replace(best, phase_s=set_at(best.phase_s, k, f * best.period_s)))
         if best_score <= before + 1e-9:
             break
-    return RobustTuneResult(best, best_score, dict(cache[(best.strength, best.t_active_s, best.t_cycle_s,
-                                                         best.phase_s)][1]), len(cache))
+    _, by_power, peak = cache[(best.strength, best.t_active_s, best.t_cycle_s, best.phase_s)]
+    return RobustTuneResult(best, min(by_power.values()), dict(by_power), len(cache), peak)
+
+
+def _run_with_peak(plant: Plant, drive: OpenLoopDrive, duration_s: float, dt_s: float) -> tuple[float, float]:
+    """``run_open_loop``, and the hottest coil it saw (°C, looked at every 0.1 s or step: a
+    coil's thermal time constant is seconds)."""
+    x0 = plant.displacement_mm
+    n = int(round(duration_s / dt_s))
+    every = max(1, int(round(0.1 / dt_s)))
+    nch = max(max(drive.channels) + 1, max(a.channel for a in plant.params.actuators) + 1)
+    t, peak = plant.time_s, -math.inf
+    for i in range(n):
+        plant.step(dt_s, drive.duties(t + i * dt_s, nch))
+        if i % every == 0 or i == n - 1:
+            peak = max(peak, float(max(plant.temperature_c)))
+    return plant.displacement_mm - x0, peak
