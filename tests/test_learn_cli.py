@@ -24,7 +24,9 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
 
 
 def _lines(path: Path) -> list[str]:
-    return path.read_text().splitlines()
+    """The log's trial records (not its first line, which names the robot)."""
+    lines = path.read_text().splitlines()
+    return lines[1:] if lines and '"trial_log"' in lines[0] else lines
 
 
 def test_an_interrupted_learn_resumes_from_its_log_and_loses_nothing(tmp_path, capsys):
@@ -137,3 +139,32 @@ def test_ctrl_c_stops_the_robot_keeps_every_trial_and_says_how_to_go_on(tmp_path
     code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2")
     assert code == 0 and _lines(log)[:len(kept)] == kept and "exploration done" in err
     assert "add --out LEARNED.toml" in err
+
+
+def test_a_report_only_reads_its_log_and_refuses_what_is_not_a_trial_log(capsys, tmp_path):
+    """`--report` used to open the log for writing: a file of notes came back empty, exit 0."""
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes\n")
+    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "paper-r1.toml"), "--log", str(notes), "--report")
+    assert code == 2 and "notes.txt:1: expected a trial record" in err and "Traceback" not in err
+    assert notes.read_text() == "my notes\n"
+    missing = tmp_path / "none.jsonl"
+    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "paper-r1.toml"), "--log", str(missing), "--report")
+    assert code == 2 and "no such trial log" in err and not missing.exists()
+
+
+def test_a_log_recorded_for_one_robot_is_refused_for_another(capsys, tmp_path):
+    log = tmp_path / "r1.jsonl"
+    code, _, _ = run(capsys, "learn", str(ROOT / "robots" / "paper-r1.toml"), "--sim", "--log", str(log),
+                     "--repeats", "1", "--report")
+    assert code == 0 and json.loads(log.read_text().splitlines()[0]) == {"trial_log": 1, "robot": "paper-r1"}
+    before = log.read_bytes()
+    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "paper-r2.toml"), "--log", str(log), "--report")
+    assert code == 2 and "a trial log of paper-r1, not of paper-r2" in err
+    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--sim", "--log", str(log))
+    assert code == 2 and "not of inchworm-3" in err
+    assert log.read_bytes() == before  # nothing explored, nothing written
+    headless = tmp_path / "old.jsonl"  # a log from before the first line: its states are checked
+    headless.write_text("\n".join(log.read_text().splitlines()[1:]) + "\n")
+    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--log", str(headless), "--report")
+    assert code == 2 and "old.jsonl:1: state '00' is not one of the robot's" in err

@@ -23,6 +23,8 @@ import argparse
 import logging
 import math
 import sys
+import warnings
+from pathlib import Path
 from typing import Any, TextIO
 
 import numpy as np
@@ -138,19 +140,27 @@ def cmd_learn(args: argparse.Namespace) -> int:
         raise LearnError("learn: --more needs --half-width and a robot (--port, --can or --sim)")
     if args.track is not None and source not in (None, "tracker"):
         raise LearnError("learn: --track goes with --source tracker")
+    if not (linked or args.report or args.out or args.half_width):
+        raise LearnError("learn: nothing to do: give a robot link to explore, or --report / --out / --half-width")
     try:
-        trial_log = TrialLog(args.log)
+        with warnings.catch_warnings(record=True) as torn:
+            warnings.simplefilter("always")
+            if not linked and not Path(args.log).exists():
+                raise LearnError(f"learn: {args.log}: no such trial log (a report reads one; give a robot link "
+                                 "(--port, --can or --sim) to record one)")
+            states = [robot.transitions.label(i) for i in range(robot.transitions.n_states)]
+            trial_log = TrialLog(args.log, append=linked, robot=robot.name, states=states)  # a report only reads
     except (TrialLogError, OSError) as e:
         raise LearnError(f"learn: {e}") from None
+    for w in torn:
+        log.warning("%s", w.message)
     with trial_log:
-        if trial_log.trials:
+        if trial_log.trials and linked:
             log.info("%s: %d trials already recorded; resuming", args.log, len(trial_log.trials))
         if linked:
             _explore(args, robot, trial_log, source)
         trials = list(trial_log.trials)
     trials = _with_track(args, trials)
-    if not (linked or args.report or args.out or args.half_width):
-        raise LearnError("learn: nothing to do: give a robot link to explore, or --report / --out / --half-width")
     return _report_and_write(args, robot, trials)
 
 

@@ -18,7 +18,9 @@ read after ``t_end`` (settled). Example line::
 ``TrialLog`` reopens an existing log and keeps everything in it: a run interrupted halfway
 continues with ``remaining`` (what is still to do), and nothing recorded is lost — each
 record is written, flushed and fsync'ed before the next transition is measured. A torn
-last line (the process died mid-write) is dropped with a warning and overwritten.
+last line (the process died mid-write, so no newline follows it) is dropped with a warning
+and overwritten; any other line that is not a record is an error naming it. Opened with
+``append=False`` (a report) the file is only read.
 """
 
 from __future__ import annotations
@@ -89,18 +91,36 @@ def _opt(v) -> float | None:
 class TrialLog:
     """An append-only JSONL trial log (see the module docstring)."""
 
-    def __init__(self, path: str | Path):
+    def __init__(self, path: str | Path, *, append: bool = True, robot: str | None = None,
+                 states: Iterable[str] | None = None):
+        """``append=False`` only reads: the file is never opened for writing, created or
+        shortened (a torn last line is skipped, with the same warning).
+
+        ``robot``: the log must be this robot's: a log whose first line names another
+        (``{"trial_log": 1, "robot": …}``, written when a log is started for a robot) is an
+        error, and a new log starts with that line. ``states``: every record's from/to must
+        be one of them (a log of another robot, or not a trial log, is an error naming the
+        line)."""
         self.path = Path(path)
         self.trials: list[Trial] = []
+        self.robot: str | None = None
         self._good_bytes = 0
+        self._fh = None
+        self._states = None if states is None else frozenset(states)
         if self.path.exists():
-            self._read()
+            self._read(append, robot)
+        if not append:
+            return
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = open(self.path, "r+b" if self.path.exists() else "wb")
         self._fh.truncate(self._good_bytes)  # drop a torn last line
         self._fh.seek(self._good_bytes)
+        if self._good_bytes == 0 and robot is not None:  # a new (or empty) log: say whose it is
+            self._fh.write(json.dumps({"trial_log": 1, "robot": robot}, ensure_ascii=False).encode("utf-8") + b"\n")
+            self._fh.flush()
+            self.robot = robot
 
-    def _read(self) -> None:
+    def _read(self, append: bool, robot: str | None) -> None:
         data = self.path.read_bytes()
         lines = data.split(b"\n")
         pos = 0
@@ -111,14 +131,25 @@ class TrialLog:
                 if not last:
                     self._good_bytes = pos
                 continue
+            if k == 0 and not self.trials and (header := _header(raw)) is not None:
+                if robot is not None and header != robot:
+                    raise TrialLogError(f"{self.path}: a trial log of {header}, not of {robot} (its first line says so)")
+                self.robot = header
+                pos += len(raw) + (0 if last else 1)
+                self._good_bytes = pos if not last else 0
+                continue
             try:
                 trial = Trial.from_json(raw.decode("utf-8"), f"{self.path}:{k + 1}")
             except (TrialLogError, UnicodeDecodeError) as e:
-                if last or all(not x.strip() for x in lines[k + 1:]):
-                    warnings.warn(f"{self.path}:{k + 1}: torn last record dropped (the run was interrupted while writing it)",
-                                  stacklevel=3)
+                if last:  # no newline after it: a write cut short (a whole line is no torn record)
+                    warnings.warn(f"{self.path}:{k + 1}: torn last record {'dropped' if append else 'skipped'} "
+                                  "(the run was interrupted while writing it)", stacklevel=3)
                     return
                 raise TrialLogError(str(e)) from None
+            if self._states is not None and not {trial.src, trial.dst} <= self._states:
+                bad = trial.src if trial.src not in self._states else trial.dst
+                raise TrialLogError(f"{self.path}:{k + 1}: state {bad!r} is not one of the robot's (a log of "
+                                    "another robot?)")
             if last:  # complete JSON but no newline: keep it, add the newline on the next append
                 self.trials.append(trial)
                 self._good_bytes = pos + len(raw)
@@ -131,6 +162,8 @@ class TrialLog:
     _needs_newline = False
 
     def append(self, trial: Trial) -> None:
+        if self._fh is None:
+            raise TrialLogError(f"{self.path}: opened to read only")
         prefix = b"\n" if self._needs_newline else b""
         self._needs_newline = False
         self._fh.write(prefix + trial.to_json().encode("utf-8") + b"\n")
@@ -139,13 +172,25 @@ class TrialLog:
         self.trials.append(trial)
 
     def close(self) -> None:
-        self._fh.close()
+        if self._fh is not None:
+            self._fh.close()
 
     def __enter__(self) -> TrialLog:
         return self
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _header(raw: bytes) -> str | None:
+    """The robot a log's first line names (``{"trial_log": 1, "robot": …}``), or None."""
+    try:
+        d = json.loads(raw.decode("utf-8"))
+    except (ValueError, UnicodeDecodeError):
+        return None
+    if isinstance(d, dict) and "trial_log" in d and isinstance(d.get("robot"), str):
+        return d["robot"]
+    return None
 
 
 def counts(table: TransitionTable, trials: Iterable[Trial]) -> np.ndarray:
