@@ -50,6 +50,8 @@ def test_each_parser_returns_the_number_it_reads(parse, text, value):
         (non_negative_float, "-0.1"),
         (positive_float, "nan"),
         (positive_float, "-1"),
+        (positive_float, "inf"),
+        (positive_float, "1e400"),
         (heading_deg, "nan"),
         (gait_index, "-1"),
         (gait_index, "first"),
@@ -63,7 +65,8 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
 @pytest.mark.parametrize(
     "argv, line",
     [
-        (["sim", R1, "--duration", "0"], "argument --duration: expected a number above 0, got 0"),
+        (["sim", R1, "--duration", "0"], "argument --duration: expected a finite number above 0, got 0"),
+        (["sim", R1, "--duration", "inf"], "argument --duration: expected a finite number above 0, got inf"),
         (["build", R1, "--board", "host-sim", "--max-transitions", "x"],
          "argument --max-transitions: expected a whole number, got 'x'"),
         (["gait", R1, "--cycles", "0"], "argument --cycles: expected at least 1, got 0"),

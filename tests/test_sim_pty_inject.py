@@ -45,3 +45,16 @@ def test_a_timed_injection_naming_no_fault_is_refused_before_serving(capsys):
         "proleg: error: --inject melt:sma-right+1: unknown fault (expected one of: dead-actuator, drift, "
         "imu-garbage, imu-silent, imu-stuck, link-corrupt, link-drop)"
     ]
+
+
+def test_an_explicit_duration_of_60_s_stops_the_pty_like_any_other(capsys):
+    """60 is the default without --pty; it was taken for "no limit" even when given."""
+    import threading
+
+    done: list[int] = []
+    runner = threading.Thread(target=lambda: done.append(main(["sim", str(R1), "--pty", "--duration", "60",
+                                                                 "--speed", "200"])), daemon=True)
+    runner.start()
+    runner.join(timeout=30.0)
+    assert done == [0], "still serving 30 s after a 60-simulated-second run at 200x"
+    capsys.readouterr()

@@ -147,7 +147,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
     s.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    s.add_argument("--duration", type=positive_float, default=60.0, metavar="S", help="simulated seconds (default 60)")
+    s.add_argument("--duration", type=positive_float, default=None, metavar="S",
+                   help="simulated seconds (default 60; with --pty: until Ctrl-C)")
     s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
     add_sim_board_options(s)
@@ -285,6 +286,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,
                             plant_kwargs, wants_help)
 
+    pty_limit_s = args.duration  # --pty serves until Ctrl-C unless a duration is given
+    if args.duration is None:
+        args.duration = 60.0
+
     if wants_help(args):
         return EXIT_OK
     if args.measure_climb:
@@ -332,7 +337,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         for spec in at_once:
             sim.inject(spec)
     if args.pty:
-        return _serve_pty(sim, args, timed)
+        return _serve_pty(sim, args, timed, pty_limit_s)
     recorder = _recorder(robot, args.record, args.board) if args.record else None
     listeners = [recorder] if recorder else []
     if args.udp:
@@ -368,7 +373,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     return EXIT_OK if report.ok else EXIT_FAILED
 
 
-def _serve_pty(sim, args, timed=()) -> int:
+def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:
     from ..sim.pty import PtyServer
 
     say = lambda line: print(line, flush=True)  # noqa: E731
@@ -376,7 +381,7 @@ def _serve_pty(sim, args, timed=()) -> int:
         print(f"simulated {sim.robot.name} on {server.path} (115200 8N1; Ctrl-C to stop)", flush=True)
         print(f"  connect with: proleg console --port {server.path}", flush=True)
         try:
-            server.serve(args.duration if args.duration != 60.0 else None)
+            server.serve(limit_s)
         except KeyboardInterrupt:
             pass
         for at, fault in server.due:  # never dropped silently

@@ -56,10 +56,10 @@ def non_negative_float(text: str) -> float:
 
 
 def positive_float(text: str) -> float:
-    """A number > 0 (durations, periods, speed factors)."""
+    """A finite number > 0 (durations, periods, speed factors): ``inf`` would run for ever."""
     v = _float(text, "a number")
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"expected a number above 0, got {text}")
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected a finite number above 0, got {text}")
     return v
 
 
