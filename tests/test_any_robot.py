@@ -164,6 +164,23 @@ def test_step_mm_is_refused_when_the_matrix_is_in_mm(tmp_path):
         load_robot(path)
 
 
+@pytest.mark.parametrize("units, step_mm", [("mm", 1.0), ("cm", 10.0), ("m", 1000.0), ("steps", 4.0)])
+def test_a_length_unit_sets_the_table_plants_millimetres_per_entry(tmp_path, units, step_mm):
+    text = (ROOT / "robots" / "paper-r1.toml").read_text().replace('units = "steps"', f'units = "{units}"')
+    path = tmp_path / f"{units}.toml"
+    path.write_text(text)
+    robot = load_robot(path)
+    assert robot.units == units and robot.plant.step_mm == step_mm
+
+
+def test_a_unit_that_is_neither_steps_nor_a_length_is_refused(tmp_path):
+    """"millimetres" used to count as steps of 4 mm: the table plant walked 4× too far."""
+    path = tmp_path / "bad.toml"
+    path.write_text((ROOT / "robots" / "paper-r1.toml").read_text().replace('units = "steps"', 'units = "millimetres"'))
+    with pytest.raises(RobotFileError, match=r"transitions.units: expected one of 'steps', 'mm', 'cm', 'm'.*'millimetres'"):
+        load_robot(path)
+
+
 def test_hil_tests_run_on_the_robot_given_with_robot():
     out = subprocess.run(
         [sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:xdist", str(ROOT / "hil_tests"),

@@ -29,6 +29,7 @@ import numpy as np
 
 from .body import DEFAULT_OVERLAP_MM, body_geometry, default_length_mm, own_reach_deg
 from .errors import RobotFileError
+from .robot_transitions import UNIT_MM
 
 FORBIDDEN = "x"
 
@@ -206,8 +207,8 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
 
     ``limb_actuators`` (the actuator index of each limb) lets a robot with more than two
     limbs get its coupling from its geometry (``geometric_coupling``) when the file gives
-    none; with ``units = "mm"`` the matrix is in millimetres and ``step_mm`` is 1 (any
-    other value is an error)."""
+    none; with a length unit (``units = "mm"``, ``"cm"``, ``"m"``) ``step_mm`` is that unit in
+    millimetres (any other value is an error)."""
     if not isinstance(table, dict):
         raise RobotFileError(f"{path}: plant: expected a table")
     unknown = sorted(set(table) - set(PLANT_KEYS))
@@ -223,13 +224,13 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
     coupling = _coupling(path, table["coupling_deg"], n_limbs, na) if "coupling_deg" in table else None
     if coupling is None and limb_actuators is not None and n_limbs > 2:
         coupling = geometric_coupling(limb_actuators, na, scalars["direct_gain_deg"], scalars["cross_gain_deg"])
-    if units == "mm":
-        if scalars["step_mm"] != 1.0 and "step_mm" in table:
+    if units in UNIT_MM:  # a length: the entry's millimetres are fixed by the unit
+        if "step_mm" in table and scalars["step_mm"] != UNIT_MM[units]:
             raise RobotFileError(
-                f"{path}: plant.step_mm: expected 1 (or no step_mm) when transitions.units = \"mm\" "
-                f"(the matrix is in mm), got {table['step_mm']!r}"
+                f"{path}: plant.step_mm: expected {UNIT_MM[units]:g} (or no step_mm) when transitions.units = "
+                f"\"{units}\" (the matrix is in {units}), got {table['step_mm']!r}"
             )
-        scalars["step_mm"] = 1.0
+        scalars["step_mm"] = UNIT_MM[units]
     truth = _true_matrix(path, table["true_matrix"], n_states) if "true_matrix" in table else None
     physical: dict[str, float | tuple[float, ...]] = {}
     for k in PHYSICAL_KEYS:

@@ -23,6 +23,12 @@ FORBIDDEN = "x"
 MAX_CSV_BYTES = 256 * 1024 * 1024
 
 
+#: What a matrix entry counts: steps (× ``[plant] step_mm`` on the table plant) or a length.
+TRANSITION_UNITS = ("steps", "mm", "cm", "m")
+#: Millimetres per entry for the length units.
+UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
+
+
 def transitions_section(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[TransitionTable, str]:
     f = Fields(
         path, "transitions", value,
@@ -30,6 +36,8 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...]) -> tupl
          *PLANAR_FIELDS},
     )
     units = f.string("units", "steps")
+    if units not in TRANSITION_UNITS:
+        f.fail("units", f"one of {', '.join(repr(u) for u in TRANSITION_UNITS)} (steps: × [plant] step_mm)", units)
     n = states.state_count(levels)
     if f.has("matrix") == f.has("file"):
         raise RobotFileError(f"{path}: transitions: expected exactly one of 'matrix' or 'file'")

@@ -28,7 +28,7 @@ def truth_matrix_mm(robot: Robot, *, jitter: float = 0.1, seed: int = 15) -> np.
     """``robot``'s dense matrix in mm, each entry × (1 + U(−jitter, jitter)); NaN-free
     (forbidden entries keep the dense matrix's value, which the writer marks "x")."""
     reward, _allowed = robot.transitions.dense()
-    step = 1.0 if robot.units == "mm" else float(robot.plant.step_mm)
+    step = float(robot.plant.step_mm)  # 1 for mm, 10 for cm… (robot_plant), the step for steps
     rng = np.random.default_rng(seed)
     return np.nan_to_num(reward) * step * (1.0 + jitter * rng.uniform(-1.0, 1.0, reward.shape))
 
