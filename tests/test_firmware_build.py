@@ -506,8 +506,12 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
 @pytest.mark.parametrize(("old", "new", "expected"), [
     ("[build]", "[built]", r"variant.toml: unknown table 'built'"),
     ("main_loop = true", "main_loop = 1", r"variant.toml: build.main_loop: expected true or false, got 1"),
-    ('objcopy = ["avr-objcopy"', 'objcopy_off = ["avr-objcopy"',
+    ('objcopy = ["avr-objcopy"', '# objcopy = ["avr-objcopy"',
      r"variant.toml: build.objcopy: missing, needed to make artifact 'firmware.hex' from 'firmware.elf'"),
+    ('objcopy = ["avr-objcopy"', 'objcopy_off = ["avr-objcopy"',
+     r"variant.toml: build.objcopy_off: unknown key \(did you mean 'objcopy'\?\)"),
+    ("stack_bytes", "stack_byts", r"variant.toml: board.stack_byts: unknown key \(did you mean 'stack_bytes'\?\)"),
+    ("baud", "baudrate", r"variant.toml: uart.baudrate: unknown key"),
     ('family = "avr"', 'family = "rp2040"',
      r"variant.toml: board.family: expected one of avr, sim, stm32f1, template \(a folder with a family.toml"),
     ("tx_buffer = 128", "tx_buffer = 100", r"variant.toml: uart.tx_buffer: expected a power of two"),

@@ -10,6 +10,7 @@ a board name (``arduino-nano``) or a path to a board file. See docs/adding-a-boa
 
 from __future__ import annotations
 
+import difflib
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -234,11 +235,31 @@ def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
     return dict(main_loop=main_loop, link=link, artifact=artifact, objcopy=objcopy, size=size)
 
 
+#: The keys each table of a board file takes ([can] checks its own: can_config; [[flash]] is a list).
+TABLE_KEYS = {
+    "board": {"name", "description", "family", "mcu", "clock_hz", "flash_bytes", "ram_bytes", "base_flash_bytes",
+              "base_ram_bytes", "stack_bytes"},
+    "toolchain": {"cc", "cflags", "ldflags", "packages"},
+    "build": {"artifact", "link", "main_loop", "objcopy", "size"},
+    "i2c": {"bus", "hz", "sda", "scl", "imu_addresses", "mux_addresses"},
+    "pwm": {"frequency_hz", "pins"},
+    "uart": {"baud", "port", "rx_buffer", "tx_buffer"},
+    "budget": {"enforce", "measured", "tick_us_base", "tick_us_per_limb"},
+    "link": {"transport"},
+}
+
+
 def _board_from_dict(path: Path, doc: dict) -> Board:
     known = {"board", "toolchain", "build", "i2c", "pwm", "uart", "flash", "budget", "link", "can"}
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
+    for table, keys in TABLE_KEYS.items():  # a misspelt key would silently take its default
+        t = doc.get(table)
+        if isinstance(t, dict) and (stray := sorted(set(t) - keys)):
+            near = difflib.get_close_matches(stray[0], sorted(keys), n=1)
+            hint = f"did you mean {near[0]!r}?" if near else f"expected one of: {', '.join(sorted(keys))}"
+            raise BoardError(f"{path}: {table}.{stray[0]}: unknown key ({hint})")
     family = _need(path, doc, "board", "family", str)
     if family not in available_families():
         raise BoardError(
