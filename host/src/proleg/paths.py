@@ -82,3 +82,12 @@ def resolve_robot(text: str) -> Path:
         return path
     bundled = robots_dir() / f"{text}.toml"
     return bundled if bundled.exists() else path
+
+
+def as_if_created(path: str | Path, directory: bool = False) -> None:
+    """Give a file made by ``tempfile.mkstemp`` / ``mkdtemp`` (mode 0600 / 0700) the mode a
+    plain ``open``/``mkdir`` would have given it under the process's umask, before it is
+    renamed into place: an output a user asked for is readable as their other files are."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, (0o777 if directory else 0o666) & ~mask)

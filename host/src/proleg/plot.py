@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import LinkError
+from .paths import as_if_created
 from .states import label
 from .record import Recording, read_recording
 
@@ -48,6 +49,7 @@ def save_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
     os.close(fd)
     try:
         fig.savefig(tmp, format=ext, dpi=dpi)
+        as_if_created(tmp)
         os.replace(tmp, out)
     finally:
         Path(tmp).unlink(missing_ok=True)

@@ -28,7 +28,7 @@ import jinja2
 
 from .. import __version__
 from ..errors import BuildError
-from ..paths import display_path, templates_dir
+from ..paths import as_if_created, display_path, templates_dir
 from ..robot import Robot
 from .boards import Board, pwm_channel_error
 from .fit import Fit, check_fit
@@ -202,6 +202,7 @@ def build(
 
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+    as_if_created(tmp, directory=True)
     try:
         for rel, text in files.items():
             p = tmp / rel

@@ -24,6 +24,7 @@ from cantools.database.can import Database, Message, Node, Signal
 from cantools.database.conversion import BaseConversion
 
 from ..errors import LinkError
+from ..paths import as_if_created
 import re
 from typing import Any
 
@@ -187,6 +188,7 @@ def write_dbc(path: str | Path, nodes: Sequence[int] = (0,), base: int = 0x100, 
     try:
         with os.fdopen(fd, "w", encoding="ascii", newline="\n") as f:
             f.write(text)
+        as_if_created(tmp)
         os.replace(tmp, out)
     except OSError as e:
         Path(tmp).unlink(missing_ok=True)
