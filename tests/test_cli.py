@@ -162,6 +162,19 @@ def test_sim_reports_a_lost_start_as_an_error_and_exits_1(capsys):
     assert "proleg: error: START failed" in err
 
 
+@pytest.mark.parametrize("spec, text", [
+    ("link-drop:2", "link-drop:P (a probability): expected a number in 0..1, got '2'"),
+    ("link-corrupt:1.5+1", "link-corrupt:P (a probability): expected a number in 0..1, got '1.5'"),
+    ("link-drop:nan", "expected a number in 0..1, got 'nan'"),
+    ("drift:all@-1", "drift@RATE (per second of on-time): expected a number ≥ 0, got '-1'"),
+    ("drift@abc", "drift@RATE (per second of on-time): expected a number, got 'abc'"),
+])
+def test_an_injection_out_of_its_range_is_refused_before_the_run(capsys, spec, text):
+    """A drop probability of 2 used to run and end in 'no reply to START', exit 1."""
+    code, _, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "2", "--inject", spec)
+    assert code == 2 and text in err and "Traceback" not in err
+
+
 def test_sim_exits_1_when_the_run_faulted(capsys):
     code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "15",
                        "--inject", "dead-actuator:sma-right+2")

@@ -20,6 +20,7 @@ console, the recorder and hil_tests) talk to.
 from __future__ import annotations
 
 import hashlib
+import math
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -208,6 +209,8 @@ class SimulatedRobot:
     def inject(self, fault: str) -> None:
         """Apply a fault by name; see ``FAULTS``."""
         name, _, arg = fault.partition(":")
+        if name.startswith("drift@"):  # drift@RATE: every actuator (drift[:ACTUATOR][@RATE])
+            name, arg = "drift", name[len("drift"):] + (":" + arg if arg else "")
         if name not in FAULTS:
             raise SimError(f"unknown fault {fault!r} (expected one of: {', '.join(sorted(FAULTS))})")
         FAULTS[name](self, arg)
@@ -231,18 +234,23 @@ def _channel(sim: SimulatedRobot, arg: str) -> int:
     )
 
 
-def _rate(arg: str, default: float) -> float:
+def _rate(arg: str, default: float, what: str, hi: float = math.inf) -> float:
+    """``arg`` as a finite number in 0..``hi`` (``default`` when empty); ``what`` names it."""
     try:
-        return float(arg) if arg else default
+        v = float(arg) if arg else default
     except ValueError:
-        raise SimError(f"expected a number, got {arg!r}") from None
+        raise SimError(f"{what}: expected a number, got {arg!r}") from None
+    if not (math.isfinite(v) and 0.0 <= v <= hi):
+        raise SimError(f"{what}: expected a number {'≥ 0' if hi == math.inf else f'in 0..{hi:g}'}, got {arg!r}")
+    return v
 
 
 def _drift(sim: SimulatedRobot, arg: str) -> None:
     target, _, rate = arg.partition("@")
     channels = [a.channel for a in sim.robot.actuators] if target in ("", "all") else [_channel(sim, target)]
+    r = _rate(rate, 0.05, "drift@RATE (per second of on-time)")
     for ch in channels:
-        sim.plant.inject_drift(ch, _rate(rate, 0.05))
+        sim.plant.inject_drift(ch, r)
 
 
 FAULTS = {
@@ -257,6 +265,7 @@ FAULTS = {
     # drift[:ACTUATOR|all][@RATE] — the SMA's heating response weakens with use
     "drift": _drift,
     # link-drop[:P] / link-corrupt[:P] — bytes dropped / bit-flipped on the serial link
-    "link-drop": lambda sim, arg: setattr(sim.link_faults, "drop", _rate(arg, 0.01)),
-    "link-corrupt": lambda sim, arg: setattr(sim.link_faults, "corrupt", _rate(arg, 0.01)),
+    "link-drop": lambda sim, arg: setattr(sim.link_faults, "drop", _rate(arg, 0.01, "link-drop:P (a probability)", 1.0)),
+    "link-corrupt": lambda sim, arg: setattr(sim.link_faults, "corrupt",
+                                             _rate(arg, 0.01, "link-corrupt:P (a probability)", 1.0)),
 }
