@@ -276,3 +276,12 @@ def test_console_plain_jsonl_prints_named_rows_for_scripts(capsys):
     tel = [r for r in rows if r["msg"] == "TELEMETRY"]
     assert len(tel) >= 20 and isinstance(tel[0]["seq"], int) and "psi_right_deg" in tel[0]
     assert any(r["msg"] == "EVENT" and r["kind"] == "BOOT" for r in rows)
+
+
+@pytest.mark.parametrize("inject", ["imu-silent:left", "imu-stuck:right+0.5"])
+def test_console_exits_1_when_the_robot_faulted_during_the_session(capsys, inject):
+    """The README's exit status: 1 when the robot faulted. An IMU that is silent from the start
+    latches its fault before the console listens (the telemetry's fault flag says so); one
+    that sticks later sends a FAULT event."""
+    code, _, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "2", "--inject", inject)
+    assert code == 1 and "the robot faulted during the console session" in err, err

@@ -45,6 +45,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     from ..errors import SimError
     from ..console.identity import check_identity
     from ..console.leave import hangup_as_exception, stop_robot
+    from ..link.listeners import FaultWatch
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..record.udp import parse_endpoint
 
@@ -82,7 +83,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                 print(f"proleg: warning: --force: {problem}", file=err)
         if robot is not None and robot.safety.link_watchdog_ms:
             client.heartbeat_s = min(client.heartbeat_s or 1e9, robot.safety.link_watchdog_ms / 2000)
-        listeners: list = []
+        faulted = FaultWatch()
+        listeners: list = [faulted]
         try:
             meta = RecordingMeta.for_robot(info=info, robot=robot, link=link)
             if record is not None:
@@ -124,6 +126,10 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         errors = [w.error for w in listeners if getattr(w, "error", None)]
         if errors:
             raise errors[0]
+    if faulted.first is not None:  # exit 1: the robot faulted (README, "Exit status")
+        what = "a fault was latched" if faulted.first == "latched" else f"fault {faulted.first}"
+        print(f"proleg: the robot faulted during the console session ({what})", file=err)
+        return 1
     return 0
 
 

@@ -169,3 +169,24 @@ class Notifier:
             listeners = list(self.listeners)
         for listener in listeners:
             listener.stop()
+
+
+class FaultWatch(Listener):
+    """Remembers whether the robot faulted while it listened: a FAULT event, or telemetry
+    with a latched fault (one latched before the listening began shows only there).
+    ``first``: the first fault event's code name, or "latched" when only telemetry said so."""
+
+    def __init__(self) -> None:
+        self.first: str | None = None
+
+    def on_message(self, rx: Received) -> None:
+        from ..protocol.definition import EventKind, FaultCode, Flag
+
+        m = rx.message
+        if self.first is not None:
+            return
+        if m.name == "EVENT" and m.fields["kind"] == EventKind.FAULT:
+            code = m.fields["code"]
+            self.first = FaultCode(code).name if code in FaultCode._value2member_map_ else f"fault {code}"
+        elif m.name == "TELEMETRY" and m.fields["flags"] & Flag.FAULT:
+            self.first = "latched"
