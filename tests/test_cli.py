@@ -175,6 +175,16 @@ def test_an_injection_out_of_its_range_is_refused_before_the_run(capsys, spec, t
     assert code == 2 and text in err and "Traceback" not in err
 
 
+def test_a_fault_latched_before_start_is_named_with_the_refusal(capsys):
+    """An IMU silent from boot latches IMU_NO_ACK before START; START is then refused with
+    NOT_ALLOWED, and the report used to show only that, with "faults": []."""
+    code, out, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "3", "--json",
+                         "--inject", "imu-silent:left")
+    doc = json.loads(out)
+    assert code == 1 and [f["code"] for f in doc["faults"]] == ["IMU_NO_ACK"]
+    assert "NOT_ALLOWED (a fault is latched" in doc["errors"][0]
+
+
 def test_sim_exits_1_when_the_run_faulted(capsys):
     code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "15",
                        "--inject", "dead-actuator:sma-right+2")

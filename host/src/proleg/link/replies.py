@@ -25,12 +25,27 @@ class CommandRefused(LinkError):
             code = f"error {error}"
         self.command = command
         self.detail = detail
-        why = _explain(self.error, detail)
+        why = _explain(self.error, detail, command)
         super().__init__(f"{where}: robot refused {command}: {code} ({why or f'detail {detail}'})")
 
 
-def _explain(error: ErrorCode | int, detail: int) -> str:
-    """What a NACK's detail means, where it is a measurement rather than an index."""
+#: NOT_ALLOWED's detail per command: why the board would not (core/cmd.c)
+_NOT_ALLOWED = {
+    "START": {0: "a fault is latched: the FAULT event or `proleg console` names it; clear it (CLEAR_FAULTS, "
+                 "console key c) once its cause is fixed",
+              1: "a gait is running: STOP it first"},
+    "LOAD_GAIT": {0: "a gait is running: STOP it first"},
+    "SET_ACTUATOR_MAP": {0: "a gait is running: STOP it first"},
+    "CALIBRATE_LEVEL": {1: "a gait is running", 2: "an IMU is faulty", 3: "a fault is latched",
+                        4: "a calibration is already under way", 5: "this build has no level calibration"},
+    "CLEAR_LEVEL": {0: "a gait is running", 5: "this build has no level calibration"},
+}
+
+
+def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
+    """What a NACK's detail means: a measurement, or why the board would not."""
+    if error == ErrorCode.NOT_ALLOWED:
+        return _NOT_ALLOWED.get(command, {}).get(detail, "")
     if error == ErrorCode.TOO_STEEP:
         if detail == TOO_TILTED:
             return ("an end tilts more than 20° at rest: beyond any ground the board levels on, uphill or down "

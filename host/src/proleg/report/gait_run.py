@@ -131,6 +131,7 @@ class SimSession:
         self.link = SimLink(sim, step_s=sim.plant_dt_s, description=f"simulated {sim.robot.name}")
         self.client = RobotClient(self.link, max_limbs=len(sim.robot.limbs), max_channels=len(sim.robot.actuators))
         self._scheduled: list[tuple[float, str]] = []  # (virtual time s, fault), sorted
+        self._latched: list[Fault] = []  # faults the board latched and has not cleared since
 
     def schedule_fault(self, at_s: float, fault: str) -> None:
         """Inject ``fault`` (see proleg.sim.closed_loop.FAULTS) once virtual time reaches ``at_s``."""
@@ -173,7 +174,11 @@ class SimSession:
         self.listeners.append(listener)
         try:
             t0 = self.link.clock()
-            if self._command(run, "START", gait=gait, direction=direction_code(direction, gait)):
+            before = list(self._latched)
+            started = self._command(run, "START", gait=gait, direction=direction_code(direction, gait))
+            if not started and before:  # refused for a fault latched before START: report it
+                run.faults[:0] = before
+            if started:
                 self.advance(duration_s - (self.link.clock() - t0))
             t_stop = self.link.clock()
             if not self._command(run, "STOP"):
@@ -214,5 +219,10 @@ class SimSession:
             self._dispatch(rx)
 
     def _dispatch(self, rx: Received) -> None:
+        msg = rx.message
+        if msg.name == "EVENT" and msg.kind == EventKind.FAULT:
+            self._latched.append(Fault(msg.time_ms / 1000.0, FaultCode(msg.code).name, msg.detail))
+        elif msg.name == "EVENT" and msg.kind == EventKind.FAULT_CLEARED:
+            self._latched.clear()
         for listener in self.listeners:
             listener.on_message(rx)
