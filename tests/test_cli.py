@@ -185,6 +185,23 @@ def test_a_fault_latched_before_start_is_named_with_the_refusal(capsys):
     assert "NOT_ALLOWED (a fault is latched" in doc["errors"][0]
 
 
+@pytest.mark.parametrize("argv, text", [
+    (("--measure-matrix", "--record", "m.csv"), "--measure-matrix: not with --record"),
+    (("--measure-matrix", "--inject", "imu-silent:left"), "--measure-matrix: not with --inject"),
+    (("--measure-matrix", "--direction", "-x"), "--measure-matrix: not with --direction"),
+    (("--measure-climb", "--gait", "5"), "--measure-climb: not with --gait"),
+    (("--measure-climb", "--duration", "5"), "--measure-climb: not with --duration"),
+    (("--pty", "--json"), "--pty: not with --json"),
+    (("--pty", "--record", "/nonexistent/x.csv"), "--pty: not with --record"),
+    (("--speed", "3"), "--speed: only with --pty"),
+    (("--all-gaits",), "only with --measure-climb"),
+])
+def test_an_option_the_sim_mode_would_ignore_is_refused(capsys, tmp_path, argv, text):
+    """Each used to be ignored with exit 0 (--measure-matrix --record wrote no file)."""
+    code, _, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), *argv)
+    assert code == 2 and text in err and "Traceback" not in err
+
+
 def test_sim_exits_1_when_the_run_faulted(capsys):
     code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "15",
                        "--inject", "dead-actuator:sma-right+2")

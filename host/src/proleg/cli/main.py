@@ -284,8 +284,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,
-                            plant_kwargs, wants_help)
+                            plant_kwargs, refuse_what_does_not_apply, wants_help)
 
+    refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
     pty_limit_s = args.duration  # --pty serves until Ctrl-C unless a duration is given
     if args.duration is None:
         args.duration = 60.0

@@ -124,6 +124,41 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     return 0
 
 
+#: ``proleg sim`` options as given (not left at their defaults): name → test on the arguments.
+_GIVEN = {
+    "--gait": lambda a: a.gait != 0,
+    "--direction": lambda a: a.direction != "+x",
+    "--inject": lambda a: bool(a.inject),
+    "--record": lambda a: a.record is not None,
+    "--udp": lambda a: a.udp is not None,
+    "--duration": lambda a: a.duration is not None,
+    "--speed": lambda a: a.speed != 1.0,
+    "--json": lambda a: a.json,
+    "--board": lambda a: a.board != "host-sim",
+}
+#: What each mode does not use (besides the refusals each makes itself).
+_UNUSED = {
+    "--measure-matrix": ("--gait", "--direction", "--inject", "--record", "--udp", "--duration", "--speed",
+                         "--board"),
+    "--measure-climb": ("--gait", "--direction", "--inject", "--record", "--udp", "--duration", "--speed"),
+    "--pty": ("--json", "--record", "--udp"),
+}
+
+
+def refuse_what_does_not_apply(args: argparse.Namespace) -> None:
+    """SimError naming an option the chosen mode of ``proleg sim`` would silently ignore
+    (``--measure-matrix --record FILE`` wrote no file; ``--speed`` without ``--pty``)."""
+    from ..errors import SimError
+
+    mode = ("--measure-matrix" if args.measure_matrix else "--measure-climb" if args.measure_climb
+            else "--pty" if args.pty else None)
+    for flag in _UNUSED.get(mode, ()):
+        if _GIVEN[flag](args):
+            raise SimError(f"{mode}: not with {flag} (it does not use it)")
+    if mode != "--pty" and _GIVEN["--speed"](args):
+        raise SimError("--speed: only with --pty (a plain sim runs as fast as it can)")
+
+
 def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     """``proleg sim ROBOT --measure-climb [--all-gaits] [--json]``: the steepest grade gait 0 of
     each direction (or every built-in gait) climbs, and the ``max_climb_deg`` that suggests (per
