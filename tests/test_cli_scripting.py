@@ -113,7 +113,9 @@ def test_a_terminal_without_utf8_gets_replacement_characters(tmp_path, env):
 def test_run_a_gait_that_does_not_exist_is_a_usage_error(capsys):
     code, out, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "7", "--duration", "1")
     assert code == 2 and out == ""
-    assert err.count("\n") == 1 and "--gait 7" in err and "INFO reports 2 compiled gaits" in err
+    assert err.count("\n") == 1 and "--gait 7: paper-r1 has gaits 0..0 in +x" in err  # not INFO's 2 (both ways)
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "1", "--duration", "1")
+    assert code == 2 and "--gait 1: paper-r1 has gaits 0..0 in +x" in err
     code, _, err = run(capsys, "run", "paper-r1-one-actuator", "--sim", "--direction", "-x", "--duration", "1")
     assert code == 2 and "no gait in -x" in err
     code, _, err = run(capsys, "sim", "paper-r1", "--gait", "3", "--duration", "1")

@@ -27,13 +27,14 @@ def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[s
     or (when the robot file is known) beyond the gaits in ``direction``."""
     if gait == GAIT_USER:
         return
-    if gait < 0 or gait >= info.gaits:
-        have = f"gaits 0..{info.gaits - 1}" if info.gaits else "no gaits"
-        raise GaitError(f"--gait {gait}: {info.robot_name} has {have} (INFO reports {info.gaits} compiled gaits)")
-    if per_direction is not None and gait >= per_direction.get(direction, 0):
+    if per_direction is not None and not 0 <= gait < per_direction.get(direction, 0):
         n = per_direction.get(direction, 0)
         have = f"gaits 0..{n - 1}" if n else "no gait"
         raise GaitError(f"--gait {gait}: {info.robot_name} has {have} in {direction}")
+    if gait < 0 or gait >= info.gaits:  # without the robot file: INFO counts both directions' gaits
+        have = f"at most {info.gaits} gaits in a direction" if info.gaits else "no gaits"
+        raise GaitError(f"--gait {gait}: {info.robot_name} has {have} (INFO reports {info.gaits} compiled gaits "
+                        "in all; give the robot file with --robot for the count in each direction)")
 
 
 def run_gait_on(
