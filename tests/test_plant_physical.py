@@ -323,3 +323,25 @@ def test_one_kinematic_sweep_replayed_per_assignment_is_the_sweep_of_each_assign
         combos = [combos[0], combos[3], combos[5], combos[-1]]
     for combo, got in zip(combos, kinematic_signs_all(robot, combos)):
         assert np.array_equal(got, _signs_by_sweeping(robot, combo)), combo
+
+
+@pytest.mark.parametrize("end", ["rear", "front"])
+def test_a_limb_name_or_an_end_names_the_same_end_for_limb_and_coil_keys(end):
+    """caterpillar-4's limbs are tail, rear, front, head on sma-tail … sma-head. `front` used to
+    mean limb front for imu_bias_deg but the last coil, sma-head, for power_scale."""
+    r = robot("caterpillar-4")
+    p = PhysicalPlant(r, parse_conditions([f"power_scale={end}:0.5", f"imu_bias_deg={end}:3"]))
+    limb = [lb.name for lb in r.limbs].index(end)
+    coil = [a.name for a in r.actuators].index(r.limbs[limb].actuator)
+    assert [i for i, s in enumerate(p._pscale) if s != 1.0] == [coil]
+    base = PhysicalPlant(r)
+    assert [i for i, (a, b) in enumerate(zip(p._sense_off, base._sense_off)) if a != b] == [limb]
+
+
+def test_rear_and_front_are_the_first_and_last_limbs_coils_where_no_limb_has_those_names():
+    r = robot("paper-r1")  # limbs left, right on sma-left, sma-right
+    p = PhysicalPlant(r, parse_conditions(["power_scale=front:0.5", "overlap_mm=rear:14"]))
+    assert p._pscale == [1.0, 0.5]
+    with pytest.raises(SimError) as e:
+        PhysicalPlant(r, parse_conditions(["power_scale=middle:0.5"]))
+    assert "sma-left, sma-right, left (its limb), right (its limb), rear, front, or 0..1" in str(e.value)

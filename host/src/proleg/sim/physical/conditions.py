@@ -61,38 +61,54 @@ class Conditions:
     def get(self, key: str) -> float:
         return float(self.values.get(key, KEYS[key].default))
 
-    def for_index(self, key: str, index: int, names: Sequence[str]) -> float:
-        """Value of a per-limb/actuator key for item ``index`` of ``names``."""
+    def for_index(self, key: str, index: int, names: Sequence[str], by_limb: Sequence[int] = (),
+                  limbs: Sequence[str] = ()) -> float:
+        """Value of a per-limb/actuator key for item ``index`` of ``names``; for an actuator
+        key, ``limbs`` and ``by_limb`` (each limb's actuator index) let a limb's name name its
+        actuator."""
         per = self.named.get(key, {})
         v = per.get("", KEYS[key].default)
         for name, x in per.items():
-            if name and _resolve(key, name, names) == index:
+            if name and _resolve(key, name, names, by_limb, limbs) == index:
                 v = x
         return float(v)
 
-    def check_names(self, limbs: Sequence[str], actuators: Sequence[str]) -> None:
+    def check_names(self, limbs: Sequence[str], actuators: Sequence[str], by_limb: Sequence[int] = ()) -> None:
         for key, per in self.named.items():
-            names = limbs if KEYS[key].per == "limb" else actuators
+            per_limb = KEYS[key].per == "limb"
             for name in per:
                 if name:
-                    _resolve(key, name, names)
+                    _resolve(key, name, limbs if per_limb else actuators, () if per_limb else by_limb,
+                             limbs if not per_limb else ())
 
     def with_(self, *items: str) -> "Conditions":
         """These conditions with ``key=value`` strings applied on top."""
         return parse_conditions(items, self)
 
 
-def _resolve(key: str, name: str, names: Sequence[str]) -> int:
+#: The first and the last limb (or their actuators), where no limb or actuator has that name.
+ALIASES = {"rear": 0, "front": -1}
+
+
+def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] = (),
+             limbs: Sequence[str] = ()) -> int:
+    """Index in ``names`` that ``name`` means for ``key``. For an actuator key with ``by_limb``
+    (each limb's actuator) a limb's name, and rear/front, mean that limb's actuator, so that
+    ``imu_bias_deg=front:3`` and ``power_scale=front:0.8`` name the same end of the robot."""
     if name in names:
         return list(names).index(name)
-    if name == "rear":
-        return 0
-    if name == "front":
-        return len(names) - 1
+    if by_limb and limbs and name in limbs:
+        return by_limb[list(limbs).index(name)]
+    if name in ALIASES:
+        ends = by_limb or range(len(names))
+        return ends[ALIASES[name]]
     if name.isdigit() and int(name) < len(names):
         return int(name)
     what = KEYS[key].per
-    raise SimError(f"condition {key}: no {what} {name!r} (expected one of: {', '.join(names)}, rear, front, or 0..{len(names) - 1})")
+    also = [a for a in ALIASES if a not in names and a not in limbs]
+    named = [*names, *(f"{lb} (its limb)" for lb in limbs if lb not in names)] if by_limb else list(names)
+    raise SimError(f"condition {key}: no {what} {name!r} (expected one of: {', '.join([*named, *also])}, "
+                   f"or 0..{len(names) - 1})")
 
 
 def _number(key: str, text: str) -> float:

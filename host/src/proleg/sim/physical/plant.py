@@ -61,7 +61,8 @@ class PhysicalPlant:
         acts = list(robot.actuators)
         lnames = [lb.name for lb in limbs]
         anames = [a.name for a in acts]
-        cond.check_names(lnames, anames)
+        by_limb = [anames.index(lb.actuator) for lb in limbs]  # a limb's name names its coil too
+        cond.check_names(lnames, anames, by_limb)
         self.levels = tuple(len(lb.psi_star_deg) + 1 for lb in limbs)
         self.params = PlantView(tuple(ActView(a.name, a.channel) for a in acts),
                               tuple(LimbView(lb.name, tuple(lb.psi_star_deg)) for lb in limbs))
@@ -83,7 +84,7 @@ class PhysicalPlant:
         self._band = p.friction_band_deg
 
         # -- geometry -------------------------------------------------------------------------
-        overlap = [cond.for_index("overlap_mm", j, anames) for j in range(na)]
+        overlap = [cond.for_index("overlap_mm", j, anames, by_limb, lnames) for j in range(na)]
         length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
         geo = body_geometry([anames.index(lb.actuator) for lb in limbs], na, length, overlap,
                             p.coil_offset_mm, p.working_strain)
@@ -107,7 +108,7 @@ class PhysicalPlant:
         self._hAb = p.body_thermal.convection_w_k(conv)
         self._supply = cond.get("supply_v") * math.sqrt(cond.get("power"))
         self._rsrc = cond.get("supply_ohm")
-        self._pscale = [cond.for_index("power_scale", j, anames) for j in range(na)]
+        self._pscale = [cond.for_index("power_scale", j, anames, by_limb, lnames) for j in range(na)]
         self._channel = [a.channel for a in acts]
         self._n_channels = max(self._channel) + 1
         self._temp = [self._amb] * na
