@@ -222,7 +222,7 @@ def test_plotjuggler_json_over_udp(capsys):
 
 def test_a_bad_udp_endpoint_is_one_line(capsys):
     code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", "--udp", "nowhere")
-    assert code == 1 and "expected HOST:PORT" in err and err.count("\n") == 1
+    assert code == 2 and "expected HOST:PORT" in err and err.count("\n") == 1
 
 
 # --------------------------------------------------------------------------- load-gait, set-param

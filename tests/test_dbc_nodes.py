@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from proleg.errors import LinkError
+from proleg.errors import UsageError
 from proleg.protocol.dbc import dbc_text
 
 
@@ -20,5 +20,5 @@ def test_every_node_name_appears_once(nodes):
 
 
 def test_a_repeated_node_id_is_refused_in_one_line():
-    with pytest.raises(LinkError, match=r"^dbc: node id 1 given more than once"):
+    with pytest.raises(UsageError, match=r"^dbc: node id 1 given more than once"):
         dbc_text((0, 1, 1))

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from proleg.errors import LinkError
+from proleg.errors import LinkError, UsageError
 from proleg.link import RobotClient
 from proleg.link.can_link import CanLink
 from proleg.sim.can_bridge import CanBoardBridge
@@ -94,7 +94,7 @@ def test_other_nodes_frames_are_ignored():
 def test_id_layout_is_base_plus_slot_and_node():
     ids = CanIds(node=3, base=0x100)
     assert [ids.id(s) for s in range(8)] == [0x103, 0x113, 0x123, 0x133, 0x143, 0x153, 0x163, 0x173]
-    with pytest.raises(LinkError, match="node id 16"):
+    with pytest.raises(UsageError, match="node id 16"):
         CanIds(node=16)
 
 

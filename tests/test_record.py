@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from proleg.errors import LinkError
+from proleg.errors import LinkError, UsageError
 from proleg.link import RobotClient
 from proleg.cli.link_commands import console_main, dbc_main, plot_main
 from fake_board import FakeBoard
@@ -190,7 +190,7 @@ def test_unreadable_record_file_is_one_link_error_and_no_output(tmp_path, conten
 
 
 def test_unknown_record_extension_is_refused_before_connecting(tmp_path):
-    with pytest.raises(LinkError, match="use .csv, .jsonl, .mcap"):
+    with pytest.raises(UsageError, match="use .csv, .jsonl, .mcap"):
         console_main(port="/dev/ttyNOPE", record=str(tmp_path / "run.txt"), plain=True)
 
 

@@ -37,3 +37,8 @@ class SimError(ProlegError):
 
 class LinkError(ProlegError):
     """A link to a robot (serial, CAN, simulated) failed or timed out."""
+
+
+class UsageError(ProlegError):
+    """An option's value the command cannot take (an output's file type, an endpoint, a node
+    id): exit 2, like any other usage mistake."""

@@ -12,7 +12,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from .errors import LinkError
+from .errors import LinkError, UsageError
 from .paths import as_if_created
 from .states import label
 from .record import Recording, read_recording
@@ -85,7 +85,7 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     out = Path(out)
     problem = figure_problem(out)
     if problem:
-        raise LinkError(f"{out}: {problem}")
+        raise UsageError(f"{out}: {problem}")
 
     panels = 4 if rec.displacement_mm is not None else 3
     fig = new_figure(10, 2.4 * panels)

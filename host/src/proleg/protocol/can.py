@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 from cobs import cobs
 
-from ..errors import LinkError
+from ..errors import LinkError, UsageError
 from .codec import FrameDecoder, Message, encode
 from .definition import BY_NAME, CHANNEL_CEILING, LIMB_CEILING
 
@@ -131,9 +131,9 @@ class CanIds:
 
     def __post_init__(self) -> None:
         if not 0 <= self.node <= MAX_NODE:
-            raise LinkError(f"CAN node id {self.node} outside 0..{MAX_NODE}")
+            raise UsageError(f"CAN node id {self.node} outside 0..{MAX_NODE}")
         if not 0 <= self.base or self.base + ((N_SLOTS - 1) << 4) + MAX_NODE > 0x7FF:
-            raise LinkError(f"CAN base id {self.base:#x} leaves no room for 11-bit ids (base ≤ 0x770)")
+            raise UsageError(f"CAN base id {self.base:#x} leaves no room for 11-bit ids (base ≤ 0x770)")
 
     def id(self, slot: int) -> int:
         return self.base + (slot << 4) + self.node

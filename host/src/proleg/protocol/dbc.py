@@ -23,7 +23,7 @@ from pathlib import Path
 from cantools.database.can import Database, Message, Node, Signal
 from cantools.database.conversion import BaseConversion
 
-from ..errors import LinkError
+from ..errors import LinkError, UsageError
 from ..paths import as_if_created
 import re
 from typing import Any
@@ -147,12 +147,12 @@ def build_database(nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = 
     """The cantools database of proleg's frames for robots ``nodes`` on one bus; ``robot``
     names the ψ and duty signals after its limbs and actuators."""
     if not nodes:
-        raise LinkError("dbc: at least one node id is needed")
+        raise UsageError("dbc: at least one node id is needed")
     limbs = [limb.name for limb in robot.limbs] if robot is not None else []
     actuators = [a.name for a in robot.actuators] if robot is not None else []
     repeated = sorted({n for n in nodes if list(nodes).count(n) > 1})
     if repeated:  # one BU_ node and one message set per robot: a repeat would name a node twice
-        raise LinkError(f"dbc: node id {repeated[0]} given more than once (each robot on the bus once)")
+        raise UsageError(f"dbc: node id {repeated[0]} given more than once (each robot on the bus once)")
     messages: list[Message] = []
     suffix = len(nodes) > 1
     for node in nodes:

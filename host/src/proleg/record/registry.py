@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import LinkError
+from ..errors import UsageError
 from .base import Reader, Recording, Writer
 from .csv_format import CsvReader, CsvWriter
 from .fields import RecordingMeta
@@ -25,7 +25,7 @@ def _lookup(path: str | Path, table: dict) -> type:
         return table[suffix]
     except KeyError:
         known = ", ".join(sorted(table))
-        raise LinkError(f"{path}: unknown record format {suffix or '(none)'!r}; use {known}") from None
+        raise UsageError(f"{path}: unknown record format {suffix or '(none)'!r}; use {known}") from None
 
 
 def check_suffix(path: str | Path) -> None:

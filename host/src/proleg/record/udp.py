@@ -15,7 +15,7 @@ from __future__ import annotations
 import socket
 from typing import Any
 
-from ..errors import LinkError
+from ..errors import LinkError, UsageError
 from ..link.client import Received
 from ..link.listeners import Listener
 from .fields import RecordingMeta, dumps, telemetry_row
@@ -28,7 +28,7 @@ def parse_endpoint(text: str) -> tuple[str, int]:
     host, sep, port = text.rpartition(":")
     host = host.strip("[]")
     if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise LinkError(f"--udp {text}: expected HOST:PORT, e.g. 127.0.0.1:9870")
+        raise UsageError(f"--udp {text}: expected HOST:PORT, e.g. 127.0.0.1:9870")
     return host, int(port)
 
 
@@ -51,7 +51,7 @@ class UdpStreamer(Listener):
 
     def __init__(self, endpoint: str, fmt: str, meta: RecordingMeta):
         if fmt not in FORMATTERS:
-            raise LinkError(f"--udp-format {fmt}: expected one of {', '.join(UDP_FORMATS)}")
+            raise UsageError(f"--udp-format {fmt}: expected one of {', '.join(UDP_FORMATS)}")
         self.host, self.port = parse_endpoint(endpoint)
         self.meta = meta
         self.format = fmt
