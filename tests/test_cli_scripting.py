@@ -287,3 +287,11 @@ def test_console_exits_1_when_the_robot_faulted_during_the_session(capsys, injec
     that sticks later sends a FAULT event."""
     code, _, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "2", "--inject", inject)
     assert code == 1 and "the robot faulted during the console session" in err, err
+
+
+def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(capsys):
+    """The board would answer FORBIDDEN_TRANSITION (detail 0), exit 1; the host knows which."""
+    code, out, err = run(capsys, "load-gait", "--sim", "paper-r1-one-actuator", "00,10,11,01")
+    assert code == 2 and out == "" and "STATES: 11 → 01 is forbidden" in err
+    code, out, err = run(capsys, "load-gait", "--sim", "paper-r1-one-actuator", "00,10,11,10,00")
+    assert code == 0, err

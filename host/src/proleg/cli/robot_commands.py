@@ -207,6 +207,10 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
         states = states[:-1]  # a closed walk may repeat its start state
     if len(states) < 2:
         raise GaitError(f"STATES: a gait needs at least two states, got {args.states!r}")
+    for a, b in zip(states, [*states[1:], states[0]]):  # the board refuses these: say which, before sending
+        if a != b and table.lookup(a, b) is None:
+            raise GaitError(f"STATES: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
+                            "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
     with open_client(args, args.robot) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(labels)} as the user gait on {client.link.description} "
