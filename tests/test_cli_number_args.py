@@ -67,6 +67,9 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
     [
         (["sim", R1, "--duration", "0"], "argument --duration: expected a finite number above 0, got 0"),
         (["sim", R1, "--duration", "inf"], "argument --duration: expected a finite number above 0, got inf"),
+        (["console", "--sim", "paper-r1", "--plain", "--duration", "0"],
+         "argument --duration: expected a finite number above 0, got 0"),
+        (["gait", ""], "argument ROBOT: expected a robot file or a bundled robot's name, got ''"),
         (["build", R1, "--board", "host-sim", "--max-transitions", "x"],
          "argument --max-transitions: expected a whole number, got 'x'"),
         (["gait", R1, "--cycles", "0"], "argument --cycles: expected at least 1, got 0"),

@@ -15,7 +15,7 @@ from typing import Any, TextIO
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import int_auto
+from .number_args import int_auto, positive_float
 
 
 def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str | None = None,
@@ -191,7 +191,7 @@ def add_arguments(subparsers: Any) -> None:
     c.add_argument("--format", choices=("text", "jsonl"), default="text",
                    help="with --plain: text lines, or one JSON object per message for scripts")
     add_udp_options(c)
-    c.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (plain mode)")
+    c.add_argument("--duration", type=positive_float, metavar="S", help="stop after S seconds (plain mode)")
     c.add_argument("--force", action="store_true",
                    help="connect even when the board's INFO does not match --robot (name, gait hash, build id)")
     c.add_argument("--leave-running", action="store_true",

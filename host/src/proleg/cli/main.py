@@ -121,6 +121,8 @@ def robot_arg(text: str) -> str:
     """A ROBOT argument: a robot file, or the name of a bundled example robot."""
     from ..paths import resolve_robot
 
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a robot file or a bundled robot's name, got ''")
     return str(resolve_robot(text))
 
 

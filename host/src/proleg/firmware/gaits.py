@@ -178,7 +178,8 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
                     f"robot {robot.name}: gait 0 of {d}, the one START runs, cannot run on this robot: "
                     f"{errors[0].message} (choose another objective or --max-transitions, or fix the robot file)"
                 )
-            out += [f"gait {i} of {d}: {p.severity}: {p.message}" for p in problems]
+            out += [f"gait {i} of {d}: {'' if p.severity == 'warning' else p.severity + ': '}{p.message}"
+                    for p in problems]  # printed after "proleg: warning: "
     return out
 
 
