@@ -295,3 +295,13 @@ def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(ca
     assert code == 2 and out == "" and "STATES: 11 → 01 is forbidden" in err
     code, out, err = run(capsys, "load-gait", "--sim", "paper-r1-one-actuator", "00,10,11,10,00")
     assert code == 0, err
+
+
+@pytest.mark.parametrize("argv, text", [
+    (("set-param", "--sim", "paper-r1", "drive_duty", "9000"), "SAFETY_LIMIT (beyond the safety envelope"),
+    (("set-param", "--sim", "paper-r1", "drive_duty", "-1"), "OUT_OF_RANGE (outside the parameter's range"),
+    (("run", "--sim", "paper-r1", "--gait", "user", "--duration", "1"), "NO_GAIT (no gait is loaded"),
+])
+def test_a_refusal_says_what_it_means_not_a_bare_detail(capsys, argv, text):
+    code, _, err = run(capsys, *argv)
+    assert code == 1 and text in err and "(detail" not in err

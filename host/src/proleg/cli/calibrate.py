@@ -68,6 +68,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         if outcome.ok:
             print(f"level calibration stored on {where} (applied from now on, kept across resets)")
             print(_table(names, outcome.reading.offsets_cdeg, ["stored"] * len(names)))
+            if getattr(args, "sim", None):
+                from .robot_commands import SIM_IS_FRESH
+
+                print(SIM_IS_FRESH)
             return 0
         print(f"level calibration refused on {where}: nothing changed")
         kept = outcome.reading

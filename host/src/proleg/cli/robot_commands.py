@@ -176,7 +176,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         if choice is not None:
             print(choice.message)
-        print(f"{run.robot} on {doc['link']}: gait {gait} in {direction} for {args.duration:g} s: "
+        which = (f"gait {gait} in {direction}" if gait != GAIT_USER else
+                 "the loaded gait" + (" (its way unstated)" if direction == UNSTATED else f" in {direction}"))
+        print(f"{run.robot} on {doc['link']}: {which} for {args.duration:g} s: "
               f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
               f"{len(run.faults)} faults")
         if "pose" in doc:
@@ -193,6 +195,11 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------- load-gait, set-param
+#: After a command that changes a --sim board: the next command's --sim is another, fresh one.
+SIM_IS_FRESH = ("note: a --sim board lives for this command only; the next command's --sim starts afresh "
+                "(proleg console --sim, or proleg sim --pty with --port, keeps one board running)")
+
+
 def cmd_load_gait(args: argparse.Namespace) -> int:
     from ..robot import load_robot
 
@@ -215,6 +222,8 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
         client.load_gait(states)
         print(f"loaded {' → '.join(labels)} as the user gait on {client.link.description} "
               f"({_way_hint(table, states)})")
+        if getattr(args, "sim", None):
+            print(SIM_IS_FRESH)
     return 0
 
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from ..errors import LinkError
 from ..protocol.codec import Message
-from ..protocol.definition import ErrorCode
+from ..protocol.definition import GAIT_USER, ErrorCode
 
 
 class CommandRefused(LinkError):
@@ -46,6 +46,15 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     """What a NACK's detail means: a measurement, or why the board would not."""
     if error == ErrorCode.NOT_ALLOWED:
         return _NOT_ALLOWED.get(command, {}).get(detail, "")
+    if command == "START" and error == ErrorCode.NO_GAIT:
+        if detail == GAIT_USER:
+            return "no gait is loaded: load one first (proleg load-gait; it lasts until the board resets)"
+        return f"the board has no gait {detail} in that direction"
+    if command == "SET_PARAM" and error == ErrorCode.SAFETY_LIMIT:
+        return ("beyond the safety envelope the firmware was built with (the robot file's [safety], e.g. max_duty "
+                "for a duty): at run time the envelope can be narrowed, never widened")
+    if command == "SET_PARAM" and error == ErrorCode.OUT_OF_RANGE:
+        return "outside the parameter's range, or no such limb or index on this robot"
     if error == ErrorCode.TOO_STEEP:
         if detail == TOO_TILTED:
             return ("an end tilts more than 20° at rest: beyond any ground the board levels on, uphill or down "
