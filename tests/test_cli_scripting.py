@@ -234,7 +234,7 @@ def test_load_gait_on_the_simulated_board(capsys):
     code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,01,11,10")
     assert code == 0 and "matrix says it walks -x" in out, err
     code, _, err = run(capsys, "load-gait", "paper-r1-one-actuator", "--sim", "00,01,11")
-    assert code == 1 and "FORBIDDEN_TRANSITION" in err and err.count("\n") == 1
+    assert code == 2 and "STATES: 00 → 01 is forbidden" in err and err.count("\n") == 1  # refused before sending
     code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,12")
     assert code == 2 and "STATES" in err
 
