@@ -305,3 +305,12 @@ def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(ca
 def test_a_refusal_says_what_it_means_not_a_bare_detail(capsys, argv, text):
     code, _, err = run(capsys, *argv)
     assert code == 1 and text in err and "(detail" not in err
+
+
+@pytest.mark.parametrize("argv, text", [
+    (("run", "--sim", "planar-4", "--exact-heading", "--duration", "1"), "--exact-heading: only with --heading"),
+    (("run", "--sim", "planar-4", "--library", "0,90", "--duration", "1"), "--library: only with --heading or --rotate"),
+])
+def test_run_refuses_a_steering_option_without_the_heading_it_serves(capsys, argv, text):
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and text in err

@@ -80,7 +80,11 @@ def heading_choice(args: argparse.Namespace, robot: Any) -> tuple[Any, Any]:
     from ..firmware.gaits import choose_heading, firmware_gaits
     from ..gait.library import library_spec
 
+    if args.exact_heading and args.heading is None:
+        raise GaitError("--exact-heading: only with --heading (it says what to do with a heading the library lacks)")
     if args.heading is None and args.rotate is None:
+        if args.library:
+            raise GaitError("--library: only with --heading or --rotate (it is the library they choose from)")
         return None, None
     if args.gait is not None or args.direction is not None:
         raise GaitError("--heading/--rotate choose the gait: leave out --gait and --direction")
