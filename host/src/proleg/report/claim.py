@@ -23,6 +23,8 @@ from ..errors import SimError
 from ..sim.openloop import OpenLoopDrive, tune_open_loop_robust
 
 RUN_S = 40.0        # each run, from a cold robot
+#: How an open-loop run that overheated a coil is noted (``DriveOutcome.note`` starts so).
+OVERHEATED = "coil overheated"
 OVERHEAT_C = 120.0  # an open-loop coil above this is ruined (NiTi wire: anneal/fatigue; Dynalloy
                     # advises against prolonged heating far above Af)
 
@@ -375,7 +377,7 @@ def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
     sign = 1 if direction == "+x" else -1
     why = ""
     if peak > OVERHEAT_C:
-        why = f"coil overheated ({peak:.0f} °C)"
+        why = f"{OVERHEATED} ({peak:.0f} °C)"
     elif not late:
         why = f"stalled: no state change in the last third (stuck in {robot.transitions.label(plant.true_state)})"
     elif sign * x <= 0:

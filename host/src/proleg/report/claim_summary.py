@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from .claim import ConditionResult, DriveOutcome
+from .claim import OVERHEATED, ConditionResult, DriveOutcome
 
 
 def _clean_stop(fb: DriveOutcome) -> bool:
@@ -76,12 +76,14 @@ def summarise(results: Sequence[ConditionResult], nominal: ConditionResult, dire
     """The targets of issue 13, counted honestly, in ``direction`` (the way the bench walks).
 
     Speeds count in that direction only: a nominal firmware run that walks the other way keeps
-    nothing, and the open loop's nominal speed is what it makes there if that run completed
-    (an open loop that overheats a coil, stalls or walks backwards sets no bar)."""
+    nothing, and the open loop's bar is what its nominal run makes that way (none backwards),
+    whether or not the bench calls the run completed, unless it overheated a coil (a drive
+    that ruins its coils is no competitor; the tuner already avoids them: ``tune_open_loop_for``)."""
     sign = 1.0 if direction == "+x" else -1.0
     nom = nominal.feedback.speed_mm_s
     ahead = sign * nom  # the nominal firmware's speed in the bench's direction
-    ol_nom = sign * nominal.open_loop.speed_mm_s if nominal.open_loop.completed else 0.0
+    ol = nominal.open_loop
+    ol_nom = 0.0 if ol.note.startswith(OVERHEATED) else max(0.0, sign * ol.speed_mm_s)
     possible = [r for r in results if r.possible]
     impossible = [r for r in results if not r.possible]
     done = [r for r in possible if r.feedback.completed]
@@ -101,6 +103,7 @@ def summarise(results: Sequence[ConditionResult], nominal: ConditionResult, dire
         "open_loop_completed": sum(r.open_loop.completed for r in results),
         "open_loop_kept_75pct": sum(ol_nom > 0 and r.open_loop.completed and sign * r.open_loop.speed_mm_s
                                     >= 0.75 * ol_nom for r in results),
+        "open_loop_bar_mm_s": round(ol_nom, 4),
         "nominal_feedback_mm_s": round(nom, 4),
         "nominal_open_loop_mm_s": round(nominal.open_loop.speed_mm_s, 4),
         "nominal_open_loop_completed": nominal.open_loop.completed,
