@@ -185,3 +185,21 @@ def test_r1_held_at_full_strokes_outwalks_the_best_open_loop_on_the_nominal_robo
     fb = claim.feedback_run(robot, claim.NOMINAL)
     assert fb.completed and fb.fault == "" and not fb.note
     assert fb.speed_mm_s >= tuned.speed_by_power[1.0] > 0, (fb.speed_mm_s, tuned.speed_by_power)
+
+
+@pytest.mark.parametrize("name, mild, strong", [
+    ("paper-r1", "sma-right", "sma-left"),
+    ("paper-r1-one-actuator", "sma-left", "sma-left"),  # one coil: both strengths kill it
+    ("caterpillar-4", "sma-front", "sma-rear"),          # its limbs named front and rear
+])
+def test_the_dead_coil_rows_kill_an_end_coil_of_any_robot(name, mild, strong):
+    """The grid named R1's coils: on a robot without sma-right the worker died and the bench
+    stopped after the grid with a TypeError."""
+    robot = load_robot(R1.parent / f"{name}.toml")
+    for strength, coil in (("mild", mild), ("strong", strong)):
+        plant = claim._plant(robot, claim.point(f"dead coil ({strength})"))
+        nch = max(a.channel for a in robot.actuators) + 1
+        for _ in range(500):
+            plant.step(0.002, [0.8] * nch)
+        temps = {a.name: t for a, t in zip(robot.actuators, plant.temperature_c)}
+        assert temps[coil] < 26.0 and all(t > 30.0 for n, t in temps.items() if n != coil), (strength, temps)

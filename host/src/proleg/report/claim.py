@@ -65,7 +65,7 @@ MODES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "sma drift with use": (("!drift:all@0.01",), ("!drift:all@0.03",)),
     # beyond what the coils can do: the firmware must stop with a fault and cold coils
     "supply collapse": (("power=0.35",), ("power=0.2",)),
-    "dead coil": (("!dead-actuator:sma-right",), ("!dead-actuator:sma-left",)),
+    "dead coil": (("!dead-actuator:front",), ("!dead-actuator:rear",)),  # R1: sma-right, sma-left
 }
 
 PAIRS: tuple[tuple[str, str], ...] = (
@@ -215,8 +215,10 @@ def _plant_fault(robot: Any, plant: Any, fault: str) -> None:
         chans = [a.channel for a in robot.actuators if target in ("", "all", a.name)]
         for ch in chans:
             plant.inject_drift(ch, float(rate or 0.05))
-    elif name == "dead-actuator":
-        plant.kill_actuator(next(a.channel for a in robot.actuators if arg in (a.name, str(a.channel))))
+    elif name == "dead-actuator":  # rear/front: the first/last limb's coil, as the conditions name them
+        from ..sim.physical.conditions import actuator_index
+
+        plant.kill_actuator(robot.actuators[actuator_index(robot, arg)].channel)
     else:
         raise SimError(f"claim grid: fault {fault!r} is not a plant fault")
 

@@ -86,6 +86,14 @@ class Conditions:
         return parse_conditions(items, self)
 
 
+def actuator_index(robot: Any, name: str) -> int:
+    """The actuator ``name`` means on ``robot`` as a per-actuator condition reads it: its own
+    name or index, a limb's name (that limb's coil), or rear/front (the first/last limb's)."""
+    limbs = [lb.name for lb in robot.limbs]
+    acts = [a.name for a in robot.actuators]
+    return _resolve("power_scale", name, acts, [acts.index(lb.actuator) for lb in robot.limbs], limbs)
+
+
 #: The first and the last limb (or their actuators), where no limb or actuator has that name.
 ALIASES = {"rear": 0, "front": -1}
 
