@@ -70,7 +70,10 @@ def _worker(args: tuple) -> dict:
     except OSError:
         pass
     robot = load_robot(path)
-    return claim.run_condition(robot, drive, point, learned=learned).to_json()
+    try:
+        return claim.run_condition(robot, drive, point, learned=learned).to_json()
+    except Exception as e:  # a StopIteration crossing pool.map came back as a None row
+        raise RuntimeError(f"condition {point.name!r}: {type(e).__name__}: {e}") from e
 
 
 def _drive_json(d: OpenLoopDrive) -> dict:
