@@ -17,7 +17,7 @@ from proleg.firmware.build import firmware_gaits, render_project
 from proleg.firmware.can_config import (BRP_RANGE, MAX_QUANTA, MIN_QUANTA, TS1_RANGE, TS2_RANGE, BitTiming,
                                         bit_timing)
 from proleg.paths import resolve_robot
-from proleg.protocol import FrameDecoder, Message, encode
+from proleg.protocol import FrameDecoder, Message
 from proleg.protocol.can import CanIds, CanToWire, message_frames
 from proleg.protocol.dbc import dbc_text
 from proleg.protocol.definition import EventKind, FaultCode, Flag

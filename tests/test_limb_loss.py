@@ -4,7 +4,6 @@ host replanning and without a host (the firmware's build-time fallback)."""
 
 from __future__ import annotations
 
-import itertools
 from pathlib import Path
 
 import pytest

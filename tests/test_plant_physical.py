@@ -3,8 +3,6 @@ experiments, closed loop with the host-sim firmware."""
 
 from __future__ import annotations
 
-import math
-import os
 from pathlib import Path
 
 import numpy as np
