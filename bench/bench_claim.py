@@ -64,14 +64,14 @@ BUDGET = 150
 
 
 def _worker(args: tuple) -> dict:
-    path, point, drive, learned = args
+    path, point, drive, learned, run_s = args
     try:
         os.nice(10)
     except OSError:
         pass
     robot = load_robot(path)
     try:
-        return claim.run_condition(robot, drive, point, learned=learned).to_json()
+        return claim.run_condition(robot, drive, point, learned=learned, duration_s=run_s).to_json()
     except Exception as e:  # a StopIteration crossing pool.map came back as a None row
         raise RuntimeError(f"condition {point.name!r}: {type(e).__name__}: {e}") from e
 
@@ -125,7 +125,10 @@ def main() -> int:
     if args.quick:
         points = points[::4]
     t1 = time.perf_counter()
-    jobs = [(args.robot, claim.NOMINAL, d, learned)] + [(args.robot, p, d, learned) for p in points]
+    run_s = claim.run_length(robot)  # RUN_S, or four nominal cycles of a long gait
+    if run_s > claim.RUN_S:
+        print(f"each run lasts {run_s:g} s: {claim.CYCLES_PER_RUN} of the gait's nominal cycles", flush=True)
+    jobs = [(args.robot, p, d, learned, run_s) for p in [claim.NOMINAL, *points]]
     if args.jobs > 1:
         from multiprocessing import get_context
 
@@ -184,7 +187,7 @@ def main() -> int:
 
     out = {
         "machine": machine(), "load_average": list(os.getloadavg()),
-        "inputs": {"robot": robot.name, "direction": "+x", "gait": 0, "run_s": claim.RUN_S,
+        "inputs": {"robot": robot.name, "direction": "+x", "gait": 0, "run_s": run_s,
                    "feedback_workflow": "flat level calibration (proleg calibrate) at rest, then the condition's ground, "
                                      f"{claim.REST_ON_GROUND_S} s at rest there, START",
                    "learned_gait": {"states": [robot.transitions.label(s) for s in learned],

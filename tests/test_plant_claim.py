@@ -203,3 +203,17 @@ def test_the_dead_coil_rows_kill_an_end_coil_of_any_robot(name, mild, strong):
             plant.step(0.002, [0.8] * nch)
         temps = {a.name: t for a, t in zip(robot.actuators, plant.temperature_c)}
         assert temps[coil] < 26.0 and all(t > 30.0 for n, t in temps.items() if n != coil), (strength, temps)
+
+
+@pytest.mark.parametrize("cycle_s, run_s", [(None, 40.0), (4.2, 40.0), (10.0, 40.0), (12.3, 50.0), (15.0, 60.0)])
+def test_a_long_gait_gets_runs_of_four_nominal_cycles(monkeypatch, cycle_s, run_s):
+    """A run completes with two cycles: caterpillar-4's ≈ 15 s cycles in a 40 s run ended
+    after one in seven slowed rows. Short gaits keep RUN_S."""
+    monkeypatch.setattr(claim, "idealised_walk",
+                        lambda *a, **k: claim.IdealisedWalk(cycle_s is not None, "", 1.0, cycle_s))
+    assert claim.run_length(object()) == run_s
+
+
+def test_the_run_length_comes_from_the_idealised_drives_nominal_cycle():
+    assert claim.run_length(load_robot(R1)) == claim.RUN_S
+    assert claim.run_length(load_robot(R1.parent / "caterpillar-4.toml")) > claim.RUN_S

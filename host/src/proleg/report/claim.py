@@ -15,6 +15,7 @@ tune_open_loop_robust`` (all 4N − 1 timing parameters free, scored on its wors
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -22,7 +23,9 @@ from typing import Any
 from ..errors import SimError
 from ..sim.openloop import OpenLoopDrive, tune_open_loop_robust
 
-RUN_S = 40.0        # each run, from a cold robot
+RUN_S = 40.0        # each run, from a cold robot (at least; run_length: a long gait's runs are longer)
+#: A run holds at least this many of the nominal gait's cycles (a run completes with two).
+CYCLES_PER_RUN = 4
 #: How an open-loop run that overheated a coil is noted (``DriveOutcome.note`` starts so).
 OVERHEATED = "coil overheated"
 OVERHEAT_C = 120.0  # an open-loop coil above this is ruined (NiTi wire: anneal/fatigue; Dynalloy
@@ -230,6 +233,15 @@ class IdealisedWalk:
     possible: bool
     why_not: str
     speed_mm_s: float | None   # its steady speed, None where it could not reach a state
+    s_per_cycle: float | None = None   # its steady cycle's length, where it walked one
+
+
+def run_length(robot: Any, direction: str = "+x", gait: int | Sequence[int] = 0) -> float:
+    """How long each run of the bench lasts (s): ``RUN_S``, or ``CYCLES_PER_RUN`` of the
+    gait's cycles on the nominal robot where those are longer (caterpillar-4's twelve steps
+    take ≈ 15 s: in 40 s a slowed row finished one cycle and counted as not completed)."""
+    cycle = idealised_walk(robot, NOMINAL, direction, gait).s_per_cycle
+    return RUN_S if cycle is None else max(RUN_S, math.ceil(CYCLES_PER_RUN * cycle / 5.0) * 5.0)
 
 
 def physically_possible(robot: Any, point: GridPoint, direction: str = "+x",
@@ -260,7 +272,7 @@ def idealised_walk(robot: Any, point: GridPoint, direction: str = "+x",
     if mm is not None:
         speed = mm / s if s else 0.0
         if (1 if direction == "+x" else -1) * mm > 0:
-            return IdealisedWalk(True, "", speed)
+            return IdealisedWalk(True, "", speed, s)
         return IdealisedWalk(False, f"the coils complete the gait, but even an ideal drive (true ψ) moves {mm:+.2f} "
                                     f"mm per cycle: under this condition the gait does not go {direction}", speed)
     return IdealisedWalk(False, _why_not_walked(robot, plant, walk.latched), None)
