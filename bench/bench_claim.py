@@ -2,8 +2,9 @@
 timed open-loop drive, on the physical plant, over a grid of drift modes and sensor/world
 errors (``proleg.report.claim.grid()``: every mode singly and in pairs, two strengths each).
 
-For every condition, from a cold robot, the paper's R1 walking +x for ``RUN_S`` simulated
-seconds:
+For every condition, from a cold robot, the paper's R1 (or ``--robot``) walking +x for
+``RUN_S`` simulated seconds (four of the gait's nominal cycles where that is longer:
+``claim.run_length``):
 - ψ-feedback: the robot's own firmware (host-sim build) on the simulated board, started as a
   user would: a flat level calibration at rest (proleg calibrate: IMU mounting offset and bias),
   then the condition's ground, at rest there for claim.REST_ON_GROUND_S before START (the
