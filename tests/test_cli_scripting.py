@@ -314,3 +314,10 @@ def test_a_refusal_says_what_it_means_not_a_bare_detail(capsys, argv, text):
 def test_run_refuses_a_steering_option_without_the_heading_it_serves(capsys, argv, text):
     code, _, err = run(capsys, *argv)
     assert code == 2 and text in err
+
+
+def test_run_says_a_nearest_heading_once(capsys):
+    """It was a warning before the run and again on stdout after it."""
+    code, out, err = run(capsys, "run", "planar-4", "--sim", "--heading", "45", "--duration", "1")
+    assert code == 0, err
+    assert (out + err).count("the library's nearest heading") == 1

@@ -178,8 +178,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.format == "jsonl":
         print(json.dumps(doc))
     else:
-        if choice is not None:
-            print(choice.message)
+        if choice is not None and not (choice.nearest or choice.index is None):
+            print(choice.message)  # the others were said as a warning before the run (heading_choice)
         which = (f"gait {gait} in {direction}" if gait != GAIT_USER else
                  "the loaded gait" + (" (its way unstated)" if direction == UNSTATED else f" in {direction}"))
         print(f"{run.robot} on {doc['link']}: {which} for {args.duration:g} s: "
