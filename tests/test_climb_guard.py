@@ -92,7 +92,7 @@ def test_each_gait_takes_its_listed_limit_and_the_rest_the_smallest_of_the_list(
     """Oracle: the list as written. The limit keeps it short (trailing repeats of the smallest go)
     and says it back as a robot file would; every gait, listed or past the list, and the loaded
     gait (None) get the same limit from both."""
-    from proleg.robot import ClimbLimit
+    from proleg.robot_climb import ClimbLimit
 
     def written(v, gait):
         if isinstance(v, float):
@@ -501,7 +501,7 @@ def test_the_bisection_finds_the_steepest_grade_a_brute_force_scan_finds(thresho
 
 
 def test_each_direction_is_suggested_its_own_limit_and_one_that_does_not_move_takes_the_others():
-    from proleg.robot import ClimbLimit
+    from proleg.robot_climb import ClimbLimit
     from proleg.sim.physical.climb import suggested_limits
 
     assert suggested_limits({"+x": [1.5], "-x": [3.0]}) == ClimbLimit(1.5, 3.0)

@@ -166,7 +166,7 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     direction to it, so tie gaits that climb less are worth measuring (docs/calibration.md)."""
     from ..errors import SimError
     from ..firmware.build import firmware_gaits
-    from ..robot import climb_guard_refusal
+    from ..robot_climb import climb_guard_refusal
     from ..sim.physical.climb import (
         RESOLUTION_DEG,
         TOP_DEG,

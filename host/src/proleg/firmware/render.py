@@ -29,7 +29,8 @@ import jinja2
 from .. import __version__
 from ..errors import BoardError, BuildError
 from ..paths import display_path, templates_dir
-from ..robot import check_climb_limit, stroke_leads
+from ..robot import stroke_leads
+from ..robot_climb import check_climb_limit
 from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
 from .placement import place_imus

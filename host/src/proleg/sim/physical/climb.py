@@ -14,14 +14,14 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from ...robot import MIN_CLIMB_DEG, ClimbLimit
+from ...robot_climb import MIN_CLIMB_DEG, ClimbLimit
 from .measure import walk_within_envelope
 
 #: The plant's steepest ground (conditions.py: incline_deg in −12..12).
 TOP_DEG = 12.0
 #: The bisection stops at this width (°).
 RESOLUTION_DEG = 0.25
-#: The grid a suggested max_climb_deg is rounded down to (at least robot.MIN_CLIMB_DEG, the smallest it takes).
+#: The grid a suggested max_climb_deg is rounded down to (at least robot_climb.MIN_CLIMB_DEG, the smallest it takes).
 SUGGEST_STEP_DEG = 0.5
 
 
@@ -59,7 +59,7 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
 
 
 def suggested_limits(climbs: dict[str, Sequence[float | None]]) -> ClimbLimit | None:
-    """``max_climb_deg`` (a ``robot.ClimbLimit``) for each direction's gaits' steepest climbs
+    """``max_climb_deg`` (a ``robot_climb.ClimbLimit``) for each direction's gaits' steepest climbs
     (gait 0 first): per direction one limit per gait where they differ (each ``suggested_limit``
     of its own climb; a gait that does not move that way gets the smallest the firmware takes),
     else one number. A direction none of whose gaits moves takes the other's smallest (it has
