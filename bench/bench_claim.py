@@ -126,7 +126,7 @@ def main() -> int:
     if args.quick:
         points = points[::4]
     t1 = time.perf_counter()
-    run_s = claim.run_length(robot)  # RUN_S, or four nominal cycles of a long gait
+    run_s = claim.run_length(ideal)  # RUN_S, or four nominal cycles of a long gait
     if run_s > claim.RUN_S:
         print(f"each run lasts {run_s:g} s: {claim.CYCLES_PER_RUN} of the gait's nominal cycles", flush=True)
     jobs = [(args.robot, p, d, learned, run_s) for p in [claim.NOMINAL, *points]]

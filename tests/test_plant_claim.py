@@ -206,14 +206,15 @@ def test_the_dead_coil_rows_kill_an_end_coil_of_any_robot(name, mild, strong):
 
 
 @pytest.mark.parametrize("cycle_s, run_s", [(None, 40.0), (4.2, 40.0), (10.0, 40.0), (12.3, 50.0), (15.0, 60.0)])
-def test_a_long_gait_gets_runs_of_four_nominal_cycles(monkeypatch, cycle_s, run_s):
+def test_a_long_gait_gets_runs_of_four_nominal_cycles(cycle_s, run_s):
     """A run completes with two cycles: caterpillar-4's ≈ 15 s cycles in a 40 s run ended
     after one in seven slowed rows. Short gaits keep RUN_S."""
-    monkeypatch.setattr(claim, "idealised_walk",
-                        lambda *a, **k: claim.IdealisedWalk(cycle_s is not None, "", 1.0, cycle_s))
-    assert claim.run_length(object()) == run_s
+    assert claim.run_length(claim.IdealisedWalk(cycle_s is not None, "", 1.0, cycle_s)) == run_s
 
 
 def test_the_run_length_comes_from_the_idealised_drives_nominal_cycle():
-    assert claim.run_length(load_robot(R1)) == claim.RUN_S
-    assert claim.run_length(load_robot(R1.parent / "caterpillar-4.toml")) > claim.RUN_S
+    def nominal(name: str) -> claim.IdealisedWalk:
+        return claim.idealised_walk(load_robot(R1.parent / f"{name}.toml"), claim.NOMINAL)
+
+    assert claim.run_length(nominal("paper-r1")) == claim.RUN_S
+    assert claim.run_length(nominal("caterpillar-4")) > claim.RUN_S

@@ -148,8 +148,8 @@ def cmd_learn(args: argparse.Namespace) -> int:
             if not linked and not Path(args.log).exists():
                 raise LearnError(f"learn: {args.log}: no such trial log (a report reads one; give a robot link "
                                  "(--port, --can or --sim) to record one)")
-            states = [robot.transitions.label(i) for i in range(robot.transitions.n_states)]
-            trial_log = TrialLog(args.log, append=linked, robot=robot.name, states=states)  # a report only reads
+            trial_log = TrialLog(args.log, append=linked, robot=robot.name,  # a report only reads
+                                 states=robot.transitions.labels())
     except (TrialLogError, OSError) as e:
         raise LearnError(f"learn: {e}") from None
     for w in torn:

@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 from typing import TextIO
 
 from ..errors import LinkError
-from ..protocol.definition import EventKind, Flag
+from ..protocol.definition import EventKind, FaultCode, Flag
 from .client import Received, RobotClient, direction_text
 
 
@@ -180,8 +180,6 @@ class FaultWatch(Listener):
         self.first: str | None = None
 
     def on_message(self, rx: Received) -> None:
-        from ..protocol.definition import EventKind, FaultCode, Flag
-
         m = rx.message
         if self.first is not None:
             return

@@ -236,11 +236,12 @@ class IdealisedWalk:
     s_per_cycle: float | None = None   # its steady cycle's length, where it walked one
 
 
-def run_length(robot: Any, direction: str = "+x", gait: int | Sequence[int] = 0) -> float:
-    """How long each run of the bench lasts (s): ``RUN_S``, or ``CYCLES_PER_RUN`` of the
-    gait's cycles on the nominal robot where those are longer (caterpillar-4's twelve steps
-    take ≈ 15 s: in 40 s a slowed row finished one cycle and counted as not completed)."""
-    cycle = idealised_walk(robot, NOMINAL, direction, gait).s_per_cycle
+def run_length(nominal: IdealisedWalk) -> float:
+    """How long each run of the bench lasts (s), from the idealised drive's walk on the nominal
+    robot (``idealised_walk(robot, NOMINAL)``): ``RUN_S``, or ``CYCLES_PER_RUN`` of its cycles
+    where those are longer (caterpillar-4's twelve steps take ≈ 15 s: in 40 s a slowed row
+    finished one cycle and counted as not completed)."""
+    cycle = nominal.s_per_cycle
     return RUN_S if cycle is None else max(RUN_S, math.ceil(CYCLES_PER_RUN * cycle / 5.0) * 5.0)
 
 

@@ -38,6 +38,11 @@ class Fault:
     code: str
     detail: int
 
+    @classmethod
+    def of(cls, event: Message) -> Fault:
+        """From a FAULT event."""
+        return cls(event.time_ms / 1000.0, FaultCode(event.code).name, event.detail)
+
 
 @dataclass
 class GaitRun:
@@ -109,7 +114,7 @@ class GaitRunListener(Listener):
                         run.cycle_displacements_mm.append(now - self._cycle_start_mm)
                     self._cycle_start_mm = now
             elif msg.kind == EventKind.FAULT:
-                run.faults.append(Fault(msg.time_ms / 1000.0, FaultCode(msg.code).name, msg.detail))
+                run.faults.append(Fault.of(msg))
             elif msg.kind in (EventKind.SUSPECT, EventKind.FALLBACK):
                 run.limb_loss.append(dict(msg.fields))
             elif msg.kind == EventKind.GAIT_STARTED and run.started_s is None:
@@ -221,7 +226,7 @@ class SimSession:
     def _dispatch(self, rx: Received) -> None:
         msg = rx.message
         if msg.name == "EVENT" and msg.kind == EventKind.FAULT:
-            self._latched.append(Fault(msg.time_ms / 1000.0, FaultCode(msg.code).name, msg.detail))
+            self._latched.append(Fault.of(msg))
         elif msg.name == "EVENT" and msg.kind == EventKind.FAULT_CLEARED:
             self._latched.clear()
         for listener in self.listeners:

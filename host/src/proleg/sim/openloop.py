@@ -69,13 +69,7 @@ class OpenLoopDrive:
 def run_open_loop(plant: Plant, drive: OpenLoopDrive, duration_s: float, dt_s: float = 0.002) -> float:
     """Drive ``plant`` for ``duration_s`` from its current time; returns the displacement (mm)
     made in that time."""
-    x0 = plant.displacement_mm
-    n = int(round(duration_s / dt_s))
-    nch = max(max(drive.channels) + 1, max(a.channel for a in plant.params.actuators) + 1)
-    t = plant.time_s
-    for i in range(n):
-        plant.step(dt_s, drive.duties(t + i * dt_s, nch))
-    return plant.displacement_mm - x0
+    return run_open_loop_peak(plant, drive, duration_s, dt_s)[0]
 
 
 @dataclass(frozen=True)
@@ -253,7 +247,7 @@ def tune_open_loop_robust(
             by_power, peak = {}, -math.inf
             for p in powers:
                 plant = plant_factory(p)
-                mm, hottest = _run_with_peak(plant, d, run_s, dt_s)
+                mm, hottest = run_open_loop_peak(plant, d, run_s, dt_s)
                 by_power[p], peak = direction * mm / run_s, max(peak, hottest)
             worst = min(by_power.values())
             cache[key] = (worst if max_coil_c is None or peak <= max_coil_c else -math.inf, by_power, peak)
@@ -308,9 +302,10 @@ def tune_open_loop_robust(
     return RobustTuneResult(best, min(by_power.values()), dict(by_power), len(cache), peak)
 
 
-def _run_with_peak(plant: Plant, drive: OpenLoopDrive, duration_s: float, dt_s: float) -> tuple[float, float]:
-    """``run_open_loop``, and the hottest coil it saw (°C, looked at every 0.1 s or step: a
-    coil's thermal time constant is seconds)."""
+def run_open_loop_peak(plant: Plant, drive: OpenLoopDrive, duration_s: float, dt_s: float) -> tuple[float, float]:
+    """Drive ``plant`` for ``duration_s`` from its current time: the displacement (mm) made in
+    that time, and the hottest coil it saw (°C, looked at every 0.1 s or step: a coil's
+    thermal time constant is seconds)."""
     x0 = plant.displacement_mm
     n = int(round(duration_s / dt_s))
     every = max(1, int(round(0.1 / dt_s)))

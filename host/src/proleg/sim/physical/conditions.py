@@ -86,12 +86,17 @@ class Conditions:
         return parse_conditions(items, self)
 
 
+def coil_of_limb(robot: Any) -> list[int]:
+    """Each limb's actuator index (the ``by_limb`` a per-actuator key resolves names with)."""
+    acts = [a.name for a in robot.actuators]
+    return [acts.index(lb.actuator) for lb in robot.limbs]
+
+
 def actuator_index(robot: Any, name: str) -> int:
     """The actuator ``name`` means on ``robot`` as a per-actuator condition reads it: its own
     name or index, a limb's name (that limb's coil), or rear/front (the first/last limb's)."""
-    limbs = [lb.name for lb in robot.limbs]
-    acts = [a.name for a in robot.actuators]
-    return _resolve("power_scale", name, acts, [acts.index(lb.actuator) for lb in robot.limbs], limbs)
+    return _resolve("power_scale", name, [a.name for a in robot.actuators], coil_of_limb(robot),
+                    [lb.name for lb in robot.limbs])
 
 
 #: The first and the last limb (or their actuators), where no limb or actuator has that name.

@@ -37,7 +37,7 @@ from ...states import limb_levels
 from ..sma import Hysteresis
 from . import materials as mat
 from ...body import Shape, body_geometry
-from .conditions import Conditions
+from .conditions import Conditions, coil_of_limb
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
 from .params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm
@@ -61,7 +61,7 @@ class PhysicalPlant:
         acts = list(robot.actuators)
         lnames = [lb.name for lb in limbs]
         anames = [a.name for a in acts]
-        by_limb = [anames.index(lb.actuator) for lb in limbs]  # a limb's name names its coil too
+        by_limb = coil_of_limb(robot)  # a limb's name names its coil too
         cond.check_names(lnames, anames, by_limb)
         self.levels = tuple(len(lb.psi_star_deg) + 1 for lb in limbs)
         self.params = PlantView(tuple(ActView(a.name, a.channel) for a in acts),
@@ -86,8 +86,7 @@ class PhysicalPlant:
         # -- geometry -------------------------------------------------------------------------
         overlap = [cond.for_index("overlap_mm", j, anames, by_limb, lnames) for j in range(na)]
         length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
-        geo = body_geometry([anames.index(lb.actuator) for lb in limbs], na, length, overlap,
-                            p.coil_offset_mm, p.working_strain)
+        geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, p.working_strain)
         self.geometry = geo
         self._shape = Shape(geo)
 
