@@ -297,10 +297,6 @@ def cmd_sim(args: argparse.Namespace) -> int:
         return EXIT_OK
     if args.measure_climb:
         return cmd_measure_climb(args, robot)
-    if args.all_gaits or args.climb_gaits is not None:
-        from ..errors import SimError
-
-        raise SimError("--all-gaits / --climb-gaits: only with --measure-climb (which gaits it measures)")
     if args.measure_matrix:
         if args.calibrated:
             from ..errors import SimError

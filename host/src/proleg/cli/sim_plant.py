@@ -157,6 +157,8 @@ def refuse_what_does_not_apply(args: argparse.Namespace) -> None:
             raise SimError(f"{mode}: not with {flag} (it does not use it)")
     if mode != "--pty" and _GIVEN["--speed"](args):
         raise SimError("--speed: only with --pty (a plain sim runs as fast as it can)")
+    if mode != "--measure-climb" and (args.all_gaits or args.climb_gaits is not None):
+        raise SimError("--all-gaits / --climb-gaits: only with --measure-climb (which gaits it measures)")
 
 
 def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
