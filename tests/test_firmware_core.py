@@ -454,6 +454,56 @@ def test_set_param_inside_the_envelope_is_used(board):
     assert board.duty(0) == 3000
 
 
+def test_a_state_held_longer_than_the_state_timeout_is_not_a_timeout(board):
+    # r1-fast times a step out after 200 ms; hold_ms may be longer (a slow, deliberate gait)
+    board.client.set_param("hold_ms", 0, 400)
+    board.client.start(0, "+x")  # at rest, in 00: the first target is reached at once
+    board.run(390)
+    assert board.duty(0) == 0 and not _events(board.log, d.EventKind.FAULT)
+    board.run(30)  # held 400 ms: the next step, 10, heats the left coil
+    assert board.duty(0) == 6000 and not _events(board.log, d.EventKind.FAULT)
+    board.run(250)  # and 10 never comes: that step times out as before
+    assert _events(board.log, d.EventKind.FAULT)[-1].code in (d.FaultCode.STATE_TIMEOUT, d.FaultCode.SMA_ON_LIMIT)
+
+
+def test_a_cooldown_the_debt_cannot_pay_back_is_refused_and_changes_nothing(board):
+    # r1-fast: max_on 50 ms; on-time is paid back at max_on/min_cooldown in steps of 1/256
+    board.client.set_param("min_cooldown_ms", 0, 255 * 50)
+    nack = board.refused("SET_PARAM", param=int(d.ParamId.MIN_COOLDOWN_MS), index=0, value=256 * 50)
+    assert nack.error == d.ErrorCode.OUT_OF_RANGE and "256" in str(nack)
+    nack = board.refused("SET_PARAM", param=int(d.ParamId.MAX_ON_MS), index=0, value=49)
+    assert nack.error == d.ErrorCode.OUT_OF_RANGE and "256" in str(nack)
+    _heating(board)  # ψ never moves: on until the on-time limit (50 ms), then a 12.75 s cool-down
+    board.run(300)  # ... and the step times out
+    assert board.duty(0) == 0 and _events(board.log, d.EventKind.FAULT)
+
+    def restarted() -> int:
+        board.client.stop()
+        board.client.clear(d.ClearWhat.FAULTS)
+        board.client.start(0, "+x")
+        board.run(30)  # 00 reached and held 10 ms, then 10 wants the left coil
+        return board.duty(0)
+
+    board.run(6_000)
+    assert restarted() == 0  # still owed
+    board.run(7_000)
+    assert restarted() == 6000  # paid back: it heats again
+
+
+def test_a_hysteresis_refused_for_one_band_changes_no_band(sim_so):
+    b = Rig(sim_so("multi"), 2, 2)  # left: ψ* −10° and 15°, bands 4° wide
+    b.reset()
+    psi_star, hysteresis = int(d.ParamId.PSI_STAR_CDEG), int(d.ParamId.HYSTERESIS_CDEG)
+    b.client.set_param(psi_star, 1, 500)  # ψ* −10° and 5°: 15° apart
+    nack = b.refused("SET_PARAM", param=hysteresis, index=0, value=1600)  # 16°: the bands would meet
+    assert nack.error == d.ErrorCode.OUT_OF_RANGE and "nothing changed" in str(nack)
+    b.client.set_param(psi_star, 1, -300)  # [−5°, −1°] clears the first band as it was, [−12°, −8°]
+    b.client.set_param(psi_star, 1, 500)
+    b.client.set_param(hysteresis, 0, 1400)  # 14°: both bands take it
+    assert b.refused("SET_PARAM", param=psi_star, index=1, value=300).error == \
+        d.ErrorCode.OUT_OF_RANGE  # [−4°, 10°] meets the first band, now [−17°, −3°]
+
+
 def test_a_held_limb_is_held_bang_bang_on_psi(board):
     # r1-fast allows 50 ms of continuous on-time: all of this fits inside it.
     _heating(board)

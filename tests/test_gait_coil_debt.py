@@ -88,6 +88,6 @@ def test_a_drive_past_max_on_is_flagged_and_cut():
 
 
 def test_the_budget_rounds_as_the_firmware_does():
-    b = coil_budget(3000, 800, 800)  # tick 1250 µs; refill_q8 = 3e6 // 3126 = 959; 1250·959 >> 8 = 4682
-    assert b.max_on_s == 3.0 and b.payback == 4682 / 1250
-    assert coil_budget(3000, 10, 1000).payback == (1000 * 10_000 >> 8) / 1000  # at most 39×
+    b = coil_budget(3000, 800, 800)  # tick 1250 µs; refill_q8 = 3e6 // 3126 = 959, paid as 959/256
+    assert b.max_on_s == 3.0 and b.payback == 959 / 256  # the fraction of a µs carries from tick to tick
+    assert coil_budget(3000, 10, 1000).payback == 10_000 / 256  # at most 39×

@@ -159,6 +159,15 @@ def test_drive_duty_above_safety_ceiling(tmp_path):
     rejects(tmp_path, text, "control.drive_duty", "at most safety.max_duty")
 
 
+def test_a_cooldown_of_256_on_times_is_refused_255_builds(tmp_path):
+    # the firmware pays on-time back at max_on/min_cooldown in steps of 1/256 (sma.c)
+    text = R1 + "\n[safety]\nmax_on_ms = 100\nmin_cooldown_ms = {}\n"
+    rejects(tmp_path, text.format(25_501), "safety.min_cooldown_ms", "at most 255 × safety.max_on_ms (25500)")
+    p = tmp_path / "ok.toml"
+    p.write_text(text.format(25_500))
+    assert load_robot(p).safety.min_cooldown_ms == 25_500
+
+
 def test_tick_rate_below_200_hz(tmp_path):
     rejects(tmp_path, R1 + "\n[control]\ntick_hz = 100\n", "control.tick_hz", "200..10000")
 

@@ -109,16 +109,26 @@ static uint8_t set_psi_star(uint8_t index, int32_t v)
     return 0;
 }
 
+/* Every band of the limb takes the width, or none does: each band must stay inside ±90°
+ * and clear of the next (ψ*s further apart than the width); only then are they set, which
+ * cannot fail (a band checked against a neighbour's old width is checked against a looser
+ * edge: widening moves its edge away, narrowing its own). */
 static uint8_t set_hysteresis(uint8_t index, int32_t v)
 {
-    uint8_t i;
+    uint8_t i, n;
     if (index >= CFG_N_LIMBS) {
         return PROTO_ERR_OUT_OF_RANGE;
     }
-    for (i = 0; i + 1u < psi_levels(index); i++) {
-        if (psi_set_band(index, i, psi_star_cdeg(index, i), (int16_t)v) != 0) {
-            return PROTO_ERR_OUT_OF_RANGE; /* earlier thresholds keep the new width */
+    n = (uint8_t)(psi_levels(index) - 1u);
+    for (i = 0; i < n; i++) {
+        int32_t star = psi_star_cdeg(index, i);
+        int32_t lo = star - (v >> 1);
+        if (lo <= -9000 || lo + v >= 9000 || (i > 0u && star - psi_star_cdeg(index, (uint8_t)(i - 1u)) <= v)) {
+            return PROTO_ERR_OUT_OF_RANGE;
         }
+    }
+    for (i = 0; i < n; i++) {
+        (void)psi_set_band(index, i, psi_star_cdeg(index, i), (int16_t)v);
     }
     return 0;
 }
@@ -129,8 +139,9 @@ __attribute__((noinline)) /* two callers: one copy */
 #endif
 static uint8_t set_on_times(uint32_t max_on_ticks, uint32_t cooldown_ticks)
 {
-    if (sma_set_limits(sma_max_duty(), max_on_ticks, cooldown_ticks) != 0) {
-        return PROTO_ERR_SAFETY_LIMIT;
+    int8_t r = sma_set_limits(sma_max_duty(), max_on_ticks, cooldown_ticks);
+    if (r != 0) {
+        return r == -1 ? PROTO_ERR_SAFETY_LIMIT : PROTO_ERR_OUT_OF_RANGE; /* -2: a cool-down of 256 on-times */
     }
     st.max_on_ticks = max_on_ticks;
     st.cooldown_ticks = cooldown_ticks;

@@ -254,9 +254,9 @@ uint8_t seq_tick(cfg_state_t measured)
             new_step();
             return (uint8_t)(ev | SEQ_EV_ADVANCED);
         }
-    } else {
-        s.held = 0;
+        return ev; /* a target held is never a timeout, however long hold_ms (SET_PARAM) */
     }
+    s.held = 0;
     if (s.step_ticks >= ticks.timeout) {
         s.running = 0;
         ev |= SEQ_EV_TIMEOUT;

@@ -32,6 +32,7 @@ typedef struct {
     uint16_t charged;  /* duty the pin carried since the last tick: charged at the next */
     uint8_t blocked;   /* the mean-duty window refused the last request */
     uint8_t forced;    /* cut at max_on: fully off until the debt is paid */
+    uint8_t pay_rem;   /* the pay-back's fraction of a µs (× 256) carried to the next tick */
 } act_state_t;
 
 static act_state_t acts[CFG_N_ACTUATORS];
@@ -90,8 +91,9 @@ static void every_channel_off(void)
 }
 
 /* Cool-down pays back max_on / min_cooldown µs of on-time per µs, i.e. an on-period of L
- * is paid back by L × min_cooldown / max_on of cool-down. Rounded down, and at most 39×
- * (a min_cooldown below 1/39 of max_on counts as 1/39): paid back no faster than that. */
+ * is paid back by L × min_cooldown / max_on of cool-down. The rate is rounded down to
+ * 1/256 (and at most 39×: a min_cooldown below 1/39 of max_on counts as 1/39): paid back no
+ * faster than that; below 1/256 it would be 0, so such a cool-down is refused. */
 #define REFILL_QUOT(on_us, cooldown_us) ((on_us) / (((cooldown_us) >> 8) + 1u))
 #define REFILL_Q8(on_us, cooldown_us) \
     ((uint16_t)(REFILL_QUOT(on_us, cooldown_us) > 10000u ? 10000u : REFILL_QUOT(on_us, cooldown_us)))
@@ -106,6 +108,9 @@ static void set_times(uint32_t on_us, uint32_t cooldown_us)
 #define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
 #define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
 static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0, 0, 0, 0};
+/* The build's own limits pay back (robot.py refuses a min_cooldown_ms of 256 × max_on_ms or
+ * more; this makes a hand-edited config fail to compile rather than lock every coil off). */
+typedef char sma_build_cooldown_pays_back[REFILL_QUOT(SMA_ON_US, SMA_COOLDOWN_US) > 0u ? 1 : -1];
 
 /* Move the window on by dt: slots older than the window fall out. */
 static void advance_window(uint32_t dt)
@@ -178,11 +183,18 @@ uint8_t sma_tick(void)
         a->win_rem = (uint16_t)(x & 1023u);
         if (a->charged > hold_max) {
             a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
+            a->pay_rem = 0;
         } else {
-            uint32_t paid = (dt * st.refill_q8) >> 8; /* ≤ 400000 × 10000: 32 × 16 bits, no 32 × 32 multiply */
+            /* ≤ 400000 × 10000 + 255: 32 × 16 bits, no 32 × 32 multiply. The fraction carries
+             * on, so a fast tick pays back at the rate set, not at its rounding (at 10 kHz a
+             * rate below 2.56/256 would round to nothing every tick). */
+            uint32_t y = dt * st.refill_q8 + a->pay_rem;
+            uint32_t paid = y >> 8;
+            a->pay_rem = (uint8_t)(y & 255u);
             a->debt_us = a->debt_us > paid ? a->debt_us - paid : 0u;
             if (a->debt_us == 0u) {
                 a->forced = 0;
+                a->pay_rem = 0;
             }
         }
         /* then decide the next output */
@@ -233,6 +245,9 @@ int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cool
     if (max_duty_pm > CFG_MAX_DUTY_PM || max_on_ticks > CFG_MAX_ON_TICKS || cooldown_ticks < min_cooldown ||
         cooldown_ticks > 0xFFFFFFFFUL / CFG_TICK_US) {
         return -1;
+    }
+    if (REFILL_QUOT(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US) == 0u) {
+        return -2; /* a cool-down of 256 on-times or more would pay back nothing: never again */
     }
     st.max_duty = max_duty_pm;
     set_times(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US);

@@ -65,7 +65,9 @@ uint8_t sma_estopped(void);
 
 /* Narrow the envelope at run time. Returns 0, or -1 (nothing changed) when a value
  * would widen it: duty above CFG_MAX_DUTY_PM, on-time above CFG_MAX_ON_TICKS, cool-down
- * below CFG_MIN_COOLDOWN_TICKS. Times in ticks of CFG_TICK_US, enforced in microseconds. */
+ * below CFG_MIN_COOLDOWN_TICKS; -2 (nothing changed) for a cool-down of 256 on-times or
+ * more, which the debt's pay-back rate (1/256 steps) cannot express. Times in ticks of
+ * CFG_TICK_US, enforced in microseconds. */
 int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cooldown_ticks);
 uint16_t sma_max_duty(void);
 

@@ -75,6 +75,24 @@ static void test_step_not_completed_within_timeout_stops_with_a_timeout_event(vo
     CHECK_EQ(seq_tick(2), 0); /* stopped: nothing more happens */
 }
 
+static void test_a_target_held_longer_than_the_timeout_advances_without_a_timeout(void)
+{
+    uint8_t ev;
+    setup();
+    seq_set_hold(CFG_STATE_TIMEOUT_TICKS + 50u); /* SET_PARAM hold_ms above state_timeout_ms */
+    seq_start(SEQ_DIR_PX, 0, 0);
+    ev = ticks(CFG_STATE_TIMEOUT_TICKS + 49u, 0);
+    CHECK(!(ev & (SEQ_EV_TIMEOUT | SEQ_EV_ADVANCED)));
+    CHECK(seq_running());
+    CHECK(seq_tick(0) & SEQ_EV_ADVANCED);
+    CHECK_EQ(seq_target(), 2);
+    /* and a target lost after the timeout has passed is a timeout at once */
+    seq_set_hold(CFG_STATE_TIMEOUT_TICKS + 50u);
+    ticks(CFG_STATE_TIMEOUT_TICKS + 10u, 2);
+    CHECK(seq_running());
+    CHECK(seq_tick(0) & SEQ_EV_TIMEOUT);
+}
+
 static void test_a_full_cycle_returns_to_the_first_step_and_counts(void)
 {
     static const cfg_state_t walk[] = {0, 2, 3, 1};
@@ -173,6 +191,7 @@ int main(void)
     RUN(test_hold_restarts_when_the_state_leaves_the_target);
     RUN(test_reached_is_reported_once_per_step);
     RUN(test_step_not_completed_within_timeout_stops_with_a_timeout_event);
+    RUN(test_a_target_held_longer_than_the_timeout_advances_without_a_timeout);
     RUN(test_a_full_cycle_returns_to_the_first_step_and_counts);
     RUN(test_start_begins_where_the_robot_is_on_the_walk);
     RUN(test_start_of_a_gait_that_does_not_exist_is_refused);

@@ -290,6 +290,12 @@ static void test_run_time_limits_may_narrow_but_never_widen_the_envelope(void)
     CHECK(sma_set_limits(8000, CFG_MAX_ON_TICKS + 1u, CFG_MIN_COOLDOWN_TICKS) != 0);
     CHECK(sma_set_limits(8000, CFG_MAX_ON_TICKS, CFG_MIN_COOLDOWN_TICKS - 1u) != 0);
     CHECK_EQ(sma_max_duty(), 8000);
+    /* a cool-down of 256 on-times would pay back nothing (refill 1/256 steps): refused */
+    CHECK(CFG_MIN_COOLDOWN_TICKS <= 255u);
+    CHECK_EQ(sma_set_limits(5000, 1, 256), -2);
+    CHECK_EQ(sma_max_duty(), 8000);
+    CHECK_EQ(sma_set_limits(5000, 1, 255), 0);
+    CHECK_EQ(sma_set_limits(8000, CFG_MAX_ON_TICKS, CFG_MIN_COOLDOWN_TICKS), 0);
     CHECK_EQ(sma_set_limits(5000, 10, CFG_MIN_COOLDOWN_TICKS + 5u), 0);
     CHECK_EQ(sma_max_duty(), 5000);
     CHECK_EQ(on_time_until_cut(6000, CFG_TICK_US, &hit), 10u * CFG_TICK_US);

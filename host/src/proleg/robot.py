@@ -39,6 +39,9 @@ NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
 #: (issue 17); 63 keeps build directory names reasonable.
 ROBOT_NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
 MAX_LIMBS = 8
+#: ``[safety] min_cooldown_ms`` is at most this many ``max_on_ms`` (sma.c's pay-back rate,
+#: max_on/min_cooldown in steps of 1/256, must not round to 0; SET_PARAM refuses the same).
+MAX_COOLDOWN_PER_ON = 255
 MAX_ACTUATORS = 8
 #: A robot file larger than this is refused before it is parsed (an inline matrix of
 #: 1,024 states takes about 5 MB); a transition CSV larger than robot_transitions.MAX_CSV_BYTES likewise.
@@ -373,13 +376,19 @@ def _imu_spec(path: Path, where: str, value: Any) -> ImuSpec:
 def _safety(path: Path, value: Any) -> Safety:
     f = Fields(path, "safety", value, set(Safety.__dataclass_fields__))
     d = Safety()
-    return Safety(
+    s = Safety(
         max_on_ms=f.integer("max_on_ms", d.max_on_ms, 10, 60_000),
         min_cooldown_ms=f.integer("min_cooldown_ms", d.min_cooldown_ms, 0, 600_000),
         max_duty=f.number("max_duty", d.max_duty, 0.0, 1.0, open_lo=True),
         state_timeout_ms=f.integer("state_timeout_ms", d.state_timeout_ms, 10, 600_000),
         link_watchdog_ms=f.integer("link_watchdog_ms", d.link_watchdog_ms, 0, 600_000),
     )
+    # sma.c pays on-time back at max_on/min_cooldown in steps of 1/256: a cool-down of 256
+    # on-times or more would pay back nothing, and a coil that hit its limit never heat again
+    if s.min_cooldown_ms > MAX_COOLDOWN_PER_ON * s.max_on_ms:
+        f.fail("min_cooldown_ms", f"at most {MAX_COOLDOWN_PER_ON} × safety.max_on_ms ({MAX_COOLDOWN_PER_ON * s.max_on_ms})",
+               s.min_cooldown_ms)
+    return s
 
 
 def _control(path: Path, value: Any, safety: Safety) -> Control:

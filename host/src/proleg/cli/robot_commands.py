@@ -327,8 +327,9 @@ def add_arguments(subparsers: Any) -> None:
                                epilog="parameters: " + ", ".join(p.name.lower() for p in ParamId))
     sp.add_argument("name", metavar="NAME", type=_param_name, help="parameter name (see below)")
     sp.add_argument("value", metavar="VALUE", type=int, help="value in the parameter's unit (permyriad, ms, 0.01°)")
-    sp.add_argument("--index", type=int, default=0, help="limb or level index as the firmware counts them, from 0 = the first limb "
-                         "(default 0); replies and messages name limbs instead")
+    sp.add_argument("--index", type=int, default=0, help="hysteresis_cdeg: the limb, from 0 = the first; psi_star_cdeg: the "
+                         "threshold, counted limb by limb (a limb of k levels has k-1); others: unused (default 0). "
+                         "Every parameter, unit and range: docs/control.md")
     add_link_options(sp, sim_takes_robot=True)
     sp.set_defaults(run=cmd_set_param)
 

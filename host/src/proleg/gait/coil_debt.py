@@ -37,12 +37,12 @@ def refill_q8(on_us: int, cooldown_us: int) -> int:
 
 def coil_budget(max_on_ms: float, min_cooldown_ms: float, tick_hz: int) -> CoilBudget:
     """The budget the firmware builds from ``[safety]`` (render.py turns the times into whole
-    ticks, sma.c's set_times the pay-back into a ×256 rate, rounded down and at most 39×,
-    paid per tick rounded down to a µs)."""
+    ticks, sma.c's set_times the pay-back into a ×256 rate, rounded down and at most 39×;
+    sma_tick carries the fraction of a µs from tick to tick, so the rate is paid as it is)."""
     tick_us = round(1_000_000 / tick_hz)
     on_us = math.ceil(max_on_ms * tick_hz / 1000.0 - 1e-9) * tick_us
     cooldown_us = math.ceil(min_cooldown_ms * tick_hz / 1000.0 - 1e-9) * tick_us
-    return CoilBudget(on_us / 1e6, ((tick_us * refill_q8(on_us, cooldown_us)) >> 8) / tick_us)
+    return CoilBudget(on_us / 1e6, refill_q8(on_us, cooldown_us) / 256)
 
 
 def charge(debt: Sequence[float], on: Sequence[bool], seconds: float, payback: float) -> list[float]:

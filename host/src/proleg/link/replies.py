@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from ..errors import LinkError
 from ..protocol.codec import Message
-from ..protocol.definition import GAIT_USER, ErrorCode
+from ..protocol.definition import GAIT_USER, ErrorCode, ParamId
 
 
 class CommandRefused(LinkError):
@@ -42,6 +42,21 @@ _NOT_ALLOWED = {
 }
 
 
+#: SET_PARAM's OUT_OF_RANGE, by the parameter (the NACK's detail; core/param.c)
+_OUT_OF_RANGE = {
+    int(ParamId.PSI_STAR_CDEG): "no such threshold (the index counts ψ* thresholds limb by limb: a limb of k levels has "
+                                "k − 1), or the band ψ* ± hysteresis/2 would leave (−90°, 90°) or meet a neighbouring "
+                                "threshold's band; nothing changed",
+    int(ParamId.HYSTERESIS_CDEG): "no such limb (the index is the limb), a width outside 0..2000 (0.01°), or a band "
+                                  "ψ* ± width/2 of the limb's thresholds would leave (−90°, 90°) or meet the next; "
+                                  "nothing changed",
+    int(ParamId.MAX_ON_MS): "below 1 ms, or so short that min_cooldown_ms would be 256 on-times or more (the "
+                            "firmware cannot pay on-time back that slowly): lower min_cooldown_ms first",
+    int(ParamId.MIN_COOLDOWN_MS): "outside 0..600000 ms, or 256 max_on_ms or more (the firmware cannot pay on-time "
+                                  "back that slowly)",
+}
+
+
 def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     """What a NACK's detail means: a measurement, or why the board would not."""
     if error == ErrorCode.NOT_ALLOWED:
@@ -54,7 +69,7 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
         return ("beyond the safety envelope the firmware was built with (the robot file's [safety], e.g. max_duty "
                 "for a duty): at run time the envelope can be narrowed, never widened")
     if command == "SET_PARAM" and error == ErrorCode.OUT_OF_RANGE:
-        return "outside the parameter's range, or no such limb or index on this robot"
+        return _OUT_OF_RANGE.get(detail, "outside the parameter's range, or no such limb or index on this robot")
     if error == ErrorCode.TOO_STEEP:
         if detail == TOO_TILTED:
             return ("an end tilts more than 20° at rest: beyond any ground the board levels on, uphill or down "

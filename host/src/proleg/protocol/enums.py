@@ -112,7 +112,7 @@ class ParamId(IntEnum):
     HOLD_MS = 2
     DEBOUNCE_TICKS = 3
     STATE_TIMEOUT_MS = 4  # ≤ build value
-    PSI_STAR_CDEG = 5  # index = limb*(levels-1) + level; 0.01°
+    PSI_STAR_CDEG = 5  # index = the threshold, counted limb by limb (a limb of k levels has k-1); 0.01°
     HYSTERESIS_CDEG = 6  # index = limb; 0.01°
     MAX_ON_MS = 7  # may only shrink
     MIN_COOLDOWN_MS = 8  # may only grow

@@ -78,6 +78,7 @@ class Envelope:
         self.hit_bits = 0
         self.win = [[0] * n_channels for _ in range(WIN_SLOTS)]
         self.win_rem = [0] * n_channels
+        self.pay_rem = [0] * n_channels  # the pay-back's fraction of a µs (× 256), as sma.c
         self.slot, self.slot_us = 0, 0
 
     def reached(self) -> None:
@@ -96,10 +97,14 @@ class Envelope:
             self.win_rem[ch] = x & 1023
             if self.charged[ch] > self.hold_ceiling_pm:
                 self.debt[ch] += self.dt_us
+                self.pay_rem[ch] = 0
             else:
-                self.debt[ch] = max(0, self.debt[ch] - (self.dt_us * self.refill_q8 >> 8))
+                y = self.dt_us * self.refill_q8 + self.pay_rem[ch]  # the fraction carries on
+                self.pay_rem[ch] = y & 255
+                self.debt[ch] = max(0, self.debt[ch] - (y >> 8))
                 if self.debt[ch] == 0:
                     self.cut[ch] = False
+                    self.pay_rem[ch] = 0
             pm = min(round(duty * 10000), self.max_duty_pm)  # sma_clamp: the duty ceiling first
             if self.cut[ch]:
                 pm = 0  # cooling after an on-limit hit: off until the debt is paid
