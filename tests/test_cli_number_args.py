@@ -17,6 +17,7 @@ from proleg.cli.number_args import (
     non_negative_float,
     positive_float,
     positive_int,
+    reply_timeout,
 )
 
 R1 = str(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
@@ -34,6 +35,7 @@ R1 = str(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
         (heading_deg, "-450", -450.0),
         (gait_index, "0", 0),
         (gait_index, " User ", 0xFF),
+        (reply_timeout, "0.01", 0.01),
     ],
 )
 def test_each_parser_returns_the_number_it_reads(parse, text, value):
@@ -55,6 +57,8 @@ def test_each_parser_returns_the_number_it_reads(parse, text, value):
         (heading_deg, "nan"),
         (gait_index, "-1"),
         (gait_index, "first"),
+        (reply_timeout, "0"),
+        (reply_timeout, "0.001"),
     ],
 )
 def test_each_parser_refuses_what_it_does_not_take(parse, text):
@@ -82,6 +86,8 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),
         (["learn", R1, "--node", "one"], "argument --node: expected an integer (0x.. for hex), got 'one'"),
         (["learn", R1, "--repeats", "-3"], "argument --repeats: expected at least 1, got -3"),
+        (["run", R1, "--sim", "--timeout", "0.001"],
+         "argument --timeout: expected at least 0.01 s (a reply takes a few ms), got 0.001"),
     ],
 )
 def test_a_bad_number_is_one_line_naming_the_option_and_exit_2(capsys, argv, line):

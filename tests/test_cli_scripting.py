@@ -237,6 +237,8 @@ def test_load_gait_on_the_simulated_board(capsys):
     assert code == 2 and "STATES: 00 → 01 is forbidden" in err and err.count("\n") == 1  # refused before sending
     code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,12")
     assert code == 2 and "STATES" in err
+    code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,,10")  # not read as 00,10
+    assert code == 2 and "STATES: entry 2 of '00,,10' is empty" in err
 
 
 def test_set_param_by_name_on_the_simulated_board(capsys):

@@ -80,6 +80,16 @@ class TransitionTable:
     def labels(self) -> list[str]:
         return [self.label(i) for i in range(self.n_states)]
 
+    def sequence(self, text: str) -> list[int]:
+        """The states of a comma-separated list of labels (``00,10,11``); ValueError naming the
+        entry that is empty or not a state."""
+        out = []
+        for k, part in enumerate(text.split(","), 1):
+            if not part.strip():
+                raise ValueError(f"entry {k} of {text!r} is empty")
+            out.append(self.index(part.strip()))
+        return out
+
     @classmethod
     def from_edges(
         cls,

@@ -290,11 +290,11 @@ def _print_evaluation(robot, args) -> int:
     from ..gait import evaluate_sequence
 
     table = robot.transitions
-    names = [s.strip() for s in args.evaluate.split(",") if s.strip()]
     try:
-        seq = [table.index(s) for s in names]
+        seq = table.sequence(args.evaluate)
     except ValueError as e:
         raise GaitError(f"--evaluate: {e}") from None
+    names = [table.label(x) for x in seq]
     try:
         gait = evaluate_sequence(table, seq)
     except GaitError as e:

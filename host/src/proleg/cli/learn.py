@@ -40,7 +40,7 @@ class LearnError(ProlegError):
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import int_auto, positive_float, positive_int
+    from .number_args import int_auto, positive_float, positive_int, reply_timeout
     from .robot_commands import DEFAULT_BAUDRATE
 
     p = subparsers.add_parser(
@@ -55,7 +55,7 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
     p.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot (default 0)")
     p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
-    p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
+    p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
                    help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
     p.add_argument("--plant", choices=("table", "physical"), default="table",

@@ -63,6 +63,19 @@ def positive_float(text: str) -> float:
     return v
 
 
+#: The shortest reply timeout the CLI takes: a reply frame takes a few ms at 115200 baud
+#: (the simulated board answers within a tick or two), so a shorter one could never succeed.
+MIN_REPLY_TIMEOUT_S = 0.01
+
+
+def reply_timeout(text: str) -> float:
+    """``--timeout``: seconds to wait for a command's reply, at least ``MIN_REPLY_TIMEOUT_S``."""
+    v = positive_float(text)
+    if v < MIN_REPLY_TIMEOUT_S:
+        raise argparse.ArgumentTypeError(f"expected at least {MIN_REPLY_TIMEOUT_S} s (a reply takes a few ms), got {text}")
+    return v
+
+
 def heading_deg(text: str) -> float:
     """A heading in degrees, any finite value (0 = +x, 90 = +y)."""
     v = _float(text, "a heading in degrees")

@@ -17,7 +17,7 @@ from typing import Any
 
 from ..errors import GaitError, LinkError
 from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import gait_index, heading_deg, int_auto, positive_float
+from .number_args import gait_index, heading_deg, int_auto, positive_float, reply_timeout
 
 log = logging.getLogger("proleg")
 
@@ -36,7 +36,7 @@ def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> No
     p.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
     p.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot (default 0)")
     p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
-    p.add_argument("--timeout", type=float, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
+    p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
 
 
 def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None):
@@ -209,9 +209,8 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     table = robot.transitions
-    labels = [s.strip() for s in args.states.split(",") if s.strip()]
     try:
-        states = [table.index(s) for s in labels]
+        states = table.sequence(args.states)
     except ValueError as e:
         raise GaitError(f"STATES: {e}") from None
     if len(states) > 1 and states[0] == states[-1]:
@@ -224,7 +223,7 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
                             "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
     with open_client(args, args.robot) as client:
         client.load_gait(states)
-        print(f"loaded {' → '.join(labels)} as the user gait on {client.link.description} "
+        print(f"loaded {' → '.join(table.label(x) for x in [*states, states[0]])} as the user gait on {client.link.description} "
               f"({_way_hint(table, states)})")
         if getattr(args, "sim", None):
             print(SIM_IS_FRESH)
