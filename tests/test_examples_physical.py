@@ -172,6 +172,31 @@ def test_a_proleg_between_raised_limbs_is_lifted_a_state_the_file_allows_is_one_
     assert list(hits) == [b] and [(i, raising) for i, raising, _ in hits[b]] == [(1, [0, 2])]
 
 
+def test_a_two_limb_robot_is_checked_for_states_its_body_cannot_hold_too(tmp_path, caplog):
+    """A four-level rear pad (ψ* 8°, 16°, 24°) beside a binary front pad: raising the front
+    end lifts the rear one past 8.75°, so 01 cannot be held; the paper's robots (ψ* 20°)
+    are not lifted past theirs and load without a word."""
+    lines = ['[robot]', 'name = "ml4-2"', '[[limb]]', 'name = "rear"', 'levels = 4',
+             'psi_star_deg = [8.0, 16.0, 24.0]', 'hysteresis_deg = 1.5', 'actuator = "a"',
+             '[[limb]]', 'name = "front"', 'psi_star_deg = [18.0]', 'actuator = "b"',
+             '[[actuator]]', 'name = "a"', 'channel = 0', '[[actuator]]', 'name = "b"', 'channel = 1',
+             '[transitions]', 'states = ["00", "01", "10", "11", "20", "21", "30", "31"]', 'matrix = [']
+    allowed = {(0, 1), (1, 0), (0, 2), (2, 0), (2, 3), (3, 2), (1, 3), (3, 1)}
+    lines += ["  [" + ", ".join("0" if a == b else "1" if (a, b) in allowed else '"x"' for b in range(8)) + "],"
+              for a in range(8)]
+    path = tmp_path / "ml4-2.toml"
+    path.write_text("\n".join([*lines, "]"]) + "\n")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 1 and "state 01: limb 'rear' (level 0) is lifted" in warned[0], warned
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        for name in ("paper-r1", "paper-r2", "paper-r3", "paper-r1-stroke", "paper-r1-one-actuator"):
+            load_robot(ROOT / "robots" / f"{name}.toml")
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
 @pytest.mark.parametrize("name", ["inchworm-3", "caterpillar-4"])
 def test_no_firmware_gait_of_an_example_robot_passes_through_a_state_its_body_cannot_hold(name):
     from proleg.firmware.build import firmware_gaits

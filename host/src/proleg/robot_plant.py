@@ -416,7 +416,7 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     from .states import limb_levels
 
     n = table.n_states
-    if len(limbs) < 3 or n > COUPLING_CHECK_MAX_STATES:
+    if len(limbs) < 2 or n > COUPLING_CHECK_MAX_STATES:
         return {}
     limb_act = [actuators.index(lb.actuator) for lb in limbs]
     overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
