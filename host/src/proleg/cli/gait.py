@@ -297,12 +297,11 @@ def _print_evaluation(robot, args) -> int:
     names = [table.label(x) for x in seq]
     try:
         gait = evaluate_sequence(table, seq)
-    except GaitError as e:
-        if args.json:
-            print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
-        else:
-            print(f"{robot.name}: {' → '.join(names)} is not a valid gait: {e}")
-        return 1
+    except GaitError as e:  # a bad gait is a usage error (exit 2), as the README says
+        if not args.json:
+            raise GaitError(f"--evaluate: {' → '.join(names)} is not a valid gait of {robot.name}: {e}") from None
+        print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
+        return 2
     if args.json:
         print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))
     else:
