@@ -126,6 +126,12 @@ def test_forbidden_mark_on_a_rewarded_transition(tmp_path):
     rejects(tmp_path, text, "transitions.forbidden[0]", "01->11", "also gives it a reward")
 
 
+def test_forbidden_mark_of_a_state_to_itself(tmp_path):
+    text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11", "00->00"]')
+    rejects(tmp_path, text.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]'), "transitions.forbidden[1]",
+            "00->00 is a state to itself, never a transition")
+
+
 def test_forbidden_mark_agreeing_with_the_matrix_is_fine(tmp_path):
     text = R1.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]').replace("[transitions]", '[transitions]\nforbidden = ["01->11"]')
     r = load_robot(write(tmp_path, text))

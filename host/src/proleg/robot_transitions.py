@@ -161,6 +161,9 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) 
             raise RobotFileError(f"{where}[{k}]: expected FROM->TO, got {mark!r}")
         a = _state_ref(parts[0], levels, n, f"{where}[{k}]")
         b = _state_ref(parts[1], levels, n, f"{where}[{k}]")
+        if a == b:
+            raise RobotFileError(f"{where}[{k}]: {mark} is a state to itself, never a transition (expected FROM->TO "
+                                 "of two different states)")
         if (a, b) in given:
             raise RobotFileError(
                 f"{where}[{k}]: {mark} is marked forbidden but the table also gives it a reward (expected 'x' there)"
