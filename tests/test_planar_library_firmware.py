@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -115,6 +116,26 @@ def test_a_bad_gaits_table_is_one_line_naming_the_key(tmp_path, gaits, message):
     with pytest.raises(RobotFileError, match=message) as e:
         load_robot(bad)
     assert str(e.value).startswith(str(bad)) and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("gaits, needs", [
+    ("library = [0, 90]", "dy"),
+    ('library = [0, "rot-cw"]', "dtheta_deg"),
+    ("library = [0]\nrotation_cap_deg = 5", "dtheta_deg"),
+    ("library = [0]\nvariance_weight = 1", "var_dx"),
+])
+def test_a_library_asking_for_statistics_the_file_lacks_is_refused_when_read(tmp_path, gaits, needs):
+    """paper-r1 has Δx only: a heading off the x axis, a rotation or a variance weight needs a
+    planar statistic it does not give. Refused when the file is read (gait and build agree),
+    naming the file, gaits.library and the statistic."""
+    r1 = re.sub(r"^max_climb_deg.*\n(\s+#.*\n)*", "", (PLANAR.parent / "paper-r1.toml").read_text(), flags=re.M)
+    bad = tmp_path / "r1-library.toml"  # (the climb guard is not for library robots)
+    bad.write_text(r1 + "\n[gaits]\n" + gaits + "\n")
+    with pytest.raises(RobotFileError, match=rf"gaits\.library: .*needs \[transitions\]\.{needs} in the robot file") as e:
+        load_robot(bad)
+    assert str(e.value).startswith(str(bad)) and "\n" not in str(e.value)
+    (tmp_path / "ok.toml").write_text(r1 + "\n[gaits]\nlibrary = [0, 180]\n")
+    assert load_robot(tmp_path / "ok.toml").library is not None
 
 
 def test_choosing_a_heading(robot, fw):

@@ -233,9 +233,11 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         log.warning("warning: %s", line)
     library = None
     if "gaits" in doc:
-        from .gait.library import library_from_robot_file
+        from .gait.library import library_from_robot_file, missing_statistics
 
         library = library_from_robot_file(path, doc["gaits"])
+        if library is not None and (why := missing_statistics(library, table)):
+            raise RobotFileError(f"{path}: gaits.library: {why}")
     _check_climb(path, control, limbs, library)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library)
 

@@ -17,7 +17,7 @@ from typing import Any
 
 from ..errors import GaitError, RobotFileError
 from ..transitions import TransitionTable
-from .planar import ROTATIONS, PlanarObjective, optimal_planar_gaits
+from .planar import ROTATIONS, PlanarObjective, dtheta_of, optimal_planar_gaits, planar_scores
 from .result import Gait, GaitResult
 
 
@@ -227,6 +227,24 @@ def library_from_robot_file(path: Any, value: Any) -> LibrarySpec | None:
         key = text.split(":", 1)[0] if text.split(":", 1)[0] in SPEC_KEYS else "library"
         text = text.removeprefix(f"{key}: ") if text.startswith(f"{key}: ") else text
         raise RobotFileError(f"{path}: gaits.{key}: {text}") from None
+
+
+def missing_statistics(spec: LibrarySpec, table: TransitionTable) -> str | None:
+    """Why ``table`` lacks a planar statistic the library's questions need (a heading off the
+    x axis needs ``dy``, a rotation or a rotation cap ``dtheta_deg``, a variance weight its
+    ``var_*``), or None: checked when the robot file is read, so that ``gait`` and ``build``
+    agree and the error names the file."""
+    try:
+        for h in spec.headings:
+            objective = PlanarObjective(h.heading_deg or 0.0, spec.variance_weight, spec.transition_cost)
+            planar_scores(table, objective)
+            if h.rotate is not None:
+                dtheta_of(table, f"gait {h.rotate}")
+            elif spec.rotation_cap_deg is not None:
+                dtheta_of(table, "gaits.rotation_cap_deg")
+    except GaitError as e:
+        return str(e)
+    return None
 
 
 def nearest_heading(entries: Sequence[tuple[Heading, Any]], heading_deg: float) -> tuple[Heading, Any, float] | None:

@@ -95,14 +95,15 @@ def rotation_scores(table: TransitionTable, objective: PlanarObjective, rotate: 
     cw) minus the variance and transition-cost terms of ``objective`` (its heading unused)."""
     if rotate not in ROTATIONS:
         raise GaitError(f"rotate must be one of {', '.join(ROTATIONS)}, got {rotate!r}")
-    theta = _dtheta(table, "a rotation gait")
+    theta = dtheta_of(table, "a rotation gait")
     sign = 1.0 if rotate == "ccw" else -1.0
     level = replace(objective, heading_deg=0.0, transition_cost=0.0)
     penalties = np.asarray(table.reward, dtype=np.float64) - planar_scores(table, level)
     return sign * theta - penalties - float(objective.transition_cost)
 
 
-def _dtheta(table: TransitionTable, what: str) -> np.ndarray:
+def dtheta_of(table: TransitionTable, what: str) -> np.ndarray:
+    """The per-transition rotation (°) ``what`` needs; GaitError when the robot file gives none."""
     if table.planar is None or table.planar.dtheta_deg is None:
         raise GaitError(f"{what} needs [transitions].dtheta_deg in the robot file, and it has none")
     return np.asarray(table.planar.dtheta_deg, dtype=np.float64)
@@ -147,7 +148,7 @@ def optimal_planar_gaits(
         if not (isinstance(rotation_cap_deg, (int, float)) and math.isfinite(rotation_cap_deg) and rotation_cap_deg >= 0):
             raise GaitError(f"rotation cap must be a number of degrees >= 0, got {rotation_cap_deg!r}")
         cap = float(rotation_cap_deg)
-        constraints.append(Constraint(_dtheta(table, "a rotation cap"), -cap, cap))
+        constraints.append(Constraint(dtheta_of(table, "a rotation cap"), -cap, cap))
     if rotate is not None:
         cap = default_translation_cap(table) if translation_cap is None else translation_cap
         if not (isinstance(cap, (int, float)) and math.isfinite(cap) and cap >= 0):
