@@ -1,11 +1,13 @@
-"""The generated DBC names each node once."""
+"""The generated DBC names each node once, and each signal."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 
 from proleg.errors import UsageError
-from proleg.protocol.dbc import dbc_text
+from proleg.protocol.dbc import build_database, dbc_text
 
 
 def _nodes(text: str) -> list[str]:
@@ -22,3 +24,28 @@ def test_every_node_name_appears_once(nodes):
 def test_a_repeated_node_id_is_refused_in_one_line():
     with pytest.raises(UsageError, match=r"^dbc: node id 1 given more than once"):
         dbc_text((0, 1, 1))
+
+
+def test_signal_names_stay_apart_whatever_the_limbs_are_called():
+    """A limb called "5" is psi_5; the unused sixth ψ slot then becomes psi_slot5, and a limb
+    called "count" leaves psi_count_field for the count. Every telemetry signal name is used once."""
+    from types import SimpleNamespace as NS
+
+    robot = NS(limbs=[NS(name="5"), NS(name="count")], actuators=[NS(name="sma-a"), NS(name="2")])
+    db = build_database(robot=robot)
+    names = [s.name for m in db.messages if m.name.startswith("TELEMETRY") for s in m.signals]
+    assert len(names) == len(set(names)), sorted(n for n in names if names.count(n) > 1)
+    assert {"psi_5", "psi_count", "psi_slot5", "psi_count_field", "duty_sma_a", "duty_2", "duty_slot2"} <= set(names)
+    psi1 = db.get_message_by_name("TELEMETRY_PSI_0")
+    assert [s.name for s in sorted(psi1.signals, key=lambda s: s.start)][:2] == ["psi_5", "psi_count"]
+
+
+def test_two_limbs_that_would_share_an_identifier_are_refused(tmp_path):
+    from proleg.errors import RobotFileError
+    from proleg.robot import load_robot
+
+    r1 = (Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").read_text()
+    path = tmp_path / "r.toml"
+    path.write_text(r1.replace('name = "left"', 'name = "a-1"').replace('name = "right"', 'name = "a_1"'))
+    with pytest.raises(RobotFileError, match=r"limb 'a_1': name: .*stays apart from limb 'a-1' .*'a_1' in recordings"):
+        load_robot(path)

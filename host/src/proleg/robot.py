@@ -23,6 +23,7 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
+from .names import identifier
 from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, inference_warning, limb_friction,
                           plant_section, unreachable_levels)
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
@@ -291,6 +292,9 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         name = f.string("name")
         if any(limb.name == name for limb in out):
             f.fail("name", "a name no other limb has (duplicate limb)", name)
+        if (twin := next((limb.name for limb in out if identifier(limb.name) == identifier(name)), None)) is not None:
+            f.fail("name", f"a name that stays apart from limb {twin!r} as an identifier (both are "
+                           f"{identifier(name)!r} in recordings and CAN signals)", name)
         levels = f.integer("levels", 2, 2, 10)
         psi = t.get("psi_star_deg")
         if isinstance(psi, (int, float)) and not isinstance(psi, bool):

@@ -19,15 +19,14 @@ import os
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from cantools.database.can import Database, Message, Node, Signal
 from cantools.database.conversion import BaseConversion
 
 from ..errors import LinkError, UsageError
+from ..names import identifier
 from ..paths import as_if_created
-import re
-from typing import Any
-
 from .definition import DIR_UNSTATED, PROTOCOL_VERSION, BY_NAME, Direction, EventKind, FaultCode, Flag, StopReason
 from .can import EVENT_FRAME, SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
 
@@ -85,13 +84,9 @@ def _directions() -> dict[int, str]:
     return {**_choices(Direction), DIR_UNSTATED: "UNSTATED"}
 
 
-def _ident(name: str) -> str:
-    """A DBC identifier from a limb/actuator name (``sma-left`` → ``sma_left``)."""
-    return re.sub(r"[^A-Za-z0-9_]", "_", name)
-
-
 def _telemetry_signals(frame: Any, limbs: Sequence[str], actuators: Sequence[str]) -> list[Signal]:
     sigs = []
+    named = {f"psi_{identifier(n)}" for n in limbs} | {f"duty_{identifier(a)}" for a in actuators}
     for s in frame.signals:
         if s.field == "flags":
             sigs += [_signal(f"flag_{f.name.lower()}", s.start_bit + f.bit_length() - 1, 1, False,
@@ -100,9 +95,11 @@ def _telemetry_signals(frame: Any, limbs: Sequence[str], actuators: Sequence[str
             continue
         name = s.name
         if s.field == "psi" and s.index is not None and s.index < len(limbs):
-            name = f"psi_{_ident(limbs[s.index])}"
+            name = f"psi_{identifier(limbs[s.index])}"
         elif s.field == "duty" and s.index is not None and s.index < len(actuators):
-            name = f"duty_{_ident(actuators[s.index])}"
+            name = f"duty_{identifier(actuators[s.index])}"
+        elif name in named:  # named like a limb or actuator (a limb "5": psi_slot5; "count": psi_count_field)
+            name = f"{s.field}_slot{s.index}" if s.index is not None else f"{name}_field"
         choices = _directions() if s.field == "direction" else None
         sigs.append(_signal(name, s.start_bit, s.length, s.signed, s.scale, s.unit,
                             comment=_FIELD_DOCS.get(s.field) or None, choices=choices, receivers=[HOST]))

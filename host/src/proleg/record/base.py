@@ -21,7 +21,8 @@ import numpy as np
 from ..errors import LinkError
 from ..link.client import Received
 from ..link.listeners import Listener
-from .fields import RecordingMeta, column_name, event_row, injection_row, telemetry_row
+from ..names import identifier
+from .fields import RecordingMeta, event_row, injection_row, telemetry_row
 
 
 class Writer(Listener, ABC):
@@ -139,8 +140,8 @@ class Recording:
         """Assemble from telemetry rows named as ``meta.columns()`` says."""
         if not rows:
             raise LinkError(f"{path}: no TELEMETRY frames in the recording")
-        psi_cols = [f"psi_{column_name(n)}_deg" for n in meta.limb_names]
-        duty_cols = [f"duty_{column_name(n)}_pct" for n in meta.channel_names]
+        psi_cols = [f"psi_{identifier(n)}_deg" for n in meta.limb_names]
+        duty_cols = [f"duty_{identifier(n)}_pct" for n in meta.channel_names]
 
         def num(r: dict[str, Any], k: str) -> float:
             v = r.get(k)

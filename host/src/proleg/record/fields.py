@@ -12,22 +12,17 @@ format (CSV, JSON Lines, MCAP) writes these same names; docs/data.md lists them.
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 from typing import Any
 
+from ..names import identifier
 from ..protocol.definition import ErrorCode, EventKind
 
 #: TELEMETRY's integer fields, as recorded (no scaling)
 INTEGER_FIELDS = ("seq", "measured", "target", "gait", "direction", "step", "flags")
 #: the columns of the events table (EVENT messages, replies, fault injections)
 EVENT_COLUMNS = ("t_host_s", "t_s", "msg", "kind", "code", "detail", "text")
-
-
-def column_name(name: str) -> str:
-    """A limb or actuator name as part of a column name: ``sma-left`` → ``sma_left``."""
-    return re.sub(r"[^0-9A-Za-z_]", "_", name)
 
 
 def utc_now() -> str:
@@ -52,8 +47,8 @@ class RecordingMeta:
     def columns(self) -> list[str]:
         """The telemetry columns, in order."""
         return (["t_host_s", "t_s", *INTEGER_FIELDS]
-                + [f"psi_{column_name(n)}_deg" for n in self.limb_names]
-                + [f"duty_{column_name(n)}_pct" for n in self.channel_names]
+                + [f"psi_{identifier(n)}_deg" for n in self.limb_names]
+                + [f"duty_{identifier(n)}_pct" for n in self.channel_names]
                 + list(self.truth))
 
     def as_dict(self) -> dict[str, Any]:
@@ -112,9 +107,9 @@ def telemetry_row(meta: RecordingMeta, host_s: float, f: dict[str, Any], truth: 
         row[k] = int(f[k])
     psi, duty = f["psi"], f["duty"]
     for i, n in enumerate(meta.limb_names):
-        row[f"psi_{column_name(n)}_deg"] = psi[i] / 100 if i < len(psi) else None
+        row[f"psi_{identifier(n)}_deg"] = psi[i] / 100 if i < len(psi) else None
     for j, n in enumerate(meta.channel_names):
-        row[f"duty_{column_name(n)}_pct"] = duty[j] / 100 if j < len(duty) else None
+        row[f"duty_{identifier(n)}_pct"] = duty[j] / 100 if j < len(duty) else None
     for k in meta.truth:
         row[k] = truth.get(k)
     return row
