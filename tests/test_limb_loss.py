@@ -16,6 +16,7 @@ from proleg.link.sim_link import SimLink
 from proleg.protocol.definition import ErrorCode, EventKind
 from proleg.report import run_gait_on
 from proleg.robot import load_robot
+from proleg.robot_plant import coil_reach_deg
 from proleg.sim.simulators import open_host_sim
 from proleg.states import limb_levels
 
@@ -39,15 +40,29 @@ def test_r1_without_its_right_coil_remapped_is_the_papers_one_actuator_robot():
     assert replan(r1, "sma-right").actuator_map == (0, 0)
 
 
-def test_remapped_table_matches_a_brute_force_of_its_rule():
-    """Foreign limbs rise only after every own limb of their coil, and never together with
-    another limb of that coil: checked state by state on the four-limb caterpillar."""
-    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+def _reach_levels(robot, limb, coil):
+    """How many of ``limb``'s entry edges (ψ* + hysteresis/2) coil ``coil`` alone, at full
+    stroke, bends it past on the physical plant's body."""
+    reach = coil_reach_deg(list(compiled_map(robot)), len(robot.actuators), robot.plant, coil)[limb]
+    lb = robot.limbs[limb]
+    return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2 <= reach)
+
+
+def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
+    """Foreign limbs rise only after every own limb of their coil, never together with another
+    limb of that coil, and no higher than their new coil lifts them: checked state by state on
+    the four-limb caterpillar with coils reaching 20 mm past their half of the body (on the
+    example's 8 mm a neighbour's coil lifts no limb past its first edge: no remap at all)."""
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text()
+    assert all(remap(load_robot(ROOT / "robots" / "caterpillar-4.toml"), a) is None for a in range(4))
+    path = tmp_path / "caterpillar-reach.toml"
+    path.write_text(text.replace("[plant]\n", "[plant]\noverlap_mm = 20\n", 1))
+    robot = load_robot(path)
     own = compiled_map(robot)
+    tops_seen = set()
     for lost in range(len(robot.actuators)):
         new = remap(robot, lost)
-        if new is None:
-            continue
+        assert new is not None and lost not in new
         got = _pairs(remapped_table(robot, new))
         t = robot.transitions
         want = set()
@@ -61,12 +76,44 @@ def test_remapped_table_matches_a_brute_force_of_its_rule():
                 for lv in (la, lb):
                     if any(lv[f] for f in foreign) and not all(lv[m] for m in mine):
                         ok = False
+                    if any(lv[f] > _reach_levels(robot, f, coil) for f in foreign):
+                        ok = False
                 changed = [i for i in limbs if la[i] != lb[i]]
                 if set(changed) & set(foreign) and len(changed) > 1:
                     ok = False
+                tops_seen.update(_reach_levels(robot, f, coil) for f in foreign)
             if ok:
                 want.add((t.label(a), t.label(b)))
         assert got == want
+    assert min(tops_seen) >= 1
+
+
+@pytest.mark.parametrize("name, lost", [("inchworm-3", "sma-middle"), ("caterpillar-4", "sma-front")])
+def test_no_remap_onto_a_coil_that_cannot_lift_the_limb(name, lost):
+    """On the three- and four-limb examples a neighbour's coil lifts a limb 8–17°, short of
+    its first edge (21°, 13°): the fallback leaves the limb down ("dead") rather than heat a
+    healthy coil to its on-time limit and then blame it."""
+    robot = load_robot(ROOT / "robots" / f"{name}.toml")
+    lost_i = [a.name for a in robot.actuators].index(lost)
+    amap = compiled_map(robot)
+    for i, a in enumerate(amap):
+        if a == lost_i:
+            assert all(_reach_levels(robot, i, c) == 0 for c in set(amap) - {lost_i})
+    for direction in ("+x", "-x"):
+        assert fallback(robot, lost, direction).mode == "dead"
+
+
+def test_after_a_coil_dies_on_the_inchworm_no_healthy_coil_is_driven_to_its_limit_or_blamed(capsys):
+    """Before, the firmware fell back to a remap onto sma-tail, heated it to its on-time
+    limit (SMA_ON_LIMIT on actuator 0) and then suspected it. Now every fault names the
+    dead coil or its limb (both index 1 on the inchworm)."""
+    import json
+
+    from proleg.cli import main
+
+    main(["sim", "inchworm-3", "--inject", "dead-actuator:sma-middle+5", "--duration", "30", "--json"])
+    faults = json.loads(capsys.readouterr().out)["faults"]
+    assert faults and all(f["detail"] == 1 for f in faults), faults
 
 
 @pytest.fixture

@@ -6,12 +6,19 @@ Two ways to go on without actuator ``a`` (both are computed, the better one is u
   rise by themselves: every state with such a limb above level 0 can be neither reached nor
   held, so every transition into or out of one is forbidden.
 * **remap** — each limb ``a`` drove is given to the actuator of its nearest other limb
-  (fewest limbs apart, the lower index on a tie); that actuator now raises its own limbs and
-  the foreign one(s). One coil bends the body from its own end: it crosses its own limb's ψ*
-  first and the foreign limb's only when it contracts further (R1: α ≈ 0.33 and 0.74,
-  docs/plant.md). So a foreign limb can be above level 0 only while every own limb of the
-  coil is too, and a step may change a foreign limb's level only if no other limb of that
-  coil changes in the same step (one coil cannot make the two cross together). For R1
+  (fewest limbs apart, the lower index on a tie) that can lift it: on the physical plant's
+  body (``robot_plant.coil_reach_deg``, from ``[plant]`` length_mm and overlap_mm) that coil
+  alone, at full stroke, bends the limb past its first level's entry edge (ψ* +
+  hysteresis/2), and the limb may rise only to the levels the coil reaches. A limb no other
+  coil can lift stays on ``a``, i.e. dead; when none can be lifted there is no remap (on
+  R1's 80 mm body a coil lifts the other end to 23.5°, past 21°; on the three- and
+  four-limb examples a neighbour's coil lifts a limb 8–17°, short of it: a remap there would
+  heat a healthy coil to its on-time limit and then blame it). That actuator now raises its
+  own limbs and the foreign one(s). One coil bends the body from its own end: it crosses its
+  own limb's ψ* first and the foreign limb's only when it contracts further (R1: α ≈ 0.33
+  and 0.74, docs/plant.md). So a foreign limb can be above level 0 only while every own limb
+  of the coil is too, and a step may change a foreign limb's level only if no other limb of
+  that coil changes in the same step (one coil cannot make the two cross together). For R1
   without ``sma-right`` this gives exactly the paper's one-actuator matrix
   (robots/paper-r1-one-actuator.toml): 00↔10, 10↔11.
 
@@ -27,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .robot_plant import coil_reach_deg
 from .states import limb_levels
 from .transitions import TransitionTable
 
@@ -73,34 +81,51 @@ def dead_table(robot, lost: int) -> TransitionTable:
     return _restrict(t, ~(up[t.src] | up[t.dst]))
 
 
+def foreign_top_level(robot, limb: int, actuator: int) -> int:
+    """The highest level coil ``actuator`` alone, at full stroke, lifts ``limb`` to on the
+    physical plant's body (0: not past its first entry edge, ψ* + hysteresis/2)."""
+    reach = coil_reach_deg(list(compiled_map(robot)), len(robot.actuators), robot.plant, actuator)[limb]
+    lb = robot.limbs[limb]
+    return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2.0 <= reach)
+
+
 def remap(robot, lost: int) -> tuple[int, ...] | None:
-    """The map that gives each limb of ``lost`` to its nearest other limb's actuator (None:
-    no other actuator drives any limb)."""
+    """The map that gives each limb of ``lost`` to the actuator of its nearest other limb
+    that can lift it (module doc); a limb none can lift stays on ``lost`` (dead). None: no
+    limb of ``lost`` can be lifted by another coil."""
     amap = compiled_map(robot)
     others = [i for i, a in enumerate(amap) if a != lost]
-    if not others:
-        return None
     out = list(amap)
     for i, a in enumerate(amap):
-        if a == lost:
-            j = min(others, key=lambda k: (abs(k - i), k))
-            out[i] = amap[j]
-    return tuple(out)
+        if a != lost:
+            continue
+        for j in sorted(others, key=lambda k: (abs(k - i), k)):
+            if foreign_top_level(robot, i, amap[j]) > 0:
+                out[i] = amap[j]
+                break
+    return None if out == list(amap) else tuple(out)
 
 
 def remapped_table(robot, new_map: tuple[int, ...]) -> TransitionTable:
-    """What the robot can do with ``new_map`` (module doc: foreign limbs follow own limbs)."""
+    """What the robot can do with ``new_map`` (module doc: foreign limbs follow own limbs, up
+    to the levels their new coil lifts them to; a limb left on a lost actuator stays down)."""
     t = robot.transitions
     own = compiled_map(robot)
+    lost = set(own) - set(new_map)
     groups = []  # per coil that gained limbs: (own limbs, foreign limbs, all its limbs)
+    tops = {}    # foreign limb -> the highest level its new coil lifts it to
     for a in sorted(set(new_map)):
         mine = [i for i, b in enumerate(own) if b == a]
         foreign = [i for i, b in enumerate(new_map) if b == a and own[i] != a]
         if foreign:
             groups.append((mine, foreign, mine + foreign))
+            tops.update({f: foreign_top_level(robot, f, a) for f in foreign})
+    down = [i for i, b in enumerate(new_map) if b in lost]  # no coil lifts these
     lv = [limb_levels(s, t.levels) for s in range(t.n_states)]
     ok_state = np.array([all(not any(lv[s][f] > 0 for f in foreign) or all(lv[s][m] > 0 for m in mine)
-                             for mine, foreign, _ in groups) for s in range(t.n_states)], dtype=bool)
+                             for mine, foreign, _ in groups)
+                         and all(lv[s][f] <= top for f, top in tops.items())
+                         and not any(lv[s][i] > 0 for i in down) for s in range(t.n_states)], dtype=bool)
     keep = ok_state[t.src] & ok_state[t.dst]
     for e in range(len(t.src)):
         if not keep[e]:

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .body import DEFAULT_OVERLAP_MM, body_geometry, default_length_mm, own_reach_deg
+from .body import DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, default_length_mm, own_reach_deg
 from .errors import RobotFileError
 from .robot_transitions import UNIT_MM
 
@@ -250,6 +250,24 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
     )
 
 
+def body_of(limb_actuators: list[int], n_actuators: int, section: PlantSection) -> BodyGeometry:
+    """The physical plant's body for these limbs and coils (``[plant]`` length_mm, overlap_mm)."""
+    overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
+    overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * n_actuators
+    return body_geometry(limb_actuators, n_actuators, section.length_mm, overlaps)
+
+
+def coil_reach_deg(limb_actuators: list[int], n_actuators: int, section: PlantSection, actuator: int) -> list[float]:
+    """ψ of every limb with coil ``actuator`` at full stroke and every other coil cold, on the
+    physical plant's body: how far that coil alone can lift each limb."""
+    from .body import Shape
+
+    c = np.zeros((1, n_actuators))
+    c[0, actuator] = 1.0
+    psi = Shape(body_of(limb_actuators, n_actuators, section), tabulate=False).compute(c)[0][0]
+    return [(float(p) + 180.0) % 360.0 - 180.0 for p in psi]
+
+
 def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection) -> list[str]:
     """One line per limb whose top level its own coil cannot reach on the physical plant's body
     (``proleg.body``): the top level is entered at ψ*_top + hysteresis/2, and the reach is ψ
@@ -261,9 +279,7 @@ def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], secti
     limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
     if len(limbs) < 2:
         return []
-    overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
-    overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * len(actuators)
-    geo = body_geometry(limb_actuators, len(actuators), section.length_mm, overlaps)
+    geo = body_of(limb_actuators, len(actuators), section)
     reach = own_reach_deg(geo, limb_actuators)
     out = []
     for lb, r in zip(limbs, reach):
@@ -419,9 +435,7 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     if len(limbs) < 2 or n > COUPLING_CHECK_MAX_STATES:
         return {}
     limb_act = [actuators.index(lb.actuator) for lb in limbs]
-    overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
-    overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * len(actuators)
-    geo = body_geometry(limb_act, len(actuators), section.length_mm, overlaps)
+    geo = body_of(limb_act, len(actuators), section)
     reach = own_reach_deg(geo, limb_act)
     entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
     levels = tuple(lb.levels for lb in limbs)
