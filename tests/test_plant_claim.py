@@ -24,11 +24,35 @@ def test_the_grid_has_every_mode_singly_at_two_strengths_and_pairs_and_at_least_
     points = claim.grid()
     assert len(points) >= 40
     singles = {(p.modes[0], p.strength) for p in points if len(p.modes) == 1}
-    assert singles == {(m, s) for m in claim.MODES for s in ("mild", "strong")}
+    assert singles == {(m, s) for m in claim.MODES if m not in claim.PAIRED_ONLY for s in ("mild", "strong")}
     pairs = [p for p in points if len(p.modes) == 2]
     assert len(pairs) >= 2 * 10 and {p.strength for p in pairs} == {"mild", "strong"}
+    assert claim.PAIRED_ONLY <= {m for p in pairs for m in p.modes}  # each still runs, in a pair
     for p in points:
         parse_conditions(p.conditions)  # every condition string is valid
+
+
+@pytest.mark.parametrize("mode", sorted(claim.PAIRED_ONLY))
+def test_a_mode_run_only_in_pairs_is_the_nominal_robot_alone(mode):
+    """On level ground a uniform friction scale changes no contact's share of the grip: the
+    same drive moves the plant exactly as the nominal one (so a row of its own could not fail),
+    while in its pair on a slope it does change the motion."""
+    from proleg.sim.physical import PhysicalPlant
+
+    robot = load_robot(R1)
+
+    def walk(conditions) -> float:
+        plant = PhysicalPlant(robot, parse_conditions(conditions))
+        for k in range(4000):  # 00 -> 10 -> 11 -> 01 -> 00, 1 s each, at 0.002 s steps
+            phase = (k * 0.002) % 4.0
+            plant.step(0.002, [0.6 if phase < 2.0 else 0.0, 0.6 if 1.0 <= phase < 3.0 else 0.0])
+        return plant.displacement_mm
+
+    strong = claim.MODES[mode][1]
+    assert walk(strong) == walk(())
+    pair = next(p for p in claim.PAIRS if mode in p)
+    other = claim.MODES[pair[0] if pair[1] == mode else pair[1]][1]
+    assert walk((*strong, *other)) != walk(other)
 
 
 def test_every_condition_key_that_is_a_drift_or_error_is_in_the_grid():
@@ -218,3 +242,20 @@ def test_the_run_length_comes_from_the_idealised_drives_nominal_cycle():
 
     assert claim.run_length(nominal("paper-r1")) == claim.RUN_S
     assert claim.run_length(nominal("caterpillar-4")) > claim.RUN_S
+
+
+def test_a_heavier_body_warms_more_slowly_which_is_all_its_mass_changes():
+    """mass_g is the body node's heat capacity: every force of the quasi-static crawl scales
+    with the weight, so the mass acts through the body's temperature alone."""
+    from proleg.sim.physical import PhysicalPlant
+
+    robot = load_robot(R1)
+    body = {}
+    for mass in (3.3, 8.0):
+        plant = PhysicalPlant(robot, parse_conditions((f"mass_g={mass}",)))
+        for _ in range(6000):
+            plant.step(0.005, [0.3, 0.3])
+        body[mass] = plant.body_temperature_c
+    ambient = parse_conditions(()).get("ambient_c")
+    assert body[3.3] - ambient > 0.8  # the coils warm the body ...
+    assert 0 < body[8.0] - ambient < 0.6 * (body[3.3] - ambient)  # ... a heavier one less in 30 s

@@ -129,8 +129,9 @@ _KEYS = (
     PlantKey("incline_deg", "°", -12.0, 12.0, 0.0, plants=PHYS, doc="ground slope, rising towards +x"),
     PlantKey("psi_star_shift_deg", "°", -15.0, 15.0, 0.0, "limb", plants=PHYS,
              doc="true critical angle ψ* − the configured one"),
-    PlantKey("friction", "×", 0.2, 3.0, 1.0, plants=PHYS, doc="scale of every friction coefficient (the ground)"),
-    PlantKey("mass_g", "g", 1.0, 20.0, 3.3, plants=PHYS, doc="robot mass"),
+    PlantKey("friction", "×", 0.2, 3.0, 1.0, plants=PHYS, doc="scale of every friction coefficient (the ground; on level ground it changes nothing: every contact scales alike)"),
+    PlantKey("mass_g", "g", 1.0, 20.0, 3.3, plants=PHYS,
+             doc="robot mass: the body node's heat capacity (every force scales with it, so nothing else)"),
     PlantKey("length_mm", "mm", 20.0, 2000.0, None, plants=PHYS,
              doc="body length, first contact to last (contacts evenly spaced); default 80 for two limbs, "
                  "40 per gap between neighbouring limbs for more"),

@@ -25,6 +25,7 @@ noise. ``psi_deg`` is the true contact angle.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 from collections.abc import Sequence
@@ -103,7 +104,8 @@ class PhysicalPlant:
             self._lat.append(g.latent_j * scale)
             self._hA.append(g.convection_w_k(80.0, self._amb, conv) * scale)
             self._G.append(g.coil_to_body_w_k)
-        self._Cb = p.body_thermal.heat_capacity_j_k()
+        # the body node is the robot's mass: all that mass_g changes (every force scales with it)
+        self._Cb = dataclasses.replace(p.body_thermal, mass_kg=cond.get("mass_g") * 1e-3).heat_capacity_j_k()
         self._hAb = p.body_thermal.convection_w_k(conv)
         self._supply = cond.get("supply_v") * math.sqrt(cond.get("power"))
         self._rsrc = cond.get("supply_ohm")
