@@ -251,3 +251,17 @@ def test_a_five_limb_robot_without_friction_takes_d1_says_so_and_walks(tmp_path,
     with caplog.at_level("WARNING"):
         load_robot(path)
     assert not [r for r in caplog.records if "friction" in r.getMessage()]
+
+
+def test_a_coil_shared_by_limbs_apart_is_explained_as_one_coil(tmp_path, caplog):
+    """Both ends of a three-limb worm on one actuator: the model's coil sits at the first limb
+    that names it and cannot bend the far end; the warning says so and what to do, rather
+    than suggesting another ψ* or body length."""
+    path = _worm(tmp_path, 3)
+    text = path.read_text().replace('actuator = "a3"', 'actuator = "a1"')
+    path.write_text(text.replace('[[actuator]]\nname = "a3"\nchannel = 2\n', ""))
+    with caplog.at_level("WARNING"):
+        load_robot(path)
+    warned = [r.getMessage() for r in caplog.records if "limb 'l3'" in r.getMessage()]
+    assert len(warned) == 1 and "that coil sits at limb 'l1'" in warned[0], warned
+    assert "give 'l3' a coil of its own" in warned[0] and "lower psi_star_deg" not in warned[0]

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .body import DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, default_length_mm, own_reach_deg
+from .body import DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, coil_homes, default_length_mm, own_reach_deg
 from .errors import RobotFileError
 from .robot_transitions import UNIT_MM
 
@@ -282,15 +282,21 @@ def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], secti
         return []
     geo = body_of(limb_actuators, len(actuators), section)
     reach = own_reach_deg(geo, limb_actuators)
+    homes = coil_homes(limb_actuators, len(actuators))
     out = []
-    for lb, r in zip(limbs, reach):
+    for i, (lb, r) in enumerate(zip(limbs, reach)):
         need = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
-        if need > r:
-            out.append(
-                f"{path}: limb {lb.name!r}: its top level needs ψ ≥ {need:.1f}° "
+        if need <= r:
+            continue
+        head = (f"{path}: limb {lb.name!r}: its top level needs ψ ≥ {need:.1f}° "
                 f"(ψ* {_g(lb.psi_star_deg[-1])}° + hysteresis/2), its own coil "
-                f"{lb.actuator!r} bends it to {r:.1f}° on the simulated {_g(section.length_mm)} mm body: "
-                f"lower psi_star_deg or give [plant] length_mm")
+                f"{lb.actuator!r} bends it to {r:.1f}° on the simulated {_g(section.length_mm)} mm body: ")
+        home = homes[limb_actuators[i]]
+        if home != i:  # a shared coil: one [[actuator]] is one coil, at the first limb naming it
+            out.append(head + f"that coil sits at limb {limbs[home].name!r} (one [[actuator]] is one coil, "
+                              f"at the first limb that names it); give {lb.name!r} a coil of its own")
+        else:
+            out.append(head + "lower psi_star_deg or give [plant] length_mm")
     return out
 
 
