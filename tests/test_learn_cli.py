@@ -76,6 +76,22 @@ def test_the_report_reads_a_log_without_a_robot_and_says_what_more_to_run(tmp_pa
     assert "too few trials" in out and "extra trials for ± 0.05" in out
 
 
+def test_the_report_says_which_transitions_passed_through_other_states(tmp_path, capsys):
+    log = tmp_path / "t.jsonl"
+    rows = [{"from": "00", "to": "10", "t_start": k, "t_end": k + 1, "dx": 4.0, "source": "sim"} for k in range(3)]
+    rows[1]["passed"] = ["11"]
+    rows.append({"from": "10", "to": "11", "t_start": 5, "t_end": 6, "dx": 4.0, "source": "sim"})
+    log.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    code, out, _err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
+    assert code == 0
+    line = next(ln for ln in out.splitlines() if ln.startswith("passed through other states"))
+    assert line.endswith(": 00->10 1/3 (via 11)"), line
+    rows[1]["passed"] = "11"  # not a list of labels
+    log.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    code, _out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
+    assert code == 2 and "passed: expected a list of state labels" in err
+
+
 def test_adaptive_spends_the_same_budget_where_intervals_are_widest(tmp_path, capsys):
     log = tmp_path / "t.jsonl"
     code, _out, _err = run(capsys, "-q", "learn", str(R1), "--sim", "--log", str(log), "--repeats", "3", "--adaptive")

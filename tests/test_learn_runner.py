@@ -12,6 +12,7 @@ import pytest
 
 from proleg.learn.measure import TrialLog
 from proleg.learn.runner import STALL_PIECES, ExplorationError, Explorer
+from proleg.protocol.definition import EventKind
 from proleg.robot import load_robot
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
@@ -21,7 +22,7 @@ class _Offline(Explorer):
     """An Explorer whose robot rests in ``rest`` and never moves (run_piece makes nothing)."""
 
     def __init__(self, robot, log, rest: int = 0, **kw):
-        client = SimpleNamespace(info=None, link=SimpleNamespace(clock=lambda: 0.0))
+        client = SimpleNamespace(info=None, link=SimpleNamespace(clock=lambda: 0.0), set_telemetry_rate=lambda hz: None)
         super().__init__(client, robot, log, None, rest=lambda s: None, **kw)
         self.rest_state = rest
         self.ran: list[tuple[int, ...]] = []
@@ -110,3 +111,70 @@ def test_a_rest_on_a_simulated_link_ends_whatever_the_clock_reads(tmp_path):
             calls.clear()
             ex._rest_on_link(2.25)
             assert link.clock() == pytest.approx(start_ns / 1e9 + 2.25, abs=1e-6)
+
+
+class _Scripted:
+    """A robot client that plays a script of (telemetry measured state | reached state) on a
+    clock that moves 10 ms per read."""
+
+    def __init__(self, script):
+        self.script = list(script)
+        self.t = 0.0
+        self.link = SimpleNamespace(clock=lambda: self.t)
+        self.info = None
+
+    def load_gait(self, states):
+        pass
+
+    def start(self, gait, direction):
+        pass
+
+    def stop(self):
+        pass
+
+    def recv(self, timeout=0.0):
+        self.t += 0.01
+        if not self.script:
+            return None
+        kind, state = self.script.pop(0)
+        ms = int(self.t * 1000)
+        if kind == "tel":
+            return SimpleNamespace(name="TELEMETRY", flags=0, measured=state, time_ms=ms)
+        return SimpleNamespace(name="EVENT", kind=int(EventKind.STATE_REACHED), detail=state, time_ms=ms, code=0)
+
+
+def test_a_transition_that_passes_through_a_state_outside_it_says_so_in_its_trial(tmp_path):
+    """100 → 110 raises the middle limb; telemetry that shows 111 on the way means the head
+    limb, which should have held, crossed too: the trial is kept (it is what the robot did
+    when asked for 100 → 110) and names 111, so that the report can say how often."""
+    from proleg.learn.measure import Trial
+    from proleg.learn.pieces import Piece
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    s = {label: t.index(label) for label in ("000", "100", "110", "111")}
+
+    def reached(label):  # each reached state is held a while: its pose is taken 50 ms after the event
+        return [("tel", s[label]), ("reached", s[label])] + [("tel", s[label])] * 8
+
+    script = reached("000") + reached("100") + [("tel", s["111"])] + reached("110")
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = Explorer(_Scripted(script), robot, log, None, rest=lambda s: None)
+        made = ex.run_piece(Piece((s["000"], s["100"], s["110"]), True, 0.0, 1.6))
+    assert [(tr.src, tr.dst, tr.passed) for tr in made] == [("000", "100", ()), ("100", "110", ("111",))]
+    lines = (tmp_path / "t.jsonl").read_text().splitlines()
+    assert '"passed"' not in lines[-2] and Trial.from_json(lines[-1]).passed == ("111",)
+
+
+def test_between_is_the_box_of_levels_two_states_span():
+    from itertools import product
+
+    from proleg.learn.runner import _between
+    from proleg.states import limb_levels
+
+    levels = (2, 3, 2)
+    n = 12
+    for a, b, x in product(range(n), repeat=3):
+        la, lb, lx = (limb_levels(v, levels) for v in (a, b, x))
+        assert _between(levels, a, b, x) == all(min(p, q) <= r <= max(p, q) for p, q, r in zip(la, lb, lx))
+    assert _between(levels, 0, 0, 0) and not _between(levels, 0, 0, 1)

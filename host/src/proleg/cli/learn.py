@@ -291,6 +291,20 @@ def _with_track(args: argparse.Namespace, trials: list) -> list:
     return [t for t in trials if t.dx is not None] + attached
 
 
+def _strayed(trials) -> str:
+    """``a->b k/n (via s, …)`` for every transition some of whose trials passed through a state
+    outside it (``Trial.passed``), in first-seen order; "" when none did."""
+    seen: dict[tuple[str, str], list[int]] = {}
+    via: dict[tuple[str, str], dict[str, None]] = {}
+    for tr in trials:
+        k = (tr.src, tr.dst)
+        seen.setdefault(k, [0, 0])[1] += 1
+        if tr.passed:
+            seen[k][0] += 1
+            via.setdefault(k, {}).update(dict.fromkeys(tr.passed))
+    return ", ".join(f"{a}->{b} {seen[a, b][0]}/{seen[a, b][1]} (via {', '.join(v)})" for (a, b), v in via.items())
+
+
 def _fmt(v: float, nd: int = 2) -> str:
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{nd}f}"
 
@@ -326,6 +340,9 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     flagged = est.flagged()
     if flagged:
         print(f"too few trials (< {est.min_samples}): {', '.join(flagged)}", file=out)
+    if strayed := _strayed(trials):
+        print("passed through other states on the way (a limb crossed a level it should have kept; "
+              f"their Δx includes those crossings): {strayed}", file=out)
     if extra is not None:
         print(f"extra trials for ± {args.half_width:g}: {int(extra.sum())} "
               f"(run them with --more and a robot link)", file=out)

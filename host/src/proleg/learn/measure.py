@@ -53,6 +53,7 @@ class Trial:
     dtheta_deg: float | None = None
     source: str = ""
     t_seen: float | None = None  # firmware time the measured state first became dst (≤ t_end)
+    passed: tuple[str, ...] = ()  # states outside src..dst the telemetry showed on the way
 
     @property
     def t_moved(self) -> float:
@@ -65,6 +66,9 @@ class Trial:
         order = ["from", "to", "t_start", "t_end", "dx", "dy", "dtheta_deg", "source"]
         if self.t_seen is not None:
             order.append("t_seen")
+        if self.passed:
+            d["passed"] = list(self.passed)
+            order.append("passed")
         return json.dumps({k: d[k] for k in order}, ensure_ascii=False)
 
     @classmethod
@@ -73,10 +77,16 @@ class Trial:
             d = json.loads(line)
             t = cls(str(d["from"]), str(d["to"]), float(d["t_start"]), float(d["t_end"]),
                     _opt(d.get("dx")), _opt(d.get("dy")), _opt(d.get("dtheta_deg")), str(d.get("source", "")),
-                    _opt(d.get("t_seen")))
+                    _opt(d.get("t_seen")), _labels(d.get("passed", [])))
         except (ValueError, KeyError, TypeError) as e:
             raise TrialLogError(f"{where}: expected a trial record (from, to, t_start, t_end, dx…), {e}") from None
         return t
+
+
+def _labels(v) -> tuple[str, ...]:
+    if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+        raise ValueError(f"passed: expected a list of state labels, got {v!r}")
+    return tuple(v)
 
 
 def _opt(v) -> float | None:

@@ -23,7 +23,11 @@ state's pose is taken ``settle_s`` after its event (the robot holds a reached st
 the robot's ``hold_ms`` before it moves on; keep settle_s below that), and every pair of
 consecutive reached states that is an allowed transition becomes a trial. The telemetry's
 measured state is watched meanwhile: the time it first showed a reached state (before the
-firmware confirmed it settled) is the trial's ``t_seen``, which a tracker is aligned with.
+firmware confirmed it settled) is the trial's ``t_seen``, which a tracker is aligned with,
+and every state it showed on the way that lies outside the transition (a limb that should
+have held, or the moving one overshooting, crossed a level) is the trial's ``passed``: its
+motion includes those crossings, and ``proleg learn --report`` says how often. The
+exploration asks for the fastest telemetry the board takes (``WATCH_HZ``) to see them.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ import numpy as np
 from ..link.client import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
+from ..states import limb_levels
 from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
@@ -48,6 +53,11 @@ CLOCK_EPS_S = 1e-6
 STALL_PIECES = 5
 #: random tours ``Explorer.next_piece`` tries for a first piece that makes progress
 PLAN_TRIES = 8
+#: telemetry frames ``Explorer.measured_state`` reads at most for three with a known state
+STATE_FRAMES = 200
+#: telemetry rates (Hz) an exploration asks for, fastest first: the board refuses what its
+#: link cannot carry (telemetry.c: at most half the UART), and the first it takes is used
+WATCH_HZ = (250, 200, 150, 100)
 
 
 class ExplorationError(RuntimeError):
@@ -117,9 +127,16 @@ class Explorer:
             self.client.recv(min(0.2, end - self._clock()))
 
     def measured_state(self) -> int:
-        for msg in self.client.telemetry(timeout=2.0, count=3):
-            state = int(msg.measured)
-        return state
+        """The robot's state as the telemetry measures it: the third frame whose state is known
+        (a frame flagged STATE_UNKNOWN, a limb between levels, is skipped)."""
+        known = 0
+        for msg in self.client.telemetry(timeout=2.0, count=STATE_FRAMES):
+            if not int(msg.flags) & Flag.STATE_UNKNOWN:
+                state, known = int(msg.measured), known + 1
+                if known == 3:
+                    return state
+        raise ExplorationError(f"the robot's state stayed unknown over {STATE_FRAMES} telemetry frames (a limb "
+                               "between its levels): check it with proleg console")
 
     def to_do(self) -> np.ndarray:
         """Trials still wanted per allowed transition: up to ``goal`` when set (extra or
@@ -132,6 +149,30 @@ class Explorer:
         """Explore until done (or ``max_pieces``); returns the trials added by this run.
         Raises ``ExplorationError`` when ``STALL_PIECES`` pieces in a row make none of the
         transitions still to do (the robot does not do what was planned), naming them."""
+        restore = self._watch_closely()
+        try:
+            return self._run(max_pieces)
+        finally:
+            if restore is not None:
+                self.client.set_telemetry_rate(restore)
+
+    def _watch_closely(self) -> int | None:
+        """Raise the telemetry rate to the fastest of ``WATCH_HZ`` the board takes, so that a
+        limb that flickers across a level on the way is seen (``Trial.passed``); the rate to
+        restore afterwards, or None (none taken: the build's rate stays)."""
+        from ..link.client import CommandRefused
+
+        for hz in WATCH_HZ:
+            if hz <= self.robot.control.telemetry_hz:
+                return None
+            try:
+                self.client.set_telemetry_rate(hz)
+                return self.robot.control.telemetry_hz
+            except CommandRefused:
+                continue
+        return None
+
+    def _run(self, max_pieces: int | None) -> list[Trial]:
         added: list[Trial] = []
         t = self.robot.transitions
         stalled = 0
@@ -230,6 +271,7 @@ class Explorer:
         reached: list[tuple[float, int, Pose | None]] = []
         pending: tuple[float, float, int, float | None] | None = None  # (due, event time, state, seen)
         seen: tuple[int, float] | None = None  # telemetry: measured state and since when (firmware s)
+        passed: set[int] = set()  # telemetry: every measured state since the last reached one
         out: list[Trial] = []
         try:
             while len(reached) < goal + 1 or pending is not None:
@@ -242,11 +284,14 @@ class Explorer:
                         t0, a, p0 = reached[-1]
                         if t.lookup(a, state) is not None:
                             d = planar_delta(p0, pose) if (p0 is not None and pose is not None) else (None, None, None)
-                            trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source, t_seen)
+                            stray = tuple(t.label(x) for x in sorted(passed) if not _between(t.levels, a, state, x))
+                            trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source, t_seen,
+                                          stray)
                             if record:
                                 self.log.append(trial)
                             out.append(trial)
                     reached.append((t_ev, state, pose))
+                    passed = set()
                     continue
                 if now > deadline:
                     raise ExplorationError(f"piece {'→'.join(t.label(s) for s in piece.states)} did not finish "
@@ -255,6 +300,7 @@ class Explorer:
                 msg = client.recv(wait)
                 if msg is not None and msg.name == "TELEMETRY" and not int(msg.flags) & Flag.STATE_UNKNOWN:
                     m = int(msg.measured)
+                    passed.add(m)
                     if seen is None or seen[0] != m:
                         seen = (m, int(msg.time_ms) / 1000.0)
                     continue
@@ -280,6 +326,13 @@ class Explorer:
         finally:
             client.stop()
         return out
+
+
+def _between(levels: tuple[int, ...], a: int, b: int, s: int) -> bool:
+    """Is every limb of state ``s`` at a level between its levels in ``a`` and in ``b`` (the
+    states a → b may pass through when the limbs it changes cross one by one)?"""
+    la, lb, ls = limb_levels(a, levels), limb_levels(b, levels), limb_levels(s, levels)
+    return all(min(x, y) <= z <= max(x, y) for x, y, z in zip(la, lb, ls))
 
 
 # ------------------------------------------------------------------------- the simulated robot
