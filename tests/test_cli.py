@@ -109,9 +109,10 @@ def test_evaluate_names_the_forbidden_transition(capsys):
     code, out, err = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--evaluate", "00,01,00")
     assert code == 2 and out == "" and err.count("\n") == 1  # a bad gait: exit 2, one line on stderr
     assert err.startswith("proleg: error: --evaluate: 00 → 01 → 00 is not a valid gait") and "forbidden" in err
-    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,10,11,01", "--json")
+    code, out, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,10,11,01", "--json")
     ev = json.loads(out)["evaluation"]
     assert code == 2 and ev["valid"] is False and "return to its start" in ev["reason"]
+    assert err.startswith("proleg: error: --evaluate:") and err.count("\n") == 1  # the README's one line
 
 
 def test_evaluate_rejects_an_unknown_label_in_one_line(capsys):

@@ -27,15 +27,17 @@ def test_a_repeated_node_id_is_refused_in_one_line():
 
 
 def test_signal_names_stay_apart_whatever_the_limbs_are_called():
-    """A limb called "5" is psi_5; the unused sixth ψ slot then becomes psi_slot5, and a limb
-    called "count" leaves psi_count_field for the count. Every telemetry signal name is used once."""
+    """A limb called "5" is psi_5; the unused sixth ψ slot then becomes psi_slot5 (psi_slot5_2
+    beside a limb called "slot5"), and a limb called "count" leaves psi_count_field for the
+    count. Every telemetry signal name is used once."""
     from types import SimpleNamespace as NS
 
-    robot = NS(limbs=[NS(name="5"), NS(name="count")], actuators=[NS(name="sma-a"), NS(name="2")])
+    robot = NS(limbs=[NS(name="5"), NS(name="count"), NS(name="slot5")], actuators=[NS(name="sma-a"), NS(name="2")])
     db = build_database(robot=robot)
     names = [s.name for m in db.messages if m.name.startswith("TELEMETRY") for s in m.signals]
     assert len(names) == len(set(names)), sorted(n for n in names if names.count(n) > 1)
-    assert {"psi_5", "psi_count", "psi_slot5", "psi_count_field", "duty_sma_a", "duty_2", "duty_slot2"} <= set(names)
+    assert {"psi_5", "psi_count", "psi_slot5", "psi_slot5_2", "psi_count_field", "duty_sma_a", "duty_2",
+            "duty_slot2"} <= set(names)
     psi1 = db.get_message_by_name("TELEMETRY_PSI_0")
     assert [s.name for s in sorted(psi1.signals, key=lambda s: s.start)][:2] == ["psi_5", "psi_count"]
 

@@ -166,15 +166,82 @@ def test_a_transition_that_passes_through_a_state_outside_it_says_so_in_its_tria
     assert '"passed"' not in lines[-2] and Trial.from_json(lines[-1]).passed == ("111",)
 
 
-def test_between_is_the_box_of_levels_two_states_span():
+def test_between_is_every_state_on_a_monotone_way_from_a_to_b():
+    """The oracle walks: from a, one limb one level at a time, each only towards its level in
+    b; the states met on any such way are the ones a transition a → b may pass through."""
     from itertools import product
 
     from proleg.learn.runner import _between
-    from proleg.states import limb_levels
+    from proleg.states import DIGITS, index, limb_levels
 
     levels = (2, 3, 2)
     n = 12
-    for a, b, x in product(range(n), repeat=3):
-        la, lb, lx = (limb_levels(v, levels) for v in (a, b, x))
-        assert _between(levels, a, b, x) == all(min(p, q) <= r <= max(p, q) for p, q, r in zip(la, lb, lx))
+
+    def walk(a: int, b: int) -> set[int]:
+        lb = limb_levels(b, levels)
+        seen, todo = {a}, [a]
+        while todo:
+            cur = list(limb_levels(todo.pop(), levels))
+            for i in range(len(levels)):
+                if cur[i] != lb[i]:
+                    nxt = cur.copy()
+                    nxt[i] += 1 if lb[i] > cur[i] else -1
+                    s = index("".join(DIGITS[v] for v in nxt), levels)
+                    if s not in seen:
+                        seen.add(s)
+                        todo.append(s)
+        assert b in seen
+        return seen
+
+    for a, b in product(range(n), repeat=2):
+        way = walk(a, b)
+        assert {x for x in range(n) if _between(levels, a, b, x)} == way
     assert _between(levels, 0, 0, 0) and not _between(levels, 0, 0, 1)
+
+
+class _RateBoard:
+    """A client whose board takes telemetry rates up to ``limit`` Hz and sends frames from a
+    script of (flags, measured)."""
+
+    def __init__(self, limit, frames=()):
+        from proleg.link.client import CommandRefused
+
+        self.limit, self.frames, self.rates, self.refused = limit, list(frames), [], CommandRefused
+        self.info, self.link = None, SimpleNamespace(clock=lambda: 0.0)
+
+    def set_telemetry_rate(self, hz):
+        if hz > self.limit:
+            raise self.refused("SET_TELEMETRY_RATE", 3, 0, "fake")
+        self.rates.append(hz)
+
+    def telemetry(self, timeout=1.0, count=None):
+        for k, (flags, measured) in enumerate(self.frames):
+            if count is not None and k >= count:
+                return
+            yield SimpleNamespace(flags=flags, measured=measured)
+
+
+def test_an_exploration_watches_at_the_fastest_rate_the_board_takes_and_gives_the_old_one_back(tmp_path):
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        board = _RateBoard(limit=160)
+        ex = Explorer(board, robot, log, None, rest=lambda s: None, repeats=0)
+        ex.run()
+    assert board.rates == [150, robot.control.telemetry_hz]  # 250 and 200 refused; restored after
+    with TrialLog(tmp_path / "u.jsonl") as log:
+        board = _RateBoard(limit=robot.control.telemetry_hz)  # the board takes nothing faster
+        Explorer(board, robot, log, None, rest=lambda s: None, repeats=0).run()
+    assert board.rates == []
+
+
+def test_the_measured_state_skips_frames_whose_state_is_unknown(tmp_path):
+    from proleg.protocol.definition import Flag
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    unknown = int(Flag.STATE_UNKNOWN)
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        board = _RateBoard(0, [(unknown, 0xFFFF), (0, 5), (unknown, 0xFFFF), (0, 5), (0, 5), (0, 1)])
+        assert Explorer(board, robot, log, None).measured_state() == 5
+        board.frames = [(unknown, 0xFFFF)] * 300
+        with pytest.raises(ExplorationError, match="state stayed unknown over 200 telemetry frames"):
+            Explorer(board, robot, log, None).measured_state()

@@ -16,7 +16,6 @@ from proleg.link.sim_link import SimLink
 from proleg.protocol.definition import ErrorCode, EventKind
 from proleg.report import run_gait_on
 from proleg.robot import load_robot
-from proleg.robot_plant import coil_reach_deg
 from proleg.sim.simulators import open_host_sim
 from proleg.states import limb_levels
 
@@ -41,11 +40,16 @@ def test_r1_without_its_right_coil_remapped_is_the_papers_one_actuator_robot():
 
 
 def _reach_levels(robot, limb, coil):
-    """How many of ``limb``'s entry edges (ψ* + hysteresis/2) coil ``coil`` alone, at full
-    stroke, bends it past on the physical plant's body."""
-    reach = coil_reach_deg(list(compiled_map(robot)), len(robot.actuators), robot.plant, coil)[limb]
+    """How many of ``limb``'s entry edges (ψ* + hysteresis/2) the physical plant's body bends it
+    past when coil ``coil`` alone is fully contracted (posed, not heated): the oracle for
+    ``limbloss.foreign_top_level``, read from the plant rather than from the same formula."""
+    from proleg.sim.closed_loop import make_plant
+
+    plant = make_plant(robot, "physical")  # with the robot file's [plant] (overlap_mm, length_mm)
+    plant.pose([1.0 if j == coil else 0.0 for j in range(len(robot.actuators))])
+    psi = float(plant.psi_deg[limb])
     lb = robot.limbs[limb]
-    return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2 <= reach)
+    return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2 <= psi)
 
 
 def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
@@ -63,7 +67,7 @@ def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
     for lost in range(len(robot.actuators)):
         new = remap(robot, lost)
         assert new is not None and lost not in new
-        got = _pairs(remapped_table(robot, new))
+        got = _pairs(remapped_table(robot, new, lost))
         t = robot.transitions
         want = set()
         for a, b in zip(t.src.tolist(), t.dst.tolist()):
@@ -86,6 +90,28 @@ def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
                 want.add((t.label(a), t.label(b)))
         assert got == want
     assert min(tops_seen) >= 1
+
+
+def test_a_limb_a_partial_remap_leaves_on_the_lost_coil_stays_down(tmp_path):
+    """Tail and rear share sma-tail; without it the front coil can lift the rear proleg but
+    no coil can lift the tail: the rear is remapped, the tail stays on the lost coil, and no
+    transition of the remapped table (nor of the fallback's) raises the tail."""
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text()
+    text = text.replace('levels = 3\npsi_star_deg = [12.0, 24.0]\nhysteresis_deg = 2.0\nactuator = "sma-rear"',
+                        'levels = 3\npsi_star_deg = [12.0, 24.0]\nhysteresis_deg = 2.0\nactuator = "sma-tail"', 1)
+    text = text.replace('[[actuator]]\nname = "sma-rear"\nchannel = 1\n\n', "")
+    path = tmp_path / "shared-tail.toml"
+    path.write_text(text.replace("[plant]\n", "[plant]\noverlap_mm = 20\n", 1))
+    robot = load_robot(path)
+    assert compiled_map(robot) == (0, 0, 1, 2)
+    new = remap(robot, 0)
+    assert new == (0, 1, 1, 2)  # the rear proleg to sma-front; the tail left on sma-tail
+    t = remapped_table(robot, new, 0)
+    assert t.n_transitions > 0
+    assert all(limb_levels(int(x), t.levels)[0] == 0 for x in (*t.src, *t.dst))
+    for direction in ("+x", "-x"):
+        fb = fallback(robot, 0, direction)
+        assert all(limb_levels(int(x), fb.table.levels)[0] == 0 for x in (*fb.table.src, *fb.table.dst))
 
 
 @pytest.mark.parametrize("name, lost", [("inchworm-3", "sma-middle"), ("caterpillar-4", "sma-front")])

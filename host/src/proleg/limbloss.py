@@ -106,21 +106,21 @@ def remap(robot, lost: int) -> tuple[int, ...] | None:
     return None if out == list(amap) else tuple(out)
 
 
-def remapped_table(robot, new_map: tuple[int, ...]) -> TransitionTable:
-    """What the robot can do with ``new_map`` (module doc: foreign limbs follow own limbs, up
-    to the levels their new coil lifts them to; a limb left on a lost actuator stays down)."""
+def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None) -> TransitionTable:
+    """What the robot can do with ``new_map`` after losing actuator ``lost`` (module doc:
+    foreign limbs follow own limbs, up to the levels their new coil lifts them to; a limb
+    ``new_map`` leaves on ``lost``, which no other coil lifts, stays down)."""
     t = robot.transitions
     own = compiled_map(robot)
-    lost = set(own) - set(new_map)
     groups = []  # per coil that gained limbs: (own limbs, foreign limbs, all its limbs)
     tops = {}    # foreign limb -> the highest level its new coil lifts it to
-    for a in sorted(set(new_map)):
+    for a in sorted(set(new_map) - {lost}):
         mine = [i for i, b in enumerate(own) if b == a]
         foreign = [i for i, b in enumerate(new_map) if b == a and own[i] != a]
         if foreign:
             groups.append((mine, foreign, mine + foreign))
             tops.update({f: foreign_top_level(robot, f, a) for f in foreign})
-    down = [i for i, b in enumerate(new_map) if b in lost]  # no coil lifts these
+    down = [i for i, b in enumerate(new_map) if b == lost]  # no coil lifts these
     lv = [limb_levels(s, t.levels) for s in range(t.n_states)]
     ok_state = np.array([all(not any(lv[s][f] > 0 for f in foreign) or all(lv[s][m] > 0 for m in mine)
                              for mine, foreign, _ in groups)
@@ -176,7 +176,7 @@ def fallback(robot, lost: int | str, direction: str = "+x") -> Fallback:
     best = Fallback(name, lost, "dead", amap, t, states, rate)
     new = remap(robot, lost)
     if new is not None:
-        t = remapped_table(robot, new)
+        t = remapped_table(robot, new, lost)
         states, rate = best_gait(t, direction)
         if states is not None and (best.states is None or sign * rate > sign * best.rate * (1 + 1e-9)):
             best = Fallback(name, lost, "remap", new, t, states, rate)

@@ -293,8 +293,8 @@ def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], secti
                 f"{lb.actuator!r} bends it to {r:.1f}° on the simulated {_g(section.length_mm)} mm body: ")
         home = homes[limb_actuators[i]]
         if home != i:  # a shared coil: one [[actuator]] is one coil, at the first limb naming it
-            out.append(head + f"that coil sits at limb {limbs[home].name!r} (one [[actuator]] is one coil, "
-                              f"at the first limb that names it); give {lb.name!r} a coil of its own")
+            out.append(head + f"in the model that coil sits at limb {limbs[home].name!r} (one [[actuator]] is one "
+                              f"coil, at one of the limbs that name it); give {lb.name!r} a coil of its own")
         else:
             out.append(head + "lower psi_star_deg or give [plant] length_mm")
     return out

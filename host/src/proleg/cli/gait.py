@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 from ..errors import GaitError
@@ -301,6 +302,7 @@ def _print_evaluation(robot, args) -> int:
         if not args.json:
             raise GaitError(f"--evaluate: {' → '.join(names)} is not a valid gait of {robot.name}: {e}") from None
         print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
+        print(f"proleg: error: --evaluate: {' → '.join(names)} is not a valid gait of {robot.name}: {e}", file=sys.stderr)
         return 2
     if args.json:
         print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))

@@ -38,6 +38,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..errors import LinkError
 from ..link.client import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
@@ -154,7 +155,10 @@ class Explorer:
             return self._run(max_pieces)
         finally:
             if restore is not None:
-                self.client.set_telemetry_rate(restore)
+                try:
+                    self.client.set_telemetry_rate(restore)
+                except LinkError:
+                    pass  # the link is gone (the run's own error, if any, says so); a reset restores it
 
     def _watch_closely(self) -> int | None:
         """Raise the telemetry rate to the fastest of ``WATCH_HZ`` the board takes, so that a

@@ -50,8 +50,8 @@ _OUT_OF_RANGE = {
     int(ParamId.HYSTERESIS_CDEG): "no such limb (the index is the limb), a width outside 0..2000 (0.01°), or a band "
                                   "ψ* ± width/2 of the limb's thresholds would leave (−90°, 90°) or meet the next; "
                                   "nothing changed",
-    int(ParamId.MAX_ON_MS): "below 1 ms, or so short that min_cooldown_ms would be 256 on-times or more (the "
-                            "firmware cannot pay on-time back that slowly): lower min_cooldown_ms first",
+    int(ParamId.MAX_ON_MS): "below 1 ms, or at most min_cooldown_ms / 256 (the firmware cannot pay on-time back "
+                            "that slowly; min_cooldown_ms never goes below the build's)",
     int(ParamId.MIN_COOLDOWN_MS): "outside 0..600000 ms, or 256 max_on_ms or more (the firmware cannot pay on-time "
                                   "back that slowly)",
 }

@@ -99,7 +99,11 @@ def _telemetry_signals(frame: Any, limbs: Sequence[str], actuators: Sequence[str
         elif s.field == "duty" and s.index is not None and s.index < len(actuators):
             name = f"duty_{identifier(actuators[s.index])}"
         elif name in named:  # named like a limb or actuator (a limb "5": psi_slot5; "count": psi_count_field)
-            name = f"{s.field}_slot{s.index}" if s.index is not None else f"{name}_field"
+            base = f"{s.field}_slot{s.index}" if s.index is not None else f"{name}_field"
+            name, k = base, 1
+            while name in named:  # ... and a limb called "slot5" too: psi_slot5_2
+                k += 1
+                name = f"{base}_{k}"
         choices = _directions() if s.field == "direction" else None
         sigs.append(_signal(name, s.start_bit, s.length, s.signed, s.scale, s.unit,
                             comment=_FIELD_DOCS.get(s.field) or None, choices=choices, receivers=[HOST]))
