@@ -2,7 +2,8 @@
 ``core/sma.c``, compiled for the host: the same per-tick duty requests through both, and tick
 by tick the duties let through and the on-limit hits must be the same. With R1's
 window (10 s: out of reach of these sequences), with a 200 ms window at a 30 % mean that the
-bursts run into all the time, and at 600 Hz, a tick that does not divide a millisecond."""
+bursts run into all the time, at 600 Hz, a tick that does not divide a millisecond, and with a
+cool-down 40 times the on-time, whose pay-back per tick is a fraction of a µs."""
 
 from __future__ import annotations
 
@@ -30,7 +31,13 @@ def _short_window(robot):
     return dataclasses.replace(robot, safety=safety)
 
 
-@pytest.fixture(scope="module", params=["r1-window", "short-window", "600-hz", "250-hz"])
+def _slow_payback(robot):
+    """Cool-down 2 s for 50 ms on (40×): a pay-back rate of 6.4/256 µs per µs, where the
+    fraction of a µs each tick pays must carry on to the next to match the firmware."""
+    return dataclasses.replace(robot, safety=dataclasses.replace(robot.safety, min_cooldown_ms=2000))
+
+
+@pytest.fixture(scope="module", params=["r1-window", "short-window", "600-hz", "250-hz", "slow-payback"])
 def replay(request, tmp_path_factory):
     robot, gaits, board = _r1_fast()  # max_on 50 ms, cooldown 20 ms, 1 kHz
     if request.param == "short-window":
@@ -39,6 +46,8 @@ def replay(request, tmp_path_factory):
         robot = dataclasses.replace(robot, control=dataclasses.replace(robot.control, tick_hz=600))
     elif request.param == "250-hz":  # 4 ms ticks, and the short window
         robot = dataclasses.replace(_short_window(robot), control=dataclasses.replace(robot.control, tick_hz=250))
+    elif request.param == "slow-payback":
+        robot = _slow_payback(robot)
     gen = tmp_path_factory.mktemp("gen")
     for name, text in {**render_config(robot, gaits, board), **render_c(2, 2)}.items():
         (gen / name).write_text(text)
