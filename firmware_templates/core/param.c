@@ -109,28 +109,9 @@ static uint8_t set_psi_star(uint8_t index, int32_t v)
     return 0;
 }
 
-/* Every band of the limb takes the width, or none does: each band must stay inside ±90°
- * and clear of the next (ψ*s further apart than the width); only then are they set, which
- * cannot fail (a band checked against a neighbour's old width is checked against a looser
- * edge: widening moves its edge away, narrowing its own). */
 static uint8_t set_hysteresis(uint8_t index, int32_t v)
 {
-    uint8_t i, n;
-    if (index >= CFG_N_LIMBS) {
-        return PROTO_ERR_OUT_OF_RANGE;
-    }
-    n = (uint8_t)(psi_levels(index) - 1u);
-    for (i = 0; i < n; i++) {
-        int32_t star = psi_star_cdeg(index, i);
-        int32_t lo = star - (v >> 1);
-        if (lo <= -9000 || lo + v >= 9000 || (i > 0u && star - psi_star_cdeg(index, (uint8_t)(i - 1u)) <= v)) {
-            return PROTO_ERR_OUT_OF_RANGE;
-        }
-    }
-    for (i = 0; i < n; i++) {
-        (void)psi_set_band(index, i, psi_star_cdeg(index, i), (int16_t)v);
-    }
-    return 0;
+    return psi_set_hysteresis(index, (int16_t)v) != 0 ? PROTO_ERR_OUT_OF_RANGE : 0u; /* all bands or none */
 }
 
 /* On-time and cool-down (ticks) into the envelope, which refuses to widen it. */

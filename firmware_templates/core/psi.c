@@ -254,17 +254,24 @@ int16_t psi_cos_q14(int16_t cdeg)
     return psi_sin_q14((int16_t)(9000 - mag(cdeg))); /* sin(90° − |cdeg|) */
 }
 
+/* The edges of a band ψ* ± h/2 (0.01°) into lo/hi: 0, or -1 when h is outside 0..2000 or
+ * the band leaves (−90°, 90°). The one place these rules live (psi_set_band, psi_set_hysteresis). */
+static int8_t band_edges(int16_t star, int16_t hyst, int16_t *lo, int16_t *hi)
+{
+    if (hyst < 0 || hyst > 2000 || star <= -9000 || star >= 9000) {
+        return -1;
+    }
+    *lo = band_lo(star, hyst);
+    *hi = (int16_t)(*lo + hyst);
+    return (int8_t)(*lo <= -9000 || *hi >= 9000 ? -1 : 0);
+}
+
 int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg)
 {
     int16_t lo, hi;
     band_t *b;
-    if (limb >= CFG_N_LIMBS || thr >= CFG_MAX_THRESHOLDS || thr + 1u >= psi_levels(limb) || hyst_cdeg < 0 || hyst_cdeg > 2000 ||
-        psi_star_cdeg <= -9000 || psi_star_cdeg >= 9000) {
-        return -1;
-    }
-    lo = band_lo(psi_star_cdeg, hyst_cdeg);
-    hi = (int16_t)(lo + hyst_cdeg);
-    if (lo <= -9000 || hi >= 9000) {
+    if (limb >= CFG_N_LIMBS || thr >= CFG_MAX_THRESHOLDS || thr + 1u >= psi_levels(limb) ||
+        band_edges(psi_star_cdeg, hyst_cdeg, &lo, &hi) != 0) {
         return -1;
     }
     b = band(limb, thr);
@@ -276,6 +283,28 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
     }
     set_angles(b, psi_star_cdeg, hyst_cdeg);
     SET_STROKE(limb, thr);
+    return 0;
+}
+
+int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg)
+{
+    uint8_t i, n;
+    int16_t lo, hi, prev_hi = 0;
+    if (limb >= CFG_N_LIMBS) {
+        return -1;
+    }
+    n = (uint8_t)(psi_levels(limb) - 1u);
+    for (i = 0; i < n; i++) { /* every band first: a width one band refuses changes none */
+        if (band_edges(band(limb, i)->star, hyst_cdeg, &lo, &hi) != 0 || (i > 0u && lo <= prev_hi)) {
+            return -1;
+        }
+        prev_hi = hi;
+    }
+    for (i = 0; i < n; i++) {
+        band_t *b = band(limb, i);
+        set_angles(b, b->star, hyst_cdeg);
+        SET_STROKE(limb, i);
+    }
     return 0;
 }
 

@@ -55,6 +55,10 @@ void psi_set_debounce(uint16_t samples);
  * when the band leaves (−90°, 90°) or overlaps a neighbouring threshold's band. */
 int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hyst_cdeg);
 
+/* Give every threshold of `limb` the band width h (0.01°), keeping their ψ*: all of them or,
+ * returning -1, none (h outside 0..2000, a band leaving (−90°, 90°), or two bands meeting). */
+int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg);
+
 /* ψ* and band width in use for threshold `thr` of `limb`, 0.01°. */
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr);
 int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr);

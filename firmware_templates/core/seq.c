@@ -235,7 +235,6 @@ uint8_t seq_tick(cfg_state_t measured)
     if (!s.running) {
         return 0;
     }
-    count_up(&s.step_ticks);
     if (measured == target_state()) {
         if (!s.reached) {
             s.reached = 1;
@@ -257,6 +256,7 @@ uint8_t seq_tick(cfg_state_t measured)
         return ev; /* a target held is never a timeout, however long hold_ms (SET_PARAM) */
     }
     s.held = 0;
+    count_up(&s.step_ticks); /* time away from the target: before it is reached, and after it is lost */
     if (s.step_ticks >= ticks.timeout) {
         s.running = 0;
         ev |= SEQ_EV_TIMEOUT;

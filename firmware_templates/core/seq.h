@@ -3,7 +3,8 @@
  * Contract. A gait is a closed walk of robot states; the sequencer holds the current
  * step's target state. Each tick it gets the measured (debounced) state: when it equals
  * the target for hold ticks in a row, the next step's state becomes the target; when a
- * step has not completed within the state timeout, it stops and reports SEQ_EV_TIMEOUT
+ * step has spent the state timeout away from its target (before reaching it, or after
+ * losing it: ticks at the target, held, never count), it stops and reports SEQ_EV_TIMEOUT
  * (e.g. a dead actuator). Gaits come from the rendered gait table (gait_table.c: the
  * optimal gaits per direction, every tie) or from one gait loaded at run time, which is
  * checked against the robot's allowed transitions and the length limit first.

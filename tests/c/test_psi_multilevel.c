@@ -85,6 +85,23 @@ static void test_moving_a_threshold_into_its_neighbour_is_refused(void)
     CHECK_EQ(classify(1, 27.1), 2);
 }
 
+/* "multi": left ψ* −10° and 15°, bands 4° wide (test_firmware_core.py, _multi_level). */
+static void test_a_width_one_band_refuses_changes_no_band(void)
+{
+    psi_init();
+    CHECK(psi_set_hysteresis(0, 2600) != 0); /* 26°: out of 0..20° */
+    CHECK_EQ(psi_set_band(0, 1, 500, 400), 0); /* ψ* 5°: the two 15° apart */
+    CHECK(psi_set_hysteresis(0, 1600) != 0);   /* 16°: the bands would meet */
+    CHECK_EQ(psi_hyst_cdeg(0, 0), 400);
+    CHECK_EQ(psi_hyst_cdeg(0, 1), 400);
+    CHECK(psi_set_hysteresis(1, 1600) == 0);   /* the one-threshold limb takes it */
+    CHECK_EQ(psi_set_hysteresis(0, 1400), 0);  /* 14°: both take it */
+    CHECK_EQ(psi_hyst_cdeg(0, 0), 1400);
+    CHECK_EQ(psi_hyst_cdeg(0, 1), 1400);
+    CHECK(psi_set_band(0, 1, 300, 1400) != 0); /* [−4°, 10°] meets [−17°, −3°] */
+    CHECK(psi_set_hysteresis(2, 100) != 0);    /* no such limb */
+}
+
 int main(void)
 {
     RUN(test_three_level_limb_without_history_counts_upper_edges);
@@ -93,5 +110,6 @@ int main(void)
     RUN(test_float_reference_sweep_of_three_levels);
     RUN(test_state_index_is_mixed_radix_first_limb_most_significant);
     RUN(test_moving_a_threshold_into_its_neighbour_is_refused);
+    RUN(test_a_width_one_band_refuses_changes_no_band);
     return UNIT_EXIT();
 }

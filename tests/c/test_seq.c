@@ -86,11 +86,25 @@ static void test_a_target_held_longer_than_the_timeout_advances_without_a_timeou
     CHECK(seq_running());
     CHECK(seq_tick(0) & SEQ_EV_ADVANCED);
     CHECK_EQ(seq_target(), 2);
-    /* and a target lost after the timeout has passed is a timeout at once */
-    seq_set_hold(CFG_STATE_TIMEOUT_TICKS + 50u);
-    ticks(CFG_STATE_TIMEOUT_TICKS + 10u, 2);
+    /* a target lost after a long hold has the step's time away from it left, no more */
+    ticks(CFG_STATE_TIMEOUT_TICKS + 10u, 2); /* reached at once, held */
     CHECK(seq_running());
+    CHECK(!(ticks(CFG_STATE_TIMEOUT_TICKS - 1u, 0) & SEQ_EV_TIMEOUT));
     CHECK(seq_tick(0) & SEQ_EV_TIMEOUT);
+}
+
+static void test_time_away_from_the_target_adds_up_over_a_flickering_step(void)
+{
+    uint32_t away = 0;
+    setup();
+    seq_start(SEQ_DIR_PX, 0, 0);
+    ticks(CFG_HOLD_TICKS, 0); /* now waiting for 10 */
+    while (away + 10u < CFG_STATE_TIMEOUT_TICKS) { /* 10 ticks away, 1 at the target, ... */
+        CHECK(!(ticks(10, 0) & SEQ_EV_TIMEOUT));
+        CHECK(!(seq_tick(2) & SEQ_EV_ADVANCED));
+        away += 10u;
+    }
+    CHECK(ticks(CFG_STATE_TIMEOUT_TICKS - away, 0) & SEQ_EV_TIMEOUT);
 }
 
 static void test_a_full_cycle_returns_to_the_first_step_and_counts(void)
@@ -192,6 +206,7 @@ int main(void)
     RUN(test_reached_is_reported_once_per_step);
     RUN(test_step_not_completed_within_timeout_stops_with_a_timeout_event);
     RUN(test_a_target_held_longer_than_the_timeout_advances_without_a_timeout);
+    RUN(test_time_away_from_the_target_adds_up_over_a_flickering_step);
     RUN(test_a_full_cycle_returns_to_the_first_step_and_counts);
     RUN(test_start_begins_where_the_robot_is_on_the_walk);
     RUN(test_start_of_a_gait_that_does_not_exist_is_refused);
