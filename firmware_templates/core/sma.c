@@ -97,13 +97,8 @@ static void every_channel_off(void)
 #define REFILL_QUOT(on_us, cooldown_us) ((on_us) / (((cooldown_us) >> 8) + 1u))
 #define REFILL_Q8(on_us, cooldown_us) \
     ((uint16_t)(REFILL_QUOT(on_us, cooldown_us) > 10000u ? 10000u : REFILL_QUOT(on_us, cooldown_us)))
-static void set_times(uint32_t on_us, uint32_t cooldown_us)
-{
-    st.max_on_us = on_us;
-    st.refill_q8 = REFILL_Q8(on_us, cooldown_us);
-}
 
-/* At start: the build's limits (what set_times makes of its max_on and min_cooldown), the
+/* At start: the build's limits (what sma_set_limits makes of its max_on and min_cooldown), the
  * window at its first slot, no hits, no ESTOP. */
 #define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
 #define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
@@ -242,15 +237,19 @@ uint8_t sma_estopped(void)
 
 int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cooldown_ticks)
 {
+    uint32_t on_us, q;
     if (max_duty_pm > CFG_MAX_DUTY_PM || max_on_ticks > CFG_MAX_ON_TICKS || cooldown_ticks < min_cooldown ||
         cooldown_ticks > 0xFFFFFFFFUL / CFG_TICK_US) {
         return -1;
     }
-    if (REFILL_QUOT(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US) == 0u) {
+    on_us = max_on_ticks * CFG_TICK_US;
+    q = REFILL_QUOT(on_us, cooldown_ticks * CFG_TICK_US); /* the one division, as REFILL_Q8 */
+    if (q == 0u) {
         return -2; /* a cool-down of 256 on-times or more would pay back nothing: never again */
     }
     st.max_duty = max_duty_pm;
-    set_times(max_on_ticks * CFG_TICK_US, cooldown_ticks * CFG_TICK_US);
+    st.max_on_us = on_us;
+    st.refill_q8 = (uint16_t)(q > 10000u ? 10000u : q);
     return 0;
 }
 
