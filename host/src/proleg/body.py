@@ -100,6 +100,16 @@ def own_reach_deg(geo: BodyGeometry, limb_actuators: list[int]) -> list[float]:
     return [float(psi[i, i]) for i in range(len(limb_actuators))]
 
 
+def coil_reach_deg(geo: BodyGeometry, actuator: int) -> list[float]:
+    """Per contact: ψ with coil ``actuator`` at full stroke and every other coil cold (how far
+    that coil alone lifts each limb: ``limbloss`` remaps a lost coil's limb only onto one that
+    lifts it)."""
+    shape = Shape(geo, tabulate=False)
+    c = np.zeros((1, shape.n_coils))
+    c[0, actuator] = 1.0
+    return [float(p) for p in shape.compute(c)[0][0]]
+
+
 def _wrap_deg(a: np.ndarray) -> np.ndarray:
     """Angles in degrees into (−180, 180]."""
     return 180.0 - np.mod(180.0 - a, 360.0)

@@ -7,7 +7,7 @@ Two ways to go on without actuator ``a`` (both are computed, the better one is u
   held, so every transition into or out of one is forbidden.
 * **remap** — each limb ``a`` drove is given to the actuator of its nearest other limb
   (fewest limbs apart, the lower index on a tie) that can lift it: on the physical plant's
-  body (``robot_plant.coil_reach_deg``, from ``[plant]`` length_mm and overlap_mm) that coil
+  body (``body.coil_reach_deg``, from ``[plant]`` length_mm and overlap_mm) that coil
   alone, at full stroke, bends the limb past its first level's entry edge (ψ* +
   hysteresis/2), and the limb may rise only to the levels the coil reaches. A limb no other
   coil can lift stays on ``a``, i.e. dead; when none can be lifted there is no remap (on
@@ -34,7 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .robot_plant import coil_reach_deg
+from .body import coil_reach_deg
+from .robot_plant import body_of
 from .states import limb_levels
 from .transitions import TransitionTable
 
@@ -84,7 +85,7 @@ def dead_table(robot, lost: int) -> TransitionTable:
 def foreign_top_level(robot, limb: int, actuator: int) -> int:
     """The highest level coil ``actuator`` alone, at full stroke, lifts ``limb`` to on the
     physical plant's body (0: not past its first entry edge, ψ* + hysteresis/2)."""
-    reach = coil_reach_deg(list(compiled_map(robot)), len(robot.actuators), robot.plant, actuator)[limb]
+    reach = coil_reach_deg(body_of(list(compiled_map(robot)), len(robot.actuators), robot.plant), actuator)[limb]
     lb = robot.limbs[limb]
     return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2.0 <= reach)
 

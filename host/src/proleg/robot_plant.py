@@ -258,17 +258,6 @@ def body_of(limb_actuators: list[int], n_actuators: int, section: PlantSection) 
     return body_geometry(limb_actuators, n_actuators, section.length_mm, overlaps)
 
 
-def coil_reach_deg(limb_actuators: list[int], n_actuators: int, section: PlantSection, actuator: int) -> list[float]:
-    """ψ of every limb with coil ``actuator`` at full stroke and every other coil cold, on the
-    physical plant's body: how far that coil alone can lift each limb."""
-    from .body import Shape
-
-    c = np.zeros((1, n_actuators))
-    c[0, actuator] = 1.0
-    psi = Shape(body_of(limb_actuators, n_actuators, section), tabulate=False).compute(c)[0][0]
-    return [(float(p) + 180.0) % 360.0 - 180.0 for p in psi]
-
-
 def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection) -> list[str]:
     """One line per limb whose top level its own coil cannot reach on the physical plant's body
     (``proleg.body``): the top level is entered at ψ*_top + hysteresis/2, and the reach is ψ
@@ -466,7 +455,7 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
             if k >= lb.levels - 1 or c[limb_act[i]] > 0.0:
                 continue  # at its top level, or its own coil is on (shared with a raised limb)
             edge = lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0
-            psi_i = (float(p[i]) + 180.0) % 360.0 - 180.0  # a body curled past 180° wraps the chord angle
+            psi_i = float(p[i])  # in (−180°, 180°] however far the body curls (Shape.compute wraps it)
             if psi_i >= edge:
                 raising = [j for j, kj in enumerate(want) if kj > 0]
                 out.setdefault(s, []).append((i, raising, psi_i))
