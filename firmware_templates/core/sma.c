@@ -95,8 +95,8 @@ static void every_channel_off(void)
  * 1/256 (and at most 39×: a min_cooldown below 1/39 of max_on counts as 1/39): paid back no
  * faster than that; below 1/256 it would be 0, so such a cool-down is refused. */
 #define REFILL_QUOT(on_us, cooldown_us) ((on_us) / (((cooldown_us) >> 8) + 1u))
-#define REFILL_Q8(on_us, cooldown_us) \
-    ((uint16_t)(REFILL_QUOT(on_us, cooldown_us) > 10000u ? 10000u : REFILL_QUOT(on_us, cooldown_us)))
+#define REFILL_Q8_OF(q) ((uint16_t)((q) > 10000u ? 10000u : (q))) /* the rate from REFILL_QUOT's q */
+#define REFILL_Q8(on_us, cooldown_us) REFILL_Q8_OF(REFILL_QUOT(on_us, cooldown_us))
 
 /* At start: the build's limits (what sma_set_limits makes of its max_on and min_cooldown), the
  * window at its first slot, no hits, no ESTOP. */
@@ -243,13 +243,13 @@ int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cool
         return -1;
     }
     on_us = max_on_ticks * CFG_TICK_US;
-    q = REFILL_QUOT(on_us, cooldown_ticks * CFG_TICK_US); /* the one division, as REFILL_Q8 */
+    q = REFILL_QUOT(on_us, cooldown_ticks * CFG_TICK_US); /* the one division */
     if (q == 0u) {
         return -2; /* a cool-down of 256 on-times or more would pay back nothing: never again */
     }
     st.max_duty = max_duty_pm;
     st.max_on_us = on_us;
-    st.refill_q8 = (uint16_t)(q > 10000u ? 10000u : q);
+    st.refill_q8 = REFILL_Q8_OF(q);
     return 0;
 }
 
