@@ -287,3 +287,16 @@ def test_the_sim_report_names_the_limb_a_fault_is_on(capsys):
           "--condition", "imu_offset_deg=right:-8"])
     out = capsys.readouterr().out
     assert "FAULT at" in out and "STATE_TIMEOUT on left" in out and "limb/channel" not in out
+
+
+@pytest.mark.parametrize("ground", [2, 7, 255])
+def test_a_ground_other_than_flat_or_this_one_is_refused_and_nothing_starts(r1, ground):
+    sim = SimulatedRobot(r1, conditions=MOUNT)
+    client = connect(sim)
+    with pytest.raises(CommandRefused) as e:
+        client.request("CALIBRATE_LEVEL", ground=ground)
+    assert e.value.error == ErrorCode.OUT_OF_RANGE and e.value.detail == 1
+    assert "ground" in str(e.value)
+    wait(client, 0.5)  # no calibration was begun: no LEVEL_DONE, nothing stored
+    assert get_level(client).status == LevelStatus.NONE
+    client.close()

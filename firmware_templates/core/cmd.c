@@ -286,8 +286,12 @@ static void cmd_calibrate_level(void)
 {
     uint8_t why = seq_running() ? 1u : imucheck_bad() ? 2u : fault_latched() ? 3u : 0u;
     int8_t r;
+    if (msg.u.calibrate_level.ground > 1u) {
+        nack(PROTO_ERR_OUT_OF_RANGE, 1u); /* field 1: ground is 0 (flat) or 1 (this ground) */
+        return;
+    }
     if (why == 0u) {
-        r = level_calibrate(msg.u.calibrate_level.ground != 0u);
+        r = level_calibrate(msg.u.calibrate_level.ground);
         why = r == -1 ? 4u : r < 0 ? 5u : 0u; /* under way / not in this build */
     }
     if (why) {

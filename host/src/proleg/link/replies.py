@@ -68,6 +68,8 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     if command == "SET_PARAM" and error == ErrorCode.SAFETY_LIMIT:
         return ("beyond the safety envelope the firmware was built with (the robot file's [safety], e.g. max_duty "
                 "for a duty): at run time the envelope can be narrowed, never widened")
+    if command == "CALIBRATE_LEVEL" and error == ErrorCode.OUT_OF_RANGE:
+        return "ground is 0 (flat ground: stored) or 1 (this ground: RAM only); nothing began"
     if command == "SET_PARAM" and error == ErrorCode.OUT_OF_RANGE:
         return _OUT_OF_RANGE.get(detail, "outside the parameter's range, or no such limb or index on this robot")
     if error == ErrorCode.TOO_STEEP:

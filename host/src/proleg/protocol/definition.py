@@ -153,7 +153,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "on flat ground as its level offset, stored in non-volatile memory; with ground = 1 as "
         "this ground's tilt on top of it, until reset. ACK when sampling begins, then EVENT LEVEL_DONE. NACK NOT_ALLOWED while a gait runs (detail 1), an IMU is bad (2), "
         "a fault is latched (3), a calibration is under way (4), or the build leaves level "
-        "calibration out (5).",
+        "calibration out (5); OUT_OF_RANGE (detail 1) for a ground other than 0 or 1.",
         reply="ACK",
     ),
     MessageSpec(0x0C, "GET_LEVEL", "h2r", (_TOKEN,), "Answered by LEVEL.", reply="LEVEL"),
