@@ -249,3 +249,15 @@ def test_recorded_events_name_the_actuator_as_the_console_does(tmp_path, suffix)
     ]
     names = RobotNames(meta.limb_names, meta.actuator_names)
     assert texts == [event_text(f, names) for f in events]  # one implementation: the console's
+
+
+@pytest.mark.parametrize("where, why", [("missing/x.mcap", "No such file or directory"),
+                                        ("folder.csv", "Is a directory")])
+def test_a_recording_that_cannot_be_written_is_refused_before_the_robot_is_touched(tmp_path, capsys, where, why):
+    from proleg.cli.main import main
+
+    (tmp_path / "folder.csv").mkdir()
+    code = main(["console", "--sim", "paper-r1", "--plain", "--duration", "0.5", "--record", str(tmp_path / where)])
+    err = capsys.readouterr().err
+    assert code == 1 and f"cannot write record file {tmp_path / where}: {why}" in err
+    assert "robot stopped" not in err  # never connected, so nothing to stop

@@ -6,9 +6,10 @@ format = a module with a writer and a reader + one line in each table below.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from ..errors import UsageError
+from ..errors import LinkError, UsageError
 from .base import Reader, Recording, Writer
 from .csv_format import CsvReader, CsvWriter
 from .fields import RecordingMeta
@@ -29,8 +30,19 @@ def _lookup(path: str | Path, table: dict) -> type:
 
 
 def check_suffix(path: str | Path) -> None:
-    """Refuse a file name no writer takes (before connecting to anything)."""
+    """Refuse, before connecting to anything, a file name no writer takes (exit 2) or a place
+    the file cannot be written (exit 1, the message a failed open would give): a directory,
+    or a folder that does not exist or is not writable. The robot is never started only to be
+    stopped because its recording could not begin."""
     _lookup(path, WRITERS)
+    p = Path(path)
+    folder = p.parent if str(p.parent) else Path(".")
+    why = ("Is a directory" if p.is_dir() else
+           "No such file or directory" if not folder.is_dir() else
+           "Permission denied" if not os.access(folder, os.W_OK | os.X_OK)
+           or (p.exists() and not os.access(p, os.W_OK)) else "")
+    if why:
+        raise LinkError(f"cannot write record file {p}: {why}")
 
 
 def Logger(path: str | Path, meta: RecordingMeta) -> Writer:  # noqa: N802 (python-can's name)
