@@ -99,3 +99,16 @@ def test_every_example_robot_gives_a_runnable_plant():
         n_ch = max(a.channel for a in robot.actuators) + 1
         p.step(1.0, [0.6] * n_ch)
         assert np.all(np.isfinite(p.psi_deg))
+
+
+def test_a_physical_plant_built_from_the_robot_alone_has_its_plant_table():
+    """``PhysicalPlant(robot)`` takes the robot file's [plant] conditions, as ``make_plant``
+    does; an explicit ``Conditions()`` is the bare default body."""
+    from proleg.sim.closed_loop import make_plant
+    from proleg.sim.physical import Conditions, PhysicalPlant
+
+    robot = r1_with_plant({"ambient_c": 31.0, "supply_v": 4.2})
+    alone, made = PhysicalPlant(robot), make_plant(robot, "physical")
+    assert alone.conditions.get("ambient_c") == made.conditions.get("ambient_c") == 31.0
+    assert alone.conditions.get("supply_v") == 4.2
+    assert PhysicalPlant(robot, Conditions()).conditions.get("ambient_c") != 31.0

@@ -38,7 +38,7 @@ from ...states import limb_levels
 from ..sma import Hysteresis
 from . import materials as mat
 from ...body import Shape, body_geometry
-from .conditions import Conditions, coil_of_limb
+from .conditions import Conditions, coil_of_limb, conditions_from_section
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
 from .params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm
@@ -50,18 +50,20 @@ class PhysicalPlant:
     """A robot body that moves by friction mechanics. ``robot``: a loaded ``proleg.robot.Robot``
     (limbs, ψ*, actuators, channels; its matrix only to infer D1/D2 when the file does not
     say, and to count transitions it forbids). ``conditions``: ``Conditions`` (see
-    ``conditions.KEYS``). ``mechanisms``: per limb "D1"/"D2" or per-level material names,
+    ``conditions.KEYS``); left out, the robot file's ``[plant]`` values (``sim.closed_loop.
+    plant_conditions`` puts more on top of them). ``mechanisms``: per limb "D1"/"D2" or per-level material names,
     overriding the robot file."""
 
     def __init__(self, robot: Any, conditions: Conditions | None = None, *, seed: int = 0,
                  params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None) -> None:
         self.robot = robot
         self.physics = p = params or PhysicalParams()
-        self.conditions = cond = conditions or Conditions()
         limbs = list(robot.limbs)
         acts = list(robot.actuators)
         lnames = [lb.name for lb in limbs]
         anames = [a.name for a in acts]
+        self.conditions = cond = (conditions if conditions is not None else
+                                  conditions_from_section(getattr(robot, "plant", None), anames, lnames))
         by_limb = coil_of_limb(robot)  # a limb's name names its coil too
         cond.check_names(lnames, anames, by_limb)
         self.levels = tuple(len(lb.psi_star_deg) + 1 for lb in limbs)
