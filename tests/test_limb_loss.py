@@ -266,6 +266,11 @@ def test_a_fallback_map_serves_the_fallback_gait_only_a_built_in_gait_runs_the_r
     assert tuple(m.actuators) == (0, 0) and m.lost == 1  # the fallback's remap while it runs
     client.request("STOP")
     client.clear()
+    with pytest.raises(CommandRefused) as refused:  # no such gait: a refused START changes nothing
+        client.request("START", gait=77, direction=0)
+    assert refused.value.error == ErrorCode.NO_GAIT
+    m = client.request("GET_ACTUATOR_MAP")
+    assert tuple(m.actuators) == (0, 0) and m.lost == 1  # the dead coil is still given up
     client.request("START", gait=0, direction=0)
     m = client.request("GET_ACTUATOR_MAP")
     assert tuple(m.actuators) == (0, 1) and m.lost == 0xFF
@@ -394,3 +399,34 @@ def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
         load_robot(p)
     p.write_text(R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = false"))
     assert fallback_lines(load_robot(p)) == ["fallback gaits: off ([control] fallback = false)"]
+
+
+def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fall_back():
+    """IMU noise (5°) wider than inchworm-3's 2° bands: the middle limb reaches its level but
+    never settles, and the step times out with every limb at its level. That used to name
+    limb 0 (whose coil was off), suspect its healthy coil and fall back without it."""
+    from proleg.console.names import RobotNames, describe_event
+    from proleg.protocol.definition import FaultCode
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    robot = load_robot(ROOT / "robots" / "inchworm-3.toml")
+    sim = SimulatedRobot(robot, conditions=["imu_noise_deg=5"])
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+    client.connect()
+    client.start(0, "+x")
+    events = []
+    end = client.link.clock() + 40.0
+    while client.link.clock() < end and not any(m.kind == EventKind.SUSPECT for m in events):
+        m = client.recv(0.5)
+        if m is not None and m.name == "EVENT":
+            events.append(m)
+    client.close()
+    timeout = [m for m in events if m.kind == EventKind.FAULT and m.code == FaultCode.STATE_TIMEOUT]
+    assert timeout, [(EventKind(m.kind).name, m.code, m.detail) for m in events]
+    assert timeout[0].detail == 0xFF
+    suspect = next(m for m in events if m.kind == EventKind.SUSPECT)
+    assert suspect.code == 0xFF
+    assert not [m for m in events if m.kind == EventKind.FALLBACK]
+    text = describe_event({"time_ms": 1, "kind": int(EventKind.FAULT), "code": int(FaultCode.STATE_TIMEOUT),
+                           "detail": 0xFF}, RobotNames.for_robot(robot))
+    assert "every limb at its level, one would not settle" in text

@@ -116,9 +116,6 @@ static void cmd_start(void)
         sdir = SEQ_DIR_LOADED;
         index = 0;
     } else {
-        if (limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the robot as built: */
-            limbmap_init();                   /* after a fallback, try the whole robot again */
-        }
         sdir = dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX;
     }
     r = seq_start(sdir, index, imucheck_measured());
@@ -138,6 +135,9 @@ static void cmd_start(void)
         }
     }
 #endif
+    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the */
+        limbmap_init(); /* robot as built: after a fallback, try the whole robot again (once accepted) */
+    }
     drive_started(gait, dir);
     fault_watchdog_rearm();
     ack();

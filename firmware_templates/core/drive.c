@@ -23,10 +23,14 @@ void drive_init(void)
     reached = 0;
 }
 
+#if defined(__GNUC__)
+__attribute__((noinline)) /* START and the fallback: one copy */
+#endif
 void drive_started(uint8_t g, uint8_t d)
 {
     gait = g;
     dir = d;
+    (void)sma_take_heated(); /* safety: what heated before this START made no progress in it */
     ctl_reset(); /* a new gait: no stall or hold state carried over from the last one */
 }
 
@@ -40,7 +44,8 @@ uint8_t drive_dir(void)
     return dir;
 }
 
-/* The first limb not at its level of `target` (0 if all are). */
+/* The first limb not at its level of `target`; DRIVE_NO_LIMB if every limb is (the step
+ * timed out only because one would not settle: no coil to suspect, fallback.c). */
 static uint16_t limb_off_target(cfg_state_t target)
 {
     uint8_t want[CFG_N_LIMBS];
@@ -51,7 +56,7 @@ static uint16_t limb_off_target(cfg_state_t target)
             return i;
         }
     }
-    return 0;
+    return DRIVE_NO_LIMB;
 }
 
 static uint8_t all_settled(void)
@@ -127,8 +132,8 @@ void drive_apply(void)
         fault_raise(PROTO_FAULT_STATE_TIMEOUT, limb_off_target(seq_target()));
         return;
     }
-    for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        if (hits & (1u << i)) {
+    for (i = 0; hits; i++, hits >>= 1) {
+        if (hits & 1u) {
             /* A single hit is reported, not latched: the channel cools down and the gait
              * goes on; CFG_ON_LIMIT_LATCH hits without progress latch a fault (above). */
             tx_event(PROTO_EV_FAULT, PROTO_FAULT_SMA_ON_LIMIT, i);

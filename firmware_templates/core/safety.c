@@ -3,11 +3,13 @@
 
 #include "elapsed.h"
 #include "hal.h"
+#include "sma.h"
 
 static uint32_t last_us;
 static uint32_t unreached_us;
 static uint32_t timeout_us; /* set by guard_init (no .data bytes in flash) */
 static uint8_t hits_since_reached;
+static uint8_t hit_mask; /* actuators hit since each last heated on the way to a target reached */
 
 #if defined(__GNUC__)
 __attribute__((noinline)) /* smaller out of line (measured) */
@@ -30,12 +32,22 @@ void guard_set_timeout_ms(uint32_t ms)
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
-    uint8_t i;
+    uint8_t i, bit;
     if (reached) {
+        /* A coil that hit and has since heated on the way to this target made progress;
+         * reaching what the other coils make is none for it (safety.h). The step's time
+         * starts again either way; the hits do only once every coil that hit progressed.
+         * (guard_ack then putting back what stays: R1 8 B smaller on the Nano.) */
+        uint8_t hit = (uint8_t)(hit_mask & ~sma_take_heated()), n = hits_since_reached;
         guard_ack();
+        if (hit) {
+            hit_mask = hit;
+            hits_since_reached = n;
+        }
     }
-    for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        if (hits & (1u << i)) {
+    hit_mask |= hits;
+    for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
+        if (hits & bit) {
             *act = i;
             if (hits_since_reached < 0xFFu) {
                 hits_since_reached++;
@@ -62,6 +74,7 @@ void guard_ack(void)
 {
     unreached_us = 0;
     hits_since_reached = 0;
+    hit_mask = 0;
 }
 
 uint32_t guard_unreached_us(void)

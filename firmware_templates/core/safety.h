@@ -4,9 +4,13 @@
  * ticks. Time spent demanding a target that has not been reached accumulates from the
  * first demand and is NOT reset by STOP, START, ESTOP or LOAD_GAIT: only reaching a
  * target (the sequencer's REACHED) or the operator acknowledging a fault (guard_ack, on
- * CLEAR(FAULTS) of a latched fault) resets it. When it passes the state timeout, or
- * when CFG_ON_LIMIT_LATCH on-limit hits happen without a target reached in between, the
- * guard reports a fault for the caller to latch. The thermal budget itself lives in
+ * CLEAR(FAULTS) of a latched fault) resets it. On-limit hits count until every coil that
+ * hit has since heated above the hold ceiling on the way to a target reached (sma.h,
+ * sma_take_heated; a START begins that record afresh): reaching states that other coils
+ * make is no progress for a coil that cannot lift its own, and a host restarting the gait
+ * past a dead coil re-reaches exactly those. When
+ * the time passes the state timeout, or CFG_ON_LIMIT_LATCH hits add up, the guard reports
+ * a fault for the caller to latch. The thermal budget itself lives in
  * sma.c and nothing here refunds it.
  */
 #ifndef PROLEG_SAFETY_H
@@ -29,16 +33,16 @@ void guard_init(void);
 /* Narrow the state timeout (ms; a value above CFG_STATE_TIMEOUT_MS counts as it). */
 void guard_set_timeout_ms(uint32_t ms);
 
-/* Once per tick after the sequencer. demanding: a gait is running and its current target
- * is not yet reached; reached: the sequencer reported REACHED this tick; hits: on-limit
- * bits from sma_tick. Returns GUARD_*; *act is the actuator of the last hit. GUARD_TIMEOUT
- * only when `demanding` (drive.c relies on it). */
+/* Once per tick after the sequencer and sma_tick. demanding: a gait is running and its
+ * current target is not yet reached; reached: the sequencer reported REACHED this tick;
+ * hits: on-limit bits from sma_tick. Returns GUARD_*; *act is the actuator of the last hit.
+ * GUARD_TIMEOUT only when `demanding` (drive.c relies on it). */
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act);
 
 /* The operator acknowledged a fault: the step's time and hit count start again. */
 void guard_ack(void);
 
-/* Time (µs) spent demanding an unreached target, and on-limit hits since one was reached. */
+/* Time (µs) spent demanding an unreached target, and on-limit hits counting towards the latch. */
 uint32_t guard_unreached_us(void);
 uint8_t guard_hits(void);
 

@@ -158,15 +158,24 @@ void sma_request(uint8_t act, uint16_t duty_pm)
     }
 }
 
+static uint8_t heated; /* a bit per channel heated above the hold ceiling since sma_take_heated */
+
+uint8_t sma_take_heated(void)
+{
+    uint8_t h = heated;
+    heated = 0;
+    return h;
+}
+
 uint8_t sma_tick(void)
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped */
     uint8_t hit = 0;
-    uint8_t i;
+    uint8_t i, bit;
     uint32_t *w;
     advance_window(dt);
     w = win[st.slot];
-    for (i = 0; i < CFG_N_ACTUATORS; i++) {
+    for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
         act_state_t *a = &acts[i];
         uint16_t duty = st.estopped ? 0u : sma_clamp(a->request);
         uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
@@ -179,6 +188,7 @@ uint8_t sma_tick(void)
         if (a->charged > hold_max) {
             a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
             a->pay_rem = 0;
+            heated = (uint8_t)(heated | bit);
         } else {
             /* ≤ 400000 × 10000 + 255: 32 × 16 bits, no 32 × 32 multiply. The fraction carries
              * on, so a fast tick pays back at the rate set, not at its rounding (at 10 kHz a
@@ -199,7 +209,7 @@ uint8_t sma_tick(void)
             if (a->debt_us + CFG_TICK_US > st.max_on_us) {
                 duty = 0; /* cut before the next tick would pass max_on */
                 a->forced = 1;
-                hit = (uint8_t)(hit | (1u << i));
+                hit = (uint8_t)(hit | bit);
                 if (st.limit_hits < 0xFFFFu) {
                     st.limit_hits++;
                 }

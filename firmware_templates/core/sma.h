@@ -90,4 +90,7 @@ uint8_t sma_take_clamped(void);
 /* Count of on-limit hits since sma_init (saturates). */
 uint16_t sma_limit_hits(void);
 
+/* A bit per channel heated above the hold ceiling (on-time) since the last call; cleared. */
+uint8_t sma_take_heated(void);
+
 #endif /* PROLEG_SMA_H */

@@ -8,6 +8,15 @@
 
 static uint8_t act;
 
+/* The coils heated on the way to each target reached (sma.c's sma_take_heated, which the
+ * guard asks on a REACH): every one, unless a test says which. */
+static uint8_t raised = 0xFFu;
+
+uint8_t sma_take_heated(void)
+{
+    return raised;
+}
+
 static uint8_t tick_us(uint32_t us, uint8_t demanding, uint8_t reached, uint8_t hits)
 {
     fake_now_us += us;
@@ -21,6 +30,7 @@ static uint8_t tick(uint8_t demanding, uint8_t reached, uint8_t hits)
 
 static void setup(uint64_t t0)
 {
+    raised = 0xFFu;
     fake_hal_reset();
     fake_now_us = t0;
     guard_init();
@@ -113,6 +123,36 @@ static void test_hits_on_different_steps_do_not_latch(void)
     }
 }
 
+/* A host restarting a gait past a dead coil re-reaches the states the other coils make:
+ * that is no progress for the coil that keeps hitting its on-time limit. */
+static void test_hits_latch_when_only_other_coils_lift_their_limbs_in_between(void)
+{
+    uint8_t k;
+    setup(0);
+    raised = 0x01u; /* only actuator 0 heated on the way to the targets reached */
+    for (k = 1; k < CFG_ON_LIMIT_LATCH; k++) {
+        CHECK_EQ(tick(1, 0, 0x02), GUARD_OK);
+        CHECK_EQ(tick(0, 1, 0), GUARD_OK); /* reached: not demanding an unreached target */
+        CHECK_EQ(guard_hits(), k);
+        CHECK_EQ(guard_unreached_us(), 0); /* the time still starts afresh at each reach */
+    }
+    CHECK_EQ(tick(1, 0, 0x02), GUARD_ON_LIMIT);
+    CHECK_EQ(act, 1);
+}
+
+static void test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_target(void)
+{
+    setup(0);
+    CHECK_EQ(tick(1, 0, 0x03), GUARD_OK); /* both coils hit */
+    CHECK_EQ(guard_hits(), 2);
+    raised = 0x01u;
+    CHECK_EQ(tick(1, 1, 0), GUARD_OK);
+    CHECK_EQ(guard_hits(), 2); /* actuator 1 has not heated on the way to a target since */
+    raised = 0x02u;
+    CHECK_EQ(tick(1, 1, 0), GUARD_OK);
+    CHECK_EQ(guard_hits(), 0);
+}
+
 static void test_the_operator_acknowledging_a_fault_restarts_the_step_time(void)
 {
     setup(0);
@@ -141,6 +181,8 @@ int main(void)
     RUN(test_reaching_a_target_starts_the_next_step_afresh);
     RUN(test_repeated_on_limit_hits_without_progress_latch);
     RUN(test_hits_on_different_steps_do_not_latch);
+    RUN(test_hits_latch_when_only_other_coils_lift_their_limbs_in_between);
+    RUN(test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_target);
     RUN(test_the_operator_acknowledging_a_fault_restarts_the_step_time);
     RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
     return UNIT_EXIT();

@@ -262,6 +262,26 @@ static void test_holding_at_or_below_the_hold_ceiling_is_never_on_time(void)
 
 /* Bursts as long as the budget allows, at the full duty: the mean over every window of
  * CFG_DUTY_WINDOW_MS stays at or below CFG_MEAN_DUTY_PM (brute-force sliding sum). */
+/* The step guard credits a coil with progress only if it heated above the hold ceiling on
+ * the way to a target (safety.h): holding is not heating, and taking the record clears it. */
+static void test_heated_names_the_coils_driven_above_the_hold_ceiling_since_it_was_taken(void)
+{
+    setup();
+    (void)sma_take_heated();
+    sma_request(0, CFG_HOLD_MAX_DUTY_PM);
+    sma_request(1, CFG_HOLD_MAX_DUTY_PM + 1u);
+    tick();
+    tick(); /* the second tick charges what the first put on the pins */
+    CHECK_EQ(sma_take_heated(), 0x02);
+    CHECK_EQ(sma_take_heated(), 0);
+    sma_request(1, 0);
+    tick();
+    tick();
+    CHECK_EQ(sma_take_heated(), 0x02); /* the tick it was still on */
+    tick();
+    CHECK_EQ(sma_take_heated(), 0);
+}
+
 static void test_mean_duty_over_any_window_stays_below_the_limit(void)
 {
     enum { W = CFG_DUTY_WINDOW_MS * 1000UL / CFG_TICK_US };
@@ -353,6 +373,7 @@ static void test_all_off_turns_every_board_channel_off_at_once(void)
 int main(void)
 {
     RUN(test_init_turns_every_board_channel_off);
+    RUN(test_heated_names_the_coils_driven_above_the_hold_ceiling_since_it_was_taken);
     RUN(test_every_output_is_clamped_to_the_duty_ceiling);
     RUN(test_actuators_drive_their_configured_channels);
     RUN(test_max_on_time_cuts_at_max_on_then_cools_for_min_cooldown);

@@ -22,6 +22,8 @@ from ..protocol.definition import (
 #: faults whose ``detail`` is an actuator index; the other faults name a limb (or nothing)
 _ACTUATOR_FAULTS = frozenset({FaultCode.SMA_ON_LIMIT})
 _NO_DETAIL_FAULTS = frozenset({FaultCode.LINK_WATCHDOG, FaultCode.NONE, FaultCode.INTERNAL})
+#: STATE_TIMEOUT's detail when no limb is off its level (core/drive.h DRIVE_NO_LIMB)
+TIMEOUT_UNSETTLED = 0xFF
 
 
 @dataclass(frozen=True)
@@ -90,6 +92,8 @@ def fault_text(code: int, detail: int, names: RobotNames = RobotNames()) -> str:
         return f"{what} (detail {detail})"
     if fc in _NO_DETAIL_FAULTS:
         return what
+    if fc == FaultCode.STATE_TIMEOUT and detail == TIMEOUT_UNSETTLED:
+        return f"{what}: every limb at its level, one would not settle (no coil suspected)"
     return f"{what} on {names.actuator(detail) if fc in _ACTUATOR_FAULTS else names.limb(detail)}"
 
 

@@ -2,7 +2,7 @@
 and ``Replanner``, which carries a running gait on after the loss (``proleg run``).
 
 The firmware reports a coil that cannot do its job as FAULT SMA_ON_LIMIT (detail: the
-channel) or STATE_TIMEOUT (detail: the limb off its target), followed by EVENT SUSPECT (code:
+channel) or STATE_TIMEOUT (detail: the limb off its target; 0xFF: none is, one would not settle), followed by EVENT SUSPECT (code:
 the actuator it suspects, detail: the failed transition from × n_states + to). What the robot
 can still do without that actuator, and with which limb→actuator map, is
 ``proleg.limbloss.fallback`` (the same model the firmware's build-time fallbacks come from:

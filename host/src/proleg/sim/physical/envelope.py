@@ -8,7 +8,8 @@ The claim bench asks whether the coils *can* complete a gait under a condition
   not on pays back ``max_on_ms / min_cooldown_ms`` seconds (at most 39: sma.c's refill_q8 ≤
   10000); a request that would take the debt past ``max_on_ms`` is an on-limit hit: the coil is
   cut and stays off until the debt is paid; ``on_limit_latch`` hits, on any coils together,
-  without a target reached in between latch the fault SMA_ON_LIMIT (core/safety.c);
+  latch the fault SMA_ON_LIMIT unless every coil that hit has since heated on the way to a
+  target reached (core/safety.c);
 - *mean duty*: the duty charged to a coil over the last window of ``duty_window_ms`` stays at
   most ``max_mean_duty`` × the window (a request that would not fit gets 0, not a hit). As in
   sma.c the window is 9 slots of 1/8 window (their sum spans 1 to 9/8 windows) and the charge
@@ -74,16 +75,22 @@ class Envelope:
         self.debt = [0] * n_channels      # µs
         self.charged = [0] * n_channels   # ‱ the coil carried over the last step
         self.cut = [False] * n_channels
-        self.hits = 0  # on-limit hits since a target was reached, every coil together (safety.c)
+        self.hits = 0  # on-limit hits counting towards the latch, every coil together (safety.c)
         self.hit_bits = 0
+        self.hit_mask = 0  # coils hit since each last heated on the way to a target reached
+        self.heated = 0    # coils heated above the hold ceiling since the last target reached
         self.win = [[0] * n_channels for _ in range(WIN_SLOTS)]
         self.win_rem = [0] * n_channels
         self.pay_rem = [0] * n_channels  # the pay-back's fraction of a µs (× 256), as sma.c
         self.slot, self.slot_us = 0, 0
 
     def reached(self) -> None:
-        """A target was reached: on-limit hits start counting again (as the firmware)."""
-        self.hits = 0
+        """A target was reached: on-limit hits start counting again once every coil that hit
+        has heated on the way to it (as safety.c: what other coils reach is no progress)."""
+        self.hit_mask &= ~self.heated
+        self.heated = 0
+        if not self.hit_mask:
+            self.hits = 0
 
     def gate(self, duties: Sequence[float]) -> list[float]:
         """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
@@ -98,6 +105,7 @@ class Envelope:
             if self.charged[ch] > self.hold_ceiling_pm:
                 self.debt[ch] += self.dt_us
                 self.pay_rem[ch] = 0
+                self.heated |= 1 << ch
             else:
                 y = self.dt_us * self.refill_q8 + self.pay_rem[ch]  # the fraction carries on
                 self.pay_rem[ch] = y & 255
@@ -112,6 +120,7 @@ class Envelope:
                 pm = 0
                 self.cut[ch] = True
                 self.hit_bits |= 1 << ch
+                self.hit_mask |= 1 << ch
                 self.hits += 1
                 if self.hits >= self.latch:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
