@@ -136,9 +136,13 @@ def test_run_jsonl_prints_every_message_then_a_result_line(capsys):
 
 
 def test_run_exits_1_when_the_robot_refuses_to_start(capsys):
-    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "-q")
+    code, out, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "-q")
     assert code == 1
     assert "START failed" in err and "robot refused START" in err
+    assert "did not start" in out and "for 1 s" not in out  # it never ran
+    code, out, _ = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "--format", "jsonl")
+    result = json.loads(out.strip().splitlines()[-1])
+    assert code == 1 and result["ok"] is False and result["duration_s"] == 0.0
 
 
 def test_run_on_a_faulting_robot_reports_the_fault(tmp_path):
@@ -239,6 +243,8 @@ def test_load_gait_on_the_simulated_board(capsys):
     assert code == 2 and "STATES" in err
     code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,,10")  # not read as 00,10
     assert code == 2 and "STATES: entry 2 of '00,,10' is empty" in err
+    code, _, err = run(capsys, "load-gait", "paper-r1", "--sim", "11,11,10")  # the board NACKed it: exit 1
+    assert code == 2 and "STATES: 11 follows itself" in err and err.count("\n") == 1
 
 
 def test_set_param_by_name_on_the_simulated_board(capsys):

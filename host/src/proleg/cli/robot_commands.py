@@ -161,7 +161,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     errors = list(run.errors) + [str(w.error) for w in listeners if getattr(w, "error", None)]
     doc = {
         "msg": "RESULT", "robot": run.robot, "link": client.link.description, "gait": gait,
-        "direction": direction, "duration_s": args.duration, "cycles": run.cycles,
+        "direction": direction, "duration_s": run.duration_s, "cycles": run.cycles,
         "states_reached": len(run.states_reached), "telemetry_frames": run.telemetry_frames,
         "telemetry_lost": run.telemetry_lost,
         "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
@@ -182,7 +182,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             print(choice.message)  # the others were said as a warning before the run (heading_choice)
         which = (f"gait {gait} in {direction}" if gait != GAIT_USER else
                  "the loaded gait" + (" (its way unstated)" if direction == UNSTATED else f" in {direction}"))
-        print(f"{run.robot} on {doc['link']}: {which} for {args.duration:g} s: "
+        ran = f"for {run.duration_s:g} s" if run.duration_s else "did not start"
+        print(f"{run.robot} on {doc['link']}: {which} {ran}: "
               f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
               f"{len(run.faults)} faults")
         if "pose" in doc:
@@ -218,7 +219,10 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
     if len(states) < 2:
         raise GaitError(f"STATES: a gait needs at least two states, got {args.states!r}")
     for a, b in zip(states, [*states[1:], states[0]]):  # the board refuses these: say which, before sending
-        if a != b and table.lookup(a, b) is None:
+        if a == b:
+            raise GaitError(f"STATES: {table.label(a)} follows itself; each step of a gait changes the state "
+                            "(the board refuses a repeat: FORBIDDEN_TRANSITION)")
+        if table.lookup(a, b) is None:
             raise GaitError(f"STATES: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
                             "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
     with open_client(args, args.robot) as client:

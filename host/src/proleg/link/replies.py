@@ -68,6 +68,12 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     if command == "SET_PARAM" and error == ErrorCode.SAFETY_LIMIT:
         return ("beyond the safety envelope the firmware was built with (the robot file's [safety], e.g. max_duty "
                 "for a duty): at run time the envelope can be narrowed, never widened")
+    if error == ErrorCode.ESTOP_LATCHED:
+        return ("the E-stop is latched: every coil stays off until it is released (CLEAR ESTOP: proleg "
+                "console key c, or RobotClient.clear)")
+    if command == "LOAD_GAIT" and error == ErrorCode.FORBIDDEN_TRANSITION:
+        return (f"step {detail} to the next (the last to the first) is not a transition this robot's firmware "
+                "allows: a state that follows itself, or an \"x\" in the robot file's matrix")
     if command == "CALIBRATE_LEVEL" and error == ErrorCode.OUT_OF_RANGE:
         return "ground is 0 (flat ground: stored) or 1 (this ground: RAM only); nothing began"
     if command == "SET_PARAM" and error == ErrorCode.OUT_OF_RANGE:

@@ -51,7 +51,7 @@ class GaitRun:
     robot: str
     direction: str
     gait: int
-    duration_s: float
+    duration_s: float  # asked for; 0 when START was refused or got no answer
     states_reached: list[int] = field(default_factory=list)  # firmware STATE_REACHED, in order
     cycle_displacements_mm: list[float] = field(default_factory=list)
     displacement_mm: float = 0.0  # plant truth over the whole run

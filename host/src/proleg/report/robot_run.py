@@ -89,6 +89,8 @@ def run_gait_on(
             way = "its way unstated" if direction == UNSTATED else f"in {direction}"
             progress(f"started {what} {way} for {duration_s:g} s on {client.link.description}")
         pump(duration_s)
+    else:
+        run.duration_s = 0.0  # it never ran
     t_stop = clock()
     if not command("STOP"):
         command("ESTOP")  # the coils must go cold whatever the link does
