@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.robot import info_name
 from proleg.protocol.definition import EventKind, FaultCode, Flag
 
 
@@ -25,7 +26,7 @@ def events(received, kind=None):
 @pytest.mark.can_link
 def test_boots_and_answers_ping_and_get_info_with_its_robot_board_and_gait_hash(target):
     info = target.client.get_info()
-    assert info.robot_name == target.robot.name
+    assert info.robot_name == info_name(target.robot.name)  # INFO: the first 15 characters
     assert info.board == target.board.name
     assert info.limbs == len(target.robot.limbs)
     assert info.actuators == len(target.robot.actuators)

@@ -18,6 +18,7 @@ from proleg import __version__
 from proleg.cli import main
 
 PROLEG = str(Path(sys.executable).with_name("proleg"))
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -329,3 +330,15 @@ def test_run_says_a_nearest_heading_once(capsys):
     code, out, err = run(capsys, "run", "planar-4", "--sim", "--heading", "45", "--duration", "1")
     assert code == 0, err
     assert (out + err).count("the library's nearest heading") == 1
+
+
+def test_a_robot_named_longer_than_info_carries_runs_and_is_watched(capsys, tmp_path):
+    """INFO carries a robot name's first 15 characters; run and console compared the whole
+    name with them and refused every robot with a longer one, even on --sim."""
+    text = (ROBOTS / "paper-r1.toml").read_text(encoding="utf-8")
+    path = tmp_path / "long.toml"
+    path.write_text(text.replace('name = "paper-r1"', 'name = "paper-r1-with-a-long-name"', 1), encoding="utf-8")
+    code, out, err = run(capsys, "run", str(path), "--sim", "--duration", "1", "-q")
+    assert code == 0, err
+    code, out, err = run(capsys, "console", "--sim", str(path), "--plain", "--duration", "0.3")
+    assert code == 0 and "does not run firmware built from" not in err, err

@@ -39,6 +39,14 @@ NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
 #: name in ROM and sends the first 15 characters. Published robots have longer names
 #: (issue 17); 63 keeps build directory names reasonable.
 ROBOT_NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
+INFO_NAME_LEN = 15
+
+
+def info_name(name: str) -> str:
+    """The robot's name as the firmware's INFO reports it (its first 15 characters): what a
+    board's answer is compared with."""
+    return name[:INFO_NAME_LEN]
+
 MAX_LIMBS = 8
 #: ``[safety] min_cooldown_ms`` is at most this many ``max_on_ms`` (sma.c's pay-back rate,
 #: max_on/min_cooldown in steps of 1/256, must not round to 0; SET_PARAM refuses the same).

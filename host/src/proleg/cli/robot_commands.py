@@ -116,7 +116,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ..protocol.definition import GAIT_USER
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on
-    from ..robot import load_robot
+    from ..robot import info_name, load_robot
 
     robot = load_robot(args.robot)
     if args.record:
@@ -130,7 +130,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     client = open_client(args, args.robot, speed=args.speed)
     with client:
         info = client.info
-        if info.robot_name != robot.name:
+        if info.robot_name != info_name(robot.name):  # INFO carries the first 15 characters
             raise LinkError(f"{client.link.description} runs robot {info.robot_name!r}, not {robot.name!r} "
                             f"({args.robot}); give the robot file it was built from")
         check_gait(info, gait, direction, gaits_per_direction(robot, fw))

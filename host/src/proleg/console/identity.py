@@ -51,7 +51,9 @@ def expected_identity(robot: Any, board_name: str, objective: str = "total") -> 
 
 def identity_problems(info: RobotInfo, robot: Any) -> list[str]:
     """What differs between INFO and the robot file (empty when they match)."""
-    if info.robot_name != robot.name:
+    from ..robot import info_name
+
+    if info.robot_name != info_name(robot.name):
         return [f"robot {info.robot_name!r} on the board, {robot.name!r} in {robot.path}"]
     best: list[str] | None = None
     for objective in OBJECTIVES:

@@ -93,7 +93,9 @@ class RecordingMeta:
             extra["link"] = link.description
         return cls(
             limb_names=tuple(limb_names), channel_names=tuple(channel_names),
-            robot=info.robot_name if info is not None else robot.name,
+            # the robot file's full name when it is the board's (INFO carries 15 characters)
+            robot=robot.name if robot is not None and (info is None or robot.name.startswith(info.robot_name))
+            else info.robot_name,
             board=info.board if info is not None else kw.pop("board", ""),
             psi_star_deg=stars, info=extra, actuator_names=actuator_names,
             truth=kw.pop("truth", tuple(sorted(link.truth())) if link is not None else ()), **kw,
