@@ -117,8 +117,12 @@ class GaitRunListener(Listener):
                 run.faults.append(Fault.of(msg))
             elif msg.kind in (EventKind.SUSPECT, EventKind.FALLBACK):
                 run.limb_loss.append(dict(msg.fields))
-            elif msg.kind == EventKind.GAIT_STARTED and run.started_s is None:
-                run.started_s = msg.time_ms / 1000.0
+            elif msg.kind in (EventKind.GAIT_STARTED, EventKind.GAIT_STOPPED):
+                # a cycle runs from step 0 to step 0 of one gait without a stop between: a
+                # fault's stop and a fallback's start end the one under way uncounted
+                self._cycle_start_mm = None
+                if msg.kind == EventKind.GAIT_STARTED and run.started_s is None:
+                    run.started_s = msg.time_ms / 1000.0
         else:
             run.replies.append(msg)
 
