@@ -183,4 +183,16 @@ def test_a_log_recorded_for_one_robot_is_refused_for_another(capsys, tmp_path):
     headless = tmp_path / "old.jsonl"  # a log from before the first line: its states are checked
     headless.write_text("\n".join(log.read_text().splitlines()[1:]) + "\n")
     code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--log", str(headless), "--report")
-    assert code == 2 and "old.jsonl:1: state '00' is not one of the robot's" in err
+    assert code == 2 and "old.jsonl:1: from: state '00' is not one of the robot's" in err
+
+
+def test_a_trial_of_a_transition_the_robot_does_not_have_is_an_error_not_dropped(tmp_path, capsys):
+    """A 00->00 trial was left out of the counts without a word (40 trials reported, not 41)."""
+    log = tmp_path / "t.jsonl"
+    rows = [{"from": "00", "to": "10", "t_start": 0, "t_end": 1, "dx": 4.0, "source": "sim"},
+            {"from": "00", "to": "00", "t_start": 1, "t_end": 2, "dx": 4.0, "source": "sim"}]
+    log.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    code, _out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
+    assert code == 2 and err.splitlines() == [
+        f"proleg: error: learn: {log}:2: from/to: 00->00 is not one of the robot's allowed transitions "
+        "(no change of state, or marked \"x\" in its matrix)"]

@@ -148,8 +148,9 @@ def cmd_learn(args: argparse.Namespace) -> int:
             if not linked and not Path(args.log).exists():
                 raise LearnError(f"learn: {args.log}: no such trial log (a report reads one; give a robot link "
                                  "(--port, --can or --sim) to record one)")
+            t = robot.transitions
             trial_log = TrialLog(args.log, append=linked, robot=robot.name,  # a report only reads
-                                 states=robot.transitions.labels())
+                                 states=t.labels(), transitions=zip(map(t.label, t.src), map(t.label, t.dst)))
     except (TrialLogError, OSError) as e:
         raise LearnError(f"learn: {e}") from None
     for w in torn:
