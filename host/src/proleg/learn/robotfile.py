@@ -9,7 +9,10 @@ some, and beside it the learned statistics under issue 17's names — ``dy``,
 (``proleg.robot``) reads: ``Robot.n_trials``, and the planar statistics that ``proleg gait``
 weighs (``--variance-weight``). ``stats_as_keys=False`` writes them as comment lines
 ``#learned: key = [...]`` instead (for an older proleg); ``read_learned`` reads both. The previous ``[transitions]`` table is
-kept below, commented out. Everything else in the file is copied unchanged.
+kept below, commented out. Everything else in the file is copied unchanged: the text is
+read back before it is written (valid TOML, only ``[transitions]`` changed) and written
+atomically (``proleg.outputs.write_text_atomic``). Numbers are written so that they read
+back exactly.
 """
 
 from __future__ import annotations
