@@ -51,3 +51,19 @@ def test_two_limbs_that_would_share_an_identifier_are_refused(tmp_path):
     path.write_text(r1.replace('name = "left"', 'name = "a-1"').replace('name = "right"', 'name = "a_1"'))
     with pytest.raises(RobotFileError, match=r"limb 'a_1': name: .*stays apart from limb 'a-1' .*'a_1' in recordings"):
         load_robot(path)
+
+
+def test_dbc_refuses_to_write_over_its_own_robot_file(tmp_path, capsys):
+    """`dbc -o X --robot X` replaced the robot file with DBC text (exit 0)."""
+    from proleg.cli import main
+
+    robot = tmp_path / "self.toml"
+    text = (Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").read_text()
+    robot.write_text(text)
+    link = tmp_path / "link.toml"
+    link.symlink_to(robot)
+    code = main(["dbc", "-o", str(link), "--robot", str(robot)])
+    err = capsys.readouterr().err
+    assert code == 2 and robot.read_text() == text
+    assert err == f"proleg: error: dbc: -o {link} is the --robot file this command reads; " \
+                  "write the output to another path\n"

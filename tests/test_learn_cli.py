@@ -183,4 +183,70 @@ def test_a_log_recorded_for_one_robot_is_refused_for_another(capsys, tmp_path):
     headless = tmp_path / "old.jsonl"  # a log from before the first line: its states are checked
     headless.write_text("\n".join(log.read_text().splitlines()[1:]) + "\n")
     code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--log", str(headless), "--report")
-    assert code == 2 and "old.jsonl:1: state '00' is not one of the robot's" in err
+    assert code == 2 and "old.jsonl:1: from: state '00' is not one of the robot's" in err
+
+
+def test_a_trial_of_a_transition_the_robot_does_not_have_is_an_error_not_dropped(tmp_path, capsys):
+    """A 00->00 trial was left out of the counts without a word (40 trials reported, not 41)."""
+    log = tmp_path / "t.jsonl"
+    rows = [{"from": "00", "to": "10", "t_start": 0, "t_end": 1, "dx": 4.0, "source": "sim"},
+            {"from": "00", "to": "00", "t_start": 1, "t_end": 2, "dx": 4.0, "source": "sim"}]
+    log.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    code, _out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
+    assert code == 2 and err.splitlines() == [
+        f"proleg: error: learn: {log}:2: from/to: 00->00 is not one of the robot's allowed transitions "
+        "(no change of state, or marked \"x\" in its matrix)"]
+
+
+def _good_log(path: Path) -> bytes:
+    rows = [{"from": "00", "to": "10", "t_start": k, "t_end": k + 1, "dx": 4.0, "source": "manual"} for k in range(3)]
+    path.write_text('{"trial_log": 1, "robot": "paper-r1"}\n' + "".join(json.dumps(r) + "\n" for r in rows))
+    return path.read_bytes()
+
+
+@pytest.mark.parametrize("which", ["--log", "--track", "ROBOT"])
+def test_learn_out_that_is_one_of_its_inputs_is_refused_and_the_input_kept(tmp_path, capsys, which):
+    """`--out` equal to `--log` replaced the 41 trials with the robot file (exit 0)."""
+    log, track, robot = tmp_path / "t.jsonl", tmp_path / "track.csv", tmp_path / "r.toml"
+    _good_log(log)
+    track.write_text("time,x,y,theta\n0,0,,\n1,4,,\n")
+    robot.write_text(R1.read_text())
+    out = {"--log": log, "--track": track, "ROBOT": robot}[which]
+    before = out.read_bytes()
+    code, _out, err = run(capsys, "learn", str(robot), "--log", str(log), "--track", str(track), "--out", str(out))
+    assert code == 2 and out.read_bytes() == before
+    assert err == f"proleg: error: learn: --out {out} is the {which} file this command reads; " \
+                  "write the output to another path\n"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--sim", "--plant", "physical", "--truth", str(ROOT / "robots" / "paper-r2.toml")],
+     "--truth drives the table plant; the physical plant has no matrix"),
+    (["--sim", "--truth", str(ROOT / "robots" / "inchworm-3.toml")], "has state levels"),
+    (["--sim", "--truth", "{tmp}/truth.toml"], "{tmp}/truth.toml"),
+    (["--sim", "--tracker-offset", "1"], "--tracker-offset goes with --track"),
+    (["--sim", "--out", "{tmp}/none/l.toml"], "--out {tmp}/none/l.toml: directory {tmp}/none does not exist"),
+])
+def test_learn_checks_every_option_before_it_creates_the_log(tmp_path, capsys, argv, message):
+    """The log was created (with its first line) before --truth, --plant or
+    --tracker-offset were checked, and --out's folder only after exploring."""
+    (tmp_path / "truth.toml").write_text("[robot\n")
+    log = tmp_path / "t.jsonl"
+    code, _out, err = run(capsys, "learn", str(R1), "--log", str(log), *(a.format(tmp=tmp_path) for a in argv))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and message.format(tmp=tmp_path) in err
+    assert not log.exists()
+
+
+@pytest.mark.parametrize("value", ["nan", "-1", "inf"])
+def test_learn_variance_weight_is_checked_as_gait_checks_it(tmp_path, capsys, value):
+    """learn took nan, -1 and inf (`mean − -1·σ`); gait refuses them."""
+    log = tmp_path / "t.jsonl"
+    _good_log(log)
+    said = []
+    for command in (["learn", str(R1), "--log", str(log), "--report"], ["gait", str(R1)]):
+        with pytest.raises(SystemExit) as e:
+            main([*command, "--variance-weight", value])
+        last = capsys.readouterr().err.splitlines()[-1]
+        assert e.value.code == 2 and "argument --variance-weight: expected a " in last and f"got '{value}'" in last
+        said.append(last.split(": error: ")[1])
+    assert said[0] == said[1]

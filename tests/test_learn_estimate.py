@@ -186,3 +186,79 @@ def test_the_extra_trial_plan_makes_every_suggested_trial_in_closed_tours():
     pick = adaptive_demand(est, 0.25)
     assert pick.sum() == 3
     assert set(np.nonzero(pick)[0]) == set(np.argsort(-est.dx.half_width)[:3])
+
+
+def _r1_trials(dx: float = 4.0) -> list[Trial]:
+    t = load_robot(R1).transitions
+    return [Trial(t.label(a), t.label(b), 0, 1, dx + k, None, None, "sim") for a, b in zip(t.src, t.dst)
+            for k in range(2)]
+
+
+@pytest.mark.parametrize("header", ["[ transitions ]  # the table", '["transitions"]', "['transitions']"])
+def test_a_transitions_header_spelled_any_valid_way_is_replaced(tmp_path, header):
+    """A spaced or quoted header was not recognised: a second [transitions] was appended and
+    the learned file was not valid TOML (exit 0)."""
+    robot_file = tmp_path / "r.toml"
+    robot_file.write_text(R1.read_text().replace("[transitions]", header))
+    robot = load_robot(robot_file)
+    out = write_learned_robot(robot, estimate(robot.transitions, _r1_trials()), tmp_path / "l.toml")
+    learned = load_robot(out)
+    assert np.allclose(learned.transitions.reward, [4.5] * robot.transitions.n_transitions)
+    assert f"# {header}" in out.read_text()  # the old table, commented out
+
+
+def test_a_learned_file_that_would_not_read_back_is_never_written(tmp_path):
+    """A [transitions] table the writer cannot replace as text (here an inline table) is
+    refused in one line, before anything is written."""
+    import tomllib
+
+    from proleg.learn.robotfile import LearnedFileError
+
+    doc = tomllib.loads(R1.read_text())
+    t = doc["transitions"]
+    inline = "transitions = { " + ", ".join(f"{k} = {_toml(v)}" for k, v in t.items()) + " }"
+    text = R1.read_text()
+    a = text.index("[transitions]")
+    b = text.index("\n[", a + 1)
+    robot_file = tmp_path / "r.toml"
+    robot_file.write_text(inline + "\n" + text[:a] + text[b:])
+    robot = load_robot(robot_file)
+    out = tmp_path / "l.toml"
+    with pytest.raises(LearnedFileError, match=r"^learn: the learned file from .*r\.toml would not be valid TOML"):
+        write_learned_robot(robot, estimate(robot.transitions, _r1_trials()), out)
+    assert not out.exists()
+
+
+def _toml(v) -> str:
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml(x) for x in v) + "]"
+    return f'"{v}"' if isinstance(v, str) else repr(v)
+
+
+def test_learned_means_read_back_exactly(tmp_path):
+    """Written with .6g, 4000.123456789 came back as 4000.12."""
+    robot = load_robot(R1)
+    est = estimate(robot.transitions, _r1_trials(4000.123456789))
+    learned = load_robot(write_learned_robot(robot, est, tmp_path / "l.toml"))
+    assert np.array_equal(learned.transitions.reward, est.dx.mean)
+    assert np.array_equal(learned.transitions.planar.var_dx, est.dx.var)
+
+
+def test_a_learned_file_that_cannot_be_written_leaves_the_old_one_and_names_the_file(tmp_path, monkeypatch):
+    """It was written in place: a full disk left a 0-byte file, and the error named none."""
+    import errno
+    import os
+
+    from proleg.errors import LinkError
+
+    robot = load_robot(R1)
+    out = tmp_path / "l.toml"
+    out.write_text("old\n")
+
+    def full(src, dst):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "replace", full)
+    with pytest.raises(LinkError, match=rf"^learn: cannot write {out}: No space left on device$"):
+        write_learned_robot(robot, estimate(robot.transitions, _r1_trials()), out)
+    assert out.read_text() == "old\n" and [p.name for p in tmp_path.iterdir()] == ["l.toml"]

@@ -104,11 +104,59 @@ def test_the_documented_example_tracker_file_reads():
     assert track.y is not None and track.theta_deg is not None and len(track.t) >= 10
 
 
-def test_a_bad_tracker_file_names_the_row(tmp_path):
+def test_a_bad_tracker_file_names_the_line(tmp_path):
     p = tmp_path / "t.csv"
     p.write_text("time,x,y,theta\n0,0,0,0\n0.1,abc,0,0\n")
-    with pytest.raises(TrackerError, match="row 3, column x"):
+    with pytest.raises(TrackerError, match="line 3, column x"):
         read_track(p)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("# c\n\n# c\ntime,x,y,theta\n0,0,0,0\n0.1,abc,0,0\n", r"t\.csv: line 6, column x: expected a number, got 'abc'"),
+    ("# c\n# c\ntime,x\n0,0\n", r"t\.csv: line 3: expected the header time,x,y,theta"),
+    ("# c\ntime,x,y,theta\n0,0,0,0\n0.1,1e308,0,0\n", r"t\.csv: line 4, column x: expected a finite number within ±1e9"),
+    ("# c\ntime,x,y,theta\n0,0,0,0\n# caf\xe9\n", r"t\.csv: line 4: expected UTF-8 text, got byte 0xe9"),
+])
+def test_tracker_errors_name_the_line_an_editor_shows(tmp_path, text, message):
+    """Comment lines were not counted (a bad cell on line 6 was "row 4"), the header error
+    always said line 1, and a file that is not UTF-8 was a traceback."""
+    p = tmp_path / "t.csv"
+    p.write_bytes(text.encode("latin-1"))
+    with pytest.raises(TrackerError, match=message):
+        read_track(p)
+
+
+_GOOD = {"from": "00", "to": "10", "t_start": 0.5, "t_end": 1.0, "dx": 4.0, "dy": None, "dtheta_deg": None,
+         "source": "sim"}
+
+
+@pytest.mark.parametrize("line, message", [
+    (b"[1, 2, 3]", r"expected a trial record \(a JSON object with from, to, t_start, t_end, dx…\), got '\[1, 2, 3\]'"),
+    (json.dumps({k: v for k, v in _GOOD.items() if k != "to"}).encode(), r"to: missing \(expected a state label\)$"),
+    (json.dumps({**_GOOD, "to": 2}).encode(), r"to: expected a state label \(a string\), got 2$"),
+    (json.dumps({**_GOOD, "dx": "4"}).encode(), r"dx: expected a number within ±1e9 or null, got '4'$"),
+    (json.dumps({**_GOOD, "dx": 1e308}).encode(), r"dx: expected a number within ±1e9 or null, got 1e\+308$"),
+    (json.dumps({**_GOOD, "t_end": True}).encode(), r"t_end: expected a number within ±1e9, got True$"),
+    (json.dumps({**_GOOD, "source": "magic"}).encode(), r"source: expected one of sim, tracker, manual, got 'magic'$"),
+    (json.dumps({**_GOOD, "source": "caf\u00e9"}, ensure_ascii=False).encode("latin-1"), r"expected UTF-8 text, got byte 0xe9 at column"),
+    (json.dumps({**_GOOD, "to": "00"}).encode(), r"from/to: 00->00 is not one of the robot's allowed transitions"),
+])
+def test_every_bad_trial_line_is_one_error_naming_the_file_line_and_field(tmp_path, line, message):
+    """These were accepted (a string dx, an unknown source), dropped (a self transition), a
+    traceback (dx 1e308) or an error without its file and line (not UTF-8) or field."""
+    p = tmp_path / "log.jsonl"
+    p.write_bytes(b'{"trial_log": 1, "robot": "paper-r1"}\n' + line + b"\n" + _trial(1).to_json().encode() + b"\n")
+    t = load_robot(ROOT / "robots" / "paper-r1.toml").transitions
+    pairs = list(zip(map(t.label, t.src), map(t.label, t.dst)))
+    with pytest.raises(TrialLogError, match=rf"^{p}:2: {message}"):
+        TrialLog(p, append=False, robot="paper-r1", states=t.labels(), transitions=pairs)
+
+
+def test_a_log_of_another_format_version_is_refused(tmp_path):
+    p = tmp_path / "log.jsonl"
+    p.write_text('{"trial_log": 99, "robot": "paper-r1"}\n' + _trial(0).to_json() + "\n")
+    with pytest.raises(TrialLogError, match=rf"^{p}:1: trial_log: expected 1 \(the format this proleg reads\), got 99$"):
+        TrialLog(p, append=False)
 
 
 def _synthetic(offset: float, seed: int):

@@ -40,7 +40,7 @@ class LearnError(ProlegError):
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import int_auto, positive_float, positive_int, reply_timeout
+    from .number_args import int_auto, non_negative_float, positive_float, positive_int, reply_timeout
     from .robot_commands import DEFAULT_BAUDRATE
 
     p = subparsers.add_parser(
@@ -76,7 +76,7 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--more", action="store_true", help="with --half-width and a link: run those extra trials")
     p.add_argument("--report", action="store_true", help="print the estimates (always printed after exploring)")
     p.add_argument("--out", metavar="LEARNED.toml", help="write the robot file with the learned [transitions]")
-    p.add_argument("--variance-weight", type=float, default=0.0, metavar="λ",
+    p.add_argument("--variance-weight", type=non_negative_float, default=0.0, metavar="λ",
                    help="report the best gait for mean − λ·σ per transition (default 0: the mean)")
     p.add_argument("--seed", type=int, default=1, help="tour randomisation and simulator seed (default 1)")
     p.add_argument("--max-pieces", type=positive_int, metavar="N",
@@ -124,11 +124,27 @@ class ProgressBar:
 
 # --------------------------------------------------------------------------- the command
 def cmd_learn(args: argparse.Namespace) -> int:
-    from ..learn.measure import TrialLog, TrialLogError
     from ..robot import load_robot
 
     robot = load_robot(args.robot)
     linked = bool(args.port or args.can or args.sim)
+    source = _check_options(args, linked)
+    truth = _checked_truth(args, robot)  # before the log is created: a bad option leaves no file
+    trial_log = _open_log(args, robot, linked)
+    with trial_log:
+        if trial_log.trials and linked:
+            log.info("%s: %d trials already recorded; resuming", args.log, len(trial_log.trials))
+        if linked:
+            _explore(args, robot, truth, trial_log, source)
+        trials = list(trial_log.trials)
+    trials = _with_track(args, trials)
+    return _report_and_write(args, robot, trials)
+
+
+def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
+    """The position source; ``LearnError`` for options that do not go together."""
+    from ..outputs import refuse_inputs
+
     source = args.source or ("sim" if args.sim else None)
     if linked and source is None:
         raise LearnError("learn: --source is required with --port/--can (tracker or manual; sim needs --sim)")
@@ -140,41 +156,60 @@ def cmd_learn(args: argparse.Namespace) -> int:
         raise LearnError("learn: --more needs --half-width and a robot (--port, --can or --sim)")
     if args.track is not None and source not in (None, "tracker"):
         raise LearnError("learn: --track goes with --source tracker")
+    if args.tracker_offset is not None and args.track is None:
+        raise LearnError("learn: --tracker-offset goes with --track")
     if not (linked or args.report or args.out or args.half_width):
         raise LearnError("learn: nothing to do: give a robot link to explore, or --report / --out / --half-width")
+    if args.out is not None:
+        directory = Path(args.out).parent
+        if not directory.is_dir():  # known now, not after hours of exploring
+            raise LearnError(f"learn: --out {args.out}: directory {directory} does not exist")
+        refuse_inputs("learn", "--out", args.out,
+                      {"ROBOT": args.robot, "--log": args.log, "--track": args.track, "--truth": args.truth})
+    return source
+
+
+def _checked_truth(args: argparse.Namespace, robot):
+    """``--truth``'s robot (None without it), checked against ``--plant`` and ROBOT's levels."""
+    if not args.sim:
+        return None
+    from ..learn.runner import ExplorationError, check_plant
+    from ..robot import load_robot
+
+    truth = load_robot(args.truth) if args.truth else None
+    try:
+        check_plant(robot, truth, args.plant)
+    except ExplorationError as e:
+        raise LearnError(f"learn: {e}") from None
+    return truth
+
+
+def _open_log(args: argparse.Namespace, robot, linked: bool):
+    """The trial log: read (a report) or opened to append (exploring)."""
+    from ..learn.measure import TrialLog, TrialLogError
+
     try:
         with warnings.catch_warnings(record=True) as torn:
             warnings.simplefilter("always")
             if not linked and not Path(args.log).exists():
                 raise LearnError(f"learn: {args.log}: no such trial log (a report reads one; give a robot link "
                                  "(--port, --can or --sim) to record one)")
+            t = robot.transitions
             trial_log = TrialLog(args.log, append=linked, robot=robot.name,  # a report only reads
-                                 states=robot.transitions.labels())
+                                 states=t.labels(), transitions=zip(map(t.label, t.src), map(t.label, t.dst)))
     except (TrialLogError, OSError) as e:
         raise LearnError(f"learn: {e}") from None
     for w in torn:
         log.warning("%s", w.message)
-    with trial_log:
-        if trial_log.trials and linked:
-            log.info("%s: %d trials already recorded; resuming", args.log, len(trial_log.trials))
-        if linked:
-            _explore(args, robot, trial_log, source)
-        trials = list(trial_log.trials)
-    trials = _with_track(args, trials)
-    return _report_and_write(args, robot, trials)
+    return trial_log
 
 
-def _explore(args: argparse.Namespace, robot, trial_log, source: str) -> None:
+def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> None:
     from ..learn.estimate import estimate
     from ..learn.plan import adaptive_demand, extra_plan
     from ..learn.runner import ExplorationError, Explorer, Progress, simulated_robot
     from .robot_commands import open_client
 
-    truth = None
-    if args.truth:
-        from ..robot import load_robot
-
-        truth = load_robot(args.truth)
     pose = None
     if args.sim:
         try:
@@ -273,8 +308,6 @@ def _adaptive(ex, args, table, trial_log, estimate, adaptive_demand) -> None:
 
 def _with_track(args: argparse.Namespace, trials: list) -> list:
     if args.track is None:
-        if args.tracker_offset is not None:
-            raise LearnError("learn: --tracker-offset goes with --track")
         return trials
     from ..learn.tracker import TrackerError, attach_track, read_track
 

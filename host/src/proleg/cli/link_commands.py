@@ -151,8 +151,10 @@ def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
 
 def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_file: str | None = None) -> int:
     """``proleg dbc -o FILE [--robot ROBOT]`` (the robot names the ψ and duty signals)."""
+    from ..outputs import refuse_inputs
     from ..protocol.dbc import write_dbc
 
+    refuse_inputs("dbc", "-o", out, {"--robot": robot_file})
     robot = None
     if robot_file is not None:
         from ..robot import load_robot

@@ -73,14 +73,53 @@ class Trial:
 
     @classmethod
     def from_json(cls, line: str, where: str = "") -> Trial:
+        """A record from its JSON line; ``TrialLogError`` naming ``where`` and the field."""
         try:
             d = json.loads(line)
-            t = cls(str(d["from"]), str(d["to"]), float(d["t_start"]), float(d["t_end"]),
-                    _opt(d.get("dx")), _opt(d.get("dy")), _opt(d.get("dtheta_deg")), str(d.get("source", "")),
-                    _opt(d.get("t_seen")), _labels(d.get("passed", [])))
-        except (ValueError, KeyError, TypeError) as e:
-            raise TrialLogError(f"{where}: expected a trial record (from, to, t_start, t_end, dx…), {e}") from None
-        return t
+        except ValueError:
+            d = None
+        if not isinstance(d, dict):
+            raise TrialLogError(f"{where}: expected a trial record (a JSON object with from, to, t_start, t_end, "
+                                f"dx…), got {line.strip()[:40]!r}")
+        try:
+            return cls(_label(d, "from"), _label(d, "to"), _number(d, "t_start", True), _number(d, "t_end", True),
+                       _number(d, "dx"), _number(d, "dy"), _number(d, "dtheta_deg"), _source(d),
+                       _number(d, "t_seen"), _labels(d.get("passed", [])))
+        except ValueError as e:
+            raise TrialLogError(f"{where}: {e}") from None
+
+
+#: where a trial's motion came from ("" or no key: not said)
+SOURCES = ("sim", "tracker", "manual")
+#: the largest magnitude a trial's number may have (a motion or a time; 1e9 mm is 1000 km)
+MAX_ABS = 1e9
+_MAX_TEXT = "1e9"
+
+
+def _label(d: dict, key: str) -> str:
+    if key not in d:
+        raise ValueError(f"{key}: missing (expected a state label)")
+    if not isinstance(d[key], str):
+        raise ValueError(f"{key}: expected a state label (a string), got {d[key]!r}")
+    return d[key]
+
+
+def _number(d: dict, key: str, required: bool = False) -> float | None:
+    v = d.get(key)
+    if v is None and not required:
+        return None
+    if key not in d:
+        raise ValueError(f"{key}: missing (expected a number)")
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not abs(v) <= MAX_ABS:
+        raise ValueError(f"{key}: expected a number within ±{_MAX_TEXT}{'' if required else ' or null'}, got {v!r}")
+    return float(v)
+
+
+def _source(d: dict) -> str:
+    v = d.get("source", "")
+    if v != "" and v not in SOURCES:
+        raise ValueError(f"source: expected one of {', '.join(SOURCES)}, got {v!r}")
+    return v
 
 
 def _labels(v) -> tuple[str, ...]:
@@ -89,20 +128,11 @@ def _labels(v) -> tuple[str, ...]:
     return tuple(v)
 
 
-def _opt(v) -> float | None:
-    if v is None:
-        return None
-    f = float(v)
-    if not math.isfinite(f):
-        raise ValueError(f"not a finite number: {v!r}")
-    return f
-
-
 class TrialLog:
     """An append-only JSONL trial log (see the module docstring)."""
 
     def __init__(self, path: str | Path, *, append: bool = True, robot: str | None = None,
-                 states: Iterable[str] | None = None):
+                 states: Iterable[str] | None = None, transitions: Iterable[tuple[str, str]] | None = None):
         """``append=False`` only reads: the file is never opened for writing, created or
         shortened (a torn last line is skipped, with the same warning).
 
@@ -110,13 +140,15 @@ class TrialLog:
         (``{"trial_log": 1, "robot": …}``, written when a log is started for a robot) is an
         error, and a new log starts with that line. ``states``: every record's from/to must
         be one of them (a log of another robot, or not a trial log, is an error naming the
-        line)."""
+        line). ``transitions``: the (from, to) pairs a record may have (the robot's allowed
+        transitions); any other is an error naming the line."""
         self.path = Path(path)
         self.trials: list[Trial] = []
         self.robot: str | None = None
         self._good_bytes = 0
         self._fh = None
         self._states = None if states is None else frozenset(states)
+        self._pairs = None if transitions is None else frozenset(transitions)
         if self.path.exists():
             self._read(append, robot)
         if not append:
@@ -136,12 +168,13 @@ class TrialLog:
         pos = 0
         for k, raw in enumerate(lines):
             last = k == len(lines) - 1
+            where = f"{self.path}:{k + 1}"
             if not raw.strip():
                 pos += len(raw) + (0 if last else 1)
                 if not last:
                     self._good_bytes = pos
                 continue
-            if k == 0 and not self.trials and (header := _header(raw)) is not None:
+            if k == 0 and not self.trials and (header := _header(raw, where)) is not None:
                 if robot is not None and header != robot:
                     raise TrialLogError(f"{self.path}: a trial log of {header}, not of {robot} (its first line says so)")
                 self.robot = header
@@ -149,17 +182,14 @@ class TrialLog:
                 self._good_bytes = pos if not last else 0
                 continue
             try:
-                trial = Trial.from_json(raw.decode("utf-8"), f"{self.path}:{k + 1}")
-            except (TrialLogError, UnicodeDecodeError) as e:
+                trial = Trial.from_json(_text(raw, where), where)
+            except TrialLogError:
                 if last:  # no newline after it: a write cut short (a whole line is no torn record)
-                    warnings.warn(f"{self.path}:{k + 1}: torn last record {'dropped' if append else 'skipped'} "
+                    warnings.warn(f"{where}: torn last record {'dropped' if append else 'skipped'} "
                                   "(the run was interrupted while writing it)", stacklevel=3)
                     return
-                raise TrialLogError(str(e)) from None
-            if self._states is not None and not {trial.src, trial.dst} <= self._states:
-                bad = trial.src if trial.src not in self._states else trial.dst
-                raise TrialLogError(f"{self.path}:{k + 1}: state {bad!r} is not one of the robot's (a log of "
-                                    "another robot?)")
+                raise
+            self._check(trial, where)
             if last:  # complete JSON but no newline: keep it, add the newline on the next append
                 self.trials.append(trial)
                 self._good_bytes = pos + len(raw)
@@ -168,6 +198,16 @@ class TrialLog:
             self.trials.append(trial)
             pos += len(raw) + 1
             self._good_bytes = pos
+
+    def _check(self, trial: Trial, where: str) -> None:
+        """A record's states are the robot's, and its transition one the robot may make."""
+        if self._states is not None and not {trial.src, trial.dst} <= self._states:
+            field, bad = ("from", trial.src) if trial.src not in self._states else ("to", trial.dst)
+            raise TrialLogError(f"{where}: {field}: state {bad!r} is not one of the robot's (a log of "
+                                "another robot?)")
+        if self._pairs is not None and (trial.src, trial.dst) not in self._pairs:
+            raise TrialLogError(f"{where}: from/to: {trial.src}->{trial.dst} is not one of the robot's allowed "
+                                "transitions (no change of state, or marked \"x\" in its matrix)")
 
     _needs_newline = False
 
@@ -192,15 +232,28 @@ class TrialLog:
         self.close()
 
 
-def _header(raw: bytes) -> str | None:
-    """The robot a log's first line names (``{"trial_log": 1, "robot": …}``), or None."""
+def _text(raw: bytes, where: str) -> str:
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise TrialLogError(f"{where}: expected UTF-8 text, got byte {raw[e.start]:#04x} at column {e.start + 1}") from None
+
+
+def _header(raw: bytes, where: str) -> str | None:
+    """The robot a log's first line names (``{"trial_log": 1, "robot": …}``), or None when
+    the line is no header; ``TrialLogError`` for a header of another format version."""
     try:
         d = json.loads(raw.decode("utf-8"))
     except (ValueError, UnicodeDecodeError):
         return None
-    if isinstance(d, dict) and "trial_log" in d and isinstance(d.get("robot"), str):
-        return d["robot"]
-    return None
+    if not isinstance(d, dict) or "trial_log" not in d:
+        return None
+    version = d["trial_log"]
+    if isinstance(version, bool) or version != 1:
+        raise TrialLogError(f"{where}: trial_log: expected 1 (the format this proleg reads), got {version!r}")
+    if not isinstance(d.get("robot"), str):
+        raise TrialLogError(f"{where}: robot: expected the robot's name, got {d.get('robot')!r}")
+    return d["robot"]
 
 
 def counts(table: TransitionTable, trials: Iterable[Trial]) -> np.ndarray:

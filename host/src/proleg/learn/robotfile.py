@@ -9,11 +9,15 @@ some, and beside it the learned statistics under issue 17's names — ``dy``,
 (``proleg.robot``) reads: ``Robot.n_trials``, and the planar statistics that ``proleg gait``
 weighs (``--variance-weight``). ``stats_as_keys=False`` writes them as comment lines
 ``#learned: key = [...]`` instead (for an older proleg); ``read_learned`` reads both. The previous ``[transitions]`` table is
-kept below, commented out. Everything else in the file is copied unchanged.
+kept below, commented out. Everything else in the file is copied unchanged: the text is
+read back before it is written (valid TOML, only ``[transitions]`` changed) and written
+atomically (``proleg.outputs.write_text_atomic``). Numbers are written so that they read
+back exactly.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import tomllib
@@ -22,21 +26,31 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import ProlegError
+from ..outputs import write_text_atomic
 from ..robot import Robot
 from .estimate import Estimates
 
-HEADER_RE = re.compile(r"^\s*\[\[?\s*[A-Za-z_][\w.\-]*\s*\]\]?\s*(#.*)?$")
+_KEY = r"""(?:[A-Za-z0-9_-]+|"[^"\n]*"|'[^'\n]*')"""  # a bare or quoted TOML key
+HEADER_RE = re.compile(rf"^\s*\[\[?\s*{_KEY}(?:\s*\.\s*{_KEY})*\s*\]\]?\s*(#.*)?$")
 PREFIX = "#learned: "
+
+
+class LearnedFileError(ProlegError):
+    """The robot file's ``[transitions]`` cannot be replaced as text (one line, exit 2)."""
+
+
 STAT_KEYS = (("dy", "dy", "mean"), ("dtheta_deg", "dtheta_deg", "mean"), ("var_dx", "dx", "var"),
              ("var_dy", "dy", "var"), ("var_dtheta_deg", "dtheta_deg", "var"))
 
 
 def _num(v: float) -> str:
-    if math.isnan(v):
-        return "nan"
+    """``v`` as TOML that reads back as exactly ``v`` (a whole number without its ``.0``)."""
+    if not math.isfinite(v):
+        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
     if v == int(v) and abs(v) < 1e15:
         return str(int(v))
-    return f"{v:.6g}"
+    return repr(v)
 
 
 def _matrix(name: str, values: np.ndarray, allowed: np.ndarray, prefix: str = "") -> list[str]:
@@ -53,15 +67,34 @@ def _matrix(name: str, values: np.ndarray, allowed: np.ndarray, prefix: str = ""
     return lines
 
 
+def _table_path(line: str) -> tuple[str, ...] | None:
+    """The key path of a table header line (``[transitions]``, ``[ transitions ]``,
+    ``["transitions"]``, ``[[limb]]``, ``[a . b]``), or None when the line is not one."""
+    if not HEADER_RE.match(line):
+        return None
+    try:
+        node = tomllib.loads(line.strip())
+    except tomllib.TOMLDecodeError:
+        return None
+    path: list[str] = []
+    while isinstance(node, dict) and len(node) == 1:
+        key = next(iter(node))
+        path.append(key)
+        node = node[key][-1] if isinstance(node[key], list) else node[key]
+    return tuple(path)
+
+
 def _section_span(lines: list[str], name: str) -> tuple[int, int] | None:
+    """Lines [start, end) of the table ``[name]`` (its header to the next header)."""
     start = None
     for i, ln in enumerate(lines):
-        if HEADER_RE.match(ln):
-            head = ln.strip().split("#")[0].strip()
-            if start is not None:
-                return start, i
-            if head == f"[{name}]":
-                start = i
+        path = _table_path(ln)
+        if path is None:
+            continue
+        if start is not None:
+            return start, i
+        if path == (name,):
+            start = i
     return None if start is None else (start, len(lines))
 
 
@@ -113,11 +146,20 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
 
 def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units: str | None = None,
                         stats_as_keys: bool = True, note: str = "") -> Path:
-    """Write ``robot``'s file with the learned ``[transitions]`` (see the module docstring)."""
-    out = Path(out)
-    lines = Path(robot.path).read_text(encoding="utf-8").splitlines()
-    span = _section_span(lines, "transitions")
+    """Write ``robot``'s file with the learned ``[transitions]`` (see the module docstring),
+    atomically, after checking that the text reads back as the robot file with only
+    ``[transitions]`` changed (``LearnedFileError`` otherwise: nothing is written)."""
+    source = Path(robot.path).read_text(encoding="utf-8")
     new = learned_transitions_text(robot, est, units=units or robot.units, stats_as_keys=stats_as_keys, note=note)
+    text = _replace_transitions(source.splitlines(), new)
+    _check_learned(source, text, new, robot.path)
+    return write_text_atomic(out, text, "learn")
+
+
+def _replace_transitions(lines: list[str], new: list[str]) -> str:
+    """The file's lines with ``[transitions]`` replaced by ``new``, the old table kept below
+    it commented out (``new`` appended when the file has no such table)."""
+    span = _section_span(lines, "transitions")
     if span is None:
         body = lines + [""] + new
     else:
@@ -127,9 +169,25 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
             old.pop()
         kept = ["", "# previous [transitions] (before learning):"] + ["# " + ln if ln.strip() else "#" for ln in old] + [""]
         body = lines[:a] + new + kept + lines[b:]
-    text = "\n".join(body) + "\n"
-    out.write_text(text, encoding="utf-8")
-    return out
+    return "\n".join(body) + "\n"
+
+
+def _check_learned(source: str, text: str, new: list[str], path: str | Path) -> None:
+    """``text`` must be valid TOML whose ``[transitions]`` is ``new`` and whose every other
+    table is as in ``source``."""
+    try:
+        before, after = tomllib.loads(source), tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise LearnedFileError(f"learn: the learned file from {path} would not be valid TOML ({e}); "
+                               "nothing written") from None
+    before["transitions"] = tomllib.loads("\n".join(new))["transitions"]
+    if _canonical(before) != _canonical(after):
+        raise LearnedFileError(f"learn: cannot find where {path}'s [transitions] table ends to replace it "
+                               "(nothing written); give it its own [transitions] header line")
+
+
+def _canonical(doc: dict) -> str:
+    return json.dumps(doc, sort_keys=True, default=str)  # NaN == NaN here, unlike in the dicts
 
 
 def read_learned(path: str | Path) -> dict[str, np.ndarray]:

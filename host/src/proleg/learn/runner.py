@@ -340,6 +340,14 @@ def _between(levels: tuple[int, ...], a: int, b: int, s: int) -> bool:
 
 
 # ------------------------------------------------------------------------- the simulated robot
+def check_plant(robot: Robot, truth: Robot | None, plant: str) -> None:
+    """``ExplorationError`` when ``simulated_robot`` cannot drive ``plant`` with ``truth``."""
+    if plant == "physical" and truth is not None:
+        raise ExplorationError("--truth drives the table plant; the physical plant has no matrix")
+    if truth is not None and truth.levels != robot.levels:
+        raise ExplorationError(f"truth {truth.path} has state levels {truth.levels}, the robot {robot.levels}")
+
+
 def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, plant: str = "table"):
     """The host-sim firmware of ``robot`` in closed loop with a table plant driven by
     ``truth``'s matrix and ``[plant]`` (its ``noise_mm``, ``step_mm``...; default: ``robot``)
@@ -351,15 +359,12 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, 
     from ..sim.closed_loop import SimulatedRobot
     from ..sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
 
+    check_plant(robot, truth, plant)
     if plant == "physical":
-        if truth is not None:
-            raise ExplorationError("--truth drives the table plant; the physical plant has no matrix")
         sim = SimulatedRobot(robot, seed=seed)
         client = RobotClient(SimLink(sim, description=f"sim {robot.name} (physical plant)"))
         return sim, client, lambda: (sim.plant.displacement_mm, None, None)
     truth = truth or robot
-    if truth.levels != robot.levels:
-        raise ExplorationError(f"truth {truth.path} has state levels {truth.levels}, the robot {robot.levels}")
     plant = Plant(plant_params_from_robot(truth), true_rewards_from_robot(truth), robot.levels, seed)
     sim = SimulatedRobot(robot, seed=seed, plant=plant)
     client = RobotClient(SimLink(sim, description=f"sim {robot.name}"))

@@ -17,7 +17,6 @@ It is searched on a grid (``step_s``) over ``±max_offset_s`` and then refined.
 from __future__ import annotations
 
 import csv
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,32 +43,26 @@ class Track:
         return x, y, th
 
 
+COLUMNS = ("time", "x", "y", "theta")
+#: the largest magnitude a tracker number may have (seconds or the robot file's unit)
+MAX_ABS = 1e9
+_MAX_TEXT = "1e9"
+
+
 def read_track(path: str | Path) -> Track:
+    """The track in ``path`` (module docstring); ``TrackerError`` naming the file, the line
+    (as an editor counts it, comments included) and the column."""
     path = Path(path)
-    try:
-        lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    except OSError as e:
-        raise TrackerError(f"{path}: cannot read: {e}") from None
-    rows = list(csv.reader(lines))
-    if not rows or [c.strip() for c in rows[0]][:4] != ["time", "x", "y", "theta"]:
-        raise TrackerError(f"{path}: line 1: expected the header time,x,y,theta")
+    rows = _rows(path)
+    if not rows or [c.strip() for c in rows[0][1]][:4] != list(COLUMNS):
+        where = f"line {rows[0][0]}" if rows else "line 1"
+        raise TrackerError(f"{path}: {where}: expected the header time,x,y,theta")
     cols: list[list[float | None]] = [[], [], [], []]
-    for k, row in enumerate(rows[1:], start=2):
+    for k, row in rows[1:]:
         if len(row) < 2 or len(row) > 4:
-            raise TrackerError(f"{path}: row {k}: expected time,x[,y[,theta]], got {','.join(row)!r}")
-        row = row + [""] * (4 - len(row))
-        for j, cell in enumerate(row):
-            cell = cell.strip()
-            if not cell and j >= 2:
-                cols[j].append(None)
-                continue
-            try:
-                v = float(cell)
-            except ValueError:
-                raise TrackerError(f"{path}: row {k}, column {('time', 'x', 'y', 'theta')[j]}: expected a number, got {cell!r}") from None
-            if not math.isfinite(v):
-                raise TrackerError(f"{path}: row {k}: expected a finite number, got {cell!r}")
-            cols[j].append(v)
+            raise TrackerError(f"{path}: line {k}: expected time,x[,y[,theta]], got {','.join(row)!r}")
+        for j, cell in enumerate(row + [""] * (4 - len(row))):
+            cols[j].append(_cell(cell.strip(), j, f"{path}: line {k}"))
     t = np.array(cols[0], dtype=float)
     if len(t) < 2 or np.any(np.diff(t) <= 0):
         raise TrackerError(f"{path}: time: expected at least two rows with strictly increasing times")
@@ -82,6 +75,35 @@ def read_track(path: str | Path) -> Track:
         return np.array(c, dtype=float)
 
     return Track(t, np.array(cols[1], dtype=float), opt(cols[2]), opt(cols[3]))
+
+
+def _rows(path: Path) -> list[tuple[int, list[str]]]:
+    """(line number, cells) of every line that is neither blank nor a comment."""
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise TrackerError(f"{path}: cannot read: {e.strerror or e}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data[:e.start].count(b"\n") + 1
+        raise TrackerError(f"{path}: line {line}: expected UTF-8 text, got byte {data[e.start]:#04x}") from None
+    return [(k, next(csv.reader([ln]))) for k, ln in enumerate(text.splitlines(), start=1)
+            if ln.strip() and not ln.lstrip().startswith("#")]
+
+
+def _cell(cell: str, j: int, where: str) -> float | None:
+    """Column ``j``'s number (None: an empty y or theta)."""
+    if not cell and j >= 2:
+        return None
+    try:
+        v = float(cell)
+    except ValueError:
+        raise TrackerError(f"{where}, column {COLUMNS[j]}: expected a number, got {cell!r}") from None
+    if not abs(v) <= MAX_ABS:
+        raise TrackerError(f"{where}, column {COLUMNS[j]}: expected a finite number within ±{_MAX_TEXT}, "
+                           f"got {cell!r}")
+    return v
 
 
 def _motion_near(track: Track, events: np.ndarray, offset: float, lead_s: float, lag_s: float) -> float:

@@ -15,8 +15,6 @@ robot (``robot=``), ψ and duty signals are named for its limbs and actuators
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -24,9 +22,9 @@ from typing import Any
 from cantools.database.can import Database, Message, Node, Signal
 from cantools.database.conversion import BaseConversion
 
-from ..errors import LinkError, UsageError
+from ..errors import UsageError
 from ..names import identifier
-from ..paths import as_if_created
+from ..outputs import write_text_atomic
 from .definition import DIR_UNSTATED, PROTOCOL_VERSION, BY_NAME, Direction, EventKind, FaultCode, Flag, StopReason
 from .can import EVENT_FRAME, SLOT_CMD, SLOT_REPLY, TELEMETRY_FRAMES, CanIds
 
@@ -180,18 +178,4 @@ def dbc_text(nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = None) 
 
 def write_dbc(path: str | Path, nodes: Sequence[int] = (0,), base: int = 0x100, robot: Any = None) -> Path:
     """Write the DBC atomically (temp file + rename); returns the path."""
-    text = dbc_text(nodes, base, robot)
-    out = Path(path)
-    directory = out.parent if str(out.parent) else Path(".")
-    if not directory.is_dir():
-        raise LinkError(f"dbc: directory {directory} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as f:
-            f.write(text)
-        as_if_created(tmp)
-        os.replace(tmp, out)
-    except OSError as e:
-        Path(tmp).unlink(missing_ok=True)
-        raise LinkError(f"dbc: cannot write {out}: {e.strerror or e}") from None
-    return out
+    return write_text_atomic(path, dbc_text(nodes, base, robot), "dbc", encoding="ascii")
