@@ -522,6 +522,34 @@ def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, e
     assert "\n" not in str(e.value)
 
 
+@pytest.mark.parametrize("table", ["pwm", "uart", "toolchain", "build"])
+def test_a_board_table_given_as_a_value_is_one_line(tmp_path, table):
+    text = (ROOT / "boards" / "host-sim.toml").read_text(encoding="utf-8")
+    text, n = re.subn(rf"^\[{table}\]\n(?:[^\[].*\n|\n)*", "", text, flags=re.M)
+    assert n == 1
+    path = tmp_path / "variant.toml"
+    path.write_text(f"{table} = 5\n{text}", encoding="utf-8")
+    with pytest.raises(BoardError, match=rf"variant.toml: {table}: expected a table, got 5$"):
+        load_board(path)
+
+
+def test_a_board_file_that_cannot_be_read_is_one_line_and_exit_2(tmp_path, capsys, parent):
+    latin1 = tmp_path / "latin1.toml"
+    text = (ROOT / "boards" / "host-sim.toml").read_text(encoding="utf-8")
+    latin1.write_bytes(text.replace("Simulated board", "Simulated b\u00f6ard").encode("latin-1"))
+    line = text[: text.index("Simulated board")].count("\n") + 1
+    code, _, err = cli(capsys, "build", R1, "--board", latin1, "-o", parent / "out")
+    assert code == 2
+    assert one_line(err) == f"proleg: error: {latin1}: expected UTF-8 text, got byte 0xf6 on line {line}"
+    folder = tmp_path / "folder.toml"
+    folder.mkdir()
+    for board in (folder, tmp_path):  # a board file path, or any path with a '/'
+        code, _, err = cli(capsys, "build", R1, "--board", board, "-o", parent / "out")
+        assert code == 2
+        assert one_line(err) == f"proleg: error: {board}: cannot read the board file: Is a directory"
+    assert_nothing_left(parent)
+
+
 def test_the_makefile_runs_the_board_files_build_steps(tmp_path):
     board = load_board(_board_variant(tmp_path, '"-R", ".eeprom", ', ""))
     robot = load_robot(R1)

@@ -162,6 +162,11 @@ def _read_doc(path: Path, seen: tuple[Path, ...] = ()) -> dict:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise BoardError(f"{path}: no such board file") from None
+    except UnicodeDecodeError as e:
+        line = e.object[: e.start].count(b"\n") + 1
+        raise BoardError(f"{path}: expected UTF-8 text, got byte 0x{e.object[e.start]:02x} on line {line}") from None
+    except OSError as e:  # a directory, no permission...
+        raise BoardError(f"{path}: cannot read the board file: {e.strerror or e}") from None
     except tomllib.TOMLDecodeError as e:
         raise BoardError(f"{path}: not valid TOML: {e}") from None
     parent = doc.get("board", {}).get("extends") if isinstance(doc.get("board"), dict) else None
@@ -254,34 +259,18 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
-    for table, keys in TABLE_KEYS.items():  # a misspelt key would silently take its default
-        t = doc.get(table)
-        if isinstance(t, dict) and (stray := sorted(set(t) - keys)):
-            near = difflib.get_close_matches(stray[0], sorted(keys), n=1)
-            hint = f"did you mean {near[0]!r}?" if near else f"expected one of: {', '.join(sorted(keys))}"
-            raise BoardError(f"{path}: {table}.{stray[0]}: unknown key ({hint})")
+    for table, keys in TABLE_KEYS.items():
+        if table in doc and not isinstance(doc[table], dict):
+            raise BoardError(f"{path}: {table}: expected a table, got {doc[table]!r}")
+        _known_keys(path, table, doc.get(table, {}), keys)
     family = _need(path, doc, "board", "family", str)
     if family not in available_families():
         raise BoardError(
             f"{path}: board.family: expected one of {', '.join(available_families())} "
             f"(a folder with a family.toml under {hal_root()}), got {family!r}"
         )
-    flash = doc.get("flash", [])
-    if not isinstance(flash, list):
-        raise BoardError(f"{path}: flash: expected [[flash]] tables")
-    methods = []
-    for i, f in enumerate(flash):
-        if not isinstance(f, dict) or not isinstance(f.get("tool"), str):
-            raise BoardError(f"{path}: flash[{i}].tool: expected a string")
-        cmd = f.get("command")
-        if not isinstance(cmd, list) or not cmd or not all(isinstance(s, str) for s in cmd):
-            raise BoardError(f"{path}: flash[{i}].command: expected a list of strings")
-        methods.append(FlashMethod(f["tool"], tuple(cmd), tuple(f.get("packages", []))))
-    i2c = doc.get("i2c", {})
-    if not isinstance(i2c, dict):
-        raise BoardError(f"{path}: i2c: expected a table")
-    buses = i2c_buses(path, i2c)
-    i2c = {k: v for k, v in i2c.items() if k != "bus"} | {
+    buses = i2c_buses(path, doc.get("i2c", {}))
+    i2c = {k: v for k, v in doc.get("i2c", {}).items() if k != "bus"} | {
         "bus": buses[0].name,
         "imu_addresses": list(buses[0].addresses),
     }
@@ -309,7 +298,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         uart_baud=_need(path, doc, "uart", "baud", int),
         uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
         uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
-        flash_methods=tuple(methods),
+        flash_methods=_flash_methods(path, doc),
         i2c_buses=buses,
         base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
         base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
@@ -317,6 +306,29 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         budget=_budget(path, doc),
         **_link(path, doc, family),
     )
+
+
+def _known_keys(path: Path, where: str, table: dict, keys: set[str]) -> None:
+    """Refuse a key the table does not take: a misspelt key would silently take its default."""
+    if stray := sorted(set(table) - keys):
+        near = difflib.get_close_matches(stray[0], sorted(keys), n=1)
+        hint = f"did you mean {near[0]!r}?" if near else f"expected one of: {', '.join(sorted(keys))}"
+        raise BoardError(f"{path}: {where}.{stray[0]}: unknown key ({hint})")
+
+
+def _flash_methods(path: Path, doc: dict) -> tuple[FlashMethod, ...]:
+    flash = doc.get("flash", [])
+    if not isinstance(flash, list):
+        raise BoardError(f"{path}: flash: expected [[flash]] tables")
+    methods = []
+    for i, f in enumerate(flash):
+        if not isinstance(f, dict) or not isinstance(f.get("tool"), str):
+            raise BoardError(f"{path}: flash[{i}].tool: expected a string")
+        cmd = f.get("command")
+        if not isinstance(cmd, list) or not cmd or not all(isinstance(s, str) for s in cmd):
+            raise BoardError(f"{path}: flash[{i}].command: expected a list of strings")
+        methods.append(FlashMethod(f["tool"], tuple(cmd), tuple(f.get("packages", []))))
+    return tuple(methods)
 
 
 def _link(path: Path, doc: dict, family: str) -> dict[str, Any]:
