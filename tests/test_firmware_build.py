@@ -515,6 +515,19 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
     ('family = "avr"', 'family = "rp2040"',
      r"variant.toml: board.family: expected one of avr, sim, stm32f1, template \(a folder with a family.toml"),
     ("tx_buffer = 128", "tx_buffer = 100", r"variant.toml: uart.tx_buffer: expected a power of two"),
+    # a zero or negative number is refused, never replaced by a default or compiled in
+    ("frequency_hz = 490", "frequency_hz = 0",
+     r"variant.toml: pwm.frequency_hz: expected a PWM frequency in Hz in 1..1_000_000, got 0$"),
+    ("frequency_hz = 490", "frequency_hz = -1000", r"variant.toml: pwm.frequency_hz: expected .*, got -1000$"),
+    ("hz = 400000", "hz = 0", r"variant.toml: i2c.hz: expected an I2C clock in Hz in 1_000..3_400_000, got 0$"),
+    ("hz = 400000", 'hz = "fast"', r"variant.toml: i2c.hz: expected an I2C clock in Hz .*, got 'fast'$"),
+    ("clock_hz = 16000000", "clock_hz = -16000000",
+     r"variant.toml: board.clock_hz: expected a clock in Hz in 0..1_000_000_000, got -16000000$"),
+    ("baud = 115200", "baud = 0", r"variant.toml: uart.baud: expected a baud rate in 300..12_000_000, got 0$"),
+    ("baud = 115200", "baud = -9600", r"variant.toml: uart.baud: expected a baud rate .*, got -9600$"),
+    ("flash_bytes = 30720", "flash_bytes = -5", r"variant.toml: board.flash_bytes: expected a size in bytes in 0..4_294_967_295, got -5$"),
+    ("ram_bytes = 2048", "ram_bytes = -1", r"variant.toml: board.ram_bytes: expected a size in bytes .*, got -1$"),
+    ("base_flash_bytes = 14240", "base_flash_bytes = -100", r"variant.toml: board.base_flash_bytes: expected a size in bytes .*, got -100$"),
 ])
 def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, expected):
     with pytest.raises(BoardError, match=expected) as e:

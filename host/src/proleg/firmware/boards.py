@@ -25,6 +25,22 @@ from .families import available_families, hal_root
 #: [uart] buffers when a board file does not give them (bytes, powers of two).
 DEFAULT_UART_RX_BUFFER = 64
 DEFAULT_UART_TX_BUFFER = 128
+#: [i2c] hz when a board file does not give it (fast mode).
+DEFAULT_I2C_HZ = 400_000
+#: The ranges of a board file's whole numbers, (lo, hi, what): clock_hz 0 is virtual time (host
+#: builds); flash_bytes/ram_bytes 0 is no limit, base_*/stack_bytes 0 not measured. The C takes
+#: them as unsigned long (32 bits on the MCUs); a HAL may need a narrower range of its own.
+RANGES = {
+    ("board", "clock_hz"): (0, 1_000_000_000, "a clock in Hz"),
+    ("board", "flash_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "ram_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "base_flash_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "base_ram_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "stack_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("i2c", "hz"): (1_000, 3_400_000, "an I2C clock in Hz"),
+    ("pwm", "frequency_hz"): (1, 1_000_000, "a PWM frequency in Hz"),
+    ("uart", "baud"): (300, 12_000_000, "a baud rate"),
+}
 
 
 @dataclass(frozen=True)
@@ -199,6 +215,15 @@ def _need(path: Path, doc: dict, table: str, key: str, kind: type | tuple[type, 
     return v
 
 
+def _whole(path: Path, doc: dict, table: str, key: str, default: int | None = None) -> int:
+    """A whole number in its ``RANGES`` entry; required when there is no default."""
+    lo, hi, what = RANGES[table, key]
+    v = _need(path, doc, table, key, int) if default is None else doc.get(table, {}).get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+        raise BoardError(f"{path}: {table}.{key}: expected {what} in {lo:_}..{hi:_}, got {v!r}")
+    return v
+
+
 def _strings(path: Path, doc: dict, table: str, key: str, default: list | None = None) -> tuple[str, ...]:
     t = doc.get(table, {})
     v = t.get(key, default)
@@ -273,6 +298,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     i2c = {k: v for k, v in doc.get("i2c", {}).items() if k != "bus"} | {
         "bus": buses[0].name,
         "imu_addresses": list(buses[0].addresses),
+        "hz": _whole(path, doc, "i2c", "hz", DEFAULT_I2C_HZ),
     }
     name = _need(path, doc, "board", "name", str)
     if not 1 <= len(name) <= 15 or not name.isascii():
@@ -283,9 +309,9 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         description=doc["board"].get("description", ""),
         family=family,
         mcu=_need(path, doc, "board", "mcu", str),
-        clock_hz=_need(path, doc, "board", "clock_hz", int),
-        flash_bytes=_need(path, doc, "board", "flash_bytes", int),
-        ram_bytes=_need(path, doc, "board", "ram_bytes", int),
+        clock_hz=_whole(path, doc, "board", "clock_hz"),
+        flash_bytes=_whole(path, doc, "board", "flash_bytes"),
+        ram_bytes=_whole(path, doc, "board", "ram_bytes"),
         cc=_need(path, doc, "toolchain", "cc", str),
         cflags=_strings(path, doc, "toolchain", "cflags", []),
         ldflags=_strings(path, doc, "toolchain", "ldflags", []),
@@ -293,16 +319,16 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         **_build_steps(path, doc),
         i2c=i2c,
         pwm_pins=_strings(path, doc, "pwm", "pins"),
-        pwm_frequency_hz=_need(path, doc, "pwm", "frequency_hz", int),
+        pwm_frequency_hz=_whole(path, doc, "pwm", "frequency_hz"),
         uart_port=_need(path, doc, "uart", "port", str),
-        uart_baud=_need(path, doc, "uart", "baud", int),
+        uart_baud=_whole(path, doc, "uart", "baud"),
         uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
         uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
         flash_methods=_flash_methods(path, doc),
         i2c_buses=buses,
-        base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
-        base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
-        stack_bytes=_optional_int(path, doc, "stack_bytes"),
+        base_flash_bytes=_whole(path, doc, "board", "base_flash_bytes", 0),
+        base_ram_bytes=_whole(path, doc, "board", "base_ram_bytes", 0),
+        stack_bytes=_whole(path, doc, "board", "stack_bytes", 0),
         budget=_budget(path, doc),
         **_link(path, doc, family),
     )
@@ -337,13 +363,6 @@ def _link(path: Path, doc: dict, family: str) -> dict[str, Any]:
     if transport == "can" and can is None:
         raise BoardError(f"{path}: link.transport = \"can\" needs a [can] table (rx, tx, bitrate, clock_hz)")
     return {"transport": transport, "can": can}
-
-
-def _optional_int(path: Path, doc: dict, key: str) -> int:
-    v = doc["board"].get(key, 0)
-    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-        raise BoardError(f"{path}: board.{key}: expected a whole number of bytes, got {v!r}")
-    return v
 
 
 def _addresses(path: Path, where: str, v: Any, allowed: range) -> tuple[int, ...]:
