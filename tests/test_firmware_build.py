@@ -528,6 +528,11 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
     ("flash_bytes = 30720", "flash_bytes = -5", r"variant.toml: board.flash_bytes: expected a size in bytes in 0..4_294_967_295, got -5$"),
     ("ram_bytes = 2048", "ram_bytes = -1", r"variant.toml: board.ram_bytes: expected a size in bytes .*, got -1$"),
     ("base_flash_bytes = 14240", "base_flash_bytes = -100", r"variant.toml: board.base_flash_bytes: expected a size in bytes .*, got -100$"),
+    ('pins = ["D9", "D10"', 'pins = ["D9", "D9"',
+     r"variant.toml: pwm.pins: expected each pin once \(one channel per pin\), got 'D9' twice$"),
+    ('packages = ["avrdude"]', 'pakages = ["avrdude"]', r"variant.toml: flash\[0\].pakages: unknown key \(did you mean 'packages'\?\)$"),
+    ('packages = ["avrdude"]', 'packages = "avrdude"', r"variant.toml: flash\[0\].packages: expected a list of strings, got 'avrdude'$"),
+    ('description = "Arduino', 'description = 5 # "', r"variant.toml: board.description: expected a string, got 5$"),
 ])
 def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, expected):
     with pytest.raises(BoardError, match=expected) as e:

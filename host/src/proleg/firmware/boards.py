@@ -41,6 +41,8 @@ RANGES = {
     ("pwm", "frequency_hz"): (1, 1_000_000, "a PWM frequency in Hz"),
     ("uart", "baud"): (300, 12_000_000, "a baud rate"),
 }
+#: The keys of a [[flash]] table.
+FLASH_KEYS = {"tool", "command", "packages"}
 
 
 @dataclass(frozen=True)
@@ -303,10 +305,13 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     name = _need(path, doc, "board", "name", str)
     if not 1 <= len(name) <= 15 or not name.isascii():
         raise BoardError(f"{path}: board.name: expected at most 15 ASCII characters (INFO carries 15), got {name!r}")
+    description = doc["board"].get("description", "")
+    if not isinstance(description, str):
+        raise BoardError(f"{path}: board.description: expected a string, got {description!r}")
     return Board(
         name=name,
         path=path,
-        description=doc["board"].get("description", ""),
+        description=description,
         family=family,
         mcu=_need(path, doc, "board", "mcu", str),
         clock_hz=_whole(path, doc, "board", "clock_hz"),
@@ -318,7 +323,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         packages=_strings(path, doc, "toolchain", "packages", []),
         **_build_steps(path, doc),
         i2c=i2c,
-        pwm_pins=_strings(path, doc, "pwm", "pins"),
+        pwm_pins=_pwm_pins(path, doc),
         pwm_frequency_hz=_whole(path, doc, "pwm", "frequency_hz"),
         uart_port=_need(path, doc, "uart", "port", str),
         uart_baud=_whole(path, doc, "uart", "baud"),
@@ -342,18 +347,28 @@ def _known_keys(path: Path, where: str, table: dict, keys: set[str]) -> None:
         raise BoardError(f"{path}: {where}.{stray[0]}: unknown key ({hint})")
 
 
+def _pwm_pins(path: Path, doc: dict) -> tuple[str, ...]:
+    pins = _strings(path, doc, "pwm", "pins")
+    twice = next((p for i, p in enumerate(pins) if p in pins[:i]), None)
+    if twice is not None:
+        raise BoardError(f"{path}: pwm.pins: expected each pin once (one channel per pin), got {twice!r} twice")
+    return pins
+
+
 def _flash_methods(path: Path, doc: dict) -> tuple[FlashMethod, ...]:
     flash = doc.get("flash", [])
-    if not isinstance(flash, list):
-        raise BoardError(f"{path}: flash: expected [[flash]] tables")
+    if not isinstance(flash, list) or not all(isinstance(f, dict) for f in flash):
+        raise BoardError(f"{path}: flash: expected [[flash]] tables, got {flash!r}")
     methods = []
     for i, f in enumerate(flash):
-        if not isinstance(f, dict) or not isinstance(f.get("tool"), str):
-            raise BoardError(f"{path}: flash[{i}].tool: expected a string")
-        cmd = f.get("command")
-        if not isinstance(cmd, list) or not cmd or not all(isinstance(s, str) for s in cmd):
-            raise BoardError(f"{path}: flash[{i}].command: expected a list of strings")
-        methods.append(FlashMethod(f["tool"], tuple(cmd), tuple(f.get("packages", []))))
+        where = f"flash[{i}]"
+        _known_keys(path, where, f, FLASH_KEYS)
+        table = {where: f}
+        tool = _need(path, table, where, "tool", str)
+        cmd = _strings(path, table, where, "command")
+        if not cmd:
+            raise BoardError(f"{path}: {where}.command: expected a command, got []")
+        methods.append(FlashMethod(tool, cmd, _strings(path, table, where, "packages", [])))
     return tuple(methods)
 
 
