@@ -533,6 +533,8 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
     ('packages = ["avrdude"]', 'pakages = ["avrdude"]', r"variant.toml: flash\[0\].pakages: unknown key \(did you mean 'packages'\?\)$"),
     ('packages = ["avrdude"]', 'packages = "avrdude"', r"variant.toml: flash\[0\].packages: expected a list of strings, got 'avrdude'$"),
     ('description = "Arduino', 'description = 5 # "', r"variant.toml: board.description: expected a string, got 5$"),
+    ('name = "arduino-nano"', 'name = "arduino\\"nano"', r"variant.toml: board.name: expected lowercase letters, digits .*, got 'arduino\"nano'$"),
+    ('name = "arduino-nano"', 'name = "nano\\n"', r"variant.toml: board.name: expected lowercase letters, digits .*, got 'nano\\n'$"),
 ])
 def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, expected):
     with pytest.raises(BoardError, match=expected) as e:

@@ -11,6 +11,7 @@ a board name (``arduino-nano``) or a path to a board file. See docs/adding-a-boa
 from __future__ import annotations
 
 import difflib
+import re
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -27,6 +28,9 @@ DEFAULT_UART_RX_BUFFER = 64
 DEFAULT_UART_TX_BUFFER = 128
 #: [i2c] hz when a board file does not give it (fast mode).
 DEFAULT_I2C_HZ = 400_000
+#: What a board name may be: it is `--board`'s argument, a C string in the firmware and INFO's
+#: board_name (15 characters), so the robot names' alphabet (robot.NAME_RE).
+BOARD_NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,14}")
 #: The ranges of a board file's whole numbers, (lo, hi, what): clock_hz 0 is virtual time (host
 #: builds); flash_bytes/ram_bytes 0 is no limit, base_*/stack_bytes 0 not measured. The C takes
 #: them as unsigned long (32 bits on the MCUs); a HAL may need a narrower range of its own.
@@ -303,8 +307,9 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         "hz": _whole(path, doc, "i2c", "hz", DEFAULT_I2C_HZ),
     }
     name = _need(path, doc, "board", "name", str)
-    if not 1 <= len(name) <= 15 or not name.isascii():
-        raise BoardError(f"{path}: board.name: expected at most 15 ASCII characters (INFO carries 15), got {name!r}")
+    if not BOARD_NAME_RE.fullmatch(name):
+        raise BoardError(f"{path}: board.name: expected lowercase letters, digits and '-', 1 to 15 characters "
+                         f"(INFO carries 15), got {name!r}")
     description = doc["board"].get("description", "")
     if not isinstance(description, str):
         raise BoardError(f"{path}: board.description: expected a string, got {description!r}")
