@@ -100,6 +100,23 @@ def test_a_full_disk_is_one_line_and_exit_1(tmp_path):
     assert p.stderr.count("\n") == 1 and "No space left on device" in p.stderr and "Traceback" not in p.stderr
 
 
+@pytest.mark.parametrize(("error", "line"), [
+    (IsADirectoryError(21, "Is a directory", "some/dir"), "cannot access some/dir: Is a directory"),
+    (PermissionError(13, "Permission denied", "x.toml"), "cannot access x.toml: Permission denied"),
+    (OSError(28, "No space left on device", "out/gen"), "cannot write out/gen: No space left on device"),
+])
+def test_an_os_error_no_command_caught_names_the_file_and_claims_no_write_it_cannot_know(
+        capsys, monkeypatch, error, line):
+    import proleg.firmware.boards
+
+    def fail(*_):
+        raise error
+
+    monkeypatch.setattr(proleg.firmware.boards, "load_board", fail)
+    code, _, err = run(capsys, "build", "paper-r1", "--board", "host-sim")
+    assert code == 1 and err == f"proleg: error: {line}\n"
+
+
 @pytest.mark.parametrize("env", [{"PYTHONIOENCODING": "ascii"}, {"LANG": "C", "LC_ALL": "C", "PYTHONUTF8": "0"}])
 def test_a_terminal_without_utf8_gets_replacement_characters(tmp_path, env):
     p = shell(f"'{PROLEG}' gait paper-r1", tmp_path, **env)

@@ -341,6 +341,17 @@ def test_a_csv_with_a_giant_field_is_one_line_naming_the_csv_line(tmp_path):
         load_robot(write(tmp_path, text))
 
 
+@pytest.mark.parametrize(("old", "new", "fragments"), [
+    ('name = "t"', 'name = "t\\n"', ("robot.name: expected lowercase", r"got 't\n'")),
+    ('name = "a"', 'name = "a\\n"', (r"actuator 'a\n': name: expected lowercase", r"got 'a\n'")),
+    ('name = "left"', 'name = "left\\n"', (r"limb 'left\n': name: expected a name of printable characters", r"got 'left\n'")),
+    ('name = "left"', 'name = ""', ("limb #1: name: expected a name of printable characters, at least one, got ''",)),
+])
+def test_a_name_with_a_newline_or_an_empty_limb_name_is_refused(tmp_path, old, new, fragments):
+    # a robot or actuator name goes into the firmware's C; "$" matched before a final newline
+    rejects(tmp_path, R1.replace(old, new, 1), *fragments)
+
+
 def test_robot_names_longer_than_the_firmwares_15_characters_are_accepted(tmp_path):
     # the firmware reports the first 15 characters in GET_INFO; the name itself may be longer
     name = "terresoro-4-limb-freeman-2025"

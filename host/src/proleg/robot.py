@@ -33,12 +33,12 @@ from .transitions import TransitionTable
 
 log = logging.getLogger(__name__)
 
-NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,14}$")
+NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,14}")  # fullmatch: "$" would let a final "\n" through
 #: Robot names may be longer than the 15 characters the firmware reports (GET_INFO's
 #: robot_name field, protocol ROBOT_NAME_LEN 16 with its NUL): the firmware keeps the full
 #: name in ROM and sends the first 15 characters. Published robots have longer names
 #: (issue 17); 63 keeps build directory names reasonable.
-ROBOT_NAME_RE = re.compile(r"^[a-z0-9][a-z0-9-]{0,62}$")
+ROBOT_NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,62}")
 INFO_NAME_LEN = 15
 
 
@@ -204,7 +204,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
 
     head = Fields(path, "robot", doc["robot"], {"name", "description"})
     name = head.string("name")
-    if not ROBOT_NAME_RE.match(name):
+    if not ROBOT_NAME_RE.fullmatch(name):
         head.fail("name", "lowercase letters, digits and '-', 1 to 63 characters", name)
     description = head.string("description", "")
 
@@ -277,7 +277,7 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
     for i, t in enumerate(tables):
         f = Fields(path, _entry("actuator", i, t), t, {"name", "channel"}, sep=": ")
         name = f.string("name")
-        if not NAME_RE.match(name):
+        if not NAME_RE.fullmatch(name):
             f.fail("name", "lowercase letters, digits and '-', 1 to 15 characters", name)
         if any(a.name == name for a in out):
             f.fail("name", "a name no other actuator has", name)
@@ -298,6 +298,8 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
                                                    "stroke_deg"},
                     sep=": ")
         name = f.string("name")
+        if not name or not name.isprintable():  # empty: psi_ in the DBC; a newline splits printed lines
+            f.fail("name", "a name of printable characters, at least one", name)
         if any(limb.name == name for limb in out):
             f.fail("name", "a name no other limb has (duplicate limb)", name)
         if (twin := next((limb.name for limb in out if identifier(limb.name) == identifier(name)), None)) is not None:

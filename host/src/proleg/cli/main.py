@@ -12,6 +12,7 @@ without a traceback.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import logging
 import os
@@ -58,10 +59,26 @@ def main(argv: Sequence[str] | None = None) -> int:
         _silence_stdout()
         return EXIT_OK
     except OSError as e:  # a full disk, a vanished directory... while writing an output
-        where = f" {e.filename}" if e.filename else ""
-        print(f"proleg: error: cannot write{where}: {e.strerror or e}", file=sys.stderr)
+        print(f"proleg: error: {os_error_line(e)}", file=sys.stderr)
         _silence_stdout()
         return EXIT_FAILED
+
+
+#: What only a write fails with (a full disk or quota, a file too large, a read-only file system).
+WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS})
+
+
+def os_error_line(e: OSError) -> str:
+    """An OSError no command caught, as one line naming the file. Input files are read and
+    reported where they are read (board and robot files: exit 2); an OSError reaching here
+    without a file name failed on a stream already open, an output (stdout, a full disk). With
+    a file name, "write" only when only a write fails that way: a directory or a missing
+    permission may be either."""
+    why = e.strerror or str(e)
+    if not e.filename:
+        return f"cannot write: {why}"
+    verb = "cannot write" if e.errno in WRITE_ERRNOS else "cannot access"
+    return f"{verb} {e.filename}: {why}"
 
 
 def _tolerant_streams() -> None:

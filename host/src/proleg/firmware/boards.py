@@ -11,6 +11,7 @@ a board name (``arduino-nano``) or a path to a board file. See docs/adding-a-boa
 from __future__ import annotations
 
 import difflib
+import re
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -25,6 +26,27 @@ from .families import available_families, hal_root
 #: [uart] buffers when a board file does not give them (bytes, powers of two).
 DEFAULT_UART_RX_BUFFER = 64
 DEFAULT_UART_TX_BUFFER = 128
+#: [i2c] hz when a board file does not give it (fast mode).
+DEFAULT_I2C_HZ = 400_000
+#: What a board name may be: it is `--board`'s argument, a C string in the firmware and INFO's
+#: board_name (15 characters), so the robot names' alphabet (robot.NAME_RE).
+BOARD_NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,14}")
+#: The ranges of a board file's whole numbers, (lo, hi, what): clock_hz 0 is virtual time (host
+#: builds); flash_bytes/ram_bytes 0 is no limit, base_*/stack_bytes 0 not measured. The C takes
+#: them as unsigned long (32 bits on the MCUs); a HAL may need a narrower range of its own.
+RANGES = {
+    ("board", "clock_hz"): (0, 1_000_000_000, "a clock in Hz"),
+    ("board", "flash_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "ram_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "base_flash_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "base_ram_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("board", "stack_bytes"): (0, 0xFFFF_FFFF, "a size in bytes"),
+    ("i2c", "hz"): (1_000, 3_400_000, "an I2C clock in Hz"),
+    ("pwm", "frequency_hz"): (1, 1_000_000, "a PWM frequency in Hz"),
+    ("uart", "baud"): (300, 12_000_000, "a baud rate"),
+}
+#: The keys of a [[flash]] table.
+FLASH_KEYS = {"tool", "command", "packages"}
 
 
 @dataclass(frozen=True)
@@ -162,6 +184,11 @@ def _read_doc(path: Path, seen: tuple[Path, ...] = ()) -> dict:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise BoardError(f"{path}: no such board file") from None
+    except UnicodeDecodeError as e:
+        line = e.object[: e.start].count(b"\n") + 1
+        raise BoardError(f"{path}: expected UTF-8 text, got byte 0x{e.object[e.start]:02x} on line {line}") from None
+    except OSError as e:  # a directory, no permission...
+        raise BoardError(f"{path}: cannot read the board file: {e.strerror or e}") from None
     except tomllib.TOMLDecodeError as e:
         raise BoardError(f"{path}: not valid TOML: {e}") from None
     parent = doc.get("board", {}).get("extends") if isinstance(doc.get("board"), dict) else None
@@ -191,6 +218,15 @@ def _need(path: Path, doc: dict, table: str, key: str, kind: type | tuple[type, 
     v = t[key]
     if not isinstance(v, kind) or isinstance(v, bool):
         raise BoardError(f"{path}: {table}.{key}: expected {getattr(kind, '__name__', kind)}, got {v!r}")
+    return v
+
+
+def _whole(path: Path, doc: dict, table: str, key: str, default: int | None = None) -> int:
+    """A whole number in its ``RANGES`` entry; required when there is no default."""
+    lo, hi, what = RANGES[table, key]
+    v = _need(path, doc, table, key, int) if default is None else doc.get(table, {}).get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+        raise BoardError(f"{path}: {table}.{key}: expected {what} in {lo:_}..{hi:_}, got {v!r}")
     return v
 
 
@@ -254,69 +290,91 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     unknown = sorted(set(doc) - known)
     if unknown:
         raise BoardError(f"{path}: unknown table {unknown[0]!r} (expected: {', '.join(sorted(known))})")
-    for table, keys in TABLE_KEYS.items():  # a misspelt key would silently take its default
-        t = doc.get(table)
-        if isinstance(t, dict) and (stray := sorted(set(t) - keys)):
-            near = difflib.get_close_matches(stray[0], sorted(keys), n=1)
-            hint = f"did you mean {near[0]!r}?" if near else f"expected one of: {', '.join(sorted(keys))}"
-            raise BoardError(f"{path}: {table}.{stray[0]}: unknown key ({hint})")
+    for table, keys in TABLE_KEYS.items():
+        if table in doc and not isinstance(doc[table], dict):
+            raise BoardError(f"{path}: {table}: expected a table, got {doc[table]!r}")
+        _known_keys(path, table, doc.get(table, {}), keys)
     family = _need(path, doc, "board", "family", str)
     if family not in available_families():
         raise BoardError(
             f"{path}: board.family: expected one of {', '.join(available_families())} "
             f"(a folder with a family.toml under {hal_root()}), got {family!r}"
         )
-    flash = doc.get("flash", [])
-    if not isinstance(flash, list):
-        raise BoardError(f"{path}: flash: expected [[flash]] tables")
-    methods = []
-    for i, f in enumerate(flash):
-        if not isinstance(f, dict) or not isinstance(f.get("tool"), str):
-            raise BoardError(f"{path}: flash[{i}].tool: expected a string")
-        cmd = f.get("command")
-        if not isinstance(cmd, list) or not cmd or not all(isinstance(s, str) for s in cmd):
-            raise BoardError(f"{path}: flash[{i}].command: expected a list of strings")
-        methods.append(FlashMethod(f["tool"], tuple(cmd), tuple(f.get("packages", []))))
-    i2c = doc.get("i2c", {})
-    if not isinstance(i2c, dict):
-        raise BoardError(f"{path}: i2c: expected a table")
-    buses = i2c_buses(path, i2c)
-    i2c = {k: v for k, v in i2c.items() if k != "bus"} | {
+    buses = i2c_buses(path, doc.get("i2c", {}))
+    i2c = {k: v for k, v in doc.get("i2c", {}).items() if k != "bus"} | {
         "bus": buses[0].name,
         "imu_addresses": list(buses[0].addresses),
+        "hz": _whole(path, doc, "i2c", "hz", DEFAULT_I2C_HZ),
     }
     name = _need(path, doc, "board", "name", str)
-    if not 1 <= len(name) <= 15 or not name.isascii():
-        raise BoardError(f"{path}: board.name: expected at most 15 ASCII characters (INFO carries 15), got {name!r}")
+    if not BOARD_NAME_RE.fullmatch(name):
+        raise BoardError(f"{path}: board.name: expected lowercase letters, digits and '-', 1 to 15 characters "
+                         f"(INFO carries 15), got {name!r}")
+    description = doc["board"].get("description", "")
+    if not isinstance(description, str):
+        raise BoardError(f"{path}: board.description: expected a string, got {description!r}")
     return Board(
         name=name,
         path=path,
-        description=doc["board"].get("description", ""),
+        description=description,
         family=family,
         mcu=_need(path, doc, "board", "mcu", str),
-        clock_hz=_need(path, doc, "board", "clock_hz", int),
-        flash_bytes=_need(path, doc, "board", "flash_bytes", int),
-        ram_bytes=_need(path, doc, "board", "ram_bytes", int),
+        clock_hz=_whole(path, doc, "board", "clock_hz"),
+        flash_bytes=_whole(path, doc, "board", "flash_bytes"),
+        ram_bytes=_whole(path, doc, "board", "ram_bytes"),
         cc=_need(path, doc, "toolchain", "cc", str),
         cflags=_strings(path, doc, "toolchain", "cflags", []),
         ldflags=_strings(path, doc, "toolchain", "ldflags", []),
         packages=_strings(path, doc, "toolchain", "packages", []),
         **_build_steps(path, doc),
         i2c=i2c,
-        pwm_pins=_strings(path, doc, "pwm", "pins"),
-        pwm_frequency_hz=_need(path, doc, "pwm", "frequency_hz", int),
+        pwm_pins=_pwm_pins(path, doc),
+        pwm_frequency_hz=_whole(path, doc, "pwm", "frequency_hz"),
         uart_port=_need(path, doc, "uart", "port", str),
-        uart_baud=_need(path, doc, "uart", "baud", int),
+        uart_baud=_whole(path, doc, "uart", "baud"),
         uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
         uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
-        flash_methods=tuple(methods),
+        flash_methods=_flash_methods(path, doc),
         i2c_buses=buses,
-        base_flash_bytes=_optional_int(path, doc, "base_flash_bytes"),
-        base_ram_bytes=_optional_int(path, doc, "base_ram_bytes"),
-        stack_bytes=_optional_int(path, doc, "stack_bytes"),
+        base_flash_bytes=_whole(path, doc, "board", "base_flash_bytes", 0),
+        base_ram_bytes=_whole(path, doc, "board", "base_ram_bytes", 0),
+        stack_bytes=_whole(path, doc, "board", "stack_bytes", 0),
         budget=_budget(path, doc),
         **_link(path, doc, family),
     )
+
+
+def _known_keys(path: Path, where: str, table: dict, keys: set[str]) -> None:
+    """Refuse a key the table does not take: a misspelt key would silently take its default."""
+    if stray := sorted(set(table) - keys):
+        near = difflib.get_close_matches(stray[0], sorted(keys), n=1)
+        hint = f"did you mean {near[0]!r}?" if near else f"expected one of: {', '.join(sorted(keys))}"
+        raise BoardError(f"{path}: {where}.{stray[0]}: unknown key ({hint})")
+
+
+def _pwm_pins(path: Path, doc: dict) -> tuple[str, ...]:
+    pins = _strings(path, doc, "pwm", "pins")
+    twice = next((p for i, p in enumerate(pins) if p in pins[:i]), None)
+    if twice is not None:
+        raise BoardError(f"{path}: pwm.pins: expected each pin once (one channel per pin), got {twice!r} twice")
+    return pins
+
+
+def _flash_methods(path: Path, doc: dict) -> tuple[FlashMethod, ...]:
+    flash = doc.get("flash", [])
+    if not isinstance(flash, list) or not all(isinstance(f, dict) for f in flash):
+        raise BoardError(f"{path}: flash: expected [[flash]] tables, got {flash!r}")
+    methods = []
+    for i, f in enumerate(flash):
+        where = f"flash[{i}]"
+        _known_keys(path, where, f, FLASH_KEYS)
+        table = {where: f}
+        tool = _need(path, table, where, "tool", str)
+        cmd = _strings(path, table, where, "command")
+        if not cmd:
+            raise BoardError(f"{path}: {where}.command: expected a command, got []")
+        methods.append(FlashMethod(tool, cmd, _strings(path, table, where, "packages", [])))
+    return tuple(methods)
 
 
 def _link(path: Path, doc: dict, family: str) -> dict[str, Any]:
@@ -325,13 +383,6 @@ def _link(path: Path, doc: dict, family: str) -> dict[str, Any]:
     if transport == "can" and can is None:
         raise BoardError(f"{path}: link.transport = \"can\" needs a [can] table (rx, tx, bitrate, clock_hz)")
     return {"transport": transport, "can": can}
-
-
-def _optional_int(path: Path, doc: dict, key: str) -> int:
-    v = doc["board"].get(key, 0)
-    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-        raise BoardError(f"{path}: board.{key}: expected a whole number of bytes, got {v!r}")
-    return v
 
 
 def _addresses(path: Path, where: str, v: Any, allowed: range) -> tuple[int, ...]:

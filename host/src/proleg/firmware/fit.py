@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import BuildError
-from .boards import pwm_channel_error
+from .boards import DEFAULT_I2C_HZ, pwm_channel_error
 from .placement import ImuPlacement, check_tick_budget, i2c_tick_us, mux_selects_per_tick, place_imus
 from .render_gaits import BITMAP_MAX_STATES, gait_table_rows
 
@@ -73,7 +73,7 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
             raise BuildError(pwm_channel_error(robot, a, name, pins))
     placements = place_imus(robot, board)
     i2c = _board(board, "i2c", {}) or {}
-    hz = int(i2c.get("hz", 400000) or 400000)
+    hz = int(i2c.get("hz", DEFAULT_I2C_HZ))  # load_board checked it
     check_tick_budget(robot, name, placements, hz)
     tables = table_bytes(robot, gaits)
     extra = max(0, len(robot.limbs) - BASE_LIMBS)

@@ -31,7 +31,7 @@ from ..errors import BoardError, BuildError
 from ..paths import display_path, templates_dir
 from ..robot import stroke_leads
 from ..robot_climb import check_climb_limit
-from .boards import DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
+from .boards import DEFAULT_I2C_HZ, DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
 from .placement import place_imus
 from .render_gaits import GaitPart, gait_part
@@ -213,13 +213,14 @@ def _board_part(board: Any) -> BoardPart:
         family_id=family.id,
         pins=pins,
         pwm_map=[family.pwm_entry(board_name, i, pin) for i, pin in enumerate(pins)],
-        imu_addresses=list(_get(i2c, "imu_addresses", None) or [0x68, 0x69]),
-        uart_baud=int(_get(board, "uart_baud", None) or 115200),
-        uart_rx_buffer=int(_get(board, "uart_rx_buffer", None) or DEFAULT_UART_RX_BUFFER),
-        uart_tx_buffer=int(_get(board, "uart_tx_buffer", None) or DEFAULT_UART_TX_BUFFER),
-        clock_hz=int(_get(board, "clock_hz", 0) or 0),
-        pwm_hz=int(_get(board, "pwm_frequency_hz", 1000) or 1000),
-        i2c_hz=int(_get(i2c, "hz", 400000) or 400000),
+        imu_addresses=list(_get(i2c, "imu_addresses", [0x68, 0x69])),
+        # a board file's values were checked by load_board; the defaults are for a partial board dict
+        uart_baud=int(_get(board, "uart_baud", 115200)),
+        uart_rx_buffer=int(_get(board, "uart_rx_buffer", DEFAULT_UART_RX_BUFFER)),
+        uart_tx_buffer=int(_get(board, "uart_tx_buffer", DEFAULT_UART_TX_BUFFER)),
+        clock_hz=int(_get(board, "clock_hz", 0)),
+        pwm_hz=int(_get(board, "pwm_frequency_hz", 1000)),
+        i2c_hz=int(_get(i2c, "hz", DEFAULT_I2C_HZ)),
         **_can_part(board),
     )
 
