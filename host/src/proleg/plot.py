@@ -63,19 +63,20 @@ def _levels(rec: Recording) -> tuple[int, ...]:
 
 
 def _markers(rec: Recording) -> list[tuple[float, str, str]]:
-    """(firmware time, colour, label) of every fault, E-stop and injected fault."""
+    """(firmware time, colour, label) of every fault, E-stop and injected fault (the reader has
+    made every event's ``t_s`` a number or None)."""
     out = []
     for e in rec.events:
         t = e.get("t_s")
-        if t is None or t == "":
+        if t is None:
             continue
         kind = e.get("kind", "")
         if kind == "FAULT":
-            out.append((float(t), "red", str(e.get("text", "fault"))))
+            out.append((t, "red", str(e.get("text", "fault"))))
         elif kind == "ESTOP":
-            out.append((float(t), "black", "E-stop"))
+            out.append((t, "black", "E-stop"))
         elif kind == "INJECT":
-            out.append((float(t), "darkorange", f"injected {e.get('text', '')}"))
+            out.append((t, "darkorange", f"injected {e.get('text', '')}"))
     return out
 
 

@@ -55,5 +55,5 @@ def LogReader(path: str | Path) -> Reader:  # noqa: N802
 
 
 def read_recording(path: str | Path) -> Recording:
-    """Read any recording back; ``LinkError`` names the file (and line) when it is bad."""
+    """Read any recording back; ``RecordingError`` names the file (and line) when it is bad."""
     return LogReader(path).read()
