@@ -333,3 +333,24 @@ def test_a_killed_recorders_torn_last_row_is_dropped_with_a_warning(tmp_path, ca
     assert main(["plot", str(path), "-o", str(tmp_path / "out.png")]) == 0
     err = capsys.readouterr().err
     assert f"warning: {path}:{lines}: torn last line dropped" in err
+
+
+def test_a_csv_recording_whose_events_file_cannot_be_opened_names_it_and_leaves_nothing(tmp_path):
+    (tmp_path / "run.events.csv").mkdir()
+    meta = RecordingMeta.for_robot(robot=ROBOT, board="fake")
+    with pytest.raises(LinkError, match=f"cannot write record file {tmp_path / 'run.events.csv'}: Is a directory"):
+        Logger(tmp_path / "run.csv", meta)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # no run.csv, no run.meta.json
+    from proleg.record import check_suffix
+
+    with pytest.raises(LinkError, match="run.events.csv: Is a directory"):
+        check_suffix(tmp_path / "run.csv")  # refused before connecting, as for run.csv itself
+
+
+def test_a_full_disk_while_opening_a_csv_recording_leaves_no_empty_files(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    (tmp_path / "run.events.csv").symlink_to("/dev/full")
+    with pytest.raises(LinkError, match="No space left on device"):
+        Logger(tmp_path / "run.csv", RecordingMeta.for_robot(robot=ROBOT, board="fake"))
+    assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # the link stays; no run.csv, no meta

@@ -16,7 +16,7 @@ import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 
@@ -42,15 +42,38 @@ class Writer(Listener, ABC):
         self.error: LinkError | None = None
         self.records = 0
         self._open = False
+        self._created: list[tuple[Path, IO[Any]]] = []
         try:
             self.open()
             self._open = True
         except OSError as e:
-            raise LinkError(f"cannot write record file {self.path}: {e.strerror or e}") from None
+            self._discard()
+            raise LinkError(f"cannot write record file {e.filename or self.path}: {e.strerror or e}") from None
+
+    @classmethod
+    def files(cls, path: Path) -> list[Path]:
+        """Every file a recording at ``path`` is made of."""
+        return [path]
+
+    def _create(self, path: Path, mode: str = "w", **kw: Any) -> IO[Any]:
+        """Open ``path`` for writing; ``open`` creates every file through this, so a failure
+        part-way removes what it had created (nothing half-written is left)."""
+        f = open(path, mode, **kw)
+        self._created.append((path, f))
+        return f
+
+    def _discard(self) -> None:
+        for path, f in self._created:
+            try:
+                f.close()
+            except OSError:
+                pass
+            if not path.is_symlink():  # the user's link (to a device...) stays
+                path.unlink(missing_ok=True)
 
     @abstractmethod
     def open(self) -> None:
-        """Create the file(s) and write the metadata."""
+        """Create the file(s) (with ``_create``) and write the metadata."""
 
     @abstractmethod
     def write_telemetry(self, row: dict[str, Any]) -> None: ...

@@ -38,11 +38,16 @@ def _cell(v: Any) -> Any:
 class CsvWriter(Writer):
     suffixes = (".csv",)
 
+    @classmethod
+    def files(cls, path: Path) -> list[Path]:
+        return [path, events_path(path), meta_path(path)]
+
     def open(self) -> None:
         self._columns = self.meta.columns()
-        meta_path(self.path).write_text(json.dumps(self.meta.as_dict(), indent=1) + "\n", encoding="utf-8")
-        self._tel: TextIO = open(self.path, "w", encoding="utf-8", newline="")
-        self._ev: TextIO = open(events_path(self.path), "w", encoding="utf-8", newline="")
+        self._tel: TextIO = self._create(self.path, encoding="utf-8", newline="")
+        self._ev: TextIO = self._create(events_path(self.path), encoding="utf-8", newline="")
+        with self._create(meta_path(self.path), encoding="utf-8") as f:
+            f.write(json.dumps(self.meta.as_dict(), indent=1) + "\n")
         self._row(self._tel, self._columns)
         self._row(self._ev, list(EVENT_COLUMNS))
 

@@ -19,7 +19,7 @@ class JsonlWriter(Writer):
     suffixes = (".jsonl", ".ndjson")
 
     def open(self) -> None:
-        self._f: TextIO = open(self.path, "w", encoding="utf-8")
+        self._f: TextIO = self._create(self.path, encoding="utf-8")
         self._line({"msg": "META", **self.meta.as_dict()})
 
     def _line(self, obj: dict[str, Any]) -> None:

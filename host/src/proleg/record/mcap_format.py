@@ -30,7 +30,7 @@ class McapWriter(Writer):
     def open(self) -> None:
         from mcap.writer import Writer as _Mcap
 
-        self._f: BinaryIO = open(self.path, "wb")
+        self._f: BinaryIO = self._create(self.path, "wb")
         self._w = _Mcap(self._f)
         self._w.start(profile="", library="proleg")
         tel = self._w.register_schema(name="proleg.Telemetry", encoding="jsonschema",
