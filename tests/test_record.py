@@ -354,3 +354,20 @@ def test_a_full_disk_while_opening_a_csv_recording_leaves_no_empty_files(tmp_pat
     with pytest.raises(LinkError, match="No space left on device"):
         Logger(tmp_path / "run.csv", RecordingMeta.for_robot(robot=ROBOT, board="fake"))
     assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # the link stays; no run.csv, no meta
+
+
+def test_gait_plot_to_a_directory_or_a_full_disk_names_the_users_file(tmp_path, capsys, monkeypatch):
+    from proleg.cli.main import main
+
+    (tmp_path / "d.png").mkdir()
+    assert main(["gait", "paper-r1", "--plot", str(tmp_path / "d.png")]) == 2
+    assert capsys.readouterr().err == f"proleg: error: --plot {tmp_path / 'd.png'}: is a directory\n"
+
+    def full(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("matplotlib.figure.Figure.savefig", full)
+    out = tmp_path / "x.png"
+    assert main(["gait", "paper-r1", "--plot", str(out)]) == 1
+    assert capsys.readouterr().err == f"proleg: error: cannot write plot {out}: No space left on device\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["d.png"]  # no temp file left

@@ -255,7 +255,7 @@ def _result_json(robot, name: str, r, planar: bool, cycles: int) -> dict:
 def _plot(robot, answers, cycles: int, out: str) -> None:
     """Each answer's gait 0 composed over ``cycles`` passes, in one plane, PNG/SVG/PDF."""
     from ..gait.compose import gait_path
-    from ..plot import figure_problem, new_figure, save_figure
+    from ..plot import figure_problem, new_figure, write_figure
 
     path = Path(out)
     problem = figure_problem(path)
@@ -284,7 +284,7 @@ def _plot(robot, answers, cycles: int, out: str) -> None:
     ax.set_title(f"{robot.name}: {cycles} passes of each gait (dots: one pass)")
     ax.grid(True, lw=0.3)
     ax.legend(loc="best", fontsize="small")
-    save_figure(fig, path)
+    write_figure(fig, path)
 
 
 def _print_evaluation(robot, args) -> int:
