@@ -356,6 +356,20 @@ def test_a_full_disk_while_opening_a_csv_recording_leaves_no_empty_files(tmp_pat
     assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # the link stays; no run.csv, no meta
 
 
+def test_gait_plot_with_evaluate_draws_the_sequence_and_cycles_alone_is_refused(tmp_path, capsys):
+    from proleg.cli.main import main
+
+    out = tmp_path / "walk.png"
+    assert main(["gait", "paper-r1", "--evaluate", "00,10,11,01,00", "--plot", str(out), "--cycles", "3"]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    capsys.readouterr()
+    for argv in (["--cycles", "3"], ["--evaluate", "00,10,11,01,00", "--cycles", "3"]):
+        assert main(["gait", "paper-r1", *argv]) == 2
+        assert "--cycles 3: only with --plot" in capsys.readouterr().err
+    assert main(["gait", "paper-r1", "--heading", "0", "--cycles", "3"]) == 0  # planar text composes 3 passes
+    assert "after 3 passes" in capsys.readouterr().out
+
+
 def test_gait_plot_to_a_directory_or_a_full_disk_names_the_users_file(tmp_path, capsys, monkeypatch):
     from proleg.cli.main import main
 
