@@ -252,6 +252,17 @@ def test_the_build_manifest_names_the_gait_selection(parent):
 # a failed build: one clear message, nothing left behind
 
 
+def test_a_full_disk_while_writing_the_project_names_the_directory(capsys, parent, monkeypatch):
+    def full(self, *a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_text", full)
+    code, _, err = cli(capsys, "build", R1, "--board", "host-sim", "-o", parent / "fw")
+    assert code == 1
+    assert one_line(err) == f"proleg: error: cannot write build directory {parent / 'fw'}: No space left on device"
+    assert_nothing_left(parent)
+
+
 def test_unknown_board_is_one_error_line(capsys, parent):
     code, _, err = cli(capsys, "build", R1, "--board", "nope", "-o", parent / "fw")
     assert code == 2

@@ -1,4 +1,4 @@
-"""Recording (CSV / JSON Lines / MCAP, chosen by suffix), plots, DBC output, and bad input → one LinkError line."""
+"""Recording (CSV / JSON Lines / MCAP, chosen by suffix), plots, DBC output; a bad recording read back → one RecordingError line (exit 2)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from proleg.errors import LinkError, UsageError
+from proleg.errors import LinkError, RecordingError, UsageError
 from proleg.link import RobotClient
 from proleg.cli.link_commands import console_main, dbc_main, plot_main
 from fake_board import FakeBoard
@@ -178,11 +178,11 @@ def test_plot_writes_the_image_atomically(tmp_path):
     (None, "does not exist"),
     ("hello\n", "not a proleg CSV recording"),
 ])
-def test_unreadable_record_file_is_one_link_error_and_no_output(tmp_path, content, match):
+def test_unreadable_record_file_is_one_recording_error_and_no_output(tmp_path, content, match):
     src = tmp_path / "bad.csv"
     if content is not None:
         src.write_text(content)
-    with pytest.raises(LinkError, match=match) as e:
+    with pytest.raises(RecordingError, match=match) as e:
         plot_main(record_file=str(src), out=str(tmp_path / "out.png"))
     assert "\n" not in str(e.value)
     assert not (tmp_path / "out.png").exists()
@@ -261,3 +261,127 @@ def test_a_recording_that_cannot_be_written_is_refused_before_the_robot_is_touch
     err = capsys.readouterr().err
     assert code == 1 and f"cannot write record file {tmp_path / where}: {why}" in err
     assert "robot stopped" not in err  # never connected, so nothing to stop
+
+
+def _edit_line(path: Path, n: int, edit) -> None:
+    lines = path.read_text().split("\n")
+    lines[n - 1] = edit(lines[n - 1])
+    path.write_text("\n".join(lines))
+
+
+def _jsonl_field(n: int, **fields):
+    return lambda path: _edit_line(path, n, lambda line: json.dumps({**json.loads(line), **fields}))
+
+
+def _first(msg: str, **fields):
+    def edit(path: Path) -> None:
+        lines = path.read_text().splitlines(keepends=True)
+        n = next(i for i, line in enumerate(lines) if f'"{msg}"' in line)
+        lines[n] = json.dumps({**json.loads(lines[n]), **fields}) + "\n"
+        path.write_text("".join(lines))
+    return edit
+
+
+def _csv_cell(column: str, value: str, *, events: bool = False):
+    def edit(path: Path) -> None:
+        target = path.with_name("run.events.csv") if events else path
+        header = target.read_text().splitlines()[0].split(",")
+        i = header.index(column)
+        _edit_line(target, 3, lambda line: ",".join(value if k == i else c for k, c in enumerate(line.split(","))))
+    return edit
+
+
+@pytest.mark.parametrize("suffix, spoil, where, says", [
+    (".csv", _csv_cell("t_s", "bar", events=True), "run.events.csv:3", "t_s: expected a finite number, got 'bar'"),
+    (".csv", _csv_cell("t_s", "abc0.1"), "run.csv:3", "t_s: expected a finite number, got 'abc0.1'"),
+    (".csv", _csv_cell("seq", "nan"), "run.csv:3", "seq: expected an integer, got nan"),
+    (".csv", _csv_cell("seq", "1.5"), "run.csv:3", "seq: expected an integer, got 1.5"),
+    (".csv", lambda p: _edit_line(p, 3, lambda line: line + ",9,9"), "run.csv:3", "16 cells, expected 14"),
+    (".jsonl", _jsonl_field(1, psi_star_deg="abc"), "run.jsonl:1", "psi_star_deg: expected a list of lists"),
+    (".jsonl", _jsonl_field(1, limb_names=5), "run.jsonl:1", "limb_names: expected a list of names, got 5"),
+    (".jsonl", _first("INJECT", t_s="abc"), "run.jsonl:", "t_s: expected a finite number, got 'abc'"),
+    (".jsonl", _first("TELEMETRY", seq=1.5), "run.jsonl:", "seq: expected an integer, got 1.5"),
+    (".jsonl", _first("TELEMETRY", t_s="0.1"), "run.jsonl:", "t_s: expected a finite number, got '0.1'"),
+    (".mcap", lambda p: p.write_text("1,2\n"), "run.mcap", "not a readable MCAP recording (it ends early"),
+    (".mcap", lambda p: p.write_bytes(p.read_bytes()[:-200]), "run.mcap", "(it ends early"),
+])
+def test_a_bad_recording_is_one_line_naming_its_file_and_line_and_exit_2(tmp_path, capsys, suffix, spoil, where, says):
+    from proleg.cli.main import main
+
+    if suffix == ".mcap":
+        pytest.importorskip("mcap")
+    path = tmp_path / f"run{suffix}"
+    record(path, 20, inject_at=10)
+    spoil(path)
+    code = main(["plot", str(path), "-o", str(tmp_path / "out.png")])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert err.count("\n") == 1 and f"{tmp_path / where}" in err and says in err, err
+    assert not (tmp_path / "out.png").exists()
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
+def test_a_killed_recorders_torn_last_row_is_dropped_with_a_warning(tmp_path, capsys, suffix):
+    from proleg.cli.main import main
+
+    path = tmp_path / f"run{suffix}"
+    record(path, 20)
+    with path.open("a") as f:
+        f.write("2.662,2.66,132,3,1,0,0" if suffix == ".csv" else '{"msg": "TELEM')
+    lines = path.read_text().count("\n") + 1
+    assert read_recording(path).time_s.size == 20
+    assert main(["plot", str(path), "-o", str(tmp_path / "out.png")]) == 0
+    err = capsys.readouterr().err
+    assert f"warning: {path}:{lines}: torn last line dropped" in err
+
+
+def test_a_csv_recording_whose_events_file_cannot_be_opened_names_it_and_leaves_nothing(tmp_path):
+    (tmp_path / "run.events.csv").mkdir()
+    meta = RecordingMeta.for_robot(robot=ROBOT, board="fake")
+    with pytest.raises(LinkError, match=f"cannot write record file {tmp_path / 'run.events.csv'}: Is a directory"):
+        Logger(tmp_path / "run.csv", meta)
+    assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # no run.csv, no run.meta.json
+    from proleg.record import check_suffix
+
+    with pytest.raises(LinkError, match="run.events.csv: Is a directory"):
+        check_suffix(tmp_path / "run.csv")  # refused before connecting, as for run.csv itself
+
+
+def test_a_full_disk_while_opening_a_csv_recording_leaves_no_empty_files(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    (tmp_path / "run.events.csv").symlink_to("/dev/full")
+    with pytest.raises(LinkError, match="No space left on device"):
+        Logger(tmp_path / "run.csv", RecordingMeta.for_robot(robot=ROBOT, board="fake"))
+    assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # the link stays; no run.csv, no meta
+
+
+def test_gait_plot_with_evaluate_draws_the_sequence_and_cycles_alone_is_refused(tmp_path, capsys):
+    from proleg.cli.main import main
+
+    out = tmp_path / "walk.png"
+    assert main(["gait", "paper-r1", "--evaluate", "00,10,11,01,00", "--plot", str(out), "--cycles", "3"]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    capsys.readouterr()
+    for argv in (["--cycles", "3"], ["--evaluate", "00,10,11,01,00", "--cycles", "3"]):
+        assert main(["gait", "paper-r1", *argv]) == 2
+        assert "--cycles 3: only with --plot" in capsys.readouterr().err
+    assert main(["gait", "paper-r1", "--heading", "0", "--cycles", "3"]) == 0  # planar text composes 3 passes
+    assert "after 3 passes" in capsys.readouterr().out
+
+
+def test_gait_plot_to_a_directory_or_a_full_disk_names_the_users_file(tmp_path, capsys, monkeypatch):
+    from proleg.cli.main import main
+
+    (tmp_path / "d.png").mkdir()
+    assert main(["gait", "paper-r1", "--plot", str(tmp_path / "d.png")]) == 2
+    assert capsys.readouterr().err == f"proleg: error: --plot {tmp_path / 'd.png'}: is a directory\n"
+
+    def full(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("matplotlib.figure.Figure.savefig", full)
+    out = tmp_path / "x.png"
+    assert main(["gait", "paper-r1", "--plot", str(out)]) == 1
+    assert capsys.readouterr().err == f"proleg: error: cannot write plot {out}: No space left on device\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["d.png"]  # no temp file left

@@ -39,6 +39,11 @@ class LinkError(ProlegError):
     """A link to a robot (serial, CAN, simulated) failed or timed out."""
 
 
+class RecordingError(ProlegError):
+    """A recording given to read back (``proleg plot``) is missing or malformed: a bad input
+    file, exit 2 like a bad robot file. Writing one that fails is a ``LinkError`` (exit 1)."""
+
+
 class UsageError(ProlegError):
     """An option's value the command cannot take (an output's file type, an endpoint, a node
     id): exit 2, like any other usage mistake."""

@@ -2,7 +2,8 @@
 and target), SMA duty per actuator (by name) and — when the recording has it — displacement,
 over firmware time; faults, E-stops and injected faults as vertical markers on every panel. matplotlib with the Agg backend; written to a temp file and renamed, so a failed plot
 leaves no half-written output. ``figure_problem``, ``new_figure`` and ``save_figure`` do that
-for every figure proleg draws (``proleg gait --plot`` too).
+for every figure proleg draws (``proleg gait --plot`` too); ``write_figure`` names the file
+when the write fails.
 """
 
 from __future__ import annotations
@@ -28,6 +29,8 @@ def figure_problem(out: Path) -> str | None:
     directory = out.parent if str(out.parent) else Path(".")
     if not directory.is_dir():
         return f"directory {directory} does not exist"
+    if out.is_dir():
+        return "is a directory"
     return None
 
 
@@ -55,6 +58,14 @@ def save_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
         Path(tmp).unlink(missing_ok=True)
 
 
+def write_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
+    """``save_figure``, a failure (a full disk...) one ``LinkError`` naming ``out`` (exit 1)."""
+    try:
+        save_figure(fig, out, dpi)
+    except OSError as e:
+        raise LinkError(f"cannot write plot {out}: {e.strerror or e}") from None
+
+
 def _levels(rec: Recording) -> tuple[int, ...]:
     stars = rec.meta.psi_star_deg
     if len(stars) == rec.limbs:
@@ -63,19 +74,20 @@ def _levels(rec: Recording) -> tuple[int, ...]:
 
 
 def _markers(rec: Recording) -> list[tuple[float, str, str]]:
-    """(firmware time, colour, label) of every fault, E-stop and injected fault."""
+    """(firmware time, colour, label) of every fault, E-stop and injected fault (the reader has
+    made every event's ``t_s`` a number or None)."""
     out = []
     for e in rec.events:
         t = e.get("t_s")
-        if t is None or t == "":
+        if t is None:
             continue
         kind = e.get("kind", "")
         if kind == "FAULT":
-            out.append((float(t), "red", str(e.get("text", "fault"))))
+            out.append((t, "red", str(e.get("text", "fault"))))
         elif kind == "ESTOP":
-            out.append((float(t), "black", "E-stop"))
+            out.append((t, "black", "E-stop"))
         elif kind == "INJECT":
-            out.append((float(t), "darkorange", f"injected {e.get('text', '')}"))
+            out.append((t, "darkorange", f"injected {e.get('text', '')}"))
     return out
 
 
@@ -138,8 +150,5 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     axes[-1].set_xlabel("firmware time (s)")
     fig.suptitle(title or f"{rec.meta.robot} {rec.meta.board} — {rec.path.name}".strip())
 
-    try:
-        save_figure(fig, out, dpi=110)
-    except OSError as e:
-        raise LinkError(f"cannot write plot {out}: {e.strerror or e}") from None
+    write_figure(fig, out, dpi=110)
     return out

@@ -5,7 +5,8 @@ Without a planar option the answer is today's: ``--direction`` +x / −x / both 
 ``matrix`` rewards. With ``--heading``, ``--variance-weight``, ``--transition-cost``,
 ``--rotation-cap-deg``, ``--simple-cycles``, ``--rotate`` or ``--library`` the question is
 planar (``proleg.gait.planar``; docs/planar.md) and every gait also shows its SE(2)-composed
-net motion per pass and the path of ``--cycles`` passes (``--plot FILE.png`` draws them).
+net motion per pass and the path of ``--cycles`` passes (``--plot FILE.png`` draws them; with
+``--evaluate`` it draws the typed sequence). ``--cycles`` where no path is composed is refused.
 """
 
 from __future__ import annotations
@@ -45,8 +46,11 @@ def add_gait_parser(sub) -> None:
     p.add_argument("--translation-cap", type=non_negative_float, metavar="D",
                    help="with --rotate: at most this translation per pass (default: one mean step)")
     p.add_argument("--library", metavar="HEADINGS", help="best gait per heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
-    p.add_argument("--cycles", type=positive_int, default=10, metavar="N", help="passes in the composed path (default 10)")
-    p.add_argument("--plot", metavar="FILE.png", help="draw each answer's gait 0 composed over --cycles passes")
+    p.add_argument("--cycles", type=positive_int, metavar="N",
+                   help="passes in the composed path of a planar answer or of --plot (default 10); refused where "
+                        "nothing composes a path")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="draw each answer's gait 0 (with --evaluate: that sequence) composed over --cycles passes")
     g.set_defaults(run=cmd_gait)
 
 
@@ -62,9 +66,10 @@ def cmd_gait(args: argparse.Namespace) -> int:
     from ..robot import load_robot
 
     robot = load_robot(args.robot)
+    planar = any(getattr(args, k) is not None and getattr(args, k) is not False for k in PLANAR_FLAGS)
+    _check_cycles(args, planar)
     if args.evaluate is not None:
         return _print_evaluation(robot, args)
-    planar = any(getattr(args, k) is not None and getattr(args, k) is not False for k in PLANAR_FLAGS)
     if not planar:
         if args.translation_cap is not None:
             raise GaitError("--translation-cap only applies with --rotate or rot-cw/rot-ccw in --library")
@@ -92,6 +97,14 @@ def cmd_gait(args: argparse.Namespace) -> int:
     for name, r in answers:
         print(_result_text(robot, name, r, planar, args.cycles))
     return 0
+
+
+def _check_cycles(args: argparse.Namespace, planar: bool) -> None:
+    """``--cycles`` only where a path is composed: --plot, or a planar answer's text."""
+    if args.cycles is not None and not args.plot and (args.evaluate is not None or not planar):
+        raise GaitError(f"--cycles {args.cycles}: only with --plot{'' if args.evaluate else ' or a planar option'} "
+                        "(nothing else composes a path)")
+    args.cycles = args.cycles or 10
 
 
 def _planar_answers(robot, args) -> list:
@@ -255,7 +268,7 @@ def _result_json(robot, name: str, r, planar: bool, cycles: int) -> dict:
 def _plot(robot, answers, cycles: int, out: str) -> None:
     """Each answer's gait 0 composed over ``cycles`` passes, in one plane, PNG/SVG/PDF."""
     from ..gait.compose import gait_path
-    from ..plot import figure_problem, new_figure, save_figure
+    from ..plot import figure_problem, new_figure, write_figure
 
     path = Path(out)
     problem = figure_problem(path)
@@ -284,7 +297,7 @@ def _plot(robot, answers, cycles: int, out: str) -> None:
     ax.set_title(f"{robot.name}: {cycles} passes of each gait (dots: one pass)")
     ax.grid(True, lw=0.3)
     ax.legend(loc="best", fontsize="small")
-    save_figure(fig, path)
+    write_figure(fig, path)
 
 
 def _print_evaluation(robot, args) -> int:
@@ -304,6 +317,10 @@ def _print_evaluation(robot, args) -> int:
         print(json.dumps({"robot": robot.name, "evaluation": {"states": names, "valid": False, "reason": str(e)}}))
         print(f"proleg: error: --evaluate: {' → '.join(names)} is not a valid gait of {robot.name}: {e}", file=sys.stderr)
         return 2
+    if args.plot:
+        from types import SimpleNamespace
+
+        _plot(robot, [("evaluated", SimpleNamespace(gaits=[gait]))], args.cycles, args.plot)
     if args.json:
         print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))
     else:

@@ -3,8 +3,8 @@ call the library, print. ``gait`` is in ``gait``; ``console``, ``plot`` and ``db
 ``link_commands``; ``run``, ``load-gait``, ``set-param`` and ``robots`` in ``robot_commands``.
 
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
-faulted, an output could not be written); 2 usage (a bad argument, robot file, board file or
-gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
+faulted, an output could not be written); 2 usage (a bad argument, robot file, board file,
+recording or gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
 a closed pipe (``proleg … | head``), a full disk and a terminal that cannot show UTF-8 end
 without a traceback.
 """
@@ -31,7 +31,7 @@ EPILOG = """\
 exit status:
   0  ok
   1  failed: a link or command failed, the robot faulted, an output could not be written
-  2  usage: a bad argument, robot file, board file or gait
+  2  usage: a bad argument, robot file, board file, recording or gait
 
 ROBOT is a robot file or the name of a bundled example (proleg robots lists them).
 """

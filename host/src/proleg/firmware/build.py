@@ -20,6 +20,8 @@ import re
 import shutil
 import subprocess
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,7 +29,7 @@ from typing import Any
 import jinja2
 
 from .. import __version__
-from ..errors import BuildError
+from ..errors import BuildError, LinkError
 from ..paths import as_if_created, display_path, templates_dir
 from ..robot import Robot
 from .boards import Board, pwm_channel_error
@@ -200,14 +202,16 @@ def build(
     warnings = tuple(gait_warnings(robot, gaits))
     files = render_project(robot, board, gaits)
 
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
-    as_if_created(tmp, directory=True)
+    with _writing(out_dir):
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+        as_if_created(tmp, directory=True)
     try:
-        for rel, text in files.items():
-            p = tmp / rel
-            p.parent.mkdir(parents=True, exist_ok=True)
-            p.write_text(text, encoding="utf-8")
+        with _writing(out_dir):
+            for rel, text in files.items():
+                p = tmp / rel
+                p.parent.mkdir(parents=True, exist_ok=True)
+                p.write_text(text, encoding="utf-8")
         _make(tmp, jobs)
         flash_used, ram_used = _sizes(board, tmp)
         _check_limits(robot, board, flash_used, ram_used)
@@ -238,12 +242,22 @@ def build(
         if gaits.library_spec is not None:  # issue 17: the gait library, heading → (direction, gait)
             manifest["gait_library_selection"] = gaits.library_spec.as_json()
             manifest["gait_library"] = [lg.as_json(robot.transitions.label) for lg in gaits.library]
-        (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
-        _replace_dir(tmp, out_dir)
+        with _writing(out_dir):
+            (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
+            _replace_dir(tmp, out_dir)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return BuildResult(out_dir, out_dir / board.artifact, board, flash_used, ram_used, digest, gaits, fit, warnings)
+
+
+@contextmanager
+def _writing(out_dir: Path) -> Iterator[None]:
+    """A failed write (a full disk...) as one line naming the project directory (exit 1)."""
+    try:
+        yield
+    except OSError as e:
+        raise LinkError(f"cannot write build directory {out_dir}: {e.strerror or e}") from None
 
 
 def _make(project: Path, jobs: int) -> None:

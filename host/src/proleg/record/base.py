@@ -5,24 +5,28 @@ writes it at once (flushed per line or message), so a killed console loses at mo
 one. Writing never raises into the ``Notifier``'s thread: a failed write (a full disk...)
 closes the writer and keeps the error in ``writer.error`` (a ``LinkError`` naming the file)
 for the caller to report. ``mark(host_s, t_s, text)`` records a fault injection.
-A ``Reader`` reads a file back into a ``Recording``.
+A ``Reader`` reads a file back into a ``Recording``; a missing or malformed file is a
+``RecordingError`` naming the file and line (exit 2: a bad input file).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 
-from ..errors import LinkError
+from ..errors import LinkError, RecordingError
 from ..link.client import Received
 from ..link.listeners import Listener
 from ..names import identifier
 from .fields import RecordingMeta, event_row, injection_row, telemetry_row
+
+log = logging.getLogger(__name__)
 
 
 class Writer(Listener, ABC):
@@ -38,15 +42,38 @@ class Writer(Listener, ABC):
         self.error: LinkError | None = None
         self.records = 0
         self._open = False
+        self._created: list[tuple[Path, IO[Any]]] = []
         try:
             self.open()
             self._open = True
         except OSError as e:
-            raise LinkError(f"cannot write record file {self.path}: {e.strerror or e}") from None
+            self._discard()
+            raise LinkError(f"cannot write record file {e.filename or self.path}: {e.strerror or e}") from None
+
+    @classmethod
+    def files(cls, path: Path) -> list[Path]:
+        """Every file a recording at ``path`` is made of."""
+        return [path]
+
+    def _create(self, path: Path, mode: str = "w", **kw: Any) -> IO[Any]:
+        """Open ``path`` for writing; ``open`` creates every file through this, so a failure
+        part-way removes what it had created (nothing half-written is left)."""
+        f = open(path, mode, **kw)
+        self._created.append((path, f))
+        return f
+
+    def _discard(self) -> None:
+        for path, f in self._created:
+            try:
+                f.close()
+            except OSError:
+                pass
+            if not path.is_symlink():  # the user's link (to a device...) stays
+                path.unlink(missing_ok=True)
 
     @abstractmethod
     def open(self) -> None:
-        """Create the file(s) and write the metadata."""
+        """Create the file(s) (with ``_create``) and write the metadata."""
 
     @abstractmethod
     def write_telemetry(self, row: dict[str, Any]) -> None: ...
@@ -103,9 +130,41 @@ class Reader(ABC):
         try:
             return p.read_text(encoding="utf-8")
         except FileNotFoundError:
-            raise LinkError(f"record file {p} does not exist") from None
+            raise RecordingError(f"record file {p} does not exist") from None
         except (OSError, UnicodeDecodeError) as e:
-            raise LinkError(f"cannot read record file {p}: {getattr(e, 'strerror', None) or e}") from None
+            raise RecordingError(f"cannot read record file {p}: {getattr(e, 'strerror', None) or e}") from None
+
+
+def torn_last(where: str) -> None:
+    """Say that a killed recorder's half-written last line is left out."""
+    log.warning("warning: %s: torn last line dropped (the recording was cut short while writing it)", where)
+
+
+def _shown(v: Any) -> str:
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _integer(where: str, r: dict[str, Any], k: str) -> int:
+    v = r.get(k)
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) < 2**63:
+        return v
+    raise RecordingError(f"{where}: {k}: expected an integer, got {_shown(v)}")
+
+
+def _number(where: str, r: dict[str, Any], k: str, *, optional: bool = False) -> float:
+    v = r.get(k)
+    if optional and v is None:
+        return math.nan
+    if isinstance(v, (int, float)) and not isinstance(v, bool) and (optional or math.isfinite(v)):
+        return float(v)
+    raise RecordingError(f"{where}: {k}: expected {'a number or empty' if optional else 'a finite number'}, "
+                         f"got {_shown(v)}")
+
+
+def event_time(where: str, e: dict[str, Any]) -> float | None:
+    """An event's firmware time ``t_s`` (None for a reply, which has none)."""
+    return None if e.get("t_s") is None else _number(where, e, "t_s")
 
 
 @dataclass
@@ -135,27 +194,25 @@ class Recording:
         return int(self.duty_pct.shape[1])
 
     @classmethod
-    def from_rows(cls, path: Path, meta: RecordingMeta, rows: list[dict[str, Any]],
-                  events: list[dict[str, Any]]) -> Recording:
-        """Assemble from telemetry rows named as ``meta.columns()`` says."""
+    def from_rows(cls, path: Path, meta: RecordingMeta, rows: list[tuple[str, dict[str, Any]]],
+                  events: list[tuple[str, dict[str, Any]]]) -> Recording:
+        """Assemble from telemetry rows named as ``meta.columns()`` says, each with where it
+        came from (``file:line``) for the message when a value has the wrong type."""
         if not rows:
-            raise LinkError(f"{path}: no TELEMETRY frames in the recording")
+            raise RecordingError(f"{path}: no TELEMETRY frames in the recording")
         psi_cols = [f"psi_{identifier(n)}_deg" for n in meta.limb_names]
         duty_cols = [f"duty_{identifier(n)}_pct" for n in meta.channel_names]
+        ints = {k: np.array([_integer(w, r, k) for w, r in rows], dtype=np.int64)
+                for k in ("seq", "measured", "target", "step", "flags")}
+        x = np.array([_number(w, r, "displacement_mm", optional=True) for w, r in rows], dtype=float)
+        return cls(
+            path=path, meta=meta, time_s=np.array([_number(w, r, "t_s") for w, r in rows]), **ints,
+            psi_deg=cls._columns(rows, psi_cols), duty_pct=cls._columns(rows, duty_cols),
+            displacement_mm=None if np.all(np.isnan(x)) else x,
+            events=[{**e, "t_s": event_time(w, e)} for w, e in events],
+        )
 
-        def num(r: dict[str, Any], k: str) -> float:
-            v = r.get(k)
-            return math.nan if v is None or v == "" else float(v)
-
-        try:
-            ints = {k: np.array([int(r[k]) for r in rows], dtype=np.int64)
-                    for k in ("seq", "measured", "target", "step", "flags")}
-            x = np.array([num(r, "displacement_mm") for r in rows], dtype=float)
-            return cls(
-                path=path, meta=meta, time_s=np.array([float(r["t_s"]) for r in rows]), **ints,
-                psi_deg=np.array([[num(r, c) for c in psi_cols] for r in rows], dtype=float).reshape(len(rows), -1),
-                duty_pct=np.array([[num(r, c) for c in duty_cols] for r in rows], dtype=float).reshape(len(rows), -1),
-                displacement_mm=None if np.all(np.isnan(x)) else x, events=events,
-            )
-        except (KeyError, TypeError, ValueError) as e:
-            raise LinkError(f"{path}: malformed telemetry ({e.__class__.__name__}: {e})") from None
+    @staticmethod
+    def _columns(rows: list[tuple[str, dict[str, Any]]], names: list[str]) -> np.ndarray:
+        values = [[_number(w, r, c, optional=True) for c in names] for w, r in rows]
+        return np.array(values, dtype=float).reshape(len(rows), -1)

@@ -12,8 +12,8 @@ import json
 from pathlib import Path
 from typing import Any, TextIO
 
-from ..errors import LinkError
-from .base import Reader, Recording, Writer
+from ..errors import RecordingError
+from .base import Reader, Recording, Writer, torn_last
 from .fields import EVENT_COLUMNS, RecordingMeta
 
 
@@ -38,11 +38,16 @@ def _cell(v: Any) -> Any:
 class CsvWriter(Writer):
     suffixes = (".csv",)
 
+    @classmethod
+    def files(cls, path: Path) -> list[Path]:
+        return [path, events_path(path), meta_path(path)]
+
     def open(self) -> None:
         self._columns = self.meta.columns()
-        meta_path(self.path).write_text(json.dumps(self.meta.as_dict(), indent=1) + "\n", encoding="utf-8")
-        self._tel: TextIO = open(self.path, "w", encoding="utf-8", newline="")
-        self._ev: TextIO = open(events_path(self.path), "w", encoding="utf-8", newline="")
+        self._tel: TextIO = self._create(self.path, encoding="utf-8", newline="")
+        self._ev: TextIO = self._create(events_path(self.path), encoding="utf-8", newline="")
+        with self._create(meta_path(self.path), encoding="utf-8") as f:
+            f.write(json.dumps(self.meta.as_dict(), indent=1) + "\n")
         self._row(self._tel, self._columns)
         self._row(self._ev, list(EVENT_COLUMNS))
 
@@ -64,6 +69,18 @@ class CsvWriter(Writer):
             f.close()
 
 
+def _value(cell: str) -> Any:
+    """A CSV cell as the JSON value it was written from: "" → None, an int, a float, else text."""
+    if cell == "":
+        return None
+    for kind in (int, float):
+        try:
+            return kind(cell)
+        except ValueError:
+            pass
+    return cell
+
+
 class CsvReader(Reader):
     suffixes = (".csv",)
 
@@ -72,20 +89,35 @@ class CsvReader(Reader):
         text = self._text()
         mp = meta_path(p)
         if not mp.exists():
-            raise LinkError(f"{p}: not a proleg CSV recording (its metadata {mp.name} is missing)")
+            raise RecordingError(f"{p}: not a proleg CSV recording (its metadata {mp.name} is missing)")
         try:
             meta = RecordingMeta.from_dict(json.loads(self._text(mp)))
-        except (ValueError, TypeError, AttributeError) as e:
-            raise LinkError(f"{mp}: not proleg recording metadata ({e})") from None
-        reader = csv.DictReader(text.splitlines())
-        if reader.fieldnames is None or "seq" not in reader.fieldnames:
-            raise LinkError(f"{p}: not a proleg CSV recording (no 'seq' column in the first row)")
-        rows = [r for r in reader if r.get("seq")]
-        events: list[dict[str, Any]] = []
+        except ValueError as e:
+            raise RecordingError(f"{mp}: not proleg recording metadata ({e})") from None
+        header, rows = self._table(p, text)
+        if "seq" not in header:
+            raise RecordingError(f"{p}: not a proleg CSV recording (no 'seq' column in the first row)")
+        telemetry = [(w, {k: _value(v) for k, v in r.items()}) for w, r in rows]
+        events: list[tuple[str, dict[str, Any]]] = []
         ep = events_path(p)
         if ep.exists():
-            for r in csv.DictReader(self._text(ep).splitlines()):
-                r = dict(r)
-                r["t_s"] = float(r["t_s"]) if r.get("t_s") else None
-                events.append(r)
-        return Recording.from_rows(p, meta, rows, events)
+            events = [(w, {**r, "t_s": _value(r.get("t_s", ""))}) for w, r in self._table(ep, self._text(ep))[1]]
+        return Recording.from_rows(p, meta, telemetry, events)
+
+    @staticmethod
+    def _table(path: Path, text: str) -> tuple[list[str], list[tuple[str, dict[str, str]]]]:
+        """The header and each row as {column: cell} with ``file:line``. Every row has the
+        header's cells; a short last row with no newline after it (a killed recorder's) is
+        dropped with a warning."""
+        reader = csv.reader(io.StringIO(text, newline=""))
+        lines = [(reader.line_num, cells) for cells in reader]
+        if not lines:
+            return [], []
+        header = lines[0][1]
+        rows = [(f"{path}:{n}", cells) for n, cells in lines[1:] if cells]
+        if rows and len(rows[-1][1]) < len(header) and not text.endswith("\n"):
+            torn_last(rows.pop()[0])
+        for where, cells in rows:
+            if len(cells) != len(header):
+                raise RecordingError(f"{where}: {len(cells)} cells, expected {len(header)} as in the header")
+        return header, [(w, dict(zip(header, cells))) for w, cells in rows]

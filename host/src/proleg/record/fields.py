@@ -25,6 +25,23 @@ INTEGER_FIELDS = ("seq", "measured", "target", "gait", "direction", "step", "fla
 EVENT_COLUMNS = ("t_host_s", "t_s", "msg", "kind", "code", "detail", "text")
 
 
+def _strings(d: dict[str, Any], key: str) -> tuple[str, ...]:
+    v = d.get(key, ())
+    if not isinstance(v, (list, tuple)) or not all(isinstance(x, str) for x in v):
+        raise ValueError(f"{key}: expected a list of names, got {v!r:.40}")
+    return tuple(v)
+
+
+def _stars(v: Any) -> tuple[tuple[float, ...], ...]:
+    """ψ* per limb: a list of lists of numbers."""
+    ok = isinstance(v, (list, tuple)) and all(
+        isinstance(s, (list, tuple)) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in s)
+        for s in v)
+    if not ok:
+        raise ValueError(f"psi_star_deg: expected a list of lists of degrees per limb, got {v!r:.40}")
+    return tuple(tuple(float(x) for x in s) for s in v)
+
+
 def utc_now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
 
@@ -60,13 +77,18 @@ class RecordingMeta:
         return d
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> RecordingMeta:
+    def from_dict(cls, d: Any) -> RecordingMeta:
+        """From ``as_dict``'s output; ``ValueError`` names the first field of the wrong type."""
+        if not isinstance(d, dict):
+            raise ValueError(f"expected a JSON object, got {type(d).__name__}")
+        info = d.get("info", {})
+        if not isinstance(info, dict):
+            raise ValueError(f"info: expected an object, got {info!r:.40}")
         return cls(
-            limb_names=tuple(d.get("limb_names", ())), channel_names=tuple(d.get("channel_names", ())),
+            limb_names=_strings(d, "limb_names"), channel_names=_strings(d, "channel_names"),
             robot=str(d.get("robot", "")), board=str(d.get("board", "")), start_utc=str(d.get("start_utc", "")),
-            psi_star_deg=tuple(tuple(float(x) for x in v) for v in d.get("psi_star_deg", ())),
-            truth=tuple(d.get("truth", ())), info={str(k): str(v) for k, v in d.get("info", {}).items()},
-            actuator_names=tuple(d.get("actuator_names", ())),
+            psi_star_deg=_stars(d.get("psi_star_deg", ())), truth=_strings(d, "truth"),
+            info={str(k): str(v) for k, v in info.items()}, actuator_names=_strings(d, "actuator_names"),
         )
 
     @classmethod

@@ -8,10 +8,10 @@ from __future__ import annotations
 import json
 from typing import Any, TextIO
 
-from ..errors import LinkError
+from ..errors import RecordingError
 from ..link.client import Received
 from ..link.listeners import Listener
-from .base import Reader, Recording, Writer
+from .base import Reader, Recording, Writer, torn_last
 from .fields import RecordingMeta, dumps, event_row, telemetry_row
 
 
@@ -19,7 +19,7 @@ class JsonlWriter(Writer):
     suffixes = (".jsonl", ".ndjson")
 
     def open(self) -> None:
-        self._f: TextIO = open(self.path, "w", encoding="utf-8")
+        self._f: TextIO = self._create(self.path, encoding="utf-8")
         self._line({"msg": "META", **self.meta.as_dict()})
 
     def _line(self, obj: dict[str, Any]) -> None:
@@ -43,8 +43,8 @@ class JsonlReader(Reader):
         p = self.path
         lines = self._text().splitlines()
         meta: RecordingMeta | None = None
-        rows: list[dict[str, Any]] = []
-        events: list[dict[str, Any]] = []
+        rows: list[tuple[str, dict[str, Any]]] = []
+        events: list[tuple[str, dict[str, Any]]] = []
         for n, line in enumerate(lines, start=1):
             if not line.strip():
                 continue
@@ -52,20 +52,28 @@ class JsonlReader(Reader):
                 obj = json.loads(line)
             except json.JSONDecodeError:
                 if n == len(lines):
-                    break  # a killed recorder's last, half-written line
-                raise LinkError(f"{p}:{n}: not JSON") from None
+                    torn_last(f"{p}:{n}")  # a killed recorder's last, half-written line
+                    break
+                raise RecordingError(f"{p}:{n}: not JSON") from None
             if not isinstance(obj, dict):
-                raise LinkError(f"{p}:{n}: expected a JSON object")
+                raise RecordingError(f"{p}:{n}: expected a JSON object")
             msg = obj.get("msg")
             if msg == "META":
-                meta = RecordingMeta.from_dict(obj)
+                meta = _meta(f"{p}:{n}", obj)
             elif msg == "TELEMETRY":
-                rows.append(obj)
+                rows.append((f"{p}:{n}", obj))
             elif msg:
-                events.append(obj)
+                events.append((f"{p}:{n}", obj))
         if meta is None:
-            raise LinkError(f"{p}: not a proleg JSON Lines recording (no META line)")
+            raise RecordingError(f"{p}: not a proleg JSON Lines recording (no META line)")
         return Recording.from_rows(p, meta, rows, events)
+
+
+def _meta(where: str, obj: dict[str, Any]) -> RecordingMeta:
+    try:
+        return RecordingMeta.from_dict(obj)
+    except ValueError as e:
+        raise RecordingError(f"{where}: not proleg recording metadata ({e})") from None
 
 
 class JsonlPrinter(Listener):

@@ -10,7 +10,7 @@ import json
 from datetime import datetime
 from typing import Any, BinaryIO
 
-from ..errors import LinkError
+from ..errors import RecordingError
 from .base import Reader, Recording, Writer
 from .fields import EVENT_COLUMNS, INTEGER_FIELDS, RecordingMeta, dumps
 
@@ -30,7 +30,7 @@ class McapWriter(Writer):
     def open(self) -> None:
         from mcap.writer import Writer as _Mcap
 
-        self._f: BinaryIO = open(self.path, "wb")
+        self._f: BinaryIO = self._create(self.path, "wb")
         self._w = _Mcap(self._f)
         self._w.start(profile="", library="proleg")
         tel = self._w.register_schema(name="proleg.Telemetry", encoding="jsonschema",
@@ -68,32 +68,51 @@ class McapReader(Reader):
     suffixes = (".mcap",)
 
     def read(self) -> Recording:
-        from mcap.exceptions import McapError
-        from mcap.reader import make_reader
-
         p = self.path
         try:
             f = open(p, "rb")
         except FileNotFoundError:
-            raise LinkError(f"record file {p} does not exist") from None
+            raise RecordingError(f"record file {p} does not exist") from None
         except OSError as e:
-            raise LinkError(f"cannot read record file {p}: {e.strerror or e}") from None
-        rows: list[dict[str, Any]] = []
-        events: list[dict[str, Any]] = []
-        meta: RecordingMeta | None = None
+            raise RecordingError(f"cannot read record file {p}: {e.strerror or e}") from None
         with f:
-            try:
-                reader = make_reader(f)
-                for record in reader.iter_metadata():
-                    if record.name == "proleg":
-                        meta = RecordingMeta.from_dict(
-                            {k: v if k in ("robot", "board", "start_utc") else json.loads(v)
-                             for k, v in record.metadata.items()})
-                for _schema, channel, message in reader.iter_messages():
-                    row = json.loads(message.data)
-                    (rows if channel.topic == TELEMETRY_TOPIC else events).append(row)
-            except (McapError, ValueError, EOFError) as e:
-                raise LinkError(f"{p}: not a readable MCAP recording ({e})") from None
+            meta, rows, events = self._records(f)
         if meta is None:
-            raise LinkError(f"{p}: not a proleg MCAP recording (no 'proleg' metadata)")
+            raise RecordingError(f"{p}: not a proleg MCAP recording (no 'proleg' metadata)")
         return Recording.from_rows(p, meta, rows, events)
+
+    def _records(self, f: BinaryIO) -> tuple[RecordingMeta | None, list, list]:
+        """The metadata, the telemetry and the events, each message with its number."""
+        import struct
+
+        from mcap.exceptions import EndOfFile, McapError
+        from mcap.reader import make_reader
+
+        p = self.path
+        rows: list[tuple[str, dict[str, Any]]] = []
+        events: list[tuple[str, dict[str, Any]]] = []
+        meta: RecordingMeta | None = None
+        try:
+            reader = make_reader(f)
+            for record in reader.iter_metadata():
+                if record.name == "proleg":
+                    meta = _meta(p, record.metadata)
+            for n, (_schema, channel, message) in enumerate(reader.iter_messages(), start=1):
+                row = json.loads(message.data)
+                if not isinstance(row, dict):
+                    raise RecordingError(f"{p}: message {n}: expected a JSON object")
+                (rows if channel.topic == TELEMETRY_TOPIC else events).append((f"{p}: message {n}", row))
+        except (EndOfFile, EOFError, struct.error):
+            raise RecordingError(f"{p}: not a readable MCAP recording (it ends early: a run cut short, a full disk, "
+                                 "or not MCAP)") from None
+        except (McapError, ValueError) as e:  # a damaged record, JSON that is not
+            raise RecordingError(f"{p}: not a readable MCAP recording ({e or e.__class__.__name__})") from None
+        return meta, rows, events
+
+
+def _meta(path: Any, metadata: dict[str, str]) -> RecordingMeta:
+    try:
+        return RecordingMeta.from_dict({k: v if k in ("robot", "board", "start_utc") else json.loads(v)
+                                        for k, v in metadata.items()})
+    except ValueError as e:
+        raise RecordingError(f"{path}: not proleg recording metadata ({e})") from None

@@ -34,8 +34,11 @@ def check_suffix(path: str | Path) -> None:
     the file cannot be written (exit 1, the message a failed open would give): a directory,
     or a folder that does not exist or is not writable. The robot is never started only to be
     stopped because its recording could not begin."""
-    _lookup(path, WRITERS)
-    p = Path(path)
+    for p in _lookup(path, WRITERS).files(Path(path)):  # a CSV recording is three files
+        _check_writable(p)
+
+
+def _check_writable(p: Path) -> None:
     folder = p.parent if str(p.parent) else Path(".")
     why = ("Is a directory" if p.is_dir() else
            "No such file or directory" if not folder.is_dir() else
@@ -55,5 +58,5 @@ def LogReader(path: str | Path) -> Reader:  # noqa: N802
 
 
 def read_recording(path: str | Path) -> Recording:
-    """Read any recording back; ``LinkError`` names the file (and line) when it is bad."""
+    """Read any recording back; ``RecordingError`` names the file (and line) when it is bad."""
     return LogReader(path).read()
