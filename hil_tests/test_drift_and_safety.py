@@ -10,7 +10,7 @@ from hypothesis.stateful import RuleBasedStateMachine, invariant, rule
 
 from proleg.errors import ProtocolError
 from proleg.protocol.codec import Message, encode
-from proleg.protocol.definition import EventKind, ParamId
+from proleg.protocol.definition import ParamId
 
 #: grid points of bench/bench_claim.py (proleg.report.claim.grid), a handful of drift modes
 CLAIM_POINTS = (

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from proleg.protocol.codec import FrameDecoder, Message, encode
+from proleg.protocol.codec import Message, encode
 from proleg.robot import info_name
 from proleg.protocol.definition import EventKind, FaultCode, Flag
 
