@@ -116,9 +116,10 @@ def test_a_transition_not_measured_is_nan_and_loads_as_unknown(tmp_path):
               for e, (a, b) in enumerate(zip(t.src, t.dst)) if e != skip for k in range(3)]
     out = write_learned_robot(robot, estimate(t, trials), tmp_path / "l.toml", units="mm")
     text = out.read_text()
-    assert "not measured (previous value kept): 11->00" in text and "nan" in text
+    assert "not measured (previous value kept, × 4 from steps to mm): 11->00" in text and "nan" in text
     learned = load_robot(out)
-    assert learned.n_trials[skip] == 0 and learned.transitions.reward[skip] == t.reward[skip]
+    # kept, in the new unit: R1's matrix is in steps of [plant] step_mm (4 mm by default)
+    assert learned.n_trials[skip] == 0 and learned.transitions.reward[skip] == 4.0 * t.reward[skip]
     var = learned.transitions.planar.var_dx
     assert var[skip] == pytest.approx(var.max())  # unknown spread: not taken for a sure transition
     assert learned.transitions.planar.dy[skip] == 0.0
@@ -262,3 +263,50 @@ def test_a_learned_file_that_cannot_be_written_leaves_the_old_one_and_names_the_
     with pytest.raises(LinkError, match=rf"^learn: cannot write {out}: No space left on device$"):
         write_learned_robot(robot, estimate(robot.transitions, _r1_trials()), out)
     assert out.read_text() == "old\n" and [p.name for p in tmp_path.iterdir()] == ["l.toml"]
+
+
+def _sim_trials(t, skip=(), dy=True):
+    return [Trial(t.label(a), t.label(b), 0, 1, 4.0 * float(r) + 0.1 * k, 0.1 * k if dy else None, None, "sim")
+            for e, (a, b, r) in enumerate(zip(t.src, t.dst, t.reward)) if e not in skip for k in range(3)]
+
+
+def test_a_learned_file_in_mm_drops_the_step_size_and_loads(tmp_path):
+    """A robot file in steps with its own [plant] step_mm: learning in mm kept step_mm = 2.5,
+    and the learned file did not load ("plant.step_mm: expected 1 ... units mm")."""
+    text = R1.read_text(encoding="utf-8")
+    assert "[plant]" not in text
+    src = tmp_path / "r1-step.toml"
+    src.write_text(text + "\n[plant]\nstep_mm = 2.5\n", encoding="utf-8")
+    robot = load_robot(src)
+    t = robot.transitions
+    skip = t.lookup(t.index("11"), t.index("00"))
+    out = write_learned_robot(robot, estimate(t, _sim_trials(t, {skip})), tmp_path / "l.toml", units="mm")
+    learned = load_robot(out)
+    assert learned.units == "mm" and learned.plant.step_mm == 1.0
+    assert learned.transitions.reward[skip] == 2.5 * t.reward[skip]  # kept, in mm at 2.5 mm a step
+    assert "# step_mm = 2.5   # the matrix is in mm now (learned)" in out.read_text()
+
+
+def test_planar_statistics_not_learned_are_kept_so_a_library_robot_still_loads(tmp_path):
+    """planar-4's [gaits] library weighs dy and dθ: a plant that gives only Δx dropped them
+    and the learned file did not load ("gaits.library: ... needs [transitions].var_dy")."""
+    robot = load_robot(ROOT / "robots" / "planar-4.toml")
+    t = robot.transitions
+    assert t.planar is not None and t.planar.dy is not None
+    out = write_learned_robot(robot, estimate(t, _sim_trials(t, dy=False)), tmp_path / "l.toml",
+                              units=robot.units)
+    learned = load_robot(out)
+    assert np.allclose(learned.transitions.planar.dtheta_deg, t.planar.dtheta_deg)
+    assert np.allclose(learned.transitions.planar.dy, t.planar.dy)
+    assert "# dy: not learned here, the previous values kept" in out.read_text()
+
+
+def test_a_learned_file_that_would_not_load_is_not_written(tmp_path, monkeypatch):
+    from proleg.learn import robotfile
+
+    robot = load_robot(R1)
+    t = robot.transitions
+    monkeypatch.setattr(robotfile, "_matrix", lambda name, values, allowed, prefix="": [f"{prefix}{name} = 5"])
+    with pytest.raises(robotfile.LearnedFileError, match="would not load"):
+        write_learned_robot(robot, estimate(t, _sim_trials(t)), tmp_path / "l.toml", units="mm")
+    assert not (tmp_path / "l.toml").exists()

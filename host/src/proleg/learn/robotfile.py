@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import ProlegError
 from ..outputs import write_text_atomic
 from ..robot import Robot
+from ..robot_transitions import UNIT_MM
 from .estimate import Estimates
 
 _KEY = r"""(?:[A-Za-z0-9_-]+|"[^"\n]*"|'[^'\n]*')"""  # a bare or quoted TOML key
@@ -98,13 +99,25 @@ def _section_span(lines: list[str], name: str) -> tuple[int, int] | None:
     return None if start is None else (start, len(lines))
 
 
+def unit_factor(robot: Robot, units: str) -> float:
+    """How many ``units`` one unit of ``robot``'s matrix is: a length unit's millimetres, or
+    for ``steps`` the robot file's ``[plant] step_mm`` (what its plants take a step to be)."""
+    if units == robot.units:
+        return 1.0
+    if units not in UNIT_MM:
+        raise LearnedFileError(f"learn: cannot turn {robot.path}'s {robot.units!r} into {units!r}")
+    mm = UNIT_MM[robot.units] if robot.units in UNIT_MM else robot.plant.step_mm
+    return mm / UNIT_MM[units]
+
+
 def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = True,
                              note: str = "") -> list[str]:
     table = robot.transitions
     n = table.n_states
     old, allowed = table.dense()
     dx = est.dx
-    new = old.copy()
+    k = unit_factor(robot, units)
+    new = old * k  # a transition not measured keeps its value, in the new unit
     missing = []
     for e, (a, b) in enumerate(zip(table.src.tolist(), table.dst.tolist())):
         if dx.n[e] >= 1:
@@ -118,7 +131,8 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
         f"# n_trials: trials per transition; {int(est.confidence * 100)} % intervals are in the learn report.",
     ]
     if missing:
-        out.append(f"# not measured (previous value kept): {', '.join(missing)}")
+        kept = "previous value kept" + (f", × {k:g} from {robot.units} to {units}" if k != 1.0 else "")
+        out.append(f"# not measured ({kept}): {', '.join(missing)}")
     out += ["[transitions]", f'units = "{units}"',
             "states = [" + ", ".join(f'"{table.label(i)}"' for i in range(n)) + "]"]
     out += _matrix("matrix", new, allowed)
@@ -133,13 +147,19 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
     counts = np.zeros((n, n))
     counts[table.src, table.dst] = dx.n
     out += _matrix("n_trials", counts, allowed, prefix)
+    given = table.planar.given() if table.planar is not None else {}
     for key, comp, what in STAT_KEYS:
         c = est.components.get(comp)
-        if c is None:
-            continue
         m = np.full((n, n), np.nan)
         np.fill_diagonal(m, 0.0)
-        m[table.src, table.dst] = getattr(c, what)
+        if c is not None:
+            m[table.src, table.dst] = getattr(c, what)
+        elif key in given:  # not learned (a plant without y/θ): the file's own, in the new unit
+            length = 0 if comp == "dtheta_deg" else (2 if what == "var" else 1)
+            m[table.src, table.dst] = np.asarray(given[key], dtype=float) * k ** length
+            out.append(f"# {key}: not learned here, the previous values kept")
+        else:
+            continue
         out += _matrix(key, m, allowed, prefix)
     return out
 
@@ -150,10 +170,39 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
     atomically, after checking that the text reads back as the robot file with only
     ``[transitions]`` changed (``LearnedFileError`` otherwise: nothing is written)."""
     source = Path(robot.path).read_text(encoding="utf-8")
-    new = learned_transitions_text(robot, est, units=units or robot.units, stats_as_keys=stats_as_keys, note=note)
-    text = _replace_transitions(source.splitlines(), new)
+    units = units or robot.units
+    new = learned_transitions_text(robot, est, units=units, stats_as_keys=stats_as_keys, note=note)
+    lines = source.splitlines()
+    if units != robot.units and units in UNIT_MM:  # the matrix's unit fixes step_mm now
+        lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")
+    text = _replace_transitions(lines, new)
     _check_learned(source, text, new, robot.path)
+    _check_loads(text, Path(out), robot.path)
     return write_text_atomic(out, text, "learn")
+
+
+def _drop_plant_key(lines: list[str], key: str, why: str) -> list[str]:
+    """The lines with ``[plant]``'s ``key = ...`` commented out, saying why."""
+    span = _section_span(lines, "plant")
+    if span is None:
+        return lines
+    a, b = span
+    out = list(lines)
+    for i in range(a + 1, b):
+        if out[i].split("=")[0].strip() == key:
+            out[i] = f"# {out[i].strip()}   # {why}"
+    return out
+
+
+def _check_loads(text: str, out: Path, source: str | Path) -> None:
+    """The learned file must load as a robot file, as it would from ``out`` (its CSVs and
+    other paths relative to where it is written): nothing is written otherwise."""
+    from ..robot import robot_from_dict
+
+    try:
+        robot_from_dict(tomllib.loads(text), out)
+    except ProlegError as e:
+        raise LearnedFileError(f"learn: the learned file from {source} would not load ({e}); nothing written") from None
 
 
 def _replace_transitions(lines: list[str], new: list[str]) -> str:
@@ -181,6 +230,8 @@ def _check_learned(source: str, text: str, new: list[str], path: str | Path) -> 
         raise LearnedFileError(f"learn: the learned file from {path} would not be valid TOML ({e}); "
                                "nothing written") from None
     before["transitions"] = tomllib.loads("\n".join(new))["transitions"]
+    for doc in (before, after):  # step_mm may go with the unit (write_learned_robot)
+        doc.get("plant", {}).pop("step_mm", None)
     if _canonical(before) != _canonical(after):
         raise LearnedFileError(f"learn: cannot find where {path}'s [transitions] table ends to replace it "
                                "(nothing written); give it its own [transitions] header line")
