@@ -197,6 +197,43 @@ def test_a_two_limb_robot_is_checked_for_states_its_body_cannot_hold_too(tmp_pat
     assert not caplog.records, [r.getMessage() for r in caplog.records]
 
 
+def test_one_coil_on_both_limbs_lifts_its_own_end_first_so_the_far_end_alone_is_warned(tmp_path, caplog):
+    """R1 with both limbs on sma-left and no forbidden list: state 01 (the far limb up, the
+    coil's own down) cannot be held, since the coil lifts its own end first. It loaded
+    without a word and gait 0 ran through 01 into SMA_ON_LIMIT and STATE_TIMEOUT. The
+    one-actuator R1, which forbids every way into 01, loads without a word."""
+    text = (ROOT / "robots" / "paper-r1.toml").read_text(encoding="utf-8")
+    lines = text.splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith('actuator = "sma-right"'))
+    lines[k] = 'actuator = "sma-left"'
+    a = lines.index('name = "sma-right"')
+    assert lines[a - 1] == "[[actuator]]" and lines[a + 1].startswith("channel")
+    del lines[a - 1:a + 2]
+    path = tmp_path / "shared.toml"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    warned = [r.getMessage() for r in caplog.records if "cannot be held" in r.getMessage()]
+    assert len(warned) == 1 and "state 01: limb 'left' (level 0) is lifted" in warned[0], warned
+    assert "by its own coil 'sma-left', which also holds 'right' up" in warned[0]
+
+
+def test_a_limb_that_rests_past_its_first_edge_is_said_so_not_lifted_by_nobody(tmp_path, caplog):
+    """ψ* −30° and 10°: the limb rests at 0°, at level 1, and its level 0 cannot be held. The
+    warning used to say it was "lifted ... by the raised limbs " (an empty list)."""
+    text = (ROOT / "robots" / "paper-r1.toml").read_text(encoding="utf-8")
+    path = tmp_path / "low.toml"
+    body = text.replace("psi_star_deg = [20.0]", "psi_star_deg = [-30.0]", 1)
+    assert body != text
+    path.write_text(body, encoding="utf-8")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    warned = [r.getMessage() for r in caplog.records if "cannot be held" in r.getMessage()]
+    assert warned and all("raised limbs  " not in w for w in warned), warned
+    assert any("state 00: limb 'left' rests at" in w and "its level 0 lies below where it rests" in w
+               for w in warned), warned
+
+
 @pytest.mark.parametrize("name", ["inchworm-3", "caterpillar-4"])
 def test_no_firmware_gait_of_an_example_robot_passes_through_a_state_its_body_cannot_hold(name):
     from proleg.firmware.build import firmware_gaits

@@ -421,9 +421,12 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     Each raised limb's coil is set to the contraction that holds it where the controller
     holds it, ψ*(its level) + ``hold_margin_deg`` (a fraction of its own coil's full-stroke
     reach, ``own_reach_deg``); every other coil is cold. A limb below its top level whose ψ
-    then reaches the next level's entry edge (ψ* + hysteresis/2) with its own coil cold reads
-    that level: the state is not reachable on this body (e.g. caterpillar-4's 1020: the rear
-    proleg between the raised tail and the front proleg at level 2 bends to ≈ 14° > 13°)."""
+    then reaches the next level's entry edge (ψ* + hysteresis/2) with its own coil at the
+    least it can be (cold, or what the other limbs on a shared coil need) reads that level:
+    the state is not reachable on this body (e.g. caterpillar-4's 1020: the rear proleg
+    between the raised tail and the front proleg at level 2 bends to ≈ 14° > 13°; one coil
+    on both of R1's limbs lifts its own end first, so 01 cannot be held). A limb that rests
+    past its level-1 edge comes with no raising limbs."""
     from .body import Shape
     from .states import limb_levels
 
@@ -435,30 +438,34 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     reach = own_reach_deg(geo, limb_act)
     entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
     levels = tuple(lb.levels for lb in limbs)
-    rows, wants = [], []
+    rows, cases = [], []
     for s in entered:
         want = limb_levels(s, levels)
-        c = np.zeros(len(actuators))
+        demand = [min(1.0, (limbs[i].psi_star_deg[k - 1] + hold_margin_deg) / reach[i])
+                  if k > 0 and reach[i] > 0 else 0.0 for i, k in enumerate(want)]
         for i, k in enumerate(want):
-            if k > 0 and reach[i] > 0:
-                hold = limbs[i].psi_star_deg[k - 1] + hold_margin_deg
-                c[limb_act[i]] = max(c[limb_act[i]], min(1.0, hold / reach[i]))
-        rows.append(c)
-        wants.append(want)
+            if k >= limbs[i].levels - 1:
+                continue  # at its top level
+            # every coil at what the raised limbs need, limb i's own at what the OTHER limbs on
+            # it need (the controller may let it cool that far, no further): one coil on two
+            # limbs lifts its near limb first, so the far one alone cannot be up
+            c = np.zeros(len(actuators))
+            for j, d in enumerate(demand):
+                if j != i:
+                    c[limb_act[j]] = max(c[limb_act[j]], d)
+            rows.append(c)
+            cases.append((s, want, i, k))
     if not rows:
         return {}
     psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
     out: dict[int, list[tuple[int, list[int], float]]] = {}
-    for s, want, c, p in zip(entered, wants, rows, psi):
-        for i, k in enumerate(want):
-            lb = limbs[i]
-            if k >= lb.levels - 1 or c[limb_act[i]] > 0.0:
-                continue  # at its top level, or its own coil is on (shared with a raised limb)
-            edge = lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0
-            psi_i = float(p[i])  # in (−180°, 180°] however far the body curls (Shape.compute wraps it)
-            if psi_i >= edge:
-                raising = [j for j, kj in enumerate(want) if kj > 0]
-                out.setdefault(s, []).append((i, raising, psi_i))
+    for (s, want, i, k), p in zip(cases, psi):
+        lb = limbs[i]
+        edge = lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0
+        psi_i = float(p[i])  # in (−180°, 180°] however far the body curls (Shape.compute wraps it)
+        if psi_i >= edge:
+            raising = [j for j, kj in enumerate(want) if kj > 0 and j != i]
+            out.setdefault(s, []).append((i, raising, psi_i))
     return out
 
 
@@ -471,11 +478,21 @@ def coupling_warnings(path: Path, limbs: list[Any], actuators: list[str], sectio
         for i, raising, psi in hits:
             lb = limbs[i]
             k = limb_levels_of(s, limbs)[i]
+            edge = f"edge {lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:.1f}° (ψ* + hysteresis/2)"
+            if not raising:  # nothing lifts it: it rests there
+                out.append(
+                    f"{path}: state {table.label(s)}: limb {lb.name!r} rests at {psi:.1f}° on the simulated "
+                    f"{_g(section.length_mm)} mm body, past its level-{k + 1} {edge}: its level {k} lies below "
+                    f"where it rests and cannot be held; check its psi_star_deg, or mark the transitions into "
+                    f"the state \"x\"")
+                continue
             names = ", ".join(repr(limbs[j].name) for j in raising)
+            shared = [j for j in raising if limbs[j].actuator == lb.actuator]
+            how = (f"by its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} "
+                   f"up" if shared else f"by the raised limbs {names}")
             out.append(
-                f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° by the "
-                f"raised limbs {names} on the simulated {_g(section.length_mm)} mm body, past its level-{k + 1} "
-                f"edge {lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:.1f}° (ψ* + hysteresis/2): the state reads "
+                f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° {how} on "
+                f"the simulated {_g(section.length_mm)} mm body, past its level-{k + 1} {edge}: the state reads "
                 f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)")
     return out
 
