@@ -6,12 +6,15 @@ ties, and their canonical rotations must match a listing of every closed walk.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from proleg.gait import RELATIVE_TOLERANCE, optimal_gaits
 from proleg.gait.bruteforce import brute_force_gaits
+from proleg.gait.result import speed_scale
 from proleg.gait.evaluate import canonical_rotation, is_primitive
 from proleg.transitions import TransitionTable
 
@@ -42,7 +45,7 @@ def assert_matches_oracle(table: TransitionTable, objective: str, direction: str
     got = [g.states for g in result.gaits]
     scale = float(np.abs(table.reward).max()) if table.n_transitions else 0.0
     if objective == "speed" and table.n_transitions:
-        scale = float(np.abs(table.reward / table.duration).max())
+        scale = speed_scale(table.reward, table.duration)
     if value is None:
         assert result.value is None and got == [], (objective, direction, bound, result)
         return
@@ -126,3 +129,17 @@ def test_flat_rewards_with_many_ties_list_all_of_them(n, seed, direction, bound)
     table = TransitionTable.from_dense((n,), rng.integers(-1, 2, (n, n)), rng.random((n, n)) < 0.8)
     assert_matches_oracle(table, "rate", direction, bound)
     assert_matches_oracle(table, "total", direction, min(bound or 4, 4))
+
+
+def test_one_very_short_transition_does_not_hide_every_speed():
+    """R1 with one transition of 1 ns and the rest 1 s: the speed objective answered "no
+    gait" both ways (its tolerance was the largest |w/t| of one transition, 1e9 × 1e-9)."""
+    from proleg.robot import load_robot
+
+    r1 = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").transitions
+    dur = np.ones(r1.n_transitions)
+    dur[r1.lookup(r1.index("00"), r1.index("10"))] = 1e-9
+    table = TransitionTable(r1.levels, r1.src, r1.dst, r1.reward, dur)
+    for direction in ("+x", "-x"):
+        assert optimal_gaits(table, "speed", direction).value is not None
+        assert_matches_oracle(table, "speed", direction, None)

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..transitions import TransitionTable
-from .result import RELATIVE_TOLERANCE
+from .result import RELATIVE_TOLERANCE, speed_scale
 
 
 def _canonical(cycle: tuple[int, ...]) -> tuple[int, ...]:
@@ -77,7 +77,7 @@ def brute_force_gaits(
     reward_scale = float(np.abs(table.reward).max()) if len(table.reward) else 0.0
     if objective == "speed":
         assert table.duration is not None
-        scale = float(np.abs(table.reward / table.duration).max()) if len(table.reward) else 0.0
+        scale = speed_scale(table.reward, table.duration)
     else:
         scale = reward_scale
     tol = RELATIVE_TOLERANCE * scale

@@ -25,7 +25,7 @@ from .critical import critical_cycles
 from .cycles import short_cycles
 from .evaluate import make_gaits
 from .howard import max_cycle_ratio
-from .result import MAX_LISTED_STATES, MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult
+from .result import MAX_LISTED_STATES, MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult, speed_scale
 from .search import bounded_search
 from .total import best_total_walks
 
@@ -165,7 +165,7 @@ def _best_ratio(
     reward_scale = float(np.abs(w).max())
     tol_j = RELATIVE_TOLERANCE * reward_scale
     t = np.ones(len(w)) if time is None else time
-    tol_r = RELATIVE_TOLERANCE * (reward_scale if time is None else float(np.abs(w / t).max()))
+    tol_r = RELATIVE_TOLERANCE * (reward_scale if time is None else speed_scale(w, t))
     sol = max_cycle_ratio(n, table.src, table.dst, w, time)
     if sol.value is None or sol.value <= tol_r:
         return GaitResult(direction, objective, K, None, (), False)

@@ -4,10 +4,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 #: Two values tie when they differ by at most this fraction of the scale of the table:
-#: the largest |reward| (for ``total`` and ``rate``) or the largest |reward / duration|
-#: (for ``speed``). A walk "moves" in +x only when J exceeds the same tolerance.
+#: the largest |reward| (for ``total`` and ``rate``) or ``speed_scale`` (for ``speed``). A walk "moves" in +x only when J exceeds the same tolerance.
 RELATIVE_TOLERANCE = 1e-9
+
+
+def speed_scale(reward: np.ndarray, duration: np.ndarray) -> float:
+    """The scale of a gait's speed (reward per second) that ties and "moves at all" are
+    judged against: the largest |reward| per the median duration. Not the largest |w/t| of
+    one transition: one very short transition made every cycle's speed look like rounding
+    noise, and the speed objective answered "no gait" (durations 1 s and one of 1 ns)."""
+    if not len(reward):
+        return 0.0
+    return float(np.abs(reward).max()) / float(np.median(duration))
 
 #: At most this many tied gaits are listed; beyond it ``GaitResult.truncated`` is True.
 MAX_TIES = 10_000
