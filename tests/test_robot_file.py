@@ -116,6 +116,14 @@ def test_psi_star_out_of_range(tmp_path, angle):
             "between -90 and 90")
 
 
+@pytest.mark.parametrize("angle", ["89.5", "-89.5"])
+def test_a_band_around_psi_star_past_90_degrees_is_refused_when_the_file_is_read(tmp_path, angle):
+    """ψ* 89.5° with the default 2° band reaches 90.5°: the file loaded and gait answered, and
+    only the build refused it, naming neither the file nor the key."""
+    rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", f"psi_star_deg = [{angle}]", 1),
+            "limb 'left': hysteresis_deg", "strictly inside (-90, 90)")
+
+
 def test_psi_star_count_must_match_levels(tmp_path):
     rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nlevels = 3', 1), "limb 'left': psi_star_deg",
             "2 critical angle")
