@@ -112,3 +112,25 @@ def test_a_physical_plant_built_from_the_robot_alone_has_its_plant_table():
     assert alone.conditions.get("ambient_c") == made.conditions.get("ambient_c") == 31.0
     assert alone.conditions.get("supply_v") == 4.2
     assert PhysicalPlant(robot, Conditions()).conditions.get("ambient_c") != 31.0
+
+
+def test_a_body_that_would_curl_over_itself_is_refused_by_the_physical_plant_and_warned_at_load(caplog):
+    """R1 stretched to 1000 mm: each coil spans half of it and bends it 873° at full stroke.
+    The reach check reported wrapped angles (and none at all at some lengths), and the plant
+    walked 153 mm/s. Up to a half turn per coil the model holds (R1 at 190 mm: no word)."""
+    import logging
+
+    from proleg.errors import SimError
+    from proleg.sim.closed_loop import make_plant
+
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        long = r1_with_plant({"length_mm": 1000.0})
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 1 and "plant.length_mm: coil 1 spans 508 mm" in warned[0], warned
+    assert "bends it by 873°" in warned[0] and "curl over itself" in warned[0]
+    with pytest.raises(SimError, match="past the 180° the physical plant models"):
+        make_plant(long, "physical")
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(r1_with_plant({"length_mm": 190.0}), "physical")
+    assert not caplog.records, [r.getMessage() for r in caplog.records]

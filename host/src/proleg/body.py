@@ -30,6 +30,7 @@ the robot-file check compares with the limb's critical angles (``proleg.robot``)
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,6 +89,25 @@ def body_geometry(limb_actuators: list[int], n_actuators: int, length_mm: float,
     contacts = tuple(float(x) for x in np.linspace(0.0, length_mm, n))
     spans = default_spans(n, coil_homes(limb_actuators, n_actuators), length_mm, overlap_mm)
     return BodyGeometry(length_mm, coil_offset_mm, working_strain, spans, contacts)
+
+
+#: The most a coil's section may bend at full stroke in this model: past a half turn the body
+#: would curl over itself and off its contacts, which the quasi-static crawl (contacts on the
+#: ground, ψ in (−180°, 180°]) does not describe.
+MAX_BEND_DEG = 180.0
+
+
+def curl_problem(geo: BodyGeometry) -> str:
+    """Why the model cannot describe this body ("" when it can): a coil whose section bends
+    past ``MAX_BEND_DEG`` at full stroke (curvature × its span; a long body with few coils)."""
+    for j, (a, b) in enumerate(geo.spans):
+        bend = math.degrees(geo.kappa_max_per_mm * (b - a))
+        if bend > MAX_BEND_DEG:
+            return (f"coil {j + 1} spans {b - a:.0f} mm of the {geo.length_mm:g} mm body and bends it by "
+                    f"{bend:.0f}° at full stroke, past the {MAX_BEND_DEG:.0f}° the physical plant models "
+                    f"(the body would curl over itself): give [plant] length_mm a shorter body, or the "
+                    f"robot more limbs and coils along it")
+    return ""
 
 
 def own_reach_deg(geo: BodyGeometry, limb_actuators: list[int]) -> list[float]:

@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .body import DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, coil_homes, default_length_mm, own_reach_deg
+from .body import (DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, coil_homes, curl_problem, default_length_mm,
+                   own_reach_deg)
 from .errors import RobotFileError
 from .robot_transitions import UNIT_MM
 
@@ -270,6 +271,9 @@ def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], secti
     if len(limbs) < 2:
         return []
     geo = body_of(limb_actuators, len(actuators), section)
+    curl = curl_problem(geo)
+    if curl:  # the reach would be a wrapped angle: say what is wrong instead
+        return [f"{path}: plant.length_mm: {curl}"]
     reach = own_reach_deg(geo, limb_actuators)
     homes = coil_homes(limb_actuators, len(actuators))
     out = []
@@ -435,6 +439,8 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
         return {}
     limb_act = [actuators.index(lb.actuator) for lb in limbs]
     geo = body_of(limb_act, len(actuators), section)
+    if curl_problem(geo):
+        return {}  # a body the model cannot describe (unreachable_levels says why)
     reach = own_reach_deg(geo, limb_act)
     entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
     levels = tuple(lb.levels for lb in limbs)

@@ -37,7 +37,7 @@ from ...errors import SimError
 from ...states import limb_levels
 from ..sma import Hysteresis
 from . import materials as mat
-from ...body import Shape, body_geometry
+from ...body import Shape, body_geometry, curl_problem
 from .conditions import Conditions, coil_of_limb, conditions_from_section
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
@@ -90,6 +90,8 @@ class PhysicalPlant:
         overlap = [cond.for_index("overlap_mm", j, anames, by_limb, lnames) for j in range(na)]
         length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
         geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, p.working_strain)
+        if curl_problem(geo):
+            raise SimError(f"physical plant of {robot.name}: {curl_problem(geo)}")
         self.geometry = geo
         self._shape = Shape(geo)
 
