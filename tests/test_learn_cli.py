@@ -250,3 +250,16 @@ def test_learn_variance_weight_is_checked_as_gait_checks_it(tmp_path, capsys, va
         assert e.value.code == 2 and "argument --variance-weight: expected a " in last and f"got '{value}'" in last
         said.append(last.split(": error: ")[1])
     assert said[0] == said[1]
+
+
+def test_a_truth_whose_limbs_differ_from_the_robots_is_refused_before_anything_is_written(tmp_path, capsys):
+    """The table plant takes its limbs from --truth: a truth with ψ* 0.8° under R1's 20° firmware
+    learned 0.00 mm on every transition without a word."""
+    truth = tmp_path / "truth.toml"
+    truth.write_text((ROOT / "robots" / "paper-r1.toml").read_text().replace("psi_star_deg = [20.0]",
+                                                                              "psi_star_deg = [0.8]"))
+    log = tmp_path / "t.jsonl"
+    code = main(["learn", str(ROOT / "robots" / "paper-r1.toml"), "--sim", "--truth", str(truth), "--log", str(log)])
+    err = capsys.readouterr().err
+    assert code == 2 and "limb 'left' has psi_star_deg [0.8]" in err and "the robot's limb 'left' [20.0]" in err, err
+    assert not log.exists()

@@ -346,6 +346,15 @@ def check_plant(robot: Robot, truth: Robot | None, plant: str) -> None:
         raise ExplorationError("--truth drives the table plant; the physical plant has no matrix")
     if truth is not None and truth.levels != robot.levels:
         raise ExplorationError(f"truth {truth.path} has state levels {truth.levels}, the robot {robot.levels}")
+    if truth is not None:  # the table plant takes its limbs from the truth: they must be the robot's
+        for mine, theirs in zip(robot.limbs, truth.limbs):
+            a = (tuple(mine.psi_star_deg), mine.hysteresis_deg)
+            b = (tuple(theirs.psi_star_deg), theirs.hysteresis_deg)
+            if a != b:
+                raise ExplorationError(
+                    f"truth {truth.path}: limb {theirs.name!r} has psi_star_deg {list(b[0])} and hysteresis_deg "
+                    f"{b[1]:g}, the robot's limb {mine.name!r} {list(a[0])} and {a[1]:g}: a truth file is the robot "
+                    f"file with another matrix (proleg.learn.truth.write_truth writes one)")
 
 
 def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, plant: str = "table"):
