@@ -83,6 +83,40 @@ def test_an_idle_session_with_the_heartbeat_never_trips_the_watchdog():
     client.close()
 
 
+class _FastBoardLink(SimLink):
+    """A board whose clock runs ``SPEED`` × the link's (``proleg sim --pty --speed 5`` seen
+    over the pty, where the host counts wall time)."""
+
+    SPEED = 5.0
+
+    def read(self, timeout: float) -> bytes:
+        return super().read(timeout * self.SPEED)
+
+    def clock(self) -> float:
+        return super().clock() / self.SPEED
+
+
+def test_the_heartbeat_keeps_pace_with_a_board_whose_clock_runs_faster_than_the_hosts():
+    """At --speed 5 a 0.5 s heartbeat is 2.5 s of board time, past the 2 s watchdog: every
+    run over a fast simulated board ended in LINK_WATCHDOG. The client measures the board's
+    clock rate from TELEMETRY and pings in proportion."""
+    robot = load_robot(resolve_robot("paper-r1"))
+    sim = SimulatedRobot(robot, seed=3)
+    client = RobotClient(_FastBoardLink(sim, step_s=sim.plant_dt_s), heartbeat_s=0.5)
+    client.connect()
+    client.start(0, "+x")
+    seen = []
+    deadline = client.link.clock() + 4.0  # 20 s of board time
+    while client.link.clock() < deadline:
+        m = client.recv(0.05)
+        if m is not None and m.name in ("EVENT", "TELEMETRY"):
+            seen.append(m)
+    assert 4.0 < client.board_rate <= 5.5
+    assert not any(m.name == "EVENT" and m.kind == EventKind.FAULT for m in seen)
+    assert all(m.flags & Flag.RUNNING for m in seen[-20:] if m.name == "TELEMETRY")
+    client.close()
+
+
 # --------------------------------------------------------------------------- identity
 def test_the_identity_computed_from_the_robot_file_is_what_the_firmware_reports():
     robot, sim, client = _running_robot(heartbeat_s=0.5)

@@ -23,7 +23,10 @@ a gait when no valid frame arrives for that long. While anyone reads the client 
 a Notifier, a waiting command), a connected client sends a PING whenever it has written
 nothing for ``heartbeat_s`` seconds of the link's clock (default 0.5 s, a quarter of the
 default 2 s watchdog), so an idle session never trips it; the ACKs of those PINGs are not
-queued. ``heartbeat_s=None`` turns it off (a test playing a host that went away).
+queued. The period counts on the board's clock: when TELEMETRY shows it running faster than
+the link's (a simulated board at ``--speed 5`` behind a pty), the period shrinks in
+proportion, or the watchdog would trip between two PINGs. ``heartbeat_s=None`` turns it off
+(a test playing a host that went away).
 """
 
 from __future__ import annotations
@@ -75,8 +78,11 @@ CONNECT_WITHIN_S = 3.0
 CONNECT_TRY_S = 0.05
 #: decoded messages kept for ``recv`` when nobody reads them (oldest dropped first)
 QUEUE_LIMIT = 65536
-#: default heartbeat period (link clock, s): at most half of any watchdog ≥ 1 s
+#: default heartbeat period (link clock, s): at most half of any watchdog ≥ 1 s; divided by
+#: how much faster than the link's clock the board's runs (``RobotClient.board_rate``)
 HEARTBEAT_S = 0.5
+RATE_WINDOW_S = 0.2
+MAX_BOARD_RATE = 50.0
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
 #: messages that can answer a command (the declared replies plus NACK)
 _REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
@@ -114,6 +120,10 @@ class RobotClient:
         self._closed = False
         self.heartbeat_s = heartbeat_s
         self.heartbeats = 0  # PINGs sent by the heartbeat
+        # how fast the board's clock runs against the link's (TELEMETRY time_ms): a simulated
+        # board at --speed 5 behind a pty counts its link watchdog 5× faster than we count
+        self.board_rate = 1.0
+        self._rate_anchor: tuple[float, int] | None = None
         self._last_tx: float | None = None  # link clock of the last write (None: not connected yet)
         self._heartbeat_tokens: set[int] = set()
 
@@ -265,7 +275,10 @@ class RobotClient:
     def _heartbeat(self) -> None:
         """PING when nothing was written for ``heartbeat_s`` (keeps the link watchdog fed)."""
         period, last = self.heartbeat_s, self._last_tx
-        if period is None or last is None or self._closed or self.link.clock() - last < period - _EPS:
+        if period is None or last is None or self._closed:
+            return
+        period /= self.board_rate  # on the board's clock, as its watchdog counts
+        if self.link.clock() - last < period - _EPS:
             return
         token = self._next_token()
         with self._cond:
@@ -369,6 +382,7 @@ class RobotClient:
                     else:
                         st.seq_restarts += 1
                 self._last_seq = seq
+                self._track_board_rate(now, m.fields["time_ms"])
             elif name in _REPLY_NAMES:
                 token = m.fields["token"]
                 waiting = self._waiting.get(token)
@@ -388,6 +402,20 @@ class RobotClient:
             with self._cond:
                 self._cond.notify_all()
         return len(msgs)
+
+    def _track_board_rate(self, now: float, board_ms: int) -> None:
+        """Re-estimate ``board_rate`` (at least 1, at most ``MAX_BOARD_RATE``) from TELEMETRY
+        over windows of ``RATE_WINDOW_S`` of the link's clock; a board clock that steps back
+        (a reset) starts over."""
+        anchor = self._rate_anchor
+        if anchor is None or board_ms < anchor[1]:
+            self._rate_anchor = (now, board_ms)
+            return
+        elapsed = now - anchor[0]
+        if elapsed >= RATE_WINDOW_S:
+            rate = (board_ms - anchor[1]) / 1000.0 / elapsed
+            self.board_rate = min(MAX_BOARD_RATE, max(1.0, rate))
+            self._rate_anchor = (now, board_ms)
 
     def _reconnect(self) -> None:
         """Reopen a vanished device; then ask for INFO again (without waiting)."""
