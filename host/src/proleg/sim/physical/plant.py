@@ -72,7 +72,8 @@ class PhysicalPlant:
         self._rng = random.Random(seed)
         nl, na = len(limbs), len(acts)
         if nl < 2:
-            raise SimError("physical plant: at least two limbs (contacts) are needed")
+            raise SimError(f"physical plant: {robot.name} has one limb; a body crawls on two contacts at "
+                           "least (--plant table simulates it from its matrix)")
         self._nl, self._na = nl, na
 
         # -- friction mechanisms (robot file, override, or inferred from the matrix) ----------
