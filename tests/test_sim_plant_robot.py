@@ -134,3 +134,21 @@ def test_a_body_that_would_curl_over_itself_is_refused_by_the_physical_plant_and
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(r1_with_plant({"length_mm": 190.0}), "physical")
     assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
+def test_a_supply_that_would_anneal_a_coil_within_the_envelope_is_warned_about(caplog):
+    """[plant] supply_v = 60 on R1: within the envelope (duty ≤ 0.8) a coil reached 3,189 °C in
+    the plant without a word; the envelope bounds duty and on-time, not energy."""
+    import logging
+
+    from proleg.sim.closed_loop import make_plant
+
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(r1_with_plant({"supply_v": 60.0}), "physical")
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 2 and all("where NiTi loses its trained shape" in w for w in warned), warned
+    assert "coil 'sma-left' held at max_duty 0.8" in warned[0] and "max_duty below 0.03" in warned[0]
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["power=1.3"])
+    assert not caplog.records, [r.getMessage() for r in caplog.records]

@@ -20,6 +20,7 @@ console, the recorder and hil_tests) talk to.
 from __future__ import annotations
 
 import hashlib
+import logging
 import math
 import random
 from dataclasses import dataclass, field
@@ -33,6 +34,8 @@ from ..firmware.placement import place_imus, sim_imu_keys
 from ..robot import Robot
 from .board import SimBoard, SimulatedBoardLike
 from .plant import Plant, plant_params_from_robot, planar_motion_from_robot, true_rewards_from_robot
+
+log = logging.getLogger(__name__)
 
 DEFAULT_PLANT_DT_S = 0.002
 PLANTS = ("physical", "table")
@@ -53,7 +56,30 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
         raise SimError(f"plant {kind!r}: expected one of: {', '.join(PLANTS)}")
     from .physical import PhysicalPlant
 
-    return PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
+    plant = PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
+    for line in overheat_warnings(robot, plant):
+        log.warning("warning: %s", line)
+    return plant
+
+
+def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
+    """One line per coil that the safety envelope's ``max_duty``, held, would heat to where
+    NiTi loses its trained shape (``NITI_ANNEAL_C``) with this plant's supply: the envelope
+    bounds duty and on-time, not energy, so such a supply ruins a coil within it (R1 at
+    60 V: about 10,000 °C; at its own 7.4 V: 185 °C, which the on-time and mean-duty limits
+    keep it from holding)."""
+    from .physical.materials import NITI_ANNEAL_C
+
+    duty = robot.safety.max_duty
+    amb = plant.conditions.get("ambient_c")
+    out = []
+    for act, hot in zip(robot.actuators, plant.steady_coil_temperature_c(duty)):
+        if hot > NITI_ANNEAL_C:
+            safe = duty * (NITI_ANNEAL_C - amb) / (hot - amb)
+            out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} would settle at {hot:.0f} °C with "
+                       f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
+                       f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {safe:.2f}")
+    return out
 
 
 def plant_conditions(robot: Robot, conditions: Any = None) -> Any:

@@ -19,6 +19,15 @@ from ...robot_plant import FRICTION_MECHANISMS
 NITI_DENSITY_KG_M3 = 6450.0
 NITI_SPECIFIC_HEAT_J_KGK = 837.0
 NITI_LATENT_HEAT_J_KG = 24.2e3
+#: Above this a coil is being ruined (anneal, loss of memory, fatigue): Dynalloy advises
+#: against prolonged heating far above Af (F1140Rev J, "Overheating"); Toki BioMetal's
+#: working range ends near 100 °C. The claim bench calls an open-loop run past it overheated.
+NITI_OVERHEAT_C = 120.0
+#: Where the trained shape itself goes: NiTi wire is shape-set by annealing at about
+#: 400–550 °C (Pelton, DiCello & Miyazaki, "Optimisation of processing and properties of
+#: medical-grade Nitinol wire", Min. Invas. Ther. & Allied Technol. 9 (2000); Dynalloy
+#: F1140Rev J). A supply that can hold a coil there within the safety envelope is a mistake.
+NITI_ANNEAL_C = 400.0
 NITI_RESISTIVITY_OHM_M = 0.80e-6          # between martensite (0.76) and austenite (0.82)
 
 # --- air at a film temperature of ≈ 50 °C (1 atm) -----------------------------------------------
