@@ -200,3 +200,8 @@ def test_a_board_built_with_another_library_is_refused_not_steered_by_index(caps
     _, err = capsys.readouterr()
     assert code == 1
     assert "is not the one" in err and "--exact-heading" in err and "Traceback" not in err
+    assert "build and flash with the same [gaits] library" in err
+    # --sim builds its board from the robot file: flashing is not the way out there
+    code = main(["run", str(PLANAR), "--sim", "--heading", "0", "--library", "0,180", "--duration", "2"])
+    _, err = capsys.readouterr()
+    assert code == 1 and "the simulated board is built from the robot file's [gaits] library" in err, err

@@ -97,17 +97,20 @@ def heading_choice(args: argparse.Namespace, robot: Any) -> tuple[Any, Any]:
     return fw, choice
 
 
-def check_library_hash(info: Any, robot: Any, fw: Any, where: str) -> None:
+def check_library_hash(info: Any, robot: Any, fw: Any, where: str, simulated: bool = False) -> None:
     """A library gait is started by its index: refuse unless the board's gait table is the one
     this robot file and library give (its hash in INFO), else the index may name another gait."""
     from ..firmware.boards import load_board
     from ..firmware.render import render_context
 
     want = int(render_context(robot, fw, load_board("host-sim")).gait.gait_hash, 16)  # board-independent
-    if want != info.gait_hash:
-        raise LinkError(f"{where}: the board's gait table (hash {info.gait_hash:08x}) is not the one {robot.path} "
-                        f"and this gait library give ({want:08x}); build and flash with the same [gaits] library "
-                        f"(or --library), or run with --exact-heading to compute and load the gait")
+    if want == info.gait_hash:
+        return
+    fix = ("the simulated board is built from the robot file's [gaits] library: put the library there, or leave "
+           "out --library" if simulated else "build and flash with the same [gaits] library (or --library)")
+    raise LinkError(f"{where}: the board's gait table (hash {info.gait_hash:08x}) is not the one {robot.path} "
+                    f"and this gait library give ({want:08x}); {fix}, or run with --exact-heading to compute "
+                    f"and load the gait")
 
 
 # --------------------------------------------------------------------------- run
@@ -135,7 +138,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                             f"({args.robot}); give the robot file it was built from")
         check_gait(info, gait, direction, gaits_per_direction(robot, fw))
         if choice is not None and choice.index is not None:
-            check_library_hash(info, robot, fw, client.link.description)
+            check_library_hash(info, robot, fw, client.link.description, simulated=bool(getattr(args, "sim", False)))
         if choice is not None and choice.index is None:
             client.load_gait(choice.states)
         meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
