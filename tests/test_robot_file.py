@@ -387,3 +387,12 @@ def test_planar_statistics_must_mark_the_same_forbidden_transitions(tmp_path):
         "dy = [[0, 0, 0, 1], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]\n"
     )
     rejects(tmp_path, text, "transitions.dy[1][4]: transition is forbidden in the matrix, expected 'x', got 1")
+
+
+@pytest.mark.parametrize("ref", ["¹", "١"])
+def test_a_state_index_is_ascii_digits_only(tmp_path, ref):
+    # "¹".isdigit() is true but int() refuses it; int("١") is 1: both are refused, in one line
+    text = R1.replace("[0, 0, 0, 0]]", '[0, 0, 0, "x"]]').replace("[transitions]", f'[transitions]\nforbidden = ["{ref}->00"]')
+    rejects(tmp_path, text, "transitions.forbidden[0]", "an index 0..3", repr(ref))
+    with pytest.raises(RobotFileError, match=r"t\.csv:2: from: expected a state label"):
+        load_robot(csv_robot(tmp_path, f"from,to,reward\n{ref},01,-1\n"))

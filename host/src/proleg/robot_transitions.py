@@ -294,7 +294,7 @@ def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
             return states.index(text, levels)
         except ValueError as e:
             raise RobotFileError(f"{expected} ({e})") from None
-    if text.isdigit() and int(text) < n:
+    if text.isascii() and text.isdigit() and int(text) < n:  # "¹" and "١" are digits too
         return int(text)
     raise RobotFileError(expected)
 
