@@ -21,6 +21,12 @@ from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 FORBIDDEN = "x"
 #: A transition CSV larger than this is refused before it is read.
 MAX_CSV_BYTES = 256 * 1024 * 1024
+#: The largest |entry| of the matrix, a CSV reward and the planar means, as ``[plant] true_matrix``:
+#: a gait sums its entries, and 1e308 would overflow to inf and turn the gait search's answer.
+MAX_ENTRY = 1e9
+#: The largest planar variance (σ up to MAX_ENTRY) and the largest ``n_trials`` entry.
+MAX_VARIANCE = MAX_ENTRY**2
+MAX_TRIALS = 10**9
 
 
 #: What a matrix entry counts: steps (× ``[plant] step_mm`` on the table plant) or a length.
@@ -89,8 +95,10 @@ def _planar(path: Path, value: dict, n: int, allowed: np.ndarray) -> PlanarRewar
     src, dst = np.nonzero(allowed)
     for key in PLANAR_FIELDS:
         if key in value:
+            variance = key.startswith("var_")
             m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed,
-                                   variance=key.startswith("var_"), allow_nan=True)
+                                   "a variance" if variance else "a number", 0.0 if variance else -MAX_ENTRY,
+                                   MAX_VARIANCE if variance else MAX_ENTRY, allow_nan=True)
             v = m[src, dst]
             known = v[~np.isnan(v)]
             fill = float(known.max()) if key.startswith("var_") and len(known) else 0.0
@@ -102,15 +110,10 @@ def n_trials_section(path: Path, value: dict, n: int, allowed: np.ndarray) -> np
     """``n_trials`` (a learned file): whole numbers >= 0 like the matrix, 'x' where forbidden."""
     if "n_trials" not in value:
         return None
-    m = _same_shape_matrix(path, "transitions.n_trials", value["n_trials"], n, allowed, variance=True)
+    m = _same_shape_matrix(path, "transitions.n_trials", value["n_trials"], n, allowed, "a whole number of trials",
+                           0, MAX_TRIALS, whole=True)
     src, dst = np.nonzero(allowed)
-    v = m[src, dst]
-    bad = [(int(a), int(b)) for a, b, x in zip(src, dst, v) if x != int(x)]
-    if bad:
-        a, b = bad[0]
-        raise RobotFileError(f"{path}: transitions.n_trials[{a + 1}][{b + 1}]: expected a whole number of trials, "
-                             f"got {m[a, b]!r}")
-    return v.astype(np.int64)
+    return m[src, dst].astype(np.int64)
 
 
 def _square(where: str, rows: Any, n: int, rows_are: str = "like the matrix") -> list[list[Any]]:
@@ -125,10 +128,12 @@ def _square(where: str, rows: Any, n: int, rows_are: str = "like the matrix") ->
     return rows
 
 
-def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
-                       allow_nan: bool = False) -> np.ndarray:
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, what: str, lo: float,
+                       hi: float, *, allow_nan: bool = False, whole: bool = False) -> np.ndarray:
+    """An n × n matrix of ``what`` in [lo, hi] where ``allowed``, 'x' elsewhere (nan, when
+    ``allow_nan``: not measured); ``whole``: whole numbers only."""
     where = f"{path}: {name}"
-    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
+    expected = f"{what} in [{lo:g}, {hi:g}]"
     out = np.full((n, n), np.nan)
     for a, row in enumerate(_square(where, rows, n)):
         for b, v in enumerate(row):
@@ -140,7 +145,7 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
                     raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
                 continue
             unknown = allow_nan and isinstance(v, float) and math.isnan(v)
-            if not unknown and (not _is_number(v) or (variance and v < 0)):
+            if not unknown and (not _in_range(v, lo, hi) or (whole and not float(v).is_integer())):
                 raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
             if not allowed[a, b]:
                 raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")
@@ -182,9 +187,10 @@ def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
                 continue  # the diagonal is not a transition
             if v == FORBIDDEN:
                 continue
-            if not _is_number(v):
+            if not _in_range(v, -MAX_ENTRY, MAX_ENTRY):
                 raise RobotFileError(
-                    f"{where}[{a + 1}][{b + 1}]: expected a number or 'x' (forbidden), got {v!r}"
+                    f"{where}[{a + 1}][{b + 1}]: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}] or 'x' "
+                    f"(forbidden), got {v!r}"
                 )
             reward[a, b] = float(v)
             allowed[a, b] = True
@@ -256,8 +262,9 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
                 r = float(cells[2])
             except ValueError:
                 raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
-            if not math.isfinite(r):
-                raise RobotFileError(f"{where}: reward: expected a finite number, got {cells[2]!r}")
+            if not _in_range(r, -MAX_ENTRY, MAX_ENTRY):
+                raise RobotFileError(f"{where}: reward: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}], "
+                                     f"got {cells[2]!r}")
             src.append(a)
             dst.append(b)
             rew.append(r)
@@ -301,3 +308,7 @@ def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
 
 def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _in_range(v: Any, lo: float, hi: float) -> bool:
+    return _is_number(v) and lo <= v <= hi
