@@ -423,3 +423,37 @@ def test_n_trials_are_whole_numbers_in_range_named_as_trials(tmp_path, entry, sh
                                        "[1, 1, 1, 0]]")
     msg = rejects(tmp_path, text, "transitions.n_trials[1][2]: expected a whole number of trials in [0, 1e+09]", shown)
     assert "variance" not in msg and "np." not in msg
+
+
+def test_csv_lines_are_file_lines_not_rows(tmp_path):
+    # a quoted cell spanning lines: the bad row is on line 6, it was reported as row 3
+    with pytest.raises(RobotFileError, match=r"t\.csv:6: reward: expected a number, got 'zz'"):
+        load_robot(csv_robot(tmp_path, 'from,to,reward\n"00\n\n\n",01,-1\n00,10,zz\n'))
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: from: expected a state label"):
+        load_robot(csv_robot(tmp_path, 'from,to,reward\n00,01,-1\n"0\n1x",10,1\n'))
+
+
+def test_a_csv_that_is_not_utf8_names_the_line(tmp_path):
+    (tmp_path / "t.csv").write_bytes(b"from,to,reward\n00,01,-1\n# caf\xe9\n00,10,1\n")
+    head = R1.split("[transitions]")[0]
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: not UTF-8 text \(invalid continuation byte\)"):
+        load_robot(write(tmp_path, head + '[transitions]\nfile = "t.csv"\n'))
+
+
+def test_a_csv_with_a_bom_or_a_comment_before_its_header_loads(tmp_path):
+    rows = "from,to,reward\n00,10,1\n10,11,0.5\n"
+    assert load_robot(csv_robot(tmp_path, "\ufeff" + rows)).transitions.n_transitions == 2
+    assert load_robot(csv_robot(tmp_path, "# my table\n" + rows)).transitions.n_transitions == 2
+    with pytest.raises(RobotFileError, match=r"t\.csv:4: from: expected a state label"):
+        load_robot(csv_robot(tmp_path, rows + "from,to,reward\n"))  # a header among the rows is a bad row
+
+
+def test_a_robot_file_with_a_bom_loads_and_one_not_utf8_names_the_line(tmp_path):
+    assert load_robot(write(tmp_path, "\ufeff# saved by Notepad\n" + R1)).name == "t"
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(R1.encode() + b"# caf\xe9\n")
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    line = R1.count("\n") + 1
+    assert str(info.value) == (f"{path}: line {line}: not UTF-8 text (byte 0xe9: invalid continuation byte); "
+                               "save it as UTF-8")

@@ -228,22 +228,9 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
     rew: list[float] = []
     dur: list[float] = []
     seen: set[tuple[int, int]] = set()
-    try:
-        size = csv_path.stat().st_size
-        fh = csv_path.open(newline="", encoding="utf-8")
-    except OSError as e:
-        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
-    if size > MAX_CSV_BYTES:
-        fh.close()
-        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
-    with fh:
-        has_duration = None
-        for lineno, row in enumerate(_csv_rows(fh, csv_path), start=1):
-            if not row or row[0].lstrip().startswith("#"):
-                continue
-            cells = [c.strip() for c in row]
-            if lineno == 1 and cells[:3] == ["from", "to", "reward"]:
-                continue  # header
+    has_duration = None
+    with _open_csv(path, csv_path) as fh:
+        for lineno, cells in _csv_rows(fh, csv_path):
             where = f"{csv_path}:{lineno}"
             if len(cells) not in (3, 4):
                 raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {len(cells)} fields")
@@ -251,46 +238,94 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
                 has_duration = len(cells) == 4
             elif has_duration != (len(cells) == 4):
                 raise RobotFileError(f"{where}: every row must have a duration, or none")
-            a = _state_ref(cells[0], levels, n, f"{where}: from")
-            b = _state_ref(cells[1], levels, n, f"{where}: to")
-            if a == b:
-                raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
+            a, b, r = _csv_transition(cells, levels, n, where)
             if (a, b) in seen:
                 raise RobotFileError(f"{where}: transition {cells[0]} -> {cells[1]} is given twice")
             seen.add((a, b))
-            try:
-                r = float(cells[2])
-            except ValueError:
-                raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
-            if not _in_range(r, -MAX_ENTRY, MAX_ENTRY):
-                raise RobotFileError(f"{where}: reward: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}], "
-                                     f"got {cells[2]!r}")
             src.append(a)
             dst.append(b)
             rew.append(r)
             if has_duration:
-                try:
-                    d = float(cells[3])
-                except ValueError:
-                    d = -1.0
-                if not d > 0 or not math.isfinite(d):
-                    raise RobotFileError(f"{where}: duration_s: expected a number > 0, got {cells[3]!r}")
-                dur.append(d)
+                dur.append(_csv_duration(cells[3], where))
     if not src:
         raise RobotFileError(f"{csv_path}: no transitions (expected rows from,to,reward)")
     return src, dst, rew, (dur if dur else None)
 
 
+def _open_csv(path: Path, csv_path: Path):
+    """The CSV as text (a leading BOM, as Excel writes, dropped), refused if too large."""
+    try:
+        size = csv_path.stat().st_size
+        fh = csv_path.open(newline="", encoding="utf-8-sig")
+    except OSError as e:
+        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
+    if size > MAX_CSV_BYTES:
+        fh.close()
+        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
+    return fh
+
+
+def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: str) -> tuple[int, int, float]:
+    a = _state_ref(cells[0], levels, n, f"{where}: from")
+    b = _state_ref(cells[1], levels, n, f"{where}: to")
+    if a == b:
+        raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
+    try:
+        r = float(cells[2])
+    except ValueError:
+        raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
+    if not _in_range(r, -MAX_ENTRY, MAX_ENTRY):
+        raise RobotFileError(f"{where}: reward: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}], "
+                             f"got {cells[2]!r}")
+    return a, b, r
+
+
+def _csv_duration(text: str, where: str) -> float:
+    try:
+        d = float(text)
+    except ValueError:
+        d = -1.0
+    if not d > 0 or not math.isfinite(d):
+        raise RobotFileError(f"{where}: duration_s: expected a number > 0, got {text!r}")
+    return d
+
+
 def _csv_rows(fh, csv_path: Path):
-    """csv.reader's rows, its errors (NUL bytes, a field over its size limit) as RobotFileError."""
+    """(line, stripped cells) of each data row: ``line`` is the file line the row starts on
+    (a quoted cell may span lines); blank rows, ``#`` comments and the ``from,to,reward``
+    header (the first other row) are skipped. csv.reader's errors (NUL bytes, a field over its
+    size limit, bytes that are not UTF-8) are RobotFileError naming the line."""
     reader = csv.reader(fh)
+    first = True
     while True:
+        start = reader.line_num + 1
         try:
-            yield next(reader)
+            row = next(reader)
         except StopIteration:
             return
-        except (csv.Error, UnicodeDecodeError) as e:
+        except csv.Error as e:
             raise RobotFileError(f"{csv_path}:{reader.line_num}: not a readable CSV row: {e}") from None
+        except UnicodeDecodeError as e:
+            raise RobotFileError(f"{csv_path}:{_first_non_utf8_line(csv_path)}: not UTF-8 text ({e.reason}); "
+                                 "save it as UTF-8") from None
+        if not row or row[0].lstrip().startswith("#"):
+            continue
+        cells = [c.strip() for c in row]
+        header, first = first and cells[:3] == ["from", "to", "reward"], False
+        if not header:
+            yield start, cells
+
+
+def _first_non_utf8_line(csv_path: Path) -> int:
+    """The line of the first bytes that are not UTF-8 (the text reader decodes in chunks,
+    so csv.reader's line count does not say)."""
+    with csv_path.open("rb") as fh:
+        for lineno, raw in enumerate(fh, start=1):
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError:
+                return lineno
+    return 1
 
 
 def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
