@@ -291,6 +291,13 @@ def test_console_exits_1_when_the_robot_faulted_during_the_session(capsys, injec
     assert code == 1 and "the robot faulted during the console session" in err, err
 
 
+def test_console_refuses_an_injection_after_its_duration(capsys):
+    """It used to run for the duration and never inject the fault, without a word."""
+    code, _, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "2", "--inject",
+                       "dead-actuator:sma-right+5")
+    assert code == 2 and "5 s is after the run ends (--duration 2 s)" in err, err
+
+
 def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(capsys):
     """The board would answer FORBIDDEN_TRANSITION (detail 0), exit 1; the host knows which."""
     code, out, err = run(capsys, "load-gait", "--sim", "paper-r1-one-actuator", "00,10,11,01")

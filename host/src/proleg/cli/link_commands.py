@@ -53,7 +53,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         check_suffix(record)  # reject an unknown extension before opening anything
     if udp is not None:
         parse_endpoint(udp)
-    timed = [parse_injection(spec) for spec in inject]  # a mistake fails before anything is opened
+    timed = [parse_injection(spec, duration_s) for spec in inject]  # a mistake fails before anything is opened
     out = out or sys.stdout
     err = err or sys.stderr
     robot = None
@@ -202,7 +202,7 @@ def add_arguments(subparsers: Any) -> None:
                         "still do; docs/learning.md)")
     c.add_argument("--inject", action="append", default=[], metavar="FAULT",
                    help="with --sim: inject a fault, optionally T simulated seconds after the start "
-                        "(e.g. dead-actuator:sma-right+10; the names of proleg sim --inject)")
+                        "(e.g. dead-actuator:sma-right+10; the names of proleg sim --inject; T at most --duration)")
     c.set_defaults(run=lambda a: console_main(
         port=a.port, can_channel=a.can, interface=a.interface, node=a.node, sim=a.sim, robot_file=a.robot,
         baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration, fmt=a.format,

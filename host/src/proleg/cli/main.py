@@ -157,7 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--inject", action="append", default=[], metavar="FAULT",
                    help="fault to inject, optionally at a time: imu-silent:LIMB, imu-stuck:LIMB, imu-garbage:LIMB, "
                         "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P]; "
-                        "append +T for T simulated seconds after the start (e.g. dead-actuator:sma-right+10)")
+                        "append +T for T simulated seconds after the start, at most --duration (e.g. dead-actuator:sma-right+10)")
     s.add_argument("--seed", type=int, default=1)
     s.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
     add_udp_options(s)
@@ -324,14 +324,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
         plant["conditions"] = flat_conditions(args)  # calibrated on the flat, put down on the slope below
     sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
                          max_transitions=args.max_transitions, **plant)
-    timed, at_once = [], []
-    for spec in args.inject:
-        if "+" in spec:  # FAULT+T: checked now, injected T simulated seconds after the start
-            from ..console.inject import parse_injection
-
-            timed.append(parse_injection(spec))
-        else:
-            at_once.append(spec)
+    # --pty may be stopped early (Ctrl-C) and names what it did not inject; a plain run would not say
+    timed, at_once = _injections(args.inject, None if args.pty else args.duration)
     if not args.calibrated:
         for spec in at_once:
             sim.inject(spec)
@@ -370,6 +364,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
         print(f"proleg: error: {recorder.error}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK if report.ok else EXIT_FAILED
+
+
+def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:
+    """``--inject`` as (timed: (T, FAULT) for FAULT+T, checked to fall within ``run_s``; at once: FAULT)."""
+    from ..console.inject import parse_injection
+
+    timed = [parse_injection(spec, run_s) for spec in specs if "+" in spec]
+    return timed, [spec for spec in specs if "+" not in spec]
 
 
 def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:
