@@ -88,6 +88,16 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["learn", R1, "--repeats", "-3"], "argument --repeats: expected at least 1, got -3"),
         (["run", R1, "--sim", "--timeout", "0.001"],
          "argument --timeout: expected at least 0.01 s (a reply takes a few ms), got 0.001"),
+        (["run", R1, "--port", "/dev/ttyS0", "--baudrate", "-5"],
+         "argument --baudrate: expected a baud rate in 1..12,000,000, got -5"),
+        (["console", "--port", "/dev/ttyS0", "--baudrate", "99999999999999"],
+         "argument --baudrate: expected a baud rate in 1..12,000,000, got 99999999999999"),
+        (["learn", R1, "--port", "x", "--baudrate", "fast"],
+         "argument --baudrate: expected a baud rate (a whole number), got 'fast'"),
+        (["calibrate", R1, "--can", "x", "--bitrate", "0"],
+         "argument --bitrate: expected a CAN bit rate in bit/s in 1..1,000,000, got 0"),
+        (["calibrate", R1, "--can", "x", "--node", "99"], "argument --node: expected a CAN node id in 0..15, got 99"),
+        (["dbc", "-o", "x.dbc", "--node", "16"], "argument --node: expected a CAN node id in 0..15, got 16"),
     ],
 )
 def test_a_bad_number_is_one_line_naming_the_option_and_exit_2(capsys, argv, line):

@@ -195,8 +195,23 @@ def add_sim_board_options(p: argparse.ArgumentParser) -> None:
 
 def add_udp_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--udp", metavar="HOST:PORT", help="stream every telemetry frame over UDP to PlotJuggler or Teleplot")
-    p.add_argument("--udp-format", choices=("plotjuggler", "teleplot"), default="plotjuggler",
-                   help="plotjuggler: one JSON object per datagram (default); teleplot: >name:timestamp_ms:value lines")
+    p.add_argument("--udp-format", choices=("plotjuggler", "teleplot"),
+                   help="with --udp: plotjuggler: one JSON object per datagram (default); teleplot: "
+                        ">name:timestamp_ms:value lines")
+
+
+def udp_options(args: argparse.Namespace) -> tuple[str | None, str]:
+    """(``--udp`` endpoint or None, ``--udp-format``); ``--udp-format`` without ``--udp`` is a
+    UsageError (it would be ignored), and the endpoint is checked before anything is opened."""
+    from ..errors import UsageError
+    from ..record.udp import parse_endpoint
+
+    if args.udp is None:
+        if args.udp_format is not None:
+            raise UsageError("--udp-format: only with --udp HOST:PORT (it is the format of that stream)")
+        return None, "plotjuggler"
+    parse_endpoint(args.udp)
+    return args.udp, args.udp_format or "plotjuggler"
 
 
 def _firmware_args(p: argparse.ArgumentParser) -> None:
@@ -289,6 +304,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
                             plant_kwargs, refuse_what_does_not_apply, wants_help)
 
     refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
+    args.udp, args.udp_format = udp_options(args)
     pty_limit_s = args.duration  # --pty serves until Ctrl-C unless a duration is given
     if args.duration is None:
         args.duration = 60.0

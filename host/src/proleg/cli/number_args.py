@@ -39,6 +39,28 @@ def int_auto(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
 
 
+def baudrate(text: str) -> int:
+    """``--baudrate``: a serial baud rate, 1 .. ``MAX_BAUDRATE`` (12 Mbaud)."""
+    from ..link.serial_link import MAX_BAUDRATE
+
+    return _int_in(text, 1, MAX_BAUDRATE, "a baud rate")
+
+
+def can_bitrate(text: str) -> int:
+    """``--bitrate``: a CAN bit rate, 1 .. 1,000,000 bit/s (classic CAN)."""
+    return _int_in(text, 1, 1_000_000, "a CAN bit rate in bit/s")
+
+
+def can_node(text: str) -> int:
+    """``--node``: a CAN node id, 0 .. 15 (any base Python reads: ``0x0f``)."""
+    from ..protocol.can import MAX_NODE
+
+    v = int_auto(text)
+    if not 0 <= v <= MAX_NODE:
+        raise argparse.ArgumentTypeError(f"expected a CAN node id in 0..{MAX_NODE}, got {text}")
+    return v
+
+
 def finite_float(text: str) -> float:
     """Any finite number (not ``nan``/``inf``)."""
     v = _float(text, "a number")
@@ -89,6 +111,13 @@ def _float(text: str, expected: str) -> float:
         return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+
+
+def _int_in(text: str, lo: int, hi: int, what: str) -> int:
+    v = _int(text, f"{what} (a whole number)")
+    if not lo <= v <= hi:
+        raise argparse.ArgumentTypeError(f"expected {what} in {lo:,}..{hi:,}, got {text}")
+    return v
 
 
 def _int(text: str, expected: str) -> int:
