@@ -208,6 +208,20 @@ def test_an_option_the_sim_mode_would_ignore_is_refused(capsys, tmp_path, argv, 
     assert code == 2 and text in err and "Traceback" not in err
 
 
+def test_sim_refuses_a_duration_it_would_take_days_to_simulate(capsys):
+    code, _, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "1e12")
+    assert code == 2 and "--duration 1e+12: expected at most 3600 simulated seconds" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv", [("gait", "paper-r1"), ("sim", "paper-r1", "--duration", "1"),
+                                  ("build", "paper-r1", "--board", "host-sim")])
+def test_objective_speed_without_durations_names_the_file_and_the_key(capsys, tmp_path, argv):
+    code, _, err = run(capsys, *argv, "--objective", "speed", *(("-o", str(tmp_path / "b")) if argv[0] == "build" else ()))
+    assert code == 2 and err.count("\n") == 1
+    assert f"--objective speed: {ROBOTS / 'paper-r1.toml'} gives no transition durations" in err
+    assert "transitions.durations_s" in err
+
+
 def test_sim_exits_1_when_the_run_faulted(capsys):
     code, out, _ = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "15",
                        "--inject", "dead-actuator:sma-right+2")

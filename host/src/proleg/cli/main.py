@@ -23,9 +23,12 @@ from pathlib import Path
 from .. import __version__
 from ..errors import LinkError, ProlegError
 from .gait import add_gait_parser
-from .number_args import positive_float, positive_int
+from .number_args import gait_number, max_transitions, positive_float
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+#: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
+#: (the emulated boards are slower); 1e12 never finished. ``--pty`` serves in real time, unbounded.
+MAX_SIM_S = 3600.0
 EPILOG = """\
 exit status:
   0  ok
@@ -150,8 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
     s.add_argument("robot", metavar="ROBOT", type=robot_arg)
     s.add_argument("--duration", type=positive_float, default=None, metavar="S",
-                   help="simulated seconds (default 60; with --pty: until Ctrl-C)")
-    s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
+                   help=f"simulated seconds (default 60, at most {MAX_SIM_S:g}; with --pty: until Ctrl-C)")
+    s.add_argument("--gait", type=gait_number, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
     add_sim_board_options(s)
     s.add_argument("--inject", action="append", default=[], metavar="FAULT",
@@ -189,8 +192,8 @@ def add_sim_board_options(p: argparse.ArgumentParser) -> None:
                         "arduino-nano / bluepill firmware.elf on an emulated MCU (--json adds the tick budget)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the simulated firmware carries (default total)")
-    p.add_argument("--max-transitions", type=positive_int, metavar="N",
-                   help="longest gait considered (default: the build's, see docs/gait-selection.md)")
+    p.add_argument("--max-transitions", type=max_transitions, metavar="N",
+                   help="longest gait considered, 2..256 (default: the build's, see docs/gait-selection.md)")
 
 
 def add_udp_options(p: argparse.ArgumentParser) -> None:
@@ -220,7 +223,7 @@ def _firmware_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--out", metavar="DIR", help="project directory (default build/ROBOT-BOARD)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the firmware carries (default total)")
-    p.add_argument("--max-transitions", type=positive_int, metavar="N")
+    p.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
     p.add_argument("--library", metavar="HEADINGS",
                    help="also carry a gait library, e.g. 0,90,180,270,rot-cw (instead of the robot file's [gaits]; "
                         "docs/planar.md)")
@@ -237,6 +240,9 @@ def _build(args: argparse.Namespace):
 
     robot = load_robot(args.robot)
     board = load_board(args.board)
+    from .gait import check_speed_objective
+
+    check_speed_objective(robot, args.objective)
     library = None
     if getattr(args, "library", None):
         from ..gait.library import library_spec
@@ -304,8 +310,16 @@ def cmd_sim(args: argparse.Namespace) -> int:
                             plant_kwargs, refuse_what_does_not_apply, wants_help)
 
     refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
+    from .gait import check_speed_objective
+
+    check_speed_objective(robot, args.objective)
     args.udp, args.udp_format = udp_options(args)
     pty_limit_s = args.duration  # --pty serves until Ctrl-C unless a duration is given
+    if not args.pty and (args.duration or 0) > MAX_SIM_S:
+        from ..errors import SimError
+
+        raise SimError(f"--duration {args.duration:g}: expected at most {MAX_SIM_S:g} simulated seconds (an hour "
+                       "takes about a minute to simulate; run several shorter simulations instead)")
     if args.duration is None:
         args.duration = 60.0
 

@@ -21,11 +21,44 @@ def positive_int(text: str) -> int:
     return v
 
 
+def max_transitions(text: str) -> int:
+    """``--max-transitions``: the longest gait, 2 .. ``MAX_GAIT_TRANSITIONS`` (a gait has at least
+    two transitions; a longer bound makes the search run for hours)."""
+    from ..gait.library import MAX_GAIT_TRANSITIONS
+
+    v = _int(text, "a whole number")
+    if not 2 <= v <= MAX_GAIT_TRANSITIONS:
+        raise argparse.ArgumentTypeError(f"expected a whole number of transitions in 2..{MAX_GAIT_TRANSITIONS} "
+                                         f"(a gait has at least 2), got {v}")
+    return v
+
+
+#: ``gait --cycles``: at most this many passes in the composed path (each pass is one point per
+#: transition in the path, the JSON and the plot; 1e9 never finished).
+MAX_CYCLES = 10_000
+
+
+def cycles(text: str) -> int:
+    """``--cycles``: passes in the composed path, 1 .. ``MAX_CYCLES``."""
+    v = positive_int(text)
+    if v > MAX_CYCLES:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_CYCLES:,} passes, got {v}")
+    return v
+
+
 def gait_index(text: str) -> int:
     """A gait table index ≥ 0, or ``user`` for the LOAD_GAIT sequence (``GAIT_USER``)."""
     if text.strip().lower() == "user":
         return GAIT_USER
     v = _int(text, "a gait index or 'user'")
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
+    return v
+
+
+def gait_number(text: str) -> int:
+    """A gait table index ≥ 0 (``sim --gait``: the built-in gaits, no user gait)."""
+    v = _int(text, "a gait index")
     if v < 0:
         raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
     return v
