@@ -172,6 +172,8 @@ def test_sim_reports_a_lost_start_as_an_error_and_exits_1(capsys):
     ("link-drop:nan", "expected a number in 0..1, got 'nan'"),
     ("drift:all@-1", "drift@RATE (per second of on-time): expected a number ≥ 0, got '-1'"),
     ("drift@abc", "drift@RATE (per second of on-time): expected a number, got 'abc'"),
+    ("dead-actuator:sma-right+1e400", "the time after '+' must be a finite number ≥ 0 s, got '1e400'"),
+    ("dead-actuator:sma-right+100", "100 s is after the run ends (--duration 2 s), so it would never be injected"),
 ])
 def test_an_injection_out_of_its_range_is_refused_before_the_run(capsys, spec, text):
     """A drop probability of 2 used to run and end in 'no reply to START', exit 1."""
@@ -204,6 +206,20 @@ def test_an_option_the_sim_mode_would_ignore_is_refused(capsys, tmp_path, argv, 
     """Each used to be ignored with exit 0 (--measure-matrix --record wrote no file)."""
     code, _, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), *argv)
     assert code == 2 and text in err and "Traceback" not in err
+
+
+def test_sim_refuses_a_duration_it_would_take_days_to_simulate(capsys):
+    code, _, err = run(capsys, "sim", str(ROBOTS / "paper-r1.toml"), "--duration", "1e12")
+    assert code == 2 and "--duration 1e+12: expected at most 3600 simulated seconds" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv", [("gait", "paper-r1"), ("sim", "paper-r1", "--duration", "1"),
+                                  ("build", "paper-r1", "--board", "host-sim")])
+def test_objective_speed_without_durations_names_the_file_and_the_key(capsys, tmp_path, argv):
+    code, _, err = run(capsys, *argv, "--objective", "speed", *(("-o", str(tmp_path / "b")) if argv[0] == "build" else ()))
+    assert code == 2 and err.count("\n") == 1
+    assert f"--objective speed: {ROBOTS / 'paper-r1.toml'} gives no transition durations" in err
+    assert "transitions.durations_s" in err
 
 
 def test_sim_exits_1_when_the_run_faulted(capsys):

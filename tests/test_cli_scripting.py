@@ -247,6 +247,39 @@ def test_a_bad_udp_endpoint_is_one_line(capsys):
     assert code == 2 and "expected HOST:PORT" in err and err.count("\n") == 1
 
 
+def test_a_udp_host_that_does_not_resolve_is_a_usage_error(capsys, monkeypatch):
+    # --udp 999.1.1.1:5 exited 1 as if a link had failed
+    def no_such_host(*_a, **_k):
+        raise socket.gaierror(socket.EAI_NONAME, "Name or service not known")
+
+    monkeypatch.setattr(socket, "getaddrinfo", no_such_host)
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", "--udp", "999.1.1.1:5")
+    assert code == 2 and err.count("\n") == 1
+    assert "--udp 999.1.1.1:5: no host '999.1.1.1' (Name or service not known); expected HOST:PORT" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (("run", "paper-r1", "--sim", "--duration", "1", "--udp-format", "teleplot"),
+     "--udp-format: only with --udp HOST:PORT"),
+    (("sim", "paper-r1", "--duration", "1", "--udp-format", "teleplot"), "--udp-format: only with --udp HOST:PORT"),
+    (("console", "--sim", "paper-r1", "--plain", "--duration", "1", "--udp-format", "teleplot"),
+     "--udp-format: only with --udp HOST:PORT"),
+    (("calibrate", "paper-r1", "--sim", "--baudrate", "9600"), "--baudrate: only with --port"),
+    (("calibrate", "paper-r1", "--sim", "--node", "3"), "--node: only with --can"),
+    (("run", "paper-r1", "--sim", "--bitrate", "500000"), "--bitrate: only with --can"),
+    (("run", "paper-r1", "--port", "loop://", "--interface", "virtual"), "--interface: only with --can"),
+    (("console", "--sim", "paper-r1", "--plain", "--baudrate", "9600"), "--baudrate: only with --port"),
+    (("learn", "paper-r1", "--sim", "--log", "LOG", "--node", "1"), "--node: only with --can"),
+    (("run", "paper-r1", "--can", "x", "--interface", "nosuch"), "unknown CAN interface 'nosuch'; python-can knows:"),
+])
+def test_an_option_the_command_would_ignore_or_cannot_take_is_exit_2(capsys, tmp_path, argv, words):
+    # each ran with exit 0 (the option ignored) or exited 1 as if a link had failed
+    argv = tuple(str(tmp_path / "t.jsonl") if a == "LOG" else a for a in argv)
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and words in err and err.count("\n") == 1, err
+    assert not (tmp_path / "t.jsonl").exists()
+
+
 # --------------------------------------------------------------------------- load-gait, set-param
 def test_load_gait_on_the_simulated_board(capsys):
     code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,10,11,01,00")
@@ -313,6 +346,13 @@ def test_console_exits_1_when_the_robot_faulted_during_the_session(capsys, injec
     that sticks later sends a FAULT event."""
     code, _, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "2", "--inject", inject)
     assert code == 1 and "the robot faulted during the console session" in err, err
+
+
+def test_console_refuses_an_injection_after_its_duration(capsys):
+    """It used to run for the duration and never inject the fault, without a word."""
+    code, _, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "2", "--inject",
+                       "dead-actuator:sma-right+5")
+    assert code == 2 and "5 s is after the run ends (--duration 2 s)" in err, err
 
 
 def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(capsys):

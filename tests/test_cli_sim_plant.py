@@ -53,6 +53,10 @@ def test_a_condition_changes_the_run(capsys):
     (["--condition", "power=9"], "condition power: 9 is outside [0.2, 2] ×"),
     (["--condition", "imu_bias_deg=middle:2"], "no limb 'middle'"),
     (["--plant", "table", "--condition", "power=0.9"], "conditions apply to the physical plant"),
+    (["--condition", "incline_deg=5", "--condition", "incline_deg=-5"],
+     "condition incline_deg: given twice ('incline_deg=5' and 'incline_deg=-5'); give it once"),
+    (["--condition", "imu_offset_deg=left:8", "--condition", "imu_offset_deg=left:-8"],
+     "condition imu_offset_deg for 'left': given twice"),
 ])
 def test_a_bad_condition_is_one_line_without_traceback(capsys, args, words):
     rc, out, err = run(capsys, "sim", str(R1), "--duration", "1", *args)

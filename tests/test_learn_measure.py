@@ -55,6 +55,17 @@ def test_a_complete_last_record_without_newline_is_kept(tmp_path):
     assert len(TrialLog(p).trials) == 2
 
 
+def test_a_log_saved_with_a_bom_reads_and_appends(tmp_path):
+    # Notepad saves UTF-8 with a byte order mark; it was "Unexpected UTF-8 BOM"
+    p = tmp_path / "log.jsonl"
+    header = json.dumps({"trial_log": 1, "robot": "r"})
+    p.write_bytes(b"\xef\xbb\xbf" + (header + "\n" + _trial(0).to_json() + "\n").encode())
+    with TrialLog(p, robot="r") as log:
+        assert log.robot == "r" and [t.dx for t in log.trials] == [4.0]
+        log.append(_trial(1))
+    assert [t.dx for t in TrialLog(p).trials] == [4.0, 5.0]
+
+
 def test_a_broken_line_in_the_middle_is_an_error_naming_the_line(tmp_path):
     p = tmp_path / "log.jsonl"
     p.write_text(_trial(0).to_json() + "\nnot json\n" + _trial(1).to_json() + "\n")

@@ -176,11 +176,12 @@ def test_dbc_describes_every_frame_of_each_node(tmp_path):
     assert bu == ["BU_: HOST ROBOT_0 ROBOT_7"]  # each node named once
 
 
-def test_unknown_can_interface_is_one_clear_link_error():
-    with pytest.raises(LinkError) as e:
+def test_unknown_can_interface_is_one_clear_usage_error():
+    # a name python-can does not know is the user's typo (exit 2), not a link that failed (exit 1)
+    with pytest.raises(UsageError) as e:
         CanLink("can0", "no-such-interface")
-    assert "unknown or unavailable CAN interface 'no-such-interface'" in str(e.value)
-    assert "\n" not in str(e.value)
+    assert str(e.value).startswith("unknown CAN interface 'no-such-interface'; python-can knows: ")
+    assert "socketcan" in str(e.value) and "\n" not in str(e.value)
 
 
 # --------------------------------------------------------------------------- python-can's configuration

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from proleg.errors import LinkError
+from proleg.errors import LinkError, UsageError
 from proleg.link import RobotClient, open_link
 from proleg.link.factory import LINKS, link_url
 from proleg.link.serial_link import SerialLink
@@ -45,8 +45,29 @@ def test_can_url_needs_a_channel_from_itself_or_python_can_configuration(tmp_pat
     monkeypatch.setenv("HOME", str(tmp_path))  # no ~/.canrc
     with pytest.raises(LinkError, match="no CAN channel: give one"):
         open_link("can://")
-    with pytest.raises(LinkError, match="node must be an integer"):
+    with pytest.raises(UsageError, match=r"node: expected an integer in 0\.\.15, got 'x'"):
         open_link("can://virtual/proleg-factory?node=x")
+
+
+@pytest.mark.parametrize("url, words", [
+    ("can://virtual/ch0?node=abc", "can://virtual/ch0?node=abc: node: expected an integer in 0..15, got 'abc'"),
+    ("can://virtual/ch0?bitrate=abc", "bitrate: expected an integer in 1..1000000, got 'abc'"),
+    ("can://virtual/ch0?bitrate=0", "bitrate: expected an integer in 1..1000000, got 0"),
+    ("sim://paper-r1?seed=abc", "sim://paper-r1?seed=abc: seed: expected an integer in 0..4294967295, got 'abc'"),
+    ("sim://paper-r1?speed=abc", "speed: expected a finite number above 0 (times real time) or 'max', got 'abc'"),
+    ("serial:///dev/ttyS0?baudrate=abc", "baudrate: expected an integer in 1..12000000, got 'abc'"),
+    ("serial:///dev/ttyS0?baudrate=99999999999999", "baudrate: expected an integer in 1..12000000, got 99999999999999"),
+])
+def test_a_bad_url_setting_is_a_usage_error_naming_it(url, words):
+    # these were a LinkError (exit 1) or a traceback (baudrate=abc, speed=abc)
+    with pytest.raises(UsageError) as e:
+        open_link(url)
+    assert words in str(e.value)
+
+
+def test_an_overflowing_baud_rate_from_a_library_caller_is_a_link_error():
+    with pytest.raises(LinkError, match="cannot open serial port loop://"):
+        SerialLink("loop://", 99999999999999, opener=lambda *a, **k: (_ for _ in ()).throw(OverflowError("too big")))
 
 
 def test_cli_options_map_to_urls():

@@ -106,6 +106,10 @@ def test_a_library_that_does_not_fit_the_flash_is_refused_naming_it(robot, fw):
     ('library = [0]\ncolour = 1', r"gaits: unknown key 'colour'"),
     ("rotation_cap_deg = 5", r"gaits: the keys rotation_cap_deg describe a library; give gaits.library"),
     ('library = [0, 0]', r"gaits\.library: heading 0 is given twice"),
+    ('library = [0, 360]', r"gaits\.library: heading 360 is given twice \(the same heading as 0\)"),
+    ('library = [0]\nmax_transitions = 1000000000', r"gaits\.max_transitions: expected a whole number in 2\.\.256, "
+                                                    r"got 1000000000"),
+    ('library = [0]\nvariance_weight = -1', r"gaits\.variance_weight: expected a number >= 0 or \[λx, λy, λθ\], got -1$"),
 ])
 def test_a_bad_gaits_table_is_one_line_naming_the_key(tmp_path, gaits, message):
     text = PLANAR.read_text()

@@ -201,7 +201,7 @@ def test_console_on_a_missing_port_is_one_clear_line(tmp_path):
 
 
 def test_console_on_an_unknown_can_interface_is_one_clear_line():
-    with pytest.raises(LinkError, match="unknown or unavailable CAN interface 'bogus'"):
+    with pytest.raises(UsageError, match="unknown CAN interface 'bogus'; python-can knows: "):  # a typo: exit 2
         console_main(can_channel="can0", interface="bogus", plain=True)
 
 

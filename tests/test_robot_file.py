@@ -390,9 +390,9 @@ def test_planar_statistics_are_read_per_transition_beside_the_matrix(tmp_path):
         ("dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1]]", ["transitions.dy: expected 4 rows like the matrix, got 2"]),
         ("dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]\n"
          "var_dy = [[0, 1, 1, 1], [1, 0, 1, 1], [1, 1, 0, -1], [1, 1, 1, 0]]",
-         ["transitions.var_dy[3][4]: expected a variance >= 0 or 'x', got -1"]),
+         ["transitions.var_dy[3][4]: expected a variance in [0, 1e+18] or 'x', got -1"]),
         ('dy = [[0, "x", -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]',
-         ["transitions.dy[1][2]: transition is allowed in the matrix, expected a number, got 'x'"]),
+         ["transitions.dy[1][2]: transition is allowed in the matrix, expected a number in [-1e+09, 1e+09], got 'x'"]),
     ],
 )
 def test_bad_planar_statistics_name_the_field_row_and_column(tmp_path, replace, fragments):
@@ -406,3 +406,73 @@ def test_planar_statistics_must_mark_the_same_forbidden_transitions(tmp_path):
         "dy = [[0, 0, 0, 1], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]\n"
     )
     rejects(tmp_path, text, "transitions.dy[1][4]: transition is forbidden in the matrix, expected 'x', got 1")
+
+
+@pytest.mark.parametrize("ref", ["¹", "١"])
+def test_a_state_index_is_ascii_digits_only(tmp_path, ref):
+    # "¹".isdigit() is true but int() refuses it; int("١") is 1: both are refused, in one line
+    text = R1.replace("[0, 0, 0, 0]]", '[0, 0, 0, "x"]]').replace("[transitions]", f'[transitions]\nforbidden = ["{ref}->00"]')
+    rejects(tmp_path, text, "transitions.forbidden[0]", "an index 0..3", repr(ref))
+    with pytest.raises(RobotFileError, match=r"t\.csv:2: from: expected a state label"):
+        load_robot(csv_robot(tmp_path, f"from,to,reward\n{ref},01,-1\n"))
+
+
+@pytest.mark.parametrize("entry", ["1e308", "-1e10"])
+def test_matrix_entries_are_bounded_like_the_true_matrix(tmp_path, entry):
+    # 1e308 overflowed the gait sums to inf and the search answered wrongly
+    rejects(tmp_path, R1.replace("[0, -1, 1, 0]", f"[0, -1, {entry}, 0]"),
+            "transitions.matrix[1][3]: expected a number in [-1e+09, 1e+09]")
+    with pytest.raises(RobotFileError, match=r"t\.csv:2: reward: expected a number in \[-1e\+09, 1e\+09\], got"):
+        load_robot(csv_robot(tmp_path, f"from,to,reward\n00,10,{entry}\n"))
+    assert load_robot(write(tmp_path, R1.replace("[0, -1, 1, 0]", "[0, -1, 1e9, 0]"))).transitions.reward.max() == 1e9
+
+
+def test_planar_means_and_variances_are_bounded(tmp_path):
+    head = PLANAR.split("dy = ")[0]
+    rejects(tmp_path, head + "dy = [[0, 1e308, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]\n",
+            "transitions.dy[1][2]: expected a number in [-1e+09, 1e+09] or 'x', got 1e+308")
+    rejects(tmp_path, head + "var_dx = [[0, 1e300, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]\n",
+            "transitions.var_dx[1][2]: expected a variance in [0, 1e+18] or 'x', got 1e+300")
+
+
+@pytest.mark.parametrize("entry, shown", [("1e300", "1e+300"), ("-1", "-1"), ("nan", "nan"), ("1.5", "got 1.5")])
+def test_n_trials_are_whole_numbers_in_range_named_as_trials(tmp_path, entry, shown):
+    # 1e300 became a garbage int64; -1 and nan were called "a variance"; 1.5 showed np.float64(1.5)
+    text = R1.replace("[transitions]", f"[transitions]\nn_trials = [[0, {entry}, 1, 1], [1, 0, 1, 1], [1, 1, 0, 1], "
+                                       "[1, 1, 1, 0]]")
+    msg = rejects(tmp_path, text, "transitions.n_trials[1][2]: expected a whole number of trials in [0, 1e+09]", shown)
+    assert "variance" not in msg and "np." not in msg
+
+
+def test_csv_lines_are_file_lines_not_rows(tmp_path):
+    # a quoted cell spanning lines: the bad row is on line 6, it was reported as row 3
+    with pytest.raises(RobotFileError, match=r"t\.csv:6: reward: expected a number, got 'zz'"):
+        load_robot(csv_robot(tmp_path, 'from,to,reward\n"00\n\n\n",01,-1\n00,10,zz\n'))
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: from: expected a state label"):
+        load_robot(csv_robot(tmp_path, 'from,to,reward\n00,01,-1\n"0\n1x",10,1\n'))
+
+
+def test_a_csv_that_is_not_utf8_names_the_line(tmp_path):
+    (tmp_path / "t.csv").write_bytes(b"from,to,reward\n00,01,-1\n# caf\xe9\n00,10,1\n")
+    head = R1.split("[transitions]")[0]
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: not UTF-8 text \(invalid continuation byte\)"):
+        load_robot(write(tmp_path, head + '[transitions]\nfile = "t.csv"\n'))
+
+
+def test_a_csv_with_a_bom_or_a_comment_before_its_header_loads(tmp_path):
+    rows = "from,to,reward\n00,10,1\n10,11,0.5\n"
+    assert load_robot(csv_robot(tmp_path, "\ufeff" + rows)).transitions.n_transitions == 2
+    assert load_robot(csv_robot(tmp_path, "# my table\n" + rows)).transitions.n_transitions == 2
+    with pytest.raises(RobotFileError, match=r"t\.csv:4: from: expected a state label"):
+        load_robot(csv_robot(tmp_path, rows + "from,to,reward\n"))  # a header among the rows is a bad row
+
+
+def test_a_robot_file_with_a_bom_loads_and_one_not_utf8_names_the_line(tmp_path):
+    assert load_robot(write(tmp_path, "\ufeff# saved by Notepad\n" + R1)).name == "t"
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(R1.encode() + b"# caf\xe9\n")
+    with pytest.raises(RobotFileError) as info:
+        load_robot(path)
+    line = R1.count("\n") + 1
+    assert str(info.value) == (f"{path}: line {line}: not UTF-8 text (byte 0xe9: invalid continuation byte); "
+                               "save it as UTF-8")

@@ -69,8 +69,19 @@ def read_text(path: Path, limit: int, what: str) -> str:
             data = fh.read(limit + 1)  # the file may have grown since stat
         if len(data) > limit:
             raise RobotFileError(f"{path}: {what} larger than {limit:,} bytes")
-        return data.decode("utf-8")
     except FileNotFoundError:
         raise RobotFileError(f"{path}: no such {what}") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise RobotFileError(f"{path}: cannot read: {e}") from None
+    except OSError as e:
+        raise RobotFileError(f"{path}: cannot read: {e.strerror or e}") from None
+    return decode_utf8(data, path)
+
+
+def decode_utf8(data: bytes, path: Path) -> str:
+    """``data`` as UTF-8 text, a leading BOM (Notepad, Excel) dropped; bytes that are not
+    UTF-8 are a RobotFileError naming the line."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data[: e.start].count(b"\n") + 1
+        raise RobotFileError(f"{path}: line {line}: not UTF-8 text (byte 0x{data[e.start]:02x}: {e.reason}); "
+                             "save it as UTF-8") from None

@@ -21,6 +21,12 @@ from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 FORBIDDEN = "x"
 #: A transition CSV larger than this is refused before it is read.
 MAX_CSV_BYTES = 256 * 1024 * 1024
+#: The largest |entry| of the matrix, a CSV reward and the planar means, as ``[plant] true_matrix``:
+#: a gait sums its entries, and 1e308 would overflow to inf and turn the gait search's answer.
+MAX_ENTRY = 1e9
+#: The largest planar variance (σ up to MAX_ENTRY) and the largest ``n_trials`` entry.
+MAX_VARIANCE = MAX_ENTRY**2
+MAX_TRIALS = 10**9
 
 
 #: What a matrix entry counts: steps (× ``[plant] step_mm`` on the table plant) or a length.
@@ -89,8 +95,10 @@ def _planar(path: Path, value: dict, n: int, allowed: np.ndarray) -> PlanarRewar
     src, dst = np.nonzero(allowed)
     for key in PLANAR_FIELDS:
         if key in value:
+            variance = key.startswith("var_")
             m = _same_shape_matrix(path, f"transitions.{key}", value[key], n, allowed,
-                                   variance=key.startswith("var_"), allow_nan=True)
+                                   "a variance" if variance else "a number", 0.0 if variance else -MAX_ENTRY,
+                                   MAX_VARIANCE if variance else MAX_ENTRY, allow_nan=True)
             v = m[src, dst]
             known = v[~np.isnan(v)]
             fill = float(known.max()) if key.startswith("var_") and len(known) else 0.0
@@ -102,15 +110,10 @@ def n_trials_section(path: Path, value: dict, n: int, allowed: np.ndarray) -> np
     """``n_trials`` (a learned file): whole numbers >= 0 like the matrix, 'x' where forbidden."""
     if "n_trials" not in value:
         return None
-    m = _same_shape_matrix(path, "transitions.n_trials", value["n_trials"], n, allowed, variance=True)
+    m = _same_shape_matrix(path, "transitions.n_trials", value["n_trials"], n, allowed, "a whole number of trials",
+                           0, MAX_TRIALS, whole=True)
     src, dst = np.nonzero(allowed)
-    v = m[src, dst]
-    bad = [(int(a), int(b)) for a, b, x in zip(src, dst, v) if x != int(x)]
-    if bad:
-        a, b = bad[0]
-        raise RobotFileError(f"{path}: transitions.n_trials[{a + 1}][{b + 1}]: expected a whole number of trials, "
-                             f"got {m[a, b]!r}")
-    return v.astype(np.int64)
+    return m[src, dst].astype(np.int64)
 
 
 def _square(where: str, rows: Any, n: int, rows_are: str = "like the matrix") -> list[list[Any]]:
@@ -125,10 +128,12 @@ def _square(where: str, rows: Any, n: int, rows_are: str = "like the matrix") ->
     return rows
 
 
-def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, *, variance: bool,
-                       allow_nan: bool = False) -> np.ndarray:
+def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.ndarray, what: str, lo: float,
+                       hi: float, *, allow_nan: bool = False, whole: bool = False) -> np.ndarray:
+    """An n × n matrix of ``what`` in [lo, hi] where ``allowed``, 'x' elsewhere (nan, when
+    ``allow_nan``: not measured); ``whole``: whole numbers only."""
     where = f"{path}: {name}"
-    expected = "a variance >= 0" if variance else "a number"  # (nan, when allowed: not measured)
+    expected = f"{what} in [{lo:g}, {hi:g}]"
     out = np.full((n, n), np.nan)
     for a, row in enumerate(_square(where, rows, n)):
         for b, v in enumerate(row):
@@ -140,7 +145,7 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
                     raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
                 continue
             unknown = allow_nan and isinstance(v, float) and math.isnan(v)
-            if not unknown and (not _is_number(v) or (variance and v < 0)):
+            if not unknown and (not _in_range(v, lo, hi) or (whole and not float(v).is_integer())):
                 raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
             if not allowed[a, b]:
                 raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")
@@ -182,9 +187,10 @@ def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
                 continue  # the diagonal is not a transition
             if v == FORBIDDEN:
                 continue
-            if not _is_number(v):
+            if not _in_range(v, -MAX_ENTRY, MAX_ENTRY):
                 raise RobotFileError(
-                    f"{where}[{a + 1}][{b + 1}]: expected a number or 'x' (forbidden), got {v!r}"
+                    f"{where}[{a + 1}][{b + 1}]: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}] or 'x' "
+                    f"(forbidden), got {v!r}"
                 )
             reward[a, b] = float(v)
             allowed[a, b] = True
@@ -222,22 +228,9 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
     rew: list[float] = []
     dur: list[float] = []
     seen: set[tuple[int, int]] = set()
-    try:
-        size = csv_path.stat().st_size
-        fh = csv_path.open(newline="", encoding="utf-8")
-    except OSError as e:
-        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
-    if size > MAX_CSV_BYTES:
-        fh.close()
-        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
-    with fh:
-        has_duration = None
-        for lineno, row in enumerate(_csv_rows(fh, csv_path), start=1):
-            if not row or row[0].lstrip().startswith("#"):
-                continue
-            cells = [c.strip() for c in row]
-            if lineno == 1 and cells[:3] == ["from", "to", "reward"]:
-                continue  # header
+    has_duration = None
+    with _open_csv(path, csv_path) as fh:
+        for lineno, cells in _csv_rows(fh, csv_path):
             where = f"{csv_path}:{lineno}"
             if len(cells) not in (3, 4):
                 raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {len(cells)} fields")
@@ -245,45 +238,94 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
                 has_duration = len(cells) == 4
             elif has_duration != (len(cells) == 4):
                 raise RobotFileError(f"{where}: every row must have a duration, or none")
-            a = _state_ref(cells[0], levels, n, f"{where}: from")
-            b = _state_ref(cells[1], levels, n, f"{where}: to")
-            if a == b:
-                raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
+            a, b, r = _csv_transition(cells, levels, n, where)
             if (a, b) in seen:
                 raise RobotFileError(f"{where}: transition {cells[0]} -> {cells[1]} is given twice")
             seen.add((a, b))
-            try:
-                r = float(cells[2])
-            except ValueError:
-                raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
-            if not math.isfinite(r):
-                raise RobotFileError(f"{where}: reward: expected a finite number, got {cells[2]!r}")
             src.append(a)
             dst.append(b)
             rew.append(r)
             if has_duration:
-                try:
-                    d = float(cells[3])
-                except ValueError:
-                    d = -1.0
-                if not d > 0 or not math.isfinite(d):
-                    raise RobotFileError(f"{where}: duration_s: expected a number > 0, got {cells[3]!r}")
-                dur.append(d)
+                dur.append(_csv_duration(cells[3], where))
     if not src:
         raise RobotFileError(f"{csv_path}: no transitions (expected rows from,to,reward)")
     return src, dst, rew, (dur if dur else None)
 
 
+def _open_csv(path: Path, csv_path: Path):
+    """The CSV as text (a leading BOM, as Excel writes, dropped), refused if too large."""
+    try:
+        size = csv_path.stat().st_size
+        fh = csv_path.open(newline="", encoding="utf-8-sig")
+    except OSError as e:
+        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
+    if size > MAX_CSV_BYTES:
+        fh.close()
+        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
+    return fh
+
+
+def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: str) -> tuple[int, int, float]:
+    a = _state_ref(cells[0], levels, n, f"{where}: from")
+    b = _state_ref(cells[1], levels, n, f"{where}: to")
+    if a == b:
+        raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
+    try:
+        r = float(cells[2])
+    except ValueError:
+        raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
+    if not _in_range(r, -MAX_ENTRY, MAX_ENTRY):
+        raise RobotFileError(f"{where}: reward: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}], "
+                             f"got {cells[2]!r}")
+    return a, b, r
+
+
+def _csv_duration(text: str, where: str) -> float:
+    try:
+        d = float(text)
+    except ValueError:
+        d = -1.0
+    if not d > 0 or not math.isfinite(d):
+        raise RobotFileError(f"{where}: duration_s: expected a number > 0, got {text!r}")
+    return d
+
+
 def _csv_rows(fh, csv_path: Path):
-    """csv.reader's rows, its errors (NUL bytes, a field over its size limit) as RobotFileError."""
+    """(line, stripped cells) of each data row: ``line`` is the file line the row starts on
+    (a quoted cell may span lines); blank rows, ``#`` comments and the ``from,to,reward``
+    header (the first other row) are skipped. csv.reader's errors (NUL bytes, a field over its
+    size limit, bytes that are not UTF-8) are RobotFileError naming the line."""
     reader = csv.reader(fh)
+    first = True
     while True:
+        start = reader.line_num + 1
         try:
-            yield next(reader)
+            row = next(reader)
         except StopIteration:
             return
-        except (csv.Error, UnicodeDecodeError) as e:
+        except csv.Error as e:
             raise RobotFileError(f"{csv_path}:{reader.line_num}: not a readable CSV row: {e}") from None
+        except UnicodeDecodeError as e:
+            raise RobotFileError(f"{csv_path}:{_first_non_utf8_line(csv_path)}: not UTF-8 text ({e.reason}); "
+                                 "save it as UTF-8") from None
+        if not row or row[0].lstrip().startswith("#"):
+            continue
+        cells = [c.strip() for c in row]
+        header, first = first and cells[:3] == ["from", "to", "reward"], False
+        if not header:
+            yield start, cells
+
+
+def _first_non_utf8_line(csv_path: Path) -> int:
+    """The line of the first bytes that are not UTF-8 (the text reader decodes in chunks,
+    so csv.reader's line count does not say)."""
+    with csv_path.open("rb") as fh:
+        for lineno, raw in enumerate(fh, start=1):
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError:
+                return lineno
+    return 1
 
 
 def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
@@ -294,10 +336,14 @@ def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
             return states.index(text, levels)
         except ValueError as e:
             raise RobotFileError(f"{expected} ({e})") from None
-    if text.isdigit() and int(text) < n:
+    if text.isascii() and text.isdigit() and int(text) < n:  # "¹" and "١" are digits too
         return int(text)
     raise RobotFileError(expected)
 
 
 def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _in_range(v: Any, lo: float, hi: float) -> bool:
+    return _is_number(v) and lo <= v <= hi

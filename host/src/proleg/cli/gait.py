@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 from ..errors import GaitError
-from .number_args import finite_float, non_negative_float, positive_int
+from .number_args import cycles, finite_float, max_transitions, non_negative_float
 
 DIRECTIONS = ("+x", "-x")
 PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_deg", "simple_cycles", "rotate", "library")
@@ -32,7 +32,7 @@ def add_gait_parser(sub) -> None:
     g.add_argument("robot", metavar="ROBOT", type=robot_arg)
     g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
     g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
-    g.add_argument("--max-transitions", type=positive_int, metavar="N")
+    g.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
     g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
     g.add_argument("--json", action="store_true", help="print one JSON object")
     p = g.add_argument_group("planar gaits (robot files with dy / dtheta_deg / var_*; docs/planar.md)")
@@ -46,9 +46,9 @@ def add_gait_parser(sub) -> None:
     p.add_argument("--translation-cap", type=non_negative_float, metavar="D",
                    help="with --rotate: at most this translation per pass (default: one mean step)")
     p.add_argument("--library", metavar="HEADINGS", help="best gait per heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
-    p.add_argument("--cycles", type=positive_int, metavar="N",
-                   help="passes in the composed path of a planar answer or of --plot (default 10); refused where "
-                        "nothing composes a path")
+    p.add_argument("--cycles", type=cycles, metavar="N",
+                   help="passes in the composed path of a planar answer or of --plot (default 10, at most 10,000); "
+                        "refused where nothing composes a path")
     p.add_argument("--plot", metavar="FILE.png",
                    help="draw each answer's gait 0 (with --evaluate: that sequence) composed over --cycles passes")
     g.set_defaults(run=cmd_gait)
@@ -62,12 +62,21 @@ def _weights(text: str) -> tuple[float, float, float]:
     return (values[0],) * 3 if len(values) == 1 else (values[0], values[1], values[2])
 
 
+def check_speed_objective(robot, objective: str) -> None:
+    """``--objective speed`` divides by the transitions' durations: a robot file without them is
+    a GaitError naming the file and the key to give."""
+    if objective == "speed" and robot.transitions.duration is None:
+        raise GaitError(f"--objective speed: {robot.path} gives no transition durations (expected "
+                        "transitions.durations_s or transitions.default_duration_s, or a duration_s column in its CSV)")
+
+
 def cmd_gait(args: argparse.Namespace) -> int:
     from ..robot import load_robot
 
     robot = load_robot(args.robot)
     planar = any(getattr(args, k) is not None and getattr(args, k) is not False for k in PLANAR_FLAGS)
     _check_cycles(args, planar)
+    check_speed_objective(robot, args.objective)
     if args.evaluate is not None:
         return _print_evaluation(robot, args)
     if not planar:

@@ -40,7 +40,7 @@ class LearnError(ProlegError):
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import int_auto, non_negative_float, positive_float, positive_int, reply_timeout
+    from .number_args import baudrate, can_node, non_negative_float, positive_float, positive_int, reply_timeout
     from .robot_commands import DEFAULT_BAUDRATE
 
     p = subparsers.add_parser(
@@ -52,9 +52,10 @@ def add_arguments(subparsers: Any) -> None:
     src.add_argument("--port", metavar="URL", help="serial port or pyserial URL of the robot")
     src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
     src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board with a table plant")
-    p.add_argument("--interface", default="socketcan", help="python-can interface for --can (default socketcan)")
-    p.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot (default 0)")
-    p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
+    p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
+                                       "else socketcan)")
+    p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
+    p.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
     p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
                    help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
@@ -126,6 +127,9 @@ class ProgressBar:
 def cmd_learn(args: argparse.Namespace) -> int:
     from ..robot import load_robot
 
+    from .robot_commands import link_settings
+
+    link_settings(args)  # a --baudrate or --node of a link not chosen is refused, not ignored
     robot = load_robot(args.robot)
     linked = bool(args.port or args.can or args.sim)
     source = _check_options(args, linked)

@@ -15,7 +15,7 @@ from typing import Any, TextIO
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import int_auto, positive_float
+from .number_args import baudrate, can_bitrate, can_node, int_auto, positive_float
 
 
 def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str | None = None,
@@ -53,7 +53,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         check_suffix(record)  # reject an unknown extension before opening anything
     if udp is not None:
         parse_endpoint(udp)
-    timed = [parse_injection(spec) for spec in inject]  # a mistake fails before anything is opened
+    timed = [parse_injection(spec, duration_s) for spec in inject]  # a mistake fails before anything is opened
     out = out or sys.stdout
     err = err or sys.stderr
     robot = None
@@ -172,6 +172,18 @@ def _robot(text: str) -> str:
     return robot_arg(text)
 
 
+def _console(a: Any) -> int:
+    from .main import udp_options
+    from .robot_commands import link_settings
+
+    link, (udp, udp_format) = link_settings(a), udp_options(a)
+    return console_main(
+        port=a.port, can_channel=a.can, interface=link["interface"], node=link["node"], sim=a.sim, robot_file=a.robot,
+        baudrate=link["baudrate"], record=a.record, plain=a.plain, duration_s=a.duration, fmt=a.format,
+        udp=udp, udp_format=udp_format, bitrate=link["bitrate"], force=a.force, leave_running=a.leave_running,
+        replan=a.replan, inject=a.inject)
+
+
 def add_arguments(subparsers: Any) -> None:
     """Add ``console``, ``plot`` and ``dbc`` to the CLI's subparsers."""
     from .main import add_udp_options
@@ -184,9 +196,10 @@ def add_arguments(subparsers: Any) -> None:
     src.add_argument("--sim", metavar="ROBOT", type=_robot, help="run the robot's firmware on the simulated board")
     c.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
                                        "else socketcan)")
-    c.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
-    c.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot, 0..15 (default 0)")
-    c.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
+    c.add_argument("--bitrate", type=can_bitrate, metavar="BIT/S",
+                   help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
+    c.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
+    c.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
     c.add_argument("--robot", metavar="ROBOT", type=_robot, help="robot file for limb names and ψ* (with --port/--can)")
     c.add_argument("--record", metavar="FILE", help="record every frame to FILE (.csv, .jsonl or .mcap)")
     c.add_argument("--plain", action="store_true", help="print one line per telemetry frame instead of the UI")
@@ -204,12 +217,8 @@ def add_arguments(subparsers: Any) -> None:
                         "still do; docs/learning.md)")
     c.add_argument("--inject", action="append", default=[], metavar="FAULT",
                    help="with --sim: inject a fault, optionally T simulated seconds after the start "
-                        "(e.g. dead-actuator:sma-right+10; the names of proleg sim --inject)")
-    c.set_defaults(run=lambda a: console_main(
-        port=a.port, can_channel=a.can, interface=a.interface, node=a.node, sim=a.sim, robot_file=a.robot,
-        baudrate=a.baudrate, record=a.record, plain=a.plain, duration_s=a.duration, fmt=a.format,
-        udp=a.udp, udp_format=a.udp_format, bitrate=a.bitrate, force=a.force, leave_running=a.leave_running,
-        replan=a.replan, inject=a.inject))
+                        "(e.g. dead-actuator:sma-right+10; the names of proleg sim --inject; T at most --duration)")
+    c.set_defaults(run=_console)
 
     p = subparsers.add_parser("plot", help="plot a recording: ψ vs ψ*, states, SMA duty, displacement")
     p.add_argument("record_file", metavar="FILE", help="recording (.csv, .jsonl or .mcap) from --record")
@@ -219,7 +228,7 @@ def add_arguments(subparsers: Any) -> None:
 
     d = subparsers.add_parser("dbc", help="write a DBC file describing the robot's CAN frames")
     d.add_argument("-o", "--out", required=True, metavar="FILE.dbc")
-    d.add_argument("--node", type=int_auto, action="append", metavar="N",
+    d.add_argument("--node", type=can_node, action="append", metavar="N",
                    help="robot node id(s) on the bus (repeatable; default 0)")
     d.add_argument("--base", type=int_auto, default=0x100, help="base CAN id (default 0x100)")
     d.add_argument("--robot", metavar="ROBOT", type=_robot, help="name ψ and duty signals after its limbs and actuators")

@@ -24,9 +24,12 @@ from pathlib import Path
 from .. import __version__
 from ..errors import LinkError, ProlegError
 from .gait import add_gait_parser
-from .number_args import positive_float, positive_int
+from .number_args import gait_number, max_transitions, positive_float
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+#: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
+#: (the emulated boards are slower); 1e12 never finished. ``--pty`` serves in real time, unbounded.
+MAX_SIM_S = 3600.0
 EPILOG = """\
 exit status:
   0  ok
@@ -167,14 +170,14 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
     s.add_argument("robot", metavar="ROBOT", type=robot_arg)
     s.add_argument("--duration", type=positive_float, default=None, metavar="S",
-                   help="simulated seconds (default 60; with --pty: until Ctrl-C)")
-    s.add_argument("--gait", type=int, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
+                   help=f"simulated seconds (default 60, at most {MAX_SIM_S:g}; with --pty: until Ctrl-C)")
+    s.add_argument("--gait", type=gait_number, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     s.add_argument("--direction", choices=("+x", "-x"), default="+x")
     add_sim_board_options(s)
     s.add_argument("--inject", action="append", default=[], metavar="FAULT",
                    help="fault to inject, optionally at a time: imu-silent:LIMB, imu-stuck:LIMB, imu-garbage:LIMB, "
                         "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P]; "
-                        "append +T for T simulated seconds after the start (e.g. dead-actuator:sma-right+10)")
+                        "append +T for T simulated seconds after the start, at most --duration (e.g. dead-actuator:sma-right+10)")
     s.add_argument("--seed", type=int, default=1)
     s.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
     add_udp_options(s)
@@ -206,14 +209,29 @@ def add_sim_board_options(p: argparse.ArgumentParser) -> None:
                         "arduino-nano / bluepill firmware.elf on an emulated MCU (--json adds the tick budget)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the simulated firmware carries (default total)")
-    p.add_argument("--max-transitions", type=positive_int, metavar="N",
-                   help="longest gait considered (default: the build's, see docs/gait-selection.md)")
+    p.add_argument("--max-transitions", type=max_transitions, metavar="N",
+                   help="longest gait considered, 2..256 (default: the build's, see docs/gait-selection.md)")
 
 
 def add_udp_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--udp", metavar="HOST:PORT", help="stream every telemetry frame over UDP to PlotJuggler or Teleplot")
-    p.add_argument("--udp-format", choices=("plotjuggler", "teleplot"), default="plotjuggler",
-                   help="plotjuggler: one JSON object per datagram (default); teleplot: >name:timestamp_ms:value lines")
+    p.add_argument("--udp-format", choices=("plotjuggler", "teleplot"),
+                   help="with --udp: plotjuggler: one JSON object per datagram (default); teleplot: "
+                        ">name:timestamp_ms:value lines")
+
+
+def udp_options(args: argparse.Namespace) -> tuple[str | None, str]:
+    """(``--udp`` endpoint or None, ``--udp-format``); ``--udp-format`` without ``--udp`` is a
+    UsageError (it would be ignored), and the endpoint is checked before anything is opened."""
+    from ..errors import UsageError
+    from ..record.udp import parse_endpoint
+
+    if args.udp is None:
+        if args.udp_format is not None:
+            raise UsageError("--udp-format: only with --udp HOST:PORT (it is the format of that stream)")
+        return None, "plotjuggler"
+    parse_endpoint(args.udp)
+    return args.udp, args.udp_format or "plotjuggler"
 
 
 def _firmware_args(p: argparse.ArgumentParser) -> None:
@@ -222,7 +240,7 @@ def _firmware_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--out", metavar="DIR", help="project directory (default build/ROBOT-BOARD)")
     p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
                    help="which optimal gaits the firmware carries (default total)")
-    p.add_argument("--max-transitions", type=positive_int, metavar="N")
+    p.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
     p.add_argument("--library", metavar="HEADINGS",
                    help="also carry a gait library, e.g. 0,90,180,270,rot-cw (instead of the robot file's [gaits]; "
                         "docs/planar.md)")
@@ -239,6 +257,9 @@ def _build(args: argparse.Namespace):
 
     robot = load_robot(args.robot)
     board = load_board(args.board)
+    from .gait import check_speed_objective
+
+    check_speed_objective(robot, args.objective)
     library = None
     if getattr(args, "library", None):
         from ..gait.library import library_spec
@@ -306,7 +327,16 @@ def cmd_sim(args: argparse.Namespace) -> int:
                             plant_kwargs, refuse_what_does_not_apply, wants_help)
 
     refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
+    from .gait import check_speed_objective
+
+    check_speed_objective(robot, args.objective)
+    args.udp, args.udp_format = udp_options(args)
     pty_limit_s = args.duration  # --pty serves until Ctrl-C unless a duration is given
+    if not args.pty and (args.duration or 0) > MAX_SIM_S:
+        from ..errors import SimError
+
+        raise SimError(f"--duration {args.duration:g}: expected at most {MAX_SIM_S:g} simulated seconds (an hour "
+                       "takes about a minute to simulate; run several shorter simulations instead)")
     if args.duration is None:
         args.duration = 60.0
 
@@ -341,14 +371,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
         plant["conditions"] = flat_conditions(args)  # calibrated on the flat, put down on the slope below
     sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
                          max_transitions=args.max_transitions, **plant)
-    timed, at_once = [], []
-    for spec in args.inject:
-        if "+" in spec:  # FAULT+T: checked now, injected T simulated seconds after the start
-            from ..console.inject import parse_injection
-
-            timed.append(parse_injection(spec))
-        else:
-            at_once.append(spec)
+    # --pty may be stopped early (Ctrl-C) and names what it did not inject; a plain run would not say
+    timed, at_once = _injections(args.inject, None if args.pty else args.duration)
     if not args.calibrated:
         for spec in at_once:
             sim.inject(spec)
@@ -387,6 +411,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
         print(f"proleg: error: {recorder.error}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK if report.ok else EXIT_FAILED
+
+
+def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:
+    """``--inject`` as (timed: (T, FAULT) for FAULT+T, checked to fall within ``run_s``; at once: FAULT)."""
+    from ..console.inject import parse_injection
+
+    timed = [parse_injection(spec, run_s) for spec in specs if "+" in spec]
+    return timed, [spec for spec in specs if "+" not in spec]
 
 
 def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:

@@ -21,11 +21,44 @@ def positive_int(text: str) -> int:
     return v
 
 
+def max_transitions(text: str) -> int:
+    """``--max-transitions``: the longest gait, 2 .. ``MAX_GAIT_TRANSITIONS`` (a gait has at least
+    two transitions; a longer bound makes the search run for hours)."""
+    from ..gait.library import MAX_GAIT_TRANSITIONS
+
+    v = _int(text, "a whole number")
+    if not 2 <= v <= MAX_GAIT_TRANSITIONS:
+        raise argparse.ArgumentTypeError(f"expected a whole number of transitions in 2..{MAX_GAIT_TRANSITIONS} "
+                                         f"(a gait has at least 2), got {v}")
+    return v
+
+
+#: ``gait --cycles``: at most this many passes in the composed path (each pass is one point per
+#: transition in the path, the JSON and the plot; 1e9 never finished).
+MAX_CYCLES = 10_000
+
+
+def cycles(text: str) -> int:
+    """``--cycles``: passes in the composed path, 1 .. ``MAX_CYCLES``."""
+    v = positive_int(text)
+    if v > MAX_CYCLES:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_CYCLES:,} passes, got {v}")
+    return v
+
+
 def gait_index(text: str) -> int:
     """A gait table index ≥ 0, or ``user`` for the LOAD_GAIT sequence (``GAIT_USER``)."""
     if text.strip().lower() == "user":
         return GAIT_USER
     v = _int(text, "a gait index or 'user'")
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
+    return v
+
+
+def gait_number(text: str) -> int:
+    """A gait table index ≥ 0 (``sim --gait``: the built-in gaits, no user gait)."""
+    v = _int(text, "a gait index")
     if v < 0:
         raise argparse.ArgumentTypeError(f"expected a gait index ≥ 0, got {v}")
     return v
@@ -37,6 +70,28 @@ def int_auto(text: str) -> int:
         return int(text, 0)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
+
+
+def baudrate(text: str) -> int:
+    """``--baudrate``: a serial baud rate, 1 .. ``MAX_BAUDRATE`` (12 Mbaud)."""
+    from ..link.serial_link import MAX_BAUDRATE
+
+    return _int_in(text, 1, MAX_BAUDRATE, "a baud rate")
+
+
+def can_bitrate(text: str) -> int:
+    """``--bitrate``: a CAN bit rate, 1 .. 1,000,000 bit/s (classic CAN)."""
+    return _int_in(text, 1, 1_000_000, "a CAN bit rate in bit/s")
+
+
+def can_node(text: str) -> int:
+    """``--node``: a CAN node id, 0 .. 15 (any base Python reads: ``0x0f``)."""
+    from ..protocol.can import MAX_NODE
+
+    v = int_auto(text)
+    if not 0 <= v <= MAX_NODE:
+        raise argparse.ArgumentTypeError(f"expected a CAN node id in 0..{MAX_NODE}, got {text}")
+    return v
 
 
 def finite_float(text: str) -> float:
@@ -89,6 +144,13 @@ def _float(text: str, expected: str) -> float:
         return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+
+
+def _int_in(text: str, lo: int, hi: int, what: str) -> int:
+    v = _int(text, f"{what} (a whole number)")
+    if not lo <= v <= hi:
+        raise argparse.ArgumentTypeError(f"expected {what} in {lo:,}..{hi:,}, got {text}")
+    return v
 
 
 def _int(text: str, expected: str) -> int:

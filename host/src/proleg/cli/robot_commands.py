@@ -15,9 +15,9 @@ import logging
 import sys
 from typing import Any
 
-from ..errors import GaitError, LinkError
+from ..errors import GaitError, LinkError, UsageError
 from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import gait_index, heading_deg, int_auto, positive_float, reply_timeout
+from .number_args import baudrate, can_bitrate, can_node, gait_index, heading_deg, positive_float, reply_timeout
 
 log = logging.getLogger("proleg")
 
@@ -33,10 +33,27 @@ def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> No
     else:
         src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board")
     p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, else socketcan)")
-    p.add_argument("--bitrate", type=int, metavar="BIT/S", help="CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
-    p.add_argument("--node", type=int_auto, default=0, help="CAN node id of the robot (default 0)")
-    p.add_argument("--baudrate", type=int, default=DEFAULT_BAUDRATE, help=f"serial baud rate (default {DEFAULT_BAUDRATE})")
+    p.add_argument("--bitrate", type=can_bitrate, metavar="BIT/S",
+                   help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
+    p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
+    p.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
     p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
+
+
+#: Link settings that belong to one link option: dest → (the setting's option, that link's option).
+LINK_SETTINGS = {"baudrate": ("--baudrate", "--port"), "node": ("--node", "--can"),
+                 "bitrate": ("--bitrate", "--can"), "interface": ("--interface", "--can")}
+
+
+def link_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """baudrate, node, bitrate and interface for the link the options choose, defaults filled
+    in (their options default to None). A setting of another link is a UsageError: it would be
+    ignored (``--sim --baudrate -5`` used to run)."""
+    for dest, (option, link) in LINK_SETTINGS.items():
+        if getattr(args, dest, None) is not None and getattr(args, link[2:], None) is None:
+            raise UsageError(f"{option}: only with {link} (a setting of that link, which this command does not use)")
+    return {"baudrate": getattr(args, "baudrate", None) or DEFAULT_BAUDRATE, "node": getattr(args, "node", None) or 0,
+            "bitrate": getattr(args, "bitrate", None), "interface": getattr(args, "interface", None)}
 
 
 def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None):
@@ -54,9 +71,10 @@ def open_client(args: argparse.Namespace, robot_path: str | None = None, *, spee
         from .main import robot_arg
 
         sim = robot_arg(sim)
-    url = link_url(port=args.port, can_channel=args.can, interface=args.interface, node=args.node, sim=sim,
-                   bitrate=args.bitrate)
-    link = open_link(url, baudrate=args.baudrate, speed=speed)
+    given = link_settings(args)
+    url = link_url(port=args.port, can_channel=args.can, interface=given["interface"], node=given["node"], sim=sim,
+                   bitrate=given["bitrate"])
+    link = open_link(url, baudrate=given["baudrate"], speed=speed)
     client = RobotClient(link, timeout=args.timeout)
     try:
         info = client.connect()
@@ -121,9 +139,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ..report import check_gait, run_gait_on
     from ..robot import info_name, load_robot
 
+    from .main import udp_options
+
     robot = load_robot(args.robot)
     if args.record:
         check_suffix(args.record)
+    args.udp, args.udp_format = udp_options(args)
+    link_settings(args)  # before the gait is chosen: an option of another link is refused first
     fw, choice = heading_choice(args, robot)
     gait = args.gait if args.gait is not None else 0
     # the loaded sequence's way is stated only by --direction (the climb guard checks it)

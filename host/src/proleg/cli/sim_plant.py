@@ -23,7 +23,7 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                    help="the simulated body: 'physical' (default; displacement from friction mechanics) or "
                         "'table' (the robot's reward matrix as a lookup, e.g. to test learning)")
     s.add_argument("--condition", action="append", default=[], metavar="KEY=VALUE",
-                   help="a physical-plant condition, repeatable, on top of the robot file's [plant] "
+                   help="a physical-plant condition, repeatable (each key, or key and NAME, once), on top of the robot file's [plant] "
                         "(e.g. power=0.8, ambient_c=30, imu_bias_deg=front:3, incline_deg=5); "
                         "--condition help lists every key with its unit and range")
     s.add_argument("--calibrated", action="store_true",

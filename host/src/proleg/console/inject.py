@@ -6,6 +6,7 @@ console do about them. ``FAULT`` names are the simulator's (``proleg.sim.closed_
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 from ..errors import SimError
@@ -13,9 +14,10 @@ from ..link.client import Received
 from ..link.listeners import Listener
 
 
-def parse_injection(spec: str) -> tuple[float, str]:
+def parse_injection(spec: str, run_s: float | None = None) -> tuple[float, str]:
     """``FAULT[+T]`` → (T seconds, FAULT); ``SimError`` naming the spec when the fault is
-    unknown or T is no number ≥ 0."""
+    unknown, T is no finite number ≥ 0, or T is after the run ends (``run_s``, the
+    ``--duration``; None: no end), where the fault would never be injected."""
     from ..sim.closed_loop import FAULTS
 
     fault, plus, at = spec.rpartition("+")
@@ -27,10 +29,13 @@ def parse_injection(spec: str) -> tuple[float, str]:
             t = float(at)
         except ValueError:
             raise SimError(f"--inject {spec}: expected FAULT+SECONDS after '+', got {at!r}") from None
-        if not t >= 0:
-            raise SimError(f"--inject {spec}: the time after '+' must be ≥ 0 s, got {at!r}")
+        if not (t >= 0 and math.isfinite(t)):
+            raise SimError(f"--inject {spec}: the time after '+' must be a finite number ≥ 0 s, got {at!r}")
     if fault.partition(":")[0] not in FAULTS:
         raise SimError(f"--inject {spec}: unknown fault (expected one of: {', '.join(sorted(FAULTS))})")
+    if run_s is not None and t > run_s:
+        raise SimError(f"--inject {spec}: {t:g} s is after the run ends (--duration {run_s:g} s), so it would "
+                       f"never be injected; expected a time in [0, {run_s:g}] s")
     return t, fault
 
 

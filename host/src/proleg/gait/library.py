@@ -44,9 +44,10 @@ class LibraryEntry:
 def parse_headings(text: str) -> list[Heading]:
     """``"0,45,90,rot-cw,rot-ccw"`` → headings (degrees, any finite number; rot-cw / rot-ccw)."""
     out: list[Heading] = []
-    for part in (p.strip() for p in text.split(",")):
+    for k, part in enumerate(p.strip() for p in text.split(",") if text.strip()):
         if not part:
-            continue
+            raise GaitError(f"--library: entry {k + 1} of {text!r} is empty; expected a heading in degrees or "
+                            "rot-cw/rot-ccw between the commas")
         if part.lower().startswith("rot-") and part[4:].lower() in ROTATIONS:
             out.append(Heading(part.lower(), rotate=part[4:].lower()))
             continue
@@ -59,10 +60,13 @@ def parse_headings(text: str) -> list[Heading]:
         out.append(Heading(f"{deg:g}", heading_deg=deg))
     if not out:
         raise GaitError("--library: give at least one heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
-    names = [h.name for h in out]
-    dup = next((n for n in names if names.count(n) > 1), None)
-    if dup is not None:
-        raise GaitError(f"--library: heading {dup} is given twice")
+    seen: dict[Any, str] = {}
+    for h in out:  # 360 is the heading 0 is: the same entry twice
+        key = h.rotate if h.rotate is not None else (h.heading_deg % 360.0) + 0.0  # type: ignore[operator]
+        if key in seen:
+            same = "" if seen[key] == h.name else f" (the same heading as {seen[key]})"
+            raise GaitError(f"--library: heading {h.name} is given twice{same}")
+        seen[key] = h.name
     return out
 
 
@@ -102,10 +106,14 @@ def library_gaits(entries: Sequence[LibraryEntry]) -> list[tuple[Heading, Gait]]
 
 
 #: The robot file's ``[gaits]`` keys (the library the firmware carries) and what each holds.
+#: The longest gait any search considers (``max_transitions``): a paper robot answers in under a
+#: second, but the search grows with the bound (a 36-state robot takes about 30 s at 32), and
+#: 99999 never finished.
+MAX_GAIT_TRANSITIONS = 256
 SPEC_KEYS = {
     "library": "headings in degrees and/or \"rot-cw\", \"rot-ccw\", e.g. [0, 90, 180, 270, \"rot-cw\"]",
     "objective": "\"total\" or \"rate\"",
-    "max_transitions": "a whole number >= 2",
+    "max_transitions": f"a whole number in 2..{MAX_GAIT_TRANSITIONS}",
     "variance_weight": "a number >= 0 or [λx, λy, λθ]",
     "transition_cost": "a number",
     "rotation_cap_deg": "a number of degrees >= 0",
@@ -179,17 +187,17 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
     parsed = parse_headings(headings)
     if len(parsed) > MAX_LIBRARY:
         raise GaitError(f"library: {len(parsed)} headings, at most {MAX_LIBRARY}")
-    vw = options.get("variance_weight", 0.0)
+    given = vw = options.get("variance_weight", 0.0)
     if isinstance(vw, (int, float)) and not isinstance(vw, bool):
         vw = (float(vw),) * 3
     if not (isinstance(vw, (list, tuple)) and len(vw) == 3 and all(
             isinstance(w, (int, float)) and not isinstance(w, bool) and math.isfinite(w) and w >= 0 for w in vw)):
-        raise GaitError(f"variance_weight: expected {SPEC_KEYS['variance_weight']}, got {vw!r}")
+        raise GaitError(f"variance_weight: expected {SPEC_KEYS['variance_weight']}, got {given!r}")
     objective = options.get("objective", "total")
     if objective not in ("total", "rate"):
         raise GaitError(f"objective: expected {SPEC_KEYS['objective']}, got {objective!r}")
     mt = options.get("max_transitions")
-    if mt is not None and (not isinstance(mt, int) or isinstance(mt, bool) or mt < 2):
+    if mt is not None and (not isinstance(mt, int) or isinstance(mt, bool) or not 2 <= mt <= MAX_GAIT_TRANSITIONS):
         raise GaitError(f"max_transitions: expected {SPEC_KEYS['max_transitions']}, got {mt!r}")
 
     def number(key: str, low: float | None, default: Any) -> Any:

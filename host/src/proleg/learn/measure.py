@@ -164,8 +164,8 @@ class TrialLog:
 
     def _read(self, append: bool, robot: str | None) -> None:
         data = self.path.read_bytes()
-        lines = data.split(b"\n")
-        pos = 0
+        pos = len(_BOM) if data.startswith(_BOM) else 0  # a log saved by Notepad starts with one
+        lines = data[pos:].split(b"\n")
         for k, raw in enumerate(lines):
             last = k == len(lines) - 1
             where = f"{self.path}:{k + 1}"
@@ -230,6 +230,10 @@ class TrialLog:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+#: The UTF-8 byte order mark some editors (Notepad) put at the start of a text file.
+_BOM = b"\xef\xbb\xbf"
 
 
 def _text(raw: bytes, where: str) -> str:

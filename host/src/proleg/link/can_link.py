@@ -19,13 +19,16 @@ from typing import Any
 
 import can
 
-from ..errors import LinkError
+from ..errors import LinkError, UsageError
 from ..protocol.can import DEFAULT_BASE, N_SLOTS, CanIds, CanToWire, WireToCan
 from .base import Link
 
 
 #: the interface when neither the caller nor python-can's configuration names one
 FALLBACK_INTERFACE = "socketcan"
+#: The fastest CAN bit rate the host asks for: classic CAN's 1 Mbit/s (CAN FD's faster data
+#: phase is not a ``bitrate``).
+MAX_BITRATE = 1_000_000
 
 
 def bus_config(channel: str | None = None, interface: str | None = None, bitrate: int | None = None,
@@ -34,6 +37,9 @@ def bus_config(channel: str | None = None, interface: str | None = None, bitrate
     (environment, ``~/.canrc``) by ``can.util.load_config``; ``LinkError`` for a bad file or value."""
     given = {k: v for k, v in {"channel": channel, "interface": interface, "bitrate": bitrate, **kwargs}.items()
              if v is not None and v != ""}
+    if "interface" in given and given["interface"] not in can.VALID_INTERFACES:  # a typo, not a link that failed
+        raise UsageError(f"unknown CAN interface {given['interface']!r}; python-can knows: "
+                         f"{', '.join(sorted(can.VALID_INTERFACES))}")
     try:
         if "interface" not in given and not _configured_interface():
             given["interface"] = FALLBACK_INTERFACE

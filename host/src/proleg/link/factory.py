@@ -16,12 +16,13 @@ An unknown scheme is a ``LinkError`` naming the known ones.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 from urllib.parse import parse_qsl, urlsplit
 
-from ..errors import LinkError
+from ..errors import LinkError, UsageError
 from .base import Link
 
 #: pyserial's own URL schemes (``serial.serial_for_url``): passed to the serial link whole
@@ -34,7 +35,9 @@ def _open_serial(url: str, rest: str, query: dict[str, str], options: dict[str, 
     port = url if url.split("://", 1)[0] in PYSERIAL_SCHEMES or "://" not in url else rest
     if not port:
         raise LinkError(f"{url}: no serial device (expected serial:///dev/ttyUSB0)")
-    baudrate = int(query.get("baudrate", options.get("baudrate", DEFAULT_BAUDRATE)))
+    from .serial_link import MAX_BAUDRATE
+
+    baudrate = _int(url, "baudrate", query.get("baudrate", options.get("baudrate") or DEFAULT_BAUDRATE), 1, MAX_BAUDRATE)
     return SerialLink(port, baudrate)
 
 
@@ -45,10 +48,13 @@ def _open_can(url: str, rest: str, query: dict[str, str], options: dict[str, Any
     interface, slash, channel = rest.partition("/")
     if not slash:
         interface, channel = "", interface
+    from ..protocol.can import MAX_NODE
+    from .can_link import MAX_BITRATE
+
     bitrate = query.get("bitrate", options.get("bitrate"))
     return CanLink(channel or None, interface or query.get("interface") or options.get("interface"),
-                   node=_int(url, "node", query.get("node", options.get("node", 0))),
-                   bitrate=None if bitrate is None else _int(url, "bitrate", bitrate))
+                   node=_int(url, "node", query.get("node", options.get("node") or 0), 0, MAX_NODE),
+                   bitrate=None if bitrate is None else _int(url, "bitrate", bitrate, 1, MAX_BITRATE))
 
 
 def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
@@ -61,10 +67,10 @@ def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any
         raise LinkError(f"{url}: expected sim://ROBOT (a bundled robot name or a robot file)")
     path = Path(rest) if rest.endswith(".toml") or "/" in rest else robots_dir() / f"{rest}.toml"
     robot = load_robot(path)
-    seed = _int(url, "seed", query.get("seed", options.get("seed", 1)))
+    seed = _int(url, "seed", query.get("seed", options.get("seed", 1)), 0, 2**32 - 1)
     speed = options.get("speed", None)
     if "speed" in query:
-        speed = None if query["speed"] == "max" else float(query["speed"])
+        speed = None if query["speed"] == "max" else _speed(url, query["speed"])
     plant = query.get("plant", options.get("plant"))  # "physical" (default) or "table" (the planar pose)
     return SimLink(SimulatedRobot(robot, seed=seed, plant=plant), speed=speed, description=f"sim {robot.name}")
 
@@ -117,8 +123,22 @@ def link_url(*, port: str | None = None, can_channel: str | None = None, interfa
     return f"sim://{sim}"
 
 
-def _int(url: str, name: str, value: Any) -> int:
+def _int(url: str, name: str, value: Any, lo: int, hi: int) -> int:
+    """The URL's (or the options') ``name`` as an integer in lo..hi; a UsageError otherwise."""
     try:
-        return int(str(value), 0)
+        v = int(str(value), 0)
     except ValueError:
-        raise LinkError(f"{url}: {name} must be an integer, got {value!r}") from None
+        raise UsageError(f"{url}: {name}: expected an integer in {lo}..{hi}, got {value!r}") from None
+    if not lo <= v <= hi:
+        raise UsageError(f"{url}: {name}: expected an integer in {lo}..{hi}, got {v}")
+    return v
+
+
+def _speed(url: str, text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = math.nan
+    if not (v > 0 and math.isfinite(v)):
+        raise UsageError(f"{url}: speed: expected a finite number above 0 (times real time) or 'max', got {text!r}")
+    return v

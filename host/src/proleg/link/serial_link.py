@@ -16,6 +16,9 @@ from ..errors import LinkError
 from .base import Link, LinkDisconnected
 
 DEFAULT_BAUDRATE = 115200
+#: The fastest serial link the host takes (an FT232H's 12 Mbaud); a bigger number overflows
+#: the termios call (OverflowError), and no adapter runs faster.
+MAX_BAUDRATE = 12_000_000
 
 Opener = Callable[..., Any]
 
@@ -35,7 +38,7 @@ class SerialLink(Link):
     def _open(self) -> None:
         try:
             self._port = self._opener(self.url, baudrate=self.baudrate, timeout=0.0, write_timeout=2.0)
-        except (serial.SerialException, OSError, ValueError) as e:
+        except (serial.SerialException, OSError, ValueError, OverflowError) as e:
             self._port = None
             raise LinkError(f"cannot open serial port {self.url}: {_reason(e)}") from None
         self._timeout = 0.0

@@ -21,6 +21,8 @@ from ..link.listeners import Listener
 from .fields import RecordingMeta, dumps, telemetry_row
 
 UDP_FORMATS = ("plotjuggler", "teleplot")
+#: getaddrinfo's answers for a name that does not exist (not a DNS server that did not answer).
+_NO_SUCH_HOST = {socket.EAI_NONAME, getattr(socket, "EAI_NODATA", socket.EAI_NONAME)}
 
 
 def parse_endpoint(text: str) -> tuple[str, int]:
@@ -61,6 +63,11 @@ class UdpStreamer(Listener):
             info = socket.getaddrinfo(self.host, self.port, type=socket.SOCK_DGRAM)[0]
             self._addr = info[4]
             self._sock: socket.socket | None = socket.socket(info[0], socket.SOCK_DGRAM)
+        except socket.gaierror as e:
+            if e.errno in _NO_SUCH_HOST:  # the argument names no host: a usage mistake, not a failed link
+                raise UsageError(f"--udp {endpoint}: no host {self.host!r} ({e.strerror}); expected HOST:PORT of a "
+                                 "host that resolves, e.g. 127.0.0.1:9870") from None
+            raise LinkError(f"--udp {endpoint}: {e.strerror or e}") from None
         except OSError as e:
             raise LinkError(f"--udp {endpoint}: {e.strerror or e}") from None
 

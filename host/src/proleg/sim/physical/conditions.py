@@ -148,11 +148,13 @@ def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions 
             else:
                 pairs.append((k, str(v)))
     else:
+        given: dict[tuple[str, str], str] = {}
         for item in items:
             key, eq, val = item.partition("=")
             if not eq:
                 raise SimError(f"condition {item!r}: expected key=value (keys: {', '.join(KEYS)})")
             pairs.append((key.strip(), val.strip()))
+            _once(given, key.strip(), val.strip(), item)
     for key, val in pairs:
         if key not in KEYS:
             raise SimError(f"condition {key!r}: unknown key (expected one of: {', '.join(KEYS)})")
@@ -165,6 +167,16 @@ def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions 
             name, colon, num = val.rpartition(":")
             named.setdefault(key, {})[name.strip() if colon else ""] = _number(key, num if colon else val)
     return replace(base, values=values, named=named)
+
+
+def _once(given: dict[tuple[str, str], str], key: str, val: str, item: str) -> None:
+    """A key (for a per-limb or per-actuator key: a key and a name) given twice is a SimError
+    naming both: which one was meant cannot be told, so the last is not silently taken."""
+    name = val.rpartition(":")[0].strip() if key in KEYS and KEYS[key].per else ""
+    if (key, name) in given:
+        which = f"{key} for {name!r}" if name else key
+        raise SimError(f"condition {which}: given twice ({given[key, name]!r} and {item!r}); give it once")
+    given[key, name] = item
 
 
 def describe_keys() -> str:
