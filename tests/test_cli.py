@@ -30,10 +30,12 @@ def test_gait_json_is_one_object_with_the_documented_shape(capsys):
     for r in doc["results"]:
         assert r["objective"] == "total" and r["max_transitions"] == 3
         for g in r["gaits"]:
-            assert set(g) == {"states", "reward", "transitions", "rate", "opposing_steps"}
+            assert set(g) == {"states", "reward", "transitions", "rate", "opposing_steps", "repeats", "problems",
+                              "entry_path"}
             assert g["states"][0] == g["states"][-1]
             assert g["transitions"] == len(g["states"]) - 1
-            assert g["reward"] == pytest.approx(r["value"])
+            assert g["reward"] * g["repeats"] == pytest.approx(r["value"])
+            assert g["problems"] == [] and g["entry_path"] == {"states": ["00"], "gait_step": 0}
             assert g["rate"] == pytest.approx(g["reward"] / g["transitions"])
 
 
@@ -242,3 +244,20 @@ def test_sim_says_when_start_came_so_fault_times_read_from_it(capsys):
                        "--inject", "dead-actuator:sma-left")
     first = doc["faults"][0]["time_s"]
     assert f"FAULT at {first:.3f} s ({first - doc['start_time_s']:.3f} s after START)" in out
+
+
+def test_gait_json_says_what_the_text_says_of_repeats_and_problems(capsys, tmp_path):
+    """A gait that repeats within the bound (value = reward × repeats) and the hardware's
+    problems were only in the text: JSON gave value 2 and a gait of reward 1 with no word why,
+    and no 'shared-actuator' error for a gait one coil cannot make."""
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--direction", "+x",
+                       "--max-transitions", "4", "--json")
+    g = json.loads(out)["results"][0]["gaits"][0]
+    assert code == 0 and g["repeats"] == 2 and g["reward"] * 2 == json.loads(out)["results"][0]["value"]
+    text = (ROBOTS / "paper-r1.toml").read_text().replace('actuator = "sma-right"', 'actuator = "sma-left"')
+    text = text.replace('[[actuator]]\nname = "sma-right"\nchannel = 1\n', "")
+    shared = tmp_path / "shared.toml"
+    shared.write_text(text)
+    code, out, _ = run(capsys, "gait", str(shared), "--direction", "+x", "--max-transitions", "3", "--json")
+    kinds = {p["kind"] for g in json.loads(out)["results"][0]["gaits"] for p in g["problems"]}
+    assert code == 0 and "shared-actuator" in kinds, out

@@ -241,19 +241,23 @@ def _gait_json(robot, gait, planar: bool = False, cycles: int = 10) -> dict:
     }
     if gait.duration is not None:
         d["duration_s"] = gait.duration
+    # what the text shows of every gait: how often it repeats within the bound (value =
+    # reward × repeats), what the hardware cannot do, and the way in from rest
+    problems, entry = _feasibility(robot, gait)
+    d.update({
+        "repeats": gait.repeats,
+        "problems": [{"kind": p.kind, "severity": p.severity, "message": p.message} for p in problems],
+        "entry_path": None if entry is None else {"states": [table.label(s) for s in entry.states],
+                                                  "gait_step": entry.gait_step},
+    })
     if planar:
         from ..gait.compose import gait_path
 
         path = gait_path(table, gait.states, cycles)
         one = path[gait.transitions]
-        problems, entry = _feasibility(robot, gait)
         d.update({
-            "repeats": gait.repeats,
             "net_motion": {"dx": one.x, "dy": one.y, "dtheta_deg": one.theta_deg},
             "path": [[p.x, p.y, p.theta_deg] for p in path],
-            "problems": [{"kind": p.kind, "severity": p.severity, "message": p.message} for p in problems],
-            "entry_path": None if entry is None else {"states": [table.label(s) for s in entry.states],
-                                                      "gait_step": entry.gait_step},
         })
     return d
 
