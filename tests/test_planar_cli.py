@@ -101,3 +101,45 @@ def test_planar_mistakes_are_one_line(capsys, robot, argv, message):
 def test_a_rotation_cap_on_a_robot_without_dtheta_is_one_line(capsys):
     code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--rotation-cap-deg", "5")
     assert code == 2 and "needs [transitions].dtheta_deg" in err
+
+
+def test_gait_library_answers_what_the_firmware_carries(capsys):
+    """planar-4's [gaits] asks rate, variance weight, transition cost, rotation cap and simple
+    cycles: `gait --library` answered with objective total and none of them, so it did not show
+    the library the build puts in the firmware."""
+    from proleg.firmware.gaits import firmware_gaits
+    from proleg.robot import load_robot
+
+    path = ROBOTS / "planar-4.toml"
+    code, out, err = run(capsys, "gait", str(path), "--library", "0,90,180,270,rot-cw,rot-ccw", "--json")
+    assert code == 0, err
+    results = json.loads(out)["results"]
+    assert {r["objective"] for r in results} == {"rate"}
+    carried = {g.heading.name: tuple(g.gait.states) for g in firmware_gaits(load_robot(path)).library}
+    shown = {r["direction"]: tuple(load_robot(path).transitions.index(s) for s in r["gaits"][0]["states"])
+             for r in results if r["gaits"]}
+    assert shown == carried
+
+
+def test_a_library_on_a_robot_of_many_states_takes_the_builds_bound(capsys, tmp_path):
+    """Five binary limbs (32 states): `gait` bounds the total objective by itself (2 · 5 = 10),
+    but `gait --library` and `build --library` refused: 'needs an explicit max_transitions'."""
+    lines = ["[robot]", 'name = "five"']
+    for i in range(5):
+        lines += ["[[limb]]", f'name = "l{i}"', "psi_star_deg = [20.0]", f'actuator = "a{i}"']
+    for i in range(5):
+        lines += ["[[actuator]]", f'name = "a{i}"', f"channel = {i}"]
+    n = 32
+    def cell(a: int, b: int) -> str:  # one limb at a time, each limb its own rewards (few ties)
+        k = (a ^ b).bit_length()
+        return "0" if a == b else (f"{1 + k / 10}" if a < b else f"{-0.5 - k / 100}") if bin(a ^ b).count("1") == 1 \
+            else '"x"'
+
+    rows = ["[" + ", ".join(cell(a, b) for b in range(n)) + "]" for a in range(n)]
+    dy = ["[" + ", ".join("0" if cell(a, b) != '"x"' else '"x"' for b in range(n)) + "]" for a in range(n)]
+    lines += ["[transitions]", "matrix = [" + ", ".join(rows) + "]", "dy = [" + ", ".join(dy) + "]"]
+    path = tmp_path / "five.toml"
+    path.write_text("\n".join(lines) + "\n")
+    code, out, err = run(capsys, "gait", str(path), "--library", "0", "--json")
+    assert code == 0, err
+    assert {r["max_transitions"] for r in json.loads(out)["results"]} == {10}

@@ -30,7 +30,8 @@ def add_gait_parser(sub) -> None:
 
     g = sub.add_parser("gait", help="optimal gaits of a robot, or the score of a sequence")
     g.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    g.add_argument("--objective", choices=("total", "rate", "speed"), default="total")
+    g.add_argument("--objective", choices=("total", "rate", "speed"),
+                   help="total (the default), rate or speed (docs/gait-selection.md)")
     g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
     g.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
     g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
@@ -76,6 +77,9 @@ def cmd_gait(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     planar = any(getattr(args, k) is not None and getattr(args, k) is not False for k in PLANAR_FLAGS)
     _check_cycles(args, planar)
+    if args.library is not None and robot.library is not None:
+        _library_options(robot, args)
+    args.objective = args.objective or "total"
     check_speed_objective(robot, args.objective)
     if args.evaluate is not None:
         return _print_evaluation(robot, args)
@@ -114,6 +118,14 @@ def _check_cycles(args: argparse.Namespace, planar: bool) -> None:
         raise GaitError(f"--cycles {args.cycles}: only with --plot{'' if args.evaluate else ' or a planar option'} "
                         "(nothing else composes a path)")
     args.cycles = args.cycles or 10
+
+
+def _library_options(robot, args) -> None:
+    """``--library`` on a robot file with ``[gaits]``: the options it leaves out are the file's,
+    so that the answer is the library the firmware carries (``proleg build`` takes them)."""
+    for key, value in robot.library.as_kwargs().items():
+        if getattr(args, key, None) in (None, False):
+            setattr(args, key, tuple(value) if isinstance(value, list) else value)
 
 
 def _planar_answers(robot, args) -> list:

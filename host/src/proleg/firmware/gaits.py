@@ -25,18 +25,13 @@ RANK = "fewest opposing steps first, then search order"
 DIRECTIONS = ("+x", "-x")
 #: Tied optimal gaits the firmware carries per direction at most (the best-ranked ones).
 MAX_FIRMWARE_GAITS = 32
-#: The objective "total" enumerates every walk up to max_transitions; the gait engine
-#: wants it given above this many states.
-TOTAL_DEFAULT_MAX_STATES = 16
-
 
 def default_max_transitions(robot: Robot, objective: str) -> int | None:
-    """max_transitions when none is given: None (the engine's own default) up to 16 states;
-    for the total objective on larger robots, one pass of every limb up through its levels
-    and down again, 2 * sum(levels - 1) transitions (a whole-body wave)."""
-    if objective != "total" or robot.n_states <= TOTAL_DEFAULT_MAX_STATES:
-        return None
-    return 2 * sum(k - 1 for k in robot.levels)
+    """max_transitions when none is given (``gait.optimal.whole_body_bound``): None up to 16
+    states; for the total objective on larger robots 2 · Σ(levels − 1), a whole-body wave."""
+    from ..gait.optimal import whole_body_bound
+
+    return whole_body_bound(robot.levels, objective)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from typing import Any
 
 from ..errors import GaitError, RobotFileError
 from ..transitions import TransitionTable
+from .optimal import whole_body_bound
 from .planar import ROTATIONS, PlanarObjective, dtheta_of, optimal_planar_gaits, planar_scores
 from .result import Gait, GaitResult
 
@@ -86,6 +87,8 @@ def gait_library(
     entries, the translation cap to the rotation entries."""
     if isinstance(headings, str):
         headings = parse_headings(headings)
+    if max_transitions is None and not simple_cycles:  # the bound the firmware build takes
+        max_transitions = whole_body_bound(table.levels, kind)
     out = []
     for h in headings:
         objective = PlanarObjective(h.heading_deg or 0.0, tuple(variance_weight), transition_cost)  # type: ignore[arg-type]

@@ -15,6 +15,8 @@ ranked (``rank_gaits``): best rate first, then fewest transitions, then by state
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -33,6 +35,16 @@ OBJECTIVES = ("total", "rate", "speed")
 DIRECTIONS = ("+x", "-x")
 #: ``total`` without an explicit bound uses max_transitions = n_states up to this size.
 TOTAL_DEFAULT_LIMIT_STATES = 16
+
+
+def whole_body_bound(levels: Sequence[int], objective: str) -> int | None:
+    """The bound on a gait's transitions when none is given, as the firmware build takes it:
+    None (the engine's own default) up to ``TOTAL_DEFAULT_LIMIT_STATES`` states; for the
+    total objective on a larger robot one pass of every limb up through its levels and down
+    again, 2 · Σ(levels − 1) transitions (a whole-body wave)."""
+    if objective != "total" or math.prod(levels) <= TOTAL_DEFAULT_LIMIT_STATES:
+        return None
+    return 2 * sum(k - 1 for k in levels)
 
 
 def _objective_value(g: Gait, objective: str) -> float:

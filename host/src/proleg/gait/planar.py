@@ -209,4 +209,4 @@ def _constrained(
         return empty
     gaits = [replace(g, repeats=k) for g, (_, k) in zip(make_gaits(scored, [c for c, _ in found.ties]), found.ties)]
     ranked = rank_gaits(gaits, "+x", tol)
-    return GaitResult("+x", kind, K, found.best, tuple(ranked), False, below_zero=found.best <= tol)
+    return GaitResult("+x", kind, K, found.best, tuple(ranked), False, below_zero=bool(found.best <= tol))
