@@ -420,4 +420,4 @@ def test_corrupted_and_random_bytes_are_counted_and_valid_commands_still_work(ta
     assert errors(after) > errors(before)
     assert after.rx_ok > before.rx_ok
     info = client.get_info()
-    assert info.robot_name == target.robot.name
+    assert info.robot_name == info_name(target.robot.name)

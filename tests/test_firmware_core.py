@@ -237,11 +237,14 @@ def test_render_refuses_a_pin_the_avr_hal_cannot_drive():
 
 
 def test_render_refuses_a_band_reaching_90_degrees():
-    doc = _robot_doc()
-    doc["limb"][0]["psi_star_deg"] = [89.5]
-    robot = robot_from_dict(doc, Path("tests/steep.toml"))
+    """The loader refuses such a file (tests/test_robot_file.py); a Robot made otherwise is
+    still refused by the renderer, whose C would otherwise wrap the band's edge."""
+    from dataclasses import replace
+
+    robot = robot_from_dict(_robot_doc(), Path("tests/steep.toml"))
+    steep = replace(robot, limbs=(replace(robot.limbs[0], psi_star_deg=(89.5,)), *robot.limbs[1:]))
     with pytest.raises(BuildError, match="90"):
-        render_config(robot, {"+x": [], "-x": []}, SIM_BOARD)
+        render_config(steep, {"+x": [], "-x": []}, SIM_BOARD)
 
 
 def test_no_gait_in_either_direction_still_renders_valid_c(rendered, tmp_path):

@@ -310,3 +310,15 @@ def test_a_learned_file_that_would_not_load_is_not_written(tmp_path, monkeypatch
     with pytest.raises(robotfile.LearnedFileError, match="would not load"):
         write_learned_robot(robot, estimate(t, _sim_trials(t)), tmp_path / "l.toml", units="mm")
     assert not (tmp_path / "l.toml").exists()
+
+
+def test_a_transition_not_measured_keeps_its_planar_statistics_too(tmp_path):
+    """planar-4 with one transition not tried: its dy and var_dx became NaN (read as 0 and
+    'unknown') while its matrix entry kept the file's value."""
+    robot = load_robot(ROOT / "robots" / "planar-4.toml")
+    t = robot.transitions
+    skip = next(e for e in range(t.n_transitions) if t.planar.dy[e] != 0)
+    out = write_learned_robot(robot, estimate(t, _sim_trials(t, {skip})), tmp_path / "l.toml", units=robot.units)
+    learned = load_robot(out).transitions
+    assert learned.planar.dy[skip] == t.planar.dy[skip]
+    assert learned.reward[skip] == t.reward[skip]

@@ -121,7 +121,7 @@ def test_a_band_around_psi_star_past_90_degrees_is_refused_when_the_file_is_read
     """ψ* 89.5° with the default 2° band reaches 90.5°: the file loaded and gait answered, and
     only the build refused it, naming neither the file nor the key."""
     rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", f"psi_star_deg = [{angle}]", 1),
-            "limb 'left': hysteresis_deg", "strictly inside (-90, 90)")
+            "limb 'left': psi_star_deg", "hysteresis_deg/2 (2/2) lie strictly inside (-90, 90)")
 
 
 def test_psi_star_count_must_match_levels(tmp_path):

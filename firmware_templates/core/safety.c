@@ -9,6 +9,8 @@ static uint32_t last_us;
 static uint32_t unreached_us;
 static uint32_t timeout_us; /* set by guard_init (no .data bytes in flash) */
 static uint8_t hits_since_reached;
+/* The hit count is a byte: it stops at the latch, reached in a tick in which every coil may hit. */
+typedef char guard_hits_fit_a_byte[(CFG_ON_LIMIT_LATCH - 1u + CFG_N_ACTUATORS <= 255u) ? 1 : -1];
 static uint8_t hit_mask; /* actuators hit since each last heated on the way to a target reached */
 
 #if defined(__GNUC__)
@@ -32,7 +34,7 @@ void guard_set_timeout_ms(uint32_t ms)
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
-    uint8_t i, bit;
+    uint8_t i;
     if (reached) {
         /* A coil that hit and has since heated on the way to this target made progress;
          * reaching what the other coils make is none for it (safety.h). The step's time
@@ -46,12 +48,10 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
         }
     }
     hit_mask |= hits;
-    for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
-        if (hits & bit) {
+    for (i = 0; hits; i++, hits >>= 1) {
+        if (hits & 1u) {
             *act = i;
-            if (hits_since_reached < 0xFFu) {
-                hits_since_reached++;
-            }
+            hits_since_reached++; /* no saturation: once it reaches the latch no coil is driven (guard_hits_fit_a_byte) */
         }
     }
     if (hits_since_reached >= CFG_ON_LIMIT_LATCH) {

@@ -188,7 +188,6 @@ uint8_t sma_tick(void)
         if (a->charged > hold_max) {
             a->debt_us += dt; /* ≤ max_on + SMA_DT_CAP_US: on-time is cut at max_on */
             a->pay_rem = 0;
-            heated = (uint8_t)(heated | bit);
         } else {
             /* ≤ 400000 × 10000 + 255: 32 × 16 bits, no 32 × 32 multiply. The fraction carries
              * on, so a fast tick pays back at the rate set, not at its rounding (at 10 kHz a
@@ -213,6 +212,10 @@ uint8_t sma_tick(void)
                 if (st.limit_hits < 0xFFFFu) {
                     st.limit_hits++;
                 }
+            } else {
+                /* heats on from now (not charged for what it carried before a STOP + START:
+                 * that would credit a dead coil with progress the other coil made, safety.h) */
+                heated = (uint8_t)(heated | bit);
             }
         }
         a->blocked = (uint8_t)(duty > 0u && window_sum(i) + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);

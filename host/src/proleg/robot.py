@@ -325,8 +325,8 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
         if gaps and hyst >= min(gaps):
             f.fail("hysteresis_deg", f"less than the smallest gap between critical angles ({min(gaps)})", hyst)
         if psi_t[0] - hyst / 2 <= -90.0 or psi_t[-1] + hyst / 2 >= 90.0:  # the firmware's band edges
-            f.fail("hysteresis_deg", f"a band psi* ± hysteresis/2 strictly inside (-90, 90) degrees around "
-                   f"psi_star_deg {list(psi_t)}", hyst)
+            f.fail("psi_star_deg", f"angles whose bands psi* ± hysteresis_deg/2 ({hyst:g}/2) lie strictly inside "
+                   f"(-90, 90) degrees", psi)
         actuator = f.string("actuator")
         if actuator not in actuator_names:
             f.fail("actuator", f"the name of an [[actuator]] ({', '.join(sorted(actuator_names))})", actuator)

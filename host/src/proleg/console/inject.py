@@ -1,7 +1,8 @@
 """Faults injected into a simulated robot while the console watches it (``proleg console
 --sim ROBOT --inject dead-actuator:sma-right+10``), to see what the firmware and the
 console do about them. ``FAULT`` names are the simulator's (``proleg.sim.closed_loop.FAULTS``);
-``+T``: T seconds of simulated time after the console started (default: at once).
+``+T``: T seconds of simulated time after the console started (default: at once); a ``+``
+followed by anything but a number belongs to the name (a limb called ``front+pad``).
 """
 
 from __future__ import annotations
@@ -22,13 +23,12 @@ def parse_injection(spec: str, run_s: float | None = None) -> tuple[float, str]:
 
     fault, plus, at = spec.rpartition("+")
     t = 0.0
+    if plus and not _number(at):
+        fault, plus = spec, ""  # a '+' inside a limb's or coil's name ("front+pad"), no time
     if not plus:
         fault = spec
     else:
-        try:
-            t = float(at)
-        except ValueError:
-            raise SimError(f"--inject {spec}: expected FAULT+SECONDS after '+', got {at!r}") from None
+        t = float(at)
         if not (t >= 0 and math.isfinite(t)):
             raise SimError(f"--inject {spec}: the time after '+' must be a finite number ≥ 0 s, got {at!r}")
     if fault.partition(":")[0] not in FAULTS:
@@ -37,6 +37,14 @@ def parse_injection(spec: str, run_s: float | None = None) -> tuple[float, str]:
         raise SimError(f"--inject {spec}: {t:g} s is after the run ends (--duration {run_s:g} s), so it would "
                        f"never be injected; expected a time in [0, {run_s:g}] s")
     return t, fault
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 class Injector(Listener):

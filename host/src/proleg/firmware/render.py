@@ -297,6 +297,10 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     )
 
 
+#: The most on-limit hits that may latch: the guard counts them in a byte and, in the tick it
+#: reaches the limit, up to 8 coils may hit at once (core/safety.c asserts the same).
+MAX_ON_LIMIT_LATCH = 255 - 8
+
 #: Thermal-budget keys of [safety] (docs/safety.md) and their defaults when a robot file
 #: (or a robot.py that predates them) has none: hold_max_duty None = max(0.3, control.hold_duty).
 BUDGET_DEFAULTS: dict[str, Any] = {
@@ -322,8 +326,9 @@ def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
         )
     if not 8 <= int(v["duty_window_ms"]) <= 600_000:
         raise BuildError(f"robot {name}: safety.duty_window_ms {v['duty_window_ms']} must lie in 8 .. 600000")
-    if not 1 <= int(v["on_limit_latch"]) <= 255:
-        raise BuildError(f"robot {name}: safety.on_limit_latch {v['on_limit_latch']} must lie in 1 .. 255")
+    if not 1 <= int(v["on_limit_latch"]) <= MAX_ON_LIMIT_LATCH:  # the hit count is a byte (safety.c)
+        raise BuildError(f"robot {name}: safety.on_limit_latch {v['on_limit_latch']} must lie in 1 .. "
+                         f"{MAX_ON_LIMIT_LATCH}")
     return dict(
         hold_max_duty_pm=round(float(hold_max) * 10000),
         mean_duty_pm=round(mean * 10000),

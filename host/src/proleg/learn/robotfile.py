@@ -150,16 +150,21 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
     given = table.planar.given() if table.planar is not None else {}
     for key, comp, what in STAT_KEYS:
         c = est.components.get(comp)
+        if c is None and key not in given:
+            continue
         m = np.full((n, n), np.nan)
         np.fill_diagonal(m, 0.0)
-        if c is not None:
-            m[table.src, table.dst] = getattr(c, what)
-        elif key in given:  # not learned (a plant without y/θ): the file's own, in the new unit
+        # the file's own values, in the new unit, where nothing was measured (a plant without
+        # y/θ, or a transition not tried), as for the matrix
+        old_values = np.full(len(table.src), np.nan)
+        if key in given:
             length = 0 if comp == "dtheta_deg" else (2 if what == "var" else 1)
-            m[table.src, table.dst] = np.asarray(given[key], dtype=float) * k ** length
+            old_values = np.asarray(given[key], dtype=float) * k ** length
+        if c is None:
+            m[table.src, table.dst] = old_values
             out.append(f"# {key}: not learned here, the previous values kept")
         else:
-            continue
+            m[table.src, table.dst] = np.where(dx.n >= 1, getattr(c, what), old_values)
         out += _matrix(key, m, allowed, prefix)
     return out
 

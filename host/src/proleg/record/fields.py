@@ -17,6 +17,7 @@ from datetime import datetime, timezone
 from typing import Any
 
 from ..names import identifier
+from ..robot import info_name
 from ..protocol.definition import ErrorCode, EventKind
 
 #: TELEMETRY's integer fields, as recorded (no scaling)
@@ -116,7 +117,7 @@ class RecordingMeta:
         return cls(
             limb_names=tuple(limb_names), channel_names=tuple(channel_names),
             # the robot file's full name when it is the board's (INFO carries 15 characters)
-            robot=robot.name if robot is not None and (info is None or robot.name.startswith(info.robot_name))
+            robot=robot.name if robot is not None and (info is None or info_name(robot.name) == info.robot_name)
             else info.robot_name,
             board=info.board if info is not None else kw.pop("board", ""),
             psi_star_deg=stars, info=extra, actuator_names=actuator_names,

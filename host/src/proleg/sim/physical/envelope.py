@@ -105,7 +105,6 @@ class Envelope:
             if self.charged[ch] > self.hold_ceiling_pm:
                 self.debt[ch] += self.dt_us
                 self.pay_rem[ch] = 0
-                self.heated |= 1 << ch
             else:
                 y = self.dt_us * self.refill_q8 + self.pay_rem[ch]  # the fraction carries on
                 self.pay_rem[ch] = y & 255
@@ -116,7 +115,9 @@ class Envelope:
             pm = min(round(duty * 10000), self.max_duty_pm)  # sma_clamp: the duty ceiling first
             if self.cut[ch]:
                 pm = 0  # cooling after an on-limit hit: off until the debt is paid
-            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.ahead_us > self.max_on_us:
+            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.ahead_us <= self.max_on_us:
+                self.heated |= 1 << ch  # heats on from now (sma.c's heated)
+            elif pm > self.hold_ceiling_pm:
                 pm = 0
                 self.cut[ch] = True
                 self.hit_bits |= 1 << ch

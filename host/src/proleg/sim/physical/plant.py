@@ -91,8 +91,9 @@ class PhysicalPlant:
         overlap = [cond.for_index("overlap_mm", j, anames, by_limb, lnames) for j in range(na)]
         length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
         geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, p.working_strain)
-        if curl_problem(geo):
-            raise SimError(f"physical plant of {robot.name}: {curl_problem(geo)}")
+        curl = curl_problem(geo)
+        if curl:
+            raise SimError(f"{getattr(robot, 'path', robot.name)}: plant.length_mm: {curl}")
         self.geometry = geo
         self._shape = Shape(geo)
 
