@@ -369,6 +369,7 @@ class RobotClient:
         truth = self.link.truth()
         append = self._queue.append
         notify = False
+        newest_ms = None  # the batch's last TELEMETRY: a backlog read at once is not a fast clock
         for m in msgs:
             name = m.name
             if name == "TELEMETRY":
@@ -382,7 +383,7 @@ class RobotClient:
                     else:
                         st.seq_restarts += 1
                 self._last_seq = seq
-                self._track_board_rate(now, m.fields["time_ms"])
+                newest_ms = m.fields["time_ms"]
             elif name in _REPLY_NAMES:
                 token = m.fields["token"]
                 waiting = self._waiting.get(token)
@@ -398,6 +399,8 @@ class RobotClient:
                     self._heartbeat_tokens.discard(token)
                     continue  # the heartbeat's own ACK: nobody asked for it
             append(Received(m, now, truth))
+        if newest_ms is not None:
+            self._track_board_rate(now, newest_ms)
         if notify:
             with self._cond:
                 self._cond.notify_all()
