@@ -263,3 +263,16 @@ def test_a_truth_whose_limbs_differ_from_the_robots_is_refused_before_anything_i
     err = capsys.readouterr().err
     assert code == 2 and "limb 'left' has psi_star_deg [0.8]" in err and "the robot's limb 'left' [20.0]" in err, err
     assert not log.exists()
+
+
+def test_a_log_mixing_simulated_and_hand_measured_trials_on_a_steps_robot_is_refused(tmp_path, capsys):
+    """Simulated Δx are in mm, a hand's in the robot file's unit (R1: steps): a resumed log
+    with both was averaged into one mean and written as mm, exit 0."""
+    log = tmp_path / "mixed.jsonl"
+    lines = ['{"trial_log": 1, "robot": "paper-r1"}',
+             '{"from": "00", "to": "10", "t_start": 0, "t_end": 1, "dx": 4.0, "dy": null, "dtheta_deg": null, "source": "sim"}',
+             '{"from": "00", "to": "10", "t_start": 2, "t_end": 3, "dx": 1.0, "dy": null, "dtheta_deg": null, "source": "manual"}']
+    log.write_text("\n".join(lines) + "\n")
+    code = main(["learn", str(ROOT / "robots" / "paper-r1.toml"), "--log", str(log), "--report"])
+    err = capsys.readouterr().err
+    assert code == 2 and "mixes simulated trials (Δx in mm) with manual ones (in steps" in err, err

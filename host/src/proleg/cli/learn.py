@@ -346,15 +346,28 @@ def _fmt(v: float, nd: int = 2) -> str:
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{nd}f}"
 
 
+def _trial_units(args: argparse.Namespace, robot, trials: list) -> str:
+    """The unit the trials' Δx are in: mm for the simulator's, the robot file's for a tracker's
+    or a hand's. A log that mixes the two (resumed with another source) cannot be averaged."""
+    sources = {tr.source for tr in trials}
+    if "sim" not in sources:
+        return robot.units
+    others = sorted(s or "unsaid" for s in sources - {"sim"})
+    if others and robot.units != "mm":
+        raise LearnError(f"learn: {args.log} mixes simulated trials (Δx in mm) with {', '.join(others)} ones (in "
+                         f"{robot.units}, the robot file's unit); learn them from separate logs")
+    return "mm"  # the plant moves in mm
+
+
 def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     from ..learn.estimate import estimate, penalised_table
     from ..learn.robotfile import write_learned_robot
 
     t = robot.transitions
+    units = _trial_units(args, robot, trials)
     est = estimate(t, trials)
     out = sys.stdout
     dx = est.dx
-    units = "mm" if any(tr.source == "sim" for tr in trials) else robot.units  # the plant moves in mm
     print(f"{robot.name}: {int(dx.n.sum())} trials, {t.n_transitions} allowed transitions "
           f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
     extra = est.extra_trials(args.half_width) if args.half_width else None
