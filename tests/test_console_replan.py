@@ -153,7 +153,8 @@ def test_plain_mode_says_whether_it_replans(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--sim", str(R1), "--inject", "dead-actuator:sma-right+soon"], "expected FAULT+SECONDS after '+'"),
+    (["--sim", str(R1), "--inject", "dead-actuator:sma-right+soon"], "fault needs an actuator (sma-left, sma-right or its channel), got 'sma-right+soon'"),
+    (["--sim", str(R1), "--inject", "dead-actuator:nosuch+0.05"], "--inject dead-actuator:nosuch: fault needs an actuator"),
     (["--sim", str(R1), "--inject", "melt:sma-right+1"], "unknown fault"),
     (["--port", "loop://", "--inject", "dead-actuator:sma-right"], "--inject needs --sim ROBOT"),
 ])
@@ -168,3 +169,18 @@ def test_an_injection_spec_is_a_fault_and_a_time():
     assert parse_injection("imu-silent:left") == (0.0, "imu-silent:left")
     with pytest.raises(SimError, match="≥ 0"):
         parse_injection("imu-silent:left+-3")
+
+
+def test_a_plus_that_is_not_followed_by_seconds_belongs_to_the_name():
+    """A limb named "front+pad @2" could not be named in --inject: everything after the last
+    '+' was taken for the time."""
+    assert parse_injection("imu-silent:front+pad @2") == (0.0, "imu-silent:front+pad @2")
+    assert parse_injection("imu-silent:front+pad @2+1.5") == (1.5, "imu-silent:front+pad @2")
+
+
+def test_a_fault_due_later_that_names_no_coil_is_refused_before_the_run(capsys):
+    """sim and console injected a timed fault only when it was due: a bad coil name then
+    raised in the middle of the run (a traceback in the console)."""
+    code = main(["sim", str(R1), "--duration", "1", "--inject", "dead-actuator:nosuch+0.5"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--inject dead-actuator:nosuch: fault needs an actuator" in err and "Traceback" not in err

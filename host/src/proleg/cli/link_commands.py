@@ -68,6 +68,12 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     if timed and not hasattr(getattr(link, "board", None), "inject"):
         link.close()
         raise SimError("--inject needs --sim ROBOT (faults are injected into the simulated robot)")
+    try:
+        for _, fault in timed:
+            link.board.check_fault(fault)  # type: ignore[attr-defined]  # a bad name fails now, not mid-run
+    except SimError:
+        link.close()
+        raise
     app: ConsoleApp | None = None
 
     def hang_up() -> None:

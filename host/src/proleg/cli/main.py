@@ -373,6 +373,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
                          max_transitions=args.max_transitions, **plant)
     # --pty may be stopped early (Ctrl-C) and names what it did not inject; a plain run would not say
     timed, at_once = _injections(args.inject, None if args.pty else args.duration)
+    for spec in [*at_once, *(fault for _, fault in timed)]:
+        sim.check_fault(spec)  # a bad name fails now, not halfway through the run
     if not args.calibrated:
         for spec in at_once:
             sim.inject(spec)

@@ -234,12 +234,36 @@ class SimulatedRobot:
     # -- fault injection ----------------------------------------------------------------
     def inject(self, fault: str) -> None:
         """Apply a fault by name; see ``FAULTS``."""
-        name, _, arg = fault.partition(":")
-        if name.startswith("drift@"):  # drift@RATE: every actuator (drift[:ACTUATOR][@RATE])
-            name, arg = "drift", name[len("drift"):] + (":" + arg if arg else "")
-        if name not in FAULTS:
-            raise SimError(f"unknown fault {fault!r} (expected one of: {', '.join(sorted(FAULTS))})")
-        FAULTS[name](self, arg)
+        _apply_fault(self, fault)
+
+    def check_fault(self, fault: str, option: str = "--inject") -> None:
+        """SimError (naming ``option`` and the fault) when ``inject(fault)`` would fail (an
+        unknown fault, limb or coil), without injecting anything: a fault due later in a run
+        is checked before the run starts."""
+        try:
+            _apply_fault(_DryRun(self), fault)
+        except SimError as e:
+            raise SimError(f"{option} {fault}: {e}") from None
+
+
+class _DryRun:
+    """A SimulatedRobot's names, with every fault's effect a no-op (``check_fault``)."""
+
+    def __init__(self, sim: SimulatedRobot):
+        self.robot, self.imu_addresses = sim.robot, sim.imu_addresses
+        nothing = lambda *a, **k: None  # noqa: E731
+        self.board = type("Board", (), {"imu_fault": staticmethod(nothing)})()
+        self.plant = type("Plant", (), {"kill_actuator": staticmethod(nothing), "inject_drift": staticmethod(nothing)})()
+        self.link_faults = type("LinkFaults", (), {})()
+
+
+def _apply_fault(sim: Any, fault: str) -> None:
+    name, _, arg = fault.partition(":")
+    if name.startswith("drift@"):  # drift@RATE: every actuator (drift[:ACTUATOR][@RATE])
+        name, arg = "drift", name[len("drift"):] + (":" + arg if arg else "")
+    if name not in FAULTS:
+        raise SimError(f"unknown fault {fault!r} (expected one of: {', '.join(sorted(FAULTS))})")
+    FAULTS[name](sim, arg)
 
 
 def _limb_addr(sim: SimulatedRobot, arg: str) -> int:
