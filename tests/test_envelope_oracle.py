@@ -10,6 +10,7 @@ from types import SimpleNamespace
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from proleg.firmware.render import MAX_ON_LIMIT_LATCH
 from proleg.paths import robots_dir
 from proleg.report import claim
 from proleg.robot import Control, load_robot
@@ -42,7 +43,7 @@ def test_what_the_envelope_lets_through_keeps_every_rule(bursts):
     cap; on/off games never on for more than max_on / (max_on + cooldown) of the time beyond
     one full on-period. (Tick by tick the model is checked against the compiled sma.c itself:
     tests/test_envelope_vs_sma.py.)"""
-    robot = _robot(max_on_ms=500, cooldown_ms=400, window_ms=2000, mean=0.4, latch=255)
+    robot = _robot(max_on_ms=500, cooldown_ms=400, window_ms=2000, mean=0.4, latch=MAX_ON_LIMIT_LATCH)  # as late as it goes
     env = Envelope(robot, 1, DT)
     requests = [d for d, n in bursts for _ in range(n)]
     out = _run(env, requests)
