@@ -223,3 +223,15 @@ def test_the_offset_is_right_though_a_cooling_limb_is_confirmed_late():
     track = Track(tt, x)
     assert estimate_offset(track, seen) == pytest.approx(offset, abs=0.03)
     assert abs(estimate_offset(track, np.array(seen) + late) - offset) > 0.1
+
+
+def test_a_tracker_csv_saved_with_a_bom_reads_as_without_one(tmp_path):
+    """Excel's "CSV UTF-8" starts the file with a BOM: the header read as '\\ufefftime'."""
+    from proleg.learn.tracker import read_track
+
+    body = "time,x,y,theta\n0.0,0.0,0.0,0.0\n0.1,0.5,0.0,0.0\n"
+    plain, bom = tmp_path / "plain.csv", tmp_path / "bom.csv"
+    plain.write_text(body, encoding="utf-8")
+    bom.write_bytes(b"\xef\xbb\xbf" + body.encode("utf-8"))
+    a, b = read_track(plain), read_track(bom)
+    assert list(a.t) == list(b.t) and list(a.x) == list(b.x)

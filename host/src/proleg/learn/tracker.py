@@ -84,7 +84,7 @@ def _rows(path: Path) -> list[tuple[int, list[str]]]:
     except OSError as e:
         raise TrackerError(f"{path}: cannot read: {e.strerror or e}") from None
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # a BOM first, as Excel's "CSV UTF-8" writes it, is not a cell
     except UnicodeDecodeError as e:
         line = data[:e.start].count(b"\n") + 1
         raise TrackerError(f"{path}: line {line}: expected UTF-8 text, got byte {data[e.start]:#04x}") from None
