@@ -106,8 +106,7 @@ def unit_factor(robot: Robot, units: str) -> float:
         return 1.0
     if units not in UNIT_MM:
         raise LearnedFileError(f"learn: cannot turn {robot.path}'s {robot.units!r} into {units!r}")
-    mm = UNIT_MM[robot.units] if robot.units in UNIT_MM else robot.plant.step_mm
-    return mm / UNIT_MM[units]
+    return robot.plant.step_mm / UNIT_MM[units]  # step_mm is the unit's mm for a length unit too
 
 
 def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = True,
@@ -181,8 +180,7 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
     if units != robot.units and units in UNIT_MM:  # the matrix's unit fixes step_mm now
         lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")
     text = _replace_transitions(lines, new)
-    _check_learned(source, text, new, robot.path)
-    _check_loads(text, Path(out), robot.path)
+    _check_loads(_check_learned(source, text, new, robot.path), Path(out), robot.path)
     return write_text_atomic(out, text, "learn")
 
 
@@ -199,13 +197,14 @@ def _drop_plant_key(lines: list[str], key: str, why: str) -> list[str]:
     return out
 
 
-def _check_loads(text: str, out: Path, source: str | Path) -> None:
-    """The learned file must load as a robot file, as it would from ``out`` (its CSVs and
-    other paths relative to where it is written): nothing is written otherwise."""
+def _check_loads(doc: dict, out: Path, source: str | Path) -> None:
+    """The learned file (``doc``, its TOML read back) must load as a robot file, as it would
+    from ``out`` (its CSVs and other paths relative to where it is written): nothing is
+    written otherwise."""
     from ..robot import robot_from_dict
 
     try:
-        robot_from_dict(tomllib.loads(text), out)
+        robot_from_dict(doc, out)
     except ProlegError as e:
         raise LearnedFileError(f"learn: the learned file from {source} would not load ({e}); nothing written") from None
 
@@ -226,23 +225,24 @@ def _replace_transitions(lines: list[str], new: list[str]) -> str:
     return "\n".join(body) + "\n"
 
 
-def _check_learned(source: str, text: str, new: list[str], path: str | Path) -> None:
+def _check_learned(source: str, text: str, new: list[str], path: str | Path) -> dict:
     """``text`` must be valid TOML whose ``[transitions]`` is ``new`` and whose every other
-    table is as in ``source``."""
+    table is as in ``source``; returns it read back."""
     try:
         before, after = tomllib.loads(source), tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise LearnedFileError(f"learn: the learned file from {path} would not be valid TOML ({e}); "
                                "nothing written") from None
     before["transitions"] = tomllib.loads("\n".join(new))["transitions"]
-    for doc in (before, after):  # step_mm may go with the unit (write_learned_robot)
-        doc.get("plant", {}).pop("step_mm", None)
-    if _canonical(before) != _canonical(after):
+    if _canonical(before, "step_mm") != _canonical(after, "step_mm"):  # step_mm may go with the unit
         raise LearnedFileError(f"learn: cannot find where {path}'s [transitions] table ends to replace it "
                                "(nothing written); give it its own [transitions] header line")
+    return after
 
 
-def _canonical(doc: dict) -> str:
+def _canonical(doc: dict, *plant_keys_left_out: str) -> str:
+    plant = {k: v for k, v in doc.get("plant", {}).items() if k not in plant_keys_left_out}
+    doc = {**doc, "plant": plant} if "plant" in doc else doc
     return json.dumps(doc, sort_keys=True, default=str)  # NaN == NaN here, unlike in the dicts
 
 
