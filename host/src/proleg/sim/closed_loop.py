@@ -25,6 +25,7 @@ import math
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 from .. import paths
@@ -241,20 +242,19 @@ class SimulatedRobot:
         unknown fault, limb or coil), without injecting anything: a fault due later in a run
         is checked before the run starts."""
         try:
-            _apply_fault(_DryRun(self), fault)
+            _apply_fault(_dry_run(self), fault)
         except SimError as e:
             raise SimError(f"{option} {fault}: {e}") from None
 
 
-class _DryRun:
-    """A SimulatedRobot's names, with every fault's effect a no-op (``check_fault``)."""
+def _dry_run(sim: SimulatedRobot) -> SimpleNamespace:
+    """``sim``'s names, with every fault's effect a no-op (``check_fault``)."""
+    def nothing(*_args: Any) -> None:
+        return None
 
-    def __init__(self, sim: SimulatedRobot):
-        self.robot, self.imu_addresses = sim.robot, sim.imu_addresses
-        nothing = lambda *a, **k: None  # noqa: E731
-        self.board = type("Board", (), {"imu_fault": staticmethod(nothing)})()
-        self.plant = type("Plant", (), {"kill_actuator": staticmethod(nothing), "inject_drift": staticmethod(nothing)})()
-        self.link_faults = type("LinkFaults", (), {})()
+    return SimpleNamespace(robot=sim.robot, imu_addresses=sim.imu_addresses, link_faults=SimpleNamespace(),
+                           board=SimpleNamespace(imu_fault=nothing),
+                           plant=SimpleNamespace(kill_actuator=nothing, inject_drift=nothing))
 
 
 def _apply_fault(sim: Any, fault: str) -> None:
