@@ -43,7 +43,7 @@ def write_text_atomic(path: str | Path, text: str, what: str, encoding: str = "u
     """Write ``text`` to ``path`` atomically (temp file + rename); ``LinkError`` naming the
     file when it cannot be written (``what``: the command, as the message's prefix)."""
     out = Path(path)
-    directory = out.parent if str(out.parent) else Path(".")
+    directory = out.parent  # "." for a bare file name
     if not directory.is_dir():
         raise LinkError(f"{what}: directory {directory} does not exist")
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=directory)

@@ -26,7 +26,7 @@ def figure_problem(out: Path) -> str | None:
     """Why no figure can be written to ``out`` (its suffix, a missing directory), else None."""
     if out.suffix.lower().lstrip(".") not in FIGURE_FORMATS:
         return "the file must end in .png, .svg or .pdf"
-    directory = out.parent if str(out.parent) else Path(".")
+    directory = out.parent  # "." for a bare file name
     if not directory.is_dir():
         return f"directory {directory} does not exist"
     if out.is_dir():

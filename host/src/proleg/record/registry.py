@@ -39,7 +39,7 @@ def check_suffix(path: str | Path) -> None:
 
 
 def _check_writable(p: Path) -> None:
-    folder = p.parent if str(p.parent) else Path(".")
+    folder = p.parent  # "." for a bare file name
     why = ("Is a directory" if p.is_dir() else
            "No such file or directory" if not folder.is_dir() else
            "Permission denied" if not os.access(folder, os.W_OK | os.X_OK)
