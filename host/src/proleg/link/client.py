@@ -54,6 +54,7 @@ from ..protocol.definition import (
     reply_answers,
 )
 from .base import Link, LinkDisconnected
+from .board_clock import BoardClockRate
 
 # The reply values and the receive side's values live in their own modules; re-exported here so
 # ``from proleg.link.client import RobotInfo, Received`` keeps working.
@@ -81,8 +82,6 @@ QUEUE_LIMIT = 65536
 #: default heartbeat period (link clock, s): at most half of any watchdog ≥ 1 s; divided by
 #: how much faster than the link's clock the board's runs (``RobotClient.board_rate``)
 HEARTBEAT_S = 0.5
-RATE_WINDOW_S = 0.2
-MAX_BOARD_RATE = 50.0
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
 #: messages that can answer a command (the declared replies plus NACK)
 _REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
@@ -120,10 +119,7 @@ class RobotClient:
         self._closed = False
         self.heartbeat_s = heartbeat_s
         self.heartbeats = 0  # PINGs sent by the heartbeat
-        # how fast the board's clock runs against the link's (TELEMETRY time_ms): a simulated
-        # board at --speed 5 behind a pty counts its link watchdog 5× faster than we count
-        self.board_rate = 1.0
-        self._rate_anchor: tuple[float, int] | None = None
+        self._board_clock = BoardClockRate()  # a board at --speed 5 behind a pty counts 5× faster
         self._last_tx: float | None = None  # link clock of the last write (None: not connected yet)
         self._heartbeat_tokens: set[int] = set()
 
@@ -272,6 +268,11 @@ class RobotClient:
                 self.link.write(data)
             self._last_tx = self.link.clock()
 
+    @property
+    def board_rate(self) -> float:
+        """How many times faster than the link's clock the board's runs (``board_clock``)."""
+        return self._board_clock.rate
+
     def _heartbeat(self) -> None:
         """PING when nothing was written for ``heartbeat_s`` (keeps the link watchdog fed)."""
         period, last = self.heartbeat_s, self._last_tx
@@ -400,25 +401,11 @@ class RobotClient:
                     continue  # the heartbeat's own ACK: nobody asked for it
             append(Received(m, now, truth))
         if newest_ms is not None:
-            self._track_board_rate(now, newest_ms)
+            self._board_clock.seen(now, newest_ms)
         if notify:
             with self._cond:
                 self._cond.notify_all()
         return len(msgs)
-
-    def _track_board_rate(self, now: float, board_ms: int) -> None:
-        """Re-estimate ``board_rate`` (at least 1, at most ``MAX_BOARD_RATE``) from TELEMETRY
-        over windows of ``RATE_WINDOW_S`` of the link's clock; a board clock that steps back
-        (a reset) starts over."""
-        anchor = self._rate_anchor
-        if anchor is None or board_ms < anchor[1]:
-            self._rate_anchor = (now, board_ms)
-            return
-        elapsed = now - anchor[0]
-        if elapsed >= RATE_WINDOW_S:
-            rate = (board_ms - anchor[1]) / 1000.0 / elapsed
-            self.board_rate = min(MAX_BOARD_RATE, max(1.0, rate))
-            self._rate_anchor = (now, board_ms)
 
     def _reconnect(self) -> None:
         """Reopen a vanished device; then ask for INFO again (without waiting)."""
