@@ -135,7 +135,7 @@ def test_a_proleg_between_raised_limbs_is_lifted_a_state_the_file_allows_is_one_
     file marks such states "x"; a file that allows 1000 -> 1020 gets one warning line naming
     the state, the lifted limb and the raised limbs, and the plant, driven there, reads
     the rear proleg at level 1."""
-    from proleg.robot_plant import coupled_states
+    from proleg.robot_body import coupled_states
     from proleg.sim.physical.measure import IdealDrive, _run_to
 
     robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
@@ -237,7 +237,7 @@ def test_a_limb_that_rests_past_its_first_edge_is_said_so_not_lifted_by_nobody(t
 @pytest.mark.parametrize("name", ["inchworm-3", "caterpillar-4"])
 def test_no_firmware_gait_of_an_example_robot_passes_through_a_state_its_body_cannot_hold(name):
     from proleg.firmware.build import firmware_gaits
-    from proleg.robot_plant import coupled_states
+    from proleg.robot_body import coupled_states
 
     robot = load_robot(ROOT / "robots" / f"{name}.toml")
     n = robot.transitions.n_states

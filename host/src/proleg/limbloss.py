@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .body import coil_reach_deg
-from .robot_plant import body_of
+from .robot_body import body_of
 from .states import limb_levels
 from .transitions import TransitionTable
 

@@ -24,8 +24,8 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .names import identifier
-from .robot_plant import (PlantSection, coupling_warnings, default_plant_section, inference_warning, limb_friction,
-                          plant_section, unreachable_levels)
+from .robot_body import coupling_warnings, unreachable_levels
+from .robot_plant import PlantSection, default_plant_section, inference_warning, limb_friction, plant_section
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
 from .robot_fields import Fields, read_text
 from .robot_transitions import n_trials_section, transitions_section

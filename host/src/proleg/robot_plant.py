@@ -27,8 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .body import (DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, coil_homes, curl_problem, default_length_mm,
-                   own_reach_deg)
+from .body import default_length_mm
 from .errors import RobotFileError
 from .robot_transitions import UNIT_MM
 
@@ -252,48 +251,6 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
     )
 
 
-def body_of(limb_actuators: list[int], n_actuators: int, section: PlantSection) -> BodyGeometry:
-    """The physical plant's body for these limbs and coils (``[plant]`` length_mm, overlap_mm)."""
-    overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
-    overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * n_actuators
-    return body_geometry(limb_actuators, n_actuators, section.length_mm, overlaps)
-
-
-def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection) -> list[str]:
-    """One line per limb whose top level its own coil cannot reach on the physical plant's body
-    (``proleg.body``): the top level is entered at ψ*_top + hysteresis/2, and the reach is ψ
-    with the limb's coil at full stroke and every other coil cold (a state with only this limb
-    raised must be reachable). Short of ψ*_top + hysteresis/2 + ``hold_margin_deg`` the hold
-    simply keeps heating, so the margin is not required. The body is the model's (``length_mm``, ``overlap_mm``),
-    so this is a warning about the simulator and the plausibility of the file, not a refusal:
-    a real body may bend further."""
-    limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
-    if len(limbs) < 2:
-        return []
-    geo = body_of(limb_actuators, len(actuators), section)
-    curl = curl_problem(geo)
-    if curl:  # the reach would be a wrapped angle: say what is wrong instead
-        return [f"{path}: plant.length_mm: {curl}"]
-    reach = own_reach_deg(geo, limb_actuators)
-    homes = coil_homes(limb_actuators, len(actuators))
-    out = []
-    for i, (lb, r) in enumerate(zip(limbs, reach)):
-        need = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
-        if need <= r:
-            continue
-        head = (f"{path}: limb {lb.name!r}: its top level needs ψ ≥ {need:.1f}° "
-                f"(ψ* {_g(lb.psi_star_deg[-1])}° + hysteresis/2), its own coil "
-                f"{lb.actuator!r} bends it to {r:.1f}° on the simulated {_g(section.length_mm)} mm body: ")
-        home = homes[limb_actuators[i]]
-        if home != i:  # a shared coil: one [[actuator]] is one coil, at the first limb naming it
-            out.append(head + f"in the model that coil sits at limb {limbs[home].name!r} (one [[actuator]] is one "
-                              f"coil, at one of the limbs that name it); give {lb.name!r} a coil of its own")
-        else:
-            out.append(head + "lower psi_star_deg or give [plant] length_mm")
-    return out
-
-
-
 def _fail(path: Path, key: str, expected: str, got: Any) -> None:
     raise RobotFileError(f"{path}: plant.{key}: expected {expected}, got {got!r}")
 
@@ -409,101 +366,3 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
         raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
                              f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {value!r}")
     return tuple(value)
-
-
-#: Above this many states the coupling check is skipped (one shape per state; the largest
-#: example robots have 36).
-COUPLING_CHECK_MAX_STATES = 4096
-
-
-def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
-                   hold_margin_deg: float) -> dict[int, list[tuple[int, list[int], float]]]:
-    """States the physical plant's body cannot hold because neighbour coupling lifts a limb:
-    ``{state: [(limb, raising limbs, ψ°), ...]}`` for every state the matrix lets the robot
-    enter (an allowed transition into it from another state).
-
-    Each raised limb's coil is set to the contraction that holds it where the controller
-    holds it, ψ*(its level) + ``hold_margin_deg`` (a fraction of its own coil's full-stroke
-    reach, ``own_reach_deg``); every other coil is cold. A limb below its top level whose ψ
-    then reaches the next level's entry edge (ψ* + hysteresis/2) with its own coil at the
-    least it can be (cold, or what the other limbs on a shared coil need) reads that level:
-    the state is not reachable on this body (e.g. caterpillar-4's 1020: the rear proleg
-    between the raised tail and the front proleg at level 2 bends to ≈ 14° > 13°; one coil
-    on both of R1's limbs lifts its own end first, so 01 cannot be held). A limb that rests
-    past its level-1 edge comes with no raising limbs."""
-    from .body import Shape
-    from .states import limb_levels
-
-    n = table.n_states
-    if len(limbs) < 2 or n > COUPLING_CHECK_MAX_STATES:
-        return {}
-    limb_act = [actuators.index(lb.actuator) for lb in limbs]
-    geo = body_of(limb_act, len(actuators), section)
-    if curl_problem(geo):
-        return {}  # a body the model cannot describe (unreachable_levels says why)
-    reach = own_reach_deg(geo, limb_act)
-    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
-    levels = tuple(lb.levels for lb in limbs)
-    rows, cases = [], []
-    for s in entered:
-        want = limb_levels(s, levels)
-        demand = [min(1.0, (limbs[i].psi_star_deg[k - 1] + hold_margin_deg) / reach[i])
-                  if k > 0 and reach[i] > 0 else 0.0 for i, k in enumerate(want)]
-        for i, k in enumerate(want):
-            if k >= limbs[i].levels - 1:
-                continue  # at its top level
-            # every coil at what the raised limbs need, limb i's own at what the OTHER limbs on
-            # it need (the controller may let it cool that far, no further): one coil on two
-            # limbs lifts its near limb first, so the far one alone cannot be up
-            c = np.zeros(len(actuators))
-            for j, d in enumerate(demand):
-                if j != i:
-                    c[limb_act[j]] = max(c[limb_act[j]], d)
-            rows.append(c)
-            cases.append((s, want, i, k))
-    if not rows:
-        return {}
-    psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
-    out: dict[int, list[tuple[int, list[int], float]]] = {}
-    for (s, want, i, k), p in zip(cases, psi):
-        lb = limbs[i]
-        edge = lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0
-        psi_i = float(p[i])  # in (−180°, 180°] however far the body curls (Shape.compute wraps it)
-        if psi_i >= edge:
-            raising = [j for j, kj in enumerate(want) if kj > 0 and j != i]
-            out.setdefault(s, []).append((i, raising, psi_i))
-    return out
-
-
-def coupling_warnings(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
-                      hold_margin_deg: float) -> list[str]:
-    """One line per state of ``coupled_states``, naming the state, the lifted limb and the
-    raised limbs that lift it."""
-    out = []
-    for s, hits in coupled_states(limbs, actuators, section, table, hold_margin_deg).items():
-        for i, raising, psi in hits:
-            lb = limbs[i]
-            k = limb_levels_of(s, limbs)[i]
-            edge = f"edge {lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:.1f}° (ψ* + hysteresis/2)"
-            if not raising:  # nothing lifts it: it rests there
-                out.append(
-                    f"{path}: state {table.label(s)}: limb {lb.name!r} rests at {psi:.1f}° on the simulated "
-                    f"{_g(section.length_mm)} mm body, past its level-{k + 1} {edge}: its level {k} lies below "
-                    f"where it rests and cannot be held; check its psi_star_deg, or mark the transitions into "
-                    f"the state \"x\"")
-                continue
-            names = ", ".join(repr(limbs[j].name) for j in raising)
-            shared = [j for j in raising if limbs[j].actuator == lb.actuator]
-            how = (f"by its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} "
-                   f"up" if shared else f"by the raised limbs {names}")
-            out.append(
-                f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° {how} on "
-                f"the simulated {_g(section.length_mm)} mm body, past its level-{k + 1} {edge}: the state reads "
-                f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)")
-    return out
-
-
-def limb_levels_of(state: int, limbs: list[Any]) -> tuple[int, ...]:
-    from .states import limb_levels
-
-    return tuple(limb_levels(state, tuple(lb.levels for lb in limbs)))
