@@ -4,6 +4,7 @@
 #include "ctl.h"
 #include "fault.h"
 #include "imucheck.h"
+#include "limbmap.h"
 #include "param.h"
 #include "proto.h"
 #include "psi.h"
@@ -30,7 +31,7 @@ void drive_started(uint8_t g, uint8_t d)
 {
     gait = g;
     dir = d;
-    (void)sma_take_heated(); /* safety: what heated before this START made no progress in it */
+    guard_started(); /* safety: what heated before this START made no progress in it */
     ctl_reset(); /* a new gait: no stall or hold state carried over from the last one */
 }
 
@@ -44,19 +45,22 @@ uint8_t drive_dir(void)
     return dir;
 }
 
-/* The first limb not at its level of `target`; DRIVE_NO_LIMB if every limb is (the step
+/* The limb not at its level of `target` driven by the coil heated longest without progress
+ * (safety.h guard_suspect), else the first: a healthy limb sagging while the gait waits on a
+ * failed one is not the one suspected. DRIVE_NO_LIMB if every limb is at its level (the step
  * timed out only because one would not settle: no coil to suspect, fallback.c). */
 static uint16_t limb_off_target(cfg_state_t target)
 {
     uint8_t want[CFG_N_LIMBS];
     uint8_t i;
+    uint16_t limb = DRIVE_NO_LIMB;
     seq_state_levels(target, want);
-    for (i = 0; i < CFG_N_LIMBS; i++) {
-        if (psi_level(i) != want[i]) {
-            return i;
+    for (i = CFG_N_LIMBS; i-- > 0;) {
+        if (psi_level(i) != want[i] && (limb == DRIVE_NO_LIMB || limbmap_actuator(i) == guard_suspect())) {
+            limb = i;
         }
     }
-    return DRIVE_NO_LIMB;
+    return limb;
 }
 
 static uint8_t all_settled(void)

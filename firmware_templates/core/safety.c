@@ -1,6 +1,8 @@
 /* safety.c - see safety.h. */
 #include "safety.h"
 
+#include <string.h>
+
 #include "elapsed.h"
 #include "hal.h"
 #include "sma.h"
@@ -12,6 +14,15 @@ static uint8_t hits_since_reached;
 /* The hit count is a byte: it stops at the latch, reached in a tick in which every coil may hit. */
 typedef char guard_hits_fit_a_byte[(CFG_ON_LIMIT_LATCH - 1u + CFG_N_ACTUATORS <= 255u) ? 1 : -1];
 static uint8_t hit_mask; /* actuators hit since each last heated on the way to a target reached */
+static uint8_t progressed; /* actuators heated since the last target reached or START */
+static uint8_t heating;    /* actuators heated in the interval the tick just charged */
+/* Each coil's time heated while a target was demanded, since it last heated on the way to a
+ * target reached. STOP and START keep it: a host restarting a gait past a dead coil
+ * re-reaches the states the other coils make, which is no progress for it (safety.h). At
+ * most timeout_us + one interval: past timeout_us, while demanding, the caller latches a fault
+ * and nothing is demanded until guard_ack clears it. */
+static uint32_t coil_us[CFG_N_ACTUATORS];
+static uint8_t suspect; /* the coil with the most of that time (the lowest of equals) */
 
 #if defined(__GNUC__)
 __attribute__((noinline)) /* smaller out of line (measured) */
@@ -34,33 +45,56 @@ void guard_set_timeout_ms(uint32_t ms)
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
-    uint8_t i;
+    uint8_t i, was = demanding ? heating : 0u, made;
+    uint32_t most = 0;
+    heating = sma_take_heated();
+    progressed |= heating;
+    made = reached ? progressed : 0u; /* heated on the way to this target: progress */
+    suspect = 0;
+    for (i = 0; i < CFG_N_ACTUATORS; i++, was >>= 1, made >>= 1) {
+        uint32_t t = coil_us[i];
+        if (was & 1u) {
+            t += dt;
+        }
+        if (made & 1u) {
+            t = 0;
+        }
+        coil_us[i] = t;
+        if (t > most) {
+            most = t;
+            suspect = i;
+        }
+    }
     if (reached) {
         /* A coil that hit and has since heated on the way to this target made progress;
          * reaching what the other coils make is none for it (safety.h). The step's time
-         * starts again either way; the hits do only once every coil that hit progressed.
-         * (guard_ack then putting back what stays: R1 8 B smaller on the Nano.) */
-        uint8_t hit = (uint8_t)(hit_mask & ~sma_take_heated()), n = hits_since_reached;
-        guard_ack();
-        if (hit) {
-            hit_mask = hit;
-            hits_since_reached = n;
+         * starts again either way; the hits do only once every coil that hit progressed. */
+        hit_mask &= (uint8_t)~progressed;
+        if (!hit_mask) {
+            hits_since_reached = 0;
         }
+        progressed = 0;
+        unreached_us = 0;
     }
     hit_mask |= hits;
-    for (i = 0; hits; i++, hits >>= 1) {
+    for (; hits; hits >>= 1) {
         if (hits & 1u) {
-            *act = i;
             hits_since_reached++; /* no saturation: once it reaches the latch no coil is driven (guard_hits_fit_a_byte) */
         }
     }
     if (hits_since_reached >= CFG_ON_LIMIT_LATCH) {
+        /* the coil heated longest without progress if it hit, else the lowest that hit: not
+         * the coil that hit last, which may be the healthy one */
+        for (i = 0; !((hit_mask >> i) & 1u); i++) {
+        }
+        *act = (uint8_t)(((hit_mask >> suspect) & 1u) ? suspect : i);
         return GUARD_ON_LIMIT;
     }
     if (demanding) {
         uint32_t u = unreached_us + dt;
         unreached_us = u < dt ? 0xFFFFFFFFUL : u; /* saturates: the sum wrapped iff it is below dt */
-        if (unreached_us >= timeout_us) {
+        /* the step, or one coil over all the steps it heated towards and none reached */
+        if (unreached_us >= timeout_us || most >= timeout_us) {
             return GUARD_TIMEOUT;
         }
     }
@@ -75,6 +109,17 @@ void guard_ack(void)
     unreached_us = 0;
     hits_since_reached = 0;
     hit_mask = 0;
+    memset(coil_us, 0, sizeof coil_us);
+}
+
+void guard_started(void)
+{
+    progressed = 0; /* what heated before this START made no progress in it */
+}
+
+uint8_t guard_suspect(void)
+{
+    return suspect;
 }
 
 uint32_t guard_unreached_us(void)

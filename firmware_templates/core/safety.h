@@ -8,9 +8,12 @@
  * hit has since heated above the hold ceiling on the way to a target reached (sma.h,
  * sma_take_heated; a START begins that record afresh): reaching states that other coils
  * make is no progress for a coil that cannot lift its own, and a host restarting the gait
- * past a dead coil re-reaches exactly those. When
- * the time passes the state timeout, or CFG_ON_LIMIT_LATCH hits add up, the guard reports
- * a fault for the caller to latch. The thermal budget itself lives in
+ * past a dead coil re-reaches exactly those. Each coil's own time heated towards targets
+ * not reached is kept the same way (STOP and START do not reset it) and times out as the
+ * step does: restarts faster than the coil's on-time limit no longer keep a dead coil
+ * demanded. When the step's or a coil's time passes the state timeout, or CFG_ON_LIMIT_LATCH
+ * hits add up, the guard reports a fault for the caller to latch; the coil it names for the
+ * latch is the one of those that hit which heated longest without progress. The thermal budget itself lives in
  * sma.c and nothing here refunds it.
  */
 #ifndef PROLEG_SAFETY_H
@@ -35,12 +38,21 @@ void guard_set_timeout_ms(uint32_t ms);
 
 /* Once per tick after the sequencer and sma_tick. demanding: a gait is running and its
  * current target is not yet reached; reached: the sequencer reported REACHED this tick;
- * hits: on-limit bits from sma_tick. Returns GUARD_*; *act is the actuator of the last hit.
+ * hits: on-limit bits from sma_tick. Takes sma_take_heated every tick. Returns GUARD_*;
+ * with GUARD_ON_LIMIT, *act is the coil suspected (of those hit, the longest heated without
+ * progress).
  * GUARD_TIMEOUT only when `demanding` (drive.c relies on it). */
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act);
 
 /* The operator acknowledged a fault: the step's time and hit count start again. */
 void guard_ack(void);
+
+/* A START: what heated before it made no progress in it (drive.c). */
+void guard_started(void);
+
+/* The actuator heated longest while a target was demanded since it last heated on the way
+ * to a target reached (kept across STOP and START; the lowest of equals, 0 if none). */
+uint8_t guard_suspect(void);
 
 /* Time (µs) spent demanding an unreached target, and on-limit hits counting towards the latch. */
 uint32_t guard_unreached_us(void);

@@ -8,8 +8,8 @@
 
 static uint8_t act;
 
-/* The coils heated on the way to each target reached (sma.c's sma_take_heated, which the
- * guard asks on a REACH): every one, unless a test says which. */
+/* The coils sma.c heats in each tick (its sma_take_heated, which the guard asks every tick):
+ * every one, unless a test says which. */
 static uint8_t raised = 0xFFu;
 
 uint8_t sma_take_heated(void)
@@ -143,6 +143,7 @@ static void test_hits_latch_when_only_other_coils_lift_their_limbs_in_between(vo
 static void test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_target(void)
 {
     setup(0);
+    raised = 0; /* a coil that hits is cut, not heated */
     CHECK_EQ(tick(1, 0, 0x03), GUARD_OK); /* both coils hit */
     CHECK_EQ(guard_hits(), 2);
     raised = 0x01u;
@@ -172,6 +173,95 @@ static void test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_
     CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
 }
 
+/* A host restarting a gait past a dead coil: every START stands in a state the other coils
+ * made, each reached at once, so the step's own time never passes the timeout; the dead
+ * coil's time heated towards targets it never reached does, and names it. */
+static void test_a_coil_that_heats_across_restarts_and_never_progresses_times_out(void)
+{
+    uint32_t k, run = 0;
+    setup(0);
+    while (run < 10u) {
+        raised = 0x01u; /* the healthy coil lifts its limb: a target reached */
+        CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+        CHECK_EQ(tick(1, 1, 0), GUARD_OK);
+        raised = 0x02u; /* the dead coil heats towards the next target for 3/4 of a timeout */
+        for (k = 0; k < 150u; k++) {
+            if (tick(1, 0, 0) == GUARD_TIMEOUT) {
+                break;
+            }
+        }
+        if (k < 150u) {
+            break;
+        }
+        CHECK(guard_unreached_us() < TIMEOUT_US);
+        raised = 0; /* STOP; START: nothing heated since */
+        for (k = 0; k < 50u; k++) {
+            CHECK_EQ(tick(0, 0, 0), GUARD_OK);
+        }
+        guard_started();
+        run++;
+    }
+    CHECK_EQ(run, 1u); /* 150 ms a run, 200 ms the timeout: the second run */
+    CHECK_EQ(guard_suspect(), 1);
+}
+
+/* The coil heated on the way to a target reached made progress: its time starts again. */
+static void test_a_coil_that_heated_on_the_way_to_a_target_reached_starts_afresh(void)
+{
+    uint32_t k, r;
+    setup(0);
+    raised = 0x02u;
+    for (r = 0; r < 5u; r++) { /* 150 ms heated each step, every step reached */
+        for (k = 0; k < 150u; k++) {
+            CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+        }
+        CHECK_EQ(tick(1, 1, 0), GUARD_OK);
+    }
+    /* heating before a START is not progress in it */
+    for (k = 0; k < 150u; k++) {
+        CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    }
+    guard_started();
+    raised = 0;
+    CHECK_EQ(tick(0, 1, 0), GUARD_OK);
+    raised = 0x02u;
+    /* a coil's time counts from the interval after the tick that heats it: one tick less */
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US - 149u * CFG_TICK_US);
+    CHECK_EQ(guard_suspect(), 1);
+    guard_ack(); /* the operator acknowledged: every coil's time starts again */
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+}
+
+/* Time not demanding (STOP, a final hold) is not time without progress. */
+static void test_a_coil_heated_while_nothing_is_demanded_does_not_time_out(void)
+{
+    uint32_t k;
+    setup(0);
+    raised = 0x01u;
+    for (k = 0; k < 100u * CFG_STATE_TIMEOUT_MS; k++) {
+        CHECK_EQ(tick(0, 0, 0), GUARD_OK);
+    }
+}
+
+/* The latch names the coil heated longest without progress among those that hit, not the
+ * one that hit last (a healthy coil at a weak supply hitting once on its way up). */
+static void test_the_latch_names_the_coil_that_heated_longest_without_progress(void)
+{
+    uint8_t k;
+    setup(0);
+    raised = 0x03u;
+    CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    raised = 0x02u; /* the dead coil heats on */
+    for (k = 0; k < 100u; k++) {
+        CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    }
+    for (k = 1; k < CFG_ON_LIMIT_LATCH; k++) {
+        CHECK_EQ(tick(1, 0, 0x02), GUARD_OK);
+    }
+    CHECK_EQ(tick(1, 0, 0x01), GUARD_ON_LIMIT);
+    CHECK_EQ(act, 1);
+}
+
 int main(void)
 {
     RUN(test_an_unreached_target_times_out_on_real_time);
@@ -185,5 +275,9 @@ int main(void)
     RUN(test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_target);
     RUN(test_the_operator_acknowledging_a_fault_restarts_the_step_time);
     RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
+    RUN(test_a_coil_that_heats_across_restarts_and_never_progresses_times_out);
+    RUN(test_a_coil_that_heated_on_the_way_to_a_target_reached_starts_afresh);
+    RUN(test_a_coil_heated_while_nothing_is_demanded_does_not_time_out);
+    RUN(test_the_latch_names_the_coil_that_heated_longest_without_progress);
     return UNIT_EXIT();
 }

@@ -15,7 +15,10 @@ The claim bench asks whether the coils *can* complete a gait under a condition
   sma.c the window is 9 slots of 1/8 window (their sum spans 1 to 9/8 windows) and the charge
   is counted in ‱·µs / 1024, rounded as the firmware rounds it;
 - *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
-  latches STATE_TIMEOUT (``_run_to`` checks that one).
+  latches STATE_TIMEOUT (``_run_to`` checks that one). The firmware also times out each coil's
+  own time heated towards targets not reached, across STOP and START (safety.c); the
+  idealised drive never restarts, so that time is never longer than the step's and needs no
+  model here.
 
 The numbers are the ones the firmware is built with (``firmware.render``: the robot file's
 ``[safety]`` in whole ticks, as sma.c takes max_on and the cool-down, and the thermal budget).
