@@ -72,7 +72,7 @@ def test_latent_heat_delays_the_contraction():
     r = robot("paper-r1")
     def time_to_contract(lat_scale):
         p = PhysicalPlant(r)
-        p._lat = [x * lat_scale for x in p._lat]
+        p._coils.lat = [x * lat_scale for x in p._coils.lat]
         while p.austenite[0] < 0.9:
             p.step(0.002, [0.6, 0.0])
         return p.time_s
@@ -331,7 +331,7 @@ def test_a_limb_name_or_an_end_names_the_same_end_for_limb_and_coil_keys(end):
     p = PhysicalPlant(r, parse_conditions([f"power_scale={end}:0.5", f"imu_bias_deg={end}:3"]))
     limb = [lb.name for lb in r.limbs].index(end)
     coil = [a.name for a in r.actuators].index(r.limbs[limb].actuator)
-    assert [i for i, s in enumerate(p._pscale) if s != 1.0] == [coil]
+    assert [i for i, s in enumerate(p._coils.pscale) if s != 1.0] == [coil]
     base = PhysicalPlant(r)
     assert [i for i, (a, b) in enumerate(zip(p._sense_off, base._sense_off)) if a != b] == [limb]
 
@@ -339,7 +339,7 @@ def test_a_limb_name_or_an_end_names_the_same_end_for_limb_and_coil_keys(end):
 def test_rear_and_front_are_the_first_and_last_limbs_coils_where_no_limb_has_those_names():
     r = robot("paper-r1")  # limbs left, right on sma-left, sma-right
     p = PhysicalPlant(r, parse_conditions(["power_scale=front:0.5", "overlap_mm=rear:14"]))
-    assert p._pscale == [1.0, 0.5]
+    assert p._coils.pscale == [1.0, 0.5]
     with pytest.raises(SimError) as e:
         PhysicalPlant(r, parse_conditions(["power_scale=middle:0.5"]))
     assert "sma-left, sma-right, left (its limb), right (its limb), rear, front, or 0..1" in str(e.value)

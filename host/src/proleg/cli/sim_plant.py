@@ -1,7 +1,7 @@
 """``proleg sim``'s plant options: ``--plant``, ``--condition``, ``--calibrated``, ``--measure-matrix``
 (``--hold-range``), ``--measure-climb``.
 
-Kept apart from the rest of the sim subcommand (``cli/main.py``) so that other options can be
+Kept apart from the rest of the sim subcommand (``cli/sim_command.py``) so that other options can be
 added there without touching these. The keys ``--condition`` takes are the physical keys of
 the robot file's ``[plant]`` schema (``proleg.robot_plant.PLANT_KEYS``, docs/robot-file.md);
 the values given here go on top of the robot file's.

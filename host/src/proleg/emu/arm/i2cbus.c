@@ -9,7 +9,7 @@
  * or behind an active channel that is not faulted "no-ack". Several models that answer at
  * once (the same address on two active channels) drive the open-drain bus together: the
  * master reads the AND of their bytes. This is the routing of hal_sim.c and avr-emu's
- * twi.c, with one datasheet detail more that only a register-level master can see
+ * i2cbus.c, with one datasheet detail more that only a register-level master can see
  * (TI TCA9548A, SCPS207F §8.5.4): the control register takes the last byte written at
  * once (a read returns it), but "when a channel is selected, the channel becomes active
  * after a stop condition has been placed on the I2C bus". emu_i2c_stop(bus) is that STOP;
@@ -29,7 +29,7 @@ static struct {
 } wire[SIM_MPU_MAX];
 
 /* Per model slot: no ACK before this many µs after power-on (an IMU that answers late,
- * MPU-6050 start-up time: mpu6050.h). Kept across unwire/power-on, as avr-emu's twi.c. */
+ * MPU-6050 start-up time: mpu6050.h). Kept across unwire/power-on, as avr-emu's i2cbus.c. */
 static uint64_t startup_us[SIM_MPU_MAX];
 
 /* The connected channels of each multiplexer, as of the last STOP on its bus. */

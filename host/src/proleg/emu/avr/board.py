@@ -35,7 +35,7 @@ from .library import harness_library
 #: IMU fault modes understood by the MPU-6050 model (as host-sim).
 IMU_FAULTS = {"ok": 0, "no-ack": 1, "stuck": 2, "garbage": 3}
 
-#: ATmega328P output-compare pins by Arduino Nano pin name (harness.c numbering).
+#: ATmega328P output-compare pins by Arduino Nano pin name (pwm.c numbering).
 OC_PINS = {"D6": 0, "D5": 1, "D9": 2, "D10": 3, "D11": 4, "D3": 5}
 
 #: simavr's cpu states (sim_avr.h).

@@ -1,4 +1,4 @@
-"""The avr-emu harness library: harness.c + twi.c + the shared MPU-6050 models, compiled
+"""The avr-emu harness library: SOURCES (harness.c and its parts) + the shared MPU-6050 models, compiled
 with the host's C compiler against libsimavr (Debian ``libsimavr-dev``) on first use and
 cached under ``$PROLEG_CACHE/avr-emu`` (default ``~/.cache/proleg/avr-emu``), keyed by
 the sources, the flags and the simavr version.
@@ -17,7 +17,7 @@ from ...errors import SimError
 from ...paths import cache_dir, templates_dir
 
 HERE = Path(__file__).resolve().parent
-SOURCES = ("harness.c", "twi.c", "boot.c")
+SOURCES = ("harness.c", "uart.c", "pwm.c", "skips.c", "twi.c", "i2cbus.c", "boot.c")
 HEADERS = ("harness.h",)
 #: host-sim's device models the bus shares (firmware_templates/hal/sim)
 MODEL_FILES = ("sim_mpu6050.c", "sim_mpu6050.h", "sim_tca9548a.c", "sim_tca9548a.h")

@@ -1,4 +1,4 @@
-/* twi.c - the ATmega328P TWI (I2C master) with the MPU-6050 models on its bus.
+/* twi.c - the ATmega328P TWI (I2C master) on the bus of i2cbus.c, with the chip's timing.
  *
  * Replaces simavr 1.6's avr_twi, whose master mode differs from the chip in ways a
  * driver can see (docs/emulators-avr.md):
@@ -19,12 +19,8 @@
  * clear; a TWDR write while TWINT is clear sets TWWC and is ignored; TWSTO clears itself
  * once the STOP is on the bus. Slave mode is not modelled (TWAR/TWAMR read back only).
  *
- * The bus: devices are the MPU-6050 models (model slot i, wired by twi_wire_imu at an
- * address, directly or behind a TCA9548A channel) and the TCA9548A multiplexers
- * (sim_tca9548a.c, as on host-sim); an address acknowledges when a multiplexer sits
- * there, or a model wired there (directly, or behind a connected channel) that is not
- * faulted "no-ack" and is past its start-up time. Several models that answer at once
- * drive the open-drain bus together: the master reads the AND of their bytes. Written
+ * The bus: who answers at an address is i2cbus.c's (the MPU-6050 models and TCA9548A
+ * multiplexers); an address acknowledges when i2cbus_transfer says so. Written
  * bytes reach the device at STOP or repeated START (one transfer: register pointer, then
  * data; a multiplexer keeps the last byte as its control register); read bytes come one
  * by one, all at the time of the SLA+R, like the chip's shadow registers that keep a
@@ -37,8 +33,6 @@
 #include "sim_cycle_timers.h"
 #include "sim_interrupts.h"
 #include "sim_io.h"
-#include "sim_mpu6050.h"
-#include "sim_tca9548a.h"
 
 #define R_TWBR 0xB8u
 #define R_TWSR 0xB9u
@@ -81,15 +75,6 @@ static struct {
     void *portc_p, *ddrc_p;
 } t;
 
-/* Start-up time of each model slot after power-on: configuration, kept across resets. */
-static uint64_t startup_us[SIM_MPU_MAX];
-
-/* Where each model slot sits on the bus: its address, and its multiplexer (0: wired
- * directly) and channel. Configuration, kept across resets. */
-static struct {
-    uint8_t used, addr, mux, ch;
-} wire[SIM_MPU_MAX];
-
 static uint32_t scl_cycles(void)
 {
     static const uint32_t prescale[4] = {1u, 4u, 16u, 64u};
@@ -118,43 +103,16 @@ static void mirror(void)
     t.avr->data[R_TWDR] = t.twdr;
 }
 
-/* One transfer with whatever answers at addr7 (see the top): 0, or -1 when nothing
- * acknowledges. */
-static int bus_transfer(uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx, uint64_t t_us)
-{
-    uint8_t tmp[8];
-    uint8_t i, j, acked = 0;
-    if (sim_tca_transfer(0, addr7, tx, ntx, rx, nrx) == 0) {
-        return 0;
-    }
-    for (i = 0; i < SIM_MPU_MAX; i++) {
-        if (!wire[i].used || wire[i].addr != addr7 || emu_now_us() < startup_us[i] ||
-            (wire[i].mux && !sim_tca_enabled(0, wire[i].mux, wire[i].ch))) {
-            continue; /* elsewhere, still powering up, or its channel is off */
-        }
-        if (sim_mpu_transfer_slot(i, tx, ntx, acked ? tmp : rx, acked && nrx > sizeof tmp ? sizeof tmp : nrx, t_us) != 0) {
-            continue;
-        }
-        if (acked) {
-            for (j = 0; j < nrx && j < sizeof tmp; j++) {
-                rx[j] &= tmp[j];
-            }
-        }
-        acked = 1;
-    }
-    return acked ? 0 : -1;
-}
-
 static int device_acks(uint8_t addr7)
 {
-    return bus_transfer(addr7, 0, 0, 0, 0, emu_now_us()) == 0;
+    return i2cbus_transfer(addr7, 0, 0, 0, 0, emu_now_us()) == 0;
 }
 
 /* Bytes written since the address phase go to the device (pointer, then data). */
 static void flush_writes(void)
 {
     if (t.acked && !(t.sla & 1u) && t.ntx) {
-        (void)bus_transfer((uint8_t)(t.sla >> 1), t.tx, t.ntx, 0, 0, emu_now_us());
+        (void)i2cbus_transfer((uint8_t)(t.sla >> 1), t.tx, t.ntx, 0, 0, emu_now_us());
     }
     t.ntx = 0;
 }
@@ -202,7 +160,7 @@ static avr_cycle_count_t complete(struct avr_t *avr, avr_cycle_count_t when, voi
     case OP_RX: {
         uint8_t b = 0xFFu; /* nobody drives SDA: the pull-ups read ones */
         if (t.acked) {
-            (void)bus_transfer((uint8_t)(t.sla >> 1), 0, 0, &b, 1, t.read_us);
+            (void)i2cbus_transfer((uint8_t)(t.sla >> 1), 0, 0, &b, 1, t.read_us);
         }
         t.twdr = b;
         t.status = (t.twcr & TWEA_) ? 0x50u : 0x58u;
@@ -498,47 +456,6 @@ uint64_t twi_bus_cycles(void)
 int twi_bus_owned(void)
 {
     return t.owned;
-}
-
-void twi_set_startup_us(uint8_t slot, uint64_t us)
-{
-    if (slot < SIM_MPU_MAX) {
-        startup_us[slot] = us;
-    }
-}
-
-void twi_wire_imu(uint8_t slot, uint8_t addr7, uint8_t mux, uint8_t ch)
-{
-    if (slot < SIM_MPU_MAX) {
-        wire[slot].used = 1;
-        wire[slot].addr = addr7;
-        wire[slot].mux = mux;
-        wire[slot].ch = ch;
-        sim_mpu_attach_slot(slot);
-        if (mux) {
-            sim_tca_attach(0, mux);
-        }
-    }
-}
-
-void twi_unwire_all(void)
-{
-    memset(wire, 0, sizeof wire);
-    sim_tca_power_on();
-}
-
-int twi_imu_slot(uint8_t key)
-{
-    uint8_t i;
-    if (key & 0x80u) {
-        return (key & 0x7Fu) < SIM_MPU_MAX && wire[key & 0x7Fu].used ? (int)(key & 0x7Fu) : -1;
-    }
-    for (i = 0; i < SIM_MPU_MAX; i++) {
-        if (wire[i].used && !wire[i].mux && wire[i].addr == key) {
-            return i;
-        }
-    }
-    return -1;
 }
 
 void twi_hold_sda(int held, uint8_t release_clocks)

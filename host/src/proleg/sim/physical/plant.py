@@ -6,7 +6,7 @@ Drop-in for ``proleg.sim.plant.Plant`` (``SimulatedRobot(robot, plant=PhysicalPl
 Unlike the table plant nothing here reads the robot's reward matrix to move: displacement is
 the centre of mass of a body whose contacts stick or slide by force balance (``friction``).
 
-Per step (duty held constant over the step):
+Per step (duty held constant over the step), steps 1–3 in ``coils``:
 1. supply: V at the coils = V_s·√power − R_source·ΣI (sag when both coils draw);
 2. each coil: thermal node (``thermal``), Liang–Rogers hysteresis (``proleg.sim.sma``), latent
    heat, the body node; fatigue (stroke loss, transformation-temperature shift) accrues with
@@ -25,7 +25,6 @@ noise. ``psi_deg`` is the true contact angle.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import random
 from collections.abc import Sequence
@@ -35,9 +34,9 @@ import numpy as np
 
 from ...errors import SimError
 from ...states import limb_levels
-from ..sma import Hysteresis
 from . import materials as mat
 from ...body import Shape, body_geometry, curl_problem
+from .coils import Coils
 from .conditions import Conditions, coil_of_limb, conditions_from_section
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
@@ -97,45 +96,9 @@ class PhysicalPlant:
         self.geometry = geo
         self._shape = Shape(geo)
 
-        # -- thermal --------------------------------------------------------------------------
-        self._amb = cond.get("ambient_c")
-        mism = cond.get("coil_mismatch")
-        conv = cond.get("convection")
-        self._R, self._C, self._hA, self._G, self._lat = [], [], [], [], []
-        for j in range(na):
-            scale = 1.0 + (mism if j == 0 else -mism if j == na - 1 and na > 1 else 0.0)
-            g = p.coil
-            self._R.append(g.resistance_ohm * scale)
-            self._C.append(g.heat_capacity_j_k * scale)
-            self._lat.append(g.latent_j * scale)
-            self._hA.append(g.convection_w_k(80.0, self._amb, conv) * scale)
-            self._G.append(g.coil_to_body_w_k)
-        # the body node is the robot's mass: all that mass_g changes (every force scales with it)
-        self._Cb = dataclasses.replace(p.body_thermal, mass_kg=cond.get("mass_g") * 1e-3).heat_capacity_j_k()
-        self._hAb = p.body_thermal.convection_w_k(conv)
-        self._supply = cond.get("supply_v") * math.sqrt(cond.get("power"))
-        self._rsrc = cond.get("supply_ohm")
-        self._pscale = [cond.for_index("power_scale", j, anames, by_limb, lnames) for j in range(na)]
-        self._channel = [a.channel for a in acts]
-        self._n_channels = max(self._channel) + 1
-        self._temp = [self._amb] * na
-        self._tbody = self._amb
-        g = p.coil
-        self._hyst = [Hysteresis(g.as_c, g.af_c, g.ms_c, g.mf_c, self._amb) for _ in range(na)]
-        self._alive = [True] * na
-        self._pfactor = [1.0] * na
-        self._drift: list[tuple[str, float, float] | None] = [None] * na
-        self._drift_on = [0.0] * na
-        self._drift_shift = [0.0] * na
-        self._drift_stroke = [1.0] * na
-        self._ontime = [0.0] * na
-        self._speedup = cond.get("fatigue_speedup")
-        self._cycles = [cond.get("fatigue_cycles")] * na
-        self._fat_stroke = [1.0] * na
-        self._fat_shift = [0.0] * na
-        self._fat_at = [0.0] * na
-        for j in range(na):
-            self._update_fatigue(j)
+        # -- the coils: supply, thermal nodes, hysteresis, fatigue, drift (``coils``) -----------
+        self._coils = coils = Coils(p, cond, acts, anames, by_limb, lnames)
+        self._temp = coils.temp   # the coils' own list, updated in place (report.claim reads it)
 
         # -- sensors and world --------------------------------------------------------------
         inc = cond.get("incline_deg")
@@ -151,8 +114,7 @@ class PhysicalPlant:
         self._push = self._weight_n * math.sin(self._incline)   # downhill force along −x
 
         # -- state ----------------------------------------------------------------------------
-        self._c = [0.0] * na
-        self._set_shape(self._shape.evaluate(self._c))
+        self._set_shape(self._shape.evaluate(coils.c))
         self._x0 = 0.0                                          # ground position of contact 0
         self._stuck = [True] * nl
         self._resting = True
@@ -160,8 +122,7 @@ class PhysicalPlant:
         self._dpsi = [0.0] * nl
         self._t = 0.0
         self._t_eval = 0.0
-        self._c_eval = list(self._c)
-        self._dt_cache: tuple[float, list[float], float] = (-1.0, [], 0.0)
+        self._c_eval = list(coils.c)
         mult, m = [], 1
         for k in reversed(self.levels):
             mult.append(m)
@@ -195,85 +156,20 @@ class PhysicalPlant:
             idx += lvl * m
         return idx
 
-    def _update_fatigue(self, j: int) -> None:
-        law = self.physics.fatigue
-        n = self._cycles[j]
-        self._fat_at[j] = n
-        self._fat_stroke[j] = law.stroke(n)
-        self._fat_shift[j] = law.shift(n)
-        self._hyst[j].shift_c = self._fat_shift[j] + self._drift_shift[j]
-
     # -- stepping -------------------------------------------------------------------------------
     def step(self, dt_s: float, duties: Sequence[float]) -> None:
         """Advance by ``dt_s`` seconds with each channel's duty held constant."""
-        if dt_s != self._dt_cache[0]:
-            if not dt_s > 0:
-                raise SimError(f"step: dt_s must be > 0, got {dt_s!r}")
-            k = [math.exp(-dt_s * (h + g) / c) for h, g, c in zip(self._hA, self._G, self._C)]
-            self._dt_cache = (dt_s, k, math.exp(-dt_s / self.physics.mech_tau_s))
-        _, decay, mdecay = self._dt_cache
-        if len(duties) < self._n_channels:
-            raise SimError(f"step: {len(duties)} duties given, the plant drives channels 0..{self._n_channels - 1}")
-        na = self._na
-        ds = []
-        for j in range(na):
-            d = duties[self._channel[j]]
-            if not 0.0 <= d <= 1.0:
-                raise SimError(f"step: duty {d!r} on channel {self._channel[j]} is outside 0..1")
-            ds.append(d if self._alive[j] else 0.0)
-        v = self._supply
-        if self._rsrc > 0.0:
-            v = v * v / (v + self._rsrc * sum(d * v / r for d, r in zip(ds, self._R)))
-        amb, tb = self._amb, self._tbody
-        to_body = 0.0
-        changed = False
-        moving = False
-        for j in range(na):
-            d = ds[j]
-            if d > 0.0:
-                self._ontime[j] += d * dt_s
-                if self._drift[j] is not None:
-                    self._apply_drift(j, d * dt_s)
-            power = d * v * v / self._R[j] * self._pscale[j] * self._pfactor[j]
-            h, g = self._hA[j], self._G[j]
-            t_eq = (power + h * amb + g * tb) / (h + g)
-            t = t_eq + (self._temp[j] - t_eq) * decay[j]
-            hy = self._hyst[j]
-            a0 = hy.alpha
-            if (a0 == 0.0 and t < hy.as_c + hy.shift_c and hy.temp < hy.as_c + hy.shift_c) or (
-                    a0 == 1.0 and t > hy.ms_c + hy.shift_c and hy.temp > hy.ms_c + hy.shift_c):
-                a1 = a0   # outside the transformation band on a saturated branch: nothing moves
-            else:
-                a1 = hy.update(t)
-            if a1 != a0:
-                t -= self._lat[j] * (a1 - a0) / self._C[j]
-                hy.temp = t
-                self._cycles[j] += abs(a1 - a0) * 0.5 * self._speedup
-                if abs(self._cycles[j] - self._fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
-                    self._update_fatigue(j)
-            self._temp[j] = t
-            to_body += g * (t - tb)
-            target = a1 * self._fat_stroke[j] * self._drift_stroke[j]
-            c = self._c[j]
-            if c != target:
-                c = target + (c - target) * mdecay
-                if abs(c - target) < 1e-7:
-                    c = target
-                else:
-                    moving = True
-                self._c[j] = c
-                changed = True
-        self._tbody = tb + dt_s * (to_body - self._hAb * (tb - amb)) / self._Cb
+        changed, moving = self._coils.step(dt_s, duties)
         self._t += dt_s
         if changed:
             # Re-evaluate the shape once the contractions have moved by SHAPE_EPS since the
             # last evaluation (≈ 0.013° of ψ, below the IMU's resolution): the anchor/slip solve is rate-independent, so
             # one step over the accumulated change is the same motion as many small ones.
-            ce = self._c_eval
-            if any(abs(a - b) > SHAPE_EPS for a, b in zip(self._c, ce)) or not moving:
-                self._c_eval = list(self._c)
+            c, ce = self._coils.c, self._c_eval
+            if any(abs(a - b) > SHAPE_EPS for a, b in zip(c, ce)) or not moving:
+                self._c_eval = list(c)
                 psi_old, gaps_old = self._psi, self._gaps
-                self._set_shape(self._shape.evaluate(self._c))
+                self._set_shape(self._shape.evaluate(c))
                 if self._nl == 2:
                     self._move2(self._gaps[0] - gaps_old[0])
                 else:
@@ -346,65 +242,31 @@ class PhysicalPlant:
             self._unexpected += 1
         self._transitions.append(Transition(t0, a, b, r))
 
-    def _apply_drift(self, j: int, on: float) -> None:
-        mode, rate, step = self._drift[j]
-        self._drift_on[j] += on
-        x = self._drift_on[j] * rate
-        if mode == "power":
-            self._pfactor[j] = (1.0 - step) * math.exp(-x)
-        elif mode == "stroke":
-            self._drift_stroke[j] = (1.0 - step) * math.exp(-x)
-        else:
-            self._drift_shift[j] = step + x
-            self._hyst[j].shift_c = self._fat_shift[j] + self._drift_shift[j]
-
     # -- faults ---------------------------------------------------------------------------------
-    def _actuator_of(self, channel: int) -> int:
-        try:
-            return self._channel.index(channel)
-        except ValueError:
-            raise SimError(f"no actuator on channel {channel} (channels: {self._channel})") from None
-
     def kill_actuator(self, channel: int) -> None:
         """The coil on ``channel`` no longer heats (broken wire, dead MOSFET)."""
-        self._alive[self._actuator_of(channel)] = False
+        self._coils.kill(channel)
 
     def inject_drift(self, channel: int, rate: float, mode: str = "power", step: float = 0.0) -> None:
         """From now on the coil on ``channel`` drifts with its on-time (∫ duty dt): "power"
         (heating × exp(−rate·t_on)), "stroke" (stroke × exp(−rate·t_on)), "temperature"
         (transformation temperatures + rate °C per s of on-time); ``step`` an immediate part."""
-        j = self._actuator_of(channel)
-        if mode not in ("power", "temperature", "stroke"):
-            raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
-        if not (math.isfinite(rate) and rate >= 0):
-            raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
-        if mode != "temperature" and not 0.0 <= step < 1.0:
-            raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
-        self._drift[j] = (mode, float(rate), float(step))
-        self._drift_on[j] = 0.0
-        self._apply_drift(j, 0.0)
+        self._coils.inject_drift(channel, rate, mode, step)
 
     # -- what the coils can reach -----------------------------------------------------------------
     def steady_coil_temperature_c(self, duty: float) -> list[float]:
         """Each coil's steady temperature at ``duty`` held forever, the body at ambient (its own
         heating neglected), one coil drawing (no sag from the others): what the supply can do."""
-        v = self._supply
-        out = []
-        for j in range(self._na):
-            r = self._R[j]
-            vv = v * r / (r + self._rsrc) if self._rsrc > 0.0 else v
-            power = duty * vv * vv / r * self._pscale[j] * self._pfactor[j] * (1.0 if self._alive[j] else 0.0)
-            out.append(self._amb + power / (self._hA[j] + self._G[j]))
-        return out
+        return self._coils.steady_temperature_c(duty)
 
     @property
     def alive(self) -> tuple[bool, ...]:
         """Per actuator: False once ``kill_actuator`` was called on it."""
-        return tuple(self._alive)
+        return tuple(self._coils.alive)
 
     def transformation_c(self) -> list[tuple[float, float]]:
         """Each coil's (As, Af) now, fatigue and drift shifts included."""
-        return [(h.as_c + h.shift_c, h.af_c + h.shift_c) for h in self._hyst]
+        return self._coils.transformation_c()
 
     # -- observation ----------------------------------------------------------------------------
     def limb_truth(self, i: int) -> tuple[float, float]:
@@ -437,32 +299,32 @@ class PhysicalPlant:
 
     @property
     def body_temperature_c(self) -> float:
-        return self._tbody
+        return self._coils.tbody
 
     @property
     def austenite(self) -> np.ndarray:
-        return np.array([h.alpha for h in self._hyst])
+        return np.array([h.alpha for h in self._coils.hyst])
 
     @property
     def contraction(self) -> np.ndarray:
         """Per coil, fraction of its fresh stroke (after the mechanical lag)."""
-        return np.array(self._c)
+        return np.array(self._coils.c)
 
     @property
     def stroke(self) -> np.ndarray:
-        return np.array([a * b for a, b in zip(self._fat_stroke, self._drift_stroke)])
+        return np.array(self._coils.stroke())
 
     @property
     def cycles(self) -> np.ndarray:
-        return np.array(self._cycles)
+        return np.array(self._coils.cycles)
 
     @property
     def resistance_ohm(self) -> np.ndarray:
-        return np.array(self._R)
+        return np.array(self._coils.R)
 
     @property
     def on_time_s(self) -> np.ndarray:
-        return np.array(self._ontime)
+        return np.array(self._coils.ontime)
 
     @property
     def contact_x_mm(self) -> np.ndarray:
@@ -474,11 +336,11 @@ class PhysicalPlant:
     def pose(self, contractions: Sequence[float]) -> None:
         """Set the coils' contractions directly (bypassing the thermal model) and let the body
         move by friction mechanics: for kinematic sweeps (``measure.infer_mechanisms``)."""
-        self._c = [float(c) for c in contractions]
-        self._c_eval = list(self._c)
+        self._coils.c[:] = [float(c) for c in contractions]
+        self._c_eval = list(self._coils.c)
         gaps_old = self._gaps
         psi_old = self._psi
-        self._set_shape(self._shape.evaluate(self._c))
+        self._set_shape(self._shape.evaluate(self._coils.c))
         self._move([g1 - g0 for g0, g1 in zip(gaps_old, self._gaps)])
         self._dpsi = [0.0 for _ in psi_old]
         self._state = self._classify()

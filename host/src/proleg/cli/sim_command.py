@@ -1,0 +1,257 @@
+"""``proleg sim``: its parser, the run (the robot's firmware on a simulated board in closed
+loop with its plant, or served on a pty with ``--pty``) and the report it prints (text or
+``--json``). The plant options and the measurements (``--plant``, ``--condition``,
+``--measure-matrix``, ``--measure-climb``, ``--calibrated``) are in ``sim_plant``; this module
+only runs what they set up. Exit codes as in ``main``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
+from .number_args import gait_number, max_transitions, positive_float
+
+#: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
+#: (the emulated boards are slower); 1e12 never finished. ``--pty`` serves in real time, unbounded.
+MAX_SIM_S = 3600.0
+
+
+def add_sim_parser(sub) -> None:
+    """Add ``proleg sim`` to the one parser's subcommands."""
+    s = sub.add_parser("sim", help="run the robot's firmware on the simulated board, in closed loop with its plant")
+    s.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    s.add_argument("--duration", type=positive_float, default=None, metavar="S",
+                   help=f"simulated seconds (default 60, at most {MAX_SIM_S:g}; with --pty: until Ctrl-C)")
+    s.add_argument("--gait", type=gait_number, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
+    s.add_argument("--direction", choices=("+x", "-x"), default="+x")
+    add_sim_board_options(s)
+    s.add_argument("--inject", action="append", default=[], metavar="FAULT",
+                   help="fault to inject, optionally at a time: imu-silent:LIMB, imu-stuck:LIMB, imu-garbage:LIMB, "
+                        "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P]; "
+                        "append +T for T simulated seconds after the start, at most --duration (e.g. dead-actuator:sma-right+10)")
+    s.add_argument("--seed", type=int, default=1)
+    s.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
+    add_udp_options(s)
+    s.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    s.add_argument("--pty", action="store_true",
+                   help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
+    s.add_argument("--speed", type=positive_float, default=1.0, help="with --pty: times real time (default 1)")
+    from .sim_plant import add_plant_options
+
+    add_plant_options(s)  # --plant, --condition, --measure-matrix
+    s.set_defaults(run=cmd_sim)
+
+
+def add_sim_board_options(p: argparse.ArgumentParser) -> None:
+    """The simulated board and the gait selection its firmware is built with."""
+    from ..sim.simulated_boards import SIMULATED_BOARDS
+
+    p.add_argument("--board", choices=tuple(SIMULATED_BOARDS), default="host-sim",
+                   help="host-sim: the firmware's C on the host (default); avr-emu / arm-emu: the exact "
+                        "arduino-nano / bluepill firmware.elf on an emulated MCU (--json adds the tick budget)")
+    p.add_argument("--objective", choices=("total", "rate", "speed"), default="total",
+                   help="which optimal gaits the simulated firmware carries (default total)")
+    p.add_argument("--max-transitions", type=max_transitions, metavar="N",
+                   help="longest gait considered, 2..256 (default: the build's, see docs/gait-selection.md)")
+
+
+def cmd_sim(args: argparse.Namespace) -> int:
+    from ..report import SimSession
+    from ..robot import load_robot
+    from ..firmware.gaits import firmware_gaits
+    from ..sim.simulators import open_simulated
+    from ..sim.simulated_boards import clear_ticks, tick_budget
+
+    robot = load_robot(args.robot)
+    from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,
+                            plant_kwargs, refuse_what_does_not_apply, wants_help)
+
+    refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
+    from .gait import check_speed_objective
+
+    check_speed_objective(robot, args.objective)
+    args.udp, args.udp_format = udp_options(args)
+    pty_limit_s = args.duration  # --pty serves until Ctrl-C unless a duration is given
+    if not args.pty and (args.duration or 0) > MAX_SIM_S:
+        from ..errors import SimError
+
+        raise SimError(f"--duration {args.duration:g}: expected at most {MAX_SIM_S:g} simulated seconds (an hour "
+                       "takes about a minute to simulate; run several shorter simulations instead)")
+    if args.duration is None:
+        args.duration = 60.0
+
+    if wants_help(args):
+        return EXIT_OK
+    if args.measure_climb:
+        return cmd_measure_climb(args, robot)
+    if args.measure_matrix:
+        if args.calibrated:
+            from ..errors import SimError
+
+            raise SimError("--calibrated: not with --measure-matrix (the matrix is measured by an idealised drive "
+                           "with true psi, no firmware to calibrate)")
+        return cmd_measure_matrix(args, robot)
+    if args.hold_range:
+        from ..errors import SimError
+
+        raise SimError("--hold-range: it is an option of --measure-matrix (measure the matrix at several hold margins)")
+    if not args.pty:
+        have = len(firmware_gaits(robot, args.objective, args.max_transitions).get(args.direction, ()))
+        if args.gait >= have:
+            from ..errors import GaitError
+
+            shown = f"gaits 0..{have - 1}" if have else "no gait"
+            raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
+    plant = plant_kwargs(args)
+    if args.calibrated:
+        if args.pty:
+            from ..errors import SimError
+
+            raise SimError("--calibrated: not with --pty (calibrate through the pseudo-terminal: proleg calibrate)")
+        plant["conditions"] = flat_conditions(args)  # calibrated on the flat, put down on the slope below
+    sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
+                         max_transitions=args.max_transitions, **plant)
+    # --pty may be stopped early (Ctrl-C) and names what it did not inject; a plain run would not say
+    timed, at_once = _injections(args.inject, None if args.pty else args.duration)
+    for spec in [*at_once, *(fault for _, fault in timed)]:
+        sim.check_fault(spec)  # a bad name fails now, not halfway through the run
+    if not args.calibrated:
+        for spec in at_once:
+            sim.inject(spec)
+    if args.pty:
+        return _serve_pty(sim, args, timed, pty_limit_s)
+    recorder = _recorder(robot, args.record, args.board) if args.record else None
+    listeners = [recorder] if recorder else []
+    if args.udp:
+        from ..record import RecordingMeta, UdpStreamer
+
+        meta = RecordingMeta.for_robot(robot=robot, board=args.board, truth=("displacement_mm",))
+        listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
+    session = SimSession(sim, listeners=listeners)
+    try:
+        session.advance(0.2)  # boot
+        if args.calibrated:
+            calibrate_then_put_down(session, sim, robot, args)
+            for spec in at_once:  # on the plant the robot walks on
+                sim.inject(spec)
+        clear_ticks(sim)  # the tick budget is measured over the gait run
+        start = sim.time_s
+        for at, fault in timed:
+            session.schedule_fault(start + at, fault)
+        report = session.run_gait(args.direction, args.gait, args.duration)
+    finally:
+        for listener in listeners:
+            listener.stop()
+    budget = tick_budget(sim)
+    if args.json:
+        print(json.dumps({**_report_json(robot, report, args.board), **(budget or {})}))
+    else:
+        print(_report_text(robot, report, args.board, budget))
+    for e in report.errors:
+        print(f"proleg: error: {e}", file=sys.stderr)
+    if recorder is not None and recorder.error is not None:
+        print(f"proleg: error: {recorder.error}", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK if report.ok else EXIT_FAILED
+
+
+def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:
+    """``--inject`` as (timed: (T, FAULT) for FAULT+T, checked to fall within ``run_s``; at once: FAULT)."""
+    from ..console.inject import parse_injection
+
+    timed = [parse_injection(spec, run_s) for spec in specs if "+" in spec]
+    return timed, [spec for spec in specs if "+" not in spec]
+
+
+def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:
+    from ..sim.pty import PtyServer
+
+    say = lambda line: print(line, flush=True)  # noqa: E731
+    with PtyServer(sim, speed=args.speed, faults=timed, say=say) as server:
+        print(f"simulated {sim.robot.name} on {server.path} (115200 8N1; Ctrl-C to stop)", flush=True)
+        print(f"  connect with: proleg console --port {server.path}", flush=True)
+        try:
+            server.serve(limit_s)
+        except KeyboardInterrupt:
+            pass
+        for at, fault in server.due:  # never dropped silently
+            print(f"proleg: not injected: {fault}+{at:g} (the simulation stopped at "
+                  f"{server.elapsed_s:.1f} s)", file=sys.stderr)
+    return 0
+
+
+def _recorder(robot, path: str, board: str = "host-sim"):
+    from ..record import Logger, RecordingMeta
+
+    return Logger(path, RecordingMeta.for_robot(robot=robot, board=board, truth=("displacement_mm",)))
+
+
+def _report_json(robot, report, board: str = "host-sim") -> dict:
+    t = robot.transitions
+    return {
+        "robot": robot.name,
+        "board": board,
+        "direction": report.direction,
+        "gait": report.gait,
+        "duration_s": report.duration_s,
+        "cycles": report.cycles,
+        "cycle_displacements_mm": report.cycle_displacements_mm,
+        "mean_cycle_mm": report.mean_cycle_mm,
+        "displacement_mm": report.displacement_mm,
+        "speed_mm_s": report.displacement_mm / report.duration_s if report.duration_s > 0 else 0.0,
+        "states_reached": [t.label(s) for s in report.states_reached],
+        "true_transitions": report.true_transitions,
+        "unexpected_transitions": report.unexpected_transitions,
+        "start_time_s": report.started_s,  # the board's clock at START: fault times are on it
+        "faults": [{"time_s": f.time_s, "code": f.code, "detail": f.detail} for f in report.faults],
+        "telemetry_frames": report.telemetry_frames,
+        "telemetry_lost": report.telemetry_lost,
+        "link_errors": report.link_errors,
+        "errors": report.errors,
+    }
+
+
+def _report_text(robot, report, board: str = "host-sim", budget: dict | None = None) -> str:
+    t = robot.transitions
+    seq = [t.label(s) for s in report.states_reached]
+    shown = " → ".join(seq[:13]) + (" …" if len(seq) > 13 else "")
+    lines = [
+        f"{robot.name} on {board}: gait {report.gait} in {report.direction} for {report.duration_s:g} s (simulated)",
+        f"  states reached:   {shown or 'none'}",
+        f"  cycles completed: {report.cycles}",
+    ]
+    if report.cycles:
+        per = ", ".join(f"{d:+.1f}" for d in report.cycle_displacements_mm[:8])
+        more = " …" if report.cycles > 8 else ""
+        lines.append(f"  displacement per cycle (mm): {per}{more}   mean {report.mean_cycle_mm:+.2f}")
+    lines.append(
+        f"  displacement total: {report.displacement_mm:+.1f} mm over {report.true_transitions} true transitions"
+        f" ({report.unexpected_transitions} not in the matrix)"
+    )
+    from ..console.names import RobotNames, fault_name_text
+
+    for f in report.faults:
+        lines.append(f"  FAULT at {f.time_s:.3f} s{report.after_start(f.time_s)}: "
+                     f"{fault_name_text(f.code, f.detail, RobotNames.for_robot(robot))}")
+    if report.limb_loss:  # EVENT SUSPECT / FALLBACK (issue 15), by name
+        from ..console.names import describe_event
+
+        lines += [f"  {describe_event(e, RobotNames.for_robot(robot), t.label).strip()}" for e in report.limb_loss]
+    for e in report.errors:
+        lines.append(f"  ERROR: {e}")
+    errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
+    lines.append(
+        f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
+    )
+    if budget is not None:
+        period, busy = budget["tick_period_us"], budget["tick_busy_us"]
+        lines.append(
+            f"  tick busy (µs of a {period:g} µs tick, {busy['ticks']} ticks): mean {busy['mean']:g}, "
+            f"p99 {busy['p99']:g} ({100 * busy['p99'] / period:.0f} %), max {busy['max']:g} "
+            f"({100 * busy['max'] / period:.0f} %)"
+        )
+    return "\n".join(lines)
+

@@ -1,0 +1,203 @@
+"""The physical plant's SMA coils: duty in, contraction out (steps 1–3 of ``plant``).
+
+``Coils(params, conditions, actuators, …)`` holds every coil's electrical, thermal and
+material state; ``step(dt_s, duties)`` advances them with each channel's duty held constant
+and says whether a contraction moved. Per step: the supply's voltage at the coils
+(V_s·√power − R_source·ΣI, sag when several draw), each coil's thermal node (``thermal``)
+and Liang–Rogers hysteresis (``proleg.sim.sma``) with latent heat, the body node they all
+warm, fatigue (stroke loss, transformation-temperature shift) with transformation cycles,
+injected drift, and the contraction ``c[j]`` = α_j × stroke_j through a first-order
+mechanical lag (``PhysicalParams.mech_tau_s``). Nothing here knows the body's shape or its
+contacts: ``PhysicalPlant`` turns ``c`` into motion.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from ...errors import SimError
+from ..sma import Hysteresis
+from .conditions import Conditions
+from .params import PhysicalParams
+
+
+class Coils:
+    """The robot's coils in actuator order; ``channel[j]`` is coil j's PWM channel. Lists
+    are per coil and updated in place (``temp`` may be held and read after each step)."""
+
+    def __init__(self, p: PhysicalParams, cond: Conditions, acts: Sequence[Any], anames: Sequence[str],
+                 by_limb: Sequence[int], lnames: Sequence[str]) -> None:
+        self.physics = p
+        na = len(acts)
+        self._na = na
+        self.amb = cond.get("ambient_c")
+        mism = cond.get("coil_mismatch")
+        conv = cond.get("convection")
+        self.R, self.C, self.hA, self.G, self.lat = [], [], [], [], []
+        for j in range(na):
+            scale = 1.0 + (mism if j == 0 else -mism if j == na - 1 and na > 1 else 0.0)
+            g = p.coil
+            self.R.append(g.resistance_ohm * scale)
+            self.C.append(g.heat_capacity_j_k * scale)
+            self.lat.append(g.latent_j * scale)
+            self.hA.append(g.convection_w_k(80.0, self.amb, conv) * scale)
+            self.G.append(g.coil_to_body_w_k)
+        # the body node is the robot's mass: all that mass_g changes (every force scales with it)
+        self.Cb = dataclasses.replace(p.body_thermal, mass_kg=cond.get("mass_g") * 1e-3).heat_capacity_j_k()
+        self.hAb = p.body_thermal.convection_w_k(conv)
+        self.supply = cond.get("supply_v") * math.sqrt(cond.get("power"))
+        self.rsrc = cond.get("supply_ohm")
+        self.pscale = [cond.for_index("power_scale", j, anames, by_limb, lnames) for j in range(na)]
+        self.channel = [a.channel for a in acts]
+        self.n_channels = max(self.channel) + 1
+        self.temp = [self.amb] * na
+        self.tbody = self.amb
+        g = p.coil
+        self.hyst = [Hysteresis(g.as_c, g.af_c, g.ms_c, g.mf_c, self.amb) for _ in range(na)]
+        self.alive = [True] * na
+        self.pfactor = [1.0] * na
+        self.drift: list[tuple[str, float, float] | None] = [None] * na
+        self.drift_on = [0.0] * na
+        self.drift_shift = [0.0] * na
+        self.drift_stroke = [1.0] * na
+        self.ontime = [0.0] * na
+        self.speedup = cond.get("fatigue_speedup")
+        self.cycles = [cond.get("fatigue_cycles")] * na
+        self.fat_stroke = [1.0] * na
+        self.fat_shift = [0.0] * na
+        self.fat_at = [0.0] * na
+        for j in range(na):
+            self._update_fatigue(j)
+        self.c = [0.0] * na   # contraction, fraction of the fresh stroke (after the lag)
+        self._dt_cache: tuple[float, list[float], float] = (-1.0, [], 0.0)
+
+    def _update_fatigue(self, j: int) -> None:
+        law = self.physics.fatigue
+        n = self.cycles[j]
+        self.fat_at[j] = n
+        self.fat_stroke[j] = law.stroke(n)
+        self.fat_shift[j] = law.shift(n)
+        self.hyst[j].shift_c = self.fat_shift[j] + self.drift_shift[j]
+
+    def step(self, dt_s: float, duties: Sequence[float]) -> tuple[bool, bool]:
+        """Advance by ``dt_s`` seconds with each channel's duty held constant. Returns
+        (changed: some contraction moved, moving: one is still on its way to its target)."""
+        if dt_s != self._dt_cache[0]:
+            if not dt_s > 0:
+                raise SimError(f"step: dt_s must be > 0, got {dt_s!r}")
+            k = [math.exp(-dt_s * (h + g) / c) for h, g, c in zip(self.hA, self.G, self.C)]
+            self._dt_cache = (dt_s, k, math.exp(-dt_s / self.physics.mech_tau_s))
+        _, decay, mdecay = self._dt_cache
+        if len(duties) < self.n_channels:
+            raise SimError(f"step: {len(duties)} duties given, the plant drives channels 0..{self.n_channels - 1}")
+        na = self._na
+        ds = []
+        for j in range(na):
+            d = duties[self.channel[j]]
+            if not 0.0 <= d <= 1.0:
+                raise SimError(f"step: duty {d!r} on channel {self.channel[j]} is outside 0..1")
+            ds.append(d if self.alive[j] else 0.0)
+        v = self.supply
+        if self.rsrc > 0.0:
+            v = v * v / (v + self.rsrc * sum(d * v / r for d, r in zip(ds, self.R)))
+        amb, tb = self.amb, self.tbody
+        to_body = 0.0
+        changed = False
+        moving = False
+        for j in range(na):
+            d = ds[j]
+            if d > 0.0:
+                self.ontime[j] += d * dt_s
+                if self.drift[j] is not None:
+                    self._apply_drift(j, d * dt_s)
+            power = d * v * v / self.R[j] * self.pscale[j] * self.pfactor[j]
+            h, g = self.hA[j], self.G[j]
+            t_eq = (power + h * amb + g * tb) / (h + g)
+            t = t_eq + (self.temp[j] - t_eq) * decay[j]
+            hy = self.hyst[j]
+            a0 = hy.alpha
+            if (a0 == 0.0 and t < hy.as_c + hy.shift_c and hy.temp < hy.as_c + hy.shift_c) or (
+                    a0 == 1.0 and t > hy.ms_c + hy.shift_c and hy.temp > hy.ms_c + hy.shift_c):
+                a1 = a0   # outside the transformation band on a saturated branch: nothing moves
+            else:
+                a1 = hy.update(t)
+            if a1 != a0:
+                t -= self.lat[j] * (a1 - a0) / self.C[j]
+                hy.temp = t
+                self.cycles[j] += abs(a1 - a0) * 0.5 * self.speedup
+                if abs(self.cycles[j] - self.fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
+                    self._update_fatigue(j)
+            self.temp[j] = t
+            to_body += g * (t - tb)
+            target = a1 * self.fat_stroke[j] * self.drift_stroke[j]
+            c = self.c[j]
+            if c != target:
+                c = target + (c - target) * mdecay
+                if abs(c - target) < 1e-7:
+                    c = target
+                else:
+                    moving = True
+                self.c[j] = c
+                changed = True
+        self.tbody = tb + dt_s * (to_body - self.hAb * (tb - amb)) / self.Cb
+        return changed, moving
+
+    def _apply_drift(self, j: int, on: float) -> None:
+        mode, rate, step = self.drift[j]
+        self.drift_on[j] += on
+        x = self.drift_on[j] * rate
+        if mode == "power":
+            self.pfactor[j] = (1.0 - step) * math.exp(-x)
+        elif mode == "stroke":
+            self.drift_stroke[j] = (1.0 - step) * math.exp(-x)
+        else:
+            self.drift_shift[j] = step + x
+            self.hyst[j].shift_c = self.fat_shift[j] + self.drift_shift[j]
+
+    # -- faults ---------------------------------------------------------------------------------
+    def of_channel(self, channel: int) -> int:
+        """The coil driven by ``channel``; a SimError when none is."""
+        try:
+            return self.channel.index(channel)
+        except ValueError:
+            raise SimError(f"no actuator on channel {channel} (channels: {self.channel})") from None
+
+    def kill(self, channel: int) -> None:
+        """The coil on ``channel`` no longer heats (broken wire, dead MOSFET)."""
+        self.alive[self.of_channel(channel)] = False
+
+    def inject_drift(self, channel: int, rate: float, mode: str = "power", step: float = 0.0) -> None:
+        """See ``PhysicalPlant.inject_drift``."""
+        j = self.of_channel(channel)
+        if mode not in ("power", "temperature", "stroke"):
+            raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
+        if not (math.isfinite(rate) and rate >= 0):
+            raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
+        if mode != "temperature" and not 0.0 <= step < 1.0:
+            raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
+        self.drift[j] = (mode, float(rate), float(step))
+        self.drift_on[j] = 0.0
+        self._apply_drift(j, 0.0)
+
+    # -- what the coils can reach -----------------------------------------------------------------
+    def steady_temperature_c(self, duty: float) -> list[float]:
+        """See ``PhysicalPlant.steady_coil_temperature_c``."""
+        v = self.supply
+        out = []
+        for j in range(self._na):
+            r = self.R[j]
+            vv = v * r / (r + self.rsrc) if self.rsrc > 0.0 else v
+            power = duty * vv * vv / r * self.pscale[j] * self.pfactor[j] * (1.0 if self.alive[j] else 0.0)
+            out.append(self.amb + power / (self.hA[j] + self.G[j]))
+        return out
+
+    def transformation_c(self) -> list[tuple[float, float]]:
+        """Each coil's (As, Af) now, fatigue and drift shifts included."""
+        return [(h.as_c + h.shift_c, h.af_c + h.shift_c) for h in self.hyst]
+
+    def stroke(self) -> list[float]:
+        """Each coil's stroke now, a fraction of its fresh stroke (fatigue and drift)."""
+        return [a * b for a, b in zip(self.fat_stroke, self.drift_stroke)]
