@@ -13,6 +13,7 @@ import sys
 
 from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
 from .number_args import gait_number, max_transitions, positive_float
+from ..report.matrix_check import check, promised_reward, remark_text
 
 #: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
 #: (the emulated boards are slower); 1e12 never finished. ``--pty`` serves in real time, unbounded.
@@ -146,16 +147,27 @@ def cmd_sim(args: argparse.Namespace) -> int:
         for listener in listeners:
             listener.stop()
     budget = tick_budget(sim)
+    agreement = _matrix_check(robot, args, report)
     if args.json:
-        print(json.dumps({**_report_json(robot, report, args.board), **(budget or {})}))
+        out = {**_report_json(robot, report, args.board), **(budget or {})}
+        out["matrix_check"] = agreement.as_json() if agreement else None
+        print(json.dumps(out))
     else:
         print(_report_text(robot, report, args.board, budget))
+        if agreement is not None and agreement.remark is not None:
+            print(f"  {remark_text(agreement)}")
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     if recorder is not None and recorder.error is not None:
         print(f"proleg: error: {recorder.error}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK if report.ok else EXIT_FAILED
+
+
+def _matrix_check(robot, args, report):
+    """The run against what the matrix promises for its gait (report/matrix_check.py)."""
+    promised = promised_reward(robot, args.direction, args.gait, args.objective, args.max_transitions)
+    return None if promised is None else check(robot, args.plant, promised, report.cycle_displacements_mm)
 
 
 def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:
