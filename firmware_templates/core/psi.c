@@ -288,6 +288,12 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
 
 int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg)
 {
+#if CFG_MAX_THRESHOLDS == 1u
+    /* One threshold a limb (every limb has 2 levels, robot.py): its one band moved to its own
+     * ψ* with the new width is exactly what psi_set_band checks and computes (R1 on the Nano
+     * 42 B smaller than the loops below). */
+    return limb < CFG_N_LIMBS ? psi_set_band(limb, 0, band(limb, 0)->star, hyst_cdeg) : (int8_t)-1;
+#else
     uint8_t i, n;
     int16_t lo, hi, prev_hi = 0;
     if (limb >= CFG_N_LIMBS) {
@@ -306,6 +312,7 @@ int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg)
         SET_STROKE(limb, i);
     }
     return 0;
+#endif
 }
 
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr)
