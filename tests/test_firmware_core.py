@@ -143,18 +143,18 @@ CONFIGS = {"inch-entry": _inchworm_entry, "r1-fast": _r1_fast, "r1-stroke": _r1_
 
 # C test → (config, core sources, extra sources, defines)
 C_TESTS = {
-    "test_psi.c": ("r1-fast", ["psi.c"], [], []),
-    "test_psi_multilevel.c": ("multi", ["psi.c", "seq.c", "count.c"], ["gait_table.c"], []),
+    "test_psi.c": ("r1-fast", ["psi.c", "angle.c"], [], []),
+    "test_psi_multilevel.c": ("multi", ["psi.c", "angle.c", "seq.c", "count.c"], ["gait_table.c"], []),
     "test_sma.c": ("r1-fast", ["sma.c", "elapsed.c"], [], []),
     "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
-    "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "limbmap.c"], [], []),
-    "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "limbmap.c"], [], []),
-    "test_ctl_stroke.c": ("r1-stroke", ["ctl.c", "psi.c", "limbmap.c"], [], []),
-    "test_ctl_chain.c": ("inch-entry", ["ctl.c", "psi.c", "limbmap.c"], [], []),
-    "test_seq.c": ("r1-fast", ["seq.c", "psi.c", "count.c"], ["gait_table.c"], []),
-    "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c", "count.c"], ["gait_table.c"], []),
-    "test_seq_edges.c": ("big", ["seq.c", "psi.c", "count.c"], ["gait_table.c"], []),
-    "test_seq_entry.c": ("inch-entry", ["seq.c", "psi.c", "count.c"], ["gait_table.c"], []),
+    "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "angle.c", "limbmap.c"], [], []),
+    "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "angle.c", "limbmap.c"], [], []),
+    "test_ctl_stroke.c": ("r1-stroke", ["ctl.c", "psi.c", "angle.c", "limbmap.c"], [], []),
+    "test_ctl_chain.c": ("inch-entry", ["ctl.c", "psi.c", "angle.c", "limbmap.c"], [], []),
+    "test_seq.c": ("r1-fast", ["seq.c", "psi.c", "angle.c", "count.c"], ["gait_table.c"], []),
+    "test_seq_transitions.c": ("r1-1act", ["seq.c", "psi.c", "angle.c", "count.c"], ["gait_table.c"], []),
+    "test_seq_edges.c": ("big", ["seq.c", "psi.c", "angle.c", "count.c"], ["gait_table.c"], []),
+    "test_seq_entry.c": ("inch-entry", ["seq.c", "psi.c", "angle.c", "count.c"], ["gait_table.c"], []),
     "test_sim_mpu6050.c": ("r1-fast", ["mpu6050.c", "imubus.c"], [SIM / "sim_mpu6050.c"], ["-DFAKE_HAL_SIM_MPU"]),
 }
 

@@ -1,8 +1,6 @@
 /* app.c - see app.h: the order of one tick; each step is its own module. */
 #include "app.h"
 
-#include <string.h>
-
 #include "cmd.h"
 #include "count.h"
 #include "ctl.h"
@@ -10,6 +8,7 @@
 #include "fault.h"
 #include "hal.h"
 #include "imucheck.h"
+#include "initzero.h"
 #include "limbmap.h"
 #include "param.h"
 #include "proto.h"
@@ -43,8 +42,8 @@ uint32_t app_time_ms(void)
 void app_init(void)
 {
     uint8_t i;
-    memset(&st, 0, sizeof st); /* again on host-sim's reset */
-    overruns = 0;
+    INIT_ZERO(st); /* again on host-sim's reset */
+    INIT_ZERO(overruns);
     st.ms_us = hal_micros();
     uart_init();
     tx_init();

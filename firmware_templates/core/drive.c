@@ -4,6 +4,7 @@
 #include "ctl.h"
 #include "fault.h"
 #include "imucheck.h"
+#include "initzero.h"
 #include "limbmap.h"
 #include "param.h"
 #include "proto.h"
@@ -16,12 +17,13 @@
 
 static uint8_t gait, dir; /* gait last started */
 static uint8_t reached;   /* the sequencer reported REACHED this tick */
+typedef char drive_dir_starts_at_zero[PROTO_DIR_PLUS_X == 0 ? 1 : -1];
 
 void drive_init(void)
 {
-    gait = 0;
-    dir = PROTO_DIR_PLUS_X;
-    reached = 0;
+    INIT_ZERO(gait);
+    INIT_ZERO(dir); /* PROTO_DIR_PLUS_X */
+    INIT_ZERO(reached);
 }
 
 #if defined(__GNUC__)

@@ -3,6 +3,7 @@
 
 #include "hal.h"
 #include "fallback.h"
+#include "initzero.h"
 #include "param.h"
 #include "proto.h"
 #include "seq.h"
@@ -24,10 +25,8 @@ static uint16_t cycles_u16(void)
 
 void fault_init(void)
 {
-    st.latched = 0;
-    st.watchdog_tripped = 0;
+    INIT_ZERO(st); /* nothing latched, the watchdog not tripped, the link not stale */
     st.rx_us = hal_micros();
-    st.rx_stale = 0;
 }
 
 /* Stop the sequencer and report it: GAIT_STOPPED(reason, cycles). One copy for both callers. */

@@ -1,9 +1,8 @@
 /* imubus.c - see imubus.h. */
 #include "imubus.h"
 
-#include <string.h>
-
 #include "hal.h"
+#include "initzero.h"
 #include "rom.h"
 
 #if CFG_I2C_BUSES > 1
@@ -44,7 +43,7 @@ static int8_t begin_on(uint8_t bus, uint8_t addr7, const uint8_t *tx, uint8_t nt
 
 void imubus_init(void)
 {
-    memset(&st, 0, sizeof st);
+    INIT_ZERO(st);
 }
 
 int8_t imubus_begin(uint8_t limb, uint8_t addr7, const uint8_t *tx, uint8_t ntx, uint8_t *rx, uint8_t nrx)

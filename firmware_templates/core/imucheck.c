@@ -6,6 +6,7 @@
 #include "fault.h"
 #include "hal.h"
 #include "imubus.h"
+#include "initzero.h"
 #include "level.h"
 #include "mpu6050.h"
 #include "proto.h"
@@ -73,7 +74,7 @@ static void imu_fault(uint8_t limb, uint8_t code)
 
 void imucheck_init(void)
 {
-    memset(&st, 0, sizeof st);
+    INIT_ZERO(st);
     st.measured = IMUCHECK_UNKNOWN;
     st.cur = NO_LIMB;
     imubus_init();

@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "angle.h"
 #include "crc16.h"
 #include "fault.h"
 #include "hal.h"
@@ -142,8 +143,8 @@ static void load(void)
                                                                                              : PROTO_LEVEL_CORRUPT;
     for (i = 0; i < CFG_N_LIMBS; i++) {
         a = (int16_t)(level_offset_cdeg(i) + lm[i].ground);
-        lm[i].rc = psi_cos_q14(a);
-        lm[i].rs = psi_sin_q14(a);
+        lm[i].rc = angle_cos_q14(a);
+        lm[i].rs = angle_sin_q14(a);
     }
 }
 
@@ -157,8 +158,8 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az)
 {
     int16_t x = *ax, z = *az, c = lm[limb].rc, s = lm[limb].rs;
     if (s != 0) { /* a tilt of 0.01° already has sin ≥ 2 in Q14; 16×16→32 products */
-        *ax = psi_turn_q14(c, s, x, z);            /* x·c − z·s */
-        *az = psi_turn_q14(c, (int16_t)-s, z, x); /* z·c + x·s */
+        *ax = angle_turn_q14(c, s, x, z);            /* x·c − z·s */
+        *az = angle_turn_q14(c, (int16_t)-s, z, x); /* z·c + x·s */
     }
 }
 

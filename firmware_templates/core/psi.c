@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "angle.h"
 #include "rom.h"
 
 static const uint8_t limb_levels[CFG_N_LIMBS] ROM = CFG_LIMB_LEVELS;
@@ -57,8 +58,8 @@ static NOINLINE band_t *band(uint8_t limb, uint8_t thr)
 /* {cos, sin} Q14 of `cdeg`, −9000 < cdeg < 9000. */
 static void edge_of(int16_t cdeg, int16_t edge[2])
 {
-    edge[0] = psi_cos_q14(cdeg);
-    edge[1] = psi_sin_q14(cdeg);
+    edge[0] = angle_cos_q14(cdeg);
+    edge[1] = angle_sin_q14(cdeg);
 }
 
 #ifdef CFG_LIMB_STROKE_CDEG
@@ -128,33 +129,13 @@ static void set_angles(band_t *b, int16_t star, int16_t hyst)
     }
 }
 
-/* x·cos θ − z·sin θ for a Q14 {cos θ, sin θ}: g·sin(ψ − θ) for the sample (x, z) = g·(sin ψ,
- * cos ψ). Called from many places; kept out of line so that the 8-bit targets carry the two
- * 32-bit products once. */
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-static int32_t dot(int16_t c, int16_t s, int16_t x, int16_t z)
-{
-    return (int32_t)x * c - (int32_t)z * s;
-}
-
-/* p / 2^14 as int16 (bits 14..29): a 2-bit shift and a byte move, where an 8-bit MCU would
- * shift 32 bits 14 times. Exact for |p| < 2^29. */
-#define Q14_TO_I16(p) ((int16_t)(uint16_t)(((uint32_t)(p) << 2) >> 16))
-
-NOINLINE int16_t psi_turn_q14(int16_t c, int16_t s, int16_t x, int16_t z)
-{
-    return Q14_TO_I16(dot(c, s, x, z));
-}
-
 /* One comparison against a Q14 edge {cos θ, sin θ}: ψ ≥ θ. Out of line too (many callers). */
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
 static uint8_t at_or_above(const int16_t *edge, int16_t ax, int16_t az)
 {
-    return dot(edge[0], edge[1], ax, az) >= 0;
+    return angle_dot_q14(edge[0], edge[1], ax, az) >= 0;
 }
 
 typedef struct {
@@ -181,25 +162,6 @@ static uint8_t last_above(uint8_t limb, uint8_t thr, uint8_t e)
     return at_or_above(band(limb, thr)->e[e], l->ax, l->az);
 }
 
-/* sin(min(i · 1.28°, 90°)) in Q14, i = 0..71: a power-of-two step of 128 × 0.01°, so the
- * lookup is a shift and a mask (no 32-bit division). Linear interpolation between entries
- * is within 2 LSB of sin everywhere (checked for every 0.01° in tests/c/test_psi.c). */
-static const int16_t sin_tab[72] ROM = {
-    0,     366,   732,   1097,  1462,  1826,  2190,  2552,  2913,  3272,  3630,  3986,
-    4340,  4692,  5041,  5388,  5732,  6074,  6412,  6747,  7079,  7408,  7732,  8053,
-    8370,  8682,  8990,  9294,  9593,  9888,  10177, 10461, 10740, 11014, 11282, 11545,
-    11802, 12052, 12297, 12536, 12769, 12995, 13214, 13428, 13634, 13833, 14026, 14212,
-    14390, 14562, 14726, 14883, 15032, 15174, 15308, 15435, 15554, 15665, 15768, 15864,
-    15951, 16031, 16102, 16166, 16221, 16269, 16308, 16339, 16362, 16377, 16384, 16384,
-};
-
-/* atan((i+1)/32) − atan(i/32) in 0.01°, i = 0..31: atan(i/32) is the sum of the first i
- * (0, 179, 358, 536, … 4409, 4500). Steps below 256: half the bytes of the sums (issue 11). */
-static const uint8_t atan_step[32] ROM = {
-    179, 179, 178, 177, 175, 174, 172, 170, 167, 164, 162, 159, 155, 152, 148, 146,
-    141, 138, 134, 131, 126, 124, 120, 116, 113, 109, 107, 103, 99,  97,  94,  91,
-};
-
 void psi_reset(void)
 {
     uint8_t i;
@@ -221,37 +183,6 @@ void psi_init(void)
     }
     debounce = CFG_DEBOUNCE_TICKS;
     psi_reset();
-}
-
-/* |v| as uint16 (|−32768| = 32768). One out-of-line copy for sin, cos and atan2. */
-static NOINLINE uint16_t mag(int16_t v)
-{
-    return v < 0 ? (uint16_t)(0u - (uint16_t)v) : (uint16_t)v;
-}
-
-int16_t psi_sin_q14(int16_t cdeg)
-{
-    uint16_t i, f, a;
-    int16_t v;
-    uint16_t x = mag(cdeg);
-    if (x >= 9000u) {
-        v = 16384;
-    } else {
-        i = x >> 7;   /* ≤ 70 */
-        f = x & 127u;
-        a = (uint16_t)ROM_I16(&sin_tab[i]);
-        /* the table rises by at most 366 per entry: 366 × 127 + 64 fits in 16 bits */
-        v = (int16_t)(a + ((((uint16_t)ROM_I16(&sin_tab[i + 1u]) - a) * f + 64u) >> 7));
-    }
-    return cdeg < 0 ? (int16_t)-v : v;
-}
-
-#if defined(__GNUC__)
-__attribute__((noinline)) /* six callers: one copy */
-#endif
-int16_t psi_cos_q14(int16_t cdeg)
-{
-    return psi_sin_q14((int16_t)(9000 - mag(cdeg))); /* sin(90° − |cdeg|) */
 }
 
 /* The edges of a band ψ* ± h/2 (0.01°) into lo/hi: 0, or -1 when h is outside 0..2000 or
@@ -288,6 +219,12 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
 
 int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg)
 {
+#if CFG_MAX_THRESHOLDS == 1u
+    /* One threshold a limb (every limb has 2 levels, robot.py): its one band moved to its own
+     * ψ* with the new width is exactly what psi_set_band checks and computes (R1 on the Nano
+     * 42 B smaller than the loops below). */
+    return limb < CFG_N_LIMBS ? psi_set_band(limb, 0, band(limb, 0)->star, hyst_cdeg) : (int8_t)-1;
+#else
     uint8_t i, n;
     int16_t lo, hi, prev_hi = 0;
     if (limb >= CFG_N_LIMBS) {
@@ -306,6 +243,7 @@ int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg)
         SET_STROKE(limb, i);
     }
     return 0;
+#endif
 }
 
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr)
@@ -439,19 +377,19 @@ int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising)
      * u = g·sin(ψ − θ), v = g·cos(ψ − θ). ψ ≥ θ ⇔ u ≥ 0 (exactly psi_at_or_above: u / 2^14
      * rounds down, so its sign is u's), and ψ ≥ θ − d ⇔ u·cos d + v·sin d ≥ 0, ψ ≥ θ + d ⇔
      * u·cos d − v·sin d ≥ 0. |g| < 2^15 (every sample imucheck.c passes is within 1.5 g)
-     * keeps |u|, |v| below 2^29 for psi_turn_q14. */
-    int16_t u16 = psi_turn_q14(e[0], e[1], l->ax, l->az);
+     * keeps |u|, |v| below 2^29 for angle_turn_q14. */
+    int16_t u16 = angle_turn_q14(e[0], e[1], l->ax, l->az);
     int16_t z16;
     if ((u16 >= 0) == !!rising) {
         return 0; /* rising: at or above the upper edge; falling: below the lower edge */
     }
-    z16 = psi_turn_q14(e[1], (int16_t)-e[0], l->ax, l->az); /* v */
+    z16 = angle_turn_q14(e[1], (int16_t)-e[0], l->ax, l->az); /* v */
     if (rising) {
         z16 = (int16_t)-z16; /* the edges below the upper edge: turn the other way */
     }
     for (k = 0; k < n; k++) {
         const int16_t *p = progress[k];
-        if ((dot(ROM_I16(&p[1]), ROM_I16(&p[2]), u16, z16) >= 0) == !!rising) {
+        if ((angle_dot_q14(ROM_I16(&p[1]), ROM_I16(&p[2]), u16, z16) >= 0) == !!rising) {
             return ROM_I16(&p[0]);
         }
     }
@@ -471,57 +409,11 @@ NOINLINE int16_t psi_last_centideg(uint8_t limb)
     }
 #ifdef CFG_LIMB_STROKE_CDEG
     if (!l->fresh) {
-        l->cdeg = psi_centideg(l->ax, l->az);
+        l->cdeg = angle_atan2_cdeg(l->ax, l->az);
         l->fresh = 1;
     }
     return l->cdeg;
 #else
-    return psi_centideg(l->ax, l->az);
+    return angle_atan2_cdeg(l->ax, l->az);
 #endif
-}
-
-/* atan(n/d) in 0.01° for 0 ≤ n ≤ d, d > 0: table plus linear interpolation. */
-static int16_t atan_frac(uint16_t n, uint16_t d)
-{
-    uint16_t r = 0, rem = n; /* r = n·2^15 / d (Q15, 0..32768) by shift and subtract: */
-    uint8_t k;               /* no 32-bit division (issue 11) */
-    if (n >= d) {
-        r = 32768u;
-    } else {
-        for (k = 0; k < 15u; k++) {
-            rem = (uint16_t)(rem << 1); /* rem < d ≤ 32768: 2·rem < 2^16 */
-            r = (uint16_t)(r << 1);
-            if (rem >= d) {
-                rem = (uint16_t)(rem - d);
-                r |= 1u;
-            }
-        }
-    }
-    uint8_t i = (uint8_t)(r >> 10); /* 0..32 */
-    uint16_t f = (uint16_t)(r & 1023u);
-    uint8_t step = 0;
-    int16_t a = 0;
-    for (k = 0; k < i; k++) {
-        a = (int16_t)(a + ROM_U8(&atan_step[k])); /* atan(i/32) */
-    }
-    if (i < 32u) {
-        step = ROM_U8(&atan_step[i]); /* to atan((i+1)/32); r = 32768 (i = 32) has f = 0 */
-    }
-    /* step ≤ 179: unsigned 16×16→32 */
-    return (int16_t)(a + (int16_t)(((uint32_t)step * f + 512u) >> 10));
-}
-
-int16_t psi_centideg(int16_t ax, int16_t az)
-{
-    uint16_t x = mag(ax); /* |−32768| = 32768 */
-    uint16_t z = mag(az);
-    int16_t a;
-    if (x == 0u && z == 0u) {
-        return 0;
-    }
-    a = (x <= z) ? atan_frac(x, z) : (int16_t)(9000 - atan_frac(z, x));
-    if (az < 0) {
-        a = (int16_t)(18000 - a);
-    }
-    return ax < 0 ? (int16_t)-a : a;
 }

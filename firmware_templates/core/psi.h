@@ -9,9 +9,10 @@
  * Level with hysteresis: from level L a limb goes up past threshold L when ψ ≥ its
  * upper edge, down past threshold L−1 when ψ < its lower edge. Debounce: the reported
  * level changes only after the hysteresis level has held the new value for `debounce`
- * consecutive samples. psi_centideg() is an integer atan2 (error < 0.01°) for telemetry
- * only: everything the controller asks (levels, hold and settle edges, progress towards a
- * crossing) is a comparison against Q14 edge constants computed when a band is set.
+ * consecutive samples. psi_last_centideg() is an integer atan2 (angle.h, error < 0.01°) for
+ * telemetry only: everything the controller asks (levels, hold and settle edges, progress
+ * towards a crossing) is a comparison against Q14 edge constants (angle.h's sin and cos)
+ * computed when a band is set.
  *
  * Settled, with hysteresis and dwell: a limb becomes settled once its last sample has been
  * inside its debounced level clear of the margins (at or above the hold edge below it,
@@ -62,15 +63,6 @@ int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg);
 /* ψ* and band width in use for threshold `thr` of `limb`, 0.01°. */
 int16_t psi_star_cdeg(uint8_t limb, uint8_t thr);
 int16_t psi_hyst_cdeg(uint8_t limb, uint8_t thr);
-
-/* sin and cos in Q14 of an angle in 0.01°, −9000..9000 (integer, error < 2 LSB). */
-int16_t psi_sin_q14(int16_t cdeg);
-int16_t psi_cos_q14(int16_t cdeg);
-
-/* (x·c − z·s) / 2^14 for a Q14 {c, s} = {cos θ, sin θ}: the x of (x, z) turned by −θ (the
- * z is psi_turn_q14(c, −s, z, x)). Exact for |x·c − z·s| < 2^29: a vector shorter than 2^15
- * (every sample imucheck.c passes is within 1.5 g) turned by a Q14 unit {c, s}. */
-int16_t psi_turn_q14(int16_t c, int16_t s, int16_t x, int16_t z);
 
 /* 1 when the gravity vector (ax, az) of `limb` is at or above the `edge` of threshold `thr`. */
 uint8_t psi_at_or_above(uint8_t limb, uint8_t thr, uint8_t edge, int16_t ax, int16_t az);
@@ -130,9 +122,6 @@ void psi_relax(uint8_t limb, uint8_t on);
 
 /* Number of levels of `limb`. */
 uint8_t psi_levels(uint8_t limb);
-
-/* ψ = atan2(ax, az) in 0.01°, −18000..18000, integer only. */
-int16_t psi_centideg(int16_t ax, int16_t az);
 
 /* ψ of the last sample of `limb` in 0.01° (0 before its first sample). */
 int16_t psi_last_centideg(uint8_t limb);

@@ -5,6 +5,7 @@
 
 #include "elapsed.h"
 #include "hal.h"
+#include "initzero.h"
 #include "sma.h"
 
 static uint32_t last_us;
@@ -29,6 +30,9 @@ __attribute__((noinline)) /* smaller out of line (measured) */
 #endif
 void guard_init(void)
 {
+    INIT_ZERO(progressed);
+    INIT_ZERO(heating);
+    INIT_ZERO(suspect);
     last_us = hal_micros();
     guard_ack();
     guard_set_timeout_ms(CFG_STATE_TIMEOUT_MS);

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "count.h"
+#include "initzero.h"
 #include "psi.h"
 #include "rom.h"
 
@@ -68,12 +69,8 @@ static NOINLINE void new_step(void)
 
 void seq_init(void)
 {
-    s.running = 0;
-    s.reached = 0;
-    s.n = 0;
-    s.step = 0;
-    s.cycles = 0;
-    loaded_n = 0;
+    INIT_ZERO(s); /* not running, no walk */
+    INIT_ZERO(loaded_n);
     ROM_COPY(&ticks, &ticks_init, sizeof ticks);
 }
 

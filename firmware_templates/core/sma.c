@@ -1,10 +1,9 @@
 /* sma.c - see sma.h. */
 #include "sma.h"
 
-#include <string.h>
-
 #include "elapsed.h"
 #include "hal.h"
+#include "initzero.h"
 #include "rom.h"
 
 #if CFG_DUTY_WINDOW_MS < 8UL || CFG_DUTY_WINDOW_MS > 600000UL
@@ -144,8 +143,8 @@ static uint32_t window_sum(uint8_t act)
 
 void sma_init(void)
 {
-    memset(acts, 0, sizeof acts);
-    memset(win, 0, sizeof win);
+    INIT_ZERO(acts);
+    INIT_ZERO(win);
     last_us = hal_micros();
     ROM_COPY(&st, &st_init, sizeof st);
     every_channel_off();

@@ -5,6 +5,7 @@
 #include "hal.h"
 #include "fault.h"
 #include "imucheck.h"
+#include "initzero.h"
 #include "proto.h"
 #include "psi.h"
 #include "robot_config.h"
@@ -29,11 +30,8 @@ static struct {
 
 void telemetry_init(void)
 {
+    INIT_ZERO(st); /* no frame taken or pending, sequence 0 */
     st.hz = CFG_TELEMETRY_HZ;
-    st.acc = 0;
-    st.seq = 0;
-    st.clamped = 0;
-    st.pending = 0;
     st.cost_us = (uint16_t)(CFG_TICK_US / 4u); /* then learnt */
 }
 

@@ -5,6 +5,7 @@
 
 #include "app.h"
 #include "count.h"
+#include "initzero.h"
 #include "robot_config.h"
 #include "uart.h"
 #if CFG_LINK_CAN
@@ -21,11 +22,11 @@ static uint8_t pending_delim; /* a frame went out half: start the next with a de
 
 void tx_init(void)
 {
-    memset(&count, 0, sizeof count);
+    INIT_ZERO(count);
 #if CFG_LINK_CAN
     canlink_init(); /* the host link is the CAN bus (board file [link] transport = "can") */
 #else
-    pending_delim = 0;
+    INIT_ZERO(pending_delim);
 #endif
 }
 

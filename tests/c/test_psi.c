@@ -1,8 +1,10 @@
-/* Host unit tests of core/psi.c (ψ classifier, hysteresis, debounce, integer atan2).
+/* Host unit tests of core/psi.c (ψ classifier, hysteresis, debounce) and core/angle.c (integer
+ * sin/cos and atan2).
  * Built by tests/test_firmware_core.py against the rendered config of a paper-R1-like
  * robot: ψ* = 20°, hysteresis 2° (band edges 19° and 21°), debounce CFG_DEBOUNCE_TICKS. */
 #include <math.h>
 
+#include "angle.h"
 #include "psi.h"
 #include "unit.h"
 
@@ -126,7 +128,7 @@ static void test_integer_atan2_is_within_0_02_deg_of_float_all_round(void)
         for (deg = -179.99; deg <= 180.0; deg += 0.173) {
             int16_t ax = (int16_t)lround(mags[k] * sin(deg * PI_D / 180.0));
             int16_t az = (int16_t)lround(mags[k] * cos(deg * PI_D / 180.0));
-            double err = psi_centideg(ax, az) - ref_deg(ax, az) * 100.0;
+            double err = angle_atan2_cdeg(ax, az) - ref_deg(ax, az) * 100.0;
             if (err > 18000.0) {
                 err -= 36000.0;
             } else if (err < -18000.0) {
@@ -141,7 +143,7 @@ static void test_integer_atan2_is_within_0_02_deg_of_float_all_round(void)
     CHECK(worst <= 2.0);
 }
 
-/* psi_centideg as it was before its atan table became 8-bit steps (issue 11): the oracle
+/* angle_atan2_cdeg as it was before its atan table became 8-bit steps (issue 11): the oracle
  * for the exhaustive test below. */
 static const int16_t old_atan_tab[33] = {
     0,    179,  358,  536,  713,  888,  1062, 1234, 1404, 1571, 1735, 1897, 2056, 2211, 2363, 2511, 2657,
@@ -200,8 +202,8 @@ static void test_atan_steps_give_the_old_table_result_for_every_ratio(void)
     int32_t v;
     for (k = 0; k < sizeof others / sizeof others[0]; k++) {
         for (v = -32768; v <= 32767; v++) {
-            bad += psi_centideg((int16_t)v, others[k]) != old_centideg((int16_t)v, others[k]);
-            bad += psi_centideg(others[k], (int16_t)v) != old_centideg(others[k], (int16_t)v);
+            bad += angle_atan2_cdeg((int16_t)v, others[k]) != old_centideg((int16_t)v, others[k]);
+            bad += angle_atan2_cdeg(others[k], (int16_t)v) != old_centideg(others[k], (int16_t)v);
         }
     }
     CHECK_EQ(bad, 0);
@@ -212,8 +214,8 @@ static void test_integer_sin_cos_match_float_within_2_lsb(void)
     int32_t cd;
     for (cd = -9000; cd <= 9000; cd++) { /* every 0.01° */
         double r = cd / 100.0 * PI_D / 180.0;
-        CHECK(labs((long)psi_sin_q14((int16_t)cd) - lround(sin(r) * 16384.0)) <= 2);
-        CHECK(labs((long)psi_cos_q14((int16_t)cd) - lround(cos(r) * 16384.0)) <= 2);
+        CHECK(labs((long)angle_sin_q14((int16_t)cd) - lround(sin(r) * 16384.0)) <= 2);
+        CHECK(labs((long)angle_cos_q14((int16_t)cd) - lround(cos(r) * 16384.0)) <= 2);
     }
 }
 

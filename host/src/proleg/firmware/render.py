@@ -58,6 +58,7 @@ class BoardPart:
     clock_hz: int
     pwm_hz: int
     i2c_hz: int
+    main_loop: bool = False  # core/main.c runs app_init once per reset (False: a host may call it again)
     link_can: bool = False  # [link] transport = "can": core/canlink.c carries the protocol
     can_btr: str = "0x00000000UL"  # CAN_BTR from the board's [can] clock and bit rate (can_config.bit_timing)
     can_timing: str = ""
@@ -221,6 +222,7 @@ def _board_part(board: Any) -> BoardPart:
         clock_hz=int(_get(board, "clock_hz", 0)),
         pwm_hz=int(_get(board, "pwm_frequency_hz", 1000)),
         i2c_hz=int(_get(i2c, "hz", DEFAULT_I2C_HZ)),
+        main_loop=bool(_get(board, "main_loop", False)),
         **_can_part(board),
     )
 
