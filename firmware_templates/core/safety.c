@@ -49,31 +49,16 @@ void guard_set_timeout_ms(uint32_t ms)
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act)
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
-    uint8_t i, was = demanding ? heating : 0u, made;
     uint32_t most = 0;
+    uint8_t i, was = demanding ? heating : 0u, made = 0;
     heating = sma_take_heated();
     progressed |= heating;
-    made = reached ? progressed : 0u; /* heated on the way to this target: progress */
-    suspect = 0;
-    for (i = 0; i < CFG_N_ACTUATORS; i++, was >>= 1, made >>= 1) {
-        uint32_t t = coil_us[i];
-        if (was & 1u) {
-            t += dt;
-        }
-        if (made & 1u) {
-            t = 0;
-        }
-        coil_us[i] = t;
-        if (t > most) {
-            most = t;
-            suspect = i;
-        }
-    }
     if (reached) {
         /* A coil that hit and has since heated on the way to this target made progress;
          * reaching what the other coils make is none for it (safety.h). The step's time
          * starts again either way; the hits do only once every coil that hit progressed. */
-        hit_mask &= (uint8_t)~progressed;
+        made = progressed;
+        hit_mask &= (uint8_t)~made;
         if (!hit_mask) {
             hits_since_reached = 0;
         }
@@ -81,17 +66,30 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
         unreached_us = 0;
     }
     hit_mask |= hits;
-    for (; hits; hits >>= 1) {
+    for (i = 0; i < CFG_N_ACTUATORS; i++, was >>= 1, made >>= 1, hits >>= 1) {
+        uint32_t t = coil_us[i];
+        if (was & 1u) {
+            t += dt;
+        }
+        if (made & 1u) {
+            t = 0; /* heated on the way to this target: progress */
+        }
+        coil_us[i] = t;
+        if (t > most) {
+            most = t;
+            suspect = i;
+        }
         if (hits & 1u) {
             hits_since_reached++; /* no saturation: once it reaches the latch no coil is driven (guard_hits_fit_a_byte) */
+            if (!most) {
+                suspect = i; /* no coil heated without progress (yet): the one that hit */
+            }
         }
     }
     if (hits_since_reached >= CFG_ON_LIMIT_LATCH) {
-        /* the coil heated longest without progress if it hit, else the lowest that hit: not
-         * the coil that hit last, which may be the healthy one */
-        for (i = 0; !((hit_mask >> i) & 1u); i++) {
-        }
-        *act = (uint8_t)(((hit_mask >> suspect) & 1u) ? suspect : i);
+        /* the coil heated longest without progress (none: the last that hit), not the coil
+         * that hit last, which may be a healthy one slow at a weak supply */
+        *act = suspect;
         return GUARD_ON_LIMIT;
     }
     if (demanding) {

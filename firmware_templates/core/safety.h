@@ -13,8 +13,8 @@
  * step does: restarts faster than the coil's on-time limit no longer keep a dead coil
  * demanded. When the step's or a coil's time passes the state timeout, or CFG_ON_LIMIT_LATCH
  * hits add up, the guard reports a fault for the caller to latch; the coil it names for the
- * latch is the one of those that hit which heated longest without progress. The thermal budget itself lives in
- * sma.c and nothing here refunds it.
+ * latch is the one heated longest without progress (the last that hit when none has such
+ * time). The thermal budget itself lives in sma.c and nothing here refunds it.
  */
 #ifndef PROLEG_SAFETY_H
 #define PROLEG_SAFETY_H
@@ -39,8 +39,8 @@ void guard_set_timeout_ms(uint32_t ms);
 /* Once per tick after the sequencer and sma_tick. demanding: a gait is running and its
  * current target is not yet reached; reached: the sequencer reported REACHED this tick;
  * hits: on-limit bits from sma_tick. Takes sma_take_heated every tick. Returns GUARD_*;
- * with GUARD_ON_LIMIT, *act is the coil suspected (of those hit, the longest heated without
- * progress).
+ * with GUARD_ON_LIMIT, *act is the coil suspected (guard_suspect: the longest heated without
+ * progress; the last that hit when none has such time).
  * GUARD_TIMEOUT only when `demanding` (drive.c relies on it). */
 uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *act);
 

@@ -127,16 +127,36 @@ static void test_hits_on_different_steps_do_not_latch(void)
  * that is no progress for the coil that keeps hitting its on-time limit. */
 static void test_hits_latch_when_only_other_coils_lift_their_limbs_in_between(void)
 {
-    uint8_t k;
+    uint8_t k, j;
     setup(0);
-    raised = 0x01u; /* only actuator 0 heated on the way to the targets reached */
     for (k = 1; k < CFG_ON_LIMIT_LATCH; k++) {
-        CHECK_EQ(tick(1, 0, 0x02), GUARD_OK);
+        raised = 0x02u; /* actuator 1 heats towards its target ... */
+        for (j = 0; j < 20u; j++) {
+            CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+        }
+        raised = 0;
+        CHECK_EQ(tick(1, 0, 0x02), GUARD_OK); /* ... and hits, cut */
+        guard_started(); /* the host restarts the gait */
+        raised = 0x01u;  /* and only actuator 0 heats on the way to the target reached */
         CHECK_EQ(tick(0, 1, 0), GUARD_OK); /* reached: not demanding an unreached target */
         CHECK_EQ(guard_hits(), k);
         CHECK_EQ(guard_unreached_us(), 0); /* the time still starts afresh at each reach */
     }
     CHECK_EQ(tick(1, 0, 0x02), GUARD_ON_LIMIT);
+    CHECK_EQ(act, 1);
+}
+
+/* Hits while no coil has heated without progress (e.g. while a reached state is held):
+ * the latch names the coil that hit. */
+static void test_with_no_time_without_progress_the_latch_names_the_coil_that_hit(void)
+{
+    uint8_t k;
+    setup(0);
+    raised = 0;
+    for (k = 1; k < CFG_ON_LIMIT_LATCH; k++) {
+        CHECK_EQ(tick(0, 0, 0x02), GUARD_OK);
+    }
+    CHECK_EQ(tick(0, 0, 0x02), GUARD_ON_LIMIT);
     CHECK_EQ(act, 1);
 }
 
@@ -272,6 +292,7 @@ int main(void)
     RUN(test_repeated_on_limit_hits_without_progress_latch);
     RUN(test_hits_on_different_steps_do_not_latch);
     RUN(test_hits_latch_when_only_other_coils_lift_their_limbs_in_between);
+    RUN(test_with_no_time_without_progress_the_latch_names_the_coil_that_hit);
     RUN(test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_target);
     RUN(test_the_operator_acknowledging_a_fault_restarts_the_step_time);
     RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
