@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 from proleg.firmware.render import render_config
 from proleg.protocol.render import render_c
 from proleg.sim.physical.envelope import Envelope
-from test_firmware_core import CC, CDIR, CFLAGS, CORE, SIM, _r1_fast
+from core_configs import CC, CORE, SIM, r1_fast
+from test_firmware_core import CDIR, CFLAGS
 
 pytestmark = pytest.mark.skipif(CC is None, reason="no host C compiler")
 
@@ -39,7 +40,7 @@ def _slow_payback(robot):
 
 @pytest.fixture(scope="module", params=["r1-window", "short-window", "600-hz", "250-hz", "slow-payback"])
 def replay(request, tmp_path_factory):
-    robot, gaits, board = _r1_fast()  # max_on 50 ms, cooldown 20 ms, 1 kHz
+    robot, gaits, board = r1_fast()  # max_on 50 ms, cooldown 20 ms, 1 kHz
     if request.param == "short-window":
         robot = _short_window(robot)
     elif request.param == "600-hz":  # a tick of 1667 µs: max_on is 30 ticks, 50,010 µs

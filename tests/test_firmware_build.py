@@ -1,5 +1,6 @@
 """Firmware builds: every example robot for every board, deterministic rendering, and
-one clear error (with nothing left behind) for every way a build or a flash can fail.
+one clear error (with nothing left behind) for every way a build can fail. Flashing is in
+test_flash_command.py, board-file mistakes in test_board_files.py.
 
 Every build goes to its own ``tmp_path``; no test shares state with another, so the
 file runs under pytest-xdist (``-n 2``) as well as serially. Size *targets* (R1 in
@@ -19,68 +20,20 @@ from pathlib import Path
 
 import pytest
 
-from proleg.cli import main
-from proleg.errors import BoardError, BuildError, LinkError
+from build_checks import R1, ROOT, assert_nothing_left, board_variant, cli, empty_build_dir, one_line, robot_variant
+from proleg.errors import BuildError
 from proleg.firmware.boards import load_board
 from proleg.firmware.build import MANIFEST, build, firmware_gaits, render_project
-from proleg.firmware.flash import choose_method, flash, flash_command
 from proleg.robot import load_robot
 
-ROOT = Path(__file__).resolve().parents[1]
 ROBOT_FILES = sorted((ROOT / "robots").glob("*.toml"))
 BOARD_FILES = sorted((ROOT / "boards").glob("*.toml"))
 STRICT = "-std=c99 -Wall -Wextra -Werror"
-R1 = ROOT / "robots" / "paper-r1.toml"
-
-
-def cli(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def board_variant(tmp_path: Path, name: str, *subs: tuple[str, str]) -> Path:
-    """A copy of boards/NAME.toml in tmp_path with each (regex, replacement) applied once."""
-    text = (ROOT / "boards" / f"{name}.toml").read_text(encoding="utf-8")
-    for pattern, repl in subs:
-        text, n = re.subn(pattern, repl, text, count=1, flags=re.M)
-        assert n == 1, f"{pattern!r} not found in boards/{name}.toml"
-    path = tmp_path / "boardfiles" / f"{name}-variant.toml"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-def robot_variant(tmp_path: Path, src: Path, *subs: tuple[str, str]) -> Path:
-    text = src.read_text(encoding="utf-8")
-    for pattern, repl in subs:
-        text, n = re.subn(pattern, repl, text, count=1, flags=re.M | re.S)
-        assert n == 1, f"{pattern!r} not found in {src.name}"
-    path = tmp_path / "robotfiles" / src.name
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path
 
 
 @pytest.fixture
 def parent(tmp_path: Path) -> Path:
-    """An empty directory the build's output goes into: after a failure it must stay empty."""
-    p = tmp_path / "builds"
-    p.mkdir()
-    return p
-
-
-def assert_nothing_left(parent: Path) -> None:
-    left = sorted(p.name for p in parent.iterdir())
-    assert left == [], f"a failed build left {left} in {parent}"
-
-
-def one_line(err: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, f"expected one error line, got:\n{err}"
-    assert lines[0].startswith("proleg: error: ")
-    assert "Traceback" not in err
-    return lines[0]
+    return empty_build_dir(tmp_path)
 
 
 # ---------------------------------------------------------------------------------------
@@ -420,171 +373,3 @@ def test_a_failed_rebuild_keeps_the_previous_build_intact(tmp_path, parent):
     after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert after == before
     assert sorted(p.name for p in parent.iterdir()) == ["fw"]
-
-
-# ---------------------------------------------------------------------------------------
-# proleg flash
-
-
-def test_flash_dry_run_prints_the_exact_avrdude_command(capsys, parent):
-    out = parent / "fw"
-    code, stdout, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--port", "/dev/ttyUSB0",
-                            "--dry-run", "-o", out)
-    assert code == 0, err
-    assert stdout.strip() == (f"avrdude -p atmega328p -c arduino -P /dev/ttyUSB0 -b 115200 -D "
-                              f"-U flash:w:{out}/firmware.hex:i")
-    assert_nothing_left(parent)  # a dry run builds nothing
-
-
-def test_flash_dry_run_prints_the_exact_openocd_and_pyocd_commands(capsys, parent):
-    out = parent / "fw"
-    code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--dry-run", "-o", out)
-    assert code == 0, err
-    assert stdout.strip() == ("openocd -f interface/stlink.cfg -f target/stm32f1x.cfg "
-                              f"-c 'program {out}/firmware.bin 0x08000000 verify reset exit'")
-    code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--tool", "pyocd", "--dry-run", "-o", out)
-    assert code == 0, err
-    assert stdout.strip() == f"pyocd flash --target stm32f103c8 --base-address 0x08000000 {out}/firmware.bin"
-    code, _, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--tool", "stlink", "--dry-run")
-    assert code == 2 and "no flash tool 'stlink'" in one_line(err) and "openocd, pyocd" in err
-
-
-def test_avrdude_without_a_port_is_a_clear_error(capsys, parent):
-    code, _, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--dry-run", "-o", parent / "fw")
-    assert code == 2
-    assert "avrdude needs the board's serial port: give --port" in one_line(err)
-    method = choose_method(load_board("arduino-nano"))
-    with pytest.raises(BuildError, match="give --port"):
-        flash_command(method, parent / "firmware.hex", None)
-    assert_nothing_left(parent)
-
-
-def test_flashing_host_sim_is_a_clear_error(capsys, parent):
-    code, _, err = cli(capsys, "flash", R1, "--board", "host-sim", "--dry-run", "-o", parent / "fw")
-    assert code == 2 and "host-sim is not flashed: the simulator loads it" in one_line(err)
-    code, _, err = cli(capsys, "flash", R1, "--board", "host-sim", "-o", parent / "fw")
-    assert code == 2 and "not flashed" in one_line(err)
-    assert_nothing_left(parent)
-
-
-@pytest.fixture
-def fake_hex(tmp_path) -> Path:
-    """An artifact to hand to flash(): the flash checks come before any tool reads it."""
-    p = tmp_path / "firmware.hex"
-    p.write_text(":00000001FF\n")
-    return p
-
-
-def test_missing_flash_tool_is_named(tmp_path, fake_hex):
-    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["avrdude-missing-xyz"'))
-    method = choose_method(load_board(board))
-    with pytest.raises(BuildError, match=r"^avrdude-missing-xyz not found: install it to flash \(Debian package: avrdude\)"):
-        flash(method, fake_hex, "/dev/ttyUSB0")
-
-
-def test_nonexistent_port_is_a_clear_error(tmp_path, fake_hex):
-    # A stand-in tool that exists ("true"), so the port check is what stops the flash.
-    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["true"'))
-    method = choose_method(load_board(board))
-    with pytest.raises(BuildError, match=r"^/dev/ttyNOPE-proleg-test: no such serial port"):
-        flash(method, fake_hex, "/dev/ttyNOPE-proleg-test")
-    flash(method, fake_hex, "/dev/null")  # an existing port and a tool that succeeds: no error
-
-
-def test_missing_artifact_and_failing_tool_are_clear_errors(tmp_path, fake_hex):
-    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["false"'))
-    method = choose_method(load_board(board))
-    with pytest.raises(BuildError, match=r"no firmware to flash \(build it first\)"):
-        flash(method, tmp_path / "missing.hex", "/dev/null")
-    # the tool ran and failed (no sync, a verify error): a failure (exit 1), not a usage error (2)
-    with pytest.raises(LinkError, match=r"^false failed with exit status 1 \(its messages are above\)$"):
-        flash(method, fake_hex, "/dev/null")
-
-
-def test_unknown_board_file_path_is_a_board_error(tmp_path):
-    with pytest.raises(BoardError, match="no such board file"):
-        load_board(tmp_path / "nope.toml")
-
-
-def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
-    text = (ROOT / "boards" / "arduino-nano.toml").read_text()
-    assert old in text
-    p = tmp_path / "variant.toml"
-    p.write_text(text.replace(old, new))
-    return p
-
-
-@pytest.mark.parametrize(("old", "new", "expected"), [
-    ("[build]", "[built]", r"variant.toml: unknown table 'built'"),
-    ("main_loop = true", "main_loop = 1", r"variant.toml: build.main_loop: expected true or false, got 1"),
-    ('objcopy = ["avr-objcopy"', '# objcopy = ["avr-objcopy"',
-     r"variant.toml: build.objcopy: missing, needed to make artifact 'firmware.hex' from 'firmware.elf'"),
-    ('objcopy = ["avr-objcopy"', 'objcopy_off = ["avr-objcopy"',
-     r"variant.toml: build.objcopy_off: unknown key \(did you mean 'objcopy'\?\)"),
-    ("stack_bytes", "stack_byts", r"variant.toml: board.stack_byts: unknown key \(did you mean 'stack_bytes'\?\)"),
-    ("baud", "baudrate", r"variant.toml: uart.baudrate: unknown key"),
-    ('family = "avr"', 'family = "rp2040"',
-     r"variant.toml: board.family: expected one of avr, sim, stm32f1, template \(a folder with a family.toml"),
-    ("tx_buffer = 128", "tx_buffer = 100", r"variant.toml: uart.tx_buffer: expected a power of two"),
-    # a zero or negative number is refused, never replaced by a default or compiled in
-    ("frequency_hz = 490", "frequency_hz = 0",
-     r"variant.toml: pwm.frequency_hz: expected a PWM frequency in Hz in 1..1_000_000, got 0$"),
-    ("frequency_hz = 490", "frequency_hz = -1000", r"variant.toml: pwm.frequency_hz: expected .*, got -1000$"),
-    ("hz = 400000", "hz = 0", r"variant.toml: i2c.hz: expected an I2C clock in Hz in 1_000..3_400_000, got 0$"),
-    ("hz = 400000", 'hz = "fast"', r"variant.toml: i2c.hz: expected an I2C clock in Hz .*, got 'fast'$"),
-    ("clock_hz = 16000000", "clock_hz = -16000000",
-     r"variant.toml: board.clock_hz: expected a clock in Hz in 0..1_000_000_000, got -16000000$"),
-    ("baud = 115200", "baud = 0", r"variant.toml: uart.baud: expected a baud rate in 300..12_000_000, got 0$"),
-    ("baud = 115200", "baud = -9600", r"variant.toml: uart.baud: expected a baud rate .*, got -9600$"),
-    ("flash_bytes = 30720", "flash_bytes = -5", r"variant.toml: board.flash_bytes: expected a size in bytes in 0..4_294_967_295, got -5$"),
-    ("ram_bytes = 2048", "ram_bytes = -1", r"variant.toml: board.ram_bytes: expected a size in bytes .*, got -1$"),
-    ("base_flash_bytes = 14110", "base_flash_bytes = -100", r"variant.toml: board.base_flash_bytes: expected a size in bytes .*, got -100$"),
-    ('pins = ["D9", "D10"', 'pins = ["D9", "D9"',
-     r"variant.toml: pwm.pins: expected each pin once \(one channel per pin\), got 'D9' twice$"),
-    ('packages = ["avrdude"]', 'pakages = ["avrdude"]', r"variant.toml: flash\[0\].pakages: unknown key \(did you mean 'packages'\?\)$"),
-    ('packages = ["avrdude"]', 'packages = "avrdude"', r"variant.toml: flash\[0\].packages: expected a list of strings, got 'avrdude'$"),
-    ('description = "Arduino', 'description = 5 # "', r"variant.toml: board.description: expected a string, got 5$"),
-    ('name = "arduino-nano"', 'name = "arduino\\"nano"', r"variant.toml: board.name: expected lowercase letters, digits .*, got 'arduino\"nano'$"),
-    ('name = "arduino-nano"', 'name = "nano\\n"', r"variant.toml: board.name: expected lowercase letters, digits .*, got 'nano\\n'$"),
-])
-def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, expected):
-    with pytest.raises(BoardError, match=expected) as e:
-        load_board(_board_variant(tmp_path, old, new))
-    assert "\n" not in str(e.value)
-
-
-@pytest.mark.parametrize("table", ["pwm", "uart", "toolchain", "build"])
-def test_a_board_table_given_as_a_value_is_one_line(tmp_path, table):
-    text = (ROOT / "boards" / "host-sim.toml").read_text(encoding="utf-8")
-    text, n = re.subn(rf"^\[{table}\]\n(?:[^\[].*\n|\n)*", "", text, flags=re.M)
-    assert n == 1
-    path = tmp_path / "variant.toml"
-    path.write_text(f"{table} = 5\n{text}", encoding="utf-8")
-    with pytest.raises(BoardError, match=rf"variant.toml: {table}: expected a table, got 5$"):
-        load_board(path)
-
-
-def test_a_board_file_that_cannot_be_read_is_one_line_and_exit_2(tmp_path, capsys, parent):
-    latin1 = tmp_path / "latin1.toml"
-    text = (ROOT / "boards" / "host-sim.toml").read_text(encoding="utf-8")
-    latin1.write_bytes(text.replace("Simulated board", "Simulated b\u00f6ard").encode("latin-1"))
-    line = text[: text.index("Simulated board")].count("\n") + 1
-    code, _, err = cli(capsys, "build", R1, "--board", latin1, "-o", parent / "out")
-    assert code == 2
-    assert one_line(err) == f"proleg: error: {latin1}: expected UTF-8 text, got byte 0xf6 on line {line}"
-    folder = tmp_path / "folder.toml"
-    folder.mkdir()
-    for board in (folder, tmp_path):  # a board file path, or any path with a '/'
-        code, _, err = cli(capsys, "build", R1, "--board", board, "-o", parent / "out")
-        assert code == 2
-        assert one_line(err) == f"proleg: error: {board}: cannot read the board file: Is a directory"
-    assert_nothing_left(parent)
-
-
-def test_the_makefile_runs_the_board_files_build_steps(tmp_path):
-    board = load_board(_board_variant(tmp_path, '"-R", ".eeprom", ', ""))
-    robot = load_robot(R1)
-    makefile = render_project(robot, board, firmware_gaits(robot))["Makefile"]
-    assert "\tavr-objcopy -O ihex firmware.elf firmware.hex\n" in makefile
-    assert "\tavr-size -B firmware.elf\n" in makefile
-    assert "family" not in makefile.lower()

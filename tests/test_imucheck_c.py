@@ -14,7 +14,7 @@ import pytest
 
 from proleg.firmware.render import render_config
 from proleg.protocol.render import render_c
-from test_firmware_core import _r1_fast
+from core_configs import r1_fast
 
 ROOT = Path(__file__).resolve().parents[1]
 CORE = ROOT / "firmware_templates" / "core"
@@ -25,7 +25,7 @@ CC = shutil.which("cc") or shutil.which("gcc")
 
 @pytest.mark.skipif(CC is None, reason="no host C compiler")
 def test_imucheck_reads_every_imu_each_tick_and_drops_no_result(tmp_path):
-    robot, gaits, board = _r1_fast()  # the C unit tests' two-limb robot on host-sim
+    robot, gaits, board = r1_fast()  # the C unit tests' two-limb robot on host-sim
     for name, text in {**render_config(robot, gaits, board), **render_c(2, 2)}.items():
         (tmp_path / name).write_text(text)
     exe = tmp_path / "test_imucheck"

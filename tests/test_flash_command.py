@@ -1,0 +1,95 @@
+"""``proleg flash``: the exact command each board's flash tool is given (--dry-run), and one
+clear error, with nothing built or left behind, for every way a flash can fail before or
+while the tool runs (no port, a board that is not flashed, a missing tool or port, no
+artifact, a tool that fails)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from build_checks import R1, assert_nothing_left, board_variant, cli, empty_build_dir, one_line
+from proleg.errors import BuildError, LinkError
+from proleg.firmware.boards import load_board
+from proleg.firmware.flash import choose_method, flash, flash_command
+
+
+@pytest.fixture
+def parent(tmp_path: Path) -> Path:
+    return empty_build_dir(tmp_path)
+
+
+def test_flash_dry_run_prints_the_exact_avrdude_command(capsys, parent):
+    out = parent / "fw"
+    code, stdout, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--port", "/dev/ttyUSB0",
+                            "--dry-run", "-o", out)
+    assert code == 0, err
+    assert stdout.strip() == (f"avrdude -p atmega328p -c arduino -P /dev/ttyUSB0 -b 115200 -D "
+                              f"-U flash:w:{out}/firmware.hex:i")
+    assert_nothing_left(parent)  # a dry run builds nothing
+
+
+def test_flash_dry_run_prints_the_exact_openocd_and_pyocd_commands(capsys, parent):
+    out = parent / "fw"
+    code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--dry-run", "-o", out)
+    assert code == 0, err
+    assert stdout.strip() == ("openocd -f interface/stlink.cfg -f target/stm32f1x.cfg "
+                              f"-c 'program {out}/firmware.bin 0x08000000 verify reset exit'")
+    code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--tool", "pyocd", "--dry-run", "-o", out)
+    assert code == 0, err
+    assert stdout.strip() == f"pyocd flash --target stm32f103c8 --base-address 0x08000000 {out}/firmware.bin"
+    code, _, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--tool", "stlink", "--dry-run")
+    assert code == 2 and "no flash tool 'stlink'" in one_line(err) and "openocd, pyocd" in err
+
+
+def test_avrdude_without_a_port_is_a_clear_error(capsys, parent):
+    code, _, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--dry-run", "-o", parent / "fw")
+    assert code == 2
+    assert "avrdude needs the board's serial port: give --port" in one_line(err)
+    method = choose_method(load_board("arduino-nano"))
+    with pytest.raises(BuildError, match="give --port"):
+        flash_command(method, parent / "firmware.hex", None)
+    assert_nothing_left(parent)
+
+
+def test_flashing_host_sim_is_a_clear_error(capsys, parent):
+    code, _, err = cli(capsys, "flash", R1, "--board", "host-sim", "--dry-run", "-o", parent / "fw")
+    assert code == 2 and "host-sim is not flashed: the simulator loads it" in one_line(err)
+    code, _, err = cli(capsys, "flash", R1, "--board", "host-sim", "-o", parent / "fw")
+    assert code == 2 and "not flashed" in one_line(err)
+    assert_nothing_left(parent)
+
+
+@pytest.fixture
+def fake_hex(tmp_path) -> Path:
+    """An artifact to hand to flash(): the flash checks come before any tool reads it."""
+    p = tmp_path / "firmware.hex"
+    p.write_text(":00000001FF\n")
+    return p
+
+
+def test_missing_flash_tool_is_named(tmp_path, fake_hex):
+    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["avrdude-missing-xyz"'))
+    method = choose_method(load_board(board))
+    with pytest.raises(BuildError, match=r"^avrdude-missing-xyz not found: install it to flash \(Debian package: avrdude\)"):
+        flash(method, fake_hex, "/dev/ttyUSB0")
+
+
+def test_nonexistent_port_is_a_clear_error(tmp_path, fake_hex):
+    # A stand-in tool that exists ("true"), so the port check is what stops the flash.
+    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["true"'))
+    method = choose_method(load_board(board))
+    with pytest.raises(BuildError, match=r"^/dev/ttyNOPE-proleg-test: no such serial port"):
+        flash(method, fake_hex, "/dev/ttyNOPE-proleg-test")
+    flash(method, fake_hex, "/dev/null")  # an existing port and a tool that succeeds: no error
+
+
+def test_missing_artifact_and_failing_tool_are_clear_errors(tmp_path, fake_hex):
+    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["false"'))
+    method = choose_method(load_board(board))
+    with pytest.raises(BuildError, match=r"no firmware to flash \(build it first\)"):
+        flash(method, tmp_path / "missing.hex", "/dev/null")
+    # the tool ran and failed (no sync, a verify error): a failure (exit 1), not a usage error (2)
+    with pytest.raises(LinkError, match=r"^false failed with exit status 1 \(its messages are above\)$"):
+        flash(method, fake_hex, "/dev/null")

@@ -1,0 +1,95 @@
+"""``proleg sim --measure-climb``: the steepest grade each gait climbs on the physical plant
+(a bisection over a 0.25° grid, checked against a brute-force scan), the ``[control]
+max_climb_deg`` it suggests from them, and that every example robot file carries exactly
+that suggestion. The guard that enforces the limit on the board is in test_climb_guard.py."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from proleg.paths import robots_dir
+from proleg.robot import load_robot
+
+
+def _cli(capsys, *argv: str) -> tuple[int, str, str]:
+    from proleg.cli.main import main
+
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@settings(max_examples=60, deadline=None)
+@given(threshold=st.floats(-1.0, 13.0))
+def test_the_bisection_finds_the_steepest_grade_a_brute_force_scan_finds(threshold):
+    """A gait that climbs every grade up to `threshold` and none steeper: the bisection's answer
+    is the scan's over the same 0.25° grid."""
+    from unittest import mock
+
+    from proleg.sim.physical import climb
+
+    calls = []
+
+    def walks(robot, states, direction, grade, conditions=()):
+        calls.append(grade)
+        return grade <= threshold
+
+    with mock.patch.object(climb, "walks_up", walks):
+        got = climb.steepest_climb(None, (0, 3), "+x")
+    grid = [k * climb.RESOLUTION_DEG for k in range(round(climb.TOP_DEG / climb.RESOLUTION_DEG) + 1)]
+    climbed = [g for g in grid if g <= threshold]
+    assert got == (max(climbed) if climbed else None)
+    assert len(calls) <= 2 + 6  # 48 steps: bisection, not a scan
+
+
+def test_each_direction_is_suggested_its_own_limit_and_one_that_does_not_move_takes_the_others():
+    from proleg.robot_climb import ClimbLimit
+    from proleg.sim.physical.climb import suggested_limits
+
+    assert suggested_limits({"+x": [1.5], "-x": [3.0]}) == ClimbLimit(1.5, 3.0)
+    assert suggested_limits({"+x": [1.5, 1.25], "-x": [3.0]}) == ClimbLimit.of([1.5, 1.0], 3.0)  # each gait its own
+    assert suggested_limits({"+x": [1.25, 1.75, 1.0], "-x": [3.0, 3.2]}) == ClimbLimit.of([1.0, 1.5], 3.0)
+    assert suggested_limits({"+x": [2.0, None], "-x": [2.0]}) == ClimbLimit.of([2.0, 0.5], 2.0)  # one goes back
+    assert suggested_limits({"+x": [None], "-x": [2.75]}) == ClimbLimit(2.5, 2.5)
+    assert suggested_limits({"+x": [2.0]}) == ClimbLimit(2.0, 2.0)
+    assert suggested_limits({"+x": [None], "-x": [None]}) is None
+    assert str(ClimbLimit(1.5, 3.0)) == '{ "+x" = 1.5, "-x" = 3 }' and str(ClimbLimit(2.5, 2.5)) == "2.5"
+
+
+def test_the_suggested_limit_is_the_smaller_climb_on_the_half_degree_and_at_least_half_a_degree():
+    from proleg.sim.physical.climb import suggested_limit
+
+    assert suggested_limit([2.75, 3.0]) == 2.5
+    assert suggested_limit([None, 2.75]) == 2.5
+    assert suggested_limit([0.0]) == 0.5
+    assert suggested_limit([12.0, 12.0]) == 12.0
+    assert suggested_limit([None, None]) is None
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in robots_dir().glob("*.toml")
+                                        if "max_climb_deg = " in p.read_text(encoding="utf-8")))
+def test_every_example_robots_limit_is_what_measure_climb_suggests(capsys, name):
+    """The robot files' max_climb_deg are measured, not chosen: --measure-climb gives them back
+    (over as many gaits of each way as the file lists limits for)."""
+    path = robots_dir() / f"{name}.toml"
+    limit = load_robot(path).control.max_climb_deg
+    listed = max(1, *(len(limit.gaits_toward(d)) for d in ("+x", "-x")))
+    rc, out, _ = _cli(capsys, "sim", str(path), "--measure-climb", "--json", "--climb-gaits", str(listed))
+    report = json.loads(out)
+    assert rc == 0
+    assert report["suggested_max_climb_deg"] == report["max_climb_deg"], report
+
+
+@pytest.mark.parametrize("argv, text", [
+    (("planar-4", "--measure-climb"), "cannot carry [control] max_climb_deg"),
+    (("paper-r2", "--measure-climb", "--condition", "incline_deg=2"), "leave incline_deg out"),
+    (("paper-r2", "--measure-climb", "--plant", "table"), "physical plant"),
+    (("paper-r2", "--measure-climb", "--board", "avr-emu"), "not with --board"),
+    (("paper-r2", "--measure-climb", "--calibrated"), "not with --calibrated"),
+])
+def test_measure_climb_says_what_it_cannot_do(capsys, argv, text):
+    rc, _, err = _cli(capsys, "sim", str(robots_dir() / f"{argv[0]}.toml"), *argv[1:])
+    assert rc == 2 and text in err and "Traceback" not in err
