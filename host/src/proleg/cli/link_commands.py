@@ -148,16 +148,17 @@ def _prod(levels: Sequence[int]) -> int:
 
 def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
     """``proleg plot FILE -o OUT.png``."""
+    from ..outputs import note_stream
     from ..plot import plot_recording
 
     path = plot_recording(record_file, out, title=title)
-    print(f"wrote {path}")
+    print(f"wrote {path}", file=note_stream(path))
     return 0
 
 
 def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_file: str | None = None) -> int:
     """``proleg dbc -o FILE [--robot ROBOT]`` (the robot names the ψ and duty signals)."""
-    from ..outputs import refuse_inputs
+    from ..outputs import note_stream, refuse_inputs
     from ..protocol.dbc import write_dbc
 
     refuse_inputs("dbc", "-o", out, {"--robot": robot_file})
@@ -167,7 +168,7 @@ def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_
 
         robot = load_robot(robot_file)
     path = write_dbc(out, nodes, base, robot)
-    print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})")
+    print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})", file=note_stream(path))
     return 0
 
 
