@@ -208,7 +208,7 @@ def _worm(tmp_path: Path, n: int) -> Path:
             b = a ^ (1 << (n - 1 - i))
             d = sum(grip[i + 1:]) - sum(grip[:i])
             d = d if b > a else -d
-            rows.append(f"{a},{b},{(d > 0) - (d < 0)}")
+            rows.append(f"@{a},@{b},{(d > 0) - (d < 0)}")
     (tmp_path / "worm.csv").write_text("\n".join(rows) + "\n")
     path = tmp_path / "worm.toml"
     path.write_text("\n".join(parts))
