@@ -62,7 +62,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
 
         robot = load_robot(robot_file)
     link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim,
-                              bitrate=bitrate), baudrate=baudrate, speed=1.0)
+                              bitrate=bitrate), baudrate=baudrate, speed=1.0, robot_file=robot_file)
     if robot is None:
         robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
     if timed and not hasattr(getattr(link, "board", None), "inject"):
