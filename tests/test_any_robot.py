@@ -290,3 +290,15 @@ def test_many_unholdable_states_are_summarised_not_listed(caplog):
     assert held[-1].endswith("5 more lines like these: in all, 7 of the 16 states the matrix enters cannot be held "
                              "on the simulated body because of a limb lifted by its own coil, shared with a raised "
                              "limb (-v lists every line)")
+
+
+def test_a_default_channel_the_board_lacks_is_called_the_default_not_quoted(tmp_path):
+    # "actuator 'a5' is on channel = 4": the file had no channel key to quote
+    path = _worm(tmp_path, 5)
+    path.write_text("\n".join(ln for ln in path.read_text().splitlines() if not ln.startswith("channel =")))
+    robot = load_robot(path)
+    with pytest.raises(BuildError) as e:
+        build(robot, load_board("arduino-nano"), tmp_path / "nano")
+    assert str(e.value).startswith("robot worm-5: actuator 'a5' (the 5th [[actuator]], no channel key) is on channel 4 "
+                                   "by default, its position, but board arduino-nano has 4 PWM channels: channel = 0 (D9)")
+    assert not (tmp_path / "nano").exists()

@@ -103,6 +103,7 @@ class Limb:
 class Actuator:
     name: str
     channel: int
+    channel_given: bool = True  # False: no channel key, the default (its position among the [[actuator]]s)
 
 
 @dataclass(frozen=True)
@@ -293,7 +294,7 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
         channel = f.integer("channel", i, 0, MAX_ACTUATORS - 1)
         if any(a.channel == channel for a in out):
             f.fail("channel", "a channel no other actuator uses", channel)
-        out.append(Actuator(name, channel))
+        out.append(Actuator(name, channel, "channel" in t))
     return tuple(out)
 
 
