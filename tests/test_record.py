@@ -364,7 +364,7 @@ def test_gait_plot_with_evaluate_draws_the_sequence_and_cycles_alone_is_refused(
     out = tmp_path / "walk.png"
     assert main(["gait", "paper-r1", "--evaluate", "00,10,11,01,00", "--plot", str(out), "--cycles", "3"]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    capsys.readouterr()
+    assert capsys.readouterr().out.splitlines()[0] == f"wrote {out}"  # as plot and dbc say it
     for argv in (["--cycles", "3"], ["--evaluate", "00,10,11,01,00", "--cycles", "3"]):
         assert main(["gait", "paper-r1", *argv]) == 2
         assert "--cycles 3: only with --plot" in capsys.readouterr().err

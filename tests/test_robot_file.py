@@ -503,3 +503,13 @@ def test_a_state_index_is_at_and_in_range(tmp_path, ref):
     with pytest.raises(RobotFileError, match=rf"t\.csv:2: to: expected a state label of 2 digits or a state index "
                                              rf"@0\.\.@3, got '{ref}'"):
         load_robot(csv_robot(tmp_path, f"from,to,reward\n00,{ref},1\n"))
+
+
+def test_a_limb_key_typo_gets_a_did_you_mean_like_plant_keys(tmp_path):
+    msg = rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_degs = [20.0]", 1),
+                  "limb 'left': unknown key 'psi_star_degs' (did you mean 'psi_star_deg'?)")
+    assert "expected one of" not in msg
+    rejects(tmp_path, R1 + "\n[safety]\nmax_on_msec = 3000\n",
+            "safety: unknown key 'max_on_msec' (did you mean 'max_on_ms'?)")
+    rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nzzz = 3'),
+            "limb 'left': unknown key 'zzz' (expected one of: actuator, friction,")
