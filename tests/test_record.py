@@ -398,3 +398,18 @@ def test_a_three_level_robots_recorded_states_are_labels_not_indices(tmp_path, c
     labels = set(load_robot(robot).transitions.labels())
     reached = [e["text"] for e in read_recording(tmp_path / "r.jsonl").events if e["kind"] == "STATE_REACHED"]
     assert len(reached) > 2 and all(t.rsplit(" ", 1)[1] in labels for t in reached), reached
+
+
+def test_a_sim_recording_carries_the_firmwares_info_as_run_sim_does(tmp_path, capsys):
+    # docs/data.md promises info (build id, gait-table hash, protocol version, rates, link);
+    # proleg sim --record wrote "info": {}
+    from proleg.cli import main
+
+    assert main(["sim", "paper-r1", "--duration", "2", "--record", str(tmp_path / "sim.jsonl")]) == 0
+    assert main(["run", "paper-r1", "--sim", "--duration", "2", "--record", str(tmp_path / "run.jsonl")]) == 0
+    sim, run = (read_recording(tmp_path / f"{n}.jsonl").meta for n in ("sim", "run"))
+    keys = {"firmware_build_id", "gait_table_hash", "protocol_version", "tick_hz", "telemetry_hz", "link"}
+    assert set(sim.info) == set(run.info) == keys
+    assert {k: sim.info[k] for k in keys - {"link"}} == {k: run.info[k] for k in keys - {"link"}}
+    assert sim.info["link"] == "simulated host-sim board"
+    assert sim.board == run.board == "host-sim"
