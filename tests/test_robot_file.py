@@ -513,3 +513,12 @@ def test_a_limb_key_typo_gets_a_did_you_mean_like_plant_keys(tmp_path):
             "safety: unknown key 'max_on_msec' (did you mean 'max_on_ms'?)")
     rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nzzz = 3'),
             "limb 'left': unknown key 'zzz' (expected one of: actuator, friction,")
+
+
+def test_the_documented_psi_star_range_is_the_loaders(tmp_path):
+    # robot-file.md said "angles in (−90, 90)"; the loader wants ψ* ± hysteresis/2 inside it
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text(encoding="utf-8")
+    assert "ψ* ± hysteresis_deg/2 must lie inside (−90, 90): with the default 2° of hysteresis, ψ* in (−89, 89)" in doc
+    rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [89.5]", 1), "limb 'left': psi_star_deg",
+            "psi* ± hysteresis_deg/2 (2/2) lie strictly inside (-90, 90)")
+    assert load_robot(write(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [88.9]", 1)))
