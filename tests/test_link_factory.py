@@ -123,3 +123,13 @@ def test_sim_name_matching_neither_file_nor_bundled_robot_says_how_to_name_a_fil
     link = open_link("sim://paper-r1", robot_file=robot)  # not the file's name: the bundled robot
     assert link.board.robot.name == "paper-r1"
     link.close()
+
+
+def test_a_bundled_name_stays_the_bundled_robot_even_when_the_robot_file_has_that_name(tmp_path):
+    # an edited copy of paper-r1.toml is compared with the board the bundled file built
+    # (test_link_watchdog: the console's identity check)
+    edited = _my_robot(tmp_path, "paper-r1")
+    edited.write_text(edited.read_text() + "\n# edited\n")
+    link = open_link("sim://paper-r1", robot_file=edited)
+    assert link.board.robot.path != edited and link.board.robot.path.name == "paper-r1.toml"
+    link.close()

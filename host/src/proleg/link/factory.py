@@ -11,9 +11,9 @@ opener imported only when used (so opening a serial port never imports python-ca
     open_link("sim://planar-4?plant=table")           # ... on the table plant (planar pose)
     open_link("sim://tri?plant=table", robot_file="lab/tri.toml")  # the command's own robot file
 
-``sim://NAME`` is the command's robot file when its name is NAME.toml (``robot_file``: the
-ROBOT argument, ``proleg run lab/tri.toml --port sim://tri``), else the bundled robot NAME;
-one that is neither is a ``UsageError`` saying how to name a file (``sim:///abs/path.toml``).
+``sim://NAME`` is the bundled robot NAME, else the command's robot file when it is NAME.toml
+(``robot_file``: the ROBOT argument, ``proleg run lab/tri.toml --port sim://tri``); one that
+is neither is a ``UsageError`` saying how to name a file (``sim:///abs/path.toml``).
 
 A ``sim://`` link's ``board`` is the ``SimulatedRobot`` (``link.board.robot`` its description).
 An unknown scheme is a ``LinkError`` naming the known ones.
@@ -80,15 +80,17 @@ def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any
 
 
 def _named_robot(url: str, name: str, robot_file: str | Path | None) -> Path:
-    """The robot file ``sim://NAME`` means: the command's own ``robot_file`` named NAME.toml,
-    else the bundled robot NAME (``UsageError`` when there is none: a bad argument)."""
+    """The robot file ``sim://NAME`` means: the bundled robot NAME, else the command's own
+    ``robot_file`` when it is NAME.toml (``UsageError`` when neither: a bad argument). The
+    bundled robot comes first, so an edited copy of it is still compared with the board the
+    bundled file built (the console's identity check)."""
     from ..paths import robots_dir
 
-    if robot_file is not None and Path(robot_file).name == f"{name}.toml":
-        return Path(robot_file)
     bundled = robots_dir() / f"{name}.toml"
     if bundled.is_file():
         return bundled
+    if robot_file is not None and Path(robot_file).name == f"{name}.toml":
+        return Path(robot_file)
     known = ", ".join(sorted(p.stem for p in robots_dir().glob("*.toml")))
     mine = f" (the robot file given is {robot_file})" if robot_file is not None else ""
     raise UsageError(f"{url}: sim://{name} names a bundled robot ({known}) or the command's robot file by its "
@@ -115,7 +117,7 @@ def register_link(scheme: str, opener: Opener) -> None:
 def open_link(url: str, **options: Any) -> Link:
     """The link ``url`` names; ``options`` (baudrate, node, bitrate, seed, speed) fill in what
     the URL's query does not say; ``robot_file``: the command's robot file, which
-    ``sim://NAME`` means when it is NAME.toml."""
+    ``sim://NAME`` means when it is NAME.toml and NAME is no bundled robot."""
     if "://" not in url:
         return _open_serial(url, url, {}, options)  # a bare device path
     scheme = url.split("://", 1)[0].lower()
