@@ -208,7 +208,7 @@ def _worm(tmp_path: Path, n: int) -> Path:
             b = a ^ (1 << (n - 1 - i))
             d = sum(grip[i + 1:]) - sum(grip[:i])
             d = d if b > a else -d
-            rows.append(f"{a},{b},{(d > 0) - (d < 0)}")
+            rows.append(f"@{a},@{b},{(d > 0) - (d < 0)}")
     (tmp_path / "worm.csv").write_text("\n".join(rows) + "\n")
     path = tmp_path / "worm.toml"
     path.write_text("\n".join(parts))
@@ -265,3 +265,40 @@ def test_a_coil_shared_by_limbs_apart_is_explained_as_one_coil(tmp_path, caplog)
     warned = [r.getMessage() for r in caplog.records if "limb 'l3'" in r.getMessage()]
     assert len(warned) == 1 and "that coil sits at limb 'l1'" in warned[0], warned
     assert "give 'l3' a coil of its own" in warned[0] and "lower psi_star_deg" not in warned[0]
+
+
+def test_build_refuses_a_gait_0_that_raises_one_limb_of_a_shared_coil_alone(tmp_path, capsys):
+    from proleg.cli.main import main
+
+    fixture = Path(__file__).parent / "fixtures" / "four-shared.toml"
+    assert main(["build", str(fixture), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and not (tmp_path / "b").exists()
+    assert ("proleg: error: robot four-shared: gait 0 of +x, the one START runs, cannot run on this robot: "
+            "gait 0000 0100 1100") in err
+    assert "step 1 (0000 -> 0100) raises 'p2' but not 'p1', which share actuator 'coil1'" in err
+
+
+def test_many_unholdable_states_are_summarised_not_listed(caplog):
+    import logging
+
+    fixture = Path(__file__).parent / "fixtures" / "four-shared.toml"
+    with caplog.at_level(logging.WARNING, logger="proleg.robot"):
+        load_robot(fixture)
+    held = [r.getMessage() for r in caplog.records if "cannot be held" in r.getMessage()]
+    assert len(held) == 4  # three examples and a count, not ten lines
+    assert held[-1].endswith("5 more lines like these: in all, 7 of the 16 states the matrix enters cannot be held "
+                             "on the simulated body because of a limb lifted by its own coil, shared with a raised "
+                             "limb (-v lists every line)")
+
+
+def test_a_default_channel_the_board_lacks_is_called_the_default_not_quoted(tmp_path):
+    # "actuator 'a5' is on channel = 4": the file had no channel key to quote
+    path = _worm(tmp_path, 5)
+    path.write_text("\n".join(ln for ln in path.read_text().splitlines() if not ln.startswith("channel =")))
+    robot = load_robot(path)
+    with pytest.raises(BuildError) as e:
+        build(robot, load_board("arduino-nano"), tmp_path / "nano")
+    assert str(e.value).startswith("robot worm-5: actuator 'a5' (the 5th [[actuator]], no channel key) is on channel 4 "
+                                   "by default, its position, but board arduino-nano has 4 PWM channels: channel = 0 (D9)")
+    assert not (tmp_path / "nano").exists()

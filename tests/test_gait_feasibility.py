@@ -136,3 +136,44 @@ def test_a_gait_unreachable_from_rest_is_an_error_naming_it(tmp_path):
     with pytest.raises(GaitError, match=r"^gait 01 11 01: no allowed path from the rest state 00 into the gait"):
         entry_path(robot, idx(robot, "01", "11", "01"))
     assert "no-entry" in kinds(robot, "01", "11", "01")
+
+
+FOUR_SHARED = Path(__file__).parent / "fixtures" / "four-shared.toml"  # p1,p2 on coil1; p3,p4 on coil2
+
+
+def _shared(robot, walk: str) -> list[str]:
+    return [p.message for p in gait_problems(robot, robot.transitions.sequence(walk)) if p.kind == "shared-actuator"]
+
+
+def test_raising_the_far_limb_of_a_shared_coil_alone_is_a_shared_actuator_error():
+    # eight-shared's gait 0 raised p4 alone: coil2 lifts p3 first, nothing moved on the sim and
+    # the firmware blamed the healthy coil (SMA_ON_LIMIT, STATE_TIMEOUT, "gave up coil2")
+    robot = load_robot(FOUR_SHARED)
+    assert _shared(robot, "0000,0001,0000") == [
+        "gait 0000 0001 0000: step 1 (0000 -> 0001) raises 'p4' but not 'p3', which share actuator 'coil2': "
+        "holding 'p4' up, it lifts 'p3' too on the simulated body, so state 0001 cannot be held (the warning "
+        "when the robot file is loaded; mark the transitions into it \"x\")"]
+    with pytest.raises(GaitError, match="raises 'p4' but not 'p3'"):
+        check_gait(robot, robot.transitions.sequence("0000,0001,0000"))
+
+
+def test_lowering_the_near_limb_of_a_shared_coil_alone_is_a_shared_actuator_error():
+    robot = load_robot(FOUR_SHARED)
+    [msg] = _shared(robot, "0000,0010,0011,0001,0000")
+    assert "step 3 (0011 -> 0001) lowers 'p3' but not 'p4', which share actuator 'coil2'" in msg
+
+
+def test_the_near_limb_of_a_shared_coil_may_rise_and_fall_alone_as_the_body_model_holds_it():
+    # consistent with the load check (coupled_states): the coil lifts its near limb p3 first,
+    # so 0010 can be held and 0000 -> 0010 -> 0011 -> 0010 -> 0000 is the coil's own order
+    robot = load_robot(FOUR_SHARED)
+    assert 0b0010 not in robot.coil_lifts and 0b0001 in robot.coil_lifts
+    assert _shared(robot, "0000,0010,0011,0010,0000") == []
+    one = load_robot(ROBOTS / "paper-r1-one-actuator.toml")
+    assert _shared(one, "00,10,11,10,00") == []
+
+
+def test_the_entry_path_avoids_a_step_the_shared_coil_cannot_make():
+    robot = load_robot(FOUR_SHARED)
+    path = entry_path(robot, robot.transitions.sequence("0011,0111,0011"))
+    assert [robot.transitions.label(s) for s in path.states] == ["0000", "0010", "0011"]

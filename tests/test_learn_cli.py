@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import re
 import json
 from pathlib import Path
 
@@ -276,3 +277,59 @@ def test_a_log_mixing_simulated_and_hand_measured_trials_on_a_steps_robot_is_ref
     code = main(["learn", str(ROOT / "robots" / "paper-r1.toml"), "--log", str(log), "--report"])
     err = capsys.readouterr().err
     assert code == 2 and "mixes simulated trials (Δx in mm) with manual ones (in steps" in err, err
+
+
+FIXTURES = Path(__file__).parent / "fixtures"
+
+
+def test_the_start_line_names_the_transitions_unreachable_from_rest_and_counts_right(tmp_path, capsys):
+    # "37 allowed transitions × 3 = 102 trials": the 3 out of 101 (nothing leads into it) were
+    # dropped silently
+    code, _out, err = run(capsys, "learn", str(FIXTURES / "tri-mixed-x.toml"), "--sim", "--log",
+                          str(tmp_path / "x.jsonl"), "--repeats", "3", "--max-pieces", "1")
+    assert code == 0, err
+    assert ("exploring tri-mixed-x on sim tri-mixed-x: 37 allowed transitions, 3 of them unreachable from rest "
+            "(101->001, 101->100, 101->111): 34 × 3 = 102 trials, 102 to do;") in err
+
+
+def test_a_state_timeout_on_the_simulated_robot_names_the_transition_and_the_robot_file_fix(tmp_path, capsys):
+    # tri-mixed enters 101, which the simulated body cannot hold (a load warning says so); the
+    # advice was to clear the fault in proleg console, on a board that ends with the command
+    code, _out, err = run(capsys, "learn", str(FIXTURES / "tri-mixed.toml"), "--sim", "--plant", "physical",
+                          "--log", str(tmp_path / "t.jsonl"))
+    assert code == 1
+    last = err.strip().splitlines()[-1]
+    assert "proleg console" not in last and "run the same command" not in last
+    assert re.search(r"^proleg: error: learn: the robot stopped while making (\d{3})->101: FAULT STATE_TIMEOUT "
+                     r"on mid \(firmware time [\d.]+s\); the simulated robot cannot make \1->101 and would stop "
+                     r"there again: look for a warning about state 101 when the robot file was loaded \(.*\) and "
+                     r"mark the transitions into 101 \"x\" \(forbidden\) in the robot file", last), last
+
+
+def test_a_fault_on_a_real_robot_still_says_to_clear_it_in_the_console():
+    from types import SimpleNamespace
+
+    from proleg.cli.learn import _stopped_hint
+    from proleg.learn.runner import ExplorationError
+
+    e = ExplorationError("the robot stopped", transition=("00", "10"), fault=True)
+    assert _stopped_hint(SimpleNamespace(sim=False), e) == \
+        "; look at the robot (proleg console), then clear the fault (key c there)"
+    assert _stopped_hint(SimpleNamespace(sim=True), ExplorationError("piece did not finish")) == ""
+
+
+def test_tracker_trials_without_a_track_say_so_before_and_after_not_a_zero_trial_report(tmp_path, capsys):
+    log = tmp_path / "q.jsonl"
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--source", "tracker", "--log", str(log),
+                         "--max-pieces", "1")
+    assert code == 0, err
+    assert err.index("--source tracker: the trials recorded now have no motion") < err.index("exploring paper-r1")
+    n = len(_lines(log))
+    assert n > 0
+    assert "0 trials" not in out and "too few trials" not in out
+    assert out.strip() == (f"learn: {log}: {n} transitions recorded without their motion (Δx; --source tracker): "
+                           f"attach the tracker's track with --track FILE.csv (proleg learn {R1} --log {log} "
+                           "--track FILE.csv --report)")
+    code, out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
+    assert code == 2 and out == ""
+    assert err.strip().endswith("--track FILE.csv --report); nothing to report")

@@ -3,6 +3,7 @@ closed loop with a table plant whose (hidden, noisy) truth matrix moves the robo
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -185,6 +186,8 @@ def test_a_fault_during_exploration_is_told_by_name_and_what_to_do(tmp_path):
     with client, TrialLog(tmp_path / "t.jsonl") as log:
         client.connect()
         sim.inject("dead-actuator:sma-right")
-        with pytest.raises(ExplorationError, match=r"the robot stopped: FAULT SMA_ON_LIMIT on sma-right "
-                                                    r"\(firmware time [\d.]+s\); look at the robot"):
+        with pytest.raises(ExplorationError, match=r"the robot stopped while making (\d\d)->(\d\d): FAULT "
+                                                    r"SMA_ON_LIMIT on sma-right \(firmware time [\d.]+s\)$") as e:
             Explorer(client, robot, log, pose, repeats=2, seed=1).run()
+    # what to do is the CLI's (it knows --sim); the error carries what it needs
+    assert e.value.fault and e.value.transition == re.search(r"making (\d\d)->(\d\d)", str(e.value)).groups()

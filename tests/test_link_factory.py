@@ -84,3 +84,52 @@ def test_opening_a_serial_link_does_not_import_python_can_or_the_simulator():
             "print('can' in sys.modules, 'proleg.sim.closed_loop' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
+
+
+def _my_robot(tmp_path, name: str = "my-worm"):
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    path = tmp_path / f"{name}.toml"
+    path.write_text((root / "robots" / "paper-r1.toml").read_text().replace('name = "paper-r1"', f'name = "{name}"'))
+    return path
+
+
+def test_sim_name_is_the_commands_own_robot_file_when_it_is_that_name(tmp_path, capsys):
+    # docs/planar.md's form with one's own robot: it looked only among the bundled robots and
+    # failed on a path the user never gave
+    from proleg.cli import main
+
+    robot = _my_robot(tmp_path)
+    link = open_link("sim://my-worm?plant=table", robot_file=robot)
+    assert link.board.robot.name == "my-worm"
+    link.close()
+    assert main(["run", str(robot), "--port", "sim://my-worm?plant=table", "--duration", "1"]) == 0
+    assert "my-worm on sim my-worm" in capsys.readouterr().out
+
+
+def test_sim_name_matching_neither_file_nor_bundled_robot_says_how_to_name_a_file(tmp_path, capsys):
+    from proleg.cli import main
+
+    robot = _my_robot(tmp_path)
+    assert main(["run", str(robot), "--port", "sim://other", "--duration", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "no such robot file" not in err
+    assert err.startswith("proleg: error: sim://other: sim://other names a bundled robot (caterpillar-4, ")
+    assert err.endswith(f"or the command's robot file by its file name (other.toml) (the robot file given is {robot}); "
+                        "for another robot file write sim://path/to/file.toml or sim:///absolute/path/to/file.toml")
+    with pytest.raises(UsageError, match="sim://nosuch names a bundled robot"):
+        open_link("sim://nosuch")
+    link = open_link("sim://paper-r1", robot_file=robot)  # not the file's name: the bundled robot
+    assert link.board.robot.name == "paper-r1"
+    link.close()
+
+
+def test_a_bundled_name_stays_the_bundled_robot_even_when_the_robot_file_has_that_name(tmp_path):
+    # an edited copy of paper-r1.toml is compared with the board the bundled file built
+    # (test_link_watchdog: the console's identity check)
+    edited = _my_robot(tmp_path, "paper-r1")
+    edited.write_text(edited.read_text() + "\n# edited\n")
+    link = open_link("sim://paper-r1", robot_file=edited)
+    assert link.board.robot.path != edited and link.board.robot.path.name == "paper-r1.toml"
+    link.close()

@@ -197,3 +197,30 @@ def test_reconnect_gives_up_with_one_line_after_its_timeout():
     client = RobotClient(link, reconnect_timeout=0.3)
     with pytest.raises(LinkError, match="device disconnected and not back within 0.3 s"):
         client.recv(0.05)
+
+
+def test_a_recording_on_a_serial_port_counts_t_host_s_from_when_the_link_opened(tmp_path: Path):
+    # docs/data.md: "0 ≈ when the link opened"; a pty recording started at 75763.48 s (the raw
+    # monotonic clock)
+    import csv
+
+    from proleg.record import Logger, RecordingMeta
+
+    server = PtyBoard()
+    try:
+        with RobotClient(SerialLink(server.path)) as client:
+            info = client.connect()
+            rec = Logger(tmp_path / "pty.csv", RecordingMeta.for_robot(info=info, link=client.link))
+            client.start(0, "+x")
+            for _ in range(200):
+                rx = client.recv_received(0.5)
+                if rx is not None:
+                    rec.on_message(rx)
+                if rec.records >= 10:
+                    break
+            rec.stop()
+    finally:
+        server.close()
+    with open(tmp_path / "pty.csv", newline="") as fh:
+        t = [float(row["t_host_s"]) for row in csv.DictReader(fh)]
+    assert len(t) >= 5 and 0.0 <= min(t) and max(t) < 10.0, t[:3]

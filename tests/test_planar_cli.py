@@ -78,9 +78,10 @@ def test_text_marks_repeats_and_a_best_below_zero(capsys, robot):
 
 def test_library_and_plot(capsys, robot, tmp_path):
     png = tmp_path / "paths.png"
-    code, out, _ = run(capsys, "gait", robot, "--library", "0,90,rot-ccw", "--max-transitions", "4", "--json", "--translation-cap", "5",
-                       "--plot", str(png))
+    code, out, err = run(capsys, "gait", robot, "--library", "0,90,rot-ccw", "--max-transitions", "4", "--json", "--translation-cap", "5",
+                         "--plot", str(png))
     assert code == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"wrote {png}" in err  # stdout is the JSON alone
     doc = json.loads(out)
     assert [r["direction"] for r in doc["results"]] == ["0", "90", "rot-ccw"]
     assert all(r["gaits"] for r in doc["results"])

@@ -217,7 +217,7 @@ def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
-def test_recorded_events_name_the_actuator_as_the_console_does(tmp_path, suffix):
+def test_recorded_events_name_the_actuator_and_states_as_the_console_does(tmp_path, suffix):
     from proleg.console.names import RobotNames, event_text
     from proleg.link.received import Received
     from proleg.protocol.codec import Message
@@ -232,6 +232,7 @@ def test_recorded_events_name_the_actuator_as_the_console_does(tmp_path, suffix)
         {"time_ms": 20001, "kind": int(EventKind.FALLBACK), "code": 1, "detail": 2},
         {"time_ms": 20002, "kind": int(EventKind.FAULT), "code": int(FaultCode.SMA_ON_LIMIT), "detail": 0},
         {"time_ms": 20003, "kind": int(EventKind.GAIT_STOPPED), "code": 1, "detail": 3},
+        {"time_ms": 20004, "kind": int(EventKind.STATE_REACHED), "code": 0, "detail": 2},
     ]
     rec = Logger(tmp_path / f"run{suffix}", meta)
     telemetry = {"seq": 0, "time_ms": 19999, "measured": 0, "target": 1, "gait": 0, "direction": 0, "step": 0,
@@ -242,13 +243,14 @@ def test_recorded_events_name_the_actuator_as_the_console_does(tmp_path, suffix)
     rec.stop()
     texts = [e["text"] for e in read_recording(tmp_path / f"run{suffix}").events]
     assert texts == [
-        "suspects sma-right (transition 11)",
+        "suspects sma-right (transition 10→11 failed)",
         "FALLBACK: gave up sma-right, runs its 2-step fallback gait",
         "FAULT SMA_ON_LIMIT on sma-left",
         "gait stopped: FAULT after 3 cycles",
+        "step 1 reached state 10",  # states by label, as the console names them ("state 2" before)
     ]
-    names = RobotNames(meta.limb_names, meta.actuator_names)
-    assert texts == [event_text(f, names) for f in events]  # one implementation: the console's
+    # one implementation: the console's, which names states through the robot's labels
+    assert texts == [event_text(f, RobotNames.for_robot(ROBOT), ROBOT.transitions.label) for f in events]
 
 
 @pytest.mark.parametrize("where, why", [("missing/x.mcap", "No such file or directory"),
@@ -362,7 +364,7 @@ def test_gait_plot_with_evaluate_draws_the_sequence_and_cycles_alone_is_refused(
     out = tmp_path / "walk.png"
     assert main(["gait", "paper-r1", "--evaluate", "00,10,11,01,00", "--plot", str(out), "--cycles", "3"]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    capsys.readouterr()
+    assert capsys.readouterr().out.splitlines()[0] == f"wrote {out}"  # as plot and dbc say it
     for argv in (["--cycles", "3"], ["--evaluate", "00,10,11,01,00", "--cycles", "3"]):
         assert main(["gait", "paper-r1", *argv]) == 2
         assert "--cycles 3: only with --plot" in capsys.readouterr().err
@@ -385,3 +387,29 @@ def test_gait_plot_to_a_directory_or_a_full_disk_names_the_users_file(tmp_path, 
     assert main(["gait", "paper-r1", "--plot", str(out)]) == 1
     assert capsys.readouterr().err == f"proleg: error: cannot write plot {out}: No space left on device\n"
     assert [p.name for p in tmp_path.iterdir()] == ["d.png"]  # no temp file left
+
+
+def test_a_three_level_robots_recorded_states_are_labels_not_indices(tmp_path, capsys):
+    # tri-mixed-meas recorded "step 2 reached state 5" where the console showed 021
+    from proleg.cli import main
+
+    robot = Path(__file__).parent / "fixtures" / "tri-mixed-meas.toml"
+    assert main(["sim", str(robot), "--duration", "4", "--record", str(tmp_path / "r.jsonl")]) == 0
+    labels = set(load_robot(robot).transitions.labels())
+    reached = [e["text"] for e in read_recording(tmp_path / "r.jsonl").events if e["kind"] == "STATE_REACHED"]
+    assert len(reached) > 2 and all(t.rsplit(" ", 1)[1] in labels for t in reached), reached
+
+
+def test_a_sim_recording_carries_the_firmwares_info_as_run_sim_does(tmp_path, capsys):
+    # docs/data.md promises info (build id, gait-table hash, protocol version, rates, link);
+    # proleg sim --record wrote "info": {}
+    from proleg.cli import main
+
+    assert main(["sim", "paper-r1", "--duration", "2", "--record", str(tmp_path / "sim.jsonl")]) == 0
+    assert main(["run", "paper-r1", "--sim", "--duration", "2", "--record", str(tmp_path / "run.jsonl")]) == 0
+    sim, run = (read_recording(tmp_path / f"{n}.jsonl").meta for n in ("sim", "run"))
+    keys = {"firmware_build_id", "gait_table_hash", "protocol_version", "tick_hz", "telemetry_hz", "link"}
+    assert set(sim.info) == set(run.info) == keys
+    assert {k: sim.info[k] for k in keys - {"link"}} == {k: run.info[k] for k in keys - {"link"}}
+    assert sim.info["link"] == "simulated host-sim board"
+    assert sim.board == run.board == "host-sim"

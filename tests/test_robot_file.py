@@ -229,7 +229,7 @@ def csv_robot(tmp_path: Path, rows: str) -> Path:
 
 
 def test_csv_table_with_labels_and_indices(tmp_path):
-    r = load_robot(csv_robot(tmp_path, "from,to,reward\n# comment line\n00,10,1\n10,11,0.5\n3,0,-2\n"))
+    r = load_robot(csv_robot(tmp_path, "from,to,reward\n# comment line\n00,10,1\n10,11,0.5\n@3,@0,-2\n"))
     t = r.transitions
     assert t.n_transitions == 3
     assert t.reward[t.lookup(3, 0)] == -2 and t.reward[t.lookup(2, 3)] == 0.5
@@ -412,7 +412,7 @@ def test_planar_statistics_must_mark_the_same_forbidden_transitions(tmp_path):
 def test_a_state_index_is_ascii_digits_only(tmp_path, ref):
     # "¹".isdigit() is true but int() refuses it; int("١") is 1: both are refused, in one line
     text = R1.replace("[0, 0, 0, 0]]", '[0, 0, 0, "x"]]').replace("[transitions]", f'[transitions]\nforbidden = ["{ref}->00"]')
-    rejects(tmp_path, text, "transitions.forbidden[0]", "an index 0..3", repr(ref))
+    rejects(tmp_path, text, "transitions.forbidden[0]", "a state index @0..@3", repr(ref))
     with pytest.raises(RobotFileError, match=r"t\.csv:2: from: expected a state label"):
         load_robot(csv_robot(tmp_path, f"from,to,reward\n{ref},01,-1\n"))
 
@@ -476,3 +476,49 @@ def test_a_robot_file_with_a_bom_loads_and_one_not_utf8_names_the_line(tmp_path)
     line = R1.count("\n") + 1
     assert str(info.value) == (f"{path}: line {line}: not UTF-8 text (byte 0xe9: invalid continuation byte); "
                                "save it as UTF-8")
+
+
+def test_a_csv_label_with_a_digit_missing_is_refused_naming_line_and_column(capsys):
+    # "0010" on five limbs was read as state index 10 (01010): the best gait walked through it
+    from proleg.cli.main import main
+
+    fixture = Path(__file__).parent / "fixtures" / "five-typo-label.toml"
+    assert main(["gait", str(fixture)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err
+    assert err.endswith("five-typo-label.csv:2: to: '0010' is not a state label of 5 digits (one per limb, "
+                        "e.g. 00000; a state index is written @0..@31)"), err
+
+
+@pytest.mark.parametrize("ref", ["1", "001", "0001"])
+def test_digits_of_the_wrong_length_are_never_a_state_index(tmp_path, ref):
+    with pytest.raises(RobotFileError, match=rf"t\.csv:2: from: '{ref}' is not a state label of 2 digits"):
+        load_robot(csv_robot(tmp_path, f"from,to,reward\n{ref},10,1\n"))
+    text = R1.replace("[0, 0, 0, 0]]", '[0, 0, 0, "x"]]').replace("[transitions]", f'[transitions]\nforbidden = ["11->{ref}"]')
+    rejects(tmp_path, text, "transitions.forbidden[0]", f"'{ref}' is not a state label of 2 digits")
+
+
+@pytest.mark.parametrize("ref", ["@4", "@", "@-1", "@x"])
+def test_a_state_index_is_at_and_in_range(tmp_path, ref):
+    with pytest.raises(RobotFileError, match=rf"t\.csv:2: to: expected a state label of 2 digits or a state index "
+                                             rf"@0\.\.@3, got '{ref}'"):
+        load_robot(csv_robot(tmp_path, f"from,to,reward\n00,{ref},1\n"))
+
+
+def test_a_limb_key_typo_gets_a_did_you_mean_like_plant_keys(tmp_path):
+    msg = rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_degs = [20.0]", 1),
+                  "limb 'left': unknown key 'psi_star_degs' (did you mean 'psi_star_deg'?)")
+    assert "expected one of" not in msg
+    rejects(tmp_path, R1 + "\n[safety]\nmax_on_msec = 3000\n",
+            "safety: unknown key 'max_on_msec' (did you mean 'max_on_ms'?)")
+    rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nzzz = 3'),
+            "limb 'left': unknown key 'zzz' (expected one of: actuator, friction,")
+
+
+def test_the_documented_psi_star_range_is_the_loaders(tmp_path):
+    # robot-file.md said "angles in (−90, 90)"; the loader wants ψ* ± hysteresis/2 inside it
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text(encoding="utf-8")
+    assert "ψ* ± hysteresis_deg/2 must lie inside (−90, 90): with the default 2° of hysteresis, ψ* in (−89, 89)" in doc
+    rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [89.5]", 1), "limb 'left': psi_star_deg",
+            "psi* ± hysteresis_deg/2 (2/2) lie strictly inside (-90, 90)")
+    assert load_robot(write(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [88.9]", 1)))

@@ -8,15 +8,13 @@ when the write fails.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 from .errors import LinkError, UsageError
-from .paths import as_if_created
-from .states import label
+from .outputs import replacing
 from .record import Recording, read_recording
+from .states import label
 
 #: the figure formats proleg writes (matplotlib's Agg backend), chosen by the file's suffix
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -45,17 +43,12 @@ def new_figure(width_in: float, height_in: float) -> Any:
 
 
 def save_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
-    """Write ``fig`` to ``out`` in the format its suffix names, through a temporary file in the
-    same directory renamed over ``out``: a failed write leaves nothing. ``OSError`` propagates."""
+    """Write ``fig`` to ``out`` in the format its suffix names, through a temporary file
+    renamed over it (``proleg.outputs.replacing``: a symlink's target replaced, a FIFO or
+    device written in place): a failed write leaves nothing. ``OSError`` propagates."""
     ext = out.suffix.lower().lstrip(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=f".{ext}", dir=out.parent)
-    os.close(fd)
-    try:
+    with replacing(out, suffix=f".{ext}") as tmp:
         fig.savefig(tmp, format=ext, dpi=dpi)
-        as_if_created(tmp)
-        os.replace(tmp, out)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
 
 
 def write_figure(fig: Any, out: Path, dpi: float | None = None) -> None:

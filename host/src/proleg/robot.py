@@ -15,7 +15,7 @@ import math
 import re
 import tomllib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +24,7 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .names import identifier
-from .robot_body import coupling_warnings, unreachable_levels
+from .robot_body import CoilLift, coupled_states, coupling_warnings, shared_coil_lifts, unreachable_levels
 from .robot_plant import PlantSection, default_plant_section, inference_warning, limb_friction, plant_section
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
 from .robot_fields import Fields, read_text
@@ -103,6 +103,7 @@ class Limb:
 class Actuator:
     name: str
     channel: int
+    channel_given: bool = True  # False: no channel key, the default (its position among the [[actuator]]s)
 
 
 @dataclass(frozen=True)
@@ -150,6 +151,10 @@ class Robot:
     plant: PlantSection | None = None  # the checked [plant] table (defaults when absent)
     n_trials: np.ndarray | None = None  # learned file: trials per allowed transition (aligned with transitions.src)
     library: Any = None  # [gaits]: the gait library the firmware carries (proleg.gait.library.LibrarySpec), or None
+    #: states the matrix enters that a shared coil cannot hold on the simulated body (it lifts
+    #: one of its limbs while holding another up): state -> (actuator, lifted limb, raised limbs)
+    #: per lift; ``proleg.robot_body.shared_coil_lifts``, checked by ``proleg.gait.feasibility``
+    coil_lifts: dict[int, tuple[CoilLift, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.plant is None:
@@ -236,8 +241,12 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
                           [act_index[limb.actuator] for limb in limbs], units)
     for line in unreachable_levels(path, list(limbs), [a.name for a in actuators], plant):
         log.warning("warning: %s", line)
-    for line in coupling_warnings(path, list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg):
+    coupled = coupled_states(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
+    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled)
+    for line in shown:
         log.warning("warning: %s", line)
+    for line in rest:
+        log.debug("warning: %s", line)
     if (line := inference_warning(path, list(limbs))) is not None:
         log.warning("warning: %s", line)
     library = None
@@ -248,7 +257,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         if library is not None and (why := missing_statistics(library, table)):
             raise RobotFileError(f"{path}: gaits.library: {why}")
     _check_climb(path, control, limbs, library)
-    return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library)
+    return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library,
+                 shared_coil_lifts(list(limbs), coupled))
 
 
 def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:
@@ -284,7 +294,7 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
         channel = f.integer("channel", i, 0, MAX_ACTUATORS - 1)
         if any(a.channel == channel for a in out):
             f.fail("channel", "a channel no other actuator uses", channel)
-        out.append(Actuator(name, channel))
+        out.append(Actuator(name, channel, "channel" in t))
     return tuple(out)
 
 

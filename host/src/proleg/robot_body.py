@@ -5,7 +5,11 @@ loaded, as warnings about the simulator and the file, not refusals (a real body 
   level (or a body too long for the model: ``body.curl_problem``);
 * ``coupled_states`` / ``coupling_warnings``: states the body cannot hold, because the coils
   the raised limbs need lift a limb that should stay down (a neighbour's bend, or a coil
-  shared with the raised limb).
+  shared with the raised limb); ``coupling_warnings`` gives a few lines per kind and a count
+  (an eight-limb robot on four shared coils has hundreds of such states);
+* ``shared_coil_lifts``: those of them where the limb is lifted by its own coil, shared with
+  a raised limb: no step can leave a shared coil's limbs so (the gait feasibility check,
+  ``proleg.gait.feasibility``, refuses such a step as ``shared-actuator``).
 
 ``body_of`` is the physical plant's body for a robot's limbs, coils and ``[plant]`` table.
 """
@@ -126,32 +130,73 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     return out
 
 
-def coupling_warnings(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
-                      hold_margin_deg: float) -> list[str]:
-    """One line per state of ``coupled_states``, naming the state, the lifted limb and the
-    raised limbs that lift it."""
-    out = []
-    for s, hits in coupled_states(limbs, actuators, section, table, hold_margin_deg).items():
+#: ``coupling_warnings`` shows this many states of each kind, then how many more there are.
+WARNING_EXAMPLES = 3
+
+#: what ``shared_coil_lifts`` gives per state: (actuator name, lifted limb, raised limbs on
+#: that actuator), limbs by index
+CoilLift = tuple[str, int, tuple[int, ...]]
+
+
+def shared_coil_lifts(limbs: list[Any], coupled: dict[int, list[tuple[int, list[int], float]]]
+                      ) -> dict[int, tuple[CoilLift, ...]]:
+    """The states of ``coupled`` (``coupled_states``) a shared coil cannot hold: a limb is
+    lifted by its own coil, which also holds one of the raised limbs up (one coil on two
+    limbs lifts its near limb first: paper-r1-one-actuator's 01). Other states the body
+    cannot hold (a neighbour's bend) are left to ``coupling_warnings``."""
+    out: dict[int, tuple[CoilLift, ...]] = {}
+    for s, hits in coupled.items():
+        lifts = tuple((limbs[i].actuator, i, tuple(j for j in raising if limbs[j].actuator == limbs[i].actuator))
+                      for i, raising, _ in hits
+                      if any(limbs[j].actuator == limbs[i].actuator for j in raising))
+        if lifts:
+            out[s] = lifts
+    return out
+
+
+def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table: Any,
+                      coupled: dict[int, list[tuple[int, list[int], float]]]) -> tuple[list[str], list[str]]:
+    """Lines about ``coupled`` (``coupled_states``), one per lifted limb naming the state, the
+    limb and what lifts it: ``(shown, rest)``. ``shown`` has, per kind (a limb resting past
+    its edge, lifted by a shared coil, lifted by raised neighbours), the first
+    ``WARNING_EXAMPLES`` lines, then one line counting the rest; ``rest`` the others (for -v)."""
+    kinds: dict[str, list[tuple[int, str]]] = {"rests": [], "shared": [], "neighbours": []}
+    for s, hits in coupled.items():
         for i, raising, psi in hits:
             lb = limbs[i]
             k = limb_levels_of(s, limbs)[i]
             edge = f"edge {lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:.1f}° (ψ* + hysteresis/2)"
             if not raising:  # nothing lifts it: it rests there
-                out.append(
+                kinds["rests"].append((s, 
                     f"{path}: state {table.label(s)}: limb {lb.name!r} rests at {psi:.1f}° on the simulated "
                     f"{section.length_mm:g} mm body, past its level-{k + 1} {edge}: its level {k} lies below "
                     f"where it rests and cannot be held; check its psi_star_deg, or mark the transitions into "
-                    f"the state \"x\"")
+                    f"the state \"x\""))
                 continue
             names = ", ".join(repr(limbs[j].name) for j in raising)
             shared = [j for j in raising if limbs[j].actuator == lb.actuator]
             how = (f"by its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} "
                    f"up" if shared else f"by the raised limbs {names}")
-            out.append(
+            kinds["shared" if shared else "neighbours"].append((s,
                 f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° {how} on "
                 f"the simulated {section.length_mm:g} mm body, past its level-{k + 1} {edge}: the state reads "
-                f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)")
-    return out
+                f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)"))
+    what = {"rests": "a limb resting past its next level's edge",
+            "shared": "a limb lifted by its own coil, shared with a raised limb",
+            "neighbours": "a limb lifted by raised neighbours"}
+    entered = len({int(d) for d in table.dst})
+    shown: list[str] = []
+    rest: list[str] = []
+    for kind, lines in kinds.items():
+        shown += [line for _, line in lines[:WARNING_EXAMPLES]]
+        if len(lines) > WARNING_EXAMPLES:
+            rest += [line for _, line in lines[WARNING_EXAMPLES:]]
+            n = len({s for s, _ in lines})
+            shown.append(f"{path}: {len(lines) - WARNING_EXAMPLES} more lines like these: in all, {n} of the "
+                         f"{entered} states the matrix enters cannot be held on the simulated body because of "
+                         f"{what[kind]} (-v lists every line)")
+    return shown, rest
+
 
 def limb_levels_of(state: int, limbs: list[Any]) -> tuple[int, ...]:
     from .states import limb_levels

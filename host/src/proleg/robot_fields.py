@@ -4,6 +4,7 @@ file's sections (``proleg.robot``, ``proleg.robot_transitions``)."""
 
 from __future__ import annotations
 
+import difflib
 import math
 from pathlib import Path
 from typing import Any
@@ -19,10 +20,10 @@ class Fields:
         if not isinstance(table, dict):
             self.fail("", "a table")
         unknown = sorted(set(table) - known)
-        if unknown:
-            raise RobotFileError(
-                f"{path}: {where}: unknown key {unknown[0]!r} (expected one of: {', '.join(sorted(known))})"
-            )
+        if unknown:  # a near miss gets a suggestion, as [plant] keys do; else the whole list
+            near = difflib.get_close_matches(str(unknown[0]), sorted(known), n=1)
+            hint = f"did you mean {near[0]!r}?" if near else f"expected one of: {', '.join(sorted(known))}"
+            raise RobotFileError(f"{path}: {where}: unknown key {unknown[0]!r} ({hint})")
         self.table = table
 
     def fail(self, key: str, expected: str, got: Any = None) -> None:

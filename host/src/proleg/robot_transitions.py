@@ -329,15 +329,24 @@ def _first_non_utf8_line(csv_path: Path) -> int:
 
 
 def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
-    """A state in a CSV row or a forbidden mark: a label (one digit per limb), else an index."""
-    expected = f"{where}: expected a state label of {len(levels)} digits or an index 0..{n - 1}, got {text!r}"
-    if len(text) == len(levels):
+    """A state in a CSV row or a forbidden mark: a label (one digit per limb), or an index
+    written ``@N``. A string of digits of another length is an error, never an index: a label
+    with a digit missing or one too many would otherwise name a different state."""
+    L = len(levels)
+    expected = f"{where}: expected a state label of {L} digits or a state index @0..@{n - 1}, got {text!r}"
+    if text.startswith("@"):
+        index = text[1:]
+        if index.isascii() and index.isdigit() and int(index) < n:  # "¹" and "١" are digits too
+            return int(index)
+        raise RobotFileError(expected)
+    if len(text) == L:
         try:
             return states.index(text, levels)
         except ValueError as e:
             raise RobotFileError(f"{expected} ({e})") from None
-    if text.isascii() and text.isdigit() and int(text) < n:  # "¹" and "١" are digits too
-        return int(text)
+    if text.isascii() and text.isdigit():
+        raise RobotFileError(f"{where}: {text!r} is not a state label of {L} digits (one per limb, e.g. "
+                             f"{states.label(0, levels)}; a state index is written @0..@{n - 1})")
     raise RobotFileError(expected)
 
 

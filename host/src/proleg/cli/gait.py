@@ -97,7 +97,7 @@ def cmd_gait(args: argparse.Namespace) -> int:
     else:
         answers = _planar_answers(robot, args)
     if args.plot:
-        _plot(robot, answers, args.cycles, args.plot)
+        _plot(robot, answers, args.cycles, args.plot, args.json)
     if args.json:
         doc = {
             "robot": robot.name,
@@ -290,9 +290,11 @@ def _result_json(robot, name: str, r, planar: bool, cycles: int) -> dict:
     return d
 
 
-def _plot(robot, answers, cycles: int, out: str) -> None:
-    """Each answer's gait 0 composed over ``cycles`` passes, in one plane, PNG/SVG/PDF."""
+def _plot(robot, answers, cycles: int, out: str, json_out: bool = False) -> None:
+    """Each answer's gait 0 composed over ``cycles`` passes, in one plane, PNG/SVG/PDF; says
+    "wrote PATH" as plot and dbc do (on stderr when stdout carries JSON)."""
     from ..gait.compose import gait_path
+    from ..outputs import note_stream
     from ..plot import figure_problem, new_figure, write_figure
 
     path = Path(out)
@@ -323,6 +325,7 @@ def _plot(robot, answers, cycles: int, out: str) -> None:
     ax.grid(True, lw=0.3)
     ax.legend(loc="best", fontsize="small")
     write_figure(fig, path)
+    print(f"wrote {path}", file=sys.stderr if json_out else note_stream(path))
 
 
 def _print_evaluation(robot, args) -> int:
@@ -345,7 +348,7 @@ def _print_evaluation(robot, args) -> int:
     if args.plot:
         from types import SimpleNamespace
 
-        _plot(robot, [("evaluated", SimpleNamespace(gaits=[gait]))], args.cycles, args.plot)
+        _plot(robot, [("evaluated", SimpleNamespace(gaits=[gait]))], args.cycles, args.plot, args.json)
     if args.json:
         print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))
     else:

@@ -214,6 +214,10 @@ def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> 
     from ..learn.runner import ExplorationError, Explorer, Progress, simulated_robot
     from .robot_commands import open_client
 
+    if source == "tracker" and args.track is None:
+        log.warning("learn: --source tracker: the trials recorded now have no motion (Δx) until the tracker's "
+                    "track is attached: give --track FILE.csv (time,x,y,theta) now, or later with --report "
+                    "and the same --log")
     pose = None
     if args.sim:
         try:
@@ -249,10 +253,10 @@ def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> 
                       on_progress=progress, ask=ask)
         done, todo = ex.tally()
         lim = ex.limits
-        log.info("learn: exploring %s on %s: %d allowed transitions × %d = %d trials, %d to do; pieces of up to "
-                 "%d transitions, %.1f s rest after each; Ctrl-C pauses (nothing recorded is lost: run the same "
-                 "command to go on)", robot.name, client.link.description, t.n_transitions, args.repeats,
-                 done + todo, todo, lim.max_transitions, lim.rest_s)
+        log.info("learn: exploring %s on %s: %s = %d trials, %d to do; pieces of up to %d transitions, %.1f s rest "
+                 "after each; Ctrl-C pauses (nothing recorded is lost: run the same command to go on)",
+                 robot.name, client.link.description, _explored(t, args.repeats), done + todo, todo,
+                 lim.max_transitions, lim.rest_s)
         try:
             if args.adaptive:
                 _adaptive(ex, args, t, trial_log, estimate, adaptive_demand)
@@ -262,8 +266,9 @@ def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> 
             else:
                 ex.run(max_pieces=args.max_pieces)
         except ExplorationError as e:
-            raise LinkError(f"learn: {e} (the {len(trial_log.trials)} trials recorded are kept in {args.log}; "
-                            "run the same command to resume)") from None
+            again = "" if args.sim and getattr(e, "fault", False) else "; run the same command to resume"
+            raise LinkError(f"learn: {e}{_stopped_hint(args, e)} (the {len(trial_log.trials)} trials recorded are "
+                            f"kept in {args.log}{again})") from None
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()
@@ -283,6 +288,38 @@ def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> 
         else:
             log.info("learn: stopped after %d pieces (--max-pieces): %d of %d done; run the same command "
                      "to go on", ex.pieces_run, done, done + todo)
+
+
+def _explored(t, repeats: int) -> str:
+    """``N allowed transitions[, K of them … (a->b, …)]: M × R``: what the exploration covers,
+    naming the transitions no closed tour from rest can make (they get no trials)."""
+    from ..learn.tours import exploration, unexplorable
+
+    unreachable, one_way = unexplorable(t, exploration(t, 1).uncoverable)
+    left = []
+    for labels, why in ((unreachable, "unreachable from rest"), (one_way, "one-way, no allowed way back")):
+        if labels:
+            shown = ", ".join(labels[:5]) + (f", … ({len(labels) - 5} more)" if len(labels) > 5 else "")
+            left.append(f"{len(labels)} of them {why} ({shown})")
+    skipped = len(unreachable) + len(one_way)
+    head = f"{t.n_transitions} allowed transitions" + "".join(f", {x}" for x in left)
+    return f"{head}: {t.n_transitions - skipped} × {repeats}" if skipped else f"{head} × {repeats}"
+
+
+def _stopped_hint(args: argparse.Namespace, e: Exception) -> str:
+    """What to do about an exploration that stopped: on a real robot, look at it and clear the
+    fault; on the simulated one (it does not outlive the command, and running again meets
+    the same fault) name the transition and what in the robot file would explain it."""
+    if not getattr(e, "fault", False):
+        return ""
+    if not args.sim:
+        return "; look at the robot (proleg console), then clear the fault (key c there)"
+    if getattr(e, "transition", None) is None:
+        return "; the simulated robot meets it again if run the same way: check the warnings printed when the robot file was loaded"
+    a, b = e.transition
+    return (f"; the simulated robot cannot make {a}->{b} and would stop there again: look for a warning about state "
+            f"{b} when the robot file was loaded (a state that cannot be held, a level out of reach) and mark the "
+            f"transitions into {b} \"x\" (forbidden) in the robot file, or fix what the warning names")
 
 
 def _counts(table, trials) -> np.ndarray:
@@ -364,6 +401,15 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     from ..learn.robotfile import write_learned_robot
 
     t = robot.transitions
+    bare = sum(1 for tr in trials if tr.dx is None)
+    if bare and bare == len(trials):  # a tracker's trials, no track attached: nothing to estimate
+        what = (f"learn: {args.log}: {bare} transitions recorded without their motion (Δx; --source tracker): "
+                f"attach the tracker's track with --track FILE.csv (proleg learn {args.robot} --log {args.log} "
+                "--track FILE.csv --report)")
+        if args.report or args.out or args.half_width:
+            raise LearnError(what + "; nothing to report")
+        print(what, file=sys.stdout)
+        return 0
     units = _trial_units(args, robot, trials)
     est = estimate(t, trials)
     out = sys.stdout
@@ -387,6 +433,9 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
         if extra is not None:
             row += f" {int(extra[e]):>5}"
         print(row, file=out)
+    if bare:
+        print(f"{bare} more transitions recorded without their motion (Δx) are not counted: attach the "
+              "tracker's track with --track FILE.csv", file=out)
     flagged = est.flagged()
     if flagged:
         print(f"too few trials (< {est.min_samples}): {', '.join(flagged)}", file=out)

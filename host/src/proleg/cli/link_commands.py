@@ -62,7 +62,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
 
         robot = load_robot(robot_file)
     link = open_link(link_url(port=port, can_channel=can_channel, interface=interface, node=node, sim=sim,
-                              bitrate=bitrate), baudrate=baudrate, speed=1.0)
+                              bitrate=bitrate), baudrate=baudrate, speed=1.0, robot_file=robot_file)
     if robot is None:
         robot = getattr(getattr(link, "board", None), "robot", None)  # the simulated robot's description
     if timed and not hasattr(getattr(link, "board", None), "inject"):
@@ -148,16 +148,17 @@ def _prod(levels: Sequence[int]) -> int:
 
 def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:
     """``proleg plot FILE -o OUT.png``."""
+    from ..outputs import note_stream
     from ..plot import plot_recording
 
     path = plot_recording(record_file, out, title=title)
-    print(f"wrote {path}")
+    print(f"wrote {path}", file=note_stream(path))
     return 0
 
 
 def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_file: str | None = None) -> int:
     """``proleg dbc -o FILE [--robot ROBOT]`` (the robot names the ψ and duty signals)."""
-    from ..outputs import refuse_inputs
+    from ..outputs import note_stream, refuse_inputs
     from ..protocol.dbc import write_dbc
 
     refuse_inputs("dbc", "-o", out, {"--robot": robot_file})
@@ -167,7 +168,7 @@ def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_
 
         robot = load_robot(robot_file)
     path = write_dbc(out, nodes, base, robot)
-    print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})")
+    print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})", file=note_stream(path))
     return 0
 
 

@@ -74,7 +74,12 @@ def open_client(args: argparse.Namespace, robot_path: str | None = None, *, spee
     given = link_settings(args)
     url = link_url(port=args.port, can_channel=args.can, interface=given["interface"], node=given["node"], sim=sim,
                    bitrate=given["bitrate"])
-    link = open_link(url, baudrate=given["baudrate"], speed=speed)
+    robot_file = None
+    if robot_path is not None:
+        from .main import robot_arg
+
+        robot_file = robot_arg(robot_path)
+    link = open_link(url, baudrate=given["baudrate"], speed=speed, robot_file=robot_file)
     client = RobotClient(link, timeout=args.timeout)
     try:
         info = client.connect()

@@ -124,16 +124,21 @@ def cmd_sim(args: argparse.Namespace) -> int:
             sim.inject(spec)
     if args.pty:
         return _serve_pty(sim, args, timed, pty_limit_s)
-    recorder = _recorder(robot, args.record, args.board) if args.record else None
+    held = _Held()  # the boot messages, until the board's INFO has named its firmware
+    session = SimSession(sim, listeners=[held])
+    booted = session.until_info(BOOT_S) if args.record or args.udp else 0.0
+    recorder = _recorder(robot, args.record, session, args.board) if args.record else None
     listeners = [recorder] if recorder else []
-    if args.udp:
-        from ..record import RecordingMeta, UdpStreamer
-
-        meta = RecordingMeta.for_robot(robot=robot, board=args.board, truth=("displacement_mm",))
-        listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
-    session = SimSession(sim, listeners=listeners)
     try:
-        session.advance(0.2)  # boot
+        if args.udp:
+            from ..record import UdpStreamer
+
+            listeners.append(UdpStreamer(args.udp, args.udp_format, _meta(robot, session, args.board)))
+        for listener in listeners:
+            for rx in held:
+                listener.on_message(rx)
+        session.listeners[:] = listeners
+        session.advance(BOOT_S - booted)  # boot
         if args.calibrated:
             calibrate_then_put_down(session, sim, robot, args)
             for spec in at_once:  # on the plant the robot walks on
@@ -195,10 +200,38 @@ def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:
     return 0
 
 
-def _recorder(robot, path: str, board: str = "host-sim"):
-    from ..record import Logger, RecordingMeta
+#: virtual seconds the simulated board runs before the gait starts (its boot)
+BOOT_S = 0.2
 
-    return Logger(path, RecordingMeta.for_robot(robot=robot, board=board, truth=("displacement_mm",)))
+
+class _Held(list):
+    """A listener keeping what the board sends until the recorders exist."""
+
+    def on_message(self, rx) -> None:
+        self.append(rx)
+
+    def stop(self) -> None:
+        pass
+
+
+def _meta(robot, session, board: str):
+    """A recording's metadata: the firmware's INFO (build id, gait-table hash, protocol
+    version, rates; docs/data.md), the robot file's names, the simulated board as the link."""
+    from dataclasses import replace
+
+    from ..record import RecordingMeta
+
+    info = session.client.info
+    if info is None:  # no boot INFO (a board that never booted): what the robot file says
+        return RecordingMeta.for_robot(robot=robot, board=board, truth=("displacement_mm",))
+    meta = RecordingMeta.for_robot(info=info, robot=robot, truth=("displacement_mm",))
+    return replace(meta, info={**meta.info, "link": f"simulated {board} board"})
+
+
+def _recorder(robot, path: str, session, board: str):
+    from ..record import Logger
+
+    return Logger(path, _meta(robot, session, board))
 
 
 def _report_json(robot, report, board: str = "host-sim") -> dict:

@@ -447,7 +447,14 @@ def _budget(path: Path, doc: dict) -> TickBudget | None:
 def pwm_channel_error(robot: Any, actuator: Any, board_name: str, pins: Sequence[str]) -> str:
     """The one message for an actuator on a PWM channel the board does not have. Channels are
     shown as the robot file writes them (``channel = N``, the board's [pwm] pins in order),
-    with the pin each one is."""
+    with the pin each one is; an actuator without a ``channel`` key is said to be on its
+    default channel, its position (the file has no ``channel = N`` to quote)."""
     have = ", ".join(f"channel = {i} ({p})" for i, p in enumerate(pins)) or "none"
-    return (f"robot {robot.name}: actuator {actuator.name!r} is on channel = {actuator.channel}, but board "
-            f"{board_name} has {len(pins)} PWM channels: {have}")
+    if getattr(actuator, "channel_given", True):
+        on = f"is on channel = {actuator.channel}"
+    else:  # the default: say so, the file has no such line
+        k = actuator.channel + 1
+        nth = f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
+        on = (f"(the {nth} [[actuator]], no channel key) is on channel {actuator.channel} by default, its "
+              "position")
+    return f"robot {robot.name}: actuator {actuator.name!r} {on}, but board {board_name} has {len(pins)} PWM channels: {have}"

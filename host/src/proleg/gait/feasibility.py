@@ -5,7 +5,11 @@ drives which limb and how long a coil may stay on. An SMA coil raises its limb(s
 and lets them fall when it cools, so:
 
 * **Shared actuators** — limbs driven by one actuator rise and fall together: a step that
-  raises one of them while lowering another cannot be made (error ``shared-actuator``).
+  raises one of them while lowering another cannot be made (error ``shared-actuator``), and
+  neither can a step that raises or lowers only some of them into a state the coil cannot
+  hold — it lifts one of its limbs while holding another up (``Robot.coil_lifts``, from the
+  body model that warns about it when the file is loaded: one coil on two limbs lifts its
+  near limb first, so paper-r1-one-actuator makes 00 -> 10 -> 11 but never 01).
 * **Opposing steps** — a step that raises a limb on one actuator while lowering a limb on
   another needs a heating and a cooling crossing to coincide; the controller synchronises
   them as well as it can, but the robot may pass through an intermediate state (warning
@@ -94,6 +98,13 @@ def step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]:
                 f"limbs {', '.join(map(repr, up))} and {', '.join(map(repr, down))} share actuator {act.name!r} "
                 f"but would move in opposite directions",
             ))
+        elif (up or down) and len(up or down) < len(driven) and (why := _coil_cannot_hold(robot, act.name, b)):
+            moved = ", ".join(map(repr, up or down))
+            still = ", ".join(repr(n) for n in driven if moves[n] == 0)
+            out.append((
+                "shared-actuator", "error",
+                f"{'raises' if up else 'lowers'} {moved} but not {still}, which share actuator {act.name!r}: {why}",
+            ))
     if not out and any(v > 0 for v in moves.values()) and any(v < 0 for v in moves.values()):
         rising = [n for n, v in moves.items() if v > 0]
         falling = [n for n, v in moves.items() if v < 0]
@@ -103,6 +114,17 @@ def step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]:
             f"(a heating and a cooling crossing must coincide)",
         ))
     return out
+
+
+def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
+    """Why ``actuator`` cannot hold ``state`` (``Robot.coil_lifts``), or None."""
+    for act, lifted, raised in getattr(robot, "coil_lifts", {}).get(state, ()):
+        if act == actuator:
+            up = ", ".join(repr(robot.limbs[j].name) for j in raised)
+            return (f"holding {up} up, it lifts {robot.limbs[lifted].name!r} too on the simulated body, so state "
+                    f"{robot.transitions.label(state)} cannot be held (the warning when the robot file is loaded; "
+                    f"mark the transitions into it \"x\")")
+    return None
 
 
 def _rising_coils(robot: "Robot", a: int, b: int) -> tuple[bool, ...]:

@@ -62,7 +62,14 @@ WATCH_HZ = (250, 200, 150, 100)
 
 
 class ExplorationError(RuntimeError):
-    """The robot stopped (fault, E-stop, timeout); the log keeps every trial made."""
+    """The robot stopped (fault, E-stop, timeout); the log keeps every trial made.
+    ``transition``: the (from, to) labels being made when it stopped, when known; ``fault``:
+    a latched fault or E-stop (cleared on the robot before going on)."""
+
+    def __init__(self, message: str, *, transition: tuple[str, str] | None = None, fault: bool = False):
+        super().__init__(message)
+        self.transition = transition
+        self.fault = fault
 
 
 @dataclass(frozen=True)
@@ -315,10 +322,11 @@ class Explorer:
                     from ..console.names import RobotNames, describe_event
 
                     what = describe_event(msg.fields, RobotNames.for_robot(self.robot), t.label).strip()
-                    hint = ("; look at the robot (proleg console), then clear the fault (key c there)"
-                            if kind in (EventKind.FAULT, EventKind.ESTOP) else "")
                     when, _, what = what.partition(" ")
-                    raise ExplorationError(f"the robot stopped: {what} (firmware time {when}){hint}")
+                    making = _making(t, piece.states, reached)
+                    during = f" while making {making[0]}->{making[1]}" if making else ""
+                    raise ExplorationError(f"the robot stopped{during}: {what} (firmware time {when})",
+                                           transition=making, fault=kind in (EventKind.FAULT, EventKind.ESTOP))
                 if kind != EventKind.STATE_REACHED:
                     continue
                 state = int(msg.detail)
@@ -330,6 +338,15 @@ class Explorer:
         finally:
             client.stop()
         return out
+
+
+def _making(t, states: tuple[int, ...], reached: list) -> tuple[str, str] | None:
+    """(from, to) labels of the piece's transition under way, given the states ``reached``
+    so far (the first is the piece's start); None before the start is reached."""
+    k = len(reached)
+    if k == 0 or k >= len(states):
+        return None
+    return t.label(reached[-1][1]), t.label(states[k])
 
 
 def _between(levels: tuple[int, ...], a: int, b: int, s: int) -> bool:

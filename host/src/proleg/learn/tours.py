@@ -261,6 +261,26 @@ def exploration(
     return Exploration(tuple(tours), unc, labels)
 
 
+def unexplorable(table: TransitionTable, uncoverable: tuple[tuple[int, int], ...], start: int = 0
+                 ) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Why no closed tour makes the ``uncoverable`` transitions (``Exploration.uncoverable``),
+    as ``a->b`` labels: (those whose start no allowed way reaches from ``start``, the rest:
+    one-way, no allowed way leads back from where they end)."""
+    succ: list[list[int]] = [[] for _ in range(table.n_states)]
+    for a, b in zip(table.src.tolist(), table.dst.tolist()):
+        succ[a].append(b)
+    seen = {start}
+    queue = deque([start])
+    while queue:
+        for b in succ[queue.popleft()]:
+            if b not in seen:
+                seen.add(b)
+                queue.append(b)
+    unreachable = tuple(f"{table.label(a)}->{table.label(b)}" for a, b in uncoverable if a not in seen)
+    one_way = tuple(f"{table.label(a)}->{table.label(b)}" for a, b in uncoverable if a in seen)
+    return unreachable, one_way
+
+
 def _join(n: int, sub: list[tuple[int, int]], multi: list[tuple[int, int]], start: int) -> int:
     """Append shortest round trips from ``start`` to every piece of ``multi`` not yet
     reachable from it (balanced pieces are strongly connected). Returns transitions added."""

@@ -30,7 +30,8 @@ class Link(ABC):
 
     ``read`` returns whatever bytes arrived (possibly several or partial frames), or ``b""``
     when ``timeout`` seconds passed without any. ``clock`` is the link's time base in seconds:
-    wall time for real links, virtual time for the simulated board; timeouts are measured on it.
+    wall time since the link opened for real links, virtual time for the simulated board;
+    timeouts are measured on it.
     """
 
     #: Human-readable endpoint for messages ("/dev/ttyUSB0", "can0 (socketcan) node 1", "sim paper-r1").
@@ -48,9 +49,17 @@ class Link(ABC):
     def close(self) -> None:
         """Release the transport; idempotent."""
 
+    #: ``clock``'s zero on the monotonic clock: when the link opened (real links set it when
+    #: they open; a link that does not gets it at its first ``clock`` call)
+    _clock_zero: float | None = None
+
     def clock(self) -> float:
-        """Seconds on the link's time base (monotonic)."""
-        return time.monotonic()
+        """Seconds on the link's time base (monotonic), 0 ≈ when the link opened: what
+        recordings' ``t_host_s`` counts (docs/data.md)."""
+        now = time.monotonic()
+        if self._clock_zero is None:
+            self._clock_zero = now
+        return now - self._clock_zero
 
     def reopen(self) -> None:
         """Try to open the transport again after ``LinkDisconnected``; raises ``LinkError`` if

@@ -93,6 +93,7 @@ class CanLink(Link):
                  base: int = DEFAULT_BASE, bitrate: int | None = None, bus: can.BusABC | None = None,
                  **bus_kwargs: Any):
         """``channel``/``interface``/``bitrate`` None: from python-can's configuration."""
+        self._clock_zero = time.monotonic()  # clock() counts from the opening (t_host_s ≈ 0)
         self.ids = CanIds(node=node, base=base)
         if bus is None:
             self.config = bus_config(channel, interface, bitrate, **bus_kwargs)

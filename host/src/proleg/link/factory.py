@@ -9,6 +9,11 @@ opener imported only when used (so opening a serial port never imports python-ca
     open_link("can://")                               # channel too (CAN_CHANNEL, ~/.canrc)
     open_link("sim://paper-r1")                       # a bundled robot, or sim://path/to/ROBOT.toml
     open_link("sim://planar-4?plant=table")           # ... on the table plant (planar pose)
+    open_link("sim://tri?plant=table", robot_file="lab/tri.toml")  # the command's own robot file
+
+``sim://NAME`` is the bundled robot NAME, else the command's robot file when it is NAME.toml
+(``robot_file``: the ROBOT argument, ``proleg run lab/tri.toml --port sim://tri``); one that
+is neither is a ``UsageError`` saying how to name a file (``sim:///abs/path.toml``).
 
 A ``sim://`` link's ``board`` is the ``SimulatedRobot`` (``link.board.robot`` its description).
 An unknown scheme is a ``LinkError`` naming the known ones.
@@ -58,14 +63,13 @@ def _open_can(url: str, rest: str, query: dict[str, str], options: dict[str, Any
 
 
 def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
-    from ..paths import robots_dir
     from ..robot import load_robot
     from ..sim.closed_loop import SimulatedRobot
     from .sim_link import SimLink
 
     if not rest:
         raise LinkError(f"{url}: expected sim://ROBOT (a bundled robot name or a robot file)")
-    path = Path(rest) if rest.endswith(".toml") or "/" in rest else robots_dir() / f"{rest}.toml"
+    path = Path(rest) if rest.endswith(".toml") or "/" in rest else _named_robot(url, rest, options.get("robot_file"))
     robot = load_robot(path)
     seed = _int(url, "seed", query.get("seed", options.get("seed", 1)), 0, 2**32 - 1)
     speed = options.get("speed", None)
@@ -73,6 +77,25 @@ def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any
         speed = None if query["speed"] == "max" else _speed(url, query["speed"])
     plant = query.get("plant", options.get("plant"))  # "physical" (default) or "table" (the planar pose)
     return SimLink(SimulatedRobot(robot, seed=seed, plant=plant), speed=speed, description=f"sim {robot.name}")
+
+
+def _named_robot(url: str, name: str, robot_file: str | Path | None) -> Path:
+    """The robot file ``sim://NAME`` means: the bundled robot NAME, else the command's own
+    ``robot_file`` when it is NAME.toml (``UsageError`` when neither: a bad argument). The
+    bundled robot comes first, so an edited copy of it is still compared with the board the
+    bundled file built (the console's identity check)."""
+    from ..paths import robots_dir
+
+    bundled = robots_dir() / f"{name}.toml"
+    if bundled.is_file():
+        return bundled
+    if robot_file is not None and Path(robot_file).name == f"{name}.toml":
+        return Path(robot_file)
+    known = ", ".join(sorted(p.stem for p in robots_dir().glob("*.toml")))
+    mine = f" (the robot file given is {robot_file})" if robot_file is not None else ""
+    raise UsageError(f"{url}: sim://{name} names a bundled robot ({known}) or the command's robot file by its "
+                    f"file name ({name}.toml){mine}; for another robot file write sim://path/to/file.toml or "
+                    f"sim:///absolute/path/to/file.toml")
 
 
 Opener = Callable[[str, str, dict[str, str], dict[str, Any]], Link]
@@ -93,7 +116,8 @@ def register_link(scheme: str, opener: Opener) -> None:
 
 def open_link(url: str, **options: Any) -> Link:
     """The link ``url`` names; ``options`` (baudrate, node, bitrate, seed, speed) fill in what
-    the URL's query does not say."""
+    the URL's query does not say; ``robot_file``: the command's robot file, which
+    ``sim://NAME`` means when it is NAME.toml and NAME is no bundled robot."""
     if "://" not in url:
         return _open_serial(url, url, {}, options)  # a bare device path
     scheme = url.split("://", 1)[0].lower()

@@ -7,6 +7,7 @@ A USB serial adapter that disappears raises ``LinkDisconnected`` from ``read``/`
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -33,6 +34,7 @@ class SerialLink(Link):
         self._opener: Opener = opener or serial.serial_for_url
         self._port: Any = None
         self._timeout: float | None = None
+        self._clock_zero = time.monotonic()  # clock() counts from the opening (t_host_s ≈ 0)
         self._open()
 
     def _open(self) -> None:

@@ -12,12 +12,14 @@ format (CSV, JSON Lines, MCAP) writes these same names; docs/data.md lists them.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 from typing import Any
 
 from ..names import identifier
 from ..robot import info_name
+from ..states import label
 from ..protocol.definition import ErrorCode, EventKind
 
 #: TELEMETRY's integer fields, as recorded (no scaling)
@@ -61,6 +63,22 @@ class RecordingMeta:
     info: dict[str, str] = field(default_factory=dict)  # firmware build id, gait hash, link, rates...
     #: actuator names in the firmware's actuator order (the robot file's), for events that name one
     actuator_names: tuple[str, ...] = ()
+
+    def state_label(self, index: int) -> str:
+        """State ``index`` by its label (one digit per limb, levels from ``psi_star_deg``), as
+        the console names it; the bare index when the metadata has no ψ* or it is out of range."""
+        if not self.psi_star_deg or len(self.psi_star_deg) != len(self.limb_names):
+            return str(index)
+        try:
+            return label(index, tuple(len(s) + 1 for s in self.psi_star_deg))
+        except ValueError:
+            return str(index)
+
+    def n_states(self) -> int:
+        """The number of states ``psi_star_deg`` gives (0: unknown)."""
+        if not self.psi_star_deg or len(self.psi_star_deg) != len(self.limb_names):
+            return 0
+        return math.prod(len(s) + 1 for s in self.psi_star_deg)
 
     def columns(self) -> list[str]:
         """The telemetry columns, in order."""
@@ -149,9 +167,12 @@ def event_row(host_s: float, name: str, f: dict[str, Any], meta: RecordingMeta |
     if name == "EVENT":
         from ..console.names import RobotNames, event_text
 
-        names = RobotNames() if meta is None else RobotNames(meta.limb_names, meta.actuator_names)
+        if meta is None:
+            names, state = RobotNames(), None
+        else:
+            names, state = RobotNames(meta.limb_names, meta.actuator_names, meta.n_states()), meta.state_label
         return {"t_host_s": round(host_s, 6), "t_s": t_s, "msg": name, "kind": _name(EventKind, f["kind"]),
-                "code": int(f["code"]), "detail": int(f["detail"]), "text": event_text(f, names)}
+                "code": int(f["code"]), "detail": int(f["detail"]), "text": event_text(f, names, state)}
     code = int(f.get("error", 0)) if name == "NACK" else 0
     detail = int(f.get("detail", 0)) if name == "NACK" else 0
     text = " ".join(f"{k}={v}" for k, v in f.items() if k != "time_ms")

@@ -30,6 +30,8 @@ COMMAND_RETRIES = 4
 #: virtual seconds the run goes on after STOP (telemetry is counted until then)
 STOP_TAIL_S = 0.05
 _EPS = 1e-9
+#: ``SimSession.until_info`` runs the board in steps this long (the boot INFO comes at ≈ 2 ms)
+INFO_STEP_S = 0.001
 
 
 @dataclass
@@ -168,6 +170,16 @@ class SimSession:
             rx = self.client.recv_received(remaining)
             if rx is not None:
                 self._dispatch(rx)
+
+    def until_info(self, limit_s: float) -> float:
+        """Run until the board's boot INFO has arrived (``client.info``: it names the firmware
+        for a recording's metadata), for at most ``limit_s`` of virtual time, in steps of
+        ``INFO_STEP_S``; the virtual seconds that took. The messages go to the listeners."""
+        clock = self.link.clock
+        t0 = clock()
+        while self.client.info is None and clock() - t0 < limit_s - _EPS:
+            self.advance(min(INFO_STEP_S, limit_s - (clock() - t0)))
+        return clock() - t0
 
     def run_gait(self, direction: str = "+x", gait: int = 0, duration_s: float = 60.0) -> GaitRun:
         """START the gait, run for ``duration_s`` of virtual time, STOP, report. A START or STOP
