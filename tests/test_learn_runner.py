@@ -115,9 +115,12 @@ def test_a_rest_on_a_simulated_link_ends_whatever_the_clock_reads(tmp_path):
 
 class _Scripted:
     """A robot client that plays a script of (telemetry measured state | reached state) on a
-    clock that moves 10 ms per read."""
+    clock that moves 10 ms per read. A telemetry frame's ψ (0.01°) is 25° for a raised limb
+    and 0° for a lowered one (inchworm-3: ψ* 20°, band ±1°), unless the script gives it as a
+    third item."""
 
-    def __init__(self, script):
+    def __init__(self, script, levels=(2, 2, 2)):
+        self.levels = levels
         self.script = list(script)
         self.t = 0.0
         self.link = SimpleNamespace(clock=lambda: self.t)
@@ -136,10 +139,13 @@ class _Scripted:
         self.t += 0.01
         if not self.script:
             return None
-        kind, state = self.script.pop(0)
+        kind, state, *psi = self.script.pop(0)
         ms = int(self.t * 1000)
         if kind == "tel":
-            return SimpleNamespace(name="TELEMETRY", flags=0, measured=state, time_ms=ms)
+            from proleg.states import limb_levels
+
+            psi = psi[0] if psi else [2500 * level for level in limb_levels(state, self.levels)]
+            return SimpleNamespace(name="TELEMETRY", flags=0, measured=state, time_ms=ms, psi=psi)
         return SimpleNamespace(name="EVENT", kind=int(EventKind.STATE_REACHED), detail=state, time_ms=ms, code=0)
 
 
@@ -164,6 +170,39 @@ def test_a_transition_that_passes_through_a_state_outside_it_says_so_in_its_tria
     assert [(tr.src, tr.dst, tr.passed) for tr in made] == [("000", "100", ()), ("100", "110", ("111",))]
     lines = (tmp_path / "t.jsonl").read_text().splitlines()
     assert '"passed"' not in lines[-2] and Trial.from_json(lines[-1]).passed == ("111",)
+
+
+def test_a_held_limb_that_sags_across_psi_star_inside_the_band_is_seen(tmp_path):
+    """100 → 110: the rear limb should hold. Its ψ sags to 19.5°, past ψ* = 20° (the contact's
+    friction changes there) but inside the band 19–21°, so the measured state stays 100; ψ read
+    against the bare ψ* shows 000, outside the transition, and the trial names it."""
+    from proleg.learn.pieces import Piece
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    s = {label: t.index(label) for label in ("000", "100", "110")}
+
+    def reached(label):
+        return [("tel", s[label]), ("reached", s[label])] + [("tel", s[label])] * 8
+
+    sag = [("tel", s["100"], [1950, 0, 0]), ("tel", s["100"], [1950, 1500, 0])]
+    noise = [("tel", s["100"], [2020, 900, 0])]  # inside the band, above ψ*: nothing crossed
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        made = Explorer(_Scripted(reached("000") + reached("100") + sag + reached("110")), robot, log, None,
+                        rest=lambda s: None).run_piece(Piece((s["000"], s["100"], s["110"]), True, 0.0, 1.6))
+        held = Explorer(_Scripted(reached("000") + reached("100") + noise + reached("110")), robot, log, None,
+                        rest=lambda s: None).run_piece(Piece((s["000"], s["100"], s["110"]), True, 0.0, 1.6))
+    assert [(tr.src, tr.dst, tr.passed) for tr in made] == [("000", "100", ()), ("100", "110", ("000",))]
+    assert [tr.passed for tr in held] == [(), ()]
+
+
+def test_psi_state_counts_the_psi_stars_each_limb_is_at_or_past():
+    from proleg.learn.runner import psi_state
+    from proleg.states import index
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    assert psi_state(robot, [2000, 1999, -4000]) == index("100", robot.levels)
+    assert psi_state(robot, [8000, 2001, 2000]) == index("111", robot.levels)
 
 
 def test_between_is_every_state_on_a_monotone_way_from_a_to_b():

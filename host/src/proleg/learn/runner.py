@@ -27,6 +27,9 @@ firmware confirmed it settled) is the trial's ``t_seen``, which a tracker is ali
 and every state it showed on the way that lies outside the transition (a limb that should
 have held, or the moving one overshooting, crossed a level) is the trial's ``passed``: its
 motion includes those crossings, and ``proleg learn --report`` says how often. The
+measured state changes only past the hysteresis band (ψ* ± h/2), while a contact's friction
+changes at ψ* itself: so each frame's ψ is also read against the bare ψ* (``psi_state``),
+and a held limb that sags across ψ* but stays inside the band counts as passing too. The
 exploration asks for the fastest telemetry the board takes (``WATCH_HZ``) to see them.
 """
 
@@ -312,6 +315,7 @@ class Explorer:
                 if msg is not None and msg.name == "TELEMETRY" and not int(msg.flags) & Flag.STATE_UNKNOWN:
                     m = int(msg.measured)
                     passed.add(m)
+                    passed.add(psi_state(self.robot, msg.psi))
                     if seen is None or seen[0] != m:
                         seen = (m, int(msg.time_ms) / 1000.0)
                     continue
@@ -347,6 +351,17 @@ def _making(t, states: tuple[int, ...], reached: list) -> tuple[str, str] | None
     if k == 0 or k >= len(states):
         return None
     return t.label(reached[-1][1]), t.label(states[k])
+
+
+def psi_state(robot: Robot, psi_centideg) -> int:
+    """The state ψ alone says, without the hysteresis band: each limb's level is how many of
+    its ψ* it is at or past (telemetry's ψ, 0.01°). A sag across ψ* that stays inside the band
+    changes this and not the measured state."""
+    index = 0
+    for limb, k, psi in zip(robot.limbs, robot.levels, psi_centideg):
+        level = sum(1 for star in limb.psi_star_deg if psi >= round(star * 100))
+        index = index * k + level
+    return index
 
 
 def _between(levels: tuple[int, ...], a: int, b: int, s: int) -> bool:
