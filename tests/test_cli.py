@@ -117,6 +117,36 @@ def test_evaluate_names_the_forbidden_transition(capsys):
     assert err.startswith("proleg: error: --evaluate:") and err.count("\n") == 1  # the README's one line
 
 
+def _one_coil_paper_r1(tmp_path) -> Path:
+    """paper-r1 with both limbs on one coil: 00 -> 01 raises the far limb alone, which the coil
+    cannot hold (the near limb rises with it)."""
+    text = (ROBOTS / "paper-r1.toml").read_text().replace('actuator = "sma-right"', 'actuator = "sma-left"')
+    shared = tmp_path / "shared.toml"
+    shared.write_text(text.replace('[[actuator]]\nname = "sma-right"\nchannel = 1\n', ""))
+    return shared
+
+
+def test_evaluate_of_a_gait_the_hardware_cannot_make_exits_2_in_text_and_json(capsys, tmp_path):
+    """The sweep's 2.1: --evaluate listed a shared-actuator error in "problems" and exited 0;
+    a gait the hardware cannot run is a bad gait (README: exit 2), like one the matrix forbids."""
+    shared = _one_coil_paper_r1(tmp_path)
+    code, out, err = run(capsys, "gait", str(shared), "--evaluate", "00,01,00", "--json")
+    ev = json.loads(out)["evaluation"]
+    assert code == 2 and ev["valid"] is True and ev["feasible"] is False
+    assert [p["kind"] for p in ev["problems"] if p["severity"] == "error"] == ["shared-actuator"]
+    errors = [line for line in err.splitlines() if line.startswith("proleg: error:")]
+    assert len(errors) == 1 and "00 → 01 → 00 cannot run on paper-r1's hardware" in errors[0]
+    assert "share actuator 'sma-left'" in errors[0]
+    code, out, err = run(capsys, "gait", str(shared), "--evaluate", "00,01,00")
+    assert code == 2 and "error: gait 00 01 00: step 1 (00 -> 01) raises 'right' but not 'left'" in out
+    assert [line for line in err.splitlines() if line.startswith("proleg: error:")]
+    # a gait it can make still exits 0, and says it is feasible
+    code, out, _ = run(capsys, "gait", str(shared), "--evaluate", "00,10,11,00", "--json")
+    assert code == 0 and json.loads(out)["evaluation"]["feasible"] is True
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r3.toml"), "--evaluate", "00,01,10,11,00")
+    assert code == 0 and "note: raises one limb while lowering another in 01 → 10" in out  # a warning only
+
+
 def test_evaluate_rejects_an_unknown_label_in_one_line(capsys):
     code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,12,00")
     assert code == 2
@@ -254,10 +284,7 @@ def test_gait_json_says_what_the_text_says_of_repeats_and_problems(capsys, tmp_p
                        "--max-transitions", "4", "--json")
     g = json.loads(out)["results"][0]["gaits"][0]
     assert code == 0 and g["repeats"] == 2 and g["reward"] * 2 == json.loads(out)["results"][0]["value"]
-    text = (ROBOTS / "paper-r1.toml").read_text().replace('actuator = "sma-right"', 'actuator = "sma-left"')
-    text = text.replace('[[actuator]]\nname = "sma-right"\nchannel = 1\n', "")
-    shared = tmp_path / "shared.toml"
-    shared.write_text(text)
+    shared = _one_coil_paper_r1(tmp_path)
     code, out, _ = run(capsys, "gait", str(shared), "--direction", "+x", "--max-transitions", "3", "--json")
     kinds = {p["kind"] for g in json.loads(out)["results"][0]["gaits"] for p in g["problems"]}
     assert code == 0 and "shared-actuator" in kinds, out

@@ -349,9 +349,30 @@ def _print_evaluation(robot, args) -> int:
         from types import SimpleNamespace
 
         _plot(robot, [("evaluated", SimpleNamespace(gaits=[gait]))], args.cycles, args.plot, args.json)
+    walk = " → ".join(table.label(s) for s in gait.states)
+    problems, entry = _feasibility(robot, gait)
+    errors = [p for p in problems if p.severity == "error"]
     if args.json:
-        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))
+        # "valid": the matrix allows every step; "feasible": the hardware can also make them
+        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, "feasible": not errors,
+                                                              **_gait_json(robot, gait)}}))
     else:
-        walk = " → ".join(table.label(s) for s in gait.states)
         print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
+        steps = _opposing_text(table, gait)
+        if steps:
+            print(f"    note: raises one limb while lowering another in {steps}")
+        for p in problems:
+            print(f"    {p.severity}: {p.message}")
+        if entry is not None and entry.transitions:
+            names = " → ".join(table.label(s) for s in entry.states)
+            print(f"    entry: entered from rest by {names} (joining at the gait's state {entry.gait_step + 1})")
+    if errors:
+        # a gait the hardware cannot run is a bad gait, like one the matrix forbids: exit 2
+        # (one line: the text above lists every problem, the JSON carries them in "problems")
+        kinds = ", ".join(dict.fromkeys(p.kind for p in errors))
+        why = f"{len(errors)} errors ({kinds})" if len(errors) > 1 else errors[0].message
+        if not args.json and len(errors) > 1:
+            why += ", listed above"
+        print(f"proleg: error: --evaluate: {walk} cannot run on {robot.name}'s hardware: {why}", file=sys.stderr)
+        return 2
     return 0
