@@ -44,6 +44,23 @@ def test_version_and_exit_codes_in_help(capsys):
     assert re.search(r"0\s+ok", out) and re.search(r"1\s+failed", out) and re.search(r"2\s+usage", out)
 
 
+def test_a_board_built_from_another_robot_exits_1_as_the_documented_rule_says(capsys):
+    """The sweep's 3.7: run on a board of another robot exits 1, and the README listed "a bad
+    robot file" under 2. The file loads; what does not match is the board, found over the
+    link, like the console's identity check and a library's gait hash (both 1): the README
+    and --help now say so."""
+    code, out, err = run(capsys, "run", "paper-r3", "--port", "sim://paper-r1", "--duration", "1")
+    assert code == 1 and out == "" and "Traceback" not in err
+    assert err.startswith("proleg: error: ") and err.count("\n") == 1
+    assert "runs robot 'paper-r1', not 'paper-r3'" in err and "give the robot file it was built from" in err
+    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8").split())
+    assert ("the board does not run the firmware of the robot file given); **2** usage (a bad argument, "
+            "a robot or board file that does not load, a bad gait)") in readme
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "the board does not run the firmware of the robot file given" in " ".join(capsys.readouterr().out.split())
+
+
 def test_a_usage_error_exits_2(capsys):
     with pytest.raises(SystemExit) as e:
         main(["run", "paper-r1"])  # no --port/--can/--sim

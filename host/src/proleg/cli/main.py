@@ -4,8 +4,9 @@ library, print. ``gait`` is in ``gait``; ``sim`` in ``sim_command``; ``console``
 ``robot_commands``.
 
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
-faulted, an output could not be written); 2 usage (a bad argument, robot file, board file,
-recording or gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
+faulted, an output could not be written, the board does not run the robot file's firmware: a
+file that loads but is not the one the board was built from is found only over the link);
+2 usage (a bad argument, a robot file, board file or recording that does not load, a bad gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
 a closed pipe (``proleg … | head``), a full disk and a terminal that cannot show UTF-8 end
 without a traceback.
 """
@@ -30,8 +31,10 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
 exit status:
   0  ok
-  1  failed: a link or command failed, the robot faulted, an output could not be written
-  2  usage: a bad argument, robot file, board file, recording or gait
+  1  failed: a link or command failed, the robot faulted, an output could not be written,
+     the board does not run the firmware of the robot file given
+  2  usage: a bad argument, a robot file, board file or recording that does not load,
+     a bad gait
 
 ROBOT is a robot file or the name of a bundled example (proleg robots lists them).
 """
