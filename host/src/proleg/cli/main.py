@@ -6,7 +6,8 @@ library, print. ``gait`` is in ``gait``; ``sim`` in ``sim_command``; ``console``
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
 faulted, an output could not be written, the board does not run the robot file's firmware: a
 file that loads but is not the one the board was built from is found only over the link);
-2 usage (a bad argument, a robot file, board file or recording that does not load, a bad gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
+2 usage (a bad argument, a robot file, board file or recording that does not load, a bad
+gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
 a closed pipe (``proleg … | head``), a full disk and a terminal that cannot show UTF-8 end
 without a traceback.
 """
