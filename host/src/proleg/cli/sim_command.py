@@ -67,8 +67,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..sim.simulated_boards import clear_ticks, tick_budget
 
     robot = load_robot(args.robot)
-    from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,
-                            plant_kwargs, refuse_what_does_not_apply, wants_help)
+    from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, conditions_json,
+                            flat_conditions, plant_kwargs, refuse_what_does_not_apply, wants_help)
 
     refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
     from .gait import check_speed_objective
@@ -154,7 +154,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     budget = tick_budget(sim)
     agreement = _matrix_check(robot, args, report)
     if args.json:
-        out = {**_report_json(robot, report, args.board), **(budget or {})}
+        out = {**_report_json(robot, report, args.board), **(budget or {}), **conditions_json(robot, args)}
         out["matrix_check"] = agreement.as_json() if agreement else None
         print(json.dumps(out))
     else:
