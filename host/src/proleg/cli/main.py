@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .. import __version__
-from ..errors import LinkError, ProlegError
+from ..errors import Interrupted, LinkError, ProlegError
 from .gait import add_gait_parser
 from .number_args import max_transitions
 
@@ -57,7 +57,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ProlegError as e:
         print(f"proleg: error: {e}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as e:  # Ctrl-C: one line, what was kept where the command says it
+        print(f"proleg: {e}" if isinstance(e, Interrupted) and str(e) else "proleg: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # the reader went away (`proleg … | head -1`): not an error
         _silence_stdout()
