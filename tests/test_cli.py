@@ -65,6 +65,55 @@ def test_gaits_with_a_step_that_raises_one_limb_and_lowers_another_are_flagged(c
     assert out.count("note:") == 1
 
 
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+
+
+def _gait_lines(out: str) -> list[str]:
+    return [line for line in out.splitlines() if line.startswith("    ") and "  J=" in line]
+
+
+def test_gait_text_shows_the_first_ties_and_counts_the_rest(capsys):
+    """The sweep's 5: a 256-state robot printed 10,000 ties per direction (20,000 lines with
+    their entry lines, 5 MB). The text now shows the first 10 of each answer and a count."""
+    code, out, err = run(capsys, "-q", "gait", str(FIXTURES / "eight-shared.toml"))
+    assert code == 0 and "10000 optimal gaits (listing stopped after 10000: more ties exist)" in out
+    assert len(_gait_lines(out)) == 20 and len(out.splitlines()) < 300
+    assert out.count("    … and 9,990 more ties: --ties N or --all-ties lists them, --json lists every one") == 2
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x")
+    assert len(_gait_lines(out)) == 10 and out.rstrip().endswith("… and 100 more ties: --ties N or --all-ties "
+                                                                   "lists them, --json lists every one")
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--ties", "3")
+    assert len(_gait_lines(out)) == 3 and "… and 107 more ties" in out
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--all-ties")
+    assert len(_gait_lines(out)) == 110 and "more tie" not in out
+    code, out, _ = run(capsys, "gait", "paper-r3", "--direction", "-x")  # 3 ties: all shown, no count
+    assert len(_gait_lines(out)) == 3 and "more tie" not in out
+
+
+def test_gait_json_lists_every_tie_and_says_how_many_unless_ties_caps_it(capsys):
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--json")
+    (r,) = json.loads(out)["results"]
+    assert code == 0 and r["ties"] == len(r["gaits"]) == 110 and "truncated" not in r
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--json", "--ties", "3")
+    (capped,) = json.loads(out)["results"]
+    assert capped["ties"] == 110 and capped["gaits"] == r["gaits"][:3]  # the first 3 in rank order
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--evaluate", "00,10,11,01,00", "--ties", "3"], "--ties: not with --evaluate"),
+    (["--evaluate", "00,10,11,01,00", "--all-ties"], "--all-ties: not with --evaluate"),
+    (["--ties", "0"], "argument --ties: expected at least 1, got 0"),
+    (["--ties", "3", "--all-ties"], "not allowed with argument"),
+])
+def test_gait_ties_options_are_refused_where_they_mean_nothing(capsys, argv, words):
+    try:
+        code = main(["gait", "paper-r1", *argv])
+    except SystemExit as e:
+        code = e.code
+    _, err = capsys.readouterr()
+    assert code == 2 and words in err and "Traceback" not in err
+
+
 def test_the_firmware_carries_one_way_gaits_first(capsys):
     from proleg.firmware.build import firmware_gaits
     from proleg.robot import load_robot
