@@ -170,6 +170,22 @@ def test_run_jsonl_prints_every_message_then_a_result_line(capsys):
     assert result["telemetry_frames"] == len(tel)
 
 
+def test_states_reached_is_the_same_list_of_labels_in_run_and_sim(capsys):
+    """The sweep's 6: ``states_reached`` was a list of labels in sim --json and a count in run's
+    RESULT line. Both are now the labels, in order; on the same simulated board the same ones."""
+    code, out, _ = run(capsys, "run", "paper-r1", "--sim", "--duration", "8", "--format", "jsonl", "-q")
+    result = json.loads(out.splitlines()[-1])
+    code_sim, out_sim, _ = run(capsys, "sim", "paper-r1", "--duration", "8", "--plant", "table", "--json")
+    sim = json.loads(out_sim)
+    assert code == code_sim == 0 and result["msg"] == "RESULT"
+    assert isinstance(result["states_reached"], list) and isinstance(sim["states_reached"], list)
+    assert set(result["states_reached"]) <= {"00", "01", "10", "11"} and len(result["states_reached"]) >= 4
+    assert result["states_reached"][:4] == sim["states_reached"][:4]  # gait 0 of +x, from rest
+    events = [json.loads(x) for x in out.splitlines()[:-1]]
+    assert len(result["states_reached"]) == sum(e["msg"] == "EVENT" and e["kind"] == "STATE_REACHED"
+                                                 for e in events)
+
+
 def test_run_exits_1_when_the_robot_refuses_to_start(capsys):
     code, out, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "-q")
     assert code == 1
