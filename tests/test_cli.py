@@ -75,7 +75,7 @@ def _gait_lines(out: str) -> list[str]:
 def test_gait_text_shows_the_first_ties_and_counts_the_rest(capsys):
     """The sweep's 5: a 256-state robot printed 10,000 ties per direction (20,000 lines with
     their entry lines, 5 MB). The text now shows the first 10 of each answer and a count."""
-    code, out, err = run(capsys, "-q", "gait", str(FIXTURES / "eight-shared.toml"))
+    code, out, _ = run(capsys, "-q", "gait", str(FIXTURES / "eight-shared.toml"))
     assert code == 0 and "10000 optimal gaits (listing stopped after 10000: more ties exist)" in out
     assert len(_gait_lines(out)) == 20 and len(out.splitlines()) < 300
     assert out.count("    … and 9,990 more ties: --ties N or --all-ties lists them, --json lists every one") == 2

@@ -14,11 +14,10 @@ import time
 from pathlib import Path
 
 import pytest
-
 from build_checks import R1, assert_nothing_left, cli, empty_build_dir
 from proleg.firmware import build as build_mod
-from proleg.firmware.build import MANIFEST, build
 from proleg.firmware.boards import load_board
+from proleg.firmware.build import MANIFEST, build
 from proleg.record import read_recording
 from proleg.report.gait_run import SimSession
 from proleg.robot import load_robot

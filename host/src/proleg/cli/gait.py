@@ -18,7 +18,13 @@ import sys
 from pathlib import Path
 
 from ..errors import GaitError
-from .number_args import cycles, finite_float, max_transitions, non_negative_float, positive_int
+from .number_args import (
+    cycles,
+    finite_float,
+    max_transitions,
+    non_negative_float,
+    positive_int,
+)
 
 DIRECTIONS = ("+x", "-x")
 #: Ties the text lists per answer unless --ties N / --all-ties says otherwise (a 256-state
