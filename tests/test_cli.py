@@ -65,6 +65,55 @@ def test_gaits_with_a_step_that_raises_one_limb_and_lowers_another_are_flagged(c
     assert out.count("note:") == 1
 
 
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+
+
+def _gait_lines(out: str) -> list[str]:
+    return [line for line in out.splitlines() if line.startswith("    ") and "  J=" in line]
+
+
+def test_gait_text_shows_the_first_ties_and_counts_the_rest(capsys):
+    """The sweep's 5: a 256-state robot printed 10,000 ties per direction (20,000 lines with
+    their entry lines, 5 MB). The text now shows the first 10 of each answer and a count."""
+    code, out, _ = run(capsys, "-q", "gait", str(FIXTURES / "eight-shared.toml"))
+    assert code == 0 and "10000 optimal gaits (listing stopped after 10000: more ties exist)" in out
+    assert len(_gait_lines(out)) == 20 and len(out.splitlines()) < 300
+    assert out.count("    … and 9,990 more ties: --ties N or --all-ties lists them, --json lists every one") == 2
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x")
+    assert len(_gait_lines(out)) == 10 and out.rstrip().endswith("… and 100 more ties: --ties N or --all-ties "
+                                                                   "lists them, --json lists every one")
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--ties", "3")
+    assert len(_gait_lines(out)) == 3 and "… and 107 more ties" in out
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--all-ties")
+    assert len(_gait_lines(out)) == 110 and "more tie" not in out
+    code, out, _ = run(capsys, "gait", "paper-r3", "--direction", "-x")  # 3 ties: all shown, no count
+    assert len(_gait_lines(out)) == 3 and "more tie" not in out
+
+
+def test_gait_json_lists_every_tie_and_says_how_many_unless_ties_caps_it(capsys):
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--json")
+    (r,) = json.loads(out)["results"]
+    assert code == 0 and r["ties"] == len(r["gaits"]) == 110 and "truncated" not in r
+    code, out, _ = run(capsys, "gait", "caterpillar-4", "--direction", "+x", "--json", "--ties", "3")
+    (capped,) = json.loads(out)["results"]
+    assert capped["ties"] == 110 and capped["gaits"] == r["gaits"][:3]  # the first 3 in rank order
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--evaluate", "00,10,11,01,00", "--ties", "3"], "--ties: not with --evaluate"),
+    (["--evaluate", "00,10,11,01,00", "--all-ties"], "--all-ties: not with --evaluate"),
+    (["--ties", "0"], "argument --ties: expected at least 1, got 0"),
+    (["--ties", "3", "--all-ties"], "not allowed with argument"),
+])
+def test_gait_ties_options_are_refused_where_they_mean_nothing(capsys, argv, words):
+    try:
+        code = main(["gait", "paper-r1", *argv])
+    except SystemExit as e:
+        code = e.code
+    _, err = capsys.readouterr()
+    assert code == 2 and words in err and "Traceback" not in err
+
+
 def test_the_firmware_carries_one_way_gaits_first(capsys):
     from proleg.firmware.build import firmware_gaits
     from proleg.robot import load_robot
@@ -117,6 +166,36 @@ def test_evaluate_names_the_forbidden_transition(capsys):
     assert err.startswith("proleg: error: --evaluate:") and err.count("\n") == 1  # the README's one line
 
 
+def _one_coil_paper_r1(tmp_path) -> Path:
+    """paper-r1 with both limbs on one coil: 00 -> 01 raises the far limb alone, which the coil
+    cannot hold (the near limb rises with it)."""
+    text = (ROBOTS / "paper-r1.toml").read_text().replace('actuator = "sma-right"', 'actuator = "sma-left"')
+    shared = tmp_path / "shared.toml"
+    shared.write_text(text.replace('[[actuator]]\nname = "sma-right"\nchannel = 1\n', ""))
+    return shared
+
+
+def test_evaluate_of_a_gait_the_hardware_cannot_make_exits_2_in_text_and_json(capsys, tmp_path):
+    """The sweep's 2.1: --evaluate listed a shared-actuator error in "problems" and exited 0;
+    a gait the hardware cannot run is a bad gait (README: exit 2), like one the matrix forbids."""
+    shared = _one_coil_paper_r1(tmp_path)
+    code, out, err = run(capsys, "gait", str(shared), "--evaluate", "00,01,00", "--json")
+    ev = json.loads(out)["evaluation"]
+    assert code == 2 and ev["valid"] is True and ev["feasible"] is False
+    assert [p["kind"] for p in ev["problems"] if p["severity"] == "error"] == ["shared-actuator"]
+    errors = [line for line in err.splitlines() if line.startswith("proleg: error:")]
+    assert len(errors) == 1 and "00 → 01 → 00 cannot run on paper-r1's hardware" in errors[0]
+    assert "share actuator 'sma-left'" in errors[0]
+    code, out, err = run(capsys, "gait", str(shared), "--evaluate", "00,01,00")
+    assert code == 2 and "error: gait 00 01 00: step 1 (00 -> 01) raises 'right' but not 'left'" in out
+    assert [line for line in err.splitlines() if line.startswith("proleg: error:")]
+    # a gait it can make still exits 0, and says it is feasible
+    code, out, _ = run(capsys, "gait", str(shared), "--evaluate", "00,10,11,00", "--json")
+    assert code == 0 and json.loads(out)["evaluation"]["feasible"] is True
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r3.toml"), "--evaluate", "00,01,10,11,00")
+    assert code == 0 and "note: raises one limb while lowering another in 01 → 10" in out  # a warning only
+
+
 def test_evaluate_rejects_an_unknown_label_in_one_line(capsys):
     code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,12,00")
     assert code == 2
@@ -147,7 +226,9 @@ def test_console_script_is_installed():
 SIM_JSON_FIELDS = {
     "robot", "board", "direction", "gait", "duration_s", "cycles", "cycle_displacements_mm", "mean_cycle_mm",
     "displacement_mm", "speed_mm_s", "states_reached", "true_transitions", "unexpected_transitions", "faults",
-    "telemetry_frames", "telemetry_lost", "link_errors", "errors", "start_time_s", "matrix_check",
+    "telemetry_frames", "telemetry_lost", "link_errors", "errors", "start_time_s",
+    "matrix_check",  # README: the run against what the matrix promises
+    "plant", "conditions", "effective_conditions",  # README: as --measure-matrix --json names them
 }
 
 
@@ -254,10 +335,7 @@ def test_gait_json_says_what_the_text_says_of_repeats_and_problems(capsys, tmp_p
                        "--max-transitions", "4", "--json")
     g = json.loads(out)["results"][0]["gaits"][0]
     assert code == 0 and g["repeats"] == 2 and g["reward"] * 2 == json.loads(out)["results"][0]["value"]
-    text = (ROBOTS / "paper-r1.toml").read_text().replace('actuator = "sma-right"', 'actuator = "sma-left"')
-    text = text.replace('[[actuator]]\nname = "sma-right"\nchannel = 1\n', "")
-    shared = tmp_path / "shared.toml"
-    shared.write_text(text)
+    shared = _one_coil_paper_r1(tmp_path)
     code, out, _ = run(capsys, "gait", str(shared), "--direction", "+x", "--max-transitions", "3", "--json")
     kinds = {p["kind"] for g in json.loads(out)["results"][0]["gaits"] for p in g["problems"]}
     assert code == 0 and "shared-actuator" in kinds, out

@@ -44,6 +44,23 @@ def test_version_and_exit_codes_in_help(capsys):
     assert re.search(r"0\s+ok", out) and re.search(r"1\s+failed", out) and re.search(r"2\s+usage", out)
 
 
+def test_a_board_built_from_another_robot_exits_1_as_the_documented_rule_says(capsys):
+    """The sweep's 3.7: run on a board of another robot exits 1, and the README listed "a bad
+    robot file" under 2. The file loads; what does not match is the board, found over the
+    link, like the console's identity check and a library's gait hash (both 1): the README
+    and --help now say so."""
+    code, out, err = run(capsys, "run", "paper-r3", "--port", "sim://paper-r1", "--duration", "1")
+    assert code == 1 and out == "" and "Traceback" not in err
+    assert err.startswith("proleg: error: ") and err.count("\n") == 1
+    assert "runs robot 'paper-r1', not 'paper-r3'" in err and "give the robot file it was built from" in err
+    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8").split())
+    assert ("the board does not run the firmware of the robot file given); **2** usage (a bad argument, "
+            "a robot or board file that does not load, a bad gait)") in readme
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "the board does not run the firmware of the robot file given" in " ".join(capsys.readouterr().out.split())
+
+
 def test_a_usage_error_exits_2(capsys):
     with pytest.raises(SystemExit) as e:
         main(["run", "paper-r1"])  # no --port/--can/--sim
@@ -151,6 +168,22 @@ def test_run_jsonl_prints_every_message_then_a_result_line(capsys):
     result = lines[-1]
     assert result["msg"] == "RESULT" and result["ok"] is True and result["faults"] == []
     assert result["telemetry_frames"] == len(tel)
+
+
+def test_states_reached_is_the_same_list_of_labels_in_run_and_sim(capsys):
+    """The sweep's 6: ``states_reached`` was a list of labels in sim --json and a count in run's
+    RESULT line. Both are now the labels, in order; on the same simulated board the same ones."""
+    code, out, _ = run(capsys, "run", "paper-r1", "--sim", "--duration", "8", "--format", "jsonl", "-q")
+    result = json.loads(out.splitlines()[-1])
+    code_sim, out_sim, _ = run(capsys, "sim", "paper-r1", "--duration", "8", "--plant", "table", "--json")
+    sim = json.loads(out_sim)
+    assert code == code_sim == 0 and result["msg"] == "RESULT"
+    assert isinstance(result["states_reached"], list) and isinstance(sim["states_reached"], list)
+    assert set(result["states_reached"]) <= {"00", "01", "10", "11"} and len(result["states_reached"]) >= 4
+    assert result["states_reached"][:4] == sim["states_reached"][:4]  # gait 0 of +x, from rest
+    events = [json.loads(x) for x in out.splitlines()[:-1]]
+    assert len(result["states_reached"]) == sum(e["msg"] == "EVENT" and e["kind"] == "STATE_REACHED"
+                                                 for e in events)
 
 
 def test_run_exits_1_when_the_robot_refuses_to_start(capsys):

@@ -48,6 +48,30 @@ def test_a_condition_changes_the_run(capsys):
     assert json.loads(hot)["displacement_mm"] != pytest.approx(json.loads(base)["displacement_mm"], abs=0.05)
 
 
+def test_sim_json_echoes_the_conditions_given_and_those_in_effect(capsys, tmp_path):
+    """The sweep's 3.7: sim --json did not say which conditions the run had (measure-matrix
+    --json echoed the --condition strings). Now every report has ``conditions`` (as given) and
+    ``effective_conditions`` (the robot file's [plant] with them on top, as --condition takes)."""
+    path = tmp_path / "paper-r1.toml"
+    path.write_text(R1.read_text() + "\n[plant]\nsupply_v = [8.0, 4.0]\nambient_c = 30.0\n")
+    given = ["--condition", "ambient_c=20", "--condition", "imu_bias_deg=right:3"]
+    rc, out, _ = run(capsys, "sim", str(path), "--duration", "2", "--json", *given)
+    report = json.loads(out)
+    assert rc == 0 and report["plant"] == "physical"
+    assert report["conditions"] == ["ambient_c=20", "imu_bias_deg=right:3"]
+    # supply_v per coil: the highest voltage, and a power scale of (V / V_max)² per coil
+    assert report["effective_conditions"] == ["supply_v=8.0", "ambient_c=20.0", "power_scale=sma-left:1.0",
+                                              "power_scale=sma-right:0.25", "imu_bias_deg=right:3.0"]
+    # the strings are what --condition takes: the same plant
+    again = plant_conditions(load_robot(R1), report["effective_conditions"])
+    assert again == plant_conditions(load_robot(path), report["conditions"])
+    rc, out, _ = run(capsys, "sim", str(path), "--measure-matrix", "--json", *given)
+    assert json.loads(out)["effective_conditions"] == report["effective_conditions"]
+    rc, out, _ = run(capsys, "sim", str(R1), "--plant", "table", "--duration", "2", "--json")
+    report = json.loads(out)
+    assert report["plant"] == "table" and report["conditions"] == report["effective_conditions"] == []
+
+
 @pytest.mark.parametrize("args, words", [
     (["--condition", "speed=3"], "condition 'speed': unknown key"),
     (["--condition", "power=9"], "condition power: 9 is outside [0.2, 2] ×"),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from proleg.cli import main
@@ -62,8 +63,29 @@ def test_host_sim_reports_no_tick_budget(capsys):
     assert "tick_busy_us" not in doc and "tick_period_us" not in doc
 
 
+def test_the_tick_period_is_a_float_in_the_json_of_both_emulated_mcus():
+    """The sweep's 7: arm-emu gave tick_period_us as an int (1000), avr-emu as a float
+    (1000.0; 1e6 / tick_hz need not be whole, 398 Hz is 2512.563 µs): one type in the JSON."""
+    from types import SimpleNamespace
+
+    from proleg.emu.arm.ticks import TickBudget as ArmBudget
+    from proleg.emu.avr.budget import summarize
+    from proleg.sim.simulated_boards import tick_budget
+
+    arm = ArmBudget(1000, 5, 100.0, 120.0, 130.0)
+    avr = summarize(np.array([0, 16000, 32000]), np.array([1600, 1700, 1800]), np.array([800, 800, 800]),
+                    freq_hz=16_000_000, tick_period_us=1e6 / 398, stack_peak_bytes=100, stack_margin_bytes=900,
+                    emulated_s=1.0, wall_s=1.0, cpu_s=1.0)
+    docs = [json.loads(json.dumps(tick_budget(SimpleNamespace(board=SimpleNamespace(tick_budget=lambda b=b: b)))))
+            for b in (arm, avr)]
+    assert [type(d["tick_period_us"]) for d in docs] == [float, float]
+    assert docs[0]["tick_period_us"] == 1000.0 and docs[1]["tick_period_us"] == 2512.563
+    assert [type(d["tick_busy_us"]["ticks"]) for d in docs] == [int, int]
+    assert json.dumps(arm.as_dict()).startswith('{"tick_period_us": 1000.0,')
+
+
 def _check_budget(doc: dict, duration_s: float) -> None:
-    assert doc["tick_period_us"] == 1000  # paper-r1: tick_hz = 1000
+    assert doc["tick_period_us"] == 1000 and isinstance(doc["tick_period_us"], float)  # paper-r1: tick_hz = 1000
     busy = doc["tick_busy_us"]
     assert 0 < busy["mean"] <= busy["p99"] <= busy["max"]
     # one record per completed tick over the run (START, the gait, STOP and its tail);

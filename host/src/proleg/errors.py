@@ -44,6 +44,12 @@ class RecordingError(ProlegError):
     file, exit 2 like a bad robot file. Writing one that fails is a ``LinkError`` (exit 1)."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C, saying in one line what was kept ("interrupted; nothing built"): the CLI prints
+    ``proleg: `` and the message and exits 130. A ``KeyboardInterrupt``, so that whatever
+    stops a run on Ctrl-C (``finally`` blocks, ``except KeyboardInterrupt``) still runs."""
+
+
 class UsageError(ProlegError):
     """An option's value the command cannot take (an output's file type, an endpoint, a node
     id): exit 2, like any other usage mistake."""

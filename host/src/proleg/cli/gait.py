@@ -18,9 +18,18 @@ import sys
 from pathlib import Path
 
 from ..errors import GaitError
-from .number_args import cycles, finite_float, max_transitions, non_negative_float
+from .number_args import (
+    cycles,
+    finite_float,
+    max_transitions,
+    non_negative_float,
+    positive_int,
+)
 
 DIRECTIONS = ("+x", "-x")
+#: Ties the text lists per answer unless --ties N / --all-ties says otherwise (a 256-state
+#: robot ties 10,000 gaits a direction: 20,000 lines); --json lists every one unless --ties N.
+TEXT_TIES = 10
 PLANAR_FLAGS = ("heading", "variance_weight", "transition_cost", "rotation_cap_deg", "simple_cycles", "rotate", "library")
 
 
@@ -36,6 +45,11 @@ def add_gait_parser(sub) -> None:
     g.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
     g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
     g.add_argument("--json", action="store_true", help="print one JSON object")
+    ties = g.add_mutually_exclusive_group()
+    ties.add_argument("--ties", type=positive_int, metavar="N",
+                      help=f"list the first N optimal gaits of each answer (text: {TEXT_TIES} by default; "
+                           "--json: every one by default, and 'ties' says how many there are)")
+    ties.add_argument("--all-ties", action="store_true", help="list every optimal gait in the text too")
     p = g.add_argument_group("planar gaits (robot files with dy / dtheta_deg / var_*; docs/planar.md)")
     p.add_argument("--heading", type=finite_float, metavar="DEG", help="score motion along this heading (0 = +x, 90 = +y)")
     p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
@@ -82,6 +96,9 @@ def cmd_gait(args: argparse.Namespace) -> int:
     args.objective = args.objective or "total"
     check_speed_objective(robot, args.objective)
     if args.evaluate is not None:
+        if args.ties is not None or args.all_ties:
+            raise GaitError(f"{'--ties' if args.ties is not None else '--all-ties'}: not with --evaluate "
+                            "(it scores one sequence; the ties are those of an optimisation)")
         return _print_evaluation(robot, args)
     if not planar:
         if args.translation_cap is not None:
@@ -102,13 +119,14 @@ def cmd_gait(args: argparse.Namespace) -> int:
         doc = {
             "robot": robot.name,
             "states": robot.transitions.labels(),
-            "results": [_result_json(robot, name, r, planar, args.cycles) for name, r in answers],
+            "results": [_result_json(robot, name, r, planar, args.cycles, args.ties) for name, r in answers],
         }
         print(json.dumps(doc))
         return 0
+    shown = None if args.all_ties else args.ties or TEXT_TIES
     print(_header(robot))
     for name, r in answers:
-        print(_result_text(robot, name, r, planar, args.cycles))
+        print(_result_text(robot, name, r, planar, args.cycles, shown))
     return 0
 
 
@@ -173,7 +191,9 @@ def _title(name: str, planar: bool) -> str:
     return name if name.startswith("rot-") else f"heading {name}°"
 
 
-def _result_text(robot, name: str, r, planar: bool, cycles: int) -> str:
+def _result_text(robot, name: str, r, planar: bool, cycles: int, shown: int | None = None) -> str:
+    """One answer as text: its value and its first ``shown`` gaits (all when None), each with
+    the notes, problems and way in from rest; a line saying how many more there are."""
     t = robot.transitions
     what = {"total": "total", "rate": "per transition", "speed": "per second"}[r.objective]
     what = f"score {what}" if planar else {"total": "total reward J", "rate": "reward per transition",
@@ -189,9 +209,10 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int) -> str:
     if r.truncated:
         head += f" (listing stopped after {n}: more ties exist)"
     lines = [head]
-    walks = [" → ".join(t.label(s) for s in gait.states) for gait in r.gaits]
+    listed = r.gaits if shown is None else r.gaits[:shown]
+    walks = [" → ".join(t.label(s) for s in gait.states) for gait in listed]
     width = max(len(w) for w in walks)
-    for walk, gait in zip(walks, r.gaits):
+    for walk, gait in zip(walks, listed):
         extra = f"  ×{gait.repeats}" if gait.repeats > 1 else ""
         extra += f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
         lines.append(f"    {walk:<{width}}    J={_fmt(gait.reward)}{extra}  N={gait.transitions}  rate={_fmt(gait.rate)}")
@@ -203,18 +224,22 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int) -> str:
             lines.append(f"      per pass Δx={_fmt(one.x)} Δy={_fmt(one.y)} {robot.units}  Δθ={_fmt(one.theta_deg)}°;"
                          f" after {cycles} passes ({path[-1].x:+.4g}, {path[-1].y:+.4g}) {robot.units},"
                          f" {path[-1].theta_deg:+.4g}°")
-    for walk, gait in zip(walks, r.gaits):
+    for walk, gait in zip(walks, listed):
         steps = _opposing_text(t, gait)
         if steps:
             lines.append(f"    note: {walk} raises one limb while lowering another in {steps}; an SMA robot")
             lines.append("          may make such a step as two transitions (heating and cooling differ in speed)")
-    for walk, gait in zip(walks, r.gaits):
+    for walk, gait in zip(walks, listed):
         problems, entry = _feasibility(robot, gait)
         for p in problems:
             lines.append(f"    {p.severity}: {p.message}")
         if entry is not None and entry.transitions:
             names = " → ".join(t.label(s) for s in entry.states)
             lines.append(f"    entry: {walk} is entered from rest by {names} (joining at the gait's state {entry.gait_step + 1})")
+    if len(listed) < n:
+        more = n - len(listed)
+        lines.append(f"    … and {more:,} more tie{'s' if more != 1 else ''}: --ties N or --all-ties lists them, "
+                     "--json lists every one")
     return "\n".join(lines)
 
 
@@ -274,13 +299,17 @@ def _gait_json(robot, gait, planar: bool = False, cycles: int = 10) -> dict:
     return d
 
 
-def _result_json(robot, name: str, r, planar: bool, cycles: int) -> dict:
+def _result_json(robot, name: str, r, planar: bool, cycles: int, shown: int | None = None) -> dict:
+    """One answer: ``gaits`` holds every tie in rank order, or the first ``shown`` (--ties N);
+    ``ties`` is how many there are (more than ``len(gaits)`` when capped; with ``truncated``
+    the listing itself stopped at ``MAX_TIES``)."""
     d = {
         "direction": name,
         "objective": r.objective,
         "max_transitions": r.max_transitions,
         "value": r.value,
-        "gaits": [_gait_json(robot, g, planar, cycles) for g in r.gaits],
+        "ties": len(r.gaits),
+        "gaits": [_gait_json(robot, g, planar, cycles) for g in (r.gaits if shown is None else r.gaits[:shown])],
     }
     if planar:
         d["below_zero"] = r.below_zero
@@ -349,9 +378,30 @@ def _print_evaluation(robot, args) -> int:
         from types import SimpleNamespace
 
         _plot(robot, [("evaluated", SimpleNamespace(gaits=[gait]))], args.cycles, args.plot, args.json)
+    walk = " → ".join(table.label(s) for s in gait.states)
+    problems, entry = _feasibility(robot, gait)
+    errors = [p for p in problems if p.severity == "error"]
     if args.json:
-        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, **_gait_json(robot, gait)}}))
+        # "valid": the matrix allows every step; "feasible": the hardware can also make them
+        print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, "feasible": not errors,
+                                                              **_gait_json(robot, gait)}}))
     else:
-        walk = " → ".join(table.label(s) for s in gait.states)
         print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
+        steps = _opposing_text(table, gait)
+        if steps:
+            print(f"    note: raises one limb while lowering another in {steps}")
+        for p in problems:
+            print(f"    {p.severity}: {p.message}")
+        if entry is not None and entry.transitions:
+            names = " → ".join(table.label(s) for s in entry.states)
+            print(f"    entry: entered from rest by {names} (joining at the gait's state {entry.gait_step + 1})")
+    if errors:
+        # a gait the hardware cannot run is a bad gait, like one the matrix forbids: exit 2
+        # (one line: the text above lists every problem, the JSON carries them in "problems")
+        kinds = ", ".join(dict.fromkeys(p.kind for p in errors))
+        why = f"{len(errors)} errors ({kinds})" if len(errors) > 1 else errors[0].message
+        if not args.json and len(errors) > 1:
+            why += ", listed above"
+        print(f"proleg: error: --evaluate: {walk} cannot run on {robot.name}'s hardware: {why}", file=sys.stderr)
+        return 2
     return 0

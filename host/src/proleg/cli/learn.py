@@ -276,9 +276,10 @@ def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> 
 
             what = stop_robot(client)  # run_piece stops it too; a Ctrl-C may have cut that short
             done, todo = ex.tally()
-            print(f"proleg: learn: paused by Ctrl-C ({what}): {len(trial_log.trials)} trials kept in {args.log}, "
-                  f"{done} of {done + todo} done; run the same command to go on", file=sys.stderr, flush=True)
-            raise
+            from ..errors import Interrupted
+
+            raise Interrupted(f"learn: paused by Ctrl-C ({what}): {len(trial_log.trials)} trials kept in {args.log}, "
+                              f"{done} of {done + todo} done; run the same command to go on") from None
         finally:
             if bar is not None:
                 bar.close()

@@ -4,8 +4,10 @@ library, print. ``gait`` is in ``gait``; ``sim`` in ``sim_command``; ``console``
 ``robot_commands``.
 
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
-faulted, an output could not be written); 2 usage (a bad argument, robot file, board file,
-recording or gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
+faulted, an output could not be written, the board does not run the robot file's firmware: a
+file that loads but is not the one the board was built from is found only over the link);
+2 usage (a bad argument, a robot file, board file or recording that does not load, a bad
+gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
 a closed pipe (``proleg … | head``), a full disk and a terminal that cannot show UTF-8 end
 without a traceback.
 """
@@ -22,7 +24,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .. import __version__
-from ..errors import LinkError, ProlegError
+from ..errors import Interrupted, LinkError, ProlegError
 from .gait import add_gait_parser
 from .number_args import max_transitions
 
@@ -30,8 +32,10 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
 exit status:
   0  ok
-  1  failed: a link or command failed, the robot faulted, an output could not be written
-  2  usage: a bad argument, robot file, board file, recording or gait
+  1  failed: a link or command failed, the robot faulted, an output could not be written,
+     the board does not run the firmware of the robot file given
+  2  usage: a bad argument, a robot file, board file or recording that does not load,
+     a bad gait
 
 ROBOT is a robot file or the name of a bundled example (proleg robots lists them).
 """
@@ -53,7 +57,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ProlegError as e:
         print(f"proleg: error: {e}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as e:  # Ctrl-C: one line, what was kept where the command says it
+        print(f"proleg: {e}" if isinstance(e, Interrupted) and str(e) else "proleg: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # the reader went away (`proleg … | head -1`): not an error
         _silence_stdout()

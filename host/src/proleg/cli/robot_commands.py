@@ -192,7 +192,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     doc = {
         "msg": "RESULT", "robot": run.robot, "link": client.link.description, "gait": gait,
         "direction": direction, "duration_s": run.duration_s, "cycles": run.cycles,
-        "states_reached": len(run.states_reached), "telemetry_frames": run.telemetry_frames,
+        # the labels of the states reached, in order, as in proleg sim --json (it was their count)
+        "states_reached": [_label(robot, s) for s in run.states_reached], "telemetry_frames": run.telemetry_frames,
         "telemetry_lost": run.telemetry_lost,
         "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
         "start_time_s": run.started_s,  # the board's clock at START: fault times are on it
@@ -227,6 +228,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     for e in errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     return 0 if doc["ok"] else 1
+
+
+def _label(robot: Any, state: int) -> str:
+    """A state the board reports, by its label (by its number if the robot file has no such state)."""
+    return robot.transitions.label(state) if 0 <= state < robot.transitions.n_states else str(state)
 
 
 # --------------------------------------------------------------------------- load-gait, set-param

@@ -67,8 +67,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from ..sim.simulated_boards import clear_ticks, tick_budget
 
     robot = load_robot(args.robot)
-    from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, flat_conditions,
-                            plant_kwargs, refuse_what_does_not_apply, wants_help)
+    from .sim_plant import (calibrate_then_put_down, cmd_measure_climb, cmd_measure_matrix, conditions_json,
+                            flat_conditions, plant_kwargs, refuse_what_does_not_apply, wants_help)
 
     refuse_what_does_not_apply(args)  # an option the mode would ignore is a mistake, not a no-op
     from .gait import check_speed_objective
@@ -113,8 +113,13 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
             raise SimError("--calibrated: not with --pty (calibrate through the pseudo-terminal: proleg calibrate)")
         plant["conditions"] = flat_conditions(args)  # calibrated on the flat, put down on the slope below
-    sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
-                         max_transitions=args.max_transitions, **plant)
+    try:
+        sim = open_simulated(robot, args.board, seed=args.seed, objective=args.objective,
+                             max_transitions=args.max_transitions, **plant)
+    except KeyboardInterrupt:  # building or loading the simulated board's firmware
+        from ..errors import Interrupted
+
+        raise Interrupted("interrupted before the run started; nothing recorded") from None
     # --pty may be stopped early (Ctrl-C) and names what it did not inject; a plain run would not say
     timed, at_once = _injections(args.inject, None if args.pty else args.duration)
     for spec in [*at_once, *(fault for _, fault in timed)]:
@@ -125,11 +130,15 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.pty:
         return _serve_pty(sim, args, timed, pty_limit_s)
     held = _Held()  # the boot messages, until the board's INFO has named its firmware
-    session = SimSession(sim, listeners=[held])
-    booted = session.until_info(BOOT_S) if args.record or args.udp else 0.0
-    recorder = _recorder(robot, args.record, session, args.board) if args.record else None
-    listeners = [recorder] if recorder else []
+    recorder = None
+    listeners: list = []
+    start = None
     try:
+        session = SimSession(sim, listeners=[held])
+        booted = session.until_info(BOOT_S) if args.record or args.udp else 0.0
+        if args.record:
+            recorder = _recorder(robot, args.record, session, args.board)
+            listeners.append(recorder)
         if args.udp:
             from ..record import UdpStreamer
 
@@ -148,13 +157,19 @@ def cmd_sim(args: argparse.Namespace) -> int:
         for at, fault in timed:
             session.schedule_fault(start + at, fault)
         report = session.run_gait(args.direction, args.gait, args.duration)
+    except KeyboardInterrupt:
+        for listener in listeners:
+            listener.stop()  # the recording is closed whole (an MCAP gets its footer)
+        from ..errors import Interrupted
+
+        raise Interrupted(_interrupted(sim, start, args.duration, recorder)) from None
     finally:
         for listener in listeners:
             listener.stop()
     budget = tick_budget(sim)
     agreement = _matrix_check(robot, args, report)
     if args.json:
-        out = {**_report_json(robot, report, args.board), **(budget or {})}
+        out = {**_report_json(robot, report, args.board), **(budget or {}), **conditions_json(robot, args)}
         out["matrix_check"] = agreement.as_json() if agreement else None
         print(json.dumps(out))
     else:
@@ -167,6 +182,19 @@ def cmd_sim(args: argparse.Namespace) -> int:
         print(f"proleg: error: {recorder.error}", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK if report.ok else EXIT_FAILED
+
+
+def _interrupted(sim, start: float | None, duration_s: float, recorder) -> str:
+    """The one line a Ctrl-C'd run ends with: how far it got and what was kept."""
+    when = ("before the run started" if start is None else
+            f"{sim.time_s - start:.1f} s into the {duration_s:g} s run (simulated time)")
+    if recorder is None:
+        kept = "nothing recorded"
+    elif recorder.error is not None:
+        kept = f"the recording stopped earlier: {recorder.error}"
+    else:
+        kept = f"recording kept in {recorder.path} (complete up to there)"
+    return f"interrupted {when}; {kept}"
 
 
 def _matrix_check(robot, args, report):

@@ -56,6 +56,19 @@ def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
     return {"plant": args.plant, "conditions": list(args.condition)}
 
 
+def conditions_json(robot: Any, args: argparse.Namespace, *, leave_out: tuple[str, ...] = ()) -> dict:
+    """What a ``--json`` report says of its plant's conditions: ``plant``, ``conditions`` (the
+    ``--condition`` strings as given) and ``effective_conditions`` (the robot file's ``[plant]``
+    physical keys with those on top, as ``key=value`` strings ``--condition`` takes; keys at
+    their defaults and ``leave_out`` are not listed; none on the table plant, which takes no
+    conditions)."""
+    from ..sim.closed_loop import condition_strings, plant_conditions
+
+    effective = [] if args.plant != "physical" else [
+        c for c in condition_strings(plant_conditions(robot, args.condition)) if c.partition("=")[0] not in leave_out]
+    return {"plant": args.plant, "conditions": list(args.condition), "effective_conditions": effective}
+
+
 def flat_conditions(args: argparse.Namespace) -> list[str]:
     """``--condition`` on flat ground: without incline_deg, and level over the robot file's
     [plant] (the ground a ``--calibrated`` board is calibrated on). The table plant takes no
@@ -109,8 +122,7 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         m = measure_matrix(robot, conditions, seed=args.seed)
     if args.json:
         extra = {} if rng is None else rng.to_json()
-        print(json.dumps({"robot": robot.name, "plant": "physical", "conditions": list(args.condition),
-                          **m.to_json(), **extra}))
+        print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(), **extra}))
         return 0
     print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
@@ -196,7 +208,8 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     limit = suggested_limits(climbs)
     have = robot.control.max_climb_deg
     if args.json:
-        print(json.dumps({"robot": robot.name, "conditions": list(args.condition), "resolution_deg": RESOLUTION_DEG,
+        print(json.dumps({"robot": robot.name, **conditions_json(robot, args, leave_out=("incline_deg",)),
+                          "resolution_deg": RESOLUTION_DEG,
                           "climb_deg": climbs, "suggested_max_climb_deg": None if limit is None else limit.to_json(),
                           "max_climb_deg": None if have is None else have.to_json()}))
         return 0

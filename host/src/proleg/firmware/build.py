@@ -29,7 +29,7 @@ from typing import Any
 import jinja2
 
 from .. import __version__
-from ..errors import BuildError, LinkError
+from ..errors import BuildError, Interrupted, LinkError
 from ..paths import as_if_created, display_path, templates_dir
 from ..robot import Robot
 from .boards import Board, pwm_channel_error
@@ -192,9 +192,23 @@ def build(
     jobs: int = 2,
     library: Any = None,
 ) -> BuildResult:
-    """Render and compile; on success the project is at ``out_dir``, on failure nothing is."""
+    """Render and compile; on success the project is at ``out_dir``, on failure nothing is (an
+    older build there is kept). Ctrl-C is an ``Interrupted`` saying which of the two happened."""
     check_buildable(robot, board)
     out_dir = Path(out_dir) if out_dir is not None else default_out_dir(robot, board)
+    had = (out_dir / MANIFEST).exists()
+    written: list[Path] = []  # the project, once it is in place
+    try:
+        return _build_into(robot, board, out_dir, objective, max_transitions, jobs, library, written)
+    except KeyboardInterrupt:
+        if written:
+            raise Interrupted(f"interrupted after the build was written: {out_dir} is complete") from None
+        kept = f" ({out_dir} keeps its previous build)" if had else ""
+        raise Interrupted(f"interrupted; nothing built{kept}") from None
+
+
+def _build_into(robot: Robot, board: Board, out_dir: Path, objective: str, max_transitions: int | None, jobs: int,
+           library: Any, written: list[Path]) -> BuildResult:
     if out_dir.exists() and not (out_dir / MANIFEST).exists():
         raise BuildError(f"{out_dir} exists and is not a proleg build directory: refusing to replace it")
     gaits = firmware_gaits(robot, objective, max_transitions, library)  # library: default the robot file's
@@ -245,6 +259,7 @@ def build(
         with _writing(out_dir):
             (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n", encoding="utf-8")
             _replace_dir(tmp, out_dir)
+            written.append(out_dir)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -304,7 +319,12 @@ def _replace_dir(new: Path, target: Path) -> None:
     if target.exists():
         old = target.with_name(f".{target.name}.old-{os.getpid()}")
         target.rename(old)
-    new.rename(target)
+    try:
+        new.rename(target)
+    except BaseException:  # Ctrl-C or a failed rename between the two: the older build goes back
+        if old is not None and not target.exists():
+            old.rename(target)
+        raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
 

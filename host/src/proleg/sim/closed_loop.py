@@ -95,6 +95,22 @@ def plant_conditions(robot: Robot, conditions: Any = None) -> Any:
     return parse_conditions(conditions or [], base)
 
 
+def condition_strings(conditions: Any) -> list[str]:
+    """``Conditions`` as the ``key=value`` strings ``--condition`` takes (``key=NAME:value`` for
+    a per-limb or per-actuator value, ``key=value`` for all of them), in the schema's key order:
+    what a run's ``--json`` reports as its ``effective_conditions`` and a script can give back.
+    Keys left at their defaults are not listed."""
+    from .physical.conditions import KEYS
+
+    out = []
+    for key in KEYS:
+        if key in conditions.values:
+            out.append(f"{key}={float(conditions.values[key])!r}")
+        for name, v in conditions.named.get(key, {}).items():
+            out.append(f"{key}={name + ':' if name else ''}{float(v)!r}")
+    return out
+
+
 def _merge(base: Any, top: Any) -> Any:
     from dataclasses import replace as _replace
 

@@ -108,7 +108,8 @@ def simulated_robot(name: str, robot: Robot, *, seed: int = 1, **options: Any) -
 def tick_budget(sim: SimulatedRobot) -> dict | None:
     """The busy time per control tick the emulated MCU measured since its last
     ``clear_ticks()`` (or reset): ``{"tick_period_us": P, "tick_busy_us": {"ticks", "mean",
-    "p99", "max"}}`` in µs of emulated time; None on a board that does not measure it."""
+    "p99", "max"}}`` in µs of emulated time (P a float on every board, ticks an int); None on a
+    board that does not measure it."""
     measure = getattr(sim.board, "tick_budget", None)
     if measure is None:
         return None
@@ -116,8 +117,9 @@ def tick_budget(sim: SimulatedRobot) -> dict | None:
     busy = d["tick_busy_us"]
     ticks = d.get("ticks", busy.get("ticks"))
     return {
-        "tick_period_us": d["tick_period_us"],
-        "tick_busy_us": {"ticks": ticks, "mean": busy["mean"], "p99": busy["p99"], "max": busy["max"]},
+        "tick_period_us": float(d["tick_period_us"]),
+        "tick_busy_us": {"ticks": int(ticks), "mean": float(busy["mean"]), "p99": float(busy["p99"]),
+                         "max": float(busy["max"])},
     }
 
 

@@ -23,7 +23,8 @@ class TickBudget:
     max: float
 
     def as_dict(self) -> dict:
-        return {"tick_period_us": self.tick_period_us, "tick_busy_us": {
+        # a float, as avr-emu's (emu/avr/budget.py: 1e6 / tick_hz need not be whole): one type in the JSON
+        return {"tick_period_us": float(self.tick_period_us), "tick_busy_us": {
             "ticks": self.ticks, "mean": round(self.mean, 1), "p99": round(self.p99, 1), "max": round(self.max, 1)}}
 
 
