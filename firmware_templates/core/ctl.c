@@ -14,15 +14,21 @@ enum { STAY, RISE, FALL, SAG };
 
 /* Held limbs sagging below their hold edge, for the falling limbs' wait: bit i+1 is limb i, so
  * a falling limb i looks at its neighbours i-1 and i+1 (bits i and i+2). With two limbs the
- * other one is the only neighbour: one flag, the same rule, no bytes spent on the Nano. */
+ * other one is the only neighbour: one flag, the same rule, no bytes spent on the Nano.
+ * With three or more a held limb counts only once it has sagged to within CTL_SYNC_CDEG of
+ * its band's lower edge (about to drop a level): its neighbours' coils tilt it by several
+ * degrees at every step, far above its band, and a falling coil kept warm for that only
+ * lengthened the step (ctl.h, docs/control.md "Long bodies"). */
 #if CFG_N_LIMBS > 2
 typedef uint16_t sag_t;
 #define SAG_MARK(i) ((sag_t)(2u << (i)))
 #define SAG_NEAR(s, i) (((s) >> (i)) & 5u)
+#define SAG_COUNTS(i, thr) (psi_to_go_cdeg(i, thr, 0u) <= CTL_SYNC_CDEG)
 #else
 typedef uint8_t sag_t;
 #define SAG_MARK(i) 1u
 #define SAG_NEAR(s, i) (s)
+#define SAG_COUNTS(i, thr) 1
 #endif
 
 #define TICKS(ms) ((uint16_t)(((uint32_t)(ms) * CFG_TICK_HZ + 999u) / 1000u))
@@ -235,7 +241,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 uint8_t thr = (uint8_t)(level - 1u);
                 if (!ABOVE_HOLD(i, thr, level)) {
                     cl[i].heat = 1;
-                    sagging |= SAG_MARK(i);
+                    if (SAG_COUNTS(i, thr)) {
+                        sagging |= SAG_MARK(i);
+                    }
                 } else if (ABOVE_TOP(i, thr, level)) {
                     cl[i].heat = 0;
                 }

@@ -38,6 +38,10 @@
  *   coils), and a coil kept warm stops relaxing until the sagging limb's coil caught it.
  *   At most CTL_SAG_WAIT_MS per limb and step: with several limbs held, one of them is
  *   nearly always in a hold pulse, and a falling coil kept warm for good never crosses.
+ *   Only a neighbour (limb i−1 or i+1) counts; with three or more limbs only one that sagged
+ *   to within CTL_SYNC_CDEG of its band's lower edge (about to drop a level): on a long body
+ *   every step tilts the held limbs by a few degrees through the body, and a falling coil
+ *   kept warm for such a sag only waited (docs/control.md, "Long bodies").
  *
  * Full strokes (robot file [[limb]] stroke_deg, built in only when a limb has one): such a
  * limb is held at its stroke on its top level (psi.h: the hold edge of its top threshold),

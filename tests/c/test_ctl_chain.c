@@ -1,7 +1,7 @@
 /* Host unit tests of core/ctl.c on a chain of three limbs (robots/inchworm-3.toml: tail,
  * middle, head; ψ* = 20°, band 19..21°, limb i driven by actuator i): a falling limb waits
  * warm only for a sagging NEIGHBOUR (the coils that bend its body section), not for every
- * held limb of the robot. */
+ * held limb of the robot, and only for one about to drop a level (within 2° of its band). */
 #include "ctl_unit.h"
 #include "unit.h"
 
@@ -65,10 +65,31 @@ static void test_a_falling_first_limb_waits_for_its_only_neighbour(void)
     CHECK_EQ(duty[0], HOLD);
 }
 
+static void test_a_falling_limb_does_not_wait_for_a_neighbour_sagging_far_above_its_band(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    put(0, 30.0);
+    put(1, 30.0);
+    put(2, 30.0);
+    demand3(1, 1, 0, duty); /* tail and middle held, head falls */
+    put(1, 23.0);           /* the middle, tilted by the falling head, is below its hold edge
+                             * (25°) but 4° clear of its band (19..21°): it re-heats, and the
+                             * head goes on falling */
+    demand3(1, 1, 0, duty);
+    CHECK_EQ(duty[1], DRIVE);
+    CHECK_EQ(duty[2], 0);
+    put(1, 20.9); /* now within 2° of dropping a level: the head waits warm */
+    demand3(1, 1, 0, duty);
+    CHECK_EQ(duty[1], DRIVE);
+    CHECK_EQ(duty[2], HOLD);
+}
+
 int main(void)
 {
     RUN(test_a_falling_limb_does_not_wait_for_a_sagging_limb_two_sections_away);
     RUN(test_a_falling_limb_waits_warm_for_a_sagging_neighbour);
     RUN(test_a_falling_first_limb_waits_for_its_only_neighbour);
+    RUN(test_a_falling_limb_does_not_wait_for_a_neighbour_sagging_far_above_its_band);
     return UNIT_EXIT();
 }
