@@ -8,6 +8,7 @@ most significant, so for two binary limbs "00"=0, "01"=1, "10"=2, "11"=3 (SPEC Â
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 from math import prod
 
 DIGITS = "0123456789abcdefghijklmnopqrstuvwxyz"
@@ -19,6 +20,12 @@ def state_count(levels: Sequence[int]) -> int:
 
 def label(index: int, levels: Sequence[int]) -> str:
     """The label of state ``index``: one digit per limb, first limb leftmost."""
+    return _label(index, tuple(levels))
+
+
+@lru_cache(maxsize=1 << 16)
+def _label(index: int, levels: tuple[int, ...]) -> str:
+    """``label``, remembered: gait reports name the same few hundred states millions of times."""
     if not 0 <= index < state_count(levels):
         raise ValueError(f"state index {index} out of range 0..{state_count(levels) - 1}")
     digits = []
@@ -43,6 +50,11 @@ def index(text: str, levels: Sequence[int]) -> int:
 
 def limb_levels(index_: int, levels: Sequence[int]) -> tuple[int, ...]:
     """The per-limb levels (S_1 ... S_N) of a state index."""
+    return _limb_levels(index_, tuple(levels))
+
+
+@lru_cache(maxsize=1 << 16)
+def _limb_levels(index_: int, levels: tuple[int, ...]) -> tuple[int, ...]:
     out = []
     for k in reversed(levels):
         index_, d = divmod(index_, k)

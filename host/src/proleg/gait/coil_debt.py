@@ -83,10 +83,10 @@ def cycle_debt(steps: Sequence[Step], payback: float) -> list[CoilDebt]:
         growth = on_s - (total - on_s) * payback
         debt, peak, at = 0.0, 0.0, 0
         for _ in range(2):
-            for k, s in enumerate(steps):
-                debt = charge([debt], [s.on[c]], s.drive_s, payback)[0]
+            for k, s in enumerate(steps):  # ``charge`` for one coil, unrolled (thousands of ties)
+                debt = debt + s.drive_s if s.on[c] else max(0.0, debt - s.drive_s * payback)
                 if debt > peak + EPS_S:
                     peak, at = debt, k
-                debt = charge([debt], [False], s.hold_s, payback)[0]
+                debt = max(0.0, debt - s.hold_s * payback)
         out.append(CoilDebt(peak, at, growth if growth > EPS_S else 0.0))
     return out

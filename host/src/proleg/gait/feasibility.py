@@ -82,9 +82,27 @@ def _name(robot: "Robot", states: Sequence[int]) -> str:
     return " ".join(robot.transitions.label(s) for s in states)
 
 
+def _per_step(robot: "Robot", what: str) -> dict:
+    """A cache of one per-step answer on ``robot`` (keyed (a, b)): the answers depend only on
+    the robot, which is frozen, and a robot with thousands of tied gaits (an 8-limb one has
+    10,000) asks the same few hundred steps again and again."""
+    caches = robot.__dict__.get("_feasibility_cache")
+    if caches is None:
+        caches = {}
+        object.__setattr__(robot, "_feasibility_cache", caches)
+    return caches.setdefault(what, {})
+
+
 def step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]:
     """(kind, severity, what) for one step a -> b: shared actuators moving limbs apart
     (error) and opposing crossings across actuators (warning)."""
+    cache = _per_step(robot, "problems")
+    if (a, b) not in cache:
+        cache[(a, b)] = tuple(_step_problems(robot, a, b))
+    return list(cache[(a, b)])
+
+
+def _step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]:
     la, lb = limb_levels(a, robot.levels), limb_levels(b, robot.levels)
     moves = {limb.name: (y > x) - (y < x) for limb, x, y in zip(robot.limbs, la, lb)}
     out = []
@@ -129,11 +147,14 @@ def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
 
 def _rising_coils(robot: "Robot", a: int, b: int) -> tuple[bool, ...]:
     """Which actuators drive during a -> b: those raising one of their limbs."""
-    la, lb = limb_levels(a, robot.levels), limb_levels(b, robot.levels)
-    return tuple(
-        any(y > x for limb, x, y in zip(robot.limbs, la, lb) if limb.actuator == act.name)
-        for act in robot.actuators
-    )
+    cache = _per_step(robot, "rising")
+    if (a, b) not in cache:
+        la, lb = limb_levels(a, robot.levels), limb_levels(b, robot.levels)
+        cache[(a, b)] = tuple(
+            any(y > x for limb, x, y in zip(robot.limbs, la, lb) if limb.actuator == act.name)
+            for act in robot.actuators
+        )
+    return cache[(a, b)]
 
 
 def coil_steps(robot: "Robot", cycle: Sequence[int]) -> list[Step]:
