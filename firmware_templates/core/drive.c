@@ -48,8 +48,8 @@ uint8_t drive_dir(void)
 }
 
 /* The limb not at its level of `target` driven by the coil heated longest without progress
- * (safety.h guard_suspect), else the first: a healthy limb sagging while the gait waits on a
- * failed one is not the one suspected. DRIVE_NO_LIMB if every limb is at its level (the step
+ * (safety.h guard_suspect; the first such), else the last limb off its level: a healthy limb
+ * sagging while the gait waits on a failed one is not the one suspected. DRIVE_NO_LIMB if every limb is at its level (the step
  * timed out only because one would not settle: no coil to suspect, fallback.c). */
 static uint16_t limb_off_target(cfg_state_t target)
 {

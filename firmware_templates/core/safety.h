@@ -51,7 +51,8 @@ void guard_ack(void);
 void guard_started(void);
 
 /* The actuator heated longest while a target was demanded since it last heated on the way
- * to a target reached (kept across STOP and START; the lowest of equals, 0 if none). */
+ * to a target reached (kept across STOP and START; the lowest of equals), as of the last
+ * guard_tick; when none has such time, the last that hit in that tick, else 0. */
 uint8_t guard_suspect(void);
 
 /* Time (µs) spent demanding an unreached target, and on-limit hits counting towards the latch. */
