@@ -13,7 +13,7 @@ import sys
 
 from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
 from .number_args import gait_number, max_transitions, positive_float
-from ..report.matrix_check import check, promised_reward, remark_text
+from ..report.matrix_check import check, remark_text
 
 #: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
 #: (the emulated boards are slower); 1e12 never finished. ``--pty`` serves in real time, unbounded.
@@ -100,7 +100,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
         raise SimError("--hold-range: it is an option of --measure-matrix (measure the matrix at several hold margins)")
     if not args.pty:
-        have = len(firmware_gaits(robot, args.objective, args.max_transitions).get(args.direction, ()))
+        gaits = firmware_gaits(robot, args.objective, args.max_transitions).get(args.direction, ())
+        have = len(gaits)
         if args.gait >= have:
             from ..errors import GaitError
 
@@ -167,7 +168,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
         for listener in listeners:
             listener.stop()
     budget = tick_budget(sim)
-    agreement = _matrix_check(robot, args, report)
+    # the run against what the matrix promises for its gait (report/matrix_check.py)
+    agreement = check(robot, args.plant, gaits[args.gait].reward, report.cycle_displacements_mm)
     if args.json:
         out = {**_report_json(robot, report, args.board), **(budget or {}), **conditions_json(robot, args)}
         out["matrix_check"] = agreement.as_json() if agreement else None
@@ -195,12 +197,6 @@ def _interrupted(sim, start: float | None, duration_s: float, recorder) -> str:
     else:
         kept = f"recording kept in {recorder.path} (complete up to there)"
     return f"interrupted {when}; {kept}"
-
-
-def _matrix_check(robot, args, report):
-    """The run against what the matrix promises for its gait (report/matrix_check.py)."""
-    promised = promised_reward(robot, args.direction, args.gait, args.objective, args.max_transitions)
-    return None if promised is None else check(robot, args.plant, promised, report.cycle_displacements_mm)
 
 
 def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:

@@ -6,8 +6,8 @@ run that passed through other states, or a 3-level limb that overshoots) gives a
 walks the other way, or not at all. The run itself succeeded, so this is a remark beside the
 report, not a failure: ``sim`` says it and points to ``--measure-matrix``.
 
-The matrix's promise per cycle is the gait's reward for one pass (a cycle is step 0 to step
-0). In a length unit it is a length; in ``steps`` it is a length only on the table plant
+The matrix's promise per cycle is the gait's reward for one pass (``Gait.reward``; a cycle is
+step 0 to step 0). In a length unit it is a length; in ``steps`` it is a length only on the table plant
 (× ``[plant] step_mm``), and on the physical plant only its sign is a promise.
 """
 
@@ -35,15 +35,6 @@ class MatrixCheck:
     def as_json(self) -> dict[str, Any]:
         return {"promised_per_cycle": self.promised, "units": self.units, "promised_mm": self.promised_mm,
                 "agrees": self.remark is None, "remark": self.remark}
-
-
-def promised_reward(robot: Any, direction: str, gait: int, objective: str = "total",
-                    max_transitions: int | None = None) -> float | None:
-    """The reward of one pass of the gait ``sim`` runs (``firmware_gaits``), or None."""
-    from ..firmware.gaits import firmware_gaits
-
-    gaits = firmware_gaits(robot, objective, max_transitions).get(direction, ())
-    return gaits[gait].reward if gait < len(gaits) else None
 
 
 def check(robot: Any, plant: str, promised: float, cycles_mm: list[float]) -> MatrixCheck | None:
