@@ -40,15 +40,15 @@ LIMBS = {"sma-tail": 0, "sma-head": 2}  # the coil and the limb it raises (same 
 RISE = 0b101  # state index of 101: tail and head up, middle down (states are in binary order)
 
 
-def _run(dead: str, other: str | None):
-    """Start 000 -> 101 with coil ``dead`` dead and, when ``other`` is given, that coil slow;
-    return the events and the last telemetry frame before the first latched fault."""
+def _run(dead: str | None, conditions: list[str]):
+    """Start 000 -> 101 with coil ``dead`` dead (if any) and the plant's ``conditions``; return
+    the events and the last telemetry frame before the first latched fault."""
     robot = load_robot(ROBOT)
-    conditions = [f"power_scale={other}:0.6"] if other else []
     sim = SimulatedRobot(robot, conditions=conditions)
     client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
     client.connect()
-    sim.inject(f"dead-actuator:{dead}")
+    if dead:
+        sim.inject(f"dead-actuator:{dead}")
     client.load_gait([0, RISE])
     client.start("user", "+x")
     events, telemetry, before_fault = [], None, None
@@ -77,7 +77,7 @@ def _show(events):
 @pytest.mark.parametrize("dead, other", [("sma-tail", "sma-head"), ("sma-head", "sma-tail")],
                          ids=["dead-tail", "dead-head"])
 def test_state_timeout_names_the_dead_coils_limb_not_the_other_one_off_its_level(dead, other, other_slow):
-    robot, events, tele = _run(dead, other if other_slow else None)
+    robot, events, tele = _run(dead, [f"power_scale={other}:0.6"] if other_slow else [])
     faults = [m for m in events if m.kind == EventKind.FAULT]
     latched = next((m for m in events if m.kind == EventKind.GAIT_STOPPED), None)
     assert latched is not None, _show(events)
@@ -98,3 +98,25 @@ def test_state_timeout_names_the_dead_coils_limb_not_the_other_one_off_its_level
     assert fault[0].detail == LIMBS[dead], _show(events)
     suspect = [m for m in events if m.kind == EventKind.SUSPECT]
     assert suspect and suspect[0].code == LIMBS[dead], _show(events)
+
+
+def test_with_no_coil_heated_the_timeout_names_the_last_limb_off_its_level_not_limb_0():
+    """At 70 °C ambient no coil cools below its transformation: the robot reaches 101, and in
+    the step back to 000 neither the tail nor the head falls. Neither coil heats in that step
+    (a falling limb's coil is off), so the guard suspects no coil, and the detail is the rule's
+    other half, the last limb off its level: the head. The firmware named the tail: the guard's
+    suspect was coil 0 whenever no coil had any time, and limb_off_target preferred coil 0's limb
+    whenever it was off its level (now GUARD_NO_SUSPECT, safety.h). Which coil is then suspected
+    is not evidence of anything (docs/safety.md); it no longer depends on the coils' numbering."""
+    robot, events, tele = _run(None, ["ambient_c=70"])
+    reached = [m.detail for m in events if m.kind == EventKind.STATE_REACHED]
+    assert RISE in reached, _show(events)
+    latched = next((m for m in events if m.kind == EventKind.GAIT_STOPPED), None)
+    assert latched is not None, _show(events)
+    fault = [m for m in events if m.kind == EventKind.FAULT and m.time_ms == latched.time_ms]
+    assert [m.code for m in fault] == [FaultCode.STATE_TIMEOUT], _show(events)
+    assert not [m for m in events if m.kind == EventKind.FAULT and m.code == FaultCode.SMA_ON_LIMIT]
+    # Both still up, both wanted down, neither coil driven.
+    assert tele is not None and tele.target == 0 and limb_levels(tele.measured, robot.levels) == (1, 0, 1)
+    assert tele.duty[0] == 0 and tele.duty[2] == 0, tele.duty
+    assert fault[0].detail == 2, _show(events)

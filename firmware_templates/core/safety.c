@@ -24,7 +24,8 @@ static uint8_t heating;    /* actuators heated in the interval the tick just cha
  * and nothing is demanded until guard_ack clears it. */
 static uint32_t coil_us[CFG_N_ACTUATORS];
 /* This tick's coil with the most of that time (the lowest of equals); when no coil has any,
- * the last that hit in this tick, else 0. Set by guard_tick, read through guard_suspect. */
+ * the last that hit in this tick, else GUARD_NO_SUSPECT. Set by guard_tick, read through
+ * guard_suspect. */
 static uint8_t suspect;
 
 #if defined(__GNUC__)
@@ -68,7 +69,7 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
         unreached_us = 0;
     }
     hit_mask |= hits;
-    suspect = 0;
+    suspect = GUARD_NO_SUSPECT; /* a latch always comes with a hit in this tick: never its act */
     for (i = 0; i < CFG_N_ACTUATORS; i++, was >>= 1, made >>= 1, hits >>= 1) {
         uint32_t t = coil_us[i];
         if (was & 1u) {

@@ -30,6 +30,8 @@
 #define GUARD_OK 0u
 #define GUARD_TIMEOUT 1u  /* the demanded target was not reached in time */
 #define GUARD_ON_LIMIT 2u /* repeated on-limit hits on one step */
+/* guard_suspect when no coil is suspected: no actuator has this index (limbmap's are < CFG_N_ACTUATORS). */
+#define GUARD_NO_SUSPECT 0xFFu
 
 void guard_init(void);
 
@@ -52,7 +54,8 @@ void guard_started(void);
 
 /* The actuator heated longest while a target was demanded since it last heated on the way
  * to a target reached (kept across STOP and START; the lowest of equals), as of the last
- * guard_tick; when none has such time, the last that hit in that tick, else 0. */
+ * guard_tick; when none has such time, the last that hit in that tick, else GUARD_NO_SUSPECT
+ * (not coil 0: drive.c would then name coil 0's limb whenever it is off its level). */
 uint8_t guard_suspect(void);
 
 /* Time (µs) spent demanding an unreached target, and on-limit hits counting towards the latch. */

@@ -282,6 +282,26 @@ static void test_the_latch_names_the_coil_that_heated_longest_without_progress(v
     CHECK_EQ(act, 1);
 }
 
+/* A step that times out with no coil heated (limbs that would not fall, say, in a hot
+ * enclosure) suspects no coil: not coil 0, whose limb drive.c would then name over the last
+ * limb off its level. A coil that hit in the tick is suspected even with no time. */
+static void test_with_no_coil_heated_and_none_hit_no_coil_is_suspected(void)
+{
+    setup(0);
+    raised = 0;
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+    CHECK_EQ(guard_suspect(), GUARD_NO_SUSPECT);
+    guard_ack();
+    CHECK_EQ(tick(1, 0, 0x02), GUARD_OK);
+    CHECK_EQ(guard_suspect(), 1);
+    CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    CHECK_EQ(guard_suspect(), GUARD_NO_SUSPECT);
+    raised = 0x01u;
+    CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    CHECK_EQ(guard_suspect(), 0);
+}
+
 int main(void)
 {
     RUN(test_an_unreached_target_times_out_on_real_time);
@@ -300,5 +320,6 @@ int main(void)
     RUN(test_a_coil_that_heated_on_the_way_to_a_target_reached_starts_afresh);
     RUN(test_a_coil_heated_while_nothing_is_demanded_does_not_time_out);
     RUN(test_the_latch_names_the_coil_that_heated_longest_without_progress);
+    RUN(test_with_no_coil_heated_and_none_hit_no_coil_is_suspected);
     return UNIT_EXIT();
 }
