@@ -333,14 +333,14 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
             s->dwell = 0;
         }
     }
-    if (s->settled) {
-        if (!inside(limb, 0)) {
-            s->settled = 0; /* left the band's edges: a real excursion */
-            s->dwell = 0;
-        }
-    } else if (inside(limb, s->relaxed ? 0 : 1)) {
+    /* dwell counts the samples that argue for a change: inside the margins while unsettled,
+     * outside the band's edges while settled. A change needs `debounce` in a row, so one
+     * noisy sample neither settles a limb nor unsettles it (a held end near the band's
+     * edge, with IMU noise, kept the step from ever being reached and its coil heated). */
+    if (s->settled ? !inside(limb, 0) : inside(limb, s->relaxed ? 0 : 1)) {
         if (++s->dwell >= debounce) {
-            s->settled = 1;
+            s->settled ^= 1u; /* settled, or left the band's edges: a real excursion */
+            s->dwell = 0;
         }
     } else {
         s->dwell = 0;

@@ -17,8 +17,9 @@
  * Settled, with hysteresis and dwell: a limb becomes settled once its last sample has been
  * inside its debounced level clear of the margins (at or above the hold edge below it,
  * below the settle edge above it) for `debounce` consecutive samples, and stays settled
- * until it leaves the band edges themselves (below ψ*+h/2 of the threshold under it, at or
- * above ψ*−h/2 of the one above) or its level changes. Relaxed (psi_relax, set by the
+ * until it has been outside the band edges themselves (below ψ*+h/2 of the threshold under
+ * it, at or above ψ*−h/2 of the one above) for `debounce` consecutive samples, or its level
+ * changes. Relaxed (psi_relax, set by the
  * controller when a limb oscillates at a threshold), the margins are not required.
  */
 #ifndef PROLEG_PSI_H

@@ -283,7 +283,7 @@ static void test_distance_to_a_crossing_agrees_with_float_without_atan(void)
     }
 }
 
-static void test_settled_needs_the_margins_for_a_dwell_and_keeps_until_the_band_edge(void)
+static void test_settled_needs_the_margins_for_a_dwell_and_keeps_until_a_dwell_past_the_band_edge(void)
 {
     /* hold edge 21° + margin, settle edge 19° − margin (CFG_HOLD_MARGIN_CDEG) */
     double m = CFG_HOLD_MARGIN_CDEG / 100.0;
@@ -298,7 +298,13 @@ static void test_settled_needs_the_margins_for_a_dwell_and_keeps_until_the_band_
     CHECK_EQ(psi_settled(0), 1); /* dwell: 3 samples */
     put(0, 21.0 + m / 2.0);      /* inside the margin but above the band: stays settled */
     CHECK_EQ(psi_settled(0), 1);
-    put(0, 20.5); /* below the band's upper edge: unsettled (still level 1) */
+    put(0, 20.5); /* below the band's upper edge: one noisy sample is not an excursion */
+    CHECK_EQ(psi_settled(0), 1);
+    put(0, 21.0 + m / 2.0); /* back inside: the count of samples outside restarts */
+    put(0, 20.5);
+    put(0, 20.5);
+    CHECK_EQ(psi_settled(0), 1);
+    put(0, 20.5); /* outside for the dwell (3 samples in a row): unsettled (still level 1) */
     CHECK_EQ(psi_level(0), 1);
     CHECK_EQ(psi_settled(0), 0);
     put(0, 21.0 + m / 2.0); /* back inside the margin: not enough to settle again */
@@ -338,6 +344,6 @@ int main(void)
     RUN(test_moved_threshold_classifies_like_a_rendered_one);
     RUN(test_threshold_band_reaching_90_deg_is_refused);
     RUN(test_distance_to_a_crossing_agrees_with_float_without_atan);
-    RUN(test_settled_needs_the_margins_for_a_dwell_and_keeps_until_the_band_edge);
+    RUN(test_settled_needs_the_margins_for_a_dwell_and_keeps_until_a_dwell_past_the_band_edge);
     return UNIT_EXIT();
 }
