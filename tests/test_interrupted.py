@@ -109,3 +109,85 @@ def test_ctrl_c_on_a_real_sim_process_ends_with_the_line_and_a_readable_mcap(tmp
     assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ")
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
     assert len(read_recording(record).time_s) > 0
+
+
+# --------------------------------------------------------------------------- proleg run
+def _ctrl_c_while_a_coil_heats(monkeypatch, seconds: float) -> list[list[float]]:
+    """Ctrl-C in ``proleg run --sim`` once the link's clock passes ``seconds`` at a moment a coil
+    is on; returns the list that gets the coils' duties as the link closes."""
+    from proleg.link.client import RobotClient
+
+    real_recv, real_close = RobotClient.recv_received, RobotClient.close
+    duties: list[list[float]] = []
+
+    def board(client):
+        return client.link.board.board  # the SimLink's SimulatedRobot's SimBoard
+
+    def recv(self, *a, **k):
+        if self.link.clock() > seconds and any(board(self).pwm(c) > 0 for c in (0, 1)):
+            raise KeyboardInterrupt
+        return real_recv(self, *a, **k)
+
+    def close(self):
+        if not self._closed:
+            duties.append([board(self).pwm(c) for c in (0, 1)])
+        real_close(self)
+
+    monkeypatch.setattr(RobotClient, "recv_received", recv)
+    monkeypatch.setattr(RobotClient, "close", close)
+    return duties
+
+
+def test_an_interrupted_run_stops_the_robot_says_how_far_it_got_and_keeps_a_whole_recording(
+        capsys, monkeypatch, tmp_path):
+    record = tmp_path / "run.mcap"
+    duties = _ctrl_c_while_a_coil_heats(monkeypatch, 3.0)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "20", "--record", record, "-q")
+    assert code == 130 and out == "" and "Traceback" not in err
+    (line,) = err.splitlines()
+    assert line.startswith("proleg: interrupted 3.") and " s into the 20 s run (simulated time), after " in line
+    assert "; STOP acknowledged: the gait is stopped and the coils are off; " in line
+    assert line.endswith(f"recording kept in {record} (complete up to there)")
+    assert duties == [[0.0, 0.0]]  # a coil was heating at the Ctrl-C; none is once the link closes
+    recording = read_recording(record)  # closed whole: the MCAP has its footer
+    assert 2.5 < recording.time_s[-1] < 3.5
+
+
+def test_an_interrupted_jsonl_run_says_no_result_line_was_printed(capsys, monkeypatch):
+    _ctrl_c_while_a_coil_heats(monkeypatch, 1.0)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--format", "jsonl", "-q")
+    assert code == 130 and '"RESULT"' not in out
+    assert err.endswith("; STOP acknowledged: the gait is stopped and the coils are off; nothing recorded; "
+                        "no RESULT line printed\n")
+
+
+def test_a_run_interrupted_while_connecting_started_nothing_and_wrote_no_recording(capsys, monkeypatch, tmp_path):
+    from proleg.link.client import RobotClient
+
+    def connect(self, *a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(RobotClient, "connect", connect)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / "run.csv")
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted while connecting, before the gait started: nothing was started on the "
+                   "robot; nothing recorded\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_ctrl_c_whose_stop_goes_unanswered_sends_estop_and_says_what_is_left():
+    from proleg.report.robot_run import _stop_after_ctrl_c, stop_text
+
+    sent = []
+
+    def command(name):
+        sent.append(name)
+        if name == "STOP":
+            raise KeyboardInterrupt  # a second Ctrl-C while STOP waits: on to the ESTOP
+        return True
+
+    assert _stop_after_ctrl_c(command) == "ESTOP" and sent == ["STOP", "ESTOP"]
+    assert _stop_after_ctrl_c(lambda name: False) is None
+    assert "E-stop stays latched" in stop_text("ESTOP")
+    assert "link watchdog stops the gait and turns the coils off within 2000 ms" in stop_text(None, 2000)
+    assert "the coils may still be on, switch the robot's power off" in stop_text(None, 0)
