@@ -191,3 +191,78 @@ def test_a_ctrl_c_whose_stop_goes_unanswered_sends_estop_and_says_what_is_left()
     assert "E-stop stays latched" in stop_text("ESTOP")
     assert "link watchdog stops the gait and turns the coils off within 2000 ms" in stop_text(None, 2000)
     assert "the coils may still be on, switch the robot's power off" in stop_text(None, 0)
+
+
+# --------------------------------------------------------------------------- proleg calibrate
+def _board_kept_across_commands(monkeypatch):
+    """A simulated R1 board that outlives ``proleg calibrate --port …``, as a real one does:
+    the command's link opens on it, and the test reconnects afterwards to see what it kept."""
+    from proleg.cli import robot_commands
+    from proleg.link.client import RobotClient
+    from proleg.link.sim_link import SimLink
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    sim = SimulatedRobot(load_robot(R1), conditions=["imu_offset_deg=left:8", "imu_offset_deg=right:-8"])
+
+    def connect(*args, **kwargs):
+        client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+        client.connect()
+        return client
+
+    monkeypatch.setattr(robot_commands, "open_client", connect)
+    return connect
+
+
+def test_an_interrupted_calibration_is_finished_by_the_board_whole_and_the_line_says_so(capsys, monkeypatch):
+    from proleg.link import level
+    from proleg.protocol.definition import LevelStatus
+
+    connect = _board_kept_across_commands(monkeypatch)
+
+    def ctrl_c(client, within_s=level.DONE_WITHIN_S):  # as CALIBRATE_LEVEL is acknowledged
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(level, "level_outcome", ctrl_c)
+    code, out, err = cli(capsys, "calibrate", R1, "--port", "/dev/ttyUSB9")
+    assert code == 130 and out == ""
+    assert err.startswith("proleg: interrupted while the board was calibrating: it finishes on its own within a "
+                          "second or so and either stores the new record whole or keeps the one it had")
+    assert err.endswith(" --port /dev/ttyUSB9 --show\n") and "check which: proleg calibrate " in err
+    client = connect()  # the board went on without the host: a whole record, the mounting tilts
+    end = client.link.clock() + 1.0
+    while client.link.clock() < end:
+        client.recv(0.05)
+    reading = level.get_level(client)
+    left, right = reading.offsets_cdeg
+    assert reading.status == LevelStatus.STORED and abs(left - 800) < 15 and abs(right + 800) < 15
+
+
+def test_a_calibration_interrupted_while_connecting_asked_the_board_nothing(capsys, monkeypatch):
+    from proleg.cli import robot_commands
+    from proleg.protocol.definition import LevelStatus
+
+    connect = _board_kept_across_commands(monkeypatch)
+
+    def ctrl_c(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(robot_commands, "open_client", ctrl_c)
+    code, out, err = cli(capsys, "calibrate", R1, "--port", "/dev/ttyUSB9")
+    assert code == 130 and out == ""
+    assert err == "proleg: interrupted before anything was asked of the board: its level calibration is unchanged\n"
+    from proleg.link.level import get_level
+
+    assert get_level(connect()).status == LevelStatus.NONE
+
+
+def test_an_interrupted_calibration_of_a_sim_board_says_nothing_is_kept(capsys, monkeypatch):
+    from proleg.link import level
+
+    def ctrl_c(client, within_s=level.DONE_WITHIN_S):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(level, "level_outcome", ctrl_c)
+    code, out, err = cli(capsys, "calibrate", R1, "--sim")
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted while the simulated board was calibrating; nothing kept: a --sim board "
+                   "lives for this command only\n")
