@@ -266,3 +266,46 @@ def test_an_interrupted_calibration_of_a_sim_board_says_nothing_is_kept(capsys, 
     assert code == 130 and out == ""
     assert err == ("proleg: interrupted while the simulated board was calibrating; nothing kept: a --sim board "
                    "lives for this command only\n")
+
+
+# --------------------------------------------------------------------------- proleg sim --measure-matrix
+def _ctrl_c_at_drive(monkeypatch, call: int) -> None:
+    """Ctrl-C in the idealised drive's ``call``-th run to a state (each transition measured is
+    two: to its start, then to its end)."""
+    from proleg.sim.physical import measure
+
+    real, calls = measure._run_to, []
+
+    def run_to(*a, **k):
+        calls.append(1)
+        if len(calls) == call:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(measure, "_run_to", run_to)
+
+
+@pytest.mark.parametrize("json_flag", [[], ["--json"]], ids=["text", "json"])
+def test_an_interrupted_matrix_measurement_says_how_many_transitions_and_prints_nothing(
+        capsys, monkeypatch, json_flag):
+    _ctrl_c_at_drive(monkeypatch, 7)  # in the 4th transition: 3 measured
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix", *json_flag)
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted after measuring 3 of 24 transitions (12 allowed, 2 times each; 3 reached "
+                   "their target); nothing printed: the matrix (text or --json) is printed only once every "
+                   "transition is measured\n")
+
+
+def test_an_interrupted_hold_range_counts_over_every_margin(capsys, monkeypatch):
+    _ctrl_c_at_drive(monkeypatch, 48 + 5)  # the first margin's 24 transitions, then 2 of the second's
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix", "--hold-range", "--json")
+    assert code == 130 and out == ""
+    assert err.startswith("proleg: interrupted after measuring 26 of 72 transitions (12 allowed, 2 times each at "
+                          "each of 3 hold margins; 26 reached their target); nothing printed")
+
+
+def test_a_matrix_measurement_interrupted_at_once_measured_nothing(capsys, monkeypatch):
+    _ctrl_c_at_drive(monkeypatch, 1)
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix")
+    assert code == 130 and out == ""
+    assert err.startswith("proleg: interrupted before the first transition was measured; nothing printed")
