@@ -309,3 +309,23 @@ def test_a_matrix_measurement_interrupted_at_once_measured_nothing(capsys, monke
     code, out, err = cli(capsys, "sim", R1, "--measure-matrix")
     assert code == 130 and out == ""
     assert err.startswith("proleg: interrupted before the first transition was measured; nothing printed")
+
+
+def test_ctrl_c_on_a_real_run_process_stops_the_robot_and_ends_with_the_line(tmp_path):
+    """The signal itself: SIGINT to ``proleg run --sim --speed 1 --record run.jsonl``."""
+    record = tmp_path / "run.jsonl"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-m", "proleg", "run", str(R1), "--sim", "--speed", "1", "--duration",
+                             "600", "--record", str(record), "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
+    lines = [x for x in err.splitlines() if "warning" not in x]
+    assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ") and " s into the 600 s run" in lines[0]
+    assert "; STOP acknowledged: the gait is stopped and the coils are off; " in lines[0]
+    assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
+    assert len(read_recording(record).time_s) > 0
