@@ -329,3 +329,30 @@ def test_ctrl_c_on_a_real_run_process_stops_the_robot_and_ends_with_the_line(tmp
     assert "; STOP acknowledged: the gait is stopped and the coils are off; " in lines[0]
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
     assert len(read_recording(record).time_s) > 0
+
+
+def test_a_run_interrupted_while_checking_the_board_started_nothing(capsys, monkeypatch, tmp_path):
+    import proleg.report
+
+    def check_gait(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(proleg.report, "check_gait", check_gait)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / "run.mcap")
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted before the gait started: nothing was started on the robot and no coil was "
+                   "driven; nothing recorded\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
+def test_a_recording_opened_for_a_run_that_never_started_is_removed(capsys, monkeypatch, tmp_path, suffix):
+    import proleg.report
+
+    def run_gait_on(*args, **kwargs):  # Ctrl-C after the recording was opened, before START
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(proleg.report, "run_gait_on", run_gait_on)
+    code, _, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / f"run{suffix}")
+    assert code == 130 and err.endswith("; nothing recorded\n")
+    assert list(tmp_path.iterdir()) == []

@@ -13,6 +13,8 @@ import argparse
 import json
 import logging
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from ..errors import GaitError, Interrupted, LinkError, UsageError
@@ -243,18 +245,17 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0 if doc["ok"] else 1
 
 
-class _before_the_gait:
+@contextmanager
+def _before_the_gait() -> Iterator[None]:
     """Ctrl-C between connecting and START (checking the board, loading a gait): nothing was
     started on the robot. A Ctrl-C of the run itself is ``run_gait_on``'s to report."""
-
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, kind: Any, exc: BaseException | None, tb: Any) -> bool:
-        if kind is not None and issubclass(kind, KeyboardInterrupt) and not isinstance(exc, Interrupted):
-            raise Interrupted("interrupted before the gait started: nothing was started on the robot and no "
-                              "coil was driven; nothing recorded") from None
-        return False
+    try:
+        yield
+    except KeyboardInterrupt as e:
+        if isinstance(e, Interrupted):
+            raise
+        raise Interrupted("interrupted before the gait started: nothing was started on the robot and no "
+                          "coil was driven; nothing recorded") from None
 
 
 def _run_interrupted(e: Any, args: argparse.Namespace, robot: Any, listeners: list[Any]) -> str:
