@@ -109,3 +109,250 @@ def test_ctrl_c_on_a_real_sim_process_ends_with_the_line_and_a_readable_mcap(tmp
     assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ")
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
     assert len(read_recording(record).time_s) > 0
+
+
+# --------------------------------------------------------------------------- proleg run
+def _ctrl_c_while_a_coil_heats(monkeypatch, seconds: float) -> list[list[float]]:
+    """Ctrl-C in ``proleg run --sim`` once the link's clock passes ``seconds`` at a moment a coil
+    is on; returns the list that gets the coils' duties as the link closes."""
+    from proleg.link.client import RobotClient
+
+    real_recv, real_close = RobotClient.recv_received, RobotClient.close
+    duties: list[list[float]] = []
+
+    def board(client):
+        return client.link.board.board  # the SimLink's SimulatedRobot's SimBoard
+
+    def recv(self, *a, **k):
+        if self.link.clock() > seconds and any(board(self).pwm(c) > 0 for c in (0, 1)):
+            raise KeyboardInterrupt
+        return real_recv(self, *a, **k)
+
+    def close(self):
+        if not self._closed:
+            duties.append([board(self).pwm(c) for c in (0, 1)])
+        real_close(self)
+
+    monkeypatch.setattr(RobotClient, "recv_received", recv)
+    monkeypatch.setattr(RobotClient, "close", close)
+    return duties
+
+
+def test_an_interrupted_run_stops_the_robot_says_how_far_it_got_and_keeps_a_whole_recording(
+        capsys, monkeypatch, tmp_path):
+    record = tmp_path / "run.mcap"
+    duties = _ctrl_c_while_a_coil_heats(monkeypatch, 3.0)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "20", "--record", record, "-q")
+    assert code == 130 and out == "" and "Traceback" not in err
+    (line,) = err.splitlines()
+    assert line.startswith("proleg: interrupted 3.") and " s into the 20 s run (simulated time), after " in line
+    assert "; STOP acknowledged: the gait is stopped and the coils are off; " in line
+    assert line.endswith(f"recording kept in {record} (complete up to there)")
+    assert duties == [[0.0, 0.0]]  # a coil was heating at the Ctrl-C; none is once the link closes
+    recording = read_recording(record)  # closed whole: the MCAP has its footer
+    assert 2.5 < recording.time_s[-1] < 3.5
+
+
+def test_an_interrupted_jsonl_run_says_no_result_line_was_printed(capsys, monkeypatch):
+    _ctrl_c_while_a_coil_heats(monkeypatch, 1.0)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--format", "jsonl", "-q")
+    assert code == 130 and '"RESULT"' not in out
+    assert err.endswith("; STOP acknowledged: the gait is stopped and the coils are off; nothing recorded; "
+                        "no RESULT line printed\n")
+
+
+def test_a_run_interrupted_while_connecting_started_nothing_and_wrote_no_recording(capsys, monkeypatch, tmp_path):
+    from proleg.link.client import RobotClient
+
+    def connect(self, *a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(RobotClient, "connect", connect)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / "run.csv")
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted while connecting, before the gait started: nothing was started on the "
+                   "robot; nothing recorded\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_ctrl_c_whose_stop_goes_unanswered_sends_estop_and_says_what_is_left():
+    from proleg.report.robot_run import _stop_after_ctrl_c, stop_text
+
+    sent = []
+
+    def command(name):
+        sent.append(name)
+        if name == "STOP":
+            raise KeyboardInterrupt  # a second Ctrl-C while STOP waits: on to the ESTOP
+        return True
+
+    assert _stop_after_ctrl_c(command) == "ESTOP" and sent == ["STOP", "ESTOP"]
+    assert _stop_after_ctrl_c(lambda name: False) is None
+    assert "E-stop stays latched" in stop_text("ESTOP")
+    assert "link watchdog stops the gait and turns the coils off within 2000 ms" in stop_text(None, 2000)
+    assert "the coils may still be on, switch the robot's power off" in stop_text(None, 0)
+
+
+# --------------------------------------------------------------------------- proleg calibrate
+def _board_kept_across_commands(monkeypatch):
+    """A simulated R1 board that outlives ``proleg calibrate --port …``, as a real one does:
+    the command's link opens on it, and the test reconnects afterwards to see what it kept."""
+    from proleg.cli import robot_commands
+    from proleg.link.client import RobotClient
+    from proleg.link.sim_link import SimLink
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    sim = SimulatedRobot(load_robot(R1), conditions=["imu_offset_deg=left:8", "imu_offset_deg=right:-8"])
+
+    def connect(*args, **kwargs):
+        client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+        client.connect()
+        return client
+
+    monkeypatch.setattr(robot_commands, "open_client", connect)
+    return connect
+
+
+def test_an_interrupted_calibration_is_finished_by_the_board_whole_and_the_line_says_so(capsys, monkeypatch):
+    from proleg.link import level
+    from proleg.protocol.definition import LevelStatus
+
+    connect = _board_kept_across_commands(monkeypatch)
+
+    def ctrl_c(client, within_s=level.DONE_WITHIN_S):  # as CALIBRATE_LEVEL is acknowledged
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(level, "level_outcome", ctrl_c)
+    code, out, err = cli(capsys, "calibrate", R1, "--port", "/dev/ttyUSB9")
+    assert code == 130 and out == ""
+    assert err.startswith("proleg: interrupted while the board was calibrating: it finishes on its own within a "
+                          "second or so and either stores the new record whole or keeps the one it had")
+    assert err.endswith(" --port /dev/ttyUSB9 --show\n") and "check which: proleg calibrate " in err
+    client = connect()  # the board went on without the host: a whole record, the mounting tilts
+    end = client.link.clock() + 1.0
+    while client.link.clock() < end:
+        client.recv(0.05)
+    reading = level.get_level(client)
+    left, right = reading.offsets_cdeg
+    assert reading.status == LevelStatus.STORED and abs(left - 800) < 15 and abs(right + 800) < 15
+
+
+def test_a_calibration_interrupted_while_connecting_asked_the_board_nothing(capsys, monkeypatch):
+    from proleg.cli import robot_commands
+    from proleg.protocol.definition import LevelStatus
+
+    connect = _board_kept_across_commands(monkeypatch)
+
+    def ctrl_c(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(robot_commands, "open_client", ctrl_c)
+    code, out, err = cli(capsys, "calibrate", R1, "--port", "/dev/ttyUSB9")
+    assert code == 130 and out == ""
+    assert err == "proleg: interrupted before anything was asked of the board: its level calibration is unchanged\n"
+    from proleg.link.level import get_level
+
+    assert get_level(connect()).status == LevelStatus.NONE
+
+
+def test_an_interrupted_calibration_of_a_sim_board_says_nothing_is_kept(capsys, monkeypatch):
+    from proleg.link import level
+
+    def ctrl_c(client, within_s=level.DONE_WITHIN_S):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(level, "level_outcome", ctrl_c)
+    code, out, err = cli(capsys, "calibrate", R1, "--sim")
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted while the simulated board was calibrating; nothing kept: a --sim board "
+                   "lives for this command only\n")
+
+
+# --------------------------------------------------------------------------- proleg sim --measure-matrix
+def _ctrl_c_at_drive(monkeypatch, call: int) -> None:
+    """Ctrl-C in the idealised drive's ``call``-th run to a state (each transition measured is
+    two: to its start, then to its end)."""
+    from proleg.sim.physical import measure
+
+    real, calls = measure._run_to, []
+
+    def run_to(*a, **k):
+        calls.append(1)
+        if len(calls) == call:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(measure, "_run_to", run_to)
+
+
+@pytest.mark.parametrize("json_flag", [[], ["--json"]], ids=["text", "json"])
+def test_an_interrupted_matrix_measurement_says_how_many_transitions_and_prints_nothing(
+        capsys, monkeypatch, json_flag):
+    _ctrl_c_at_drive(monkeypatch, 7)  # in the 4th transition: 3 measured
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix", *json_flag)
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted after measuring 3 of 24 transitions (12 allowed, 2 times each; 3 reached "
+                   "their target); nothing printed: the matrix (text or --json) is printed only once every "
+                   "transition is measured\n")
+
+
+def test_an_interrupted_hold_range_counts_over_every_margin(capsys, monkeypatch):
+    _ctrl_c_at_drive(monkeypatch, 48 + 5)  # the first margin's 24 transitions, then 2 of the second's
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix", "--hold-range", "--json")
+    assert code == 130 and out == ""
+    assert err.startswith("proleg: interrupted after measuring 26 of 72 transitions (12 allowed, 2 times each at "
+                          "each of 3 hold margins; 26 reached their target); nothing printed")
+
+
+def test_a_matrix_measurement_interrupted_at_once_measured_nothing(capsys, monkeypatch):
+    _ctrl_c_at_drive(monkeypatch, 1)
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix")
+    assert code == 130 and out == ""
+    assert err.startswith("proleg: interrupted before the first transition was measured; nothing printed")
+
+
+def test_ctrl_c_on_a_real_run_process_stops_the_robot_and_ends_with_the_line(tmp_path):
+    """The signal itself: SIGINT to ``proleg run --sim --speed 1 --record run.jsonl``."""
+    record = tmp_path / "run.jsonl"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-m", "proleg", "run", str(R1), "--sim", "--speed", "1", "--duration",
+                             "600", "--record", str(record), "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
+    lines = [x for x in err.splitlines() if "warning" not in x]
+    assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ") and " s into the 600 s run" in lines[0]
+    assert "; STOP acknowledged: the gait is stopped and the coils are off; " in lines[0]
+    assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
+    assert len(read_recording(record).time_s) > 0
+
+
+def test_a_run_interrupted_while_checking_the_board_started_nothing(capsys, monkeypatch, tmp_path):
+    import proleg.report
+
+    def check_gait(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(proleg.report, "check_gait", check_gait)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / "run.mcap")
+    assert code == 130 and out == ""
+    assert err == ("proleg: interrupted before the gait started: nothing was started on the robot and no coil was "
+                   "driven; nothing recorded\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
+def test_a_recording_opened_for_a_run_that_never_started_is_removed(capsys, monkeypatch, tmp_path, suffix):
+    import proleg.report
+
+    def run_gait_on(*args, **kwargs):  # Ctrl-C after the recording was opened, before START
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(proleg.report, "run_gait_on", run_gait_on)
+    code, _, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / f"run{suffix}")
+    assert code == 130 and err.endswith("; nothing recorded\n")
+    assert list(tmp_path.iterdir()) == []

@@ -222,6 +222,58 @@ def test_multi_level_limb_labels(tmp_path):
     assert r.transitions.n_transitions == 30
 
 
+def three_level_left(psi: str, control: str = "") -> str:
+    """R1 with a three-level left limb of critical angles ``psi`` (and a [control] table)."""
+    text = R1.replace('name = "left"\npsi_star_deg = [20.0]', f'name = "left"\nlevels = 3\npsi_star_deg = {psi}')
+    text = text.replace(
+        "matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]",
+        "matrix = [" + ", ".join("[" + ", ".join("1" for _ in range(6)) + "]" for _ in range(6)) + "]",
+    )
+    return text + (f"\n[control]\n{control}\n" if control else "")
+
+
+def hold_warnings(path: Path) -> list[str]:
+    """The warnings loading ``path`` logs about levels that cannot be held, caught on the
+    loader's own logger (the CLI's stops propagating to caplog once a test has run ``main``)."""
+    import logging
+
+    lines: list[str] = []
+    handler = logging.Handler(logging.WARNING)
+    handler.emit = lambda record: lines.append(record.getMessage())  # type: ignore[method-assign]
+    logger = logging.getLogger("proleg.robot")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.WARNING)
+    try:
+        load_robot(path)
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+    return [line for line in lines if "so level" in line]
+
+
+def test_thresholds_too_close_to_hold_the_lower_level_warn_naming_file_limb_angles_and_spacing(tmp_path):
+    # held at level 1 between 10 + 1 + 4 = 15° and 16°: level 2's band starts at 16 - 1 = 15°
+    path = write(tmp_path, three_level_left("[10.0, 16.0]"))
+    (line,) = hold_warnings(path)
+    assert line.startswith(f"warning: {path}: limb 'left': psi_star_deg 10° and 16° are 6° apart")
+    assert "up to 16°" in line and "level 2's band (from 15°)" in line and "level 1 cannot be held" in line
+    assert "more than 7° apart (hysteresis_deg 2 + hold_margin_deg 4 + 1)" in line
+    # a smaller hold margin makes room: 10 + 1 + 1 + 1 = 13° < 15°
+    path = write(tmp_path, three_level_left("[10.0, 16.0]", "hold_margin_deg = 1.0"))
+    assert hold_warnings(path) == []
+
+
+def test_thresholds_far_enough_apart_do_not_warn(tmp_path):
+    path = write(tmp_path, three_level_left("[10.0, 17.5]"))  # hold top 16°, next band from 16.5°
+    assert hold_warnings(path) == []
+
+
+@pytest.mark.parametrize("path", sorted(ROBOTS.glob("*.toml")), ids=lambda p: p.stem)
+def test_no_example_robot_has_a_level_it_cannot_hold(path):
+    assert hold_warnings(path) == []
+
+
 def csv_robot(tmp_path: Path, rows: str) -> Path:
     (tmp_path / "t.csv").write_text(rows)
     head = R1.split("[transitions]")[0]

@@ -236,6 +236,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
     _check_strokes(path, control, limbs)
+    for line in hold_crossings(path, limbs, control.hold_margin_deg):
+        log.warning("warning: %s", line)
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
@@ -374,6 +376,34 @@ def _check_strokes(path: Path, control: Control, limbs: Sequence[Limb]) -> None:
         if name is not None and name not in with_stroke:
             raise RobotFileError(f"{path}: control.{key}: expected the name of a limb with a stroke_deg "
                                  f"({', '.join(with_stroke)}), got {name!r}")
+
+
+#: How far above its hold edge the firmware lets a held limb's coil heat (core/psi.h
+#: PSI_HOLD_BAND_CDEG): the hold band is [hold edge, hold edge + 1°].
+HOLD_BAND_DEG = 1.0
+
+
+def hold_crossings(path: Path, limbs: Sequence[Limb], hold_margin_deg: float) -> list[str]:
+    """One warning line per pair of neighbouring thresholds of a limb too close for the
+    controller to hold the lower level: it holds level k with ψ between the hold edge
+    ψ*_k + h/2 + ``hold_margin_deg`` and 1° above it (docs/control.md), and a hold band that
+    reaches the next band's lower edge ψ*_{k+1} − h/2 takes the limb into level k+1. A warning,
+    not an error: ``SET_PARAM`` may move the thresholds and the margin on the board."""
+    out = []
+    for lb in limbs:
+        h = lb.hysteresis_deg
+        need = h + hold_margin_deg + HOLD_BAND_DEG  # ψ*_{k+1} − ψ*_k must exceed this
+        for k, (lo, hi) in enumerate(zip(lb.psi_star_deg, lb.psi_star_deg[1:]), start=1):
+            if hi - lo > need:
+                continue
+            top = lo + h / 2 + hold_margin_deg + HOLD_BAND_DEG
+            out.append(f"{path}: limb {lb.name!r}: psi_star_deg {lo:g}° and {hi:g}° are {hi - lo:g}° apart: holding "
+                       f"level {k}, the controller heats it up to {top:g}° (psi* + hysteresis/2 + "
+                       f"control.hold_margin_deg + {HOLD_BAND_DEG:g}°), which reaches level {k + 1}'s band "
+                       f"(from {hi - h / 2:g}°), so level {k} cannot be held; space them more than {need:g}° "
+                       f"apart (hysteresis_deg {h:g} + hold_margin_deg {hold_margin_deg:g} + {HOLD_BAND_DEG:g}), "
+                       f"or lower hold_margin_deg or hysteresis_deg")
+    return out
 
 
 def stroke_leads(limbs: Sequence[Any], control: Any) -> tuple[int, int | None] | None:

@@ -3,7 +3,7 @@
 With the robot at rest on flat ground (every coil cold), ``proleg calibrate ROBOT --port …``
 has the firmware record each IMU's rest tilt and store it in the board's non-volatile memory;
 ``--show`` prints what is stored, ``--clear`` erases it. Exit 0 when stored (or shown/cleared),
-1 when the robot refuses.
+1 when the robot refuses, 130 on Ctrl-C with a line saying what the board keeps.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ..errors import LinkError
+from ..errors import Interrupted, LinkError
 
 
 def _limb_names(robot: Any, n: int) -> list[str]:
@@ -28,56 +28,92 @@ def _table(names: list[str], offsets_cdeg: tuple[int, ...], status: list[str], w
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
-    from ..link.client import CommandRefused
-    from ..link.level import calibrate_level, clear_level, get_level
-    from ..protocol.definition import LevelStatus
     from ..robot import load_robot
     from .robot_commands import open_client
 
     robot = load_robot(args.robot)
-    with open_client(args, args.robot) as client:
-        where = client.link.description
-        if args.show or args.clear:
-            reading = clear_level(client) if args.clear else get_level(client)
-            names = _limb_names(robot, len(reading.offsets_cdeg))
-            what = {LevelStatus.NONE: "no level calibration stored",
-                    LevelStatus.STORED: "level calibration stored",
-                    LevelStatus.CORRUPT: "the stored level calibration is corrupt (ignored: offsets 0); calibrate again",
-                    LevelStatus.CALIBRATING: "a level calibration is under way"}[reading.status]
-            print(f"{'cleared: ' if args.clear else ''}{what} on {where}")
-            if reading.status == LevelStatus.STORED:
-                print(_table(names, reading.offsets_cdeg, ["applied"] * len(names)))
-            if any(reading.ground_cdeg):
-                print("levelled on this ground (until reset):")
-                print(_table(names, reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
-            return 0
-        try:
-            outcome = calibrate_level(client, ground=args.ground)
-        except CommandRefused as e:
-            why = {1: "a gait is running (stop it, let the coils cool)", 2: "an IMU is marked bad (see the fault; clear it)",
-                   3: "a fault is latched (clear it first)", 4: "a calibration is already under way",
-                   5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)"}
-            raise LinkError(f"{where}: robot refused the level calibration: {why.get(e.detail, e)}") from None
-        names = _limb_names(robot, len(outcome.reading.offsets_cdeg))
-        if outcome.ok and args.ground:
-            if outcome.reading.status != LevelStatus.STORED:
-                print("note: no flat calibration is stored, so the tilts below include each IMU's mounting tilt")
-            print(f"levelled on this ground on {where} (applied until the board resets; not stored)")
-            print(_table(names, outcome.reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
-            return 0
-        if outcome.ok:
-            print(f"level calibration stored on {where} (applied from now on, kept across resets)")
-            print(_table(names, outcome.reading.offsets_cdeg, ["stored"] * len(names)))
-            if getattr(args, "sim", None):
-                from .robot_commands import SIM_IS_FRESH
+    asked: list[str] = []  # the command that changes what the board keeps, once it is being sent
+    try:
+        with open_client(args, args.robot) as client:
+            return _calibrate(args, robot, client, asked)
+    except KeyboardInterrupt as e:
+        if isinstance(e, Interrupted):
+            raise
+        raise Interrupted(_interrupted(args, asked[-1] if asked else None)) from None
 
-                print(SIM_IS_FRESH)
-            return 0
-        print(f"level calibration refused on {where}: nothing changed")
-        kept = outcome.reading
-        print(_table(names, kept.offsets_cdeg if kept.status == LevelStatus.STORED else (0,) * len(names),
-                     [outcome.limb_text(i) for i in range(len(names))]))
-        return 1
+
+def _interrupted(args: argparse.Namespace, asked: str | None) -> str:
+    """The one line a Ctrl-C'd ``proleg calibrate`` ends with: what the board keeps. The board
+    does the sampling and the writing on its own once asked (core/level.c): the host leaving
+    does not stop it half-way, and a record is used only whole (its CRC checked)."""
+    if asked is None:
+        return "interrupted before anything was asked of the board: its level calibration is unchanged"
+    if getattr(args, "sim", False):
+        return ("interrupted while the simulated board was " + ("clearing" if asked == "CLEAR_LEVEL" else "calibrating")
+                + "; nothing kept: a --sim board lives for this command only")
+    link = f"--port {args.port}" if args.port else f"--can {args.can}"
+    check = f"proleg calibrate {args.robot} {link} --show"
+    if asked == "CLEAR_LEVEL":
+        return f"interrupted after asking the board to clear its level calibration: it erases it on its own; check: {check}"
+    if asked == "ground":
+        return ("interrupted while the board was levelling on this ground: it finishes on its own and applies the "
+                f"result in RAM only, until it resets (nothing stored); check: {check}")
+    return ("interrupted while the board was calibrating: it finishes on its own within a second or so and either "
+            "stores the new record whole or keeps the one it had (a record is used only whole, its CRC checked); "
+            f"check which: {check}")
+
+
+def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[str]) -> int:
+    from ..link.client import CommandRefused
+    from ..link.level import ask_level_calibration, clear_level, get_level, level_outcome
+    from ..protocol.definition import LevelStatus
+
+    where = client.link.description
+    if args.show or args.clear:
+        if args.clear:
+            asked.append("CLEAR_LEVEL")
+        reading = clear_level(client) if args.clear else get_level(client)
+        names = _limb_names(robot, len(reading.offsets_cdeg))
+        what = {LevelStatus.NONE: "no level calibration stored",
+                LevelStatus.STORED: "level calibration stored",
+                LevelStatus.CORRUPT: "the stored level calibration is corrupt (ignored: offsets 0); calibrate again",
+                LevelStatus.CALIBRATING: "a level calibration is under way"}[reading.status]
+        print(f"{'cleared: ' if args.clear else ''}{what} on {where}")
+        if reading.status == LevelStatus.STORED:
+            print(_table(names, reading.offsets_cdeg, ["applied"] * len(names)))
+        if any(reading.ground_cdeg):
+            print("levelled on this ground (until reset):")
+            print(_table(names, reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
+        return 0
+    try:
+        asked.append("ground" if args.ground else "CALIBRATE_LEVEL")
+        ask_level_calibration(client, ground=args.ground)
+    except CommandRefused as e:
+        why = {1: "a gait is running (stop it, let the coils cool)", 2: "an IMU is marked bad (see the fault; clear it)",
+               3: "a fault is latched (clear it first)", 4: "a calibration is already under way",
+               5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)"}
+        raise LinkError(f"{where}: robot refused the level calibration: {why.get(e.detail, e)}") from None
+    outcome = level_outcome(client)
+    names = _limb_names(robot, len(outcome.reading.offsets_cdeg))
+    if outcome.ok and args.ground:
+        if outcome.reading.status != LevelStatus.STORED:
+            print("note: no flat calibration is stored, so the tilts below include each IMU's mounting tilt")
+        print(f"levelled on this ground on {where} (applied until the board resets; not stored)")
+        print(_table(names, outcome.reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
+        return 0
+    if outcome.ok:
+        print(f"level calibration stored on {where} (applied from now on, kept across resets)")
+        print(_table(names, outcome.reading.offsets_cdeg, ["stored"] * len(names)))
+        if getattr(args, "sim", None):
+            from .robot_commands import SIM_IS_FRESH
+
+            print(SIM_IS_FRESH)
+        return 0
+    print(f"level calibration refused on {where}: nothing changed")
+    kept = outcome.reading
+    print(_table(names, kept.offsets_cdeg if kept.status == LevelStatus.STORED else (0,) * len(names),
+                 [outcome.limb_text(i) for i in range(len(names))]))
+    return 1
 
 
 def add_arguments(subparsers: Any) -> None:

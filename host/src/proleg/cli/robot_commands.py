@@ -13,9 +13,11 @@ import argparse
 import json
 import logging
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
-from ..errors import GaitError, LinkError, UsageError
+from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..link.serial_link import DEFAULT_BAUDRATE
 from .number_args import baudrate, can_bitrate, can_node, gait_index, heading_deg, positive_float, reply_timeout
 
@@ -142,6 +144,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ..protocol.definition import GAIT_USER
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on
+    from ..report.robot_run import RunInterrupted
     from ..robot import info_name, load_robot
 
     from .main import udp_options
@@ -157,8 +160,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     direction = args.direction or (UNSTATED if gait == GAIT_USER else "+x")
     if choice is not None:
         gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
-    client = open_client(args, args.robot, speed=args.speed)
-    with client:
+    try:
+        client = open_client(args, args.robot, speed=args.speed)
+    except KeyboardInterrupt:
+        raise Interrupted("interrupted while connecting, before the gait started: nothing was started on the "
+                          "robot; nothing recorded") from None
+    with client, _before_the_gait():
         info = client.info
         if info.robot_name != info_name(robot.name):  # INFO carries the first 15 characters
             raise LinkError(f"{client.link.description} runs robot {info.robot_name!r}, not {robot.name!r} "
@@ -170,21 +177,29 @@ def cmd_run(args: argparse.Namespace) -> int:
             client.load_gait(choice.states)
         meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
         listeners: list[Any] = []
-        if args.record:
-            listeners.append(Logger(args.record, meta))
-        if args.udp:
-            listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
-        if args.format == "jsonl":
-            listeners.append(JsonlPrinter(meta, sys.stdout))
-        replanner = None
-        if args.replan:
-            from ..learn.replan import Replanner
-
-            replanner = Replanner(robot, client, None if direction == UNSTATED else direction,
-                                  say=lambda t: print(f"  {t}", flush=True) if args.format != "jsonl" else log.info(t))
         try:
+            if args.record:
+                listeners.append(Logger(args.record, meta))
+            if args.udp:
+                listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
+            if args.format == "jsonl":
+                listeners.append(JsonlPrinter(meta, sys.stdout))
+            replanner = None
+            if args.replan:
+                from ..learn.replan import Replanner
+
+                replanner = Replanner(robot, client, None if direction == UNSTATED else direction,
+                                      say=lambda t: print(f"  {t}", flush=True) if args.format != "jsonl" else log.info(t))
             run = run_gait_on(client, gait, direction, args.duration, listeners=listeners,
                               progress=log.info, progress_every_s=args.progress, replanner=replanner)
+        except RunInterrupted as e:
+            for listener in listeners:
+                listener.stop()  # the recording is closed whole (an MCAP gets its footer)
+            raise Interrupted(_run_interrupted(e, args, robot, listeners)) from None
+        except KeyboardInterrupt:  # before START: a recording of nothing is not kept
+            for listener in listeners:
+                getattr(listener, "discard", listener.stop)()
+            raise
         finally:
             for listener in listeners:
                 listener.stop()
@@ -228,6 +243,43 @@ def cmd_run(args: argparse.Namespace) -> int:
     for e in errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     return 0 if doc["ok"] else 1
+
+
+@contextmanager
+def _before_the_gait() -> Iterator[None]:
+    """Ctrl-C between connecting and START (checking the board, loading a gait): nothing was
+    started on the robot. A Ctrl-C of the run itself is ``run_gait_on``'s to report."""
+    try:
+        yield
+    except KeyboardInterrupt as e:
+        if isinstance(e, Interrupted):
+            raise
+        raise Interrupted("interrupted before the gait started: nothing was started on the robot and no "
+                          "coil was driven; nothing recorded") from None
+
+
+def _run_interrupted(e: Any, args: argparse.Namespace, robot: Any, listeners: list[Any]) -> str:
+    """The one line a Ctrl-C'd ``proleg run`` ends with: how far it got, what the robot was
+    left doing, and what was kept."""
+    from ..record.base import Writer
+    from ..report.robot_run import stop_text
+
+    clock = " (simulated time)" if getattr(args, "sim", False) else ""
+    if e.started:
+        when = (f"interrupted {e.ran_s:.1f} s into the {args.duration:g} s run{clock}, after {e.run.cycles} "
+                f"cycle{'s' if e.run.cycles != 1 else ''}")
+    else:
+        when = "interrupted while starting the gait (START was not acknowledged yet)"
+    recorder = next((w for w in listeners if isinstance(w, Writer)), None)
+    if recorder is None:
+        kept = "nothing recorded"
+    elif recorder.error is not None:
+        kept = f"the recording stopped earlier: {recorder.error}"
+    else:
+        kept = f"recording kept in {args.record} (complete up to there)"
+    if args.format == "jsonl":
+        kept += "; no RESULT line printed"
+    return f"{when}; {stop_text(e.stopped, robot.safety.link_watchdog_ms)}; {kept}"
 
 
 def _label(robot: Any, state: int) -> str:

@@ -113,13 +113,20 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         raise SimError("--measure-matrix: the matrix is measured on the physical plant (the table plant is the matrix)")
     conditions = plant_conditions(robot, args.condition)
     rng = None
-    if args.hold_range:
-        from ..sim.physical.measure import MARGIN_DEG, measure_matrix_range
+    steps = _Steps()
+    try:
+        if args.hold_range:
+            from ..sim.physical.measure import MARGIN_DEG, measure_matrix_range
 
-        rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed)
-        m = rng.at(MARGIN_DEG)
-    else:
-        m = measure_matrix(robot, conditions, seed=args.seed)
+            rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed, on_step=steps)
+            m = rng.at(MARGIN_DEG)
+        else:
+            m = measure_matrix(robot, conditions, seed=args.seed, on_step=steps)
+    except KeyboardInterrupt:
+        from ..errors import Interrupted
+
+        margins = 3 if args.hold_range else 1
+        raise Interrupted(steps.interrupted(robot.transitions.n_transitions, margins)) from None
     if args.json:
         extra = {} if rng is None else rng.to_json()
         print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(), **extra}))
@@ -134,6 +141,27 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         _table(m.states, [[None if lo != lo else f"{lo:+.2f}..{hi:+.2f}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
     return 0
+
+
+class _Steps:
+    """``measure_matrix``'s ``on_step``: how far the measurement got, for a Ctrl-C's line."""
+
+    def __init__(self) -> None:
+        self.tried = self.sampled = self.total = 0
+
+    def __call__(self, tried: int, sampled: int, total: int) -> None:
+        self.tried, self.sampled, self.total = tried, sampled, total
+
+    def interrupted(self, allowed: int, margins: int) -> str:
+        """The one line a Ctrl-C'd ``--measure-matrix`` ends with: how many transitions were
+        measured, and that nothing was printed (the matrix comes out whole or not at all)."""
+        nothing = "nothing printed: the matrix (text or --json) is printed only once every transition is measured"
+        if not self.tried:
+            return f"interrupted before the first transition was measured; {nothing}"
+        each = self.total // max(1, allowed * margins)
+        how = f"{allowed} allowed, {each} times each" + (f" at each of {margins} hold margins" if margins > 1 else "")
+        return (f"interrupted after measuring {self.tried} of {self.total} transitions ({how}; {self.sampled} "
+                f"reached their target); {nothing}")
 
 
 #: ``proleg sim`` options as given (not left at their defaults): name → test on the arguments.

@@ -90,7 +90,18 @@ def calibrate_level(client: RobotClient, *, ground: bool = False, within_s: floa
     refuses at once (NOT_ALLOWED: a gait runs, an IMU is bad, a fault is latched).
     ``ground``: level on the ground the robot stands on now (a slope), in the robot's RAM
     only, on top of the stored flat calibration."""
+    ask_level_calibration(client, ground=ground)
+    return level_outcome(client, within_s)
+
+
+def ask_level_calibration(client: RobotClient, *, ground: bool = False) -> None:
+    """CALIBRATE_LEVEL: from here the board samples and stores (or applies) on its own, whether
+    or not anyone waits for its end."""
     client.request("CALIBRATE_LEVEL", ground=int(ground))
+
+
+def level_outcome(client: RobotClient, within_s: float = DONE_WITHIN_S) -> LevelOutcome:
+    """Wait for the EVENT LEVEL_DONE of the calibration asked for, and read back what is stored."""
     deadline = client.link.clock() + within_s
     while True:
         msg = client.recv(max(0.0, deadline - client.link.clock()))

@@ -49,6 +49,9 @@ class Writer(Listener, ABC):
         except OSError as e:
             self._discard()
             raise LinkError(f"cannot write record file {e.filename or self.path}: {e.strerror or e}") from None
+        except BaseException:  # Ctrl-C while the file is being created: no half-written header left
+            self._discard()
+            raise
 
     @classmethod
     def files(cls, path: Path) -> list[Path]:
@@ -104,6 +107,11 @@ class Writer(Listener, ABC):
         except OSError as e:
             self.error = LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             self.stop()
+
+    def discard(self) -> None:
+        """Close and remove the recording (one of nothing: a run that never started)."""
+        self._open = False
+        self._discard()
 
     def stop(self) -> None:
         if self._open:

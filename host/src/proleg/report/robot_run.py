@@ -4,14 +4,16 @@
 (recorders, UDP streamers, printers) and to a ``GaitRunListener`` for the report, reports
 progress every ``progress_every_s`` seconds of the link's clock, STOPs (ESTOP when the STOP is
 not acknowledged) and returns the ``GaitRun``: ``ok`` is False when a command failed or the
-firmware reported a fault. ``check_gait`` refuses a gait index the robot does not have.
+firmware reported a fault. Ctrl-C stops the robot the same way and raises ``RunInterrupted``
+saying how far the run got and which command, if any, the robot acknowledged. ``check_gait``
+refuses a gait index the robot does not have.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from ..errors import GaitError, LinkError
+from ..errors import GaitError, Interrupted, LinkError
 from ..link.client import UNSTATED, RobotClient, RobotInfo, direction_code
 from ..link.listeners import Listener
 from ..protocol.definition import GAIT_USER
@@ -20,6 +22,33 @@ from .gait_run import GaitRun, GaitRunListener
 COMMAND_RETRIES = 2
 STOP_TAIL_S = 0.1
 _EPS = 1e-9
+
+
+class RunInterrupted(Interrupted):
+    """Ctrl-C during ``run_gait_on``, raised once the robot was told to stop: the run so far
+    (``run``), the seconds it ran on the link's clock (``ran_s``), whether the robot had
+    acknowledged START (``started``) and the command that stopped it, STOP or ESTOP (``stopped``;
+    None when neither was acknowledged). The caller says it in a line with what it kept."""
+
+    def __init__(self, run: GaitRun, ran_s: float, started: bool, stopped: str | None):
+        super().__init__(f"interrupted {ran_s:.1f} s into the run; " + stop_text(stopped))
+        self.run, self.ran_s, self.started, self.stopped = run, ran_s, started, stopped
+
+
+def stop_text(stopped: str | None, watchdog_ms: int | None = None) -> str:
+    """What the robot was left doing after a Ctrl-C, from the command it acknowledged
+    (``watchdog_ms``: the robot file's ``[safety] link_watchdog_ms``, when known)."""
+    if stopped == "STOP":
+        return "STOP acknowledged: the gait is stopped and the coils are off"
+    if stopped == "ESTOP":
+        return ("STOP unanswered, ESTOP acknowledged: the coils are off and the E-stop stays latched until a "
+                "CLEAR (proleg console)")
+    if watchdog_ms == 0:
+        return ("neither STOP nor ESTOP was acknowledged and the firmware has no link watchdog ([safety] "
+                "link_watchdog_ms = 0): the coils may still be on, switch the robot's power off")
+    within = "its [safety] link_watchdog_ms" if watchdog_ms is None else f"{watchdog_ms} ms"
+    return (f"neither STOP nor ESTOP was acknowledged: the board's link watchdog stops the gait and turns the "
+            f"coils off within {within} of the last frame")
 
 
 def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[str, int] | None = None) -> None:
@@ -83,17 +112,35 @@ def run_gait_on(
             return False
 
     t0 = clock()
-    if command("START", gait=gait, direction=direction_code(direction, gait)):
-        if progress is not None:
-            what = "the loaded gait" if gait == GAIT_USER else f"gait {gait}"
-            way = "its way unstated" if direction == UNSTATED else f"in {direction}"
-            progress(f"started {what} {way} for {duration_s:g} s on {client.link.description}")
-        pump(duration_s)
-    else:
-        run.duration_s = 0.0  # it never ran
+    started = False
+    try:
+        if command("START", gait=gait, direction=direction_code(direction, gait)):
+            started = True
+            if progress is not None:
+                what = "the loaded gait" if gait == GAIT_USER else f"gait {gait}"
+                way = "its way unstated" if direction == UNSTATED else f"in {direction}"
+                progress(f"started {what} {way} for {duration_s:g} s on {client.link.description}")
+            pump(duration_s)
+        else:
+            run.duration_s = 0.0  # it never ran
+    except KeyboardInterrupt:  # also while START waited for its ACK: the board may have started
+        ran_s = clock() - t0
+        raise RunInterrupted(run, ran_s, started, _stop_after_ctrl_c(command)) from None
     t_stop = clock()
     if not command("STOP"):
         command("ESTOP")  # the coils must go cold whatever the link does
     pump(STOP_TAIL_S - (clock() - t_stop))
     run.telemetry_lost = client.stats.lost
     return run
+
+
+def _stop_after_ctrl_c(command: Callable[..., bool]) -> str | None:
+    """STOP, else ESTOP, whatever the user presses meanwhile (a second Ctrl-C goes on to the
+    ESTOP rather than leave the coils on): the command acknowledged, or None."""
+    for name in ("STOP", "ESTOP"):
+        try:
+            if command(name):
+                return name
+        except KeyboardInterrupt:
+            continue
+    return None

@@ -17,7 +17,7 @@ no sample (its entry is NaN and its count 0).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -207,8 +207,11 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
 def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats: int = 2,
                    duty: float | None = None, margin_deg: float = MARGIN_DEG, settle_s: float = 2.5,
                    timeout_s: float = 12.0, dt_s: float = 0.002, seed: int = 0,
-                   params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None) -> MeasuredMatrix:
-    """The reward matrix of ``robot`` measured on the physical plant (mm, row = from)."""
+                   params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None,
+                   on_step: Callable[[int, int, int], None] | None = None) -> MeasuredMatrix:
+    """The reward matrix of ``robot`` measured on the physical plant (mm, row = from).
+    ``on_step(tried, sampled, total)`` after each transition tried: how many were tried, how
+    many of those gave a sample, of ``total`` (the allowed transitions × ``repeats``)."""
     plant = PhysicalPlant(robot, conditions, seed=seed, params=params, mechanisms=mechanisms)
     drive = IdealDrive(robot, plant, margin_deg)
     duty = robot.control.drive_duty if duty is None else duty
@@ -216,19 +219,21 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
     n = len(allowed)
     sums = [[[] for _ in range(n)] for _ in range(n)]
     times = [[[] for _ in range(n)] for _ in range(n)]
+    steps = [(a, b) for a in range(n) for b in range(n) if a != b and allowed[a][b]]
+    tried = sampled = 0
     for _ in range(repeats):
-        for a in range(n):
-            for b in range(n):
-                if a == b or not allowed[a][b]:
-                    continue
-                if _run_to(plant, drive, a, duty, dt_s, timeout_s, settle_s) is None:
-                    continue
+        for a, b in steps:
+            took = None
+            if _run_to(plant, drive, a, duty, dt_s, timeout_s, settle_s) is not None:
                 x0 = plant.displacement_mm
                 took = _run_to(plant, drive, b, duty, dt_s, timeout_s, settle_s)
-                if took is None:
-                    continue
+            if took is not None:
                 sums[a][b].append(plant.displacement_mm - x0)
                 times[a][b].append(took)
+                sampled += 1
+            tried += 1
+            if on_step is not None:
+                on_step(tried, sampled, len(steps) * repeats)
     mean = np.full((n, n), np.nan)
     std = np.full((n, n), np.nan)
     dur = np.full((n, n), np.nan)
@@ -287,10 +292,24 @@ def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_D
     a drive that holds within it walks (a gait's steps interact: docs/plant.md)."""
     if not margins_deg:
         raise ValueError("measure_matrix_range: no hold margins given")
-    measured = tuple(measure_matrix(robot, margin_deg=m, **kwargs) for m in margins_deg)
+    on_step = kwargs.pop("on_step", None)
+    measured: list[MeasuredMatrix] = []
+    for m in margins_deg:
+        step = _counting_on(on_step, measured, len(margins_deg))
+        measured.append(measure_matrix(robot, margin_deg=m, on_step=step, **kwargs))
     stack = np.array([m.matrix_mm for m in measured])
-    return MatrixRange(tuple(float(m) for m in margins_deg), measured,
+    return MatrixRange(tuple(float(m) for m in margins_deg), tuple(measured),
                        np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0))
+
+
+def _counting_on(on_step: Callable[[int, int, int], None] | None, measured: Sequence[MeasuredMatrix],
+                 n_margins: int) -> Callable[[int, int, int], None] | None:
+    """``on_step`` for the next of ``n_margins`` measurements: its counts go on from the
+    matrices already ``measured``, out of all the margins' transitions."""
+    if on_step is None:
+        return None
+    done, sampled_before = len(measured), sum(int(x.samples.sum()) for x in measured)
+    return lambda tried, sampled, total: on_step(done * total + tried, sampled_before + sampled, total * n_margins)
 
 
 def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float = MARGIN_DEG,
