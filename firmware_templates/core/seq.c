@@ -144,16 +144,17 @@ uint8_t seq_gait_count(uint8_t dir)
     return loaded_n ? 1u : 0u;
 }
 
-int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
+int8_t seq_load(const cfg_state_t *states, uint16_t count, uint16_t *bad)
 {
-    uint16_t i;
+    step_ix_t i, n; /* n ≤ CFG_MAX_LOADED_STEPS once checked: a step_ix_t */
     int8_t err = SEQ_ERR_STATE;
-    if (n >= 2u && states[n - 1u] == states[0]) {
-        n--; /* closed form */
+    if (count >= 2u && states[count - 1u] == states[0]) {
+        count--; /* closed form */
     }
-    if (n < 2u || n > CFG_MAX_LOADED_STEPS) {
+    if (count < 2u || count > CFG_MAX_LOADED_STEPS) {
         return SEQ_ERR_LENGTH;
     }
+    n = (step_ix_t)count;
     for (i = 0; i < n; i++) {
         if (states[i] >= n_states) {
             goto refused;
@@ -161,7 +162,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
     }
     err = SEQ_ERR_FORBIDDEN;
     for (i = 0; i < n; i++) {
-        cfg_state_t next = states[(uint16_t)(i + 1u) == n ? 0u : (uint16_t)(i + 1u)];
+        cfg_state_t next = states[(step_ix_t)(i + 1u) == n ? 0u : (step_ix_t)(i + 1u)];
         if (!seq_allowed_transition(states[i], next)) {
             goto refused;
         }
@@ -170,7 +171,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
         s.running = 0; /* never run a half-replaced walk */
     }
     memcpy(loaded, states, n * sizeof loaded[0]);
-    loaded_n = (step_ix_t)n;
+    loaded_n = n;
     return SEQ_OK;
 refused: /* one exit for both refusals (issue 11: one copy of the store) */
     if (bad) {
