@@ -85,6 +85,16 @@ def test_render_is_deterministic_and_names_its_inputs():
     assert "#define CFG_GAIT_TABLE_HASH 0x" in a["robot_config.h"]
 
 
+def test_entry_path_code_is_rendered_only_for_gaits_entered_off_their_step_0():
+    """CFG_ENTRY_PATHS 0 (core/seq.c without its entry-path code) only where seq_entry_* would
+    change nothing: no entry states and every join step 0 (R1: rest is on both gaits)."""
+    from core_configs import inchworm_entry
+
+    pick = lambda t: [line for line in t.splitlines() if line.startswith("#define CFG_ENTRY_PATHS")]  # noqa: E731
+    assert pick(render_config(*r1_fast())["robot_config.h"]) == ["#define CFG_ENTRY_PATHS 0"]
+    assert pick(render_config(*inchworm_entry())["robot_config.h"]) == ["#define CFG_ENTRY_PATHS 1"]
+
+
 def test_gait_hash_changes_with_the_gaits_but_build_inputs_do_not_leak_time():
     robot, gaits, board = r1_fast()
     a = render_config(robot, gaits, board)["robot_config.h"]

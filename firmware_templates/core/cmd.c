@@ -200,15 +200,14 @@ static void cmd_clear(void)
         fault_clear();
         guard_ack(); /* safety: the operator acknowledged; the thermal budget is not refunded */
         done |= PROTO_CLEAR_FAULTS;
-        tx_event(PROTO_EV_FAULT_CLEARED, done, 0);
-        done = 0;
         for (i = 0; i < CFG_N_LIMBS; i++) {
             if (bad & (1u << i)) {
                 imucheck_start(i); /* faults again at once if it still does not answer */
             }
         }
     }
-    if (done) {
+    if (done) { /* one event, after the restarts: imucheck_start sends nothing (its IMU answers, or
+                 * faults again, in a later tick) */
         tx_event(PROTO_EV_FAULT_CLEARED, done, 0);
     }
 }

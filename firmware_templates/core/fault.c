@@ -85,6 +85,15 @@ void fault_heard_host(void)
     st.rx_stale = 0;
 }
 
+/* The link watchdog is on. A build with one (CFG_LINK_WATCHDOG_MS > 0) starts it on and
+ * SET_PARAM cannot turn it off (param.c: LINK_WATCHDOG_MS at least 1 ms, so at least one tick
+ * of µs): then it is always on and the test folds away. */
+#if CFG_LINK_WATCHDOG_MS != 0
+#define WATCHDOG_ON 1
+#else
+#define WATCHDOG_ON (param_watchdog_us() != 0u)
+#endif
+
 void fault_watchdog_tick(void)
 {
     /* safety: on real time (hal_micros, wrap-safe), not on the tick count */
@@ -95,7 +104,7 @@ void fault_watchdog_tick(void)
     if (st.rx_stale) {
         since = 0xFFFFFFFFUL;
     }
-    if (param_watchdog_us() && seq_running() && since >= param_watchdog_us()) {
+    if (WATCHDOG_ON && seq_running() && since >= param_watchdog_us()) {
         sma_all_off();
         st.watchdog_tripped = 1;
         tx_event(PROTO_EV_FAULT, PROTO_FAULT_LINK_WATCHDOG, 0);

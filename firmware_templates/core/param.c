@@ -86,6 +86,13 @@ static uint8_t set_timeout(uint8_t index, int32_t ticks)
 /* Where threshold `flat` (limb by limb, thresholds in order) lives. */
 static int8_t threshold_at(uint8_t flat, uint8_t *limb, uint8_t *thr)
 {
+#if PSI_UNIFORM_LEVELS && CFG_MAX_LEVELS == 2u
+    /* every limb has 2 levels, one threshold: threshold `flat` is limb `flat`'s (the loop below
+     * with each n = 1, without it) */
+    *limb = flat;
+    *thr = 0;
+    return flat < CFG_N_LIMBS ? 0 : -1;
+#else
     uint8_t i;
     for (i = 0; i < CFG_N_LIMBS; i++) {
         uint8_t n = (uint8_t)(psi_levels(i) - 1u);
@@ -97,6 +104,7 @@ static int8_t threshold_at(uint8_t flat, uint8_t *limb, uint8_t *thr)
         flat = (uint8_t)(flat - n);
     }
     return -1;
+#endif
 }
 
 static uint8_t set_psi_star(uint8_t index, int32_t v)

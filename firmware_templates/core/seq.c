@@ -23,6 +23,10 @@
 /* Variables, not macros, so range checks never compare against a type's limits. At most
  * 65535 states (proleg build refuses more): state numbers compare in 16 bits. */
 static const uint16_t n_states = CFG_N_STATES;
+/* A robot_config.h rendered before CFG_ENTRY_PATHS existed: the entry-path code stays in. */
+#ifndef CFG_ENTRY_PATHS
+#define CFG_ENTRY_PATHS 1
+#endif
 typedef char at_most_65535_states[CFG_N_STATES <= 0xFFFFUL ? 1 : -1];
 
 /* A step's place in a walk: one byte when every rendered gait step and every loadable step
@@ -46,9 +50,16 @@ static struct {
     uint32_t step_ticks;
     uint32_t held;
     uint32_t cycles;
+#if CFG_ENTRY_PATHS
     uint16_t entry_at;   /* next entry state in seq_entry_steps */
     uint16_t entry_left; /* entry states still to reach before the gait's join step */
+#endif
 } s;
+#if CFG_ENTRY_PATHS
+#define ENTRY_LEFT s.entry_left
+#else
+#define ENTRY_LEFT 0u /* every rendered gait is entered from rest at its step 0: never on an entry path */
+#endif
 
 /* Both set by seq_init (no .data bytes in flash), from one ROM block: on AVR 8 B of flash
  * and a copy call where storing the two 32-bit constants took 48 B of code (R1 24 B smaller
@@ -133,16 +144,17 @@ uint8_t seq_gait_count(uint8_t dir)
     return loaded_n ? 1u : 0u;
 }
 
-int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
+int8_t seq_load(const cfg_state_t *states, uint16_t count, uint16_t *bad)
 {
-    uint16_t i;
+    step_ix_t i, n; /* n ≤ CFG_MAX_LOADED_STEPS once checked: a step_ix_t */
     int8_t err = SEQ_ERR_STATE;
-    if (n >= 2u && states[n - 1u] == states[0]) {
-        n--; /* closed form */
+    if (count >= 2u && states[count - 1u] == states[0]) {
+        count--; /* closed form */
     }
-    if (n < 2u || n > CFG_MAX_LOADED_STEPS) {
+    if (count < 2u || count > CFG_MAX_LOADED_STEPS) {
         return SEQ_ERR_LENGTH;
     }
+    n = (step_ix_t)count;
     for (i = 0; i < n; i++) {
         if (states[i] >= n_states) {
             goto refused;
@@ -150,7 +162,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
     }
     err = SEQ_ERR_FORBIDDEN;
     for (i = 0; i < n; i++) {
-        cfg_state_t next = states[(uint16_t)(i + 1u) == n ? 0u : (uint16_t)(i + 1u)];
+        cfg_state_t next = states[(step_ix_t)(i + 1u) == n ? 0u : (step_ix_t)(i + 1u)];
         if (!seq_allowed_transition(states[i], next)) {
             goto refused;
         }
@@ -159,7 +171,7 @@ int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad)
         s.running = 0; /* never run a half-replaced walk */
     }
     memcpy(loaded, states, n * sizeof loaded[0]);
-    loaded_n = (step_ix_t)n;
+    loaded_n = n;
     return SEQ_OK;
 refused: /* one exit for both refusals (issue 11: one copy of the store) */
     if (bad) {
@@ -178,7 +190,11 @@ static cfg_state_t step_state(step_ix_t step)
 
 static cfg_state_t target_state(void)
 {
+#if CFG_ENTRY_PATHS
     return s.entry_left ? ROM_STATE(&seq_entry_steps[s.entry_at]) : step_state(s.step);
+#else
+    return step_state(s.step);
+#endif
 }
 
 int8_t seq_start(uint8_t dir, uint8_t index, uint16_t measured)
@@ -201,7 +217,9 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint16_t measured)
     }
     s.dir = dir;
     s.step = 0;
+#if CFG_ENTRY_PATHS
     s.entry_left = 0;
+#endif
     /* every step's state is below n_states: an unknown measured state matches none, and a
      * known one compares in cfg_state_t (no 32-bit compare per step) */
     for (i = 0; measured < n_states && i < s.n; i++) {
@@ -210,11 +228,13 @@ int8_t seq_start(uint8_t dir, uint8_t index, uint16_t measured)
             break;
         }
     }
+#if CFG_ENTRY_PATHS
     if (i == s.n && measured == 0u && dir != SEQ_DIR_LOADED) { /* from rest: the entry path */
         s.step = (step_ix_t)ROM_U16(&seq_entry_join[g]);
         s.entry_at = ROM_U16(&seq_entry_first[g]);
         s.entry_left = ROM_U16(&seq_entry_len[g]);
     }
+#endif
     new_step();
     s.cycles = 0;
     s.running = 1;
@@ -239,10 +259,13 @@ uint8_t seq_tick(cfg_state_t measured)
         }
         count_up(&s.held);
         if (s.held >= ticks.hold) {
+#if CFG_ENTRY_PATHS
             if (s.entry_left) {
                 s.entry_left--;
                 s.entry_at++;
-            } else if (++s.step >= s.n) {
+            } else
+#endif
+            if (++s.step >= s.n) {
                 s.step = 0;
                 count_up(&s.cycles);
                 ev |= SEQ_EV_CYCLE;
@@ -281,7 +304,7 @@ __attribute__((noinline)) /* smaller out of line (measured, issue 11) */
 #endif
 uint16_t seq_step(void)
 {
-    return s.entry_left ? SEQ_STEP_ENTRY : s.step;
+    return ENTRY_LEFT ? SEQ_STEP_ENTRY : s.step;
 }
 
 uint32_t seq_cycles(void)
