@@ -13,6 +13,7 @@ import pytest
 
 from proleg.body import body_geometry, default_length_mm, own_reach_deg
 from proleg.errors import RobotFileError
+from proleg.paths import robots_dir
 from proleg.report import SimSession
 from proleg.robot import load_robot
 from proleg.sim.physical import PhysicalPlant
@@ -105,7 +106,7 @@ def test_a_top_level_out_of_its_own_coils_reach_is_one_warning_line_per_limb(tmp
         robot = load_robot(path)
     lines = [r.getMessage() for r in caplog.records]
     assert robot.plant.length_mm == 80.0
-    assert len(lines) == 2 and all("\n" not in line for line in lines), lines
+    assert len(lines) == 2 and all("\n" not in line for line in lines), lines  # not also their hold tops
     for line, limb in zip(lines, ("rear", "front")):
         assert f"limb {limb!r}" in line and "needs ψ ≥ 36.0°" in line and "80 mm body" in line, line
         reach = float(line.split("bends it to ")[1].split("°")[0])
@@ -269,3 +270,26 @@ def test_caterpillar_keeps_pace_with_the_idealised_drive_of_its_gait():
     assert report.displacement_mm > 0, report.displacement_mm
     s_per_step = report.duration_s / len(report.states_reached)
     assert s_per_step <= ideal.s_per_cycle / steps / 0.9, (s_per_step, ideal.s_per_cycle / steps)
+
+
+def test_a_hold_top_out_of_reach_is_one_warning_line_with_the_margin_that_fits(tmp_path, caplog):
+    """The one-actuator R1 with the default 4° hold margin: its far end bends to ≈ 23.5° with
+    its one coil at full stroke, short of its hold top 26°, and the warning says which margin
+    fits (its hold top 0.5° below the reach); with that margin, no warning."""
+    text = (robots_dir() / "paper-r1-one-actuator.toml").read_text()
+    assert "hold_margin_deg = 1.0" in text
+    path = tmp_path / "one.toml"
+    path.write_text(text.replace("hold_margin_deg = 1.0", "hold_margin_deg = 4.0"))
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 1 and "limb 'right': held raised" in lines[0] and "ψ ≥ 26.0°" in lines[0], lines
+    reach = float(lines[0].split("bends it to ")[1].split("°")[0])
+    assert 22.0 < reach < 25.0, lines
+    fits = float(lines[0].split("hold_margin_deg to at most ")[1])
+    assert fits == pytest.approx(reach - 0.5 - 1.0 - 21.0, abs=0.06)
+    path.write_text(text.replace("hold_margin_deg = 1.0", f"hold_margin_deg = {fits}"))
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    assert caplog.records == []

@@ -3,6 +3,8 @@ loaded, as warnings about the simulator and the file, not refusals (a real body 
 
 * ``unreachable_levels``: a limb whose own coil, at full stroke, cannot bend it to its top
   level (or a body too long for the model: ``body.curl_problem``);
+* ``unreachable_holds``: a limb that reaches its top level but not the hold top the controller
+  heats it to (``control.hold_margin_deg``), even with every coil at full stroke;
 * ``coupled_states`` / ``coupling_warnings``: states the body cannot hold, because the coils
   the raised limbs need lift a limb that should stay down (a neighbour's bend, or a coil
   shared with the raised limb); ``coupling_warnings`` gives a few lines per kind and a count
@@ -21,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .body import DEFAULT_OVERLAP_MM, BodyGeometry, body_geometry, coil_homes, curl_problem, own_reach_deg
+from .body import DEFAULT_OVERLAP_MM, BodyGeometry, Shape, body_geometry, coil_homes, curl_problem, own_reach_deg
 from .robot_plant import PlantSection
 
 
@@ -63,6 +65,48 @@ def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], secti
                               f"coil, at one of the limbs that name it); give {lb.name!r} a coil of its own")
         else:
             out.append(head + "lower psi_star_deg or give [plant] length_mm")
+    return out
+
+
+#: How far below its reach a hold top must lie for the hold to end by reaching it: the end's
+#: ψ creeps to its last tenths of a degree only as the coil's temperature settles, and
+#: a sample of IMU noise above the top is no plan.
+HOLD_TOP_CLEARANCE_DEG = 0.5
+
+
+def unreachable_holds(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection,
+                      hold_margin_deg: float) -> list[str]:
+    """One line per limb whose top level it can reach but whose hold top it cannot, with every
+    coil at full stroke on the physical plant's body: the controller holds a raised limb by
+    heating its coil until ψ ≥ ψ*_top + hysteresis/2 + ``hold_margin_deg`` + 1° (the hold top,
+    docs/control.md), or its ``stroke_deg``. Short of it the coil heats on at every step until
+    the step's hover clock lets the gait go on (300 ms), far past its transformation: the
+    one-actuator R1's far end bends to 23.5° with the default 4° margin's hold top at 26°, and
+    its coil reached 107 °C at every step (claim bench, nominal). A warning about the simulated
+    body, as ``unreachable_levels``; a stroke the limb cannot reach is that check's."""
+    limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
+    if len(limbs) < 2:
+        return []
+    geo = body_of(limb_actuators, len(actuators), section)
+    if curl_problem(geo):
+        return []  # unreachable_levels says what is wrong
+    shape = Shape(geo, tabulate=False)
+    reach = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
+    own = own_reach_deg(geo, limb_actuators)
+    out = []
+    for lb, r, o in zip(limbs, reach, own):
+        entry = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
+        top = entry + hold_margin_deg + 1.0
+        if getattr(lb, "stroke_deg", None) is not None or o < entry or top + HOLD_TOP_CLEARANCE_DEG <= r:
+            continue  # a stroke, a level out of its own coil's reach (unreachable_levels), or a hold top in reach
+        fit = r - HOLD_TOP_CLEARANCE_DEG - 1.0 - entry
+        advice = (f"set control.hold_margin_deg to at most {max(fit, 0.0):.1f}" if fit >= 0.0 else
+                  f"its top level is entered within {r - entry:.1f}° of its reach: lower psi_star_deg")
+        out.append(f"{path}: limb {lb.name!r}: held raised, its coil heats until ψ ≥ {top:.1f}° (ψ* "
+                   f"{lb.psi_star_deg[-1]:g}° + hysteresis/2 + control.hold_margin_deg {hold_margin_deg:g}° + 1°), "
+                   f"but every coil at full stroke bends it to {r:.1f}° on the simulated {section.length_mm:g} mm "
+                   f"body: at every step its coil would heat on, past its transformation, until the step's hover "
+                   f"clock lets the gait go on; {advice}")
     return out
 
 
