@@ -373,6 +373,9 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     note = ""
     if not faults and not completed:
         note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
+    if peak[0] > OVERHEAT_C:  # the open loop's line (open_loop_run): a run that ruins a coil did not complete
+        completed = False
+        note = (note + "; " if note else "") + f"{OVERHEATED} ({peak[0]:.0f} °C)"
     if cal_note:
         note = (note + "; " if note else "") + cal_note
     return DriveOutcome(completed, speed, run.displacement_mm, faults, note,

@@ -7,12 +7,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from .claim import OVERHEATED, ConditionResult, DriveOutcome
+from .claim import OVERHEAT_C, OVERHEATED, ConditionResult, DriveOutcome
 
 
 def _clean_stop(fb: DriveOutcome) -> bool:
-    """Stopped with a fault (a refused START included) and its coils below 50 °C 2 s later."""
-    return not fb.completed and bool(fb.fault) and fb.coil_max_end_c < 50.0
+    """Stopped with a fault (a refused START included), its coils below 50 °C 2 s later, and no
+    coil past ``OVERHEAT_C`` on the way: a stop that first ruined a coil is not clean."""
+    return not fb.completed and bool(fb.fault) and fb.coil_max_end_c < 50.0 and fb.coil_peak_c <= OVERHEAT_C
 
 
 #: The idealised drive "walks" a row when it makes at least this share of its nominal speed the
