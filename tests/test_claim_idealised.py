@@ -96,3 +96,37 @@ def test_the_targets_count_speed_in_the_benchs_direction_only(spec, nom_fb, nom_
     assert s["feedback_kept_75pct_where_possible"] == kept
     assert s["targets"]["nominal feedback at least as fast as open loop"] == (ahead > 0 and ahead >= bar)
     assert s["open_loop_bar_mm_s"] == round(bar, 4)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(st.booleans(), st.floats(20, 60), st.floats(20, 200)), min_size=1, max_size=8))
+def test_an_impossible_rows_stop_is_clean_only_with_cold_coils_and_none_overheated_on_the_way(spec):
+    """Recount of the third target: a fault, every coil below 50 °C 2 s after the stop, and no
+    coil past the open loop's line (claim.OVERHEAT_C) on the way."""
+    results = []
+    for i, (fault, end_c, peak_c) in enumerate(spec):
+        out = claim.DriveOutcome(False, 0.0, 0.0, "STATE_TIMEOUT" if fault else "", "", end_c, peak_c)
+        results.append(claim.ConditionResult(claim.GridPoint(f"c{i}", ("m",), "mild"), False, "no", out, out, {}, None))
+    nominal = _row(-1, True, True, 1.0, 1.0)
+    s = summarise(results, nominal)
+    clean = sum(1 for f, end_c, peak_c in spec if f and end_c < 50.0 and peak_c <= claim.OVERHEAT_C)
+    assert s["impossible_stopped_with_fault_and_cold_coils"] == clean
+    assert s["targets"]["impossible conditions stop with a fault and cold coils"] == (clean == len(spec))
+
+
+def test_a_firmware_run_that_overheats_a_coil_is_not_completed(tmp_path):
+    """The one-actuator R1 with the default 4° hold margin (its hold top out of reach: it heats
+    its coil toward it at every step) on a supply 1.5× as strong: it walks without a fault, but
+    a coil passes the open loop's line, so the run is "overheated", not completed."""
+    text = (robots_dir() / "paper-r1-one-actuator.toml").read_text()
+    path = tmp_path / "one.toml"
+    path.write_text(text.replace("hold_margin_deg = 1.0", "hold_margin_deg = 4.0"))
+    point = claim.GridPoint("strong supply", ("supply boost",), "strong", ("power=1.5",))
+    out = claim.feedback_run(load_robot(path), point, gait=[2, 3, 2], duration_s=12.0)
+    assert out.speed_mm_s > 0.5 and not out.fault
+    assert out.coil_peak_c > claim.OVERHEAT_C and not out.completed
+    assert out.note == f"{claim.OVERHEATED} ({out.coil_peak_c:.0f} °C)"
+    # with the margin the robot file has, the same run keeps its coil below the line and completes
+    out = claim.feedback_run(load_robot(robots_dir() / "paper-r1-one-actuator.toml"), point, gait=[2, 3, 2],
+                             duration_s=12.0)
+    assert out.completed and out.coil_peak_c <= claim.OVERHEAT_C
