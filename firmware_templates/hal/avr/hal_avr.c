@@ -71,21 +71,18 @@ uint32_t hal_micros(void)
  * numbers in Timer1 and Timer2) and its port pin (PB1, PB2, PB3; OC2B is PD3). */
 typedef char com_bits_match[COM1A1 == COM2A1 && COM1B1 == COM2B1 && PB2 == PB1 + 1 && PB3 == PB1 + 2 ? 1 : -1];
 
+/* Every output starts off: hal_avr_early (.init3, before main) made the pins outputs and drove
+ * them low, and nothing has touched them since; the timers' compare outputs start disconnected
+ * (TCCR1A and TCCR2A are written here with every COMnx bit 0). That is what hal_pwm_set(ch, 0)
+ * leaves, so it is not called again for each channel here, nor the pins set up twice (R1 on
+ * the Nano: issue 11). */
 static void pwm_init(void)
 {
-    uint8_t ch;
-    DDRB |= _BV(PB1) | _BV(PB2) | _BV(PB3);
-    DDRD |= _BV(PD3);
-    PORTB &= (uint8_t) ~(_BV(PB1) | _BV(PB2) | _BV(PB3));
-    PORTD &= (uint8_t)~_BV(PD3);
     ICR1 = T1_TOP;
     TCCR1A = _BV(WGM11);
     TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
     TCCR2A = _BV(WGM21) | _BV(WGM20);
     TCCR2B = _BV(CS22) | _BV(CS20);
-    for (ch = 0; ch < CFG_PWM_CHANNELS; ch++) {
-        hal_pwm_set(ch, 0);
-    }
 }
 
 void hal_pwm_set(uint8_t channel, uint16_t duty)
