@@ -299,12 +299,20 @@ cfg_state_t seq_target(void)
     return s.n ? target_state() : 0u;
 }
 
-#if defined(__GNUC__)
-__attribute__((noinline)) /* smaller out of line (measured, issue 11) */
-#endif
 uint16_t seq_step(void)
 {
     return ENTRY_LEFT ? SEQ_STEP_ENTRY : s.step;
+}
+
+/* One out-of-line copy of the clamp for the EVENT and the TELEMETRY frame (R1 on the Nano:
+ * issue 11). */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+uint8_t seq_step_byte(void)
+{
+    uint16_t step = seq_step();
+    return (uint8_t)(step > 255u ? 255u : step);
 }
 
 uint32_t seq_cycles(void)
