@@ -176,7 +176,7 @@ ISR(TWI_vect)
         tw.rx[tw.i++] = TWDR;
         /* fall through */
     case 0x40u: /* SLA+R ACKed */
-        TWCR = (uint8_t)(TWCR_GO | (tw.i + 1u < tw.nrx ? _BV(TWEA) : 0u));
+        TWCR = (uint8_t)(TWCR_GO | ((uint8_t)(tw.i + 1u) < tw.nrx ? _BV(TWEA) : 0u)); /* i < nrx ≤ 255 */
         break;
     case 0x58u: /* last byte received, NACK returned */
         tw.rx[tw.i] = TWDR;
