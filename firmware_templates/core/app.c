@@ -26,10 +26,20 @@ typedef char app_reset_causes_match[(HAL_RESET_WATCHDOG == PROTO_RESET_WATCHDOG 
                                      HAL_RESET_BROWN_OUT == PROTO_RESET_BROWN_OUT &&
                                      HAL_RESET_SOFTWARE == PROTO_RESET_SOFTWARE) ? 1 : -1];
 
+/* Overruns in a row, saturating: only compared with CFG_OVERRUN_FAULT, so a byte does where
+ * that is below its ceiling (the same comparisons; R1 on the Nano: issue 11). */
+#if CFG_OVERRUN_FAULT < 0xFFu
+typedef uint8_t overrun_run_t;
+#define OVERRUN_RUN_MAX 0xFFu
+#else
+typedef uint16_t overrun_run_t;
+#define OVERRUN_RUN_MAX 0xFFFFu
+#endif
+
 static struct {
-    uint32_t ms;          /* firmware time: real time (hal_micros), not a tick count */
-    uint32_t ms_us;       /* hal_micros() at which `ms` last counted a whole ms */
-    uint16_t overrun_run; /* overruns in a row */
+    uint32_t ms;               /* firmware time: real time (hal_micros), not a tick count */
+    uint32_t ms_us;            /* hal_micros() at which `ms` last counted a whole ms */
+    overrun_run_t overrun_run; /* overruns in a row */
 } st;
 static uint32_t overruns; /* ticks whose work ended after the next tick was due (its own
                            * symbol: the avr-emu tests read it) */
@@ -73,7 +83,7 @@ void app_tick_done(uint8_t overran)
         return;
     }
     count_up(&overruns);
-    if (st.overrun_run < 0xFFFFu) {
+    if (st.overrun_run < OVERRUN_RUN_MAX) {
         st.overrun_run++;
     }
     if (st.overrun_run >= CFG_OVERRUN_FAULT && !fault_latched()) {

@@ -78,15 +78,14 @@ static uint8_t all_settled(void)
 
 void drive_step(void)
 {
-    uint8_t ev;
-    uint16_t step;
+    uint8_t ev, step;
     cfg_state_t target;
     uint16_t measured = imucheck_measured();
     reached = 0;
     if (!seq_running() || measured == IMUCHECK_UNKNOWN) {
         return;
     }
-    step = seq_step();
+    step = seq_step_byte();
     target = seq_target();
     /* The step counts as reached only once every limb is settled clear of its band
      * edges (psi_settled): until then the sequencer is shown a state that is not
@@ -94,7 +93,7 @@ void drive_step(void)
     ev = seq_tick(all_settled() ? (cfg_state_t)measured : (cfg_state_t)(target ^ 1u));
     if (ev & SEQ_EV_REACHED) {
         reached = 1;
-        tx_event(PROTO_EV_STATE_REACHED, (uint8_t)(step > 255u ? 255u : step), target);
+        tx_event(PROTO_EV_STATE_REACHED, step, target);
     }
     if (ev & SEQ_EV_TIMEOUT) {
         fault_raise_stopped(PROTO_FAULT_STATE_TIMEOUT, limb_off_target(target));

@@ -97,7 +97,9 @@ void seq_set_timeout(uint32_t n)
 
 uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b)
 {
-#if CFG_N_STATES <= 256u
+#if CFG_N_STATES <= 16u
+    uint8_t key; /* < 16²: one byte on the 8-bit targets */
+#elif CFG_N_STATES <= 256u
     uint16_t key; /* < 256², and no 32-bit multiply on the 8-bit targets */
 #else
     uint32_t key;
@@ -105,7 +107,9 @@ uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b)
     if (a >= n_states || b >= n_states || a == b) {
         return 0;
     }
-#if CFG_N_STATES <= 256u
+#if CFG_N_STATES <= 16u
+    key = (uint8_t)((uint16_t)a * (uint16_t)n_states + b);
+#elif CFG_N_STATES <= 256u
     key = (uint16_t)((uint16_t)a * (uint16_t)n_states + b);
 #else
     key = (uint32_t)a * n_states + b;
@@ -299,12 +303,20 @@ cfg_state_t seq_target(void)
     return s.n ? target_state() : 0u;
 }
 
-#if defined(__GNUC__)
-__attribute__((noinline)) /* smaller out of line (measured, issue 11) */
-#endif
 uint16_t seq_step(void)
 {
     return ENTRY_LEFT ? SEQ_STEP_ENTRY : s.step;
+}
+
+/* One out-of-line copy of the clamp for the EVENT and the TELEMETRY frame (R1 on the Nano:
+ * issue 11). */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+uint8_t seq_step_byte(void)
+{
+    uint16_t step = seq_step();
+    return (uint8_t)(step > 255u ? 255u : step);
 }
 
 uint32_t seq_cycles(void)

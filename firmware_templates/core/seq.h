@@ -80,6 +80,7 @@ uint8_t seq_running(void);
 uint8_t seq_holding(void); /* running and the current target has been reached */
 cfg_state_t seq_target(void);
 uint16_t seq_step(void); /* SEQ_STEP_ENTRY while on the entry path (events show 255) */
+uint8_t seq_step_byte(void); /* seq_step() as EVENT and TELEMETRY carry it: 255 from 255 up and on the entry path */
 uint32_t seq_cycles(void);
 
 /* State index ↔ per-limb levels (first limb most significant digit). */

@@ -98,7 +98,6 @@ uint16_t telemetry_flags(void)
 static void take_telemetry(void)
 {
     uint8_t i;
-    uint16_t step = seq_step();
     proto_msg_t *m = &st.frame;
     m->id = PROTO_ID_TELEMETRY;
     m->u.telemetry.seq = st.seq++;
@@ -107,7 +106,7 @@ static void take_telemetry(void)
     m->u.telemetry.target = (uint16_t)seq_target();
     m->u.telemetry.gait = drive_gait();
     m->u.telemetry.direction = drive_dir();
-    m->u.telemetry.step = (uint8_t)(step > 255u ? 255u : step);
+    m->u.telemetry.step = seq_step_byte();
     m->u.telemetry.flags = telemetry_flags();
     m->u.telemetry.psi_count = CFG_N_LIMBS;
     for (i = 0; i < CFG_N_LIMBS; i++) {

@@ -20,8 +20,6 @@
 #include "rom.h"
 #include "uart.h"
 
-enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
-
 #include "robot_config.h"
 
 #ifndef F_CPU
@@ -32,8 +30,6 @@ enum { HAL_AVR_OC1A, HAL_AVR_OC1B, HAL_AVR_OC2A, HAL_AVR_OC2B };
 #if RING_LARGE
 #error "AVR: the UART rings must be at most 128 bytes (8-bit indices are the only atomic ones)"
 #endif
-
-static const uint8_t pwm_map[CFG_PWM_CHANNELS] ROM = CFG_PWM_MAP; /* flash: no .data bytes */
 
 /* ------------------------------------------------------------------ time */
 
@@ -67,39 +63,51 @@ uint32_t hal_micros(void)
 #define T1_SCALE ((uint16_t)(((uint32_t)T1_TOP * 65536u + 9999u) / 10000u))
 #define T2_SCALE ((uint16_t)((255UL * 65536u + 9999u) / 10000u))
 
-/* Per output: its compare-output enable bit in TCCRnA (COMnA1 or COMnB1: the same bit
- * numbers in Timer1 and Timer2) and its port pin (PB1, PB2, PB3; OC2B is PD3). */
-typedef char com_bits_match[COM1A1 == COM2A1 && COM1B1 == COM2B1 && PB2 == PB1 + 1 && PB3 == PB1 + 2 ? 1 : -1];
+/* Each PWM channel's compare output (CFG_PWM_MAP names them: HAL_AVR_OC1A = D9, OC1B = D10,
+ * OC2A = D11, OC2B = D3), as the row hal_pwm_set reads: its TCCRnA and compare-output enable
+ * bit there (COMnA1 or COMnB1), its port and pin, its OCRnx (the low byte of Timer1's 16-bit
+ * ones). Data-space addresses, all below 0x100. In flash (no .data bytes); one row read
+ * instead of each computed from the output's number (R1 on the Nano: issue 11). */
+typedef struct {
+    uint8_t tccra, com, port, bit, ocr;
+} pwm_row_t;
+#define SFR(sfr) ((uint8_t)_SFR_MEM_ADDR(sfr))
+#define REG(a) (*(volatile uint8_t *)(uint16_t)(a))
+#define HAL_AVR_OC1A {SFR(TCCR1A), _BV(COM1A1), SFR(PORTB), _BV(PB1), SFR(OCR1AL)}
+#define HAL_AVR_OC1B {SFR(TCCR1A), _BV(COM1B1), SFR(PORTB), _BV(PB2), SFR(OCR1BL)}
+#define HAL_AVR_OC2A {SFR(TCCR2A), _BV(COM2A1), SFR(PORTB), _BV(PB3), SFR(OCR2A)}
+#define HAL_AVR_OC2B {SFR(TCCR2A), _BV(COM2B1), SFR(PORTD), _BV(PD3), SFR(OCR2B)}
+static const pwm_row_t pwm_map[CFG_PWM_CHANNELS] ROM = CFG_PWM_MAP;
 
+/* Every output starts off: hal_avr_early (.init3, before main) made the pins outputs and drove
+ * them low, and nothing has touched them since; the timers' compare outputs start disconnected
+ * (TCCR1A and TCCR2A are written here with every COMnx bit 0). That is what hal_pwm_set(ch, 0)
+ * leaves, so it is not called again for each channel here, nor the pins set up twice (R1 on
+ * the Nano: issue 11). */
 static void pwm_init(void)
 {
-    uint8_t ch;
-    DDRB |= _BV(PB1) | _BV(PB2) | _BV(PB3);
-    DDRD |= _BV(PD3);
-    PORTB &= (uint8_t) ~(_BV(PB1) | _BV(PB2) | _BV(PB3));
-    PORTD &= (uint8_t)~_BV(PD3);
     ICR1 = T1_TOP;
     TCCR1A = _BV(WGM11);
     TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
     TCCR2A = _BV(WGM21) | _BV(WGM20);
     TCCR2B = _BV(CS22) | _BV(CS20);
-    for (ch = 0; ch < CFG_PWM_CHANNELS; ch++) {
-        hal_pwm_set(ch, 0);
-    }
 }
 
 void hal_pwm_set(uint8_t channel, uint16_t duty)
 {
-    uint8_t oc, com, bit;
-    volatile uint8_t *tccra, *port;
+    uint8_t com, bit;
+    const uint8_t *r;
+    volatile uint8_t *tccra, *port, *ocr;
+    uint16_t v;
     if (channel >= CFG_PWM_CHANNELS) {
         return;
     }
-    oc = ROM_U8(&pwm_map[channel]);
-    com = (oc == HAL_AVR_OC1A || oc == HAL_AVR_OC2A) ? _BV(COM1A1) : _BV(COM1B1);
-    bit = oc == HAL_AVR_OC2B ? _BV(PD3) : (uint8_t)(_BV(PB1) << oc);
-    tccra = oc < HAL_AVR_OC2A ? &TCCR1A : &TCCR2A;
-    port = oc == HAL_AVR_OC2B ? &PORTD : &PORTB;
+    r = (const uint8_t *)&pwm_map[channel]; /* the row's fields in order */
+    tccra = &REG(ROM_U8(r++));
+    com = ROM_U8(r++);
+    port = &REG(ROM_U8(r++));
+    bit = ROM_U8(r++);
+    ocr = &REG(ROM_U8(r));
     if (duty == 0u || duty >= 10000u) {
         /* compare output off: the pin is the port's, low (off) or high (full on) */
         *tccra &= (uint8_t)~com;
@@ -110,21 +118,13 @@ void hal_pwm_set(uint8_t channel, uint16_t duty)
         }
         return;
     }
-    if (oc < HAL_AVR_OC2A) {
-        uint16_t v = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
-        if (oc == HAL_AVR_OC1A) {
-            OCR1A = v;
-        } else {
-            OCR1B = v;
-        }
+    if (tccra == &TCCR1A) {
+        v = (uint16_t)(((uint32_t)duty * T1_SCALE) >> 16);
+        ocr[1] = (uint8_t)(v >> 8); /* OCR1xH first (the TEMP register), as OCR1x = v writes it */
     } else {
-        uint8_t v = (uint8_t)(((uint32_t)duty * T2_SCALE) >> 16);
-        if (oc == HAL_AVR_OC2A) {
-            OCR2A = v;
-        } else {
-            OCR2B = v;
-        }
+        v = (uint16_t)(((uint32_t)duty * T2_SCALE) >> 16); /* ≤ 255 */
     }
+    *ocr = (uint8_t)v;
     *tccra |= com;
 }
 
@@ -176,7 +176,7 @@ ISR(TWI_vect)
         tw.rx[tw.i++] = TWDR;
         /* fall through */
     case 0x40u: /* SLA+R ACKed */
-        TWCR = (uint8_t)(TWCR_GO | (tw.i + 1u < tw.nrx ? _BV(TWEA) : 0u));
+        TWCR = (uint8_t)(TWCR_GO | ((uint8_t)(tw.i + 1u) < tw.nrx ? _BV(TWEA) : 0u)); /* i < nrx ≤ 255 */
         break;
     case 0x58u: /* last byte received, NACK returned */
         tw.rx[tw.i] = TWDR;
