@@ -130,3 +130,15 @@ def test_a_firmware_run_that_overheats_a_coil_is_not_completed(tmp_path):
     out = claim.feedback_run(load_robot(robots_dir() / "paper-r1-one-actuator.toml"), point, gait=[2, 3, 2],
                              duration_s=12.0)
     assert out.completed and out.coil_peak_c <= claim.OVERHEAT_C
+
+
+def test_a_rise_that_stops_short_is_cut_before_its_coil_overheats_and_a_slow_one_is_not():
+    """The one-actuator R1 worn by 30,000 cycles: its far end stops short of ψ*; the firmware
+    cuts the coil once the rise stops answering (ctl.h, CTL_REACH_MS), not at its on-time limit
+    past 160 °C, and the stop is clean. At a weak supply in a draught the same rise creeps and
+    is held off by the envelope's mean-duty window on the way: it still gets there."""
+    robot = load_robot(robots_dir() / "paper-r1-one-actuator.toml")
+    out = claim.feedback_run(robot, claim.point("fatigue (strong)"), gait=[2, 3, 2], duration_s=12.0)
+    assert out.fault and not out.completed and out.coil_peak_c <= claim.OVERHEAT_C, out
+    out = claim.feedback_run(robot, claim.point("supply sag + draught (strong)"), gait=[2, 3, 2], duration_s=20.0)
+    assert out.completed and out.speed_mm_s > 0.5, out

@@ -6,6 +6,7 @@
 #include "limbmap.h"
 #include "psi.h"
 #include "rom.h"
+#include "sma.h"
 
 /* What a limb asks of its actuator, weakest first; an actuator serves the strongest. */
 enum { WANT_NOTHING, WANT_HOLD, WANT_RELEASE, WANT_HEAT, WANT_BOOST };
@@ -32,6 +33,11 @@ typedef uint8_t sag_t;
 #endif
 
 #define TICKS(ms) ((uint16_t)(((uint32_t)(ms) * CFG_TICK_HZ + 999u) / 1000u))
+#define NOT_SEEN 0xFFu
+/* CTL_REACH_MS in looks of the reach watch, one every CTL_REACH_EVERY ticks (250 at 10 kHz) */
+#define REACH_LOOKS ((TICKS(CTL_REACH_MS) + CTL_REACH_EVERY - 1u) / CTL_REACH_EVERY)
+typedef char ctl_reach_fits_a_byte[REACH_LOOKS < NOT_SEEN ? 1 : -1];
+static uint8_t look; /* ticks to the reach watch's next look, mod CTL_REACH_EVERY: it looks at 0 */
 
 /* Per limb: the step it is in (target), and what the hold and the stall detector know. */
 typedef struct {
@@ -43,6 +49,8 @@ typedef struct {
     uint8_t stall;     /* CTL_STALL_* */
     uint16_t ticks;    /* rising without progress / at the target level unsettled / falling: kept warm */
     uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
+    int16_t lo, hi;    /* reach watch: lowest ψ looked at in this step's rise, highest since */
+    uint8_t still;     /* ... its looks since hi last rose; NOT_SEEN: none yet */
 #ifdef CFG_LIMB_STROKE_CDEG
     int16_t peak;      /* ψ (0.01°) when the hover clock last restarted on a climb */
     uint16_t clock;    /* ticks since this step began (saturating) */
@@ -138,6 +146,29 @@ static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 #define ABOVE_TOP(i, thr, level) psi_last_at_or_above_hold_top(i, thr)
 #endif
 
+/* Reach watch (ctl.h, CTL_REACH_MS) of limb i, rising alone with its coil heating: 1 once
+ * its ψ rose CTL_MOVE_CDEG from its lowest in this step and then gained less than
+ * CTL_GAIN_CDEG for CTL_REACH_MS. The rise counts from the lowest ψ: a limb may still sag
+ * while its coil heats back to As. */
+static uint8_t at_reach(uint8_t i, ctl_limb_t *c)
+{
+    int16_t m;
+    if (look == 0u) {
+        m = psi_last_centideg(i);
+        if (c->still == NOT_SEEN || m < c->lo) {
+            c->lo = m;
+            c->hi = m;
+            c->still = 0;
+        } else if (m >= c->hi + CTL_GAIN_CDEG) {
+            c->hi = m;
+            c->still = 0;
+        } else if (c->still < REACH_LOOKS) {
+            c->still++;
+        }
+    }
+    return (uint8_t)(c->still == REACH_LOOKS && c->hi - c->lo >= CTL_MOVE_CDEG);
+}
+
 /* Stall detector of limb i for this tick (ctl.h). */
 static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int16_t progress)
 {
@@ -149,6 +180,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         c->stall = CTL_STALL_NONE;
         c->ticks = 0;
         c->heat = 0;
+        c->still = NOT_SEEN; /* the reach watch starts over */
         psi_relax(i, 0);
     }
     if (level != c->level) {
@@ -191,6 +223,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t move[CFG_N_LIMBS];
     int16_t to_go[CFG_N_LIMBS];
     uint8_t falling = 0, far_fall = 0;
+    uint8_t changing = 0; /* limbs rising or falling */
     sag_t sagging = 0;
     int16_t farthest = -1;
     uint8_t i;
@@ -205,6 +238,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t rising = 0;
 #endif
 
+    look = (uint8_t)((look + 1u) % CTL_REACH_EVERY);
 #ifdef CFG_LIMB_STROKE_CDEG
     for (i = 0; i < CFG_N_LIMBS; i++) {
         new_step |= (uint8_t)(target[i] != cl[i].target && psi_level(i) != PSI_UNKNOWN);
@@ -274,6 +308,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                                share(i) > CTL_FALL_SHARE);
 #endif
         to_go[i] = psi_to_go_cdeg(i, move[i] == RISE ? level : (uint8_t)(level - 1u), (uint8_t)(move[i] == RISE));
+        changing++;
         if (to_go[i] > farthest) {
             farthest = to_go[i];
         }
@@ -350,6 +385,16 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
         if (level != PSI_UNKNOWN) {
             watch(i, target[i], level, (uint8_t)(w >= WANT_HEAT && move[i] == RISE), to_go[i]);
+            /* Rising alone (the body couples limbs that move together), its coil heating and not
+             * held off by the envelope, its ψ stopped answering short of its level: it cannot
+             * get there, as after CTL_STALL_MS without progress but at once (ctl.h) */
+            if (move[i] == RISE && w >= WANT_HEAT && changing == 1u) {
+                if (sma_cooling(ctl_limb_actuator(i))) {
+                    cl[i].still = NOT_SEEN; /* held off: it starts over, from a cooler coil */
+                } else if (at_reach(i, &cl[i])) {
+                    cl[i].stall = CTL_STALL_UNREACHABLE;
+                }
+            }
             if (cl[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {
                 w = WANT_NOTHING; /* cannot get there: stop heating, let it cool */
             }

@@ -201,7 +201,8 @@ static void test_a_limb_that_heats_without_progress_is_unreachable_and_cut_off(v
     for (k = 0; k < n / 2u; k++) {
         demand(1, 0, duty);
     }
-    put(0, 14.0); /* one progress edge closer (7° to go): the clock restarts */
+    put(0, 7.0); /* one progress edge closer (14° to go): the clock restarts; a rise of 2°, not
+                  * the 3° the reach watch needs (below), so this is the slow stall */
     for (k = 0; k < n; k++) {
         demand(1, 0, duty);
         CHECK(duty[0] == DRIVE || duty[0] == CFG_MAX_DUTY_PM); /* boosted once it lags */
@@ -246,8 +247,84 @@ static void test_a_limb_whose_rise_lags_is_boosted_to_the_duty_ceiling_until_the
 
 #endif
 
+/* Limb 0 rises from 8° at 25°/s to `stop` (short of its band at 21°) and stays there, limb 1
+ * down at 0° or, `other_falls`, falling from 30°; returns the ticks from the stop to limb 0's
+ * coil's cut (-1: none within `ticks`, -2: not heated on its way up). */
+static int ticks_to_cut_after_stopping_at(double stop, int ticks, int other_falls)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    int t;
+    setup();
+    put(1, other_falls ? 30.0 : 0.0);
+    if (other_falls) {
+        put(1, 20.5); /* level 1 still, about to cross down: limb 0 need not wait for it */
+    }
+    for (psi = 8.0; psi < stop; psi += 0.025) {
+        put(0, psi);
+        demand(1, 0, duty);
+        if (duty[0] != DRIVE) {
+            return -2;
+        }
+    }
+    for (t = 0; t < ticks; t++) {
+        put(0, stop);
+        demand(1, 0, duty);
+        if (duty[0] == 0u) {
+            return t;
+        }
+    }
+    return -1;
+}
+
+static void test_a_rise_that_stops_short_of_its_level_is_cut_off_at_its_reach(void)
+{
+    /* rose 3° or more from its lowest, then nothing for CTL_REACH_MS: cannot reach */
+    int t = ticks_to_cut_after_stopping_at(16.0, 2000, 0);
+    CHECK(t >= (int)CTL_REACH_MS - 2 * (int)CTL_REACH_EVERY); /* its last gain came a look or two before */
+    CHECK(t <= (int)CTL_REACH_MS + 2 * (int)CTL_REACH_EVERY);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_UNREACHABLE);
+    /* a rise of 2° that stops is the slow stall's (CTL_STALL_MS), not the reach watch's */
+    CHECK_EQ(ticks_to_cut_after_stopping_at(10.0, 2000, 0), -1);
+}
+
+static void test_a_rise_that_still_creeps_or_has_not_begun_keeps_heating(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    int t;
+    setup();
+    put(1, 0.0);
+    for (psi = 8.0; psi < 14.0; psi += 0.025) { /* 25 °/s */
+        put(0, psi);
+        demand(1, 0, duty);
+    }
+    for (t = 0; t < 2000; t++) { /* then creeping at 2 °/s (a coil at a weak supply's equilibrium) */
+        put(0, 14.0 + 0.002 * t);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    setup();
+    put(1, 0.0);
+    for (t = 0; t < 2000; t++) { /* flat, a cool coil heating back to As, with 1.5° of IMU noise */
+        put(0, 8.0 + ((t / 16) % 2 ? 1.5 : 0.0));
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+}
+
+static void test_no_reach_while_another_limb_moves(void)
+{
+    /* limb 1 falls in the same step: the body couples them, and limb 0's ψ may stall for that */
+    CHECK_EQ(ticks_to_cut_after_stopping_at(16.0, 1000, 1), -1);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+}
+
 int main(void)
 {
+    RUN(test_a_rise_that_stops_short_of_its_level_is_cut_off_at_its_reach);
+    RUN(test_a_rise_that_still_creeps_or_has_not_begun_keeps_heating);
+    RUN(test_no_reach_while_another_limb_moves);
     RUN(test_limb_that_must_go_up_gets_the_drive_duty);
     RUN(test_limb_that_must_go_down_is_switched_off);
     RUN(test_holding_a_raised_level_is_bang_bang_with_hysteresis_on_psi);
