@@ -49,7 +49,7 @@ typedef struct {
     uint8_t stall;     /* CTL_STALL_* */
     uint16_t ticks;    /* rising without progress / at the target level unsettled / falling: kept warm */
     uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
-    int16_t lo, hi;    /* reach watch: lowest ψ looked at in this step's rise, highest since */
+    int16_t lo, hi;    /* reach watch: lowest smoothed ψ looked at in this step's rise, highest since */
     uint8_t still;     /* ... its looks since hi last rose; NOT_SEEN: none yet */
 #ifdef CFG_LIMB_STROKE_CDEG
     int16_t peak;      /* ψ (0.01°) when the hover clock last restarted on a climb */
@@ -147,14 +147,14 @@ static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 #endif
 
 /* Reach watch (ctl.h, CTL_REACH_MS) of limb i, rising alone with its coil heating: 1 once
- * its ψ rose CTL_MOVE_CDEG from its lowest in this step and then gained less than
+ * its smoothed ψ rose CTL_MOVE_CDEG from its lowest in this step and then gained less than
  * CTL_GAIN_CDEG for CTL_REACH_MS. The rise counts from the lowest ψ: a limb may still sag
  * while its coil heats back to As. */
 static uint8_t at_reach(uint8_t i, ctl_limb_t *c)
 {
     int16_t m;
     if (look == 0u) {
-        m = psi_last_centideg(i);
+        m = psi_smooth_cdeg(i);
         if (c->still == NOT_SEEN || m < c->lo) {
             c->lo = m;
             c->hi = m;

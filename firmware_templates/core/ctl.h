@@ -113,8 +113,8 @@
 #define CTL_CLIMB_MAX_MS 3000u
 #define CTL_STALL_MS 5000u
 /* A rise that ψ no longer answers. A limb rising alone (the body couples limbs that move
- * together), its coil heating and not held off by the envelope, whose ψ (looked at every
- * CTL_REACH_EVERY ticks) rose CTL_MOVE_CDEG from its lowest in this step and then gained less
+ * together), its coil heating and not held off by the envelope, whose smoothed ψ
+ * (psi_smooth_cdeg, looked at every CTL_REACH_EVERY ticks) rose CTL_MOVE_CDEG from its lowest in this step and then gained less
  * than CTL_GAIN_CDEG for CTL_REACH_MS cannot get there: its coil is through its transformation
  * (or at its supply's equilibrium) short of the level, and more heat only heats the wire. It
  * stops as "cannot reach" at once instead of after CTL_STALL_MS without progress (which IMU
