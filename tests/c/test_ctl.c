@@ -313,6 +313,39 @@ static void test_a_rise_that_still_creeps_or_has_not_begun_keeps_heating(void)
     }
 }
 
+/* A deterministic Gaussian-ish noise of about `sd` degrees (sum of four uniforms). */
+static double noise(double sd)
+{
+    static uint32_t x = 12345u;
+    double sum = 0.0;
+    int k;
+    for (k = 0; k < 4; k++) {
+        x = x * 1664525u + 1013904223u;
+        sum += (double)(x >> 8) / 16777216.0 - 0.5;
+    }
+    return sum * sd * 1.732;
+}
+
+static void test_a_creeping_rise_under_imu_noise_keeps_heating(void)
+{
+    /* 1.5° of noise on every sample (the claim bench's strong imu_noise_deg): on raw samples the
+     * looks spread over 7°, a 'rise' of 3° and then a highest look not beaten for 400 ms */
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    int t;
+    setup();
+    put(1, 0.0);
+    for (psi = 8.0; psi < 11.0; psi += 0.025) {
+        put(0, psi + noise(1.5));
+        demand(1, 0, duty);
+    }
+    for (t = 0; t < 1000; t++) { /* creeping at 3 °/s, to 14° (noise keeps it below its band) */
+        put(0, 11.0 + 0.003 * t + noise(1.5));
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+}
+
 static void test_no_reach_while_another_limb_moves(void)
 {
     /* limb 1 falls in the same step: the body couples them, and limb 0's ψ may stall for that */
@@ -324,6 +357,7 @@ int main(void)
 {
     RUN(test_a_rise_that_stops_short_of_its_level_is_cut_off_at_its_reach);
     RUN(test_a_rise_that_still_creeps_or_has_not_begun_keeps_heating);
+    RUN(test_a_creeping_rise_under_imu_noise_keeps_heating);
     RUN(test_no_reach_while_another_limb_moves);
     RUN(test_limb_that_must_go_up_gets_the_drive_duty);
     RUN(test_limb_that_must_go_down_is_switched_off);
