@@ -198,6 +198,69 @@ def test_a_two_limb_robot_is_checked_for_states_its_body_cannot_hold_too(tmp_pat
     assert not caplog.records, [r.getMessage() for r in caplog.records]
 
 
+_THREE_LEVEL_REAR = """[robot]
+name = "l3-l2"
+[[limb]]
+name = "rear"
+levels = 3
+psi_star_deg = [10.0, 22.0]
+actuator = "a"
+[[limb]]
+name = "front"
+psi_star_deg = [20.0]
+actuator = "b"
+[[actuator]]
+name = "a"
+[[actuator]]
+name = "b"
+[transitions]
+matrix = [
+  [0, -1, 1, "x", "x", "x"],  # 00
+  [1, 0, "x", 0, "x", "x"],  # 01
+  [-1, "x", 0, -1, 1, "x"],  # 10
+  ["x", 0, 1, 0, "x", 0],  # 11
+  ["x", "x", -1, "x", 0, 0],  # 20
+  ["x", "x", "x", 0, 0, 0],  # 21
+]
+"""
+
+
+def test_a_limb_the_raised_limbs_hold_inside_its_band_cannot_come_down_and_the_transition_is_warned(tmp_path, caplog):
+    """A three-level rear pad (ψ* 10°, 22°) beside a binary front pad: the raised front end
+    holds the rear one at ≈ 10°, short of its level-1 entry edge (11°), so 01 is reached from
+    00, but above its level-0 edge (9°), so lowering it from 11 never reads level 0. The file
+    loaded without a word; gait 0 (00 10 20 21 11 01 00) ran into STATE_TIMEOUT at 11 -> 01.
+    Now the transition is one warning line, and a file that marks it "x" loads without one."""
+    from proleg.firmware.gaits import firmware_gaits
+    from proleg.protocol.definition import FaultCode
+    from proleg.sim.simulators import open_simulated
+
+    path = tmp_path / "l3-l2.toml"
+    path.write_text(_THREE_LEVEL_REAR)
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 1 and "\n" not in warned[0], warned
+    assert "transition 11→01: limb 'rear' cannot come down to level 0" in warned[0], warned[0]
+    assert "the raised limbs 'front'" in warned[0] and "edge 9.0° (ψ* − hysteresis/2)" in warned[0], warned[0]
+    assert [robot.transitions.label(int(s)) for s in firmware_gaits(robot)["+x"][0].states] == \
+        ["00", "10", "20", "21", "11", "01", "00"]
+    # the simulated firmware on the physical plant: the step 11 -> 01 never ends
+    session = SimSession(open_simulated(robot))
+    session.advance(0.2)
+    report = session.run_gait("+x", 0, 20.0)
+    assert [f.code for f in report.faults][:1] == [FaultCode.STATE_TIMEOUT.name], report.faults
+    t = robot.transitions
+    suspect = report.limb_loss[0]["detail"]
+    assert (t.label(suspect // t.n_states), t.label(suspect % t.n_states)) == ("11", "01")
+    # marked "x", the file loads without a word
+    caplog.clear()
+    path.write_text(_THREE_LEVEL_REAR.replace('["x", 0, 1, 0, "x", 0],  # 11', '["x", "x", 1, 0, "x", 0],  # 11'))
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
 def test_one_coil_on_both_limbs_lifts_its_own_end_first_so_the_far_end_alone_is_warned(tmp_path, caplog):
     """R1 with both limbs on sma-left and no forbidden list: state 01 (the far limb up, the
     coil's own down) cannot be held, since the coil lifts its own end first. It loaded

@@ -24,7 +24,8 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .names import identifier
-from .robot_body import CoilLift, coupled_states, coupling_warnings, shared_coil_lifts, unreachable_holds, unreachable_levels
+from .robot_body import (CoilLift, blocked_descents, coupled_states, coupling_warnings, shared_coil_lifts,
+                         unreachable_holds, unreachable_levels)
 from .robot_plant import PlantSection, default_plant_section, inference_warning, limb_friction, plant_section
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
 from .robot_fields import Fields, read_text
@@ -246,7 +247,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     for line in unreachable_holds(path, list(limbs), [a.name for a in actuators], plant, control.hold_margin_deg):
         log.warning("warning: %s", line)
     coupled = coupled_states(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
-    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled)
+    blocked = blocked_descents(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
+    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled, blocked)
     for line in shown:
         log.warning("warning: %s", line)
     for line in rest:

@@ -9,6 +9,9 @@ loaded, as warnings about the simulator and the file, not refusals (a real body 
   the raised limbs need lift a limb that should stay down (a neighbour's bend, or a coil
   shared with the raised limb); ``coupling_warnings`` gives a few lines per kind and a count
   (an eight-limb robot on four shared coils has hundreds of such states);
+* ``blocked_descents``: transitions that lower a limb the raised limbs of the state it goes
+  to hold inside its hysteresis band: it keeps reading the level above (also in
+  ``coupling_warnings``);
 * ``shared_coil_lifts``: those of them where the limb is lifted by its own coil, shared with
   a raised limb: no step can leave a shared coil's limbs so (the gait feasibility check,
   ``proleg.gait.feasibility``, refuses such a step as ``shared-actuator``).
@@ -115,62 +118,109 @@ def unreachable_holds(path: Path, limbs: list[Any], actuators: list[str], sectio
 COUPLING_CHECK_MAX_STATES = 4096
 
 
-def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
-                   hold_margin_deg: float) -> dict[int, list[tuple[int, list[int], float]]]:
-    """States the physical plant's body cannot hold because neighbour coupling lifts a limb:
-    ``{state: [(limb, raising limbs, ψ°), ...]}`` for every state the matrix lets the robot
-    enter (an allowed transition into it from another state).
-
-    Each raised limb's coil is set to the contraction that holds it where the controller
-    holds it, ψ*(its level) + ``hold_margin_deg`` (a fraction of its own coil's full-stroke
-    reach, ``own_reach_deg``); every other coil is cold. A limb below its top level whose ψ
-    then reaches the next level's entry edge (ψ* + hysteresis/2) with its own coil at the
-    least it can be (cold, or what the other limbs on a shared coil need) reads that level:
-    the state is not reachable on this body (e.g. caterpillar-4's 1020: the rear proleg
-    between the raised tail and the front proleg at level 2 bends to ≈ 14° > 13°; one coil
-    on both of R1's limbs lifts its own end first, so 01 cannot be held). A limb that rests
-    past its level-1 edge comes with no raising limbs."""
+def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, states: list[int],
+              hold_margin_deg: float) -> dict[tuple[int, int], float] | None:
+    """ψ of each limb below its top level in each of ``states`` on the physical plant's body,
+    ``{(state, limb): ψ°}``, with every raised limb's coil at the contraction that holds it
+    where the controller holds it, ψ*(its level) + ``hold_margin_deg`` (a fraction of its own
+    coil's full-stroke reach, ``own_reach_deg``), and the limb's own coil at the least it can
+    be (cold, or what the other limbs on a shared coil need: the controller may let it cool
+    that far, no further). None: a body the model cannot describe (``curl_problem``)."""
     from .body import Shape
     from .states import limb_levels
 
-    n = table.n_states
-    if len(limbs) < 2 or n > COUPLING_CHECK_MAX_STATES:
-        return {}
     limb_act = [actuators.index(lb.actuator) for lb in limbs]
     geo = body_of(limb_act, len(actuators), section)
     if curl_problem(geo):
-        return {}  # a body the model cannot describe (unreachable_levels says why)
+        return None  # unreachable_levels says why
     reach = own_reach_deg(geo, limb_act)
-    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
     levels = tuple(lb.levels for lb in limbs)
     rows, cases = [], []
-    for s in entered:
+    for s in states:
         want = limb_levels(s, levels)
         demand = [min(1.0, (limbs[i].psi_star_deg[k - 1] + hold_margin_deg) / reach[i])
                   if k > 0 and reach[i] > 0 else 0.0 for i, k in enumerate(want)]
         for i, k in enumerate(want):
             if k >= limbs[i].levels - 1:
                 continue  # at its top level
-            # every coil at what the raised limbs need, limb i's own at what the OTHER limbs on
-            # it need (the controller may let it cool that far, no further): one coil on two
-            # limbs lifts its near limb first, so the far one alone cannot be up
+            # one coil on two limbs lifts its near limb first, so the far one alone cannot be up
             c = np.zeros(len(actuators))
             for j, d in enumerate(demand):
                 if j != i:
                     c[limb_act[j]] = max(c[limb_act[j]], d)
             rows.append(c)
-            cases.append((s, want, i, k))
+            cases.append((s, i))
     if not rows:
         return {}
     psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    # in (−180°, 180°] however far the body curls (Shape.compute wraps it)
+    return {case: float(p[case[1]]) for case, p in zip(cases, psi)}
+
+
+def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
+                   hold_margin_deg: float) -> dict[int, list[tuple[int, list[int], float]]]:
+    """States the physical plant's body cannot hold because neighbour coupling lifts a limb:
+    ``{state: [(limb, raising limbs, ψ°), ...]}`` for every state the matrix lets the robot
+    enter (an allowed transition into it from another state).
+
+    Each state is posed as ``_held_psi`` says (raised limbs held where the controller holds
+    them, every other coil cold). A limb below its top level whose ψ then reaches the next
+    level's entry edge (ψ* + hysteresis/2) reads that level: the state is not reachable on
+    this body (e.g. caterpillar-4's 1020: the rear proleg between the raised tail and the
+    front proleg at level 2 bends to ≈ 14° > 13°; one coil on both of R1's limbs lifts its own
+    end first, so 01 cannot be held). A limb that rests past its level-1 edge comes with no
+    raising limbs."""
+    from .states import limb_levels
+
+    if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
+        return {}
+    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
+    held = _held_psi(limbs, actuators, section, entered, hold_margin_deg)
+    levels = tuple(lb.levels for lb in limbs)
     out: dict[int, list[tuple[int, list[int], float]]] = {}
-    for (s, want, i, k), p in zip(cases, psi):
+    for (s, i), psi_i in (held or {}).items():
+        want = limb_levels(s, levels)
         lb = limbs[i]
-        edge = lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0
-        psi_i = float(p[i])  # in (−180°, 180°] however far the body curls (Shape.compute wraps it)
-        if psi_i >= edge:
+        if psi_i >= lb.psi_star_deg[want[i]] + lb.hysteresis_deg / 2.0:
             raising = [j for j, kj in enumerate(want) if kj > 0 and j != i]
             out.setdefault(s, []).append((i, raising, psi_i))
+    return out
+
+
+def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
+                     hold_margin_deg: float) -> dict[tuple[int, int], tuple[int, list[int], float]]:
+    """Allowed transitions the physical plant's body cannot finish because neighbour coupling
+    keeps a limb from coming down: ``{(from, to): (limb, raising limbs, ψ°)}``.
+
+    The firmware's level bands are hysteretic: a limb lowered to level k reads level k only
+    once ψ falls below ψ*(k) − hysteresis/2. Posed in the state it is lowered into
+    (``_held_psi``), a limb whose ψ stays at or above that edge keeps reading level k + 1, and
+    the step ends in STATE_TIMEOUT, although the same state is reached from below (raising a
+    neighbour lifts the limb short of ψ* + hysteresis/2). Where ψ reaches that upper edge too
+    the state itself cannot be held (``coupled_states``), and it is left to that warning."""
+    from .states import limb_levels
+
+    if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
+        return {}
+    levels = tuple(lb.levels for lb in limbs)
+    lowered: dict[tuple[int, int], list[int]] = {}   # (from, to) -> the limbs it lowers
+    for a, b in zip(table.src, table.dst):
+        a, b = int(a), int(b)
+        if a != b:
+            down = [i for i, (x, y) in enumerate(zip(limb_levels(a, levels), limb_levels(b, levels))) if y < x]
+            if down:
+                lowered[(a, b)] = down
+    held = _held_psi(limbs, actuators, section, sorted({b for _, b in lowered}), hold_margin_deg) or {}
+    out: dict[tuple[int, int], tuple[int, list[int], float]] = {}
+    for (a, b), down in lowered.items():
+        want = limb_levels(b, levels)
+        for i in down:
+            lb, k = limbs[i], want[i]
+            psi_i = held.get((b, i))
+            lo = lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0
+            if psi_i is not None and lo <= psi_i < lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:
+                out[(a, b)] = (i, [j for j, kj in enumerate(want) if kj > 0 and j != i], psi_i)
+                break
     return out
 
 
@@ -199,12 +249,15 @@ def shared_coil_lifts(limbs: list[Any], coupled: dict[int, list[tuple[int, list[
 
 
 def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table: Any,
-                      coupled: dict[int, list[tuple[int, list[int], float]]]) -> tuple[list[str], list[str]]:
+                      coupled: dict[int, list[tuple[int, list[int], float]]],
+                      blocked: dict[tuple[int, int], tuple[int, list[int], float]] | None = None
+                      ) -> tuple[list[str], list[str]]:
     """Lines about ``coupled`` (``coupled_states``), one per lifted limb naming the state, the
-    limb and what lifts it: ``(shown, rest)``. ``shown`` has, per kind (a limb resting past
-    its edge, lifted by a shared coil, lifted by raised neighbours), the first
+    limb and what lifts it, and about ``blocked`` (``blocked_descents``), one per transition:
+    ``(shown, rest)``. ``shown`` has, per kind (a limb resting past its edge, lifted by a
+    shared coil, lifted by raised neighbours, kept from coming down), the first
     ``WARNING_EXAMPLES`` lines, then one line counting the rest; ``rest`` the others (for -v)."""
-    kinds: dict[str, list[tuple[int, str]]] = {"rests": [], "shared": [], "neighbours": []}
+    kinds: dict[str, list[tuple[Any, str]]] = {"rests": [], "shared": [], "neighbours": [], "descents": []}
     for s, hits in coupled.items():
         for i, raising, psi in hits:
             lb = limbs[i]
@@ -225,6 +278,17 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
                 f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° {how} on "
                 f"the simulated {section.length_mm:g} mm body, past its level-{k + 1} {edge}: the state reads "
                 f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)"))
+    for (a, s), (i, raising, psi) in (blocked or {}).items():
+        lb = limbs[i]
+        k = limb_levels_of(s, limbs)[i]
+        shared = [j for j in raising if limbs[j].actuator == lb.actuator]
+        how = (f"its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} up,"
+               if shared else f"the raised limbs {', '.join(repr(limbs[j].name) for j in raising)}")
+        kinds["descents"].append(((a, s),
+            f"{path}: transition {table.label(a)}→{table.label(s)}: limb {lb.name!r} cannot come down to level "
+            f"{k}: {how} hold it at {psi:.1f}° on the simulated {section.length_mm:g} mm body, above its level-{k} "
+            f"edge {lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0:.1f}° (ψ* − hysteresis/2), so it keeps reading "
+            f"level {k + 1} and the step cannot end; mark the transition \"x\" (no gait may rely on it)"))
     what = {"rests": "a limb resting past its next level's edge",
             "shared": "a limb lifted by its own coil, shared with a raised limb",
             "neighbours": "a limb lifted by raised neighbours"}
@@ -235,6 +299,11 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
         shown += [line for _, line in lines[:WARNING_EXAMPLES]]
         if len(lines) > WARNING_EXAMPLES:
             rest += [line for _, line in lines[WARNING_EXAMPLES:]]
+            if kind == "descents":
+                shown.append(f"{path}: {len(lines) - WARNING_EXAMPLES} more lines like these: in all, {len(lines)} "
+                             f"of the {len(table.src)} transitions the matrix allows cannot end on the simulated "
+                             f"body because raised limbs keep a limb from coming down (-v lists every line)")
+                continue
             n = len({s for s, _ in lines})
             shown.append(f"{path}: {len(lines) - WARNING_EXAMPLES} more lines like these: in all, {n} of the "
                          f"{entered} states the matrix enters cannot be held on the simulated body because of "
