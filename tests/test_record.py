@@ -413,3 +413,19 @@ def test_a_sim_recording_carries_the_firmwares_info_as_run_sim_does(tmp_path, ca
     assert {k: sim.info[k] for k in keys - {"link"}} == {k: run.info[k] for k in keys - {"link"}}
     assert sim.info["link"] == "simulated host-sim board"
     assert sim.board == run.board == "host-sim"
+
+
+def test_every_format_reads_the_events_back_alike_numbers_as_numbers(tmp_path):
+    """read_recording of a CSV recording gave each event's t_host_s, code and detail as text
+    ('0.002', '1'), where the JSONL and MCAP readers give floats and ints (docs/data.md: code
+    and detail are ints): a script that reads any format compared '1' with 1."""
+    pytest.importorskip("mcap")
+    got = {}
+    for suffix in (".csv", ".jsonl", ".mcap"):
+        record(tmp_path / f"run{suffix}", 20, inject_at=10)
+        got[suffix] = read_recording(tmp_path / f"run{suffix}").events
+    for suffix, events in got.items():
+        assert events and all(isinstance(e["code"], int) and isinstance(e["detail"], int)
+                              and isinstance(e["t_host_s"], (int, float)) for e in events), (suffix, events[:2])
+        assert [(e["msg"], e["kind"], e["code"], e["detail"], e["text"]) for e in events] == \
+            [(e["msg"], e["kind"], e["code"], e["detail"], e["text"]) for e in got[".jsonl"]], suffix

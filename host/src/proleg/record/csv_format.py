@@ -101,7 +101,9 @@ class CsvReader(Reader):
         events: list[tuple[str, dict[str, Any]]] = []
         ep = events_path(p)
         if ep.exists():
-            events = [(w, {**r, "t_s": _value(r.get("t_s", ""))}) for w, r in self._table(ep, self._text(ep))[1]]
+            # the numbers as numbers, as the JSONL and MCAP readers give them; msg, kind and text stay text
+            events = [(w, {**r, **{k: _value(r[k]) for k in ("t_host_s", "t_s", "code", "detail") if k in r}})
+                      for w, r in self._table(ep, self._text(ep))[1]]
         return Recording.from_rows(p, meta, telemetry, events)
 
     @staticmethod
