@@ -51,6 +51,15 @@ def test_without_the_key_the_mechanisms_are_still_inferred():
     assert PhysicalPlant(r).mechanism_source == "inferred from the matrix"
 
 
+def test_a_robot_with_a_multi_level_limb_says_why_its_mechanisms_are_not_inferred():
+    """caterpillar-4 without friction: its binary end pads take D1 and its three-level prolegs
+    alternate soft/hard, not inferred; the source said only "default", and the docs had the
+    two-level limbs of such a robot inferred."""
+    plant = PhysicalPlant(load_robot(robots_dir() / "caterpillar-4.toml"))
+    assert plant.mechanisms == ("D1", "custom", "custom", "D1")
+    assert plant.mechanism_source == "default (not inferred: a limb has more than two levels)"
+
+
 def test_declaring_d2_makes_r1_move_like_r2():
     """R1's matrix with D2 pads declared: the measured 00->10 and 00->01 take R2's signs
     (the paper: R1 00->10 = +1, R2 00->10 = -1), so the declaration is what moves the body."""

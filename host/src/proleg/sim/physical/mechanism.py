@@ -6,8 +6,9 @@ material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``;
 ``proleg.robot``, on every limb or none). A robot file without that key has its mechanisms inferred from the sign pattern of
 the robot's transition matrix: every assignment of D1/D2 to the limbs is swept kinematically
 through every allowed transition (``measure.kinematic_signs_all``: one sweep, replayed per assignment) and the assignment whose signs
-agree with the most non-zero matrix entries wins (ties: D1 first). Multi-level limbs without
-the key alternate soft/hard from level 0. Robots of more than ``INFER_MAX_LIMBS`` limbs are
+agree with the most non-zero matrix entries wins (ties: D1 first). A robot with a multi-level
+limb is not inferred: its multi-level limbs alternate soft/hard from level 0, its two-level
+limbs take D1. Robots of more than ``INFER_MAX_LIMBS`` limbs are
 not inferred (the work grows as 4^n): they take D1 on every limb, and loading such a file
 without ``friction`` warns.
 """
@@ -31,7 +32,7 @@ from . import materials as mat
 class Mechanisms:
     names: tuple[str, ...]                      # "D1", "D2" or "custom"
     materials: tuple[tuple[str, ...], ...]      # per limb, material per level
-    source: str                                 # "robot file", "given", "inferred from the matrix", "default"
+    source: str                                 # "robot file", "given", "inferred from the matrix", "default (…why)"
 
 
 def _materials(name_or_list: Any, levels: int, where: str) -> tuple[str, tuple[str, ...]]:
@@ -63,7 +64,8 @@ def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None) -> Mechan
         return Mechanisms(tuple(g[0] for g in got), tuple(g[1] for g in got), "robot file")
     if any(k != 2 for k in levels) or getattr(robot, "transitions", None) is None:
         mats = tuple(tuple("soft" if lv % 2 == 0 else "hard" for lv in range(k)) for k in levels)
-        return Mechanisms(tuple("D1" if k == 2 else "custom" for k in levels), mats, "default")
+        why = "a limb has more than two levels" if any(k != 2 for k in levels) else "no transition matrix"
+        return Mechanisms(tuple("D1" if k == 2 else "custom" for k in levels), mats, f"default (not inferred: {why})")
     if too_many_to_infer(limbs):  # 2^n assignments × n·2^n transitions (robot_plant)
         return Mechanisms(("D1",) * len(limbs), (mat.MECHANISMS["D1"],) * len(limbs),
                           f"default (not inferred for more than {INFER_MAX_LIMBS} limbs)")
