@@ -52,11 +52,36 @@ def _reach_levels(robot, limb, coil):
     return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2 <= psi)
 
 
+def _own_levels_oracle(robot, foreign, coil, level):
+    """The level each own limb of ``coil`` reads (from above: ψ ≥ ψ* − hysteresis/2, at least
+    1) when the coil is contracted just enough to lift ``foreign`` to ``level``: bisected on
+    the physical plant's posed body, not from ``limbloss``'s proportion."""
+    from proleg.sim.closed_loop import make_plant
+
+    plant = make_plant(robot, "physical")
+    lf = robot.limbs[foreign]
+    edge = lf.psi_star_deg[level - 1] + lf.hysteresis_deg / 2
+
+    def psi(c):
+        plant.pose([c if j == coil else 0.0 for j in range(len(robot.actuators))])
+        return [float(x) for x in plant.psi_deg]
+
+    lo, hi = 0.0, 1.0
+    for _ in range(30):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if psi(mid)[foreign] >= edge else (mid, hi)
+    at = psi(hi)
+    own = compiled_map(robot)
+    return {m: max(1, sum(1 for st in robot.limbs[m].psi_star_deg if st - robot.limbs[m].hysteresis_deg / 2 <= at[m]))
+            for m in range(len(own)) if own[m] == coil}
+
+
 def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
-    """Foreign limbs rise only after every own limb of their coil, never together with another
-    limb of that coil, and no higher than their new coil lifts them: checked state by state on
-    the four-limb caterpillar with coils reaching 20 mm past their half of the body (on the
-    example's 8 mm a neighbour's coil lifts no limb past its first edge: no remap at all)."""
+    """Foreign limbs rise only after every own limb of their coil, to at least the level the
+    coil's contraction then bends it to, never together with another limb of that coil, and
+    no higher than their new coil lifts them: checked state by state on the four-limb
+    caterpillar with coils reaching 20 mm past their half of the body (on the example's 8 mm
+    a neighbour's coil lifts no limb past its first edge: no remap at all)."""
     text = (ROOT / "robots" / "caterpillar-4.toml").read_text()
     assert all(remap(load_robot(ROOT / "robots" / "caterpillar-4.toml"), a) is None for a in range(4))
     path = tmp_path / "caterpillar-reach.toml"
@@ -78,7 +103,8 @@ def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
                 foreign = [i for i in limbs if own[i] != coil]
                 mine = [i for i in limbs if own[i] == coil]
                 for lv in (la, lb):
-                    if any(lv[f] for f in foreign) and not all(lv[m] for m in mine):
+                    if any(lv[m] < _own_levels_oracle(robot, f, coil, lv[f])[m]
+                           for f in foreign if lv[f] for m in mine):
                         ok = False
                     if any(lv[f] > _reach_levels(robot, f, coil) for f in foreign):
                         ok = False
@@ -140,6 +166,34 @@ def test_after_a_coil_dies_on_the_inchworm_no_healthy_coil_is_driven_to_its_limi
     main(["sim", "inchworm-3", "--inject", "dead-actuator:sma-middle+5", "--duration", "30", "--json"])
     faults = json.loads(capsys.readouterr().out)["faults"]
     assert faults and all(f["detail"] == 1 for f in faults), faults
+
+
+def test_a_far_limb_remapped_onto_a_three_level_limbs_coil_rises_only_with_that_limb_at_its_top(tmp_path, capsys):
+    """A three-level rear pad (ψ* 10°, 22°) and a binary front pad: without the front coil the
+    rear coil lifts the front end, but only contracted to ≈ 52° at its own end, where the rear
+    pad reads level 2. The remap let the rear pad sit at level 1 with the front end up (11),
+    so the fallback 10 20 21 11 10 held the rear coil at full stroke into SMA_ON_LIMIT and then
+    blamed the healthy coil (21 -> 11 failed). Now 11 and 01 are out of the remap, and no
+    fault names the rear coil."""
+    import json
+
+    from proleg.cli import main
+
+    path = tmp_path / "l3-l2.toml"
+    path.write_text("\n".join([
+        '[robot]', 'name = "l3-l2"', '[[limb]]', 'name = "rear"', 'levels = 3', 'psi_star_deg = [10.0, 22.0]',
+        'actuator = "a"', '[[limb]]', 'name = "front"', 'psi_star_deg = [20.0]', 'actuator = "b"',
+        '[[actuator]]', 'name = "a"', '[[actuator]]', 'name = "b"', '[transitions]', 'matrix = [',
+        '  [0, -1, 1, "x", "x", "x"],', '  [1, 0, "x", 0, "x", "x"],', '  [-1, "x", 0, -1, 1, "x"],',
+        '  ["x", 0, 1, 0, "x", 0],', '  ["x", "x", -1, "x", 0, 0],', '  ["x", "x", "x", 0, 0, 0],', ']', '']))
+    robot = load_robot(path)
+    assert remap(robot, 1) == (0, 0)
+    t = remapped_table(robot, (0, 0), 1)
+    assert {(t.label(int(a)), t.label(int(b))) for a, b in zip(t.src, t.dst)} == {
+        ("00", "10"), ("10", "00"), ("10", "20"), ("20", "10"), ("20", "21"), ("21", "20")}
+    main(["sim", str(path), "--inject", "dead-actuator:b+1", "--duration", "40", "--json"])
+    faults = json.loads(capsys.readouterr().out)["faults"]
+    assert faults and all(f["detail"] == 1 for f in faults), faults  # the front coil (b) or its limb
 
 
 @pytest.fixture

@@ -17,7 +17,8 @@ Two ways to go on without actuator ``a`` (both are computed, the better one is u
   own limbs and the foreign one(s). One coil bends the body from its own end: it crosses its
   own limb's ψ* first and the foreign limb's only when it contracts further (R1: α ≈ 0.33
   and 0.74, docs/plant.md). So a foreign limb can be above level 0 only while every own limb
-  of the coil is too, and a step may change a foreign limb's level only if no other limb of
+  of the coil is too, at least at the level the contraction that lifts the foreign limb bends
+  it to (``own_levels_under``: a multi-level own limb, its top level in practice), and a step may change a foreign limb's level only if no other limb of
   that coil changes in the same step (one coil cannot make the two cross together). For R1
   without ``sma-right`` this gives exactly the paper's one-actuator matrix
   (robots/paper-r1-one-actuator.toml): 00↔10, 10↔11.
@@ -90,6 +91,28 @@ def foreign_top_level(robot, limb: int, actuator: int) -> int:
     return sum(1 for star in lb.psi_star_deg if star + lb.hysteresis_deg / 2.0 <= reach)
 
 
+def own_levels_under(robot, limb: int, actuator: int, own: tuple[int, ...]) -> dict[int, dict[int, int]]:
+    """For a foreign ``limb`` lifted by coil ``actuator``: per level j ≥ 1 of it, the lowest
+    level each own limb of that coil reads while the coil is contracted enough for level j,
+    ``{j: {own limb: level}}`` (at least 1). The contraction is the fraction of the coil's
+    full-stroke reach at ``limb`` its entry edge needs (ψ* + hysteresis/2; the body bends in
+    proportion to it), and an own limb reads level k + 1 as long as that contraction keeps it
+    at or above ψ*(k) − hysteresis/2, the edge it would have to fall below: a three-level own
+    limb cannot come down to level 1 while the coil holds a far limb up (on R1's 80 mm body
+    that contraction bends the own end to ≈ 52°)."""
+    reach = coil_reach_deg(body_of(list(own), len(robot.actuators), robot.plant), actuator)
+    lf = robot.limbs[limb]
+    out: dict[int, dict[int, int]] = {}
+    for j, star in enumerate(lf.psi_star_deg, start=1):
+        c = min(1.0, (star + lf.hysteresis_deg / 2.0) / reach[limb]) if reach[limb] > 0 else 1.0
+        out[j] = {}
+        for m in (i for i, a in enumerate(own) if a == actuator):
+            lm = robot.limbs[m]
+            k = sum(1 for sm in lm.psi_star_deg if sm - lm.hysteresis_deg / 2.0 <= c * reach[m])
+            out[j][m] = max(1, k)
+    return out
+
+
 def remap(robot, lost: int) -> tuple[int, ...] | None:
     """The map that gives each limb of ``lost`` to the actuator of its nearest other limb
     that can lift it (module doc); a limb none can lift stays on ``lost`` (dead). None: no
@@ -123,8 +146,13 @@ def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None) -> 
             tops.update({f: foreign_top_level(robot, f, a) for f in foreign})
     down = [i for i, b in enumerate(new_map) if b == lost]  # no coil lifts these
     lv = [limb_levels(s, t.levels) for s in range(t.n_states)]
-    ok_state = np.array([all(not any(lv[s][f] > 0 for f in foreign) or all(lv[s][m] > 0 for m in mine)
-                             for mine, foreign, _ in groups)
+    needs = {f: own_levels_under(robot, f, new_map[f], own) for _, foreign, _ in groups for f in foreign}
+
+    def coil_ok(s: int, mine: list[int], foreign: list[int]) -> bool:
+        up = [f for f in foreign if lv[s][f] > 0]
+        return all(lv[s][m] >= max(needs[f][lv[s][f]][m] for f in up) for m in mine) if up else True
+
+    ok_state = np.array([all(coil_ok(s, mine, foreign) for mine, foreign, _ in groups)
                          and all(lv[s][f] <= top for f, top in tops.items())
                          and not any(lv[s][i] > 0 for i in down) for s in range(t.n_states)], dtype=bool)
     keep = ok_state[t.src] & ok_state[t.dst]
