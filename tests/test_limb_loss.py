@@ -459,7 +459,7 @@ def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fa
     """IMU noise (5°) wider than inchworm-3's 2° bands: the middle limb reaches its level but
     never settles, and the step times out with every limb at its level. That used to name
     limb 0 (whose coil was off), suspect its healthy coil and fall back without it."""
-    from proleg.console.names import RobotNames, describe_event
+    from proleg.console.names import RobotNames, describe_event, event_text
     from proleg.protocol.definition import FaultCode
     from proleg.sim.closed_loop import SimulatedRobot
 
@@ -481,6 +481,12 @@ def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fa
     suspect = next(m for m in events if m.kind == EventKind.SUSPECT)
     assert suspect.code == 0xFF
     assert not [m for m in events if m.kind == EventKind.FALLBACK]
+    # measured = target: the text said "transition 110→110 failed"; it is the state it is in
+    n = robot.transitions.n_states
+    assert suspect.detail // n == suspect.detail % n
+    said = event_text({"time_ms": 1, "kind": int(EventKind.SUSPECT), "code": 0xFF, "detail": suspect.detail},
+                      RobotNames.for_robot(robot), robot.transitions.label)
+    assert said == f"suspects no actuator (in state {robot.transitions.label(suspect.detail % n)}, the step's target)"
     text = describe_event({"time_ms": 1, "kind": int(EventKind.FAULT), "code": int(FaultCode.STATE_TIMEOUT),
                            "detail": 0xFF}, RobotNames.for_robot(robot))
     assert "every limb at its level, one would not settle" in text

@@ -131,6 +131,8 @@ def event_text(f: dict, names: RobotNames = RobotNames(), state_label: object = 
         n = names.n_states
         if n and detail != 0xFFFF and detail < n * n:
             lab = state_label if callable(state_label) else str
+            if detail // n == detail % n:  # the robot is in the step's target: no transition failed
+                return f"suspects {who} (in state {lab(detail % n)}, the step's target)"
             return f"suspects {who} (transition {lab(detail // n)}→{lab(detail % n)} failed)"
         return f"suspects {who} (transition {'unknown' if detail == 0xFFFF else detail})"
     if k == EventKind.FALLBACK:

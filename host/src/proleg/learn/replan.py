@@ -126,8 +126,11 @@ class Replanner(Listener):
             elif m.kind == EventKind.SUSPECT:
                 name = self.robot.actuators[m.code].name if m.code < len(self.robot.actuators) else None
                 self._suspect = name
-                told = (f"firmware suspects {name or 'no actuator'} "
-                        f"(transition {describe_transition(self.robot, m.detail)} failed)")
+                n = self.robot.n_states
+                where = (f"in state {self.robot.transitions.label(m.detail % n)}, the step's target"
+                         if m.detail < n * n and m.detail // n == m.detail % n
+                         else f"transition {describe_transition(self.robot, m.detail)} failed")
+                told = f"firmware suspects {name or 'no actuator'} ({where})"
             elif m.kind == EventKind.GAIT_STOPPED and m.code == StopReason.FAULT:
                 self._stopped_at = rx.time
                 self._fell_back = False
