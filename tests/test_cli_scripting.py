@@ -432,3 +432,19 @@ def test_a_robot_named_longer_than_info_carries_runs_and_is_watched(capsys, tmp_
     assert code == 0, err
     code, out, err = run(capsys, "console", "--sim", str(path), "--plain", "--duration", "0.3")
     assert code == 0 and "does not run firmware built from" not in err, err
+
+
+def test_run_starts_once_the_board_knows_where_the_robot_is_so_a_gait_off_rest_takes_its_entry_path(capsys):
+    """run STARTed a millisecond after the (simulated) board booted, before it had read an IMU:
+    the firmware matched no step and took no entry path, so planar-4's +x gait 3, which starts
+    at 0101, raised both limbs at once (first STATE_REACHED: step 1 at 0101). run now waits for
+    a telemetry frame with a known state (at most 2 s), and the entry path from rest comes first."""
+    code, out, _ = run(capsys, "run", "planar-4", "--sim", "--gait", "3", "--duration", "4", "--format", "jsonl", "-q")
+    assert code == 0
+    lines = [json.loads(x) for x in out.splitlines()]
+    reached = [e for e in lines if e["msg"] == "EVENT" and e["kind"] == "STATE_REACHED"]
+    assert reached and reached[0]["code"] == 255, reached[:2]  # the entry path's, not step 1's
+    assert reached[0]["text"].startswith("entry path reached state 0") and reached[0]["text"].count("1") == 1
+    start = next(e for e in lines if e["msg"] == "EVENT" and e["kind"] == "GAIT_STARTED")
+    tel = [x for x in lines if x["msg"] == "TELEMETRY" and x["t_s"] <= start["t_s"]]
+    assert tel and not tel[-1]["flags"] & 512  # Flag.STATE_UNKNOWN: the last frame before START knew the state
