@@ -110,6 +110,29 @@ def test_measure_matrix_json_has_states_matrix_in_mm_and_sample_counts(capsys):
                     assert m["matrix"][a][b] * paper[a][b] > 0, (a, b)
 
 
+def test_measure_matrix_tells_an_allowed_transition_the_body_did_not_make_from_a_forbidden_one(capsys, tmp_path):
+    """A three-level rear pad (ψ* 10°, 22°) beside a binary front one: the raised front end
+    lifts the rear pad past 10°, so 01 is never reached. Its four allowed transitions were
+    shown '-', like the forbidden ones ("entries without a sample"); they are '?' now, named
+    in a line, and --json lists them as not_made."""
+    path = tmp_path / "l3-l2.toml"
+    path.write_text("\n".join([
+        '[robot]', 'name = "l3-l2"', '[[limb]]', 'name = "rear"', 'levels = 3', 'psi_star_deg = [10.0, 22.0]',
+        'actuator = "a"', '[[limb]]', 'name = "front"', 'psi_star_deg = [20.0]', 'actuator = "b"',
+        '[[actuator]]', 'name = "a"', '[[actuator]]', 'name = "b"', '[transitions]', 'matrix = [',
+        '  [0, -1, 1, "x", "x", "x"],', '  [1, 0, "x", 0, "x", "x"],', '  [-1, "x", 0, -1, 1, "x"],',
+        '  ["x", 0, 1, 0, "x", 0],', '  ["x", "x", -1, "x", 0, 0],', '  ["x", "x", "x", 0, 0, 0],', ']', '']))
+    rc, out, _ = run(capsys, "sim", str(path), "--measure-matrix", "--json")
+    m = json.loads(out)
+    assert rc == 0 and m["not_made"] == ["00->01", "01->00", "01->11", "11->01"]
+    assert all(m["samples"][1][b] == 0 and m["matrix"][1][b] is None for b in range(6))
+    rc, out, _ = run(capsys, "sim", str(path), "--measure-matrix")
+    rows = {line.split()[0]: line.split()[1:] for line in out.splitlines() if line[:2] in ("00", "01")}
+    assert rc == 0 and rows["00"][:3] == [".", "?", rows["00"][2]] and rows["00"][3:] == ["-", "-", "-"]
+    assert rows["01"] == ["?", ".", "-", "?", "-", "-"]
+    assert "'?': allowed, but not made on the simulated body (4 of 14: 00->01, 01->00, 01->11, 11->01)" in out
+
+
 def test_measure_matrix_hold_range_brackets_the_4_degree_matrix_and_says_its_margins(capsys):
     rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--json")
     plain = json.loads(out)

@@ -127,14 +127,28 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 
         margins = 3 if args.hold_range else 1
         raise Interrupted(steps.interrupted(robot.transitions.n_transitions, margins)) from None
+    # allowed by the robot file, but the idealised drive did not make them on this body
+    _, allowed = robot.transitions.dense()
+    not_made = [(a, b) for a in range(len(m.states)) for b in range(len(m.states))
+                if a != b and allowed[a][b] and not m.samples[a][b]]
     if args.json:
         extra = {} if rng is None else rng.to_json()
-        print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(), **extra}))
+        print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(),
+                          "not_made": [f"{m.states[a]}->{m.states[b]}" for a, b in not_made], **extra}))
         return 0
     print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
-    _table(m.states, [[None if x != x else f"{x:+.2f}" for x in row] for row in m.matrix_mm])
-    print(f"samples per entry: {int(m.samples.max()) if m.samples.size else 0} (entries without a sample: '-')")
+    cells = [[None if x != x else f"{x:+.2f}" for x in row] for row in m.matrix_mm]
+    for a, b in not_made:
+        cells[a][b] = "?"
+    _table(m.states, cells)
+    print(f"samples per entry: {int(m.samples.max()) if m.samples.size else 0} ('-': not an allowed transition)")
+    if not_made:
+        shown = ", ".join(f"{m.states[a]}->{m.states[b]}" for a, b in not_made[:6])
+        more = f", … ({len(not_made) - 6} more)" if len(not_made) > 6 else ""
+        print(f"'?': allowed, but not made on the simulated body ({len(not_made)} of "
+              f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached (see "
+              "the warnings when the robot file was loaded)")
     if rng is not None:
         print(f"\neach entry's range over hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi* "
               "(mm, low..high):")
