@@ -24,3 +24,15 @@ def test_a_walk_of_single_limb_steps_has_no_opposing_step():
     levels = (2, 2)
     assert opposing_steps([0, 2, 3, 1, 0], levels) == []
     assert opposing_steps([0, 1, 2, 3, 0], levels) == [1]
+
+
+def test_a_digit_out_of_its_limbs_range_says_which_digit_on_a_robot_of_mixed_levels():
+    """'02' on a three-level limb and a binary one: the message said "digit '2' is not a level
+    0..1", while the first limb does have a level 2; it names the place now."""
+    import pytest
+
+    from proleg.states import index as state_index
+
+    assert state_index("21", (3, 2)) == 5
+    with pytest.raises(ValueError, match=r"state label '02': digit 2 \('2'\) is not a level of limb #2, 0\.\.1$"):
+        state_index("02", (3, 2))

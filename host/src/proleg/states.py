@@ -40,10 +40,11 @@ def index(text: str, levels: Sequence[int]) -> int:
     if len(text) != len(levels):
         raise ValueError(f"state label {text!r} has {len(text)} digits, expected {len(levels)} (one per limb)")
     value = 0
-    for ch, k in zip(text.lower(), levels):
+    for i, (ch, k) in enumerate(zip(text.lower(), levels)):
         d = DIGITS.find(ch)
-        if not 0 <= d < k:
-            raise ValueError(f"state label {text!r}: digit {ch!r} is not a level 0..{k - 1}")
+        if not 0 <= d < k:  # on a robot of mixed levels the digit's place says which limb's range
+            raise ValueError(f"state label {text!r}: digit {i + 1} ({ch!r}) is not a level of limb #{i + 1}, "
+                             f"0..{k - 1}")
         value = value * k + d
     return value
 
