@@ -339,3 +339,13 @@ def test_gait_json_says_what_the_text_says_of_repeats_and_problems(capsys, tmp_p
     code, out, _ = run(capsys, "gait", str(shared), "--direction", "+x", "--max-transitions", "3", "--json")
     kinds = {p["kind"] for g in json.loads(out)["results"][0]["gaits"] for p in g["problems"]}
     assert code == 0 and "shared-actuator" in kinds, out
+
+
+def test_a_one_limb_robot_is_one_limb_in_the_gait_header(capsys, tmp_path):
+    """A single four-level pad: the header said "1 limbs"."""
+    path = tmp_path / "solo.toml"
+    path.write_text('[robot]\nname = "solo"\n[[limb]]\nname = "pad"\nlevels = 4\npsi_star_deg = [8.0, 16.0, 24.0]\n'
+                    'actuator = "a"\n[[actuator]]\nname = "a"\n[transitions]\nmatrix = [\n'
+                    '  [0, 1, "x", "x"],\n  [-1, 0, 1, "x"],\n  ["x", -1, 0, 1],\n  ["x", "x", -1, 0],\n]\n')
+    code, out, _ = run(capsys, "gait", str(path))
+    assert code == 0 and out.startswith("solo: 1 limb, 4 states (0 1 2 3), 6 allowed transitions"), out

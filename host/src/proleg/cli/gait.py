@@ -176,7 +176,7 @@ def _header(robot) -> str:
     t = robot.transitions
     shown = " ".join(t.labels()) if t.n_states <= 16 else f"{t.label(0)} … {t.label(t.n_states - 1)}"
     return (
-        f"{robot.name}: {len(robot.limbs)} limbs, {t.n_states} states ({shown}), "
+        f"{robot.name}: {len(robot.limbs)} limb{'s' if len(robot.limbs) != 1 else ''}, {t.n_states} states ({shown}), "
         f"{t.n_transitions} allowed transitions, rewards in {robot.units}"
     )
 
