@@ -200,7 +200,8 @@ def test_a_trial_of_a_transition_the_robot_does_not_have_is_an_error_not_dropped
 
 
 def _good_log(path: Path) -> bytes:
-    rows = [{"from": "00", "to": "10", "t_start": k, "t_end": k + 1, "dx": 4.0, "source": "manual"} for k in range(3)]
+    rows = [{"from": "0000", "to": "0100", "t_start": k, "t_end": k + 1, "dx": 4.0, "source": "manual"}
+            for k in range(3)]
     path.write_text('{"trial_log": 1, "robot": "paper-r1"}\n' + "".join(json.dumps(r) + "\n" for r in rows))
     return path.read_bytes()
 
@@ -333,3 +334,19 @@ def test_tracker_trials_without_a_track_say_so_before_and_after_not_a_zero_trial
     code, out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
     assert code == 2 and out == ""
     assert err.strip().endswith("--track FILE.csv --report); nothing to report")
+
+
+def test_the_too_few_trials_line_names_ten_and_counts_the_rest(tmp_path, capsys):
+    """After a short run on a six-limb robot of 608 transitions the report's "too few trials"
+    line named every one of the 600 or so not yet tried, a line of 10 KB under a table that
+    already gives each one's n. It names the first ten and counts them all now."""
+    log = tmp_path / "t.jsonl"
+    rows = [{"from": "0000", "to": "0100", "t_start": k, "t_end": k + 1, "dx": 4.0, "source": "manual"}
+            for k in range(3)]
+    log.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    code, out, _err = run(capsys, "learn", str(ROOT / "robots" / "caterpillar-4.toml"), "--log", str(log),
+                          "--report")
+    line = next(ln for ln in out.splitlines() if ln.startswith("too few trials"))
+    n = load_robot(ROOT / "robots" / "caterpillar-4.toml").transitions.n_transitions
+    assert code == 0 and line.startswith(f"too few trials (< 2): {n - 1} of {n}: "), line
+    assert line.count("->") == 10 and line.endswith(f", … ({n - 11} more; column n)"), line

@@ -397,6 +397,10 @@ def _trial_units(args: argparse.Namespace, robot, trials: list) -> str:
     return "mm"  # the plant moves in mm
 
 
+#: how many transitions the report's "too few trials" line names before it counts the rest
+FLAGGED_SHOWN = 10
+
+
 def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     from ..learn.estimate import estimate, penalised_table
     from ..learn.robotfile import write_learned_robot
@@ -438,8 +442,10 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
         print(f"{bare} more transitions recorded without their motion (Δx) are not counted: attach the "
               "tracker's track with --track FILE.csv", file=out)
     flagged = est.flagged()
-    if flagged:
-        print(f"too few trials (< {est.min_samples}): {', '.join(flagged)}", file=out)
+    if flagged:  # the table above has each one's n: a few names and the count, not hundreds of them
+        shown = ", ".join(flagged[:FLAGGED_SHOWN]) + (
+            f", … ({len(flagged) - FLAGGED_SHOWN} more; column n)" if len(flagged) > FLAGGED_SHOWN else "")
+        print(f"too few trials (< {est.min_samples}): {len(flagged)} of {t.n_transitions}: {shown}", file=out)
     if strayed := _strayed(trials):
         print("passed through other states on the way (a limb crossed a level it should have kept; "
               f"their Δx includes those crossings): {strayed}", file=out)
