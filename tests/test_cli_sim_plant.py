@@ -133,6 +133,18 @@ def test_measure_matrix_tells_an_allowed_transition_the_body_did_not_make_from_a
     assert "'?': allowed, but not made on the simulated body (4 of 14: 00->01, 01->00, 01->11, 11->01)" in out
 
 
+def test_measure_matrix_says_how_far_it_has_got(capsys, monkeypatch):
+    """A 96-state robot measured for ten minutes without a word on stderr; it says how many
+    transitions it has tried, of how many, every PROGRESS_EVERY_S."""
+    from proleg.cli import sim_plant
+
+    monkeypatch.setattr(sim_plant, "PROGRESS_EVERY_S", 0.0)
+    rc, _, err = run(capsys, "sim", str(R1), "--measure-matrix")
+    said = [x.removeprefix("proleg: ") for x in err.splitlines() if x.startswith("proleg: measure-matrix: ")]
+    assert rc == 0 and said[0].startswith("measure-matrix: 1/24 transitions, about ") and len(said) == 23, said
+    assert said[-1].startswith("measure-matrix: 23/24 transitions")
+
+
 def test_measure_matrix_hold_range_brackets_the_4_degree_matrix_and_says_its_margins(capsys):
     rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--json")
     plain = json.loads(out)

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
+import time
 from typing import Any
 
 from .number_args import positive_int
@@ -157,14 +159,28 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     return 0
 
 
+log = logging.getLogger("proleg")
+
+#: ``--measure-matrix`` says how far it has got at most this often (a 96-state robot takes
+#: about ten minutes: without a word a lab cannot tell it from a hang).
+PROGRESS_EVERY_S = 10.0
+
+
 class _Steps:
-    """``measure_matrix``'s ``on_step``: how far the measurement got, for a Ctrl-C's line."""
+    """``measure_matrix``'s ``on_step``: how far the measurement got, said on stderr every
+    ``PROGRESS_EVERY_S`` (with the time left) and in a Ctrl-C's line."""
 
     def __init__(self) -> None:
         self.tried = self.sampled = self.total = 0
+        self.started = self.said = time.monotonic()
 
     def __call__(self, tried: int, sampled: int, total: int) -> None:
         self.tried, self.sampled, self.total = tried, sampled, total
+        now = time.monotonic()
+        if tried < total and now - self.said >= PROGRESS_EVERY_S:
+            self.said = now
+            left = (now - self.started) / tried * (total - tried)
+            log.info("measure-matrix: %d/%d transitions, about %d:%02d left", tried, total, left // 60, left % 60)
 
     def interrupted(self, allowed: int, margins: int) -> str:
         """The one line a Ctrl-C'd ``--measure-matrix`` ends with: how many transitions were
