@@ -303,7 +303,8 @@ def test_a_state_timeout_on_the_simulated_robot_names_the_transition_and_the_rob
     assert "proleg console" not in last and "run the same command" not in last
     assert re.search(r"^proleg: error: learn: the robot stopped while making (\d{3})->101: FAULT STATE_TIMEOUT "
                      r"on mid \(firmware time [\d.]+s\); the simulated robot cannot make \1->101 and would stop "
-                     r"there again: look for a warning about state 101 when the robot file was loaded \(.*\) and "
+                     r"there again: look for a warning about state 101 or transition \1→101 when the robot file was "
+                     r"loaded \(.*\) and "
                      r"mark the transitions into 101 \"x\" \(forbidden\) in the robot file", last), last
 
 

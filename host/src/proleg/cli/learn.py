@@ -319,8 +319,9 @@ def _stopped_hint(args: argparse.Namespace, e: Exception) -> str:
         return "; the simulated robot meets it again if run the same way: check the warnings printed when the robot file was loaded"
     a, b = e.transition
     return (f"; the simulated robot cannot make {a}->{b} and would stop there again: look for a warning about state "
-            f"{b} when the robot file was loaded (a state that cannot be held, a level out of reach) and mark the "
-            f"transitions into {b} \"x\" (forbidden) in the robot file, or fix what the warning names")
+            f"{b} or transition {a}→{b} when the robot file was loaded (a state that cannot be held, a step that "
+            f"cannot end, a level out of reach) and mark the transitions into {b} \"x\" (forbidden) in the robot "
+            f"file, or fix what the warning names")
 
 
 def _counts(table, trials) -> np.ndarray:
