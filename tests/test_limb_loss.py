@@ -455,15 +455,20 @@ def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
     assert fallback_lines(load_robot(p)) == ["fallback gaits: off ([control] fallback = false)"]
 
 
-def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fall_back():
-    """IMU noise (5°) wider than inchworm-3's 2° bands: the middle limb reaches its level but
-    never settles, and the step times out with every limb at its level. That used to name
-    limb 0 (whose coil was off), suspect its healthy coil and fall back without it."""
+def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fall_back(tmp_path):
+    """IMU noise (5°) wider than inchworm-3's 2° bands, and no debounce (one sample is a level
+    change, and an excursion that unsettles a limb): the middle limb reaches its level but never
+    settles, and the step times out with every limb at its level. That used to name limb 0
+    (whose coil was off), suspect its healthy coil and fall back without it."""
     from proleg.console.names import RobotNames, describe_event, event_text
     from proleg.protocol.definition import FaultCode
     from proleg.sim.closed_loop import SimulatedRobot
 
-    robot = load_robot(ROOT / "robots" / "inchworm-3.toml")
+    text = (ROOT / "robots" / "inchworm-3.toml").read_text()
+    assert "debounce_ticks = 5" in text
+    path = tmp_path / "inchworm-3.toml"
+    path.write_text(text.replace("debounce_ticks = 5", "debounce_ticks = 1"))
+    robot = load_robot(path)
     sim = SimulatedRobot(robot, conditions=["imu_noise_deg=5"])
     client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
     client.connect()

@@ -114,19 +114,20 @@
 #define CTL_STALL_MS 5000u
 /* A rise that ψ no longer answers. A limb rising alone (the body couples limbs that move
  * together), its coil heating and not held off by the envelope, whose smoothed ψ
- * (psi_smooth_cdeg, looked at every CTL_REACH_EVERY ticks) rose CTL_MOVE_CDEG from its lowest in this step and then gained less
- * than CTL_GAIN_CDEG for CTL_REACH_MS cannot get there: its coil is through its transformation
- * (or at its supply's equilibrium) short of the level, and more heat only heats the wire. It
- * stops as "cannot reach" at once instead of after CTL_STALL_MS without progress (which IMU
- * noise keeps from running out) or at its on-time limit: the one-actuator R1 after 30,000
- * cycles' stroke loss heated its coil to 169 °C within the envelope (docs/control.md). The 3°
- * rise from the lowest keeps IMU noise while a cool coil heats back to As (its dead time,
- * 0.15-0.6 s) from counting as a rise; 0.5° in 400 ms is a rise of 1.25°/s, far below a
+ * (psi_smooth_cdeg, looked at every CTL_REACH_EVERY ticks) rose CTL_MOVE_CDEG from its lowest
+ * in this step and then gained less than CTL_GAIN_CDEG for CTL_REACH_MS cannot get there: its
+ * coil is through its transformation (or at its supply's equilibrium) short of the level, and
+ * more heat only heats the wire. It stops as "cannot reach" at once instead of after
+ * CTL_STALL_MS without progress (which IMU noise keeps from running out) or at its on-time
+ * limit: the one-actuator R1 after 30,000 cycles' stroke loss heated its coil to 169 °C within
+ * the envelope, now 113 °C (docs/control.md). 0.4° in 320 ms is a rise of 1.25°/s, far below a
  * transforming coil's tens of degrees a second and below the creep of a coil at a weak
- * supply's equilibrium that still gets there. */
-#define CTL_MOVE_CDEG 300
-#define CTL_GAIN_CDEG 50
-#define CTL_REACH_MS 400u
+ * supply's equilibrium that still gets there; past Af R1's coil heats ≈ 11 K per 100 ms at 0.8
+ * duty. The 4° rise from the lowest keeps IMU noise (smoothed, up to 3° RMS) while a cool coil
+ * heats back to As (its dead time, 0.15-0.6 s) from counting as a rise. */
+#define CTL_MOVE_CDEG 400
+#define CTL_GAIN_CDEG 40
+#define CTL_REACH_MS 320u
 #define CTL_REACH_EVERY 16u
 /* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default
  * (flash; the default controller passes the hil central-claim points without it): at 700 ms

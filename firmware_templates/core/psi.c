@@ -150,7 +150,7 @@ typedef struct {
     int16_t cdeg;    /* ψ of the last sample in 0.01° once computed (the stroke rules ask for it */
     uint8_t fresh;   /* several times a tick: one atan2 per sample on the 8-bit targets) */
 #endif
-    int16_t fx, fz;  /* the samples halved (no int16 overflow), smoothed: 1/8 of each new one */
+    int16_t fx, fz;  /* the samples halved (no int16 overflow), smoothed: 1/16 of each new one */
 } limb_state_t;
 
 static limb_state_t limbs[CFG_N_LIMBS];
@@ -319,8 +319,8 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
 #endif
     /* arithmetic shifts (gcc and clang; ISO C leaves a negative's to the compiler): a division
      * rounds toward zero at twice the flash on the 8-bit targets */
-    s->fx = (int16_t)(s->fx + (((ax >> 1) - s->fx) >> 3));
-    s->fz = (int16_t)(s->fz + (((az >> 1) - s->fz) >> 3));
+    s->fx = (int16_t)(s->fx + (((ax >> 1) - s->fx) >> 4));
+    s->fz = (int16_t)(s->fz + (((az >> 1) - s->fz) >> 4));
     s->hyst = psi_classify(limb, s->hyst, ax, az);
     if (s->level == PSI_UNKNOWN) {
         s->level = s->hyst;

@@ -106,8 +106,8 @@ uint8_t psi_last_at_or_above_hold_top(uint8_t limb, uint8_t thr);
  * falling 2°). Comparisons against Q14 edges only, no atan. */
 int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising);
 
-/* ψ of `limb` smoothed in 0.01°: the angle of its samples' exponential mean (1/8 of each new
- * one: about a quarter of a sample's noise, a lag of about 8 samples), for the controller's
+/* ψ of `limb` smoothed in 0.01°: the angle of its samples' exponential mean (1/16 of each new
+ * one: about a fifth of a sample's noise, a lag of about 16 samples), for the controller's
  * watch on a rise that stops short (ctl.h, CTL_REACH_MS). One atan2 a call. */
 int16_t psi_smooth_cdeg(uint8_t limb);
 
