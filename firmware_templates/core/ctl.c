@@ -34,6 +34,15 @@ typedef uint8_t sag_t;
 
 #define TICKS(ms) ((uint16_t)(((uint32_t)(ms) * CFG_TICK_HZ + 999u) / 1000u))
 #define NOT_SEEN 0xFFu
+/* The reach watch runs in builds without full strokes (ctl.h, CTL_REACH_MS). With strokes, a
+ * limb's climb is held back by the others' (CLIMBS_TO_STROKE): a rise cut as "cannot reach"
+ * took that brake off, and R1 at full strokes with a dead right coil climbed its left end to a
+ * stroke it could not reach, its coil at 173 °C instead of 107 °C. */
+#ifdef CFG_LIMB_STROKE_CDEG
+#define REACH_WATCH 0
+#else
+#define REACH_WATCH 1
+#endif
 /* CTL_REACH_MS in looks of the reach watch, one every CTL_REACH_EVERY ticks (250 at 10 kHz) */
 #define REACH_LOOKS ((TICKS(CTL_REACH_MS) + CTL_REACH_EVERY - 1u) / CTL_REACH_EVERY)
 typedef char ctl_reach_fits_a_byte[REACH_LOOKS < NOT_SEEN ? 1 : -1];
@@ -388,7 +397,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             /* Rising alone (the body couples limbs that move together), its coil heating and not
              * held off by the envelope, its ψ stopped answering short of its level: it cannot
              * get there, as after CTL_STALL_MS without progress but at once (ctl.h) */
-            if (move[i] == RISE && w >= WANT_HEAT && changing == 1u) {
+            if (REACH_WATCH && move[i] == RISE && w >= WANT_HEAT && changing == 1u) {
                 if (sma_cooling(ctl_limb_actuator(i))) {
                     cl[i].still = NOT_SEEN; /* held off: it starts over, from a cooler coil */
                 } else if (at_reach(i, &cl[i])) {
