@@ -81,6 +81,7 @@ void ctl_reset(void)
 {
     uint8_t i;
     memset(cl, 0, sizeof cl); /* not heating, no crossings, no stall, no boost */
+    look = 0;                 /* the reach watch's looks in the same phase after every reset */
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
         cl[i].level = PSI_UNKNOWN;

@@ -17,6 +17,7 @@ typedef char guard_hits_fit_a_byte[(CFG_ON_LIMIT_LATCH - 1u + CFG_N_ACTUATORS <=
 static uint8_t hit_mask; /* actuators hit since each last heated on the way to a target reached */
 static uint8_t progressed; /* actuators heated since the last target reached or START */
 static uint8_t heating;    /* actuators heated in the interval the tick just charged */
+static uint8_t demanded;   /* the last tick demanded a target (that interval's demand) */
 /* Each coil's time heated while a target was demanded, since it last heated on the way to a
  * target reached. STOP and START keep it: a host restarting a gait past a dead coil
  * re-reaches the states the other coils make, which is no progress for it (safety.h). At
@@ -35,6 +36,7 @@ void guard_init(void)
 {
     INIT_ZERO(progressed);
     INIT_ZERO(heating);
+    INIT_ZERO(demanded);
     INIT_ZERO(suspect);
     last_us = hal_micros();
     guard_ack();
@@ -53,7 +55,10 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped as sma.c */
     uint32_t most = 0;
-    uint8_t i, was = demanding ? heating : 0u, made = 0;
+    /* the interval since the last tick heated the coils `heating` says, and belonged to a
+     * demand if the last tick demanded: a STOP in this tick does not take it back */
+    uint8_t i, was = demanded ? heating : 0u, made = 0;
+    demanded = demanding;
     heating = sma_take_heated();
     progressed |= heating;
     if (reached) {

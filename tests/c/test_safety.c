@@ -245,11 +245,32 @@ static void test_a_coil_that_heated_on_the_way_to_a_target_reached_starts_afresh
     raised = 0;
     CHECK_EQ(tick(0, 1, 0), GUARD_OK);
     raised = 0x02u;
-    /* a coil's time counts from the interval after the tick that heats it: one tick less */
-    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US - 149u * CFG_TICK_US);
+    /* every interval it heated while a target was demanded counts: the 150 before the START,
+     * the last of them charged in the START's tick, which demands nothing */
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US - 150u * CFG_TICK_US);
     CHECK_EQ(guard_suspect(), 1);
     guard_ack(); /* the operator acknowledged: every coil's time starts again */
     CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US);
+}
+
+/* The interval before a STOP was heated towards the target demanded then: the STOP's tick,
+ * which demands nothing, still charges it (each restart of a gait past a dead coil lost one
+ * tick, and R1 restarted every 3 s heated its dead coil 8.003 s between latched faults). */
+static void test_the_interval_before_a_stop_counts_for_the_coil_that_heated_in_it(void)
+{
+    uint32_t k, r;
+    setup(0);
+    raised = 0x02u;
+    for (r = 0; r < 2u; r++) {
+        for (k = 0; k < 50u; k++) {
+            CHECK_EQ(tick(1, 0, 0), GUARD_OK); /* heated and demanded */
+        }
+        raised = 0;
+        CHECK_EQ(tick(0, 0, 0), GUARD_OK); /* STOP: the 50th interval is charged here */
+        guard_started();
+        raised = 0x02u;
+    }
+    CHECK_EQ(demand_until(GUARD_TIMEOUT, CFG_TICK_US), TIMEOUT_US - 100u * CFG_TICK_US);
 }
 
 /* Time not demanding (STOP, a final hold) is not time without progress. */
@@ -318,6 +339,7 @@ int main(void)
     RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
     RUN(test_a_coil_that_heats_across_restarts_and_never_progresses_times_out);
     RUN(test_a_coil_that_heated_on_the_way_to_a_target_reached_starts_afresh);
+    RUN(test_the_interval_before_a_stop_counts_for_the_coil_that_heated_in_it);
     RUN(test_a_coil_heated_while_nothing_is_demanded_does_not_time_out);
     RUN(test_the_latch_names_the_coil_that_heated_longest_without_progress);
     RUN(test_with_no_coil_heated_and_none_hit_no_coil_is_suspected);
