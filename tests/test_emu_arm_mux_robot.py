@@ -131,7 +131,9 @@ def test_at_the_fastest_tick_the_build_allows_every_tick_still_reads_both_imus(t
     i2c._begin_start, i2c._complete = begin_start, done
     writes, transfers = b.mux_writes, i2c.transfers
     b.run_ticks(300)
-    assert b.mux_writes - writes == 600 and i2c.transfers - transfers == 1200  # every tick: 2 selects, 2 reads
+    # every tick: 2 selects, 2 reads; at this tick rate the last read of a tick may complete
+    # after the next tick began, so one read may straddle either end of the 300 ticks
+    assert b.mux_writes - writes == 600 and abs(i2c.transfers - transfers - 1200) <= 1
     bus_us = sum(c for c in owned if c > 0) / 72 / 300
     assert need_us < bus_us < b.tick_us, (need_us, bus_us, b.tick_us)  # the rule's estimate is a floor; it fits
     assert _faults(b) == []

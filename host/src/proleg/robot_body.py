@@ -100,8 +100,8 @@ def unreachable_holds(path: Path, limbs: list[Any], actuators: list[str], sectio
     for lb, r, o in zip(limbs, reach, own):
         entry = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
         top = entry + hold_margin_deg + 1.0
-        if getattr(lb, "stroke_deg", None) is not None or o < entry or top + HOLD_TOP_CLEARANCE_DEG <= r:
-            continue  # a stroke, a level out of its own coil's reach (unreachable_levels), or a hold top in reach
+        if getattr(lb, "stroke_deg", None) is not None or min(o, r) < entry or top + HOLD_TOP_CLEARANCE_DEG <= r:
+            continue  # a stroke, a level out of reach (unreachable_levels' or the body's), or a hold top in reach
         fit = r - HOLD_TOP_CLEARANCE_DEG - 1.0 - entry
         advice = (f"set control.hold_margin_deg to at most {max(fit, 0.0):.1f}" if fit >= 0.0 else
                   f"its top level is entered within {r - entry:.1f}° of its reach: lower psi_star_deg")
