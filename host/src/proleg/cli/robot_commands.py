@@ -261,7 +261,7 @@ def _before_the_gait() -> Iterator[None]:
 def _run_interrupted(e: Any, args: argparse.Namespace, robot: Any, listeners: list[Any]) -> str:
     """The one line a Ctrl-C'd ``proleg run`` ends with: how far it got, what the robot was
     left doing, and what was kept."""
-    from ..record.base import Writer
+    from ..record.base import Writer, what_was_kept
     from ..report.robot_run import stop_text
 
     clock = " (simulated time)" if getattr(args, "sim", False) else ""
@@ -270,13 +270,7 @@ def _run_interrupted(e: Any, args: argparse.Namespace, robot: Any, listeners: li
                 f"cycle{'s' if e.run.cycles != 1 else ''}")
     else:
         when = "interrupted while starting the gait (START was not acknowledged yet)"
-    recorder = next((w for w in listeners if isinstance(w, Writer)), None)
-    if recorder is None:
-        kept = "nothing recorded"
-    elif recorder.error is not None:
-        kept = f"the recording stopped earlier: {recorder.error}"
-    else:
-        kept = f"recording kept in {args.record} (complete up to there)"
+    kept = what_was_kept(next((w for w in listeners if isinstance(w, Writer)), None), args.record)
     if args.format == "jsonl":
         kept += "; no RESULT line printed"
     return f"{when}; {stop_text(e.stopped, robot.safety.link_watchdog_ms)}; {kept}"

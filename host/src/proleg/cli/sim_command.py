@@ -190,13 +190,9 @@ def _interrupted(sim, start: float | None, duration_s: float, recorder) -> str:
     """The one line a Ctrl-C'd run ends with: how far it got and what was kept."""
     when = ("before the run started" if start is None else
             f"{sim.time_s - start:.1f} s into the {duration_s:g} s run (simulated time)")
-    if recorder is None:
-        kept = "nothing recorded"
-    elif recorder.error is not None:
-        kept = f"the recording stopped earlier: {recorder.error}"
-    else:
-        kept = f"recording kept in {recorder.path} (complete up to there)"
-    return f"interrupted {when}; {kept}"
+    from ..record.base import what_was_kept
+
+    return f"interrupted {when}; {what_was_kept(recorder)}"
 
 
 def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:

@@ -29,6 +29,16 @@ from .fields import RecordingMeta, event_row, injection_row, telemetry_row
 log = logging.getLogger(__name__)
 
 
+def what_was_kept(recorder: "Writer | None", path: str | Path | None = None) -> str:
+    """What an interrupted run's recording is: none, stopped earlier by an error, or kept
+    whole up to the interruption (in ``path``, default the recorder's own)."""
+    if recorder is None:
+        return "nothing recorded"
+    if recorder.error is not None:
+        return f"the recording stopped earlier: {recorder.error}"
+    return f"recording kept in {path if path is not None else recorder.path} (complete up to there)"
+
+
 class Writer(Listener, ABC):
     """One recording format's writer (subclasses: ``open``, ``write_telemetry``, ``write_event``,
     ``close``)."""
