@@ -120,7 +120,7 @@
  * more heat only heats the wire. It stops as "cannot reach" at once instead of after
  * CTL_STALL_MS without progress (which IMU noise keeps from running out) or at its on-time
  * limit: the one-actuator R1 after 30,000 cycles' stroke loss heated its coil to 169 °C within
- * the envelope, now 113 °C (docs/control.md). 0.4° in 320 ms is a rise of 1.25°/s, far below a
+ * the envelope, now 112 °C (docs/control.md). 0.4° in 320 ms is a rise of 1.25°/s, far below a
  * transforming coil's tens of degrees a second and below the creep of a coil at a weak
  * supply's equilibrium that still gets there; past Af R1's coil heats ≈ 11 K per 100 ms at 0.8
  * duty. The 4° rise from the lowest keeps IMU noise (smoothed, up to 3° RMS) while a cool coil
