@@ -110,18 +110,12 @@ def test_measure_matrix_json_has_states_matrix_in_mm_and_sample_counts(capsys):
                     assert m["matrix"][a][b] * paper[a][b] > 0, (a, b)
 
 
-def test_measure_matrix_tells_an_allowed_transition_the_body_did_not_make_from_a_forbidden_one(capsys, tmp_path):
+def test_measure_matrix_tells_an_allowed_transition_the_body_did_not_make_from_a_forbidden_one(capsys):
     """A three-level rear pad (ψ* 10°, 22°) beside a binary front one: the raised front end
     lifts the rear pad past 10°, so 01 is never reached. Its four allowed transitions were
     shown '-', like the forbidden ones ("entries without a sample"); they are '?' now, named
     in a line, and --json lists them as not_made."""
-    path = tmp_path / "l3-l2.toml"
-    path.write_text("\n".join([
-        '[robot]', 'name = "l3-l2"', '[[limb]]', 'name = "rear"', 'levels = 3', 'psi_star_deg = [10.0, 22.0]',
-        'actuator = "a"', '[[limb]]', 'name = "front"', 'psi_star_deg = [20.0]', 'actuator = "b"',
-        '[[actuator]]', 'name = "a"', '[[actuator]]', 'name = "b"', '[transitions]', 'matrix = [',
-        '  [0, -1, 1, "x", "x", "x"],', '  [1, 0, "x", 0, "x", "x"],', '  [-1, "x", 0, -1, 1, "x"],',
-        '  ["x", 0, 1, 0, "x", 0],', '  ["x", "x", -1, "x", 0, 0],', '  ["x", "x", "x", 0, 0, 0],', ']', '']))
+    path = Path(__file__).parent / "fixtures" / "l3-l2.toml"
     rc, out, _ = run(capsys, "sim", str(path), "--measure-matrix", "--json")
     m = json.loads(out)
     assert rc == 0 and m["not_made"] == ["00->01", "01->00", "01->11", "11->01"]

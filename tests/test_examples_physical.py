@@ -198,31 +198,7 @@ def test_a_two_limb_robot_is_checked_for_states_its_body_cannot_hold_too(tmp_pat
     assert not caplog.records, [r.getMessage() for r in caplog.records]
 
 
-_THREE_LEVEL_REAR = """[robot]
-name = "l3-l2"
-[[limb]]
-name = "rear"
-levels = 3
-psi_star_deg = [10.0, 22.0]
-actuator = "a"
-[[limb]]
-name = "front"
-psi_star_deg = [20.0]
-actuator = "b"
-[[actuator]]
-name = "a"
-[[actuator]]
-name = "b"
-[transitions]
-matrix = [
-  [0, -1, 1, "x", "x", "x"],  # 00
-  [1, 0, "x", 0, "x", "x"],  # 01
-  [-1, "x", 0, -1, 1, "x"],  # 10
-  ["x", 0, 1, 0, "x", 0],  # 11
-  ["x", "x", -1, "x", 0, 0],  # 20
-  ["x", "x", "x", 0, 0, 0],  # 21
-]
-"""
+_THREE_LEVEL_REAR = (Path(__file__).parent / "fixtures" / "l3-l2.toml").read_text()
 
 
 def test_a_limb_the_raised_limbs_hold_inside_its_band_cannot_come_down_and_the_transition_is_warned(tmp_path, caplog):

@@ -168,7 +168,7 @@ def test_after_a_coil_dies_on_the_inchworm_no_healthy_coil_is_driven_to_its_limi
     assert faults and all(f["detail"] == 1 for f in faults), faults
 
 
-def test_a_far_limb_remapped_onto_a_three_level_limbs_coil_rises_only_with_that_limb_at_its_top(tmp_path, capsys):
+def test_a_far_limb_remapped_onto_a_three_level_limbs_coil_rises_only_with_that_limb_at_its_top(capsys):
     """A three-level rear pad (ψ* 10°, 22°) and a binary front pad: without the front coil the
     rear coil lifts the front end, but only contracted to ≈ 52° at its own end, where the rear
     pad reads level 2. The remap let the rear pad sit at level 1 with the front end up (11),
@@ -179,13 +179,7 @@ def test_a_far_limb_remapped_onto_a_three_level_limbs_coil_rises_only_with_that_
 
     from proleg.cli import main
 
-    path = tmp_path / "l3-l2.toml"
-    path.write_text("\n".join([
-        '[robot]', 'name = "l3-l2"', '[[limb]]', 'name = "rear"', 'levels = 3', 'psi_star_deg = [10.0, 22.0]',
-        'actuator = "a"', '[[limb]]', 'name = "front"', 'psi_star_deg = [20.0]', 'actuator = "b"',
-        '[[actuator]]', 'name = "a"', '[[actuator]]', 'name = "b"', '[transitions]', 'matrix = [',
-        '  [0, -1, 1, "x", "x", "x"],', '  [1, 0, "x", 0, "x", "x"],', '  [-1, "x", 0, -1, 1, "x"],',
-        '  ["x", 0, 1, 0, "x", 0],', '  ["x", "x", -1, "x", 0, 0],', '  ["x", "x", "x", 0, 0, 0],', ']', '']))
+    path = Path(__file__).parent / "fixtures" / "l3-l2.toml"
     robot = load_robot(path)
     assert remap(robot, 1) == (0, 0)
     t = remapped_table(robot, (0, 0), 1)
