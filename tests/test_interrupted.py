@@ -93,19 +93,25 @@ def test_an_interrupted_rebuild_keeps_the_previous_build_and_says_so(capsys, mon
     assert (out_dir / MANIFEST).exists() and hits and hits[0].name.startswith(".fw.")  # the new one, refused
 
 
-def test_ctrl_c_on_a_real_sim_process_ends_with_the_line_and_a_readable_mcap(tmp_path):
-    """The signal itself, not a stand-in: SIGINT to ``proleg sim --record run.mcap``."""
-    record = tmp_path / "run.mcap"
+def _sigint_once_recording(args: list[str], record: Path) -> list[str]:
+    """``proleg ARGS`` in a process of its own, sent SIGINT once ``record`` holds 20 kB: it exits
+    130 with nothing on stdout and no traceback; its stderr lines besides warnings."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
-    proc = subprocess.Popen([sys.executable, "-m", "proleg", "sim", str(R1), "--duration", "3600", "--record",
-                             str(record)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen([sys.executable, "-m", "proleg", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
         time.sleep(0.2)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
-    lines = [x for x in err.splitlines() if "warning" not in x]
+    return [x for x in err.splitlines() if "warning" not in x]
+
+
+def test_ctrl_c_on_a_real_sim_process_ends_with_the_line_and_a_readable_mcap(tmp_path):
+    """The signal itself, not a stand-in: SIGINT to ``proleg sim --record run.mcap``."""
+    record = tmp_path / "run.mcap"
+    lines = _sigint_once_recording(["sim", str(R1), "--duration", "3600", "--record", str(record)], record)
     assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ")
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
     assert len(read_recording(record).time_s) > 0
@@ -314,17 +320,8 @@ def test_a_matrix_measurement_interrupted_at_once_measured_nothing(capsys, monke
 def test_ctrl_c_on_a_real_run_process_stops_the_robot_and_ends_with_the_line(tmp_path):
     """The signal itself: SIGINT to ``proleg run --sim --speed 1 --record run.jsonl``."""
     record = tmp_path / "run.jsonl"
-    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
-    proc = subprocess.Popen([sys.executable, "-m", "proleg", "run", str(R1), "--sim", "--speed", "1", "--duration",
-                             "600", "--record", str(record), "-q"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
-        time.sleep(0.2)
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
-    lines = [x for x in err.splitlines() if "warning" not in x]
+    lines = _sigint_once_recording(["run", str(R1), "--sim", "--speed", "1", "--duration", "600", "--record",
+                                    str(record), "-q"], record)
     assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ") and " s into the 600 s run" in lines[0]
     assert "; STOP acknowledged: the gait is stopped and the coils are off; " in lines[0]
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
