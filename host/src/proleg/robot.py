@@ -24,8 +24,7 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .names import identifier
-from .robot_body import (CoilLift, blocked_descents, coupled_states, coupling_warnings, shared_coil_lifts,
-                         unreachable_holds, unreachable_levels)
+from .robot_body import CoilLift, blocked_descents, coupled_states, coupling_warnings, reach_warnings, shared_coil_lifts
 from .robot_plant import PlantSection, default_plant_section, inference_warning, limb_friction, plant_section
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
 from .robot_fields import Fields, read_text
@@ -242,9 +241,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
-    for line in unreachable_levels(path, list(limbs), [a.name for a in actuators], plant):
-        log.warning("warning: %s", line)
-    for line in unreachable_holds(path, list(limbs), [a.name for a in actuators], plant, control.hold_margin_deg):
+    for line in reach_warnings(path, list(limbs), [a.name for a in actuators], plant, control.hold_margin_deg):
         log.warning("warning: %s", line)
     coupled = coupled_states(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
     blocked = blocked_descents(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)

@@ -1,10 +1,11 @@
 """Is a robot file plausible on the simulated body (``proleg.body``)? Checked when the file is
 loaded, as warnings about the simulator and the file, not refusals (a real body may differ):
 
-* ``unreachable_levels``: a limb whose own coil, at full stroke, cannot bend it to its top
-  level (or a body too long for the model: ``body.curl_problem``);
-* ``unreachable_holds``: a limb that reaches its top level but not the hold top the controller
-  heats it to (``control.hold_margin_deg``), even with every coil at full stroke;
+* ``reach_warnings`` (the body built and bent once for both): ``unreachable_levels``, a limb
+  whose own coil, at full stroke, cannot bend it to its top level (or a body too long for the
+  model: ``body.curl_problem``);
+  and ``unreachable_holds``, a limb that reaches its top level but not the hold top the
+  controller heats it to (``control.hold_margin_deg``), even with every coil at full stroke;
 * ``coupled_states`` / ``coupling_warnings``: states the body cannot hold, because the coils
   the raised limbs need lift a limb that should stay down (a neighbour's bend, or a coil
   shared with the raised limb); ``coupling_warnings`` gives a few lines per kind and a count
@@ -37,25 +38,35 @@ def body_of(limb_actuators: list[int], n_actuators: int, section: PlantSection) 
     return body_geometry(limb_actuators, n_actuators, section.length_mm, overlaps)
 
 
-def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection) -> list[str]:
-    """One line per limb whose top level its own coil cannot reach on the physical plant's body
-    (``proleg.body``): the top level is entered at ψ*_top + hysteresis/2, and the reach is ψ
-    with the limb's coil at full stroke and every other coil cold (a state with only this limb
-    raised must be reachable). Short of ψ*_top + hysteresis/2 + ``hold_margin_deg`` the hold
-    simply keeps heating, so the margin is not required. The body is the model's (``length_mm``, ``overlap_mm``),
-    so this is a warning about the simulator and the plausibility of the file, not a refusal:
-    a real body may bend further."""
+def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection,
+                   hold_margin_deg: float) -> list[str]:
+    """The physical plant's body (``proleg.body``) against what the controller asks of each
+    limb, computed once: ``unreachable_levels``' lines, then ``unreachable_holds``' for the
+    limbs whose top level is in reach. Warnings about the simulator and the plausibility of the
+    file, not refusals: a real body may bend further. A body too long for the model (it would
+    curl over itself, so every reach is a wrapped angle) is one line saying so instead."""
     limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
     if len(limbs) < 2:
         return []
     geo = body_of(limb_actuators, len(actuators), section)
     curl = curl_problem(geo)
-    if curl:  # the reach would be a wrapped angle: say what is wrong instead
+    if curl:
         return [f"{path}: plant.length_mm: {curl}"]
-    reach = own_reach_deg(geo, limb_actuators)
-    homes = coil_homes(limb_actuators, len(actuators))
+    own = own_reach_deg(geo, limb_actuators)
+    shape = Shape(geo, tabulate=False)
+    full = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
+    return (unreachable_levels(path, limbs, limb_actuators, len(actuators), own, section) +
+            unreachable_holds(path, limbs, own, full, section, hold_margin_deg))
+
+
+def unreachable_levels(path: Path, limbs: list[Any], limb_actuators: list[int], n_actuators: int,
+                       own: list[float], section: PlantSection) -> list[str]:
+    """One line per limb whose top level its own coil cannot reach: the top level is entered at
+    ψ*_top + hysteresis/2, and ``own`` is ψ with the limb's coil at full stroke and every other
+    coil cold (a state with only this limb raised must be reachable)."""
+    homes = coil_homes(limb_actuators, n_actuators)
     out = []
-    for i, (lb, r) in enumerate(zip(limbs, reach)):
+    for i, (lb, r) in enumerate(zip(limbs, own)):
         need = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
         if need <= r:
             continue
@@ -77,27 +88,18 @@ def unreachable_levels(path: Path, limbs: list[Any], actuators: list[str], secti
 HOLD_TOP_CLEARANCE_DEG = 0.5
 
 
-def unreachable_holds(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection,
+def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list[float], section: PlantSection,
                       hold_margin_deg: float) -> list[str]:
-    """One line per limb whose top level it can reach but whose hold top it cannot, with every
-    coil at full stroke on the physical plant's body: the controller holds a raised limb by
-    heating its coil until ψ ≥ ψ*_top + hysteresis/2 + ``hold_margin_deg`` + 1° (the hold top,
-    docs/control.md), or its ``stroke_deg``. Short of it the coil heats on at every step until
-    the step's hover clock lets the gait go on (300 ms), far past its transformation: the
-    one-actuator R1's far end bends to 23.5° with the default 4° margin's hold top at 26°, and
-    its coil reached 107 °C at every step (claim bench, nominal). A warning about the simulated
-    body, as ``unreachable_levels``; a stroke the limb cannot reach is that check's."""
-    limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
-    if len(limbs) < 2:
-        return []
-    geo = body_of(limb_actuators, len(actuators), section)
-    if curl_problem(geo):
-        return []  # unreachable_levels says what is wrong
-    shape = Shape(geo, tabulate=False)
-    reach = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
-    own = own_reach_deg(geo, limb_actuators)
+    """One line per limb whose top level it can reach but whose hold top it cannot with every
+    coil at full stroke (``full``): the controller holds a raised limb by heating its coil until
+    ψ ≥ ψ*_top + hysteresis/2 + ``hold_margin_deg`` + 1° (the hold top, docs/control.md), or its
+    ``stroke_deg``. Short of it the coil heats on at every step until the step's hover clock
+    lets the gait go on (300 ms), far past its transformation: the one-actuator R1's far end
+    bends to 23.5° with the default 4° margin's hold top at 26°, and its coil reached 107 °C at
+    every step (claim bench, nominal). A limb with a stroke is held at its stroke and not
+    checked here; a level out of its own coil's reach (``own``) is ``unreachable_levels``'."""
     out = []
-    for lb, r, o in zip(limbs, reach, own):
+    for lb, r, o in zip(limbs, full, own):
         entry = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
         top = entry + hold_margin_deg + 1.0
         if getattr(lb, "stroke_deg", None) is not None or min(o, r) < entry or top + HOLD_TOP_CLEARANCE_DEG <= r:
