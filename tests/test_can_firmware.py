@@ -138,6 +138,7 @@ def test_the_firmware_frames_every_message_exactly_as_the_python_mapping_does(ca
     ids = CanIds(node=0, base=0x100)
     can_board.reset(1)
     _command(can_board, Message.new("GET_INFO", token=9), ids)
+    can_board.run_ticks(150)  # the IMUs read: the board takes a START
     _command(can_board, Message.new("START", token=10, gait=0, direction=0), ids)
     _command(can_board, Message.new("GET_STATS", token=11), ids)
     can_board.run_ticks(300)
@@ -300,6 +301,7 @@ def test_the_bluepill_can_image_frames_every_message_as_the_python_mapping_does_
     assert board.can.on_bus and board.can.bitrate == pytest.approx(500_000)
     _command(board, Message.new("GET_INFO", token=21), ids)
     _command(board, Message.new("PING", token=22), CanIds(node=3))  # not this node: filtered
+    board.run_us(150_000)  # the IMUs read: the board takes a START
     _command(board, Message.new("START", token=23, gait=0, direction=1), ids)
     board.run_us(150_000)
     frames = board.can_read()

@@ -100,7 +100,8 @@ def board(sim_so):
     b.set_psi(0, 0.0)
     b.set_psi(1, 0.0)
     b.reset()
-    b.run(5)
+    assert b.client.wait_known_state()  # every IMU read: the board takes a START
+    b.run(0)
     return b
 
 
@@ -123,6 +124,38 @@ def test_boot_sends_info_and_boot_event(sim_so):
     msgs = b.reset()
     assert msgs[0].spec.name == "INFO" and msgs[0].token == 0 and msgs[0].robot_name == "test-r1"
     assert _events(msgs, d.EventKind.BOOT)
+
+
+def test_start_is_refused_until_every_imu_has_been_read(sim_so):
+    """Just after a reset no limb's angle is known: a gait started then would begin at its first
+    step whatever the robot's state, and level on a ground it has not measured. The board says so."""
+    b = Rig(sim_so("r1-fast"), 2, 2)
+    b.set_psi(0, 0.0)
+    b.set_psi(1, 0.0)
+    b.reset()
+    nack = b.refused("START", gait=0, direction=0)
+    assert nack.error == d.ErrorCode.NOT_ALLOWED and nack.detail == 2
+    assert "not known" in str(nack)
+    b.run(5)
+    assert not _events(b.log, d.EventKind.GAIT_STARTED) and b.duty(0) == 0 and b.duty(1) == 0
+    tel = b.client.wait_known_state()
+    assert tel is not None and tel.measured == 0
+    b.client.start(0, "+x")
+    b.run(5)
+    assert _events(b.log, d.EventKind.GAIT_STARTED)
+
+
+def test_start_is_refused_while_an_imu_is_bad_even_with_its_fault_cleared(board):
+    board.board.imu_fault(0x69, "no-ack")
+    board.run(5)
+    assert _events(board.log, d.EventKind.FAULT)[-1].code == d.FaultCode.IMU_NO_ACK
+    board.client.clear(d.ClearWhat.FAULTS)
+    board.run(5)
+    nack = board.refused("START", gait=0, direction=0)
+    assert nack.error == d.ErrorCode.NOT_ALLOWED and nack.detail == 2, nack
+    board.run(20)
+    assert board.duty(0) == 0 and board.duty(1) == 0
+    assert not _events(board.log, d.EventKind.GAIT_STARTED)
 
 
 def test_estop_turns_every_mosfet_off_within_one_tick(board):
@@ -309,8 +342,7 @@ def test_start_takes_plus_x_minus_x_or_for_the_loaded_gait_unstated(board, gait,
 
 
 def test_telemetry_comes_at_the_configured_rate(board):
-    board.run(1000)
-    tel = [m for m in board.log if m.spec.name == "TELEMETRY"]
+    tel = [m for m in board.run(1000) if m.spec.name == "TELEMETRY"]
     assert 49 <= len(tel) <= 51
     assert len(tel[-1].psi) == 2 and len(tel[-1].duty) == 2
     board.client.set_telemetry_rate(150)

@@ -209,7 +209,7 @@ def test_the_actuator_map_is_a_run_time_setting_checked_by_the_firmware(r1_sim):
     with pytest.raises(CommandRefused) as e:
         client.request("SET_ACTUATOR_MAP", actuators=(0,))
     assert e.value.error == ErrorCode.OUT_OF_RANGE and e.value.detail == 0xFFFF
-    client.request("START", gait=0, direction=0)
+    client.start(0, "+x")
     with pytest.raises(CommandRefused) as e:
         client.request("SET_ACTUATOR_MAP", actuators=())
     assert e.value.error == ErrorCode.NOT_ALLOWED
@@ -225,7 +225,7 @@ def test_with_the_map_swapped_the_right_coil_raises_the_left_limb(r1_sim):
     client.connect()
     client.request("SET_ACTUATOR_MAP", actuators=(1, 0))
     client.load_gait([0, 2])  # 00 → 10: raise the left limb
-    client.request("START", gait=0xFF, direction=0)
+    client.start("user", "+x")
     duties = []
     t_end = client.link.clock() + 0.5
     while client.link.clock() < t_end:
@@ -450,33 +450,49 @@ def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
 
 
 def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fall_back(tmp_path):
-    """IMU noise (5°) wider than inchworm-3's 2° bands, and no debounce (one sample is a level
-    change, and an excursion that unsettles a limb): the middle limb reaches its level but never
-    settles, and the step times out with every limb at its level. That used to name limb 0
-    (whose coil was off), suspect its healthy coil and fall back without it."""
+    """IMU noise (5°) wider than inchworm-3's 2° bands, no debounce (one sample is a level change,
+    and an excursion that unsettles a limb) and a hold_ms of 1 s: limbs reach their levels but
+    rarely stay settled for the hold, and the step times out (3 s away from its target, not the
+    file's 8 s: time at the target does not count). Whether a limb is off its level at the tick
+    of the timeout is up to the noise, so the run is repeated with fresh noise until a timeout
+    comes with every limb at its level. That used to name limb 0 (whose coil was off), suspect
+    its healthy coil and fall back without it."""
     from proleg.console.names import RobotNames, describe_event, event_text
     from proleg.protocol.definition import FaultCode
     from proleg.sim.closed_loop import SimulatedRobot
 
     text = (ROOT / "robots" / "inchworm-3.toml").read_text()
-    assert "debounce_ticks = 5" in text
+    edits = {"debounce_ticks = 5": "debounce_ticks = 1", "hold_ms = 100": "hold_ms = 1000",
+             "state_timeout_ms = 8000": "state_timeout_ms = 3000"}
+    for old, new in edits.items():
+        assert old in text
+        text = text.replace(old, new)
     path = tmp_path / "inchworm-3.toml"
-    path.write_text(text.replace("debounce_ticks = 5", "debounce_ticks = 1"))
+    path.write_text(text)
     robot = load_robot(path)
-    sim = SimulatedRobot(robot, conditions=["imu_noise_deg=5"])
-    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
-    client.connect()
-    client.start(0, "+x")
-    events = []
-    end = client.link.clock() + 40.0
-    while client.link.clock() < end and not any(m.kind == EventKind.SUSPECT for m in events):
-        m = client.recv(0.5)
-        if m is not None and m.name == "EVENT":
-            events.append(m)
-    client.close()
-    timeout = [m for m in events if m.kind == EventKind.FAULT and m.code == FaultCode.STATE_TIMEOUT]
-    assert timeout, [(EventKind(m.kind).name, m.code, m.detail) for m in events]
-    assert timeout[0].detail == 0xFF
+
+    def run(seed: int) -> list:
+        sim = SimulatedRobot(robot, conditions=["imu_noise_deg=5"], seed=seed)
+        client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+        client.connect()
+        client.start(0, "+x")
+        events = []
+        end = client.link.clock() + 40.0
+        while client.link.clock() < end and not any(m.kind == EventKind.SUSPECT for m in events):
+            m = client.recv(0.5)
+            if m is not None and m.name == "EVENT":
+                events.append(m)
+        client.close()
+        timeout = [m for m in events if m.kind == EventKind.FAULT and m.code == FaultCode.STATE_TIMEOUT]
+        assert timeout, [(EventKind(m.kind).name, m.code, m.detail) for m in events]
+        return events
+
+    for seed in range(1, 13):
+        events = run(seed)
+        if next(m for m in events if m.kind == EventKind.FAULT).detail == 0xFF:
+            break
+    else:
+        pytest.fail("no timeout with every limb at its level in 12 noisy runs")
     suspect = next(m for m in events if m.kind == EventKind.SUSPECT)
     assert suspect.code == 0xFF
     assert not [m for m in events if m.kind == EventKind.FALLBACK]

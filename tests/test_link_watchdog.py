@@ -25,6 +25,9 @@ def _running_robot(heartbeat_s: float | None):
     sim = SimulatedRobot(robot, seed=3)
     client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), heartbeat_s=heartbeat_s)
     client.connect()
+    assert client.wait_known_state()  # the board refuses START before it has read its IMUs
+    while client.recv(0.0) is not None:  # what came before the gait: not the running robot's
+        pass
     client.start(0, "+x")
     return robot, sim, client
 

@@ -100,8 +100,10 @@ static void cmd_start(void)
         nack(PROTO_ERR_ESTOP_LATCHED, 0);
         return;
     }
-    if (fault_latched()) {
-        nack(PROTO_ERR_NOT_ALLOWED, 0);
+    if (fault_latched() || imucheck_measured() == IMUCHECK_UNKNOWN) {
+        /* safety: no gait from an unknown state (before the first reading, or an IMU bad):
+         * its step, the ground it levels on and the climb guard all need the limbs' angles */
+        nack(PROTO_ERR_NOT_ALLOWED, fault_latched() ? 0 : 2);
         return;
     }
     if (seq_running()) { /* safety: a restart would restart the step; STOP first */

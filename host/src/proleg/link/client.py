@@ -49,6 +49,7 @@ from ..protocol.definition import (
     PROTOCOL_VERSION,
     ClearWhat,
     Direction,
+    Flag,
     MessageSpec,
     ParamId,
     reply_answers,
@@ -83,6 +84,9 @@ QUEUE_LIMIT = 65536
 #: how much faster than the link's clock the board's runs (``RobotClient.board_rate``)
 HEARTBEAT_S = 0.5
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
+#: How long ``start`` waits for the board to know its state after a reset: an MPU-6050 starts
+#: in 100 ms at most (datasheet), then the state needs its debounce and a telemetry frame.
+KNOWN_STATE_WAIT_S = 1.0
 #: messages that can answer a command (the declared replies plus NACK)
 _REPLY_NAMES = frozenset({m.reply for m in MESSAGES if m.reply} | {"NACK"})
 _PING = BY_NAME["PING"]
@@ -115,6 +119,7 @@ class RobotClient:
         self._waiting: dict[int, MessageSpec] = {}  # token -> the command waiting for its reply
         self._token = 0
         self._last_seq: int | None = None
+        self._state_known = False  # the last TELEMETRY frame since the last INFO had a known state
         self._reconnect_lock = threading.Lock()
         self._closed = False
         self.heartbeat_s = heartbeat_s
@@ -186,6 +191,8 @@ class RobotClient:
         (``Direction``, 0/1, ``"+x"``/``"-x"``; for the loaded one, the way it walks, which the
         climb guard checks, or ``UNSTATED``)."""
         g = GAIT_USER if gait == "user" else int(gait)
+        if not self._state_known:  # just reset, or last seen without a state: the board would refuse
+            self.wait_known_state()  # (it answers for itself if the wait runs out)
         self.request("START", gait=g, direction=direction_code(direction, g))
 
     def stop(self) -> None:
@@ -345,6 +352,30 @@ class RobotClient:
             n += 1
             yield msg
 
+    @property
+    def state_known(self) -> bool:
+        """The newest TELEMETRY frame since the board last (re)started gave a known state."""
+        return self._state_known
+
+    def wait_known_state(self, timeout: float = KNOWN_STATE_WAIT_S) -> Message | None:
+        """The first TELEMETRY frame whose state is known (no ``STATE_UNKNOWN`` flag), or None
+        when none arrives within ``timeout`` seconds: the board refuses START until it has read
+        every IMU (NOT_ALLOWED, detail 2), e.g. just after it reset. Every message received
+        meanwhile stays queued for ``recv``, in order."""
+        seen: list[Received] = []
+        deadline = self.link.clock() + timeout
+        try:
+            while True:
+                rx = self.recv_received(max(0.0, deadline - self.link.clock()))
+                if rx is None:
+                    return None
+                seen.append(rx)
+                msg = rx.message
+                if msg.name == "TELEMETRY" and not int(msg.flags) & Flag.STATE_UNKNOWN:
+                    return msg
+        finally:
+            self._queue.extendleft(reversed(seen))
+
     def _pump(self, timeout: float) -> int:
         """Read the link once (caller holds ``_rx_lock``); decode; queue. Returns messages read."""
         self._heartbeat()
@@ -375,6 +406,7 @@ class RobotClient:
             name = m.name
             if name == "TELEMETRY":
                 st.telemetry += 1
+                self._state_known = not m.fields["flags"] & Flag.STATE_UNKNOWN
                 seq = m.fields["seq"]
                 last = self._last_seq
                 if last is not None and seq != (last + 1) & 0xFFFF:
@@ -391,6 +423,7 @@ class RobotClient:
                 answers = waiting is not None and reply_answers(name, m.fields, waiting)
                 if name == "INFO":
                     self._last_seq = None  # a reset or a new session restarts the sequence
+                    self._state_known = False
                     if not answers:
                         self.info = RobotInfo.from_message(m)
                 if answers:

@@ -33,7 +33,9 @@ class CommandRefused(LinkError):
 _NOT_ALLOWED = {
     "START": {0: "a fault is latched: the FAULT event or `proleg console` names it; clear it (CLEAR_FAULTS, "
                  "console key c) once its cause is fixed",
-              1: "a gait is running: STOP it first"},
+              1: "a gait is running: STOP it first",
+              2: "the limbs' state is not known yet: the board has no reading from every IMU (it has just "
+                 "started, or an IMU is bad); wait for telemetry with a known state"},
     "LOAD_GAIT": {0: "a gait is running: STOP it first"},
     "SET_ACTUATOR_MAP": {0: "a gait is running: STOP it first"},
     "CALIBRATE_LEVEL": {1: "a gait is running", 2: "an IMU is faulty", 3: "a fault is latched",

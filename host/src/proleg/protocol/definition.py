@@ -97,7 +97,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
             _u8("direction", "Direction; with GAIT_USER the way the loaded sequence walks, or DIR_UNSTATED "
                 "(0xFF): not stated, not climb-guarded", Direction),
         ),
-        "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED / TOO_STEEP (the ground rises more than "
+        "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED (detail 0: a fault is latched, 1: a gait "
+        "runs, 2: the state is not known: no reading from every IMU yet) / TOO_STEEP (the ground rises more than "
         "the build's max_climb_deg in the gait's direction: detail = that climb in 0.01°).",
         reply="ACK",
     ),

@@ -190,6 +190,8 @@ class SimSession:
         start_unexpected = plant.unexpected_transitions
         counters = self.client.decoder.counters()
         run = GaitRun(self.sim.robot.name, direction, gait, duration_s)
+        if not self.client.state_known:  # just booted: the board refuses START before it knows its state
+            self.client.wait_known_state()
         self._dispatch_queued()
         listener = GaitRunListener(run, self.keep_telemetry)
         self.listeners.append(listener)
