@@ -102,16 +102,22 @@ uint8_t ctl_stall(uint8_t limb)
 /* Limb i falls from its stroke: it has one and is still on its top level. */
 #define FROM_STROKE(i, level) (STROKE(i) && TOP(i, level))
 
-/* A limb climbing to its stroke: ψ rose CTL_CLIMB_CDEG since the last time this said so, within
- * CTL_CLIMB_MAX_MS of the step's start. Its hover clock restarts, so it settles at the stroke
- * or where it stops climbing. */
+/* A limb climbing to its stroke: its smoothed ψ rose CTL_CLIMB_CDEG since the last time this
+ * said so, within CTL_CLIMB_MAX_MS of the step's start. Its hover clock restarts, so it settles
+ * at the stroke or where it stops climbing. Smoothed, because under IMU noise single samples
+ * keep making new highs: a limb at the end of its reach counted as climbing, its coil at the
+ * drive duty (R1 at full strokes, 1.5° of noise: 116 °C). Looked at with the reach watch's
+ * pace (an atan2 each CTL_REACH_EVERY ticks, not each tick). */
 static uint8_t climbing(uint8_t i, ctl_limb_t *c)
 {
     int16_t p;
     if (!CLIMBS_TO_STROKE(i, psi_level(i)) || c->clock >= TICKS(CTL_CLIMB_MAX_MS)) {
         return 0;
     }
-    p = psi_last_centideg(i);
+    if (c->ticks != 0u && look != 0u) {
+        return 0;
+    }
+    p = psi_smooth_cdeg(i);
     if (c->ticks == 0u || p >= c->peak + CTL_CLIMB_CDEG) {
         c->peak = p; /* a new level, a settled limb or a new high: measure from here */
         return c->ticks != 0u;
@@ -201,6 +207,21 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         c->level = level;
     }
     if (c->stall != CTL_STALL_NONE) {
+#ifdef CFG_LIMB_STROKE_CDEG
+        /* Relaxed short of its stroke in the step that raises it (the crossings may have done
+         * it mid-climb): heated on while its smoothed ψ still gains CTL_CLIMB_CDEG a hover
+         * time, then held where it stopped (above_hold). Heated on regardless, a worn coil at
+         * the end of its stroke reached 134 °C, and with a dead neighbour 166 °C. */
+        if (c->shortfall && c->climb && look == 0u) {
+            int16_t p = psi_smooth_cdeg(i);
+            if (p >= c->peak + CTL_CLIMB_CDEG) {
+                c->peak = p;
+                c->ticks = 0;
+            } else if ((c->ticks = (uint16_t)(c->ticks + CTL_REACH_EVERY)) > TICKS(CTL_HOVER_MS)) {
+                c->climb = 0; /* stopped: held where it stopped from now on */
+            }
+        }
+#endif
         return; /* decided for this step */
     }
     if (level == target) {
@@ -213,7 +234,12 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
             psi_relax(i, 1);
 #ifdef CFG_LIMB_STROKE_CDEG
             c->shortfall = (uint8_t)(c->climb && STROKE(i) && TOP(i, level));
-            c->peak = psi_last_centideg(i); /* where it stopped (climbing() may not have run) */
+            c->peak = psi_smooth_cdeg(i); /* where it stopped (climbing() may not have run); smoothed:
+                                            * one noisy sample would set a hold it cannot reach */
+            if (c->ticks > TICKS(CTL_HOVER_MS)) {
+                c->climb = 0; /* stopped climbing a hover time ago: held where it stopped */
+            }
+            c->ticks = 0; /* else the crossings relaxed it: the clock of its climb from here (above) */
 #endif
         }
     } else if (heating) {

@@ -72,11 +72,12 @@
  *   or the limb sat at its target level without settling for CTL_HOVER_MS. Recovery: the
  *   limb settles on the band edges alone (psi_relax), so the sequencer can go on, and
  *   the bang-bang hold keeps it above ψ*. A limb climbing to its stroke (below) is not
- *   hovering while it still climbs: its clock restarts whenever ψ gained CTL_CLIMB_CDEG, so
- *   it is relaxed (and the step goes on) once it stops climbing short of the stroke, or
- *   CTL_CLIMB_MAX_MS after the step began. In that step it is heated on, as far as it goes
- *   (the step ends once every limb settled; sma.c's on-time limit bounds it); in the robot's
- *   later steps that leave it raised it is held where it stopped (1° band, its edge 1° below
+ *   hovering while it still climbs: its clock restarts whenever its smoothed ψ gained
+ *   CTL_CLIMB_CDEG, so it is relaxed (and the step goes on) once it stops climbing short of
+ *   the stroke, or CTL_CLIMB_MAX_MS after the step began. Relaxed by the crossings instead
+ *   (IMU noise at its band) it is heated on while it still gains CTL_CLIMB_CDEG a hover time;
+ *   once it has stopped, in that step and the robot's later steps that leave it raised, it
+ *   is held where it stopped (1° band, its edge 1° below
  *   where it stopped but not below the hold edge it has without a stroke) - a weak supply or
  *   a worn coil still walks, with less stroke;
  * - cannot reach the state: rising and heating at the drive duty without getting one

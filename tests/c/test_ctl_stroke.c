@@ -9,9 +9,13 @@
 
 #define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
 #define CLIMB_TICKS ((uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u)
+/* Samples the smoothed ψ (1/16 of each new sample, psi.h) takes to come within 1° of a jump of
+ * up to 60°: 16 ln 60 ≈ 66. A climb is judged on it (ctl.c, climbing). */
+#define SMOOTH_TICKS 100u
 
 /* Step 10 from 00 after `wait` ticks below the band: limb 0 goes up to `deg` (± `noise`, never
- * a climbing degree) and stays there until the controller relaxes it: stopped short. */
+ * a climbing degree) and stays there until the controller relaxes it: stopped short, a hover
+ * time after its smoothed ψ stopped gaining. */
 static void stop_short_at(double deg, double noise, uint32_t wait)
 {
     uint16_t duty[CFG_N_ACTUATORS];
@@ -20,13 +24,14 @@ static void stop_short_at(double deg, double noise, uint32_t wait)
     put(1, 0.0);
     put(0, 5.0);
     for (k = 0; k < wait; k++) {
+        put(0, 5.0);
         demand(1, 0, duty);
     }
-    put(0, deg);
-    for (k = 0; k <= HOVER_TICKS + 1u; k++) {
+    for (k = 0; k <= HOVER_TICKS + SMOOTH_TICKS && ctl_stall(0) == CTL_STALL_NONE; k++) {
         put(0, deg + noise * (double)(k % 2u));
         demand(1, 0, duty);
     }
+    CHECK(k > HOVER_TICKS); /* not before a hover time */
     CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
 }
 
@@ -231,19 +236,23 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     put(0, 35.0);
     put(0, 35.0);
     CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
+    put(0, 35.6);
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], DRIVE); /* this step ends soon: heated on, as far as it goes */
+    CHECK_EQ(duty[0], 0); /* a hover time without a 1° gain: held where it stopped from now on */
+    put(0, 33.5);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], DRIVE);
     put(1, 30.0);             /* the next step raises limb 1; limb 0 stays up */
-    put(0, 35.2);
+    put(0, 35.6);
     demand(1, 1, duty);
-    CHECK_EQ(duty[0], 0); /* held where it stopped (34..35°), not heated on towards 60° */
+    CHECK_EQ(duty[0], 0); /* held where it stopped (about 34.25..35.25°), not heated on towards 60° */
     put(0, 33.5);
     demand(1, 1, duty);
     CHECK_EQ(duty[0], DRIVE);
     put(0, 34.5); /* going up again inside the band: keeps heating */
     demand(1, 1, duty);
     CHECK_EQ(duty[0], DRIVE);
-    put(0, 35.1);
+    put(0, 35.6);
     demand(1, 1, duty);
     CHECK_EQ(duty[0], 0);
     put(0, 15.0); /* down: the next time it is raised it climbs to its stroke again */
@@ -251,6 +260,42 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     demand(0, 1, duty);
     put(0, 40.0);
     demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+}
+
+static void test_a_limb_relaxed_mid_climb_is_heated_on_while_it_still_climbs(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    uint8_t j;
+    double psi = 23.0;
+    setup();
+    put(1, 0.0);
+    put(0, 5.0);
+    demand(1, 0, duty); /* the step that raises it, from below */
+    for (j = 0; j < 6u && ctl_stall(0) == CTL_STALL_NONE; j++) { /* in and out of its band (noise) */
+        for (k = 0; k < 8u; k++) {
+            put(0, j % 2u ? 18.0 : 23.0);
+            demand(1, 0, duty);
+        }
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING); /* the crossings relaxed it, mid-climb */
+    CHECK_EQ(psi_level(0), 1);
+    for (k = 0; k < 3u * HOVER_TICKS; k++) { /* then climbs on at 2° a hover time */
+        psi += 2.0 / (double)HOVER_TICKS;
+        put(0, psi);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    for (k = 0; k < HOVER_TICKS + 2u * CTL_REACH_EVERY + SMOOTH_TICKS; k++) { /* and stops */
+        put(0, psi);
+        demand(1, 0, duty);
+    }
+    put(0, psi + 0.6);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0); /* held where it stopped (within the last 1° it gained), 6° above where it was relaxed */
+    put(0, psi - 3.0);
+    demand(1, 0, duty);
     CHECK_EQ(duty[0], DRIVE);
 }
 
@@ -334,9 +379,8 @@ static void test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit
     demand(1, 1, duty);
     put(0, 50.0); /* share 74 %: far ahead of limb 1 */
     for (k = 1; k < limit + 10u; k++) {
-        if (k % (HOVER_TICKS / 2u) == 0u) {
-            put(1, 22.0 + (double)k / 250.0); /* limb 1 climbs 1.2° in 0.3 s, and stays far behind */
-        }
+        put(0, 50.0);
+        put(1, 22.0 + (double)(k - k % (HOVER_TICKS / 2u)) / 200.0); /* 1.5° in 0.3 s, far behind */
         demand(1, 1, duty);
         if (k + 1u < limit) {
             CHECK_EQ(duty[0], HOLD);
@@ -396,6 +440,7 @@ int main(void)
     RUN(test_limbs_climb_to_their_strokes_in_step);
     RUN(test_a_limb_still_climbing_to_its_stroke_is_not_hovering);
     RUN(test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there);
+    RUN(test_a_limb_relaxed_mid_climb_is_heated_on_while_it_still_climbs);
     RUN(test_a_climb_is_not_waited_for_longer_than_the_climb_limit);
     RUN(test_a_limb_waiting_for_another_in_step_is_not_hovering);
     RUN(test_a_limb_that_stops_just_past_its_band_is_held_at_the_hold_it_has_without_a_stroke);
