@@ -174,7 +174,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         if choice is not None and choice.index is not None:
             check_library_hash(info, robot, fw, client.link.description, simulated=bool(getattr(args, "sim", False)))
         if choice is not None and choice.index is None:
-            client.load_gait(choice.states)
+            from ..gait.feasibility import loaded_start
+
+            known = client.wait_known_state()  # a loaded gait starts where the robot stands (no entry path)
+            client.load_gait(choice.states if known is None else loaded_start(robot, choice.states, known.measured))
         meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
         listeners: list[Any] = []
         try:
@@ -307,6 +310,10 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
         if table.lookup(a, b) is None:
             raise GaitError(f"STATES: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
                             "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
+    from ..gait.feasibility import rest_start_warning
+
+    if (line := rest_start_warning(robot, states)) is not None:
+        log.warning("warning: %s", line)
     with open_client(args, args.robot) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(table.label(x) for x in [*states, states[0]])} as the user gait on {client.link.description} "

@@ -252,3 +252,50 @@ def entry_path(robot: "Robot", states: Sequence[int], rest: int = REST) -> Entry
         f"gait {_name(robot, cycle + cycle[:1])}: no allowed path from the rest state "
         f"{table.label(rest)} into the gait (every limb at level 0 first)"
     )
+
+
+def _can_step(robot: "Robot", a: int, b: int) -> bool:
+    """a -> b is allowed in the robot file and the hardware can make it (step_problems)."""
+    return robot.transitions.lookup(a, b) is not None and not any(
+        sev == "error" for _, sev, _ in step_problems(robot, a, b))
+
+
+def loaded_start(robot: "Robot", states: Sequence[int], standing: int) -> list[int]:
+    """``states`` (a gait to LOAD_GAIT) in the order that starts it well from ``standing``.
+
+    The firmware starts a loaded gait at the step whose state the robot stands in, else at
+    its first step, straight from where the robot stands: a loaded gait has no entry path.
+    So the gait is unchanged when it visits ``standing``; else it is rotated to begin at its
+    first state the robot can step into (allowed in the robot file, and a step the hardware
+    can make) - the same cycle, from another phase. GaitError when it can step into none."""
+    cycle = _open(states)
+    if standing in cycle:
+        return cycle
+    for k, s in enumerate(cycle):
+        if _can_step(robot, standing, s):
+            return cycle[k:] + cycle[:k]
+    table = robot.transitions
+    raise GaitError(
+        f"gait {_name(robot, cycle + cycle[:1])}: the robot stands in {table.label(standing)}, which the gait does "
+        f"not visit, and no step from there into one of its states is allowed (the firmware would step straight "
+        f"into {table.label(cycle[0])}); move the robot into one of its states first (proleg console)"
+    )
+
+
+def rest_start_warning(robot: "Robot", states: Sequence[int]) -> str | None:
+    """A line for a gait loaded as ``states`` whose first step, started from rest, is one the
+    robot cannot make (``loaded_start``): None when it visits the rest state or can step into
+    its first state from there."""
+    cycle = _open(states)
+    if REST in cycle or _can_step(robot, REST, cycle[0]):
+        return None
+    table = robot.transitions
+    try:
+        better = loaded_start(robot, cycle, REST)
+        fix = f"start it from one of its states, or load it from {table.label(better[0])}: " + " ".join(
+            table.label(x) for x in better + better[:1])
+    except GaitError:
+        fix = "start it from one of its states"
+    return (f"started from rest ({table.label(REST)}) this gait steps straight into {table.label(cycle[0])}, "
+            f"{'forbidden in the robot file' if table.lookup(REST, cycle[0]) is None else 'a step the hardware cannot make'} "
+            f"(a loaded gait has no entry path); {fix}")
