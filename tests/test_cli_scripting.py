@@ -125,6 +125,10 @@ def test_a_full_disk_is_one_line_and_exit_1(tmp_path):
 def test_an_os_error_no_command_caught_names_the_file_and_claims_no_write_it_cannot_know(
         capsys, monkeypatch, error, line):
     import proleg.firmware.boards
+    # imported before the patch: a module imported first under it (build pulls in the
+    # simulator's closed_loop, which binds load_board at import) would keep `fail` for good
+    import proleg.firmware.build  # noqa: F401
+    import proleg.sim.closed_loop  # noqa: F401
 
     def fail(*_):
         raise error
