@@ -152,6 +152,7 @@ def tick_cost(lib: Path) -> dict:
         fw["ticks"] += n
 
     board.run_ticks = timed_run_ticks  # type: ignore[method-assign]
+    sim.advance(0.2)  # the IMUs read: the firmware refuses START before it knows the robot's state
     sim.write(encode(Message.new("START", token=1, gait=0, direction=int(Direction.PLUS_X))))
     sim.advance(1.0)
     sim.read()
@@ -162,6 +163,8 @@ def tick_cost(lib: Path) -> dict:
         sim.advance(0.1)
         sim.read()
     wall = time.perf_counter() - t0
+    if sim.plant.displacement_mm - x0 <= 0.0:
+        raise SystemExit(f"bench_firmware: R1 did not walk +x in {LOOP_S:.0f} s: the tick timed is not a walking one")
     ticks = round(LOOP_S * 1e6 / board.tick_us)
     assert fw["ticks"] == ticks, (fw, ticks)
     return {

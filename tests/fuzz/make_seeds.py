@@ -64,26 +64,31 @@ def cmd(name: str, **fields) -> bytes:
 START = dict(gait=0, direction=0)
 USER = dict(gait=0xFF, direction=0)
 
+#: The board up and its IMUs read (an MPU-6050 starts in 20 ms, then the debounce): the
+#: firmware refuses START before (NACK NOT_ALLOWED, detail 2), as "start_before_readings" shows.
+BOOT = ticks(40)
+
 APP = {
-    "start_and_wait": cmd("START", **START) + ticks(600),
-    "walk_r1": cmd("START", **START) + ticks(30) + psi(0, 25) + ticks(30) + psi(1, 25) + ticks(30)
+    "start_before_readings": cmd("START", **START) + ticks(600),
+    "start_and_wait": BOOT + cmd("START", **START) + ticks(600),
+    "walk_r1": BOOT + cmd("START", **START) + ticks(30) + psi(0, 25) + ticks(30) + psi(1, 25) + ticks(30)
     + psi(0, 0) + ticks(30) + psi(1, 0) + ticks(60),
-    "bypass1_stop_start_one_tick": cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER) + ticks(5)
+    "bypass1_stop_start_one_tick": BOOT + cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER) + ticks(5)
     + (ticks(45) + cmd("STOP") + cmd("START", **USER) + ticks(1)) * 8,
-    "bypass2_one_tick_gap": cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER)
+    "bypass2_one_tick_gap": BOOT + cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER)
     + (ticks(48) + cmd("STOP") + ticks(1) + cmd("START", **USER)) * 8,
-    "bypass3_start_resent": cmd("START", **START) + (ticks(40) + cmd("START", **START)) * 10,
-    "estop_clear_start": cmd("START", **START) + ticks(20) + cmd("ESTOP") + cmd("CLEAR", what=7)
+    "bypass3_start_resent": BOOT + cmd("START", **START) + (ticks(40) + cmd("START", **START)) * 10,
+    "estop_clear_start": BOOT + cmd("START", **START) + ticks(20) + cmd("ESTOP") + cmd("CLEAR", what=7)
     + cmd("START", **START) + ticks(100),
-    "set_params": cmd("SET_PARAM", param=1, index=0, value=8000) + cmd("SET_PARAM", param=10, index=0, value=3000)
+    "set_params": BOOT + cmd("SET_PARAM", param=1, index=0, value=8000) + cmd("SET_PARAM", param=10, index=0, value=3000)
     + cmd("SET_PARAM", param=7, index=0, value=10) + cmd("SET_PARAM", param=8, index=0, value=40)
     + cmd("SET_PARAM", param=4, index=0, value=100)
     + cmd("START", **START) + ticks(300),
-    "imu_faults": cmd("START", **START) + ticks(10) + imu(0, 2) + ticks(300) + imu(0, 0)
+    "imu_faults": BOOT + cmd("START", **START) + ticks(10) + imu(0, 2) + ticks(300) + imu(0, 0)
     + cmd("CLEAR", what=7) + cmd("START", **START) + ticks(50) + imu(1, 1) + ticks(10),
     "noise_and_partial_frames": raw(b"\x00\x01\x02\x03garbage\x00") + raw(frame("STOP")[:-3]) + ticks(3)
     + cmd("PING") + ticks(3),
-    "hold_forever": cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER) + ticks(20) + psi(0, 25)
+    "hold_forever": BOOT + cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER) + ticks(20) + psi(0, 25)
     + ticks(4000),
 }
 
