@@ -16,14 +16,14 @@ from collections.abc import Callable, Iterable
 from ..errors import GaitError, Interrupted, LinkError
 from ..link.client import UNSTATED, RobotClient, RobotInfo, direction_code
 from ..link.listeners import Listener
-from ..protocol.definition import GAIT_USER, Flag
+from ..protocol.definition import GAIT_USER
 from .gait_run import GaitRun, GaitRunListener
 
 COMMAND_RETRIES = 2
 STOP_TAIL_S = 0.1
 #: how long ``run_gait_on`` waits, before START, for a telemetry frame whose measured state is
-#: known (a board just reset has read no IMU yet): START then picks the gait's step, or its
-#: entry path from rest, from that state
+#: known: a board just reset (opening a Nano's port resets it) refuses START until it has read
+#: every IMU, then picks the gait's step, or its entry path from rest, from that state
 KNOWN_STATE_WAIT_S = 2.0
 _EPS = 1e-9
 
@@ -115,22 +115,7 @@ def run_gait_on(
             run.errors.append(f"{name} failed: {e}")
             return False
 
-    def await_known_state() -> None:
-        """Hand messages on until a TELEMETRY frame says where the robot is: START on a board
-        that has read no IMU yet (just reset: opening a Nano's port resets it) matched no step
-        and took none of the entry path, so a gait that does not start at rest drove every
-        limb of its first state at once."""
-        deadline = clock() + KNOWN_STATE_WAIT_S
-        while (remaining := deadline - clock()) > _EPS:
-            rx = client.recv_received(remaining)
-            if rx is None:
-                continue
-            for listener in targets:
-                listener.on_message(rx)
-            if rx.message.name == "TELEMETRY" and not rx.message.flags & Flag.STATE_UNKNOWN:
-                return
-
-    await_known_state()
+    client.wait_known_state(KNOWN_STATE_WAIT_S)  # queued for pump: the listeners get them in order
     t0 = clock()
     started = False
     try:
