@@ -89,6 +89,16 @@ def r1_one_actuator():
     return robot, {"+x": [gait(0, 2, 3, 2, 0)], "-x": []}, SIM_BOARD
 
 
+def r1_worn():
+    """R1 with ψ* = 50°, within a worn coil's stroke loss of its own coil's reach (58° on the 80 mm body): the
+    renderer builds the hold watch in (robot_body.worn_holds; test_ctl_hold.c)."""
+    doc = robot_doc()
+    for limb in doc["limb"]:
+        limb["psi_star_deg"] = [50.0]
+    robot = robot_from_dict(doc, Path("tests/r1-worn.toml"))
+    return robot, {"+x": [gait(0, 2, 3, 1, 0)], "-x": []}, SIM_BOARD
+
+
 def multi_level():
     doc = robot_doc(
         limb=[
@@ -127,7 +137,7 @@ def inchworm_entry():
     return robot, {"+x": [gait(3, 7, 3), gait(7, 3, 7)], "-x": [gait(1, 5, 1)]}, board
 
 
-CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "multi": multi_level, "big": big}
+CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "r1-worn": r1_worn, "multi": multi_level, "big": big}
 
 
 def renderer(tmp_path_factory) -> Callable[[str], Path]:

@@ -32,6 +32,7 @@ C_TESTS = {
     "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
+    "test_ctl_hold.c": ("r1-worn", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_stroke.c": ("r1-stroke", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_chain.c": ("inch-entry", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_seq.c": ("r1-fast", ["seq.c", "psi.c", "angle.c", "count.c"], ["gait_table.c"], []),

@@ -43,6 +43,9 @@ typedef uint8_t sag_t;
 #else
 #define REACH_WATCH 1
 #endif
+/* The hold watch (ctl.h, CFG_HOLD_WATCH): in builds with the reach watch, where the robot's
+ * body leaves a worn coil short of some limb's hold top. */
+#define HOLD_WATCH (REACH_WATCH && CFG_HOLD_WATCH)
 /* CTL_REACH_MS in looks of the reach watch, one every CTL_REACH_EVERY ticks (250 at 10 kHz) */
 #define REACH_LOOKS ((TICKS(CTL_REACH_MS) + CTL_REACH_EVERY - 1u) / CTL_REACH_EVERY)
 typedef char ctl_reach_fits_a_byte[REACH_LOOKS < NOT_SEEN ? 1 : -1];
@@ -180,6 +183,8 @@ static uint8_t at_reach(uint8_t i, ctl_limb_t *c)
             c->still = 0;
         } else if (c->still < REACH_LOOKS) {
             c->still++;
+        } else if (HOLD_WATCH && m < c->hi - CTL_CLIMB_CDEG) {
+            c->still = 0; /* a held limb sagged from where it stopped: its re-heat is watched afresh */
         }
     }
     return (uint8_t)(c->still == REACH_LOOKS && c->hi - c->lo >= CTL_MOVE_CDEG);
@@ -421,14 +426,21 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
         if (level != PSI_UNKNOWN) {
             watch(i, target[i], level, (uint8_t)(w >= WANT_HEAT && move[i] == RISE), to_go[i]);
-            /* Rising alone (the body couples limbs that move together), its coil heating and not
-             * held off by the envelope, its ψ stopped answering short of its level: it cannot
-             * get there, as after CTL_STALL_MS without progress but at once (ctl.h) */
-            if (REACH_WATCH && move[i] == RISE && w >= WANT_HEAT && changing == 1u) {
+            /* Its coil heating and not held off by the envelope, its ψ stopped answering (ctl.h):
+             * - rising alone (the body couples limbs that move together), short of its level:
+             *   it cannot get there, as after CTL_STALL_MS without progress but at once;
+             * - with the hold watch, held and relaxed (it never settled clear of its hold edge)
+             *   and heating below that edge: held where it stopped, its coil off until it sags
+             *   CTL_CLIMB_CDEG below its highest. */
+            if (REACH_WATCH && w >= WANT_HEAT &&
+                (move[i] == RISE ? changing == 1u
+                                 : HOLD_WATCH && move[i] == SAG && cl[i].stall == CTL_STALL_OSCILLATING)) {
                 if (sma_cooling(ctl_limb_actuator(i))) {
                     cl[i].still = NOT_SEEN; /* held off: it starts over, from a cooler coil */
-                } else if (at_reach(i, &cl[i])) {
+                } else if (at_reach(i, &cl[i]) && move[i] == RISE) {
                     cl[i].stall = CTL_STALL_UNREACHABLE;
+                } else if (cl[i].still == REACH_LOOKS && move[i] == SAG) {
+                    w = WANT_NOTHING;
                 }
             }
             if (cl[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {

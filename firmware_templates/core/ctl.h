@@ -127,6 +127,20 @@
  * duty. The 4° rise from the lowest keeps IMU noise (smoothed, up to 3° RMS) while a cool coil
  * heats back to As (its dead time, 0.15-0.6 s) from counting as a rise. */
 #define CTL_MOVE_CDEG 400
+/* The hold watch (CFG_HOLD_WATCH, builds with the reach watch): a held limb that the stall
+ * detector relaxed (it never settled clear of its hold edge) and that heats below that edge is
+ * watched the same way, without the 4° rise: once its smoothed ψ gained less than CTL_GAIN_CDEG
+ * for CTL_REACH_MS it is held where it stopped, its coil off until its smoothed ψ sags
+ * CTL_CLIMB_CDEG below its highest, then re-heated and watched afresh. A worn coil (stroke lost)
+ * whose reach fell to just past the limb's top level can no longer reach its hold edge; the
+ * bang-bang hold heated it on below that edge, through the rest of the robot's steps:
+ * caterpillar-4's rear proleg at 30,000 cycles' fatigue reached 135 °C at ψ 25.4°, its hold
+ * edge 27°. The renderer builds it in where the robot's body (its [plant] table) leaves a limb's
+ * hold top within a worn coil's stroke loss of its reach (proleg.robot_body.worn_holds); where
+ * it does not (R1: ψ* 20°, reach 80°) it costs no flash. */
+#ifndef CFG_HOLD_WATCH
+#define CFG_HOLD_WATCH 0
+#endif
 #define CTL_GAIN_CDEG 40
 #define CTL_REACH_MS 320u
 #define CTL_REACH_EVERY 16u

@@ -115,6 +115,34 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
     return out
 
 
+def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, hold_margin_deg: float) -> list[int]:
+    """The limbs (indices) whose hold top a worn coil may fall short of on the simulated body:
+    without a ``stroke_deg``, their hold top (ψ*_top + hysteresis/2 + ``hold_margin_deg`` + 1°)
+    lies above what their reach (their own coil's and every coil's, the lesser) keeps after a
+    worn coil's stroke loss (``FatigueLaw.stroke_loss``, 25 %; ψ taken as proportional to the
+    coil's contraction). The firmware is built with its hold watch where any such limb exists
+    (``CFG_HOLD_WATCH``, core/ctl.h): a held limb that stopped short of its hold edge is held where
+    it stopped instead of heated on. A body the model cannot describe counts every limb."""
+    from .sim.physical.params import FatigueLaw
+
+    if len(limbs) < 2:
+        return []
+    limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
+    geo = body_of(limb_actuators, len(actuators), section)
+    if curl_problem(geo):
+        return [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is None]
+    own = own_reach_deg(geo, limb_actuators)
+    shape = Shape(geo, tabulate=False)
+    full = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
+    kept = 1.0 - FatigueLaw().stroke_loss
+    out = []
+    for i, (lb, o, r) in enumerate(zip(limbs, own, full)):
+        top = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0 + hold_margin_deg + 1.0
+        if getattr(lb, "stroke_deg", None) is None and top > kept * min(o, r):
+            out.append(i)
+    return out
+
+
 #: Above this many states the coupling check is skipped (one shape per state; the largest
 #: example robots have 36).
 COUPLING_CHECK_MAX_STATES = 4096

@@ -127,6 +127,7 @@ class ControlPart:
     max_climb_mx_cdeg: int | None  # its -x limit where that differs (None: the same)
     max_climb_gaits_px: tuple[int, ...] = ()  # each built-in +x gait's own limit (): the way's for all
     max_climb_gaits_mx: tuple[int, ...] = ()
+    hold_watch: int = 0  # 1: core/ctl.h's hold watch is built in (robot_body.worn_holds)
 
 
 
@@ -351,6 +352,17 @@ def _climb_cdeg(limit: Any) -> dict[str, int | None]:
             "max_climb_gaits_mx": tuple(round(v * 100) for v in limit.minus_x_gaits)}
 
 
+def _worn_holds(robot: Any) -> list[int]:
+    """The limbs whose hold top a worn coil may fall short of on the robot's simulated body
+    (``proleg.robot_body.worn_holds``); none for a robot built without its [plant] table."""
+    from ..robot_body import worn_holds
+
+    if robot.plant is None:
+        return []
+    return worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
+                      float(robot.control.hold_margin_deg))
+
+
 def control_part(robot: Any) -> ControlPart:
     """The robot's control and safety numbers as the firmware is built with them (whole ticks)."""
     ctl, safety = robot.control, robot.safety
@@ -377,6 +389,7 @@ def control_part(robot: Any) -> ControlPart:
         watchdog_ms=int(safety.link_watchdog_ms),
         watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
         **thermal_budget(robot.name, safety, ctl),
+        hold_watch=int(bool(_worn_holds(robot))),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
         overrun_fault=int(getattr(ctl, "overrun_fault", 10)),

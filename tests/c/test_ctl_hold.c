@@ -1,0 +1,136 @@
+/* Host unit tests of core/ctl.c's hold watch (CFG_HOLD_WATCH, ctl.h): a held limb that never
+ * settled clear of its hold edge and stopped gaining is held where it stopped.
+ * Config "r1-worn": two limbs, ψ* = 50°, band 49..51°, hold margin 1° (hold edge 52°, hold top
+ * 53°), 1 kHz; on the simulated 80 mm body its own coil bends its end to 58°, 44° once worn (25 %
+ * of its stroke lost), so the renderer builds the watch in (robot_body.worn_holds). */
+#include "ctl_unit.h"
+#include "unit.h"
+
+#define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
+#define REACH_TICKS ((uint32_t)CTL_REACH_MS * CFG_TICK_HZ / 1000u)
+/* Samples the smoothed ψ (1/16 of each new sample, psi.h) takes to follow a step of a few
+ * degrees to within a tenth of one: 16 ln 30 ≈ 55. */
+#define SMOOTH_TICKS 60u
+
+/* Step 10: limb 0 rises from 40° at 25°/s to `stop` (level 1, short of its hold edge) and stays
+ * there until the stall detector relaxes it (a hover time unsettled). Its coil heats all along. */
+static void rise_to(double stop)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    uint32_t k;
+    setup();
+    put(1, 0.0);
+    for (psi = 40.0; psi < stop; psi += 0.025) {
+        put(0, psi);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    for (k = 0; k <= HOVER_TICKS + 1u && ctl_stall(0) == CTL_STALL_NONE; k++) {
+        put(0, stop);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE); /* the bang-bang hold heats it towards its hold edge */
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    CHECK_EQ(psi_level(0), 1);
+}
+
+/* Ticks at ψ = `deg` until limb 0's coil is `on` (DRIVE) or off (0); -1: not within `ticks`,
+ * -2: some other duty. */
+static int ticks_until(double deg, int on, int ticks)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t;
+    for (t = 0; t < ticks; t++) {
+        put(0, deg);
+        demand(1, 0, duty);
+        if ((duty[0] != 0u && duty[0] != DRIVE) || duty[1] != 0u) {
+            return -2; /* a duty the hold never asks for */
+        }
+        if ((duty[0] == DRIVE) == (on != 0)) {
+            return t;
+        }
+    }
+    return -1;
+}
+
+static void test_the_config_builds_the_hold_watch_in(void)
+{
+    CHECK_EQ(CFG_HOLD_WATCH, 1);
+    CHECK_EQ(CFG_HOLD_MARGIN_CDEG, 100);
+}
+
+static void test_a_held_limb_that_stopped_short_of_its_hold_edge_is_held_where_it_stopped(void)
+{
+    int t;
+    rise_to(51.5);
+    /* still short of the hold edge (52°), no gain: off a reach time later, not heated on */
+    t = ticks_until(51.5, 0, 2 * (int)REACH_TICKS);
+    CHECK(t >= (int)REACH_TICKS - 2 * (int)CTL_REACH_EVERY);
+    CHECK(t <= (int)REACH_TICKS + 2 * (int)CTL_REACH_EVERY);
+    /* held there: it stays off while its ψ stays where it stopped */
+    CHECK_EQ(ticks_until(51.5, 1, 3000), -1);
+    CHECK_EQ(ticks_until(50.6, 1, 3000), -1); /* a sag of less than 1° */
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+}
+
+static void test_a_limb_held_where_it_stopped_is_re_heated_once_it_sags_and_stopped_again(void)
+{
+    int t;
+    rise_to(51.5);
+    CHECK(ticks_until(51.5, 0, 2 * (int)REACH_TICKS) >= 0);
+    /* 1.5° below where it stopped (still level 1): heated again once its smoothed ψ got there
+     * (1° below the highest look at it that gained 0.4°: 1-1.4° below where it stopped) */
+    t = ticks_until(50.0, 1, 1000);
+    CHECK(t >= 0);
+    CHECK(t <= (int)SMOOTH_TICKS + 2 * (int)CTL_REACH_EVERY);
+    /* back where it stopped, no higher: off again a reach time after its last gain */
+    t = ticks_until(51.5, 0, 3 * (int)REACH_TICKS);
+    CHECK(t >= (int)REACH_TICKS - 2 * (int)CTL_REACH_EVERY);
+    CHECK(t <= (int)REACH_TICKS + (int)SMOOTH_TICKS + 2 * (int)CTL_REACH_EVERY);
+}
+
+static void test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t;
+    rise_to(51.2);
+    for (t = 0; t < 850; t++) { /* creeping at 2 °/s (0.64° per reach time), to 52.9° */
+        put(0, 51.2 + 0.002 * t);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    put(0, 53.2); /* at its hold top: off, as any bang-bang hold */
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+}
+
+static void test_a_limb_that_settled_is_not_watched(void)
+{
+    /* held normally (settled between its hold edge and top): the bang-bang hold as always, its
+     * coil heated below the hold edge for as long as it takes */
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t;
+    setup();
+    put(1, 0.0);
+    put(0, 52.5);
+    demand(1, 0, duty);
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+    CHECK(psi_settled(0));
+    for (t = 0; t < 2 * (int)REACH_TICKS; t++) {
+        put(0, 51.8); /* sagged below the hold edge, no gain for two reach times */
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+}
+
+int main(void)
+{
+    RUN(test_the_config_builds_the_hold_watch_in);
+    RUN(test_a_held_limb_that_stopped_short_of_its_hold_edge_is_held_where_it_stopped);
+    RUN(test_a_limb_held_where_it_stopped_is_re_heated_once_it_sags_and_stopped_again);
+    RUN(test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top);
+    RUN(test_a_limb_that_settled_is_not_watched);
+    return UNIT_EXIT();
+}

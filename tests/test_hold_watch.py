@@ -1,0 +1,75 @@
+"""The hold watch (core/ctl.h, CFG_HOLD_WATCH): built in where the robot's body leaves a worn
+coil short of a limb's hold top (proleg.robot_body.worn_holds), and on such a robot a worn
+coil no longer heats on below a hold edge it cannot reach. Its C behaviour:
+tests/c/test_ctl_hold.c."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from core_configs import SIM_BOARD, robot_doc
+from proleg.body import own_reach_deg
+from proleg.firmware.render import control_part, render_config
+from proleg.paths import robots_dir
+from proleg.report import claim
+from proleg.robot import load_robot, robot_from_dict
+from proleg.robot_body import body_of, worn_holds
+from proleg.sim.physical.params import FatigueLaw
+
+
+def _worn(name: str) -> list[int]:
+    robot = load_robot(robots_dir() / f"{name}.toml")
+    return worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
+                      robot.control.hold_margin_deg)
+
+
+def test_a_hold_top_far_below_the_reach_needs_no_watch_and_one_near_it_does():
+    # R1, R2, R3: ψ* 20° against a coil that bends its end to ~58°; strokes are not watched
+    for name in ("paper-r1", "paper-r2", "paper-r3", "paper-r1-stroke"):
+        assert _worn(name) == [], name
+    # the one-actuator R1's far end bends to ~23.5° with its hold top at ~22°
+    assert _worn("paper-r1-one-actuator") == [1]
+    # caterpillar-4's prolegs: top level entered at 25°, the coil reaches ~31°
+    assert {1, 2} <= set(_worn("caterpillar-4"))
+
+
+def test_the_watch_follows_the_stroke_a_worn_coil_keeps():
+    """Raising ψ* moves a limb's hold top towards its reach: the watch comes in once the top
+    passes what 75 % of the reach keeps, and stays in."""
+    kept = 1.0 - FatigueLaw().stroke_loss
+    seen = []
+    for psi_star in range(20, 56, 5):
+        doc = robot_doc()
+        for limb in doc["limb"]:
+            limb["psi_star_deg"] = [float(psi_star)]
+        robot = robot_from_dict(doc, Path("tests/t.toml"))
+        worn = worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant, 1.0)
+        seen.append(bool(worn))
+        reach = own_reach_deg(body_of([0, 1], 2, robot.plant), [0, 1])
+        top = psi_star + 1.0 + 1.0 + 1.0
+        assert bool(worn) == (top > kept * min(reach)), (psi_star, reach)
+    assert seen[0] is False and seen[-1] is True
+    assert seen == sorted(seen)
+
+
+@pytest.mark.parametrize("name, on", [("paper-r1", 0), ("paper-r1-one-actuator", 1), ("caterpillar-4", 1)])
+def test_the_renderer_builds_the_watch_in_where_it_is_needed(name, on):
+    assert control_part(load_robot(robots_dir() / f"{name}.toml")).hold_watch == on
+
+
+def test_the_rendered_header_carries_the_choice():
+    robot = robot_from_dict(robot_doc(), Path("tests/t.toml"))
+    header = render_config(robot, {"+x": [], "-x": []}, SIM_BOARD)["robot_config.h"]
+    assert "#define CFG_HOLD_WATCH 0\n" in header
+
+
+def test_a_worn_caterpillar_walks_without_cooking_a_proleg():
+    """caterpillar-4 at 30,000 cycles of fatigue (the claim bench's strong fatigue): its rear
+    proleg's coil reaches its top level at ~25.4° but not its hold edge (27°); without the watch
+    the bang-bang hold heated it on to 135 °C. Now it walks, every coil below 120 °C."""
+    robot = load_robot(robots_dir() / "caterpillar-4.toml")
+    out = claim.feedback_run(robot, claim.point("fatigue (strong)"), duration_s=30.0)
+    assert out.fault == "", out
+    assert out.coil_peak_c < claim.OVERHEAT_C, out
+    assert out.completed and out.speed_mm_s > 0.0, out
