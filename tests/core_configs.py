@@ -99,6 +99,15 @@ def r1_worn():
     return robot, {"+x": [gait(0, 2, 3, 1, 0)], "-x": []}, SIM_BOARD
 
 
+def r1_boost():
+    """r1-fast with control.boost_ms = 200: a lagging rise heats at the duty ceiling
+    (test_ctl.c's boost test)."""
+    doc = robot_doc()
+    doc["control"]["boost_ms"] = 200
+    robot = robot_from_dict(doc, Path("tests/r1-boost.toml"))
+    return robot, {"+x": [gait(0, 2, 3, 1, 0)], "-x": []}, SIM_BOARD
+
+
 def multi_level():
     doc = robot_doc(
         limb=[
@@ -137,7 +146,7 @@ def inchworm_entry():
     return robot, {"+x": [gait(3, 7, 3), gait(7, 3, 7)], "-x": [gait(1, 5, 1)]}, board
 
 
-CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "r1-worn": r1_worn, "multi": multi_level, "big": big}
+CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "r1-worn": r1_worn, "r1-boost": r1_boost, "multi": multi_level, "big": big}
 
 
 def renderer(tmp_path_factory) -> Callable[[str], Path]:

@@ -24,7 +24,8 @@ CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-g", "-O1"]
 
 pytestmark = pytest.mark.skipif(CC is None, reason="no host C compiler")
 
-# C test → (config, core sources, extra sources, defines)
+# C test (FILE, or FILE@NAME: the same file against another config) → (config, core sources,
+# extra sources, defines)
 C_TESTS = {
     "test_psi.c": ("r1-fast", ["psi.c", "angle.c"], [], []),
     "test_psi_multilevel.c": ("multi", ["psi.c", "angle.c", "seq.c", "count.c"], ["gait_table.c"], []),
@@ -32,6 +33,7 @@ C_TESTS = {
     "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
+    "test_ctl.c@r1-boost": ("r1-boost", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_hold.c": ("r1-worn", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_stroke.c": ("r1-stroke", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_chain.c": ("inch-entry", ["ctl.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
@@ -61,9 +63,9 @@ def rendered(tmp_path_factory):
 def test_c_unit(test_file, rendered, sanitizers, tmp_path):
     config, core, extra, defines = C_TESTS[test_file]
     gen = rendered(config)
-    sources = [CDIR / test_file, CDIR / "fake_hal.c"] + [CORE / c for c in core]
+    sources = [CDIR / test_file.split("@")[0], CDIR / "fake_hal.c"] + [CORE / c for c in core]
     sources += [gen / e if isinstance(e, str) else e for e in extra]
-    exe = tmp_path / test_file.removesuffix(".c")
+    exe = tmp_path / test_file.split("@")[0].removesuffix(".c")
     cmd = [CC, *CFLAGS, *sanitizers, *defines, f"-I{CORE}", f"-I{gen}", f"-I{SIM}", f"-I{CDIR}"]
     cmd += [str(s) for s in sources] + ["-o", str(exe), "-lm"]
     build = subprocess.run(cmd, capture_output=True, text=True)

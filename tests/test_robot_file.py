@@ -168,6 +168,24 @@ def test_hold_duty_negative(tmp_path):
     rejects(tmp_path, text, "control.hold_duty", "a number in [0.0, 1.0]")
 
 
+@pytest.mark.parametrize("ms, fragment", [(50, "0 (off) or 100 .. 4000 ms"), (4001, "an integer in 0..4000, got 4001"),
+                                           (-1, "an integer in 0..4000, got -1"), (0.5, "an integer")])
+def test_boost_ms_is_off_or_between_a_dead_time_and_the_stall(tmp_path, ms, fragment):
+    rejects(tmp_path, R1 + f"\n[control]\nboost_ms = {ms}\n", "control.boost_ms", fragment)
+
+
+def test_boost_ms_reaches_the_firmware_only_when_set(tmp_path):
+    from core_configs import SIM_BOARD
+    from proleg.firmware.render import render_config
+
+    off = load_robot(write(tmp_path, R1, "off.toml"))
+    on = load_robot(write(tmp_path, R1 + "\n[control]\nboost_ms = 700\n", "on.toml"))
+    assert off.control.boost_ms == 0 and on.control.boost_ms == 700
+    gaits = {"+x": [], "-x": []}
+    assert "CTL_BOOST_MS" not in render_config(off, gaits, SIM_BOARD)["robot_config.h"]
+    assert "#define CTL_BOOST_MS 700u" in render_config(on, gaits, SIM_BOARD)["robot_config.h"]
+
+
 def test_drive_duty_above_safety_ceiling(tmp_path):
     text = R1 + "\n[safety]\nmax_duty = 0.5\n[control]\ndrive_duty = 0.6\n"
     rejects(tmp_path, text, "control.drive_duty", "at most safety.max_duty")

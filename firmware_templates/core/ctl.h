@@ -144,9 +144,11 @@
 #define CTL_GAIN_CDEG 40
 #define CTL_REACH_MS 320u
 #define CTL_REACH_EVERY 16u
-/* Rising without progress for this long: heat at the duty ceiling (0: off). Off by default
- * (flash; the default controller passes the hil central-claim points without it): at 700 ms
- * it gives heating-limited conditions back speed (docs/control.md). */
+/* Rising without progress for this long: heat at the duty ceiling (0: off). The robot file's
+ * control.boost_ms (robot_config.h); off by default (R1 on the Nano has no room for its 68 B,
+ * and the default controller passes the hil central-claim points without it). It gives
+ * heating-limited conditions (weak supply, draught, worn coil) back their rises
+ * (docs/control.md, "The boost"). */
 #ifndef CTL_BOOST_MS
 #define CTL_BOOST_MS 0u
 #endif

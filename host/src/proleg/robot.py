@@ -115,6 +115,13 @@ class Safety:
     link_watchdog_ms: int = 2000  # on by default: a host that goes away stops the robot (docs/safety.md)
 
 
+#: control.boost_ms: 0 (off) or this range. Below 100 ms a coil still heating back to As (its
+#: dead time, 0.15-0.6 s) would count as lagging at every rise; at or above the stall
+#: detector's 5 s (CTL_STALL_MS) the limb is cut off as "cannot reach" first.
+BOOST_MIN_MS = 100
+BOOST_MAX_MS = 4000
+
+
 @dataclass(frozen=True)
 class Control:
     tick_hz: int = 1000
@@ -125,6 +132,9 @@ class Control:
     hold_margin_deg: float = 4.0
     telemetry_hz: int = 50
     overrun_fault: int = 10  # consecutive ticks whose work overran the period: fault TICK_OVERRUN
+    #: a rising limb that gets no progress edge closer for this long heats at safety.max_duty
+    #: until the next START (core/ctl.h, CTL_BOOST_MS); 0: never (the default)
+    boost_ms: int = 0
     fallback: bool = True  # firmware switches to a build-time fallback gait when it loses an actuator
     #: limbs raised to their strokes together: which crosses psi* first (None: the largest stroke);
     #: lowered together: which goes down first while the others are held at their strokes (None:
@@ -463,6 +473,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
         overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
+        boost_ms=f.integer("boost_ms", d.boost_ms, 0, BOOST_MAX_MS),
         fallback=f.table.get("fallback", d.fallback),
         stroke_rise_lead=f.string("stroke_rise_lead") if f.has("stroke_rise_lead") else None,
         stroke_fall_lead=f.string("stroke_fall_lead") if f.has("stroke_fall_lead") else None,
@@ -476,4 +487,6 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         f.fail("hold_duty", f"at most control.drive_duty ({c.drive_duty})", c.hold_duty)
     if c.telemetry_hz > c.tick_hz:
         f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
+    if 0 < c.boost_ms < BOOST_MIN_MS:
+        f.fail("boost_ms", f"0 (off) or {BOOST_MIN_MS} .. {BOOST_MAX_MS} ms", c.boost_ms)
     return c

@@ -128,6 +128,7 @@ class ControlPart:
     max_climb_gaits_px: tuple[int, ...] = ()  # each built-in +x gait's own limit (): the way's for all
     max_climb_gaits_mx: tuple[int, ...] = ()
     hold_watch: int = 0  # 1: core/ctl.h's hold watch is built in (robot_body.worn_holds)
+    boost_ms: int = 0  # [control] boost_ms: CTL_BOOST_MS (0: no boost, none of its code)
 
 
 
@@ -390,6 +391,7 @@ def control_part(robot: Any) -> ControlPart:
         watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
         **thermal_budget(robot.name, safety, ctl),
         hold_watch=int(bool(_worn_holds(robot))),
+        boost_ms=int(getattr(ctl, "boost_ms", 0)),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
         overrun_fault=int(getattr(ctl, "overrun_fault", 10)),
