@@ -209,6 +209,9 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         if (c->level != PSI_UNKNOWN && c->crossings < CTL_OSC_CROSSINGS) {
             c->crossings++;
         }
+        if (HOLD_WATCH && level < c->level) {
+            c->still = NOT_SEEN; /* dropped from where the hold watch kept it: its rise back is watched afresh */
+        }
         c->level = level;
     }
     if (c->stall != CTL_STALL_NONE) {

@@ -90,6 +90,26 @@ static void test_a_limb_held_where_it_stopped_is_re_heated_once_it_sags_and_stop
     CHECK(t <= (int)REACH_TICKS + (int)SMOOTH_TICKS + 2 * (int)CTL_REACH_EVERY);
 }
 
+static void test_a_limb_that_drops_its_level_while_held_off_rises_back(void)
+{
+    /* a weak supply: sagged 1.5°, its re-heat gains nothing for a reach time and is cut; it
+     * drops out of its level (below 49°) while its coil is off: the rise back is a new rise for
+     * the reach watch, not one that stopped short (the watch's last look was not a gain) */
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t;
+    rise_to(51.5);
+    CHECK(ticks_until(51.5, 0, 2 * (int)REACH_TICKS) >= 0);
+    CHECK(ticks_until(50.0, 1, 1000) >= 0);
+    CHECK(ticks_until(50.0, 0, 2 * (int)REACH_TICKS) >= 0); /* the re-heat, cut */
+    for (t = 0; t < 1000; t++) {
+        put(0, 45.0);
+        demand(1, 0, duty);
+        CHECK_EQ(psi_level(0), 0);
+        CHECK_EQ(duty[0], DRIVE); /* heated back up, at once and for as long as a rise may take */
+    }
+    CHECK(ctl_stall(0) != CTL_STALL_UNREACHABLE);
+}
+
 static void test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
@@ -130,6 +150,7 @@ int main(void)
     RUN(test_the_config_builds_the_hold_watch_in);
     RUN(test_a_held_limb_that_stopped_short_of_its_hold_edge_is_held_where_it_stopped);
     RUN(test_a_limb_held_where_it_stopped_is_re_heated_once_it_sags_and_stopped_again);
+    RUN(test_a_limb_that_drops_its_level_while_held_off_rises_back);
     RUN(test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top);
     RUN(test_a_limb_that_settled_is_not_watched);
     return UNIT_EXIT();
