@@ -95,6 +95,7 @@ def r1_worn():
     doc = robot_doc()
     for limb in doc["limb"]:
         limb["psi_star_deg"] = [50.0]
+    doc["control"]["hold_margin_deg"] = 2.0
     robot = robot_from_dict(doc, Path("tests/r1-worn.toml"))
     return robot, {"+x": [gait(0, 2, 3, 1, 0)], "-x": []}, SIM_BOARD
 

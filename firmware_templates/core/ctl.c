@@ -432,12 +432,14 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             /* Its coil heating and not held off by the envelope, its ψ stopped answering (ctl.h):
              * - rising alone (the body couples limbs that move together), short of its level:
              *   it cannot get there, as after CTL_STALL_MS without progress but at once;
-             * - with the hold watch, held and relaxed (it never settled clear of its hold edge)
-             *   and heating below that edge: held where it stopped, its coil off until it sags
-             *   CTL_CLIMB_CDEG below its highest. */
+             * - with the hold watch, held and relaxed (it never settled clear of its hold edge),
+             *   settled clear of its band (the step needs no more of it) and heating below that
+             *   edge: held where it stopped, its coil off until it sags CTL_CLIMB_CDEG below its
+             *   highest. */
             if (REACH_WATCH && w >= WANT_HEAT &&
                 (move[i] == RISE ? changing == 1u
-                                 : HOLD_WATCH && move[i] == SAG && cl[i].stall == CTL_STALL_OSCILLATING)) {
+                                 : HOLD_WATCH && move[i] == SAG && cl[i].stall == CTL_STALL_OSCILLATING &&
+                                       psi_settled(i))) {
                 if (sma_cooling(ctl_limb_actuator(i))) {
                     cl[i].still = NOT_SEEN; /* held off: it starts over, from a cooler coil */
                 } else if (at_reach(i, &cl[i]) && move[i] == RISE) {
