@@ -128,10 +128,12 @@
  * heats back to As (its dead time, 0.15-0.6 s) from counting as a rise. */
 #define CTL_MOVE_CDEG 400
 /* The hold watch (CFG_HOLD_WATCH, builds with the reach watch): a held limb that the stall
- * detector relaxed (it never settled clear of its hold edge) and that heats below that edge is
- * watched the same way, without the 4° rise: once its smoothed ψ gained less than CTL_GAIN_CDEG
- * for CTL_REACH_MS it is held where it stopped, its coil off until its smoothed ψ sags
- * CTL_CLIMB_CDEG below its highest, then re-heated and watched afresh. A worn coil (stroke lost)
+ * detector relaxed (it never settled clear of its hold edge), that is settled clear of its band
+ * (the step needs nothing more of it) and heats below its hold edge is watched the same way,
+ * without the 4° rise: once its smoothed ψ gained less than CTL_GAIN_CDEG for CTL_REACH_MS it is
+ * held where it stopped, its coil off until its smoothed ψ sags CTL_CLIMB_CDEG below its
+ * highest, then re-heated and watched afresh; a limb that drops out of its level meanwhile rises
+ * back on a fresh reach watch. A worn coil (stroke lost)
  * whose reach fell to just past the limb's top level can no longer reach its hold edge; the
  * bang-bang hold heated it on below that edge, through the rest of the robot's steps:
  * caterpillar-4's rear proleg at 30,000 cycles' fatigue reached 135 °C at ψ 25.4°, its hold
