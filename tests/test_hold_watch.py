@@ -14,7 +14,7 @@ from proleg.firmware.render import control_part, render_config
 from proleg.paths import robots_dir
 from proleg.report import claim
 from proleg.robot import load_robot, robot_from_dict
-from proleg.robot_body import body_of, worn_holds
+from proleg.robot_body import WORN_STROKE_LOSS, body_of, worn_holds
 from proleg.sim.physical.params import FatigueLaw
 
 
@@ -32,6 +32,10 @@ def test_a_hold_top_far_below_the_reach_needs_no_watch_and_one_near_it_does():
     assert _worn("paper-r1-one-actuator") == [1]
     # caterpillar-4's prolegs: top level entered at 25°, the coil reaches ~31°
     assert {1, 2} <= set(_worn("caterpillar-4"))
+
+
+def test_the_worn_stroke_is_the_plants_fatigue_law():
+    assert WORN_STROKE_LOSS == FatigueLaw().stroke_loss
 
 
 def test_the_watch_follows_the_stroke_a_worn_coil_keeps():

@@ -115,16 +115,21 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
     return out
 
 
+#: The recoverable stroke a worn coil has lost: the physical plant's fatigue law after many cycles
+#: (``proleg.sim.physical.params.FatigueLaw.stroke_loss``, which a test keeps equal to this:
+#: Lagoudas (ed.), "Shape Memory Alloys", Springer 2008, ch. 7; Mammano & Dragoni, Int. J.
+#: Fatigue 2014). Here, not imported: the robot file's checks sit below the simulator.
+WORN_STROKE_LOSS = 0.25
+
+
 def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, hold_margin_deg: float) -> list[int]:
     """The limbs (indices) whose hold top a worn coil may fall short of on the simulated body:
     without a ``stroke_deg``, their hold top (ψ*_top + hysteresis/2 + ``hold_margin_deg`` + 1°)
     lies above what their reach (their own coil's and every coil's, the lesser) keeps after a
-    worn coil's stroke loss (``FatigueLaw.stroke_loss``, 25 %; ψ taken as proportional to the
+    worn coil's stroke loss (``WORN_STROKE_LOSS``, 25 %; ψ taken as proportional to the
     coil's contraction). The firmware is built with its hold watch where any such limb exists
     (``CFG_HOLD_WATCH``, core/ctl.h): a held limb that stopped short of its hold edge is held where
     it stopped instead of heated on. A body the model cannot describe counts every limb."""
-    from .sim.physical.params import FatigueLaw
-
     if len(limbs) < 2:
         return []
     limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
@@ -134,7 +139,7 @@ def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, ho
     own = own_reach_deg(geo, limb_actuators)
     shape = Shape(geo, tabulate=False)
     full = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
-    kept = 1.0 - FatigueLaw().stroke_loss
+    kept = 1.0 - WORN_STROKE_LOSS
     out = []
     for i, (lb, o, r) in enumerate(zip(limbs, own, full)):
         top = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0 + hold_margin_deg + 1.0

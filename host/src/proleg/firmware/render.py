@@ -358,7 +358,7 @@ def _worn_holds(robot: Any) -> list[int]:
     (``proleg.robot_body.worn_holds``); none for a robot built without its [plant] table."""
     from ..robot_body import worn_holds
 
-    if robot.plant is None:
+    if getattr(robot, "plant", None) is None:
         return []
     return worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
                       float(robot.control.hold_margin_deg))
