@@ -48,15 +48,32 @@ def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: 
     limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
     if len(limbs) < 2:
         return []
-    geo = body_of(limb_actuators, len(actuators), section)
-    curl = curl_problem(geo)
-    if curl:
-        return [f"{path}: plant.length_mm: {curl}"]
-    own = own_reach_deg(geo, limb_actuators)
-    shape = Shape(geo, tabulate=False)
-    full = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
+    reach = body_reach(limb_actuators, len(actuators), section)
+    if isinstance(reach, str):
+        return [f"{path}: plant.length_mm: {reach}"]
+    own, full = reach
     return (unreachable_levels(path, limbs, limb_actuators, len(actuators), own, section) +
             unreachable_holds(path, limbs, own, full, section, hold_margin_deg))
+
+
+def body_reach(limb_actuators: list[int], n_actuators: int,
+               section: PlantSection) -> tuple[list[float], list[float]] | str:
+    """ψ per limb on the physical plant's body: ``(own, full)``, with only the limb's own coil
+    at full stroke and with every coil at full stroke; or, for a body too long for the model,
+    why (``body.curl_problem``)."""
+    geo = body_of(limb_actuators, n_actuators, section)
+    curl = curl_problem(geo)
+    if curl:
+        return curl
+    own = own_reach_deg(geo, limb_actuators)
+    shape = Shape(geo, tabulate=False)
+    return own, [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
+
+
+def hold_top_deg(limb: Any, hold_margin_deg: float) -> float:
+    """Where the controller heats a held limb's top level to (docs/control.md): its top
+    threshold's upper band edge, ψ*_top + hysteresis/2, plus ``hold_margin_deg`` + 1°."""
+    return limb.psi_star_deg[-1] + limb.hysteresis_deg / 2.0 + hold_margin_deg + 1.0
 
 
 def unreachable_levels(path: Path, limbs: list[Any], limb_actuators: list[int], n_actuators: int,
@@ -101,7 +118,7 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
     out = []
     for lb, r, o in zip(limbs, full, own):
         entry = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
-        top = entry + hold_margin_deg + 1.0
+        top = hold_top_deg(lb, hold_margin_deg)
         if getattr(lb, "stroke_deg", None) is not None or min(o, r) < entry or top + HOLD_TOP_CLEARANCE_DEG <= r:
             continue  # a stroke, a level out of reach (unreachable_levels' or the body's), or a hold top in reach
         fit = r - HOLD_TOP_CLEARANCE_DEG - 1.0 - entry
@@ -132,20 +149,12 @@ def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, ho
     it stopped instead of heated on. A body the model cannot describe counts every limb."""
     if len(limbs) < 2:
         return []
-    limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
-    geo = body_of(limb_actuators, len(actuators), section)
-    if curl_problem(geo):
-        return [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is None]
-    own = own_reach_deg(geo, limb_actuators)
-    shape = Shape(geo, tabulate=False)
-    full = [float(p) for p in shape.compute(np.ones((1, shape.n_coils)))[0][0]]
+    reach = body_reach([actuators.index(lb.actuator) for lb in limbs], len(actuators), section)
+    no_stroke = [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is None]
+    if isinstance(reach, str):
+        return no_stroke
     kept = 1.0 - WORN_STROKE_LOSS
-    out = []
-    for i, (lb, o, r) in enumerate(zip(limbs, own, full)):
-        top = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0 + hold_margin_deg + 1.0
-        if getattr(lb, "stroke_deg", None) is None and top > kept * min(o, r):
-            out.append(i)
-    return out
+    return [i for i in no_stroke if hold_top_deg(limbs[i], hold_margin_deg) > kept * min(reach[0][i], reach[1][i])]
 
 
 #: Above this many states the coupling check is skipped (one shape per state; the largest
