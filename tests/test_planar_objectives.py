@@ -128,6 +128,17 @@ def test_when_every_gait_costs_the_cheapest_is_reported_and_marked():
         assert [g.states for g in res.gaits] == [(0, 1, 0)] and res.gaits[0].repeats == 1
 
 
+def test_a_score_that_cancels_to_rounding_noise_is_zero_not_a_gain():
+    # at 45° a step of (3, -3) scores 3·(cos 45° − sin 45°), one ulp apart: 3.3e-16, not 0.
+    # It is below zero (nothing gains), whatever the noise's sign (seed 146 of the oracle test).
+    r = np.array([[0, 3], [3, 0]], dtype=float)
+    table = TransitionTable.from_dense((2,), r)
+    table = TransitionTable(table.levels, table.src, table.dst, table.reward, None, PlanarRewards(dy=np.array([-3.0, -3.0])))
+    for kind in ("total", "rate"):
+        res = optimal_planar_gaits(table, PlanarObjective(45.0), kind, 2)
+        assert abs(res.value) < 1e-12 and res.below_zero
+
+
 def test_constrained_questions_refuse_speed_and_missing_statistics():
     t = TransitionTable.from_dense((2,), np.array([[0, 1], [1, 0]]))
     with pytest.raises(GaitError, match="dtheta_deg"):

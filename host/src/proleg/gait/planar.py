@@ -85,6 +85,25 @@ def planar_scores(table: TransitionTable, objective: PlanarObjective) -> np.ndar
     return score - float(objective.transition_cost)
 
 
+def score_scale(table: TransitionTable, objective: PlanarObjective, rotate: str | None = None) -> float:
+    """The largest magnitude any term of a transition's score has: the scale against which
+    a score is "zero". A score that cancels (heading 45° with Δx = −Δy) is rounding noise
+    the size of its terms, not of itself, so a tolerance relative to the scores alone would
+    call that noise a gain."""
+    planar = table.planar
+    given = planar.given() if planar is not None else {}
+    zero = np.zeros(table.n_transitions)
+    if rotate is None:
+        cos_h, sin_h = heading_cos_sin(objective.heading_deg)
+        motion = np.abs(cos_h * np.asarray(table.reward, dtype=np.float64)) + np.abs(sin_h * given.get("dy", zero))
+    else:
+        motion = np.abs(dtheta_of(table, "a rotation gait"))
+    lx, ly, lt = (float(x) for x in objective.variance_weight)
+    spread = lx * np.abs(given.get("var_dx", zero)) + ly * np.abs(given.get("var_dy", zero)) + lt * np.abs(given.get("var_dtheta_deg", zero))
+    terms = motion + spread + abs(float(objective.transition_cost))
+    return float(terms.max()) if len(terms) else 0.0
+
+
 def planar_table(table: TransitionTable, objective: PlanarObjective) -> TransitionTable:
     """The table with each reward replaced by its planar score (durations kept)."""
     return replace(table, reward=planar_scores(table, objective))
@@ -142,6 +161,7 @@ def optimal_planar_gaits(
         scored = replace(table, reward=rotation_scores(table, objective, rotate))
     else:
         scored = planar_table(table, objective)
+    tol = RELATIVE_TOLERANCE * score_scale(table, objective, rotate)
     constraints: list[Constraint] = []
     accept: Callable[[np.ndarray], np.ndarray] | None = None
     if rotation_cap_deg is not None and rotate is None:
@@ -163,14 +183,13 @@ def optimal_planar_gaits(
         raise GaitError("rotation caps, simple cycles and rotation gaits are answered for total and rate, not speed")
     if not constrained:
         result = optimal_gaits(scored, kind, "+x", max_transitions)
-        tol = RELATIVE_TOLERANCE * float(np.abs(scored.reward).max()) if scored.n_transitions else 0.0
         if (result.value is not None and result.value > tol) or kind == "speed" or scored.n_transitions == 0:
             return result
         # nothing scores above zero (a value within rounding of 0 is zero, as ties are):
         # the best of the rest, over the same gaits
         # (rate: simple cycles, as optimal_gaits answers it)
-        return _constrained(scored, kind, max_transitions, kind == "rate", [], None)
-    return _constrained(scored, kind, max_transitions, simple_cycles, constraints, accept)
+        return _constrained(scored, kind, max_transitions, kind == "rate", [], None, tol)
+    return _constrained(scored, kind, max_transitions, simple_cycles, constraints, accept, tol)
 
 
 def _translation_within(cap: float) -> Callable[[np.ndarray], np.ndarray]:
@@ -196,14 +215,13 @@ def _default_bound(table: TransitionTable, kind: str, max_transitions: int | Non
 
 
 def _constrained(
-    scored: TransitionTable, kind: str, max_transitions: int | None, simple: bool, constraints, accept
+    scored: TransitionTable, kind: str, max_transitions: int | None, simple: bool, constraints, accept, tol: float
 ) -> GaitResult:
     K = _default_bound(scored, kind, max_transitions, simple)
     w = np.asarray(scored.reward, dtype=np.float64)
     empty = GaitResult("+x", kind, K, None, (), False)
     if len(w) == 0 or K < 2:
         return empty
-    tol = RELATIVE_TOLERANCE * float(np.abs(w).max())
     found = best_constrained(scored.n_states, scored.src, scored.dst, w, K, kind, simple, constraints, accept, tol)
     if found.best is None:
         return empty
