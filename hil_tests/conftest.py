@@ -15,7 +15,8 @@ console uses). Tests marked ``plant`` also need the simulated plant's ground tru
 (displacement, PWM at tick resolution, injected faults): they run on host-sim and on the
 emulated MCUs (which have the plant) and are skipped on hardware. Tests marked
 ``emu_long`` take minutes on an emulated MCU; ``make test`` deselects them there and
-``make emu`` runs them. ``--robot`` is honoured on every target: given a robot, every test
+``make emu`` runs them (``emu_long_on("arm-emu")``: only on the emulated MCUs named, where
+the emulator is slow for them). ``--robot`` is honoured on every target: given a robot, every test
 runs on it (the gait tests on its gaits); a test that shows one robot's behaviour (marked
 ``robot("paper-r1")``) is deselected for another. With ``--target sim``, ``--board`` may
 name the simulated board instead (``proleg.sim.simulated_boards.SIMULATED_BOARDS``).
@@ -112,7 +113,13 @@ def simulated_board_name(config) -> str | None:
     )
 
 
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` selects on the marks added here
 def pytest_collection_modifyitems(config, items):
+    target = config.getoption("--target")
+    for item in items:  # minutes on these emulated MCUs only: emu_long there
+        mark = item.get_closest_marker("emu_long_on")
+        if mark is not None and target in mark.args:
+            item.add_marker(pytest.mark.emu_long)
     given = config.getoption("--robot")
     name = load_robot(given).name if given else None
     kept, other_robots = [], []

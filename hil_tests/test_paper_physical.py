@@ -37,6 +37,7 @@ def _mean(xs: list[float]) -> float:
 
 
 @pytest.mark.plant
+@pytest.mark.emu_long_on("arm-emu")  # 2 × 36 s of walking: ~2 min each on unicorn, `make emu` runs it there
 @pytest.mark.robot("paper-r1", "paper-r2")
 @pytest.mark.parametrize("name, ct1_sign", [("paper-r1", +1), ("paper-r2", -1)])
 def test_ct1_and_ct2_move_r1_and_r2_by_equal_amounts_in_opposite_directions(open_target, name, ct1_sign):
@@ -47,6 +48,7 @@ def test_ct1_and_ct2_move_r1_and_r2_by_equal_amounts_in_opposite_directions(open
 
 
 @pytest.mark.plant
+@pytest.mark.emu_long_on("arm-emu")
 @pytest.mark.robot("paper-r1-one-actuator")
 @pytest.mark.parametrize("sequence", [C_L1, C_L2], ids=["C_L1", "C_L2"])
 def test_one_actuator_r1_moves_only_plus_x(open_target, sequence):

@@ -16,6 +16,7 @@ from proleg.errors import RobotFileError
 from proleg.paths import robots_dir
 from proleg.report import SimSession
 from proleg.robot import load_robot
+from proleg.robot_body import worn_holds
 from proleg.sim.physical import PhysicalPlant
 from proleg.sim.simulators import open_simulated
 
@@ -320,9 +321,11 @@ def test_a_hold_top_out_of_reach_is_one_warning_line_with_the_margin_that_fits(t
     path = tmp_path / "one.toml"
     path.write_text(text.replace("hold_margin_deg = 1.0", "hold_margin_deg = 4.0"))
     with caplog.at_level(logging.WARNING, logger="proleg"):
-        load_robot(path)
+        robot = load_robot(path)
     lines = [r.getMessage() for r in caplog.records]
     assert len(lines) == 1 and "limb 'right': held raised" in lines[0] and "ψ ≥ 26.0°" in lines[0], lines
+    # the warning says the hold watch holds it short: the firmware for this file has it
+    assert worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant, 4.0) == [1]
     reach = float(lines[0].split("bends it to ")[1].split("°")[0])
     assert 22.0 < reach < 25.0, lines
     fits = float(lines[0].split("hold_margin_deg to at most ")[1])

@@ -69,8 +69,16 @@ def test_the_suggested_limit_is_the_smaller_climb_on_the_half_degree_and_at_leas
     assert suggested_limit([None, None]) is None
 
 
-@pytest.mark.parametrize("name", sorted(p.stem for p in robots_dir().glob("*.toml")
-                                        if "max_climb_deg = " in p.read_text(encoding="utf-8")))
+def _climbing_robots():
+    """Every example robot file with a max_climb_deg; one with four or more limbs is ``long``
+    (its bisections take two minutes on host-sim: `make bench` runs it)."""
+    for path in sorted(robots_dir().glob("*.toml")):
+        if "max_climb_deg = " in path.read_text(encoding="utf-8"):
+            long = len(load_robot(path).limbs) >= 4
+            yield pytest.param(path.stem, marks=[pytest.mark.long] if long else [])
+
+
+@pytest.mark.parametrize("name", list(_climbing_robots()))
 def test_every_example_robots_limit_is_what_measure_climb_suggests(capsys, name):
     """The robot files' max_climb_deg are measured, not chosen: --measure-climb gives them back
     (over as many gaits of each way as the file lists limits for)."""

@@ -110,10 +110,11 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
     """One line per limb whose top level it can reach but whose hold top it cannot with every
     coil at full stroke (``full``): the controller holds a raised limb by heating its coil until
     ψ ≥ ψ*_top + hysteresis/2 + ``hold_margin_deg`` + 1° (the hold top, docs/control.md), or its
-    ``stroke_deg``. Short of it the coil heats on at every step until the step's hover clock
-    lets the gait go on (300 ms), far past its transformation: the one-actuator R1's far end
-    bends to 23.5° with the default 4° margin's hold top at 26°, and its coil reached 107 °C at
-    every step (claim bench, nominal). A limb with a stroke is held at its stroke and not
+    ``stroke_deg``. Short of it the coil heats at every step until the step's hover clock
+    lets the gait go on (300 ms), past its transformation: the one-actuator R1's far end bends
+    to 23.5° with the default 4° margin's hold top at 26°, and its coil reached 107 °C at every
+    step (claim bench, nominal). The hold watch (``worn_holds``, built in wherever this warns)
+    then stops heating it where it stopped, short of the hold top. A limb with a stroke is held at its stroke and not
     checked here; a level out of its own coil's reach (``own``) is ``unreachable_levels``'."""
     out = []
     for lb, r, o in zip(limbs, full, own):
@@ -127,8 +128,9 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
         out.append(f"{path}: limb {lb.name!r}: held raised, its coil heats until ψ ≥ {top:.1f}° (ψ* "
                    f"{lb.psi_star_deg[-1]:g}° + hysteresis/2 + control.hold_margin_deg {hold_margin_deg:g}° + 1°), "
                    f"but every coil at full stroke bends it to {r:.1f}° on the simulated {section.length_mm:g} mm "
-                   f"body: at every step its coil would heat on, past its transformation, until the step's hover "
-                   f"clock lets the gait go on; {advice}")
+                   f"body: at every step its coil heats past its transformation until the step's hover clock "
+                   f"lets the gait go on, and the firmware's hold watch then holds the limb short of its hold "
+                   f"top with the coil off; {advice}")
     return out
 
 
