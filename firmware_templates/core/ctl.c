@@ -105,27 +105,33 @@ uint8_t ctl_stall(uint8_t limb)
 /* Limb i falls from its stroke: it has one and is still on its top level. */
 #define FROM_STROKE(i, level) (STROKE(i) && TOP(i, level))
 
-/* A limb climbing to its stroke: its smoothed ψ rose CTL_CLIMB_CDEG since the last time this
- * said so, within CTL_CLIMB_MAX_MS of the step's start. Its hover clock restarts, so it settles
+/* Limb i's smoothed ψ rose CTL_CLIMB_CDEG above c->peak: the peak moves up to it. */
+static uint8_t gained(uint8_t i, ctl_limb_t *c)
+{
+    int16_t p = psi_smooth_cdeg(i);
+    if (p >= c->peak + CTL_CLIMB_CDEG) {
+        c->peak = p; /* a new high: measure from here */
+        return 1;
+    }
+    return 0;
+}
+
+/* A limb climbing to its stroke: its smoothed ψ gained (above) since the last time this said
+ * so, within CTL_CLIMB_MAX_MS of the step's start. Its hover clock restarts, so it settles
  * at the stroke or where it stops climbing. Smoothed, because under IMU noise single samples
  * keep making new highs: a limb at the end of its reach counted as climbing, its coil at the
  * drive duty (R1 at full strokes, 1.5° of noise: 116 °C). Looked at with the reach watch's
  * pace (an atan2 each CTL_REACH_EVERY ticks, not each tick). */
 static uint8_t climbing(uint8_t i, ctl_limb_t *c)
 {
-    int16_t p;
     if (!CLIMBS_TO_STROKE(i, psi_level(i)) || c->clock >= TICKS(CTL_CLIMB_MAX_MS)) {
         return 0;
     }
-    if (c->ticks != 0u && look != 0u) {
+    if (c->ticks == 0u) {
+        c->peak = psi_smooth_cdeg(i); /* a new level or a settled limb: measure from here */
         return 0;
     }
-    p = psi_smooth_cdeg(i);
-    if (c->ticks == 0u || p >= c->peak + CTL_CLIMB_CDEG) {
-        c->peak = p; /* a new level, a settled limb or a new high: measure from here */
-        return c->ticks != 0u;
-    }
-    return 0;
+    return look == 0u && gained(i, c);
 }
 
 /* How far limb i, climbing to its stroke on its top level, has got: 0 at its top band's upper
@@ -221,9 +227,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
          * time, then held where it stopped (above_hold). Heated on regardless, a worn coil at
          * the end of its stroke reached 134 °C, and with a dead neighbour 166 °C. */
         if (c->shortfall && c->climb && look == 0u) {
-            int16_t p = psi_smooth_cdeg(i);
-            if (p >= c->peak + CTL_CLIMB_CDEG) {
-                c->peak = p;
+            if (gained(i, c)) {
                 c->ticks = 0;
             } else if ((c->ticks = (uint16_t)(c->ticks + CTL_REACH_EVERY)) > TICKS(CTL_HOVER_MS)) {
                 c->climb = 0; /* stopped: held where it stopped from now on */
