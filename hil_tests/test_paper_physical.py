@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from proleg.link.client import UNSTATED
+from proleg.link.direction import UNSTATED
 from proleg.protocol.definition import EventKind
 
 C_T1 = ("00", "10", "01")          # 00 → 10 → 01 → 00

@@ -261,7 +261,7 @@ def test_a_loaded_gait_is_guarded_in_the_way_its_start_states(tmp_path_factory):
 def test_a_loaded_gait_whose_way_start_leaves_unstated_is_not_guarded(tmp_path_factory):
     """A learning probe or a planar heading walks neither +x nor -x: START says so
     (DIR_UNSTATED) and the firmware does not refuse it on any ground."""
-    from proleg.link.client import UNSTATED
+    from proleg.link.direction import UNSTATED
 
     sim, session = _calibrated_then_put_on(_r1_limited(1.5, tmp_path_factory), ["incline_deg=6"])
     session.client.load_gait([0, 2, 1])
@@ -272,7 +272,7 @@ def test_a_loaded_gait_whose_way_start_leaves_unstated_is_not_guarded(tmp_path_f
 
 def test_only_the_loaded_gait_may_leave_its_way_unstated():
     from proleg.errors import LinkError
-    from proleg.link.client import UNSTATED, direction_code
+    from proleg.link.direction import UNSTATED, direction_code
 
     assert direction_code(UNSTATED, GAIT_USER) == DIR_UNSTATED
     assert direction_code("-x", GAIT_USER) == 1
@@ -381,7 +381,7 @@ class ClimbGuardMachine(RuleBasedStateMachine):
     def start(self, direction, loaded):
         """Gait 0, or the loaded learn-then-walk sequence (00→10→01→00, +x) with its way
         stated (either way: a wrong one is the operator's) or unstated."""
-        from proleg.link.client import direction_code
+        from proleg.link.direction import direction_code
 
         loaded = loaded or direction == "unstated"
         if loaded:

@@ -351,7 +351,7 @@ def test_a_loaded_gait_whose_way_is_unstated_neither_falls_back_nor_is_replanned
     """A learning probe (START of the loaded gait, its way unstated) walks neither way: on an
     actuator loss the firmware keeps the fault latched instead of walking a +x fallback, and
     the host does not replan a gait of no known direction."""
-    from proleg.link.client import UNSTATED
+    from proleg.link.direction import UNSTATED
     from proleg.protocol.definition import GAIT_USER
 
     robot = load_robot(R1)  # fallback on

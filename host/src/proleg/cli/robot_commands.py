@@ -140,7 +140,7 @@ def check_library_hash(info: Any, robot: Any, fw: Any, where: str, simulated: bo
 
 # --------------------------------------------------------------------------- run
 def cmd_run(args: argparse.Namespace) -> int:
-    from ..link.client import UNSTATED
+    from ..link.direction import UNSTATED
     from ..protocol.definition import GAIT_USER
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on

@@ -41,7 +41,8 @@ from ..errors import LinkError
 from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, EventKind, Flag
 from ..states import label as state_label
 from ..states import limb_levels
-from ..link.client import Received, RobotClient, RobotInfo, direction_text
+from ..link.client import Received, RobotClient, RobotInfo
+from ..link.direction import direction_text
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
 from ..robot import Robot
 from .names import RobotNames, describe_event, gait_text, step_text

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..link.client import direction_text
+from ..link.direction import direction_text
 from ..protocol.definition import (
     GAIT_USER,
     ClearWhat,

@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 from ..errors import LinkError
 from ..limbloss import Fallback, dead_table, fallback
-from ..link.client import Received, RobotClient, direction_code, direction_text
+from ..link.client import Received, RobotClient
+from ..link.direction import direction_code, direction_text
 from ..link.listeners import Listener
 from ..protocol.definition import GAIT_USER, ClearWhat, EventKind, FaultCode, Flag, StopReason
 from ..robot import Robot

@@ -42,7 +42,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import LinkError
-from ..link.client import UNSTATED
+from ..link.direction import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
 from ..states import limb_levels

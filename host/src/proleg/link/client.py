@@ -42,7 +42,6 @@ from ..protocol.codec import FrameDecoder, Message, encode
 from ..protocol.definition import (
     BY_NAME,
     CHANNEL_CEILING,
-    DIR_UNSTATED,
     GAIT_USER,
     LIMB_CEILING,
     MESSAGES,
@@ -56,6 +55,7 @@ from ..protocol.definition import (
 )
 from .base import Link, LinkDisconnected
 from .board_clock import BoardClockRate
+from .direction import direction_code
 
 # The reply values and the receive side's values live in their own modules; re-exported here so
 # ``from proleg.link.client import RobotInfo, Received`` keeps working.
@@ -70,7 +70,6 @@ __all__ = [
     "ReplyTimeout",
     "RobotClient",
     "RobotInfo",
-    "parse_direction",
 ]
 
 DEFAULT_TIMEOUT = 0.5
@@ -479,43 +478,6 @@ class RobotClient:
             self.link.write(b"\0" + encode(Message("GET_INFO", {"token": token})))
         except LinkError:
             pass  # gone again: the next read notices
-
-
-#: The way of a LOAD_GAIT sequence that the host does not state (a learning probe, a planar
-#: heading): START sends DIR_UNSTATED and the firmware's climb guard does not check it.
-UNSTATED = "unstated"
-
-
-def direction_code(direction: Direction | int | str, gait: int) -> int:
-    """START's direction byte for ``gait``: ``UNSTATED`` only for the loaded sequence."""
-    if direction in (UNSTATED, DIR_UNSTATED):
-        if gait != GAIT_USER:
-            raise LinkError(f"gait {gait}: a built-in gait runs +x or -x; only the loaded sequence (user) "
-                            "may leave its way unstated")
-        return DIR_UNSTATED
-    return int(parse_direction(direction))
-
-
-def direction_text(direction: int) -> str:
-    """A direction byte as text: +x, -x, or "unstated" (DIR_UNSTATED: the loaded gait started
-    without its way)."""
-    if direction == Direction.PLUS_X:
-        return "+x"
-    return "-x" if direction == Direction.MINUS_X else UNSTATED if direction == DIR_UNSTATED else f"?{direction}"
-
-
-def parse_direction(direction: Direction | int | str) -> Direction:
-    if isinstance(direction, str):
-        text = direction.strip().lower()
-        if text in ("+x", "x", "plus_x", "+"):
-            return Direction.PLUS_X
-        if text in ("-x", "minus_x", "-"):
-            return Direction.MINUS_X
-        raise LinkError(f"unknown direction {direction!r}; expected +x or -x (or, for the loaded gait, {UNSTATED})")
-    try:
-        return Direction(int(direction))
-    except ValueError:
-        raise LinkError(f"unknown direction {direction!r}; expected 0 (+x) or 1 (-x)") from None
 
 
 def _seconds(t: float) -> str:

@@ -17,7 +17,8 @@ from typing import TextIO
 
 from ..errors import LinkError
 from ..protocol.definition import EventKind, FaultCode, Flag
-from .client import Received, RobotClient, direction_text
+from .client import Received, RobotClient
+from .direction import direction_text
 
 
 class Listener(ABC):

@@ -18,7 +18,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from ..errors import LinkError
-from ..link.client import Received, RobotClient, direction_code
+from ..link.client import Received, RobotClient
+from ..link.direction import direction_code
 from ..link.listeners import Listener
 from ..link.sim_link import SimLink
 from ..protocol.codec import Message

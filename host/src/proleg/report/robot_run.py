@@ -14,7 +14,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 
 from ..errors import GaitError, Interrupted, LinkError
-from ..link.client import UNSTATED, RobotClient, RobotInfo, direction_code
+from ..link.client import RobotClient, RobotInfo
+from ..link.direction import UNSTATED, direction_code
 from ..link.listeners import Listener
 from ..protocol.definition import GAIT_USER
 from .gait_run import GaitRun, GaitRunListener
