@@ -51,6 +51,48 @@ def test_an_interrupted_sim_says_how_far_it_got_and_keeps_a_whole_recording(caps
     assert "torn" not in capsys.readouterr().err
 
 
+@pytest.fixture
+def python_sigint():
+    """SIGINT as a terminal's Ctrl-C gives it (a test worker started in the background ignores it)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def test_a_real_sigint_inside_an_mcap_chunk_write_waits_for_the_chunk(capsys, monkeypatch, tmp_path, python_sigint):
+    """The signal itself, sent while the MCAP writer is writing its first chunk to the file:
+    the chunk is written whole, then the run stops, and the recording reads back."""
+    from proleg.record.mcap_format import McapWriter
+
+    real_open, sent = McapWriter.open, []
+
+    class Torn:  # the file, with Ctrl-C pressed during the first big write
+        def __init__(self, f):
+            self.f = f
+
+        def write(self, data):
+            if len(data) > 4096 and not sent:
+                sent.append(len(data))
+                os.kill(os.getpid(), signal.SIGINT)  # handled at the next line, mid-chunk
+                half = len(data) // 2
+                return self.f.write(data[:half]) + self.f.write(data[half:])
+            return self.f.write(data)
+
+        def __getattr__(self, name):
+            return getattr(self.f, name)
+
+    def open_(self):
+        real_open(self)
+        self._w._Writer__stream = Torn(self._w._Writer__stream)  # the mcap library's own stream
+
+    monkeypatch.setattr(McapWriter, "open", open_)
+    record = tmp_path / "run.mcap"
+    code, out, err = cli(capsys, "sim", R1, "--duration", "600", "--record", record)
+    assert sent and code == 130 and out == "" and "Traceback" not in err, err
+    assert err.rstrip().endswith(f"recording kept in {record} (complete up to there)")
+    assert len(read_recording(record).time_s) > 50  # the chunk that was being written is in it
+
+
 def test_an_interrupted_sim_without_a_recording_says_nothing_was_recorded(capsys, monkeypatch):
     _ctrl_c_after(monkeypatch, 0.1)  # during the boot, before START
     code, out, err = cli(capsys, "sim", R1, "--duration", "60", "--json")
@@ -93,12 +135,19 @@ def test_an_interrupted_rebuild_keeps_the_previous_build_and_says_so(capsys, mon
     assert (out_dir / MANIFEST).exists() and hits and hits[0].name.startswith(".fw.")  # the new one, refused
 
 
+def _as_from_a_terminal() -> None:
+    """In the child before exec: SIGINT as a shell's foreground job gets it. A test run started
+    in the background (``make test &``) ignores SIGINT, and an exec'd child would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _sigint_once_recording(args: list[str], record: Path) -> list[str]:
     """``proleg ARGS`` in a process of its own, sent SIGINT once ``record`` holds 20 kB: it exits
     130 with nothing on stdout and no traceback; its stderr lines besides warnings."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
     proc = subprocess.Popen([sys.executable, "-m", "proleg", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env)
+                            stderr=subprocess.PIPE, text=True, env=env, preexec_fn=_as_from_a_terminal)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
         time.sleep(0.2)

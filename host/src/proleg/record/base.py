@@ -21,6 +21,7 @@ from typing import IO, Any
 import numpy as np
 
 from ..errors import LinkError, RecordingError
+from .. import interrupts
 from ..link.client import Received
 from ..link.listeners import Listener
 from ..names import identifier
@@ -56,6 +57,7 @@ class Writer(Listener, ABC):
         try:
             self.open()
             self._open = True
+            interrupts.hold()  # from here a Ctrl-C lands between two rows (_guard), not inside one
         except OSError as e:
             self._discard()
             raise LinkError(f"cannot write record file {e.filename or self.path}: {e.strerror or e}") from None
@@ -112,24 +114,30 @@ class Writer(Listener, ABC):
         if not self._open:
             return
         try:
-            write(row)
-            self.records += 1
+            with interrupts.deferred():  # a Ctrl-C lands between two rows, not inside one
+                write(row)
+                self.records += 1
         except OSError as e:
             self.error = LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             self.stop()
 
     def discard(self) -> None:
         """Close and remove the recording (one of nothing: a run that never started)."""
-        self._open = False
+        if self._open:
+            self._open = False
+            interrupts.release()
         self._discard()
 
     def stop(self) -> None:
         if self._open:
             self._open = False
             try:
-                self.close()
+                with interrupts.deferred():  # the footer is written whole
+                    self.close()
             except OSError as e:
                 self.error = self.error or LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
+            finally:
+                interrupts.release()
 
 
 class Reader(ABC):
