@@ -135,19 +135,20 @@ def test_an_interrupted_rebuild_keeps_the_previous_build_and_says_so(capsys, mon
     assert (out_dir / MANIFEST).exists() and hits and hits[0].name.startswith(".fw.")  # the new one, refused
 
 
-def _as_from_a_terminal() -> None:
-    """In the child before exec: SIGINT as a shell's foreground job gets it. A test run started
-    in the background (``make test &``) ignores SIGINT, and an exec'd child would inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+#: ``python -c`` that gives SIGINT the disposition a shell's foreground job has, then execs
+#: ``proleg ARGS``: a test run started in the background (``make test &``) ignores SIGINT, and
+#: an exec'd child would inherit that (a wrapper, not ``preexec_fn``: this process has threads).
+_AS_FROM_A_TERMINAL = ("import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+                       "signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT}); "
+                       "os.execv(sys.executable, [sys.executable, '-m', 'proleg', *sys.argv[1:]])")
 
 
 def _sigint_once_recording(args: list[str], record: Path) -> list[str]:
     """``proleg ARGS`` in a process of its own, sent SIGINT once ``record`` holds 20 kB: it exits
     130 with nothing on stdout and no traceback; its stderr lines besides warnings."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
-    proc = subprocess.Popen([sys.executable, "-m", "proleg", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env, preexec_fn=_as_from_a_terminal)
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
         time.sleep(0.2)

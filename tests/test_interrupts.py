@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import signal
 import threading
+from pathlib import Path
 
 import pytest
 from proleg import interrupts
@@ -30,13 +31,27 @@ def test_a_ctrl_c_inside_the_block_is_raised_once_after_it(held):
     with pytest.raises(KeyboardInterrupt):
         with deferred():
             _ctrl_c()
-            _ctrl_c()
             done.append("the rest of the block")
     assert done == ["the rest of the block"]
     with deferred():  # nothing pending afterwards
         pass
     with pytest.raises(KeyboardInterrupt):
         _ctrl_c()  # and outside a block, at once
+
+
+def test_a_second_ctrl_c_inside_the_block_is_raised_at_once(held):
+    """A write that blocks (a stalled pipe, a hung mount) must not keep the user from
+    stopping the robot: the second Ctrl-C does not wait for the block."""
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with deferred():
+            _ctrl_c()
+            done.append("after the first")
+            _ctrl_c()
+            done.append("after the second")
+    assert done == ["after the first"]
+    with deferred():  # nothing left pending
+        pass
 
 
 def test_the_ctrl_c_wins_over_an_error_of_the_block(held):
@@ -50,8 +65,7 @@ def test_the_ctrl_c_wins_over_an_error_of_the_block(held):
 def test_the_last_release_gives_python_its_handler_back():
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        interrupts.hold()
-        interrupts.hold()
+        assert interrupts.hold() and interrupts.hold()
         interrupts.release()
         assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler  # one holder left
         interrupts.release()
@@ -65,15 +79,13 @@ def test_the_last_release_gives_python_its_handler_back():
 def test_an_ignored_sigint_stays_ignored_and_another_handler_is_left_alone():
     old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        interrupts.hold()
+        assert not interrupts.hold()  # nothing to release
         assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
-        interrupts.release()
         seen = []
         signal.signal(signal.SIGINT, lambda *_: seen.append(1))
-        interrupts.hold()
+        assert not interrupts.hold()
         with deferred():
             _ctrl_c()
-        interrupts.release()
         assert seen == [1]
     finally:
         signal.signal(signal.SIGINT, old)
@@ -97,3 +109,31 @@ def test_off_the_main_thread_a_block_defers_nothing(held):
             pass
     t.join()
     assert raised == []
+
+
+def test_a_writer_that_fails_on_a_notifier_thread_gives_the_handler_back_when_stopped(tmp_path):
+    """The console's Notifier thread writes the rows: a full disk stops the writer there, and
+    its hold is still let go, once, so Python's handler comes back."""
+    from proleg.record import Logger, RecordingMeta
+    from proleg.robot import load_robot
+
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        robot = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+        writer = Logger(tmp_path / "run.jsonl", RecordingMeta.for_robot(robot=robot))
+        assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler  # held
+
+        def full(row):
+            raise OSError(28, "No space left on device")
+
+        t = threading.Thread(target=writer._guard, args=(full, {}))
+        t.start()
+        t.join()
+        assert writer.error is not None
+        writer.stop()  # the main thread's stop, as the console's finally does
+        writer.stop()
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        with deferred(), pytest.raises(KeyboardInterrupt):  # nobody holds: at once
+            _ctrl_c()
+    finally:
+        signal.signal(signal.SIGINT, old)

@@ -4,13 +4,14 @@ A SIGINT becomes ``KeyboardInterrupt`` at whatever Python line the main thread i
 a recording writer that can be halfway through an MCAP chunk: the footer then follows a torn
 chunk, and a recording reported "complete up to there" reads back without its telemetry.
 
-While anyone has called ``hold()`` (a writer, for as long as its file is open), SIGINT goes
-to a handler of ours that raises ``KeyboardInterrupt`` at once, as Python's does, except
-inside a ``deferred()`` block on the main thread: there it is raised when the block ends,
-once. ``release()`` puts Python's handler back after the last holder. Nothing changes off
-the main thread (signals are handled only there) or when SIGINT is not Python's default
-handler (ignored in a background job, or another handler installed). Per-row cost: a flag,
-not a ``signal.signal`` call (those took 18 µs a row).
+While anyone holds (``hold()``, a writer for as long as its file is open), SIGINT goes to a
+handler of ours that raises ``KeyboardInterrupt`` at once, as Python's does, except inside a
+``deferred()`` block on the main thread: there the first Ctrl-C is raised when the block
+ends. A second one inside the same block raises at once, so a write that blocks (a stalled
+pipe, a hung mount) never keeps the user from stopping the robot. ``release()`` puts
+Python's handler back after the last holder. Nothing is deferred off the main thread
+(signals are handled only there), and an ignored SIGINT (a background job) or another
+handler is left alone. Per row: a flag, not a ``signal.signal`` call (those took 18 µs).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+_lock = threading.Lock()
 _holders = 0
 _inside = False
 _caught = False
@@ -27,36 +29,47 @@ _caught = False
 
 def _on_sigint(signum: int, frame: object) -> None:
     global _caught
-    if _inside:
-        _caught = True
+    if _holders and _inside and not _caught:
+        _caught = True  # raised when the block ends
     else:
-        raise KeyboardInterrupt
+        raise KeyboardInterrupt  # outside a block, a second Ctrl-C, or nobody holds any more
 
 
 def _main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
-def hold() -> None:
-    """Start deferring Ctrl-C in ``deferred()`` blocks (pair with ``release``)."""
+def hold() -> bool:
+    """Start deferring Ctrl-C in ``deferred()`` blocks. True when counted: the caller then
+    owes one ``release()``; False (nothing to release) off the main thread or when SIGINT is
+    ignored or someone else's."""
     global _holders
     if not _main_thread():
-        return
-    if _holders == 0:
-        if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-            return  # ignored, or someone else's: left alone (and not counted)
-        signal.signal(signal.SIGINT, _on_sigint)
-    _holders += 1
+        return False
+    with _lock:
+        current = signal.getsignal(signal.SIGINT)
+        if current is not _on_sigint:
+            if current is not signal.default_int_handler:
+                return False
+            signal.signal(signal.SIGINT, _on_sigint)
+        _holders += 1
+        return True
 
 
 def release() -> None:
-    """The last holder gone: Python's own SIGINT handler again."""
+    """One holder fewer (from any thread); after the last, Python's own handler again (on the
+    main thread; off it, ours stays and acts as Python's until ``settle()`` or a hold)."""
     global _holders
-    if not _main_thread() or _holders == 0:
-        return
-    _holders -= 1
-    if _holders == 0 and signal.getsignal(signal.SIGINT) is _on_sigint:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    with _lock:
+        _holders = max(0, _holders - 1)
+    settle()
+
+
+def settle() -> None:
+    """On the main thread with nobody holding: Python's own handler back, if ours is still in."""
+    with _lock:
+        if _holders == 0 and _main_thread() and signal.getsignal(signal.SIGINT) is _on_sigint:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @contextmanager

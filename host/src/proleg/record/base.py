@@ -53,15 +53,17 @@ class Writer(Listener, ABC):
         self.error: LinkError | None = None
         self.records = 0
         self._open = False
+        self._held = False  # owes interrupts.release()
         self._created: list[tuple[Path, IO[Any]]] = []
         try:
             self.open()
+            self._held = interrupts.hold()  # from here a Ctrl-C lands between two rows (_guard), not inside one
             self._open = True
-            interrupts.hold()  # from here a Ctrl-C lands between two rows (_guard), not inside one
         except OSError as e:
             self._discard()
             raise LinkError(f"cannot write record file {e.filename or self.path}: {e.strerror or e}") from None
         except BaseException:  # Ctrl-C while the file is being created: no half-written header left
+            self._let_go()
             self._discard()
             raise
 
@@ -121,23 +123,28 @@ class Writer(Listener, ABC):
             self.error = LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             self.stop()
 
+    def _let_go(self) -> None:
+        if self._held:
+            self._held = False
+            interrupts.release()
+
     def discard(self) -> None:
         """Close and remove the recording (one of nothing: a run that never started)."""
-        if self._open:
-            self._open = False
-            interrupts.release()
+        self._open = False
+        self._let_go()
         self._discard()
 
     def stop(self) -> None:
         if self._open:
-            self._open = False
             try:
                 with interrupts.deferred():  # the footer is written whole
+                    self._open = False
                     self.close()
             except OSError as e:
                 self.error = self.error or LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             finally:
-                interrupts.release()
+                self._let_go()
+        interrupts.settle()  # let go on a Notifier thread (a failed write): Python's handler is back now
 
 
 class Reader(ABC):
