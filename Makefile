@@ -48,7 +48,8 @@ demo: $(STAMP) toolchains
 
 # The emulated MCUs (avr-emu: simavr, arm-emu: unicorn) run the exact firmware images much
 # slower than host-sim: `make test` runs their focused hil subset (boot, link, one closed-loop
-# gait, ESTOP, on-time limit, IMU loss; tests marked emu_long deselected), `make emu` all.
+# gait, ESTOP, on-time limit, IMU loss, and on avr-emu the paper's C_T/C_L experiments; tests
+# marked emu_long deselected), `make emu` all.
 EMU_TARGETS := avr-emu arm-emu
 
 test: $(STAMP) toolchains

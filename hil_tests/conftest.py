@@ -115,7 +115,7 @@ def simulated_board_name(config) -> str | None:
 
 @pytest.hookimpl(tryfirst=True)  # before ``-m`` selects on the marks added here
 def pytest_collection_modifyitems(config, items):
-    target = config.getoption("--target")
+    target = simulated_board_name(config)  # --target arm-emu, or --target sim --board arm-emu
     for item in items:  # minutes on these emulated MCUs only: emu_long there
         mark = item.get_closest_marker("emu_long_on")
         if mark is not None and target in mark.args:
