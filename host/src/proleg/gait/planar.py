@@ -62,8 +62,11 @@ def heading_cos_sin(heading_deg: float) -> tuple[float, float]:
     return math.cos(h), math.sin(h)
 
 
-def planar_scores(table: TransitionTable, objective: PlanarObjective) -> np.ndarray:
-    """The score of every transition (aligned with ``table.src``/``dst``)."""
+def _score_terms(table: TransitionTable, objective: PlanarObjective) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """A transition's score is Σ motion − Σ penalties − κ: the motion terms (cos h·Δx and, off
+    the x axis, sin h·Δy) and the weighted variances with a non-zero weight, each an array
+    aligned with ``table.src``/``dst``. GaitError for an objective that is not finite or a
+    statistic the robot file does not give."""
     h = math.radians(objective.heading_deg)
     planar = table.planar
     given = planar.given() if planar is not None else {}
@@ -72,16 +75,24 @@ def planar_scores(table: TransitionTable, objective: PlanarObjective) -> np.ndar
         raise GaitError("planar objective: heading, variance weights and transition cost must be finite numbers")
     if min(lx, ly, lt) < 0:
         raise GaitError(f"planar objective: variance weights must be >= 0, got {objective.variance_weight}")
-    cos_h, sin_h = heading_cos_sin(objective.heading_deg) if math.isfinite(h) else (math.nan, math.nan)
+    cos_h, sin_h = heading_cos_sin(objective.heading_deg)
     needed = {"dy": sin_h != 0.0, "var_dx": lx != 0, "var_dy": ly != 0, "var_dtheta_deg": lt != 0}
     missing = [k for k, used in needed.items() if used and k not in given]
     if missing:
         raise GaitError(f"planar objective needs [transitions].{missing[0]} in the robot file, and it has none")
-    zero = np.zeros(table.n_transitions)
-    score = cos_h * np.asarray(table.reward, dtype=np.float64)
+    motion = [cos_h * np.asarray(table.reward, dtype=np.float64)]
     if sin_h != 0.0:
-        score = score + sin_h * given["dy"]
-    score = score - lx * given.get("var_dx", zero) - ly * given.get("var_dy", zero) - lt * given.get("var_dtheta_deg", zero)
+        motion.append(sin_h * given["dy"])
+    penalties = [w * given[k] for k, w in (("var_dx", lx), ("var_dy", ly), ("var_dtheta_deg", lt)) if w != 0]
+    return motion, penalties
+
+
+def planar_scores(table: TransitionTable, objective: PlanarObjective) -> np.ndarray:
+    """The score of every transition (aligned with ``table.src``/``dst``)."""
+    motion, penalties = _score_terms(table, objective)
+    score = sum(motion[1:], motion[0])
+    for p in penalties:
+        score = score - p
     return score - float(objective.transition_cost)
 
 
@@ -89,19 +100,12 @@ def score_scale(table: TransitionTable, objective: PlanarObjective, rotate: str 
     """The largest magnitude any term of a transition's score has: the scale against which
     a score is "zero". A score that cancels (heading 45° with Δx = −Δy) is rounding noise
     the size of its terms, not of itself, so a tolerance relative to the scores alone would
-    call that noise a gain."""
-    planar = table.planar
-    given = planar.given() if planar is not None else {}
-    zero = np.zeros(table.n_transitions)
-    if rotate is None:
-        cos_h, sin_h = heading_cos_sin(objective.heading_deg)
-        motion = np.abs(cos_h * np.asarray(table.reward, dtype=np.float64)) + np.abs(sin_h * given.get("dy", zero))
-    else:
-        motion = np.abs(dtheta_of(table, "a rotation gait"))
-    lx, ly, lt = (float(x) for x in objective.variance_weight)
-    spread = lx * np.abs(given.get("var_dx", zero)) + ly * np.abs(given.get("var_dy", zero)) + lt * np.abs(given.get("var_dtheta_deg", zero))
-    terms = motion + spread + abs(float(objective.transition_cost))
-    return float(terms.max()) if len(terms) else 0.0
+    call that noise a gain. A rotation gait's motion is its turn, |Δθ|."""
+    motion, penalties = _score_terms(table, objective if rotate is None else replace(objective, heading_deg=0.0))
+    if rotate is not None:
+        motion = [dtheta_of(table, "a rotation gait")]
+    size = sum(np.abs(t) for t in motion + penalties) + abs(float(objective.transition_cost))
+    return float(size.max()) if table.n_transitions else 0.0
 
 
 def planar_table(table: TransitionTable, objective: PlanarObjective) -> TransitionTable:
