@@ -100,6 +100,41 @@ def test_an_interrupted_sim_without_a_recording_says_nothing_was_recorded(capsys
     assert err == "proleg: interrupted before the run started; nothing recorded\n"
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".mcap"])
+def test_a_sim_interrupted_before_its_run_started_keeps_no_recording(capsys, monkeypatch, tmp_path, suffix):
+    """Calibrating on the flat before START (--calibrated): a recording of no run is not kept,
+    as proleg run does not keep one."""
+    record = tmp_path / f"run{suffix}"
+    _ctrl_c_after(monkeypatch, 1.0)
+    code, out, err = cli(capsys, "sim", R1, "--calibrated", "--record", record)
+    assert code == 130 and out == ""
+    assert err == "proleg: interrupted before the run started; nothing recorded\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_real_sigint_between_opening_a_recording_and_keeping_it_loses_nothing(
+        capsys, monkeypatch, tmp_path, python_sigint):
+    """The signal lands after the writer opened its file and before the command holds it in
+    its listeners: the command still closes it (here: removes it, no run had started) rather
+    than leaving an MCAP without its footer and saying nothing was recorded."""
+    from proleg.cli import sim_command
+
+    real, opened = sim_command._recorder, []
+
+    def recorder(*args):
+        writer = real(*args)
+        opened.append(writer.path)
+        os.kill(os.getpid(), signal.SIGINT)  # handled at the next line: before the caller has it
+        return writer
+
+    monkeypatch.setattr(sim_command, "_recorder", recorder)
+    record = tmp_path / "run.mcap"
+    code, out, err = cli(capsys, "sim", R1, "--record", record)
+    assert opened == [record] and code == 130 and out == ""
+    assert err == "proleg: interrupted before the run started; nothing recorded\n"
+    assert not record.exists()
+
+
 def test_an_interrupted_build_leaves_nothing_and_says_so(capsys, monkeypatch, tmp_path):
     parent = empty_build_dir(tmp_path)
 
@@ -403,3 +438,21 @@ def test_a_recording_opened_for_a_run_that_never_started_is_removed(capsys, monk
     code, _, err = cli(capsys, "run", R1, "--sim", "--record", tmp_path / f"run{suffix}")
     assert code == 130 and err.endswith("; nothing recorded\n")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_console_interrupted_while_it_sets_up_closes_the_recording_it_opened(capsys, monkeypatch, tmp_path):
+    """Ctrl-C after --record opened its file, before the session began (here while the UDP
+    streamer is being made): the robot is stopped and the MCAP still gets its footer."""
+    from proleg.record import udp
+
+    def ctrl_c(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(udp.UdpStreamer, "__init__", ctrl_c)
+    record = tmp_path / "session.mcap"
+    code, _, err = cli(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "5",
+                       "--record", record, "--udp", "127.0.0.1:9")
+    assert code == 0 and "Traceback" not in err  # Ctrl-C is how a console session ends (README, "Exit status")
+    assert "robot stopped" in err  # the robot was stopped all the same
+    data = record.read_bytes()
+    assert data.endswith(b"\x89MCAP0\r\n") and len(data) > 16  # the footer's closing magic: a whole file

@@ -137,3 +137,20 @@ def test_a_writer_that_fails_on_a_notifier_thread_gives_the_handler_back_when_st
             _ctrl_c()
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def test_whole_holds_by_itself_and_gives_python_its_handler_back():
+    """whole() needs no holder around it (a writer being opened has not held yet)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        done = []
+        with pytest.raises(KeyboardInterrupt):
+            with interrupts.whole():
+                _ctrl_c()
+                done.append("the rest of the block")
+        assert done == ["the rest of the block"]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        with interrupts.whole():  # nothing pending afterwards
+            pass
+    finally:
+        signal.signal(signal.SIGINT, old)

@@ -88,3 +88,18 @@ def deferred() -> Iterator[None]:
         if _caught:
             _caught = False
             raise KeyboardInterrupt
+
+
+@contextmanager
+def whole() -> Iterator[None]:
+    """Hold and defer for the length of the block: a Ctrl-C in it is raised after it. For
+    opening a writer and handing it to whoever will close it (``listeners.append(Logger(…))``):
+    a Ctrl-C between the two would leave a recording nobody closes (an MCAP without its
+    footer)."""
+    counted = hold()
+    try:
+        with deferred():
+            yield
+    finally:
+        if counted:
+            release()

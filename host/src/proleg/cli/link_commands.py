@@ -12,6 +12,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any, TextIO
 
+from .. import interrupts
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
@@ -94,7 +95,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         try:
             meta = RecordingMeta.for_robot(info=info, robot=robot, link=link)
             if record is not None:
-                listeners.append(Logger(record, meta))
+                with interrupts.whole():  # a Ctrl-C in between: the recording is already ours to close
+                    listeners.append(Logger(record, meta))
             if udp is not None:
                 listeners.append(UdpStreamer(udp, udp_format, meta))
             levels = robot.levels if robot is not None else (2,) * info.limbs
@@ -127,8 +129,12 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                 if app.model.link_error is not None:
                     raise app.model.link_error
         finally:
-            if not leave_running:
-                print(f"proleg: {stop_robot(client)} on {link.description}", file=err)
+            try:
+                if not leave_running:
+                    print(f"proleg: {stop_robot(client)} on {link.description}", file=err)
+            finally:
+                for listener in listeners:  # also those a Ctrl-C before the session left open
+                    listener.stop()  # (a recording gets its MCAP footer; stopping twice is nothing)
         errors = [w.error for w in listeners if getattr(w, "error", None)]
         if errors:
             raise errors[0]

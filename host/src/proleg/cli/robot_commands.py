@@ -17,6 +17,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
+from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..link.serial_link import DEFAULT_BAUDRATE
 from .number_args import baudrate, can_bitrate, can_node, gait_index, heading_deg, positive_float, reply_timeout
@@ -182,7 +183,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         listeners: list[Any] = []
         try:
             if args.record:
-                listeners.append(Logger(args.record, meta))
+                with interrupts.whole():  # a Ctrl-C in between: the recording is already ours to close
+                    listeners.append(Logger(args.record, meta))
             if args.udp:
                 listeners.append(UdpStreamer(args.udp, args.udp_format, meta))
             if args.format == "jsonl":

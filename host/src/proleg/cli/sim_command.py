@@ -13,6 +13,7 @@ import sys
 
 from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
 from .number_args import gait_number, max_transitions, positive_float
+from .. import interrupts
 from ..report.matrix_check import check, remark_text
 
 #: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
@@ -138,8 +139,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
         session = SimSession(sim, listeners=[held])
         booted = session.until_info(BOOT_S) if args.record or args.udp else 0.0
         if args.record:
-            recorder = _recorder(robot, args.record, session, args.board)
-            listeners.append(recorder)
+            with interrupts.whole():  # a Ctrl-C in between: the recording is already ours to close
+                recorder = _recorder(robot, args.record, session, args.board)
+                listeners.append(recorder)
         if args.udp:
             from ..record import UdpStreamer
 
@@ -160,10 +162,13 @@ def cmd_sim(args: argparse.Namespace) -> int:
         report = session.run_gait(args.direction, args.gait, args.duration)
     except KeyboardInterrupt:
         for listener in listeners:
-            listener.stop()  # the recording is closed whole (an MCAP gets its footer)
+            if start is None:  # before START: a recording of nothing is not kept (as proleg run)
+                getattr(listener, "discard", listener.stop)()
+            else:
+                listener.stop()  # the recording is closed whole (an MCAP gets its footer)
         from ..errors import Interrupted
 
-        raise Interrupted(_interrupted(sim, start, args.duration, recorder)) from None
+        raise Interrupted(_interrupted(sim, start, args.duration, None if start is None else recorder)) from None
     finally:
         for listener in listeners:
             listener.stop()
