@@ -16,7 +16,7 @@ from proleg.errors import RobotFileError
 from proleg.paths import robots_dir
 from proleg.report import SimSession
 from proleg.robot import load_robot
-from proleg.robot_body import worn_holds
+from proleg.robot_body import worn_holds_of
 from proleg.sim.physical import PhysicalPlant
 from proleg.sim.simulators import open_simulated
 
@@ -325,7 +325,7 @@ def test_a_hold_top_out_of_reach_is_one_warning_line_with_the_margin_that_fits(t
     lines = [r.getMessage() for r in caplog.records]
     assert len(lines) == 1 and "limb 'right': held raised" in lines[0] and "ψ ≥ 26.0°" in lines[0], lines
     # the warning says the hold watch holds it short: the firmware for this file has it
-    assert worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant, 4.0) == [1]
+    assert worn_holds_of(robot) == [1]
     reach = float(lines[0].split("bends it to ")[1].split("°")[0])
     assert 22.0 < reach < 25.0, lines
     fits = float(lines[0].split("hold_margin_deg to at most ")[1])

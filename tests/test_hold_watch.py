@@ -14,14 +14,12 @@ from proleg.firmware.render import control_part, render_config
 from proleg.paths import robots_dir
 from proleg.report import claim
 from proleg.robot import load_robot, robot_from_dict
-from proleg.robot_body import WORN_STROKE_LOSS, body_of, worn_holds
+from proleg.robot_body import WORN_STROKE_LOSS, body_of, worn_holds, worn_holds_of
 from proleg.sim.physical.params import FatigueLaw
 
 
 def _worn(name: str) -> list[int]:
-    robot = load_robot(robots_dir() / f"{name}.toml")
-    return worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
-                      robot.control.hold_margin_deg)
+    return worn_holds_of(load_robot(robots_dir() / f"{name}.toml"))
 
 
 def test_a_hold_top_far_below_the_reach_needs_no_watch_and_one_near_it_does():

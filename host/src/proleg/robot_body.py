@@ -159,6 +159,15 @@ def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, ho
     return [i for i in no_stroke if hold_top_deg(limbs[i], hold_margin_deg) > kept * min(reach[0][i], reach[1][i])]
 
 
+def worn_holds_of(robot: Any) -> list[int]:
+    """``worn_holds`` of a loaded robot, with its own hold margin; none for a robot without
+    its [plant] table."""
+    if getattr(robot, "plant", None) is None:
+        return []
+    return worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
+                      float(robot.control.hold_margin_deg))
+
+
 #: Above this many states the coupling check is skipped (one shape per state; the largest
 #: example robots have 36).
 COUPLING_CHECK_MAX_STATES = 4096

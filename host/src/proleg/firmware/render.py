@@ -30,6 +30,7 @@ from .. import __version__
 from ..errors import BoardError, BuildError
 from ..paths import display_path, templates_dir
 from ..robot import stroke_leads
+from ..robot_body import worn_holds_of
 from ..robot_climb import check_climb_limit
 from .boards import DEFAULT_I2C_HZ, DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
@@ -353,17 +354,6 @@ def _climb_cdeg(limit: Any) -> dict[str, int | None]:
             "max_climb_gaits_mx": tuple(round(v * 100) for v in limit.minus_x_gaits)}
 
 
-def _worn_holds(robot: Any) -> list[int]:
-    """The limbs whose hold top a worn coil may fall short of on the robot's simulated body
-    (``proleg.robot_body.worn_holds``); none for a robot built without its [plant] table."""
-    from ..robot_body import worn_holds
-
-    if getattr(robot, "plant", None) is None:
-        return []
-    return worn_holds(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
-                      float(robot.control.hold_margin_deg))
-
-
 def control_part(robot: Any) -> ControlPart:
     """The robot's control and safety numbers as the firmware is built with them (whole ticks)."""
     ctl, safety = robot.control, robot.safety
@@ -390,7 +380,7 @@ def control_part(robot: Any) -> ControlPart:
         watchdog_ms=int(safety.link_watchdog_ms),
         watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
         **thermal_budget(robot.name, safety, ctl),
-        hold_watch=int(bool(_worn_holds(robot))),
+        hold_watch=int(bool(worn_holds_of(robot))),
         boost_ms=int(getattr(ctl, "boost_ms", 0)),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
