@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from proleg.errors import LinkError, RecordingError, UsageError
@@ -429,3 +430,25 @@ def test_every_format_reads_the_events_back_alike_numbers_as_numbers(tmp_path):
                               and isinstance(e["t_host_s"], (int, float)) for e in events), (suffix, events[:2])
         assert [(e["msg"], e["kind"], e["code"], e["detail"], e["text"]) for e in events] == \
             [(e["msg"], e["kind"], e["code"], e["detail"], e["text"]) for e in got[".jsonl"]], suffix
+
+
+@pytest.mark.parametrize("channels", [(1, 0), (3, 1)])
+def test_duty_columns_name_the_actuator_the_firmware_sends_whatever_its_channel(tmp_path, channels):
+    """TELEMETRY carries one duty per actuator in the robot file's order (core/telemetry.c).
+    The recording named them by PWM channel: with R1's coils on swapped channels the left
+    coil's heat was filed under sma-right, and channels 3 and 1 gave duty_ch0_pct…"""
+    from proleg.cli import main
+
+    text = (Path(__file__).parents[1] / "robots" / "paper-r1.toml").read_text()
+    assert text.count("channel = 0") == 1 and text.count("channel = 1") == 1
+    text = text.replace("channel = 0", "channel = @L").replace("channel = 1", "channel = @R")
+    robot = tmp_path / "r1.toml"
+    robot.write_text(text.replace("@L", str(channels[0])).replace("@R", str(channels[1])))
+    assert main(["sim", str(robot), "--duration", "4", "--record", str(tmp_path / "r.jsonl")]) == 0
+    rec = read_recording(tmp_path / "r.jsonl")
+    assert rec.meta.channel_names == ("sma-left", "sma-right")
+    left, right = rec.duty_pct[:, 0], rec.duty_pct[:, 1]
+    psi_left = rec.psi_deg[:, 0]
+    first_up = int(np.argmax(psi_left > 20.0))  # gait 0 starts 00 -> 10: the left coil alone raises it
+    assert first_up > 0
+    assert left[:first_up].max() > 50.0 and right[:first_up].max() == 0.0

@@ -214,7 +214,7 @@ class Recording:
     step: np.ndarray
     flags: np.ndarray
     psi_deg: np.ndarray  # [frames, limbs]
-    duty_pct: np.ndarray  # [frames, channels]
+    duty_pct: np.ndarray  # [frames, actuators] (the robot file's order: meta.channel_names)
     displacement_mm: np.ndarray | None
     events: list[dict[str, Any]] = field(default_factory=list)
 

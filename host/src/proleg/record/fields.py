@@ -115,7 +115,9 @@ class RecordingMeta:
         """Metadata from a connected robot's INFO (``RobotInfo``), its robot file (``Robot``,
         for limb and actuator names and ψ*) and the link (its description, its ground truth)."""
         limbs = info.limbs if info is not None else len(robot.limbs)
-        channels = info.actuators if info is not None else max(a.channel for a in robot.actuators) + 1
+        # TELEMETRY's duties come one per actuator in the firmware's actuator order (the robot
+        # file's: core/telemetry.c), whatever channels those actuators drive
+        channels = info.actuators if info is not None else len(robot.actuators)
         limb_names = [f"limb{i + 1}" for i in range(limbs)]  # counted from 1, as messages show them
         channel_names = [f"ch{j}" for j in range(channels)]
         stars: tuple[tuple[float, ...], ...] = ()
@@ -123,10 +125,9 @@ class RecordingMeta:
         if robot is not None and len(robot.limbs) == limbs:
             limb_names = [limb.name for limb in robot.limbs]
             stars = tuple(tuple(limb.psi_star_deg) for limb in robot.limbs)
-            for a in robot.actuators:
-                if a.channel < channels:
-                    channel_names[a.channel] = a.name
             actuator_names = tuple(a.name for a in robot.actuators)
+            if len(actuator_names) == channels:
+                channel_names = list(actuator_names)
         extra = dict(info.header()) if info is not None else {}
         for k in ("robot", "board", "limbs", "channels"):
             extra.pop(k, None)
