@@ -81,6 +81,12 @@ def test_sim_json_echoes_the_conditions_given_and_those_in_effect(capsys, tmp_pa
      "condition incline_deg: given twice ('incline_deg=5' and 'incline_deg=-5'); give it once"),
     (["--condition", "imu_offset_deg=left:8", "--condition", "imu_offset_deg=left:-8"],
      "condition imu_offset_deg for 'left': given twice"),
+    # one limb or coil under two of its names: the last one was silently taken
+    (["--condition", "imu_bias_deg=rear:3", "--condition", "imu_bias_deg=left:4"],
+     "condition imu_bias_deg: 'imu_bias_deg=rear:3' and 'imu_bias_deg=left:4' both name limb 'left'; give it once"),
+    (["--condition", "imu_bias_deg=1:3", "--condition", "imu_bias_deg=front:4"], "both name limb 'right'"),
+    (["--condition", "power_scale=right:0.8", "--condition", "power_scale=sma-right:0.9"],
+     "both name actuator 'sma-right'"),
 ])
 def test_a_bad_condition_is_one_line_without_traceback(capsys, args, words):
     rc, out, err = run(capsys, "sim", str(R1), "--duration", "1", *args)
@@ -201,3 +207,14 @@ def test_simulated_robot_takes_the_plant_choice():
     assert SimulatedRobot(robot, plant="table").plant_kind == "table"
     sim = SimulatedRobot(robot, conditions=["ambient_c=30"])
     assert sim.plant.conditions.get("ambient_c") == 30.0
+
+
+def test_each_end_once_and_all_limbs_beside_one_are_not_a_repeat(capsys):
+    """rear and front are two limbs; a value for all limbs and one for a single limb is how
+    to set all but one."""
+    rc, out, err = run(capsys, "sim", str(R1), "--duration", "1", "--json", "--condition", "imu_bias_deg=rear:3",
+                       "--condition", "imu_bias_deg=front:-2", "--condition", "power_scale=0.9",
+                       "--condition", "power_scale=left:0.8")
+    assert rc == 0, err
+    assert json.loads(out)["effective_conditions"] == [
+        "power_scale=0.9", "power_scale=left:0.8", "imu_bias_deg=rear:3.0", "imu_bias_deg=front:-2.0"]

@@ -179,6 +179,27 @@ def _once(given: dict[tuple[str, str], str], key: str, val: str, item: str) -> N
     given[key, name] = item
 
 
+def check_given_once(items: Iterable[str], limbs: Sequence[str], actuators: Sequence[str],
+                     by_limb: Sequence[int] = ()) -> None:
+    """``_once`` on a known robot: two ``key=NAME:value`` strings whose names mean the same limb
+    or actuator (``0`` and ``tail``, ``front`` and ``head``, a limb and its coil) are the same
+    SimError as one name given twice, not the last silently taken."""
+    seen: dict[tuple[str, int], str] = {}
+    for item in items:
+        key, _, val = item.partition("=")
+        key = key.strip()
+        name = val.rpartition(":")[0].strip()
+        if key not in KEYS or not KEYS[key].per or not name:
+            continue
+        per_limb = KEYS[key].per == "limb"
+        names = limbs if per_limb else actuators
+        index = _resolve(key, name, names, () if per_limb else by_limb, () if per_limb else limbs)
+        if (key, index) in seen:
+            raise SimError(f"condition {key}: {seen[key, index]!r} and {item!r} both name {KEYS[key].per} "
+                           f"{names[index]!r}; give it once")
+        seen[key, index] = item
+
+
 def describe_keys() -> str:
     """One line per key: name, unit, range, default, what it does."""
     out = []
