@@ -6,6 +6,7 @@ of a robot file against the board's INFO."""
 from __future__ import annotations
 
 import io
+import json
 import shutil
 
 import pytest
@@ -117,6 +118,51 @@ def test_the_heartbeat_keeps_pace_with_a_board_whose_clock_runs_faster_than_the_
     assert 4.0 < client.board_rate <= 5.5
     assert not any(m.name == "EVENT" and m.kind == EventKind.FAULT for m in seen)
     assert all(m.flags & Flag.RUNNING for m in seen[-20:] if m.name == "TELEMETRY")
+    client.close()
+
+
+def _watchdog_robot(tmp_path, ms: int):
+    text = (resolve_robot("paper-r1")).read_text()
+    path = tmp_path / f"r1-watchdog-{ms}.toml"
+    path.write_text(text.replace("[safety]\n", f"[safety]\nlink_watchdog_ms = {ms}\n"))
+    return path
+
+
+@pytest.mark.parametrize("command", [["sim", "--json"], ["run", "--sim", "--format", "jsonl"]])
+def test_a_robot_files_shorter_watchdog_is_fed_by_sim_and_run(tmp_path, capsys, command):
+    """Only the console pinged in step with the robot file's watchdog: with 400 ms, proleg sim
+    and proleg run (0.5 s heartbeat) stopped every gait with LINK_WATCHDOG 0.4 s after START."""
+    from proleg.cli import main
+
+    path = _watchdog_robot(tmp_path, 400)
+    code = main([command[0], str(path), *command[1:], "--duration", "8"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    result = json.loads(out.splitlines()[-1])
+    assert result["faults"] == [] and result["cycles"] >= 1
+
+
+def test_a_watchdog_under_100_ms_is_refused_and_100_is_fed(tmp_path):
+    from proleg.errors import RobotFileError
+
+    with pytest.raises(RobotFileError, match=r"safety.link_watchdog_ms: expected 0 \(off\) or at least 100 ms, got 50"):
+        load_robot(_watchdog_robot(tmp_path, 50))
+    robot = load_robot(_watchdog_robot(tmp_path, 100))
+    client = RobotClient(SimLink(SimulatedRobot(robot, seed=1)), watchdog_ms=robot.safety.link_watchdog_ms)
+    assert client.heartbeat_s == pytest.approx(0.025)
+
+
+def test_set_param_shortening_the_watchdog_shortens_the_heartbeat():
+    robot, sim, client = _running_robot(heartbeat_s=0.5)
+    client.set_param("link_watchdog_ms", 0, 300)
+    assert client.heartbeat_s == pytest.approx(0.075)
+    deadline = client.link.clock() + 3.0
+    faults = []
+    while client.link.clock() < deadline:  # reading only, as an idle console does
+        m = client.recv(0.1)
+        if m is not None and m.name == "EVENT" and m.kind == EventKind.FAULT:
+            faults.append(m)
+    assert not faults
     client.close()
 
 

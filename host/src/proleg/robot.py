@@ -106,6 +106,11 @@ class Actuator:
     channel_given: bool = True  # False: no channel key, the default (its position among the [[actuator]]s)
 
 
+#: The shortest link watchdog a robot file may set (0 turns it off): the host's heartbeat
+#: comes every quarter of it (``proleg.link.client.WATCHDOG_SHARE``).
+MIN_LINK_WATCHDOG_MS = 100
+
+
 @dataclass(frozen=True)
 class Safety:
     max_on_ms: int = 3000
@@ -453,6 +458,10 @@ def _safety(path: Path, value: Any) -> Safety:
         state_timeout_ms=f.integer("state_timeout_ms", d.state_timeout_ms, 10, 600_000),
         link_watchdog_ms=f.integer("link_watchdog_ms", d.link_watchdog_ms, 0, 600_000),
     )
+    # the host feeds the watchdog with a PING every quarter of it (link/client.py): below
+    # 100 ms that is a frame every few ms, and a desktop OS's scheduling alone can miss it
+    if 0 < s.link_watchdog_ms < MIN_LINK_WATCHDOG_MS:
+        f.fail("link_watchdog_ms", f"0 (off) or at least {MIN_LINK_WATCHDOG_MS} ms", s.link_watchdog_ms)
     # sma.c pays on-time back at max_on/min_cooldown in steps of 1/256: a cool-down of 256
     # on-times or more would pay back nothing, and a coil that hit its limit never heat again
     if s.min_cooldown_ms > MAX_COOLDOWN_PER_ON * s.max_on_ms:

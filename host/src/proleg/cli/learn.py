@@ -228,7 +228,7 @@ def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> 
         if source == "sim":
             pose = sim_pose
     else:
-        client = open_client(args, args.robot)
+        client = open_client(args, args.robot, watchdog_ms=robot.safety.link_watchdog_ms)
     bar = ProgressBar() if log.isEnabledFor(logging.INFO) else None
 
     def progress(p: Progress) -> None:

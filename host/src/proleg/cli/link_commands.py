@@ -88,8 +88,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         if robot is not None:
             for problem in check_identity(info, robot, force=force):
                 print(f"proleg: warning: --force: {problem}", file=err)
-        if robot is not None and robot.safety.link_watchdog_ms:
-            client.heartbeat_s = min(client.heartbeat_s or 1e9, robot.safety.link_watchdog_ms / 2000)
+        if robot is not None:
+            client.fit_heartbeat(robot.safety.link_watchdog_ms)
         faulted = FaultWatch()
         listeners: list = [faulted]
         try:

@@ -59,9 +59,11 @@ def link_settings(args: argparse.Namespace) -> dict[str, Any]:
             "bitrate": getattr(args, "bitrate", None), "interface": getattr(args, "interface", None)}
 
 
-def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None):
+def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None,
+                watchdog_ms: int | None = None):
     """A connected ``RobotClient`` on the link the options name (the simulated board runs
-    flat out unless ``speed`` paces it)."""
+    flat out unless ``speed`` paces it), pinging often enough for ``watchdog_ms`` (the robot
+    file's link watchdog)."""
     from ..link.client import RobotClient
     from ..link.factory import link_url, open_link
 
@@ -83,7 +85,7 @@ def open_client(args: argparse.Namespace, robot_path: str | None = None, *, spee
 
         robot_file = robot_arg(robot_path)
     link = open_link(url, baudrate=given["baudrate"], speed=speed, robot_file=robot_file)
-    client = RobotClient(link, timeout=args.timeout)
+    client = RobotClient(link, timeout=args.timeout, watchdog_ms=watchdog_ms)
     try:
         info = client.connect()
     except BaseException:
@@ -162,7 +164,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if choice is not None:
         gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
     try:
-        client = open_client(args, args.robot, speed=args.speed)
+        client = open_client(args, args.robot, speed=args.speed, watchdog_ms=robot.safety.link_watchdog_ms)
     except KeyboardInterrupt:
         raise Interrupted("interrupted while connecting, before the gait started: nothing was started on the "
                           "robot; nothing recorded") from None
@@ -316,7 +318,7 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
 
     if (line := rest_start_warning(robot, states)) is not None:
         log.warning("warning: %s", line)
-    with open_client(args, args.robot) as client:
+    with open_client(args, args.robot, watchdog_ms=robot.safety.link_watchdog_ms) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(table.label(x) for x in [*states, states[0]])} as the user gait on {client.link.description} "
               f"({_way_hint(table, states)})")

@@ -403,12 +403,13 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, 
     check_plant(robot, truth, plant)
     if plant == "physical":
         sim = SimulatedRobot(robot, seed=seed)
-        client = RobotClient(SimLink(sim, description=f"sim {robot.name} (physical plant)"))
+        client = RobotClient(SimLink(sim, description=f"sim {robot.name} (physical plant)"),
+                             watchdog_ms=robot.safety.link_watchdog_ms)
         return sim, client, lambda: (sim.plant.displacement_mm, None, None)
     truth = truth or robot
     plant = Plant(plant_params_from_robot(truth), true_rewards_from_robot(truth), robot.levels, seed)
     sim = SimulatedRobot(robot, seed=seed, plant=plant)
-    client = RobotClient(SimLink(sim, description=f"sim {robot.name}"))
+    client = RobotClient(SimLink(sim, description=f"sim {robot.name}"), watchdog_ms=robot.safety.link_watchdog_ms)
 
     def pose() -> Pose:
         return (sim.plant.displacement_mm, None, None)

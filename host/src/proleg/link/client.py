@@ -22,7 +22,8 @@ Heartbeat: the firmware's link watchdog (on by default, ``[safety] link_watchdog
 a gait when no valid frame arrives for that long. While anyone reads the client (``recv``,
 a Notifier, a waiting command), a connected client sends a PING whenever it has written
 nothing for ``heartbeat_s`` seconds of the link's clock (default 0.5 s, a quarter of the
-default 2 s watchdog), so an idle session never trips it; the ACKs of those PINGs are not
+default 2 s watchdog; ``watchdog_ms``, the robot file's, shortens it to a quarter of that),
+so an idle session never trips it; the ACKs of those PINGs are not
 queued. The period counts on the board's clock: when TELEMETRY shows it running faster than
 the link's (a simulated board at ``--speed 5`` behind a pty), the period shrinks in
 proportion, or the watchdog would trip between two PINGs. ``heartbeat_s=None`` turns it off
@@ -82,6 +83,9 @@ QUEUE_LIMIT = 65536
 #: default heartbeat period (link clock, s): at most half of any watchdog ≥ 1 s; divided by
 #: how much faster than the link's clock the board's runs (``RobotClient.board_rate``)
 HEARTBEAT_S = 0.5
+#: The heartbeat comes at least this many times per link watchdog period (the default 0.5 s
+#: is a quarter of the default 2 s watchdog): a robot file's shorter watchdog shortens it.
+WATCHDOG_SHARE = 4
 _EPS = 1e-9  # clock comparisons: virtual time advances in float steps
 #: How long ``start`` waits for the board to know its state after a reset: an MPU-6050 starts
 #: in 100 ms at most (datasheet), then the state needs its debounce and a telemetry frame.
@@ -102,6 +106,7 @@ class RobotClient:
         max_channels: int = CHANNEL_CEILING,
         poll_s: float = 0.02,
         heartbeat_s: float | None = HEARTBEAT_S,
+        watchdog_ms: int | None = None,
     ):
         self.link = link
         self.timeout = timeout
@@ -122,6 +127,7 @@ class RobotClient:
         self._reconnect_lock = threading.Lock()
         self._closed = False
         self.heartbeat_s = heartbeat_s
+        self.fit_heartbeat(watchdog_ms)
         self.heartbeats = 0  # PINGs sent by the heartbeat
         self._board_clock = BoardClockRate()  # a board at --speed 5 behind a pty counts 5× faster
         self._last_tx: float | None = None  # link clock of the last write (None: not connected yet)
@@ -207,6 +213,13 @@ class RobotClient:
         """Store a user gait: a closed walk without the repeated start state."""
         self.request("LOAD_GAIT", states=tuple(int(s) for s in states))
 
+    def fit_heartbeat(self, watchdog_ms: int | None) -> None:
+        """Ping often enough for a link watchdog of ``watchdog_ms`` (the robot file's ``[safety]
+        link_watchdog_ms``; None or 0: nothing to fit): at least ``WATCHDOG_SHARE`` times a
+        period. A heartbeat that is off stays off."""
+        if self.heartbeat_s is not None and watchdog_ms:
+            self.heartbeat_s = min(self.heartbeat_s, watchdog_ms / 1000 / WATCHDOG_SHARE)
+
     def set_param(self, param: ParamId | int | str, index: int, value: int) -> None:
         if isinstance(param, str):
             try:
@@ -214,6 +227,8 @@ class RobotClient:
             except KeyError:
                 raise LinkError(f"unknown parameter {param!r}; known: {', '.join(p.name.lower() for p in ParamId)}") from None
         self.request("SET_PARAM", param=int(param), index=int(index), value=int(value))
+        if int(param) == ParamId.LINK_WATCHDOG_MS:
+            self.fit_heartbeat(int(value))  # a shorter watchdog from here on
 
     def set_telemetry_rate(self, hz: int) -> None:
         self.request("SET_TELEMETRY_RATE", hz=int(hz))

@@ -141,7 +141,8 @@ class SimSession:
         self.keep_telemetry = keep_telemetry
         self.listeners: list[Listener] = list(listeners)
         self.link = SimLink(sim, step_s=sim.plant_dt_s, description=f"simulated {sim.robot.name}")
-        self.client = RobotClient(self.link, max_limbs=len(sim.robot.limbs), max_channels=len(sim.robot.actuators))
+        self.client = RobotClient(self.link, max_limbs=len(sim.robot.limbs), max_channels=len(sim.robot.actuators),
+                                  watchdog_ms=sim.robot.safety.link_watchdog_ms)
         self._scheduled: list[tuple[float, str]] = []  # (virtual time s, fault), sorted
         self._latched: list[Fault] = []  # faults the board latched and has not cleared since
 
