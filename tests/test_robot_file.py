@@ -97,6 +97,17 @@ def test_non_numeric_entry_names_row_and_column(tmp_path):
     rejects(tmp_path, R1.replace("[1, 0, 0, -1]", '[1, "up", 0, -1]'), "transitions.matrix[2][2]", "'up'")
 
 
+@pytest.mark.parametrize("old, new, shown", [
+    ("[1, 0, 0, -1]", "[1, true, 0, -1]", "got true"),                 # a matrix cell
+    ("psi_star_deg = [20.0]", "psi_star_deg = [false]", "got [false]"),  # a field's list
+    ("psi_star_deg = [20.0]", "psi_star_deg = {left = 3}", "got {left = 3}"),
+])
+def test_a_wrong_value_is_shown_as_it_was_written_in_toml(tmp_path, old, new, shown):
+    """Not Python's True, [False] or {'left': 3}."""
+    msg = rejects(tmp_path, R1.replace(old, new, 1), shown)
+    assert "True" not in msg and "False" not in msg and "{'left'" not in msg
+
+
 def test_unknown_key_is_rejected_with_the_known_ones(tmp_path):
     msg = rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\npsi_star = 3'), "limb 'left': unknown key", "'psi_star'")
     assert "psi_star_deg" in msg

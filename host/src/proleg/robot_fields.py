@@ -12,6 +12,21 @@ from typing import Any
 from .errors import RobotFileError
 
 
+def toml_text(value: Any) -> str:
+    """A value read from a robot file as it was written in TOML (``true``, ``[1, true]``,
+    ``{left = 3}``), for error messages: Python's ``True`` or ``{'left': 3}`` is not what the
+    user typed. Strings keep their quotes ('abc' is a TOML literal string too)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(toml_text(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {toml_text(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (str, int, float)):
+        return repr(value)
+    return str(value)  # a TOML date or time
+
+
 class Fields:
     """Reads one TOML table, checking types and refusing keys it does not know."""
 
@@ -28,7 +43,7 @@ class Fields:
 
     def fail(self, key: str, expected: str, got: Any = None) -> None:
         name = f"{self.where}{self.sep}{key}" if key else self.where
-        shown = "" if got is None else f", got {got!r}"
+        shown = "" if got is None else f", got {toml_text(got)}"
         raise RobotFileError(f"{self.path}: {name}: expected {expected}{shown}")
 
     def has(self, key: str) -> bool:

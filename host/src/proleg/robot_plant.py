@@ -29,6 +29,7 @@ import numpy as np
 
 from .body import default_length_mm
 from .errors import RobotFileError
+from .robot_fields import toml_text
 from .robot_transitions import UNIT_MM
 
 FORBIDDEN = "x"
@@ -252,7 +253,7 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
 
 
 def _fail(path: Path, key: str, expected: str, got: Any) -> None:
-    raise RobotFileError(f"{path}: plant.{key}: expected {expected}, got {got!r}")
+    raise RobotFileError(f"{path}: plant.{key}: expected {expected}, got {toml_text(got)}")
 
 
 def _value(path: Path, spec: PlantKey, key: str, v: Any) -> float:
@@ -356,7 +357,7 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
     if isinstance(value, str):
         if value not in FRICTION_MECHANISMS:
             raise RobotFileError(f"{path}: {where}: friction: expected one of {', '.join(FRICTION_MECHANISMS)} "
-                                 f"or a list of materials ({', '.join(FRICTION_MATERIALS)}), got {value!r}")
+                                 f"or a list of materials ({', '.join(FRICTION_MATERIALS)}), got {toml_text(value)}")
         if levels != 2:
             raise RobotFileError(f"{path}: {where}: friction: {value} describes 2 levels, the limb has {levels}; "
                                  f"give a list of {levels} materials ({', '.join(FRICTION_MATERIALS)})")
@@ -364,5 +365,5 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
     if (not isinstance(value, list) or len(value) != levels
             or any(not isinstance(m, str) or m not in FRICTION_MATERIALS for m in value)):
         raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
-                             f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {value!r}")
+                             f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {toml_text(value)}")
     return tuple(value)

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_fields import Fields
+from .robot_fields import Fields, toml_text
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
 #: The mark of a forbidden transition in a matrix ("x").
@@ -146,9 +146,9 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
                 continue
             unknown = allow_nan and isinstance(v, float) and math.isnan(v)
             if not unknown and (not _in_range(v, lo, hi) or (whole and not float(v).is_integer())):
-                raise RobotFileError(f"{cell}: expected {expected} or 'x', got {v!r}")
+                raise RobotFileError(f"{cell}: expected {expected} or 'x', got {toml_text(v)}")
             if not allowed[a, b]:
-                raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {v!r}")
+                raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {toml_text(v)}")
             out[a, b] = float(v)
     return out
 
@@ -183,14 +183,14 @@ def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
         for b, v in enumerate(row):
             if a == b:
                 if not (v == FORBIDDEN or _is_number(v)):
-                    raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a number or 'x', got {v!r}")
+                    raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a number or 'x', got {toml_text(v)}")
                 continue  # the diagonal is not a transition
             if v == FORBIDDEN:
                 continue
             if not _in_range(v, -MAX_ENTRY, MAX_ENTRY):
                 raise RobotFileError(
                     f"{where}[{a + 1}][{b + 1}]: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}] or 'x' "
-                    f"(forbidden), got {v!r}"
+                    f"(forbidden), got {toml_text(v)}"
                 )
             reward[a, b] = float(v)
             allowed[a, b] = True
@@ -211,10 +211,10 @@ def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.
                     )
                 continue
             if not _is_number(v) or not v > 0:
-                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration > 0 seconds or 'x', got {v!r}")
+                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration > 0 seconds or 'x', got {toml_text(v)}")
             if not allowed[a, b]:
                 raise RobotFileError(
-                    f"{where}[{a + 1}][{b + 1}]: transition is forbidden in the matrix, expected 'x', got {v!r}"
+                    f"{where}[{a + 1}][{b + 1}]: transition is forbidden in the matrix, expected 'x', got {toml_text(v)}"
                 )
             out[a, b] = float(v)
     return out
