@@ -439,6 +439,9 @@ def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
         "fallback without sma-left (-x): 01 11 01 (remap: left→sma-right, right→sma-right)",
         "fallback without sma-right (+x): 10 11 10 (remap: left→sma-left, right→sma-left)",
     ]
+    # a coil lost with its limbs left down: those limbs, not the whole map read as "dead: …"
+    i3 = fallback_lines(load_robot(R1.parent / "inchworm-3.toml"))
+    assert "fallback without sma-tail (+x): 000 010 011 001 000 (tail left down)" in i3, i3
     p = tmp_path / "paper-r1.toml"
     p.write_text(R1.read_text().replace("telemetry_hz = 50", "telemetry_hz = 50\nfallback = \"yes\""))
     from proleg.errors import RobotFileError

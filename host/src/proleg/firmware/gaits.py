@@ -209,8 +209,13 @@ def fallback_lines(robot: Robot) -> list[str]:
     out = []
     for (a, d), fb in sorted(fbs.items()):
         walk = " ".join(fb.table.label(s) for s in fb.states)
-        amap = ", ".join(f"{limb.name}→{robot.actuators[x].name}" for limb, x in zip(robot.limbs, fb.actuator_map))
-        out.append(f"fallback without {robot.actuators[a].name} ({d}): {walk} ({fb.mode}: {amap})")
+        if fb.mode == "remap":  # limbs moved to the coils that are left
+            how = "remap: " + ", ".join(f"{limb.name}→{robot.actuators[x].name}"
+                                        for limb, x in zip(robot.limbs, fb.actuator_map))
+        else:  # the lost coil's limbs stay at level 0, the others keep their coils
+            down = [limb.name for limb, x in zip(robot.limbs, fb.actuator_map) if x == a]
+            how = f"{', '.join(down)} left down"
+        out.append(f"fallback without {robot.actuators[a].name} ({d}): {walk} ({how})")
     return out
 
 
