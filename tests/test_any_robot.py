@@ -274,7 +274,7 @@ def test_build_refuses_a_gait_0_that_raises_one_limb_of_a_shared_coil_alone(tmp_
     assert main(["build", str(fixture), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and not (tmp_path / "b").exists()
-    assert ("proleg: error: robot four-shared: gait 0 of +x, the one START runs, cannot run on this robot: "
+    assert (f"proleg: error: {fixture}: gait 0 of +x, the one START runs, cannot run on this robot: "
             "gait 0000 0100 1100") in err
     assert "step 1 (0000 -> 0100) raises 'p2' but not 'p1', which share actuator 'coil1'" in err
 
@@ -299,6 +299,6 @@ def test_a_default_channel_the_board_lacks_is_called_the_default_not_quoted(tmp_
     robot = load_robot(path)
     with pytest.raises(BuildError) as e:
         build(robot, load_board("arduino-nano"), tmp_path / "nano")
-    assert str(e.value).startswith("robot worm-5: actuator 'a5' (the 5th [[actuator]], no channel key) is on channel 4 "
+    assert str(e.value).startswith(f"{path}: actuator 'a5' (the 5th [[actuator]], no channel key) is on channel 4 "
                                    "by default, its position, but board arduino-nano has 4 PWM channels: channel = 0 (D9)")
     assert not (tmp_path / "nano").exists()

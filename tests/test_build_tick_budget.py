@@ -54,7 +54,7 @@ def test_the_bluepill_takes_paper_r1_at_1_khz_and_refuses_a_rate_beyond_its_budg
     need = b.tick_us_base + 2 * b.tick_us_per_limb
     msg = str(e.value)
     assert "\n" not in msg
-    assert msg.startswith(f"robot paper-r1: control.tick_hz = {hz} is too fast for board bluepill-f103: ")
+    assert msg.startswith(f"{r1.path}: control.tick_hz = {hz} is too fast for board bluepill-f103: ")
     assert f"2 limbs need {need:.0f} µs per tick" in msg
     assert "more than 70 % of the 50 µs period" in msg and f"at most {b.max_tick_hz(2)} Hz" in msg
 
@@ -102,7 +102,7 @@ def test_a_budget_not_enforced_yet_warns_with_the_same_numbers_and_builds(tmp_pa
     with caplog.at_level("WARNING", logger="proleg"):
         check_tick_budget(load_robot(R1), board)
     assert [r.getMessage() for r in caplog.records] == [
-        "robot paper-r1: control.tick_hz = 1000 is too fast for board bluepill-f103: 2 limbs need 1400 µs per tick "
+        f"{R1}: control.tick_hz = 1000 is too fast for board bluepill-f103: 2 limbs need 1400 µs per tick "
         "(900 + 2 × 250 µs, [budget] of bluepill-f103.toml), more than 70 % of the 1000 µs period; at most 500 Hz "
         "(building anyway: [budget] enforce = false)"
     ]
@@ -125,7 +125,7 @@ def test_the_nano_enforces_its_budget_takes_every_example_robot_it_hosts_and_ref
         check_tick_budget(at_rate(r1, fastest + 1), board)
     msg = str(e.value)
     assert "\n" not in msg and msg.startswith(
-        f"robot paper-r1: control.tick_hz = {fastest + 1} is too fast for board arduino-nano: 2 limbs need ")
+        f"{r1.path}: control.tick_hz = {fastest + 1} is too fast for board arduino-nano: 2 limbs need ")
     assert "[budget] of arduino-nano.toml), more than 70 % of the" in msg and f"at most {fastest} Hz" in msg
 
 

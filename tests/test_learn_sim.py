@@ -170,12 +170,47 @@ def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
     t, x = np.array(path).T
     keep = np.arange(0, len(t), 17)  # ~30 fps
     track = Track(t[keep] + 42.0, x[keep])
-    with_motion, offset = attach_track(trials, track)
+    with_motion, offset, outside = attach_track(trials, track)
+    assert outside == [] and len(with_motion) == len(trials)
     assert offset == pytest.approx(42.0, abs=0.06)
     plant = sim.plant.transitions
     for tr in with_motion:
         truth = sum(p.reward_mm for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05)
         assert tr.dx == pytest.approx(truth, abs=0.2)
+
+
+def test_trials_the_track_does_not_cover_keep_no_motion_rather_than_zero(tmp_path, capsys):
+    """np.interp clamps to a track's ends: a trial after the track's last row got that row's
+    pose at both ends, a motion of 0 that was never measured, and a track from another run
+    made a matrix of zeros (exit 0)."""
+    from proleg.cli.main import main
+    from proleg.learn.measure import Trial, TrialLog
+    from proleg.learn.tracker import Track, attach_track
+
+    track = Track(np.array([0.0, 1.0, 2.0, 3.0]), np.array([0.0, 1.0, 2.0, 3.0]))
+    trials = [Trial("00", "10", 0.2, 1.2), Trial("10", "11", 1.2, 2.5), Trial("11", "01", 2.5, 3.5),
+              Trial("01", "00", 3.5, 4.5)]
+    got, offset, outside = attach_track(trials, track, 0.0, settle_s=0.0)
+    assert offset == 0.0 and [t.dx for t in got] == [pytest.approx(1.0), pytest.approx(1.3)]
+    assert [(t.src, t.dst, t.dx) for t in outside] == [("11", "01", None), ("01", "00", None)]
+
+    log = tmp_path / "run.jsonl"
+    with TrialLog(log) as tl:
+        for tr in trials:
+            tl.append(tr)
+    csv = tmp_path / "track.csv"
+    csv.write_text("time,x,y,theta\n0,0,,\n1,1,,\n2,2,,\n3,3,,\n")
+    out = tmp_path / "learned.toml"
+    code = main(["learn", str(R1), "--log", str(log), "--track", str(csv), "--tracker-offset", "100000",
+                 "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and not out.exists() and "Traceback" not in err
+    assert f"--track {csv}: covers none of the 4 trials without motion: its times 0..3 s" in err
+    # the track of this run: two trials get their motion, two are left without (a warning says so)
+    code = main(["learn", str(R1), "--log", str(log), "--track", str(csv), "--tracker-offset", "0", "--report"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "2 of 4 trials begin or end outside it and are left without motion" in captured.err
 
 
 def test_a_fault_during_exploration_is_told_by_name_and_what_to_do(tmp_path):

@@ -171,6 +171,11 @@ class Robot:
     #: per lift; ``proleg.robot_body.shared_coil_lifts``, checked by ``proleg.gait.feasibility``
     coil_lifts: dict[int, tuple[CoilLift, ...]] = field(default_factory=dict)
 
+    @property
+    def where(self) -> str:
+        """How an error about this robot's file names it (as a load error does): its path."""
+        return str(self.path)
+
     def __post_init__(self) -> None:
         if self.plant is None:
             object.__setattr__(self, "plant", default_plant_section(len(self.actuators), len(self.limbs)))

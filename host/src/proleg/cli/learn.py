@@ -359,12 +359,20 @@ def _with_track(args: argparse.Namespace, trials: list) -> list:
         bare = [t for t in trials if t.dx is None]
         if not bare:
             return trials
-        attached, offset = attach_track(bare, track, args.tracker_offset)
+        attached, offset, outside = attach_track(bare, track, args.tracker_offset)
     except TrackerError as e:
         raise LearnError(f"learn: {e}") from None
     how = "given" if args.tracker_offset is not None else "estimated"
+    span = (f"its times {track.t[0]:g}..{track.t[-1]:g} s, the trials' {min(t.t_start for t in bare) + offset:g}.."
+            f"{max(t.t_end for t in bare) + offset:g} s on its clock (offset {offset:+.3f} s, {how})")
+    if not attached:
+        raise LearnError(f"learn: --track {args.track}: covers none of the {len(bare)} trials without motion: {span}; "
+                         "give the track of this run, or --tracker-offset")
+    if outside:
+        log.warning("learn: --track %s: %d of %d trials begin or end outside it and are left without motion "
+                    "(%s)", args.track, len(outside), len(bare), span)
     log.info("%s: %d trials given their motion (clock offset %+.3f s, %s)", args.track, len(attached), offset, how)
-    return [t for t in trials if t.dx is not None] + attached
+    return [t for t in trials if t.dx is not None] + attached + outside
 
 
 def _strayed(trials) -> str:

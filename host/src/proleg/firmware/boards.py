@@ -457,4 +457,4 @@ def pwm_channel_error(robot: Any, actuator: Any, board_name: str, pins: Sequence
         nth = f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
         on = (f"(the {nth} [[actuator]], no channel key) is on channel {actuator.channel} by default, its "
               "position")
-    return f"robot {robot.name}: actuator {actuator.name!r} {on}, but board {board_name} has {len(pins)} PWM channels: {have}"
+    return f"{robot.where}: actuator {actuator.name!r} {on}, but board {board_name} has {len(pins)} PWM channels: {have}"

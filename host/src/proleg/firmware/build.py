@@ -82,7 +82,7 @@ def check_buildable(robot: Robot, board: Board) -> None:
     link_hz = board.uart_baud // 10 // frame // 2
     if robot.control.telemetry_hz > link_hz:
         raise BuildError(
-            f"robot {robot.name}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
+            f"{robot.where}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
             f"board {board.name}'s {board.uart_baud} baud link (at most {link_hz} Hz for {frame}-byte frames)"
         )
     for tool in board.tools():
@@ -107,7 +107,7 @@ def check_can_link(robot: Robot, board: Board) -> None:
     bus_hz = board.can.bitrate // bits // 2
     if robot.control.telemetry_hz > bus_hz:
         raise BuildError(
-            f"robot {robot.name}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
+            f"{robot.where}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
             f"board {board.name}'s {board.can.bitrate} bit/s CAN bus (at most {bus_hz} Hz for {bits}-bit telemetry)"
         )
 
@@ -124,7 +124,7 @@ def check_tick_budget(robot: Robot, board: Board) -> None:
     need_us = budget.busy_us(limbs)
     if need_us * hz > budget.BUSY_LIMIT * 1e6:  # need > 70 % of the period, without dividing
         message = (
-            f"robot {robot.name}: control.tick_hz = {hz} is too fast for board {board.name}: "
+            f"{robot.where}: control.tick_hz = {hz} is too fast for board {board.name}: "
             f"{limbs} limbs need {need_us:.0f} µs per tick ({budget.tick_us_base:g} + {limbs} × "
             f"{budget.tick_us_per_limb:g} µs, [budget] of {board.path.name}), more than "
             f"{100 * budget.BUSY_LIMIT:.0f} % of the {period_us:.0f} µs period; at most "

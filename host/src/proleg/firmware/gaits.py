@@ -170,7 +170,7 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
             errors = [p for p in problems if p.severity == "error" and p.kind in CANNOT_MAKE]
             if i == 0 and errors:
                 raise BuildError(
-                    f"robot {robot.name}: gait 0 of {d}, the one START runs, cannot run on this robot: "
+                    f"{robot.where}: gait 0 of {d}, the one START runs, cannot run on this robot: "
                     f"{errors[0].message} (choose another objective or --max-transitions, or fix the robot file)"
                 )
             out += [f"gait {i} of {d}: {'' if p.severity == 'warning' else p.severity + ': '}{p.message}"

@@ -91,7 +91,7 @@ def place_imus(robot: Any, board: Any) -> tuple[ImuPlacement, ...]:
     bname = _board_name(board)
     limbs = list(robot.limbs)
     if len(limbs) > MAX_IMUS:
-        raise BuildError(f"robot {robot.name}: {len(limbs)} limbs, the firmware reads at most {MAX_IMUS} IMUs")
+        raise BuildError(f"{robot.where}: {len(limbs)} limbs, the firmware reads at most {MAX_IMUS} IMUs")
     taken: list[ImuPlacement] = []
     for limb in limbs:
         if limb.imu is not None:
@@ -111,7 +111,7 @@ def _bus_mux(buses: Sequence[I2cBus], taken: Sequence[ImuPlacement], bus: I2cBus
 
 def _explicit(robot: Any, bname: str, buses: Sequence[I2cBus], limb: str, spec: ImuSpec,
               taken: Sequence[ImuPlacement]) -> ImuPlacement:
-    where = f"robot {robot.name}: limb {limb}: imu"
+    where = f"{robot.where}: limb {limb}: imu"
     behind = spec.mux is not None or spec.channel is not None
     if spec.bus is not None:
         bus = next((b for b in buses if b.name == spec.bus), None)
@@ -235,7 +235,7 @@ def check_tick_budget(robot: Any, bname: str, placements: Sequence[ImuPlacement]
     if need > I2C_TICK_SHARE * tick_us:
         most = int(I2C_TICK_SHARE * 1e6 / need)
         raise BuildError(
-            f"robot {robot.name}: reading {len(placements)} IMUs ({mux_selects_per_tick(placements)} channel switches) "
+            f"{robot.where}: reading {len(placements)} IMUs ({mux_selects_per_tick(placements)} channel switches) "
             f"takes about {need:.0f} us of I2C at {i2c_hz // 1000} kHz per tick on board {bname}, more than "
             f"{I2C_TICK_SHARE:.0%} of the {tick_us:.0f} us tick: set control.tick_hz to at most {most}"
         )

@@ -247,7 +247,7 @@ def _check_bands(robot: Any, limb: Any) -> None:
         up, lo = p + h / 2.0, p - h / 2.0
         if not (-90.0 < lo and up < 90.0):
             raise BuildError(
-                f"robot {robot.name}: limb {limb.name!r}: band {lo:g}..{up:g} deg around psi* {p:g} "
+                f"{robot.where}: limb {limb.name!r}: band {lo:g}..{up:g} deg around psi* {p:g} "
                 "must lie strictly inside (-90, 90)"
             )
 
@@ -269,7 +269,7 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     levels = [int(limb.levels) for limb in limbs]
     n_states = math.prod(levels)
     if n_states > 0xFFFF:
-        raise BuildError(f"robot {robot.name}: {n_states} states, the firmware supports at most 65535")
+        raise BuildError(f"{robot.where}: {n_states} states, the firmware supports at most 65535")
     max_thr = max(k - 1 for k in levels)
     for limb in limbs:
         _check_bands(robot, limb)
@@ -359,7 +359,7 @@ def control_part(robot: Any) -> ControlPart:
     ctl, safety = robot.control, robot.safety
     tick_hz = int(ctl.tick_hz)
     if tick_hz < 200:
-        raise BuildError(f"robot {robot.name}: control.tick_hz {tick_hz} below 200")
+        raise BuildError(f"{robot.where}: control.tick_hz {tick_hz} below 200")
     return ControlPart(
         tick_hz=tick_hz,
         tick_us=round(1_000_000 / tick_hz),
@@ -422,7 +422,7 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
     control = control_part(robot)
     gaits = gait_part(robot, gaits_by_direction, limb_part.n_states)
     if why := check_climb_limit(getattr(robot.control, "max_climb_deg", None), gaits_by_direction):
-        raise BuildError(f"robot {robot.name}: {why}")
+        raise BuildError(f"{robot.where}: {why}")
     robot_sha = _file_sha256(getattr(robot, "path", None))
     return RenderContext(
         version=__version__,

@@ -68,7 +68,7 @@ def _step_table(robot: Any, rows: list[tuple[int, str, tuple[int, ...]]]) -> tup
         length.append(len(st))
         steps.extend(st)
     if len(steps) > 0xFFFF:
-        raise BuildError(f"robot {robot.name}: gait table of {len(steps)} steps, at most 65535")
+        raise BuildError(f"{robot.where}: gait table of {len(steps)} steps, at most 65535")
     return steps, first, length
 
 
@@ -132,7 +132,7 @@ def gait_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], n_sta
     n_px = sum(1 for r in rows if r[0] == 0)
     n_mx = len(rows) - n_px
     if n_px > 255 or n_mx > 255:
-        raise BuildError(f"robot {robot.name}: more than 255 optimal gaits in one direction")
+        raise BuildError(f"{robot.where}: more than 255 optimal gaits in one direction")
     steps, first, length = _step_table(robot, rows)
     table = robot.transitions
     src = [int(x) for x in table.src]
@@ -207,7 +207,7 @@ def _library_part(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], t
         return {}
     total = sum(len(gaits_by_direction.get(d, ()) or ()) for d in ("+x", "-x"))
     if total > 255:
-        raise BuildError(f"robot {robot.name}: {total} gaits with the library, at most 255 (fewer headings)")
+        raise BuildError(f"{robot.where}: {total} gaits with the library, at most 255 (fewer headings)")
     spec = getattr(gaits_by_direction, "library_spec", None)
     return {"library": [lg.describe(table.label) for lg in library],
             "library_selection": spec.describe() if spec is not None else ""}

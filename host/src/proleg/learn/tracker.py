@@ -35,8 +35,13 @@ class Track:
     y: np.ndarray | None = None
     theta_deg: np.ndarray | None = None
 
+    def covers(self, t: float) -> bool:
+        """Tracker time ``t`` lies within the track (a pose there is measured, not made up)."""
+        return bool(self.t[0] <= t <= self.t[-1])
+
     def pose(self, t: float) -> tuple[float | None, float | None, float | None]:
-        """Linear interpolation at tracker time ``t`` (clamped to the ends)."""
+        """Linear interpolation at tracker time ``t`` (clamped to the ends: ask ``covers``
+        first where a pose past them would be a motion of zero that was never measured)."""
         x = float(np.interp(t, self.t, self.x))
         y = None if self.y is None else float(np.interp(t, self.t, self.y))
         th = None if self.theta_deg is None else float(np.interp(t, self.t, np.unwrap(self.theta_deg, period=360.0)))
@@ -193,7 +198,9 @@ def attach_track(trials, track: Track, offset_s: float | None = None, *, settle_
     given their motion from ``track``; the offset is estimated from the times the trials'
     motion ended (``Trial.t_moved``: when the telemetry first showed the new state, else the
     state-reached event) unless given; the poses are read ``settle_s`` after the events
-    (the robot settled). Returns (new trials, offset used)."""
+    (the robot settled). A trial that begins or ends outside the track keeps no motion (the
+    track says nothing about it; before, the track's end pose made it a motion of 0). Returns
+    (new trials, offset used, trials left without motion)."""
     from dataclasses import replace
 
     from .measure import planar_delta
@@ -201,8 +208,12 @@ def attach_track(trials, track: Track, offset_s: float | None = None, *, settle_
     if offset_s is None:
         offset_s = estimate_offset(track, [t.t_moved for t in trials])
     src = TrackerSource(track, offset_s)
-    out = []
+    out, outside = [], []
     for t in trials:
-        dx, dy, dth = planar_delta(src.pose_at(t.t_start + settle_s), src.pose_at(t.t_end + settle_s))
+        a, b = t.t_start + settle_s, t.t_end + settle_s
+        if not (track.covers(a + offset_s) and track.covers(b + offset_s)):
+            outside.append(t)
+            continue
+        dx, dy, dth = planar_delta(src.pose_at(a), src.pose_at(b))
         out.append(replace(t, dx=dx, dy=dy, dtheta_deg=dth, source="tracker"))
-    return out, offset_s
+    return out, offset_s, outside
