@@ -44,6 +44,22 @@ def test_version_and_exit_codes_in_help(capsys):
     assert re.search(r"0\s+ok", out) and re.search(r"1\s+failed", out) and re.search(r"2\s+usage", out)
 
 
+@pytest.mark.parametrize("argv", [
+    ("learn", "paper-r3", "--port", "sim://paper-r1", "--source", "tracker", "--repeats", "1"),
+    ("load-gait", "paper-r3", "--port", "sim://paper-r1", "00,10,11,01"),
+    ("calibrate", "paper-r3", "--port", "sim://paper-r1"),
+])
+def test_learn_load_gait_and_calibrate_refuse_a_board_of_another_robot_as_run_does(capsys, tmp_path, argv):
+    """They checked at most the limb count: learn recorded paper-r1's body into a paper-r3 log,
+    load-gait advised the way paper-r3's matrix walks, calibrate stored the level."""
+    extra = ("--log", str(tmp_path / "l.jsonl")) if argv[0] == "learn" else ()
+    code, out, err = run(capsys, *argv, *extra)
+    assert code == 1 and "Traceback" not in err, err
+    assert "runs robot 'paper-r1', not 'paper-r3'" in err and "give the robot file it was built from" in err
+    assert "loaded" not in out and "calibrat" not in out
+    assert not (tmp_path / "l.jsonl").exists()  # learn opens its log only once the board answered as it should
+
+
 def test_a_board_built_from_another_robot_exits_1_as_the_documented_rule_says(capsys):
     """The sweep's 3.7: run on a board of another robot exits 1, and the README listed "a bad
     robot file" under 2. The file loads; what does not match is the board, found over the

@@ -34,7 +34,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     asked: list[str] = []  # the command that changes what the board keeps, once it is being sent
     try:
-        with open_client(args, args.robot, watchdog_ms=robot.safety.link_watchdog_ms) as client:
+        with open_client(args, args.robot, robot=robot) as client:
             return _calibrate(args, robot, client, asked)
     except KeyboardInterrupt as e:
         if isinstance(e, Interrupted):

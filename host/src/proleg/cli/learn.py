@@ -134,12 +134,19 @@ def cmd_learn(args: argparse.Namespace) -> int:
     linked = bool(args.port or args.can or args.sim)
     source = _check_options(args, linked)
     truth = _checked_truth(args, robot)  # before the log is created: a bad option leaves no file
-    trial_log = _open_log(args, robot, linked)
+    # and so is the link: a board that does not answer, or runs another robot, leaves no file either
+    client, pose = _connect(args, robot, truth, source) if linked else (None, None)
+    try:
+        trial_log = _open_log(args, robot, linked)
+    except BaseException:
+        if client is not None:
+            client.close()
+        raise
     with trial_log:
         if trial_log.trials and linked:
             log.info("%s: %d trials already recorded; resuming", args.log, len(trial_log.trials))
-        if linked:
-            _explore(args, robot, truth, trial_log, source)
+        if client is not None:
+            _explore(args, robot, trial_log, source, client, pose)
         trials = list(trial_log.trials)
     trials = _with_track(args, trials)
     return _report_and_write(args, robot, trials)
@@ -208,27 +215,31 @@ def _open_log(args: argparse.Namespace, robot, linked: bool):
     return trial_log
 
 
-def _explore(args: argparse.Namespace, robot, truth, trial_log, source: str) -> None:
+def _connect(args: argparse.Namespace, robot, truth, source: str):
+    """The connected robot to explore (the simulator with --sim) and, with ``--source sim``,
+    its ground-truth pose: (client, pose or None)."""
+    from ..learn.runner import ExplorationError, simulated_robot
+    from .robot_commands import open_client
+
+    if not args.sim:
+        return open_client(args, args.robot, robot=robot), None
+    try:
+        _sim, client, sim_pose = simulated_robot(robot, truth, seed=args.seed, plant=args.plant)
+    except ExplorationError as e:
+        raise LearnError(f"learn: {e}") from None
+    client.connect()
+    return client, sim_pose if source == "sim" else None
+
+
+def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, pose) -> None:
     from ..learn.estimate import estimate
     from ..learn.plan import adaptive_demand, extra_plan
-    from ..learn.runner import ExplorationError, Explorer, Progress, simulated_robot
-    from .robot_commands import open_client
+    from ..learn.runner import ExplorationError, Explorer, Progress
 
     if source == "tracker" and args.track is None:
         log.warning("learn: --source tracker: the trials recorded now have no motion (Δx) until the tracker's "
                     "track is attached: give --track FILE.csv (time,x,y,theta) now, or later with --report "
                     "and the same --log")
-    pose = None
-    if args.sim:
-        try:
-            _sim, client, sim_pose = simulated_robot(robot, truth, seed=args.seed, plant=args.plant)
-        except ExplorationError as e:
-            raise LearnError(f"learn: {e}") from None
-        client.connect()
-        if source == "sim":
-            pose = sim_pose
-    else:
-        client = open_client(args, args.robot, watchdog_ms=robot.safety.link_watchdog_ms)
     bar = ProgressBar() if log.isEnabledFor(logging.INFO) else None
 
     def progress(p: Progress) -> None:

@@ -60,10 +60,11 @@ def link_settings(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None,
-                watchdog_ms: int | None = None):
+                robot: Any = None):
     """A connected ``RobotClient`` on the link the options name (the simulated board runs
-    flat out unless ``speed`` paces it), pinging often enough for ``watchdog_ms`` (the robot
-    file's link watchdog)."""
+    flat out unless ``speed`` paces it). With ``robot`` (the loaded robot file): a board that
+    runs another robot is refused before anything is sent to it, and the heartbeat keeps
+    pace with the file's link watchdog."""
     from ..link.client import RobotClient
     from ..link.factory import link_url, open_link
 
@@ -85,14 +86,27 @@ def open_client(args: argparse.Namespace, robot_path: str | None = None, *, spee
 
         robot_file = robot_arg(robot_path)
     link = open_link(url, baudrate=given["baudrate"], speed=speed, robot_file=robot_file)
-    client = RobotClient(link, timeout=args.timeout, watchdog_ms=watchdog_ms)
+    client = RobotClient(link, timeout=args.timeout, watchdog_ms=None if robot is None else robot.safety.link_watchdog_ms)
     try:
         info = client.connect()
+        if robot is not None:
+            check_robot_name(info, robot, client.link.description)
     except BaseException:
         client.close()
         raise
     log.debug("connected to %s on %s (build %08x)", info.robot_name, link.description, info.build_id)
     return client
+
+
+def check_robot_name(info: Any, robot: Any, link: str) -> None:
+    """LinkError unless the board's INFO names ``robot`` (its first 15 characters): learning,
+    calibrating or loading a gait for one robot on a board that runs another records or sends
+    what the file says of the wrong body."""
+    from ..robot import info_name
+
+    if info.robot_name != info_name(robot.name):
+        raise LinkError(f"{link} runs robot {info.robot_name!r}, not {robot.name!r} ({robot.path}); "
+                        "give the robot file it was built from")
 
 
 def gaits_per_direction(robot: Any, fw: Any = None) -> dict[str, int]:
@@ -148,7 +162,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..report import check_gait, run_gait_on
     from ..report.robot_run import RunInterrupted
-    from ..robot import info_name, load_robot
+    from ..robot import load_robot
 
     from .main import udp_options
 
@@ -164,15 +178,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     if choice is not None:
         gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
     try:
-        client = open_client(args, args.robot, speed=args.speed, watchdog_ms=robot.safety.link_watchdog_ms)
+        client = open_client(args, args.robot, speed=args.speed, robot=robot)
     except KeyboardInterrupt:
         raise Interrupted("interrupted while connecting, before the gait started: nothing was started on the "
                           "robot; nothing recorded") from None
     with client, _before_the_gait():
         info = client.info
-        if info.robot_name != info_name(robot.name):  # INFO carries the first 15 characters
-            raise LinkError(f"{client.link.description} runs robot {info.robot_name!r}, not {robot.name!r} "
-                            f"({args.robot}); give the robot file it was built from")
         check_gait(info, gait, direction, gaits_per_direction(robot, fw))
         if choice is not None and choice.index is not None:
             check_library_hash(info, robot, fw, client.link.description, simulated=bool(getattr(args, "sim", False)))
@@ -318,7 +329,7 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
 
     if (line := rest_start_warning(robot, states)) is not None:
         log.warning("warning: %s", line)
-    with open_client(args, args.robot, watchdog_ms=robot.safety.link_watchdog_ms) as client:
+    with open_client(args, args.robot, robot=robot) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(table.label(x) for x in [*states, states[0]])} as the user gait on {client.link.description} "
               f"({_way_hint(table, states)})")
