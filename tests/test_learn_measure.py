@@ -104,6 +104,23 @@ def test_manual_entry_asks_again_on_nonsense_and_skips_on_empty():
     assert (t.dx, t.dy, t.dtheta_deg) == (1.0, 2.0, -3.0)
 
 
+def test_manual_entry_asks_again_for_a_number_the_log_could_not_read_back(tmp_path):
+    """1e20 was stored, and from then on every report of that log failed on its line."""
+    answers = iter(["1e20", "-2e9", "3.5"])
+    prompts = []
+
+    def ask(p):
+        prompts.append(p)
+        return next(answers)
+
+    t = manual_trial("00", "10", 1.0, 2.0, ask=ask)
+    assert t is not None and t.dx == 3.5
+    assert "within ±1e9" in prompts[1] and "within ±1e9" in prompts[2]
+    with TrialLog(tmp_path / "m.jsonl") as log:
+        log.append(manual_trial("00", "10", 1.0, 2.0, ask=lambda p: "1e9"))
+    assert [tr.dx for tr in TrialLog(tmp_path / "m.jsonl", append=False).trials] == [1e9]
+
+
 def test_planar_delta_is_in_the_start_frame():
     dx, dy, dth = planar_delta((10.0, 0.0, 90.0), (10.0, 5.0, 100.0))
     assert dx == pytest.approx(5.0) and dy == pytest.approx(0.0, abs=1e-12) and dth == pytest.approx(10.0)

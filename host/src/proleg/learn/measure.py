@@ -325,7 +325,9 @@ def manual_trial(src: str, dst: str, t_start: float, t_end: float, *,
             prompt = f"  not a number ({text!r}); {src} → {dst}: {what}: "
             continue
         if len(vals) == 1 or (planar and len(vals) == 3):
-            if all(math.isfinite(v) for v in vals):
+            if all(math.isfinite(v) and abs(v) <= MAX_ABS for v in vals):  # what the log can read back
                 vals += [None, None] * (len(vals) == 1)  # type: ignore[list-item]
                 return Trial(src, dst, t_start, t_end, vals[0], vals[1], vals[2], "manual")
+            prompt = f"  expected numbers within ±{_MAX_TEXT} ({text!r}); {src} → {dst}: {what}: "
+            continue
         prompt = f"  expected {what}; {src} → {dst}: "
