@@ -121,6 +121,16 @@ def test_broken_pipe_ends_quietly(tmp_path):
     assert p.stderr == ""
 
 
+def test_learn_out_writes_its_file_also_when_the_reader_goes_away(tmp_path):
+    """The table was printed first: with | head -1 the command ended quietly (exit 0) before
+    it wrote --out."""
+    p = shell(f"'{PROLEG}' learn paper-r1 --sim --repeats 1 --log r1.jsonl -q", tmp_path)
+    assert p.returncode == 0, p.stderr
+    p = shell(f"'{PROLEG}' learn paper-r1 --log r1.jsonl --out learned.toml | head -1", tmp_path)
+    assert p.stdout.startswith("paper-r1: 12 trials") and "Traceback" not in p.stderr
+    assert "[transitions]" in (tmp_path / "learned.toml").read_text()
+
+
 def test_a_full_disk_is_one_line_and_exit_1(tmp_path):
     if not Path("/dev/full").exists():
         pytest.skip("no /dev/full")

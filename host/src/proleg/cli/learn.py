@@ -439,6 +439,11 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     est = estimate(t, trials)
     out = sys.stdout
     dx = est.dx
+    path = None
+    if args.out:  # written before the table is printed: a reader that goes away (| head) loses no file
+        if not int(dx.n.sum()):
+            raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
+        path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True)
     print(f"{robot.name}: {int(dx.n.sum())} trials, {t.n_transitions} allowed transitions "
           f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
     extra = est.extra_trials(args.half_width) if args.half_width else None
@@ -483,10 +488,7 @@ def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
         if best is not None:
             what = "mean" if not args.variance_weight else f"mean − {args.variance_weight:g}·σ"
             print(f"best +x gait for {what}: {','.join(t.label(s) for s in best.states)}", file=out)
-    if args.out:
-        if not int(dx.n.sum()):
-            raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
-        path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True)
+    if path is not None:
         print(f"wrote {path}", file=out)
         log.info("learn: next: proleg gait %s shows the best gaits of the learned matrix; proleg build/flash %s "
                  "puts them on the robot", path, path)
