@@ -111,6 +111,21 @@ def test_manual_entry_asks_on_stderr_and_records_the_answers(tmp_path, capsys, m
     assert [r["dx"] for r in recorded] == [2.5] and recorded[0]["source"] == "manual"
 
 
+def test_manual_entry_measures_from_rest_then_says_what_only_a_tracker_can(tmp_path, capsys, monkeypatch):
+    """One transition a piece, from where the robot rests: R1's 9 transitions out of 01, 10
+    and 11 are never reached. It said "no piece within the thermal limits reaches …", which
+    sent the user to the wrong knob."""
+    monkeypatch.setattr("sys.stdin", io.StringIO("1\n1\n1\n"))
+    log = tmp_path / "m.jsonl"
+    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--source", "manual", "--log", str(log),
+                          "--repeats", "1")
+    assert code == 1 and "Traceback" not in err
+    assert "manual entry measures one transition at a time from where the robot rests (00)" in err
+    assert "record them with --source tracker into the same --log" in err and "thermal limits" not in err
+    assert sorted((r["from"], r["to"]) for r in map(json.loads, _lines(log))) == [("00", "01"), ("00", "10"),
+                                                                                   ("00", "11")]
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--port", "/dev/null"], "--source is required"),
     (["--truth", str(R1)], "--truth needs --sim"),

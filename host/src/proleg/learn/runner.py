@@ -248,6 +248,12 @@ class Explorer:
                 best = pieces[0]
         if best is None:
             left = [f"{t.label(a)}->{t.label(b)}" for a, b, k in zip(t.src, t.dst, demand) if k > 0]
+            if self.ask is not None:  # one transition a piece: the operator measures from where it rests
+                raise ExplorationError(
+                    f"manual entry measures one transition at a time from where the robot rests ({t.label(start)}), "
+                    f"and {', '.join(left)} start elsewhere (the robot passes through on its way, it does not stop "
+                    "there): record them with --source tracker into the same --log (a camera's track gives each "
+                    "transition of a piece its motion)")
             raise ExplorationError(
                 f"from {t.label(start)}, where the robot rests, no piece within the thermal limits ([safety] "
                 f"max_on_ms, min_cooldown_ms; the transition durations) reaches {', '.join(left)}")
