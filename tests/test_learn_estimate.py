@@ -322,3 +322,26 @@ def test_a_transition_not_measured_keeps_its_planar_statistics_too(tmp_path):
     learned = load_robot(out).transitions
     assert learned.planar.dy[skip] == t.planar.dy[skip]
     assert learned.reward[skip] == t.reward[skip]
+
+
+def test_the_documented_next_step_gait_with_a_variance_weight_runs_on_a_one_dimensional_learned_file(
+        tmp_path, capsys):
+    """docs/learning.md step 4: `proleg gait LEARNED --objective rate --variance-weight 1`. One
+    λ meant λ on var_dx, var_dy and var_dtheta_deg: a file learned with Δx only failed with
+    "planar objective needs [transitions].var_dy". One λ now weighs the variances the file gives."""
+    import json
+
+    from proleg.cli import main
+
+    robot = load_robot(R1)
+    t = robot.transitions
+    trials = [Trial(t.label(a), t.label(b), 0, 1, 2.0 + 0.5 * k * (e % 3), None, None, "sim")
+              for e, (a, b) in enumerate(zip(t.src, t.dst)) for k in range(3)]
+    out = write_learned_robot(robot, estimate(t, trials), tmp_path / "l.toml", units="mm")
+    value = {}
+    for weight in ("0", "1"):
+        assert main(["gait", str(out), "--objective", "rate", "--variance-weight", weight, "--json"]) == 0
+        value[weight] = json.loads(capsys.readouterr().out)["results"][0]["value"]
+    assert value["1"] < value["0"]  # the variances weigh on it
+    assert main(["gait", str(out), "--variance-weight", "1,1,0"]) == 2  # a weight for var_dy, which it lacks
+    assert "needs [transitions].var_dy" in capsys.readouterr().err

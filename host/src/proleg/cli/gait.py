@@ -53,7 +53,8 @@ def add_gait_parser(sub) -> None:
     p = g.add_argument_group("planar gaits (robot files with dy / dtheta_deg / var_*; docs/planar.md)")
     p.add_argument("--heading", type=finite_float, metavar="DEG", help="score motion along this heading (0 = +x, 90 = +y)")
     p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
-                   help="subtract λ·(var_dx + var_dy + var_dtheta_deg), or each with its own weight")
+                   help="subtract λ·(var_dx + var_dy + var_dtheta_deg), those the robot file gives, or each "
+                        "with its own weight")
     p.add_argument("--transition-cost", type=finite_float, metavar="κ", help="subtract κ per transition")
     p.add_argument("--rotation-cap-deg", type=non_negative_float, metavar="DEG", help="only gaits turning at most this much per pass")
     p.add_argument("--simple-cycles", action="store_true", help="only simple cycles (each state once per pass)")
@@ -69,12 +70,26 @@ def add_gait_parser(sub) -> None:
     g.set_defaults(run=cmd_gait)
 
 
-def _weights(text: str) -> tuple[float, float, float]:
+def _weights(text: str) -> float | tuple[float, float, float]:
+    """One λ (a float: every variance the robot file gives) or λx,λy,λθ (a tuple: each its own)."""
     parts = [p.strip() for p in text.split(",")]
     if len(parts) not in (1, 3):
         raise argparse.ArgumentTypeError(f"expected λ or λx,λy,λθ, got {text!r}")
     values = [non_negative_float(p) for p in parts]
-    return (values[0],) * 3 if len(values) == 1 else (values[0], values[1], values[2])
+    return values[0] if len(values) == 1 else (values[0], values[1], values[2])
+
+
+def _variance_weights(robot, given: float | tuple[float, float, float] | None) -> tuple[float, float, float]:
+    """``--variance-weight`` as (λx, λy, λθ): one λ weighs every variance the robot file gives
+    (a learned one-dimensional file has var_dx only: λ on it, not an error about var_dy); var_dx
+    always, so that a file with no variances at all is told so."""
+    if given is None:
+        return (0.0, 0.0, 0.0)
+    if isinstance(given, tuple):
+        return given
+    planar = robot.transitions.planar
+    have = planar.given() if planar is not None else {}
+    return (given, given if "var_dy" in have else 0.0, given if "var_dtheta_deg" in have else 0.0)
 
 
 def check_speed_objective(robot, objective: str) -> None:
@@ -163,7 +178,7 @@ def _planar_answers(robot, args) -> list:
                     for d in (DIRECTIONS if args.direction == "both" else (args.direction,))]
     entries = gait_library(
         robot.transitions, headings, args.objective, args.max_transitions,
-        variance_weight=args.variance_weight or (0.0, 0.0, 0.0),
+        variance_weight=_variance_weights(robot, args.variance_weight),
         transition_cost=args.transition_cost or 0.0,
         rotation_cap_deg=args.rotation_cap_deg,
         simple_cycles=args.simple_cycles,
