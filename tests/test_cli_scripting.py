@@ -334,6 +334,7 @@ def test_a_udp_host_that_does_not_resolve_is_a_usage_error(capsys, monkeypatch):
     (("console", "--sim", "paper-r1", "--plain", "--baudrate", "9600"), "--baudrate: only with --port"),
     (("learn", "paper-r1", "--sim", "--log", "LOG", "--node", "1"), "--node: only with --can"),
     (("run", "paper-r1", "--can", "x", "--interface", "nosuch"), "unknown CAN interface 'nosuch'; python-can knows:"),
+    (("run", "paper-r1", "--port", "sim://paper-r1", "--speed", "2"), "--speed: only with --sim"),
 ])
 def test_an_option_the_command_would_ignore_or_cannot_take_is_exit_2(capsys, tmp_path, argv, words):
     # each ran with exit 0 (the option ignored) or exited 1 as if a link had failed
@@ -341,6 +342,13 @@ def test_an_option_the_command_would_ignore_or_cannot_take_is_exit_2(capsys, tmp
     code, _, err = run(capsys, *argv)
     assert code == 2 and words in err and err.count("\n") == 1, err
     assert not (tmp_path / "t.jsonl").exists()
+
+
+def test_a_negative_transition_cost_is_refused_like_every_other_weight(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["gait", "paper-r1", "--transition-cost", "-1"])
+    assert e.value.code == 2
+    assert "argument --transition-cost: expected a number >= 0, got '-1'" in capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- load-gait, set-param

@@ -129,6 +129,7 @@ def test_manual_entry_measures_from_rest_then_says_what_only_a_tracker_can(tmp_p
 @pytest.mark.parametrize("argv, message", [
     (["--port", "/dev/null"], "--source is required"),
     (["--truth", str(R1)], "--truth needs --sim"),
+    (["--port", "/dev/null", "--source", "tracker", "--plant", "physical"], "--plant needs --sim"),
     (["--sim", "--more"], "--more needs --half-width"),
     ([], "nothing to do"),
     (["--sim", "--source", "manual", "--track", "x.csv"], "--track goes with --source tracker"),

@@ -55,7 +55,8 @@ def add_gait_parser(sub) -> None:
     p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
                    help="subtract λ·(var_dx + var_dy + var_dtheta_deg), those the robot file gives, or each "
                         "with its own weight")
-    p.add_argument("--transition-cost", type=finite_float, metavar="κ", help="subtract κ per transition")
+    p.add_argument("--transition-cost", type=non_negative_float, metavar="κ",
+                   help="subtract κ ≥ 0 per transition (a cost: prefers short gaits)")
     p.add_argument("--rotation-cap-deg", type=non_negative_float, metavar="DEG", help="only gaits turning at most this much per pass")
     p.add_argument("--simple-cycles", action="store_true", help="only simple cycles (each state once per pass)")
     p.add_argument("--rotate", choices=("cw", "ccw"), help="the gait that turns the most this way")

@@ -59,7 +59,7 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
                    help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
-    p.add_argument("--plant", choices=("table", "physical"), default="table",
+    p.add_argument("--plant", choices=("table", "physical"), default=None,
                    help="with --sim: the table plant (a matrix drives it: ROBOT's or --truth's, default) or the "
                         "physical plant (friction mechanics: learn what the robot really does)")
     p.add_argument("--log", required=True, metavar="TRIALS.jsonl",
@@ -163,6 +163,9 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
         raise LearnError("learn: --source sim needs --sim (the simulator's ground truth)")
     if args.truth and not args.sim:
         raise LearnError("learn: --truth needs --sim")
+    if args.plant is not None and not args.sim:
+        raise LearnError("learn: --plant needs --sim (it picks the simulated body)")
+    args.plant = args.plant or "table"
     if args.more and (args.half_width is None or not linked):
         raise LearnError("learn: --more needs --half-width and a robot (--port, --can or --sim)")
     if args.track is not None and source not in (None, "tracker"):

@@ -171,6 +171,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         check_suffix(args.record)
     args.udp, args.udp_format = udp_options(args)
     link_settings(args)  # before the gait is chosen: an option of another link is refused first
+    if args.speed is not None and not args.sim:  # a real board keeps its own time
+        raise UsageError("--speed: only with --sim (a simulated board's pace; a real one runs in real time)")
     fw, choice = heading_choice(args, robot)
     gait = args.gait if args.gait is not None else 0
     # the loaded sequence's way is stated only by --direction (the climb guard checks it)
