@@ -199,3 +199,16 @@ def test_the_console_refuses_another_robots_file():
     with pytest.raises(IdentityMismatch, match="robot 'paper-r1' on the board, 'paper-r3'"):
         console_main(sim="paper-r1", robot_file=str(resolve_robot("paper-r3")), plain=True, duration_s=0.1,
                      out=io.StringIO(), err=io.StringIO())
+
+
+def test_force_does_not_read_a_board_with_another_robot_files_shape():
+    """--force with inchworm-3's file on R1's board printed 3-digit states beside 2 ψ."""
+    out = io.StringIO()
+    with pytest.raises(IdentityMismatch, match="has 2 limbs and 2 actuators, .*inchworm-3.toml 3 and 3: --force cannot"):
+        console_main(sim="paper-r1", robot_file=str(resolve_robot("inchworm-3")), plain=True, duration_s=0.5,
+                     force=True, out=out, err=io.StringIO())
+    assert out.getvalue() == ""
+    # the same shape: --force reads it (R3 is R1's body with other pads)
+    code = console_main(sim="paper-r1", robot_file=str(resolve_robot("paper-r3")), plain=True, duration_s=0.5,
+                        force=True, out=out, err=io.StringIO())
+    assert code == 0 and "state=" in out.getvalue()
