@@ -345,6 +345,9 @@ def test_robot_name_goes_into_firmware_so_it_is_restricted(tmp_path):
         ('resistance_ohm = [30.0]', ["plant.resistance_ohm: expected one number or a list of 2 (one per actuator)"]),
         ('resistance_ohm = [30.0, -3]', ["plant.resistance_ohm[2]: expected a number in (0, 10000] Ω, got -3"]),
         ('psi_rest_deg = [0, 95]', ["plant.psi_rest_deg[2]: expected a number in (-90, 90) °"]),
+        # a cold limb inside its level 1 band: the table plant never rests at level 0 (it loaded)
+        ('psi_rest_deg = [30, 0]', ["plant.psi_rest_deg: limb 'left' rests at 30°, in or above its level 1 "
+                                    "(from 19°", "expected below 19°"]),
         ('as_c = 90.0', ["plant: actuator 'a': expected as_c (90) below af_c (82)"]),
         ('coupling_deg = [[1, 2, 3], [4, 5, 6]]', ["plant.coupling_deg: expected 2 rows (limbs) of 2 numbers"]),
         ('coupling_deg = [[1, 2], [4, true]]', ["plant.coupling_deg[2][2]: expected a number"]),
