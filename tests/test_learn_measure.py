@@ -144,6 +144,11 @@ def test_a_bad_tracker_file_names_the_line(tmp_path):
     ("# c\n# c\ntime,x\n0,0\n", r"t\.csv: line 3: expected the header time,x,y,theta"),
     ("# c\ntime,x,y,theta\n0,0,0,0\n0.1,1e308,0,0\n", r"t\.csv: line 4, column x: expected a finite number within ±1e9"),
     ("# c\ntime,x,y,theta\n0,0,0,0\n# caf\xe9\n", r"t\.csv: line 4: expected UTF-8 text, got byte 0xe9"),
+    # these named neither line nor column
+    ("time,x,y,theta\n0,0,,\n# c\n0.2,1,,\n0.1,2,,\n",
+     r"t\.csv: line 5, column time: expected a time after the previous row's 0\.2 s \(strictly increasing\), got 0\.1"),
+    ("time,x,y,theta\n0,0,1,\n0.1,1,,\n", r"t\.csv: line 3, column y: empty, but given on line 2"),
+    ("time,x,y,theta\n0,0,,\n", r"t\.csv: expected at least two rows of time,x\[,y\[,theta\]\] after the header, got 1"),
 ])
 def test_tracker_errors_name_the_line_an_editor_shows(tmp_path, text, message):
     """Comment lines were not counted (a bad cell on line 6 was "row 4"), the header error

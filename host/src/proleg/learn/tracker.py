@@ -69,17 +69,26 @@ def read_track(path: str | Path) -> Track:
         for j, cell in enumerate(row + [""] * (4 - len(row))):
             cols[j].append(_cell(cell.strip(), j, f"{path}: line {k}"))
     t = np.array(cols[0], dtype=float)
-    if len(t) < 2 or np.any(np.diff(t) <= 0):
-        raise TrackerError(f"{path}: time: expected at least two rows with strictly increasing times")
+    if len(t) < 2:
+        raise TrackerError(f"{path}: expected at least two rows of time,x[,y[,theta]] after the header, "
+                           f"got {len(t)}")
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        k = int(back[0]) + 1  # the first row whose time does not increase
+        raise TrackerError(f"{path}: line {rows[k + 1][0]}, column time: expected a time after the previous "
+                           f"row's {t[k - 1]:g} s (strictly increasing), got {t[k]:g}")
 
-    def opt(c: list[float | None]) -> np.ndarray | None:
+    def opt(c: list[float | None], j: int) -> np.ndarray | None:
         if all(v is None for v in c):
             return None
         if any(v is None for v in c):
-            raise TrackerError(f"{path}: a column is given on some rows only (give it on every row or none)")
+            given = next(i for i, v in enumerate(c) if v is not None)
+            empty = next(i for i, v in enumerate(c) if v is None)
+            raise TrackerError(f"{path}: line {rows[empty + 1][0]}, column {COLUMNS[j]}: empty, but given on line "
+                               f"{rows[given + 1][0]} (give it on every row or none)")
         return np.array(c, dtype=float)
 
-    return Track(t, np.array(cols[1], dtype=float), opt(cols[2]), opt(cols[3]))
+    return Track(t, np.array(cols[1], dtype=float), opt(cols[2], 2), opt(cols[3], 3))
 
 
 def _rows(path: Path) -> list[tuple[int, list[str]]]:
