@@ -367,3 +367,9 @@ def test_the_too_few_trials_line_names_ten_and_counts_the_rest(tmp_path, capsys)
     n = load_robot(ROOT / "robots" / "caterpillar-4.toml").transitions.n_transitions
     assert code == 0 and line.startswith(f"too few trials (< 2): {n - 1} of {n}: "), line
     assert line.count("->") == 10 and line.endswith(f", … ({n - 11} more; column n)"), line
+
+
+def test_the_report_writes_no_minus_zero():
+    from proleg.cli.learn import _fmt
+
+    assert [_fmt(v) for v in (-0.001, -0.01, 0.0, -1.5, float("nan"), None)] == ["0.00", "-0.01", "0.00", "-1.50", "-", "-"]

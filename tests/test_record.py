@@ -206,7 +206,7 @@ def test_console_on_an_unknown_can_interface_is_one_clear_line():
         console_main(can_channel="can0", interface="bogus", plain=True)
 
 
-def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys):
+def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys, monkeypatch):
     import cantools
 
     out = tmp_path / "robot.dbc"
@@ -215,6 +215,14 @@ def test_dbc_command_writes_a_file_cantools_loads(tmp_path, capsys):
     assert "wrote" in capsys.readouterr().out
     with pytest.raises(LinkError, match="does not exist"):
         dbc_main(out=str(tmp_path / "no" / "robot.dbc"))
+    # -o -: the DBC on standard output, not a file named "-"
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    assert dbc_main(out="-", nodes=[1]) == 0
+    text = capsys.readouterr().out
+    assert list(cwd.iterdir()) == []
+    assert len(cantools.database.load_string(text, "dbc").messages) == 9 and "wrote" not in text
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])

@@ -404,7 +404,10 @@ def _strayed(trials) -> str:
 
 
 def _fmt(v: float, nd: int = 2) -> str:
-    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{nd}f}"
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    text = f"{v:.{nd}f}"
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text  # -0.00 is 0.00
 
 
 def _trial_units(args: argparse.Namespace, robot, trials: list) -> str:

@@ -179,6 +179,11 @@ def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_
         from ..robot import load_robot
 
         robot = load_robot(robot_file)
+    if out == "-":  # standard output, as the usual convention has it (it made a file named "-")
+        from ..protocol.dbc import dbc_text
+
+        sys.stdout.write(dbc_text(nodes, base, robot))
+        return 0
     path = write_dbc(out, nodes, base, robot)
     print(f"wrote {path} ({len(nodes)} node(s), base id {base:#x})", file=note_stream(path))
     return 0
@@ -246,7 +251,7 @@ def add_arguments(subparsers: Any) -> None:
     p.set_defaults(run=lambda a: plot_main(record_file=a.record_file, out=a.out, title=a.title))
 
     d = subparsers.add_parser("dbc", help="write a DBC file describing the robot's CAN frames")
-    d.add_argument("-o", "--out", required=True, metavar="FILE.dbc")
+    d.add_argument("-o", "--out", required=True, metavar="FILE.dbc", help="the DBC file to write (- for standard output)")
     d.add_argument("--node", type=can_node, action="append", metavar="N",
                    help="robot node id(s) on the bus (repeatable; default 0)")
     d.add_argument("--base", type=int_auto, default=0x100, help="base CAN id (default 0x100)")
