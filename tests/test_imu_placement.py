@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def robot(n: int, specs: dict[int, ImuSpec] | None = None, tick_hz: int = 250):
     specs = specs or {}
     limbs = tuple(SimpleNamespace(name=f"l{i + 1}", imu=specs.get(i)) for i in range(n))
-    return SimpleNamespace(name="toy", limbs=limbs, control=SimpleNamespace(tick_hz=tick_hz))
+    return SimpleNamespace(name="toy", where="toy.toml", limbs=limbs, control=SimpleNamespace(tick_hz=tick_hz))
 
 
 def test_bluepill_puts_a_third_imu_on_its_second_bus():
