@@ -291,6 +291,20 @@ def test_teleplot_lines_over_udp(capsys):
     assert [v for _, v in series["seq"]][:3] == sorted([v for _, v in series["seq"]][:3])
 
 
+def test_a_live_plot_gets_no_placeholder_state_while_the_board_does_not_know_it(capsys):
+    """At boot the measured state is 65535 (STATE_UNKNOWN): Teleplot drew a spike to it."""
+    with _udp_socket() as sock:
+        port = sock.getsockname()[1]
+        code, _, err = run(capsys, "sim", "paper-r1", "--duration", "2",
+                           "--udp", f"127.0.0.1:{port}", "--udp-format", "teleplot")
+        assert code == 0, err
+        grams = _datagrams(sock)
+    measured = [float(ln.split(":")[2]) for g in grams for ln in g.decode("ascii").split("\n")
+                if ln.startswith(">measured:")]
+    seq = [ln for g in grams for ln in g.decode("ascii").split("\n") if ln.startswith(">seq:")]
+    assert measured and max(measured) <= 3 and len(measured) < len(seq)  # the boot frames carry no state
+
+
 def test_plotjuggler_json_over_udp(capsys):
     with _udp_socket() as sock:
         port = sock.getsockname()[1]

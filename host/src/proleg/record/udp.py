@@ -18,6 +18,7 @@ from typing import Any
 from ..errors import LinkError, UsageError
 from ..link.client import Received
 from ..link.listeners import Listener
+from ..protocol.enums import Flag
 from .fields import RecordingMeta, dumps, telemetry_row
 
 UDP_FORMATS = ("plotjuggler", "teleplot")
@@ -74,7 +75,10 @@ class UdpStreamer(Listener):
     def on_message(self, rx: Received) -> None:
         if self._sock is None or rx.message.name != "TELEMETRY":
             return
-        data = FORMATTERS[self.format](telemetry_row(self.meta, rx.time, rx.message.fields, rx.truth))
+        row = telemetry_row(self.meta, rx.time, rx.message.fields, rx.truth)
+        if row["flags"] & Flag.STATE_UNKNOWN:
+            del row["measured"]  # its placeholder (65535 at boot) is no state: a live plot would spike to it
+        data = FORMATTERS[self.format](row)
         try:
             self._sock.sendto(data, self._addr)
             self.sent += 1
