@@ -204,31 +204,3 @@ def test_request_retries_with_the_same_token_until_acknowledged():
     assert len(sent) == 3 and len({m.token for m in sent}) == 1
     assert client.stats.retries == 2 and client.stats.timeouts == 1
 
-
-def test_what_a_port_buffered_before_the_handshake_is_not_part_of_the_session():
-    """A board idle behind a pty (or a USB-serial adapter's buffer) hands a new client seconds of
-    old TELEMETRY: proleg run --port counted 624 frames for a 1 s run, the first ones 11 s
-    before its START, and recorded them."""
-    old = encode(Message("TELEMETRY", {"seq": 7, "time_ms": 1_000, "measured": 0, "target": 0, "gait": 0,
-                                       "direction": 0, "step": 0, "flags": 0, "psi": (0, 0), "duty": (0, 0)}))
-
-    class Stale(SimLink):
-        first = True
-
-        def read(self, timeout: float) -> bytes:
-            data = super().read(timeout)
-            if self.first:
-                self.first = False
-                return old * 50 + data
-            return data
-
-    board = FakeBoard()
-    client = RobotClient(Stale(board, description="sim fake"))
-    client.connect()
-    seen = []
-    deadline = client.link.clock() + 0.5
-    while client.link.clock() < deadline:
-        m = client.recv(0.05)
-        if m is not None and m.name == "TELEMETRY":
-            seen.append(m)
-    assert seen and all(m.time_ms != 1_000 for m in seen)

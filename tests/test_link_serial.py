@@ -98,6 +98,42 @@ def test_client_talks_to_firmware_on_a_pty():
         server.close()
 
 
+class _BackloggedPort:
+    """A port that held old frames when it was opened, and hands over more old bytes still in
+    flight after a flush (a pty's flip buffer) before the board's fresh ones."""
+
+    def __init__(self):
+        self.buffer = bytearray(b"OLD" * 1000)
+        self.in_flight = [b"OLD" * 10, b"OLD" * 10]
+        self.timeout = 0.0
+
+    @property
+    def in_waiting(self) -> int:
+        return len(self.buffer)
+
+    def reset_input_buffer(self) -> None:
+        self.buffer.clear()
+
+    def read(self, n: int = 1) -> bytes:
+        if not self.buffer and self.in_flight:
+            self.buffer += self.in_flight.pop(0)
+        out, self.buffer[:] = bytes(self.buffer[:n]), self.buffer[n:]
+        return out
+
+    def close(self) -> None:
+        pass
+
+
+def test_what_a_port_held_before_it_was_opened_is_not_part_of_the_session():
+    """A board idle behind a pty (or a USB adapter's buffer) handed proleg run --port seconds of
+    old TELEMETRY: a 1 s run counted 624 frames, the first ones 11 s before its START, and
+    recorded them. Flushed at open, and what was still in flight read away."""
+    port = _BackloggedPort()
+    link = SerialLink("/dev/ttyACM0", opener=lambda url, **kw: port)
+    port.buffer += b"NEW"  # what the board says once we are there
+    assert link.read(0.0) == b"NEW"
+
+
 def test_timeout_names_the_command_and_the_port():
     server = PtyBoard(FakeBoard(silent=True))
     try:

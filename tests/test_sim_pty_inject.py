@@ -58,3 +58,17 @@ def test_an_explicit_duration_of_60_s_stops_the_pty_like_any_other(capsys):
     runner.join(timeout=30.0)
     assert done == [0], "still serving 30 s after a 60-simulated-second run at 200x"
     capsys.readouterr()
+
+
+def test_output_nobody_reads_is_dropped_beyond_a_small_backlog():
+    """The server held 64 KiB of output nobody read (half a minute of 50 Hz frames), which a
+    client that connected later took for its own session: proleg run --port counted 624 frames
+    for a 1 s run, the first ones 11 s before its START."""
+    from proleg.sim.pty import BACKLOG_BYTES
+
+    sim = open_simulated(load_robot(R1), "host-sim")
+    with PtyServer(sim, say=lambda _: None) as server:
+        pending = b""
+        for _ in range(200):  # 200 × 4 KiB, nobody reading: the pty fills, then the server holds the rest
+            pending = server._write(pending + bytes(4096))
+        assert server.bytes_dropped > 0 and len(pending) <= BACKLOG_BYTES <= 4096

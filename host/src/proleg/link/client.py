@@ -164,8 +164,6 @@ class RobotClient:
                 f"{self.link.description}: robot speaks protocol {info.protocol_version}, "
                 f"this proleg speaks {PROTOCOL_VERSION} (rebuild the firmware or update proleg)"
             )
-        with self._rx_lock:  # what came before the handshake is no part of this session: a
-            self._queue.clear()  # pty or USB-serial buffer can hold many seconds of old frames
         return info
 
     def close(self) -> None:

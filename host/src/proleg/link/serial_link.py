@@ -24,6 +24,12 @@ MAX_BAUDRATE = 12_000_000
 Opener = Callable[..., Any]
 
 
+#: Opening a port: its old input is read away until the line is quiet this long (a frame of 50 Hz
+#: telemetry comes every 20 ms), for at most DRAIN_S.
+QUIET_S = 0.03
+DRAIN_S = 0.3
+
+
 class SerialLink(Link):
     """One serial port. ``opener`` is ``serial.serial_for_url`` unless a test injects another."""
 
@@ -44,6 +50,23 @@ class SerialLink(Link):
             self._port = None
             raise LinkError(f"cannot open serial port {self.url}: {_reason(e)}") from None
         self._timeout = 0.0
+        self._discard_backlog()
+
+    def _discard_backlog(self) -> None:
+        """What the port held before we opened it is no part of this session: a board idle behind
+        a pty (or a USB adapter's buffer) left seconds of old frames there, which ``proleg run
+        --port`` counted and recorded as its own. Flushed, then read away until the line is quiet
+        for ``QUIET_S`` (a pty still hands over what was in flight), for at most ``DRAIN_S``: a
+        Nano that resets as its port opens says nothing for a while, so its BOOT is not lost."""
+        port = self._port
+        try:
+            port.reset_input_buffer()
+            end = time.monotonic() + DRAIN_S
+            port.timeout = self._timeout = QUIET_S
+            while time.monotonic() < end and port.read(max(1, port.in_waiting)):
+                pass
+        except (serial.SerialException, OSError, AttributeError, ValueError):
+            pass  # a port (or URL handler) without an input buffer to discard
 
     def write(self, data: bytes) -> None:
         port = self._require()

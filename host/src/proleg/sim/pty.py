@@ -19,6 +19,13 @@ from pathlib import Path
 from .closed_loop import SimulatedRobot
 
 
+#: Output the server holds while the pty's own buffer is full (nobody reading): a UART sends
+#: into the void, a USB adapter buffers a little. It held 64 KiB, half a minute of frames at
+#: 50 Hz, which a client that connected later took for its own session (proleg run --port
+#: counted 624 frames for a 1 s run, the first ones 11 s before its START).
+BACKLOG_BYTES = 1024
+
+
 class PtyServer:
     """``faults``: ``(at_s, FAULT)`` pairs injected once ``at_s`` of simulated time has passed
     since ``serve`` was first called (``proleg sim --pty --inject FAULT+T``, as without --pty and in
@@ -97,7 +104,7 @@ class PtyServer:
             n = 0
         self.bytes_out += n
         rest = data[n:]
-        if len(rest) > 65536:  # nobody is reading: drop the oldest, as a UART would
-            self.bytes_dropped += len(rest) - 65536
-            rest = rest[-65536:]
+        if len(rest) > BACKLOG_BYTES:  # nobody is reading: drop the oldest, as a UART would
+            self.bytes_dropped += len(rest) - BACKLOG_BYTES
+            rest = rest[-BACKLOG_BYTES:]
         return rest
