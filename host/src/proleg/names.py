@@ -13,3 +13,8 @@ import re
 def identifier(name: str) -> str:
     """``name`` with every character other than ASCII letters, digits and ``_`` made ``_``."""
     return re.sub(r"[^0-9A-Za-z_]", "_", name)
+
+
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural but for one: "1 cycle", "0 cycles", "3 faults"."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"

@@ -30,6 +30,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from ..errors import LinkError, ProlegError
+from ..names import counted
 
 log = logging.getLogger("proleg")
 
@@ -267,10 +268,10 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                       on_progress=progress, ask=ask)
         done, todo = ex.tally()
         lim = ex.limits
-        log.info("learn: exploring %s on %s: %s = %d trials, %d to do; pieces of up to %d transitions, %.1f s rest "
+        log.info("learn: exploring %s on %s: %s = %d trials, %d to do; pieces of up to %s, %.1f s rest "
                  "after each; Ctrl-C pauses (nothing recorded is lost: run the same command to go on)",
                  robot.name, client.link.description, _explored(t, args.repeats), done + todo, todo,
-                 lim.max_transitions, lim.rest_s)
+                 counted(lim.max_transitions, "transition"), lim.rest_s)
         try:
             if args.adaptive:
                 _adaptive(ex, args, t, trial_log, estimate, adaptive_demand)

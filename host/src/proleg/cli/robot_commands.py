@@ -18,6 +18,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from .. import interrupts
+from ..names import counted
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..link.serial_link import DEFAULT_BAUDRATE
 from .number_args import baudrate, can_bitrate, can_node, gait_index, heading_deg, positive_float, reply_timeout
@@ -250,8 +251,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                  "the loaded gait" + (" (its way unstated)" if direction == UNSTATED else f" in {direction}"))
         ran = f"for {run.duration_s:g} s" if run.duration_s else "did not start"
         print(f"{run.robot} on {doc['link']}: {which} {ran}: "
-              f"{run.cycles} cycles, {run.telemetry_frames} telemetry frames ({run.telemetry_lost} lost), "
-              f"{len(run.faults)} faults")
+              f"{counted(run.cycles, 'cycle')}, {counted(run.telemetry_frames, 'telemetry frame')} "
+              f"({run.telemetry_lost} lost), {counted(len(run.faults), 'fault')}")
         if "pose" in doc:
             pose = doc["pose"]["x_mm"], doc["pose"]["y_mm"], doc["pose"]["theta_deg"]
             print(f"  pose: x {pose[0]:+.1f} mm, y {pose[1]:+.1f} mm, theta {pose[2]:+.1f} deg")

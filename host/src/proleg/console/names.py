@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..link.direction import direction_text
+from ..names import counted
 from ..protocol.definition import (
     GAIT_USER,
     ClearWhat,
@@ -113,7 +114,7 @@ def event_text(f: dict, names: RobotNames = RobotNames(), state_label: object = 
     if k == EventKind.FAULT:
         return f"FAULT {fault_text(code, detail, names)}"
     if k == EventKind.GAIT_STOPPED:
-        return f"gait stopped: {enum_name(StopReason, code)} after {detail} cycles"
+        return f"gait stopped: {enum_name(StopReason, code)} after {counted(detail, 'cycle')}"
     if k == EventKind.GAIT_STARTED:
         return f"gait {gait_text(code)} started {direction_text(detail)}"
     if k == EventKind.STATE_REACHED:
