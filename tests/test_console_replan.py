@@ -169,6 +169,9 @@ def test_an_injection_spec_is_a_fault_and_a_time():
     assert parse_injection("imu-silent:left") == (0.0, "imu-silent:left")
     with pytest.raises(SimError, match="≥ 0"):
         parse_injection("imu-silent:left+-3")
+    # a '+' with nothing after it: a time left out, not part of the coil's name ("no actuator 'sma-right+'")
+    with pytest.raises(SimError, match=r"--inject dead-actuator:sma-right\+: no time after '\+'"):
+        parse_injection("dead-actuator:sma-right+")
 
 
 def test_a_plus_that_is_not_followed_by_seconds_belongs_to_the_name():

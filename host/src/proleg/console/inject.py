@@ -23,6 +23,8 @@ def parse_injection(spec: str, run_s: float | None = None) -> tuple[float, str]:
 
     fault, plus, at = spec.rpartition("+")
     t = 0.0
+    if plus and not at.strip():
+        raise SimError(f"--inject {spec}: no time after '+' (expected FAULT+T, T seconds after the start)")
     if plus and not _number(at):
         fault, plus = spec, ""  # a '+' inside a limb's or coil's name ("front+pad"), no time
     if not plus:
