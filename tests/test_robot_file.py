@@ -145,6 +145,17 @@ def test_forbidden_mark_on_a_rewarded_transition(tmp_path):
     rejects(tmp_path, text, "transitions.forbidden[0]", "01->11", "also gives it a reward")
 
 
+def test_a_state_label_with_a_bad_digit_names_the_limb(tmp_path, capsys):
+    """'not a level of limb #2' where the limb has a name (docs/robot-file.md: messages use it)."""
+    from proleg.cli import main
+
+    text = R1.replace("[transitions]", '[transitions]\nforbidden = ["00->02"]')
+    msg = rejects(tmp_path, text, "transitions.forbidden[0]", "digit 2 ('2') is not a level of limb 'right', 0..1")
+    assert "limb #" not in msg
+    assert main(["gait", str(write(tmp_path, R1, "ok.toml")), "--evaluate", "00,10,20"]) == 2
+    assert "digit 1 ('2') is not a level of limb 'left', 0..1" in capsys.readouterr().err
+
+
 def test_forbidden_mark_of_a_state_to_itself(tmp_path):
     text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11", "00->00"]')
     rejects(tmp_path, text.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]'), "transitions.forbidden[1]",

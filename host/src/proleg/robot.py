@@ -246,7 +246,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         raise RobotFileError(
             f"{path}: limb: {n:,} states (the product of the limbs' levels {levels}), expected at most {MAX_STATES:,}"
         )
-    table, units = transitions_section(path, doc["transitions"], levels)
+    table, units = transitions_section(path, doc["transitions"], levels, [limb.name for limb in limbs])
     n_trials = None
     if isinstance(doc["transitions"], dict) and "n_trials" in doc["transitions"]:
         allowed = np.zeros((table.n_states, table.n_states), dtype=bool)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +36,9 @@ TRANSITION_UNITS = ("steps", "mm", "cm", "m")
 UNIT_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
 
 
-def transitions_section(path: Path, value: Any, levels: tuple[int, ...]) -> tuple[TransitionTable, str]:
+def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
+                        names: Sequence[str] = ()) -> tuple[TransitionTable, str]:
+    """``[transitions]`` (``names``: the limbs', for an error about a state label's digit)."""
     f = Fields(
         path, "transitions", value,
         {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", "n_trials",
@@ -66,10 +69,10 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...]) -> tupl
             if f.has(key):
                 f.fail(key, "an inline 'matrix' (planar statistics are not read from a CSV table yet)")
         planar = None
-        src, dst, rew, dur = _csv(path, f.string("file"), levels)
+        src, dst, rew, dur = _csv(path, f.string("file"), levels, names)
 
     if f.has("forbidden"):
-        _check_forbidden(path, value["forbidden"], levels, src, dst)
+        _check_forbidden(path, value["forbidden"], levels, src, dst, names)
 
     if f.has("default_duration_s"):
         default = f.number("default_duration_s", None, 0.0, 3600.0, open_lo=True)
@@ -153,7 +156,7 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
     return out
 
 
-def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) -> None:
+def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, names: Sequence[str] = ()) -> None:
     """``forbidden = ["01->11", ...]`` states what the robot cannot do; the table must agree."""
     where = f"{path}: transitions.forbidden"
     if not isinstance(marks, list) or not all(isinstance(m, str) for m in marks):
@@ -164,8 +167,8 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst) 
         parts = [p.strip() for p in mark.split("->")]
         if len(parts) != 2:
             raise RobotFileError(f"{where}[{k}]: expected FROM->TO, got {mark!r}")
-        a = _state_ref(parts[0], levels, n, f"{where}[{k}]")
-        b = _state_ref(parts[1], levels, n, f"{where}[{k}]")
+        a = _state_ref(parts[0], levels, n, f"{where}[{k}]", names)
+        b = _state_ref(parts[1], levels, n, f"{where}[{k}]", names)
         if a == b:
             raise RobotFileError(f"{where}[{k}]: {mark} is a state to itself, never a transition (expected FROM->TO "
                                  "of two different states)")
@@ -220,7 +223,7 @@ def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.
     return out
 
 
-def _csv(path: Path, name: str, levels: tuple[int, ...]):
+def _csv(path: Path, name: str, levels: tuple[int, ...], names: Sequence[str] = ()):
     csv_path = (path.parent / name).resolve()
     n = states.state_count(levels)
     src: list[int] = []
@@ -238,7 +241,7 @@ def _csv(path: Path, name: str, levels: tuple[int, ...]):
                 has_duration = len(cells) == 4
             elif has_duration != (len(cells) == 4):
                 raise RobotFileError(f"{where}: every row must have a duration, or none")
-            a, b, r = _csv_transition(cells, levels, n, where)
+            a, b, r = _csv_transition(cells, levels, n, where, names)
             if (a, b) in seen:
                 raise RobotFileError(f"{where}: transition {cells[0]} -> {cells[1]} is given twice")
             seen.add((a, b))
@@ -265,9 +268,10 @@ def _open_csv(path: Path, csv_path: Path):
     return fh
 
 
-def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: str) -> tuple[int, int, float]:
-    a = _state_ref(cells[0], levels, n, f"{where}: from")
-    b = _state_ref(cells[1], levels, n, f"{where}: to")
+def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: str,
+                    names: Sequence[str] = ()) -> tuple[int, int, float]:
+    a = _state_ref(cells[0], levels, n, f"{where}: from", names)
+    b = _state_ref(cells[1], levels, n, f"{where}: to", names)
     if a == b:
         raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
     try:
@@ -328,7 +332,7 @@ def _first_non_utf8_line(csv_path: Path) -> int:
     return 1
 
 
-def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
+def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str, names: Sequence[str] = ()) -> int:
     """A state in a CSV row or a forbidden mark: a label (one digit per limb), or an index
     written ``@N``. A string of digits of another length is an error, never an index: a label
     with a digit missing or one too many would otherwise name a different state."""
@@ -341,7 +345,7 @@ def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str) -> int:
         raise RobotFileError(expected)
     if len(text) == L:
         try:
-            return states.index(text, levels)
+            return states.index(text, levels, names)
         except ValueError as e:
             raise RobotFileError(f"{expected} ({e})") from None
     if text.isascii() and text.isdigit():

@@ -35,16 +35,17 @@ def _label(index: int, levels: tuple[int, ...]) -> str:
     return "".join(reversed(digits))
 
 
-def index(text: str, levels: Sequence[int]) -> int:
-    """The index of the state written as ``text``; ValueError says what is wrong."""
+def index(text: str, levels: Sequence[int], names: Sequence[str] = ()) -> int:
+    """The index of the state written as ``text``; ValueError says what is wrong (naming the
+    limb by ``names``, the robot file's, where given; else by its place, ``limb #2``)."""
     if len(text) != len(levels):
         raise ValueError(f"state label {text!r} has {len(text)} digits, expected {len(levels)} (one per limb)")
     value = 0
     for i, (ch, k) in enumerate(zip(text.lower(), levels)):
         d = DIGITS.find(ch)
         if not 0 <= d < k:  # on a robot of mixed levels the digit's place says which limb's range
-            raise ValueError(f"state label {text!r}: digit {i + 1} ({ch!r}) is not a level of limb #{i + 1}, "
-                             f"0..{k - 1}")
+            limb = f"limb {names[i]!r}" if i < len(names) else f"limb #{i + 1}"
+            raise ValueError(f"state label {text!r}: digit {i + 1} ({ch!r}) is not a level of {limb}, 0..{k - 1}")
         value = value * k + d
     return value
 

@@ -7,6 +7,7 @@ that a 2^16-state robot with a million transitions costs a few tens of megabytes
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from math import prod
 
@@ -74,20 +75,21 @@ class TransitionTable:
     def label(self, i: int) -> str:
         return states.label(i, self.levels)
 
-    def index(self, text: str) -> int:
-        return states.index(text, self.levels)
+    def index(self, text: str, names: Sequence[str] = ()) -> int:
+        """The state labelled ``text`` (``names``: the limbs', for the error)."""
+        return states.index(text, self.levels, names)
 
     def labels(self) -> list[str]:
         return [self.label(i) for i in range(self.n_states)]
 
-    def sequence(self, text: str) -> list[int]:
+    def sequence(self, text: str, names: Sequence[str] = ()) -> list[int]:
         """The states of a comma-separated list of labels (``00,10,11``); ValueError naming the
-        entry that is empty or not a state."""
+        entry that is empty or not a state (and the limb, by ``names`` where given)."""
         out = []
         for k, part in enumerate(text.split(","), 1):
             if not part.strip():
                 raise ValueError(f"entry {k} of {text!r} is empty")
-            out.append(self.index(part.strip()))
+            out.append(self.index(part.strip(), names))
         return out
 
     @classmethod

@@ -378,7 +378,7 @@ def _print_evaluation(robot, args) -> int:
 
     table = robot.transitions
     try:
-        seq = table.sequence(args.evaluate)
+        seq = table.sequence(args.evaluate, [limb.name for limb in robot.limbs])
     except ValueError as e:
         raise GaitError(f"--evaluate: {e}") from None
     names = [table.label(x) for x in seq]

@@ -314,7 +314,7 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     table = robot.transitions
     try:
-        states = table.sequence(args.states)
+        states = table.sequence(args.states, [limb.name for limb in robot.limbs])
     except ValueError as e:
         raise GaitError(f"STATES: {e}") from None
     if len(states) > 1 and states[0] == states[-1]:
