@@ -387,6 +387,7 @@ def test_set_param_by_name_on_the_simulated_board(capsys):
     code, out, err = run(capsys, "set-param", "--sim", "paper-r1", "drive_duty", "3000")
     assert code == 0, err
     assert out.startswith("set drive_duty[0] = 3000")
+    assert "a --sim board lives for this command only" in out  # as load-gait and calibrate say
     code, _, err = run(capsys, "set-param", "--sim", "paper-r1", "DRIVE-DUTY", "9900")
     assert code == 1 and "SAFETY_LIMIT" in err
     with pytest.raises(SystemExit) as e:

@@ -360,6 +360,8 @@ def cmd_set_param(args: argparse.Namespace) -> int:
     with open_client(args) as client:
         client.set_param(args.name, args.index, args.value)
         print(f"set {args.name}[{args.index}] = {args.value} on {client.link.description}")
+        if getattr(args, "sim", None):
+            print(SIM_IS_FRESH)  # as load-gait and calibrate say: the setting ends with this command
     return 0
 
 
