@@ -208,6 +208,29 @@ def test_boost_ms_reaches_the_firmware_only_when_set(tmp_path):
     assert "#define CTL_BOOST_MS 700u" in render_config(on, gaits, SIM_BOARD)["robot_config.h"]
 
 
+def test_the_thermal_budget_keys_are_robot_file_keys_that_reach_the_firmware(tmp_path):
+    """docs/safety.md listed hold_max_duty, max_mean_duty, duty_window_ms and on_limit_latch as
+    [safety] keys, and a robot file giving one was refused as an unknown key."""
+    from core_configs import SIM_BOARD
+    from proleg.firmware.render import render_config
+
+    text = R1 + "\n[safety]\nhold_max_duty = 0.2\nmax_mean_duty = 0.4\nduty_window_ms = 5000\non_limit_latch = 5\n"
+    robot = load_robot(write(tmp_path, text, "budget.toml"))
+    s = robot.safety
+    assert (s.hold_max_duty, s.max_mean_duty, s.duty_window_ms, s.on_limit_latch) == (0.2, 0.4, 5000, 5)
+    config = render_config(robot, {"+x": [], "-x": []}, SIM_BOARD)["robot_config.h"]
+    for line in ("#define CFG_HOLD_MAX_DUTY_PM 2000u", "#define CFG_MEAN_DUTY_PM 4000u",
+                 "#define CFG_DUTY_WINDOW_MS 5000UL", "#define CFG_ON_LIMIT_LATCH 5u"):
+        assert line in config
+    default = load_robot(write(tmp_path, R1, "default.toml")).safety
+    assert (default.hold_max_duty, default.max_mean_duty, default.duty_window_ms, default.on_limit_latch) == (
+        None, 0.5, 10_000, 3)
+    rejects(tmp_path, R1 + "\n[safety]\nhold_max_duty = 0.6\n",
+            "safety.hold_max_duty: expected at most max_mean_duty and max_duty (0.5)", "got 0.6")
+    rejects(tmp_path, R1 + "\n[safety]\nduty_window_ms = 4\n", "safety.duty_window_ms: expected an integer in 8..600000")
+    rejects(tmp_path, R1 + "\n[safety]\non_limit_latch = 0\n", "safety.on_limit_latch: expected an integer in 1..247")
+
+
 def test_drive_duty_above_safety_ceiling(tmp_path):
     text = R1 + "\n[safety]\nmax_duty = 0.5\n[control]\ndrive_duty = 0.6\n"
     rejects(tmp_path, text, "control.drive_duty", "at most safety.max_duty")

@@ -106,6 +106,10 @@ class Actuator:
     channel_given: bool = True  # False: no channel key, the default (its position among the [[actuator]]s)
 
 
+#: The most on-limit hits that may latch: the guard counts them in a byte and, in the tick it
+#: reaches the limit, up to 8 coils may hit at once (core/safety.c asserts the same).
+MAX_ON_LIMIT_LATCH = 255 - 8
+
 #: The shortest link watchdog a robot file may set (0 turns it off): the host's heartbeat
 #: comes every quarter of it (``proleg.link.client.WATCHDOG_SHARE``).
 MIN_LINK_WATCHDOG_MS = 100
@@ -118,6 +122,13 @@ class Safety:
     max_duty: float = 0.8
     state_timeout_ms: int = 8000
     link_watchdog_ms: int = 2000  # on by default: a host that goes away stops the robot (docs/safety.md)
+    #: the thermal budget (docs/safety.md): a duty at or below hold_max_duty is holding, never
+    #: on-time (None: max(0.3, control.hold_duty)); the mean duty over any duty_window_ms is at
+    #: most max_mean_duty; on_limit_latch on-limit hits without progress latch SMA_ON_LIMIT
+    hold_max_duty: float | None = None
+    max_mean_duty: float = 0.5
+    duty_window_ms: int = 10_000
+    on_limit_latch: int = 3
 
 
 #: control.boost_ms: 0 (off) or this range. Below 100 ms a coil still heating back to As (its
@@ -470,7 +481,14 @@ def _safety(path: Path, value: Any) -> Safety:
         max_duty=f.number("max_duty", d.max_duty, 0.0, 1.0, open_lo=True),
         state_timeout_ms=f.integer("state_timeout_ms", d.state_timeout_ms, 10, 600_000),
         link_watchdog_ms=f.integer("link_watchdog_ms", d.link_watchdog_ms, 0, 600_000),
+        hold_max_duty=f.number("hold_max_duty", None, 0.0, 1.0) if f.has("hold_max_duty") else None,
+        max_mean_duty=f.number("max_mean_duty", d.max_mean_duty, 0.0, 1.0, open_lo=True),
+        duty_window_ms=f.integer("duty_window_ms", d.duty_window_ms, 8, 600_000),
+        on_limit_latch=f.integer("on_limit_latch", d.on_limit_latch, 1, MAX_ON_LIMIT_LATCH),
     )
+    if s.hold_max_duty is not None and s.hold_max_duty > min(s.max_mean_duty, s.max_duty):
+        f.fail("hold_max_duty", f"at most max_mean_duty and max_duty ({min(s.max_mean_duty, s.max_duty):g}): a "
+               "duty the coil may hold forever must fit the mean-duty window", s.hold_max_duty)
     # the host feeds the watchdog with a PING every quarter of it (link/client.py): below
     # 100 ms that is a frame every few ms, and a desktop OS's scheduling alone can miss it
     if 0 < s.link_watchdog_ms < MIN_LINK_WATCHDOG_MS:

@@ -29,7 +29,7 @@ import jinja2
 from .. import __version__
 from ..errors import BoardError, BuildError
 from ..paths import display_path, templates_dir
-from ..robot import stroke_leads
+from ..robot import MAX_ON_LIMIT_LATCH, stroke_leads
 from ..robot_body import worn_holds_of
 from ..robot_climb import check_climb_limit
 from .boards import DEFAULT_I2C_HZ, DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
@@ -302,9 +302,6 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     )
 
 
-#: The most on-limit hits that may latch: the guard counts them in a byte and, in the tick it
-#: reaches the limit, up to 8 coils may hit at once (core/safety.c asserts the same).
-MAX_ON_LIMIT_LATCH = 255 - 8
 
 #: Thermal-budget keys of [safety] (docs/safety.md) and their defaults when a robot file
 #: (or a robot.py that predates them) has none: hold_max_duty None = max(0.3, control.hold_duty).
