@@ -388,6 +388,11 @@ def test_set_param_by_name_on_the_simulated_board(capsys):
     assert code == 0, err
     assert out.startswith("set drive_duty[0] = 3000")
     assert "a --sim board lives for this command only" in out  # as load-gait and calibrate say
+    # a watchdog under the robot files' floor is refused; a short one is set, with what it means later
+    code, _, err = run(capsys, "set-param", "--sim", "paper-r1", "link_watchdog_ms", "50")
+    assert code == 2 and "link_watchdog_ms: expected at least 100 ms" in err
+    code, out, err = run(capsys, "set-param", "--sim", "paper-r1", "link_watchdog_ms", "300")
+    assert code == 0 and "the board keeps 300 ms until it resets" in out and "stops with LINK_WATCHDOG" in out
     code, _, err = run(capsys, "set-param", "--sim", "paper-r1", "DRIVE-DUTY", "9900")
     assert code == 1 and "SAFETY_LIMIT" in err
     with pytest.raises(SystemExit) as e:

@@ -328,8 +328,13 @@ def test_leave_running_leaves_the_robot_alone():
     board = FakeBoard()
     board.running, board.sequence = True, (0, 2, 3, 1)
     err, sent = _console_on(board, leave_running=True)
-    assert "STOP" not in sent and "ESTOP" not in sent and err == ""
+    assert "STOP" not in sent and "ESTOP" not in sent
     assert board.running
+    # and it says for how long: the link watchdog stops a gait nobody pings (without a robot file
+    # the console cannot know the period; the gait ran on for 2 s and stopped, unannounced)
+    assert err == ("proleg: left running on fake board: the firmware's link watchdog stops it its link_watchdog_ms "
+                   "(2000 unless its robot file says otherwise) after the last frame from a host (a run to detach "
+                   "from needs firmware built with [safety] link_watchdog_ms = 0)\n")
 
 
 def test_a_closed_terminal_window_runs_the_leaving_code():

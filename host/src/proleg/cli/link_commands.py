@@ -138,6 +138,12 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             try:
                 if not leave_running:
                     print(f"proleg: {stop_robot(client)} on {link.description}", file=err)
+                elif robot is None or robot.safety.link_watchdog_ms:
+                    after = ("its link_watchdog_ms (2000 unless its robot file says otherwise)" if robot is None
+                             else f"{robot.safety.link_watchdog_ms} ms")
+                    print(f"proleg: left running on {link.description}: the firmware's link watchdog stops it "
+                          f"{after} after the last frame from a host (a run to detach from needs firmware built "
+                          "with [safety] link_watchdog_ms = 0)", file=err)
             finally:
                 for listener in listeners:  # also those a Ctrl-C before the session left open
                     listener.stop()  # (a recording gets its MCAP footer; stopping twice is nothing)

@@ -357,9 +357,21 @@ def _way_hint(table: Any, states: list[int]) -> str:
 
 
 def cmd_set_param(args: argparse.Namespace) -> int:
+    from ..link.client import HEARTBEAT_S, WATCHDOG_SHARE
+    from ..robot import MIN_LINK_WATCHDOG_MS
+
+    watchdog = args.name == "link_watchdog_ms"
+    if watchdog and 0 < args.value < MIN_LINK_WATCHDOG_MS:
+        raise UsageError(f"link_watchdog_ms: expected at least {MIN_LINK_WATCHDOG_MS} ms (as in a robot file; the "
+                         f"board takes 0 only when its build has no watchdog), got {args.value}")
     with open_client(args) as client:
         client.set_param(args.name, args.index, args.value)
         print(f"set {args.name}[{args.index}] = {args.value} on {client.link.description}")
+        if watchdog and 0 < args.value < HEARTBEAT_S * 1000 * WATCHDOG_SHARE:
+            print(f"note: the board keeps {args.value} ms until it resets, and nothing tells a later session: one "
+                  f"that knows only the robot file's watchdog pings every {HEARTBEAT_S:g} s or a quarter of that "
+                  f"watchdog, and its gait stops with LINK_WATCHDOG; set it in the robot file ([safety] "
+                  "link_watchdog_ms) and rebuild to keep it")
         if getattr(args, "sim", None):
             print(SIM_IS_FRESH)  # as load-gait and calibrate say: the setting ends with this command
     return 0
