@@ -300,3 +300,28 @@ def test_a_ground_other_than_flat_or_this_one_is_refused_and_nothing_starts(r1, 
     wait(client, 0.5)  # no calibration was begun: no LEVEL_DONE, nothing stored
     assert get_level(client).status == LevelStatus.NONE
     client.close()
+
+
+def test_calibrate_refuses_a_robot_whose_ends_are_still_coming_down(r1, capsys):
+    """The board checks only that no gait runs and that no limb tilts 20°: right after a gait's
+    STOP, its ends still bent and cooling, proleg calibrate stored +7° and +17° of "rest tilt",
+    and every START on flat ground after it was refused (TOO_STEEP)."""
+    from types import SimpleNamespace
+
+    from proleg.cli.calibrate import _calibrate
+
+    sim = SimulatedRobot(r1, seed=4)
+    client = connect(sim)
+    assert client.wait_known_state()
+    client.start(0, "+x")
+    wait(client, 3.5)  # 00 -> 10 -> 11: both ends up
+    client.stop()
+    args = SimpleNamespace(show=False, clear=False, ground=False, sim=True)
+    with pytest.raises(Exception, match=r"not at rest, nothing asked of the board: .*(is still moving|is heating)"):
+        _calibrate(args, r1, client, [])
+    assert get_level(client).status == LevelStatus.NONE  # nothing stored
+    wait(client, 10.0)  # the coils cool, the body settles
+    assert _calibrate(args, r1, client, []) == 0
+    reading = get_level(client)
+    assert reading.status == LevelStatus.STORED and max(abs(v) for v in reading.offsets_cdeg) < 100  # under 1°
+    client.close()

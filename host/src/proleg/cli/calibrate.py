@@ -14,6 +14,38 @@ from typing import Any
 from ..errors import Interrupted, LinkError
 
 
+#: How long the host watches ψ before it asks for a calibration, and how far a limb's mean ψ may
+#: move between the first and the second half of that time: a coil cooling after a gait moves
+#: its end by degrees a second (R1: 17° to 8° in about 2 s); 1.5° of IMU noise moves a mean of
+#: 25 samples by about 0.4°.
+REST_WATCH_S = 1.0
+REST_DRIFT_DEG = 1.0
+
+
+def _not_at_rest(client: Any, robot: Any) -> str | None:
+    """Why the robot is not at rest (a coil heating, or a limb whose ψ still moves), from
+    ``REST_WATCH_S`` of telemetry; None when it rests. The board checks only that no gait runs
+    and that no limb tilts 20°: a robot stopped a moment ago, its ends still coming down, was
+    calibrated with +17° of bend and then refused START on flat ground (TOO_STEEP)."""
+    hz = getattr(client.info, "telemetry_hz", 0) or 50
+    frames = list(client.telemetry(timeout=2.0, count=max(4, round(hz * REST_WATCH_S))))
+    names = [limb.name for limb in robot.limbs]
+    acts = [a.name for a in robot.actuators]
+    for f in frames:
+        hot = [j for j, d in enumerate(f.duty) if d]
+        if hot:
+            j = hot[0]
+            coil = repr(acts[j]) if j < len(acts) else f"#{j + 1}"
+            return f"actuator {coil} is heating (duty {f.duty[j] / 100:g} %)"
+    half = len(frames) // 2
+    for i, name in enumerate(names[:len(frames[0].psi)]):
+        first = sum(f.psi[i] for f in frames[:half]) / half / 100
+        second = sum(f.psi[i] for f in frames[half:]) / (len(frames) - half) / 100
+        if abs(second - first) > REST_DRIFT_DEG:
+            return f"limb {name!r} is still moving (ψ {first:+.1f}° then {second:+.1f}° within {REST_WATCH_S:g} s)"
+    return None
+
+
 def _limb_names(robot: Any, n: int) -> list[str]:
     names = [limb.name for limb in robot.limbs]
     if len(names) != n:
@@ -85,6 +117,9 @@ def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[st
             print("levelled on this ground (until reset):")
             print(_table(names, reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
         return 0
+    if (moving := _not_at_rest(client, robot)) is not None:
+        raise LinkError(f"{where}: not at rest, nothing asked of the board: {moving}; let the coils cool and the "
+                        "body settle (docs/calibration.md, step 2), then calibrate")
     try:
         asked.append("ground" if args.ground else "CALIBRATE_LEVEL")
         ask_level_calibration(client, ground=args.ground)
