@@ -114,9 +114,9 @@ class ParamId(IntEnum):
     STATE_TIMEOUT_MS = 4  # ≤ build value
     PSI_STAR_CDEG = 5  # index = the threshold, counted limb by limb (a limb of k levels has k-1); 0.01°
     HYSTERESIS_CDEG = 6  # index = limb; 0.01°
-    MAX_ON_MS = 7  # may only shrink
-    MIN_COOLDOWN_MS = 8  # may only grow
-    LINK_WATCHDOG_MS = 9  # may only shrink (0 only if the build has it off)
+    MAX_ON_MS = 7  # never above the build's value
+    MIN_COOLDOWN_MS = 8  # never below the build's value
+    LINK_WATCHDOG_MS = 9  # never above the build's value (0 only if the build has it off)
     HOLD_DUTY = 10  # permyriad, ≤ build max_duty; 0 = hold by bang-bang only
 
 
