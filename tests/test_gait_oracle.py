@@ -143,3 +143,40 @@ def test_one_very_short_transition_does_not_hide_every_speed():
     for direction in ("+x", "-x"):
         assert optimal_gaits(table, "speed", direction).value is not None
         assert_matches_oracle(table, "speed", direction, None)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(table=tables(durations=False), direction=st.sampled_from(["+x", "-x"]), objective=st.sampled_from(["total", "rate"]),
+       bound=st.sampled_from([None, 2, 3, 4]), pick=st.integers(0, 10_000))
+def test_a_penalty_no_walk_can_afford_changes_nothing(table, direction, objective, bound, pick):
+    """One transition made a penalty of 1e9 against the direction: no walk that moves that way
+    can use it, so the answer is the table's without that transition. The tie tolerance was
+    1e-9 of the largest |reward|: with the penalty every J within 1 tied (R1 with 11->00 at
+    -1e9 listed J = 2 gaits as optimal beside J = 3), and rate found no gait at all."""
+    if table.n_transitions < 2:
+        return
+    k = pick % table.n_transitions
+    sign = 1.0 if direction == "+x" else -1.0
+    reward = table.reward.copy()
+    reward[k] = -sign * 1e9
+    penalised = TransitionTable(table.levels, table.src, table.dst, reward)
+    keep = np.arange(table.n_transitions) != k
+    without = TransitionTable(table.levels, table.src[keep], table.dst[keep], table.reward[keep])
+    got, want = optimal_gaits(penalised, objective, direction, bound), optimal_gaits(without, objective, direction, bound)
+    assert (got.value is None) == (want.value is None), (got, want)
+    if want.value is not None:
+        assert abs(got.value - want.value) <= 1e-9 * max(1.0, abs(want.value))
+        assert [g.states for g in got.gaits] == [g.states for g in want.gaits]
+
+
+def test_r1_with_a_penalty_of_1e9_has_one_optimal_gait_and_a_rate():
+    from proleg.robot import load_robot
+
+    r1 = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").transitions
+    reward = r1.reward.copy()
+    reward[r1.lookup(r1.index("11"), r1.index("00"))] = -1e9
+    table = TransitionTable(r1.levels, r1.src, r1.dst, reward)
+    total = optimal_gaits(table, "total", "+x", 4)
+    assert total.value == 3.0 and [r1.label(s) for s in total.gaits[0].states] == ["00", "10", "11", "01", "00"]
+    assert len(total.gaits) == 1
+    assert optimal_gaits(table, "rate", "+x").value == 0.75

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..transitions import TransitionTable
-from .result import RELATIVE_TOLERANCE, speed_scale
+from .result import RELATIVE_TOLERANCE, reward_scale, speed_scale
 
 
 def _canonical(cycle: tuple[int, ...]) -> tuple[int, ...]:
@@ -74,12 +74,13 @@ def brute_force_gaits(
     simple = objective != "total"
     bound = max_transitions if max_transitions is not None else n
     sign = 1.0 if direction == "+x" else -1.0
-    reward_scale = float(np.abs(table.reward).max()) if len(table.reward) else 0.0
+    w = sign * np.asarray(table.reward, dtype=np.float64)
+    longest = bound if not simple else min(bound, n)
     if objective == "speed":
         assert table.duration is not None
-        scale = speed_scale(table.reward, table.duration)
+        scale = speed_scale(w, table.duration, longest)
     else:
-        scale = reward_scale
+        scale = reward_scale(w, longest)
     tol = RELATIVE_TOLERANCE * scale
     scored = [(sign * score(table, c, objective), c) for c in closed_walks(table, bound, simple)]
     if objective == "total":  # repeats count in the direction the walk moves

@@ -27,7 +27,7 @@ from .critical import critical_cycles
 from .cycles import short_cycles
 from .evaluate import make_gaits
 from .howard import max_cycle_ratio
-from .result import MAX_LISTED_STATES, MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult, speed_scale
+from .result import MAX_LISTED_STATES, MAX_TIES, RELATIVE_TOLERANCE, Gait, GaitResult, reward_scale, speed_scale
 from .search import bounded_search
 from .total import best_total_walks
 
@@ -90,12 +90,14 @@ def _finish(
         return GaitResult(direction, objective, bound, None, (), False)
     best = max(v for v, _ in scored)
     keep = list({g.states: g for v, g in scored if v >= best - tol}.values())
-    rate_tol = tol if objective == "rate" else RELATIVE_TOLERANCE * _rate_scale(table)
+    rate_tol = tol if objective == "rate" else RELATIVE_TOLERANCE * _rate_scale(table, sign, bound)
     return GaitResult(direction, objective, bound, sign * best, tuple(rank_gaits(keep, direction, rate_tol)), truncated)
 
 
-def _rate_scale(table: TransitionTable) -> float:
-    return float(np.abs(table.reward).max()) if len(table.reward) else 0.0
+def _rate_scale(table: TransitionTable, sign: float, bound: int | None) -> float:
+    """The scale ties of rate are judged against when gaits of another objective are ranked."""
+    longest = table.n_states if bound is None else min(bound, table.n_states)
+    return reward_scale(sign * np.asarray(table.reward, dtype=np.float64), longest)
 
 
 def optimal_gaits(
@@ -111,8 +113,8 @@ def optimal_gaits(
     (J per second; needs durations). direction: "+x" maximises and counts only J > 0; "-x"
     minimises and counts only J < 0 (``value`` is then negative). ``max_transitions``
     bounds N; for "total" it defaults to the number of states (tables of at most 16
-    states; larger ones must give it). Ties within 1e-9 of the table's largest |reward|
-    (|reward/duration| for speed) are all listed, each rotated to its canonical start, in
+    states; larger ones must give it). Ties within 1e-9 of the table's ``reward_scale``
+    (``speed_scale`` for speed) are all listed, each rotated to its canonical start, in
     rank order (``rank_gaits``): gait 0 is the one the firmware runs by default.
     """
     max_transitions = _check_request(table, objective, direction, max_transitions)
@@ -160,7 +162,7 @@ def _durations(table: TransitionTable) -> np.ndarray:
 
 
 def _best_total(table: TransitionTable, direction: str, K: int, w: np.ndarray) -> GaitResult:
-    tol_j = RELATIVE_TOLERANCE * float(np.abs(w).max())
+    tol_j = RELATIVE_TOLERANCE * reward_scale(w, K)
     res = best_total_walks(table.n_states, table.src, table.dst, w, K, tol_j, limit=MAX_TIES, max_states=MAX_LISTED_STATES)
     cycles = [c for c, _ in res.ties]
     repeats = [k for _, k in res.ties]
@@ -174,10 +176,11 @@ def _best_ratio(
     bounded search when no optimal cycle fits the bound."""
     n = table.n_states
     sign = 1.0 if direction == "+x" else -1.0
-    reward_scale = float(np.abs(w).max())
-    tol_j = RELATIVE_TOLERANCE * reward_scale
+    longest = n if K is None else min(K, n)  # an optimal cycle of a ratio is simple
+    scale = reward_scale(w, longest)
+    tol_j = RELATIVE_TOLERANCE * scale
     t = np.ones(len(w)) if time is None else time
-    tol_r = RELATIVE_TOLERANCE * (reward_scale if time is None else speed_scale(w, t))
+    tol_r = RELATIVE_TOLERANCE * (scale if time is None else speed_scale(w, t, longest))
     sol = max_cycle_ratio(n, table.src, table.dst, w, time)
     if sol.value is None or sol.value <= tol_r:
         return GaitResult(direction, objective, K, None, (), False)

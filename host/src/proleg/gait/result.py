@@ -6,19 +6,36 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Two values tie when they differ by at most this fraction of the scale of the table:
-#: the largest |reward| (for ``total`` and ``rate``) or ``speed_scale`` (for ``speed``). A walk "moves" in +x only when J exceeds the same tolerance.
+#: Two values tie when they differ by at most this fraction of the scale of the table
+#: (``reward_scale`` for ``total`` and ``rate``, ``speed_scale`` for ``speed``). A walk
+#: "moves" in +x only when J exceeds the same tolerance.
 RELATIVE_TOLERANCE = 1e-9
 
 
-def speed_scale(reward: np.ndarray, duration: np.ndarray) -> float:
+def reward_scale(w: np.ndarray, bound: int | None) -> float:
+    """The scale of a gait's J that ties and "moves at all" are judged against, for rewards
+    ``w`` signed for the direction (−reward for −x) and walks of at most ``bound``
+    transitions: the largest |w|, but no more than ``bound`` × the largest positive w. A walk
+    with J > 0 has no step below −(bound − 1) × that, so a larger |w| (a penalty of −1e9 in
+    a matrix of ±1) is in no walk that is compared, and made every J within 1 a tie: gaits
+    worse by 1 were listed as optimal, and rate answered "no gait"."""
+    if not len(w):
+        return 0.0
+    top = float(np.abs(w).max())
+    positive = float(np.max(w))
+    if positive <= 0 or bound is None:
+        return top
+    return min(top, bound * positive)
+
+
+def speed_scale(reward: np.ndarray, duration: np.ndarray, bound: int | None = None) -> float:
     """The scale of a gait's speed (reward per second) that ties and "moves at all" are
-    judged against: the largest |reward| per the median duration. Not the largest |w/t| of
+    judged against: ``reward_scale`` per the median duration. Not the largest |w/t| of
     one transition: one very short transition made every cycle's speed look like rounding
     noise, and the speed objective answered "no gait" (durations 1 s and one of 1 ns)."""
     if not len(reward):
         return 0.0
-    return float(np.abs(reward).max()) / float(np.median(duration))
+    return reward_scale(np.asarray(reward, dtype=np.float64), bound) / float(np.median(duration))
 
 #: At most this many tied gaits are listed; beyond it ``GaitResult.truncated`` is True.
 MAX_TIES = 10_000
