@@ -302,3 +302,26 @@ def test_a_default_channel_the_board_lacks_is_called_the_default_not_quoted(tmp_
     assert str(e.value).startswith(f"{path}: actuator 'a5' (the 5th [[actuator]], no channel key) is on channel 4 "
                                    "by default, its position, but board arduino-nano has 4 PWM channels: channel = 0 (D9)")
     assert not (tmp_path / "nano").exists()
+
+
+def test_a_tie_the_hardware_can_make_is_gait_0_when_the_first_ranked_cannot_be(tmp_path, capsys):
+    """Two limbs on one coil, 00 -> 01 -> 00 and 00 -> 10 -> 00 both +1 a step: the engine ranks
+    00 01 00 first (by states), which the shared coil cannot hold, and the build refused the
+    robot (gait 0 cannot run) though 00 10 00 was an optimal tie it can walk."""
+    from proleg.cli.main import main
+    from proleg.firmware.gaits import firmware_gaits
+
+    path = tmp_path / "shared.toml"
+    path.write_text("\n".join([
+        '[robot]', 'name = "shared"',
+        '[[limb]]', 'name = "a"', 'psi_star_deg = [20.0]', 'actuator = "c"',
+        '[[limb]]', 'name = "b"', 'psi_star_deg = [20.0]', 'actuator = "c"',
+        '[[actuator]]', 'name = "c"',
+        '[control]', 'hold_margin_deg = 1.0',
+        '[transitions]', 'matrix = [[0, 1, 1, "x"], [1, 0, "x", "x"], [1, "x", 0, "x"], ["x", "x", "x", 0]]', '']))
+    robot = load_robot(path)
+    gaits = firmware_gaits(robot)["+x"]
+    labels = [" ".join(robot.transitions.label(s) for s in g.states) for g in gaits]
+    assert labels[0] == "00 10 00" and "00 01 00" in labels, labels
+    assert main(["build", str(path), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 0
+    capsys.readouterr()

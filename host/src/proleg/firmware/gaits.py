@@ -104,12 +104,24 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
 
     Ties whose steps each move limbs one way only come first (stable otherwise), so that
     gait 0, the one START and ``proleg sim`` run by default, is the easiest to make
-    physically (``proleg.states.opposing_steps``)."""
+    physically (``proleg.states.opposing_steps``); and a tie the hardware cannot make at all
+    (``CANNOT_MAKE``: a shared coil moving its limbs apart, no way in from rest) is never
+    gait 0 while another can be made (the build refused the robot, though a tie it could
+    walk was there)."""
     from ..gait import optimal_gaits
+    from ..gait.feasibility import gait_problems
     from ..states import opposing_steps
 
+    def makeable(g) -> bool:
+        return not any(p.severity == "error" and p.kind in CANNOT_MAKE for p in gait_problems(robot, g.states))
+
     def ordered(gaits):
-        return tuple(sorted(gaits, key=lambda g: len(opposing_steps(g.states, robot.levels))))
+        out = sorted(gaits, key=lambda g: len(opposing_steps(g.states, robot.levels)))
+        if out and not makeable(out[0]):  # checked one by one: ties may number thousands
+            first = next((k for k, g in enumerate(out) if makeable(g)), None)
+            if first is not None:
+                out.insert(0, out.pop(first))
+        return tuple(out)
 
     if max_transitions is None:
         max_transitions = default_max_transitions(robot, objective)
