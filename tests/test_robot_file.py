@@ -357,6 +357,26 @@ def test_csv_errors_name_file_and_line(tmp_path):
     assert re.search(r"t\.csv:3: to: expected a state label", str(info.value))
 
 
+@pytest.mark.parametrize("text, message", [
+    # the header was skipped unread: a 4th column was taken for duration_s whatever it said
+    ("from,to,reward,extra\n00,10,1,3\n10,00,1,4\n",
+     r"t\.csv:1: expected the header from,to,reward\[,duration_s\] \(in this order\), got 'from,to,reward,extra'"),
+    ("to,from,reward\n10,00,1\n", r"t\.csv:1: expected the header .*got 'to,from,reward'"),
+    ("from,to,reward\n00,10,1,3\n10,00,1,4\n",
+     r"t\.csv:2: expected 3 fields as the header names \(from,to,reward\), got 4"),
+])
+def test_a_csv_header_is_read_not_skipped(tmp_path, text, message):
+    with pytest.raises(RobotFileError, match=message):
+        load_robot(csv_robot(tmp_path, text))
+
+
+def test_a_csv_header_that_names_durations_gives_them(tmp_path):
+    r = load_robot(csv_robot(tmp_path, "# c\nfrom,to,reward,duration_s\n00,10,1,3\n10,00,1,4\n"))
+    assert sorted(r.transitions.duration.tolist()) == [3.0, 4.0]
+    r = load_robot(csv_robot(tmp_path, "00,10,1\n10,00,1\n"))  # no header at all: as before
+    assert r.transitions.n_transitions == 2
+
+
 def test_csv_duplicate_transition(tmp_path):
     with pytest.raises(RobotFileError, match=r"t\.csv:3: transition 00 -> 10 is given twice"):
         load_robot(csv_robot(tmp_path, "from,to,reward\n00,10,1\n00,10,2\n"))

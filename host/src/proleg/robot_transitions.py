@@ -232,11 +232,15 @@ def _csv(path: Path, name: str, levels: tuple[int, ...], names: Sequence[str] = 
     dur: list[float] = []
     seen: set[tuple[int, int]] = set()
     has_duration = None
+    header: list[str] = []
     with _open_csv(path, csv_path) as fh:
-        for lineno, cells in _csv_rows(fh, csv_path):
+        for lineno, cells in _csv_rows(fh, csv_path, header):
             where = f"{csv_path}:{lineno}"
             if len(cells) not in (3, 4):
                 raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {len(cells)} fields")
+            if header and len(cells) != len(header):
+                raise RobotFileError(f"{where}: expected {len(header)} fields as the header names "
+                                     f"({','.join(header)}), got {len(cells)}")
             if has_duration is None:
                 has_duration = len(cells) == 4
             elif has_duration != (len(cells) == 4):
@@ -294,11 +298,12 @@ def _csv_duration(text: str, where: str) -> float:
     return d
 
 
-def _csv_rows(fh, csv_path: Path):
+def _csv_rows(fh, csv_path: Path, header: list[str]):
     """(line, stripped cells) of each data row: ``line`` is the file line the row starts on
-    (a quoted cell may span lines); blank rows, ``#`` comments and the ``from,to,reward``
-    header (the first other row) are skipped. csv.reader's errors (NUL bytes, a field over its
-    size limit, bytes that are not UTF-8) are RobotFileError naming the line."""
+    (a quoted cell may span lines); blank rows and ``#`` comments are skipped, and the header
+    (a first row that starts with no state) must be ``from,to,reward[,duration_s]``: its
+    cells go to ``header``. csv.reader's errors (NUL bytes, a field over its size limit,
+    bytes that are not UTF-8) are RobotFileError naming the line."""
     reader = csv.reader(fh)
     first = True
     while True:
@@ -315,9 +320,24 @@ def _csv_rows(fh, csv_path: Path):
         if not row or row[0].lstrip().startswith("#"):
             continue
         cells = [c.strip() for c in row]
-        header, first = first and cells[:3] == ["from", "to", "reward"], False
-        if not header:
-            yield start, cells
+        if first and not _looks_like_a_state(cells[0]):  # the header: checked, not just skipped
+            if cells not in (CSV_COLUMNS[:3], CSV_COLUMNS):
+                raise RobotFileError(f"{csv_path}:{start}: expected the header {','.join(CSV_COLUMNS[:3])}"
+                                     f"[,{CSV_COLUMNS[3]}] (in this order), got {','.join(cells)!r}")
+            header.extend(cells)
+            first = False
+            continue
+        first = False
+        yield start, cells
+
+
+#: A CSV transition table's columns, in order; the last is optional.
+CSV_COLUMNS = ["from", "to", "reward", "duration_s"]
+
+
+def _looks_like_a_state(cell: str) -> bool:
+    """A state label (digits) or index (@N): a first row starting otherwise is a header."""
+    return cell.startswith("@") or (cell.isascii() and cell.isdigit())
 
 
 def _first_non_utf8_line(csv_path: Path) -> int:
