@@ -358,6 +358,23 @@ def test_an_option_the_command_would_ignore_or_cannot_take_is_exit_2(capsys, tmp
     assert not (tmp_path / "t.jsonl").exists()
 
 
+@pytest.mark.parametrize("argv, words", [
+    # each was taken and ignored (exit 0): the score printed was not the one asked for
+    (("--evaluate", "00,10,11,01,00", "--heading", "90"), "--heading: not with --evaluate"),
+    (("--evaluate", "00,10,11,01,00", "--max-transitions", "2"), "--max-transitions: not with --evaluate"),
+    (("--evaluate", "00,10,11,01,00", "--direction", "-x"), "--direction: not with --evaluate"),
+    (("--direction", "-x", "--heading", "90"), "--direction -x: not with a planar option"),
+])
+def test_gait_options_that_would_be_ignored_are_refused(capsys, argv, words):
+    code, out, err = run(capsys, "gait", "paper-r1", *argv)
+    assert code == 2 and out == "" and words in err, err
+
+
+def test_direction_still_picks_the_way_of_a_weighted_answer(capsys):
+    code, out, err = run(capsys, "gait", "paper-r1", "--direction", "-x", "--transition-cost", "0.1")
+    assert code == 0 and "-x" in out and "+x" not in out, (out, err)
+
+
 def test_a_negative_transition_cost_is_refused_like_every_other_weight(capsys):
     with pytest.raises(SystemExit) as e:
         main(["gait", "paper-r1", "--transition-cost", "-1"])

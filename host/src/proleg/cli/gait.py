@@ -41,7 +41,8 @@ def add_gait_parser(sub) -> None:
     g.add_argument("robot", metavar="ROBOT", type=robot_arg)
     g.add_argument("--objective", choices=("total", "rate", "speed"),
                    help="total (the default), rate or speed (docs/gait-selection.md)")
-    g.add_argument("--direction", choices=("+x", "-x", "both"), default="both")
+    g.add_argument("--direction", choices=("+x", "-x", "both"), default=None,
+                   help="which way to optimise (default both; a planar option gives its own heading)")
     g.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
     g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
     g.add_argument("--json", action="store_true", help="print one JSON object")
@@ -115,7 +116,16 @@ def cmd_gait(args: argparse.Namespace) -> int:
         if args.ties is not None or args.all_ties:
             raise GaitError(f"{'--ties' if args.ties is not None else '--all-ties'}: not with --evaluate "
                             "(it scores one sequence; the ties are those of an optimisation)")
+        ignored = [k for k in (*PLANAR_FLAGS, "max_transitions", "direction")
+                   if getattr(args, k) is not None and getattr(args, k) is not False]
+        if ignored:  # they were taken and ignored: the score printed was not the one asked for
+            raise GaitError(f"--{ignored[0].replace('_', '-')}: not with --evaluate (it scores the sequence given by "
+                            "its reward J; options of an optimisation do not apply)")
         return _print_evaluation(robot, args)
+    if args.direction is not None and any(getattr(args, k) is not None for k in ("heading", "rotate", "library")):
+        raise GaitError(f"--direction {args.direction}: not with a planar option (--heading, --rotate or --library "
+                        "gives the way: heading 0 is +x, 180 is -x)")
+    args.direction = args.direction or "both"
     if not planar:
         if args.translation_cap is not None:
             raise GaitError("--translation-cap only applies with --rotate or rot-cw/rot-ccw in --library")
