@@ -20,7 +20,7 @@ from pathlib import Path
 from ..errors import GaitError
 from .number_args import (
     cycles,
-    finite_float,
+    heading_deg,
     max_transitions,
     non_negative_float,
     positive_int,
@@ -52,7 +52,8 @@ def add_gait_parser(sub) -> None:
                            "--json: every one by default, and 'ties' says how many there are)")
     ties.add_argument("--all-ties", action="store_true", help="list every optimal gait in the text too")
     p = g.add_argument_group("planar gaits (robot files with dy / dtheta_deg / var_*; docs/planar.md)")
-    p.add_argument("--heading", type=finite_float, metavar="DEG", help="score motion along this heading (0 = +x, 90 = +y)")
+    p.add_argument("--heading", type=heading_deg, metavar="DEG",
+                   help="score motion along this heading (0 = +x, 90 = +y; within ±3600)")
     p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
                    help="subtract λ·(var_dx + var_dy + var_dtheta_deg), those the robot file gives, or each "
                         "with its own weight")

@@ -56,8 +56,8 @@ def parse_headings(text: str) -> list[Heading]:
             deg = float(part)
         except ValueError:
             raise GaitError(f"--library: {part!r} is neither a heading in degrees nor rot-cw/rot-ccw") from None
-        if not math.isfinite(deg):
-            raise GaitError(f"--library: heading {part!r} must be a finite number of degrees")
+        if not math.isfinite(deg) or abs(deg) > 3600.0:  # as --heading (cli/number_args.MAX_HEADING_DEG)
+            raise GaitError(f"--library: heading {part!r} must be a number of degrees within ±3600")
         out.append(Heading(f"{deg:g}", heading_deg=deg))
     if not out:
         raise GaitError("--library: give at least one heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
