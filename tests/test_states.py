@@ -36,3 +36,6 @@ def test_a_digit_out_of_its_limbs_range_says_which_digit_on_a_robot_of_mixed_lev
     assert state_index("21", (3, 2)) == 5
     with pytest.raises(ValueError, match=r"state label '02': digit 2 \('2'\) is not a level of limb #2, 0\.\.1$"):
         state_index("02", (3, 2))
+    # the digit as typed (a letter O for a zero), not lower-cased
+    with pytest.raises(ValueError, match=r"state label '1O': digit 2 \('O'\) is not a level of limb 'b', 0\.\.1$"):
+        state_index("1O", (2, 2), ("a", "b"))

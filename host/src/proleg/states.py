@@ -41,8 +41,8 @@ def index(text: str, levels: Sequence[int], names: Sequence[str] = ()) -> int:
     if len(text) != len(levels):
         raise ValueError(f"state label {text!r} has {len(text)} digits, expected {len(levels)} (one per limb)")
     value = 0
-    for i, (ch, k) in enumerate(zip(text.lower(), levels)):
-        d = DIGITS.find(ch)
+    for i, (ch, k) in enumerate(zip(text, levels)):
+        d = DIGITS.find(ch.lower())
         if not 0 <= d < k:  # on a robot of mixed levels the digit's place says which limb's range
             limb = f"limb {names[i]!r}" if i < len(names) else f"limb #{i + 1}"
             raise ValueError(f"state label {text!r}: digit {i + 1} ({ch!r}) is not a level of {limb}, 0..{k - 1}")
