@@ -27,8 +27,13 @@ def _not_at_rest(client: Any, robot: Any) -> str | None:
     ``REST_WATCH_S`` of telemetry; None when it rests. The board checks only that no gait runs
     and that no limb tilts 20°: a robot stopped a moment ago, its ends still coming down, was
     calibrated with +17° of bend and then refused START on flat ground (TOO_STEEP)."""
+    from ..protocol.definition import Flag
+
     hz = getattr(client.info, "telemetry_hz", 0) or 50
+    client.wait_known_state()  # a board that has just reset reads its IMUs first: no ψ to judge yet
     frames = list(client.telemetry(timeout=2.0, count=max(4, round(hz * REST_WATCH_S))))
+    known = [f for f in frames if not int(f.flags) & Flag.STATE_UNKNOWN]
+    frames = known if len(known) >= 4 else frames  # a limb between its levels leaves the state unknown
     names = [limb.name for limb in robot.limbs]
     acts = [a.name for a in robot.actuators]
     for f in frames:
