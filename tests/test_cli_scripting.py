@@ -71,7 +71,7 @@ def test_a_board_built_from_another_robot_exits_1_as_the_documented_rule_says(ca
     assert "runs robot 'paper-r1', not 'paper-r3'" in err and "give the robot file it was built from" in err
     readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8").split())
     assert ("the board does not run the firmware of the robot file given); **2** usage (a bad argument, "
-            "a robot or board file that does not load, a bad gait)") in readme
+            "an output directory that does not exist, a robot or board file that does not load, a bad gait)") in readme
     with pytest.raises(SystemExit):
         main(["--help"])
     assert "the board does not run the firmware of the robot file given" in " ".join(capsys.readouterr().out.split())

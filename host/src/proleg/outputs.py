@@ -109,11 +109,12 @@ def replacing(path: str | Path, suffix: str = ".tmp") -> Iterator[Path]:
 def write_text_atomic(path: str | Path, text: str, what: str, encoding: str = "utf-8") -> Path:
     """Write ``text`` to ``path`` atomically (``replacing``: temp file + rename, a symlink's
     target replaced, a FIFO or device written in place); ``LinkError`` naming the file when
-    it cannot be written (``what``: the command, as the message's prefix)."""
+    it cannot be written (``what``: the command, as the message's prefix); ``UsageError``
+    for a directory that does not exist (a bad argument, exit 2, as plot and learn --out say)."""
     out = Path(path)
     for directory in (out.parent, output_target(out)[0].parent):  # "." for a bare file name
         if not directory.is_dir():
-            raise LinkError(f"{what}: directory {directory} does not exist")
+            raise UsageError(f"{what}: directory {directory} does not exist")
     try:
         with replacing(out) as tmp, open(tmp, "w", encoding=encoding, newline="\n") as f:
             f.write(text)

@@ -34,8 +34,8 @@ exit status:
   0  ok
   1  failed: a link or command failed, the robot faulted, an output could not be written,
      the board does not run the firmware of the robot file given
-  2  usage: a bad argument, a robot file, board file or recording that does not load,
-     a bad gait
+  2  usage: a bad argument (an output directory that does not exist), a robot file,
+     board file or recording that does not load, a bad gait
 
 ROBOT is a robot file or the name of a bundled example (proleg robots lists them).
 """
