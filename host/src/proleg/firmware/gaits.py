@@ -113,7 +113,7 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
     from ..states import opposing_steps
 
     def makeable(g) -> bool:
-        return not any(p.severity == "error" and p.kind in CANNOT_MAKE for p in gait_problems(robot, g.states))
+        return not cannot_make(gait_problems(robot, g.states))
 
     def ordered(gaits):
         out = sorted(gaits, key=lambda g: len(opposing_steps(g.states, robot.levels)))
@@ -164,6 +164,12 @@ def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:
 CANNOT_MAKE = ("shared-actuator", "no-entry")
 
 
+def cannot_make(problems: Any) -> list[Any]:
+    """Of a gait's ``gait_problems``, the errors for which the hardware cannot make it at all
+    (``CANNOT_MAKE``); empty when it can."""
+    return [p for p in problems if p.severity == "error" and p.kind in CANNOT_MAKE]
+
+
 def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
     """What the hardware may not do in the firmware's gaits (proleg.gait.feasibility):
     one line per problem, for ``proleg build`` to print. BuildError when gait 0 of a
@@ -179,7 +185,7 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
     for d, gs in gaits.items():
         for i, g in enumerate(gs):
             problems = gait_problems(robot, g.states)
-            errors = [p for p in problems if p.severity == "error" and p.kind in CANNOT_MAKE]
+            errors = cannot_make(problems)
             if i == 0 and errors:
                 raise BuildError(
                     f"{robot.where}: gait 0 of {d}, the one START runs, cannot run on this robot: "
