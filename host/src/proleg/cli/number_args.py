@@ -131,13 +131,11 @@ def reply_timeout(text: str) -> float:
     return v
 
 
-#: A heading is an angle: ten turns either way are plenty (−450 is −90); beyond is a typo (1e308° was
-#: answered as a heading, its cosine meaningless).
-MAX_HEADING_DEG = 3600.0
-
-
 def heading_deg(text: str) -> float:
-    """A heading in degrees within ±MAX_HEADING_DEG (0 = +x, 90 = +y)."""
+    """A heading in degrees within ±``proleg.gait.library.MAX_HEADING_DEG`` (0 = +x, 90 = +y),
+    as ``--library`` takes them."""
+    from ..gait.library import MAX_HEADING_DEG  # here: the gait engine is not loaded for every command
+
     v = _float(text, "a heading in degrees")
     if not math.isfinite(v) or abs(v) > MAX_HEADING_DEG:
         raise argparse.ArgumentTypeError(f"expected a heading in degrees within ±{MAX_HEADING_DEG:g}, got {text}")

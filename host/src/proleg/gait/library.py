@@ -56,8 +56,8 @@ def parse_headings(text: str) -> list[Heading]:
             deg = float(part)
         except ValueError:
             raise GaitError(f"--library: {part!r} is neither a heading in degrees nor rot-cw/rot-ccw") from None
-        if not math.isfinite(deg) or abs(deg) > 3600.0:  # as --heading (cli/number_args.MAX_HEADING_DEG)
-            raise GaitError(f"--library: heading {part!r} must be a number of degrees within ±3600")
+        if not math.isfinite(deg) or abs(deg) > MAX_HEADING_DEG:
+            raise GaitError(f"--library: heading {part!r} must be a number of degrees within ±{MAX_HEADING_DEG:g}")
         out.append(Heading(f"{deg:g}", heading_deg=deg))
     if not out:
         raise GaitError("--library: give at least one heading, e.g. 0,90,180,270,rot-cw,rot-ccw")
@@ -113,6 +113,9 @@ def library_gaits(entries: Sequence[LibraryEntry]) -> list[tuple[Heading, Gait]]
 #: second, but the search grows with the bound (a 36-state robot takes about 30 s at 32), and
 #: 99999 never finished.
 MAX_GAIT_TRANSITIONS = 256
+#: A heading is an angle: ten turns either way are plenty (−450 is −90); beyond is a typo
+#: (1e308° was answered as a heading, its cosine meaningless). --heading takes the same.
+MAX_HEADING_DEG = 3600.0
 SPEC_KEYS = {
     "library": "headings in degrees and/or \"rot-cw\", \"rot-ccw\", e.g. [0, 90, 180, 270, \"rot-cw\"]",
     "objective": "\"total\" or \"rate\"",
