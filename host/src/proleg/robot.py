@@ -25,7 +25,8 @@ from . import states
 from .errors import RobotFileError
 from .names import identifier
 from .robot_body import CoilLift, blocked_descents, coupled_states, coupling_warnings, reach_warnings, shared_coil_lifts
-from .robot_plant import PlantSection, default_plant_section, inference_warning, limb_friction, plant_section
+from .robot_plant import (PlantSection, default_plant_section, inference_warning, limb_friction, plant_section,
+                          rest_warnings)
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
 from .robot_fields import Fields, read_text
 from .robot_transitions import n_trials_section, transitions_section
@@ -109,6 +110,8 @@ class Actuator:
 #: The most on-limit hits that may latch: the guard counts them in a byte and, in the tick it
 #: reaches the limit, up to 8 coils may hit at once (core/safety.c asserts the same).
 MAX_ON_LIMIT_LATCH = 255 - 8
+#: The mean-duty window's range (ms; docs/safety.md: kept as 8 slots of a window / 8).
+DUTY_WINDOW_MS_RANGE = (8, 600_000)
 
 #: The shortest link watchdog a robot file may set (0 turns it off): the host's heartbeat
 #: comes every quarter of it (``proleg.link.client.WATCHDOG_SHARE``).
@@ -272,14 +275,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
-    if "psi_rest_deg" in plant.given:  # the table plant's cold limb (the physical body's is below)
-        for limb, rest in zip(limbs, plant.psi_rest_deg):
-            edge = limb.psi_star_deg[0] - limb.hysteresis_deg / 2
-            if rest >= edge:
-                log.warning("warning: %s: plant.psi_rest_deg: limb %r rests at %g°, in its level 1 or above (from "
-                            "%g°: psi* %g° − hysteresis/2): on the table plant (--plant table) its level 0 cannot "
-                            "be reached with every coil cold, and a state that needs it times out",
-                            path, limb.name, rest, edge, limb.psi_star_deg[0])
+    for line in rest_warnings(path, list(limbs), plant):
+        log.warning("warning: %s", line)
     for line in reach_warnings(path, list(limbs), [a.name for a in actuators], plant, control.hold_margin_deg):
         log.warning("warning: %s", line)
     coupled = coupled_states(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
@@ -483,7 +480,7 @@ def _safety(path: Path, value: Any) -> Safety:
         link_watchdog_ms=f.integer("link_watchdog_ms", d.link_watchdog_ms, 0, 600_000),
         hold_max_duty=f.number("hold_max_duty", None, 0.0, 1.0) if f.has("hold_max_duty") else None,
         max_mean_duty=f.number("max_mean_duty", d.max_mean_duty, 0.0, 1.0, open_lo=True),
-        duty_window_ms=f.integer("duty_window_ms", d.duty_window_ms, 8, 600_000),
+        duty_window_ms=f.integer("duty_window_ms", d.duty_window_ms, *DUTY_WINDOW_MS_RANGE),
         on_limit_latch=f.integer("on_limit_latch", d.on_limit_latch, 1, MAX_ON_LIMIT_LATCH),
     )
     if s.hold_max_duty is not None and s.hold_max_duty > min(s.max_mean_duty, s.max_duty):

@@ -367,3 +367,20 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
         raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
                              f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {toml_text(value)}")
     return tuple(value)
+
+
+def rest_warnings(path: Path, limbs: list[Any], section: PlantSection) -> list[str]:
+    """A ``psi_rest_deg`` the file gives that puts a cold limb in its level 1 or above: the
+    table plant's (the physical body rests flat, and its own load check says when level 0
+    cannot be held there). Loaded silently, every ``--plant table`` run timed out."""
+    if "psi_rest_deg" not in section.given:
+        return []
+    out = []
+    for limb, rest in zip(limbs, section.psi_rest_deg):
+        edge = limb.psi_star_deg[0] - limb.hysteresis_deg / 2
+        if rest >= edge:
+            out.append(f"{path}: plant.psi_rest_deg: limb {limb.name!r} rests at {rest:g}°, in its level 1 or above "
+                       f"(from {edge:g}°: psi* {limb.psi_star_deg[0]:g}° − hysteresis/2): on the table plant "
+                       "(--plant table) its level 0 cannot be reached with every coil cold, and a state that needs "
+                       "it times out")
+    return out

@@ -29,7 +29,7 @@ import jinja2
 from .. import __version__
 from ..errors import BoardError, BuildError
 from ..paths import display_path, templates_dir
-from ..robot import MAX_ON_LIMIT_LATCH, stroke_leads
+from ..robot import DUTY_WINDOW_MS_RANGE, MAX_ON_LIMIT_LATCH, Safety, stroke_leads
 from ..robot_body import worn_holds_of
 from ..robot_climb import check_climb_limit
 from .boards import DEFAULT_I2C_HZ, DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
@@ -302,14 +302,10 @@ def _limb_part(robot: Any, board: BoardPart, raw_board: Any) -> LimbPart:
     )
 
 
-
-#: Thermal-budget keys of [safety] (docs/safety.md) and their defaults when a robot file
-#: (or a robot.py that predates them) has none: hold_max_duty None = max(0.3, control.hold_duty).
+#: Thermal-budget keys of [safety] (docs/safety.md) and their defaults (``Safety``'s) for a
+#: stand-in robot that has none: hold_max_duty None = max(0.3, control.hold_duty).
 BUDGET_DEFAULTS: dict[str, Any] = {
-    "hold_max_duty": None,
-    "max_mean_duty": 0.5,
-    "duty_window_ms": 10_000,
-    "on_limit_latch": 3,
+    k: getattr(Safety(), k) for k in ("hold_max_duty", "max_mean_duty", "duty_window_ms", "on_limit_latch")
 }
 
 
@@ -326,8 +322,9 @@ def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
             f"robot {name}: safety.hold_max_duty {hold_max:g} must lie in 0 .. max_mean_duty ({mean:g}): "
             "a duty the coil may hold forever must fit the mean-duty window"
         )
-    if not 8 <= int(v["duty_window_ms"]) <= 600_000:
-        raise BuildError(f"robot {name}: safety.duty_window_ms {v['duty_window_ms']} must lie in 8 .. 600000")
+    lo, hi = DUTY_WINDOW_MS_RANGE
+    if not lo <= int(v["duty_window_ms"]) <= hi:
+        raise BuildError(f"robot {name}: safety.duty_window_ms {v['duty_window_ms']} must lie in {lo} .. {hi}")
     if not 1 <= int(v["on_limit_latch"]) <= MAX_ON_LIMIT_LATCH:  # the hit count is a byte (safety.c)
         raise BuildError(f"robot {name}: safety.on_limit_latch {v['on_limit_latch']} must lie in 1 .. "
                          f"{MAX_ON_LIMIT_LATCH}")
