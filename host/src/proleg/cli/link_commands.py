@@ -83,19 +83,12 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         else:
             raise KeyboardInterrupt
 
-    with hangup_as_exception(hang_up), RobotClient(link, timeout=timeout) as client:
+    watchdog_ms = robot.safety.link_watchdog_ms if robot is not None else None
+    with hangup_as_exception(hang_up), RobotClient(link, timeout=timeout, watchdog_ms=watchdog_ms) as client:
         info = client.connect()
         if robot is not None:
-            for problem in check_identity(info, robot, force=force):
+            for problem in check_identity(info, robot, force=force, link=link.description):
                 print(f"proleg: warning: --force: {problem}", file=err)
-            if len(robot.limbs) != info.limbs or len(robot.actuators) != info.actuators:
-                from ..console.identity import IdentityMismatch
-
-                raise IdentityMismatch(  # its states and ψ would be read with the file's shape: wrong
-                    f"{link.description} has {info.limbs} limbs and {info.actuators} actuators, {robot.path} "
-                    f"{len(robot.limbs)} and {len(robot.actuators)}: --force cannot read one with the other")
-        if robot is not None:
-            client.fit_heartbeat(robot.safety.link_watchdog_ms)
         faulted = FaultWatch()
         listeners: list = [faulted]
         try:

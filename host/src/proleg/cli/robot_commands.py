@@ -18,8 +18,8 @@ from contextlib import contextmanager
 from typing import Any
 
 from .. import interrupts
-from ..names import counted
 from ..errors import GaitError, Interrupted, LinkError, UsageError
+from ..names import counted
 from ..link.serial_link import DEFAULT_BAUDRATE
 from .number_args import baudrate, can_bitrate, can_node, gait_index, heading_deg, positive_float, reply_timeout
 

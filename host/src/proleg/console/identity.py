@@ -76,11 +76,16 @@ def identity_problems(info: RobotInfo, robot: Any) -> list[str]:
     return best or []
 
 
-def check_identity(info: RobotInfo, robot: Any, *, force: bool = False) -> list[str]:
+def check_identity(info: RobotInfo, robot: Any, *, force: bool = False, link: str = "the board") -> list[str]:
     """Raise ``IdentityMismatch`` when the board does not run ``robot``'s firmware (unless
-    ``force``); returns the differences (empty when none)."""
+    ``force``); returns the differences (empty when none). A board of another shape (limb or
+    actuator count) is refused even with ``force``: its frames read with the file's shape are
+    wrong (3-digit states beside 2 ψ)."""
     problems = identity_problems(info, robot)
     if problems and not force:
         raise IdentityMismatch(f"the board does not run firmware built from {robot.path}: "
                                f"{'; '.join(problems)} (rebuild and flash it, or --force)")
+    if len(robot.limbs) != info.limbs or len(robot.actuators) != info.actuators:
+        raise IdentityMismatch(f"{link} has {info.limbs} limbs and {info.actuators} actuators, {robot.path} "
+                               f"{len(robot.limbs)} and {len(robot.actuators)}: --force cannot read one with the other")
     return problems
