@@ -13,13 +13,20 @@ from proleg.interrupts import deferred
 
 
 @pytest.fixture
-def held():
-    """Python's own SIGINT handler (a worker started in the background ignores SIGINT), held."""
+def python_handler():
+    """Python's own SIGINT handler, as a terminal's Ctrl-C finds it (a worker started in the
+    background ignores SIGINT); the test's handler put back after it."""
     old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+@pytest.fixture
+def held(python_handler):
+    """Python's own handler, held."""
     interrupts.hold()
     yield
     interrupts.release()
-    signal.signal(signal.SIGINT, old)
 
 
 def _ctrl_c() -> None:
@@ -62,18 +69,14 @@ def test_the_ctrl_c_wins_over_an_error_of_the_block(held):
     assert isinstance(e.value.__context__, OSError)
 
 
-def test_the_last_release_gives_python_its_handler_back():
-    old = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        assert interrupts.hold() and interrupts.hold()
-        interrupts.release()
-        assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler  # one holder left
-        interrupts.release()
-        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        with deferred(), pytest.raises(KeyboardInterrupt):  # not held: at once, as Python does
-            _ctrl_c()
-    finally:
-        signal.signal(signal.SIGINT, old)
+def test_the_last_release_gives_python_its_handler_back(python_handler):
+    assert interrupts.hold() and interrupts.hold()
+    interrupts.release()
+    assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler  # one holder left
+    interrupts.release()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with deferred(), pytest.raises(KeyboardInterrupt):  # not held: at once, as Python does
+        _ctrl_c()
 
 
 def test_an_ignored_sigint_stays_ignored_and_another_handler_is_left_alone():
@@ -111,46 +114,38 @@ def test_off_the_main_thread_a_block_defers_nothing(held):
     assert raised == []
 
 
-def test_a_writer_that_fails_on_a_notifier_thread_gives_the_handler_back_when_stopped(tmp_path):
+def test_a_writer_that_fails_on_a_notifier_thread_gives_the_handler_back_when_stopped(tmp_path, python_handler):
     """The console's Notifier thread writes the rows: a full disk stops the writer there, and
     its hold is still let go, once, so Python's handler comes back."""
     from proleg.record import Logger, RecordingMeta
     from proleg.robot import load_robot
 
-    old = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        robot = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
-        writer = Logger(tmp_path / "run.jsonl", RecordingMeta.for_robot(robot=robot))
-        assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler  # held
+    robot = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+    writer = Logger(tmp_path / "run.jsonl", RecordingMeta.for_robot(robot=robot))
+    assert signal.getsignal(signal.SIGINT) is not signal.default_int_handler  # held
 
-        def full(row):
-            raise OSError(28, "No space left on device")
+    def full(row):
+        raise OSError(28, "No space left on device")
 
-        t = threading.Thread(target=writer._guard, args=(full, {}))
-        t.start()
-        t.join()
-        assert writer.error is not None
-        writer.stop()  # the main thread's stop, as the console's finally does
-        writer.stop()
-        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        with deferred(), pytest.raises(KeyboardInterrupt):  # nobody holds: at once
-            _ctrl_c()
-    finally:
-        signal.signal(signal.SIGINT, old)
+    t = threading.Thread(target=writer._guard, args=(full, {}))
+    t.start()
+    t.join()
+    assert writer.error is not None
+    writer.stop()  # the main thread's stop, as the console's finally does
+    writer.stop()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with deferred(), pytest.raises(KeyboardInterrupt):  # nobody holds: at once
+        _ctrl_c()
 
 
-def test_whole_holds_by_itself_and_gives_python_its_handler_back():
+def test_whole_holds_by_itself_and_gives_python_its_handler_back(python_handler):
     """whole() needs no holder around it (a writer being opened has not held yet)."""
-    old = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        done = []
-        with pytest.raises(KeyboardInterrupt):
-            with interrupts.whole():
-                _ctrl_c()
-                done.append("the rest of the block")
-        assert done == ["the rest of the block"]
-        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        with interrupts.whole():  # nothing pending afterwards
-            pass
-    finally:
-        signal.signal(signal.SIGINT, old)
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with interrupts.whole():
+            _ctrl_c()
+            done.append("the rest of the block")
+    assert done == ["the rest of the block"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with interrupts.whole():  # nothing pending afterwards
+        pass
