@@ -68,6 +68,7 @@ typedef struct {
     uint16_t clock;    /* ticks since this step began (saturating) */
     uint8_t climb;     /* this step raises it to its stroke (it began below its top level) */
     uint8_t shortfall; /* stopped climbing short of its stroke: held where it stopped until it leaves its top level */
+    uint8_t lagged;    /* heated CTL_LAG_MS rising without progress in this step: not waited for (ctl.h) */
 #endif
 } ctl_limb_t;
 
@@ -133,6 +134,9 @@ static uint8_t climbing(uint8_t i, ctl_limb_t *c)
     }
     return look == 0u && gained(i, c);
 }
+
+/* Limb i still rises: the others climbing in step wait for it (ctl.h, CTL_LAG_MS). */
+#define STILL_RISING(i) (!cl[i].lagged)
 
 /* How far limb i, climbing to its stroke on its top level, has got: 0 at its top band's upper
  * edge, CTL_SHARE_FULL at the stroke. */
@@ -261,6 +265,11 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         } else if (++c->ticks >= TICKS(CTL_STALL_MS)) {
             c->stall = CTL_STALL_UNREACHABLE;
         }
+#ifdef CFG_LIMB_STROKE_CDEG
+        if (c->ticks >= TICKS(CTL_LAG_MS)) {
+            c->lagged = 1; /* lags: not waited for in the rest of this step (ctl.h, CTL_LAG_MS) */
+        }
+#endif
     }
 }
 
@@ -301,6 +310,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         if (target[i] != cl[i].target) { /* a new step for this limb */
             cl[i].clock = 0;
             cl[i].climb = (uint8_t)(level != PSI_UNKNOWN && level < target[i]);
+            cl[i].lagged = 0;
         } else if (new_step) {
             cl[i].climb = 0; /* the robot's next step, which leaves this limb where it is */
         } else if (cl[i].clock != 0xFFFFu) {
@@ -335,7 +345,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #ifdef CFG_LIMB_STROKE_CDEG
                 if (cl[i].heat && CLIMBS_TO_STROKE(i, level)) {
                     got[i] = share(i);
-                    if (got[i] < least) {
+                    if (got[i] < least && STILL_RISING(i)) {
                         least = got[i];
                     }
                 }
@@ -346,7 +356,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         move[i] = target[i] > level ? RISE : FALL;
 #ifdef CFG_LIMB_STROKE_CDEG
         if (move[i] == RISE && CLIMBS_TO_STROKE(i, target[i])) {
-            least = 0; /* not past its band yet: nothing of its climb to the stroke covered */
+            if (STILL_RISING(i)) {
+                least = 0; /* not past its band yet: nothing of its climb to the stroke covered */
+            }
             lead_below |= (uint8_t)(i == CFG_STROKE_RISE_LEAD);
         }
 #endif

@@ -56,8 +56,9 @@
  * - then they climb in step: a limb that has covered more than CTL_SHARE_SYNC /
  *   CTL_SHARE_FULL (5 %) more of its climb (from its top band's upper edge to its stroke)
  *   than another waits at the hold duty (not hovering meanwhile), until CTL_CLIMB_MAX_MS
- *   after the step began (a limb that cannot rise must not hold the others down); a limb
- *   not across its band yet has covered none. Only limbs the step raises climb in step: one
+ *   after the step began, and only while the lagging limb still rises (CTL_LAG_MS): a limb
+ *   that cannot rise must not hold the others down; a limb not across its band yet has
+ *   covered none. Only limbs the step raises climb in step: one
  *   already at its stroke when the step began is held as usual.
  * Falling from their strokes together (no limb rising), they fall as their coils cool: the
  * one bent least comes down first. With a fall lead (CFG_STROKE_FALL_LEAD: robot file
@@ -112,6 +113,21 @@
 #define CTL_FALL_SHARE 128
 #endif
 #define CTL_CLIMB_MAX_MS 3000u
+/* Lag watch: limbs climbing in step wait for a lagging limb below its band only while it still
+ * rises: once it has heated at the drive duty this long without getting one progress edge
+ * closer to its crossing (the stall detector's clock: 1° near it, 2-5° farther), the others go
+ * on, for the rest of the step (what it gains then, their climb gives it). A limb on its top
+ * level needs no such watch: one that stops climbing there is relaxed a hover time later and no
+ * longer climbs in step. R1 at full strokes with a dead right coil: the left end
+ * waited warm for the right one's climb until CTL_CLIMB_MAX_MS at every rise, the dead coil on
+ * meanwhile, and its on-time limit cut it in every cycle (docs/control.md, "Full strokes").
+ * 1 s covers a healthy coil's dead time from the hold duty back to As (0.15-0.6 s) with room,
+ * and a transforming coil gains tens of degrees a second; the dead end, lifted through the body
+ * by the other end's warm coil, crept up to ≈ 1°/s, an edge every 1.5-2.5 s. Kept in the stall
+ * detector's clock, it costs the Nano's tick nothing measurable; a watch of its own on the
+ * smoothed ψ (an atan2 every 16 ticks) took R1 at full strokes from busy p99 688 µs / max 845
+ * to 713-745 / 993-1026 µs, past the tick budget (bench/bench_mcu.py). */
+#define CTL_LAG_MS 1000u
 #define CTL_STALL_MS 5000u
 /* A rise that ψ no longer answers. A limb rising alone (the body couples limbs that move
  * together), its coil heating and not held off by the envelope, whose smoothed ψ

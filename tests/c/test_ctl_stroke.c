@@ -9,6 +9,7 @@
 
 #define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
 #define CLIMB_TICKS ((uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u)
+#define LAG_TICKS ((uint32_t)CTL_LAG_MS * CFG_TICK_HZ / 1000u)
 /* Samples the smoothed ψ (1/16 of each new sample, psi.h) takes to come within 1° of a jump of
  * up to 60°: 16 ln 60 ≈ 66. A climb is judged on it (ctl.c, climbing). */
 #define SMOOTH_TICKS 100u
@@ -427,6 +428,79 @@ static void test_falling_together_the_others_are_held_at_their_strokes_until_the
     }
 }
 
+/* Step 11 from 00, limb 0 across its band at 50° (share 74 %), limb 1 below its band from 10°
+ * heated at the drive duty and gaining `step` degrees every `every` ticks; returns the tick at
+ * which limb 0 stopped waiting warm (0: it waited throughout `n` ticks), or n + 1 if some tick
+ * did not drive limb 1 or gave limb 0 neither the hold nor the drive duty. */
+static uint32_t wait_for_a_lagging_limb(double step, uint32_t every, uint32_t n)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    double psi1 = 10.0;
+    setup();
+    put(0, 5.0);
+    put(1, psi1);
+    demand(1, 1, duty);
+    for (k = 1; k < n; k++) {
+        if (k % every == 0u && psi1 + step < 19.0) {
+            psi1 += step;
+        }
+        put(0, 50.0);
+        put(1, psi1);
+        demand(1, 1, duty);
+        if (duty[1] != DRIVE || (duty[0] != HOLD && duty[0] != DRIVE)) {
+            return n + 1u;
+        }
+        if (duty[0] == DRIVE) {
+            return k;
+        }
+    }
+    return 0;
+}
+
+static void test_climbing_in_step_waits_for_a_limb_only_while_it_still_rises(void)
+{
+    /* a coil that does not heat: its end stays where it is */
+    uint32_t k = wait_for_a_lagging_limb(0.0, 1u, CLIMB_TICKS);
+    CHECK(k >= LAG_TICKS);                /* not before the lag time */
+    CHECK(k <= LAG_TICKS + 2u);           /* then at once, not at the climb limit */
+    /* nor one whose end the other's warm coil lifts through the body, 1° per 0.8 s */
+    k = wait_for_a_lagging_limb(1.0, LAG_TICKS * 4u / 5u, CLIMB_TICKS);
+    CHECK(k >= LAG_TICKS);
+    CHECK(k + LAG_TICKS / 2u < CLIMB_TICKS);
+    /* a slow healthy rise, 1° every 0.2 s (5°/s), is waited for */
+    CHECK_EQ(wait_for_a_lagging_limb(1.0, LAG_TICKS / 5u, LAG_TICKS + LAG_TICKS / 2u), 0u);
+}
+
+static void test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(0, 5.0);
+    put(1, 10.0);
+    demand(1, 1, duty);
+    for (k = 1; k <= LAG_TICKS + LAG_TICKS / 5u; k++) {
+        put(0, 50.0);
+        put(1, 10.0);
+        demand(1, 1, duty);
+    }
+    CHECK_EQ(duty[0], DRIVE);
+    for (k = 0; k < LAG_TICKS / 2u; k++) {
+        put(0, 50.0);
+        put(1, 10.0 + 8.0 * (double)k / (double)(LAG_TICKS / 2u)); /* lifted by limb 0's climb */
+        demand(1, 1, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    demand(0, 0, duty); /* the next rise watches it afresh */
+    put(0, 5.0);
+    put(1, 10.0);
+    demand(1, 1, duty);
+    put(0, 50.0);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], HOLD);
+}
+
 int main(void)
 {
     RUN(test_the_config_has_the_strokes);
@@ -447,5 +521,7 @@ int main(void)
     RUN(test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped);
     RUN(test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit);
     RUN(test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down);
+    RUN(test_climbing_in_step_waits_for_a_limb_only_while_it_still_rises);
+    RUN(test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step);
     return UNIT_EXIT();
 }

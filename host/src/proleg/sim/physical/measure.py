@@ -44,6 +44,11 @@ FALL_SHARE = 0.5
 CLIMB_MAX_S = 3.0
 CLIMB_STOP_DPS = 1.0 / 0.3
 SHARE_SYNC = 13 / 256  # CTL_SHARE_SYNC / CTL_SHARE_FULL
+#: A lagging limb below its band is waited for only while it still rises: heated this long
+#: without getting one of PROGRESS_DEG closer to its crossing, it is not waited for again in
+#: the step (CTL_LAG_MS; psi.h PSI_PROGRESS_CDEG).
+LAG_S = 1.0
+PROGRESS_DEG = (1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30)
 
 
 class IdealDrive:
@@ -51,7 +56,8 @@ class IdealDrive:
 
     Limbs with a ``stroke_deg`` follow the firmware's rules (core/ctl.h): raised to the stroke
     on their top level; rising together, the rise lead crosses ψ* first while the others wait,
-    then they climb in step (for at most ``CLIMB_MAX_S``); falling together with a fall lead,
+    then they climb in step (for at most ``CLIMB_MAX_S``, and waiting only for a limb that still
+    rises: ``LAG_S``); falling together with a fall lead,
     the others are held at their strokes until it is halfway down its climb (at most
     ``FALL_WAIT_S``; times counted from the ``dt_s`` given to ``command``). Where the firmware
     keeps a waiting coil warm at the hold duty, this drive switches it off; a limb that stopped
@@ -71,6 +77,9 @@ class IdealDrive:
         self._step: tuple[int, float] = (-1, 0.0)   # (target, seconds in it) for the fall hold
         self._raised: set[int] = set()              # limbs the current step raises to their strokes
         self._waits: set[int] = set()               # limbs waiting in the last command
+        self._heated: set[int] = set()              # limbs whose coil the last command heated
+        self._lag: dict[int, tuple[float, float]] = {}  # limb -> (closest edge to go, s heated since)
+        self._given_up: set[int] = set()            # lagging limbs not waited for in this step
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
@@ -96,6 +105,7 @@ class IdealDrive:
                 heat[j] = True
             if k > 0:
                 active[j] = True
+        self._heated = {i for i, j in enumerate(self.limb_act) if heat[j] and not cool[j]}
         return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
 
     def _stroke_rules(self, psi: Sequence[float], want: Sequence[int], target: int,
@@ -107,6 +117,8 @@ class IdealDrive:
         tops = [i for i, s in enumerate(self.stroke) if s is not None]
         if t != target:
             self._raised = {i for i in tops if level[i] < want[i] == len(self.th[i])}
+            self._lag, self._given_up = {}, set()
+        self._watch_lag(psi, dt_s)
         rising = [i for i in range(len(psi)) if want[i] > level[i]]
         falling = [i for i in range(len(psi)) if want[i] < level[i]]
         waits: set[int] = set()
@@ -116,15 +128,34 @@ class IdealDrive:
             waits = {i for i in rising if i in tops and i != lead and want[i] == len(self.th[i])}
         # then they climb in step: a limb more than 5 % of its climb ahead of another waits
         climbing = [i for i in self._raised if psi[i] < self.stroke[i]]
-        if len(climbing) > 1 and self._step[1] < CLIMB_MAX_S:
+        rises = [i for i in climbing if i not in self._given_up]
+        if len(climbing) > 1 and rises and self._step[1] < CLIMB_MAX_S:
             share = {i: self._share(i, psi[i]) for i in climbing}
-            least = min(share.values())
+            least = min(share[i] for i in rises)
             waits |= {i for i in climbing if share[i] > least + SHARE_SYNC and level[i] == want[i]}
         lead = self.fall_lead
         if (lead is not None and not rising and lead in falling and level[lead] == len(self.th[lead])
                 and self._share(lead, psi[lead]) > FALL_SHARE and self._step[1] < FALL_WAIT_S):
             held = {i for i in falling if i in tops and i != lead and level[i] == len(self.th[i])}
         return waits, held
+
+    def _watch_lag(self, psi: Sequence[float], dt_s: float) -> None:
+        """The firmware's lag watch (ctl.c: ``lagged``, on the stall detector's clock) on the
+        limbs this step raises, below their top band: heated ``LAG_S`` without getting one
+        progress edge closer to the crossing, a limb is given up for the rest of the step."""
+        for i in self._raised - self._given_up:
+            gap = self.th[i][-1] + self.half_band[i] - psi[i]
+            if gap <= 0:
+                continue   # across its band: the hover rule's, not this watch's
+            edge = next((e for e in PROGRESS_DEG if gap <= e), math.inf)
+            best, idle = self._lag.get(i, (math.inf, 0.0))
+            if edge < best:
+                best, idle = edge, 0.0
+            elif i in self._heated:
+                idle += dt_s
+                if idle >= LAG_S:
+                    self._given_up.add(i)
+            self._lag[i] = (best, idle)
 
     def _share(self, i: int, psi: float) -> float:
         """How much of its climb limb i has covered: 0 at its top band's upper edge, 1 at its stroke."""
