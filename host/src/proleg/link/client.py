@@ -47,8 +47,10 @@ from ..protocol.definition import (
     LIMB_CEILING,
     MESSAGES,
     PROTOCOL_VERSION,
+    DIR_UNSTATED,
     ClearWhat,
     Direction,
+    ErrorCode,
     Flag,
     MessageSpec,
     ParamId,
@@ -124,6 +126,7 @@ class RobotClient:
         self._token = 0
         self._last_seq: int | None = None
         self._state_known = False  # the last TELEMETRY frame since the last INFO had a known state
+        self._running: tuple[int, int] | None = None  # (gait, direction) the last TELEMETRY ran, if any
         self._reconnect_lock = threading.Lock()
         self._closed = False
         self.heartbeat_s = heartbeat_s
@@ -252,6 +255,11 @@ class RobotClient:
             self._waiting[token] = spec
             self._replies.pop(token, None)
         wait = self.timeout if timeout is None else timeout
+        # A START sent again after its ACK was lost is refused: the board runs the gait the
+        # first one started (a restart would restart its step). Whether the refusal is that,
+        # the TELEMETRY before and after tells (_started_after_all).
+        idle_before = name == "START" and self.stats.telemetry > 0 and self._running is None
+        attempt = 0
         try:
             for attempt in range(retries + 1):
                 self._write(frame)
@@ -270,9 +278,40 @@ class RobotClient:
                 self._waiting.pop(token, None)
                 self._replies.pop(token, None)
         if reply.name == "NACK":
+            note = ""
+            if name == "START" and attempt > 0 and reply.error == ErrorCode.NOT_ALLOWED and reply.detail == 1:
+                if idle_before and self._started_after_all(fields, wait):
+                    self.stats.lost_acks += 1
+                    return Message("ACK", {"token": token, "cmd": spec.id})
+                note = (f"; this was try {attempt + 1}: an earlier one may have started the gait and "
+                        "its ACK been lost, which no TELEMETRY showed")
             self.stats.nacks += 1
-            raise CommandRefused(name, reply.error, reply.detail, self.link.description)
+            raise CommandRefused(name, reply.error, reply.detail, self.link.description, note)
         return reply
+
+    def _started_after_all(self, fields: dict, timeout: float) -> bool:
+        """A START sent again was refused because a gait runs, and the board ran none before
+        the first try: whether the next TELEMETRY frame (within ``timeout``) runs the gait asked
+        for, the way asked for. Then the first try started it and only its ACK was lost."""
+        seen = self.stats.telemetry
+        deadline = self.link.clock() + timeout
+        while self.stats.telemetry == seen:
+            now = self.link.clock()
+            if now >= deadline - _EPS:
+                return False
+            if self._rx_lock.acquire(blocking=False):
+                try:
+                    self._pump(min(self.poll_s, deadline - now))
+                finally:
+                    self._rx_lock.release()
+            else:  # a Notifier reads: the frames count as it receives them
+                with self._cond:
+                    self._cond.wait(self.poll_s)
+        running = self._running
+        if running is None or running[0] != fields.get("gait"):
+            return False
+        way = fields.get("direction")
+        return way == DIR_UNSTATED or running[1] == way
 
     def _next_token(self) -> int:
         with self._cond:
@@ -420,7 +459,9 @@ class RobotClient:
             name = m.name
             if name == "TELEMETRY":
                 st.telemetry += 1
-                self._state_known = not m.fields["flags"] & Flag.STATE_UNKNOWN
+                flags = m.fields["flags"]
+                self._state_known = not flags & Flag.STATE_UNKNOWN
+                self._running = (m.fields["gait"], m.fields["direction"]) if flags & Flag.RUNNING else None
                 seq = m.fields["seq"]
                 last = self._last_seq
                 if last is not None and seq != (last + 1) & 0xFFFF:

@@ -28,6 +28,7 @@ class LinkStats:
     nacks: int = 0
     timeouts: int = 0  # commands that got no reply (after their retries)
     retries: int = 0  # commands sent again after a try got no reply
+    lost_acks: int = 0  # STARTs whose ACK was lost: sent again, refused, and TELEMETRY runs their gait
 
     @property
     def corrupt(self) -> int:

@@ -16,7 +16,7 @@ from ..protocol.definition import GAIT_USER, ErrorCode, ParamId
 class CommandRefused(LinkError):
     """The robot answered a command with NACK."""
 
-    def __init__(self, command: str, error: int, detail: int, where: str):
+    def __init__(self, command: str, error: int, detail: int, where: str, note: str = ""):
         try:
             self.error: ErrorCode | int = ErrorCode(error)
             code = self.error.name
@@ -26,7 +26,7 @@ class CommandRefused(LinkError):
         self.command = command
         self.detail = detail
         why = _explain(self.error, detail, command)
-        super().__init__(f"{where}: robot refused {command}: {code} ({why or f'detail {detail}'})")
+        super().__init__(f"{where}: robot refused {command}: {code} ({why or f'detail {detail}'}){note}")
 
 
 #: NOT_ALLOWED's detail per command: why the board would not (core/cmd.c)
