@@ -231,6 +231,25 @@ def test_the_thermal_budget_keys_are_robot_file_keys_that_reach_the_firmware(tmp
     rejects(tmp_path, R1 + "\n[safety]\non_limit_latch = 0\n", "safety.on_limit_latch: expected an integer in 1..247")
 
 
+def test_a_mean_duty_below_the_default_hold_ceiling_lowers_it_and_a_hold_duty_above_it_is_refused(tmp_path):
+    """max_mean_duty = 0.25 (in its range) loaded, then failed at build on the default hold
+    ceiling max(0.3, hold_duty), a key the file did not contain, without its path. The default
+    now stays within the window; a hold duty that cannot is refused at load, naming both keys."""
+    from core_configs import SIM_BOARD
+    from proleg.firmware.render import render_config
+
+    robot = load_robot(write(tmp_path, R1 + "\n[safety]\nmax_mean_duty = 0.25\n", "mean.toml"))
+    assert robot.safety.hold_ceiling(robot.control.hold_duty) == 0.25
+    config = render_config(robot, {"+x": [], "-x": []}, SIM_BOARD)["robot_config.h"]
+    assert "#define CFG_HOLD_MAX_DUTY_PM 2500u" in config
+    assert load_robot(write(tmp_path, R1, "default.toml")).safety.hold_ceiling(0.25) == 0.3
+    rejects(tmp_path, R1 + "\n[safety]\nmax_mean_duty = 0.4\n[control]\nhold_duty = 0.45\n",
+            "control.hold_duty: expected at most safety.max_mean_duty (0.4)", "got 0.45")
+    # with a hold ceiling of its own, a hold duty above it is on-time, not refused
+    load_robot(write(tmp_path, R1 + "\n[safety]\nmax_mean_duty = 0.4\nhold_max_duty = 0.2\n[control]\nhold_duty = 0.45\n",
+                     "own.toml"))
+
+
 def test_drive_duty_above_safety_ceiling(tmp_path):
     text = R1 + "\n[safety]\nmax_duty = 0.5\n[control]\ndrive_duty = 0.6\n"
     rejects(tmp_path, text, "control.drive_duty", "at most safety.max_duty")

@@ -133,6 +133,13 @@ class Safety:
     duty_window_ms: int = 10_000
     on_limit_latch: int = 3
 
+    def hold_ceiling(self, hold_duty: float) -> float:
+        """``hold_max_duty``, or its default: max(0.3, the control's hold duty), at most
+        ``max_duty`` and ``max_mean_duty`` (a duty the coil may hold forever fits the window)."""
+        if self.hold_max_duty is not None:
+            return self.hold_max_duty
+        return min(self.max_duty, self.max_mean_duty, max(0.3, hold_duty))
+
 
 #: control.boost_ms: 0 (off) or this range. Below 100 ms a coil still heating back to As (its
 #: dead time, 0.15-0.6 s) would count as lagging at every rise; at or above the stall
@@ -506,7 +513,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         drive_duty=f.number("drive_duty", d.drive_duty, 0.0, 1.0, open_lo=True),
         hold_duty=f.number("hold_duty", d.hold_duty, 0.0, 1.0),
         debounce_ticks=f.integer("debounce_ticks", d.debounce_ticks, 1, 1000),
-        hold_ms=f.integer("hold_ms", d.hold_ms, 0, 60_000),
+        hold_ms=f.integer("hold_ms", d.hold_ms, 0, 600_000),  # as SET_PARAM's (core/param.c)
         hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
         overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
@@ -522,6 +529,10 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         f.fail("drive_duty", f"at most safety.max_duty ({safety.max_duty})", c.drive_duty)
     if c.hold_duty > c.drive_duty:
         f.fail("hold_duty", f"at most control.drive_duty ({c.drive_duty})", c.hold_duty)
+    if safety.hold_max_duty is None and c.hold_duty > min(safety.max_mean_duty, safety.max_duty):
+        f.fail("hold_duty", f"at most safety.max_mean_duty ({min(safety.max_mean_duty, safety.max_duty):g}): "
+               "a duty that holds a state must fit the mean-duty window (or set safety.hold_max_duty "
+               "below it, and the hold counts as on-time)", c.hold_duty)
     if c.telemetry_hz > c.tick_hz:
         f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
     if 0 < c.boost_ms < BOOST_MIN_MS:
