@@ -169,6 +169,22 @@ def test_a_penalty_no_walk_can_afford_changes_nothing(table, direction, objectiv
         assert [g.states for g in got.gaits] == [g.states for g in want.gaits]
 
 
+def test_rate_finds_its_cycle_beside_a_penalty_edge_that_lifts_howards_potentials():
+    """Found by the property above: one reward of 1.672 among zeros, and a penalty of -1e9 on
+    0 -> 1. Howard's potentials came out near 6e9, where one ulp (1e-6) is above the tie
+    tolerance, so no edge of the optimal cycle counted as tight and rate answered "no gait"
+    (the critical subgraph now takes potentials of its own, from zero)."""
+    src = np.array([0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2, 4, 4, 4, 4, 5, 5])
+    dst = np.array([1, 2, 3, 4, 5, 0, 2, 3, 4, 5, 0, 1, 3, 4, 5, 1, 2, 3, 5, 3, 4])
+    reward = np.zeros(len(src))
+    reward[4] = 1.672  # 0 -> 5
+    penalised = reward.copy()
+    penalised[0] = -1e9  # 0 -> 1
+    got = optimal_gaits(TransitionTable((3, 2), src, dst, penalised), "rate", "+x")
+    assert got.value is not None and abs(got.value - 1.672 / 4) < 1e-12
+    assert [g.states for g in got.gaits] == [(0, 5, 4, 1, 0), (0, 5, 4, 2, 0)]
+
+
 def test_r1_with_a_penalty_of_1e9_has_one_optimal_gait_and_a_rate():
     from proleg.robot import load_robot
 

@@ -73,16 +73,19 @@ def critical_cycles(
     sel = np.flatnonzero(node_ok[src] & node_ok[dst])
     es, ed = src[sel], dst[sel]
     a = w[sel] - lam * t[sel]
-    x = sol.potential.copy()
-    # Bellman-Ford-like repair: raise x[u] to max(a + x[v]) until it holds on every edge.
+    # Potentials of the subgraph, from zero: x[u] >= a + x[v] on every edge (then a cycle is
+    # tight on every edge iff its Σa is 0). Not Howard's own potentials: a penalty edge
+    # (-1e9) elsewhere in the table put them near 6e9, where one ulp is 1e-6, above the
+    # tolerance, and no edge was tight: rate answered "no gait" (tests/test_gait_oracle.py).
+    x = np.zeros(n)
+    # Bellman-Ford: raise x[u] to max(a + x[v]) until it holds on every edge.
     if len(sel):
         starts = np.flatnonzero(np.r_[True, es[1:] != es[:-1]])
         heads = es[starts]
-        eps = 1e-13 * (float(np.abs(a).max()) + 1.0)
-        for _ in range(n + 1):
+        for _ in range(n + 1):  # from zero, without a positive cycle: at most n rounds
             best = np.maximum.reduceat(a + x[ed], starts)
             gap = best - x[heads]
-            if not (gap > eps).any():
+            if not (gap > 0).any():
                 break
             x[heads] = np.maximum(x[heads], best)
     slack = x[es] - a - x[ed]
