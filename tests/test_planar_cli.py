@@ -93,6 +93,11 @@ def test_library_and_plot(capsys, robot, tmp_path):
     (["--library", "0,north"], "'north' is neither a heading"),
     (["--heading", "0", "--plot", "out.txt"], "must end in .png"),
     (["--translation-cap", "1"], "--translation-cap only applies with --rotate"),
+    # a cap that applies to none of the questions asked was taken and ignored: refused
+    (["--rotate", "cw", "--rotation-cap-deg", "5"], "--rotation-cap-deg caps how far a heading's gait turns"),
+    (["--library", "rot-ccw", "--rotation-cap-deg", "0"], "does not apply to rot-ccw"),
+    (["--heading", "0", "--translation-cap", "1"], "--translation-cap bounds a turn's drift"),
+    (["--library", "0,90", "--translation-cap", "1"], "not to headings"),
 ])
 def test_planar_mistakes_are_one_line(capsys, robot, argv, message):
     code, _, err = run(capsys, "gait", robot, "--max-transitions", "4", *argv)
@@ -102,6 +107,28 @@ def test_planar_mistakes_are_one_line(capsys, robot, argv, message):
 def test_a_rotation_cap_on_a_robot_without_dtheta_is_one_line(capsys):
     code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--rotation-cap-deg", "5")
     assert code == 2 and "needs [transitions].dtheta_deg" in err
+
+
+def test_a_heading_on_a_robot_without_dy_names_the_file_and_the_heading(capsys):
+    code, _, err = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--heading", "90")
+    assert code == 2 and "paper-r1.toml: heading 90° (off the x axis) needs [transitions].dy" in err
+
+
+def test_evaluate_with_library_names_library_not_an_option_from_the_gaits_table(capsys):
+    """planar-4's [gaits] table fills --library's other options; --evaluate named the first of
+    them (--variance-weight), an option the user had not given."""
+    code, _, err = run(capsys, "gait", str(ROBOTS / "planar-4.toml"), "--evaluate", "0000,0010,0000",
+                       "--library", "0")
+    assert code == 2 and "--library: not with --evaluate" in err
+
+
+def test_a_negative_transition_cost_in_the_gaits_table_is_refused_as_on_the_command_line(tmp_path, capsys):
+    text = (ROBOTS / "planar-4.toml").read_text()
+    assert "transition_cost = 0.05" in text
+    bad = tmp_path / "neg.toml"
+    bad.write_text(text.replace("transition_cost = 0.05", "transition_cost = -1", 1))
+    code, _, err = run(capsys, "gait", str(bad), "--library", "0")
+    assert code == 2 and "transition_cost: expected a number >= 0" in err and "Traceback" not in err
 
 
 def test_gait_library_answers_what_the_firmware_carries(capsys):

@@ -109,20 +109,24 @@ def cmd_gait(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     planar = any(getattr(args, k) is not None and getattr(args, k) is not False for k in PLANAR_FLAGS)
     _check_cycles(args, planar)
-    if args.library is not None and robot.library is not None:
-        _library_options(robot, args)
-    args.objective = args.objective or "total"
-    check_speed_objective(robot, args.objective)
+    # what the command line gave, before a [gaits] table fills in the rest of --library's options
+    given = {k for k in (*PLANAR_FLAGS, "translation_cap", "max_transitions", "direction")
+             if getattr(args, k) is not None and getattr(args, k) is not False}
     if args.evaluate is not None:
+        args.objective = args.objective or "total"
+        check_speed_objective(robot, args.objective)
         if args.ties is not None or args.all_ties:
             raise GaitError(f"{'--ties' if args.ties is not None else '--all-ties'}: not with --evaluate "
                             "(it scores one sequence; the ties are those of an optimisation)")
-        ignored = [k for k in (*PLANAR_FLAGS, "max_transitions", "direction")
-                   if getattr(args, k) is not None and getattr(args, k) is not False]
+        ignored = [k for k in (*PLANAR_FLAGS, "max_transitions", "direction") if k in given]
         if ignored:  # they were taken and ignored: the score printed was not the one asked for
             raise GaitError(f"--{ignored[0].replace('_', '-')}: not with --evaluate (it scores the sequence given by "
                             "its reward J; options of an optimisation do not apply)")
         return _print_evaluation(robot, args)
+    if args.library is not None and robot.library is not None:
+        _library_options(robot, args)
+    args.objective = args.objective or "total"
+    check_speed_objective(robot, args.objective)
     if args.direction is not None and any(getattr(args, k) is not None for k in ("heading", "rotate", "library")):
         raise GaitError(f"--direction {args.direction}: not with a planar option (--heading, --rotate or --library "
                         "gives the way: heading 0 is +x, 180 is -x)")
@@ -139,7 +143,10 @@ def cmd_gait(args: argparse.Namespace) -> int:
             robot, args.objective)
         answers = [(d, optimal_gaits(robot.transitions, args.objective, d, bound)) for d in directions]
     else:
-        answers = _planar_answers(robot, args)
+        try:
+            answers = _planar_answers(robot, args, given)
+        except GaitError as e:
+            raise GaitError(f"{robot.path}: {e}") from None
     if args.plot:
         _plot(robot, answers, args.cycles, args.plot, args.json)
     if args.json:
@@ -173,12 +180,14 @@ def _library_options(robot, args) -> None:
             setattr(args, key, tuple(value) if isinstance(value, list) else value)
 
 
-def _planar_answers(robot, args) -> list:
+def _planar_answers(robot, args, given: set[str]) -> list:
+    """The planar question's answers; ``given``: the options the command line gave (a cap that
+    applies to none of the headings asked for is refused: it was taken and ignored)."""
     from ..gait.library import Heading, gait_library, parse_headings
 
-    given = [k for k in ("heading", "rotate", "library") if getattr(args, k) is not None]
-    if len(given) > 1:
-        raise GaitError(f"give one of --heading, --rotate and --library, not --{given[0]} and --{given[1].replace('_', '-')}")
+    ways = [k for k in ("heading", "rotate", "library") if getattr(args, k) is not None]
+    if len(ways) > 1:
+        raise GaitError(f"give one of --heading, --rotate and --library, not --{ways[0]} and --{ways[1].replace('_', '-')}")
     if args.library is not None:
         headings = parse_headings(args.library)
     elif args.rotate is not None:
@@ -188,6 +197,13 @@ def _planar_answers(robot, args) -> list:
     else:
         headings = [Heading(d, heading_deg=0.0 if d == "+x" else 180.0)
                     for d in (DIRECTIONS if args.direction == "both" else (args.direction,))]
+    turns = [h for h in headings if h.rotate is not None]
+    if "rotation_cap_deg" in given and len(turns) == len(headings):
+        raise GaitError("--rotation-cap-deg caps how far a heading's gait turns; it does not apply to "
+                        f"{', '.join(h.name for h in turns)} (a turn in place: --translation-cap bounds its drift)")
+    if "translation_cap" in given and not turns:
+        raise GaitError("--translation-cap bounds a turn's drift; it applies with --rotate or rot-cw/rot-ccw in "
+                        "--library, not to headings")
     entries = gait_library(
         robot.transitions, headings, args.objective, args.max_transitions,
         variance_weight=_variance_weights(robot, args.variance_weight),

@@ -121,7 +121,7 @@ SPEC_KEYS = {
     "objective": "\"total\" or \"rate\"",
     "max_transitions": f"a whole number in 2..{MAX_GAIT_TRANSITIONS}",
     "variance_weight": "a number >= 0 or [λx, λy, λθ]",
-    "transition_cost": "a number",
+    "transition_cost": "a number >= 0 (a cost per transition, as --transition-cost)",
     "rotation_cap_deg": "a number of degrees >= 0",
     "simple_cycles": "true or false",
     "translation_cap": "a number >= 0 (rotation gaits)",
@@ -218,7 +218,7 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
     if not isinstance(simple, bool):
         raise GaitError(f"simple_cycles: expected true or false, got {simple!r}")
     return LibrarySpec(tuple(parsed), objective, mt, tuple(float(w) for w in vw),  # type: ignore[arg-type]
-                       number("transition_cost", None, 0.0), number("rotation_cap_deg", 0.0, None), simple,
+                       number("transition_cost", 0.0, 0.0), number("rotation_cap_deg", 0.0, None), simple,
                        number("translation_cap", 0.0, None))
 
 

@@ -79,7 +79,9 @@ def _score_terms(table: TransitionTable, objective: PlanarObjective) -> tuple[li
     needed = {"dy": sin_h != 0.0, "var_dx": lx != 0, "var_dy": ly != 0, "var_dtheta_deg": lt != 0}
     missing = [k for k, used in needed.items() if used and k not in given]
     if missing:
-        raise GaitError(f"planar objective needs [transitions].{missing[0]} in the robot file, and it has none")
+        what = (f"heading {objective.heading_deg:g}° (off the x axis)" if missing[0] == "dy"
+                else f"variance weight on {missing[0][4:]}")
+        raise GaitError(f"{what} needs [transitions].{missing[0]} in the robot file, and it has none")
     motion = [cos_h * np.asarray(table.reward, dtype=np.float64)]
     if sin_h != 0.0:
         motion.append(sin_h * given["dy"])
