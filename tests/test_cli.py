@@ -349,3 +349,12 @@ def test_a_one_limb_robot_is_one_limb_in_the_gait_header(capsys, tmp_path):
                     '  [0, 1, "x", "x"],\n  [-1, 0, 1, "x"],\n  ["x", -1, 0, 1],\n  ["x", "x", -1, 0],\n]\n')
     code, out, _ = run(capsys, "gait", str(path))
     assert code == 0 and out.startswith("solo: 1 limb, 4 states (0 1 2 3), 6 allowed transitions"), out
+
+
+def test_build_into_a_folder_that_does_not_exist_is_a_usage_error_and_creates_nothing(capsys, tmp_path):
+    """-o A/B/out with A missing built it, creating A and B (a typo at the root made /nonexist);
+    every other command's output in a missing folder is exit 2."""
+    out = tmp_path / "missing" / "deeper" / "out"
+    code, _, err = run(capsys, "build", str(ROBOTS / "paper-r1.toml"), "--board", "host-sim", "-o", str(out))
+    assert code == 2 and f"directory {out.parent} does not exist" in err
+    assert not (tmp_path / "missing").exists()

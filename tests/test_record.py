@@ -262,15 +262,20 @@ def test_recorded_events_name_the_actuator_and_states_as_the_console_does(tmp_pa
     assert texts == [event_text(f, RobotNames.for_robot(ROBOT), ROBOT.transitions.label) for f in events]
 
 
-@pytest.mark.parametrize("where, why", [("missing/x.mcap", "No such file or directory"),
-                                        ("folder.csv", "Is a directory")])
-def test_a_recording_that_cannot_be_written_is_refused_before_the_robot_is_touched(tmp_path, capsys, where, why):
+@pytest.mark.parametrize("where, why, status", [("missing/x.mcap", "No such file or directory", 2),
+                                                ("folder.csv", "Is a directory", 1)])
+@pytest.mark.parametrize("command", [["console", "--sim", "paper-r1", "--plain", "--duration", "0.5"],
+                                     ["sim", "paper-r1", "--duration", "0.5"]])
+def test_a_recording_that_cannot_be_written_is_refused_before_the_robot_is_touched(tmp_path, capsys, where, why,
+                                                                                  status, command):
+    """A folder that does not exist is a usage mistake (exit 2, as every command's output
+    directory; sim and run said 1); a directory in the file's place cannot be written (1)."""
     from proleg.cli.main import main
 
     (tmp_path / "folder.csv").mkdir()
-    code = main(["console", "--sim", "paper-r1", "--plain", "--duration", "0.5", "--record", str(tmp_path / where)])
+    code = main([*command, "--record", str(tmp_path / where)])
     err = capsys.readouterr().err
-    assert code == 1 and f"cannot write record file {tmp_path / where}: {why}" in err
+    assert code == status and f"cannot write record file {tmp_path / where}: {why}" in err
     assert "robot stopped" not in err  # never connected, so nothing to stop
 
 

@@ -225,6 +225,10 @@ def _build(args: argparse.Namespace):
     from ..firmware.build import build
     from ..robot import load_robot
 
+    if args.out is not None and not Path(args.out).parent.is_dir():
+        from ..errors import UsageError  # as every command's output: the folder it goes in must exist
+
+        raise UsageError(f"-o {args.out}: directory {Path(args.out).parent} does not exist")
     robot = load_robot(args.robot)
     board = load_board(args.board)
     from .gait import check_speed_objective

@@ -108,6 +108,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
             shown = f"gaits 0..{have - 1}" if have else "no gait"
             raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
+    if args.record and not args.pty:
+        from ..record import check_suffix
+
+        check_suffix(args.record)  # a folder that does not exist is a usage mistake: before the build
     plant = plant_kwargs(args)
     if args.calibrated:
         if args.pty:

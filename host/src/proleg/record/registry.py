@@ -30,10 +30,11 @@ def _lookup(path: str | Path, table: dict) -> type:
 
 
 def check_suffix(path: str | Path) -> None:
-    """Refuse, before connecting to anything, a file name no writer takes (exit 2) or a place
-    the file cannot be written (exit 1, the message a failed open would give): a directory,
-    or a folder that does not exist or is not writable. The robot is never started only to be
-    stopped because its recording could not begin."""
+    """Refuse, before connecting to anything, a file name no writer takes or a folder that
+    does not exist (exit 2, as every command's output directory), or a place the file cannot
+    be written (exit 1, the message a failed open would give): a directory, or a folder that
+    is not writable. The robot is never started only to be stopped because its recording
+    could not begin."""
     for p in _lookup(path, WRITERS).files(Path(path)):  # a CSV recording is three files
         _check_writable(p)
 
@@ -45,7 +46,7 @@ def _check_writable(p: Path) -> None:
            "Permission denied" if not os.access(folder, os.W_OK | os.X_OK)
            or (p.exists() and not os.access(p, os.W_OK)) else "")
     if why:
-        raise LinkError(f"cannot write record file {p}: {why}")
+        raise (UsageError if not folder.is_dir() else LinkError)(f"cannot write record file {p}: {why}")
 
 
 def Logger(path: str | Path, meta: RecordingMeta) -> Writer:  # noqa: N802 (python-can's name)
