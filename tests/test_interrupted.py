@@ -178,18 +178,20 @@ _AS_FROM_A_TERMINAL = ("import os, signal, sys; signal.signal(signal.SIGINT, sig
                        "os.execv(sys.executable, [sys.executable, '-m', 'proleg', *sys.argv[1:]])")
 
 
-def _sigint_once_recording(args: list[str], record: Path) -> list[str]:
-    """``proleg ARGS`` in a process of its own, sent SIGINT once ``record`` holds 20 kB: it exits
-    130 with nothing on stdout and no traceback; its stderr lines besides warnings."""
+def _sigint_once_recording(args: list[str], record: Path, sig: int = signal.SIGINT) -> list[str]:
+    """``proleg ARGS`` in a process of its own, sent ``sig`` once ``record`` holds 20 kB: it exits
+    130 (SIGINT) or 128 + the signal with nothing on stdout and no traceback; its stderr lines
+    besides warnings."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
     proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
         time.sleep(0.2)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
+    assert proc.returncode == (130 if sig == signal.SIGINT else 128 + sig), (proc.returncode, err)
+    assert out == "" and "Traceback" not in err, err
     return [x for x in err.splitlines() if "warning" not in x]
 
 
@@ -200,6 +202,30 @@ def test_ctrl_c_on_a_real_sim_process_ends_with_the_line_and_a_readable_mcap(tmp
     assert len(lines) == 1 and lines[0].startswith("proleg: interrupted ")
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
     assert len(read_recording(record).time_s) > 0
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_end_a_sim_as_ctrl_c_does(tmp_path, sig):
+    """``kill`` (a CI job's timeout) or a closed terminal killed the process mid-run: no STOP, no
+    line, an MCAP without its footer. They now end it as Ctrl-C does, exit 128 + the signal."""
+    record = tmp_path / "run.mcap"
+    lines = _sigint_once_recording(["sim", str(R1), "--duration", "3600", "--record", str(record)], record, sig)
+    assert len(lines) == 1 and lines[0].endswith(f"recording kept in {record} (complete up to there)")
+    assert len(read_recording(record).time_s) > 0
+
+
+def test_ctrl_c_before_the_command_begins_is_one_line(capsys, monkeypatch):
+    """Ctrl-C while the parser is built (or Python still loads proleg) printed a traceback."""
+    import importlib
+
+    cli_main = importlib.import_module("proleg.cli.main")  # the module: proleg.cli.main is also the function
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_main, "build_parser", interrupted)
+    assert cli_main.main(["robots"]) == 130
+    assert capsys.readouterr().err == "proleg: interrupted\n"
 
 
 # --------------------------------------------------------------------------- proleg run

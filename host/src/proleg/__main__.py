@@ -2,6 +2,10 @@
 
 import sys
 
-from .cli import main
+try:
+    from .cli import main
+except KeyboardInterrupt:  # Ctrl-C while Python loads proleg: no traceback for that
+    print("proleg: interrupted", file=sys.stderr)
+    sys.exit(130)
 
 sys.exit(main())

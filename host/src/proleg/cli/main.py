@@ -19,6 +19,7 @@ import errno
 import logging
 import os
 import shlex
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -42,11 +43,42 @@ ROBOT is a robot file or the name of a bundled example (proleg robots lists them
 log = logging.getLogger("proleg")
 
 
+#: The signal that ended the command (SIGTERM, SIGHUP), if not Ctrl-C: its exit status is 128 + it.
+_ended_by: list[int] = []
+
+
+def _as_ctrl_c(signum: int, frame: object) -> None:
+    """SIGTERM (``kill``, a CI timeout) and SIGHUP (a closed terminal) end a command the way
+    Ctrl-C does: the robot is stopped, a recording closed whole, one line says what was kept.
+    Delivered as SIGINT, so that whatever takes Ctrl-C now (``interrupts.whole`` defers it)
+    takes these too. Before, they killed a learn or run mid-piece, no STOP sent, nothing said."""
+    _ended_by.append(signum)
+    os.kill(os.getpid(), signal.SIGINT)
+
+
+def _catch_termination() -> None:
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return  # main() called from another thread (a test): signals are the caller's
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        return  # Ctrl-C ignored (a background job) or taken by the caller: SIGTERM kills as before
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
+            signal.signal(sig, _as_ctrl_c)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    _tolerant_streams()
-    argv = _hoist_verbosity(_join_signed_values(sys.argv[1:] if argv is None else list(argv)))
-    args = build_parser().parse_args(argv)
-    _setup_logging(args.verbose - args.quiet)
+    try:
+        _tolerant_streams()
+        _catch_termination()
+        argv = _hoist_verbosity(_join_signed_values(sys.argv[1:] if argv is None else list(argv)))
+        args = build_parser().parse_args(argv)
+        _setup_logging(args.verbose - args.quiet)
+    except KeyboardInterrupt:  # before the command began: nothing to say but that
+        print("proleg: interrupted", file=sys.stderr)
+        return _interrupted_status()
     try:
         code = args.run(args)
         sys.stdout.flush()
@@ -59,7 +91,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except KeyboardInterrupt as e:  # Ctrl-C: one line, what was kept where the command says it
         print(f"proleg: {e}" if isinstance(e, Interrupted) and str(e) else "proleg: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted_status()
     except BrokenPipeError:  # the reader went away (`proleg … | head -1`): not an error
         _silence_stdout()
         return EXIT_OK
@@ -67,6 +99,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"proleg: error: {os_error_line(e)}", file=sys.stderr)
         _silence_stdout()
         return EXIT_FAILED
+
+
+def _interrupted_status() -> int:
+    """130 for Ctrl-C; 128 + the signal for SIGTERM or SIGHUP (the shell's convention)."""
+    return 128 + _ended_by[0] if _ended_by else 130
 
 
 #: What only a write fails with (a full disk or quota, a file too large, a read-only file system).
