@@ -231,3 +231,21 @@ def test_the_example_robots_matrix_is_what_the_simulator_measures():
     measured = np.where(np.isfinite(m.matrix_mm), m.matrix_mm, 0.0)
     assert np.array_equal(np.asarray(allowed, dtype=bool), np.isfinite(m.matrix_mm))
     assert np.allclose(np.where(allowed, table, 0.0), measured, atol=0.1)
+
+
+def test_states_a_stroke_makes_unholdable_are_warned_about_at_load(tmp_path, caplog):
+    """The coupling check held raised limbs at ψ* + the hold margin, not at their strokes: R1's
+    body at full strokes with the paper's matrix (10 and 01 allowed) loaded without a word, and
+    its gait 0 (00 10 11 01 00) stopped at once with STATE_TIMEOUT on the nominal robot."""
+    import logging
+
+    paper = "[[0, -1, 1, \"x\"], [1, 0, \"x\", -1], [-1, \"x\", 0, 1], [\"x\", 1, -1, 0]]"
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(with_strokes(tmp_path, 76.0, 72.0, paper))
+    held = [r.getMessage() for r in caplog.records if "cannot be held" in r.getMessage()]
+    assert len(held) == 2 and "state 01: limb 'left'" in held[0] and "state 10: limb 'right'" in held[1]
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(with_strokes(tmp_path, None, None, paper))  # held just past psi*: both states hold
+        load_robot(STROKE)  # its own matrix enters only 00 and 11
+    assert not [r for r in caplog.records if "cannot be held" in r.getMessage()]

@@ -173,12 +173,23 @@ def worn_holds_of(robot: Any) -> list[int]:
 COUPLING_CHECK_MAX_STATES = 4096
 
 
+def _held_at(limb: Any, level: int, hold_margin_deg: float) -> float:
+    """ψ° the controller holds ``limb`` at on ``level`` ≥ 1 (core/ctl.h): its stroke on its top
+    level if it has one, else ψ* of the level + the hold margin."""
+    stroke = getattr(limb, "stroke_deg", None)
+    if stroke is not None and level == limb.levels - 1:
+        return float(stroke)
+    return limb.psi_star_deg[level - 1] + hold_margin_deg
+
+
 def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, states: list[int],
               hold_margin_deg: float) -> dict[tuple[int, int], float] | None:
     """ψ of each limb below its top level in each of ``states`` on the physical plant's body,
     ``{(state, limb): ψ°}``, with every raised limb's coil at the contraction that holds it
-    where the controller holds it, ψ*(its level) + ``hold_margin_deg`` (a fraction of its own
-    coil's full-stroke reach, ``own_reach_deg``), and the limb's own coil at the least it can
+    where the controller holds it, ψ*(its level) + ``hold_margin_deg``, or its ``stroke_deg``
+    on its top level if it has one (a fraction of its own coil's full-stroke reach,
+    ``own_reach_deg``; a stroke held that high bends the whole body: R1 at full strokes cannot
+    hold 10 or 01, and a matrix that allowed them loaded without a word), and the limb's own coil at the least it can
     be (cold, or what the other limbs on a shared coil need: the controller may let it cool
     that far, no further). None: a body the model cannot describe (``curl_problem``)."""
     from .body import Shape
@@ -193,7 +204,7 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
     rows, cases = [], []
     for s in states:
         want = limb_levels(s, levels)
-        demand = [min(1.0, (limbs[i].psi_star_deg[k - 1] + hold_margin_deg) / reach[i])
+        demand = [min(1.0, _held_at(limbs[i], k, hold_margin_deg) / reach[i])
                   if k > 0 and reach[i] > 0 else 0.0 for i, k in enumerate(want)]
         for i, k in enumerate(want):
             if k >= limbs[i].levels - 1:
