@@ -226,3 +226,27 @@ def test_a_fault_during_exploration_is_told_by_name_and_what_to_do(tmp_path):
             Explorer(client, robot, log, pose, repeats=2, seed=1).run()
     # what to do is the CLI's (it knows --sim); the error carries what it needs
     assert e.value.fault and e.value.transition == re.search(r"making (\d\d)->(\d\d)", str(e.value)).groups()
+
+
+def test_learning_planar_4_on_the_table_plant_measures_dy_and_dtheta(tmp_path):
+    """learn --sim built the table plant without the robot file's planar statistics and its
+    pose gave Δx only: on planar-4 every trial had dy and dθ null, and the learned file kept the
+    prior's. Now each trial carries all three, and where the file's dy or dθ is clearly nonzero
+    the mean learned value has its sign (a trial or two each, with the plant's variance noise;
+    a trial that passed through other states is left out: its motion is theirs too)."""
+    robot = load_robot(ROOT / "robots" / "planar-4.toml")
+    with TrialLog(tmp_path / "p4.jsonl") as log:
+        explore_simulated(robot, None, log, repeats=1, seed=2)
+        trials = list(log.trials)
+    assert trials and all(tr.dy is not None and tr.dtheta_deg is not None for tr in trials)
+    t = robot.transitions
+    agree = total = 0
+    for field in ("dy", "dtheta_deg"):
+        want = getattr(t.planar, field)
+        for k, (a, b) in enumerate(zip(t.src, t.dst)):
+            got = [getattr(tr, field) for tr in trials if not tr.passed
+                   and (t.index(tr.src), t.index(tr.dst)) == (int(a), int(b))]
+            if got and abs(want[k]) >= 0.5:
+                total += 1
+                agree += bool(np.sign(np.mean(got)) == np.sign(want[k]))
+    assert total >= 20 and agree >= 0.9 * total, (agree, total)

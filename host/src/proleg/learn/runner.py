@@ -404,7 +404,7 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, 
     from ..link import RobotClient
     from ..link.sim_link import SimLink
     from ..sim.closed_loop import SimulatedRobot
-    from ..sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
+    from ..sim.plant import Plant, plant_params_from_robot, planar_motion_from_robot, true_rewards_from_robot
 
     check_plant(robot, truth, plant)
     if plant == "physical":
@@ -413,12 +413,16 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, 
                              watchdog_ms=robot.safety.link_watchdog_ms)
         return sim, client, lambda: (sim.plant.displacement_mm, None, None)
     truth = truth or robot
-    plant = Plant(plant_params_from_robot(truth), true_rewards_from_robot(truth), robot.levels, seed)
+    # with the truth's planar statistics (dy, dθ and their variances) the table plant moves a
+    # planar pose, as `proleg sim`'s does; without them Δy and Δθ were never learned on planar-4
+    plant = Plant(plant_params_from_robot(truth), true_rewards_from_robot(truth), robot.levels, seed,
+                  planar_motion_from_robot(truth))
     sim = SimulatedRobot(robot, seed=seed, plant=plant)
     client = RobotClient(SimLink(sim, description=f"sim {robot.name}"), watchdog_ms=robot.safety.link_watchdog_ms)
 
     def pose() -> Pose:
-        return (sim.plant.displacement_mm, None, None)
+        planar = sim.plant.pose
+        return (sim.plant.displacement_mm, None, None) if planar is None else planar
 
     return sim, client, pose
 
