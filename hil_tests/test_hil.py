@@ -56,7 +56,7 @@ def test_telemetry_streams_with_consecutive_sequence_numbers(target):
 #: R1 one-actuator ≈ 1.0, R2 ≈ 0.51, R3 −x ≈ 1.0 and 1.67; to the range's high end, at most 1.49
 #: (inchworm-3's 100→110→111→101).
 BAND = (0.45, 1.75)
-R3_PLUS_X = ("on the physical plant the firmware walks R3's +x gait 00→11→01→00 backwards (about −1.2 mm "
+R3_PLUS_X = ("on the physical plant the firmware walks R3's +x gait 00→11→01→00 backwards (about −1.0 mm "
              "per cycle after the first) while the idealised drive's measured matrix predicts +1.5: the "
              "simultaneous 00→11 step's outcome depends on which end crosses ψ* first, and R3's matrix is "
              "not realisable under Coulomb friction (docs/plant.md, 'R3')")
