@@ -92,7 +92,8 @@ def test_remapped_table_matches_a_brute_force_of_its_rule(tmp_path):
     for lost in range(len(robot.actuators)):
         new = remap(robot, lost)
         assert new is not None and lost not in new
-        got = _pairs(remapped_table(robot, new, lost))
+        got = _pairs(remapped_table(robot, new, lost, body=False))
+        assert _pairs(remapped_table(robot, new, lost)) <= got  # the body only takes away
         t = robot.transitions
         want = set()
         for a, b in zip(t.src.tolist(), t.dst.tolist()):
@@ -508,3 +509,25 @@ def test_a_timeout_with_every_limb_at_its_level_suspects_no_coil_and_does_not_fa
     text = describe_event({"time_ms": 1, "kind": int(EventKind.FAULT), "code": int(FaultCode.STATE_TIMEOUT),
                            "detail": 0xFF}, RobotNames.for_robot(robot))
     assert "every limb at its level, one would not settle" in text
+
+
+def test_a_remap_whose_coil_would_hold_the_body_up_is_not_used(tmp_path):
+    """inchworm-3 on a 160 mm body: the middle coil alone lifts the head past its band, so the
+    head was remapped onto it without its own coil, but the contraction that holds the head up
+    bends the middle limb to 60° and keeps the tail above its band: 111 -> 011 never finished,
+    the middle coil ran into its on-time limit and the fault blamed the tail. The remapped
+    table now keeps only what the body lets the remapped robot hold and finish."""
+    robot_path = tmp_path / "iw160.toml"
+    robot_path.write_text((ROOT / "robots" / "inchworm-3.toml").read_text().replace("[plant]", "[plant]\nlength_mm = 160", 1))
+    robot = load_robot(robot_path)
+    lost = [a.name for a in robot.actuators].index("sma-head")
+    new_map = remap(robot, lost)
+    assert new_map is not None  # the middle coil reaches the head on this body
+    t = robot.transitions
+    table = remapped_table(robot, new_map, lost)
+    allowed = {(t.label(int(a)), t.label(int(b))) for a, b in zip(table.src, table.dst)}
+    # 011: the middle coil holding the head up lifts the tail to 23.5°, past its band
+    assert not any("011" in pair for pair in allowed) and ("110", "111") in allowed
+    fb = fallback(robot, lost, "+x")
+    assert fb.mode == "dead" or fb.states is None or all(
+        (t.label(a), t.label(b)) in allowed for a, b in zip(fb.states, fb.states[1:]))

@@ -21,7 +21,11 @@ Two ways to go on without actuator ``a`` (both are computed, the better one is u
   it to (``own_levels_under``: a multi-level own limb, its top level in practice), and a step may change a foreign limb's level only if no other limb of
   that coil changes in the same step (one coil cannot make the two cross together). For R1
   without ``sma-right`` this gives exactly the paper's one-actuator matrix
-  (robots/paper-r1-one-actuator.toml): 00↔10, 10↔11.
+  (robots/paper-r1-one-actuator.toml): 00↔10, 10↔11. Then the body has its say: a coil
+  contracted far enough to hold a foreign limb up bends its own limb, and the body, further
+  than its own limbs alone need; states where that lifts another limb past its band, and
+  steps where it keeps one from coming down, go too (``robot_body.coupled_states`` and
+  ``blocked_descents`` with the remapped drive).
 
 Rewards are the robot's own (they depend on the friction states, not on which coil made
 them). Gaits are ranked by rate (reward per transition, simple cycles), as in ``replan``.
@@ -130,10 +134,11 @@ def remap(robot, lost: int) -> tuple[int, ...] | None:
     return None if out == list(amap) else tuple(out)
 
 
-def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None) -> TransitionTable:
+def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None, *, body: bool = True) -> TransitionTable:
     """What the robot can do with ``new_map`` after losing actuator ``lost`` (module doc:
     foreign limbs follow own limbs, up to the levels their new coil lifts them to; a limb
-    ``new_map`` leaves on ``lost``, which no other coil lifts, stays down)."""
+    ``new_map`` leaves on ``lost``, which no other coil lifts, stays down), and, with ``body``,
+    what the physical plant's body then lets it hold and finish (``_body_allows``)."""
     t = robot.transitions
     own = compiled_map(robot)
     groups = []  # per coil that gained limbs: (own limbs, foreign limbs, all its limbs)
@@ -164,7 +169,28 @@ def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None) -> 
             changed = [i for i in every if a[i] != b[i]]
             if any(i in foreign for i in changed) and len(changed) > 1:
                 keep[e] = False
+    if groups and body:
+        keep &= _body_allows(robot, _restrict(t, keep), new_map, t)
     return _restrict(t, keep)
+
+
+def _body_allows(robot, table: TransitionTable, new_map: tuple[int, ...], full: TransitionTable) -> np.ndarray:
+    """Per transition of ``full``: whether the physical plant's body lets the remapped robot
+    make it. A coil that lifts a foreign limb contracts far enough to bend its own limb, and
+    the body, far past where it holds them alone: inchworm-3 on a 160 mm body without its
+    head coil held the head up with the middle coil, which bent the middle to 60° and kept the
+    tail up, so 111 -> 011 never finished, the middle coil ran into its on-time limit and the
+    fault blamed the tail (``robot_body.coupled_states`` and ``blocked_descents`` with the
+    remapped drive)."""
+    from .robot_body import blocked_descents, coupled_states
+
+    limbs, names = list(robot.limbs), [a.name for a in robot.actuators]
+    margin = robot.control.hold_margin_deg
+    drive = list(new_map)
+    bad_states = set(coupled_states(limbs, names, robot.plant, table, margin, drive))
+    blocked = set(blocked_descents(limbs, names, robot.plant, table, margin, drive))
+    return np.array([int(a) not in bad_states and int(b) not in bad_states and (int(a), int(b)) not in blocked
+                     for a, b in zip(full.src, full.dst)], dtype=bool)
 
 
 def best_gait(table: TransitionTable, direction: str) -> tuple[tuple[int, ...] | None, float]:

@@ -27,7 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .body import DEFAULT_OVERLAP_MM, BodyGeometry, Shape, body_geometry, coil_homes, curl_problem, own_reach_deg
+from .body import (DEFAULT_OVERLAP_MM, BodyGeometry, Shape, body_geometry, coil_homes, coil_reach_deg, curl_problem,
+                   own_reach_deg)
 from .robot_plant import PlantSection
 
 
@@ -183,7 +184,7 @@ def _held_at(limb: Any, level: int, hold_margin_deg: float) -> float:
 
 
 def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, states: list[int],
-              hold_margin_deg: float) -> dict[tuple[int, int], float] | None:
+              hold_margin_deg: float, drive: list[int] | None = None) -> dict[tuple[int, int], float] | None:
     """ψ of each limb below its top level in each of ``states`` on the physical plant's body,
     ``{(state, limb): ψ°}``, with every raised limb's coil at the contraction that holds it
     where the controller holds it, ψ*(its level) + ``hold_margin_deg``, or its ``stroke_deg``
@@ -191,7 +192,11 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
     ``own_reach_deg``; a stroke held that high bends the whole body: R1 at full strokes cannot
     hold 10 or 01, and a matrix that allowed them loaded without a word), and the limb's own coil at the least it can
     be (cold, or what the other limbs on a shared coil need: the controller may let it cool
-    that far, no further). None: a body the model cannot describe (``curl_problem``)."""
+    that far, no further). None: a body the model cannot describe (``curl_problem``).
+
+    ``drive``: the actuator index that drives each limb, where it is not the robot file's (a
+    fallback's remap, ``proleg.limbloss``): the coils stay where the body has them, and a
+    limb driven by another limb's coil is held by that coil's contraction."""
     from .body import Shape
     from .states import limb_levels
 
@@ -199,7 +204,12 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
     geo = body_of(limb_act, len(actuators), section)
     if curl_problem(geo):
         return None  # unreachable_levels says why
-    reach = own_reach_deg(geo, limb_act)
+    drive = list(limb_act) if drive is None else list(drive)
+    if drive == limb_act:
+        reach = own_reach_deg(geo, limb_act)
+    else:  # how far each limb's driving coil alone lifts it at full stroke
+        lifts = {a: coil_reach_deg(geo, a) for a in set(drive)}
+        reach = [lifts[a][i] for i, a in enumerate(drive)]
     levels = tuple(lb.levels for lb in limbs)
     rows, cases = [], []
     for s in states:
@@ -213,7 +223,7 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
             c = np.zeros(len(actuators))
             for j, d in enumerate(demand):
                 if j != i:
-                    c[limb_act[j]] = max(c[limb_act[j]], d)
+                    c[drive[j]] = max(c[drive[j]], d)
             rows.append(c)
             cases.append((s, i))
     if not rows:
@@ -224,7 +234,7 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
 
 
 def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
-                   hold_margin_deg: float) -> dict[int, list[tuple[int, list[int], float]]]:
+                   hold_margin_deg: float, drive: list[int] | None = None) -> dict[int, list[tuple[int, list[int], float]]]:
     """States the physical plant's body cannot hold because neighbour coupling lifts a limb:
     ``{state: [(limb, raising limbs, ψ°), ...]}`` for every state the matrix lets the robot
     enter (an allowed transition into it from another state).
@@ -241,7 +251,7 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
         return {}
     entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
-    held = _held_psi(limbs, actuators, section, entered, hold_margin_deg)
+    held = _held_psi(limbs, actuators, section, entered, hold_margin_deg, drive)
     levels = tuple(lb.levels for lb in limbs)
     out: dict[int, list[tuple[int, list[int], float]]] = {}
     for (s, i), psi_i in (held or {}).items():
@@ -254,7 +264,8 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
 
 
 def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
-                     hold_margin_deg: float) -> dict[tuple[int, int], tuple[int, list[int], float]]:
+                     hold_margin_deg: float, drive: list[int] | None = None
+                     ) -> dict[tuple[int, int], tuple[int, list[int], float]]:
     """Allowed transitions the physical plant's body cannot finish because neighbour coupling
     keeps a limb from coming down: ``{(from, to): (limb, raising limbs, ψ°)}``.
 
@@ -276,7 +287,7 @@ def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSecti
             down = [i for i, (x, y) in enumerate(zip(limb_levels(a, levels), limb_levels(b, levels))) if y < x]
             if down:
                 lowered[(a, b)] = down
-    held = _held_psi(limbs, actuators, section, sorted({b for _, b in lowered}), hold_margin_deg) or {}
+    held = _held_psi(limbs, actuators, section, sorted({b for _, b in lowered}), hold_margin_deg, drive) or {}
     out: dict[tuple[int, int], tuple[int, list[int], float]] = {}
     for (a, b), down in lowered.items():
         want = limb_levels(b, levels)
