@@ -325,3 +325,35 @@ def test_a_tie_the_hardware_can_make_is_gait_0_when_the_first_ranked_cannot_be(t
     assert labels[0] == "00 10 00" and "00 01 00" in labels, labels
     assert main(["build", str(path), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 0
     capsys.readouterr()
+
+
+def test_a_shared_coil_sits_at_the_same_limb_whatever_the_order_of_the_actuator_tables(tmp_path, caplog):
+    """A coil's home was "the limb of the coil's own index if that limb names it, else the first
+    limb naming it": listing [[actuator]] b before a moved a shared coil from the tail to the
+    middle, and the load's reach warnings (and the body) changed with it."""
+    import logging
+
+    def robot(first: str, second: str) -> Path:
+        text = "\n".join([
+            '[robot]\nname = "shared3"',
+            '[[limb]]\nname = "tail"\npsi_star_deg = [20.0]\nactuator = "coil-a"',
+            '[[limb]]\nname = "mid"\npsi_star_deg = [20.0]\nactuator = "coil-a"',
+            '[[limb]]\nname = "head"\npsi_star_deg = [20.0]\nactuator = "coil-b"',
+            f'[[actuator]]\nname = "{first}"\nchannel = 0',
+            f'[[actuator]]\nname = "{second}"\nchannel = 1',
+            '[transitions]\nunits = "steps"\nmatrix = [' + ", ".join(
+                "[" + ", ".join("0" if i == j else ("1" if bin(i ^ j).count("1") == 1 else '"x"') for j in range(8)) + "]"
+                for i in range(8)) + "]",
+        ])
+        path = tmp_path / f"{first}-{second}.toml"
+        path.write_text(text + "\n")
+        return path
+
+    seen = []
+    for order in (("coil-a", "coil-b"), ("coil-b", "coil-a")):
+        caplog.clear()
+        path = robot(*order)
+        with caplog.at_level(logging.WARNING, logger="proleg"):
+            load_robot(path)
+        seen.append(sorted(r.getMessage().replace(str(path), "FILE") for r in caplog.records))
+    assert seen[0] == seen[1] and any("sits at limb 'tail'" in m for m in seen[0])

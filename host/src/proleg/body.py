@@ -73,13 +73,11 @@ def default_length_mm(n_contacts: int) -> float:
 
 
 def coil_homes(limb_actuators: list[int], n_actuators: int) -> list[int]:
-    """The contact each coil bends: the limb of the same index when that limb names the coil,
-    else the first limb that names it (a shared coil), else contact 0."""
-    homes = []
-    for j in range(n_actuators):
-        named = [i for i, a in enumerate(limb_actuators) if a == j]
-        homes.append(j if j in named else (named[0] if named else 0))
-    return homes
+    """The contact each coil bends: the first limb (in the robot file's order) that names it,
+    else contact 0. Not "the limb of the coil's own index when it names the coil": a shared
+    coil then sat at another limb when the [[actuator]] tables were listed in another order,
+    and the body, its reach warnings, measured matrix and fallbacks changed with it."""
+    return [next((i for i, a in enumerate(limb_actuators) if a == j), 0) for j in range(n_actuators)]
 
 
 def body_geometry(limb_actuators: list[int], n_actuators: int, length_mm: float,
