@@ -94,7 +94,7 @@ def unreachable_levels(path: Path, limbs: list[Any], limb_actuators: list[int], 
         home = homes[limb_actuators[i]]
         if home != i:  # a shared coil: one [[actuator]] is one coil, at the first limb naming it
             out.append(head + f"in the model that coil sits at limb {limbs[home].name!r} (one [[actuator]] is one "
-                              f"coil, at one of the limbs that name it); give {lb.name!r} a coil of its own")
+                              f"coil, at the first limb that names it); give {lb.name!r} a coil of its own")
         else:
             out.append(head + "lower psi_star_deg or give [plant] length_mm")
     return out
