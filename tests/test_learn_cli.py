@@ -373,3 +373,23 @@ def test_the_report_writes_no_minus_zero():
     from proleg.cli.learn import _fmt
 
     assert [_fmt(v) for v in (-0.001, -0.01, 0.0, -1.5, float("nan"), None)] == ["0.00", "-0.01", "0.00", "-1.50", "-", "-"]
+
+
+def test_a_stop_no_load_warning_predicts_says_so_and_how_to_find_out():
+    """caterpillar-4 learned on the physical plant stops on 0101->0111 (STATE_TIMEOUT, a limb that
+    will not settle): the advice pointed at a load warning about 0111 that does not exist. It
+    now says that no warning predicts it and to measure the matrix; where a warning does
+    (tri-mixed's 101, test above), the advice is unchanged."""
+    from types import SimpleNamespace
+
+    from proleg.cli.learn import _predicted, _stopped_hint
+    from proleg.learn.runner import ExplorationError
+
+    cat = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    assert not _predicted(cat, "0101", "0111")
+    e = ExplorationError("the robot stopped", transition=("0101", "0111"), fault=True)
+    hint = _stopped_hint(SimpleNamespace(sim=True, robot="caterpillar-4"), e, cat)
+    assert "which no warning at load predicts" in hint and "proleg sim caterpillar-4 --measure-matrix" in hint
+    tri = load_robot(FIXTURES / "tri-mixed.toml")
+    assert any(_predicted(tri, tri.transitions.label(int(a)), "101")
+               for a, b in zip(tri.transitions.src, tri.transitions.dst) if tri.transitions.label(int(b)) == "101")

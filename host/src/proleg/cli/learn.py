@@ -282,7 +282,7 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                 ex.run(max_pieces=args.max_pieces)
         except ExplorationError as e:
             again = "" if args.sim and getattr(e, "fault", False) else "; run the same command to resume"
-            raise LinkError(f"learn: {e}{_stopped_hint(args, e)} (the {len(trial_log.trials)} trials recorded are "
+            raise LinkError(f"learn: {e}{_stopped_hint(args, e, robot)} (the {len(trial_log.trials)} trials recorded are "
                             f"kept in {args.log}{again})") from None
         except KeyboardInterrupt:
             if bar is not None:
@@ -322,10 +322,12 @@ def _explored(t, repeats: int) -> str:
     return f"{head}: {t.n_transitions - skipped} × {repeats}" if skipped else f"{head} × {repeats}"
 
 
-def _stopped_hint(args: argparse.Namespace, e: Exception) -> str:
+def _stopped_hint(args: argparse.Namespace, e: Exception, robot=None) -> str:
     """What to do about an exploration that stopped: on a real robot, look at it and clear the
     fault; on the simulated one (it does not outlive the command, and running again meets
-    the same fault) name the transition and what in the robot file would explain it."""
+    the same fault) name the transition and what in the robot file would explain it, or, when
+    the load checks predicted nothing for it, say so and how to find out (the physical plant
+    can stop a step its body model's checks pass: a step slower than the state timeout)."""
     if not getattr(e, "fault", False):
         return ""
     if not args.sim:
@@ -333,10 +335,35 @@ def _stopped_hint(args: argparse.Namespace, e: Exception) -> str:
     if getattr(e, "transition", None) is None:
         return "; the simulated robot meets it again if run the same way: check the warnings printed when the robot file was loaded"
     a, b = e.transition
+    if robot is not None and not _predicted(robot, a, b):
+        return (f"; the simulated robot stopped making {a}->{b}, which no warning at load predicts (the body "
+                f"model's checks pass it): measure what this body makes with proleg sim {args.robot} "
+                f"--measure-matrix (it names each transition it cannot make and why), then mark those \"x\" "
+                f"(forbidden) in the robot file")
     return (f"; the simulated robot cannot make {a}->{b} and would stop there again: look for a warning about state "
             f"{b} or transition {a}→{b} when the robot file was loaded (a state that cannot be held, a step that "
             f"cannot end, a level out of reach) and mark the transitions into {b} \"x\" (forbidden) in the robot "
             f"file, or fix what the warning names")
+
+
+def _predicted(robot, a: str, b: str) -> bool:
+    """Whether the load checks warned about the step ``a`` -> ``b`` (labels): a state that
+    cannot be held or a step that cannot end on the simulated body, or a limb that cannot
+    reach one of its levels."""
+    from ..robot_body import blocked_descents, coupled_states, reach_warnings
+
+    t = robot.transitions
+    try:
+        ia, ib = t.index(a), t.index(b)
+    except Exception:  # noqa: BLE001 - a label the table does not know: nothing to look up
+        return True
+    limbs, names = list(robot.limbs), [x.name for x in robot.actuators]
+    margin = robot.control.hold_margin_deg
+    if ib in coupled_states(limbs, names, robot.plant, t, margin):
+        return True
+    if (ia, ib) in blocked_descents(limbs, names, robot.plant, t, margin):
+        return True
+    return bool(reach_warnings(robot.path, limbs, names, robot.plant, margin))
 
 
 def _counts(table, trials) -> np.ndarray:
