@@ -390,6 +390,7 @@ def test_a_stop_no_load_warning_predicts_says_so_and_how_to_find_out():
     e = ExplorationError("the robot stopped", transition=("0101", "0111"), fault=True)
     hint = _stopped_hint(SimpleNamespace(sim=True, robot="caterpillar-4"), e, cat)
     assert "which no warning at load predicts" in hint and "proleg sim caterpillar-4 --measure-matrix" in hint
+    assert 'mark 0101->0111 "x"' in hint
     tri = load_robot(FIXTURES / "tri-mixed.toml")
     assert any(_predicted(tri, tri.transitions.label(int(a)), "101")
                for a, b in zip(tri.transitions.src, tri.transitions.dst) if tri.transitions.label(int(b)) == "101")

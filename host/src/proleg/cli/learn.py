@@ -337,9 +337,9 @@ def _stopped_hint(args: argparse.Namespace, e: Exception, robot=None) -> str:
     a, b = e.transition
     if robot is not None and not _predicted(robot, a, b):
         return (f"; the simulated robot stopped making {a}->{b}, which no warning at load predicts (the body "
-                f"model's checks pass it): measure what this body makes with proleg sim {args.robot} "
-                f"--measure-matrix (it names each transition it cannot make and why), then mark those \"x\" "
-                f"(forbidden) in the robot file")
+                f"model's checks pass it): proleg sim {args.robot} --measure-matrix says whether the body can make "
+                f"it at all (its not_made list); if it can, the firmware's control failed it on this body. To "
+                f"learn the rest meanwhile, mark {a}->{b} \"x\" (forbidden) in the robot file")
     return (f"; the simulated robot cannot make {a}->{b} and would stop there again: look for a warning about state "
             f"{b} or transition {a}→{b} when the robot file was loaded (a state that cannot be held, a step that "
             f"cannot end, a level out of reach) and mark the transitions into {b} \"x\" (forbidden) in the robot "
