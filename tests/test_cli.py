@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import json
 import subprocess
 import sys
@@ -358,3 +359,18 @@ def test_build_into_a_folder_that_does_not_exist_is_a_usage_error_and_creates_no
     code, _, err = run(capsys, "build", str(ROBOTS / "paper-r1.toml"), "--board", "host-sim", "-o", str(out))
     assert code == 2 and f"directory {out.parent} does not exist" in err
     assert not (tmp_path / "missing").exists()
+
+
+def test_build_folds_tens_of_gait_problems_after_the_first_few(capsys, tmp_path):
+    """A robot with tens of tied gaits, each with problems: build printed every one (82 lines)."""
+    from proleg.cli.main import BUILD_WARNINGS_SHOWN
+
+    robot = Path(__file__).parent / "fixtures" / "shared-coil-strokes-3.toml"
+    code, _, err = run(capsys, "build", str(robot), "--board", "host-sim", "-o", str(tmp_path / "b"))
+    lines = [x for x in err.splitlines() if x.startswith("proleg: warning: gait ")]
+    assert code == 0 and len(lines) == BUILD_WARNINGS_SHOWN
+    more = re.search(r"… and (\d+) more like these \(-v shows them", err)
+    assert more
+    code, _, err = run(capsys, "build", str(robot), "--board", "host-sim", "-o", str(tmp_path / "b"), "-v")
+    assert code == 0
+    assert len([x for x in err.splitlines() if x.startswith("proleg: warning: gait ")]) == BUILD_WARNINGS_SHOWN + int(more[1])

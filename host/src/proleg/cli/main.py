@@ -257,6 +257,10 @@ def _firmware_args(p: argparse.ArgumentParser) -> None:
 # proleg build / flash
 
 
+#: ``proleg build`` prints this many of the gaits' problems, then how many more (``-v``: all).
+BUILD_WARNINGS_SHOWN = 6
+
+
 def _build(args: argparse.Namespace):
     from ..firmware.boards import load_board
     from ..firmware.build import build
@@ -283,8 +287,12 @@ def _build(args: argparse.Namespace):
     if result.fit is not None:
         for line in result.fit.lines():
             print(f"  {line}")
-    for line in result.warnings:
+    shown = result.warnings if args.verbose > 0 else result.warnings[:BUILD_WARNINGS_SHOWN]
+    for line in shown:
         print(f"proleg: warning: {line}", file=sys.stderr)
+    if len(shown) < len(result.warnings):  # a robot with tens of tied gaits, each with its problems
+        print(f"proleg: warning: … and {len(result.warnings) - len(shown)} more like these (-v shows them; "
+              f"proleg gait {args.robot} --json lists every gait's problems)", file=sys.stderr)
     for d, gaits in result.gaits.items():
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
         print(f"  {d} gaits: {shown}")
