@@ -170,11 +170,13 @@ def test_an_interrupted_rebuild_keeps_the_previous_build_and_says_so(capsys, mon
     assert (out_dir / MANIFEST).exists() and hits and hits[0].name.startswith(".fw.")  # the new one, refused
 
 
-#: ``python -c`` that gives SIGINT the disposition a shell's foreground job has, then execs
-#: ``proleg ARGS``: a test run started in the background (``make test &``) ignores SIGINT, and
-#: an exec'd child would inherit that (a wrapper, not ``preexec_fn``: this process has threads).
-_AS_FROM_A_TERMINAL = ("import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
-                       "signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT}); "
+#: ``python -c`` that gives SIGINT (and SIGTERM, SIGHUP) the disposition a shell's foreground
+#: job has, then execs ``proleg ARGS``: a test run started in the background (``make test &``)
+#: ignores SIGINT, under ``nohup`` SIGHUP, and an exec'd child would inherit that (a wrapper,
+#: not ``preexec_fn``: this process has threads).
+_AS_FROM_A_TERMINAL = ("import os, signal, sys; "
+                       "[signal.signal(s, signal.SIG_DFL) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)]; "
+                       "signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}); "
                        "os.execv(sys.executable, [sys.executable, '-m', 'proleg', *sys.argv[1:]])")
 
 
