@@ -187,12 +187,13 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
               hold_margin_deg: float, drive: list[int] | None = None) -> dict[tuple[int, int], float] | None:
     """ψ of each limb below its top level in each of ``states`` on the physical plant's body,
     ``{(state, limb): ψ°}``, with every raised limb's coil at the contraction that holds it
-    where the controller holds it, ψ*(its level) + ``hold_margin_deg``, or its ``stroke_deg``
-    on its top level if it has one (a fraction of its own coil's full-stroke reach,
-    ``own_reach_deg``; a stroke held that high bends the whole body: R1 at full strokes cannot
-    hold 10 or 01, and a matrix that allowed them loaded without a word), and the limb's own coil at the least it can
-    be (cold, or what the other limbs on a shared coil need: the controller may let it cool
-    that far, no further). None: a body the model cannot describe (``curl_problem``).
+    where the controller holds it (``_held_at``: ψ*(its level) + ``hold_margin_deg``, or its
+    ``stroke_deg`` on its top level; a fraction of its own coil's full-stroke reach,
+    ``own_reach_deg``. A stroke held that high bends the whole body: R1 at full strokes cannot
+    hold 10 or 01, and a matrix allowing them loaded without a word when raised limbs were
+    posed just past ψ*), and the limb's own coil at the least it can be (cold, or what the
+    other limbs on a shared coil need: the controller may let it cool that far, no further).
+    None: a body the model cannot describe (``curl_problem``).
 
     ``drive``: the actuator index that drives each limb, where it is not the robot file's (a
     fallback's remap, ``proleg.limbloss``): the coils stay where the body has them, and a
