@@ -73,6 +73,10 @@ typedef struct {
 } ctl_limb_t;
 
 static ctl_limb_t cl[CFG_N_LIMBS];
+#if CTL_HELD_UP
+/* Per limb: ticks relaxed (oscillating) at its target level without settling (ctl.h). */
+static uint16_t held_up[CFG_N_LIMBS];
+#endif
 /* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
 static const uint16_t boost_ticks = TICKS(CTL_BOOST_MS);
 
@@ -85,6 +89,9 @@ void ctl_reset(void)
 {
     uint8_t i;
     memset(cl, 0, sizeof cl); /* not heating, no crossings, no stall, no boost */
+#if CTL_HELD_UP
+    memset(held_up, 0, sizeof held_up);
+#endif
     look = 0;                 /* the reach watch's looks in the same phase after every reset */
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
@@ -213,6 +220,9 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         c->heat = 0;
         c->still = NOT_SEEN; /* the reach watch starts over */
         psi_relax(i, 0);
+#if CTL_HELD_UP
+        held_up[i] = 0;
+#endif
     }
     if (level != c->level) {
         c->ticks = 0; /* a new level: the hover and stall clocks restart */
@@ -235,6 +245,17 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
                 c->ticks = 0;
             } else if ((c->ticks = (uint16_t)(c->ticks + CTL_REACH_EVERY)) > TICKS(CTL_HOVER_MS)) {
                 c->climb = 0; /* stopped: held where it stopped from now on */
+            }
+        }
+#endif
+#if CTL_HELD_UP
+        /* relaxed and still not settled at its target level a hover time on: its neighbours
+         * hold it up into the band above, its own coil off (ctl.h, CTL_HELD_UP) */
+        if (c->stall == CTL_STALL_OSCILLATING && level == target && !psi_settled(i)) {
+            if (held_up[i] < TICKS(CTL_HOVER_MS)) {
+                held_up[i]++;
+            } else {
+                psi_relax(i, PSI_RELAX_HELD_UP);
             }
         }
 #endif

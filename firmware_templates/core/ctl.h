@@ -175,6 +175,16 @@
  * ≈ 60 K/s on R1); released earlier, the falling end drags it below ψ* (11 → 00 → 10 on the
  * table plant instead of 11 → 10). */
 #define CTL_SAG_WAIT_MS 500u
+/* Held up: on a body of three or more limbs, a limb whose neighbours hold it up into the band
+ * above its target level (caterpillar-4's front proleg at 12-12.6° in 0101, its band 11..13°,
+ * the rear proleg held at 19° and the head at 27°) reads its level (hysteresis) but never
+ * settles clear of that band, even relaxed to the band edges, and its coil is already off:
+ * the step ended in STATE_TIMEOUT "every limb at its level, one would not settle" (proleg
+ * learn --plant physical stopped there on every seed). Relaxed and still unsettled a further
+ * CTL_HOVER_MS, it settles on the band edge below alone (psi.h PSI_RELAX_HELD_UP). Not built
+ * for two limbs: there the other end is lifted past its band or not into it (R1: 23.5° at full
+ * stroke, ≈ 8-10° at the hold), and R1's image has no bytes to spare (14 KB target). */
+#define CTL_HELD_UP PSI_HELD_UP
 #define CTL_STALL_NONE 0u
 #define CTL_STALL_OSCILLATING 1u
 #define CTL_STALL_UNREACHABLE 2u

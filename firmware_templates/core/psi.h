@@ -114,7 +114,13 @@ int16_t psi_smooth_cdeg(uint8_t limb);
 /* 1 when `limb` is settled in its debounced level (see above). */
 uint8_t psi_settled(uint8_t limb);
 
-/* Settle on the band edges alone (on = 1) or with the margins (0, the default). */
+/* Settle on the band edges alone (on = PSI_RELAX_EDGES) or with the margins (0, the default);
+ * PSI_RELAX_HELD_UP: on the band edge below alone, whatever the band above says (a limb its
+ * neighbours hold up into the band above its level, its own coil off: ctl.h). */
+#define PSI_RELAX_EDGES 1u
+#define PSI_RELAX_HELD_UP 2u
+/* Built for three or more limbs only (ctl.h, CTL_HELD_UP): R1's image has no bytes to spare. */
+#define PSI_HELD_UP (CFG_N_LIMBS > 2)
 void psi_relax(uint8_t limb, uint8_t on);
 
 /* Every limb has CFG_MAX_LEVELS levels exactly when their product, CFG_N_STATES, is

@@ -85,11 +85,58 @@ static void test_a_falling_limb_does_not_wait_for_a_neighbour_sagging_far_above_
     CHECK_EQ(duty[2], HOLD);
 }
 
+#define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
+
+/* Limb `limb` at `deg` inside the band around ψ* = 20° (19..21°) for `ticks` control ticks
+ * of targets (t0, t1, t2), the other limbs at 30° or 10° as their targets say; whether it
+ * settled. */
+static uint8_t in_the_band(uint8_t t0, uint8_t t1, uint8_t t2, uint8_t limb, double from, double deg, uint32_t ticks)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint8_t tg[3];
+    uint32_t k;
+    uint8_t i;
+    tg[0] = t0;
+    tg[1] = t1;
+    tg[2] = t2;
+    setup();
+    for (i = 0; i < 3; i++) {
+        put(i, i == limb ? from : (tg[i] ? 30.0 : 10.0));
+    }
+    demand3(t0, t1, t2, duty);
+    for (k = 0; k < ticks; k++) {
+        for (i = 0; i < 3; i++) {
+            put(i, i == limb ? deg : (tg[i] ? 30.0 : 10.0));
+        }
+        demand3(t0, t1, t2, duty);
+    }
+    return psi_settled(limb);
+}
+
+static void test_a_limb_its_neighbours_hold_up_into_the_band_above_settles_a_while_after_relaxing(void)
+{
+    /* caterpillar-4's front proleg in 0101: its target level 0, its neighbours raised, the
+     * body holds it at 20° (its level still 0 by hysteresis, coming from below): relaxed to the
+     * band edges it still is not clear of the band; a hover time later it settles */
+    CHECK(!in_the_band(1, 0, 1, 1, 10.0, 20.0, HOVER_TICKS + HOVER_TICKS / 2u));
+    CHECK(in_the_band(1, 0, 1, 1, 10.0, 20.0, 2u * HOVER_TICKS + 20u));
+    CHECK_EQ(psi_level(1), 0);
+}
+
+static void test_a_limb_that_sags_into_the_band_below_its_level_does_not_settle_there(void)
+{
+    /* held at level 1, sagging into the band from above: too low, not held up */
+    CHECK(!in_the_band(1, 1, 1, 1, 30.0, 19.5, 4u * HOVER_TICKS));
+    CHECK_EQ(psi_level(1), 1);
+}
+
 int main(void)
 {
     RUN(test_a_falling_limb_does_not_wait_for_a_sagging_limb_two_sections_away);
     RUN(test_a_falling_limb_waits_warm_for_a_sagging_neighbour);
     RUN(test_a_falling_first_limb_waits_for_its_only_neighbour);
     RUN(test_a_falling_limb_does_not_wait_for_a_neighbour_sagging_far_above_its_band);
+    RUN(test_a_limb_its_neighbours_hold_up_into_the_band_above_settles_a_while_after_relaxing);
+    RUN(test_a_limb_that_sags_into_the_band_below_its_level_does_not_settle_there);
     return UNIT_EXIT();
 }
