@@ -70,13 +70,12 @@ typedef struct {
     uint8_t shortfall; /* stopped climbing short of its stroke: held where it stopped until it leaves its top level */
     uint8_t lagged;    /* heated CTL_LAG_MS rising without progress in this step: not waited for (ctl.h) */
 #endif
+#if CTL_HELD_UP
+    uint16_t held_up;  /* ticks relaxed (oscillating) at its target level without settling (ctl.h) */
+#endif
 } ctl_limb_t;
 
 static ctl_limb_t cl[CFG_N_LIMBS];
-#if CTL_HELD_UP
-/* Per limb: ticks relaxed (oscillating) at its target level without settling (ctl.h). */
-static uint16_t held_up[CFG_N_LIMBS];
-#endif
 /* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
 static const uint16_t boost_ticks = TICKS(CTL_BOOST_MS);
 
@@ -89,9 +88,6 @@ void ctl_reset(void)
 {
     uint8_t i;
     memset(cl, 0, sizeof cl); /* not heating, no crossings, no stall, no boost */
-#if CTL_HELD_UP
-    memset(held_up, 0, sizeof held_up);
-#endif
     look = 0;                 /* the reach watch's looks in the same phase after every reset */
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
@@ -221,7 +217,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         c->still = NOT_SEEN; /* the reach watch starts over */
         psi_relax(i, 0);
 #if CTL_HELD_UP
-        held_up[i] = 0;
+        c->held_up = 0;
 #endif
     }
     if (level != c->level) {
@@ -252,8 +248,8 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         /* relaxed and still not settled at its target level a hover time on: its neighbours
          * hold it up into the band above, its own coil off (ctl.h, CTL_HELD_UP) */
         if (c->stall == CTL_STALL_OSCILLATING && level == target && !psi_settled(i)) {
-            if (held_up[i] < TICKS(CTL_HOVER_MS)) {
-                held_up[i]++;
+            if (c->held_up < TICKS(CTL_HOVER_MS)) {
+                c->held_up++;
             } else {
                 psi_relax(i, PSI_RELAX_HELD_UP);
             }

@@ -301,22 +301,13 @@ static uint8_t inside(uint8_t limb, uint8_t margins)
     if (level == PSI_UNKNOWN) {
         return 0;
     }
-#if PSI_HELD_UP
-    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), margins == 1u ? E_HOLD : E_UPPER)) {
+    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), (PSI_HELD_UP ? margins == 1u : margins) ? E_HOLD : E_UPPER)) {
         return 0;
     }
-    if (margins != PSI_RELAX_HELD_UP && level + 1u < psi_levels(limb) &&
+    if (!(PSI_HELD_UP && margins == PSI_RELAX_HELD_UP) && level + 1u < psi_levels(limb) &&
         last_above(limb, level, margins ? E_SETTLE : E_LOWER)) {
         return 0;
     }
-#else
-    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), margins ? E_HOLD : E_UPPER)) {
-        return 0;
-    }
-    if (level + 1u < psi_levels(limb) && last_above(limb, level, margins ? E_SETTLE : E_LOWER)) {
-        return 0;
-    }
-#endif
     return 1;
 }
 
@@ -353,12 +344,9 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
      * outside the band's edges while settled. A change needs `debounce` in a row, so one
      * noisy sample neither settles a limb nor unsettles it (a held end near the band's
      * edge, with IMU noise, kept the step from ever being reached and its coil heated). */
-#if PSI_HELD_UP
-    if (s->settled ? !inside(limb, s->relaxed == PSI_RELAX_HELD_UP ? PSI_RELAX_HELD_UP : 0)
-                   : inside(limb, s->relaxed ? s->relaxed & PSI_RELAX_HELD_UP : 1)) {
-#else
-    if (s->settled ? !inside(limb, 0) : inside(limb, s->relaxed ? 0 : 1)) {
-#endif
+    /* relaxed: on the band edges (0), or held up (PSI_RELAX_HELD_UP, three or more limbs only) */
+    if (s->settled ? !inside(limb, PSI_HELD_UP && s->relaxed == PSI_RELAX_HELD_UP ? PSI_RELAX_HELD_UP : 0)
+                   : inside(limb, s->relaxed ? (PSI_HELD_UP ? s->relaxed & PSI_RELAX_HELD_UP : 0) : 1)) {
         if (++s->dwell >= debounce) {
             s->settled ^= 1u; /* settled, or left the band's edges: a real excursion */
             s->dwell = 0;
