@@ -182,14 +182,10 @@ def _body_allows(robot, table: TransitionTable, new_map: tuple[int, ...], full: 
     tail up, so 111 -> 011 never finished, the middle coil ran into its on-time limit and the
     fault blamed the tail (``robot_body.coupled_states`` and ``blocked_descents`` with the
     remapped drive)."""
-    from .robot_body import blocked_descents, coupled_states
+    from .robot_body import body_coupling
 
-    limbs, names = list(robot.limbs), [a.name for a in robot.actuators]
-    margin = robot.control.hold_margin_deg
-    drive = list(new_map)
-    bad_states = set(coupled_states(limbs, names, robot.plant, table, margin, drive))
-    blocked = set(blocked_descents(limbs, names, robot.plant, table, margin, drive))
-    return np.array([int(a) not in bad_states and int(b) not in bad_states and (int(a), int(b)) not in blocked
+    coupled, blocked = body_coupling(robot, table, list(new_map))
+    return np.array([int(a) not in coupled and int(b) not in coupled and (int(a), int(b)) not in blocked
                      for a, b in zip(full.src, full.dst)], dtype=bool)
 
 

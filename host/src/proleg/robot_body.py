@@ -310,6 +310,16 @@ WARNING_EXAMPLES = 3
 CoilLift = tuple[str, int, tuple[int, ...]]
 
 
+def body_coupling(robot: Any, table: Any = None, drive: list[int] | None = None) -> tuple[dict, dict]:
+    """``coupled_states`` and ``blocked_descents`` of a loaded robot: on ``table`` (default its
+    own), with ``drive`` (a fallback's remap; default the robot file's map)."""
+    limbs, names = list(robot.limbs), [a.name for a in robot.actuators]
+    table = robot.transitions if table is None else table
+    margin = robot.control.hold_margin_deg
+    return (coupled_states(limbs, names, robot.plant, table, margin, drive),
+            blocked_descents(limbs, names, robot.plant, table, margin, drive))
+
+
 def shared_coil_lifts(limbs: list[Any], coupled: dict[int, list[tuple[int, list[int], float]]]
                       ) -> dict[int, tuple[CoilLift, ...]]:
     """The states of ``coupled`` (``coupled_states``) a shared coil cannot hold: a limb is

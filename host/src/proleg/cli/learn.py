@@ -350,20 +350,18 @@ def _predicted(robot, a: str, b: str) -> bool:
     """Whether the load checks warned about the step ``a`` -> ``b`` (labels): a state that
     cannot be held or a step that cannot end on the simulated body, or a limb that cannot
     reach one of its levels."""
-    from ..robot_body import blocked_descents, coupled_states, reach_warnings
+    from ..robot_body import body_coupling, reach_warnings
 
     t = robot.transitions
     try:
         ia, ib = t.index(a), t.index(b)
-    except Exception:  # noqa: BLE001 - a label the table does not know: nothing to look up
+    except ValueError:  # a label the table does not know: nothing to look up
         return True
-    limbs, names = list(robot.limbs), [x.name for x in robot.actuators]
-    margin = robot.control.hold_margin_deg
-    if ib in coupled_states(limbs, names, robot.plant, t, margin):
+    coupled, blocked = body_coupling(robot)
+    if ib in coupled or (ia, ib) in blocked:
         return True
-    if (ia, ib) in blocked_descents(limbs, names, robot.plant, t, margin):
-        return True
-    return bool(reach_warnings(robot.path, limbs, names, robot.plant, margin))
+    return bool(reach_warnings(robot.path, list(robot.limbs), [x.name for x in robot.actuators], robot.plant,
+                               robot.control.hold_margin_deg))
 
 
 def _counts(table, trials) -> np.ndarray:
