@@ -133,12 +133,17 @@ class Safety:
     duty_window_ms: int = 10_000
     on_limit_latch: int = 3
 
+    @property
+    def mean_ceiling(self) -> float:
+        """The most a duty held for ever may be: it fits the mean-duty window and max_duty."""
+        return min(self.max_mean_duty, self.max_duty)
+
     def hold_ceiling(self, hold_duty: float) -> float:
         """``hold_max_duty``, or its default: max(0.3, the control's hold duty), at most
-        ``max_duty`` and ``max_mean_duty`` (a duty the coil may hold forever fits the window)."""
+        ``mean_ceiling`` (a duty the coil may hold forever fits the window)."""
         if self.hold_max_duty is not None:
             return self.hold_max_duty
-        return min(self.max_duty, self.max_mean_duty, max(0.3, hold_duty))
+        return min(self.mean_ceiling, max(0.3, hold_duty))
 
 
 #: control.boost_ms: 0 (off) or this range. Below 100 ms a coil still heating back to As (its
@@ -490,8 +495,8 @@ def _safety(path: Path, value: Any) -> Safety:
         duty_window_ms=f.integer("duty_window_ms", d.duty_window_ms, *DUTY_WINDOW_MS_RANGE),
         on_limit_latch=f.integer("on_limit_latch", d.on_limit_latch, 1, MAX_ON_LIMIT_LATCH),
     )
-    if s.hold_max_duty is not None and s.hold_max_duty > min(s.max_mean_duty, s.max_duty):
-        f.fail("hold_max_duty", f"at most max_mean_duty and max_duty ({min(s.max_mean_duty, s.max_duty):g}): a "
+    if s.hold_max_duty is not None and s.hold_max_duty > s.mean_ceiling:
+        f.fail("hold_max_duty", f"at most max_mean_duty and max_duty ({s.mean_ceiling:g}): a "
                "duty the coil may hold forever must fit the mean-duty window", s.hold_max_duty)
     # the host feeds the watchdog with a PING every quarter of it (link/client.py): below
     # 100 ms that is a frame every few ms, and a desktop OS's scheduling alone can miss it
@@ -529,8 +534,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         f.fail("drive_duty", f"at most safety.max_duty ({safety.max_duty})", c.drive_duty)
     if c.hold_duty > c.drive_duty:
         f.fail("hold_duty", f"at most control.drive_duty ({c.drive_duty})", c.hold_duty)
-    if safety.hold_max_duty is None and c.hold_duty > min(safety.max_mean_duty, safety.max_duty):
-        f.fail("hold_duty", f"at most safety.max_mean_duty ({min(safety.max_mean_duty, safety.max_duty):g}): "
+    if safety.hold_max_duty is None and c.hold_duty > safety.mean_ceiling:
+        f.fail("hold_duty", f"at most safety.max_mean_duty ({safety.mean_ceiling:g}): "
                "a duty that holds a state must fit the mean-duty window (or set safety.hold_max_duty "
                "below it, and the hold counts as on-time)", c.hold_duty)
     if c.telemetry_hz > c.tick_hz:

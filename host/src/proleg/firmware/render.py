@@ -312,11 +312,10 @@ BUDGET_DEFAULTS: dict[str, Any] = {
 def thermal_budget(name: str, safety: Any, ctl: Any) -> dict[str, int]:
     """The [safety] keys of the thermal budget, read with their defaults (docs/safety.md)."""
     v = {k: getattr(safety, k, d) for k, d in BUDGET_DEFAULTS.items()}
-    max_duty = float(safety.max_duty)
-    mean = min(float(v["max_mean_duty"]), max_duty)
-    hold_max = v["hold_max_duty"]
-    if hold_max is None:  # Safety.hold_ceiling's default, for a stand-in safety too
-        hold_max = min(mean, max(0.3, float(ctl.hold_duty)))
+    # read as a Safety, so that a stand-in safety gets Safety's rules for the default ceiling
+    budget = Safety(max_duty=float(safety.max_duty), **v)
+    mean = budget.mean_ceiling
+    hold_max = budget.hold_ceiling(float(ctl.hold_duty))
     if not 0.0 <= float(hold_max) <= mean:
         raise BuildError(
             f"robot {name}: safety.hold_max_duty {hold_max:g} must lie in 0 .. max_mean_duty ({mean:g}): "
