@@ -345,3 +345,47 @@ def test_the_documented_next_step_gait_with_a_variance_weight_runs_on_a_one_dime
     assert value["1"] < value["0"]  # the variances weigh on it
     assert main(["gait", str(out), "--variance-weight", "1,1,0"]) == 2  # a weight for var_dy, which it lacks
     assert "needs [transitions].var_dy" in capsys.readouterr().err
+
+
+def test_per_gait_climb_limits_become_their_smallest_so_the_learned_file_builds(tmp_path):
+    """caterpillar-4 gives each of its first two gaits of a way its own climb limit. Learned on
+    the physical plant, its matrix ranked one +x gait first and `proleg build`/`sim` of the
+    learned file stopped: "control.max_climb_deg.+x: 2 limits, but the firmware carries 1 gait"."""
+    from proleg.firmware.gaits import firmware_gaits
+    from proleg.robot_climb import check_climb_limit
+
+    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    t = robot.transitions
+    given_limit = robot.control.max_climb_deg
+    assert given_limit.plus_x_gaits and given_limit.minus_x_gaits  # the file's lists, per gait
+    # one 2-cycle moves the robot each way, nothing else: one gait per way
+    moves = {(t.label(a), t.label(b)): 0.0 for a, b in zip(t.src, t.dst)}
+    moves[("0121", "0221")] = moves[("0221", "0121")] = 1.0
+    moves[("1210", "1220")] = moves[("1220", "1210")] = -1.0
+    trials = [Trial(s, d, 0, 1, v, None, None, "sim") for (s, d), v in moves.items() for _k in range(3)]
+    out = write_learned_robot(robot, estimate(t, trials), tmp_path / "l.toml", units=robot.units)
+    learned = load_robot(out)
+    gaits = firmware_gaits(learned)
+    assert len(gaits["+x"]) < len(given_limit.plus_x_gaits)
+    assert check_climb_limit(learned.control.max_climb_deg, gaits) is None
+    limit = learned.control.max_climb_deg
+    assert (limit.plus_x, limit.minus_x) == (min(given_limit.plus_x_gaits), min(given_limit.minus_x_gaits))
+    assert not limit.plus_x_gaits and not limit.minus_x_gaits  # every gait: the smallest
+    text = out.read_text()
+    assert '# max_climb_deg = { "+x" = [1.5, 1], "-x" = [3, 3.5] }' in text
+
+
+def test_a_climb_limit_list_learn_cannot_replace_as_text_is_refused_and_nothing_written(tmp_path):
+    from proleg.learn.robotfile import LearnedFileError
+
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text(encoding="utf-8")
+    line = next(ln for ln in text.splitlines() if ln.startswith("max_climb_deg"))
+    src = tmp_path / "c4.toml"  # the same limits as a table of their own
+    src.write_text(text.replace(line, "") + '\n[control.max_climb_deg]\n"+x" = [1.5, 1]\n"-x" = [3, 3.5]\n',
+                   encoding="utf-8")
+    robot = load_robot(src)
+    assert robot.control.max_climb_deg.plus_x_gaits == (1.5, 1.0)
+    t = robot.transitions
+    with pytest.raises(LearnedFileError, match=r"\[control\] max_climb_deg .* one line"):
+        write_learned_robot(robot, estimate(t, _sim_trials(t)), tmp_path / "l.toml", units=robot.units)
+    assert not (tmp_path / "l.toml").exists()

@@ -9,8 +9,10 @@ some, and beside it the learned statistics under issue 17's names — ``dy``,
 (``proleg.robot``) reads: ``Robot.n_trials``, and the planar statistics that ``proleg gait``
 weighs (``--variance-weight``). ``stats_as_keys=False`` writes them as comment lines
 ``#learned: key = [...]`` instead (for an older proleg); ``read_learned`` reads both. The previous ``[transitions]`` table is
-kept below, commented out. Everything else in the file is copied unchanged: the text is
-read back before it is written (valid TOML, only ``[transitions]`` changed) and written
+kept below, commented out. Everything else in the file is copied unchanged but two keys
+that the new matrix voids: ``[plant] step_mm`` when the unit turns to a length, and per-gait
+``[control] max_climb_deg`` lists (the old gaits'; ``climb_for_new_gaits``). The text is
+read back before it is written (valid TOML, only those changed) and written
 atomically (``proleg.outputs.write_text_atomic``). Numbers are written so that they read
 back exactly.
 """
@@ -29,6 +31,7 @@ import numpy as np
 from ..errors import ProlegError
 from ..outputs import write_text_atomic
 from ..robot import Robot
+from ..robot_climb import ClimbLimit
 from ..robot_transitions import UNIT_MM
 from .estimate import Estimates
 
@@ -179,9 +182,44 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
     lines = source.splitlines()
     if units != robot.units and units in UNIT_MM:  # the matrix's unit fixes step_mm now
         lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")
+    climb = climb_for_new_gaits(robot)
+    if climb is not None:
+        lines = _set_control_key(lines, "max_climb_deg", str(climb), robot.path,
+                                 "per-gait limits of the previous matrix's gaits: their smallest for every "
+                                 "gait now (learned; proleg sim --measure-climb measures the new ones)")
     text = _replace_transitions(lines, new)
-    _check_loads(_check_learned(source, text, new, robot.path), Path(out), robot.path)
+    doc = _check_learned(source, text, new, robot.path, control_changed=("max_climb_deg",) if climb else ())
+    learned = _check_loads(doc, Path(out), robot.path)
+    if climb is not None and learned.control.max_climb_deg != climb:
+        raise LearnedFileError(f"learn: {robot.path}: [control] max_climb_deg would not read back as {climb} "
+                               "in the learned file; nothing written")
     return write_text_atomic(out, text, "learn")
+
+
+def climb_for_new_gaits(robot: Robot) -> ClimbLimit | None:
+    """``[control] max_climb_deg`` for the learned file when the robot's gives per-gait lists,
+    else None. A list names the previous matrix's built-in gaits, gait 0 first; the learned
+    matrix may rank other gaits first, so every gait takes the smallest of its way's list, as
+    the gaits past a list already do (docs/robot-file.md)."""
+    climb = robot.control.max_climb_deg
+    if climb is None or not (climb.plus_x_gaits or climb.minus_x_gaits):
+        return None
+    return ClimbLimit(climb.plus_x, climb.minus_x)
+
+
+def _set_control_key(lines: list[str], key: str, value: str, path: str | Path, why: str) -> list[str]:
+    """The lines with ``[control]``'s one-line ``key = ...`` set to ``value``, the old line kept
+    above it commented out, saying why. A key given another way (a dotted key, its own table)
+    cannot be replaced as text: ``LearnedFileError``, nothing written."""
+    span = _section_span(lines, "control")
+    if span is not None:
+        a, b = span
+        for i in range(a + 1, b):
+            if lines[i].split("=")[0].strip() == key:
+                return lines[:i] + [f"# {lines[i].strip()}", f"{key} = {value}   # {why}"] + lines[i + 1:]
+    raise LearnedFileError(f"learn: {path}: [control] {key} names gaits of the previous matrix and must change "
+                           f"with it; give it on one line in [control] ({key} = ...) so that learn can replace "
+                           "it; nothing written")
 
 
 def _drop_plant_key(lines: list[str], key: str, why: str) -> list[str]:
@@ -197,14 +235,14 @@ def _drop_plant_key(lines: list[str], key: str, why: str) -> list[str]:
     return out
 
 
-def _check_loads(doc: dict, out: Path, source: str | Path) -> None:
+def _check_loads(doc: dict, out: Path, source: str | Path) -> Robot:
     """The learned file (``doc``, its TOML read back) must load as a robot file, as it would
     from ``out`` (its CSVs and other paths relative to where it is written): nothing is
-    written otherwise."""
+    written otherwise. Returns it loaded."""
     from ..robot import robot_from_dict
 
     try:
-        robot_from_dict(doc, out)
+        return robot_from_dict(doc, out)
     except ProlegError as e:
         raise LearnedFileError(f"learn: the learned file from {source} would not load ({e}); nothing written") from None
 
@@ -225,15 +263,20 @@ def _replace_transitions(lines: list[str], new: list[str]) -> str:
     return "\n".join(body) + "\n"
 
 
-def _check_learned(source: str, text: str, new: list[str], path: str | Path) -> dict:
+def _check_learned(source: str, text: str, new: list[str], path: str | Path,
+                   control_changed: tuple[str, ...] = ()) -> dict:
     """``text`` must be valid TOML whose ``[transitions]`` is ``new`` and whose every other
-    table is as in ``source``; returns it read back."""
+    table is as in ``source`` (but ``[control]``'s keys ``control_changed``, checked by the
+    caller); returns it read back."""
     try:
         before, after = tomllib.loads(source), tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise LearnedFileError(f"learn: the learned file from {path} would not be valid TOML ({e}); "
                                "nothing written") from None
     before["transitions"] = tomllib.loads("\n".join(new))["transitions"]
+    for key in control_changed:
+        if key in after.get("control", {}):
+            before["control"][key] = after["control"][key]
     if _canonical(before, "step_mm") != _canonical(after, "step_mm"):  # step_mm may go with the unit
         raise LearnedFileError(f"learn: cannot find where {path}'s [transitions] table ends to replace it "
                                "(nothing written); give it its own [transitions] header line")
