@@ -128,6 +128,7 @@ def test_a_body_that_would_curl_over_itself_is_refused_by_the_physical_plant_and
     warned = [r.getMessage() for r in caplog.records]
     assert len(warned) == 1 and "plant.length_mm: coil 1 spans 508 mm" in warned[0], warned
     assert "bends it by 873°" in warned[0] and "curl over itself" in warned[0]
+    assert "gait and build go on" in warned[0]  # the warning says what it stops, the error below stops it
     with pytest.raises(SimError, match="past the 180° the physical plant models"):
         make_plant(long, "physical")
     caplog.clear()

@@ -51,7 +51,8 @@ def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: 
         return []
     reach = body_reach(limb_actuators, len(actuators), section)
     if isinstance(reach, str):
-        return [f"{path}: plant.length_mm: {reach}"]
+        return [f"{path}: plant.length_mm: {reach} (gait and build go on; the physical plant of `proleg sim` "
+                "and `learn --sim` refuses such a body, `--plant table` runs it)"]
     own, full = reach
     return (unreachable_levels(path, limbs, limb_actuators, len(actuators), own, section) +
             unreachable_holds(path, limbs, own, full, section, hold_margin_deg))
