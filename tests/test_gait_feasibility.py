@@ -119,6 +119,19 @@ def test_a_coil_driving_more_than_the_cycle_pays_back_is_refused(tmp_path):
     assert "actuator 'sma-left' gains" in problems[0].message
 
 
+def test_an_on_time_error_the_build_lets_through_says_to_expect_a_fault_not_error_in_a_warning(tmp_path):
+    """`proleg build` printed "proleg: warning: gait 0 of +x: error: ... the firmware cuts it"
+    and built anyway: a warning that called itself an error."""
+    from proleg.firmware.gaits import firmware_gaits, gait_warnings
+
+    text = (ROBOTS / "paper-r1.toml").read_text().replace("min_cooldown_ms = 800", "min_cooldown_ms = 30000")
+    robot = robot_from(tmp_path, text.replace("[transitions]", "[transitions]\ndefault_duration_s = 2.5"))
+    lines = gait_warnings(robot, firmware_gaits(robot))  # not refused: on-time is an estimate
+    faulting = [ln for ln in lines if "expect a fault: " in ln]
+    assert faulting and all(("debt" in ln or "gains" in ln) for ln in faulting), lines
+    assert not any(": error: " in ln for ln in lines), lines
+
+
 def test_the_entry_path_from_rest_uses_only_allowed_transitions_the_hardware_can_make(tmp_path):
     robot = robot_from(tmp_path, ONE_ACTUATOR)
     # gait 01 11 01: 00 -> 10 -> 01 is shorter to 01 but lowers 'front' while raising 'back'

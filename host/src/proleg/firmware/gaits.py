@@ -191,8 +191,10 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
                     f"{robot.where}: gait 0 of {d}, the one START runs, cannot run on this robot: "
                     f"{errors[0].message} (choose another objective or --max-transitions, or fix the robot file)"
                 )
-            out += [f"gait {i} of {d}: {'' if p.severity == 'warning' else p.severity + ': '}{p.message}"
-                    for p in problems]  # printed after "proleg: warning: "
+            # printed after "proleg: warning: "; an error the build lets through (on-time) is one the
+            # firmware's envelope will stop the gait for: said so, not called an error in a warning
+            out += [f"gait {i} of {d}: {'' if p.severity == 'warning' else 'expect a fault: '}{p.message}"
+                    for p in problems]
     return out
 
 
