@@ -273,3 +273,22 @@ def test_the_ideal_drives_copies_of_the_firmwares_stroke_constants_agree_with_it
     assert measure.FALL_SHARE == number("CTL_FALL_SHARE") / number("CTL_SHARE_FULL")
     edges = [int(x) for x in define("PSI_PROGRESS_CDEG").strip("{}").split(",")]
     assert [e * 100 for e in measure.PROGRESS_DEG] == edges
+
+
+def test_the_table_plant_takes_a_staggered_stroke_step_as_the_matrix_transition_it_is(tmp_path):
+    """The rise lead crosses first on purpose (00 -> 10 -> 11, 00 -> 10 forbidden): the table
+    plant counted two unexpected transitions and 0 mm, so `sim --plant table` walked R1 at full
+    strokes 12.0 mm a cycle against the matrix's 25.1, and `learn --sim` learned 00 -> 11 as 0."""
+    from proleg.firmware.gaits import firmware_gaits
+    from proleg.sim.closed_loop import SimulatedRobot
+
+    robot = load_robot(STROKE)
+    session = SimSession(SimulatedRobot(robot, plant="table"))
+    session.advance(0.2)
+    run = session.run_gait("+x", 0, 20.0)
+    assert run.faults == [] and len(run.cycle_displacements_mm) >= 3, run
+    states = firmware_gaits(robot)["+x"][0].states
+    promised = sum(robot.transitions.dense()[0][a, b] for a, b in zip(states, states[1:]))
+    assert promised > 20.0
+    assert run.cycle_displacements_mm == pytest.approx([promised] * len(run.cycle_displacements_mm))
+    assert run.unexpected_transitions == 0

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from proleg.errors import SimError
-from proleg.sim.plant import LimbParams, Plant, PlantParams
+from proleg.sim.plant import PASS_S, LimbParams, Plant, PlantParams
 from proleg.sim.sma import Hysteresis, SmaParams, cooling_branch, heating_branch
 
 R1 = np.array([[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]], float)
@@ -227,14 +227,45 @@ def test_displacement_is_the_sum_of_true_rewards_over_the_true_transitions():
     assert all(x.src != x.dst for x in trans)
 
 
+class ScriptedPlant(Plant):
+    """The table plant with its true state given as (from time s, state) instead of from ψ."""
+
+    def __init__(self, script, rewards=R1_LEFT_ONLY):
+        self.script = script
+        super().__init__(PlantParams(noise_mm=0.0), rewards)
+
+    def _classify(self) -> int:
+        return [s for t, s in self.script if getattr(self, "_t", 0.0) >= t - 1e-9][-1]
+
+
+def _run(script, seconds, rewards=R1_LEFT_ONLY):
+    p = ScriptedPlant([(0.0, 0)] + script, rewards)
+    for _ in range(round(seconds / 0.01)):
+        p.step(0.01, [0.0, 0.0])
+    return [(a, b, r) for _, a, b, r in p.transitions], p.unexpected_transitions
+
+
 def test_a_forbidden_transition_that_happens_earns_nothing_and_is_counted():
-    p = Plant(PlantParams(), R1_LEFT_ONLY)      # the table says the right end cannot move
-    time_to(p, lambda q: q.psi_deg[1] >= 20.0, [0.0, 0.6])
-    p.step(0.1, [0.0, 0.0])
-    assert [(a, b) for _, a, b, _ in p.transitions] == [(0, 1)]
-    assert p.transitions[0].reward_mm == 0.0
-    assert p.unexpected_transitions == 1
-    assert p.displacement_mm == 0.0
+    # the table says the right end cannot move (00 -> 01 forbidden); held past PASS_S, it happened
+    assert _run([(1.0, 1)], 1.0 + PASS_S - 0.1) == ([], 0)  # not yet: it may be a pass
+    assert _run([(1.0, 1)], 1.0 + PASS_S + 0.1) == ([(0, 1, 0.0)], 1)
+
+
+def test_a_state_passed_through_on_the_way_to_an_allowed_one_is_one_transition():
+    """Full strokes' leads cross one limb first on purpose: 00 -> 10 (forbidden) -> 11 is the
+    matrix's 00 -> 11. The table plant used to count two unexpected transitions and 0 mm."""
+    stroke = np.array([[0, X, X, 4.0], [X, 0, X, X], [X, X, 0, X], [1.0, X, X, 0]], float)
+    step = PlantParams().step_mm
+    moves, unexpected = _run([(1.0, 2), (3.5, 3), (6.0, 1), (7.0, 0)], 9.0, stroke)
+    assert (moves, unexpected) == ([(0, 3, 4.0 * step), (3, 0, 1.0 * step)], 0)
+    # there and back through a forbidden state: nothing; and a pass to a state neither end allows
+    assert _run([(1.0, 1), (2.0, 0)], 8.0) == ([], 0)
+    # 00 -> 01 -> 11: 11 is forbidden from 00 and from 01
+    assert _run([(1.0, 1), (2.0, 3)], 3.0) == ([(0, 1, 0.0)], 1)  # 00 -> 01 happened; 01 -> 11 a pass now
+    allowed_on = R1_LEFT_ONLY.copy()
+    allowed_on[1, 3] = 1.0  # 01 -> 11 allowed: 00 -> 01 happened, then 01 -> 11 as the table says
+    assert _run([(1.0, 1), (2.0, 3)], 3.0, allowed_on) == ([(0, 1, 0.0), (1, 3, step)], 1)
+    assert _run([(1.0, 1), (2.0, 2)], 3.0) == ([(0, 2, step)], 0)  # 00 -> 01 -> 10: the allowed 00 -> 10
 
 
 def test_noise_is_deterministic_for_a_seed():
