@@ -63,3 +63,16 @@ def test_the_remark_follows_the_cycles(cycles, remark):
         assert c is None
     else:
         assert c.promised_mm == 12.0 and c.remark == remark
+
+
+@pytest.mark.parametrize("cycles, remark", [
+    ([12.0, 12.0], None),
+    ([9.5, 9.5], None),     # within a quarter of it
+    ([8.5, 8.5], "walked 71% of it on the table plant, which moves by the matrix: the plant made other "
+                 "transitions than the gait's"),  # R1 at full strokes before passes: 12.0 of 25.1
+    ([-12.0, -12.0], "walked the other way"),
+])
+def test_on_the_table_plant_a_cycle_far_from_the_matrix_is_remarked_on(cycles, remark):
+    robot = load_robot(ROBOTS / "paper-r1-stroke.toml")  # units = "mm", no noise
+    assert check(robot, "table", 12.0, cycles, 2).remark == remark
+    assert check(robot, "physical", 12.0, cycles, 2).remark == (None if cycles[0] > 0 else remark)

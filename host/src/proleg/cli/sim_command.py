@@ -178,7 +178,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
             listener.stop()
     budget = tick_budget(sim)
     # the run against what the matrix promises for its gait (report/matrix_check.py)
-    agreement = check(robot, args.plant, gaits[args.gait].reward, report.cycle_displacements_mm)
+    agreement = check(robot, args.plant, gaits[args.gait].reward, report.cycle_displacements_mm,
+                      len(gaits[args.gait].states) - 1)
     if args.json:
         out = {**_report_json(robot, report, args.board), **(budget or {}), **conditions_json(robot, args)}
         out["matrix_check"] = agreement.as_json() if agreement else None
