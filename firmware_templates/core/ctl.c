@@ -71,9 +71,13 @@ typedef struct {
     uint8_t lagged;    /* heated CTL_LAG_MS rising without progress in this step: not waited for (ctl.h) */
 #endif
 #if CTL_HELD_UP
-    uint16_t held_up;  /* ticks relaxed (oscillating) at its target level without settling (ctl.h) */
+    uint16_t held_up;  /* ticks relaxed (oscillating) at its target level without settling, or
+                        * falling without a CTL_CLIMB_CDEG drop of its smoothed ψ (ctl.h) */
 #endif
 } ctl_limb_t;
+#if CTL_HELD_UP
+static uint8_t hold_low; /* a falling limb is held up: held limbs hold just above their band (ctl.h) */
+#endif
 
 static ctl_limb_t cl[CFG_N_LIMBS];
 /* A variable, not the macro: comparing against a constant 0 would warn (-Wtype-limits). */
@@ -89,6 +93,9 @@ void ctl_reset(void)
     uint8_t i;
     memset(cl, 0, sizeof cl); /* not heating, no crossings, no stall, no boost */
     look = 0;                 /* the reach watch's looks in the same phase after every reset */
+#if CTL_HELD_UP
+    hold_low = 0;
+#endif
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
         cl[i].level = PSI_UNKNOWN;
@@ -228,6 +235,9 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         if (HOLD_WATCH && level < c->level) {
             c->still = NOT_SEEN; /* dropped from where the hold watch kept it: its rise back is watched afresh */
         }
+#if CTL_HELD_UP
+        c->held_up = 0;
+#endif
         c->level = level;
     }
     if (c->stall != CTL_STALL_NONE) {
@@ -288,6 +298,21 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         }
 #endif
     }
+#if CTL_HELD_UP
+    else if (level > target && look == 0u) {
+        /* falling: the lowest smoothed ψ of this step's fall (reach watch's lo and still,
+         * unused while it falls); no drop of CTL_CLIMB_CDEG below it for CTL_FALL_STALL_MS:
+         * held up (ctl.h) */
+        int16_t m = psi_smooth_cdeg(i);
+        if (c->still == NOT_SEEN || m <= c->lo - CTL_CLIMB_CDEG) {
+            c->lo = m;
+            c->still = 0;
+            c->held_up = 0;
+        } else if (c->held_up < TICKS(CTL_FALL_STALL_MS)) {
+            c->held_up = (uint16_t)(c->held_up + CTL_REACH_EVERY);
+        }
+    }
+#endif
 }
 
 void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t hold_pm,
@@ -297,6 +322,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t move[CFG_N_LIMBS];
     int16_t to_go[CFG_N_LIMBS];
     uint8_t falling = 0, far_fall = 0;
+#if CTL_HELD_UP
+    uint8_t held_up = 0; /* some falling limb is held up (ctl.h, CTL_FALL_STALL_MS) */
+#endif
     uint8_t changing = 0; /* limbs rising or falling */
     sag_t sagging = 0;
     int16_t farthest = -1;
@@ -348,6 +376,11 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 /* Bang-bang hold with hysteresis: heat from below the hold edge up to the
                  * hold top, then off until it sags below the hold edge again. */
                 uint8_t thr = (uint8_t)(level - 1u);
+#if CTL_HELD_UP
+                if (hold_low) {
+                    cl[i].heat = psi_to_go_cdeg(i, thr, 1u) > 0; /* below its band's upper edge (ctl.h) */
+                } else
+#endif
                 if (!ABOVE_HOLD(i, thr, level)) {
                     cl[i].heat = 1;
                     if (SAG_COUNTS(i, thr)) {
@@ -484,6 +517,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             if (cl[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {
                 w = WANT_NOTHING; /* cannot get there: stop heating, let it cool */
             }
+#if CTL_HELD_UP
+            held_up |= (uint8_t)(move[i] == FALL && cl[i].held_up >= TICKS(CTL_FALL_STALL_MS));
+#endif
         }
         a = ctl_limb_actuator(i);
         if (w > want[a]) {
@@ -493,6 +529,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     /* Without CTL_BOOST_MS no limb is ever boosted (boost stays 0: WANT_HEAT is the strongest
      * want), so the ceiling's case is compiled out and heat is "at least WANT_HEAT": the same
      * duties, R1 24 B smaller on the Nano. */
+#if CTL_HELD_UP
+    hold_low = held_up; /* the holds of the next tick */
+#endif
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         duty[i] = (CTL_BOOST_MS && want[i] == WANT_BOOST) ? (uint16_t)CFG_MAX_DUTY_PM : want[i] >= WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;
     }

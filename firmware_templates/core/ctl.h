@@ -185,6 +185,18 @@
  * for two limbs: there the other end is lifted past its band or not into it (R1: 23.5° at full
  * stroke, ≈ 8-10° at the hold), and R1's image has no bytes to spare (14 KB target). */
 #define CTL_HELD_UP PSI_HELD_UP
+/* Held up on the way down (the same builds): a falling limb, its coil off, whose neighbours'
+ * holds keep it in the band above its target level. caterpillar-4 in 1110 -> 1010, learned on
+ * the physical plant: the rear proleg's coil cold at 25 °C, the rear at 11.7-12.4° against
+ * its band's lower edge 11°, held there by the tail's hold (24.6-27°, its band 19..21°) and
+ * the front's (16.6-19°, band 11..13° below it) until STATE_TIMEOUT. Once a falling limb's
+ * smoothed ψ (looked at every CTL_REACH_EVERY ticks) has not dropped CTL_CLIMB_CDEG below its
+ * lowest in this step for CTL_FALL_STALL_MS, every held limb is held low, for as long as one
+ * falling limb is so held up: heated only below its band's upper edge (ψ* + h/2, not the hold
+ * edge h/2 + margin above it), which still keeps its level, and off above it. A coil cooling
+ * from its hold takes 0.2-1 s before its limb moves; 1.5 s leaves that room, and a held-up
+ * limb 5 s of the default 8 s state timeout. */
+#define CTL_FALL_STALL_MS 1500u
 #define CTL_STALL_NONE 0u
 #define CTL_STALL_OSCILLATING 1u
 #define CTL_STALL_UNREACHABLE 2u

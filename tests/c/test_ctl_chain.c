@@ -130,6 +130,57 @@ static void test_a_limb_that_sags_into_the_band_below_its_level_does_not_settle_
     CHECK_EQ(psi_level(1), 1);
 }
 
+#define FALL_STALL_TICKS ((uint32_t)CTL_FALL_STALL_MS * CFG_TICK_HZ / 1000u)
+
+/* `ticks` control ticks of targets (1, 1, 0): tail at 30°, middle at `middle`, the head at
+ * `head` + `rate` degrees a tick. */
+static void falling_head(double middle, double head, double rate, uint32_t ticks, uint16_t duty[CFG_N_ACTUATORS])
+{
+    uint32_t k;
+    for (k = 0; k < ticks; k++) {
+        put(0, 30.0);
+        put(1, middle);
+        put(2, head + rate * (double)k);
+        demand3(1, 1, 0, duty);
+    }
+}
+
+static void test_a_falling_limb_its_neighbours_hold_up_has_them_held_low(void)
+{
+    /* caterpillar-4's rear proleg in 1110 -> 1010: cold, stopped in the band above its target
+     * level by its neighbours' holds. The inchworm's head stopped at 20.5° (band 19..21°). */
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    falling_head(30.0, 30.0, 0.0, 1u, duty);
+    falling_head(30.0, 20.5, 0.0, FALL_STALL_TICKS / 2u, duty);
+    CHECK_EQ(psi_level(2), 1);
+    falling_head(23.0, 20.5, 0.0, 1u, duty); /* the middle 2° below its hold edge (25°) */
+    CHECK_EQ(duty[1], DRIVE);                 /* not held up long enough: the usual hold */
+    falling_head(23.0, 20.5, 0.0, FALL_STALL_TICKS, duty);
+    CHECK_EQ(duty[1], 0); /* held low: clear of its band (upper edge 21°), off */
+    CHECK_EQ(duty[0], 0);
+    CHECK_EQ(duty[2], 0);
+    falling_head(20.8, 20.5, 0.0, 1u, duty); /* into its band: heated back to its edge */
+    CHECK_EQ(duty[1], DRIVE);
+    CHECK_EQ(duty[2], 0); /* the head does not wait warm for it: that is what held it up */
+    CHECK_EQ(psi_level(1), 1);
+    falling_head(23.0, 18.0, 0.0, 20u, duty); /* the head got down: the usual hold again */
+    CHECK_EQ(psi_level(2), 0);
+    CHECK_EQ(duty[1], DRIVE);
+}
+
+static void test_a_limb_that_falls_slowly_does_not_lower_the_holds(void)
+{
+    /* from 30° to 21.5° at 1°/s: a drop of 1° every second, under CTL_FALL_STALL_MS */
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t ticks = (uint32_t)(8.5 * CFG_TICK_HZ);
+    setup();
+    falling_head(30.0, 30.0, 0.0, 1u, duty);
+    falling_head(23.0, 30.0, -1.0 / CFG_TICK_HZ, ticks, duty);
+    CHECK_EQ(psi_level(2), 1);
+    CHECK_EQ(duty[1], DRIVE);
+}
+
 int main(void)
 {
     RUN(test_a_falling_limb_does_not_wait_for_a_sagging_limb_two_sections_away);
@@ -138,5 +189,7 @@ int main(void)
     RUN(test_a_falling_limb_does_not_wait_for_a_neighbour_sagging_far_above_its_band);
     RUN(test_a_limb_its_neighbours_hold_up_into_the_band_above_settles_a_while_after_relaxing);
     RUN(test_a_limb_that_sags_into_the_band_below_its_level_does_not_settle_there);
+    RUN(test_a_falling_limb_its_neighbours_hold_up_has_them_held_low);
+    RUN(test_a_limb_that_falls_slowly_does_not_lower_the_holds);
     return UNIT_EXIT();
 }
