@@ -334,6 +334,87 @@ def test_restarting_gait_0_past_a_dead_coil_still_latches_a_fault(rig, stopped_t
     assert [m.code for m in rig.events(EventKind.SUSPECT)][:1] == [1]  # sma-right, not the healthy coil
 
 
+def test_a_target_reached_and_then_lost_is_demanded_again_and_its_time_counts(rig):
+    """The sequencer reports REACHED once a step, and the guard took a reached step for held
+    even after its target was lost: a host that STARTs the loaded gait 01 -> 00 with the right
+    threshold moved below the resting limb (01 reached at once), moves it back (01 lost), lets
+    the controller heat the dead right coil for 2.9 s, STOPs and repeats, kept that coil above
+    the hold ceiling 73 % of 600 s with no fault. Now the lost target's time counts and the
+    fault latches once the coil has been heated the state timeout. What is not counted: the
+    hold's own re-heat in the ticks before the lost level is debounced (docs/safety.md), at
+    most debounce_ticks + 1 a round."""
+    rig.reset()
+    rig.sim.inject("dead-actuator:sma-right")  # watched here, not by Rig.kill's per-tick bound
+    rig.ticks(300)
+    heated = rounds = 0
+    latched = lambda: any(m.code == StopReason.FAULT for m in rig.events(EventKind.GAIT_STOPPED))  # noqa: E731
+
+    def run(n: int) -> None:
+        nonlocal heated
+        for _ in range(n):
+            rig.ticks(1)
+            if not latched() and rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm:
+                heated += rig.env.tick_us
+
+    def ok(name: str, **fields) -> None:
+        token = rig.send(name, **fields)
+        run(2)
+        m = next(m for m in reversed(rig.log) if m.spec.name in ("ACK", "NACK") and m.token == token)
+        assert m.spec.name == "ACK", (name, fields, m)
+
+    ok("LOAD_GAIT", states=(1, 0))
+    ok("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=600000)
+    first = rig.now_us
+    while rig.now_us - first < 40_000_000 and not latched():
+        rounds += 1
+        ok("STOP")
+        ok("SET_PARAM", param=int(ParamId.PSI_STAR_CDEG), index=1, value=-700)  # the resting right limb reads up
+        run(60)
+        ok("START", gait=GAIT_USER, direction=0)
+        run(60)
+        ok("SET_PARAM", param=int(ParamId.PSI_STAR_CDEG), index=1, value=2000)  # and down again: 01 lost
+        for _ in range(11):
+            run(250)
+            rig.send("PING")
+        run(150)
+        rig.send("STOP")
+        run(800)
+    faults = rig.events(EventKind.FAULT)
+    assert latched() and faults[0].code == FaultCode.STATE_TIMEOUT, "no latched fault: the dead coil is heated for ever"
+    assert rounds <= 4
+    debounce = rig.robot.control.debounce_ticks
+    assert heated <= rig.timeout_us + rounds * (debounce + 1) * rig.env.tick_us, (heated, rounds)
+
+
+@pytest.mark.parametrize("run_ms", [3000, 4500])
+def test_restarting_gait_0_after_the_fallback_does_not_bring_the_dead_coil_back(rig, run_ms):
+    """The fallback cleared the fault itself and a START of a built-in gait went back to the
+    build's map: restarted every 3-4.5 s for 120 s, R1's dead right coil was heated 58-69 s,
+    each fault ending in another fallback rather than a latch. Now the coil given up stays
+    given up: gait 0 is refused (NOT_ALLOWED, detail 3) and the coil is heated only until the
+    first fault, the state timeout (Rig.kill's bound, checked every tick)."""
+    rig.reset()
+    rig.kill("sma-right")
+    rig.ticks(200)
+    heated = 0
+    refused = []
+    for _ in range(60_000 // run_ms):
+        token = rig.send("START", gait=0, direction=0)
+        for _ in range(run_ms // 250):
+            for _ in range(250):
+                rig.ticks(1)
+                heated += rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm
+            rig.send("PING")
+        m = next(m for m in reversed(rig.log) if m.spec.name in ("ACK", "NACK") and m.token == token)
+        if m.spec.name == "NACK":
+            refused.append((m.error, m.detail))
+        rig.send("STOP")
+        rig.ticks(1)
+    assert rig.events(EventKind.FALLBACK), "R1 falls back without the right coil"
+    assert refused and set(refused) == {(ErrorCode.NOT_ALLOWED, 3)}, refused
+    assert heated * rig.env.tick_us <= rig.timeout_us + 2 * rig.env.tick_us
+
+
 def test_holding_a_state_at_the_hold_duty_is_not_ended_by_the_envelope(rig):
     """The one-coil hold of C_L2 (10 -> 11 -> 10) must live inside the budget: a gait that
     merely holds the left limb up for far longer than max_on runs on without an on-limit."""

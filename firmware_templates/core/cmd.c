@@ -110,6 +110,13 @@ static void cmd_start(void)
         nack(PROTO_ERR_NOT_ALLOWED, 1);
         return;
     }
+    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) {
+        /* safety: a built-in gait needs the coil the fallback gave up, which stays given up until
+         * the operator clears it (CLEAR(FAULTS), fallback.h): restarted by a host, it was heated
+         * up to the state timeout again at every START, and fell back again */
+        nack(PROTO_ERR_NOT_ALLOWED, 3);
+        return;
+    }
     if (dir > PROTO_DIR_MINUS_X && (dir != PROTO_DIR_UNSTATED || gait != PROTO_GAIT_USER)) {
         nack(PROTO_ERR_OUT_OF_RANGE, 2); /* +x, -x, or (the loaded gait only) unstated */
         return;
@@ -137,9 +144,6 @@ static void cmd_start(void)
         }
     }
 #endif
-    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) { /* a built-in gait needs the */
-        limbmap_init(); /* robot as built: after a fallback, try the whole robot again (once accepted) */
-    }
     drive_started(gait, dir);
     fault_watchdog_rearm();
     ack();

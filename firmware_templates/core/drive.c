@@ -16,14 +16,14 @@
 #include "tx.h"
 
 static uint8_t gait, dir; /* gait last started */
-static uint8_t reached;   /* the sequencer reported REACHED this tick */
+static uint8_t seen;      /* the sequencer's events this tick (SEQ_EV_*; 0 when it did not run) */
 typedef char drive_dir_starts_at_zero[PROTO_DIR_PLUS_X == 0 ? 1 : -1];
 
 void drive_init(void)
 {
     INIT_ZERO(gait);
     INIT_ZERO(dir); /* PROTO_DIR_PLUS_X */
-    INIT_ZERO(reached);
+    INIT_ZERO(seen);
 }
 
 #if defined(__GNUC__)
@@ -81,7 +81,7 @@ void drive_step(void)
     uint8_t ev, step;
     cfg_state_t target;
     uint16_t measured = imucheck_measured();
-    reached = 0;
+    seen = 0;
     if (!seq_running() || measured == IMUCHECK_UNKNOWN) {
         return;
     }
@@ -91,8 +91,8 @@ void drive_step(void)
      * edges (psi_settled): until then the sequencer is shown a state that is not
      * the target (target ^ 1 differs from target by construction). */
     ev = seq_tick(all_settled() ? (cfg_state_t)measured : (cfg_state_t)(target ^ 1u));
+    seen = ev;
     if (ev & SEQ_EV_REACHED) {
-        reached = 1;
         tx_event(PROTO_EV_STATE_REACHED, step, target);
     }
     if (ev & SEQ_EV_TIMEOUT) {
@@ -125,7 +125,11 @@ void drive_apply(void)
     }
     /* safety: the step guard (safety.h) runs on real time from the first demand of an
      * unreached target; a START, STOP or ESTOP does not reset it. */
-    guard = guard_tick((uint8_t)(seq_running() && !seq_holding() && !fault_latched()), reached, hits, &act);
+    /* demanding: away from the target (not reached yet, or lost since: the sequencer reports
+     * REACHED once a step, so a lost target's time counts until the step moves on), or just
+     * moved on to the next */
+    guard = guard_tick((uint8_t)((seen & (SEQ_EV_AWAY | SEQ_EV_ADVANCED)) && seq_running() && !fault_latched()),
+                       (uint8_t)(seen & SEQ_EV_REACHED), hits, &act);
     if (guard == GUARD_ON_LIMIT && !fault_latched()) {
         fault_raise(PROTO_FAULT_SMA_ON_LIMIT, act); /* repeated hits on one step: latched */
         return;

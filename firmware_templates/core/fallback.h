@@ -4,7 +4,8 @@
  * coil of the limb off its target) and SMA_ON_LIMIT (that coil) it names the actuator it suspects
  * and the failed transition (EVENT SUSPECT). With CFG_FALLBACK (robot file [control]
  * fallback, on by default) and a fallback gait for that actuator and the running direction
- * (gait_table.c, proleg.limbloss), it then switches by itself, once per boot: the map
+ * (gait_table.c, proleg.limbloss), it then switches by itself, once until the coil is
+ * taken back (limbmap.h: SET_ACTUATOR_MAP with no entries, or a reset): the map
  * becomes the fallback's, the fallback gait is loaded (it replaces a LOAD_GAIT gait) and
  * started from the measured state, the fault is cleared, and EVENT FALLBACK + GAIT_STARTED
  * say so. A second loss, one without a fallback, or one in a loaded gait whose way START left

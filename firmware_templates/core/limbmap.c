@@ -7,9 +7,6 @@ static const uint8_t compiled[CFG_N_LIMBS] ROM = CFG_LIMB_ACTUATOR;
 static uint8_t map[CFG_N_LIMBS]; /* both set by limbmap_init (no .data bytes in flash) */
 static uint8_t lost;
 
-#if defined(__GNUC__)
-__attribute__((noinline)) /* smaller out of line (measured) */
-#endif
 void limbmap_init(void)
 {
     limbmap_use(LIMBMAP_NONE, compiled);
@@ -55,7 +52,7 @@ uint8_t limbmap_set(const uint8_t *actuators, uint8_t n, uint16_t *bad)
             map[i] = actuators[i];
         }
     } else {
-        limbmap_use(lost, compiled); /* the compiled map; what was lost stays lost */
+        limbmap_use(LIMBMAP_NONE, compiled); /* the build's map, a coil the fallback gave up taken back (limbmap.h) */
     }
     return 0;
 }

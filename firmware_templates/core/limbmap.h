@@ -5,8 +5,12 @@
  * says which coil the controller heats for a limb; the safety envelope (duty, on-time,
  * cool-down, thermal budget: sma.c) stays per actuator and is never widened by a map.
  * Limb loss (switching to a fallback map): fallback.h. A fallback's map serves the fallback
- * gait only: START of a built-in gait goes back to the build's map (cmd.c), so a robot whose
- * coil was wrongly suspected, or has been mended, walks as built again.
+ * gait (and gaits the host loads) only: START of a built-in gait is refused while a coil is
+ * given up (NACK NOT_ALLOWED, detail 3: cmd.c), and SET_ACTUATOR_MAP with no entries (or a
+ * reset) takes it back, the build's map again: the operator's word that the coil was wrongly
+ * suspected, or has been mended. START used to go back to the build's map by itself: a host
+ * restarting gait 0 every few seconds heated a dead coil up to the state timeout at every
+ * START, 58-73 % of the time, each fault ending in another fallback instead of a latch.
  */
 #ifndef PROLEG_LIMBMAP_H
 #define PROLEG_LIMBMAP_H

@@ -285,7 +285,7 @@ uint8_t seq_tick(cfg_state_t measured)
         s.running = 0;
         ev |= SEQ_EV_TIMEOUT;
     }
-    return ev;
+    return (uint8_t)(ev | SEQ_EV_AWAY);
 }
 
 uint8_t seq_running(void)

@@ -31,6 +31,7 @@
 #define SEQ_EV_ADVANCED 0x02u /* held long enough: next step */
 #define SEQ_EV_CYCLE 0x04u    /* a whole cycle completed */
 #define SEQ_EV_TIMEOUT 0x08u  /* step not completed in time: stopped */
+#define SEQ_EV_AWAY 0x10u     /* not at the target: before it is reached, or after it was lost */
 
 #define SEQ_OK 0
 #define SEQ_ERR_LENGTH (-1)    /* fewer than 2 or more than CFG_MAX_LOADED_STEPS steps */

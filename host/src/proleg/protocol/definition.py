@@ -98,7 +98,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
                 "(0xFF): not stated, not climb-guarded", Direction),
         ),
         "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED (detail 0: a fault is latched, 1: a gait "
-        "runs, 2: the state is not known: no reading from every IMU yet) / TOO_STEEP (the ground rises more than "
+        "runs, 2: the state is not known: no reading from every IMU yet, 3: a built-in gait while the fallback "
+        "has given up a coil, until SET_ACTUATOR_MAP with no entries takes it back) / TOO_STEEP (the ground rises more than "
         "the build's max_climb_deg in the gait's direction: detail = that climb in 0.01°).",
         reply="ACK",
     ),
@@ -261,7 +262,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
         0x14,
         "SET_ACTUATOR_MAP",
         "h2r",
-        (_TOKEN, Field("actuators", "u8", "actuator index per limb, first limb first; empty: the build's map",
+        (_TOKEN, Field("actuators", "u8", "actuator index per limb, first limb first; empty: the build's map "
+                       "(a coil the fallback gave up taken back)",
                        max_count="limbs")),
         "Set which actuator raises each limb (the safety envelope stays per actuator); NACK NOT_ALLOWED "
         "while a gait runs, OUT_OF_RANGE (detail = limb index; 0xFFFF: not one per limb) for a bad value.",
