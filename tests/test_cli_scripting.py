@@ -472,7 +472,13 @@ def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(ca
 
 
 @pytest.mark.parametrize("argv, text", [
-    (("set-param", "--sim", "paper-r1", "drive_duty", "9000"), "SAFETY_LIMIT (beyond the safety envelope"),
+    (("set-param", "--sim", "paper-r1", "drive_duty", "9000"), "SAFETY_LIMIT (above the build's duty ceiling, "
+                                                               "the robot file's [safety] max_duty"),
+    # the refusal names the limit it met (it said only "e.g. max_duty for a duty")
+    (("set-param", "--sim", "paper-r1", "state_timeout_ms", "9000"), "longer than the build's [safety] "
+                                                                     "state_timeout_ms (it may only be shortened)"),
+    (("set-param", "--sim", "paper-r1", "min_cooldown_ms", "100"), "shorter than the build's [safety] "
+                                                                   "min_cooldown_ms"),
     (("set-param", "--sim", "paper-r1", "drive_duty", "-1"), "OUT_OF_RANGE (outside the parameter's range"),
     (("run", "--sim", "paper-r1", "--gait", "user", "--duration", "1"), "NO_GAIT (no gait is loaded"),
 ])

@@ -63,6 +63,18 @@ _OUT_OF_RANGE = {
 }
 
 
+#: SET_PARAM's SAFETY_LIMIT, by the parameter (the NACK's detail; core/param.c's safe bounds)
+_SAFETY_LIMIT = {
+    int(ParamId.DRIVE_DUTY): "above the build's duty ceiling, the robot file's [safety] max_duty",
+    int(ParamId.HOLD_DUTY): "above the build's duty ceiling, the robot file's [safety] max_duty",
+    int(ParamId.STATE_TIMEOUT_MS): "longer than the build's [safety] state_timeout_ms (it may only be shortened)",
+    int(ParamId.MAX_ON_MS): "longer than the build's [safety] max_on_ms (it may only be shortened)",
+    int(ParamId.MIN_COOLDOWN_MS): "shorter than the build's [safety] min_cooldown_ms (it may only be lengthened)",
+    int(ParamId.LINK_WATCHDOG_MS): "0 (off) or longer than the build's [safety] link_watchdog_ms (it may only be "
+                                   "shortened)",
+}
+
+
 def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     """What a NACK's detail means: a measurement, or why the board would not."""
     if error == ErrorCode.NOT_ALLOWED:
@@ -72,8 +84,8 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
             return "no gait is loaded: load one first (proleg load-gait; it lasts until the board resets)"
         return f"the board has no gait {detail} in that direction"
     if command == "SET_PARAM" and error == ErrorCode.SAFETY_LIMIT:
-        return ("beyond the safety envelope the firmware was built with (the robot file's [safety], e.g. max_duty "
-                "for a duty): at run time the envelope can be narrowed, never widened")
+        return (_SAFETY_LIMIT.get(detail, "beyond the safety envelope the firmware was built with (the robot file's "
+                                          "[safety])") + ": at run time the envelope can be narrowed, never widened")
     if error == ErrorCode.ESTOP_LATCHED:
         return ("the E-stop is latched: every coil stays off until it is released (CLEAR ESTOP: proleg "
                 "console key c, or RobotClient.clear)")
