@@ -114,3 +114,28 @@ def test_a_truth_file_merges_its_noise_into_the_robots_own_plant_table(name, tmp
     step = robot.plant.step_mm if robot.units == "steps" else 1.0
     assert np.all(np.abs(tt.reward - t.reward * step) <= 0.1 * np.abs(t.reward * step) + 1e-3)
     assert np.any(tt.reward != t.reward * step)  # moved, hidden from a learner that knows the file
+
+
+@pytest.mark.long
+def test_caterpillar_learned_on_the_physical_plant_builds_and_walks_faster_both_ways(tmp_path):
+    """The whole lab loop on the four-limb example, physical plant: explore (R = 5), write the
+    learned file, then walk its gait 0 and the hand-made matrix's for 40 s each way. The
+    exploration used to stop in 1110 -> 1010 (the rear proleg held up by its neighbours'
+    holds, core/ctl.h CTL_FALL_STALL_MS) and the learned file to fail to build (its per-gait
+    climb limits named the old gaits); the learned gaits must cover at least as much ground as
+    the hand-made ones, with no fault."""
+    from proleg.cli.main import main
+    from proleg.report import SimSession
+    from proleg.sim.simulators import open_host_sim
+
+    robot_path = ROBOTS / "caterpillar-4.toml"
+    log, out = tmp_path / "trials.jsonl", tmp_path / "learned.toml"
+    assert main(["learn", str(robot_path), "--sim", "--plant", "physical", "--log", str(log), "--repeats", "5",
+                 "--seed", "2", "--out", str(out), "-q"]) == 0
+    for direction, sign in (("+x", 1.0), ("-x", -1.0)):
+        ground = {}
+        for name, path in (("hand", robot_path), ("learned", out)):
+            run = SimSession(open_host_sim(load_robot(path))).run_gait(direction, 0, 40.0)
+            assert run.cycles >= 2 and not run.faults, (name, direction, run)
+            ground[name] = sign * run.displacement_mm
+        assert ground["learned"] >= 0.95 * ground["hand"] > 0, (direction, ground)
