@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from proleg.errors import SimError
-from proleg.sim.plant import PASS_S, LimbParams, Plant, PlantParams
+from proleg.sim.plant import LimbParams, Plant, PlantParams
 from proleg.sim.sma import Hysteresis, SmaParams, cooling_branch, heating_branch
 
 R1 = np.array([[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]], float)
@@ -246,26 +246,32 @@ def _run(script, seconds, rewards=R1_LEFT_ONLY):
 
 
 def test_a_forbidden_transition_that_happens_earns_nothing_and_is_counted():
-    # the table says the right end cannot move (00 -> 01 forbidden); held past PASS_S, it happened
-    assert _run([(1.0, 1)], 1.0 + PASS_S - 0.1) == ([], 0)  # not yet: it may be a pass
-    assert _run([(1.0, 1)], 1.0 + PASS_S + 0.1) == ([(0, 1, 0.0)], 1)
+    # the table says the right end cannot move (00 -> 01 forbidden): it happened, at once
+    assert _run([(1.0, 1)], 1.1) == ([(0, 1, 0.0)], 1)
 
 
 def test_a_state_passed_through_on_the_way_to_an_allowed_one_is_one_transition():
-    """Full strokes' leads cross one limb first on purpose: 00 -> 10 (forbidden) -> 11 is the
-    matrix's 00 -> 11. The table plant used to count two unexpected transitions and 0 mm."""
+    """Full strokes' leads cross one limb first on purpose: 00 -> 10 -> 11, both legs forbidden,
+    is the matrix's 00 -> 11. The table plant counted two unexpected transitions and 0 mm."""
     stroke = np.array([[0, X, X, 4.0], [X, 0, X, X], [X, X, 0, X], [1.0, X, X, 0]], float)
     step = PlantParams().step_mm
     moves, unexpected = _run([(1.0, 2), (3.5, 3), (6.0, 1), (7.0, 0)], 9.0, stroke)
     assert (moves, unexpected) == ([(0, 3, 4.0 * step), (3, 0, 1.0 * step)], 0)
-    # there and back through a forbidden state: nothing; and a pass to a state neither end allows
-    assert _run([(1.0, 1), (2.0, 0)], 8.0) == ([], 0)
-    # 00 -> 01 -> 11: 11 is forbidden from 00 and from 01
-    assert _run([(1.0, 1), (2.0, 3)], 3.0) == ([(0, 1, 0.0)], 1)  # 00 -> 01 happened; 01 -> 11 a pass now
+    assert _run([(1.0, 2)], 3.0, stroke) == ([(0, 2, 0.0)], 1)  # held there: it happened (so far)
+    assert _run([(1.0, 1), (2.0, 0)], 3.0) == ([(0, 1, 0.0), (1, 0, 0.0)], 2)  # there and back: no pass
+    # a second leg the table allows is its own transition (caterpillar-4's proleg lifted past
+    # its second edge: what the firmware's step really did on this body, as before)
     allowed_on = R1_LEFT_ONLY.copy()
-    allowed_on[1, 3] = 1.0  # 01 -> 11 allowed: 00 -> 01 happened, then 01 -> 11 as the table says
+    allowed_on[1, 3] = 1.0  # 00 -> 01 forbidden, 01 -> 11 allowed
     assert _run([(1.0, 1), (2.0, 3)], 3.0, allowed_on) == ([(0, 1, 0.0), (1, 3, step)], 1)
-    assert _run([(1.0, 1), (2.0, 2)], 3.0) == ([(0, 2, step)], 0)  # 00 -> 01 -> 10: the allowed 00 -> 10
+    # both legs forbidden and the whole too (00 -> 01 -> 11 on R1_LEFT_ONLY): two unexpected
+    assert _run([(1.0, 1), (2.0, 3)], 3.0) == ([(0, 1, 0.0), (1, 3, 0.0)], 2)
+    # both legs forbidden, the whole allowed, but a limb past its end level and back (00 -> 11
+    # -> 10: the right end lifted and dropped): what happened, not a pass
+    only_left = np.where(np.eye(4) > 0, 0.0, X)
+    only_left[0, 2] = 1.0  # 00 -> 10 allowed, nothing else
+    assert _run([(1.0, 3), (2.0, 2)], 3.0, only_left) == ([(0, 3, 0.0), (3, 2, 0.0)], 2)
+    assert _run([(1.0, 3), (2.0, 2)], 3.0, stroke) == ([(0, 3, 4.0 * step), (3, 2, 0.0)], 1)  # 00 -> 11 allowed
 
 
 def test_noise_is_deterministic_for_a_seed():

@@ -19,13 +19,12 @@ Chain per step, for a PWM duty held constant over the step:
    the firmware's classifier with hysteresis and debounce is not modelled here);
 6. robot state index (mixed radix, first limb most significant); when it changes, the change
    and any further change within ``simultaneous_s`` (30 ms) form one transition a → b, and
-   displacement += T_true[a][b] · step_mm + N(0, noise_mm²). A change to a state b that
-   T_true forbids from a (NaN) is a pass: the limbs of a step that the firmware staggers on
-   purpose (full strokes' rise and fall leads cross one limb first, up to seconds before the
-   others) pass through it on the way to a state c that T_true allows from a, and a → c is
-   the transition. A forbidden state held ``PASS_S`` (4 s), or left for another state that T_true
-   forbids from a and from b, physically happened: a → b earns 0 and is counted in
-   ``unexpected_transitions``.
+   displacement += T_true[a][b] · step_mm + N(0, noise_mm²). A transition that T_true forbids
+   (NaN) but that physically happened earns 0 and is counted in ``unexpected_transitions``,
+   unless the next one is forbidden too, T_true allows the two as one (a → b → c, a → c
+   allowed) and every limb's level in b lies between a's and c's: that was a pass, the limbs
+   of one step crossing apart (full strokes' rise and fall leads cross one limb first on
+   purpose, up to seconds before the others), booked as a → c when c is reached.
 
 Not modelled: the quasi-static friction alternative of SPEC §5 (rewards come only from the
 ground-truth matrix), latent heat, the coil's stress dependence of the transformation
@@ -62,11 +61,6 @@ from .plant_params import (  # noqa: F401 (re-exported: the plant's parameters l
     true_rewards_from_robot,
 )
 from .sma import Hysteresis
-
-#: How long the table plant waits in a state the matrix forbids from the last one before it
-#: counts the change as having happened (unexpected): a full stroke's rise lead crosses first
-#: and the others follow within CTL_SAG_WAIT_MS + CTL_CLIMB_MAX_MS (3.5 s, core/ctl.h).
-PASS_S = 4.0
 
 @dataclass(frozen=True)
 class Transition:
@@ -165,7 +159,6 @@ class Plant:
         self._state = self._classify()
         self._committed = self._state
         self._pending_since: float | None = None
-        self._passing: tuple[float, int] | None = None  # (when, via): a forbidden state passed through
         self._displacement = 0.0
         self._transitions: list[Transition] = []
         self._unexpected = 0
@@ -243,34 +236,34 @@ class Plant:
                 self._pending_since = self._t
         if self._pending_since is not None and self._t - self._pending_since >= self._window - 1e-12:
             self._commit()
-        elif self._passing is not None and self._t - self._passing[0] >= PASS_S:
-            self._record(self._passing[0], self._committed, self._passing[1], None)  # held: it happened
 
     def _commit(self) -> None:
         a, b = self._committed, self._state
         t0 = self._pending_since
         self._pending_since = None
-        if self._passing is not None:
-            t_pass, via = self._passing
-            if a == b or self._reward[a][b] is not None:
-                self._passing = None  # back where it was, or through `via` to a state a leads to
-                t0 = t_pass
-            elif self._reward[via][b] is not None:
-                self._record(t_pass, a, via, None)  # a -> via happened; via -> b below
-                a = via
-            else:
-                self._record(t_pass, a, via, None)  # a -> via happened; via -> b is a pass again (below)
-                a = via
         if a == b:
-            return  # changed and changed back within the window (or a pass): no transition
-        if self._reward[a][b] is None:
-            self._passing = (t0, b)  # a pass, unless held or left for nothing a allows (above)
+            return  # changed and changed back within the window: no transition
+        last = self._transitions[-1] if self._transitions else None
+        if (self._reward[a][b] is None and last is not None and last.dst == a and self._reward[last.src][a] is None
+                and last.src != b and self._reward[last.src][b] is not None and self._between(last.src, a, b)):
+            # a pass: both legs forbidden, the whole allowed, every limb on its way (a staggered
+            # step): one transition
+            self._transitions.pop()
+            self._unexpected -= 1
+            self._committed = last.src
+            self._record(last.t_s, last.src, b, self._reward[last.src][b])
             return
         self._record(t0, a, b, self._reward[a][b])
 
+    def _between(self, a: int, via: int, c: int) -> bool:
+        """Every limb's level in ``via`` lies between its levels in ``a`` and ``c``: the limbs of
+        a → c crossing apart, none past where the step takes it (not a proleg lifted past its
+        second edge and back: that is what the step did on this body, as it happened)."""
+        la, lv, lc = (limb_levels(x, self.levels) for x in (a, via, c))
+        return all(min(x, z) <= y <= max(x, z) for x, y, z in zip(la, lv, lc))
+
     def _record(self, t0: float, a: int, b: int, r: float | None) -> None:
         """Transition a → b from ``t0``: ``r`` mm (None: one T_true forbids, 0 mm, unexpected)."""
-        self._passing = None
         if r is None:
             self._unexpected += 1
             r = 0.0
