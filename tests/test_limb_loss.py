@@ -13,7 +13,7 @@ from proleg.limbloss import compiled_map, fallback, remap, remapped_table
 from proleg.link.client import CommandRefused, Received, RobotClient
 from proleg.link.listeners import Listener
 from proleg.link.sim_link import SimLink
-from proleg.protocol.definition import GAIT_USER, ErrorCode, EventKind
+from proleg.protocol.definition import GAIT_USER, ClearWhat, ErrorCode, EventKind
 from proleg.report import run_gait_on
 from proleg.robot import load_robot
 from proleg.sim.simulators import open_host_sim
@@ -318,7 +318,7 @@ def test_a_coil_given_up_stays_given_up_until_the_operator_takes_it_back():
     m = client.request("GET_ACTUATOR_MAP")
     assert tuple(m.actuators) == (0, 0) and m.lost == 1  # the fallback's remap while it runs
     client.request("STOP")
-    client.clear()
+    client.request("CLEAR", what=int(ClearWhat.FAULTS))  # a bare CLEAR: no fault is latched, nothing taken back
     for gait in (0, 77):  # a built-in gait, or none such: refused for the coil given up
         with pytest.raises(CommandRefused) as refused:
             client.request("START", gait=gait, direction=0)
@@ -328,7 +328,8 @@ def test_a_coil_given_up_stays_given_up_until_the_operator_takes_it_back():
     assert tuple(m.actuators) == (0, 0) and m.lost == 1  # the dead coil is still given up
     client.request("START", gait=GAIT_USER, direction=0)  # the fallback gait runs on
     client.request("STOP")
-    client.request("SET_ACTUATOR_MAP", actuators=())  # the operator takes the coil back
+    assert client.clear()  # the operator's clear (console key c) takes the coil back: SET_ACTUATOR_MAP, no entries
+    assert not client.clear()  # nothing left to take back
     m = client.request("GET_ACTUATOR_MAP")
     assert tuple(m.actuators) == (0, 1) and m.lost == 0xFF
     client.request("START", gait=0, direction=0)

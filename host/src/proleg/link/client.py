@@ -65,6 +65,9 @@ from .direction import direction_code
 from .received import LinkStats, Received
 from .replies import CommandRefused, FirmwareStats, ReplyTimeout, RobotInfo
 
+#: ACTUATOR_MAP's ``lost`` when no coil is given up (core/limbmap.h LIMBMAP_NONE)
+LIMBMAP_NONE = 0xFF
+
 __all__ = [
     "CommandRefused",
     "FirmwareStats",
@@ -209,8 +212,21 @@ class RobotClient:
     def estop(self) -> None:
         self.request("ESTOP")
 
-    def clear(self, what: ClearWhat | int = ClearWhat.FAULTS | ClearWhat.ESTOP) -> None:
+    def clear(self, what: ClearWhat | int = ClearWhat.FAULTS | ClearWhat.ESTOP) -> bool:
+        """CLEAR ``what``. The operator's word on faults also takes back a coil the firmware's
+        fallback gave up (SET_ACTUATOR_MAP with no entries, while no gait runs): the firmware
+        refuses built-in gaits without it (NOT_ALLOWED, detail 3; docs/safety.md), and a host
+        restarting a gait never clears. Returns whether a coil was taken back."""
         self.request("CLEAR", what=int(what))
+        if not int(what) & ClearWhat.FAULTS:
+            return False
+        try:
+            if self.request("GET_ACTUATOR_MAP").lost == LIMBMAP_NONE:
+                return False
+            self.request("SET_ACTUATOR_MAP", actuators=())
+        except CommandRefused:  # a gait runs (the fallback's): it keeps the coil given up
+            return False
+        return True
 
     def load_gait(self, states: Sequence[int]) -> None:
         """Store a user gait: a closed walk without the repeated start state."""

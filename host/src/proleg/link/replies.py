@@ -37,9 +37,9 @@ _NOT_ALLOWED = {
               2: "the limbs' state is not known yet: the board has no reading from every IMU (it has just "
                  "started, or an IMU is bad); wait for telemetry with a known state",
               3: "the firmware's fallback gave up a coil (EVENT FALLBACK), and a built-in gait needs it: run "
-                 "the fallback gait (START the loaded gait), or once the coil is mended take it back with "
-                 "SET_ACTUATOR_MAP and no entries (RobotClient.request(\"SET_ACTUATOR_MAP\", actuators=())), "
-                 "or reset the board"},
+                 "the fallback gait (START the loaded gait), or once the coil is mended (or was wrongly "
+                 "suspected) take it back: clear faults (console key c, RobotClient.clear: SET_ACTUATOR_MAP "
+                 "with no entries) or reset the board"},
     "LOAD_GAIT": {0: "a gait is running: STOP it first"},
     "SET_ACTUATOR_MAP": {0: "a gait is running: STOP it first"},
     "CALIBRATE_LEVEL": {1: "a gait is running", 2: "an IMU is faulty", 3: "a fault is latched",
