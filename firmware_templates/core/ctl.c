@@ -300,16 +300,22 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
     }
 #if CTL_HELD_UP
     else if (level > target && look == 0u) {
-        /* falling: the lowest smoothed ψ of this step's fall (reach watch's lo and still,
-         * unused while it falls); no drop of CTL_CLIMB_CDEG below it for CTL_FALL_STALL_MS:
-         * held up (ctl.h) */
-        int16_t m = psi_smooth_cdeg(i);
-        if (c->still == NOT_SEEN || m <= c->lo - CTL_CLIMB_CDEG) {
-            c->lo = m;
-            c->still = 0;
+        /* falling, within 2° of its crossing (psi_to_go_cdeg's fall edges; farther, its coil may
+         * still be cooling to Ms): the lowest smoothed ψ of this step's fall there (the reach
+         * watch's lo and still, unused while it falls); no drop of CTL_CLIMB_CDEG below it for
+         * CTL_FALL_STALL_MS: held up (ctl.h) */
+        if (progress == PSI_FAR) {
+            c->still = NOT_SEEN;
             c->held_up = 0;
-        } else if (c->held_up < TICKS(CTL_FALL_STALL_MS)) {
-            c->held_up = (uint16_t)(c->held_up + CTL_REACH_EVERY);
+        } else {
+            int16_t m = psi_smooth_cdeg(i);
+            if (c->still == NOT_SEEN || m <= c->lo - CTL_CLIMB_CDEG) {
+                c->lo = m;
+                c->still = 0;
+                c->held_up = 0;
+            } else if (c->held_up < TICKS(CTL_FALL_STALL_MS)) {
+                c->held_up = (uint16_t)(c->held_up + CTL_REACH_EVERY);
+            }
         }
     }
 #endif

@@ -189,9 +189,11 @@
  * holds keep it in the band above its target level. caterpillar-4 in 1110 -> 1010, learned on
  * the physical plant: the rear proleg's coil cold at 25 °C, the rear at 11.7-12.4° against
  * its band's lower edge 11°, held there by the tail's hold (24.6-27°, its band 19..21°) and
- * the front's (16.6-19°, band 11..13° below it) until STATE_TIMEOUT. Once a falling limb's
- * smoothed ψ (looked at every CTL_REACH_EVERY ticks) has not dropped CTL_CLIMB_CDEG below its
- * lowest in this step for CTL_FALL_STALL_MS, every held limb is held low, for as long as one
+ * the front's (16.6-19°, band 11..13° below it) until STATE_TIMEOUT. Once a falling limb
+ * within 2° of its crossing (farther, its coil may still be cooling to Ms: in a hot enclosure
+ * for seconds, and holding the others low then only shortened their steps) has not had its
+ * smoothed ψ (looked at every CTL_REACH_EVERY ticks) drop CTL_CLIMB_CDEG below its lowest there
+ * for CTL_FALL_STALL_MS, every held limb is held low, for as long as one
  * falling limb is so held up: heated only below its band's upper edge (ψ* + h/2, not the hold
  * edge h/2 + margin above it), which still keeps its level, and off above it. A coil cooling
  * from its hold takes 0.2-1 s before its limb moves; 1.5 s leaves that room, and a held-up

@@ -169,6 +169,17 @@ static void test_a_falling_limb_its_neighbours_hold_up_has_them_held_low(void)
     CHECK_EQ(duty[1], DRIVE);
 }
 
+static void test_a_falling_limb_stopped_far_above_its_band_does_not_lower_the_holds(void)
+{
+    /* its coil still cooling to Ms (a hot enclosure): 4° above its band for twice the watch */
+    uint16_t duty[CFG_N_ACTUATORS];
+    setup();
+    falling_head(30.0, 30.0, 0.0, 1u, duty);
+    falling_head(23.0, 25.0, 0.0, 2u * FALL_STALL_TICKS, duty);
+    CHECK_EQ(psi_level(2), 1);
+    CHECK_EQ(duty[1], DRIVE); /* the usual hold */
+}
+
 static void test_a_limb_that_falls_slowly_does_not_lower_the_holds(void)
 {
     /* from 30° to 21.5° at 1°/s: a drop of 1° every second, under CTL_FALL_STALL_MS */
@@ -190,6 +201,7 @@ int main(void)
     RUN(test_a_limb_its_neighbours_hold_up_into_the_band_above_settles_a_while_after_relaxing);
     RUN(test_a_limb_that_sags_into_the_band_below_its_level_does_not_settle_there);
     RUN(test_a_falling_limb_its_neighbours_hold_up_has_them_held_low);
+    RUN(test_a_falling_limb_stopped_far_above_its_band_does_not_lower_the_holds);
     RUN(test_a_limb_that_falls_slowly_does_not_lower_the_holds);
     return UNIT_EXIT();
 }
