@@ -260,6 +260,8 @@ class FakeBoard:
             elif msg.param == ParamId.HOLD_MS:
                 self.hold_ms = max(0, msg.value)
             self._ack(msg)
+        elif name == "GET_ACTUATOR_MAP":  # the build's map, no coil given up (no fallback here)
+            self._send(Message.new("ACTUATOR_MAP", token=msg.token, lost=0xFF, actuators=tuple(range(self.limbs))))
         elif name == "SET_TELEMETRY_RATE":
             if msg.hz > self.tick_hz:
                 return self._nack(msg, ErrorCode.OUT_OF_RANGE, 0)

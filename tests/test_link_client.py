@@ -39,8 +39,9 @@ def test_commands_carry_fresh_tokens_and_wait_for_their_ack():
     client.estop()
     client.clear()
     names = [m.name for m in board.received]
+    # the clear asks whether a coil is given up (the fallback's), to take it back
     assert names == ["GET_INFO", "PING", "START", "STOP", "SET_TELEMETRY_RATE", "SET_PARAM", "LOAD_GAIT",
-                     "START", "ESTOP", "CLEAR"]
+                     "START", "ESTOP", "CLEAR", "GET_ACTUATOR_MAP"]
     tokens = [m.token for m in board.received]
     assert len(set(tokens)) == len(tokens) and 0 not in tokens
     assert board.drive_duty == 5000 and board.telemetry_hz == 100 and board.user_gait == (0, 2, 3, 1)
