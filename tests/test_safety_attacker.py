@@ -386,6 +386,46 @@ def test_a_target_reached_and_then_lost_is_demanded_again_and_its_time_counts(ri
     assert heated <= rig.timeout_us + rounds * (debounce + 1) * rig.env.tick_us, (heated, rounds)
 
 
+def test_a_threshold_moved_each_step_does_not_make_a_dead_coil_progress(rig):
+    """One START, then a host alternates the right threshold: 6 s at 20° (the dead right coil
+    heated towards 01), 1 s at -7° (the resting limb reads up: 01 "reached", and the coil that
+    heated was credited with it). The dead coil was above the hold ceiling 75.6 s of 126 s with
+    no latched fault. Now any SET_PARAM starts the progress record afresh (as START does):
+    a target read through a moved threshold is no progress of what heated before it."""
+    rig.reset()
+    rig.sim.inject("dead-actuator:sma-right")  # watched here, not by Rig.kill's per-tick bound
+    rig.ticks(300)
+    heated = 0
+    latched = lambda: any(m.code == StopReason.FAULT for m in rig.events(EventKind.GAIT_STOPPED))  # noqa: E731
+
+    def run(n: int) -> None:
+        nonlocal heated
+        for _ in range(n):
+            rig.ticks(1)
+            if not latched() and rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm:
+                heated += rig.env.tick_us
+
+    def ok(name: str, **fields) -> None:
+        token = rig.send(name, **fields)
+        run(2)
+        m = next(m for m in reversed(rig.log) if m.spec.name in ("ACK", "NACK") and m.token == token)
+        assert m.spec.name == "ACK", (name, fields, m)
+
+    ok("LOAD_GAIT", states=(1, 0))
+    ok("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=100)
+    ok("START", gait=GAIT_USER, direction=0)
+    first = rig.now_us
+    while rig.now_us - first < 40_000_000 and not latched():
+        for value, ms in ((2000, 6000), (-700, 1000)):
+            ok("SET_PARAM", param=int(ParamId.PSI_STAR_CDEG), index=1, value=value)
+            for _ in range(ms // 250):
+                run(250)
+                rig.send("PING")
+    assert latched(), "no latched fault: the dead coil is heated for ever"
+    assert rig.events(EventKind.FAULT)[-1].code == FaultCode.STATE_TIMEOUT
+    assert heated <= rig.timeout_us + 8 * rig.env.tick_us, heated
+
+
 @pytest.mark.parametrize("run_ms", [3000, 4500])
 def test_restarting_gait_0_after_the_fallback_does_not_bring_the_dead_coil_back(rig, run_ms):
     """The fallback cleared the fault itself and a START of a built-in gait went back to the

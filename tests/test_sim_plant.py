@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from proleg.errors import SimError
-from proleg.sim.plant import LimbParams, Plant, PlantParams
+from proleg.sim.plant import PASS_S, LimbParams, Plant, PlantParams
 from proleg.sim.sma import Hysteresis, SmaParams, cooling_branch, heating_branch
 
 R1 = np.array([[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]], float)
@@ -258,6 +258,7 @@ def test_a_state_passed_through_on_the_way_to_an_allowed_one_is_one_transition()
     moves, unexpected = _run([(1.0, 2), (3.5, 3), (6.0, 1), (7.0, 0)], 9.0, stroke)
     assert (moves, unexpected) == ([(0, 3, 4.0 * step), (3, 0, 1.0 * step)], 0)
     assert _run([(1.0, 2)], 3.0, stroke) == ([(0, 2, 0.0)], 1)  # held there: it happened (so far)
+    assert _run([(1.0, 2), (1.0 + PASS_S + 0.5, 3)], PASS_S + 3.0, stroke) == ([(0, 2, 0.0), (2, 3, 0.0)], 2)  # too long
     assert _run([(1.0, 1), (2.0, 0)], 3.0) == ([(0, 1, 0.0), (1, 0, 0.0)], 2)  # there and back: no pass
     # a second leg the table allows is its own transition (caterpillar-4's proleg lifted past
     # its second edge: what the firmware's step really did on this body, as before)

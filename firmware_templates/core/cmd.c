@@ -244,6 +244,9 @@ static void cmd_set_param(void)
     if (r) {
         nack(r, msg.u.set_param.param);
     } else {
+        /* safety: what heated before made no progress towards a target read with what changed
+         * (a threshold moved each step made every step "reached": docs/safety.md) */
+        guard_started();
         ack();
     }
 }

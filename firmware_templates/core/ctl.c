@@ -236,7 +236,10 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
             c->still = NOT_SEEN; /* dropped from where the hold watch kept it: its rise back is watched afresh */
         }
 #if CTL_HELD_UP
-        c->held_up = 0;
+        if (c->level > target || level > target) {
+            c->held_up = 0; /* the fall watch's count (falling, or just down); at the target level
+                             * the held-up settle's count runs on through its flips */
+        }
 #endif
         c->level = level;
     }

@@ -127,7 +127,8 @@ void drive_apply(void)
      * unreached target; a START, STOP or ESTOP does not reset it. */
     /* demanding: away from the target (not reached yet, or lost since: the sequencer reports
      * REACHED once a step, so a lost target's time counts until the step moves on), or just
-     * moved on to the next */
+     * moved on to the next (time lost after a step's REACHED carries into the next step's
+     * until that is reached: docs/safety.md) */
     guard = guard_tick((uint8_t)((seen & (SEQ_EV_AWAY | SEQ_EV_ADVANCED)) && seq_running() && !fault_latched()),
                        (uint8_t)(seen & SEQ_EV_REACHED), hits, &act);
     if (guard == GUARD_ON_LIMIT && !fault_latched()) {

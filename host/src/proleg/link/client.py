@@ -221,9 +221,9 @@ class RobotClient:
         if not int(what) & ClearWhat.FAULTS:
             return False
         try:
-            if self.request("GET_ACTUATOR_MAP").lost == LIMBMAP_NONE:
+            if self.request("GET_ACTUATOR_MAP", retries=2).lost == LIMBMAP_NONE:
                 return False
-            self.request("SET_ACTUATOR_MAP", actuators=())
+            self.request("SET_ACTUATOR_MAP", retries=2, actuators=())
         except CommandRefused:  # a gait runs (the fallback's): it keeps the coil given up
             return False
         return True

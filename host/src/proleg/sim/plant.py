@@ -24,7 +24,8 @@ Chain per step, for a PWM duty held constant over the step:
    unless the next one is forbidden too, T_true allows the two as one (a → b → c, a → c
    allowed) and every limb's level in b lies between a's and c's: that was a pass, the limbs
    of one step crossing apart (full strokes' rise and fall leads cross one limb first on
-   purpose, up to seconds before the others), booked as a → c when c is reached.
+   purpose, up to 3.5 s before the others), booked as a → c when c is reached within
+   ``PASS_S`` (5 s) of the first change.
 
 Not modelled: the quasi-static friction alternative of SPEC §5 (rewards come only from the
 ground-truth matrix), latent heat, the coil's stress dependence of the transformation
@@ -61,6 +62,11 @@ from .plant_params import (  # noqa: F401 (re-exported: the plant's parameters l
     true_rewards_from_robot,
 )
 from .sma import Hysteresis
+
+#: The longest pass (a -> b -> c booked as a -> c): full strokes' leads cross first and the
+#: others follow within CTL_SAG_WAIT_MS + CTL_CLIMB_MAX_MS (3.5 s, core/ctl.h); a state held
+#: longer happened.
+PASS_S = 5.0
 
 @dataclass(frozen=True)
 class Transition:
@@ -245,7 +251,8 @@ class Plant:
             return  # changed and changed back within the window: no transition
         last = self._transitions[-1] if self._transitions else None
         if (self._reward[a][b] is None and last is not None and last.dst == a and self._reward[last.src][a] is None
-                and last.src != b and self._reward[last.src][b] is not None and self._between(last.src, a, b)):
+                and last.src != b and self._reward[last.src][b] is not None and self._between(last.src, a, b)
+                and self._t - last.t_s <= PASS_S):
             # a pass: both legs forbidden, the whole allowed, every limb on its way (a staggered
             # step): one transition
             self._transitions.pop()
