@@ -334,6 +334,37 @@ def test_restarting_gait_0_past_a_dead_coil_still_latches_a_fault(rig, stopped_t
     assert [m.code for m in rig.events(EventKind.SUSPECT)][:1] == [1]  # sma-right, not the healthy coil
 
 
+class _DeadRightCoil:
+    """R1 on a fresh rig with its right coil dead (the plant's ``dead-actuator``), its time
+    above the hold ceiling counted here until a fault latches (``heated_us``), not bounded per
+    tick by Rig.kill: the attacks below are allowed a few debounce ticks a round."""
+
+    def __init__(self, rig: Rig) -> None:
+        self.rig = rig
+        self.heated_us = 0
+        rig.reset()
+        rig.sim.inject("dead-actuator:sma-right")
+        rig.ticks(300)
+
+    def latched(self) -> bool:
+        return any(m.code == StopReason.FAULT for m in self.rig.events(EventKind.GAIT_STOPPED))
+
+    def run(self, n: int) -> None:
+        rig = self.rig
+        for _ in range(n):
+            rig.ticks(1)
+            if not self.latched() and rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm:
+                self.heated_us += rig.env.tick_us
+
+    def ok(self, name: str, **fields) -> None:
+        """Send a command, run two ticks, and require its ACK."""
+        rig = self.rig
+        token = rig.send(name, **fields)
+        self.run(2)
+        m = next(m for m in reversed(rig.log) if m.spec.name in ("ACK", "NACK") and m.token == token)
+        assert m.spec.name == "ACK", (name, fields, m)
+
+
 def test_a_target_reached_and_then_lost_is_demanded_again_and_its_time_counts(rig):
     """The sequencer reports REACHED once a step, and the guard took a reached step for held
     even after its target was lost: a host that STARTs the loaded gait 01 -> 00 with the right
@@ -343,25 +374,9 @@ def test_a_target_reached_and_then_lost_is_demanded_again_and_its_time_counts(ri
     fault latches once the coil has been heated the state timeout. What is not counted: the
     hold's own re-heat in the ticks before the lost level is debounced (docs/safety.md), at
     most debounce_ticks + 1 a round."""
-    rig.reset()
-    rig.sim.inject("dead-actuator:sma-right")  # watched here, not by Rig.kill's per-tick bound
-    rig.ticks(300)
-    heated = rounds = 0
-    latched = lambda: any(m.code == StopReason.FAULT for m in rig.events(EventKind.GAIT_STOPPED))  # noqa: E731
-
-    def run(n: int) -> None:
-        nonlocal heated
-        for _ in range(n):
-            rig.ticks(1)
-            if not latched() and rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm:
-                heated += rig.env.tick_us
-
-    def ok(name: str, **fields) -> None:
-        token = rig.send(name, **fields)
-        run(2)
-        m = next(m for m in reversed(rig.log) if m.spec.name in ("ACK", "NACK") and m.token == token)
-        assert m.spec.name == "ACK", (name, fields, m)
-
+    watch = _DeadRightCoil(rig)
+    run, ok, latched = watch.run, watch.ok, watch.latched
+    rounds = 0
     ok("LOAD_GAIT", states=(1, 0))
     ok("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=600000)
     first = rig.now_us
@@ -383,7 +398,7 @@ def test_a_target_reached_and_then_lost_is_demanded_again_and_its_time_counts(ri
     assert latched() and faults[0].code == FaultCode.STATE_TIMEOUT, "no latched fault: the dead coil is heated for ever"
     assert rounds <= 4
     debounce = rig.robot.control.debounce_ticks
-    assert heated <= rig.timeout_us + rounds * (debounce + 1) * rig.env.tick_us, (heated, rounds)
+    assert watch.heated_us <= rig.timeout_us + rounds * (debounce + 1) * rig.env.tick_us, (watch.heated_us, rounds)
 
 
 def test_a_threshold_moved_each_step_does_not_make_a_dead_coil_progress(rig):
@@ -392,25 +407,8 @@ def test_a_threshold_moved_each_step_does_not_make_a_dead_coil_progress(rig):
     heated was credited with it). The dead coil was above the hold ceiling 75.6 s of 126 s with
     no latched fault. Now any SET_PARAM starts the progress record afresh (as START does):
     a target read through a moved threshold is no progress of what heated before it."""
-    rig.reset()
-    rig.sim.inject("dead-actuator:sma-right")  # watched here, not by Rig.kill's per-tick bound
-    rig.ticks(300)
-    heated = 0
-    latched = lambda: any(m.code == StopReason.FAULT for m in rig.events(EventKind.GAIT_STOPPED))  # noqa: E731
-
-    def run(n: int) -> None:
-        nonlocal heated
-        for _ in range(n):
-            rig.ticks(1)
-            if not latched() and rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm:
-                heated += rig.env.tick_us
-
-    def ok(name: str, **fields) -> None:
-        token = rig.send(name, **fields)
-        run(2)
-        m = next(m for m in reversed(rig.log) if m.spec.name in ("ACK", "NACK") and m.token == token)
-        assert m.spec.name == "ACK", (name, fields, m)
-
+    watch = _DeadRightCoil(rig)
+    run, ok, latched = watch.run, watch.ok, watch.latched
     ok("LOAD_GAIT", states=(1, 0))
     ok("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=100)
     ok("START", gait=GAIT_USER, direction=0)
@@ -423,7 +421,7 @@ def test_a_threshold_moved_each_step_does_not_make_a_dead_coil_progress(rig):
                 rig.send("PING")
     assert latched(), "no latched fault: the dead coil is heated for ever"
     assert rig.events(EventKind.FAULT)[-1].code == FaultCode.STATE_TIMEOUT
-    assert heated <= rig.timeout_us + 8 * rig.env.tick_us, heated
+    assert watch.heated_us <= rig.timeout_us + 8 * rig.env.tick_us, watch.heated_us
 
 
 @pytest.mark.parametrize("run_ms", [3000, 4500])

@@ -112,8 +112,8 @@ static void cmd_start(void)
     }
     if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) {
         /* safety: a built-in gait needs the coil the fallback gave up, which stays given up until
-         * the operator clears it (CLEAR(FAULTS), fallback.h): restarted by a host, it was heated
-         * up to the state timeout again at every START, and fell back again */
+         * the operator takes it back (SET_ACTUATOR_MAP with no entries, limbmap.h): restarted by a
+         * host, it was heated up to the state timeout again at every START, and fell back again */
         nack(PROTO_ERR_NOT_ALLOWED, 3);
         return;
     }
