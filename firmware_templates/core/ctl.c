@@ -115,12 +115,14 @@ uint8_t ctl_stall(uint8_t limb)
 #define CLIMBS_TO_STROKE(i, level) (STROKE(i) && TOP(i, level) && cl[i].climb && cl[i].stall == CTL_STALL_NONE)
 /* Limb i falls from its stroke: it has one and is still on its top level. */
 #define FROM_STROKE(i, level) (STROKE(i) && TOP(i, level))
+/* Limb i stopped climbing short of its stroke in its step, within CTL_CLIMB_MAX_MS of the step's start. */
+#define STOPPED_SHORT(i, level) (STROKE(i) && TOP(i, level) && cl[i].shortfall && !cl[i].climb && cl[i].clock < TICKS(CTL_CLIMB_MAX_MS))
 
-/* Limb i's smoothed ψ rose CTL_CLIMB_CDEG above c->peak: the peak moves up to it. */
+/* Limb i's smoothed ψ rose CTL_CLIMB_GAIN_CDEG above c->peak: the peak moves up to it. */
 static uint8_t gained(uint8_t i, ctl_limb_t *c)
 {
     int16_t p = psi_smooth_cdeg(i);
-    if (p >= c->peak + CTL_CLIMB_CDEG) {
+    if (p >= c->peak + CTL_CLIMB_GAIN_CDEG) {
         c->peak = p; /* a new high: measure from here */
         return 1;
     }
@@ -144,6 +146,9 @@ static uint8_t climbing(uint8_t i, ctl_limb_t *c)
     }
     return look == 0u && gained(i, c);
 }
+
+/* A limb climbing to its stroke has stopped after CTL_CLIMB_STOP_MS without a gain, not a hover time (ctl.h). */
+#define CLIMB_STOP(c) ((c)->climb)
 
 /* Limb i still rises: the others climbing in step wait for it (ctl.h, CTL_LAG_MS). */
 #define STILL_RISING(i) (!cl[i].lagged)
@@ -181,6 +186,7 @@ static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 #define ABOVE_TOP(i, thr, level) above_hold(i, thr, level, 1u)
 #else
 #define climbing(i, c) 0
+#define CLIMB_STOP(c) 0
 #define ABOVE_HOLD(i, thr, level) psi_last_at_or_above_hold(i, thr)
 #define ABOVE_TOP(i, thr, level) psi_last_at_or_above_hold_top(i, thr)
 #endif
@@ -275,14 +281,14 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
             c->ticks = 0;
         } else if (climbing(i, c)) {
             c->ticks = 1;
-        } else if (++c->ticks > TICKS(CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
+        } else if (++c->ticks > TICKS(CLIMB_STOP(c) ? CTL_CLIMB_STOP_MS : CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
             c->stall = CTL_STALL_OSCILLATING;
             psi_relax(i, 1);
 #ifdef CFG_LIMB_STROKE_CDEG
             c->shortfall = (uint8_t)(c->climb && STROKE(i) && TOP(i, level));
             c->peak = psi_smooth_cdeg(i); /* where it stopped (climbing() may not have run); smoothed:
                                             * one noisy sample would set a hold it cannot reach */
-            if (c->ticks > TICKS(CTL_HOVER_MS)) {
+            if (c->ticks > TICKS(CLIMB_STOP(c) ? CTL_CLIMB_STOP_MS : CTL_HOVER_MS)) {
                 c->climb = 0; /* stopped climbing a hover time ago: held where it stopped */
             }
             c->ticks = 0; /* else the crossings relaxed it: the clock of its climb from here (above) */
@@ -343,6 +349,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     int16_t least = CTL_SHARE_FULL;
     uint8_t lead_below = 0; /* the rise lead is rising to its stroke and has not crossed ψ* yet */
     uint8_t new_step = 0;   /* some limb's target changed: the robot's next step */
+    int16_t stopped = CTL_SHARE_FULL; /* the least share of the limbs that stopped short of their strokes */
 #endif
 #ifdef CFG_STROKE_FALL_LEAD
     uint8_t lead_down = 0; /* the fall lead is falling from its stroke */
@@ -407,6 +414,8 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                     if (got[i] < least && STILL_RISING(i)) {
                         least = got[i];
                     }
+                } else if (STOPPED_SHORT(i, level) && share(i) < stopped) {
+                    stopped = share(i);
                 }
 #endif
             }
@@ -493,6 +502,8 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 cl[i].clock < TICKS(CTL_CLIMB_MAX_MS)) {
                 w = WANT_HOLD;     /* ahead of another limb's climb: wait for it (ctl.h) */
                 cl[i].ticks = 0u;  /* not hovering: waiting */
+            } else if (CLIMBS_TO_STROKE(i, level) && got[i] > stopped + CTL_SHARE_SYNC) {
+                w = WANT_HOLD;     /* past where a limb in step stopped short: climbed far enough, hovers (ctl.h) */
             }
 #endif
         } else if (level == PSI_UNKNOWN) {

@@ -59,7 +59,12 @@
  *   after the step began, and only while the lagging limb still rises (CTL_LAG_MS): a limb
  *   that cannot rise must not hold the others down; a limb not across its band yet has
  *   covered none. Only limbs the step raises climb in step: one
- *   already at its stroke when the step began is held as usual.
+ *   already at its stroke when the step began is held as usual. A limb that stopped short of
+ *   its stroke in its step (below: a worn coil, a weak supply) sets how far the others climb:
+ *   one more than CTL_SHARE_SYNC past its share waits at the hold duty and counts as stopped
+ *   there. Fatigue takes stroke off every coil alike: R1's ends both topped out at 66° and,
+ *   the right one climbing on to it, lost the order of their strokes that makes the ratchet
+ *   (the right end, raised less, comes down first): 0.34 mm/s against 6.85 fresh.
  * Falling from their strokes together (no limb rising), they fall as their coils cool: the
  * one bent least comes down first. With a fall lead (CFG_STROKE_FALL_LEAD: robot file
  * control.stroke_fall_lead, built in only when given) the others are held at their strokes
@@ -74,9 +79,10 @@
  *   limb settles on the band edges alone (psi_relax), so the sequencer can go on, and
  *   the bang-bang hold keeps it above ψ*. A limb climbing to its stroke (below) is not
  *   hovering while it still climbs: its clock restarts whenever its smoothed ψ gained
- *   CTL_CLIMB_CDEG, so it is relaxed (and the step goes on) once it stops climbing short of
- *   the stroke, or CTL_CLIMB_MAX_MS after the step began. Relaxed by the crossings instead
- *   (IMU noise at its band) it is heated on while it still gains CTL_CLIMB_CDEG a hover time;
+ *   CTL_CLIMB_GAIN_CDEG, so it is relaxed (and the step goes on) once it stops climbing short
+ *   of the stroke (CTL_CLIMB_STOP_MS without a gain), or CTL_CLIMB_MAX_MS after the step
+ *   began. Relaxed by the crossings instead (IMU noise at its band) it is heated on while it
+ *   still gains CTL_CLIMB_GAIN_CDEG a hover time;
  *   once it has stopped, in that step and the robot's later steps that leave it raised, it
  *   is held where it stopped (1° band, its edge 1° below
  *   where it stopped but not below the hold edge it has without a stroke) - a weak supply or
@@ -104,6 +110,15 @@
 /* Stall detector (see above). */
 #define CTL_OSC_CROSSINGS 3u
 #define CTL_HOVER_MS 300u
+/* A limb climbing to its stroke has stopped once its smoothed ψ gained less than
+ * CTL_CLIMB_GAIN_CDEG in CTL_CLIMB_STOP_MS: the rate of CTL_CLIMB_CDEG in a hover time
+ * (3.3°/s), seen in half the time. At the end of its travel the coil heats on at ≈ 60 °C/s
+ * (drive duty 0.8), and a worn coil (its transformation shifted up) ends its travel near
+ * 105 °C: told after 1° in 300 ms, R1's worn coils at full strokes reached 119-121 °C (NiTi is
+ * ruined past ≈ 120 °C: sim/physical/materials.py). A finer gain is safe under IMU noise
+ * because it is the smoothed ψ. */
+#define CTL_CLIMB_STOP_MS 150u
+#define CTL_CLIMB_GAIN_CDEG 50
 #define CTL_CLIMB_CDEG 100
 /* Limbs climbing to their strokes together (see above): shares of the climb, 0..FULL. */
 #define CTL_SHARE_FULL 256

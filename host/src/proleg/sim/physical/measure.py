@@ -38,11 +38,13 @@ MARGIN_DEG = 4.0
 #: The firmware's stroke rules (core/ctl.h) the idealised drive follows: how long a limb falling
 #: behind the fall lead is held at its stroke at most (CTL_FALL_WAIT_MS) and how far down the
 #: lead is by then (CTL_FALL_SHARE), how long limbs climb in step at most (CTL_CLIMB_MAX_MS),
-#: and when a limb rising to its stroke has stopped climbing (CTL_CLIMB_CDEG in CTL_HOVER_MS).
+#: and when a limb rising to its stroke has stopped climbing (CTL_CLIMB_GAIN_CDEG in CTL_CLIMB_STOP_MS).
 FALL_WAIT_S = 2.0
 FALL_SHARE = 0.5
 CLIMB_MAX_S = 3.0
-CLIMB_STOP_DPS = 1.0 / 0.3
+CLIMB_GAIN_DEG = 0.5
+CLIMB_STOP_S = 0.15
+CLIMB_STOP_DPS = CLIMB_GAIN_DEG / CLIMB_STOP_S
 SHARE_SYNC = 13 / 256  # CTL_SHARE_SYNC / CTL_SHARE_FULL
 #: A lagging limb below its band is waited for only while it still rises: heated this long
 #: without getting one of PROGRESS_DEG closer to its crossing, it is not waited for again in
@@ -59,7 +61,8 @@ class IdealDrive:
     then they climb in step (for at most ``CLIMB_MAX_S``, and waiting only for a limb that still
     rises: ``LAG_S``); falling together with a fall lead,
     the others are held at their strokes until it is halfway down its climb (at most
-    ``FALL_WAIT_S``; times counted from the ``dt_s`` given to ``command``). Where the firmware
+    ``FALL_WAIT_S``; times counted from the ``dt_s`` given to ``command``); a limb climbing in
+    step past where another stopped short of its stroke waits there and counts as stopped. Where the firmware
     keeps a waiting coil warm at the hold duty, this drive switches it off; a limb that stopped
     short of its stroke is driven towards it again in later steps (no on-time limit here)."""
 
@@ -80,6 +83,8 @@ class IdealDrive:
         self._heated: set[int] = set()              # limbs whose coil the last command heated
         self._lag: dict[int, tuple[float, float]] = {}  # limb -> (closest edge to go, s heated since)
         self._given_up: set[int] = set()            # lagging limbs not waited for in this step
+        self._capped: set[int] = set()              # waiting past where a limb in step stopped short
+        self._gain: dict[int, tuple[float, float]] = {}  # limb -> (ψ at its last 1° gain, s since)
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
@@ -117,7 +122,7 @@ class IdealDrive:
         tops = [i for i, s in enumerate(self.stroke) if s is not None]
         if t != target:
             self._raised = {i for i in tops if level[i] < want[i] == len(self.th[i])}
-            self._lag, self._given_up = {}, set()
+            self._lag, self._given_up, self._gain = {}, set(), {}
         self._watch_lag(psi, dt_s)
         rising = [i for i in range(len(psi)) if want[i] > level[i]]
         falling = [i for i in range(len(psi)) if want[i] < level[i]]
@@ -126,18 +131,39 @@ class IdealDrive:
         lead = self.rise_lead
         if not falling and lead in rising and want[lead] == len(self.th[lead]):
             waits = {i for i in rising if i in tops and i != lead and want[i] == len(self.th[i])}
-        # then they climb in step: a limb more than 5 % of its climb ahead of another waits
+        # then they climb in step: a limb more than 5 % of its climb ahead of another waits;
+        # one past where a limb that stopped short of its stroke (on its top level, not waiting)
+        # stopped has climbed far enough (ctl.c: STOPPED_SHORT)
         climbing = [i for i in self._raised if psi[i] < self.stroke[i]]
         rises = [i for i in climbing if i not in self._given_up]
+        self._capped = set()
         if len(climbing) > 1 and rises and self._step[1] < CLIMB_MAX_S:
             share = {i: self._share(i, psi[i]) for i in climbing}
             least = min(share[i] for i in rises)
-            waits |= {i for i in climbing if share[i] > least + SHARE_SYNC and level[i] == want[i]}
+            ahead = {i for i in climbing if share[i] > least + SHARE_SYNC and level[i] == want[i]}
+            waits |= ahead
+            stopped = [share[i] for i in rises if level[i] == want[i] and self._stopped(i, psi[i], dt_s)]
+            if stopped:
+                self._capped = {i for i in ahead if share[i] > min(stopped) + SHARE_SYNC}
         lead = self.fall_lead
         if (lead is not None and not rising and lead in falling and level[lead] == len(self.th[lead])
                 and self._share(lead, psi[lead]) > FALL_SHARE and self._step[1] < FALL_WAIT_S):
             held = {i for i in falling if i in tops and i != lead and level[i] == len(self.th[i])}
         return waits, held
+
+    def _stopped(self, i: int, psi: float, dt_s: float) -> bool:
+        """Limb i, climbing on its top level and not waiting, has gained less than
+        ``CLIMB_GAIN_DEG`` in ``CLIMB_STOP_S`` (ctl.c: the clock of a climbing limb); once
+        stopped it stays so for the step."""
+        peak, idle = self._gain.get(i, (psi, 0.0))
+        if idle >= CLIMB_STOP_S:
+            return True
+        if i in self._waits or psi >= peak + CLIMB_GAIN_DEG:
+            peak, idle = psi, 0.0
+        else:
+            idle += dt_s
+        self._gain[i] = (peak, idle)
+        return idle >= CLIMB_STOP_S
 
     def _watch_lag(self, psi: Sequence[float], dt_s: float) -> None:
         """The firmware's lag watch (ctl.c: ``lagged``, on the stall detector's clock) on the
@@ -168,7 +194,8 @@ class IdealDrive:
         if self.rise_lead is None:
             return True   # no strokes
         want = limb_levels(target, self.levels)
-        return all(s is None or k < len(th) or p >= s or (d < CLIMB_STOP_DPS and i not in self._waits)
+        return all(s is None or k < len(th) or p >= s
+                   or (d < CLIMB_STOP_DPS and (i not in self._waits or i in self._capped))
                    for i, (s, k, th, p, d) in enumerate(zip(self.stroke, want, self.th, psi, dpsi)))
 
 
