@@ -8,6 +8,8 @@
 #include "unit.h"
 
 #define HOVER_TICKS ((uint32_t)CTL_HOVER_MS * CFG_TICK_HZ / 1000u)
+/* A limb climbing to its stroke has stopped after this long without a 0.5° gain (ctl.h). */
+#define STOP_TICKS ((uint32_t)CTL_CLIMB_STOP_MS * CFG_TICK_HZ / 1000u)
 #define CLIMB_TICKS ((uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u)
 #define LAG_TICKS ((uint32_t)CTL_LAG_MS * CFG_TICK_HZ / 1000u)
 /* Samples the smoothed ψ (1/16 of each new sample, psi.h) takes to come within 1° of a jump of
@@ -15,8 +17,8 @@
 #define SMOOTH_TICKS 100u
 
 /* Step 10 from 00 after `wait` ticks below the band: limb 0 goes up to `deg` (± `noise`, never
- * a climbing degree) and stays there until the controller relaxes it: stopped short, a hover
- * time after its smoothed ψ stopped gaining. */
+ * a climbing degree) and stays there until the controller relaxes it: stopped short,
+ * CTL_CLIMB_STOP_MS after its smoothed ψ stopped gaining. */
 static void stop_short_at(double deg, double noise, uint32_t wait)
 {
     uint16_t duty[CFG_N_ACTUATORS];
@@ -28,11 +30,11 @@ static void stop_short_at(double deg, double noise, uint32_t wait)
         put(0, 5.0);
         demand(1, 0, duty);
     }
-    for (k = 0; k <= HOVER_TICKS + SMOOTH_TICKS && ctl_stall(0) == CTL_STALL_NONE; k++) {
+    for (k = 0; k <= STOP_TICKS + SMOOTH_TICKS && ctl_stall(0) == CTL_STALL_NONE; k++) {
         put(0, deg + noise * (double)(k % 2u));
         demand(1, 0, duty);
     }
-    CHECK(k > HOVER_TICKS); /* not before a hover time */
+    CHECK(k > STOP_TICKS); /* not before CTL_CLIMB_STOP_MS */
     CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
 }
 
@@ -218,9 +220,9 @@ static void test_a_limb_still_climbing_to_its_stroke_is_not_hovering(void)
     put(0, 5.0); /* the step begins below the band */
     demand(1, 0, duty);
     put(0, psi);
-    for (k = 0; k < 4u * HOVER_TICKS; k++) {
-        if (k % (HOVER_TICKS / 2u) == 0u) {
-            psi += 1.5; /* 1.5° every half hover time */
+    for (k = 0; k < 8u * STOP_TICKS; k++) {
+        if (k % (STOP_TICKS / 2u) == 0u) {
+            psi += 0.75; /* 0.75° every half stop time: 10°/s */
             put(0, psi);
         }
         demand(1, 0, duty);
@@ -239,7 +241,7 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
     put(0, 35.6);
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], 0); /* a hover time without a 1° gain: held where it stopped from now on */
+    CHECK_EQ(duty[0], 0); /* CTL_CLIMB_STOP_MS without a 0.5° gain: held where it stopped from now on */
     put(0, 33.5);
     demand(1, 0, duty);
     CHECK_EQ(duty[0], DRIVE);
@@ -329,9 +331,9 @@ static void test_a_limb_waiting_for_another_in_step_is_not_hovering(void)
     put(1, 5.0);
     demand(1, 1, duty);
     put(0, 50.0); /* share 74 % */
-    for (k = 0; k < 3u * HOVER_TICKS; k++) {
-        if (k % (HOVER_TICKS / 2u) == 0u) {
-            put(1, 25.0 + 1.5 * (double)(k / (HOVER_TICKS / 2u))); /* climbing, 14..45 %: limb 0 waits */
+    for (k = 0; k < 6u * STOP_TICKS; k++) {
+        if (k % (STOP_TICKS / 2u) == 0u) {
+            put(1, 25.0 + 0.75 * (double)(k / (STOP_TICKS / 2u))); /* climbing, 14..45 %: limb 0 waits */
         }
         demand(1, 1, duty);
         CHECK_EQ(duty[0], HOLD);
@@ -381,13 +383,41 @@ static void test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit
     put(0, 50.0); /* share 74 %: far ahead of limb 1 */
     for (k = 1; k < limit + 10u; k++) {
         put(0, 50.0);
-        put(1, 22.0 + (double)(k - k % (HOVER_TICKS / 2u)) / 200.0); /* 1.5° in 0.3 s, far behind */
+        put(1, 22.0 + (double)k / 200.0); /* 5°/s, far behind */
         demand(1, 1, duty);
         if (k + 1u < limit) {
             CHECK_EQ(duty[0], HOLD);
         }
     }
     CHECK_EQ(duty[0], DRIVE); /* the climb limit has passed: limb 0 goes on to its stroke */
+}
+
+static void test_a_limb_that_stopped_short_caps_the_others_in_step(void)
+{
+    /* Step 11 from 00; both ends at 30°: limb 0 has covered 23 % of its climb, limb 1 31 %.
+     * Limb 1 waits for limb 0 (5 % ahead); limb 0 stops there (a worn coil). Limb 1 then does
+     * not climb on to its stroke: it is past where limb 0 stopped, waits at the hold duty and
+     * counts as stopped (the strokes keep their order: ctl.h). */
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    put(0, 5.0);
+    put(1, 5.0);
+    demand(1, 1, duty);
+    for (k = 0; k <= STOP_TICKS + SMOOTH_TICKS && ctl_stall(0) == CTL_STALL_NONE; k++) {
+        put(0, 30.0);
+        put(1, 30.0);
+        demand(1, 1, duty);
+        CHECK_EQ(duty[1], HOLD);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING); /* limb 0 stopped short */
+    for (k = 0; k <= STOP_TICKS + 1u && ctl_stall(1) == CTL_STALL_NONE; k++) {
+        put(0, 30.0);
+        put(1, 30.0);
+        demand(1, 1, duty);
+        CHECK_EQ(duty[1], HOLD); /* not DRIVE: not on to its 50° */
+    }
+    CHECK_EQ(ctl_stall(1), CTL_STALL_OSCILLATING); /* stopped there: the step goes on */
 }
 
 static void test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down(void)
@@ -520,6 +550,7 @@ int main(void)
     RUN(test_a_limb_that_stops_just_past_its_band_is_held_at_the_hold_it_has_without_a_stroke);
     RUN(test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped);
     RUN(test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit);
+    RUN(test_a_limb_that_stopped_short_caps_the_others_in_step);
     RUN(test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down);
     RUN(test_climbing_in_step_waits_for_a_limb_only_while_it_still_rises);
     RUN(test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step);
