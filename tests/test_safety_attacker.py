@@ -424,6 +424,29 @@ def test_a_threshold_moved_each_step_does_not_make_a_dead_coil_progress(rig):
     assert watch.heated_us <= rig.timeout_us + 8 * rig.env.tick_us, watch.heated_us
 
 
+def test_a_hold_that_stops_short_is_cut_at_the_mean_duty_limit_and_latches(rig):
+    """A held limb that reads at its level but cannot reach its hold edge: the bang-bang hold
+    heats its coil at the drive duty for good. After two on-limit hits the mean-duty window
+    refused the coil before its on-time reached max_on again, so there never was a third hit:
+    one SET_PARAM (R1's right threshold at -3°: the dead right limb at rest reads 01, below its
+    hold edge) and a long hold kept that coil above the hold ceiling 74 % of 300 s with no
+    fault. Now a coil above the hold ceiling that the window stops is cut as at max_on (a hit),
+    and the third hit latches SMA_ON_LIMIT."""
+    watch = _DeadRightCoil(rig)
+    run, ok, latched = watch.run, watch.ok, watch.latched
+    ok("SET_PARAM", param=int(ParamId.PSI_STAR_CDEG), index=1, value=-300)
+    ok("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=600000)
+    ok("LOAD_GAIT", states=(1, 0))
+    ok("START", gait=GAIT_USER, direction=0)
+    first = rig.now_us
+    while rig.now_us - first < 60_000_000 and not latched():
+        run(250)
+        rig.send("PING")
+    assert latched(), f"no latched fault: the coil was heated {watch.heated_us / 1e6:.1f} s of 60 s"
+    assert rig.events(EventKind.FAULT)[-1].code == FaultCode.SMA_ON_LIMIT
+    assert watch.heated_us <= rig.robot.safety.on_limit_latch * rig.env.max_on_us + rig.env.tick_us, watch.heated_us
+
+
 @pytest.mark.parametrize("run_ms", [3000, 4500])
 def test_restarting_gait_0_after_the_fallback_does_not_bring_the_dead_coil_back(rig, run_ms):
     """The fallback cleared the fault itself and a START of a built-in gait went back to the

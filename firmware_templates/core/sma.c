@@ -177,6 +177,7 @@ uint8_t sma_tick(void)
     for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
         act_state_t *a = &acts[i];
         uint16_t duty = st.estopped ? 0u : sma_clamp(a->request);
+        uint8_t full;
         uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
         if (!st.estopped && duty != a->request) {
             clamped = 1;
@@ -200,12 +201,17 @@ uint8_t sma_tick(void)
                 a->pay_rem = 0;
             }
         }
-        /* then decide the next output */
+        /* then decide the next output: another tick at this duty would pass the mean-duty limit */
+        full = (uint8_t)(duty > 0u && window_sum(i) + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
         if (a->forced) {
             duty = 0; /* cooling after an on-limit hit: off until the debt is paid */
         } else if (duty > hold_max) {
-            if (a->debt_us + CFG_TICK_US > st.max_on_us) {
-                duty = 0; /* cut before the next tick would pass max_on */
+            if (a->debt_us + CFG_TICK_US > st.max_on_us || full) {
+                /* cut before the next tick would pass max_on, or the mean-duty limit: heated
+                 * above the hold ceiling until the window stops it, a coil is cut as at max_on
+                 * (a window that only refused it let a hold that stops short heat at the mean
+                 * limit for good, never hitting max_on: docs/safety.md) */
+                duty = 0;
                 a->forced = 1;
                 hit = (uint8_t)(hit | bit);
                 if (st.limit_hits < 0xFFFFu) {
@@ -217,8 +223,8 @@ uint8_t sma_tick(void)
                 heated = (uint8_t)(heated | bit);
             }
         }
-        a->blocked = (uint8_t)(duty > 0u && window_sum(i) + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
-        if (a->blocked) {
+        a->blocked = full; /* a duty at or below the hold ceiling refused (or one cut above) */
+        if (full) {
             duty = 0;
         }
         output(i, duty);
