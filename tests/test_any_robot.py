@@ -276,7 +276,10 @@ def test_build_refuses_a_gait_0_that_raises_one_limb_of_a_shared_coil_alone(tmp_
     assert "Traceback" not in err and not (tmp_path / "b").exists()
     assert (f"proleg: error: {fixture}: gait 0 of +x, the one START runs, cannot run on this robot: "
             "gait 0000 0100 1100") in err
-    assert "step 1 (0000 -> 0100) raises 'p2' but not 'p1', which share actuator 'coil1'" in err
+    # the far limb p2 alone: coil1 sits at p1 and bends p2 to 8.6°, so 0100 is not even reachable
+    # (that reason comes first); raising p2 without p1 is the shared coil's error as well
+    assert ("goes to states 0100 (step 1), 1100 (step 2)" in err and "which the robot cannot reach" in err
+            and "in 0100 'p2' needs ψ ≥ 21.0° and gets at most 8.6°" in err)
 
 
 def test_many_unholdable_states_are_summarised_not_listed(caplog):

@@ -187,6 +187,61 @@ def test_the_near_limb_of_a_shared_coil_may_rise_and_fall_alone_as_the_body_mode
 
 
 def test_the_entry_path_avoids_a_step_the_shared_coil_cannot_make():
+    """0000 -> 0001 raises p4 alone (a shared-actuator error), and 0011 is unreachable anyway:
+    coil2 at full stroke bends its far limb p4 to 17.2° (the physical plant, coil2 on for 6 s:
+    ψ = 0, 8.2, 31.6, 17.2°), short of 21°. The way into 0010 is the near limb's own."""
     robot = load_robot(FOUR_SHARED)
-    path = entry_path(robot, robot.transitions.sequence("0011,0111,0011"))
-    assert [robot.transitions.label(s) for s in path.states] == ["0000", "0010", "0011"]
+    path = entry_path(robot, robot.transitions.sequence("0010,1010,0010"))
+    assert [robot.transitions.label(s) for s in path.states] == ["0000", "0010"]
+    assert robot.transitions.index("0011") in robot.unreachable
+    with pytest.raises(GaitError, match="no allowed path from the rest state 0000"):
+        entry_path(robot, robot.transitions.sequence("0011,0111,0011"))
+
+
+def _inchworm_middle_on_the_tail_coil(tmp_path: Path):
+    """inchworm-3 with its middle limb named on the tail's coil (a lab wiring two limbs to one
+    coil): in the model the coil sits at the tail and bends the middle to 8.1° alone."""
+    text = (ROBOTS / "inchworm-3.toml").read_text(encoding="utf-8")
+    text = (text.replace('actuator = "sma-middle"', 'actuator = "sma-tail"')
+                .replace('[[actuator]]\nname = "sma-middle"\nchannel = 1\n\n', '')
+                .replace('name = "sma-head"\nchannel = 2', 'name = "sma-head"\nchannel = 1'))
+    assert text.count("sma-middle") == 0
+    return robot_from(tmp_path, text)
+
+
+def test_a_state_a_raised_limb_cannot_reach_is_an_unreachable_error(tmp_path):
+    """The build chose 100 110 111 101 100 as gait 0 (no shared coil moves its limbs apart in
+    it) and the firmware faulted 3.6 s into the simulation (SMA_ON_LIMIT, then STATE_TIMEOUT on
+    'middle'): the middle limb, on the tail's coil, gets 8.1° alone and 16.2° with every coil
+    hot, short of its 21° entry edge. Every state with the middle raised is unreachable, and a
+    gait stepping into one is an error that names the limb and the angles."""
+    robot = _inchworm_middle_on_the_tail_coil(tmp_path)
+    middle_up = {s for s in range(robot.transitions.n_states) if (s >> 1) & 1}
+    assert set(robot.unreachable) == middle_up
+    for s in middle_up:
+        [(limb, got, need)] = robot.unreachable[s]
+        assert robot.limbs[limb].name == "middle" and got < need == pytest.approx(21.0)
+    [problem] = [p for p in gait_problems(robot, robot.transitions.sequence("100,110,111,101,100"))
+                 if p.kind == "unreachable"]
+    assert problem.severity == "error" and problem.message == (
+        "gait 100 110 111 101 100: goes to states 110 (step 1), 111 (step 2), which the robot cannot reach "
+        "on the simulated body (every raised limb's coil at full stroke): in 110 'middle' needs ψ ≥ 21.0° and "
+        "gets at most 8.1° (the warning when the robot file is loaded)")
+    assert kinds(robot, "000", "100", "101", "001") == []  # the tail and head alone: reachable
+
+
+def test_the_build_does_not_make_a_gait_with_an_unreachable_state_gait_0(tmp_path):
+    """Every optimal gait of the wiring above needs the middle limb up: the build refuses it with
+    the reason, instead of firmware that faults within seconds."""
+    from proleg.errors import BuildError
+    from proleg.firmware.gaits import firmware_gaits, gait_warnings
+
+    robot = _inchworm_middle_on_the_tail_coil(tmp_path)
+    with pytest.raises(BuildError, match=r"gait 0 of \+x, the one START runs, cannot run on this robot: .*"
+                                         r"which the robot cannot reach .* 'middle' needs"):
+        gait_warnings(robot, firmware_gaits(robot))
+
+
+def test_no_bundled_robot_has_an_unreachable_state():
+    for path in sorted(ROBOTS.glob("*.toml")):
+        assert load_robot(path).unreachable == {}, path.name

@@ -24,7 +24,8 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .names import identifier
-from .robot_body import CoilLift, blocked_descents, coupled_states, coupling_warnings, reach_warnings, shared_coil_lifts
+from .robot_body import (CoilLift, Unreached, blocked_descents, coupled_states, coupling_warnings, reach_warnings,
+                         shared_coil_lifts, unreachable_states)
 from .robot_plant import (PlantSection, default_plant_section, inference_warning, limb_friction, plant_section,
                           rest_warnings)
 from .robot_climb import ClimbLimit, climb_guard_refusal, climb_limit
@@ -196,6 +197,10 @@ class Robot:
     #: one of its limbs while holding another up): state -> (actuator, lifted limb, raised limbs)
     #: per lift; ``proleg.robot_body.shared_coil_lifts``, checked by ``proleg.gait.feasibility``
     coil_lifts: dict[int, tuple[CoilLift, ...]] = field(default_factory=dict)
+    #: states the matrix enters that a raised limb cannot reach on the simulated body, even with
+    #: every raised limb's coil at full stroke: state -> (limb, ψ° at most, ψ° needed) per limb;
+    #: ``proleg.robot_body.unreachable_states``, checked by ``proleg.gait.feasibility``
+    unreachable: dict[int, tuple[Unreached, ...]] = field(default_factory=dict)
 
     @property
     def where(self) -> str:
@@ -309,7 +314,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
             raise RobotFileError(f"{path}: gaits.library: {why}")
     _check_climb(path, control, limbs, library)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library,
-                 shared_coil_lifts(list(limbs), coupled))
+                 shared_coil_lifts(list(limbs), coupled),
+                 unreachable_states(list(limbs), [a.name for a in actuators], plant, table))
 
 
 def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:

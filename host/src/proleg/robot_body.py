@@ -15,7 +15,12 @@ loaded, as warnings about the simulator and the file, not refusals (a real body 
   ``coupling_warnings``);
 * ``shared_coil_lifts``: those of them where the limb is lifted by its own coil, shared with
   a raised limb: no step can leave a shared coil's limbs so (the gait feasibility check,
-  ``proleg.gait.feasibility``, refuses such a step as ``shared-actuator``).
+  ``proleg.gait.feasibility``, refuses such a step as ``shared-actuator``);
+* ``unreachable_states``: states the matrix enters in which a raised limb cannot get to its
+  level even with the coils of every raised limb at full stroke (a limb on another limb's
+  coil, which bends the body at that limb: ``unreachable_levels`` warns about the limb); the
+  feasibility check refuses a step into one (``unreachable``), so the build does not choose
+  such a gait as gait 0.
 
 ``body_of`` is the physical plant's body for a robot's limbs, coils and ``[plant]`` table.
 """
@@ -319,6 +324,54 @@ def body_coupling(robot: Any, table: Any = None, drive: list[int] | None = None)
     margin = robot.control.hold_margin_deg
     return (coupled_states(limbs, names, robot.plant, table, margin, drive),
             blocked_descents(limbs, names, robot.plant, table, margin, drive))
+
+
+#: what ``unreachable_states`` gives per state: (limb, ψ° at most, ψ° its level needs)
+Unreached = tuple[int, float, float]
+
+
+def unreachable_states(limbs: list[Any], actuators: list[str], section: PlantSection,
+                       table: Any) -> dict[int, tuple[Unreached, ...]]:
+    """States the matrix enters (an allowed transition into it from another state) in which
+    some raised limb cannot reach its level's entry edge (ψ* + hysteresis/2) on the physical
+    plant's body, even with the coil of every raised limb at full stroke and the others cold:
+    ``{state: ((limb, ψ° reached, ψ° needed), ...)}``. The most any drive of that state gives,
+    so no state is listed that some controller could reach. Empty for a body the model cannot
+    describe (``unreachable_levels`` says why) and past ``COUPLING_CHECK_MAX_STATES``."""
+    from .states import limb_levels
+
+    if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
+        return {}  # one limb: unreachable_levels is the whole story
+    limb_act = [actuators.index(lb.actuator) for lb in limbs]
+    geo = body_of(limb_act, len(actuators), section)
+    if curl_problem(geo):
+        return {}
+    levels = tuple(lb.levels for lb in limbs)
+    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
+    rows, wanted = [], []
+    for s in entered:
+        want = limb_levels(s, levels)
+        if not any(want):
+            continue
+        c = np.zeros(len(actuators))
+        for i, k in enumerate(want):
+            if k > 0:
+                c[limb_act[i]] = 1.0
+        rows.append(c)
+        wanted.append((s, want))
+    if not rows:
+        return {}
+    psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    out: dict[int, tuple[Unreached, ...]] = {}
+    for (s, want), p in zip(wanted, psi):
+        short = []
+        for i, k in enumerate(want):
+            need = limbs[i].psi_star_deg[k - 1] + limbs[i].hysteresis_deg / 2.0 if k > 0 else None
+            if need is not None and float(p[i]) < need:
+                short.append((i, float(p[i]), need))
+        if short:
+            out[s] = tuple(short)
+    return out
 
 
 def shared_coil_lifts(limbs: list[Any], coupled: dict[int, list[tuple[int, list[int], float]]]

@@ -105,7 +105,8 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
     Ties whose steps each move limbs one way only come first (stable otherwise), so that
     gait 0, the one START and ``proleg sim`` run by default, is the easiest to make
     physically (``proleg.states.opposing_steps``); and a tie the hardware cannot make at all
-    (``CANNOT_MAKE``: a shared coil moving its limbs apart, no way in from rest) is never
+    (``CANNOT_MAKE``: a shared coil moving its limbs apart, a state a raised limb cannot reach on
+    the simulated body, no way in from rest) is never
     gait 0 while another can be made (the build refused the robot, though a tie it could
     walk was there)."""
     from ..gait import optimal_gaits
@@ -161,7 +162,7 @@ def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:
 
 
 #: Feasibility problems that mean the hardware cannot make the gait at all.
-CANNOT_MAKE = ("shared-actuator", "no-entry")
+CANNOT_MAKE = ("shared-actuator", "unreachable", "no-entry")
 
 
 def cannot_make(problems: Any) -> list[Any]:
@@ -174,7 +175,8 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
     """What the hardware may not do in the firmware's gaits (proleg.gait.feasibility):
     one line per problem, for ``proleg build`` to print. BuildError when gait 0 of a
     direction (the one START runs by default) is one the hardware cannot make: a shared
-    actuator moving its limbs apart, or no way in from rest over allowed transitions.
+    actuator moving its limbs apart, a state a raised limb cannot reach, or no way in from rest
+    over allowed transitions.
     A coil on longer than safety.max_on_ms (on-time, never-cools) stays a warning: the
     firmware's hold is bang-bang on psi and sma.c enforces the on-time limit and the
     cool-down (the paper's one-actuator R1 walks 10 11 10 with its coil held)."""

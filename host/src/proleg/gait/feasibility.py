@@ -10,6 +10,10 @@ and lets them fall when it cools, so:
   hold — it lifts one of its limbs while holding another up (``Robot.coil_lifts``, from the
   body model that warns about it when the file is loaded: one coil on two limbs lifts its
   near limb first, so paper-r1-one-actuator makes 00 -> 10 -> 11 but never 01).
+* **Unreachable states** — a step into a state in which some raised limb cannot get to its
+  level on the simulated body, even with every raised limb's coil at full stroke (a limb
+  named on another limb's coil, which sits at that limb: ``Robot.unreachable``): error
+  ``unreachable``.
 * **Opposing steps** — a step that raises a limb on one actuator while lowering a limb on
   another needs a heating and a cooling crossing to coincide; the controller synchronises
   them as well as it can, but the robot may pass through an intermediate state (warning
@@ -123,6 +127,9 @@ def _step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]
                 "shared-actuator", "error",
                 f"{'raises' if up else 'lowers'} {moved} but not {still}, which share actuator {act.name!r}: {why}",
             ))
+    if a != b and b in getattr(robot, "unreachable", {}):
+        out.append(("unreachable", "error", f"goes to state {robot.transitions.label(b)}, {CANNOT_REACH}: "
+                                            f"{_short_of(robot, b)} (the warning when the robot file is loaded)"))
     if not out and any(v > 0 for v in moves.values()) and any(v < 0 for v in moves.values()):
         rising = [n for n, v in moves.items() if v > 0]
         falling = [n for n, v in moves.items() if v < 0]
@@ -132,6 +139,27 @@ def _step_problems(robot: "Robot", a: int, b: int) -> list[tuple[str, str, str]]
             f"(a heating and a cooling crossing must coincide)",
         ))
     return out
+
+
+CANNOT_REACH = "which the robot cannot reach on the simulated body (every raised limb's coil at full stroke)"
+
+
+def _short_of(robot: "Robot", state: int) -> str:
+    """Why ``state`` cannot be reached (``Robot.unreachable``)."""
+    return "; ".join(f"{robot.limbs[i].name!r} needs ψ ≥ {need:.1f}° and gets at most {got:.1f}°"
+                     for i, got, need in robot.unreachable[state])
+
+
+def _unreachable_problem(robot: "Robot", gait: str, unreached: list[tuple[int, int]]) -> Problem:
+    """One ``unreachable`` error for the steps of a gait into states it cannot reach: the first
+    three named, with the reason for the first."""
+    label = robot.transitions.label
+    named = ", ".join(f"{label(b)} (step {k})" for k, b in unreached[:3])
+    more = f" and {len(unreached) - 3} more" if len(unreached) > 3 else ""
+    first = unreached[0][1]
+    return Problem("unreachable", "error", f"gait {gait}: goes to state{'s' if len(unreached) > 1 else ''} "
+                                           f"{named}{more}, {CANNOT_REACH}: in {label(first)} "
+                                           f"{_short_of(robot, first)} (the warning when the robot file is loaded)")
 
 
 def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
@@ -202,10 +230,16 @@ def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
     cycle = _open(states)
     gait = _name(robot, cycle + cycle[:1])
     out = []
+    unreached = []  # (step, state): one problem for them all (an 8-limb gait may enter dozens)
     for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1):
         for kind, severity, what in step_problems(robot, a, b):
+            if kind == "unreachable":
+                unreached.append((k, b))
+                continue
             label = f"{robot.transitions.label(a)} -> {robot.transitions.label(b)}"
             out.append(Problem(kind, severity, f"gait {gait}: step {k} ({label}) {what}"))
+    if unreached:  # first: a state no drive reaches says the most
+        out.insert(0, _unreachable_problem(robot, gait, unreached))
     out += on_time_problems(robot, cycle)
     try:
         entry_path(robot, cycle)
