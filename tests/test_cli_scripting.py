@@ -438,6 +438,29 @@ def test_sim_recording_marks_injections_and_faults_for_the_plot(capsys, tmp_path
     assert code == 0 and (tmp_path / "run.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_plot_of_a_sim_recording_leaves_the_unknown_boot_state_out_of_the_state_panel(capsys, tmp_path,
+                                                                                      monkeypatch):
+    """The first frames of every simulator recording have measured=65535 (state unknown): the
+    state panel's axis ran 0..65535, the real states a flat line at the bottom."""
+    import proleg.plot
+
+    path = tmp_path / "run.csv"
+    code, _, err = run(capsys, "sim", "paper-r1", "--duration", "2", "--record", str(path))
+    assert code == 0, err
+    assert "65535" in path.read_text().splitlines()[1]  # the recording keeps it (docs/data.md)
+    drawn = []
+    real_write = proleg.plot.write_figure
+    monkeypatch.setattr(proleg.plot, "write_figure", lambda fig, out, dpi=None: (drawn.append(fig),
+                                                                                  real_write(fig, out, dpi)))
+    code, _, err = run(capsys, "plot", str(path), "-o", str(tmp_path / "run.png"))
+    assert code == 0, err
+    state_panel = drawn[0].axes[1]
+    measured = next(line for line in state_panel.get_lines() if line.get_label() == "measured")
+    ys = [y for y in measured.get_ydata() if y == y]  # NaN: not drawn
+    assert ys and max(ys) <= 3 and len(ys) < len(measured.get_ydata())
+    assert state_panel.get_ylim()[1] < 10
+
+
 def test_console_plain_jsonl_prints_named_rows_for_scripts(capsys):
     code, out, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--format", "jsonl", "--duration", "1")
     assert code == 0, err

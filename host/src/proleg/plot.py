@@ -11,13 +11,19 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .errors import LinkError, UsageError
 from .outputs import replacing
+from .protocol.enums import Flag
 from .record import Recording, read_recording
 from .states import label
 
 #: the figure formats proleg writes (matplotlib's Agg backend), chosen by the file's suffix
 FIGURE_FORMATS = ("png", "svg", "pdf")
+
+#: the ``measured`` value of a frame whose state the board does not know (docs/data.md)
+STATE_UNKNOWN_VALUE = 0xFFFF
 
 
 def figure_problem(out: Path) -> str | None:
@@ -66,6 +72,14 @@ def _levels(rec: Recording) -> tuple[int, ...]:
     return (2,) * rec.limbs
 
 
+def known_measured(rec: Recording) -> np.ndarray:
+    """The measured state per frame as floats, NaN where the board did not know it (the
+    ``STATE_UNKNOWN`` flag, and the 65535 a recording keeps there, docs/data.md): the state
+    panel leaves a gap at boot instead of an axis that runs up to 65535."""
+    unknown = ((rec.flags & int(Flag.STATE_UNKNOWN)) != 0) | (rec.measured == STATE_UNKNOWN_VALUE)
+    return np.where(unknown, np.nan, rec.measured.astype(float))
+
+
 def _markers(rec: Recording) -> list[tuple[float, str, str]]:
     """(firmware time, colour, label) of every fault, E-stop and injected fault (the reader has
     made every event's ``t_s`` a number or None)."""
@@ -111,7 +125,7 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     ax = axes[1]
     levels = _levels(rec)
     ax.step(t, rec.target, where="post", color="0.6", lw=2.5, label="target")
-    ax.step(t, rec.measured, where="post", color="C3", lw=1.2, label="measured")
+    ax.step(t, known_measured(rec), where="post", color="C3", lw=1.2, label="measured")
     n_states = 1
     for k in levels:
         n_states *= k
