@@ -255,6 +255,16 @@ def test_learn_checks_every_option_before_it_creates_the_log(tmp_path, capsys, a
     assert not log.exists()
 
 
+def test_a_log_in_a_folder_that_does_not_exist_is_a_usage_error_and_creates_nothing(tmp_path, capsys):
+    """The log's folder was created, parents and all (exit 0), where every other output
+    (--out, -o, --record) is refused when its folder does not exist."""
+    log = tmp_path / "nope" / "deeper" / "t.jsonl"
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1")
+    assert code == 2 and out == ""
+    assert err == f"proleg: error: learn: --log {log}: directory {log.parent} does not exist\n"
+    assert not (tmp_path / "nope").exists()
+
+
 @pytest.mark.parametrize("value", ["nan", "-1", "inf"])
 def test_learn_variance_weight_is_checked_as_gait_checks_it(tmp_path, capsys, value):
     """learn took nan, -1 and inf (`mean − -1·σ`); gait refuses them."""

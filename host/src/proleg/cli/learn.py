@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -181,7 +182,19 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
             raise LearnError(f"learn: --out {args.out}: directory {directory} does not exist")
         refuse_inputs("learn", "--out", args.out,
                       {"ROBOT": args.robot, "--log": args.log, "--track": args.track, "--truth": args.truth})
+    if linked:
+        _check_log_writable(args.log)
     return source
+
+
+def _check_log_writable(path: str) -> None:
+    """The log exploring appends to, checked as every output is before anything is opened or
+    created: a folder that does not exist is a usage mistake (``LearnError``, exit 2; it was
+    created, parents and all)."""
+    p = Path(path)
+    for directory in (p.parent, Path(os.path.realpath(p)).parent):  # "." for a bare name; a symlink's target
+        if not directory.is_dir():
+            raise LearnError(f"learn: --log {path}: directory {directory} does not exist")
 
 
 def _checked_truth(args: argparse.Namespace, robot):

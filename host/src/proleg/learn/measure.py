@@ -153,7 +153,6 @@ class TrialLog:
             self._read(append, robot)
         if not append:
             return
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fh = open(self.path, "r+b" if self.path.exists() else "wb")
         self._fh.truncate(self._good_bytes)  # drop a torn last line
         self._fh.seek(self._good_bytes)
