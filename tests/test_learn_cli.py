@@ -265,6 +265,19 @@ def test_a_log_in_a_folder_that_does_not_exist_is_a_usage_error_and_creates_noth
     assert not (tmp_path / "nope").exists()
 
 
+@pytest.mark.parametrize("where, why", [("folder.jsonl", "Is a directory"), ("/sys/t.jsonl", "Permission denied")])
+def test_a_log_that_cannot_be_written_is_a_failed_output_in_words(tmp_path, capsys, where, why):
+    """It was `learn: [Errno 13] Permission denied: '/sys/t.jsonl'`, exit 2: an output that
+    cannot be written is exit 1, in the words --record and --out use."""
+    if where.startswith("/sys/") and not Path("/sys/kernel").is_dir():
+        pytest.skip("no sysfs")
+    (tmp_path / "folder.jsonl").mkdir()
+    log = tmp_path / where  # an absolute where stays itself
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1")
+    assert code == 1 and out == ""
+    assert err == f"proleg: error: learn: cannot write trial log {log}: {why}\n"
+
+
 @pytest.mark.parametrize("value", ["nan", "-1", "inf"])
 def test_learn_variance_weight_is_checked_as_gait_checks_it(tmp_path, capsys, value):
     """learn took nan, -1 and inf (`mean − -1·σ`); gait refuses them."""

@@ -190,11 +190,16 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
 def _check_log_writable(path: str) -> None:
     """The log exploring appends to, checked as every output is before anything is opened or
     created: a folder that does not exist is a usage mistake (``LearnError``, exit 2; it was
-    created, parents and all)."""
+    created, parents and all), a place the log cannot be written a ``LinkError`` (exit 1)."""
     p = Path(path)
     for directory in (p.parent, Path(os.path.realpath(p)).parent):  # "." for a bare name; a symlink's target
         if not directory.is_dir():
             raise LearnError(f"learn: --log {path}: directory {directory} does not exist")
+    why = ("Is a directory" if p.is_dir() else
+           "Permission denied" if not os.access(p.parent, os.W_OK | os.X_OK)
+           or (p.exists() and not os.access(p, os.R_OK | os.W_OK)) else "")
+    if why:
+        raise LinkError(f"learn: cannot write trial log {path}: {why}")
 
 
 def _checked_truth(args: argparse.Namespace, robot):
@@ -225,8 +230,12 @@ def _open_log(args: argparse.Namespace, robot, linked: bool):
             t = robot.transitions
             trial_log = TrialLog(args.log, append=linked, robot=robot.name,  # a report only reads
                                  states=t.labels(), transitions=zip(map(t.label, t.src), map(t.label, t.dst)))
-    except (TrialLogError, OSError) as e:
+    except TrialLogError as e:
         raise LearnError(f"learn: {e}") from None
+    except OSError as e:  # exploring writes the log (exit 1, as any output); a report only reads it (exit 2)
+        if linked:
+            raise LinkError(f"learn: cannot write trial log {args.log}: {e.strerror or e}") from None
+        raise LearnError(f"learn: cannot read trial log {args.log}: {e.strerror or e}") from None
     for w in torn:
         log.warning("%s", w.message)
     return trial_log
