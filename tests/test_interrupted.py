@@ -216,6 +216,28 @@ def test_sigterm_and_sighup_end_a_sim_as_ctrl_c_does(tmp_path, sig):
     assert len(read_recording(record).time_s) > 0
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_ends_sim_pty_with_its_exit_status_and_one_line(sig):
+    """``sim --pty`` took Ctrl-C (and SIGTERM, SIGHUP, delivered as one) for its way to stop
+    and exited 0: a script or CI job could not tell it was stopped. Only console is exempt."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "sim", str(R1), "--pty"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        first = proc.stdout.readline()  # serving once it names the pty
+        assert first.startswith("simulated paper-r1 on /dev/"), first
+        path = first.split(" on ")[1].split(" ")[0]
+        time.sleep(0.5)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == (130 if sig == signal.SIGINT else 128 + sig), (proc.returncode, err)
+    lines = [x for x in err.splitlines() if "warning" not in x]
+    assert len(lines) == 1 and lines[0].startswith("proleg: interrupted after serving "), err
+    assert lines[0].endswith(f" s (simulated) on {path}; nothing recorded")
+
+
 def test_ctrl_c_before_the_command_begins_is_one_line(capsys, monkeypatch):
     """Ctrl-C while the parser is built (or Python still loads proleg) printed a traceback."""
     import importlib

@@ -217,16 +217,22 @@ def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:
     from ..sim.pty import PtyServer
 
     say = lambda line: print(line, flush=True)  # noqa: E731
+    interrupted = False
     with PtyServer(sim, speed=args.speed, faults=timed, say=say) as server:
         print(f"simulated {sim.robot.name} on {server.path} (115200 8N1; Ctrl-C to stop)", flush=True)
         print(f"  connect with: proleg console --port {server.path}", flush=True)
         try:
             server.serve(limit_s)
-        except KeyboardInterrupt:
-            pass
+        except KeyboardInterrupt:  # Ctrl-C, or SIGTERM/SIGHUP delivered as one (cli.main)
+            interrupted = True
         for at, fault in server.due:  # never dropped silently
             print(f"proleg: not injected: {fault}+{at:g} (the simulation stopped at "
                   f"{server.elapsed_s:.1f} s)", file=sys.stderr)
+    if interrupted:  # 130 (143, 129) as every command but console: a script sees it did not end by itself
+        from ..errors import Interrupted
+
+        raise Interrupted(f"interrupted after serving {server.elapsed_s:.1f} s (simulated) on {server.path}; "
+                          "nothing recorded")
     return 0
 
 
