@@ -418,6 +418,28 @@ def test_set_param_by_name_on_the_simulated_board(capsys):
     assert "known: drive_duty" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("argv, message", [
+    (("drive_duty", "5000", "--index", "5"),
+     "--index 5: drive_duty has no index (only psi_star_cdeg and hysteresis_cdeg take one; docs/control.md)"),
+    (("hold_ms", "100", "--index", "0"), "--index 0: hold_ms has no index"),
+    (("hysteresis_cdeg", "100", "--index", "2"),
+     "--index 2: hysteresis_cdeg's index is the limb; paper-r1 has 2 limbs, expected 0..1"),
+    (("psi_star_cdeg", "1500", "--index", "2"), "paper-r1 has 2 thresholds, expected 0..1"),
+])
+def test_set_param_refuses_an_index_the_parameter_does_not_have_before_sending(capsys, monkeypatch, argv, message):
+    """`set-param drive_duty 5000 --index 5` sent it and printed `set drive_duty[5] = 5000`:
+    drive_duty has no index (docs/control.md)."""
+    from proleg.link.client import RobotClient
+
+    sent = []
+    monkeypatch.setattr(RobotClient, "set_param", lambda self, *a: sent.append(a))
+    code, out, err = run(capsys, "set-param", "--sim", "paper-r1", *argv)
+    assert code == 2 and out == "" and err.startswith("proleg: error: ") and message in err, err
+    assert err.count("\n") == 1 and sent == []  # one line, and nothing was sent
+    code, out, _ = run(capsys, "set-param", "--sim", "caterpillar-4", "psi_star_cdeg", "1500", "--index", "5")
+    assert code == 0 and out.startswith("set psi_star_cdeg[5] = 1500") and sent == [("psi_star_cdeg", 5, 1500)]
+
+
 def test_sim_recording_marks_injections_and_faults_for_the_plot(capsys, tmp_path):
     pd = pytest.importorskip("pandas")
     from proleg.plot import _markers

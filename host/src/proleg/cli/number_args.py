@@ -56,6 +56,11 @@ def gait_index(text: str) -> int:
     return v
 
 
+def param_index(text: str) -> int:
+    """``set-param --index``: 0..255 (SET_PARAM's index is one byte)."""
+    return _int_in(text, 0, 255, "an index")
+
+
 def gait_number(text: str) -> int:
     """A gait table index ≥ 0 (``sim --gait``: the built-in gaits, no user gait)."""
     v = _int(text, "a gait index")

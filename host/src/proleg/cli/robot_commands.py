@@ -21,7 +21,8 @@ from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..names import counted
 from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import baudrate, can_bitrate, can_node, gait_index, heading_deg, positive_float, reply_timeout
+from .number_args import (baudrate, can_bitrate, can_node, gait_index, heading_deg, param_index, positive_float,
+                          reply_timeout)
 
 log = logging.getLogger("proleg")
 
@@ -364,9 +365,10 @@ def cmd_set_param(args: argparse.Namespace) -> int:
     if watchdog and 0 < args.value < MIN_LINK_WATCHDOG_MS:
         raise UsageError(f"link_watchdog_ms: expected at least {MIN_LINK_WATCHDOG_MS} ms (as in a robot file; the "
                          f"board takes 0 only when its build has no watchdog), got {args.value}")
+    index = _param_index(args)
     with open_client(args) as client:
-        client.set_param(args.name, args.index, args.value)
-        print(f"set {args.name}[{args.index}] = {args.value} on {client.link.description}")
+        client.set_param(args.name, index, args.value)
+        print(f"set {args.name}[{index}] = {args.value} on {client.link.description}")
         if watchdog and 0 < args.value < HEARTBEAT_S * 1000 * WATCHDOG_SHARE:
             print(f"note: the board keeps {args.value} ms until it resets, and nothing tells a later session: one "
                   f"that knows only the robot file's watchdog pings every {HEARTBEAT_S:g} s or a quarter of that "
@@ -375,6 +377,36 @@ def cmd_set_param(args: argparse.Namespace) -> int:
         if getattr(args, "sim", None):
             print(SIM_IS_FRESH)  # as load-gait and calibrate say: the setting ends with this command
     return 0
+
+
+#: The parameters that take ``--index``, and what it counts (docs/control.md); the others have none.
+INDEXED_PARAMS = {"psi_star_cdeg": "the threshold, counted limb by limb (a limb of k levels has k − 1)",
+                  "hysteresis_cdeg": "the limb"}
+
+
+def _param_index(args: argparse.Namespace) -> int:
+    """``--index`` for SET_PARAM (0 when the parameter has none). An index on a parameter
+    that has none is a UsageError, as is one past the robot's limbs or thresholds when the
+    robot is known (``--sim ROBOT``; a board checks it itself, NACK OUT_OF_RANGE): it was
+    sent and ignored, and ``set drive_duty[5]`` printed as if it meant something."""
+    counts = INDEXED_PARAMS.get(args.name)
+    if counts is None:
+        if args.index is not None:
+            raise UsageError(f"--index {args.index}: {args.name} has no index (only "
+                             f"{' and '.join(INDEXED_PARAMS)} take one; docs/control.md)")
+        return 0
+    index = args.index or 0
+    if isinstance(getattr(args, "sim", None), str):
+        from ..robot import load_robot
+        from .main import robot_arg
+
+        robot = load_robot(robot_arg(args.sim))
+        limbs = args.name == "hysteresis_cdeg"
+        n = len(robot.limbs) if limbs else sum(limb.levels - 1 for limb in robot.limbs)
+        if index >= n:
+            raise UsageError(f"--index {index}: {args.name}'s index is {counts}; {robot.name} has "
+                             f"{counted(n, 'limb' if limbs else 'threshold')}, expected 0..{n - 1}")
+    return index
 
 
 def _param_name(text: str) -> str:
@@ -451,8 +483,9 @@ def add_arguments(subparsers: Any) -> None:
                                epilog="parameters: " + ", ".join(p.name.lower() for p in ParamId))
     sp.add_argument("name", metavar="NAME", type=_param_name, help="parameter name (see below)")
     sp.add_argument("value", metavar="VALUE", type=int, help="value in the parameter's unit (permyriad, ms, 0.01°)")
-    sp.add_argument("--index", type=int, default=0, help="hysteresis_cdeg: the limb, from 0 = the first; psi_star_cdeg: the "
-                         "threshold, counted limb by limb (a limb of k levels has k-1); others: unused (default 0). "
+    sp.add_argument("--index", type=param_index, default=None, metavar="N",
+                    help="hysteresis_cdeg: the limb, from 0 = the first; psi_star_cdeg: the threshold, counted limb "
+                         "by limb (a limb of k levels has k-1); default 0. The other parameters have none. "
                          "Every parameter, unit and range: docs/control.md")
     add_link_options(sp, sim_takes_robot=True)
     sp.set_defaults(run=cmd_set_param)
