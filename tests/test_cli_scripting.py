@@ -42,6 +42,9 @@ def test_version_and_exit_codes_in_help(capsys):
     out = capsys.readouterr().out
     assert "exit status:" in out
     assert re.search(r"0\s+ok", out) and re.search(r"1\s+failed", out) and re.search(r"2\s+usage", out)
+    # and the signals' statuses, as the README gives them (help listed 0, 1 and 2 only)
+    assert re.search(r"130\s+interrupted: Ctrl-C", out) and re.search(r"143\s+ended by SIGTERM", out)
+    assert re.search(r"129\s+ended by SIGHUP", out)
 
 
 @pytest.mark.parametrize("argv", [

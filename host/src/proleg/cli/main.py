@@ -7,7 +7,7 @@ Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed
 faulted, an output could not be written, the board does not run the robot file's firmware: a
 file that loads but is not the one the board was built from is found only over the link);
 2 usage (a bad argument, a robot file, board file or recording that does not load, a bad
-gait). Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
+gait); 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP. Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
 a closed pipe (``proleg … | head``), a full disk and a terminal that cannot show UTF-8 end
 without a traceback.
 """
@@ -32,11 +32,15 @@ from .number_args import max_transitions
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
 exit status:
-  0  ok
-  1  failed: a link or command failed, the robot faulted, an output could not be written,
-     the board does not run the firmware of the robot file given
-  2  usage: a bad argument (an output directory that does not exist), a robot file,
-     board file or recording that does not load, a bad gait
+  0    ok
+  1    failed: a link or command failed, the robot faulted, an output could not be written,
+       the board does not run the firmware of the robot file given
+  2    usage: a bad argument (an output directory that does not exist), a robot file,
+       board file or recording that does not load, a bad gait
+  130  interrupted: Ctrl-C (SIGINT), with one line saying what was kept (console: Ctrl-C
+       is a way to leave, 0)
+  143  ended by SIGTERM (kill, a CI job's timeout) the way Ctrl-C ends it
+  129  ended by SIGHUP (a closed terminal) the way Ctrl-C ends it
 
 ROBOT is a robot file or the name of a bundled example (proleg robots lists them).
 """
