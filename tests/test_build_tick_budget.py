@@ -139,3 +139,43 @@ def test_proleg_build_refuses_r1_on_the_nano_at_a_rate_its_budget_cannot_meet(tm
     assert code == 2
     assert err.count("\n") == 1 and f"control.tick_hz = {hz} is too fast for board arduino-nano" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_robot_file_md_gives_the_default_tick_rate_and_the_highest_rate_each_board_takes():
+    """docs/robot-file.md named `tick_hz` but neither its default (1000) nor that robots of four
+    limbs or more must lower it: the build's refusal was the first anyone heard of it. Each rate
+    in its table passes both checks (I2C reads, [budget]) and one more Hz fails one of them."""
+    from types import SimpleNamespace
+
+    from proleg.firmware import placement
+    from proleg.firmware.fit import DEFAULT_I2C_HZ
+    from proleg.robot import Control
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text(encoding="utf-8")
+    assert Control().tick_hz == 1000
+    assert "`tick_hz` (200–10000, default 1000)" in doc and "a robot of four limbs\nor more must set `tick_hz` lower" in doc
+    rows = {}
+    for line in doc.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) == 9 and cells[0] != "limbs" and all(c.isdigit() for c in cells[1:]):
+            for name in cells[0].split(", "):
+                rows[name] = [int(c) for c in cells[1:]]
+    assert set(rows) == {p.stem for p in boards_dir().glob("*.toml")}
+
+    def fits(board, limbs: int, hz: int) -> bool:
+        robot = SimpleNamespace(name="toy", where="toy.toml", limbs=tuple(
+            SimpleNamespace(name=f"l{i}", imu=None) for i in range(limbs)), control=SimpleNamespace(tick_hz=hz))
+        i2c_hz = int((board.i2c or {}).get("hz", DEFAULT_I2C_HZ))  # as check_fit reads it
+        try:  # the I2C reads, as check_fit checks them
+            placement.check_tick_budget(robot, board.name, placement.place_imus(robot, board), i2c_hz)
+            check_tick_budget(robot, board)  # the board's [budget]
+        except BuildError:
+            return False
+        return True
+
+    for name, most in rows.items():
+        board = load_board(name)
+        for limbs, hz in enumerate(most, start=1):
+            assert fits(board, limbs, hz) and not fits(board, limbs, hz + 1), (name, limbs, hz)
+        assert [limbs for limbs, hz in enumerate(most, start=1) if hz < 1000] == list(
+            range(3 if name == "arduino-nano" else 4, 9))
