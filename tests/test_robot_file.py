@@ -140,9 +140,34 @@ def test_psi_star_count_must_match_levels(tmp_path):
             "2 critical angle")
 
 
-def test_forbidden_mark_on_a_rewarded_transition(tmp_path):
+def test_forbidden_mark_on_a_rewarded_transition_says_what_forbidden_is_for_and_the_fix(tmp_path):
+    """It said "(expected 'x' there)", which means nothing for a CSV table, nor says why."""
     text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11"]')
-    rejects(tmp_path, text, "transitions.forbidden[0]", "01->11", "also gives it a reward")
+    msg = rejects(tmp_path, text, "transitions.forbidden[0]: 01->11 is marked forbidden, but transitions.matrix[2][4] "
+                  "gives it a reward (-1): forbidden lists the transitions the robot cannot make, to check that the "
+                  'table allows none of them; write "x" there, or drop the mark')
+    assert "expected 'x'" not in msg
+    (tmp_path / "t.csv").write_text("from,to,reward\n00,10,1\n10,11,2.5\n11,01,1\n01,00,1\n")
+    head = R1.split("[transitions]")[0]
+    msg = rejects(tmp_path, head + '[transitions]\nfile = "t.csv"\nforbidden = ["10->11"]\n',
+                  "transitions.forbidden[0]: 10->11 is marked forbidden, but the table t.csv gives it a reward "
+                  "(2.5): forbidden lists the transitions the robot cannot make", "; delete its row, or drop the mark")
+    assert "'x'" not in msg and '"x"' not in msg
+
+
+def test_the_transitions_keys_behave_as_robot_file_md_says(tmp_path):
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot-file.md").read_text(encoding="utf-8")
+    for key in ("forbidden", "states", "durations_s", "default_duration_s", "units"):
+        assert re.search(rf"^\| `{key}` \| .+ \| .+ \|$", doc, re.M), key  # a row of the table explaining it
+    t = "[transitions]\n"
+    rejects(tmp_path, R1.replace(t, t + 'states = ["00", "10", "01", "11"]\n'),
+            "transitions.states: expected the state order ['00', '01', '10', '11']")
+    assert load_robot(write(tmp_path, R1.replace(t, t + 'states = ["00", "01", "10", "11"]\n')))
+    rejects(tmp_path, R1.replace(t, t + "durations_s = 1.5\n"), "transitions.durations_s: expected 4 rows like the matrix")
+    r = load_robot(write(tmp_path, R1.replace(t, t + "default_duration_s = 1.5\n")))
+    assert list(r.transitions.duration) == [1.5] * len(r.transitions.src)
+    marked = R1.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]').replace(t, t + 'forbidden = ["@1->@3"]\n')
+    assert load_robot(write(tmp_path, marked)).transitions.lookup(1, 3) is None  # an index mark, agreeing
 
 
 def test_a_state_label_with_a_bad_digit_names_the_limb(tmp_path, capsys):

@@ -72,7 +72,8 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
         src, dst, rew, dur = _csv(path, f.string("file"), levels, names)
 
     if f.has("forbidden"):
-        _check_forbidden(path, value["forbidden"], levels, src, dst, names)
+        csv_file = None if f.has("matrix") else value["file"]
+        _check_forbidden(path, value["forbidden"], levels, src, dst, rew, csv_file, names)
 
     if f.has("default_duration_s"):
         default = f.number("default_duration_s", None, 0.0, 3600.0, open_lo=True)
@@ -156,12 +157,14 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
     return out
 
 
-def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, names: Sequence[str] = ()) -> None:
-    """``forbidden = ["01->11", ...]`` states what the robot cannot do; the table must agree."""
+def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, rewards, csv_file: str | None,
+                     names: Sequence[str] = ()) -> None:
+    """``forbidden = ["01->11", ...]`` states what the robot cannot do; the table must agree:
+    the matrix has "x" there, the CSV ``csv_file`` (None: the table is the matrix) no row."""
     where = f"{path}: transitions.forbidden"
     if not isinstance(marks, list) or not all(isinstance(m, str) for m in marks):
         raise RobotFileError(f"{where}: expected a list of transitions like \"01->11\"")
-    given = set(zip(np.asarray(src).tolist(), np.asarray(dst).tolist()))
+    given = dict(zip(zip(np.asarray(src).tolist(), np.asarray(dst).tolist()), np.asarray(rewards).tolist()))
     n = states.state_count(levels)
     for k, mark in enumerate(marks):
         parts = [p.strip() for p in mark.split("->")]
@@ -173,8 +176,12 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, 
             raise RobotFileError(f"{where}[{k}]: {mark} is a state to itself, never a transition (expected FROM->TO "
                                  "of two different states)")
         if (a, b) in given:
+            there, fix = ((f"transitions.matrix[{a + 1}][{b + 1}]", 'write "x" there') if csv_file is None
+                          else (f"the table {csv_file}", "delete its row"))
             raise RobotFileError(
-                f"{where}[{k}]: {mark} is marked forbidden but the table also gives it a reward (expected 'x' there)"
+                f"{where}[{k}]: {mark} is marked forbidden, but {there} gives it a reward ({given[a, b]:g}): "
+                "forbidden lists the transitions the robot cannot make, to check that the table allows none "
+                f"of them; {fix}, or drop the mark"
             )
 
 
