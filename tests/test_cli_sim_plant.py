@@ -75,6 +75,11 @@ def test_sim_json_echoes_the_conditions_given_and_those_in_effect(capsys, tmp_pa
 @pytest.mark.parametrize("args, words", [
     (["--condition", "speed=3"], "condition 'speed': unknown key"),
     (["--condition", "power=9"], "condition power: 9 is outside [0.2, 2] ×"),
+    # "expected a number in ×" read oddly, "nan is outside" as if nan were a number
+    (["--condition", "power=abc"], "condition power: expected a number (a factor, ×), got 'abc'"),
+    (["--condition", "ambient_c=warm"], "condition ambient_c: expected a number (in °C), got 'warm'"),
+    (["--condition", "coil_mismatch=abc"], "condition coil_mismatch: expected a number, got 'abc'"),
+    (["--condition", "power=nan"], "condition power: expected a finite number in [0.2, 2] ×, got 'nan'"),
     (["--condition", "imu_bias_deg=middle:2"], "no limb 'middle'"),
     (["--plant", "table", "--condition", "power=0.9"], "conditions apply to the physical plant"),
     (["--condition", "incline_deg=5", "--condition", "incline_deg=-5"],

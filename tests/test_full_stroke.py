@@ -64,7 +64,7 @@ RANGE = ("expected an angle from 26 (1° above where it is held without one: psi
     ("85.5", f"{RANGE}, got 85.5"),    # the hold band above it would pass 89°
     ('"full"', "expected a number, got 'full'"),
     ("true", "expected a number, got true"),  # as written in the file, not Python's True
-    ("nan", "expected a number, got nan"),
+    ("nan", "expected a finite number, got nan"),  # "a number, got nan" read as nonsense
 ])
 def test_a_stroke_outside_its_range_is_a_one_line_error_naming_the_limb(tmp_path, value, expected):
     path = with_strokes(tmp_path, value, 72)

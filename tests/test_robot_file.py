@@ -135,6 +135,18 @@ def test_a_band_around_psi_star_past_90_degrees_is_refused_when_the_file_is_read
             "limb 'left': psi_star_deg", "hysteresis_deg/2 (2/2) lie strictly inside (-90, 90)")
 
 
+@pytest.mark.parametrize("value, expected", [
+    ("nan", "expected a finite number in [0.0, 20.0], got nan"),  # it said "expected a number, got nan"
+    ("inf", "expected a finite number in [0.0, 20.0], got inf"),
+    ('"two"', "expected a number, got 'two'"),
+    ("25", "expected a number in [0.0, 20.0], got 25"),
+])
+def test_a_hysteresis_that_is_not_a_finite_number_says_so(tmp_path, value, expected):
+    text = R1.replace('name = "left"', f'name = "left"\nhysteresis_deg = {value}', 1)
+    msg = rejects(tmp_path, text)
+    assert msg.endswith(f": limb 'left': hysteresis_deg: {expected}"), msg
+
+
 def test_psi_star_count_must_match_levels(tmp_path):
     rejects(tmp_path, R1.replace('name = "left"', 'name = "left"\nlevels = 3', 1), "limb 'left': psi_star_deg",
             "2 critical angle")

@@ -69,10 +69,13 @@ class Fields:
         if key not in self.table and default is None:
             self.fail(key, "a number (required)")
         v = self.table.get(key, default)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        span = f" in {'(' if open_lo else '['}{lo}, {hi}]" if math.isfinite(lo) and math.isfinite(hi) else ""
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(key, "a number", v)
+        if not math.isfinite(v):  # TOML's nan and inf are floats: "expected a number, got nan" read as nonsense
+            self.fail(key, f"a finite number{span}", v)
         if (v <= lo if open_lo else v < lo) or v > hi:
-            self.fail(key, f"a number in {'(' if open_lo else '['}{lo}, {hi}]", v)
+            self.fail(key, f"a number{span}", v)
         return float(v)
 
 

@@ -129,10 +129,19 @@ def _number(key: str, text: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise SimError(f"condition {key}: expected a number in {spec.unit}, got {text!r}") from None
-    if not math.isfinite(v) or not spec.accepts(v):
+        raise SimError(f"condition {key}: expected a number{_in_unit(spec.unit)}, got {text!r}") from None
+    if not math.isfinite(v):
+        raise SimError(f"condition {key}: expected a finite number in {spec.range_text()}, got {text!r}")
+    if not spec.accepts(v):
         raise SimError(f"condition {key}: {v:g} is outside {spec.range_text()}")
     return v
+
+
+def _in_unit(unit: str) -> str:
+    """What a value of ``unit`` is, after "expected a number": "in ×" read oddly."""
+    if unit == "×":
+        return " (a factor, ×)"
+    return f" (in {unit})" if unit else ""
 
 
 def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions | None = None) -> Conditions:
