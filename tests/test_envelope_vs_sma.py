@@ -100,7 +100,6 @@ def test_stepped_finer_than_the_tick_the_model_cuts_no_later_than_the_firmware(r
     requests = [(8000, 0)] * 30 + [(0, 0)] * 5 + [(3000, 0)] * 200  # heat, rest, then hold against the window
     fw = run(requests)
     env = Envelope(robot, 2, 0.002)
-    env.latch = 10**9  # the cuts' times are compared here, not the latch
     model = [env.gate([a / 10000, 0.0])[0] for a, _ in requests for _ in range(2)]
 
     def first_off_us(out, step_us, start):

@@ -424,14 +424,14 @@ def test_a_threshold_moved_each_step_does_not_make_a_dead_coil_progress(rig):
     assert watch.heated_us <= rig.timeout_us + 8 * rig.env.tick_us, watch.heated_us
 
 
-def test_a_hold_that_stops_short_is_cut_at_the_mean_duty_limit_and_latches(rig):
+def test_a_hold_that_stops_short_is_a_hit_at_the_mean_duty_limit_and_latches(rig):
     """A held limb that reads at its level but cannot reach its hold edge: the bang-bang hold
     heats its coil at the drive duty for good. After two on-limit hits the mean-duty window
     refused the coil before its on-time reached max_on again, so there never was a third hit:
     one SET_PARAM (R1's right threshold at -3°: the dead right limb at rest reads 01, below its
     hold edge) and a long hold kept that coil above the hold ceiling 74 % of 300 s with no
-    fault. Now a coil above the hold ceiling that the window stops is cut as at max_on (a hit),
-    and the third hit latches SMA_ON_LIMIT."""
+    fault. Now, while a reached target is held, the window refusing a coil above the hold
+    ceiling is a hit (sma_tick's ``holding``), and the third hit latches SMA_ON_LIMIT."""
     watch = _DeadRightCoil(rig)
     run, ok, latched = watch.run, watch.ok, watch.latched
     ok("SET_PARAM", param=int(ParamId.PSI_STAR_CDEG), index=1, value=-300)

@@ -107,6 +107,11 @@ void drive_apply(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
     uint8_t i, hits, guard, act = 0;
+    /* demanding: away from the target (not reached yet, or lost since: the sequencer reports
+     * REACHED once a step, so a lost target's time counts until the step moves on), or just
+     * moved on to the next (time lost after a step's REACHED carries into the next step's
+     * until that is reached: docs/safety.md) */
+    uint8_t demanding = (uint8_t)((seen & (SEQ_EV_AWAY | SEQ_EV_ADVANCED)) && seq_running() && !fault_latched());
     if (seq_running() && !fault_latched() && !sma_estopped() && imucheck_measured() != IMUCHECK_UNKNOWN) {
         uint8_t want[CFG_N_LIMBS];
         seq_state_levels(seq_target(), want);
@@ -119,18 +124,13 @@ void drive_apply(void)
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         sma_request(i, duty[i]);
     }
-    hits = sma_tick();
+    hits = sma_tick((uint8_t)!demanding); /* holding a reached target, or not running (all off) */
     if (sma_take_clamped()) {
         telemetry_note_clamped();
     }
     /* safety: the step guard (safety.h) runs on real time from the first demand of an
      * unreached target; a START, STOP or ESTOP does not reset it. */
-    /* demanding: away from the target (not reached yet, or lost since: the sequencer reports
-     * REACHED once a step, so a lost target's time counts until the step moves on), or just
-     * moved on to the next (time lost after a step's REACHED carries into the next step's
-     * until that is reached: docs/safety.md) */
-    guard = guard_tick((uint8_t)((seen & (SEQ_EV_AWAY | SEQ_EV_ADVANCED)) && seq_running() && !fault_latched()),
-                       (uint8_t)(seen & SEQ_EV_REACHED), hits, &act);
+    guard = guard_tick(demanding, (uint8_t)(seen & SEQ_EV_REACHED), hits, &act);
     if (guard == GUARD_ON_LIMIT && !fault_latched()) {
         fault_raise(PROTO_FAULT_SMA_ON_LIMIT, act); /* repeated hits on one step: latched */
         return;

@@ -45,7 +45,6 @@ typedef struct {
     uint16_t max_duty;
     uint16_t refill_q8; /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
     uint32_t slot_us;   /* time in the slot being filled */
-    uint16_t limit_hits;
     uint8_t slot;       /* the slot being filled */
     uint8_t estopped;
 } sma_vars_t;
@@ -101,7 +100,7 @@ static void every_channel_off(void)
  * window at its first slot, no hits, no ESTOP. */
 #define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
 #define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
-static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0, 0, 0, 0};
+static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0, 0, 0};
 /* The build's own limits pay back (robot.py refuses a min_cooldown_ms of 256 × max_on_ms or
  * more; this makes a hand-edited config fail to compile rather than lock every coil off). */
 typedef char sma_build_cooldown_pays_back[REFILL_QUOT(SMA_ON_US, SMA_COOLDOWN_US) > 0u ? 1 : -1];
@@ -166,18 +165,17 @@ uint8_t sma_take_heated(void)
     return h;
 }
 
-uint8_t sma_tick(void)
+uint8_t sma_tick(uint8_t holding)
 {
     uint32_t dt = elapsed_us(&last_us); /* wrap-safe; a backwards step or a stall capped */
     uint8_t hit = 0;
-    uint8_t i, bit;
+    uint8_t i, bit, blocked;
     uint32_t *w;
     advance_window(dt);
     w = win[st.slot];
     for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
         act_state_t *a = &acts[i];
         uint16_t duty = st.estopped ? 0u : sma_clamp(a->request);
-        uint8_t full;
         uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
         if (!st.estopped && duty != a->request) {
             clamped = 1;
@@ -201,32 +199,31 @@ uint8_t sma_tick(void)
                 a->pay_rem = 0;
             }
         }
-        /* then decide the next output: another tick at this duty would pass the mean-duty limit */
-        full = (uint8_t)(duty > 0u && window_sum(i) + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
+        /* then decide the next output */
         if (a->forced) {
             duty = 0; /* cooling after an on-limit hit: off until the debt is paid */
         } else if (duty > hold_max) {
-            if (a->debt_us + CFG_TICK_US > st.max_on_us || full) {
-                /* cut before the next tick would pass max_on, or the mean-duty limit: heated
-                 * above the hold ceiling until the window stops it, a coil is cut as at max_on
-                 * (a window that only refused it let a hold that stops short heat at the mean
-                 * limit for good, never hitting max_on: docs/safety.md) */
-                duty = 0;
+            if (a->debt_us + CFG_TICK_US > st.max_on_us) {
+                duty = 0; /* cut before the next tick would pass max_on */
                 a->forced = 1;
                 hit = (uint8_t)(hit | bit);
-                if (st.limit_hits < 0xFFFFu) {
-                    st.limit_hits++;
-                }
             } else {
                 /* heats on from now (not charged for what it carried before a STOP + START:
                  * that would credit a dead coil with progress the other coil made, safety.h) */
                 heated = (uint8_t)(heated | bit);
             }
         }
-        a->blocked = full; /* a duty at or below the hold ceiling refused (or one cut above) */
-        if (full) {
+        blocked = (uint8_t)(duty > 0u && window_sum(i) + SMA_TICK_CHARGE(duty) > SMA_WIN_LIMIT);
+        if (blocked) {
+            /* the window stopping a coil that heats a held target (above the hold ceiling) is a
+             * hit, once a block: a hold that never reaches its hold edge heated at the mean-duty
+             * limit for good, never hitting max_on, with no fault (docs/safety.md) */
+            if (holding && !a->blocked && duty > hold_max) {
+                hit = (uint8_t)(hit | bit);
+            }
             duty = 0;
         }
+        a->blocked = blocked;
         output(i, duty);
     }
     return hit;
@@ -301,7 +298,4 @@ uint8_t sma_take_clamped(void)
     return c;
 }
 
-uint16_t sma_limit_hits(void)
-{
-    return st.limit_hits;
-}
+

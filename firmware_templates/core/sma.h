@@ -17,7 +17,8 @@
  *   that would pass it is cut one tick early (an on-limit hit, reported) and the coil then
  *   stays fully off until the debt is paid: min_cooldown after a full max_on;
  * - mean duty: the duty integrated over any window of CFG_DUTY_WINDOW_MS stays at or below
- *   CFG_MEAN_DUTY_PM (a request that would not fit gets 0).
+ *   CFG_MEAN_DUTY_PM (a request that would not fit gets 0; while a reached target is held,
+ *   the first such tick of a request above the hold ceiling is an on-limit hit).
  * Nothing resets the spent budget: sma_all_off() and sma_estop() turn the pins off at once
  * but the interval until the next sma_tick is still charged at the duty it had, so a
  * STOP + START in one tick continues the on-period. Only sma_init() (reset) starts
@@ -52,8 +53,10 @@ void sma_init(void);
 void sma_request(uint8_t act, uint16_t duty_pm);
 
 /* Charge the time since the last call, then apply requests under the budget; returns a
- * bit per actuator whose on-period was cut at max_on this tick (an on-limit hit). */
-uint8_t sma_tick(void);
+ * bit per actuator whose on-period was cut at max_on this tick (an on-limit hit), or, with
+ * `holding` (a gait holds a reached target: safety.h's demanding is 0), that the mean-duty
+ * window began to refuse while it asked for more than the hold ceiling (also a hit). */
+uint8_t sma_tick(uint8_t holding);
 
 /* Every channel off at once; requests cleared. Not latched; refunds nothing. */
 void sma_all_off(void);
@@ -86,9 +89,6 @@ uint32_t sma_debt_us(uint8_t act);
 
 /* 1 when an output was clamped to the ceiling since the last call. */
 uint8_t sma_take_clamped(void);
-
-/* Count of on-limit hits since sma_init (saturates). */
-uint16_t sma_limit_hits(void);
 
 /* A bit per channel heated above the hold ceiling (on-time) since the last call; cleared. */
 uint8_t sma_take_heated(void);

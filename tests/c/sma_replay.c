@@ -19,7 +19,7 @@ int main(void)
         sma_request(0, (uint16_t)d0);
         sma_request(1, (uint16_t)d1);
         fake_now_us += CFG_TICK_US;
-        hits = sma_tick();
+        hits = sma_tick(0);
         printf("%u %u %u\n", (unsigned)sma_duty(0), (unsigned)sma_duty(1), (unsigned)hits);
     }
     return 0;

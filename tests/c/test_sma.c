@@ -26,7 +26,7 @@ static void setup(void)
 static uint8_t tick_us(uint32_t us)
 {
     fake_now_us += us;
-    return sma_tick();
+    return sma_tick(0);
 }
 
 static uint8_t tick(void)
@@ -94,7 +94,6 @@ static void test_max_on_time_cuts_at_max_on_then_cools_for_min_cooldown(void)
     CHECK_EQ(on_time_until_cut(6000, CFG_TICK_US, &hit), MAX_ON_US);
     CHECK_EQ(hit, 1);
     CHECK(sma_cooling(0));
-    CHECK_EQ(sma_limit_hits(), 1);
     while (fake_pwm[0] == 0u && off < 10u * COOL_US) {
         tick();
         off += CFG_TICK_US;
@@ -142,7 +141,7 @@ static void test_a_clock_that_steps_back_and_forth_never_lengthens_an_on_period(
         } else {
             fake_now_us += 0u;    /* one real ms, read as none (back to the truth) */
         }
-        sma_tick();
+        sma_tick(0);
         true_on += 1000u;
         k++;
     }
@@ -152,6 +151,7 @@ static void test_a_clock_that_steps_back_and_forth_never_lengthens_an_on_period(
 static void test_stop_and_start_between_two_ticks_continue_the_on_period(void)
 {
     uint32_t on = 0;
+    uint8_t hits = 0;
     setup();
     sma_request(0, 6000);
     tick();
@@ -159,11 +159,11 @@ static void test_stop_and_start_between_two_ticks_continue_the_on_period(void)
         sma_all_off();          /* STOP ... */
         CHECK_EQ(fake_pwm[0], 0);
         sma_request(0, 6000);   /* ... and START before the next tick */
-        tick();
+        hits = (uint8_t)(hits + tick());
         on += CFG_TICK_US;
     }
     CHECK(on <= MAX_ON_US);
-    CHECK_EQ(sma_limit_hits(), 1);
+    CHECK_EQ(hits, 1); /* one on-limit hit, on channel 0 */
 }
 
 static void test_estop_and_clear_refund_nothing(void)
@@ -300,6 +300,40 @@ static void test_mean_duty_over_any_window_stays_below_the_limit(void)
     CHECK(on > (uint64_t)CFG_MEAN_DUTY_PM * 4u * W); /* and it does use its budget */
 }
 
+/* A held target whose limb never reaches its hold edge: its coil asks for the drive duty
+ * tick after tick. Without a gait holding, the window only refuses it (no hit); while a
+ * reached target is held, the first refused tick of each block is a hit (docs/safety.md). */
+static void test_the_window_refusing_a_held_coil_is_a_hit_and_otherwise_not(void)
+{
+    enum { W = CFG_DUTY_WINDOW_MS * 1000UL / CFG_TICK_US };
+    uint8_t holding;
+    for (holding = 0; holding < 2u; holding++) {
+        uint32_t t, blocks = 0, hits = 0, max_on_hits = 0;
+        uint8_t was_blocked = 0;
+        setup();
+        sma_request(0, 8000);
+        for (t = 0; t < 3u * W; t++) {
+            uint8_t h;
+            fake_now_us += CFG_TICK_US;
+            h = sma_tick(holding);
+            if (sma_cooling(0) && !was_blocked && fake_pwm[0] == 0u && sma_debt_us(0) < MAX_ON_US) {
+                blocks++; /* off with the debt below max_on: the window, not the on-time */
+            }
+            was_blocked = (uint8_t)(sma_cooling(0) && sma_debt_us(0) < MAX_ON_US);
+            hits += h & 1u;
+            if ((h & 1u) && sma_debt_us(0) + CFG_TICK_US > MAX_ON_US) {
+                max_on_hits++;
+            }
+        }
+        CHECK(blocks > 0u); /* the window does refuse it (else this proves nothing) */
+        if (holding) {
+            CHECK(hits > max_on_hits);
+        } else {
+            CHECK_EQ(hits, max_on_hits);
+        }
+    }
+}
+
 static void test_run_time_limits_may_narrow_but_never_widen_the_envelope(void)
 {
     uint8_t hit;
@@ -385,6 +419,7 @@ int main(void)
     RUN(test_after_an_on_limit_hit_the_coil_is_fully_off_for_its_cool_down);
     RUN(test_holding_at_or_below_the_hold_ceiling_is_never_on_time);
     RUN(test_mean_duty_over_any_window_stays_below_the_limit);
+    RUN(test_the_window_refusing_a_held_coil_is_a_hit_and_otherwise_not);
     RUN(test_run_time_limits_may_narrow_but_never_widen_the_envelope);
     RUN(test_estop_turns_every_mosfet_off_within_one_tick);
     RUN(test_all_off_turns_every_board_channel_off_at_once);

@@ -11,8 +11,9 @@ The claim bench asks whether the coils *can* complete a gait under a condition
   latch the fault SMA_ON_LIMIT unless every coil that hit has since heated on the way to a
   target reached (core/safety.c);
 - *mean duty*: the duty charged to a coil over the last window of ``duty_window_ms`` stays at
-  most ``max_mean_duty`` × the window: a request above the hold ceiling that would not fit is
-  cut as at max_on (a hit), one at or below it gets 0 (not a hit). As in
+  most ``max_mean_duty`` × the window (a request that would not fit gets 0, not a hit: the
+  firmware's hit for a refused *hold*, sma.c's ``holding``, is not modelled; the idealised
+  drive holds a reached state 0.3 s). As in
   sma.c the window is 9 slots of 1/8 window (their sum spans 1 to 9/8 windows) and the charge
   is counted in ‱·µs / 1024, rounded as the firmware rounds it;
 - *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
@@ -117,13 +118,11 @@ class Envelope:
                     self.cut[ch] = False
                     self.pay_rem[ch] = 0
             pm = min(round(duty * 10000), self.max_duty_pm)  # sma_clamp: the duty ceiling first
-            # another step at this duty would pass the mean-duty window
-            full = pm > 0 and sum(s[ch] for s in self.win) + ((pm * self.ahead_us + 1023) >> 10) > self.win_limit
             if self.cut[ch]:
                 pm = 0  # cooling after an on-limit hit: off until the debt is paid
-            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.ahead_us <= self.max_on_us and not full:
+            elif pm > self.hold_ceiling_pm and self.debt[ch] + self.ahead_us <= self.max_on_us:
                 self.heated |= 1 << ch  # heats on from now (sma.c's heated)
-            elif pm > self.hold_ceiling_pm:  # cut at max_on, or where the window stops it (sma.c)
+            elif pm > self.hold_ceiling_pm:
                 pm = 0
                 self.cut[ch] = True
                 self.hit_bits |= 1 << ch
@@ -132,10 +131,9 @@ class Envelope:
                 if self.hits >= self.latch:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
                         f"the safety envelope's on-time limit: {self.latch} on-limit hits (max_on_ms "
-                        f"{self.max_on_us / 1000:.0f} ms of heating, or heating up to the mean-duty limit; "
-                        f"the last on channel {ch}) without reaching the state"))
-            if full:
-                pm = 0  # a hold duty that does not fit the mean-duty window: 0 (not a hit)
+                        f"{self.max_on_us / 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
+            if pm > 0 and sum(s[ch] for s in self.win) + ((pm * self.ahead_us + 1023) >> 10) > self.win_limit:
+                pm = 0  # does not fit the mean-duty window: 0 (not a hit)
             self.charged[ch] = pm
             out.append(pm / 10000.0)
         return out
