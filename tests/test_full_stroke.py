@@ -192,7 +192,7 @@ def _walk_tracking_psi(robot, direction: str = "+x", seconds: float = 25.0):
 def test_a_limb_is_raised_to_its_stroke_and_one_out_of_reach_as_far_as_it_goes(tmp_path):
     """76°/72°: each limb gets to its stroke. 84° is past what R1's left coil bends its end to
     (about 80°): the firmware keeps heating while the limb still climbs (it is not 'hovering'
-    then), settles where it stops (150 ms without a 1° gain: within 3° of the end, where the
+    then), settles where it stops (150 ms without a 0.5° gain: within 3° of the end, where the
     climb has slowed), and the robot walks on."""
     run, highest = _walk_tracking_psi(load_robot(STROKE))
     assert run.faults == [] and highest[0] >= 76.0 and highest[1] >= 72.0, highest
@@ -269,6 +269,7 @@ def test_the_ideal_drives_copies_of_the_firmwares_stroke_constants_agree_with_it
 
     assert measure.CLIMB_MAX_S == number("CTL_CLIMB_MAX_MS") / 1000
     assert measure.CLIMB_STOP_S == number("CTL_CLIMB_STOP_MS") / 1000
+    assert measure.HOVER_S == number("CTL_HOVER_MS") / 1000
     assert measure.CLIMB_GAIN_DEG == number("CTL_CLIMB_GAIN_CDEG") / 100
     assert measure.FALL_WAIT_S == number("CTL_FALL_WAIT_MS") / 1000
     assert measure.LAG_S == number("CTL_LAG_MS") / 1000

@@ -50,6 +50,9 @@ typedef uint8_t sag_t;
 #define REACH_LOOKS ((TICKS(CTL_REACH_MS) + CTL_REACH_EVERY - 1u) / CTL_REACH_EVERY)
 typedef char ctl_reach_fits_a_byte[REACH_LOOKS < NOT_SEEN ? 1 : -1];
 static uint8_t look; /* ticks to the reach watch's next look, mod CTL_REACH_EVERY: it looks at 0 */
+#ifdef CFG_LIMB_STROKE_CDEG
+static uint8_t waited; /* some limb climbing in step waited for another in the last tick (CLIMB_STOP) */
+#endif
 
 /* Per limb: the step it is in (target), and what the hold and the stall detector know. */
 typedef struct {
@@ -69,6 +72,7 @@ typedef struct {
     uint8_t climb;     /* this step raises it to its stroke (it began below its top level) */
     uint8_t shortfall; /* stopped climbing short of its stroke: held where it stopped until it leaves its top level */
     uint8_t lagged;    /* heated CTL_LAG_MS rising without progress in this step: not waited for (ctl.h) */
+    uint8_t capping;   /* stopped short of its stroke in this robot step: the others in step climb no further */
 #endif
 #if CTL_HELD_UP
     uint16_t held_up;  /* ticks relaxed (oscillating) at its target level without settling, or
@@ -93,6 +97,9 @@ void ctl_reset(void)
     uint8_t i;
     memset(cl, 0, sizeof cl); /* not heating, no crossings, no stall, no boost */
     look = 0;                 /* the reach watch's looks in the same phase after every reset */
+#ifdef CFG_LIMB_STROKE_CDEG
+    waited = 0;
+#endif
 #if CTL_HELD_UP
     hold_low = 0;
 #endif
@@ -116,7 +123,7 @@ uint8_t ctl_stall(uint8_t limb)
 /* Limb i falls from its stroke: it has one and is still on its top level. */
 #define FROM_STROKE(i, level) (STROKE(i) && TOP(i, level))
 /* Limb i stopped climbing short of its stroke in its step, within CTL_CLIMB_MAX_MS of the step's start. */
-#define STOPPED_SHORT(i, level) (STROKE(i) && TOP(i, level) && cl[i].shortfall && !cl[i].climb && cl[i].clock < TICKS(CTL_CLIMB_MAX_MS))
+#define STOPPED_SHORT(i, level) (STROKE(i) && TOP(i, level) && cl[i].capping && cl[i].clock < TICKS(CTL_CLIMB_MAX_MS))
 
 /* Limb i's smoothed ψ rose CTL_CLIMB_GAIN_CDEG above c->peak: the peak moves up to it. */
 static uint8_t gained(uint8_t i, ctl_limb_t *c)
@@ -147,8 +154,10 @@ static uint8_t climbing(uint8_t i, ctl_limb_t *c)
     return look == 0u && gained(i, c);
 }
 
-/* A limb climbing to its stroke has stopped after CTL_CLIMB_STOP_MS without a gain, not a hover time (ctl.h). */
-#define CLIMB_STOP(c) ((c)->climb)
+/* A limb climbing to its stroke on its top level has stopped after CTL_CLIMB_STOP_MS without a
+ * gain, not a hover time (ctl.h); a hover time while another limb in step waits for it (its
+ * wait takes the help of its coil away: R1 at full strokes at power 0.5 stopped at 36° of 76°). */
+#define CLIMB_STOP(i, c, level) ((c)->climb && STROKE(i) && TOP(i, level) && !waited)
 
 /* Limb i still rises: the others climbing in step wait for it (ctl.h, CTL_LAG_MS). */
 #define STILL_RISING(i) (!cl[i].lagged)
@@ -186,7 +195,7 @@ static uint8_t above_hold(uint8_t i, uint8_t thr, uint8_t level, uint8_t top)
 #define ABOVE_TOP(i, thr, level) above_hold(i, thr, level, 1u)
 #else
 #define climbing(i, c) 0
-#define CLIMB_STOP(c) 0
+#define CLIMB_STOP(i, c, level) 0
 #define ABOVE_HOLD(i, thr, level) psi_last_at_or_above_hold(i, thr)
 #define ABOVE_TOP(i, thr, level) psi_last_at_or_above_hold_top(i, thr)
 #endif
@@ -252,7 +261,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
     if (c->stall != CTL_STALL_NONE) {
 #ifdef CFG_LIMB_STROKE_CDEG
         /* Relaxed short of its stroke in the step that raises it (the crossings may have done
-         * it mid-climb): heated on while its smoothed ψ still gains CTL_CLIMB_CDEG a hover
+         * it mid-climb): heated on while its smoothed ψ still gains CTL_CLIMB_GAIN_CDEG a hover
          * time, then held where it stopped (above_hold). Heated on regardless, a worn coil at
          * the end of its stroke reached 134 °C, and with a dead neighbour 166 °C. */
         if (c->shortfall && c->climb && look == 0u) {
@@ -260,6 +269,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
                 c->ticks = 0;
             } else if ((c->ticks = (uint16_t)(c->ticks + CTL_REACH_EVERY)) > TICKS(CTL_HOVER_MS)) {
                 c->climb = 0; /* stopped: held where it stopped from now on */
+                c->capping = 1;
             }
         }
 #endif
@@ -281,15 +291,17 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
             c->ticks = 0;
         } else if (climbing(i, c)) {
             c->ticks = 1;
-        } else if (++c->ticks > TICKS(CLIMB_STOP(c) ? CTL_CLIMB_STOP_MS : CTL_HOVER_MS) || c->crossings >= CTL_OSC_CROSSINGS) {
+        } else if (++c->ticks > TICKS(CLIMB_STOP(i, c, level) ? CTL_CLIMB_STOP_MS : CTL_HOVER_MS) ||
+                   c->crossings >= CTL_OSC_CROSSINGS) {
             c->stall = CTL_STALL_OSCILLATING;
             psi_relax(i, 1);
 #ifdef CFG_LIMB_STROKE_CDEG
             c->shortfall = (uint8_t)(c->climb && STROKE(i) && TOP(i, level));
             c->peak = psi_smooth_cdeg(i); /* where it stopped (climbing() may not have run); smoothed:
                                             * one noisy sample would set a hold it cannot reach */
-            if (c->ticks > TICKS(CLIMB_STOP(c) ? CTL_CLIMB_STOP_MS : CTL_HOVER_MS)) {
-                c->climb = 0; /* stopped climbing a hover time ago: held where it stopped */
+            if (c->ticks > TICKS(CLIMB_STOP(i, c, level) ? CTL_CLIMB_STOP_MS : CTL_HOVER_MS)) {
+                c->capping = c->shortfall;
+                c->climb = 0; /* stopped climbing (not relaxed by crossings): held where it stopped */
             }
             c->ticks = 0; /* else the crossings relaxed it: the clock of its climb from here (above) */
 #endif
@@ -350,6 +362,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t lead_below = 0; /* the rise lead is rising to its stroke and has not crossed ψ* yet */
     uint8_t new_step = 0;   /* some limb's target changed: the robot's next step */
     int16_t stopped = CTL_SHARE_FULL; /* the least share of the limbs that stopped short of their strokes */
+    uint8_t waiting = 0;              /* some limb climbing in step waits for another (waited, next tick) */
 #endif
 #ifdef CFG_STROKE_FALL_LEAD
     uint8_t lead_down = 0; /* the fall lead is falling from its stroke */
@@ -372,8 +385,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             cl[i].clock = 0;
             cl[i].climb = (uint8_t)(level != PSI_UNKNOWN && level < target[i]);
             cl[i].lagged = 0;
+            cl[i].capping = 0;
         } else if (new_step) {
             cl[i].climb = 0; /* the robot's next step, which leaves this limb where it is */
+            cl[i].capping = 0;
         } else if (cl[i].clock != 0xFFFFu) {
             cl[i].clock++;
         }
@@ -502,8 +517,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 cl[i].clock < TICKS(CTL_CLIMB_MAX_MS)) {
                 w = WANT_HOLD;     /* ahead of another limb's climb: wait for it (ctl.h) */
                 cl[i].ticks = 0u;  /* not hovering: waiting */
-            } else if (CLIMBS_TO_STROKE(i, level) && got[i] > stopped + CTL_SHARE_SYNC) {
-                w = WANT_HOLD;     /* past where a limb in step stopped short: climbed far enough, hovers (ctl.h) */
+                waiting = 1;
+            } else if (CLIMBS_TO_STROKE(i, level) && got[i] > stopped + CTL_SHARE_SYNC &&
+                       cl[i].ticks > TICKS(CTL_CLIMB_STOP_MS / 2u)) {
+                w = WANT_HOLD; /* past where a limb in step stopped short and no longer gaining: hovers (ctl.h) */
             }
 #endif
         } else if (level == PSI_UNKNOWN) {
@@ -551,6 +568,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
      * duties, R1 24 B smaller on the Nano. */
 #if CTL_HELD_UP
     hold_low = held_up; /* the holds of the next tick */
+#endif
+#ifdef CFG_LIMB_STROKE_CDEG
+    waited = waiting;
 #endif
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         duty[i] = (CTL_BOOST_MS && want[i] == WANT_BOOST) ? (uint16_t)CFG_MAX_DUTY_PM : want[i] >= WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;

@@ -60,9 +60,11 @@
  *   that cannot rise must not hold the others down; a limb not across its band yet has
  *   covered none. Only limbs the step raises climb in step: one
  *   already at its stroke when the step began is held as usual. A limb that stopped short of
- *   its stroke in its step (below: a worn coil, a weak supply) sets how far the others climb:
- *   one more than CTL_SHARE_SYNC past its share waits at the hold duty and counts as stopped
- *   there. Fatigue takes stroke off every coil alike: R1's ends both topped out at 66° and,
+ *   its stroke in this robot step (below: a worn coil, a weak supply) sets how far the others
+ *   climb: one more than CTL_SHARE_SYNC past its share that has gained nothing for
+ *   CTL_CLIMB_STOP_MS / 2 waits at the hold duty and counts as stopped there (one still
+ *   gaining climbs on: at a weak supply the two coils together bend the body further than
+ *   either alone, and a cap on the first that stopped held R1 at 36° of 76°). Fatigue takes stroke off every coil alike: R1's ends both topped out at 66° and,
  *   the right one climbing on to it, lost the order of their strokes that makes the ratchet
  *   (the right end, raised less, comes down first): 0.34 mm/s against 6.85 fresh.
  * Falling from their strokes together (no limb rising), they fall as their coils cool: the
@@ -80,7 +82,8 @@
  *   the bang-bang hold keeps it above ψ*. A limb climbing to its stroke (below) is not
  *   hovering while it still climbs: its clock restarts whenever its smoothed ψ gained
  *   CTL_CLIMB_GAIN_CDEG, so it is relaxed (and the step goes on) once it stops climbing short
- *   of the stroke (CTL_CLIMB_STOP_MS without a gain), or CTL_CLIMB_MAX_MS after the step
+ *   of the stroke (CTL_CLIMB_STOP_MS without a gain; a hover time while another limb in step
+ *   waits for it, its coil's help withdrawn), or CTL_CLIMB_MAX_MS after the step
  *   began. Relaxed by the crossings instead (IMU noise at its band) it is heated on while it
  *   still gains CTL_CLIMB_GAIN_CDEG a hover time;
  *   once it has stopped, in that step and the robot's later steps that leave it raised, it

@@ -395,29 +395,62 @@ static void test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit
 static void test_a_limb_that_stopped_short_caps_the_others_in_step(void)
 {
     /* Step 11 from 00; both ends at 30°: limb 0 has covered 23 % of its climb, limb 1 31 %.
-     * Limb 1 waits for limb 0 (5 % ahead); limb 0 stops there (a worn coil). Limb 1 then does
-     * not climb on to its stroke: it is past where limb 0 stopped, waits at the hold duty and
-     * counts as stopped (the strokes keep their order: ctl.h). */
+     * Limb 1 waits for limb 0 (5 % ahead); limb 0 stops there (a worn coil), told after a hover
+     * time (CTL_CLIMB_STOP_MS only when no limb waits for it). Limb 1 then does
+     * not climb on to its stroke: it is past where limb 0 stopped and gains nothing, waits at
+     * the hold duty and counts as stopped (the strokes keep their order: ctl.h). */
     uint16_t duty[CFG_N_ACTUATORS];
     uint32_t k;
     setup();
     put(0, 5.0);
     put(1, 5.0);
     demand(1, 1, duty);
-    for (k = 0; k <= STOP_TICKS + SMOOTH_TICKS && ctl_stall(0) == CTL_STALL_NONE; k++) {
+    for (k = 0; k <= HOVER_TICKS + SMOOTH_TICKS && ctl_stall(0) == CTL_STALL_NONE; k++) {
         put(0, 30.0);
         put(1, 30.0);
         demand(1, 1, duty);
         CHECK_EQ(duty[1], HOLD);
     }
+    CHECK(k > HOVER_TICKS);                        /* waited for, it is given a hover time */
     CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING); /* limb 0 stopped short */
     for (k = 0; k <= STOP_TICKS + 1u && ctl_stall(1) == CTL_STALL_NONE; k++) {
         put(0, 30.0);
         put(1, 30.0);
         demand(1, 1, duty);
-        CHECK_EQ(duty[1], HOLD); /* not DRIVE: not on to its 50° */
+        if (k > STOP_TICKS / 2u + 1u) {
+            CHECK_EQ(duty[1], HOLD); /* gained nothing for half a stop time: not on to its 50° */
+        }
     }
     CHECK_EQ(ctl_stall(1), CTL_STALL_OSCILLATING); /* stopped there: the step goes on */
+}
+
+static void test_a_limb_stopped_short_in_an_earlier_step_caps_nothing(void)
+{
+    /* Step 10: limb 0 stops short at 30° (a worn coil). Step 11 raises limb 1 alone: it climbs
+     * to its 50° stroke, not held where limb 0 stopped a step ago (it stopped at 29°). */
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    double p1 = 22.0;
+    setup();
+    put(0, 5.0);
+    put(1, 0.0);
+    demand(1, 0, duty);
+    for (k = 0; k < 600u && ctl_stall(0) == CTL_STALL_NONE; k++) {
+        put(0, 30.0);
+        put(1, 0.0);
+        demand(1, 0, duty);
+    }
+    CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING);
+    put(1, 5.0);
+    demand(1, 1, duty);
+    for (k = 0; k < 3000u && p1 < 50.0; k++) {
+        put(0, 30.0);
+        put(1, p1);
+        demand(1, 1, duty);
+        CHECK_EQ(duty[1], DRIVE);
+        p1 += 0.02; /* 20°/s while driven */
+    }
+    CHECK(p1 >= 50.0);
 }
 
 static void test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down(void)
@@ -551,6 +584,7 @@ int main(void)
     RUN(test_a_limb_that_reaches_its_top_level_late_is_held_where_it_stopped);
     RUN(test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit);
     RUN(test_a_limb_that_stopped_short_caps_the_others_in_step);
+    RUN(test_a_limb_stopped_short_in_an_earlier_step_caps_nothing);
     RUN(test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down);
     RUN(test_climbing_in_step_waits_for_a_limb_only_while_it_still_rises);
     RUN(test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step);

@@ -45,6 +45,7 @@ CLIMB_MAX_S = 3.0
 CLIMB_GAIN_DEG = 0.5
 CLIMB_STOP_S = 0.15
 CLIMB_STOP_DPS = CLIMB_GAIN_DEG / CLIMB_STOP_S
+HOVER_S = 0.3  # CTL_HOVER_MS: the stop time of a limb another limb in step waits for
 SHARE_SYNC = 13 / 256  # CTL_SHARE_SYNC / CTL_SHARE_FULL
 #: A lagging limb below its band is waited for only while it still rises: heated this long
 #: without getting one of PROGRESS_DEG closer to its crossing, it is not waited for again in
@@ -84,7 +85,8 @@ class IdealDrive:
         self._lag: dict[int, tuple[float, float]] = {}  # limb -> (closest edge to go, s heated since)
         self._given_up: set[int] = set()            # lagging limbs not waited for in this step
         self._capped: set[int] = set()              # waiting past where a limb in step stopped short
-        self._gain: dict[int, tuple[float, float]] = {}  # limb -> (ψ at its last 1° gain, s since)
+        self._gain: dict[int, tuple[float, float]] = {}  # limb -> (ψ at its last CLIMB_GAIN_DEG gain, s since)
+        self._ahead: set[int] = set()  # limbs that waited in step for another in the last command
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
@@ -122,7 +124,7 @@ class IdealDrive:
         tops = [i for i, s in enumerate(self.stroke) if s is not None]
         if t != target:
             self._raised = {i for i in tops if level[i] < want[i] == len(self.th[i])}
-            self._lag, self._given_up, self._gain = {}, set(), {}
+            self._lag, self._given_up, self._gain, self._ahead = {}, set(), {}, set()
         self._watch_lag(psi, dt_s)
         rising = [i for i in range(len(psi)) if want[i] > level[i]]
         falling = [i for i in range(len(psi)) if want[i] < level[i]]
@@ -142,7 +144,8 @@ class IdealDrive:
             least = min(share[i] for i in rises)
             ahead = {i for i in climbing if share[i] > least + SHARE_SYNC and level[i] == want[i]}
             waits |= ahead
-            stopped = [share[i] for i in rises if level[i] == want[i] and self._stopped(i, psi[i], dt_s)]
+            waited, self._ahead = bool(self._ahead), ahead
+            stopped = [share[i] for i in rises if level[i] == want[i] and self._stopped(i, psi[i], dt_s, waited)]
             if stopped:
                 self._capped = {i for i in ahead if share[i] > min(stopped) + SHARE_SYNC}
         lead = self.fall_lead
@@ -151,19 +154,21 @@ class IdealDrive:
             held = {i for i in falling if i in tops and i != lead and level[i] == len(self.th[i])}
         return waits, held
 
-    def _stopped(self, i: int, psi: float, dt_s: float) -> bool:
+    def _stopped(self, i: int, psi: float, dt_s: float, waited: bool = False) -> bool:
         """Limb i, climbing on its top level and not waiting, has gained less than
-        ``CLIMB_GAIN_DEG`` in ``CLIMB_STOP_S`` (ctl.c: the clock of a climbing limb); once
-        stopped it stays so for the step."""
+        ``CLIMB_GAIN_DEG`` in ``CLIMB_STOP_S``, or in ``HOVER_S`` while another limb waited for
+        it (ctl.c: the clock of a climbing limb, CLIMB_STOP); once stopped it stays so for the
+        step."""
+        limit = HOVER_S if waited else CLIMB_STOP_S
         peak, idle = self._gain.get(i, (psi, 0.0))
-        if idle >= CLIMB_STOP_S:
+        if idle >= limit:
             return True
         if i in self._waits or psi >= peak + CLIMB_GAIN_DEG:
             peak, idle = psi, 0.0
         else:
             idle += dt_s
         self._gain[i] = (peak, idle)
-        return idle >= CLIMB_STOP_S
+        return idle >= limit
 
     def _watch_lag(self, psi: Sequence[float], dt_s: float) -> None:
         """The firmware's lag watch (ctl.c: ``lagged``, on the stall detector's clock) on the
