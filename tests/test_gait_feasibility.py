@@ -245,3 +245,18 @@ def test_the_build_does_not_make_a_gait_with_an_unreachable_state_gait_0(tmp_pat
 def test_no_bundled_robot_has_an_unreachable_state():
     for path in sorted(ROBOTS.glob("*.toml")):
         assert load_robot(path).unreachable == {}, path.name
+
+
+def test_the_fallbacks_leave_out_the_states_the_robot_cannot_reach(tmp_path):
+    """Without sma-head the fallback of the wiring above was 000 -> 100 -> 110 -> 010 -> 000,
+    through 110 and 010, which the middle limb (on the tail's coil) cannot reach."""
+    from proleg.limbloss import dead_table, remap, remapped_table
+
+    robot = _inchworm_middle_on_the_tail_coil(tmp_path)
+    head = [a.name for a in robot.actuators].index("sma-head")
+    tables = [dead_table(robot, head)]
+    if (new_map := remap(robot, head)) is not None:
+        tables.append(remapped_table(robot, new_map, head))
+    for t in tables:
+        entered = {int(s) for s in t.src} | {int(d) for d in t.dst}
+        assert entered and not entered & set(robot.unreachable), sorted(entered & set(robot.unreachable))

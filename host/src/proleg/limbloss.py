@@ -78,12 +78,24 @@ def _restrict(t: TransitionTable, keep: np.ndarray) -> TransitionTable:
                            None if t.duration is None else t.duration[keep], planar)
 
 
+def _unreachable(robot, t: TransitionTable) -> np.ndarray:
+    """Per state of ``t``: one the intact robot cannot reach on the simulated body
+    (``Robot.unreachable``, every raised limb's coil at full stroke). With a coil lost or its
+    limbs on other coils no raised limb gets more help, so a fallback cannot reach it either
+    (a limb moved onto a coil that happens to reach it further is given up with it)."""
+    bad = np.zeros(t.n_states, dtype=bool)
+    bad[list(getattr(robot, "unreachable", {}))] = True
+    return bad
+
+
 def dead_table(robot, lost: int) -> TransitionTable:
-    """The robot's table without the transitions that need actuator ``lost`` (module doc)."""
+    """The robot's table without the transitions that need actuator ``lost`` (module doc),
+    nor those into or out of a state the robot cannot reach (``_unreachable``)."""
     t = robot.transitions
     amap = compiled_map(robot)
     driven = [i for i, a in enumerate(amap) if a == lost]
     up = np.array([any(limb_levels(s, t.levels)[i] > 0 for i in driven) for s in range(t.n_states)], dtype=bool)
+    up |= _unreachable(robot, t)
     return _restrict(t, ~(up[t.src] | up[t.dst]))
 
 
@@ -160,6 +172,7 @@ def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None, *, 
     ok_state = np.array([all(coil_ok(s, mine, foreign) for mine, foreign, _ in groups)
                          and all(lv[s][f] <= top for f, top in tops.items())
                          and not any(lv[s][i] > 0 for i in down) for s in range(t.n_states)], dtype=bool)
+    ok_state &= ~_unreachable(robot, t)
     keep = ok_state[t.src] & ok_state[t.dst]
     for e in range(len(t.src)):
         if not keep[e]:
