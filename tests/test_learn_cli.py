@@ -278,6 +278,21 @@ def test_a_log_that_cannot_be_written_is_a_failed_output_in_words(tmp_path, caps
     assert err == f"proleg: error: learn: cannot write trial log {log}: {why}\n"
 
 
+def test_a_log_that_is_a_device_is_refused_before_it_is_read(tmp_path, capsys):
+    """A --log linked to /dev/full was read to its end (which never comes) until the kernel
+    killed the process; a report reading one got the same. A trial log is a regular file."""
+    if not Path("/dev/null").exists():
+        pytest.skip("no /dev/null")
+    log = tmp_path / "t.jsonl"
+    log.symlink_to("/dev/null")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1")
+    assert (code, out) == (1, "")
+    assert err == f"proleg: error: learn: cannot write trial log {log}: not a regular file (a device, pipe or socket)\n"
+    code, out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
+    assert (code, out) == (2, "")
+    assert err == f"proleg: error: learn: cannot read trial log {log}: not a regular file (a device, pipe or socket)\n"
+
+
 @pytest.mark.parametrize("value", ["nan", "-1", "inf"])
 def test_learn_variance_weight_is_checked_as_gait_checks_it(tmp_path, capsys, value):
     """learn took nan, -1 and inf (`mean − -1·σ`); gait refuses them."""

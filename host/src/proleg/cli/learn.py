@@ -196,6 +196,7 @@ def _check_log_writable(path: str) -> None:
         if not directory.is_dir():
             raise LearnError(f"learn: --log {path}: directory {directory} does not exist")
     why = ("Is a directory" if p.is_dir() else
+           "not a regular file (a device, pipe or socket)" if p.exists() and not p.is_file() else
            "Permission denied" if not os.access(p.parent, os.W_OK | os.X_OK)
            or (p.exists() and not os.access(p, os.R_OK | os.W_OK)) else "")
     if why:

@@ -25,6 +25,7 @@ and overwritten; any other line that is not a record is an error naming it. Open
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
@@ -150,6 +151,8 @@ class TrialLog:
         self._states = None if states is None else frozenset(states)
         self._pairs = None if transitions is None else frozenset(transitions)
         if self.path.exists():
+            if not self.path.is_file():  # a device read to its end never ends (/dev/zero)
+                raise OSError(errno.EINVAL, "not a regular file (a device, pipe or socket)", str(self.path))
             self._read(append, robot)
         if not append:
             return
