@@ -155,14 +155,14 @@ def test_psi_star_count_must_match_levels(tmp_path):
 def test_forbidden_mark_on_a_rewarded_transition_says_what_forbidden_is_for_and_the_fix(tmp_path):
     """It said "(expected 'x' there)", which means nothing for a CSV table, nor says why."""
     text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11"]')
-    msg = rejects(tmp_path, text, "transitions.forbidden[0]: 01->11 is marked forbidden, but transitions.matrix[2][4] "
+    msg = rejects(tmp_path, text, "transitions.forbidden[1]: 01->11 is marked forbidden, but transitions.matrix[2][4] "
                   "gives it a reward (-1): forbidden lists the transitions the robot cannot make, to check that the "
                   'table allows none of them; write "x" there, or drop the mark')
     assert "expected 'x'" not in msg
     (tmp_path / "t.csv").write_text("from,to,reward\n00,10,1\n10,11,2.5\n11,01,1\n01,00,1\n")
     head = R1.split("[transitions]")[0]
     msg = rejects(tmp_path, head + '[transitions]\nfile = "t.csv"\nforbidden = ["10->11"]\n',
-                  "transitions.forbidden[0]: 10->11 is marked forbidden, but the table t.csv gives it a reward "
+                  "transitions.forbidden[1]: 10->11 is marked forbidden, but the table t.csv gives it a reward "
                   "(2.5): forbidden lists the transitions the robot cannot make", "; delete its row, or drop the mark")
     assert "'x'" not in msg and '"x"' not in msg
 
@@ -187,7 +187,7 @@ def test_a_state_label_with_a_bad_digit_names_the_limb(tmp_path, capsys):
     from proleg.cli import main
 
     text = R1.replace("[transitions]", '[transitions]\nforbidden = ["00->02"]')
-    msg = rejects(tmp_path, text, "transitions.forbidden[0]", "digit 2 ('2') is not a level of limb 'right', 0..1")
+    msg = rejects(tmp_path, text, "transitions.forbidden[1]", "digit 2 ('2') is not a level of limb 'right', 0..1")
     assert "limb #" not in msg
     assert main(["gait", str(write(tmp_path, R1, "ok.toml")), "--evaluate", "00,10,20"]) == 2
     assert "digit 1 ('2') is not a level of limb 'left', 0..1" in capsys.readouterr().err
@@ -195,7 +195,7 @@ def test_a_state_label_with_a_bad_digit_names_the_limb(tmp_path, capsys):
 
 def test_forbidden_mark_of_a_state_to_itself(tmp_path):
     text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11", "00->00"]')
-    rejects(tmp_path, text.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]'), "transitions.forbidden[1]",
+    rejects(tmp_path, text.replace("[1, 0, 0, -1]", '[1, 0, 0, "x"]'), "transitions.forbidden[2]",
             "00->00 is a state to itself, never a transition")
 
 
@@ -603,7 +603,7 @@ def test_planar_statistics_must_mark_the_same_forbidden_transitions(tmp_path):
 def test_a_state_index_is_ascii_digits_only(tmp_path, ref):
     # "¹".isdigit() is true but int() refuses it; int("١") is 1: both are refused, in one line
     text = R1.replace("[0, 0, 0, 0]]", '[0, 0, 0, "x"]]').replace("[transitions]", f'[transitions]\nforbidden = ["{ref}->00"]')
-    rejects(tmp_path, text, "transitions.forbidden[0]", "a state index @0..@3", repr(ref))
+    rejects(tmp_path, text, "transitions.forbidden[1]", "a state index @0..@3", repr(ref))
     with pytest.raises(RobotFileError, match=r"t\.csv:2: from: expected a state label"):
         load_robot(csv_robot(tmp_path, f"from,to,reward\n{ref},01,-1\n"))
 
@@ -686,7 +686,7 @@ def test_digits_of_the_wrong_length_are_never_a_state_index(tmp_path, ref):
     with pytest.raises(RobotFileError, match=rf"t\.csv:2: from: '{ref}' is not a state label of 2 digits"):
         load_robot(csv_robot(tmp_path, f"from,to,reward\n{ref},10,1\n"))
     text = R1.replace("[0, 0, 0, 0]]", '[0, 0, 0, "x"]]').replace("[transitions]", f'[transitions]\nforbidden = ["11->{ref}"]')
-    rejects(tmp_path, text, "transitions.forbidden[0]", f"'{ref}' is not a state label of 2 digits")
+    rejects(tmp_path, text, "transitions.forbidden[1]", f"'{ref}' is not a state label of 2 digits")
 
 
 @pytest.mark.parametrize("ref", ["@4", "@", "@-1", "@x"])

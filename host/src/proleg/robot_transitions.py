@@ -166,20 +166,20 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, 
         raise RobotFileError(f"{where}: expected a list of transitions like \"01->11\"")
     given = dict(zip(zip(np.asarray(src).tolist(), np.asarray(dst).tolist()), np.asarray(rewards).tolist()))
     n = states.state_count(levels)
-    for k, mark in enumerate(marks):
+    for k, mark in enumerate(marks):  # counted from 1 in messages, as the matrix's rows
         parts = [p.strip() for p in mark.split("->")]
         if len(parts) != 2:
-            raise RobotFileError(f"{where}[{k}]: expected FROM->TO, got {mark!r}")
-        a = _state_ref(parts[0], levels, n, f"{where}[{k}]", names)
-        b = _state_ref(parts[1], levels, n, f"{where}[{k}]", names)
+            raise RobotFileError(f"{where}[{k + 1}]: expected FROM->TO, got {mark!r}")
+        a = _state_ref(parts[0], levels, n, f"{where}[{k + 1}]", names)
+        b = _state_ref(parts[1], levels, n, f"{where}[{k + 1}]", names)
         if a == b:
-            raise RobotFileError(f"{where}[{k}]: {mark} is a state to itself, never a transition (expected FROM->TO "
+            raise RobotFileError(f"{where}[{k + 1}]: {mark} is a state to itself, never a transition (expected FROM->TO "
                                  "of two different states)")
         if (a, b) in given:
             there, fix = ((f"transitions.matrix[{a + 1}][{b + 1}]", 'write "x" there') if csv_file is None
                           else (f"the table {csv_file}", "delete its row"))
             raise RobotFileError(
-                f"{where}[{k}]: {mark} is marked forbidden, but {there} gives it a reward ({given[a, b]:g}): "
+                f"{where}[{k + 1}]: {mark} is marked forbidden, but {there} gives it a reward ({given[a, b]:g}): "
                 "forbidden lists the transitions the robot cannot make, to check that the table allows none "
                 f"of them; {fix}, or drop the mark"
             )
