@@ -240,6 +240,12 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
     return {case: float(p[case[1]]) for case, p in zip(cases, psi)}
 
 
+def entered_states(table: Any) -> list[int]:
+    """The states the matrix lets the robot enter: those with an allowed transition into them
+    from another state, in order."""
+    return sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
+
+
 def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
                    hold_margin_deg: float, drive: list[int] | None = None) -> dict[int, list[tuple[int, list[int], float]]]:
     """States the physical plant's body cannot hold because neighbour coupling lifts a limb:
@@ -257,7 +263,7 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
 
     if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
         return {}
-    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
+    entered = entered_states(table)
     held = _held_psi(limbs, actuators, section, entered, hold_margin_deg, drive)
     levels = tuple(lb.levels for lb in limbs)
     out: dict[int, list[tuple[int, list[int], float]]] = {}
@@ -347,7 +353,7 @@ def unreachable_states(limbs: list[Any], actuators: list[str], section: PlantSec
     if curl_problem(geo):
         return {}
     levels = tuple(lb.levels for lb in limbs)
-    entered = sorted({int(d) for s, d in zip(table.src, table.dst) if s != d})
+    entered = entered_states(table)
     rows, wanted = [], []
     for s in entered:
         want = limb_levels(s, levels)
