@@ -9,7 +9,8 @@ For every condition, from a cold robot, the paper's R1 (or ``--robot``) walking 
   user would: a flat level calibration at rest (proleg calibrate: IMU mounting offset and bias),
   then the condition's ground, at rest there for claim.REST_ON_GROUND_S before START (the
   firmware levels itself on a ground it has rested on for 2 s); completed, or stopped with
-  the firmware's fault; mm/s; the hottest coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
+  the firmware's fault (one that latched and stopped the gait; a single on-limit hit the gait
+  walks on from is listed in the row: "ok (SMA_ON_LIMIT ×1 reported)"); mm/s; the hottest coil 2 s after the run. Slope rows also after `proleg calibrate --ground` on the slope;
 - ψ-feedback walking the learn-then-walk gait (the optimal gait of the matrix that
   ``proleg sim --measure-matrix`` measures on the fresh robot, loaded with LOAD_GAIT);
 - open loop: the best timed drive (all 7 parameters free), tuned ONCE on the fresh robot by a
@@ -83,7 +84,8 @@ def _drive_json(d: OpenLoopDrive) -> dict:
 
 
 def _cell(o: dict) -> str:
-    status = "ok" if o["completed"] else ("FAULT " + o["fault"] if o["fault"] else "no: " + o["note"])
+    reported = f" ({o['reported']} reported)" if o.get("reported") else ""
+    status = "ok" + reported if o["completed"] else ("FAULT " + o["fault"] if o["fault"] else "no: " + o["note"])
     return f"{o['speed_mm_s']:+.3f} {status}"
 
 

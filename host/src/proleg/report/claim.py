@@ -134,10 +134,11 @@ class DriveOutcome:
     completed: bool
     speed_mm_s: float
     displacement_mm: float
-    fault: str = ""          # the firmware's fault codes (ψ-feedback only; "" = none)
+    fault: str = ""          # the fault codes of a run a fault stopped (ψ-feedback only; "" = none)
     note: str = ""           # why a run without a fault did not complete (wrong way, stalled, overheated)
     coil_max_end_c: float = 0.0   # hottest coil 2 s after the run (cold coils after a fault)
     coil_peak_c: float = 0.0
+    reported: str = ""       # fault events of a run no fault stopped (a single on-limit hit): codes ×count
 
 
 @dataclass
@@ -364,7 +365,12 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     session.advance(0.2)
     run = session.run_gait(direction, gait, duration_s)
     session.advance(2.0)
-    faults = ", ".join(sorted({f.code for f in run.faults})) if run.faults else ""
+    # Stopped: a fault latched and stopped the gait (GAIT_STOPPED FAULT), or a command was
+    # refused. A FAULT event with no stop is a report (a single on-limit hit: docs/safety.md):
+    # the gait went on, and the row says so (``reported``).
+    codes = ", ".join(sorted({f.code for f in run.faults}))
+    stopped = run.fault_stops > 0 or bool(run.errors)
+    faults = codes if stopped else ""
     if run.errors:
         faults = (faults + "; " if faults else "") + "; ".join(run.errors)
     speed = run.displacement_mm / duration_s
@@ -373,13 +379,14 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     note = ""
     if not faults and not completed:
         note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
+    reported = f"{codes} ×{len(run.faults)}" if codes and not stopped else ""
     if peak[0] > OVERHEAT_C:  # the open loop's line (open_loop_run): a run that ruins a coil did not complete
         completed = False
         note = (note + "; " if note else "") + f"{OVERHEATED} ({peak[0]:.0f} °C)"
     if cal_note:
         note = (note + "; " if note else "") + cal_note
     return DriveOutcome(completed, speed, run.displacement_mm, faults, note,
-                        float(max(sim.plant.temperature_c)), peak[0])
+                        float(max(sim.plant.temperature_c)), peak[0], reported)
 
 
 def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, direction: str = "+x",

@@ -23,7 +23,7 @@ from ..link.direction import direction_code
 from ..link.listeners import Listener
 from ..link.sim_link import SimLink
 from ..protocol.codec import Message
-from ..protocol.definition import EventKind, FaultCode
+from ..protocol.definition import EventKind, FaultCode, StopReason
 from ..sim.closed_loop import SimulatedRobot
 
 #: a START/STOP is sent again this many times when no reply comes within the client's timeout
@@ -68,6 +68,9 @@ class GaitRun:
     telemetry: list[Message] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)  # commands not acknowledged or refused
     limb_loss: list[dict] = field(default_factory=list)  # EVENT SUSPECT / FALLBACK fields, in order
+    #: GAIT_STOPPED events with reason FAULT: a fault that latched and stopped the gait. A FAULT
+    #: event without one is a report (a single on-limit hit, docs/safety.md): the gait went on.
+    fault_stops: int = 0
     started_s: float | None = None  # the board's clock (s from boot) at its first GAIT_STARTED
 
     def after_start(self, time_s: float) -> str:
@@ -121,6 +124,8 @@ class GaitRunListener(Listener):
             elif msg.kind in (EventKind.SUSPECT, EventKind.FALLBACK):
                 run.limb_loss.append(dict(msg.fields))
             elif msg.kind in (EventKind.GAIT_STARTED, EventKind.GAIT_STOPPED):
+                if msg.kind == EventKind.GAIT_STOPPED and msg.code == StopReason.FAULT:
+                    run.fault_stops += 1
                 # a cycle runs from step 0 to step 0 of one gait without a stop between: a
                 # fault's stop and a fallback's start end the one under way uncounted
                 self._cycle_start_mm = None
