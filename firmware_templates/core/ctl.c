@@ -78,9 +78,16 @@ typedef struct {
     uint16_t held_up;  /* ticks relaxed (oscillating) at its target level without settling, or
                         * falling without a CTL_CLIMB_CDEG drop of its smoothed ψ (ctl.h) */
 #endif
+#if SEQ_CLOCK_PAUSE
+    int16_t fall_low;    /* lowest smoothed ψ of this step, in CTL_CLIMB_CDEG drops (descent) */
+    uint16_t fall_quiet; /* ticks since the last such drop */
+#endif
 } ctl_limb_t;
 #if CTL_HELD_UP
 static uint8_t hold_low; /* a falling limb is held up: held limbs hold just above their band (ctl.h) */
+#endif
+#if SEQ_CLOCK_PAUSE
+static uint8_t coming_down; /* ctl_coming_down */
 #endif
 
 static ctl_limb_t cl[CFG_N_LIMBS];
@@ -103,6 +110,9 @@ void ctl_reset(void)
 #if CTL_HELD_UP
     hold_low = 0;
 #endif
+#if SEQ_CLOCK_PAUSE
+    coming_down = 0;
+#endif
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
         cl[i].level = PSI_UNKNOWN;
@@ -114,6 +124,40 @@ uint8_t ctl_stall(uint8_t limb)
 {
     return cl[limb].stall;
 }
+
+#if SEQ_CLOCK_PAUSE
+uint8_t ctl_coming_down(void)
+{
+    return coming_down;
+}
+
+#define DONE 0u /* settled at its target level */
+#define DOWN 1u /* coming down, a new low within CTL_FALL_PROGRESS_MS */
+#define STUCK 2u
+/* Limb i, its level known, in a fall still coming down (ctl.h, CTL_FALL_PROGRESS_MS). Its
+ * lowest smoothed ψ is looked at with the reach watch's pace; watch() starts it afresh at
+ * each new target, with no drop yet. */
+static uint8_t descent(uint8_t i, uint8_t target, uint8_t level)
+{
+    ctl_limb_t *c = &cl[i];
+    if (level == target && psi_settled(i)) {
+        return DONE;
+    }
+    if (level < target) {
+        return STUCK; /* rising: its step's time runs */
+    }
+    if (look == 0u) {
+        int16_t m = psi_smooth_cdeg(i);
+        if (m <= c->fall_low - CTL_CLIMB_CDEG) {
+            c->fall_low = m;
+            c->fall_quiet = 0;
+        } else if (c->fall_quiet < TICKS(CTL_FALL_PROGRESS_MS)) {
+            c->fall_quiet = (uint16_t)(c->fall_quiet + CTL_REACH_EVERY);
+        }
+    }
+    return c->fall_quiet < TICKS(CTL_FALL_PROGRESS_MS) ? DOWN : STUCK;
+}
+#endif
 
 #ifdef CFG_LIMB_STROKE_CDEG
 #define STROKE(i) (psi_stroke_cdeg(i) != PSI_NO_STROKE)
@@ -241,6 +285,10 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
 #if CTL_HELD_UP
         c->held_up = 0;
 #endif
+#if SEQ_CLOCK_PAUSE
+        c->fall_low = psi_smooth_cdeg(i); /* the step's fall is measured from here, no drop yet */
+        c->fall_quiet = TICKS(CTL_FALL_PROGRESS_MS);
+#endif
     }
     if (level != c->level) {
         c->ticks = 0; /* a new level: the hover and stall clocks restart */
@@ -353,6 +401,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t held_up = 0; /* some falling limb is held up (ctl.h, CTL_FALL_STALL_MS) */
 #endif
     uint8_t changing = 0; /* limbs rising or falling */
+#if SEQ_CLOCK_PAUSE
+    uint8_t down = 0; /* DONE | DOWN | STUCK of the limbs (descent) */
+#endif
     sag_t sagging = 0;
     int16_t farthest = -1;
     uint8_t i;
@@ -557,6 +608,11 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #if CTL_HELD_UP
             held_up |= (uint8_t)(move[i] == FALL && cl[i].held_up >= TICKS(CTL_FALL_STALL_MS));
 #endif
+#if SEQ_CLOCK_PAUSE
+            down |= descent(i, target[i], level);
+        } else {
+            down |= STUCK;
+#endif
         }
         a = ctl_limb_actuator(i);
         if (w > want[a]) {
@@ -571,6 +627,14 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #endif
 #ifdef CFG_LIMB_STROKE_CDEG
     waited = waiting;
+#endif
+#if SEQ_CLOCK_PAUSE
+    coming_down = (uint8_t)(down == DOWN); /* some limb coming down, none stuck or rising */
+    for (i = 0; i < CFG_N_ACTUATORS; i++) {
+        if (want[i] >= WANT_HEAT) {
+            coming_down = 0; /* a coil asked for more than the hold: its step's time runs */
+        }
+    }
 #endif
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         duty[i] = (CTL_BOOST_MS && want[i] == WANT_BOOST) ? (uint16_t)CFG_MAX_DUTY_PM : want[i] >= WANT_HEAT ? drive_pm : want[i] == WANT_HOLD ? hold_pm : 0u;

@@ -105,6 +105,7 @@
 #include <stdint.h>
 
 #include "robot_config.h"
+#include "seq.h" /* SEQ_CLOCK_PAUSE */
 
 /* Synchronised steps (see above), in 0.01°. */
 #define CTL_SYNC_CDEG 200
@@ -217,6 +218,19 @@
  * from its hold takes 0.2-1 s before its limb moves; 1.5 s leaves that room, and a held-up
  * limb 5 s of the default 8 s state timeout. */
 #define CTL_FALL_STALL_MS 1500u
+/* A fall still coming down (built with seq.h's SEQ_CLOCK_PAUSE: full strokes, or three or
+ * more limbs). In a warm, still place a coil cools slowly through its hysteresis: R1 at full
+ * strokes at 38 °C in an enclosure (convection ×0.6) took 8.5 s to come down from 11 to 00,
+ * falling steadily at 3-12°/s, and the step ended in STATE_TIMEOUT 0.5 s short of 00. While
+ * no limb rises, no coil is asked for more than the hold duty, and every limb not yet settled
+ * at its target level is coming down and has had its smoothed ψ make a new low of its step
+ * CTL_CLIMB_CDEG below the last within CTL_FALL_PROGRESS_MS, the step's time stands still
+ * (seq.h seq_pause_clock, and the step guard's: safety.h). A limb that stops coming down
+ * starts the clock again CTL_FALL_PROGRESS_MS later; new lows only count once per degree of
+ * the step's fall, so a fall's pause is bounded by its height, not by noise (one wobbling
+ * limb keeps finding its old lows). Nothing is heated past the hold in a paused tick, so the
+ * coils' own step times (safety.h) and the envelope are untouched. */
+#define CTL_FALL_PROGRESS_MS 1500u
 #define CTL_STALL_NONE 0u
 #define CTL_STALL_OSCILLATING 1u
 #define CTL_STALL_UNREACHABLE 2u
@@ -235,5 +249,10 @@ uint8_t ctl_stall(uint8_t limb);
 
 /* Actuator index driving limb i. */
 uint8_t ctl_limb_actuator(uint8_t limb);
+
+#if SEQ_CLOCK_PAUSE
+/* The last ctl_demand found a fall still coming down (CTL_FALL_PROGRESS_MS); 0 after ctl_reset. */
+uint8_t ctl_coming_down(void);
+#endif
 
 #endif /* PROLEG_CTL_H */

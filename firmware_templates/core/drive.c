@@ -87,6 +87,9 @@ void drive_step(void)
     }
     step = seq_step_byte();
     target = seq_target();
+#if SEQ_CLOCK_PAUSE
+    seq_pause_clock(ctl_coming_down()); /* the last tick's verdict (ctl.h, CTL_FALL_PROGRESS_MS) */
+#endif
     /* The step counts as reached only once every limb is settled clear of its band
      * edges (psi_settled): until then the sequencer is shown a state that is not
      * the target (target ^ 1 differs from target by construction). */
@@ -130,6 +133,11 @@ void drive_apply(void)
     }
     /* safety: the step guard (safety.h) runs on real time from the first demand of an
      * unreached target; a START, STOP or ESTOP does not reset it. */
+#if SEQ_CLOCK_PAUSE
+    if (ctl_coming_down()) {
+        demanding = 0; /* a fall still coming down, nothing heated past the hold: its time stands (ctl.h) */
+    }
+#endif
     guard = guard_tick(demanding, (uint8_t)(seen & SEQ_EV_REACHED), hits, &act);
     if (guard == GUARD_ON_LIMIT && !fault_latched()) {
         fault_raise(PROTO_FAULT_SMA_ON_LIMIT, act); /* repeated hits on one step: latched */

@@ -50,6 +50,9 @@ static struct {
     uint32_t step_ticks;
     uint32_t held;
     uint32_t cycles;
+#if SEQ_CLOCK_PAUSE
+    uint8_t paused; /* seq_pause_clock */
+#endif
 #if CFG_ENTRY_PATHS
     uint16_t entry_at;   /* next entry state in seq_entry_steps */
     uint16_t entry_left; /* entry states still to reach before the gait's join step */
@@ -84,6 +87,13 @@ void seq_init(void)
     INIT_ZERO(loaded_n);
     ROM_COPY(&ticks, &ticks_init, sizeof ticks);
 }
+
+#if SEQ_CLOCK_PAUSE
+void seq_pause_clock(uint8_t paused)
+{
+    s.paused = paused;
+}
+#endif
 
 void seq_set_hold(uint32_t n)
 {
@@ -280,6 +290,9 @@ uint8_t seq_tick(cfg_state_t measured)
         return ev; /* a target held is never a timeout, however long hold_ms (SET_PARAM) */
     }
     s.held = 0;
+#if SEQ_CLOCK_PAUSE
+    if (!s.paused) /* a fall still coming down (seq.h) */
+#endif
     count_up(&s.step_ticks); /* time away from the target: before it is reached, and after it is lost */
     if (s.step_ticks >= ticks.timeout) {
         s.running = 0;

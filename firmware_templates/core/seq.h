@@ -59,6 +59,17 @@ void seq_init(void);
 void seq_set_hold(uint32_t ticks);    /* target held this long → next step */
 void seq_set_timeout(uint32_t ticks); /* step not done in this long → SEQ_EV_TIMEOUT */
 
+/* Built where falls are long (a limb with a full stroke) or held up by neighbours (three or
+ * more limbs): the ticks a fall still comes down (ctl.h, CTL_FALL_PROGRESS_MS) do not count
+ * toward the step's timeout. paused: from the next seq_tick on, until told otherwise; a new
+ * step or START does not change it (drive.c tells it every tick). */
+#if defined(CFG_LIMB_STROKE_CDEG) || CFG_N_LIMBS > 2
+#define SEQ_CLOCK_PAUSE 1
+void seq_pause_clock(uint8_t paused);
+#else
+#define SEQ_CLOCK_PAUSE 0
+#endif
+
 /* 1 when a → b is an allowed transition (a ≠ b). */
 uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b);
 

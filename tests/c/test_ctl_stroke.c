@@ -564,6 +564,77 @@ static void test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step(voi
     CHECK_EQ(duty[0], HOLD);
 }
 
+/* Both limbs at their strokes' tops (11), lowered (00): the fall lead (limb 1) first, past
+ * halfway down, limb 0 above its hold top so that nothing is heated. */
+static void lower_from_the_strokes(double *a, double *b)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k;
+    setup();
+    *a = 61.5;
+    *b = 34.0;
+    for (k = 0; k < SMOOTH_TICKS; k++) {
+        put(0, *a);
+        put(1, 50.5);
+        demand(1, 1, duty);
+    }
+    CHECK(!ctl_coming_down()); /* held: nothing comes down */
+    put(1, *b);
+    demand(0, 0, duty);
+    CHECK(!ctl_coming_down()); /* a new step: no drop seen yet */
+}
+
+/* ctl.h, CTL_FALL_PROGRESS_MS: the step's clock stands while every limb not settled at its
+ * target comes down, not once they stop, nor for a wobble where they stopped, nor while a
+ * coil is asked for more than the hold. */
+static void test_a_fall_still_coming_down_stands_the_steps_clock_and_one_that_stopped_does_not(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint32_t k, paused = 0, quiet = (uint32_t)CTL_FALL_PROGRESS_MS * CFG_TICK_HZ / 1000u;
+    double a, b;
+    lower_from_the_strokes(&a, &b);
+    for (k = 1; k <= 400u; k++) { /* 1° every 40 ticks (25°/s) each, coils off */
+        if (k % 40u == 0u) {
+            a -= 1.0;
+            b -= 1.0;
+        }
+        put(0, a);
+        put(1, b);
+        demand(0, 0, duty);
+        CHECK_EQ(duty[0], 0);
+        CHECK_EQ(duty[1], 0);
+        paused += ctl_coming_down();
+    }
+    CHECK(ctl_coming_down());
+    CHECK(paused > 400u - 2u * SMOOTH_TICKS); /* from its first degree down */
+    for (k = 0; k < 2u * quiet && ctl_coming_down(); k++) { /* they stop at 51.5° and 24° */
+        put(0, a);
+        put(1, b);
+        demand(0, 0, duty);
+    }
+    CHECK(!ctl_coming_down());
+    CHECK(k + 2u * CTL_REACH_EVERY >= quiet - SMOOTH_TICKS);
+    CHECK(k <= quiet + SMOOTH_TICKS); /* the smoothed ψ comes down a little after them */
+    for (k = 0, paused = 0; k < 10u * quiet; k++) { /* ±2° of wobble there, 10 Hz */
+        double w = (k / 50u) % 2u ? 2.0 : -2.0;
+        put(0, a + w);
+        put(1, b + w);
+        demand(0, 0, duty);
+        paused += ctl_coming_down();
+    }
+    CHECK(paused <= 2u * quiet); /* one or two new lows, not one a swing */
+    for (k = 1; k <= 200u; k++) { /* coming down again, limb 0 raised back to its stroke: heated */
+        if (k % 40u == 0u) {
+            b -= 1.0;
+        }
+        put(0, a);
+        put(1, b);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+        CHECK(!ctl_coming_down());
+    }
+}
+
 int main(void)
 {
     RUN(test_the_config_has_the_strokes);
@@ -588,5 +659,6 @@ int main(void)
     RUN(test_falling_together_the_others_are_held_at_their_strokes_until_the_fall_lead_is_down);
     RUN(test_climbing_in_step_waits_for_a_limb_only_while_it_still_rises);
     RUN(test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step);
+    RUN(test_a_fall_still_coming_down_stands_the_steps_clock_and_one_that_stopped_does_not);
     return UNIT_EXIT();
 }

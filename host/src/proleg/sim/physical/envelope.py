@@ -17,7 +17,8 @@ The claim bench asks whether the coils *can* complete a gait under a condition
   sma.c the window is 9 slots of 1/8 window (their sum spans 1 to 9/8 windows) and the charge
   is counted in ‱·µs / 1024, rounded as the firmware rounds it;
 - *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
-  latches STATE_TIMEOUT (``_run_to`` checks that one). The firmware also times out each coil's
+  latches STATE_TIMEOUT (``_run_to`` checks that one, on a ``StepClock``: where the firmware
+  is built with it, a fall still coming down does not count, ctl.h CTL_FALL_PROGRESS_MS). The firmware also times out each coil's
   own time heated towards targets not reached, across STOP and START (safety.c); the
   idealised drive never restarts, so that time is never longer than the step's and needs no
   model here.
@@ -145,3 +146,39 @@ class Envelope:
             self.slot_us -= self.slot_len_us
             self.slot = (self.slot + 1) % WIN_SLOTS
             self.win[self.slot] = [0] * len(self.win_rem)
+
+
+#: ctl.h CTL_FALL_PROGRESS_MS and CTL_CLIMB_CDEG
+FALL_PROGRESS_S = 1.5
+FALL_DROP_DEG = 1.0
+
+
+class StepClock:
+    """The time a target has been demanded and not reached, as the firmware counts it toward
+    the state timeout (seq.c, safety.c). In builds with ``pause`` (seq.h SEQ_CLOCK_PAUSE: a limb
+    with a full stroke, or three or more limbs) a tick does not count while a fall still comes
+    down: no coil heats, no limb is below its target level, and every limb off its target level
+    has made a new low of this step ``FALL_DROP_DEG`` below the last within ``FALL_PROGRESS_S``
+    (ctl.h; the firmware looks at the smoothed ψ, this at the true one)."""
+
+    def __init__(self, thresholds: Sequence[Sequence[float]], psi: Sequence[float], pause: bool):
+        self.th = [list(t) for t in thresholds]
+        self.pause = pause
+        self.low = [float(p) for p in psi]
+        self.quiet = [FALL_PROGRESS_S] * len(self.th)  # no drop seen yet
+        self.away_s = 0.0
+
+    def tick(self, dt: float, psi: Sequence[float], want: Sequence[int], heating: bool) -> float:
+        """Account ``dt`` at ``psi`` with levels ``want`` demanded; the time counted so far."""
+        level = [sum(p >= t for t in th) for p, th in zip(psi, self.th)]
+        off = [i for i, (lv, w) in enumerate(zip(level, want)) if lv != w]
+        for i in off:
+            if psi[i] <= self.low[i] - FALL_DROP_DEG:
+                self.low[i], self.quiet[i] = float(psi[i]), 0.0
+            else:
+                self.quiet[i] = min(FALL_PROGRESS_S, self.quiet[i] + dt)
+        coming_down = (self.pause and bool(off) and not heating
+                       and all(level[i] > want[i] and self.quiet[i] < FALL_PROGRESS_S for i in off))
+        if not coming_down:
+            self.away_s += dt
+        return self.away_s

@@ -26,7 +26,7 @@ import numpy as np
 from ...robot import stroke_leads
 from ...states import limb_levels
 from .conditions import Conditions
-from .envelope import Envelope, EnvelopeLatched
+from .envelope import Envelope, EnvelopeLatched, StepClock
 from .plant import PhysicalParams, PhysicalPlant
 
 
@@ -238,6 +238,8 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
     t0 = plant.time_s
     first = since = None
     arrived = False
+    want = limb_levels(target, drive.levels)
+    clock = StepClock(drive.th, plant.psi_deg, pause=any(s is not None for s in drive.stroke) or len(drive.th) > 2)
     while True:
         cmd = drive.command(plant.psi_deg.tolist(), target, dt)
         duties = [0.0] * nch
@@ -248,6 +250,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
             duties = envelope.gate(duties)
         plant.step(dt, duties)
         now = plant.time_s - t0
+        away = clock.tick(dt, plant.psi_deg, want, any(d > 0 for d in duties))
         arrived = plant.true_state == target and (arrived or drive.at_strokes(plant.psi_deg, plant.dpsi_dps, target))
         if arrived:
             if since is None:
@@ -259,7 +262,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
                 return first
         else:
             since = None
-            if envelope is not None and first is None and now > envelope.state_timeout_s:
+            if envelope is not None and first is None and away > envelope.state_timeout_s:
                 raise EnvelopeLatched("STATE_TIMEOUT", (
                     f"the safety envelope's state timeout: state {target} not reached within state_timeout_ms "
                     f"({envelope.state_timeout_s * 1000:.0f} ms)"))
