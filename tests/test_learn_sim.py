@@ -12,7 +12,7 @@ import pytest
 from proleg.gait import optimal_gaits
 from proleg.gait.evaluate import evaluate_sequence
 from proleg.learn.estimate import estimate, penalised_table
-from proleg.learn.evaluate import effective_truth
+from proleg.learn.evaluate import effective_truth, plant_changes
 from proleg.learn.measure import TrialLog, counts
 from proleg.learn.robotfile import write_learned_robot
 from proleg.learn.runner import explore_simulated
@@ -173,10 +173,8 @@ def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
     with_motion, offset, outside = attach_track(trials, track)
     assert outside == [] and len(with_motion) == len(trials)
     assert offset == pytest.approx(42.0, abs=0.06)
-    plant = sim.plant.transitions
-    for tr in with_motion:
-        truth = sum(p.reward_mm for p in plant if tr.t_start + 0.05 < p.t_s <= tr.t_end + 0.05)
-        assert tr.dx == pytest.approx(truth, abs=0.2)
+    for tr, seen in zip(with_motion, plant_changes(with_motion, sim.plant.transitions)):
+        assert tr.dx == pytest.approx(sum(p.reward_mm for p in seen), abs=0.2)
 
 
 def test_trials_the_track_does_not_cover_keep_no_motion_rather_than_zero(tmp_path, capsys):

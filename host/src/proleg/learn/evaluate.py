@@ -29,7 +29,8 @@ from .measure import Trial
 
 #: |truth| above which a transition counts as moving the robot (sign checks)
 MOVING_MM = 1.0
-#: a plant state change belongs to the trial whose window (t_start, t_end] shifted by this holds it
+#: a plant state change belongs to the trial whose window (t_start, t_end] shifted by this holds
+#: its booking time: the explorer's settle_s, the wait between a STATE_REACHED event and the pose
 WINDOW_SHIFT_S = 0.05
 
 
@@ -83,32 +84,43 @@ def accuracy(truth: TransitionTable, est: Estimates, *, moving_mm: float = MOVIN
     )
 
 
-def plant_changes(trials: Sequence[Trial], plant_transitions: Sequence) -> list[list[tuple[int, int]]]:
-    """Per trial, the plant's state changes (src, dst) inside its window (the trial's start and
-    end, each shifted by WINDOW_SHIFT_S: a change the plant logs just after the firmware's
-    report belongs to the trial it ended). ``plant_transitions``: the plant's log (``.t_s``,
-    ``.src``, ``.dst``), in any order."""
-    changes = sorted(plant_transitions, key=lambda p: p.t_s)
-    times = np.array([p.t_s for p in changes])
+def booked_at(change) -> float:
+    """When a plant transition moved the robot: its ``t_booked_s`` (the table plant adds a
+    change's motion once ``simultaneous_s`` has passed since its first limb crossed, a pass's
+    when its last leg did), else ``t_s`` (a log without booking times)."""
+    t = getattr(change, "t_booked_s", None)
+    return change.t_s if t is None else t
+
+
+def plant_changes(trials: Sequence[Trial], plant_transitions: Sequence) -> list[list]:
+    """Per trial, the plant's transitions whose motion falls inside its pose window: booked
+    (``booked_at``) after the trial's start and up to its end, each shifted by
+    WINDOW_SHIFT_S (the explorer reads the pose ``settle_s`` after each STATE_REACHED event).
+    Windowing by the first limb change instead (``t_s``) put a change that began just before
+    a pose was read, and moved the robot just after, in the trial that did not measure it.
+    ``plant_transitions``: the plant's log (``.t_s``, ``.t_booked_s``, ``.src``, ``.dst``), in
+    any order; each trial's list keeps the log's objects, in booking order."""
+    changes = sorted(plant_transitions, key=booked_at)
+    times = np.array([booked_at(p) for p in changes])
     out = []
     for tr in trials:
         lo = np.searchsorted(times, tr.t_start + WINDOW_SHIFT_S, side="right")
         hi = np.searchsorted(times, tr.t_end + WINDOW_SHIFT_S, side="right")
-        out.append([(changes[k].src, changes[k].dst) for k in range(lo, hi)])
+        out.append(changes[lo:hi])
     return out
 
 
 def effective_truth(table: TransitionTable, truth_mm: np.ndarray, trials: Sequence[Trial],
                     plant_transitions: Sequence) -> TransitionTable:
     """Noise-free mm per firmware transition as the table plant made them (module docstring):
-    per trial the truth entries (``truth_mm``, n×n) of every plant state change inside it,
-    averaged over the transition's trials; a transition without trials keeps the direct
-    entry. ``plant_transitions``: the plant's log (``.t_s``, ``.src``, ``.dst``)."""
+    per trial the truth entries (``truth_mm``, n×n) of every plant state change whose motion
+    its pose window holds (``plant_changes``), averaged over the transition's trials; a
+    transition without trials keeps the direct entry. ``plant_transitions``: the plant's log."""
     sums: list[list[float]] = [[] for _ in range(table.n_transitions)]
     for tr, seen in zip(trials, plant_changes(trials, plant_transitions)):
         e = table.lookup(table.index(tr.src), table.index(tr.dst))
         if e is not None:
-            sums[e].append(float(sum(truth_mm[a, b] for a, b in seen)))
+            sums[e].append(float(sum(truth_mm[p.src, p.dst] for p in seen)))
     direct = truth_mm[table.src, table.dst]
     eff = np.array([np.mean(s) if s else direct[e] for e, s in enumerate(sums)])
     return TransitionTable(table.levels, table.src, table.dst, eff, table.duration)

@@ -74,6 +74,9 @@ class Transition:
     src: int
     dst: int
     reward_mm: float
+    #: when reward_mm was added to displacement_mm: simultaneous_s after t_s (a pass: after
+    #: its last leg's first change, up to PASS_S later); a pose read before it has not moved yet
+    t_booked_s: float | None = None
 
     def __iter__(self):  # unpacks as (t, from, to, reward_mm)
         return iter((self.t_s, self.src, self.dst, self.reward_mm))
@@ -280,7 +283,7 @@ class Plant:
             r = self._move_pose(a, b, r)
         self._committed = b
         self._displacement += r
-        self._transitions.append(Transition(t0, a, b, r))
+        self._transitions.append(Transition(t0, a, b, r, self._t))
 
     def _move_pose(self, a: int, b: int, dx: float) -> float:
         """Compose one transition's noisy body-frame step into the pose; returns the Δx used."""
