@@ -202,7 +202,9 @@ static cfg_state_t step_state(step_ix_t step)
     return ROM_STATE(&seq_steps[s.first + step]);
 }
 
-static cfg_state_t target_state(void)
+/* Out of line: seq_target and seq_tick share one copy (the tick inlines seq_tick right after
+ * its seq_target call; R1 on the Nano 36 B smaller). */
+static NOINLINE cfg_state_t target_state(void)
 {
 #if CFG_ENTRY_PATHS
     return s.entry_left ? ROM_STATE(&seq_entry_steps[s.entry_at]) : step_state(s.step);
