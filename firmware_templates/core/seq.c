@@ -33,8 +33,10 @@ typedef char at_most_65535_states[CFG_N_STATES <= 0xFFFFUL ? 1 : -1];
  * is numbered below 255 (an 8-bit MCU then indexes and compares in single bytes). */
 #if CFG_N_GAIT_STEPS + CFG_MAX_LOADED_STEPS < 255u
 typedef uint8_t step_ix_t;
+#define STEP_IX_BYTE 1
 #else
 typedef uint16_t step_ix_t;
+#define STEP_IX_BYTE 0
 #endif
 
 static cfg_state_t loaded[CFG_MAX_LOADED_STEPS];
@@ -324,8 +326,9 @@ uint16_t seq_step(void)
 }
 
 /* One out-of-line copy of the clamp for the EVENT and the TELEMETRY frame (R1 on the Nano:
- * issue 11). */
-#if defined(__GNUC__)
+ * issue 11). Without an entry path and with one-byte steps there is no clamp (the step is
+ * below 255): inline, a load where the call was (R1 on the Nano 2 B smaller). */
+#if defined(__GNUC__) && (CFG_ENTRY_PATHS || !STEP_IX_BYTE)
 __attribute__((noinline))
 #endif
 uint8_t seq_step_byte(void)
