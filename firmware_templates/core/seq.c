@@ -312,7 +312,9 @@ uint8_t seq_running(void)
 
 uint8_t seq_holding(void)
 {
-    return (uint8_t)(s.running && s.reached);
+    /* s.held: ticks at the target in a row, 0 once it is lost; not s.reached, which stays set
+     * to the end of the step (SEQ_EV_REACHED once a step) */
+    return (uint8_t)(s.running && s.held);
 }
 
 cfg_state_t seq_target(void)

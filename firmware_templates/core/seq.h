@@ -89,7 +89,7 @@ void seq_stop(void);
 uint8_t seq_tick(cfg_state_t measured);
 
 uint8_t seq_running(void);
-uint8_t seq_holding(void); /* running and the current target has been reached */
+uint8_t seq_holding(void); /* running and the current target measured now (not just reached once) */
 cfg_state_t seq_target(void);
 uint16_t seq_step(void); /* SEQ_STEP_ENTRY while on the entry path (events show 255) */
 uint8_t seq_step_byte(void); /* seq_step() as EVENT and TELEMETRY carry it: 255 from 255 up and on the entry path */

@@ -62,6 +62,29 @@ static void test_reached_is_reported_once_per_step(void)
     CHECK(!(seq_tick(0) & SEQ_EV_REACHED));
 }
 
+/* TELEMETRY's HOLDING flag (telemetry.c): set while the step's target is measured, not from
+ * its first reach to the end of the step (a limb that fell back is not holding). */
+static void test_holding_is_only_while_the_target_is_measured(void)
+{
+    setup();
+    seq_start(SEQ_DIR_PX, 0, 0);
+    seq_tick(2); /* away before it is reached */
+    CHECK(!seq_holding());
+    CHECK(seq_tick(0) & SEQ_EV_REACHED);
+    CHECK(seq_holding());
+    CHECK(seq_tick(1) & SEQ_EV_AWAY); /* lost: a limb fell back */
+    CHECK(!seq_holding());
+    CHECK(!(seq_tick(0) & SEQ_EV_REACHED)); /* re-reached: REACHED stays once per step */
+    CHECK(seq_holding());
+    CHECK(ticks(CFG_HOLD_TICKS - 1u, 0) & SEQ_EV_ADVANCED);
+    CHECK_EQ(seq_target(), 2);
+    CHECK(!seq_holding()); /* the next step's target is not reached yet */
+    seq_tick(2);
+    CHECK(seq_holding());
+    seq_stop();
+    CHECK(!seq_holding());
+}
+
 static void test_step_not_completed_within_timeout_stops_with_a_timeout_event(void)
 {
     setup();
@@ -204,6 +227,7 @@ int main(void)
     RUN(test_advances_to_the_next_step_after_target_held_for_hold_ticks);
     RUN(test_hold_restarts_when_the_state_leaves_the_target);
     RUN(test_reached_is_reported_once_per_step);
+    RUN(test_holding_is_only_while_the_target_is_measured);
     RUN(test_step_not_completed_within_timeout_stops_with_a_timeout_event);
     RUN(test_a_target_held_longer_than_the_timeout_advances_without_a_timeout);
     RUN(test_time_away_from_the_target_adds_up_over_a_flickering_step);
