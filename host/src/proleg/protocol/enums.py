@@ -124,7 +124,7 @@ class Flag(IntFlag):
     """``TELEMETRY.flags`` bits."""
 
     RUNNING = 1 << 0  # a gait is running
-    HOLDING = 1 << 1  # target state reached, holding before the next step
+    HOLDING = 1 << 1  # the step's target state is measured now, held before the next step (clear once lost)
     FAULT = 1 << 2  # a fault is latched (see the FAULT event)
     ESTOP = 1 << 3  # E-stop latched, all MOSFETs off
     COOLDOWN = 1 << 4  # a channel is in enforced cool-down
