@@ -222,6 +222,17 @@ def test_hold_duty_above_drive_duty(tmp_path):
     rejects(tmp_path, text, "control.hold_duty", "at most control.drive_duty")
 
 
+@pytest.mark.parametrize("extra", ["[control]\ndrive_duty = 0.3\nhold_duty = 0.25\n",
+                                   "[control]\ndrive_duty = 0.5\nhold_duty = 0.5\n",
+                                   "[safety]\nhold_max_duty = 0.45\n[control]\ndrive_duty = 0.45\n"])
+def test_a_drive_duty_at_or_below_the_hold_ceiling_is_refused(tmp_path, extra):
+    """At or below the hold ceiling heating is holding, never on-time (docs/safety.md): a robot
+    file with drive_duty = hold_duty = 0.5 loaded, walked, and held a coil its threshold was
+    moved past at 0.5 for 177 s above 120 °C with no fault (the on-time rules never applied)."""
+    rejects(tmp_path, R1 + "\n" + extra, "control.drive_duty", "above the hold ceiling",
+            "never as on-time")
+
+
 def test_hold_duty_negative(tmp_path):
     text = R1 + "\n[control]\nhold_duty = -0.1\n"
     rejects(tmp_path, text, "control.hold_duty", "a number in [0.0, 1.0]")

@@ -153,3 +153,26 @@ def test_a_supply_that_would_anneal_a_coil_within_the_envelope_is_warned_about(c
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["power=1.3"])
     assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
+def test_a_hold_ceiling_that_would_wear_a_coil_out_is_warned_about(caplog):
+    """The hold ceiling is a duty the firmware may hold forever (never on-time): with this
+    plant's supply it must settle below NITI_OVERHEAT_C. R1's 0.3 settles at 85 °C; a hold
+    duty of 0.5 (its ceiling too) at 125 °C, and R1's own 0.3 with a coil drawing 1.6× its
+    power at about 130 °C."""
+    import logging
+
+    from proleg.sim.closed_loop import make_plant
+
+    doc = copy.deepcopy(tomllib.loads((ROBOTS / "paper-r1.toml").read_text()))
+    doc["control"]["hold_duty"] = 0.5
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(robot_from_dict(doc, Path("my-robot.toml")), "physical")
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 2 and all("held at the hold ceiling 0.5" in w and "would settle at 125 °C" in w
+                                    for w in warned), warned
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["power_scale=rear:1.6"])
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 1 and "coil 'sma-left' held at the hold ceiling 0.3" in warned[0], warned

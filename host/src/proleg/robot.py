@@ -544,6 +544,13 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         f.fail("hold_duty", f"at most safety.max_mean_duty ({safety.mean_ceiling:g}): "
                "a duty that holds a state must fit the mean-duty window (or set safety.hold_max_duty "
                "below it, and the hold counts as on-time)", c.hold_duty)
+    ceiling = safety.hold_ceiling(c.hold_duty)
+    if c.drive_duty <= ceiling:
+        # at or below the hold ceiling a duty is holding, never on-time (docs/safety.md): a coil
+        # driven there would never meet max_on_ms, the cool-down or the on-limit latch
+        f.fail("drive_duty", f"above the hold ceiling {ceiling:g} (safety.hold_max_duty, by default "
+               "max(0.3, control.hold_duty)): at or below it heating counts as holding, never as on-time, "
+               "so max_on_ms, the cool-down and the on-limit latch would never apply", c.drive_duty)
     if c.telemetry_hz > c.tick_hz:
         f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
     if 0 < c.boost_ms < BOOST_MIN_MS:

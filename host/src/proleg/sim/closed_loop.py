@@ -65,22 +65,35 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
 
 
 def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
-    """One line per coil that the safety envelope's ``max_duty``, held, would heat to where
-    NiTi loses its trained shape (``NITI_ANNEAL_C``) with this plant's supply: the envelope
-    bounds duty and on-time, not energy, so such a supply ruins a coil within it (R1 at
-    60 V: about 10,000 °C; at its own 7.4 V: 185 °C, which the on-time and mean-duty limits
-    keep it from holding)."""
-    from .physical.materials import NITI_ANNEAL_C
+    """One line per coil that, with this plant's supply and conditions, the safety envelope
+    lets heat too far: the envelope bounds duty and on-time, not energy.
+
+    - ``max_duty`` held would heat it to where NiTi loses its trained shape (``NITI_ANNEAL_C``):
+      such a supply ruins a coil within the envelope (R1 at 60 V: about 10,000 °C; at its own
+      7.4 V: 185 °C, which the on-time and mean-duty limits keep it from holding);
+    - else the hold ceiling (``safety.hold_max_duty``: a duty the firmware may hold forever,
+      never on-time) held would settle past ``NITI_OVERHEAT_C``: R1's right coil drawing twice
+      its power (``coil_mismatch=0.5``) at full strokes reached 209 °C with no fault, heated at
+      the hold duty while waiting (R1 nominal: 85 °C at the ceiling 0.3)."""
+    from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C
 
     duty = robot.safety.max_duty
+    ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)
     amb = plant.conditions.get("ambient_c")
     out = []
-    for act, hot in zip(robot.actuators, plant.steady_coil_temperature_c(duty)):
+    held = plant.steady_coil_temperature_c(ceiling)
+    for act, hot, warm in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held):
         if hot > NITI_ANNEAL_C:
             safe = duty * (NITI_ANNEAL_C - amb) / (hot - amb)
             out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} would settle at {hot:.0f} °C with "
                        f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
                        f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {safe:.2f}")
+        elif warm > NITI_OVERHEAT_C:
+            safe = ceiling * (NITI_OVERHEAT_C - amb) / (warm - amb)
+            out.append(f"{robot.path}: coil {act.name!r} held at the hold ceiling {ceiling:g} (a duty the firmware "
+                       f"may hold forever, never on-time: docs/safety.md) would settle at {warm:.0f} °C with this "
+                       f"supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out: lower the supply, or "
+                       f"control.hold_duty and safety.hold_max_duty below {safe:.2f}")
     return out
 
 
