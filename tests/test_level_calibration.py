@@ -118,6 +118,7 @@ def test_refused_while_a_gait_runs_and_interrupted_by_a_start(r1):
         assert e.value.error == ErrorCode.NOT_ALLOWED
     assert get_level(client).status == LevelStatus.NONE
     client.stop()
+    wait(client, 2.5)  # at rest for 2 s since the gait (the next test)
     client.request("CALIBRATE_LEVEL", ground=0)
     client.start(0, "+x")  # within the 64 sampling ticks
     ev = next(m for m in iter(lambda: client.recv(1.0), None) if m.name == "EVENT" and m.kind == EventKind.LEVEL_DONE)
@@ -254,6 +255,7 @@ def test_levelling_at_start_refuses_a_tilt_beyond_20_degrees_and_keeps_the_groun
     wait(client, 0.5)
     client.stop()
     assert get_level(client).ground_cdeg == (0, 0)
+    wait(client, 2.5)  # at rest 2 s since the gait: the board calibrates again
     outcome = calibrate_level(client, ground=True)
     assert outcome.result == LevelResult.TOO_TILTED  # the same verdict by hand
     client.close()
@@ -324,4 +326,31 @@ def test_calibrate_refuses_a_robot_whose_ends_are_still_coming_down(r1, capsys):
     assert _calibrate(args, r1, client, []) == 0
     reading = get_level(client)
     assert reading.status == LevelStatus.STORED and max(abs(v) for v in reading.offsets_cdeg) < 100  # under 1°
+    client.close()
+
+
+def test_the_board_refuses_to_calibrate_until_at_rest_2_s_after_a_gait(r1):
+    """A host that asks the board itself (not proleg calibrate, which checks rest first): a flat
+    calibration 5 ms after STOP stored R1's still-falling ends (7.6° and 17.4°) as mounting
+    tilts, and START +x on flat ground was refused TOO_STEEP from then on, across resets. The
+    board now refuses (NOT_ALLOWED 6) until every limb has been at level 0 for 2 s with no gait
+    and no fault since; a fresh board, at rest from its reset, calibrates at once."""
+    sim = SimulatedRobot(r1, seed=4)
+    client = connect(sim)
+    assert client.wait_known_state()
+    client.start(0, "+x")
+    wait(client, 3.5)  # both ends up
+    client.stop()
+    for gap_s in (0.005, 1.0):
+        wait(client, gap_s)
+        with pytest.raises(CommandRefused) as e:
+            client.request("CALIBRATE_LEVEL", ground=0)
+        assert (e.value.error, e.value.detail) == (ErrorCode.NOT_ALLOWED, 6)
+    assert get_level(client).status == LevelStatus.NONE
+    wait(client, 10.0)  # the coils cool, the ends come down and rest
+    assert calibrate_level(client).ok
+    reading = get_level(client)
+    assert reading.status == LevelStatus.STORED and max(abs(v) for v in reading.offsets_cdeg) < 100
+    client = reset(sim, client)
+    client.request("CALIBRATE_LEVEL", ground=0)  # from a reset: nothing was driven
     client.close()

@@ -300,7 +300,7 @@ static void cmd_calibrate_level(void)
     }
     if (why == 0u) {
         r = level_calibrate(msg.u.calibrate_level.ground);
-        why = r == -1 ? 4u : r < 0 ? 5u : 0u; /* under way / not in this build */
+        why = r < 0 ? (uint8_t)(3 - r) : 0u; /* -1 under way (4), -2 not in this build (5), -3 not at rest since a gait (6) */
     }
     if (why) {
         nack(PROTO_ERR_NOT_ALLOWED, why);

@@ -10,6 +10,7 @@
 #include "crc16.h"
 #include "fault.h"
 #include "hal.h"
+#include "initzero.h"
 #include "imucheck.h"
 #include "proto.h"
 #include "psi.h"
@@ -42,6 +43,8 @@ static uint8_t left;     /* ticks of sampling left */
 static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
 #if LEVEL_AT_REST
 static uint16_t rest_ticks; /* ticks the robot has been at rest (up to LEVEL_REST_TICKS) */
+static uint8_t after_gait;  /* a gait ran (or a fault latched) and the robot has not been at rest
+                             * LEVEL_REST_TICKS since: no calibration (level_calibrate) */
 static uint8_t rest_limb;   /* the limb whose reading this tick low-passes */
 #endif
 static uint16_t waited;  /* ticks some limb had no sample yet */
@@ -151,6 +154,9 @@ static void load(void)
 void level_init(void)
 {
     phase = PH_IDLE;
+#if LEVEL_AT_REST
+    INIT_ZERO(after_gait); /* from a reset: at rest, as far as anything was driven */
+#endif
     load();
 }
 
@@ -169,6 +175,11 @@ int8_t level_calibrate(uint8_t on_this_ground)
     if (phase != PH_IDLE) {
         return -1;
     }
+#if LEVEL_AT_REST
+    if (after_gait) {
+        return -3; /* its limbs may still come down, its coils still cool (level.h) */
+    }
+#endif
     for (i = 0; i < CFG_N_LIMBS; i++) {
         lm[i].sum = 0;
     }
@@ -275,6 +286,7 @@ static void track_rest(void)
     uint8_t i, shift;
     int16_t a;
     if (seq_running() || fault_latched()) {
+        after_gait = 1;
         goto moving; /* (before any ψ is computed: a gait's ticks pay nothing for this) */
     }
     for (i = 0; i < CFG_N_LIMBS; i++) {
@@ -293,6 +305,8 @@ static void track_rest(void)
     rest_limb = (uint8_t)(i + 1u < CFG_N_LIMBS ? i + 1u : 0u);
     if (rest_ticks < LEVEL_REST_TICKS) {
         rest_ticks++;
+    } else {
+        after_gait = 0;
     }
     return;
 moving:

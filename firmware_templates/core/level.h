@@ -72,7 +72,10 @@ void level_apply(uint8_t limb, int16_t *ax, int16_t *az);
 
 /* Begin sampling: on flat ground (0: the result is stored) or on this ground (1: applied
  * on top of the record until reset). 0, or -1 when a calibration or an erase is under way
- * (-2: not in this build). */
+ * (-2: not in this build), -3 (with LEVEL_AT_REST) when a gait ran or a fault latched since
+ * the robot was last at rest LEVEL_REST_TICKS: its limbs may still be coming down (a flat
+ * calibration 5 ms after STOP stored R1's falling ends, 7.6° and 17.4°, as mounting tilts,
+ * and START +x was refused TOO_STEEP on flat ground from then on, across resets). */
 int8_t level_calibrate(uint8_t on_this_ground);
 
 /* Erase the record (begins the write; status NONE at once). 0, or -1 while calibrating. */

@@ -131,7 +131,9 @@ def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[st
     except CommandRefused as e:
         why = {1: "a gait is running (stop it, let the coils cool)", 2: "an IMU is marked bad (see the fault; clear it)",
                3: "a fault is latched (clear it first)", 4: "a calibration is already under way",
-               5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)"}
+               5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)",
+               6: "a gait ran or a fault latched since the robot was last at rest for 2 s (its limbs may still "
+                  "be coming down); let the coils cool, then calibrate"}
         raise LinkError(f"{where}: robot refused the level calibration: {why.get(e.detail, e)}") from None
     outcome = level_outcome(client)
     names = _limb_names(robot, len(outcome.reading.offsets_cdeg))

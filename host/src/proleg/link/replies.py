@@ -43,7 +43,9 @@ _NOT_ALLOWED = {
     "LOAD_GAIT": {0: "a gait is running: STOP it first"},
     "SET_ACTUATOR_MAP": {0: "a gait is running: STOP it first"},
     "CALIBRATE_LEVEL": {1: "a gait is running", 2: "an IMU is faulty", 3: "a fault is latched",
-                        4: "a calibration is already under way", 5: "this build has no level calibration"},
+                        4: "a calibration is already under way", 5: "this build has no level calibration",
+                        6: "a gait ran or a fault latched since the robot was last at rest for 2 s: let the coils "
+                           "cool and the limbs come down, then calibrate"},
     "CLEAR_LEVEL": {0: "a gait is running", 5: "this build has no level calibration"},
 }
 
