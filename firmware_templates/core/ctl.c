@@ -79,7 +79,7 @@ typedef struct {
                         * falling without a CTL_CLIMB_CDEG drop of its smoothed ψ (ctl.h) */
 #endif
 #if SEQ_CLOCK_PAUSE
-    int16_t fall_low;    /* lowest smoothed ψ of this step, in CTL_CLIMB_CDEG drops (descent) */
+    psi_mark_t fall_low; /* lowest smoothed ψ of this step, in 1° drops (descent) */
     uint16_t fall_quiet; /* ticks since the last such drop */
 #endif
 } ctl_limb_t;
@@ -88,6 +88,7 @@ static uint8_t hold_low; /* a falling limb is held up: held limbs hold just abov
 #endif
 #if SEQ_CLOCK_PAUSE
 static uint8_t coming_down; /* ctl_coming_down */
+static uint8_t fall_down;   /* DONE | DOWN | STUCK of the limbs at the fall watch's last look */
 #endif
 
 static ctl_limb_t cl[CFG_N_LIMBS];
@@ -112,6 +113,7 @@ void ctl_reset(void)
 #endif
 #if SEQ_CLOCK_PAUSE
     coming_down = 0;
+    fall_down = 0; /* DONE: nothing coming down */
 #endif
     for (i = 0; i < CFG_N_LIMBS; i++) {
         cl[i].target = PSI_UNKNOWN;
@@ -131,12 +133,14 @@ uint8_t ctl_coming_down(void)
     return coming_down;
 }
 
+/* The tick of CTL_REACH_EVERY in which the fall watch looks: not the reach watch's. */
+#define FALL_LOOK (CTL_REACH_EVERY / 2u)
 #define DONE 0u /* settled at its target level */
 #define DOWN 1u /* coming down, a new low within CTL_FALL_PROGRESS_MS */
 #define STUCK 2u
-/* Limb i, its level known, in a fall still coming down (ctl.h, CTL_FALL_PROGRESS_MS). Its
- * lowest smoothed ψ is looked at with the reach watch's pace; watch() starts it afresh at
- * each new target, with no drop yet. */
+/* Limb i, its level known, in a fall still coming down (ctl.h, CTL_FALL_PROGRESS_MS), looked
+ * at once every CTL_REACH_EVERY ticks (FALL_LOOK); watch() starts its lowest smoothed ψ afresh
+ * at each new target, with no drop yet. */
 static uint8_t descent(uint8_t i, uint8_t target, uint8_t level)
 {
     ctl_limb_t *c = &cl[i];
@@ -146,16 +150,28 @@ static uint8_t descent(uint8_t i, uint8_t target, uint8_t level)
     if (level < target) {
         return STUCK; /* rising: its step's time runs */
     }
-    if (look == 0u) {
-        int16_t m = psi_smooth_cdeg(i);
-        if (m <= c->fall_low - CTL_CLIMB_CDEG) {
-            c->fall_low = m;
-            c->fall_quiet = 0;
-        } else if (c->fall_quiet < TICKS(CTL_FALL_PROGRESS_MS)) {
-            c->fall_quiet = (uint16_t)(c->fall_quiet + CTL_REACH_EVERY);
-        }
+    if (psi_fell(i, &c->fall_low)) {
+        c->fall_quiet = 0;
+    } else if (c->fall_quiet < TICKS(CTL_FALL_PROGRESS_MS)) {
+        c->fall_quiet = (uint16_t)(c->fall_quiet + CTL_REACH_EVERY);
     }
     return c->fall_quiet < TICKS(CTL_FALL_PROGRESS_MS) ? DOWN : STUCK;
+}
+
+/* DONE | DOWN | STUCK of every limb (descent). Out of line and once in CTL_REACH_EVERY ticks:
+ * inlined in ctl_demand's loop, it cost R1 at full strokes on the Nano its tick's margin
+ * (max 852 -> 1027 us of 1000, overruns) though it ran in no more than one tick of 16. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static uint8_t fall_watch(const uint8_t target[CFG_N_LIMBS])
+{
+    uint8_t i, down = 0;
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        uint8_t level = psi_level(i);
+        down |= level == PSI_UNKNOWN ? STUCK : descent(i, target[i], level);
+    }
+    return down;
 }
 #endif
 
@@ -286,7 +302,7 @@ static void watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int
         c->held_up = 0;
 #endif
 #if SEQ_CLOCK_PAUSE
-        c->fall_low = psi_smooth_cdeg(i); /* the step's fall is measured from here, no drop yet */
+        psi_mark(i, &c->fall_low); /* the step's fall is measured from here, no drop yet */
         c->fall_quiet = TICKS(CTL_FALL_PROGRESS_MS);
 #endif
     }
@@ -401,9 +417,6 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     uint8_t held_up = 0; /* some falling limb is held up (ctl.h, CTL_FALL_STALL_MS) */
 #endif
     uint8_t changing = 0; /* limbs rising or falling */
-#if SEQ_CLOCK_PAUSE
-    uint8_t down = 0; /* DONE | DOWN | STUCK of the limbs (descent) */
-#endif
     sag_t sagging = 0;
     int16_t farthest = -1;
     uint8_t i;
@@ -608,11 +621,6 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #if CTL_HELD_UP
             held_up |= (uint8_t)(move[i] == FALL && cl[i].held_up >= TICKS(CTL_FALL_STALL_MS));
 #endif
-#if SEQ_CLOCK_PAUSE
-            down |= descent(i, target[i], level);
-        } else {
-            down |= STUCK;
-#endif
         }
         a = ctl_limb_actuator(i);
         if (w > want[a]) {
@@ -629,7 +637,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     waited = waiting;
 #endif
 #if SEQ_CLOCK_PAUSE
-    coming_down = (uint8_t)(down == DOWN); /* some limb coming down, none stuck or rising */
+    if (look == FALL_LOOK) {
+        fall_down = fall_watch(target);
+    }
+    coming_down = (uint8_t)(fall_down == DOWN); /* some limb coming down, none stuck or rising */
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         if (want[i] >= WANT_HEAT) {
             coming_down = 0; /* a coil asked for more than the hold: its step's time runs */

@@ -410,6 +410,28 @@ int16_t psi_smooth_cdeg(uint8_t limb)
     return angle_atan2_cdeg(limbs[limb].fx, limbs[limb].fz);
 }
 
+#define PSI_SIN_1DEG_Q16 1144 /* sin 1° × 65536 */
+
+void psi_mark(uint8_t limb, psi_mark_t *m)
+{
+    m->x = limbs[limb].fx;
+    m->z = limbs[limb].fz;
+}
+
+uint8_t psi_fell(uint8_t limb, psi_mark_t *m)
+{
+    const limb_state_t *l = &limbs[limb];
+    /* ψ = atan2(x, z): |v||m| sin(ψ − ψm) = x·zm − z·xm; |m|² stands for |v||m| (halved samples:
+     * |m|² < 2^28, the products and the difference fit an int32) */
+    int32_t turn = (int32_t)l->fx * m->z - (int32_t)l->fz * m->x;
+    int32_t norm = (int32_t)m->x * m->x + (int32_t)m->z * m->z;
+    if (turn < -((norm >> 16) * PSI_SIN_1DEG_Q16)) {
+        psi_mark(limb, m);
+        return 1;
+    }
+    return 0;
+}
+
 uint8_t psi_settled(uint8_t limb)
 {
     return limbs[limb].settled;

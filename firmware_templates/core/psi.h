@@ -111,6 +111,17 @@ int16_t psi_to_go_cdeg(uint8_t limb, uint8_t thr, uint8_t rising);
  * watch on a rise that stops short (ctl.h, CTL_REACH_MS). One atan2 a call. */
 int16_t psi_smooth_cdeg(uint8_t limb);
 
+/* A direction of `limb`'s smoothed samples (those of psi_smooth_cdeg), kept to compare with:
+ * psi_mark puts it at the limb's direction now; psi_fell is 1, and moves it there, once the
+ * smoothed ψ is 1° or more below it (a cross product, no atan: the fall watch of ctl.h,
+ * CTL_FALL_PROGRESS_MS, looks at falling limbs in ticks that an atan2 a limb overran on the
+ * Nano). The samples' magnitude is taken as the mark's (at rest it is g, whatever ψ). */
+typedef struct {
+    int16_t x, z;
+} psi_mark_t;
+void psi_mark(uint8_t limb, psi_mark_t *m);
+uint8_t psi_fell(uint8_t limb, psi_mark_t *m);
+
 /* 1 when `limb` is settled in its debounced level (see above). */
 uint8_t psi_settled(uint8_t limb);
 
