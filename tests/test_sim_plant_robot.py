@@ -159,7 +159,7 @@ def test_a_hold_ceiling_that_would_wear_a_coil_out_is_warned_about(caplog):
     """The hold ceiling is a duty the firmware may hold forever (never on-time): with this
     plant's supply it must settle below NITI_OVERHEAT_C. R1's 0.3 settles at 85 °C; a hold
     duty of 0.5 (its ceiling too) at 125 °C, and R1's own 0.3 with a coil drawing 1.6× its
-    power at about 130 °C."""
+    power at 121 °C."""
     import logging
 
     from proleg.sim.closed_loop import make_plant

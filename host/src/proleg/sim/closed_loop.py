@@ -89,11 +89,11 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
                        f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
                        f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {safe:.2f}")
         elif warm > NITI_OVERHEAT_C:
-            safe = ceiling * (NITI_OVERHEAT_C - amb) / (warm - amb)
+            safe = math.floor(100 * ceiling * (NITI_OVERHEAT_C - amb) / (warm - amb)) / 100  # below, not rounded up to it
             out.append(f"{robot.path}: coil {act.name!r} held at the hold ceiling {ceiling:g} (a duty the firmware "
                        f"may hold forever, never on-time: docs/safety.md) would settle at {warm:.0f} °C with this "
                        f"supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out: lower the supply, or "
-                       f"control.hold_duty and safety.hold_max_duty below {safe:.2f}")
+                       f"control.hold_duty and safety.hold_max_duty to {safe:.2f} or less")
     return out
 
 
