@@ -24,9 +24,11 @@ REST_DRIFT_DEG = 1.0
 
 def _not_at_rest(client: Any, robot: Any) -> str | None:
     """Why the robot is not at rest (a coil heating, or a limb whose ψ still moves), from
-    ``REST_WATCH_S`` of telemetry; None when it rests. The board checks only that no gait runs
-    and that no limb tilts 20°: a robot stopped a moment ago, its ends still coming down, was
-    calibrated with +17° of bend and then refused START on flat ground (TOO_STEEP)."""
+    ``REST_WATCH_S`` of telemetry; None when it rests. The board refuses a calibration while a
+    gait runs, within 2 s at rest of a gait or a fault (NACK 6) and beyond 20° of tilt; this also
+    sees a limb still moving or a coil heating past that: a robot stopped a moment ago, its ends
+    still coming down, was calibrated with +17° of bend and then refused START on flat ground
+    (TOO_STEEP)."""
     from ..protocol.definition import Flag
 
     hz = getattr(client.info, "telemetry_hz", 0) or 50
