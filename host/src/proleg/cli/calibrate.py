@@ -130,13 +130,8 @@ def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[st
     try:
         asked.append("ground" if args.ground else "CALIBRATE_LEVEL")
         ask_level_calibration(client, ground=args.ground)
-    except CommandRefused as e:
-        why = {1: "a gait is running (stop it, let the coils cool)", 2: "an IMU is marked bad (see the fault; clear it)",
-               3: "a fault is latched (clear it first)", 4: "a calibration is already under way",
-               5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)",
-               6: "a gait ran or a fault latched since the robot was last at rest for 2 s (its limbs may still "
-                  "be coming down); let the coils cool, then calibrate"}
-        raise LinkError(f"{where}: robot refused the level calibration: {why.get(e.detail, e)}") from None
+    except CommandRefused as e:  # the reasons are the client's (link/replies.py), one table for both
+        raise LinkError(f"{where}: robot refused the level calibration: {e.why or e}") from None
     outcome = level_outcome(client)
     names = _limb_names(robot, len(outcome.reading.offsets_cdeg))
     if outcome.ok and args.ground:

@@ -26,6 +26,7 @@ class CommandRefused(LinkError):
         self.command = command
         self.detail = detail
         why = _explain(self.error, detail, command)
+        self.why = why  # the reason in words ("" where none is known)
         super().__init__(f"{where}: robot refused {command}: {code} ({why or f'detail {detail}'}){note}")
 
 
@@ -42,10 +43,12 @@ _NOT_ALLOWED = {
                  "with no entries) or reset the board"},
     "LOAD_GAIT": {0: "a gait is running: STOP it first"},
     "SET_ACTUATOR_MAP": {0: "a gait is running: STOP it first"},
-    "CALIBRATE_LEVEL": {1: "a gait is running", 2: "an IMU is faulty", 3: "a fault is latched",
-                        4: "a calibration is already under way", 5: "this build has no level calibration",
-                        6: "a gait ran or a fault latched since the robot was last at rest for 2 s: let the coils "
-                           "cool and the limbs come down, then calibrate"},
+    "CALIBRATE_LEVEL": {1: "a gait is running (stop it, let the coils cool)",
+                        2: "an IMU is marked bad (see the fault; clear it)", 3: "a fault is latched (clear it first)",
+                        4: "a calibration is already under way",
+                        5: "this firmware was built without level calibration (CFG_LEVEL_CALIBRATION=0)",
+                        6: "a gait ran or a fault latched since the robot was last at rest for 2 s (its limbs may "
+                           "still be coming down); let the coils cool, then calibrate"},
     "CLEAR_LEVEL": {0: "a gait is running", 5: "this build has no level calibration"},
 }
 
