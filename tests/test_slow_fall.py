@@ -44,22 +44,27 @@ def test_the_idealised_drives_step_clock_stands_only_while_a_fall_comes_down():
     """``envelope.StepClock``, the firmware's rule for the claim bench's idealised drive."""
     from proleg.sim.physical.envelope import FALL_PROGRESS_S, StepClock
 
-    dt, th = 0.01, [[20.0], [20.0]]
-    clock = StepClock(th, [70.0, 60.0], pause=True)
+    dt = 0.01
+
+    def level(psi):  # one threshold at 20° a limb
+        return [int(p >= 20.0) for p in psi]
+
+    clock = StepClock([70.0, 60.0], pause=True)
     psi = [70.0, 60.0]
     for _ in range(300):  # both coming down 10°/s: after the first degree, not counted
         psi = [p - 10.0 * dt for p in psi]
-        away = clock.tick(dt, psi, [0, 0], heating=False)
+        away = clock.tick(dt, psi, level(psi), [0, 0], heating=False)
     assert 0.09 < away < 0.11
     for _ in range(300):  # they stop: counted again once FALL_PROGRESS_S has passed
-        away = clock.tick(dt, psi, [0, 0], heating=False)
+        away = clock.tick(dt, psi, level(psi), [0, 0], heating=False)
     assert 0.0 <= away - (0.1 + 3.0 - FALL_PROGRESS_S) <= 0.11  # from its last whole degree down
     before = away
     for _ in range(100):  # coming down again, but a coil heats: counted
         psi = [psi[0] - 0.1, psi[1]]
-        away = clock.tick(dt, psi, [0, 1], heating=True)
+        away = clock.tick(dt, psi, level(psi), [0, 1], heating=True)
     assert abs(away - before - 1.0) < 1e-9
-    plain = StepClock(th, [70.0, 60.0], pause=False)  # a build without the pause: all counted
-    for _ in range(100):
-        away = plain.tick(dt, [70.0 - _, 60.0 - _], [0, 0], heating=False)
+    plain = StepClock([70.0, 60.0], pause=False)  # a build without the pause: all counted
+    for k in range(100):
+        psi = [70.0 - k, 60.0 - k]
+        away = plain.tick(dt, psi, level(psi), [0, 0], heating=False)
     assert abs(away - 1.0) < 1e-9

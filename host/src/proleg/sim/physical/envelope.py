@@ -161,16 +161,16 @@ class StepClock:
     has made a new low of this step ``FALL_DROP_DEG`` below the last within ``FALL_PROGRESS_S``
     (ctl.h; the firmware looks at the smoothed ψ, this at the true one)."""
 
-    def __init__(self, thresholds: Sequence[Sequence[float]], psi: Sequence[float], pause: bool):
-        self.th = [list(t) for t in thresholds]
+    def __init__(self, psi: Sequence[float], pause: bool):
         self.pause = pause
         self.low = [float(p) for p in psi]
-        self.quiet = [FALL_PROGRESS_S] * len(self.th)  # no drop seen yet
+        self.quiet = [FALL_PROGRESS_S] * len(self.low)  # no drop seen yet
         self.away_s = 0.0
 
-    def tick(self, dt: float, psi: Sequence[float], want: Sequence[int], heating: bool) -> float:
-        """Account ``dt`` at ``psi`` with levels ``want`` demanded; the time counted so far."""
-        level = [sum(p >= t for t in th) for p, th in zip(psi, self.th)]
+    def tick(self, dt: float, psi: Sequence[float], level: Sequence[int], want: Sequence[int],
+             heating: bool) -> float:
+        """Account ``dt`` at ``psi`` (each limb at ``level``) with levels ``want`` demanded; the
+        time counted so far."""
         off = [i for i, (lv, w) in enumerate(zip(level, want)) if lv != w]
         for i in off:
             if psi[i] <= self.low[i] - FALL_DROP_DEG:

@@ -115,12 +115,16 @@ class IdealDrive:
         self._heated = {i for i, j in enumerate(self.limb_act) if heat[j] and not cool[j]}
         return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
 
+    def level_of(self, psi: Sequence[float]) -> list[int]:
+        """Each limb's level at ``psi``: how many of its true thresholds it is at or past."""
+        return [sum(p >= x for x in th) for p, th in zip(psi, self.th)]
+
     def _stroke_rules(self, psi: Sequence[float], want: Sequence[int], target: int,
                       dt_s: float) -> tuple[set[int], set[int]]:
         """(limbs waiting for the rise lead to cross, limbs held at their strokes for the fall lead)."""
         t, spent = self._step
         self._step = (target, spent + dt_s if t == target else 0.0)
-        level = [sum(p >= x for x in th) for p, th in zip(psi, self.th)]
+        level = self.level_of(psi)
         tops = [i for i, s in enumerate(self.stroke) if s is not None]
         if t != target:
             self._raised = {i for i in tops if level[i] < want[i] == len(self.th[i])}
@@ -239,7 +243,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
     first = since = None
     arrived = False
     want = limb_levels(target, drive.levels)
-    clock = StepClock(drive.th, plant.psi_deg, pause=any(s is not None for s in drive.stroke) or len(drive.th) > 2)
+    clock = StepClock(plant.psi_deg, pause=any(s is not None for s in drive.stroke) or len(drive.th) > 2)
     while True:
         cmd = drive.command(plant.psi_deg.tolist(), target, dt)
         duties = [0.0] * nch
@@ -250,7 +254,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
             duties = envelope.gate(duties)
         plant.step(dt, duties)
         now = plant.time_s - t0
-        away = clock.tick(dt, plant.psi_deg, want, any(d > 0 for d in duties))
+        away = clock.tick(dt, plant.psi_deg, drive.level_of(plant.psi_deg), want, any(d > 0 for d in duties))
         arrived = plant.true_state == target and (arrived or drive.at_strokes(plant.psi_deg, plant.dpsi_dps, target))
         if arrived:
             if since is None:
