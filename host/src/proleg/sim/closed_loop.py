@@ -74,15 +74,20 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     - else the hold ceiling (``safety.hold_max_duty``: a duty the firmware may hold forever,
       never on-time) held would settle past ``NITI_OVERHEAT_C``: R1's right coil drawing twice
       its power (``coil_mismatch=0.5``) at full strokes reached 209 °C with no fault, heated at
-      the hold duty while waiting (R1 nominal: 85 °C at the ceiling 0.3)."""
+      the hold duty while waiting (R1 nominal: 85 °C at the ceiling 0.3);
+    - else the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
+      envelope lets a coil average for ever, whatever the host commands) held would settle past
+      ``NITI_OVERHEAT_C`` (R1 nominal: 105 °C at 0.4; at 1.3× its power, ``power=1.3``, 129 °C)."""
     from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C
 
     duty = robot.safety.max_duty
     ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)
     amb = plant.conditions.get("ambient_c")
     out = []
+    mean = robot.safety.mean_ceiling
     held = plant.steady_coil_temperature_c(ceiling)
-    for act, hot, warm in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held):
+    averaged = plant.steady_coil_temperature_c(mean)
+    for act, hot, warm, avg in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held, averaged):
         if hot > NITI_ANNEAL_C:
             safe = duty * (NITI_ANNEAL_C - amb) / (hot - amb)
             out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} would settle at {hot:.0f} °C with "
@@ -94,6 +99,12 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
                        f"may hold forever, never on-time: docs/safety.md) would settle at {warm:.0f} °C with this "
                        f"supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out: lower the supply, or "
                        f"control.hold_duty and safety.hold_max_duty to {safe:.2f} or less")
+        elif avg > NITI_OVERHEAT_C:
+            safe = math.floor(100 * mean * (NITI_OVERHEAT_C - amb) / (avg - amb)) / 100
+            out.append(f"{robot.path}: coil {act.name!r} held at the mean-duty ceiling {mean:g} (what the safety "
+                       f"envelope lets a coil average for ever, whatever the host commands: docs/safety.md) would "
+                       f"settle at {avg:.0f} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
+                       f"out: lower the supply, or safety.max_mean_duty to {safe:.2f} or less")
     return out
 
 
