@@ -272,9 +272,9 @@ def test_the_thermal_budget_keys_are_robot_file_keys_that_reach_the_firmware(tmp
         assert line in config
     default = load_robot(write(tmp_path, R1, "default.toml")).safety
     assert (default.hold_max_duty, default.max_mean_duty, default.duty_window_ms, default.on_limit_latch) == (
-        None, 0.4, 10_000, 3)
+        None, 0.45, 10_000, 3)
     rejects(tmp_path, R1 + "\n[safety]\nhold_max_duty = 0.6\n",
-            "safety.hold_max_duty: expected at most max_mean_duty and max_duty (0.4)", "got 0.6")
+            "safety.hold_max_duty: expected at most max_mean_duty and max_duty (0.45)", "got 0.6")
     rejects(tmp_path, R1 + "\n[safety]\nduty_window_ms = 4\n", "safety.duty_window_ms: expected an integer in 8..600000")
     rejects(tmp_path, R1 + "\n[safety]\non_limit_latch = 0\n", "safety.on_limit_latch: expected an integer in 1..247")
 

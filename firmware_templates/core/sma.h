@@ -37,7 +37,7 @@
 #define CFG_HOLD_MAX_DUTY_PM 3000u
 #endif
 #ifndef CFG_MEAN_DUTY_PM
-#define CFG_MEAN_DUTY_PM 4000u
+#define CFG_MEAN_DUTY_PM 4500u
 #endif
 #ifndef CFG_DUTY_WINDOW_MS
 #define CFG_DUTY_WINDOW_MS 10000UL

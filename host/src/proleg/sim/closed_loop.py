@@ -77,7 +77,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
       the hold duty while waiting (R1 nominal: 85 °C at the ceiling 0.3);
     - else the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
       envelope lets a coil average for ever, whatever the host commands) held would settle past
-      ``NITI_OVERHEAT_C`` (R1 nominal: 105 °C at 0.4; at 1.3× its power, ``power=1.3``, 129 °C)."""
+      ``NITI_OVERHEAT_C`` (R1 nominal: 115 °C at 0.45; at 1.3× its power, ``power=1.3``, 142 °C)."""
     from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C
 
     duty = robot.safety.max_duty
