@@ -253,10 +253,10 @@ def test_states_a_stroke_makes_unholdable_are_warned_about_at_load(tmp_path, cap
 
 
 def test_the_ideal_drives_copies_of_the_firmwares_stroke_constants_agree_with_it():
-    """measure.py follows core/ctl.h's stroke rules with its own copies of their constants (and
+    """drive.py follows core/ctl.h's stroke rules with its own copies of their constants (and
     psi.h's progress edges, for the lag watch): a change on one side only would make the
     idealised drive, and the claim bench's "physically possible", judge another controller."""
-    from proleg.sim.physical import measure
+    from proleg.sim.physical import drive
 
     core = ROBOTS.parent / "firmware_templates" / "core"
     text = (core / "ctl.h").read_text() + (core / "psi.h").read_text()
@@ -267,16 +267,16 @@ def test_the_ideal_drives_copies_of_the_firmwares_stroke_constants_agree_with_it
     def number(name: str) -> int:
         return int(define(name).rstrip("u"))
 
-    assert measure.CLIMB_MAX_S == number("CTL_CLIMB_MAX_MS") / 1000
-    assert measure.CLIMB_STOP_S == number("CTL_CLIMB_STOP_MS") / 1000
-    assert measure.HOVER_S == number("CTL_HOVER_MS") / 1000
-    assert measure.CLIMB_GAIN_DEG == number("CTL_CLIMB_GAIN_CDEG") / 100
-    assert measure.FALL_WAIT_S == number("CTL_FALL_WAIT_MS") / 1000
-    assert measure.LAG_S == number("CTL_LAG_MS") / 1000
-    assert measure.SHARE_SYNC == number("CTL_SHARE_SYNC") / number("CTL_SHARE_FULL")
-    assert measure.FALL_SHARE == number("CTL_FALL_SHARE") / number("CTL_SHARE_FULL")
+    assert drive.CLIMB_MAX_S == number("CTL_CLIMB_MAX_MS") / 1000
+    assert drive.CLIMB_STOP_S == number("CTL_CLIMB_STOP_MS") / 1000
+    assert drive.HOVER_S == number("CTL_HOVER_MS") / 1000
+    assert drive.CLIMB_GAIN_DEG == number("CTL_CLIMB_GAIN_CDEG") / 100
+    assert drive.FALL_WAIT_S == number("CTL_FALL_WAIT_MS") / 1000
+    assert drive.LAG_S == number("CTL_LAG_MS") / 1000
+    assert drive.SHARE_SYNC == number("CTL_SHARE_SYNC") / number("CTL_SHARE_FULL")
+    assert drive.FALL_SHARE == number("CTL_FALL_SHARE") / number("CTL_SHARE_FULL")
     edges = [int(x) for x in define("PSI_PROGRESS_CDEG").strip("{}").split(",")]
-    assert [e * 100 for e in measure.PROGRESS_DEG] == edges
+    assert [e * 100 for e in drive.PROGRESS_DEG] == edges
 
 
 def test_the_table_plant_takes_a_staggered_stroke_step_as_the_matrix_transition_it_is(tmp_path):

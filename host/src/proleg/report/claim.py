@@ -6,7 +6,7 @@ runs both drives under one of them from a cold robot and reports each as complet
 (with the firmware's fault, or why the open loop stopped walking) and its speed in mm/s;
 ``physically_possible`` says whether the coils can complete the gait's transformations at all
 under the condition, within the firmware's safety envelope (an idealised drive with perfect
-sensing held to the envelope's rules, ``measure.run_sequence(envelope=True)``) and, if not,
+sensing held to the envelope's rules, ``drive.run_sequence(envelope=True)``) and, if not,
 why; a condition the firmware itself completes is possible whatever the idealised drive says. The open-loop drive is tuned once on the fresh robot by ``openloop.
 tune_open_loop_robust`` (all 4N − 1 timing parameters free, scored on its worst speed over
 ±10 % power so that no knife-edge timing wins). ``bench/bench_claim.py`` runs the whole grid;
@@ -272,7 +272,7 @@ def idealised_walk(robot: Any, point: GridPoint, direction: str = "+x",
     The speed is not a ceiling (the drive settles 0.3 s in every state and holds 4° past ψ*,
     or at the strokes), but it has no sensing errors and no stall rules: how much a condition
     slows the gait itself, whatever drives it."""
-    from ..sim.physical.measure import walk_within_envelope
+    from ..sim.physical.drive import walk_within_envelope
 
     plant = _plant(robot, point)
     walk = walk_within_envelope(robot, gait_states(robot, direction, gait), plant)

@@ -2,7 +2,7 @@
 ``[control] max_climb_deg`` wants (docs/calibration.md, "Too steep to climb").
 
 ``steepest_climb`` walks the gait with the idealised drive (true ψ, the firmware's duties, within
-its safety envelope: ``measure.walk_within_envelope``) up ever steeper ground, by
+its safety envelope: ``drive.walk_within_envelope``) up ever steeper ground, by
 bisection, and returns the steepest grade on which it still moves up the slope. Bisection
 assumes a gait that slides back on a grade also slides back on every steeper one (true of every
 example robot measured half a degree at a time, docs/calibration.md).
@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ...robot_climb import MIN_CLIMB_DEG, ClimbLimit
-from .measure import walk_within_envelope
+from .drive import walk_within_envelope
 
 #: The plant's steepest ground (conditions.py: incline_deg in −12..12).
 TOP_DEG = 12.0

@@ -1,4 +1,4 @@
-"""The firmware's safety envelope, for the idealised drive (``measure._run_to``).
+"""The firmware's safety envelope, for the idealised drive (``drive._run_to``).
 
 The claim bench asks whether the coils *can* complete a gait under a condition
 (``report.claim.physically_possible``). The firmware may only try within its safety envelope
