@@ -335,7 +335,8 @@ class PhysicalPlant:
 
     def pose(self, contractions: Sequence[float]) -> None:
         """Set the coils' contractions directly (bypassing the thermal model) and let the body
-        move by friction mechanics: for kinematic sweeps (``measure.infer_mechanisms``)."""
+        move by friction mechanics: for kinematic sweeps (``measure.kinematic_signs_all``, which
+        ``mechanism`` infers the friction mechanisms from)."""
         self._coils.c[:] = [float(c) for c in contractions]
         self._c_eval = list(self._coils.c)
         gaps_old = self._gaps
