@@ -44,6 +44,10 @@ class RecordingError(ProlegError):
     file, exit 2 like a bad robot file. Writing one that fails is a ``LinkError`` (exit 1)."""
 
 
+class LearnError(ProlegError):
+    """A learn option or file the user got wrong (one line, exit code 2)."""
+
+
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C, saying in one line what was kept ("interrupted; nothing built"): the CLI prints
     ``proleg: `` and the message and exits 130. A ``KeyboardInterrupt``, so that whatever

@@ -15,13 +15,15 @@ Three things, in this order, each optional after the first:
 Position sources (``--source``): ``sim`` (the simulator's ground truth; the default with
 ``--sim``), ``tracker`` (no pose during the run; ``--track FILE.csv`` gives the motion,
 clocks aligned by ``proleg.learn.tracker``), ``manual`` (asked after each transition).
+
+This module parses the command, checks its options, opens the log and the link and explores;
+the report and the learned file (2 and 3) are ``learn_report``'s.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
-import math
 import os
 import sys
 import warnings
@@ -30,14 +32,11 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from ..errors import LinkError, ProlegError
+from ..errors import LearnError, LinkError
 from ..names import counted
+from .learn_report import FLAGGED_SHOWN, _fmt, report_and_write, with_track  # noqa: F401 (first two re-exported)
 
 log = logging.getLogger("proleg")
-
-
-class LearnError(ProlegError):
-    """A learn option or file the user got wrong (one line, exit code 2)."""
 
 
 def add_arguments(subparsers: Any) -> None:
@@ -150,8 +149,8 @@ def cmd_learn(args: argparse.Namespace) -> int:
         if client is not None:
             _explore(args, robot, trial_log, source, client, pose)
         trials = list(trial_log.trials)
-    trials = _with_track(args, trials)
-    return _report_and_write(args, robot, trials)
+    trials = with_track(args, trials)
+    return report_and_write(args, robot, trials)
 
 
 def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
@@ -410,144 +409,3 @@ def _adaptive(ex, args, table, trial_log, estimate, adaptive_demand) -> None:
         _run_to(ex, _counts(table, trial_log.trials) + demand, args.max_pieces)
         if demand.sum() == 0 or len(trial_log.trials) == before:
             break
-
-
-def _with_track(args: argparse.Namespace, trials: list) -> list:
-    if args.track is None:
-        return trials
-    from ..learn.tracker import TrackerError, attach_track, read_track
-
-    try:
-        track = read_track(args.track)
-        bare = [t for t in trials if t.dx is None]
-        if not bare:
-            return trials
-        attached, offset, outside = attach_track(bare, track, args.tracker_offset)
-    except TrackerError as e:
-        raise LearnError(f"learn: {e}") from None
-    how = "given" if args.tracker_offset is not None else "estimated"
-    span = (f"its times {track.t[0]:g}..{track.t[-1]:g} s, the trials' {min(t.t_start for t in bare) + offset:g}.."
-            f"{max(t.t_end for t in bare) + offset:g} s on its clock (offset {offset:+.3f} s, {how})")
-    if not attached:
-        raise LearnError(f"learn: --track {args.track}: covers none of the {len(bare)} trials without motion: {span}; "
-                         "give the track of this run, or --tracker-offset")
-    if outside:
-        log.warning("learn: --track %s: %d of %d trials begin or end outside it and are left without motion "
-                    "(%s)", args.track, len(outside), len(bare), span)
-    log.info("%s: %d trials given their motion (clock offset %+.3f s, %s)", args.track, len(attached), offset, how)
-    return [t for t in trials if t.dx is not None] + attached + outside
-
-
-def _strayed(trials) -> str:
-    """``a->b k/n (via s, …)`` for every transition some of whose trials passed through a state
-    outside it (``Trial.passed``), in first-seen order; "" when none did."""
-    seen: dict[tuple[str, str], list[int]] = {}
-    via: dict[tuple[str, str], dict[str, None]] = {}
-    for tr in trials:
-        k = (tr.src, tr.dst)
-        seen.setdefault(k, [0, 0])[1] += 1
-        if tr.passed:
-            seen[k][0] += 1
-            via.setdefault(k, {}).update(dict.fromkeys(tr.passed))
-    return ", ".join(f"{a}->{b} {seen[a, b][0]}/{seen[a, b][1]} (via {', '.join(v)})" for (a, b), v in via.items())
-
-
-def _fmt(v: float, nd: int = 2) -> str:
-    if v is None or (isinstance(v, float) and math.isnan(v)):
-        return "-"
-    text = f"{v:.{nd}f}"
-    return text[1:] if text.startswith("-") and not text.strip("-0.") else text  # -0.00 is 0.00
-
-
-def _trial_units(args: argparse.Namespace, robot, trials: list) -> str:
-    """The unit the trials' Δx are in: mm for the simulator's, the robot file's for a tracker's
-    or a hand's. A log that mixes the two (resumed with another source) cannot be averaged."""
-    sources = {tr.source for tr in trials}
-    if "sim" not in sources:
-        return robot.units
-    others = sorted(s or "unsaid" for s in sources - {"sim"})
-    if others and robot.units != "mm":
-        raise LearnError(f"learn: {args.log} mixes simulated trials (Δx in mm) with {', '.join(others)} ones (in "
-                         f"{robot.units}, the robot file's unit); learn them from separate logs")
-    return "mm"  # the plant moves in mm
-
-
-#: how many transitions the report's "too few trials" line names before it counts the rest
-FLAGGED_SHOWN = 10
-
-
-def _report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
-    from ..learn.estimate import estimate, penalised_table
-    from ..learn.robotfile import write_learned_robot
-
-    t = robot.transitions
-    bare = sum(1 for tr in trials if tr.dx is None)
-    if bare and bare == len(trials):  # a tracker's trials, no track attached: nothing to estimate
-        what = (f"learn: {args.log}: {bare} transitions recorded without their motion (Δx; --source tracker): "
-                f"attach the tracker's track with --track FILE.csv (proleg learn {args.robot} --log {args.log} "
-                "--track FILE.csv --report)")
-        if args.report or args.out or args.half_width:
-            raise LearnError(what + "; nothing to report")
-        print(what, file=sys.stdout)
-        return 0
-    units = _trial_units(args, robot, trials)
-    est = estimate(t, trials)
-    out = sys.stdout
-    dx = est.dx
-    path = None
-    if args.out:  # written before the table is printed: a reader that goes away (| head) loses no file
-        if not int(dx.n.sum()):
-            raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
-        path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True)
-    print(f"{robot.name}: {int(dx.n.sum())} trials, {t.n_transitions} allowed transitions "
-          f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
-    extra = est.extra_trials(args.half_width) if args.half_width else None
-    head = f"{'transition':>12} {'n':>3} {'mean Δx':>9} {'var':>8} {'interval':>19}"
-    planar = "dy" in est.components and bool(np.any(est.components["dy"].n > 0))
-    if planar:
-        head += f" {'mean Δy':>8} {'mean Δθ':>8}"
-    if extra is not None:
-        head += f" {'more':>5}"
-    print(head, file=out)
-    for e, (a, b) in enumerate(zip(t.src.tolist(), t.dst.tolist())):
-        lab = f"{t.label(a)}->{t.label(b)}"
-        ci = "-" if math.isnan(dx.half_width[e]) else f"[{dx.low[e]:.2f}, {dx.high[e]:.2f}]"
-        row = f"{lab:>12} {int(dx.n[e]):>3} {_fmt(dx.mean[e]):>9} {_fmt(dx.var[e]):>8} {ci:>19}"
-        if planar:
-            row += f" {_fmt(est.components['dy'].mean[e]):>8} {_fmt(est.components['dtheta_deg'].mean[e], 1):>8}"
-        if extra is not None:
-            row += f" {int(extra[e]):>5}"
-        print(row, file=out)
-    if bare:
-        print(f"{bare} more transitions recorded without their motion (Δx) are not counted: attach the "
-              "tracker's track with --track FILE.csv", file=out)
-    flagged = est.flagged()
-    if flagged:  # the table above has each one's n: a few names and the count, not hundreds of them
-        shown = ", ".join(flagged[:FLAGGED_SHOWN]) + (
-            f", … ({len(flagged) - FLAGGED_SHOWN} more; column n)" if len(flagged) > FLAGGED_SHOWN else "")
-        print(f"too few trials (< {est.min_samples}): {len(flagged)} of {t.n_transitions}: {shown}", file=out)
-    if strayed := _strayed(trials):
-        print("passed through other states on the way (a limb crossed a level it should have kept; "
-              f"their Δx includes those crossings): {strayed}", file=out)
-    if extra is not None:
-        print(f"extra trials for ± {args.half_width:g}: {int(extra.sum())} "
-              f"(run them with --more and a robot link)", file=out)
-    if int(dx.n.sum()) and (args.variance_weight or args.report):
-        from ..gait import optimal_gaits
-
-        try:
-            res = optimal_gaits(penalised_table(est, args.variance_weight, fallback=t), "total", "+x")
-            best = res.gaits[0] if res.gaits and res.value is not None else None
-        except ProlegError:
-            best = None
-        if best is not None:
-            what = "mean" if not args.variance_weight else f"mean − {args.variance_weight:g}·σ"
-            print(f"best +x gait for {what}: {','.join(t.label(s) for s in best.states)}", file=out)
-    if path is not None:
-        print(f"wrote {path}", file=out)
-        log.info("learn: next: proleg gait %s shows the best gaits of the learned matrix; proleg build/flash %s "
-                 "puts them on the robot", path, path)
-    elif int(dx.n.sum()):
-        log.info("learn: next: add --out LEARNED.toml to write the robot file with the learned matrix (the "
-                 "trials are in %s; nothing is explored again)", args.log)
-    return 0
