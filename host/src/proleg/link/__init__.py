@@ -2,7 +2,7 @@
 
 python-can's shape: one ``Link`` interface (``base``; ``serial_link``, ``can_link``,
 ``sim_link``), opened from a URL by ``factory.open_link``; ``RobotClient`` (``client``) turning
-its bytes into one decoded-message stream (``received``) and matching replies to commands as the
+its bytes into one decoded-message stream (``stream``, ``received``) and matching replies to commands as the
 protocol definition says (``replies``); ``Notifier`` fanning that stream out to ``Listener``s (``listeners``; the
 console, the recorder and the gait report live in their own packages above this one).
 """
