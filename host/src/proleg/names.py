@@ -2,7 +2,7 @@
 the DBC file (``protocol.dbc``) and column names of recordings (``record.fields``).
 
 ``identifier("sma-left")`` → ``sma_left``. Two names that give the same identifier would
-give one column or signal for two limbs, so the robot file refuses them (``robot._limbs``).
+give one column or signal for two limbs, so the robot file refuses them (``robot_limbs._limbs``).
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """Checking a robot file's fields: every reader raises RobotFileError naming the file and the
 field (``Fields``), and files are read with a size limit (``read_text``). Shared by the robot
-file's sections (``proleg.robot``, ``proleg.robot_transitions``)."""
+file's sections (``proleg.robot``, ``proleg.robot_limbs``, ``proleg.robot_settings``,
+``proleg.robot_transitions``)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,162 @@
+"""The robot file's ``[safety]`` and ``[control]`` tables: the safety envelope the firmware
+enforces (``Safety``, docs/safety.md) and the control settings it runs with (``Control``).
+``_safety`` and ``_control`` (called by ``proleg.robot.robot_from_dict``) check every key
+against its range, and the control's duties against the safety envelope; a bad value raises
+RobotFileError naming the file and the key, never clamped. Re-exported by ``proleg.robot``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .robot_climb import ClimbLimit, climb_limit
+from .robot_fields import Fields
+
+#: ``[safety] min_cooldown_ms`` is at most this many ``max_on_ms`` (sma.c's pay-back rate,
+#: max_on/min_cooldown in steps of 1/256, must not round to 0; SET_PARAM refuses the same).
+MAX_COOLDOWN_PER_ON = 255
+
+#: The most on-limit hits that may latch: the guard counts them in a byte and, in the tick it
+#: reaches the limit, up to 8 coils may hit at once (core/safety.c asserts the same).
+MAX_ON_LIMIT_LATCH = 255 - 8
+#: The mean-duty window's range (ms; docs/safety.md: kept as 8 slots of a window / 8).
+DUTY_WINDOW_MS_RANGE = (8, 600_000)
+
+#: The shortest link watchdog a robot file may set (0 turns it off): the host's heartbeat
+#: comes every quarter of it (``proleg.link.client.WATCHDOG_SHARE``).
+MIN_LINK_WATCHDOG_MS = 100
+
+
+@dataclass(frozen=True)
+class Safety:
+    max_on_ms: int = 3000
+    min_cooldown_ms: int = 800
+    max_duty: float = 0.8
+    state_timeout_ms: int = 8000
+    link_watchdog_ms: int = 2000  # on by default: a host that goes away stops the robot (docs/safety.md)
+    #: the thermal budget (docs/safety.md): a duty at or below hold_max_duty is holding, never
+    #: on-time (None: max(0.3, control.hold_duty)); the mean duty over any duty_window_ms is at
+    #: most max_mean_duty; on_limit_latch on-limit hits without progress latch SMA_ON_LIMIT.
+    #: 0.45: held for ever the paper robots' coils settle at 115 °C, 5 K under the 120 °C that
+    #: wears NiTi out (materials.NITI_OVERHEAT_C); 0.5 settled at 125 °C, and a host flicking a
+    #: held limb's threshold kept a coil there without a fault (docs/safety.md, "Keys")
+    hold_max_duty: float | None = None
+    max_mean_duty: float = 0.45
+    duty_window_ms: int = 10_000
+    on_limit_latch: int = 3
+
+    @property
+    def mean_ceiling(self) -> float:
+        """The most a duty held for ever may be: it fits the mean-duty window and max_duty."""
+        return min(self.max_mean_duty, self.max_duty)
+
+    def hold_ceiling(self, hold_duty: float) -> float:
+        """``hold_max_duty``, or its default: max(0.3, the control's hold duty), at most
+        ``mean_ceiling`` (a duty the coil may hold forever fits the window)."""
+        if self.hold_max_duty is not None:
+            return self.hold_max_duty
+        return min(self.mean_ceiling, max(0.3, hold_duty))
+
+
+#: control.boost_ms: 0 (off) or this range. Below 100 ms a coil still heating back to As (its
+#: dead time, 0.15-0.6 s) would count as lagging at every rise; at or above the stall
+#: detector's 5 s (CTL_STALL_MS) the limb is cut off as "cannot reach" first.
+BOOST_MIN_MS = 100
+BOOST_MAX_MS = 4000
+
+
+@dataclass(frozen=True)
+class Control:
+    tick_hz: int = 1000
+    drive_duty: float = 0.6
+    hold_duty: float = 0.25
+    debounce_ticks: int = 5
+    hold_ms: int = 100
+    hold_margin_deg: float = 4.0
+    telemetry_hz: int = 50
+    overrun_fault: int = 10  # consecutive ticks whose work overran the period: fault TICK_OVERRUN
+    #: a rising limb that gets no progress edge closer for this long heats at safety.max_duty
+    #: until the next START (core/ctl.h, CTL_BOOST_MS); 0: never (the default)
+    boost_ms: int = 0
+    fallback: bool = True  # firmware switches to a build-time fallback gait when it loses an actuator
+    #: limbs raised to their strokes together: which crosses psi* first (None: the largest stroke);
+    #: lowered together: which goes down first while the others are held at their strokes (None:
+    #: they fall as they cool). Limb names.
+    stroke_rise_lead: str | None = None
+    stroke_fall_lead: str | None = None
+    #: the steepest ground (degrees, rising in the gait's direction) a gait is started on, per
+    #: direction: START steeper uphill is refused (NACK TOO_STEEP). None: no guard
+    #: (docs/calibration.md)
+    max_climb_deg: ClimbLimit | None = None
+
+
+def _safety(path: Path, value: Any) -> Safety:
+    f = Fields(path, "safety", value, set(Safety.__dataclass_fields__))
+    d = Safety()
+    s = Safety(
+        max_on_ms=f.integer("max_on_ms", d.max_on_ms, 10, 60_000),
+        min_cooldown_ms=f.integer("min_cooldown_ms", d.min_cooldown_ms, 0, 600_000),
+        max_duty=f.number("max_duty", d.max_duty, 0.0, 1.0, open_lo=True),
+        state_timeout_ms=f.integer("state_timeout_ms", d.state_timeout_ms, 10, 600_000),
+        link_watchdog_ms=f.integer("link_watchdog_ms", d.link_watchdog_ms, 0, 600_000),
+        hold_max_duty=f.number("hold_max_duty", None, 0.0, 1.0) if f.has("hold_max_duty") else None,
+        max_mean_duty=f.number("max_mean_duty", d.max_mean_duty, 0.0, 1.0, open_lo=True),
+        duty_window_ms=f.integer("duty_window_ms", d.duty_window_ms, *DUTY_WINDOW_MS_RANGE),
+        on_limit_latch=f.integer("on_limit_latch", d.on_limit_latch, 1, MAX_ON_LIMIT_LATCH),
+    )
+    if s.hold_max_duty is not None and s.hold_max_duty > s.mean_ceiling:
+        f.fail("hold_max_duty", f"at most max_mean_duty and max_duty ({s.mean_ceiling:g}): a "
+               "duty the coil may hold forever must fit the mean-duty window", s.hold_max_duty)
+    # the host feeds the watchdog with a PING every quarter of it (link/client.py): below
+    # 100 ms that is a frame every few ms, and a desktop OS's scheduling alone can miss it
+    if 0 < s.link_watchdog_ms < MIN_LINK_WATCHDOG_MS:
+        f.fail("link_watchdog_ms", f"0 (off) or at least {MIN_LINK_WATCHDOG_MS} ms", s.link_watchdog_ms)
+    # sma.c pays on-time back at max_on/min_cooldown in steps of 1/256: a cool-down of 256
+    # on-times or more would pay back nothing, and a coil that hit its limit never heat again
+    if s.min_cooldown_ms > MAX_COOLDOWN_PER_ON * s.max_on_ms:
+        f.fail("min_cooldown_ms", f"at most {MAX_COOLDOWN_PER_ON} × safety.max_on_ms ({MAX_COOLDOWN_PER_ON * s.max_on_ms})",
+               s.min_cooldown_ms)
+    return s
+
+
+def _control(path: Path, value: Any, safety: Safety) -> Control:
+    f = Fields(path, "control", value, set(Control.__dataclass_fields__))
+    d = Control()
+    c = Control(
+        tick_hz=f.integer("tick_hz", d.tick_hz, 200, 10_000),
+        drive_duty=f.number("drive_duty", d.drive_duty, 0.0, 1.0, open_lo=True),
+        hold_duty=f.number("hold_duty", d.hold_duty, 0.0, 1.0),
+        debounce_ticks=f.integer("debounce_ticks", d.debounce_ticks, 1, 1000),
+        hold_ms=f.integer("hold_ms", d.hold_ms, 0, 600_000),  # as SET_PARAM's (core/param.c)
+        hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
+        telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
+        overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
+        boost_ms=f.integer("boost_ms", d.boost_ms, 0, BOOST_MAX_MS),
+        fallback=f.table.get("fallback", d.fallback),
+        stroke_rise_lead=f.string("stroke_rise_lead") if f.has("stroke_rise_lead") else None,
+        stroke_fall_lead=f.string("stroke_fall_lead") if f.has("stroke_fall_lead") else None,
+        max_climb_deg=climb_limit(f),
+    )
+    if not isinstance(c.fallback, bool):
+        f.fail("fallback", "true or false", c.fallback)
+    if c.drive_duty > safety.max_duty:
+        f.fail("drive_duty", f"at most safety.max_duty ({safety.max_duty})", c.drive_duty)
+    if c.hold_duty > c.drive_duty:
+        f.fail("hold_duty", f"at most control.drive_duty ({c.drive_duty})", c.hold_duty)
+    if safety.hold_max_duty is None and c.hold_duty > safety.mean_ceiling:
+        f.fail("hold_duty", f"at most safety.max_mean_duty ({safety.mean_ceiling:g}): "
+               "a duty that holds a state must fit the mean-duty window (or set safety.hold_max_duty "
+               "below it, and the hold counts as on-time)", c.hold_duty)
+    ceiling = safety.hold_ceiling(c.hold_duty)
+    if c.drive_duty <= ceiling:
+        # at or below the hold ceiling a duty is holding, never on-time (docs/safety.md): a coil
+        # driven there would never meet max_on_ms, the cool-down or the on-limit latch
+        f.fail("drive_duty", f"above the hold ceiling {ceiling:g} (safety.hold_max_duty, by default "
+               "max(0.3, control.hold_duty)): at or below it heating counts as holding, never as on-time, "
+               "so max_on_ms, the cool-down and the on-limit latch would never apply", c.drive_duty)
+    if c.telemetry_hz > c.tick_hz:
+        f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
+    if 0 < c.boost_ms < BOOST_MIN_MS:
+        f.fail("boost_ms", f"0 (off) or {BOOST_MIN_MS} .. {BOOST_MAX_MS} ms", c.boost_ms)
+    return c
