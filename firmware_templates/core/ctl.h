@@ -97,7 +97,8 @@
  *
  * An actuator that drives several limbs serves the strongest demand of its limbs: boost
  * over heat over release over hold. Levels come from psi.h. Why and where the time goes:
- * docs/control.md.
+ * docs/control.md. ctl.c turns levels and targets into duties; the watches on each limb's
+ * step (the stall detector, the reach, hold, lag and fall watches) are stall.c's (stall.h).
  */
 #ifndef PROLEG_CTL_H
 #define PROLEG_CTL_H

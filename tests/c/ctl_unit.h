@@ -1,5 +1,5 @@
-/* Shared by the host unit tests of core/ctl.c: a limb's accelerometer sample for an angle,
- * a fresh controller, and the duties the tests ask for. */
+/* Shared by the host unit tests of core/ctl.c and core/stall.c: a limb's accelerometer sample
+ * for an angle, a fresh controller, and the duties the tests ask for. */
 #ifndef CTL_UNIT_H
 #define CTL_UNIT_H
 

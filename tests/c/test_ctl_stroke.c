@@ -13,7 +13,7 @@
 #define CLIMB_TICKS ((uint32_t)CTL_CLIMB_MAX_MS * CFG_TICK_HZ / 1000u)
 #define LAG_TICKS ((uint32_t)CTL_LAG_MS * CFG_TICK_HZ / 1000u)
 /* Samples the smoothed ψ (1/16 of each new sample, psi.h) takes to come within 1° of a jump of
- * up to 60°: 16 ln 60 ≈ 66. A climb is judged on it (ctl.c, climbing). */
+ * up to 60°: 16 ln 60 ≈ 66. A climb is judged on it (stall.c, climbing). */
 #define SMOOTH_TICKS 100u
 
 /* Step 10 from 00 after `wait` ticks below the band: limb 0 goes up to `deg` (± `noise`, never

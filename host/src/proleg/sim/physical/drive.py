@@ -156,7 +156,7 @@ class IdealDrive:
     def _stopped(self, i: int, psi: float, dt_s: float, waited: bool = False) -> bool:
         """Limb i, climbing on its top level and not waiting, has gained less than
         ``CLIMB_GAIN_DEG`` in ``CLIMB_STOP_S``, or in ``HOVER_S`` while another limb waited for
-        it (ctl.c: the clock of a climbing limb, CLIMB_STOP); once stopped it stays so for the
+        it (stall.c: the clock of a climbing limb, CLIMB_STOP); once stopped it stays so for the
         step."""
         limit = HOVER_S if waited else CLIMB_STOP_S
         peak, idle = self._gain.get(i, (psi, 0.0))
@@ -170,7 +170,7 @@ class IdealDrive:
         return idle >= limit
 
     def _watch_lag(self, psi: Sequence[float], dt_s: float) -> None:
-        """The firmware's lag watch (ctl.c: ``lagged``, on the stall detector's clock) on the
+        """The firmware's lag watch (stall.c: ``lagged``, on the stall detector's clock) on the
         limbs this step raises, below their top band: heated ``LAG_S`` without getting one
         progress edge closer to the crossing, a limb is given up for the rest of the step."""
         for i in self._raised - self._given_up:
