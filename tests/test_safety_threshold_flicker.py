@@ -1,6 +1,6 @@
 """A host that keeps a held limb's hold edge out of reach cannot keep its coil hot.
 
-The attack (found by an adversarial review, docs/safety.md "Keys"): R1 holds 10 with a long
+The attack (found by an adversarial review, docs/safety.md "Keys"): R1 holds 11 with a long
 hold; the host sets ``debounce_ticks`` 1000 so the limb keeps reading its level, then moves
 the left threshold to 80° (its hold edge out of reach: the bang-bang hold heats the coil at
 the drive duty) for 0.9 s at a time, and back to 20° for a few ticks (the debounce starts
@@ -78,7 +78,7 @@ def r1():
 
 
 def test_a_threshold_flickered_out_of_reach_of_a_held_coil_latches_before_it_overheats(r1):
-    assert r1.safety.max_mean_duty <= 0.45  # the default this test is about (robot.py Safety)
+    assert r1.safety.max_mean_duty == 0.45  # the default this test is about (robot_settings.Safety)
     host = Host(r1)
     host.run(0.3)
     host.ok("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=600_000)
@@ -100,7 +100,7 @@ def test_a_threshold_flickered_out_of_reach_of_a_held_coil_latches_before_it_ove
     faults = [FaultCode(m.code).name for m in host.events(EventKind.FAULT)]
     assert host.latched(), f"no fault stopped the hold in 120 s: left coil above {NITI_OVERHEAT_C:.0f} °C " \
                            f"{host.hot_s[0]:.1f} s, peak {host.peak_c[0]:.0f} °C, faults {faults}"
-    assert faults, "stopped without a fault"
+    assert "SMA_ON_LIMIT" in faults, faults  # the held coil's window refusals, as hits
     assert host.sim.time_s - start < 30, (host.sim.time_s - start, faults)
     # the bursts before the latch: a few seconds past the line, not a minute
     assert host.hot_s[0] < 10.0, host.hot_s

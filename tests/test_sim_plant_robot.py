@@ -171,13 +171,18 @@ def test_a_hold_ceiling_that_would_wear_a_coil_out_is_warned_about(caplog):
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(robot_from_dict(doc, Path("my-robot.toml")), "physical")
     warned = [r.getMessage() for r in caplog.records]
-    assert len(warned) == 2 and all("held at the hold ceiling 0.5" in w and "would settle at 125 °C" in w
-                                    for w in warned), warned
+    held = [w for w in warned if "held at the hold ceiling" in w]
+    assert len(held) == 2 and all("held at the hold ceiling 0.5" in w and "would settle at 125 °C" in w
+                                  for w in held), warned
+    assert len(warned) == 4 and all("mean-duty ceiling 0.5" in w for w in warned if w not in held), warned
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["power_scale=rear:1.6"])
     warned = [r.getMessage() for r in caplog.records]
-    assert len(warned) == 1 and "coil 'sma-left' held at the hold ceiling 0.3" in warned[0], warned
+    # the hold ceiling's advice alone would leave the mean-duty ceiling at 169 °C: both are named
+    assert len(warned) == 2 and all("coil 'sma-left'" in w for w in warned), warned
+    assert "held at the mean-duty ceiling 0.45" in warned[0] and "would settle at 169 °C" in warned[0], warned
+    assert "held at the hold ceiling 0.3" in warned[1], warned
 
 
 def test_a_mean_duty_ceiling_that_would_wear_a_coil_out_is_warned_about(caplog):

@@ -95,7 +95,7 @@ static void set_stroke(uint8_t limb, uint8_t thr)
 #define SET_STROKE(limb, thr) ((void)0)
 #endif
 
-/* The band's lower edge: ψ* less half the width (0 ≤ h ≤ 2000: robot.py, psi_set_band; /2 as
+/* The band's lower edge: ψ* less half the width (0 ≤ h ≤ 2000: robot_limbs.py, psi_set_band; /2 as
  * a shift); the upper edge is lo + h. One copy for both callers. */
 #if defined(__GNUC__)
 __attribute__((noinline))
@@ -221,7 +221,7 @@ int8_t psi_set_band(uint8_t limb, uint8_t thr, int16_t psi_star_cdeg, int16_t hy
 int8_t psi_set_hysteresis(uint8_t limb, int16_t hyst_cdeg)
 {
 #if CFG_MAX_THRESHOLDS == 1u
-    /* One threshold a limb (every limb has 2 levels, robot.py): its one band moved to its own
+    /* One threshold a limb (every limb has 2 levels, robot_limbs.py): its one band moved to its own
      * ψ* with the new width is exactly what psi_set_band checks and computes (R1 on the Nano
      * 42 B smaller than the loops below). */
     return limb < CFG_N_LIMBS ? psi_set_band(limb, 0, band(limb, 0)->star, hyst_cdeg) : (int8_t)-1;

@@ -101,7 +101,7 @@ static void every_channel_off(void)
 #define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
 #define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
 static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0, 0, 0};
-/* The build's own limits pay back (robot.py refuses a min_cooldown_ms of 256 × max_on_ms or
+/* The build's own limits pay back (robot_settings.py refuses a min_cooldown_ms of 256 × max_on_ms or
  * more; this makes a hand-edited config fail to compile rather than lock every coil off). */
 typedef char sma_build_cooldown_pays_back[REFILL_QUOT(SMA_ON_US, SMA_COOLDOWN_US) > 0u ? 1 : -1];
 

@@ -1,4 +1,4 @@
-/* Host unit tests of core/ctl.c's hold watch (CFG_HOLD_WATCH, ctl.h): a held limb that never
+/* Host unit tests of core/stall.c's hold watch (through ctl_demand) (CFG_HOLD_WATCH, ctl.h): a held limb that never
  * settled clear of its hold edge and stopped gaining is held where it stopped.
  * Config "r1-worn": two limbs, ψ* = 50°, band 49..51°, hold margin 2° (hold edge 53°, hold top
  * 54°), 1 kHz; on the simulated 80 mm body its own coil bends its end to 58°, 44° once worn (25 %

@@ -1,6 +1,6 @@
 /* Host unit tests of core/sma.c, the thermal budget of every SMA coil. Config (r1-fast):
  * max_duty 0.8 (8000 ‱), max_on 50 ms, min_cooldown 20 ms, 1 kHz tick; budget defaults:
- * hold ceiling 3000 ‱, mean duty 5000 ‱ over 10 s. Time comes from fake_now_us only. */
+ * hold ceiling 3000 ‱, mean duty 4500 ‱ over 10 s. Time comes from fake_now_us only. */
 #include <string.h>
 
 #include "fake_hal.h"

@@ -24,7 +24,7 @@ MAX_ON_LIMIT_LATCH = 255 - 8
 DUTY_WINDOW_MS_RANGE = (8, 600_000)
 
 #: The shortest link watchdog a robot file may set (0 turns it off): the host's heartbeat
-#: comes every quarter of it (``proleg.link.client.WATCHDOG_SHARE``).
+#: comes every quarter of it (``proleg.link.stream.WATCHDOG_SHARE``).
 MIN_LINK_WATCHDOG_MS = 100
 
 
@@ -108,7 +108,7 @@ def _safety(path: Path, value: Any) -> Safety:
     if s.hold_max_duty is not None and s.hold_max_duty > s.mean_ceiling:
         f.fail("hold_max_duty", f"at most max_mean_duty and max_duty ({s.mean_ceiling:g}): a "
                "duty the coil may hold forever must fit the mean-duty window", s.hold_max_duty)
-    # the host feeds the watchdog with a PING every quarter of it (link/client.py): below
+    # the host feeds the watchdog with a PING every quarter of it (link/stream.py): below
     # 100 ms that is a frame every few ms, and a desktop OS's scheduling alone can miss it
     if 0 < s.link_watchdog_ms < MIN_LINK_WATCHDOG_MS:
         f.fail("link_watchdog_ms", f"0 (off) or at least {MIN_LINK_WATCHDOG_MS} ms", s.link_watchdog_ms)

@@ -65,17 +65,20 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
 
 
 def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
-    """One line per coil that, with this plant's supply and conditions, the safety envelope
-    lets heat too far: the envelope bounds duty and on-time, not energy.
+    """A line per coil and limit that, with this plant's supply and conditions, the safety
+    envelope lets heat too far: the envelope bounds duty and on-time, not energy.
 
     - ``max_duty`` held would heat it to where NiTi loses its trained shape (``NITI_ANNEAL_C``):
       such a supply ruins a coil within the envelope (R1 at 60 V: about 10,000 °C; at its own
-      7.4 V: 185 °C, which the on-time and mean-duty limits keep it from holding);
-    - else the hold ceiling (``safety.hold_max_duty``: a duty the firmware may hold forever,
+      7.4 V: 185 °C, which the on-time and mean-duty limits keep it from holding); else, each
+      on its own line, the two ceilings below past ``NITI_OVERHEAT_C``, the mean-duty one
+      first (lowering it lowers a default hold ceiling too);
+    - the hold ceiling (``safety.hold_max_duty``: a duty the firmware may hold forever,
       never on-time) held would settle past ``NITI_OVERHEAT_C``: R1's right coil drawing twice
       its power (``coil_mismatch=0.5``) at full strokes reached 209 °C with no fault, heated at
-      the hold duty while waiting (R1 nominal: 85 °C at the ceiling 0.3);
-    - else the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
+      the hold duty while waiting (R1 nominal: 85 °C at the ceiling 0.3; the mean-duty ceiling
+      0.45 past it too, at 169 °C, which the advice for the hold alone left in place);
+    - the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
       envelope lets a coil average for ever, whatever the host commands) held would settle past
       ``NITI_OVERHEAT_C`` (R1 nominal: 115 °C at 0.45; at 1.3× its power, ``power=1.3``, 142 °C)."""
     from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C
@@ -93,18 +96,19 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
             out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} would settle at {hot:.0f} °C with "
                        f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
                        f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {safe:.2f}")
-        elif warm > NITI_OVERHEAT_C:
-            safe = math.floor(100 * ceiling * (NITI_OVERHEAT_C - amb) / (warm - amb)) / 100  # below, not rounded up to it
-            out.append(f"{robot.path}: coil {act.name!r} held at the hold ceiling {ceiling:g} (a duty the firmware "
-                       f"may hold forever, never on-time: docs/safety.md) would settle at {warm:.0f} °C with this "
-                       f"supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out: lower the supply, or "
-                       f"control.hold_duty and safety.hold_max_duty to {safe:.2f} or less")
-        elif avg > NITI_OVERHEAT_C:
-            safe = math.floor(100 * mean * (NITI_OVERHEAT_C - amb) / (avg - amb)) / 100
+            continue
+        if avg > NITI_OVERHEAT_C:
+            safe = math.floor(100 * mean * (NITI_OVERHEAT_C - amb) / (avg - amb)) / 100  # below, not rounded up to it
             out.append(f"{robot.path}: coil {act.name!r} held at the mean-duty ceiling {mean:g} (what the safety "
                        f"envelope lets a coil average for ever, whatever the host commands: docs/safety.md) would "
                        f"settle at {avg:.0f} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
                        f"out: lower the supply, or safety.max_mean_duty to {safe:.2f} or less")
+        if warm > NITI_OVERHEAT_C:
+            safe = math.floor(100 * ceiling * (NITI_OVERHEAT_C - amb) / (warm - amb)) / 100
+            out.append(f"{robot.path}: coil {act.name!r} held at the hold ceiling {ceiling:g} (a duty the firmware "
+                       f"may hold forever, never on-time: docs/safety.md) would settle at {warm:.0f} °C with this "
+                       f"supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out: lower the supply, or "
+                       f"control.hold_duty and safety.hold_max_duty to {safe:.2f} or less")
     return out
 
 
