@@ -2,10 +2,12 @@
 
 The envelope (docs/safety.md) bounds duty and on-time, not temperature: the firmware senses
 neither. This bench asks the most of it: one coil of each example robot is requested at
-``max_duty`` on every step for 300 s, through the firmware's envelope as the idealised drive
-models it tick for tick (``proleg.sim.physical.envelope.Envelope``: on-time debt and cool-down,
-the mean-duty window), and every latched on-limit fault is cleared at once, as a host may
-(CLEAR refunds nothing). The physical plant's coil temperature is recorded at the supply
+``max_duty`` on every 2 ms step for 300 s, through the firmware's envelope as the idealised
+drive models it (``proleg.sim.physical.envelope.Envelope``: on-time debt and cool-down, the
+mean-duty window; sma.c's equal when stepped at the firmware's tick, cutting no later at 2 ms),
+and any latched on-limit fault is cleared at once, as a host may (CLEAR refunds nothing;
+``latches_cleared`` counts them). The firmware's state timeout and its stall and reach watches
+are not modelled: a host reaching this would clear those too. The physical plant's coil temperature is recorded at the supply
 powers ×0.7, ×1 and ×1.3. Also printed: where the coil settles held at the mean-duty ceiling
 (what ``proleg sim`` warns about past 120 °C).
 
