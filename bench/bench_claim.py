@@ -42,6 +42,7 @@ worker processes, at low priority.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import logging
 import os
@@ -201,7 +202,9 @@ def main() -> int:
                    "learned_gait": {"states": [robot.transitions.label(s) for s in learned],
                                     "from": "proleg sim --measure-matrix on the fresh robot, optimal gait (total)",
                                     "measured_matrix": measured.to_json()},
-                   "open_loop_budget": args.budget, "open_loop_powers": [0.9, 1.0, 1.1], "quick": args.quick},
+                   "open_loop_budget": args.budget, "open_loop_powers": [0.9, 1.0, 1.1], "quick": args.quick,
+                   # the envelope the firmware was built with: its defaults change between rounds
+                   "safety": dataclasses.asdict(robot.safety)},
         "open_loop_drive": _drive_json(d), "open_loop_tuned_worst_mm_s": round(tuned.worst_speed_mm_s, 4),
         "open_loop_tuned_peak_coil_c": round(tuned.peak_coil_c, 1), "open_loop_max_coil_c": claim.OVERHEAT_C,
         "open_loop_tuned_by_power": {str(k): round(v, 4) for k, v in tuned.speed_by_power.items()},
