@@ -48,7 +48,7 @@ def test_the_bluepill_takes_paper_r1_at_1_khz_and_refuses_a_rate_beyond_its_budg
     check_tick_budget(r1, board)  # 1 kHz: fits
     b = board.budget
     check_tick_budget(at_rate(r1, b.max_tick_hz(2)), board)  # the highest rate the budget allows
-    hz = 20_000  # 50 µs: beyond the background-I2C bluepill's two-limb budget (97 µs)
+    hz = 20_000  # 50 µs: beyond the background-I2C bluepill's two-limb budget (105 µs)
     with pytest.raises(BuildError) as e:
         check_tick_budget(at_rate(r1, hz), board)
     need = b.tick_us_base + 2 * b.tick_us_per_limb
