@@ -90,6 +90,13 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     mean = robot.safety.mean_ceiling
     held = plant.steady_coil_temperature_c(ceiling)
     averaged = plant.steady_coil_temperature_c(mean)
+
+    def worn(act: Any, what: str, duty_held: float, settles_c: float, meaning: str, keys: str) -> str:
+        safe = math.floor(100 * duty_held * (NITI_OVERHEAT_C - amb) / (settles_c - amb)) / 100  # below, not up to it
+        return (f"{robot.path}: coil {act.name!r} held at {what} {duty_held:g} ({meaning}: docs/safety.md) would "
+                f"settle at {settles_c:.0f} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
+                f"out: lower the supply, or {keys} to {safe:.2f} or less")
+
     for act, hot, warm, avg in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held, averaged):
         if hot > NITI_ANNEAL_C:
             safe = duty * (NITI_ANNEAL_C - amb) / (hot - amb)
@@ -98,17 +105,11 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
                        f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {safe:.2f}")
             continue
         if avg > NITI_OVERHEAT_C:
-            safe = math.floor(100 * mean * (NITI_OVERHEAT_C - amb) / (avg - amb)) / 100  # below, not rounded up to it
-            out.append(f"{robot.path}: coil {act.name!r} held at the mean-duty ceiling {mean:g} (what the safety "
-                       f"envelope lets a coil average for ever, whatever the host commands: docs/safety.md) would "
-                       f"settle at {avg:.0f} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
-                       f"out: lower the supply, or safety.max_mean_duty to {safe:.2f} or less")
+            out.append(worn(act, "the mean-duty ceiling", mean, avg, "what the safety envelope lets a coil average "
+                            "for ever, whatever the host commands", "safety.max_mean_duty"))
         if warm > NITI_OVERHEAT_C:
-            safe = math.floor(100 * ceiling * (NITI_OVERHEAT_C - amb) / (warm - amb)) / 100
-            out.append(f"{robot.path}: coil {act.name!r} held at the hold ceiling {ceiling:g} (a duty the firmware "
-                       f"may hold forever, never on-time: docs/safety.md) would settle at {warm:.0f} °C with this "
-                       f"supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out: lower the supply, or "
-                       f"control.hold_duty and safety.hold_max_duty to {safe:.2f} or less")
+            out.append(worn(act, "the hold ceiling", ceiling, warm, "a duty the firmware may hold forever, never "
+                            "on-time", "control.hold_duty and safety.hold_max_duty"))
     return out
 
 
