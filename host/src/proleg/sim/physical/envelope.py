@@ -98,6 +98,11 @@ class Envelope:
         if not self.hit_mask:
             self.hits = 0
 
+    def acknowledge(self) -> None:
+        """The operator cleared a latched fault (safety.c guard_ack): the hits count again from
+        none; the debt and the window are not refunded."""
+        self.hits, self.hit_mask = 0, 0
+
     def gate(self, duties: Sequence[float]) -> list[float]:
         """The duties after the envelope; raises EnvelopeLatched when a fault latches."""
         out = []
