@@ -34,6 +34,16 @@ typedef uint8_t sag_t;
 #define SAG_COUNTS(i, thr) 1
 #endif
 
+/* The hold watch's cut of a limb at its level (below, ctl_demand): settled (clear of its band,
+ * relaxed), or not settled and risen CTL_MOVE_CDEG in this step before it stopped gaining. A
+ * held limb that sags back into its band has not risen so: its coil may be in its dead time
+ * (0.15-0.6 s back to As), and it is heated on as before. */
+#if PSI_IN_LEVEL
+#define SAG_STOPPED(i) (psi_settled(i) || ctl_limb[i].hi - ctl_limb[i].lo >= CTL_MOVE_CDEG)
+#else
+#define SAG_STOPPED(i) 1
+#endif
+
 /* Shared with the watches (stall.h). */
 ctl_limb_t ctl_limb[CFG_N_LIMBS];
 uint8_t ctl_look;
@@ -328,20 +338,30 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             /* Its coil heating and not held off by the envelope, its ψ stopped answering (ctl.h):
              * - rising alone (the body couples limbs that move together), short of its level:
              *   it cannot get there, as after CTL_STALL_MS without progress but at once;
-             * - with the hold watch, held and relaxed (it never settled clear of its hold edge),
-             *   settled clear of its band (the step needs no more of it) and heating below that
-             *   edge: held where it stopped, its coil off until it sags CTL_CLIMB_CDEG below its
-             *   highest. */
+             * - with the hold watch, heating below its hold edge at its level, relaxed (it never
+             *   settled clear of that edge) and settled clear of its band, or not settled yet
+             *   after rising into its level in this step (SAG_STOPPED): held where it stopped,
+             *   its coil off until it sags CTL_CLIMB_CDEG below its highest. Not settled, it
+             *   settles in its level there if past ψ* (psi_settle_in_level): its coil has given
+             *   all it has. The watch's count runs on from the rise, so the coil is off a reach
+             *   time after the last gain, not a hover time and a reach time. A limb settled by the
+             *   margins (stall NONE) is held by the bang-bang hold alone. */
             if (REACH_WATCH && w >= WANT_HEAT &&
                 (move[i] == RISE ? changing == 1u
-                                 : HOLD_WATCH && move[i] == SAG && ctl_limb[i].stall == CTL_STALL_OSCILLATING &&
-                                       psi_settled(i))) {
+                                 : HOLD_WATCH && move[i] == SAG &&
+                                       (PSI_IN_LEVEL ? ctl_limb[i].stall == CTL_STALL_OSCILLATING || !psi_settled(i)
+                                                     : ctl_limb[i].stall == CTL_STALL_OSCILLATING && psi_settled(i)))) {
                 if (sma_cooling(ctl_limb_actuator(i))) {
                     ctl_limb[i].still = NOT_SEEN; /* held off: it starts over, from a cooler coil */
                 } else if (stall_at_reach(i, &ctl_limb[i]) && move[i] == RISE) {
                     ctl_limb[i].stall = CTL_STALL_UNREACHABLE;
-                } else if (ctl_limb[i].still == REACH_LOOKS && move[i] == SAG) {
+                } else if (ctl_limb[i].still == REACH_LOOKS && move[i] == SAG && SAG_STOPPED(i)) {
                     w = WANT_NOTHING;
+#if PSI_IN_LEVEL
+                    ctl_limb[i].stall = CTL_STALL_OSCILLATING; /* decided for this step (stall_watch) */
+                    psi_relax(i, PSI_RELAX_EDGES);
+                    psi_settle_in_level(i);
+#endif
                 }
             }
             if (ctl_limb[i].stall == CTL_STALL_UNREACHABLE && move[i] == RISE) {

@@ -146,6 +146,9 @@ typedef struct {
     uint8_t settled; /* latched: clear of the margins for `debounce` samples (psi.h) */
     uint8_t relaxed; /* settle on the band edges instead of the margin edges */
     uint16_t dwell;  /* samples clear of the margins while not yet settled */
+#if PSI_IN_LEVEL
+    uint8_t in_level; /* settle on the level's own lower band edge (psi_settle_in_level) */
+#endif
 #ifdef CFG_LIMB_STROKE_CDEG
     int16_t cdeg;    /* ψ of the last sample in 0.01° once computed (the stroke rules ask for it */
     uint8_t fresh;   /* several times a tick: one atan2 per sample on the 8-bit targets) */
@@ -294,14 +297,20 @@ uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
 
 /* The last sample of `limb` is inside its debounced level: clear of the band edges of
  * its thresholds (margins = 0) or of the hold and settle edges (margins = 1); with
- * PSI_RELAX_HELD_UP (margins = 2) the band above is not looked at. */
+ * PSI_RELAX_HELD_UP (margins = 2) the band above is not looked at. Settled in its level
+ * (psi_settle_in_level), the band edge below is its lower one, not its upper one. */
+#if PSI_IN_LEVEL
+#define IN_EDGE(limb) (limbs[limb].in_level ? E_LOWER : E_UPPER)
+#else
+#define IN_EDGE(limb) E_UPPER
+#endif
 static uint8_t inside(uint8_t limb, uint8_t margins)
 {
     uint8_t level = limbs[limb].level;
     if (level == PSI_UNKNOWN) {
         return 0;
     }
-    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), (PSI_HELD_UP ? margins == 1u : margins) ? E_HOLD : E_UPPER)) {
+    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), (PSI_HELD_UP ? margins == 1u : margins) ? E_HOLD : IN_EDGE(limb))) {
         return 0;
     }
     if (!(PSI_HELD_UP && margins == PSI_RELAX_HELD_UP) && level + 1u < psi_levels(limb) &&
@@ -360,7 +369,22 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
 void psi_relax(uint8_t limb, uint8_t on)
 {
     limbs[limb].relaxed = on;
+#if PSI_IN_LEVEL
+    if (!on) {
+        limbs[limb].in_level = 0; /* the limb's next target: the margins again */
+    }
+#endif
 }
+
+#if PSI_IN_LEVEL
+void psi_settle_in_level(uint8_t limb)
+{
+    limb_state_t *l = &limbs[limb];
+    if (l->level != PSI_UNKNOWN && l->level > 0u && psi_smooth_cdeg(limb) >= band(limb, (uint8_t)(l->level - 1u))->star) {
+        l->in_level = 1; /* past ψ*: its pad has switched */
+    }
+}
+#endif
 
 uint8_t psi_level(uint8_t limb)
 {

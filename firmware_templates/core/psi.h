@@ -134,6 +134,20 @@ uint8_t psi_settled(uint8_t limb);
 #define PSI_HELD_UP (CFG_N_LIMBS > 2)
 void psi_relax(uint8_t limb, uint8_t on);
 
+/* Settle in the debounced level itself, if the limb's smoothed ψ is at or past the ψ* below
+ * its level (its pad has switched): on the level's own lower band edge (ψ* − h/2, where the
+ * classifier would leave it) instead of its upper one, until psi_relax(limb, 0) at the limb's
+ * next target. Short of ψ* nothing changes. For a limb whose coil has given all it has inside
+ * its band (ctl.h, the hold watch): its level is reached as far as this coil can reach it.
+ * Built with the hold watch only (CFG_HOLD_WATCH; not with strokes, which run no reach watch):
+ * R1's image has no bytes to spare. */
+#if CFG_HOLD_WATCH && !defined(CFG_LIMB_STROKE_CDEG)
+#define PSI_IN_LEVEL 1
+void psi_settle_in_level(uint8_t limb);
+#else
+#define PSI_IN_LEVEL 0
+#endif
+
 /* Every limb has CFG_MAX_LEVELS levels exactly when their product, CFG_N_STATES, is
  * CFG_MAX_LEVELS^CFG_N_LIMBS (no limb has more): then psi_levels() is a constant the compiler
  * folds into every caller (R1, R3, inchworm-3). Up to 8 limbs; more read the table. Usable

@@ -1,5 +1,6 @@
 /* Host unit tests of core/stall.c's hold watch (through ctl_demand) (CFG_HOLD_WATCH, ctl.h): a held limb that never
- * settled clear of its hold edge and stopped gaining is held where it stopped.
+ * settled clear of its hold edge and stopped gaining is held where it stopped, and settled in its
+ * level there if it rose into it and is past ψ*.
  * Config "r1-worn": two limbs, ψ* = 50°, band 49..51°, hold margin 2° (hold edge 53°, hold top
  * 54°), 1 kHz; on the simulated 80 mm body its own coil bends its end to 58°, 44° once worn (25 %
  * of its stroke lost), so the renderer builds the watch in (robot_body.worn_holds). */
@@ -64,10 +65,12 @@ static void test_a_held_limb_that_stopped_short_of_its_hold_edge_is_held_where_i
 {
     int t;
     rise_to(52.8);
-    /* clear of its band (51°), short of its hold edge (53°), no gain: off a reach time later */
+    /* clear of its band (51°), short of its hold edge (53°), no gain: off a reach time after its
+     * last gain (the watch counts from its rise on, through the hover time rise_to has spent) */
     t = ticks_until(52.8, 0, 2 * (int)REACH_TICKS);
-    CHECK(t >= (int)REACH_TICKS - 2 * (int)CTL_REACH_EVERY);
-    CHECK(t <= (int)REACH_TICKS + 2 * (int)CTL_REACH_EVERY);
+    CHECK(t >= 0);
+    CHECK(t + (int)HOVER_TICKS >= (int)REACH_TICKS - 2 * (int)CTL_REACH_EVERY);
+    CHECK(t + (int)HOVER_TICKS <= (int)REACH_TICKS + (int)SMOOTH_TICKS + 2 * (int)CTL_REACH_EVERY);
     /* held there: it stays off while its ψ stays where it stopped, or sags less than 1° */
     CHECK_EQ(ticks_until(52.8, 1, 3000), -1);
     CHECK_EQ(ticks_until(52.2, 1, 3000), -1);
@@ -110,19 +113,69 @@ static void test_a_limb_that_drops_its_level_while_held_off_rises_back(void)
     CHECK(ctl_stall(0) != CTL_STALL_UNREACHABLE);
 }
 
-static void test_a_limb_inside_its_band_is_heated_until_it_is_clear_of_it(void)
+static void test_a_limb_that_stopped_inside_its_band_past_psi_star_settles_there(void)
 {
-    /* at its level (entered at 51.2°) but back inside its band (50.5°) when relaxed: the step
-     * is not reached until it is clear of the band, so it is not held there (the one-actuator
-     * R1's far end at a weak supply, entered on noise, stopped with STATE_TIMEOUT so) */
+    /* at its level (entered at 51.2°), back inside its band (50.5°, past ψ* = 50°) and gaining
+     * nothing: its coil has given all it has, and it settles in its level where it is, its coil
+     * off (heated on, the one-actuator R1's worn far end reached 151 °C and the step its
+     * timeout); it stays in its level, settled, down to the band's lower edge (49°) */
     uint16_t duty[CFG_N_ACTUATORS];
     int t;
     rise_to(51.2);
+    CHECK(ticks_until(50.5, 0, 2 * (int)REACH_TICKS) >= 0);
+    for (t = 0; t < 100 && !psi_settled(0); t++) {
+        put(0, 50.5);
+        demand(1, 0, duty);
+    }
+    CHECK(psi_settled(0));
+    CHECK_EQ(psi_level(0), 1);
+    CHECK_EQ(duty[0], 0);
+    for (t = 0; t < 100; t++) {
+        put(0, 49.2);
+        demand(1, 0, duty);
+    }
+    CHECK(psi_settled(0));
+    CHECK_EQ(psi_level(0), 1);
+    for (t = 0; t < 100; t++) {
+        put(0, 48.8);
+        demand(1, 0, duty);
+    }
+    CHECK_EQ(psi_level(0), 0); /* out of its level, as the classifier says */
+}
+
+static void test_a_limb_that_stopped_inside_its_band_short_of_psi_star_is_held_off_unsettled(void)
+{
+    /* back inside its band short of ψ* (49.6°): its pad has not switched, so the step is not
+     * reached, but its coil, which gains nothing, is off all the same (the step's timeout
+     * reports it, the coil cooling) */
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t;
+    rise_to(51.2);
+    CHECK(ticks_until(49.6, 0, 2 * (int)REACH_TICKS) >= 0);
+    for (t = 0; t < 300; t++) {
+        put(0, 49.6);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], 0);
+        CHECK(!psi_settled(0));
+    }
+    CHECK_EQ(psi_level(0), 1);
+}
+
+static void test_a_held_limb_that_sags_into_its_band_is_heated(void)
+{
+    /* settled at its hold (53.5°), then sagged into its band (50.5°): no rise in this step
+     * brought it there, and its coil may be in its dead time: heated, not held where it is */
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t;
+    setup();
+    put(1, 0.0);
+    put(0, 53.5);
+    demand(1, 0, duty);
+    CHECK(psi_settled(0));
     for (t = 0; t < 3 * (int)REACH_TICKS; t++) {
         put(0, 50.5);
         demand(1, 0, duty);
         CHECK_EQ(psi_level(0), 1);
-        CHECK(!psi_settled(0));
         CHECK_EQ(duty[0], DRIVE);
     }
 }
@@ -130,9 +183,15 @@ static void test_a_limb_inside_its_band_is_heated_until_it_is_clear_of_it(void)
 static void test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top(void)
 {
     uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
     int t;
-    rise_to(52.0);
-    for (t = 0; t < 950; t++) { /* creeping at 2 °/s (0.64° per reach time), to 53.9° */
+    setup();
+    put(1, 0.0);
+    for (psi = 40.0; psi < 52.0; psi += 0.025) { /* risen into its level, short of its hold edge */
+        put(0, psi);
+        demand(1, 0, duty);
+    }
+    for (t = 0; t < 950; t++) { /* creeping on at 2 °/s (0.64° per reach time), to 53.9° */
         put(0, 52.0 + 0.002 * t);
         demand(1, 0, duty);
         CHECK_EQ(duty[0], DRIVE);
@@ -168,7 +227,9 @@ int main(void)
     RUN(test_a_held_limb_that_stopped_short_of_its_hold_edge_is_held_where_it_stopped);
     RUN(test_a_limb_held_where_it_stopped_is_re_heated_once_it_sags_and_stopped_again);
     RUN(test_a_limb_that_drops_its_level_while_held_off_rises_back);
-    RUN(test_a_limb_inside_its_band_is_heated_until_it_is_clear_of_it);
+    RUN(test_a_limb_that_stopped_inside_its_band_past_psi_star_settles_there);
+    RUN(test_a_limb_that_stopped_inside_its_band_short_of_psi_star_is_held_off_unsettled);
+    RUN(test_a_held_limb_that_sags_into_its_band_is_heated);
     RUN(test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top);
     RUN(test_a_limb_that_settled_is_not_watched);
     return UNIT_EXIT();
