@@ -75,3 +75,19 @@ def test_a_worn_caterpillar_walks_without_cooking_a_proleg():
     assert out.fault == "", out
     assert out.coil_peak_c < claim.OVERHEAT_C, out
     assert out.completed and out.speed_mm_s > 0.0, out
+
+
+def test_a_worn_far_end_that_stops_inside_its_band_lets_the_gait_go_on_cool():
+    """The one-actuator R1, its coil worn by 13,906 cycles, behind 2.7 Ω of source resistance:
+    its far end rises into level 1 and stops inside its band (19–21°), past ψ* (20°). An
+    idealised drive (true ψ) walks it. Heated on there, the coil reached 151 °C and the step
+    ran out (SMA_ON_LIMIT, STATE_TIMEOUT); held where it stopped and settled in its level, the
+    gait goes on, every coil below 120 °C."""
+    robot = load_robot(robots_dir() / "paper-r1-one-actuator.toml")
+    point = claim.GridPoint("worn, weak supply", (), "random",
+                            ("fatigue_cycles=13906", "imu_bias_deg=right:0.8", "supply_ohm=2.7"), ())
+    assert claim.idealised_walk(robot, point).possible
+    out = claim.feedback_run(robot, point, duration_s=30.0)
+    assert out.fault == "", out
+    assert out.coil_peak_c < claim.OVERHEAT_C, out
+    assert out.completed and out.speed_mm_s > 0.2, out
