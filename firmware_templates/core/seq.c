@@ -167,7 +167,9 @@ int8_t seq_load(const cfg_state_t *states, uint16_t count, uint16_t *bad)
     if (count >= 2u && states[count - 1u] == states[0]) {
         count--; /* closed form */
     }
-    if (count < 2u || count > CFG_MAX_LOADED_STEPS) {
+    /* one state left is checked as a walk too: it follows itself, the forbidden transition
+     * LOAD_GAIT documents at step 0 (10 10 used to be refused as too short, OUT_OF_RANGE) */
+    if (count == 0u || count > CFG_MAX_LOADED_STEPS) {
         return SEQ_ERR_LENGTH;
     }
     n = (step_ix_t)count;

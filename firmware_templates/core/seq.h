@@ -34,7 +34,7 @@
 #define SEQ_EV_AWAY 0x10u     /* not at the target: before it is reached, or after it was lost */
 
 #define SEQ_OK 0
-#define SEQ_ERR_LENGTH (-1)    /* fewer than 2 or more than CFG_MAX_LOADED_STEPS steps */
+#define SEQ_ERR_LENGTH (-1)    /* no steps, or more than CFG_MAX_LOADED_STEPS */
 #define SEQ_ERR_STATE (-2)     /* a state index ≥ CFG_N_STATES */
 #define SEQ_ERR_FORBIDDEN (-3) /* a transition the robot cannot make */
 #define SEQ_ERR_NO_GAIT (-4)   /* no such gait (direction, index) or nothing loaded */
@@ -77,7 +77,8 @@ uint8_t seq_allowed_transition(cfg_state_t a, cfg_state_t b);
 uint8_t seq_gait_count(uint8_t dir);
 
 /* Check and store a gait (open or closed: a repeated first state at the end is dropped).
- * On SEQ_ERR_FORBIDDEN, *bad is the step index whose transition to the next is forbidden. */
+ * On SEQ_ERR_FORBIDDEN, *bad is the step index whose transition to the next is forbidden
+ * (a one-state walk, e.g. 2 2 closed, follows itself: step 0). */
 int8_t seq_load(const cfg_state_t *states, uint16_t n, uint16_t *bad);
 
 /* Start gait `index` of `dir`, or the loaded gait with SEQ_DIR_LOADED; `measured` is

@@ -193,9 +193,25 @@ static void test_loaded_gait_too_long_or_too_short_is_refused(void)
     walk[CFG_MAX_LOADED_STEPS] = 1; /* not closed: 25 steps */
     CHECK_EQ(seq_load(walk, CFG_MAX_LOADED_STEPS + 1u, 0), SEQ_ERR_LENGTH);
     CHECK_EQ(seq_load(walk, CFG_MAX_LOADED_STEPS, 0), SEQ_OK);
-    CHECK_EQ(seq_load(walk, 1, 0), SEQ_ERR_LENGTH);
-    walk[1] = 0;
-    CHECK_EQ(seq_load(walk, 2, 0), SEQ_ERR_LENGTH); /* 0 0 closes to a single state */
+    CHECK_EQ(seq_load(walk, 0, 0), SEQ_ERR_LENGTH);
+}
+
+/* A walk of one state (0, or 0 0 closed to it) is a state that follows itself: the forbidden
+ * transition LOAD_GAIT documents at step 0 (definition.py), not a length (it was OUT_OF_RANGE). */
+static void test_a_single_state_walk_is_a_forbidden_self_transition(void)
+{
+    static const cfg_state_t walk[3] = {2, 2, 2};
+    uint16_t bad = 99;
+    setup();
+    CHECK_EQ(seq_load(walk, 1, &bad), SEQ_ERR_FORBIDDEN);
+    CHECK_EQ(bad, 0);
+    bad = 99;
+    CHECK_EQ(seq_load(walk, 2, &bad), SEQ_ERR_FORBIDDEN); /* 2 2 closes to a single state */
+    CHECK_EQ(bad, 0);
+    bad = 99;
+    CHECK_EQ(seq_load(walk, 3, &bad), SEQ_ERR_FORBIDDEN);
+    CHECK_EQ(bad, 0);
+    CHECK_EQ(seq_gait_count(SEQ_DIR_LOADED), 0);
 }
 
 static void test_loaded_gait_with_an_unknown_state_is_refused(void)
@@ -236,6 +252,7 @@ int main(void)
     RUN(test_start_of_a_gait_that_does_not_exist_is_refused);
     RUN(test_loaded_gait_accepts_open_and_closed_walks);
     RUN(test_loaded_gait_too_long_or_too_short_is_refused);
+    RUN(test_a_single_state_walk_is_a_forbidden_self_transition);
     RUN(test_loaded_gait_with_an_unknown_state_is_refused);
     RUN(test_every_off_diagonal_transition_of_r1_is_allowed);
     return UNIT_EXIT();
