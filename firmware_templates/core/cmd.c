@@ -110,13 +110,6 @@ static void cmd_start(void)
         nack(PROTO_ERR_NOT_ALLOWED, 1);
         return;
     }
-    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) {
-        /* safety: a built-in gait needs the coil the fallback gave up, which stays given up until
-         * the operator takes it back (SET_ACTUATOR_MAP with no entries, limbmap.h): restarted by a
-         * host, it was heated up to the state timeout again at every START, and fell back again */
-        nack(PROTO_ERR_NOT_ALLOWED, 3);
-        return;
-    }
     if (dir > PROTO_DIR_MINUS_X && (dir != PROTO_DIR_UNSTATED || gait != PROTO_GAIT_USER)) {
         nack(PROTO_ERR_OUT_OF_RANGE, 2); /* +x, -x, or (the loaded gait only) unstated */
         return;
@@ -131,6 +124,15 @@ static void cmd_start(void)
     if (r != SEQ_OK) {
         nack(PROTO_ERR_NO_GAIT, gait);
         return; /* refused: nothing changed, the ground in use included */
+    }
+    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) {
+        /* safety: a built-in gait needs the coil the fallback gave up, which stays given up until
+         * the operator takes it back (SET_ACTUATOR_MAP with no entries, limbmap.h): restarted by a
+         * host, it was heated up to the state timeout again at every START, and fell back again.
+         * Checked once seq_start found the gait: a gait the board does not have is NO_GAIT. */
+        seq_stop(); /* nothing ran: no tick came between */
+        nack(PROTO_ERR_NOT_ALLOWED, 3);
+        return;
     }
     level_at_start(); /* started from rest: level on this ground (level.h) */
 #ifdef CFG_MAX_CLIMB_CDEG
@@ -175,10 +177,8 @@ static void cmd_load_gait(void)
     r = seq_load(states, n, &bad);
     if (r == SEQ_ERR_FORBIDDEN) {
         nack(PROTO_ERR_FORBIDDEN_TRANSITION, bad);
-    } else if (r == SEQ_ERR_LENGTH) {
+    } else if (r != SEQ_OK) { /* SEQ_ERR_LENGTH: every state was checked above (no SEQ_ERR_STATE) */
         nack(n > CFG_MAX_LOADED_STEPS ? PROTO_ERR_TOO_LONG : PROTO_ERR_OUT_OF_RANGE, n);
-    } else if (r != SEQ_OK) {
-        nack(PROTO_ERR_OUT_OF_RANGE, bad);
     } else {
         ack();
         tx_event(PROTO_EV_GAIT_LOADED, 0, n);
