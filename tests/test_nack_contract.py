@@ -68,7 +68,30 @@ def test_a_step_that_is_not_an_allowed_transition_is_forbidden_transition_naming
     assert not d.Flag.USER_GAIT & board.run(25)[-1].flags  # nothing stored
 
 
+def test_load_gait_refusals_other_than_a_transition(board):
+    assert _refusal(board, "LOAD_GAIT", states=(0, 4)) == (E.OUT_OF_RANGE, 1)  # no state 4: its step
+    assert _refusal(board, "LOAD_GAIT", states=(0, 2, 0x102)) == (E.OUT_OF_RANGE, 2)  # not narrowed to 2
+    assert _refusal(board, "LOAD_GAIT", states=()) == (E.OUT_OF_RANGE, 0)  # no steps
+    board.client.start(0, "+x")
+    assert _refusal(board, "LOAD_GAIT", states=(0, 2)) == (E.NOT_ALLOWED, 0)
+    assert _refusal(board, "LOAD_GAIT", states=(2, 2)) == (E.NOT_ALLOWED, 0)  # the mode first
+
+
 # ---------------------------------------------------------------- START
+
+
+def test_start_refusals_and_which_wins(board):
+    assert _refusal(board, "START", gait=5, direction=0) == (E.NO_GAIT, 5)
+    assert _refusal(board, "START", gait=0, direction=1) == (E.NO_GAIT, 0)  # r1-fast has no -x gait
+    assert _refusal(board, "START", gait=d.GAIT_USER, direction=0) == (E.NO_GAIT, d.GAIT_USER)
+    assert _refusal(board, "START", gait=5, direction=7) == (E.OUT_OF_RANGE, 2)
+    board.client.start(0, "+x")
+    assert _refusal(board, "START", gait=0, direction=0) == (E.NOT_ALLOWED, 1)
+    assert _refusal(board, "START", gait=5, direction=7) == (E.NOT_ALLOWED, 1)  # the mode first
+    board.client.estop()
+    assert _refusal(board, "START", gait=0, direction=0) == (E.ESTOP_LATCHED, 0)
+    board.client.clear(d.ClearWhat.ESTOP)
+    board.client.start(0, "+x")
 
 
 def test_start_of_no_such_gait_while_the_fallback_has_given_up_a_coil_is_no_gait(sim_so):
@@ -90,9 +113,55 @@ def test_start_of_no_such_gait_while_the_fallback_has_given_up_a_coil_is_no_gait
     assert _refusal(board, "START", gait=0, direction=0) == (E.NOT_ALLOWED, 3)
     assert _refusal(board, "START", gait=77, direction=0) == (E.NO_GAIT, 77)
     assert _refusal(board, "START", gait=1, direction=1) == (E.NO_GAIT, 1)
-    r = board.refused("START", gait=77, direction=9)
-    assert (r.error, r.detail) == (E.OUT_OF_RANGE, 2)
+    assert _refusal(board, "START", gait=77, direction=9) == (E.OUT_OF_RANGE, 2)
     tel = board.run(25)[-1]
     assert not d.Flag.RUNNING & tel.flags and not any(tel.duty)  # a refused START runs nothing
     board.client.start("user", "+x")  # the fallback gait still runs
     board.client.stop()
+
+
+# ---------------------------------------------------------------- the other commands
+
+
+def test_set_param_refusals_name_the_parameter(board):
+    p = d.ParamId
+    cases = [
+        (p.DRIVE_DUTY, 8001, E.SAFETY_LIMIT),
+        (p.HOLD_DUTY, 8001, E.SAFETY_LIMIT),
+        (p.MAX_ON_MS, 51, E.SAFETY_LIMIT),
+        (p.MIN_COOLDOWN_MS, 19, E.SAFETY_LIMIT),
+        (p.STATE_TIMEOUT_MS, 201, E.SAFETY_LIMIT),
+        (p.LINK_WATCHDOG_MS, 0, E.SAFETY_LIMIT),  # r1-fast has a 2 s watchdog: it stays on
+        (p.LINK_WATCHDOG_MS, 2001, E.SAFETY_LIMIT),
+        (p.MAX_ON_MS, 0, E.OUT_OF_RANGE),
+        (p.DEBOUNCE_TICKS, 0, E.OUT_OF_RANGE),
+        (p.HYSTERESIS_CDEG, 2001, E.OUT_OF_RANGE),
+    ]
+    for param, value, error in cases:
+        assert _refusal(board, "SET_PARAM", param=int(param), index=0, value=value) == (error, int(param)), param
+    for param in (0, 11, 255):
+        assert board.refused("SET_PARAM", param=param, index=0, value=1).error == E.OUT_OF_RANGE
+
+
+def test_actuator_map_level_and_telemetry_refusals(board):
+    assert _refusal(board, "SET_ACTUATOR_MAP", actuators=(0, 2)) == (E.OUT_OF_RANGE, 1)
+    assert _refusal(board, "SET_ACTUATOR_MAP", actuators=(0,)) == (E.OUT_OF_RANGE, 0xFFFF)
+    assert _refusal(board, "CALIBRATE_LEVEL", ground=2) == (E.OUT_OF_RANGE, 1)
+    assert _refusal(board, "SET_TELEMETRY_RATE", hz=181) == (E.OUT_OF_RANGE, 0)
+    board.client.start(0, "+x")
+    assert _refusal(board, "SET_ACTUATOR_MAP", actuators=()) == (E.NOT_ALLOWED, 0)
+    assert _refusal(board, "CALIBRATE_LEVEL", ground=0) == (E.NOT_ALLOWED, 1)
+    assert _refusal(board, "CLEAR_LEVEL") == (E.NOT_ALLOWED, 0)
+
+
+def test_the_protocol_text_names_every_refusal_detail_the_host_explains():
+    """definition.py is the protocol's one description: each command whose NOT_ALLOWED details
+    replies.py explains names NOT_ALLOWED, and CALIBRATE_LEVEL each of its details (LOAD_GAIT named
+    none; CALIBRATE_LEVEL left out 6, not at rest since a gait)."""
+    from proleg.link.replies import _NOT_ALLOWED
+
+    for command, details in _NOT_ALLOWED.items():
+        doc = d.BY_NAME[command].doc
+        assert "NOT_ALLOWED" in doc, command
+        if command == "CALIBRATE_LEVEL":
+            assert all(f"({k})" in doc or f"(detail {k})" in doc for k in details), doc

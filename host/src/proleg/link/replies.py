@@ -97,6 +97,22 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     if command == "LOAD_GAIT" and error == ErrorCode.FORBIDDEN_TRANSITION:
         return (f"step {detail} to the next (the last to the first) is not a transition this robot's firmware "
                 "allows: a state that follows itself, or an \"x\" in the robot file's matrix")
+    if command == "LOAD_GAIT" and error == ErrorCode.OUT_OF_RANGE:
+        if detail == 0:
+            return "the gait has no steps, or its step 0 is not one of this robot's states; nothing stored"
+        return f"step {detail} is not one of this robot's states (they are numbered from 0); nothing stored"
+    if command == "LOAD_GAIT" and error == ErrorCode.TOO_LONG:
+        return "more steps than this firmware stores (INFO max_gait_steps); nothing stored"
+    if command == "START" and error == ErrorCode.OUT_OF_RANGE:
+        return ("the direction is +x (0) or -x (1); only the loaded gait (GAIT_USER) may leave it unstated "
+                "(0xFF)")
+    if command == "SET_ACTUATOR_MAP" and error == ErrorCode.OUT_OF_RANGE:
+        if detail == 0xFFFF:
+            return "give one actuator per limb, or none (the build's map); nothing changed"
+        return f"limb {detail}'s actuator is not one this build has; nothing changed"
+    if command == "SET_TELEMETRY_RATE" and error == ErrorCode.OUT_OF_RANGE:
+        return ("faster than the firmware sends: at most its tick rate, and at most half of what the UART carries "
+                "(the rest is kept for replies and events)")
     if command == "CALIBRATE_LEVEL" and error == ErrorCode.OUT_OF_RANGE:
         return "ground is 0 (flat ground: stored) or 1 (this ground: RAM only); nothing began"
     if command == "SET_PARAM" and error == ErrorCode.OUT_OF_RANGE:

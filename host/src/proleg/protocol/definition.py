@@ -97,10 +97,12 @@ MESSAGES: tuple[MessageSpec, ...] = (
             _u8("direction", "Direction; with GAIT_USER the way the loaded sequence walks, or DIR_UNSTATED "
                 "(0xFF): not stated, not climb-guarded", Direction),
         ),
-        "Run a gait; NACK NO_GAIT / ESTOP_LATCHED / NOT_ALLOWED (detail 0: a fault is latched, 1: a gait "
-        "runs, 2: the state is not known: no reading from every IMU yet, 3: a built-in gait while the fallback "
-        "has given up a coil, until SET_ACTUATOR_MAP with no entries takes it back) / TOO_STEEP (the ground rises more than "
-        "the build's max_climb_deg in the gait's direction: detail = that climb in 0.01°).",
+        "Run a gait; NACK NO_GAIT (detail = gait) / ESTOP_LATCHED / NOT_ALLOWED (detail 0: a fault is latched, 1: a "
+        "gait runs, 2: the state is not known: no reading from every IMU yet, 3: a built-in gait while the fallback "
+        "has given up a coil, until SET_ACTUATOR_MAP with no entries takes it back) / OUT_OF_RANGE (detail 2: a "
+        "direction other than PLUS_X / MINUS_X, or DIR_UNSTATED for a built-in gait) / TOO_STEEP (the ground rises "
+        "more than the build's max_climb_deg in the gait's direction: detail = that climb in 0.01°). Where several "
+        "apply, the first of: ESTOP_LATCHED, NOT_ALLOWED 0, 2, 1, OUT_OF_RANGE, NO_GAIT, NOT_ALLOWED 3, TOO_STEEP.",
         reply="ACK",
     ),
     MessageSpec(0x05, "STOP", "h2r", (_TOKEN,), "Stop the gait, all actuators off.", reply="ACK"),
@@ -114,7 +116,10 @@ MESSAGES: tuple[MessageSpec, ...] = (
             Field("states", "u16", "closed walk without the repeated start state", max_count=MAX_GAIT_STEPS),
         ),
         "Store the user gait; firmware checks each step against the allowed transitions "
-        "(NACK FORBIDDEN_TRANSITION, detail = step index).",
+        "(NACK FORBIDDEN_TRANSITION, detail = step index; a state that follows itself, a one-state walk "
+        "included, is one). A last state equal to the first closes the walk and is dropped. NACK NOT_ALLOWED "
+        "(detail 0) while a gait runs, OUT_OF_RANGE for a state the robot does not have (detail = its step) or "
+        "no steps (detail 0), TOO_LONG above the build's max_gait_steps. Nothing is stored on a NACK.",
         reply="ACK",
     ),
     MessageSpec(
@@ -127,14 +132,17 @@ MESSAGES: tuple[MessageSpec, ...] = (
             _u8("index", "limb/channel/level index where the param has one, else 0"),
             Field("value", "i32", "in the param's unit"),
         ),
-        "Change a whitelisted parameter inside the build's safety envelope.",
+        "Change a whitelisted parameter inside the build's safety envelope; NACK SAFETY_LIMIT for a value "
+        "that would widen it, OUT_OF_RANGE for an unknown param, a value outside its range or no such index "
+        "(detail = param, both).",
         reply="ACK",
     ),
     MessageSpec(
         0x09,
         "SET_TELEMETRY_RATE",
         "h2r",
-        (_TOKEN, Field("hz", "u16", "0 = telemetry off; firmware may NACK OUT_OF_RANGE above tick_hz")),
+        (_TOKEN, Field("hz", "u16", "0 = telemetry off; NACK OUT_OF_RANGE above tick_hz or above half what the "
+                            "UART carries")),
         "Change the TELEMETRY rate.",
         reply="ACK",
     ),
@@ -154,8 +162,9 @@ MESSAGES: tuple[MessageSpec, ...] = (
         "Record each IMU's rest tilt (the mean of 64 ticks' samples; robot at rest, coils cold): "
         "on flat ground as its level offset, stored in non-volatile memory; with ground = 1 as "
         "this ground's tilt on top of it, until reset. ACK when sampling begins, then EVENT LEVEL_DONE. NACK NOT_ALLOWED while a gait runs (detail 1), an IMU is bad (2), "
-        "a fault is latched (3), a calibration is under way (4), or the build leaves level "
-        "calibration out (5); OUT_OF_RANGE (detail 1) for a ground other than 0 or 1.",
+        "a fault is latched (3), a calibration is under way (4), the build leaves level "
+        "calibration out (5), or a gait ran or a fault latched since the robot was last at rest for 2 s (6); "
+        "OUT_OF_RANGE (detail 1) for a ground other than 0 or 1, checked first.",
         reply="ACK",
     ),
     MessageSpec(0x0C, "GET_LEVEL", "h2r", (_TOKEN,), "Answered by LEVEL.", reply="LEVEL"),

@@ -24,7 +24,7 @@ class ErrorCode(IntEnum):
     UNKNOWN_MESSAGE = 1  # CRC-valid frame with an id this firmware does not decode
     BAD_CRC = 2  # reserved: frames with a bad CRC are dropped silently (counted), never NACKed
     BAD_LENGTH = 3  # payload length does not match the message layout
-    OUT_OF_RANGE = 4  # a value outside its allowed range (detail = param id / field index)
+    OUT_OF_RANGE = 4  # a value outside its allowed range (detail per command: param id, field, step or limb index)
     FORBIDDEN_TRANSITION = 5  # LOAD_GAIT step not an allowed transition (detail = step index)
     TOO_LONG = 6  # array count above this build's maximum
     NOT_ALLOWED = 7  # not allowed in the current mode (e.g. LOAD_GAIT while running)
