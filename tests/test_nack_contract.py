@@ -10,15 +10,21 @@ stepped one control tick at a time and talked to through the one client.
 from __future__ import annotations
 
 import pytest
+from hypothesis import HealthCheck, settings
+from hypothesis import strategies as st
+from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule
 import test_firmware_on_sim_board as on_sim_board
 from test_firmware_on_sim_board import CC, Rig
 
+from proleg.link import CommandRefused
 from proleg.protocol import definition as d
 
 pytestmark = pytest.mark.skipif(CC is None, reason="no host C compiler")
 rendered, sim_so = on_sim_board.rendered, on_sim_board.sim_so  # its fixtures: the firmware on the sim board
 
 E = d.ErrorCode
+MAX_DUTY_PM, HOLD_MAX_PM = 8000, 3000  # r1-fast's [safety] max_duty; the default hold ceiling
+MAX_ON_MS, MIN_COOLDOWN_MS = 50, 20  # r1-fast's [safety]
 
 
 def _rig(sim_so, config="r1-fast", limbs=2, channels=2) -> Rig:
@@ -165,3 +171,118 @@ def test_the_protocol_text_names_every_refusal_detail_the_host_explains():
         assert "NOT_ALLOWED" in doc, command
         if command == "CALIBRATE_LEVEL":
             assert all(f"({k})" in doc or f"(detail {k})" in doc for k in details), doc
+
+
+# ---------------------------------------------------------------- interleavings vs the envelope
+
+
+class Interleavings(RuleBasedStateMachine):
+    """A host sending any mix of the mode commands and envelope parameters while the limbs
+    move (or do not). Every control tick (those that pass while a command waits for its reply
+    included), each coil's duty is checked against the build's envelope, with an on-time debt
+    oracle on the build's max_on / min_cooldown (SET_PARAM can only narrow them)."""
+
+    so = None
+
+    @initialize()
+    def boot(self):
+        self.b = Rig(self.so, 2, 2)
+        self.debt_ms = [0.0, 0.0]
+        self.estopped = False  # an ESTOP was acknowledged and no CLEAR(ESTOP) sent since
+        self.may_heat = False  # a START was sent since the last acknowledged STOP / ESTOP
+        run_ticks = self.b.board.run_ticks
+
+        def tick_by_tick(n):
+            for _ in range(n):
+                run_ticks(1)
+                self.observe()
+
+        self.b.board.run_ticks = tick_by_tick
+        self.b.set_psi(0, 0.0)
+        self.b.set_psi(1, 0.0)
+        self.b.reset()
+        assert self.b.client.wait_known_state()
+
+    def observe(self):
+        for ch in (0, 1):
+            duty = self.b.duty(ch)
+            assert duty <= MAX_DUTY_PM
+            if self.estopped or not self.may_heat:
+                assert duty == 0, (ch, duty, self.estopped)
+            if duty > HOLD_MAX_PM:
+                self.debt_ms[ch] += 1.0
+            else:
+                self.debt_ms[ch] = max(0.0, self.debt_ms[ch] - MAX_ON_MS / MIN_COOLDOWN_MS)
+            assert self.debt_ms[ch] <= MAX_ON_MS + 1.0, (ch, self.debt_ms)
+
+    def send(self, name, **fields):
+        try:
+            self.b.client.request(name, **fields)
+        except CommandRefused:
+            return False
+        return True
+
+    @rule(gait=st.sampled_from([0, 0, 1, 2, d.GAIT_USER]), direction=st.sampled_from([0, 0, 0, 1, d.DIR_UNSTATED]),
+          then=st.integers(0, 200))
+    def start(self, gait, direction, then):
+        heat = self.may_heat
+        self.may_heat = True
+        if self.send("START", gait=gait, direction=direction):
+            assert not self.estopped
+        else:
+            self.may_heat = heat
+        self.b.run(then)
+
+    @rule()
+    def stop(self):
+        assert self.send("STOP")
+        self.may_heat = False
+
+    @rule()
+    def estop(self):
+        assert self.send("ESTOP")
+        self.estopped, self.may_heat = True, False
+
+    @rule(what=st.integers(0, 7))
+    def clear(self, what):
+        if what & d.ClearWhat.ESTOP:
+            self.estopped = False
+        assert self.send("CLEAR", what=what)
+
+    @rule(states=st.lists(st.integers(0, 3), min_size=0, max_size=5))
+    def load_gait(self, states):
+        self.send("LOAD_GAIT", states=tuple(states))
+
+    @rule(actuators=st.sampled_from([(), (0, 0), (1, 1), (1, 0), (0, 1)]))
+    def actuator_map(self, actuators):
+        self.send("SET_ACTUATOR_MAP", actuators=actuators)
+
+    @rule(ground=st.integers(0, 1))
+    def calibrate(self, ground):
+        self.send("CALIBRATE_LEVEL", ground=ground)
+
+    @rule(param=st.sampled_from(list(d.ParamId)), value=st.integers(-100, 9000), index=st.integers(0, 2))
+    def set_param(self, param, value, index):
+        self.send("SET_PARAM", param=int(param), index=index, value=value)
+
+    @rule(limb=st.integers(0, 1), deg=st.sampled_from([0.0, 18.0, 21.0, 25.0]))
+    def move(self, limb, deg):
+        self.b.set_psi(limb, deg)
+
+    @rule(ticks=st.integers(1, 150))
+    def run(self, ticks):
+        self.b.run(ticks)
+
+    @invariant()
+    def nothing_heats_while_estopped(self):
+        if getattr(self, "estopped", False):
+            assert not any(self.b.duty(ch) for ch in (0, 1))
+
+
+def test_no_interleaving_of_commands_gets_around_the_envelope(sim_so):
+    Interleavings.so = sim_so("r1-fast")
+    run = Interleavings.TestCase
+    run.settings = settings(max_examples=100, stateful_step_count=50, deadline=None,
+                            suppress_health_check=list(HealthCheck))
+    run().runTest()
+
