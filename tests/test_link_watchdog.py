@@ -212,3 +212,26 @@ def test_force_does_not_read_a_board_with_another_robot_files_shape():
     code = console_main(sim="paper-r1", robot_file=str(resolve_robot("paper-r3")), plain=True, duration_s=0.5,
                         force=True, out=out, err=io.StringIO())
     assert code == 0 and "state=" in out.getvalue()
+
+
+def test_a_100_ms_watchdog_with_slow_telemetry_is_fed_between_frames(tmp_path):
+    """A read waited up to 0.1 s for the next frame before the heartbeat looked again: with
+    telemetry at 7 Hz (143 ms apart) and link_watchdog_ms = 100 (both in range) every gait
+    stopped with LINK_WATCHDOG 0.2 s after START. The read now ends when the next PING is due."""
+    path = _watchdog_robot(tmp_path, 100)
+    path.write_text(path.read_text().replace("telemetry_hz = 50", "telemetry_hz = 7"))
+    robot = load_robot(path)
+    assert robot.control.telemetry_hz == 7
+    sim = SimulatedRobot(robot, seed=3)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), watchdog_ms=robot.safety.link_watchdog_ms)
+    client.connect()
+    assert client.wait_known_state()
+    client.start(0, "+x")
+    faults = []
+    deadline = client.link.clock() + 2.0
+    while client.link.clock() < deadline:  # reading only, as proleg sim and an idle console do
+        m = client.recv(0.5)
+        if m is not None and m.name == "EVENT" and m.kind == EventKind.FAULT:
+            faults.append(m.fields)
+    client.close()
+    assert faults == []

@@ -132,19 +132,24 @@ class MessageStream:
         """How many times faster than the link's clock the board's runs (``board_clock``)."""
         return self._board_clock.rate
 
-    def _heartbeat(self) -> None:
-        """PING when nothing was written for ``heartbeat_s`` (keeps the link watchdog fed)."""
+    def _heartbeat(self) -> float | None:
+        """PING when nothing was written for ``heartbeat_s`` (keeps the link watchdog fed).
+        Returns the link seconds until the next PING is due (None: no heartbeat), so that a
+        read does not block past it: a read waiting 0.1 s for a slow TELEMETRY (7 Hz) let a
+        100 ms watchdog trip between two PINGs."""
         period, last = self.heartbeat_s, self._last_tx
         if period is None or last is None or self._closed:
-            return
+            return None
         period /= self.board_rate  # on the board's clock, as its watchdog counts
-        if self.link.clock() - last < period - _EPS:
-            return
+        due_in = period - (self.link.clock() - last)
+        if due_in > _EPS:
+            return due_in
         token = self._next_token()
         with self._cond:
             self._heartbeat_tokens.add(token)
         self.heartbeats += 1
         self._write(encode(Message("PING", {"token": token})))
+        return period
 
     # ------------------------------------------------------------------ receiving
     def recv(self, timeout: float = 0.0) -> Message | None:
@@ -210,7 +215,9 @@ class MessageStream:
 
     def _pump(self, timeout: float) -> int:
         """Read the link once (caller holds ``_rx_lock``); decode; queue. Returns messages read."""
-        self._heartbeat()
+        due_in = self._heartbeat()
+        if due_in is not None:
+            timeout = min(timeout, due_in)
         try:
             data = self.link.read(timeout)
         except LinkDisconnected:
