@@ -214,3 +214,41 @@ def test_a_mean_duty_ceiling_that_would_wear_a_coil_out_is_warned_about(caplog):
     advised = float(warned[0].split("safety.max_mean_duty to ")[1].split()[0])
     assert max(plant.steady_coil_temperature_c(advised)) <= NITI_OVERHEAT_C
     assert max(plant.steady_coil_temperature_c(advised + 0.02)) > NITI_OVERHEAT_C  # and not far below it
+
+
+def test_air_too_warm_for_the_coils_to_transform_back_is_warned_about(caplog):
+    """ambient_c is in range up to 100 °C, but the physical plant's coils transform back
+    between Ms 56 and Mf 38 °C and cool no lower than the air: R1 at 45 °C stopped with
+    STATE_TIMEOUT on a limb its coils held at 27°, and nothing said why. At 40 °C it walks
+    (its coils keep 3 % of their stroke) and nothing is said."""
+    import logging
+
+    from proleg.sim.closed_loop import make_plant
+
+    robot = load_robot(ROBOTS / "paper-r1.toml")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        plant = make_plant(robot, "physical", ["ambient_c=45"])
+    warned = [r.getMessage() for r in caplog.records if "cannot come down" in r.getMessage()]
+    assert len(warned) == 2, [r.getMessage() for r in caplog.records]
+    assert "limb 'left' cannot come down to level 0 at ambient_c 45 °C" in warned[0]
+    assert "'sma-left' 33 %" in warned[0] and "hold it at 26.9°" in warned[0] and "19.0°" in warned[0]
+    contraction, psi = plant.warm_rest()
+    assert contraction == pytest.approx([0.329, 0.329], abs=1e-3) and min(psi) > 19.0
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(robot, "physical", ["ambient_c=40"])
+    assert not any("cannot come down" in r.getMessage() for r in caplog.records)
+
+
+def test_a_duty_advice_under_one_percent_is_not_printed_as_zero(caplog):
+    """60 V at twice the power in 100 °C air: the advice read "max_duty below 0.00"."""
+    import logging
+
+    from proleg.sim.closed_loop import make_plant
+
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(r1_with_plant({"supply_v": 60.0}), "physical", ["power=2", "ambient_c=100"])
+    warned = [r.getMessage() for r in caplog.records if "trained shape" in r.getMessage()]
+    assert len(warned) == 2, [r.getMessage() for r in caplog.records]
+    advised = float(warned[0].split("max_duty below ")[1].split()[0])
+    assert 0.001 < advised < 0.01, warned[0]

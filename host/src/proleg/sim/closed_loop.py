@@ -59,9 +59,33 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
     from .physical import PhysicalPlant
 
     plant = PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
-    for line in overheat_warnings(robot, plant):
+    for line in overheat_warnings(robot, plant) + ambient_warnings(robot, plant):
         log.warning("warning: %s", line)
     return plant
+
+
+def ambient_warnings(robot: Robot, plant: Any) -> list[str]:
+    """A line per limb that cannot come down to level 0 because the air is too warm for its
+    coils to transform back (``PhysicalPlant.warm_rest``): a coil cools no lower than
+    ``ambient_c``, and above its Mf it stays partly contracted. R1 at 45 °C (in range) stopped
+    with STATE_TIMEOUT on a limb held at 27° by its own coils, and nothing said why."""
+    amb = plant.conditions.get("ambient_c")
+    contraction, psi = plant.warm_rest()
+    if not any(c > 0.0 for c in contraction):
+        return []
+    ms, mf = min(plant._coils.reverse_transformation_c())
+    out = []
+    for i, (lb, p) in enumerate(zip(robot.limbs, psi)):
+        edge = lb.psi_star_deg[0] - lb.hysteresis_deg / 2.0
+        if p < edge:
+            continue
+        coils = ", ".join(f"{a.name!r} {100 * c:.0f} %" for a, c in zip(robot.actuators, contraction) if c > 0.0)
+        out.append(f"{robot.path}: limb {lb.name!r} cannot come down to level 0 at ambient_c {amb:g} °C: the coils "
+                   f"cool no lower than the air, inside their reverse transformation (Ms {ms:.0f} °C, Mf {mf:.0f} °C "
+                   f"on the physical plant), so once heated they stay contracted ({coils} of their stroke) and hold "
+                   f"it at {p:.1f}°, above its level-0 edge {edge:.1f}° (ψ* − hysteresis/2): a gait that lowers it "
+                   f"ends in STATE_TIMEOUT; the coils recover fully below {mf:.0f} °C")
+    return out
 
 
 def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
@@ -100,9 +124,11 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     for act, hot, warm, avg in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held, averaged):
         if hot > NITI_ANNEAL_C:
             safe = duty * (NITI_ANNEAL_C - amb) / (hot - amb)
+            # two significant digits below 0.01: 60 V with power=2 advised "max_duty below 0.00"
+            shown = f"{safe:.2f}" if safe >= 0.01 else f"{safe:.2g}"
             out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} would settle at {hot:.0f} °C with "
                        f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
-                       f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {safe:.2f}")
+                       f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {shown}")
             continue
         if avg > NITI_OVERHEAT_C:
             out.append(worn(act, "the mean-duty ceiling", mean, avg, "what the safety envelope lets a coil average "

@@ -198,6 +198,10 @@ class Coils:
         """Each coil's (As, Af) now, fatigue and drift shifts included."""
         return [(h.as_c + h.shift_c, h.af_c + h.shift_c) for h in self.hyst]
 
+    def reverse_transformation_c(self) -> list[tuple[float, float]]:
+        """Each coil's (Ms, Mf) now, fatigue and drift shifts included."""
+        return [(h.ms_c + h.shift_c, h.mf_c + h.shift_c) for h in self.hyst]
+
     def stroke(self) -> list[float]:
         """Each coil's stroke now, a fraction of its fresh stroke (fatigue and drift)."""
         return [a * b for a, b in zip(self.fat_stroke, self.drift_stroke)]

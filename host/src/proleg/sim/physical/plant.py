@@ -259,6 +259,20 @@ class PhysicalPlant:
         heating neglected), one coil drawing (no sag from the others): what the supply can do."""
         return self._coils.steady_temperature_c(duty)
 
+    def warm_rest(self) -> tuple[list[float], list[float]]:
+        """Where the body comes to rest once every coil has been heated through its
+        transformation and then switched off, its temperature settled at the air's
+        (``ambient_c``): (each coil's contraction, a fraction of its fresh stroke; each limb's
+        ψ°). Below the coils' Mf both are 0; above it a coil transforms back only partly
+        (above Ms not at all) and keeps its limbs bent (the body's own warmth neglected)."""
+        from ..sma import cooling_branch
+
+        amb = self.conditions.get("ambient_c")
+        coils = self._coils
+        c = [cooling_branch(amb, ms, mf) * s
+             for (ms, mf), s in zip(coils.reverse_transformation_c(), coils.stroke())]
+        return c, [float(p) for p in self._shape.evaluate(c)[:self._nl]]
+
     @property
     def alive(self) -> tuple[bool, ...]:
         """Per actuator: False once ``kill_actuator`` was called on it."""
