@@ -171,3 +171,24 @@ def test_a_gait_table_too_big_for_the_board_is_refused_before_compiling():
     with pytest.raises(BuildError, match=r"does not fit board arduino-nano .*tables take 24,\d\d\d bytes .* needs [34]\d,\d\d\d bytes of flash, board arduino-nano has 30,720$"):
         check_fit(r1, load_board("arduino-nano"), big)
     check_fit(r1, load_board("bluepill-f103"), big)  # 64 KB: fits
+
+
+def test_a_placement_wired_for_a_real_board_is_simulated_on_the_sim_buses_of_the_same_index():
+    """proleg sim, run --sim and learn build for host-sim: a robot file placed for the bluepill
+    (bus = "I2C1" / "I2C2") was refused by every simulator command ("board host-sim has no I2C
+    bus 'I2C1'"), though arm-emu ran it. Its buses map to sim0 / sim1 by index; a name no
+    shipped board has is still refused, naming it."""
+    specs = {0: ImuSpec(bus="I2C1", mux=0x70, channel=1, address=0x68), 1: ImuSpec(bus="I2C2"),
+             2: ImuSpec(bus="I2C1", address=0x69)}
+    real = place_imus(robot(3, specs), load_board("bluepill-f103"))
+    for board in ("host-sim", "host-sim-can"):
+        sim = place_imus(robot(3, specs), load_board(board))
+        assert [x.bus_name for x in sim] == ["sim0", "sim1", "sim0"]
+        assert [(x.bus, x.mux, x.channel, x.address, x.automatic) for x in sim] == \
+            [(x.bus, x.mux, x.channel, x.address, x.automatic) for x in real]
+    nano = place_imus(robot(2, {0: ImuSpec(bus="TWI", channel=2)}), load_board("host-sim"))
+    assert (nano[0].bus_name, nano[0].mux, nano[0].channel) == ("sim0", 0x70, 2)
+    with pytest.raises(BuildError, match=r"limb l2: imu.bus: board host-sim has no I2C bus 'I2C9'"):
+        place_imus(robot(2, {0: ImuSpec(bus="I2C1"), 1: ImuSpec(bus="I2C9")}), load_board("host-sim"))
+    with pytest.raises(BuildError, match=r"board bluepill-f103 has no I2C bus 'sim0'"):
+        place_imus(robot(1, {0: ImuSpec(bus="sim0")}), load_board("bluepill-f103"))

@@ -26,6 +26,7 @@ refuses a robot whose reads do not fit in ``I2C_TICK_SHARE`` of its tick.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -93,15 +94,51 @@ def place_imus(robot: Any, board: Any) -> tuple[ImuPlacement, ...]:
     if len(limbs) > MAX_IMUS:
         raise BuildError(f"{robot.where}: {len(limbs)} limbs, the firmware reads at most {MAX_IMUS} IMUs")
     taken: list[ImuPlacement] = []
+    renamed = _sim_bus_names(robot, board, buses)
     for limb in limbs:
         if limb.imu is not None:
-            p = _explicit(robot, bname, buses, limb.name, limb.imu, taken)
+            spec = limb.imu
+            if spec.bus in renamed:
+                spec = dataclasses.replace(spec, bus=renamed[spec.bus])
+            p = _explicit(robot, bname, buses, limb.name, spec, taken)
             taken.append(p)
     auto = [limb.name for limb in limbs if limb.imu is None]
     if auto:
         taken.extend(_automatic(robot, bname, buses, auto, taken))
     by_name = {p.limb: p for p in taken}
     return tuple(by_name[limb.name] for limb in limbs)
+
+
+def _sim_bus_names(robot: Any, board: Any, buses: Sequence[I2cBus]) -> dict[str, str]:
+    """On a simulated board (family ``sim``: what ``proleg sim``, ``run --sim`` and ``learn``
+    build for), the bus names a robot file's ``imu`` placements give for a real board, each
+    mapped to the simulated bus of the same index: ``{"I2C2": "sim1"}``. A placement wired for
+    the bluepill (``bus = "I2C1"``) was refused by every simulator command ("board host-sim has
+    no I2C bus 'I2C1'"). Only names that are not the simulated board's own, from the one shipped
+    board that has the most of them on a bus index the simulated board has; a name it does not
+    have stays, and the placement's own error names it."""
+    family = board.get("board", {}).get("family") if isinstance(board, dict) else getattr(board, "family", None)
+    if family != "sim":
+        return {}
+    own = {b.name for b in buses}
+    named = {lb.imu.bus for lb in robot.limbs if lb.imu is not None and lb.imu.bus is not None} - own
+    if not named:
+        return {}
+    from .boards import available_boards, load_board
+
+    best: dict[str, str] = {}
+    for name in available_boards():
+        try:
+            other = load_board(name)
+        except Exception:  # a board file that does not load is not where the names come from
+            continue
+        if getattr(other, "family", None) == "sim":
+            continue
+        index = {b.name: b.index for b in buses_of(other)}
+        mapped = {n: buses[index[n]].name for n in sorted(named) if n in index and index[n] < len(buses)}
+        if len(mapped) > len(best):
+            best = mapped
+    return best
 
 
 def _bus_mux(buses: Sequence[I2cBus], taken: Sequence[ImuPlacement], bus: I2cBus) -> int | None:
