@@ -373,3 +373,17 @@ def test_a_failed_rebuild_keeps_the_previous_build_intact(tmp_path, parent):
     after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert after == before
     assert sorted(p.name for p in parent.iterdir()) == ["fw"]
+
+
+def test_a_limb_name_that_would_close_a_c_comment_builds(tmp_path, parent):
+    """Limb names are "any printable text" (docs/robot-file.md), and they are written into
+    the generated C's comments (the limb list, the IMU placement, the fallback gaits): a limb
+    named 'left */ "x" \\ 1st' ended the comment, and the build failed with the compiler's
+    "stray '\\' in program" instead of building."""
+    path = robot_variant(tmp_path, R1, (r'^name = "left"', r'name = "left */ \"x\" \\\\ 1st"'))
+    robot = load_robot(path)
+    assert robot.limbs[0].name == 'left */ "x" \\ 1st'
+    result = build(robot, load_board("host-sim"), parent / "fw")
+    assert result.artifact.is_file()
+    config = (parent / "fw" / "gen" / "robot_config.h").read_text()
+    assert 'left *\\/ "x" \\ 1st' in config

@@ -430,6 +430,14 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
     )
 
 
+def _comment_safe(value: Any) -> Any:
+    """Every rendered value, with ``*/`` broken up: limb names ("any printable text"), IMU
+    placement lines, fallback lines and the robot file's path are written into C comments,
+    and a limb named ``tail */ x`` ended the comment: the build failed with compiler errors
+    ("stray '\\' in program") instead of building. No rendered code value contains ``*/``."""
+    return value.replace("*/", "*\\/") if isinstance(value, str) else value
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
@@ -437,6 +445,7 @@ def _environment() -> jinja2.Environment:
         keep_trailing_newline=True,
         trim_blocks=True,
         lstrip_blocks=True,
+        finalize=_comment_safe,
     )
     env.filters["chunks"] = _chunks
     return env
