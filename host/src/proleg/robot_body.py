@@ -332,6 +332,17 @@ def body_coupling(robot: Any, table: Any = None, drive: list[int] | None = None)
             blocked_descents(limbs, names, robot.plant, table, margin, drive))
 
 
+def warned_step(robot: Any, a: int, b: int) -> bool:
+    """Whether the checks when the robot file was loaded warned about the step ``a`` -> ``b``
+    (state indices): ``b`` a state that cannot be held, the step one that cannot end on the
+    simulated body, or a limb that cannot reach one of its levels."""
+    coupled, blocked = body_coupling(robot)
+    if b in coupled or (a, b) in blocked:
+        return True
+    return bool(reach_warnings(robot.path, list(robot.limbs), [x.name for x in robot.actuators], robot.plant,
+                               robot.control.hold_margin_deg))
+
+
 #: what ``unreachable_states`` gives per state: (limb, ψ° at most, ψ° its level needs)
 Unreached = tuple[int, float, float]
 

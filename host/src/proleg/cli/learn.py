@@ -372,18 +372,14 @@ def _predicted(robot, a: str, b: str) -> bool:
     """Whether the load checks warned about the step ``a`` -> ``b`` (labels): a state that
     cannot be held or a step that cannot end on the simulated body, or a limb that cannot
     reach one of its levels."""
-    from ..robot_body import body_coupling, reach_warnings
+    from ..robot_body import warned_step
 
     t = robot.transitions
     try:
         ia, ib = t.index(a), t.index(b)
     except ValueError:  # a label the table does not know: nothing to look up
         return True
-    coupled, blocked = body_coupling(robot)
-    if ib in coupled or (ia, ib) in blocked:
-        return True
-    return bool(reach_warnings(robot.path, list(robot.limbs), [x.name for x in robot.actuators], robot.plant,
-                               robot.control.hold_margin_deg))
+    return warned_step(robot, ia, ib)
 
 
 def _counts(table, trials) -> np.ndarray:

@@ -146,11 +146,19 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     _table(m.states, cells)
     print(f"samples per entry: {int(m.samples.max()) if m.samples.size else 0} ('-': not an allowed transition)")
     if not_made:
+        from ..robot_body import warned_step
+
         shown = ", ".join(f"{m.states[a]}->{m.states[b]}" for a, b in not_made[:6])
         more = f", … ({len(not_made) - 6} more)" if len(not_made) > 6 else ""
+        # "see the warnings" pointed at nothing when the load checks passed every one of them
+        # (their body model poses each state still, the plant's held coils overshoot)
+        warned = any(warned_step(robot, a, b) or warned_step(robot, b, a) for a, b in not_made)
+        why = ("see the warnings when the robot file was loaded" if warned else
+               "no warning when the robot file was loaded foresaw it: the load checks pose each state at rest "
+               "with its raised limbs held just past ψ*, and a held coil heats further; proleg sim "
+               f"{args.robot} --record run.csv shows each limb's ψ")
         print(f"'?': allowed, but not made on the simulated body ({len(not_made)} of "
-              f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached (see "
-              "the warnings when the robot file was loaded)")
+              f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached ({why})")
     if rng is not None:
         print(f"\neach entry's range over hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi* "
               "(mm, low..high):")
