@@ -252,3 +252,32 @@ def test_a_duty_advice_under_one_percent_is_not_printed_as_zero(caplog):
     assert len(warned) == 2, [r.getMessage() for r in caplog.records]
     advised = float(warned[0].split("max_duty below ")[1].split()[0])
     assert 0.001 < advised < 0.01, warned[0]
+
+
+def test_a_drive_too_weak_to_reach_as_is_warned_about(caplog):
+    """R1 with control.drive_duty = 0.15 (in range): its coils settle at 55 °C, below As 64 °C,
+    so no limb rises; the run stopped with SMA_ON_LIMIT and STATE_TIMEOUT 'suspects sma-left'
+    and nothing said why. Warned, with the duty that would do; a supply no allowed duty gets
+    there (source resistance 50 Ω) says so; R1 as shipped is not warned about."""
+    import logging
+
+    from proleg.sim.closed_loop import make_plant
+
+    doc = copy.deepcopy(tomllib.loads((ROBOTS / "paper-r1.toml").read_text()))
+    doc["control"].update(drive_duty=0.15, hold_duty=0.1)
+    doc["safety"]["hold_max_duty"] = 0.1
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(robot_from_dict(doc, Path("weak.toml")), "physical")
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 2 and all("heated at control.drive_duty 0.15 settles at 55 °C" in w and
+                                    "below the 64 °C where it starts to contract" in w and
+                                    "a duty above 0.20" in w for w in warned), warned
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["supply_ohm=50"])
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 2 and all("even safety.max_duty 0.8 does not get it there" in w for w in warned), warned
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical")
+    assert not caplog.records

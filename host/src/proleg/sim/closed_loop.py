@@ -59,9 +59,35 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
     from .physical import PhysicalPlant
 
     plant = PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
-    for line in overheat_warnings(robot, plant) + ambient_warnings(robot, plant):
+    for line in overheat_warnings(robot, plant) + underpowered_warnings(robot, plant) + ambient_warnings(robot, plant):
         log.warning("warning: %s", line)
     return plant
+
+
+def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
+    """A line per coil that the duty a rise heats at (``control.drive_duty``; with
+    ``control.boost_ms``, ``safety.max_duty``) cannot bring to As with this plant's supply and
+    conditions: its limbs can never rise. R1 with drive_duty = 0.15 (its coils settle at 55 °C,
+    As 64 °C) stopped with SMA_ON_LIMIT and STATE_TIMEOUT 'suspects sma-left', and nothing said
+    that no duty it was allowed could lift a limb."""
+    boost = robot.control.boost_ms > 0
+    duty = robot.safety.max_duty if boost else robot.control.drive_duty
+    key = "safety.max_duty (control.boost_ms is on)" if boost else "control.drive_duty"
+    amb = plant.conditions.get("ambient_c")
+    out = []
+    for act, settles, (as_c, _af) in zip(robot.actuators, plant.steady_coil_temperature_c(duty),
+                                         plant.transformation_c()):
+        if settles >= as_c or amb >= as_c:
+            continue
+        need = duty * (as_c - amb) / (settles - amb) if settles > amb else math.inf
+        advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} (at most safety.max_duty), or a stronger supply"
+                  if need <= robot.safety.max_duty else
+                  f"a stronger supply: even safety.max_duty {robot.safety.max_duty:g} does not get it there")
+        out.append(f"{robot.path}: coil {act.name!r} heated at {key} {duty:g} settles at {settles:.0f} °C with "
+                   f"this supply, below the {as_c:.0f} °C where it starts to contract (As on the physical plant): "
+                   f"no limb it drives can rise, and a gait stops with SMA_ON_LIMIT or STATE_TIMEOUT; it needs "
+                   f"{advice}")
+    return out
 
 
 def ambient_warnings(robot: Robot, plant: Any) -> list[str]:
