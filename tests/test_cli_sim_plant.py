@@ -238,3 +238,27 @@ def test_each_end_once_and_all_limbs_beside_one_are_not_a_repeat(capsys):
     assert rc == 0, err
     assert json.loads(out)["effective_conditions"] == [
         "power_scale=0.9", "power_scale=left:0.8", "imu_bias_deg=rear:3.0", "imu_bias_deg=front:-2.0"]
+
+
+def test_a_bare_condition_goes_on_top_of_the_robot_files_per_limb_values(capsys, tmp_path):
+    """[plant] imu_bias_deg = [1, -2] and power_scale per coil, then --condition
+    imu_bias_deg=15 / power_scale=0.5 (a bare value: every limb, every coil): the file's
+    per-limb values still won, and the run had ±1–2° of bias and full power while its report
+    listed imu_bias_deg=15.0 beside them. A bare value on the command line replaces them; a
+    named one beside it still names its own."""
+    path = tmp_path / "paper-r1.toml"
+    path.write_text(R1.read_text() + "\n[plant]\nimu_bias_deg = [1.0, -2.0]\npower_scale = [1.0, 0.9]\n")
+    robot = load_robot(path)
+    c = plant_conditions(robot, ["imu_bias_deg=15", "power_scale=0.5"])
+    assert [c.for_index("imu_bias_deg", i, ["left", "right"]) for i in range(2)] == [15.0, 15.0]
+    assert [c.for_index("power_scale", j, ["sma-left", "sma-right"]) for j in range(2)] == [0.5, 0.5]
+    for given in (["imu_bias_deg=right:3", "imu_bias_deg=15"], ["imu_bias_deg=15", "imu_bias_deg=right:3"]):
+        c = plant_conditions(robot, given)
+        assert [c.for_index("imu_bias_deg", i, ["left", "right"]) for i in range(2)] == [15.0, 3.0], given
+    c = plant_conditions(robot, [])
+    assert [c.for_index("imu_bias_deg", i, ["left", "right"]) for i in range(2)] == [1.0, -2.0]
+    rc, out, _ = run(capsys, "sim", str(path), "--duration", "1", "--json", "--condition", "imu_bias_deg=15")
+    effective = json.loads(out)["effective_conditions"]
+    assert rc == 0 and "imu_bias_deg=15.0" in effective and not any(
+        e.startswith("imu_bias_deg=left") or e.startswith("imu_bias_deg=right") for e in effective), effective
+    assert plant_conditions(load_robot(R1), effective) == plant_conditions(robot, ["imu_bias_deg=15"])

@@ -164,6 +164,7 @@ def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions 
                 raise SimError(f"condition {item!r}: expected key=value (keys: {', '.join(KEYS)})")
             pairs.append((key.strip(), val.strip()))
             _once(given, key.strip(), val.strip(), item)
+    fresh: dict[str, set[str]] = {}  # per key, the names these items set (not ``base``)
     for key, val in pairs:
         if key not in KEYS:
             raise SimError(f"condition {key!r}: unknown key (expected one of: {', '.join(KEYS)})")
@@ -174,7 +175,14 @@ def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions 
             values[key] = _number(key, val)
         else:
             name, colon, num = val.rpartition(":")
-            named.setdefault(key, {})[name.strip() if colon else ""] = _number(key, num if colon else val)
+            per = named.setdefault(key, {})
+            if not colon:
+                # a bare value goes on top of every item ``base`` names: a robot file's
+                # imu_bias_deg = [1, -1] kept both limbs at ±1° under --condition imu_bias_deg=15
+                for n in [n for n in per if n and n not in fresh.get(key, set())]:
+                    del per[n]
+            per[name.strip() if colon else ""] = _number(key, num if colon else val)
+            fresh.setdefault(key, set()).add(name.strip() if colon else "")
     return replace(base, values=values, named=named)
 
 
