@@ -133,3 +133,20 @@ def test_a_bundled_name_stays_the_bundled_robot_even_when_the_robot_file_has_tha
     link = open_link("sim://paper-r1", robot_file=edited)
     assert link.board.robot.path != edited and link.board.robot.path.name == "paper-r1.toml"
     link.close()
+
+
+def test_a_one_limb_robot_on_sim_says_how_to_run_it_on_the_table_plant(tmp_path, capsys):
+    """run/console/set-param/calibrate --sim on a one-limb robot ended in the physical plant's
+    "(--plant table simulates it from its matrix)", an option none of them has. The error
+    names the --port URL that does it, and that URL runs."""
+    from proleg.cli import main
+
+    path = tmp_path / "mono.toml"
+    path.write_text('[robot]\nname = "mono"\n[[limb]]\nname = "only"\npsi_star_deg = [20.0]\nactuator = "c"\n'
+                    '[[actuator]]\nname = "c"\n[transitions]\nmatrix = [[0, 1], [1, 0]]\n')
+    assert main(["run", str(path), "--sim", "--duration", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    hint = f'--port "sim://{path}?plant=table"'
+    assert "\n" not in err and hint in err and "mono has one" in err, err
+    assert "--plant table" not in err
+    assert main(["run", str(path), "--port", f"sim://{path}?plant=table", "--duration", "1"]) == 0
