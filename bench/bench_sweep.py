@@ -1,0 +1,168 @@
+"""The claim off the grid: the ψ-feedback firmware under random conditions nobody tuned for.
+
+The claim bench (bench_claim.py) walks a fixed grid of 66 conditions. A controller can be
+fitted to a fixed grid without anyone meaning to, so this bench draws conditions at random:
+each row is three keys of the physical plant (docs/plant.md, "Conditions") drawn at random
+from the ranges below, at strengths between and beyond the grid's mild and strong ones, on
+ends named as the grid names them (`rear`, `front`: any robot). For each row, as in the claim
+bench:
+
+- the idealised drive (true ψ and ψ*, the firmware's envelope: ``claim.idealised_walk``) says
+  whether the coils can complete the gait under it at all;
+- the firmware walks gait 0 on the simulated board, started as a user starts it (a flat
+  calibration, then the ground: ``claim.feedback_run``), for the claim bench's run length.
+
+A row is *missed* when the idealised drive walks it and the firmware does not complete it (a
+fault stop, the wrong way, or a coil past 120 °C), and a *dirty stop* when neither walks it and
+the firmware's stop heated a coil past 120 °C. The draws are seeded (``--seed``): the same rows
+each run, different ones with another seed.
+
+    python bench/bench_sweep.py                        # every example robot, 30 rows each
+    python bench/bench_sweep.py --robot robots/X.toml --rows 50 --seed 3
+
+Writes bench/results/sweep.json (or sweep-NAME.json for one --robot) and prints the table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import multiprocessing
+import platform
+import random
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "host" / "src"))
+
+from proleg.report import claim  # noqa: E402
+from proleg.report.claim import GridPoint  # noqa: E402
+from proleg.robot import load_robot  # noqa: E402
+from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
+
+ROBOTS = ("paper-r1", "paper-r2", "paper-r1-stroke", "paper-r1-one-actuator", "inchworm-3", "caterpillar-4")
+ROWS = 30
+KEYS_PER_ROW = 3
+
+#: key -> a draw of its value (random.Random -> the value's text). Ends by the grid's names.
+#: Each range spans the claim grid's mild and strong strengths (report/claim.py MODES) and goes
+#: a little past the strong one where the plant allows, never into what the grid calls
+#: impossible (supply collapse, a dead coil).
+DRAWS = {
+    "power": lambda r: f"{r.uniform(0.7, 1.3):.2f}",
+    "ambient_c": lambda r: f"{r.uniform(5, 38):.0f}",
+    "convection": lambda r: f"{r.uniform(0.6, 1.6):.2f}",
+    "supply_ohm": lambda r: f"{r.uniform(0, 8):.1f}",
+    "coil_mismatch": lambda r: f"{r.uniform(0, 0.3):.2f}",
+    "power_scale": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(0.7, 1.0):.2f}",
+    "overlap_mm": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(4, 16):.0f}",
+    "fatigue_cycles": lambda r: f"{r.uniform(0, 30000):.0f}",
+    "imu_offset_deg": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(-8, 8):.1f}",
+    "imu_bias_deg": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(-6, 6):.1f}",
+    "imu_noise_deg": lambda r: f"{r.uniform(0, 1.5):.2f}",
+    "psi_star_shift_deg": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(-6, 6):.1f}",
+    "mass_g": lambda r: f"{r.uniform(3, 8):.1f}",
+}
+
+
+def draw_rows(n: int, seed: int) -> list[tuple[str, ...]]:
+    """``n`` rows of KEYS_PER_ROW distinct keys each, drawn with ``seed``."""
+    rng = random.Random(seed)
+    rows = []
+    for _ in range(n):
+        keys = rng.sample(sorted(DRAWS), KEYS_PER_ROW)
+        rows.append(tuple(f"{k}={DRAWS[k](rng)}" for k in keys))
+    return rows
+
+
+def run_row(args: tuple[str, int, tuple[str, ...], float]) -> dict:
+    name, i, conditions, run_s = args
+    logging.disable(logging.WARNING)  # make_plant's overheat advice, once per run: rows say it
+    robot = load_robot(ROOT / "robots" / f"{name}.toml")
+    point = GridPoint(f"{name} #{i}", (), "random", conditions, ())
+    ideal = claim.idealised_walk(robot, point)
+    fb = claim.feedback_run(robot, point, duration_s=run_s)
+    hot = fb.coil_peak_c > NITI_OVERHEAT_C
+    return {
+        "robot": name, "row": i, "conditions": list(conditions),
+        "possible": ideal.possible, "why_not": ideal.why_not,
+        "idealised_mm_s": None if ideal.speed_mm_s is None else round(ideal.speed_mm_s, 4),
+        "completed": fb.completed, "speed_mm_s": round(fb.speed_mm_s, 4), "fault": fb.fault,
+        "note": fb.note, "coil_peak_c": round(fb.coil_peak_c, 1), "reported": fb.reported,
+        "missed": ideal.possible and not fb.completed,
+        "dirty_stop": not ideal.possible and not fb.completed and hot,
+    }
+
+
+def summary(rows: list[dict]) -> dict:
+    possible = [r for r in rows if r["possible"]]
+    impossible = [r for r in rows if not r["possible"]]
+    return {
+        "rows": len(rows), "possible": len(possible),
+        "completed_where_possible": sum(r["completed"] for r in possible),
+        "impossible": len(impossible),
+        "impossible_completed_by_the_firmware": sum(r["completed"] for r in impossible),
+        "impossible_stopped_below_120c": sum(not r["completed"] and r["coil_peak_c"] <= NITI_OVERHEAT_C
+                                             for r in impossible),
+        "overheated": sum(r["coil_peak_c"] > NITI_OVERHEAT_C for r in rows),
+        "hottest_c": max((r["coil_peak_c"] for r in rows), default=None),
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--robot", type=Path, help="one robot file (default: every example robot)")
+    ap.add_argument("--rows", type=int, default=ROWS, help=f"random rows per robot (default {ROWS})")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the draws (default 1)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
+    args = ap.parse_args()
+    if args.rows < 1:
+        ap.error("--rows: at least 1")
+    names = (args.robot.stem,) if args.robot else ROBOTS
+    if args.robot and args.robot.resolve().parent != (ROOT / "robots").resolve():
+        ap.error(f"--robot {args.robot}: one of the robot files in {ROOT / 'robots'}")
+    t0 = time.perf_counter()
+    draws = draw_rows(args.rows, args.seed)
+    jobs = []
+    for name in names:
+        robot = load_robot(ROOT / "robots" / f"{name}.toml")
+        logging.disable(logging.WARNING)
+        run_s = claim.run_length(claim.idealised_walk(robot, claim.NOMINAL))
+        logging.disable(logging.NOTSET)
+        jobs += [(name, i, c, run_s) for i, c in enumerate(draws)]
+    with multiprocessing.Pool(args.jobs) as pool:
+        rows = pool.map(run_row, jobs, chunksize=1)
+    by_robot = {n: summary([r for r in rows if r["robot"] == n]) for n in names}
+
+    print(f"\nψ-feedback under {args.rows} random conditions a robot ({KEYS_PER_ROW} keys each, seed {args.seed})")
+    print(f"{'robot':22} {'possible':>8} {'completed':>9} {'impossible':>10} {'fw walks':>8} {'clean stop':>10} "
+          f"{'>120 °C':>7} {'hottest °C':>10}")
+    for n, s in by_robot.items():
+        print(f"{n:22} {s['possible']:8d} {s['completed_where_possible']:9d} {s['impossible']:10d} "
+              f"{s['impossible_completed_by_the_firmware']:8d} {s['impossible_stopped_below_120c']:10d} "
+              f"{s['overheated']:7d} {s['hottest_c']:10.1f}")
+    missed = [r for r in rows if r["missed"] or r["dirty_stop"]]
+    if missed:
+        print("\nrows the firmware did not complete where the idealised drive walks, or stopped hot:")
+        for r in missed:
+            what = r["fault"] or r["note"] or "no fault"
+            print(f"  {r['robot']:22} {' '.join(r['conditions']):70} {what} (peak {r['coil_peak_c']:.0f} °C; "
+                  f"idealised {r['idealised_mm_s']} mm/s)")
+    out = {
+        "benchmark": "sweep",
+        "machine": {"python": platform.python_version(), "platform": platform.platform()},
+        "inputs": {"robots": list(names), "rows": args.rows, "seed": args.seed, "keys_per_row": KEYS_PER_ROW,
+                   "overheat_c": NITI_OVERHEAT_C},
+        "summary": by_robot, "rows": rows, "bench_wall_s": round(time.perf_counter() - t0, 1),
+    }
+    path = ROOT / "bench" / "results" / (f"sweep-{args.robot.stem}.json" if args.robot else "sweep.json")
+    path.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+    print(f"\nwrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
