@@ -1,0 +1,59 @@
+"""bench/bench_sweep.py's pieces: its random rows are conditions every example robot's plant
+takes (a draw out of a key's range or naming an end a robot lacks would stop the bench
+mid-run), the same seed draws the same rows, and its summary counts what its rows say."""
+
+from __future__ import annotations
+
+import importlib.util
+import logging
+from pathlib import Path
+
+import pytest
+from proleg.paths import robots_dir
+from proleg.robot import load_robot
+from proleg.sim.closed_loop import make_plant
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("bench_sweep", ROOT / "bench" / "bench_sweep.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+sweep = _bench()
+
+
+@pytest.mark.parametrize("name", sweep.ROBOTS)
+def test_every_draw_is_a_condition_the_robots_plant_takes(name):
+    robot = load_robot(robots_dir() / f"{name}.toml")
+    logging.disable(logging.WARNING)  # the plant's overheat advice for hot draws
+    try:
+        for row in sweep.draw_rows(40, seed=3):
+            assert len(row) == sweep.KEYS_PER_ROW
+            assert len({c.split("=")[0] for c in row}) == sweep.KEYS_PER_ROW, row
+            make_plant(robot, "physical", list(row))  # SimError on a bad key, value or end
+    finally:
+        logging.disable(logging.NOTSET)
+
+
+def test_the_seed_decides_the_rows():
+    assert sweep.draw_rows(10, seed=5) == sweep.draw_rows(10, seed=5)
+    assert sweep.draw_rows(10, seed=5) != sweep.draw_rows(10, seed=6)
+    keys = {c.split("=")[0] for row in sweep.draw_rows(200, seed=1) for c in row}
+    assert keys == set(sweep.DRAWS)  # every key gets drawn
+
+
+def _row(possible, completed, peak):
+    return {"possible": possible, "completed": completed, "coil_peak_c": peak}
+
+
+def test_the_summary_counts_its_rows():
+    rows = [_row(True, True, 80.0), _row(True, False, 130.0), _row(False, False, 90.0),
+            _row(False, False, 125.0), _row(False, True, 70.0)]
+    s = sweep.summary(rows)
+    assert (s["rows"], s["possible"], s["completed_where_possible"]) == (5, 2, 1)
+    assert (s["impossible"], s["impossible_completed_by_the_firmware"], s["impossible_stopped_below_120c"]) == (3, 1, 1)
+    assert (s["overheated"], s["hottest_c"]) == (2, 130.0)
