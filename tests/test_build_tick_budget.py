@@ -72,6 +72,14 @@ def test_proleg_build_refuses_the_rate_in_one_line_before_compiling(tmp_path, ca
     assert not (tmp_path / "out").exists()
 
 
+def test_a_one_limb_robot_is_told_what_its_one_limb_needs():
+    r1 = load_robot(R1)
+    one = dataclasses.replace(r1, limbs=r1.limbs[:1])
+    with pytest.raises(BuildError) as e:
+        check_tick_budget(at_rate(one, 20_000), load_board("bluepill-f103"))
+    assert " 1 limb needs " in str(e.value) and "limbs need" not in str(e.value)
+
+
 @given(base=st.integers(0, 5000), per_limb=st.integers(0, 3000), limbs=st.integers(1, 8))
 def test_max_tick_hz_is_exactly_the_highest_rate_the_check_accepts(base, per_limb, limbs):
     budget = TickBudget(float(base), float(per_limb), "test")

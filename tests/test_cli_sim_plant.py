@@ -262,3 +262,10 @@ def test_a_bare_condition_goes_on_top_of_the_robot_files_per_limb_values(capsys,
     assert rc == 0 and "imu_bias_deg=15.0" in effective and not any(
         e.startswith("imu_bias_deg=left") or e.startswith("imu_bias_deg=right") for e in effective), effective
     assert plant_conditions(load_robot(R1), effective) == plant_conditions(robot, ["imu_bias_deg=15"])
+
+
+def test_a_measured_entry_that_rounds_to_zero_prints_without_a_sign_it_does_not_have():
+    from proleg.cli.sim_plant import _mm
+
+    assert _mm(-0.001) == "+0.00" and _mm(0.001) == "+0.00" and _mm(0.0) == "+0.00"
+    assert _mm(-0.02) == "-0.02" and _mm(12.3) == "+12.30"

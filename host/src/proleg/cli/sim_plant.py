@@ -140,7 +140,7 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         return 0
     print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
-    cells = [[None if x != x else f"{x:+.2f}" for x in row] for row in m.matrix_mm]
+    cells = [[None if x != x else _mm(x) for x in row] for row in m.matrix_mm]
     for a, b in not_made:
         cells[a][b] = "?"
     _table(m.states, cells)
@@ -162,9 +162,15 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     if rng is not None:
         print(f"\neach entry's range over hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi* "
               "(mm, low..high):")
-        _table(m.states, [[None if lo != lo else f"{lo:+.2f}..{hi:+.2f}" for lo, hi in zip(rl, rh)]
+        _table(m.states, [[None if lo != lo else f"{_mm(lo)}..{_mm(hi)}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
     return 0
+
+
+def _mm(x: float) -> str:
+    """A matrix entry in mm, signed, two decimals; one that rounds to zero is +0.00 (a tiny
+    negative printed "-0.00", a sign the entry does not have)."""
+    return f"{x:+.2f}" if round(x, 2) != 0 else "+0.00"
 
 
 log = logging.getLogger("proleg")

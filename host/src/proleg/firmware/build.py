@@ -125,7 +125,7 @@ def check_tick_budget(robot: Robot, board: Board) -> None:
     if need_us * hz > budget.BUSY_LIMIT * 1e6:  # need > 70 % of the period, without dividing
         message = (
             f"{robot.where}: control.tick_hz = {hz} is too fast for board {board.name}: "
-            f"{limbs} limbs need {need_us:.0f} µs per tick ({budget.tick_us_base:g} + {limbs} × "
+            f"{limbs} {'limb needs' if limbs == 1 else 'limbs need'} {need_us:.0f} µs per tick ({budget.tick_us_base:g} + {limbs} × "
             f"{budget.tick_us_per_limb:g} µs, [budget] of {board.path.name}), more than "
             f"{100 * budget.BUSY_LIMIT:.0f} % of the {period_us:.0f} µs period; at most "
             f"{budget.max_tick_hz(limbs)} Hz"
