@@ -360,3 +360,22 @@ def test_a_shared_coil_sits_at_the_same_limb_whatever_the_order_of_the_actuator_
             load_robot(path)
         seen.append(sorted(r.getMessage().replace(str(path), "FILE") for r in caplog.records))
     assert seen[0] == seen[1] and any("sits at limb 'tail'" in m for m in seen[0])
+
+
+def test_inject_names_the_ends_as_the_conditions_do():
+    """``--inject`` takes rear/front (the first and last limb, and their coils) as ``--condition``
+    does, where no limb or coil has that name: inchworm-3's front is its head and sma-head, and
+    caterpillar-4's front is its front proleg (a limb of that name)."""
+    for name, end, limb in (("inchworm-3", "front", 2), ("caterpillar-4", "front", 2), ("inchworm-3", "rear", 0)):
+        sim = open_simulated(load_robot(ROOT / "robots" / f"{name}.toml"), plant="table")
+        SimSession(sim).advance(0.2)
+        sim.board.read()
+        sim.inject(f"imu-silent:{end}")
+        sim.run_ticks(50)
+        faults = [m for m in FrameDecoder().feed(sim.board.read()) if m.name == "EVENT" and m.kind == EventKind.FAULT]
+        assert [(f.code, f.detail) for f in faults] == [(FaultCode.IMU_NO_ACK, limb)], (name, end)
+    sim = open_simulated(load_robot(ROOT / "robots" / "inchworm-3.toml"), plant="physical")
+    sim.inject("dead-actuator:front")
+    assert [bool(a) for a in sim.plant.alive] == [True, True, False]  # sma-head
+    with pytest.raises(Exception, match="rear, front or 0..2"):
+        sim.inject("imu-stuck:nose")

@@ -369,20 +369,34 @@ def _apply_fault(sim: Any, fault: str) -> None:
 
 
 def _limb_addr(sim: SimulatedRobot, arg: str) -> int:
+    """The IMU address of the limb ``arg`` names: its name, its index, or rear/front (the first
+    and last limb, as ``--condition`` reads them, where no limb has that name)."""
+    from .physical.conditions import ALIASES
+
     names = [limb.name for limb in sim.robot.limbs]
     if arg in names:
         return sim.imu_addresses[names.index(arg)]
+    if arg in ALIASES:
+        return sim.imu_addresses[ALIASES[arg]]
     if arg.isdigit() and int(arg) < len(names):
         return sim.imu_addresses[int(arg)]
-    raise SimError(f"fault needs a limb ({', '.join(names)} or 0..{len(names) - 1}), got {arg!r}")
+    raise SimError(f"fault needs a limb ({', '.join(names)}, rear, front or 0..{len(names) - 1}), got {arg!r}")
 
 
 def _channel(sim: SimulatedRobot, arg: str) -> int:
+    """The channel of the actuator ``arg`` names: its name or channel, or rear/front (the first
+    and last limb's coil, as ``--condition`` reads them, where no actuator has that name)."""
+    from .physical.conditions import ALIASES
+
     for a in sim.robot.actuators:
         if arg in (a.name, str(a.channel)):
             return a.channel
+    if arg in ALIASES:
+        limb = sim.robot.limbs[ALIASES[arg]]
+        return next(a.channel for a in sim.robot.actuators if a.name == limb.actuator)
     raise SimError(
-        f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)} or its channel), got {arg!r}"
+        f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)}, rear, front or its "
+        f"channel), got {arg!r}"
     )
 
 
