@@ -269,3 +269,17 @@ def test_a_measured_entry_that_rounds_to_zero_prints_without_a_sign_it_does_not_
 
     assert _mm(-0.001) == "+0.00" and _mm(0.001) == "+0.00" and _mm(0.0) == "+0.00"
     assert _mm(-0.02) == "-0.02" and _mm(12.3) == "+12.30"
+
+
+def test_a_run_without_a_cycle_or_a_fault_says_why(capsys, tmp_path):
+    """R1 holding each state 30 s (control.hold_ms) completes no cycle in 20 s and nothing goes
+    wrong: the report says the holds are why; a run with a cycle has no such note."""
+    slow = tmp_path / "slow.toml"
+    slow.write_text((ROBOTS / "paper-r1.toml").read_text(encoding="utf-8").replace("hold_ms = 100", "hold_ms = 30000"),
+                    encoding="utf-8")
+    assert main(["sim", str(slow), "--duration", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "cycles completed: 0" in out
+    assert "NOTE: no cycle completed in 20 s, and no fault: each step holds its state control.hold_ms = 30000 ms" in out
+    assert main(["sim", str(ROBOTS / "paper-r1.toml"), "--duration", "20"]) == 0
+    assert "NOTE: no cycle" not in capsys.readouterr().out

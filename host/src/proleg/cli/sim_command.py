@@ -296,6 +296,21 @@ def _report_json(robot, report, board: str = "host-sim") -> dict:
     }
 
 
+def _no_cycle_note(robot, report) -> list[str]:
+    """A NOTE when the run completed no cycle and nothing went wrong (no fault, no error): why,
+    where the robot file says it (a step's hold_ms), else where to look."""
+    if report.cycles or report.faults or report.errors:
+        return []
+    hold_s = robot.control.hold_ms / 1000.0
+    if 2 * hold_s >= report.duration_s:
+        return [f"  NOTE: no cycle completed in {report.duration_s:g} s, and no fault: each step holds its state "
+                f"control.hold_ms = {robot.control.hold_ms} ms once reached, so a cycle of two or more steps takes "
+                f"at least {2 * hold_s:g} s; run longer (--duration) or shorten hold_ms"]
+    return [f"  NOTE: no cycle completed in {report.duration_s:g} s, and no fault: a cycle may take longer than "
+            f"this run (--duration), or the gait did not get round its steps (states reached above; --record FILE "
+            f"shows each limb's ψ and duty)"]
+
+
 def _report_text(robot, report, board: str = "host-sim", budget: dict | None = None) -> str:
     t = robot.transitions
     seq = [t.label(s) for s in report.states_reached]
@@ -324,6 +339,7 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
         lines += [f"  {describe_event(e, RobotNames.for_robot(robot), t.label).strip()}" for e in report.limb_loss]
     for e in report.errors:
         lines.append(f"  ERROR: {e}")
+    lines += _no_cycle_note(robot, report)
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
     lines.append(
         f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
