@@ -35,11 +35,12 @@ typedef uint8_t sag_t;
 #endif
 
 /* The hold watch's cut of a limb at its level (below, ctl_demand): settled (clear of its band,
- * relaxed), or not settled and risen CTL_MOVE_CDEG in this step before it stopped gaining. A
- * held limb that sags back into its band has not risen so: its coil may be in its dead time
- * (0.15-0.6 s back to As), and it is heated on as before. */
+ * relaxed), or not settled and risen CTL_MOVE_CDEG into its level in this step before it stopped
+ * gaining (ctl_limb_t risen). A held limb that settled by the margins and then sags back into its
+ * band has not risen so since: its coil may be in its dead time (0.15-0.6 s back to As), and it
+ * is heated on as before. */
 #if PSI_IN_LEVEL
-#define SAG_STOPPED(i) (psi_settled(i) || ctl_limb[i].hi - ctl_limb[i].lo >= CTL_MOVE_CDEG)
+#define SAG_STOPPED(i) (psi_settled(i) || ctl_limb[i].risen)
 #else
 #define SAG_STOPPED(i) 1
 #endif
@@ -206,6 +207,12 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             if (target[i] != ctl_limb[i].target) {
                 ctl_limb[i].heat = 0;
             }
+#if PSI_IN_LEVEL
+            if (psi_settled(i) && ctl_limb[i].stall == CTL_STALL_NONE) {
+                ctl_limb[i].risen = 0; /* held by the margins: a sag from here is a re-heat (SAG_STOPPED) */
+                ctl_limb[i].still = NOT_SEEN;
+            }
+#endif
             if (level > 0u) {
                 /* Bang-bang hold with hysteresis: heat from below the hold edge up to the
                  * hold top, then off until it sags below the hold edge again. */
@@ -358,9 +365,13 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 } else if (ctl_limb[i].still == REACH_LOOKS && move[i] == SAG && SAG_STOPPED(i)) {
                     w = WANT_NOTHING;
 #if PSI_IN_LEVEL
-                    ctl_limb[i].stall = CTL_STALL_OSCILLATING; /* decided for this step (stall_watch) */
-                    psi_relax(i, PSI_RELAX_EDGES);
-                    psi_settle_in_level(i);
+                    if (ctl_limb[i].stall == CTL_STALL_NONE) {
+                        ctl_limb[i].stall = CTL_STALL_OSCILLATING; /* decided for this step (stall_watch) */
+                        psi_relax(i, PSI_RELAX_EDGES);
+                    }
+                    if (ctl_look == 0u && !psi_settled(i)) {
+                        psi_settle_in_level(i); /* an atan2: once a look, not each tick it is held off */
+                    }
 #endif
                 }
             }

@@ -295,22 +295,38 @@ uint8_t psi_classify(uint8_t limb, uint8_t prev, int16_t ax, int16_t az)
     return level;
 }
 
+#if PSI_IN_LEVEL
+/* The last sample of `limb` at or past ψ* of threshold `thr`: against the direction halfway
+ * between the band's edges (the sum of their unit vectors, halved so it fits in 16 bits; only
+ * its direction counts in at_or_above). */
+static uint8_t last_past_star(uint8_t limb, uint8_t thr)
+{
+    const band_t *b = band(limb, thr);
+    int16_t mid[2];
+    mid[0] = (int16_t)((b->e[E_UPPER][0] >> 1) + (b->e[E_LOWER][0] >> 1));
+    mid[1] = (int16_t)((b->e[E_UPPER][1] >> 1) + (b->e[E_LOWER][1] >> 1));
+    return at_or_above(mid, limbs[limb].ax, limbs[limb].az);
+}
+#endif
+
 /* The last sample of `limb` is inside its debounced level: clear of the band edges of
  * its thresholds (margins = 0) or of the hold and settle edges (margins = 1); with
  * PSI_RELAX_HELD_UP (margins = 2) the band above is not looked at. Settled in its level
- * (psi_settle_in_level), the band edge below is its lower one, not its upper one. */
-#if PSI_IN_LEVEL
-#define IN_EDGE(limb) (limbs[limb].in_level ? E_LOWER : E_UPPER)
-#else
-#define IN_EDGE(limb) E_UPPER
-#endif
+ * (psi_settle_in_level), the edge below is ψ* itself, not the band's upper edge. */
 static uint8_t inside(uint8_t limb, uint8_t margins)
 {
     uint8_t level = limbs[limb].level;
     if (level == PSI_UNKNOWN) {
         return 0;
     }
-    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), (PSI_HELD_UP ? margins == 1u : margins) ? E_HOLD : IN_EDGE(limb))) {
+#if PSI_IN_LEVEL
+    if (level > 0u && limbs[limb].in_level && !(PSI_HELD_UP ? margins == 1u : margins)) {
+        if (!last_past_star(limb, (uint8_t)(level - 1u))) {
+            return 0; /* back below ψ*: its pad has switched back */
+        }
+    } else
+#endif
+    if (level > 0u && !last_above(limb, (uint8_t)(level - 1u), (PSI_HELD_UP ? margins == 1u : margins) ? E_HOLD : E_UPPER)) {
         return 0;
     }
     if (!(PSI_HELD_UP && margins == PSI_RELAX_HELD_UP) && level + 1u < psi_levels(limb) &&
@@ -347,6 +363,9 @@ uint8_t psi_update(uint8_t limb, int16_t ax, int16_t az)
             s->count = 0;
             s->settled = 0;
             s->dwell = 0;
+#if PSI_IN_LEVEL
+            s->in_level = 0; /* a new level: settled by its own edges again */
+#endif
         }
     }
     /* dwell counts the samples that argue for a change: inside the margins while unsettled,

@@ -135,9 +135,9 @@ uint8_t psi_settled(uint8_t limb);
 void psi_relax(uint8_t limb, uint8_t on);
 
 /* Settle in the debounced level itself, if the limb's smoothed ψ is at or past the ψ* below
- * its level (its pad has switched): on the level's own lower band edge (ψ* − h/2, where the
- * classifier would leave it) instead of its upper one, until psi_relax(limb, 0) at the limb's
- * next target. Short of ψ* nothing changes. For a limb whose coil has given all it has inside
+ * its level (its pad has switched): on that ψ* instead of the band's upper edge, so that it
+ * stays settled as long as its pad is switched, until psi_relax(limb, 0) at the limb's next
+ * target or a change of its level. Short of ψ* nothing changes. For a limb whose coil has given all it has inside
  * its band (ctl.h, the hold watch): its level is reached as far as this coil can reach it.
  * Built with the hold watch only (CFG_HOLD_WATCH; not with strokes, which run no reach watch):
  * R1's image has no bytes to spare. */

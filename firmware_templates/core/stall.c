@@ -99,8 +99,19 @@ uint8_t stall_at_reach(uint8_t i, ctl_limb_t *c)
         } else if (c->still < REACH_LOOKS) {
             c->still++;
         } else if (HOLD_WATCH && m < c->hi - CTL_CLIMB_CDEG) {
-            c->still = 0; /* a held limb sagged from where it stopped: its re-heat is watched afresh */
+            /* a held limb sagged from where it stopped: its re-heat is watched afresh, from where
+             * it sagged to (kept at its old highest, a coil that cannot lift it back was heated
+             * 20 looks in 21 for as long as the limb was held) */
+            c->still = 0;
+#if PSI_IN_LEVEL
+            c->hi = m;
+#endif
         }
+#if PSI_IN_LEVEL
+        if (c->hi - c->lo >= CTL_MOVE_CDEG) {
+            c->risen = 1;
+        }
+#endif
     }
     return (uint8_t)(c->still == REACH_LOOKS && c->hi - c->lo >= CTL_MOVE_CDEG);
 }
@@ -117,6 +128,9 @@ void stall_watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int1
         c->ticks = 0;
         c->heat = 0;
         c->still = NOT_SEEN; /* the reach watch starts over */
+#if PSI_IN_LEVEL
+        c->risen = 0;
+#endif
         psi_relax(i, 0);
 #if CTL_HELD_UP
         c->held_up = 0;
@@ -133,6 +147,9 @@ void stall_watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int1
         }
         if (HOLD_WATCH && level < c->level) {
             c->still = NOT_SEEN; /* dropped from where the hold watch kept it: its rise back is watched afresh */
+#if PSI_IN_LEVEL
+            c->risen = 0;
+#endif
         }
 #if CTL_HELD_UP
         if (c->level > target || level > target) {

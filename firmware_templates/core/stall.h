@@ -50,6 +50,10 @@ typedef struct {
     uint8_t boost;     /* heats at the duty ceiling (once a rise lagged, until ctl_reset) */
     int16_t lo, hi;    /* reach watch: lowest smoothed ψ looked at in this step's rise, highest since */
     uint8_t still;     /* ... its looks since hi last rose; NOT_SEEN: none yet */
+#if PSI_IN_LEVEL
+    uint8_t risen;     /* rose CTL_MOVE_CDEG into its target level in this step, and has not settled
+                        * there by the margins since (the hold watch's SAG_STOPPED, ctl.c) */
+#endif
 #ifdef CFG_LIMB_STROKE_CDEG
     int16_t peak;      /* ψ (0.01°) when the hover clock last restarted on a climb */
     uint16_t clock;    /* ticks since this step began (saturating) */

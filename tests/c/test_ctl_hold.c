@@ -118,7 +118,8 @@ static void test_a_limb_that_stopped_inside_its_band_past_psi_star_settles_there
     /* at its level (entered at 51.2°), back inside its band (50.5°, past ψ* = 50°) and gaining
      * nothing: its coil has given all it has, and it settles in its level where it is, its coil
      * off (heated on, the one-actuator R1's worn far end reached 151 °C and the step its
-     * timeout); it stays in its level, settled, down to the band's lower edge (49°) */
+     * timeout); it stays settled while past ψ*, and back below ψ* (its pad switched back) it
+     * is not, though the classifier keeps its level down to the band's lower edge (49°) */
     uint16_t duty[CFG_N_ACTUATORS];
     int t;
     rise_to(51.2);
@@ -131,10 +132,16 @@ static void test_a_limb_that_stopped_inside_its_band_past_psi_star_settles_there
     CHECK_EQ(psi_level(0), 1);
     CHECK_EQ(duty[0], 0);
     for (t = 0; t < 100; t++) {
-        put(0, 49.2);
+        put(0, 50.2);
         demand(1, 0, duty);
     }
     CHECK(psi_settled(0));
+    CHECK_EQ(psi_level(0), 1);
+    for (t = 0; t < 100; t++) {
+        put(0, 49.7);
+        demand(1, 0, duty);
+    }
+    CHECK(!psi_settled(0));
     CHECK_EQ(psi_level(0), 1);
     for (t = 0; t < 100; t++) {
         put(0, 48.8);
@@ -178,6 +185,52 @@ static void test_a_held_limb_that_sags_into_its_band_is_heated(void)
         CHECK_EQ(psi_level(0), 1);
         CHECK_EQ(duty[0], DRIVE);
     }
+}
+
+static void test_a_limb_that_rose_and_settled_at_its_hold_then_sagged_into_its_band_is_heated(void)
+{
+    /* it rose alone to its hold top (54.5°) and settled there by the margins; later it sags into
+     * its band (50.5°): a re-heat, its coil perhaps in its dead time, not a rise that stopped
+     * short, so it is heated, not cut and settled there (the rise of its step is long past) */
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    int t;
+    setup();
+    put(1, 0.0);
+    for (psi = 40.0; psi < 54.5; psi += 0.025) {
+        put(0, psi);
+        demand(1, 0, duty);
+    }
+    for (t = 0; t < 200; t++) {
+        put(0, 54.5);
+        demand(1, 0, duty);
+    }
+    CHECK(psi_settled(0));
+    CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
+    for (t = 0; t < 3 * (int)REACH_TICKS; t++) {
+        put(0, 50.5);
+        demand(1, 0, duty);
+        CHECK_EQ(psi_level(0), 1);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+}
+
+static void test_a_limb_held_where_it_stopped_that_sags_is_re_heated_and_cut_again_from_there(void)
+{
+    /* held where it stopped (52.8°), it sags 1.5° and its coil cannot lift it back: the re-heat
+     * is watched from where it sagged to, so it is cut a reach time later and stays off until it
+     * sags a further degree (kept at its old highest, it was heated 20 looks in 21) */
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t, on = 0;
+    rise_to(52.8);
+    CHECK(ticks_until(52.8, 0, 2 * (int)REACH_TICKS) >= 0);
+    for (t = 0; t < 3000; t++) {
+        put(0, 51.3);
+        demand(1, 0, duty);
+        on += duty[0] == DRIVE;
+    }
+    CHECK(on >= (int)REACH_TICKS - 2 * (int)CTL_REACH_EVERY);
+    CHECK(on <= (int)REACH_TICKS + (int)SMOOTH_TICKS + 2 * (int)CTL_REACH_EVERY);
 }
 
 static void test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top(void)
@@ -230,6 +283,8 @@ int main(void)
     RUN(test_a_limb_that_stopped_inside_its_band_past_psi_star_settles_there);
     RUN(test_a_limb_that_stopped_inside_its_band_short_of_psi_star_is_held_off_unsettled);
     RUN(test_a_held_limb_that_sags_into_its_band_is_heated);
+    RUN(test_a_limb_that_rose_and_settled_at_its_hold_then_sagged_into_its_band_is_heated);
+    RUN(test_a_limb_held_where_it_stopped_that_sags_is_re_heated_and_cut_again_from_there);
     RUN(test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top);
     RUN(test_a_limb_that_settled_is_not_watched);
     return UNIT_EXIT();
