@@ -377,5 +377,10 @@ def test_inject_names_the_ends_as_the_conditions_do():
     sim = open_simulated(load_robot(ROOT / "robots" / "inchworm-3.toml"), plant="physical")
     sim.inject("dead-actuator:front")
     assert [bool(a) for a in sim.plant.alive] == [True, True, False]  # sma-head
-    with pytest.raises(Exception, match="rear, front or 0..2"):
+    with pytest.raises(Exception, match=r"\(tail, middle, head, rear, front or 0..2\)"):
+        sim.inject("imu-stuck:nose")
+    sim = open_simulated(load_robot(ROOT / "robots" / "caterpillar-4.toml"), plant="physical")
+    sim.inject("dead-actuator:rear")  # the rear proleg's coil, as power_scale=rear reads it
+    assert [bool(a) for a in sim.plant.alive] == [True, False, True, True]  # sma-rear, not sma-tail
+    with pytest.raises(Exception, match=r"\(tail, rear, front, head or 0..3\)"):
         sim.inject("imu-stuck:nose")

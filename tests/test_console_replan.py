@@ -153,7 +153,7 @@ def test_plain_mode_says_whether_it_replans(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--sim", str(R1), "--inject", "dead-actuator:sma-right+soon"], "fault needs an actuator (sma-left, sma-right, rear, front or its channel), got 'sma-right+soon'"),
+    (["--sim", str(R1), "--inject", "dead-actuator:sma-right+soon"], "fault needs an actuator (sma-left, sma-right, a limb's name, rear, front or its channel), got 'sma-right+soon'"),
     (["--sim", str(R1), "--inject", "dead-actuator:nosuch+0.05"], "--inject dead-actuator:nosuch: fault needs an actuator"),
     (["--sim", str(R1), "--inject", "melt:sma-right+1"], "unknown fault"),
     (["--port", "loop://", "--inject", "dead-actuator:sma-right"], "--inject needs --sim ROBOT"),

@@ -380,23 +380,26 @@ def _limb_addr(sim: SimulatedRobot, arg: str) -> int:
         return sim.imu_addresses[ALIASES[arg]]
     if arg.isdigit() and int(arg) < len(names):
         return sim.imu_addresses[int(arg)]
-    raise SimError(f"fault needs a limb ({', '.join(names)}, rear, front or 0..{len(names) - 1}), got {arg!r}")
+    also = [a for a in ALIASES if a not in names]
+    raise SimError(f"fault needs a limb ({', '.join([*names, *also])} or 0..{len(names) - 1}), got {arg!r}")
 
 
 def _channel(sim: SimulatedRobot, arg: str) -> int:
-    """The channel of the actuator ``arg`` names: its name or channel, or rear/front (the first
-    and last limb's coil, as ``--condition`` reads them, where no actuator has that name)."""
+    """The channel of the actuator ``arg`` names, as ``--condition`` reads a coil: its name or
+    channel, a limb's name (that limb's coil), or rear/front (the first and last limb's coil)
+    where no actuator or limb has that name (caterpillar-4's ``rear`` is its rear proleg's)."""
     from .physical.conditions import ALIASES
 
     for a in sim.robot.actuators:
         if arg in (a.name, str(a.channel)):
             return a.channel
-    if arg in ALIASES:
-        limb = sim.robot.limbs[ALIASES[arg]]
+    limbs = [lb for lb in sim.robot.limbs if lb.name == arg]
+    if limbs or arg in ALIASES:
+        limb = limbs[0] if limbs else sim.robot.limbs[ALIASES[arg]]
         return next(a.channel for a in sim.robot.actuators if a.name == limb.actuator)
     raise SimError(
-        f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)}, rear, front or its "
-        f"channel), got {arg!r}"
+        f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)}, a limb's name, rear, front "
+        f"or its channel), got {arg!r}"
     )
 
 
