@@ -743,13 +743,14 @@ def test_a_table_plant_limb_that_rests_in_its_level_1_is_warned_of(tmp_path, cap
 
 
 def test_a_debounce_longer_than_the_state_timeout_is_refused(tmp_path):
-    """A step is reached only after debounce_ticks samples at its levels, under the state
-    timeout: 1000 ticks at 200 Hz (5 s, both keys in range) with a 2 s timeout loaded and
-    built, and every step ended in STATE_TIMEOUT ("one would not settle")."""
+    """A step changes a limb's level after debounce_ticks samples and settles it after as many
+    again, under the state timeout: 1000 ticks at 200 Hz (5 s, both keys in range) with a 2 s
+    timeout loaded and built, and every step ended in STATE_TIMEOUT ("one would not settle")."""
     slow = "\n[safety]\nstate_timeout_ms = 2000\n[control]\ntick_hz = 200\ntelemetry_hz = 20\ndebounce_ticks = {}\n"
-    rejects(tmp_path, R1 + slow.format(1000), "control.debounce_ticks: expected well under the 400 ticks "
-            "safety.state_timeout_ms lasts at 200 Hz: 1000 ticks take 5000 ms", "STATE_TIMEOUT after 2000 ms",
-            "got 1000")
-    rejects(tmp_path, R1 + slow.format(400), "400 ticks take 2000 ms")
+    rejects(tmp_path, R1 + slow.format(1000), "control.debounce_ticks: expected under half the 400 ticks "
+            "safety.state_timeout_ms lasts at 200 Hz", "1000 ticks take 5000 ms, twice that 10000 ms",
+            "STATE_TIMEOUT after 2000 ms", "got 1000")
+    rejects(tmp_path, R1 + slow.format(200), "200 ticks take 1000 ms, twice that 2000 ms")
+    assert load_robot(write(tmp_path, R1 + slow.format(199))).control.debounce_ticks == 199
     assert load_robot(write(tmp_path, R1 + slow.format(50))).control.debounce_ticks == 50
     assert load_robot(write(tmp_path, R1 + "\n[control]\ndebounce_ticks = 1000\n")).control.debounce_ticks == 1000

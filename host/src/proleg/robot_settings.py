@@ -161,14 +161,17 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
     if 0 < c.boost_ms < BOOST_MIN_MS:
         f.fail("boost_ms", f"0 (off) or {BOOST_MIN_MS} .. {BOOST_MAX_MS} ms", c.boost_ms)
-    # a step is reached only once its limbs have been at their levels for debounce_ticks
-    # samples (docs/control.md), all the while under the state timeout: 1000 ticks at 200 Hz
-    # (5 s) with a 2 s timeout loaded, built, and every step of every gait ended in
-    # STATE_TIMEOUT "every limb at its level, one would not settle"
+    # a step changes a limb's level only after debounce_ticks samples past its band, and counts
+    # it settled only after as many again clear of its edges (docs/control.md), all the while
+    # under the state timeout: 1000 ticks at 200 Hz (5 s) with a 2 s timeout loaded, built, and
+    # every step of every gait ended in STATE_TIMEOUT "every limb at its level, one would not
+    # settle". Twice the debounce is what a step needs at the least (the hold's dips restart
+    # the settle count: R1 at 200 Hz with 400 ticks, 4 s of an 8 s timeout, still timed out).
     debounce_ms = c.debounce_ticks * 1000.0 / c.tick_hz
-    if debounce_ms >= safety.state_timeout_ms:
-        most = math.ceil(safety.state_timeout_ms * c.tick_hz / 1000.0) - 1
-        f.fail("debounce_ticks", f"well under the {most + 1} ticks safety.state_timeout_ms lasts at {c.tick_hz} "
-               f"Hz: {c.debounce_ticks} ticks take {debounce_ms:g} ms, a step is reached only after them, and "
-               f"every step would end in STATE_TIMEOUT after {safety.state_timeout_ms} ms", c.debounce_ticks)
+    if 2 * debounce_ms >= safety.state_timeout_ms:
+        ticks = math.ceil(safety.state_timeout_ms * c.tick_hz / 1000.0)
+        f.fail("debounce_ticks", f"under half the {ticks} ticks safety.state_timeout_ms lasts at {c.tick_hz} Hz (a "
+               f"step changes a limb's level after debounce_ticks samples and settles it after as many again): "
+               f"{c.debounce_ticks} ticks take {debounce_ms:g} ms, twice that {2 * debounce_ms:g} ms, and every "
+               f"step would end in STATE_TIMEOUT after {safety.state_timeout_ms} ms", c.debounce_ticks)
     return c
