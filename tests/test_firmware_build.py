@@ -387,3 +387,7 @@ def test_a_limb_name_that_would_close_a_c_comment_builds(tmp_path, parent):
     assert result.artifact.is_file()
     config = (parent / "fw" / "gen" / "robot_config.h").read_text()
     assert 'left *\\/ "x" \\ 1st' in config
+    opens = robot_variant(tmp_path, R1, (r'^name = "left"', r'name = "left /* x"'))
+    result = build(load_robot(opens), load_board("host-sim"), parent / "fw2")  # "/*" within comment: -Werror
+    assert result.artifact.is_file()
+    assert "left /\\* x" in (parent / "fw2" / "gen" / "robot_config.h").read_text()

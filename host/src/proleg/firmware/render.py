@@ -431,11 +431,12 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
 
 
 def _comment_safe(value: Any) -> Any:
-    """Every rendered value, with ``*/`` broken up: limb names ("any printable text"), IMU
-    placement lines, fallback lines and the robot file's path are written into C comments,
-    and a limb named ``tail */ x`` ended the comment: the build failed with compiler errors
-    ("stray '\\' in program") instead of building. No rendered code value contains ``*/``."""
-    return value.replace("*/", "*\\/") if isinstance(value, str) else value
+    """Every rendered value, with ``*/`` and ``/*`` broken up: limb names ("any printable
+    text"), IMU placement lines, fallback lines and the robot file's path are written into C
+    comments, and a limb named ``tail */ x`` ended the comment: the build failed with compiler
+    errors ("stray '\\' in program") instead of building; ``left /* x`` opened one inside it
+    ("'/*' within comment", an error under -Werror). No rendered code value contains either."""
+    return value.replace("*/", "*\\/").replace("/*", "/\\*") if isinstance(value, str) else value
 
 
 def _environment() -> jinja2.Environment:
