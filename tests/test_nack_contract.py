@@ -116,7 +116,10 @@ def test_start_of_no_such_gait_while_the_fallback_has_given_up_a_coil_is_no_gait
     assert [m.code for m in _events(board, d.EventKind.FALLBACK)] == [1]
     board.client.stop()
     assert board.client.request("GET_ACTUATOR_MAP").lost == 1
+    before = [m for m in board.run(40) if m.spec.name == "TELEMETRY"][-1]
     assert _refusal(board, "START", gait=0, direction=0) == (E.NOT_ALLOWED, 3)
+    after = [m for m in board.run(40) if m.spec.name == "TELEMETRY"][-1]  # refused before the sequencer:
+    assert (after.gait, after.step, after.target) == (before.gait, before.step, before.target)  # as it stopped
     assert _refusal(board, "START", gait=77, direction=0) == (E.NO_GAIT, 77)
     assert _refusal(board, "START", gait=1, direction=1) == (E.NO_GAIT, 1)
     assert _refusal(board, "START", gait=77, direction=9) == (E.OUT_OF_RANGE, 2)

@@ -120,19 +120,19 @@ static void cmd_start(void)
     } else {
         sdir = dir == PROTO_DIR_PLUS_X ? SEQ_DIR_PX : SEQ_DIR_MX;
     }
+    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE && index < seq_gait_count(sdir)) {
+        /* safety: a built-in gait needs the coil the fallback gave up, which stays given up until
+         * the operator takes it back (SET_ACTUATOR_MAP with no entries, limbmap.h): restarted by a
+         * host, it was heated up to the state timeout again at every START, and fell back again.
+         * Only for a gait the board has (else NO_GAIT, below), and before seq_start: a refused
+         * START leaves the sequencer as it was. */
+        nack(PROTO_ERR_NOT_ALLOWED, 3);
+        return;
+    }
     r = seq_start(sdir, index, imucheck_measured());
     if (r != SEQ_OK) {
         nack(PROTO_ERR_NO_GAIT, gait);
         return; /* refused: nothing changed, the ground in use included */
-    }
-    if (gait != PROTO_GAIT_USER && limbmap_lost() != LIMBMAP_NONE) {
-        /* safety: a built-in gait needs the coil the fallback gave up, which stays given up until
-         * the operator takes it back (SET_ACTUATOR_MAP with no entries, limbmap.h): restarted by a
-         * host, it was heated up to the state timeout again at every START, and fell back again.
-         * Checked once seq_start found the gait: a gait the board does not have is NO_GAIT. */
-        seq_stop(); /* nothing ran: no tick came between */
-        nack(PROTO_ERR_NOT_ALLOWED, 3);
-        return;
     }
     level_at_start(); /* started from rest: level on this ground (level.h) */
 #ifdef CFG_MAX_CLIMB_CDEG
