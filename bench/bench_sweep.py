@@ -4,8 +4,9 @@ The claim bench (bench_claim.py) walks a fixed grid of 66 conditions. A controll
 fitted to a fixed grid without anyone meaning to, so this bench draws conditions at random:
 each row is three keys of the physical plant (docs/plant.md, "Conditions") drawn at random
 from the ranges below, at strengths between and beyond the grid's mild and strong ones, on
-ends named as the grid names them (`rear`, `front`: any robot). For each row, as in the claim
-bench:
+limbs and coils named as the grid names them (`rear`, `front`: the first and last limb, or on
+a robot with limbs of those names, those limbs: caterpillar-4's prolegs). For each row, as in
+the claim bench:
 
 - the idealised drive (true ψ and ψ*, the firmware's envelope: ``claim.idealised_walk``) says
   whether the coils can complete the gait under it at all;
@@ -17,7 +18,7 @@ fault stop, the wrong way, or a coil past 120 °C), and a *dirty stop* when neit
 the firmware's stop heated a coil past 120 °C. The draws are seeded (``--seed``): the same rows
 each run, different ones with another seed.
 
-    python bench/bench_sweep.py                        # every example robot, 30 rows each
+    python bench/bench_sweep.py                        # six example robots (ROBOTS), 30 rows each
     python bench/bench_sweep.py --robot robots/X.toml --rows 50 --seed 3
 
 Writes bench/results/sweep.json (or sweep-NAME.json for one --robot) and prints the table.
@@ -43,6 +44,8 @@ from proleg.report.claim import GridPoint  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
 
+#: The example robots whose gait 0 walks +x on the physical plant: not paper-r3 (the idealised drive
+#: walks it backwards: docs/plant.md, "R3") nor planar-4 (its +x gait is a library heading).
 ROBOTS = ("paper-r1", "paper-r2", "paper-r1-stroke", "paper-r1-one-actuator", "inchworm-3", "caterpillar-4")
 ROWS = 30
 KEYS_PER_ROW = 3
@@ -114,7 +117,7 @@ def summary(rows: list[dict]) -> dict:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--robot", type=Path, help="one robot file (default: every example robot)")
+    ap.add_argument("--robot", type=Path, help="one robot file in robots/ (default: the six of ROBOTS)")
     ap.add_argument("--rows", type=int, default=ROWS, help=f"random rows per robot (default {ROWS})")
     ap.add_argument("--seed", type=int, default=1, help="seed of the draws (default 1)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
