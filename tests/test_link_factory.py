@@ -150,3 +150,6 @@ def test_a_one_limb_robot_on_sim_says_how_to_run_it_on_the_table_plant(tmp_path,
     assert "\n" not in err and hint in err and "mono has one" in err, err
     assert "--plant table" not in err
     assert main(["run", str(path), "--port", f"sim://{path}?plant=table", "--duration", "1"]) == 0
+    capsys.readouterr()
+    assert main(["run", str(path), "--port", f"sim://{path}?seed=7&speed=max", "--duration", "1"]) == 2
+    assert f'--port "sim://{path}?seed=7&speed=max&plant=table"' in capsys.readouterr().err  # its other settings kept

@@ -79,8 +79,11 @@ def _open_sim(url: str, rest: str, query: dict[str, str], options: dict[str, Any
     if plant in (None, "physical") and len(robot.limbs) < 2:
         # the physical plant's own refusal names sim's --plant table, which run/console/set-param/
         # calibrate --sim do not have: a one-limb robot had no way to be run there
+        from urllib.parse import urlencode
+
+        kept = urlencode({**{k: v for k, v in query.items() if k != "plant"}, "plant": "table"})
         raise UsageError(f"{url}: the physical plant needs two limbs at least, {robot.name} has one: "
-                        f"--port \"sim://{rest}?plant=table\" simulates it from its matrix (the table plant)")
+                        f"--port \"sim://{rest}?{kept}\" simulates it from its matrix (the table plant)")
     return SimLink(SimulatedRobot(robot, seed=seed, plant=plant), speed=speed, description=f"sim {robot.name}")
 
 
