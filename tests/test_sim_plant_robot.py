@@ -232,6 +232,7 @@ def test_air_too_warm_for_the_coils_to_transform_back_is_warned_about(caplog):
     assert len(warned) == 2, [r.getMessage() for r in caplog.records]
     assert "limb 'left' cannot come down to level 0 at ambient_c 45 °C" in warned[0]
     assert "'sma-left' 33 %" in warned[0] and "hold it at 26.9°" in warned[0] and "19.0°" in warned[0]
+    assert "(Ms 56 °C, Mf 38 °C on the physical plant)" in warned[0] and "recover fully below 38 °C" in warned[0]
     contraction, psi = plant.warm_rest()
     assert contraction == pytest.approx([0.329, 0.329], abs=1e-3) and min(psi) > 19.0
     caplog.clear()

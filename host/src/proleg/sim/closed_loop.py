@@ -99,7 +99,14 @@ def ambient_warnings(robot: Robot, plant: Any) -> list[str]:
     contraction, psi = plant.warm_rest()
     if not any(c > 0.0 for c in contraction):
         return []
-    ms, mf = min(plant._coils.reverse_transformation_c())
+    temps = plant._coils.reverse_transformation_c()  # each coil's (Ms, Mf): fatigue and drift shift them
+
+    def span(values: list[float]) -> str:
+        lo, hi = min(values), max(values)
+        return f"{lo:.0f} °C" if round(lo) == round(hi) else f"{lo:.0f}–{hi:.0f} °C"
+
+    ms, mf = span([t[0] for t in temps]), span([t[1] for t in temps])
+    recover = f"{min(t[1] for t in temps):.0f} °C"
     out = []
     for i, (lb, p) in enumerate(zip(robot.limbs, psi)):
         edge = lb.psi_star_deg[0] - lb.hysteresis_deg / 2.0
@@ -107,10 +114,10 @@ def ambient_warnings(robot: Robot, plant: Any) -> list[str]:
             continue
         coils = ", ".join(f"{a.name!r} {100 * c:.0f} %" for a, c in zip(robot.actuators, contraction) if c > 0.0)
         out.append(f"{robot.path}: limb {lb.name!r} cannot come down to level 0 at ambient_c {amb:g} °C: the coils "
-                   f"cool no lower than the air, inside their reverse transformation (Ms {ms:.0f} °C, Mf {mf:.0f} °C "
-                   f"on the physical plant), so once heated they stay contracted ({coils} of their stroke) and hold "
-                   f"it at {p:.1f}°, above its level-0 edge {edge:.1f}° (ψ* − hysteresis/2): a gait that lowers it "
-                   f"ends in STATE_TIMEOUT; the coils recover fully below {mf:.0f} °C")
+                   f"cool no lower than the air, inside their reverse transformation (Ms {ms}, Mf {mf} on the "
+                   f"physical plant), so once heated they stay contracted ({coils} of their stroke) and hold it at "
+                   f"{p:.1f}°, above its level-0 edge {edge:.1f}° (ψ* − hysteresis/2): a gait that lowers it ends in "
+                   f"STATE_TIMEOUT; the coils recover fully below {recover}")
     return out
 
 
