@@ -395,15 +395,13 @@ def _channel(sim: SimulatedRobot, arg: str) -> int:
     """The channel of the actuator ``arg`` names, as ``--condition`` reads a coil: its name or
     channel, a limb's name (that limb's coil), or rear/front (the first and last limb's coil)
     where no actuator or limb has that name (caterpillar-4's ``rear`` is its rear proleg's)."""
-    from .physical.conditions import ALIASES
+    from .physical.conditions import ALIASES, actuator_index
 
     for a in sim.robot.actuators:
         if arg in (a.name, str(a.channel)):
             return a.channel
-    limbs = [lb for lb in sim.robot.limbs if lb.name == arg]
-    if limbs or arg in ALIASES:
-        limb = limbs[0] if limbs else sim.robot.limbs[ALIASES[arg]]
-        return next(a.channel for a in sim.robot.actuators if a.name == limb.actuator)
+    if arg in ALIASES or any(lb.name == arg for lb in sim.robot.limbs):
+        return sim.robot.actuators[actuator_index(sim.robot, arg)].channel  # as --condition resolves it
     raise SimError(
         f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)}, a limb's name, rear, front "
         f"or its channel), got {arg!r}"
