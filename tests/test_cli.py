@@ -265,6 +265,19 @@ def test_an_injection_out_of_its_range_is_refused_before_the_run(capsys, spec, t
     assert code == 2 and text in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("spec, coil", [("dead-actuator:leg+2", 1), ("dead-actuator:leg+2+0", 1),
+                                        ("dead-actuator:leg", 0)])
+def test_a_limb_name_ending_in_plus_a_number_is_a_name_in_inject(capsys, tmp_path, spec, coil):
+    """With limbs "leg" and "leg+2", `--inject dead-actuator:leg+2` killed leg's coil 2 s in:
+    the '+2' was read as a time although the whole spec names a limb."""
+    text = (ROBOTS / "paper-r1.toml").read_text()
+    robot = tmp_path / "plus.toml"
+    robot.write_text(text.replace('name = "left"', 'name = "leg"').replace('name = "right"', 'name = "leg+2"'))
+    code, out, err = run(capsys, "sim", str(robot), "--duration", "5", "--json", "--inject", spec)
+    doc = json.loads(out)
+    assert code == 1 and [(f["code"], f["detail"]) for f in doc["faults"]] == [("SMA_ON_LIMIT", coil)], err
+
+
 def test_a_fault_latched_before_start_is_named_with_the_refusal(capsys):
     """An IMU silent from boot latches IMU_NO_ACK before START; START is then refused with
     NOT_ALLOWED, and the report used to show only that, with "faults": []."""

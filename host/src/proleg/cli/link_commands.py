@@ -41,7 +41,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     after the start (``proleg.console.inject``)."""
     from ..console import ConsoleApp, LimbView, RobotNames, run_plain
     from ..console.app import replan_state
-    from ..console.inject import Injector, parse_injection
+    from ..console.inject import Injector, fault_checker, parse_injection
     from ..console.replan import ReplanWorker
     from ..errors import SimError
     from ..console.identity import check_identity
@@ -70,6 +70,9 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         link.close()
         raise SimError("--inject needs --sim ROBOT (faults are injected into the simulated robot)")
     try:
+        if timed:  # again with the robot's names: a limb called "leg+2" is no time
+            names_fault = fault_checker(link.board.check_fault)  # type: ignore[attr-defined]
+            timed = [parse_injection(spec, duration_s, names_fault) for spec in inject]
         for _, fault in timed:
             link.board.check_fault(fault)  # type: ignore[attr-defined]  # a bad name fails now, not mid-run
     except SimError:

@@ -129,7 +129,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
         raise Interrupted("interrupted before the run started; nothing recorded") from None
     # --pty may be stopped early (Ctrl-C) and names what it did not inject; a plain run would not say
-    timed, at_once = _injections(args.inject, None if args.pty else args.duration)
+    timed, at_once = _injections(args.inject, None if args.pty else args.duration, sim.check_fault)
     for spec in [*at_once, *(fault for _, fault in timed)]:
         sim.check_fault(spec)  # a bad name fails now, not halfway through the run
     if not args.calibrated:
@@ -207,11 +207,14 @@ def _interrupted(sim, start: float | None, duration_s: float, recorder) -> str:
     return f"interrupted {when}; {what_was_kept(recorder)}"
 
 
-def _injections(specs: list[str], run_s: float | None) -> tuple[list[tuple[float, str]], list[str]]:
-    """``--inject`` as (timed: (T, FAULT) for FAULT+T, checked to fall within ``run_s``; at once: FAULT)."""
-    from ..console.inject import parse_injection
+def _injections(specs: list[str], run_s: float | None,
+                check_fault) -> tuple[list[tuple[float, str]], list[str]]:
+    """``--inject`` as (timed: (T, FAULT) for FAULT+T, checked to fall within ``run_s``; at once: FAULT).
+    ``check_fault``: the simulated robot's, which tells a name ending in ``+2`` from a time."""
+    from ..console.inject import fault_checker, parse_injection
 
-    timed = [parse_injection(spec, run_s) for spec in specs if "+" in spec]
+    names_fault = fault_checker(check_fault)
+    timed = [parse_injection(spec, run_s, names_fault) for spec in specs if "+" in spec]
     return timed, [spec for spec in specs if "+" not in spec]
 
 

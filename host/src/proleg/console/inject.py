@@ -2,7 +2,9 @@
 --sim ROBOT --inject dead-actuator:sma-right+10``), to see what the firmware and the
 console do about them. ``FAULT`` names are the simulator's (``proleg.sim.closed_loop.FAULTS``);
 ``+T``: T seconds of simulated time after the console started (default: at once); a ``+``
-followed by anything but a number belongs to the name (a limb called ``front+pad``).
+followed by anything but a number belongs to the name (a limb called ``front+pad``), and so does
+one followed by a number when the whole spec names a fault the robot has (a limb called ``leg+2``;
+``dead-actuator:leg+2+5`` injects it at 5 s).
 """
 
 from __future__ import annotations
@@ -15,12 +17,17 @@ from ..link.client import Received
 from ..link.listeners import Listener
 
 
-def parse_injection(spec: str, run_s: float | None = None) -> tuple[float, str]:
+def parse_injection(spec: str, run_s: float | None = None,
+                    names_fault: Callable[[str], bool] | None = None) -> tuple[float, str]:
     """``FAULT[+T]`` → (T seconds, FAULT); ``SimError`` naming the spec when the fault is
     unknown, T is no finite number ≥ 0, or T is after the run ends (``run_s``, the
-    ``--duration``; None: no end), where the fault would never be injected."""
+    ``--duration``; None: no end), where the fault would never be injected.
+    ``names_fault(spec)``: whether the whole spec is a fault of the robot's (its limb or coil
+    name ends in ``+`` and a number); then it is that fault, at once."""
     from ..sim.closed_loop import FAULTS
 
+    if names_fault is not None and "+" in spec and names_fault(spec):
+        return 0.0, spec
     fault, plus, at = spec.rpartition("+")
     t = 0.0
     if plus and not at.strip():
@@ -39,6 +46,18 @@ def parse_injection(spec: str, run_s: float | None = None) -> tuple[float, str]:
         raise SimError(f"--inject {spec}: {t:g} s is after the run ends (--duration {run_s:g} s), so it would "
                        f"never be injected; expected a time in [0, {run_s:g}] s")
     return t, fault
+
+
+def fault_checker(check: Callable[[str], None]) -> Callable[[str], bool]:
+    """``names_fault`` for ``parse_injection`` from a simulated robot's ``check_fault``."""
+    def names_fault(spec: str) -> bool:
+        try:
+            check(spec)
+        except SimError:
+            return False
+        return True
+
+    return names_fault
 
 
 def _number(text: str) -> bool:
