@@ -230,6 +230,7 @@ SIM_JSON_FIELDS = {
     "telemetry_frames", "telemetry_lost", "link_errors", "errors", "start_time_s",
     "matrix_check",  # README: the run against what the matrix promises
     "plant", "conditions", "effective_conditions",  # README: as --measure-matrix --json names them
+    "coil_peak_c",  # README: each coil's hottest in the run
 }
 
 

@@ -182,14 +182,17 @@ def cmd_sim(args: argparse.Namespace) -> int:
     # the run against what the matrix promises for its gait (report/matrix_check.py)
     agreement = check(robot, args.plant, gaits[args.gait].reward, report.cycle_displacements_mm,
                       len(gaits[args.gait].states) - 1)
+    peaks = coil_peaks(robot, sim.plant)
     if args.json:
         out = {**_report_json(robot, report, args.board), **(budget or {}), **conditions_json(robot, args)}
         out["matrix_check"] = agreement.as_json() if agreement else None
+        out["coil_peak_c"] = peaks
         print(json.dumps(out))
     else:
         print(_report_text(robot, report, args.board, budget))
         if agreement is not None and agreement.remark is not None:
             print(f"  {remark_text(agreement)}")
+        print("\n".join(_peaks_text(peaks)))
     for e in report.errors:
         print(f"proleg: error: {e}", file=sys.stderr)
     if recorder is not None and recorder.error is not None:
@@ -298,6 +301,22 @@ def _report_json(robot, report, board: str = "host-sim") -> dict:
         "link_errors": report.link_errors,
         "errors": report.errors,
     }
+
+
+def coil_peaks(robot, plant) -> dict[str, float]:
+    """Each coil's hottest in the simulated run, °C to 0.1, by the robot file's actuator names."""
+    return {a.name: round(float(t), 1) for a, t in zip(robot.actuators, plant.peak_temperature_c)}
+
+
+def _peaks_text(peaks: dict[str, float]) -> list[str]:
+    """The coils' hottest, and a WARNING for each past the 120 °C that wears NiTi out: the firmware
+    senses no temperature, so only the simulator can tell (docs/safety.md)."""
+    from ..sim.physical.materials import NITI_OVERHEAT_C
+
+    lines = ["  coils, hottest: " + ", ".join(f"{name} {t:.0f} °C" for name, t in peaks.items())]
+    lines += [f"  WARNING: coil {name} reached {t:.0f} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"
+              for name, t in peaks.items() if t > NITI_OVERHEAT_C]
+    return lines
 
 
 def _no_cycle_note(robot, report) -> list[str]:

@@ -353,15 +353,6 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
         states = list(gait)
         session.client.load_gait(states[:-1] if len(states) > 1 and states[0] == states[-1] else states)
         gait = GAIT_USER
-    peak = [0.0]
-    step = sim.step
-    temps = sim.plant._temp  # the coil temperatures, read once per plant step
-
-    def stepping() -> None:
-        step()
-        peak[0] = max(peak[0], *temps)
-
-    sim.step = stepping  # type: ignore[method-assign]
     session.advance(0.2)
     run = session.run_gait(direction, gait, duration_s)
     session.advance(2.0)
@@ -380,13 +371,14 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     if not faults and not completed:
         note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
     reported = f"{codes} ×{len(run.faults)}" if codes and not stopped else ""
-    if peak[0] > OVERHEAT_C:  # the open loop's line (open_loop_run): a run that ruins a coil did not complete
+    peak = max(sim.plant.peak_temperature_c)  # since the plant was made: the coils were cold before START
+    if peak > OVERHEAT_C:  # the open loop's line (open_loop_run): a run that ruins a coil did not complete
         completed = False
-        note = (note + "; " if note else "") + f"{OVERHEATED} ({peak[0]:.0f} °C)"
+        note = (note + "; " if note else "") + f"{OVERHEATED} ({peak:.0f} °C)"
     if cal_note:
         note = (note + "; " if note else "") + cal_note
     return DriveOutcome(completed, speed, run.displacement_mm, faults, note,
-                        float(max(sim.plant.temperature_c)), peak[0], reported)
+                        float(max(sim.plant.temperature_c)), peak, reported)
 
 
 def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, direction: str = "+x",

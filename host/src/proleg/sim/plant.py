@@ -144,6 +144,7 @@ class Plant:
         self._strain = [a.max_strain for a in acts]
         self._amb = float(params.ambient_c)
         self._temp = [self._amb] * self._na
+        self._peak = [self._amb] * self._na  # each coil's hottest since the plant was made
         self._hyst = [Hysteresis(a.as_c, a.af_c, a.ms_c, a.mf_c, self._amb) for a in acts]
         self._alive = [True] * self._na
         self._pfactor = [1.0] * self._na                      # heating power factor (drift)
@@ -225,6 +226,8 @@ class Plant:
             t_eq = amb + d * self._power[j] * self._pfactor[j] / self._hA[j]
             t1 = t_eq + (temp[j] - t_eq) * decay[j]
             temp[j] = t1
+            if t1 > self._peak[j]:
+                self._peak[j] = t1
             contraction.append(self._hyst[j].update(t1) * self._stroke[j])
         psi = self._psi
         dpsi = self._dpsi
@@ -358,6 +361,11 @@ class Plant:
     @property
     def temperature_c(self) -> np.ndarray:
         return np.array(self._temp)
+
+    @property
+    def peak_temperature_c(self) -> list[float]:
+        """Each coil's hottest (°C, coil order) since the plant was made."""
+        return list(self._peak)
 
     @property
     def austenite(self) -> np.ndarray:

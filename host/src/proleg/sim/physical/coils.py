@@ -54,6 +54,7 @@ class Coils:
         self.channel = [a.channel for a in acts]
         self.n_channels = max(self.channel) + 1
         self.temp = [self.amb] * na
+        self.peak = [self.amb] * na  # each coil's hottest since the plant was made
         self.tbody = self.amb
         g = p.coil
         self.hyst = [Hysteresis(g.as_c, g.af_c, g.ms_c, g.mf_c, self.amb) for _ in range(na)]
@@ -131,6 +132,8 @@ class Coils:
                 if abs(self.cycles[j] - self.fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
                     self._update_fatigue(j)
             self.temp[j] = t
+            if t > self.peak[j]:
+                self.peak[j] = t
             to_body += g * (t - tb)
             target = a1 * self.fat_stroke[j] * self.drift_stroke[j]
             c = self.c[j]

@@ -312,6 +312,11 @@ class PhysicalPlant:
         return np.array(self._temp)
 
     @property
+    def peak_temperature_c(self) -> list[float]:
+        """Each coil's hottest (°C, coil order) since the plant was made."""
+        return list(self._coils.peak)
+
+    @property
     def body_temperature_c(self) -> float:
         return self._coils.tbody
 
