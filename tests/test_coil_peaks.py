@@ -4,6 +4,8 @@ temperature, so the simulator is where a lab sees that a run cooked a coil (docs
 
 from __future__ import annotations
 
+import asyncio
+import csv
 import json
 
 import pytest
@@ -12,9 +14,13 @@ from hypothesis import strategies as st
 
 from proleg.cli import main
 from proleg.cli.sim_command import _peaks_text
+from proleg.console import ConsoleApp, LimbView, RobotNames
+from proleg.link.client import RobotClient
+from proleg.link.sim_link import SimLink
 from proleg.paths import robots_dir
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import make_plant
+from proleg.sim.simulators import open_host_sim
 
 R1 = robots_dir() / "paper-r1.toml"
 
@@ -48,3 +54,47 @@ def test_proleg_sim_reports_each_coils_hottest(capsys):
     assert main(["sim", str(R1), "--duration", "8"]) == 0
     out = capsys.readouterr().out
     assert "  coils, hottest: sma-left " in out and "WARNING" not in out
+
+
+def test_a_sim_recording_carries_each_coils_temperature(capsys, tmp_path):
+    """The recording's truth columns: the plant's coil temperatures at each frame, never
+    above the run's peak and within a few degrees of it (50 Hz frames of a coil heating
+    at most ≈ 100 K/s)."""
+    rec = tmp_path / "run.csv"
+    assert main(["sim", str(R1), "--duration", "8", "--json", "--record", str(rec)]) == 0
+    peaks = json.loads(capsys.readouterr().out)["coil_peak_c"]
+    rows = list(csv.DictReader(rec.open()))
+    for name, column in (("sma-left", "temp_sma_left_c"), ("sma-right", "temp_sma_right_c")):
+        seen = [float(r[column]) for r in rows if r.get(column)]
+        assert len(seen) > 300 and seen[0] == pytest.approx(25.0, abs=0.01)  # the plant's ambient at boot
+        assert peaks[name] - 3.0 < max(seen) <= peaks[name] + 0.05
+
+
+def test_the_console_shows_a_simulated_coils_temperature_beside_its_duty():
+    robot = load_robot(R1)
+    sim = open_host_sim(robot)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s, speed=8.0, description="sim paper-r1"))
+    client.connect()
+    app = ConsoleApp(client, limbs=[LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs],
+                     levels=robot.levels, names=RobotNames.for_robot(robot), robot=robot)
+    seen = {}
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:  # the README: it fits 80×24
+            await pilot.press("s")  # gait 0 in +x
+            for _ in range(200):
+                await pilot.pause(0.05)
+                if sim.time_s > 3.0:
+                    break
+            app.refresh_view()
+            seen["duty"] = str(app.query_one("#duty").content)
+            seen["temps"] = list(sim.plant.temperature_c)
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    client.close()
+    lines = seen["duty"].splitlines()
+    assert len(lines) == 2 and all(line.endswith("°C (sim)") for line in lines), seen["duty"]
+    shown = [float(line.split()[-3]) for line in lines]
+    assert all(abs(s - t) < 10.0 for s, t in zip(shown, seen["temps"])), (shown, seen["temps"])
+    assert max(shown) > 40.0  # heated: the gait's first rise is under way by 3 s

@@ -44,7 +44,9 @@ from ..states import limb_levels
 from ..link.client import Received, RobotClient, RobotInfo
 from ..link.direction import direction_text
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
+from ..link.sim_link import temperature_key
 from ..robot import Robot
+from ..sim.physical.materials import NITI_OVERHEAT_C
 from .names import RobotNames, describe_event, gait_text, step_text
 from .replan import ReplanWorker
 
@@ -292,6 +294,9 @@ class ConsoleApp(App[None]):
                 duty.append(f"{names.actuator(j)[:16]:<16} ")
                 duty.append(_bar(dv / 10000), style="red" if dv else "grey50")
                 duty.append(f" {dv / 100:5.1f} %")
+                temp = truth.get(temperature_key(names.actuator(j)))
+                if temp is not None:  # the simulated coil's temperature: a real board senses none
+                    duty.append(f"  {temp:4.0f} °C (sim)", style="bold red" if temp > NITI_OVERHEAT_C else "")
                 if j < len(tel["duty"]) - 1:
                     duty.append("\n")
         self.query_one("#duty", Static).update(duty)

@@ -82,6 +82,9 @@ def format_message(rx: Received, labels: Callable[[int], str] | None = None) -> 
                 f" psi=[{psi}] duty%=[{duty}] flags={flags}")
         if "displacement_mm" in rx.truth:
             line += f" x={rx.truth['displacement_mm']:.1f}mm"
+        temps = [v for k, v in rx.truth.items() if k.startswith("temp_")]  # simulated coils, °C
+        if temps:
+            line += " coil_c=[" + " ".join(f"{t:.0f}" for t in temps) + "]"
         return line
     if m.name == "EVENT":
         try:

@@ -32,6 +32,13 @@ class BoardLike(Protocol):
 TRUTH_ATTRIBUTES = ("displacement_mm",)
 
 
+def temperature_key(actuator: str) -> str:
+    """The truth (and recording column) of a simulated coil's temperature, °C: ``temp_<name>_c``."""
+    from ..names import identifier
+
+    return f"temp_{identifier(actuator)}_c"
+
+
 class SimLink(Link):
     def __init__(self, board: BoardLike, *, step_s: float = 0.002, speed: float | None = None,
                  description: str = "simulated board"):
@@ -93,6 +100,11 @@ class SimLink(Link):
                 v = getattr(self.board, name, None)
             if isinstance(v, (int, float)):
                 out[name] = float(v)
+        robot = getattr(self.board, "robot", None)
+        temps = getattr(source, "temperature_c", None) if source is not self.board else None
+        if robot is not None and temps is not None:  # each coil's temperature: no board can tell it
+            for actuator, t in zip(robot.actuators, temps):
+                out[temperature_key(actuator.name)] = float(t)
         return out
 
     def close(self) -> None:

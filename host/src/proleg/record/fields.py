@@ -92,7 +92,8 @@ class RecordingMeta:
         d["psi_star_deg"] = [list(v) for v in self.psi_star_deg]
         d["columns"] = self.columns()
         d["units"] = {"t_host_s": "s (host clock)", "t_s": "s (firmware clock)", "psi_*_deg": "degree",
-                      "duty_*_pct": "percent", "displacement_mm": "mm"}
+                      "duty_*_pct": "percent", "displacement_mm": "mm",
+                      "temp_*_c": "degree Celsius (simulated coil)"}
         return d
 
     @classmethod
