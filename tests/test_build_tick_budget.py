@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 from proleg.cli import main
 from proleg.errors import BoardError, BuildError
 from proleg.firmware.boards import TickBudget, load_board
-from proleg.firmware.build import check_tick_budget
+from proleg.firmware.build import check_tick_budget, firmware_gaits
+from proleg.firmware.fit import check_fit
 from proleg.paths import boards_dir, robots_dir
 from proleg.robot import load_robot
 
@@ -56,7 +57,22 @@ def test_the_bluepill_takes_paper_r1_at_1_khz_and_refuses_a_rate_beyond_its_budg
     assert "\n" not in msg
     assert msg.startswith(f"{r1.path}: control.tick_hz = {hz} is too fast for board bluepill-f103: ")
     assert f"2 limbs need {need:.0f} µs per tick" in msg
-    assert "more than 70 % of the 50 µs period" in msg and f"at most {b.max_tick_hz(2)} Hz" in msg
+    assert "more than 70 % of the 50 µs period" in msg and "at most 1785 Hz (its IMUs' I2C reads allow no more)" in msg
+
+
+def test_the_rate_a_refused_tick_names_builds_where_the_i2c_reads_allow_less_than_the_budget(tmp_path, capsys):
+    """The bluepill's [budget] takes R1 up to 6,666 Hz, its two IMUs' I2C reads up to 1,785: the
+    budget's refusal said 'at most 6666 Hz', and at 6,666 Hz the build refused again, naming 1,785."""
+    fast, named = tmp_path / "fast-r1.toml", tmp_path / "named-r1.toml"
+    fast.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", "tick_hz = 10000"), encoding="utf-8")
+    assert main(["build", str(fast), "--board", "bluepill-f103", "-o", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    most = int(re.search(r"at most (\d+) Hz", err).group(1))
+    assert most < load_board("bluepill-f103").budget.max_tick_hz(2)
+    named.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", f"tick_hz = {most}"), encoding="utf-8")
+    board = load_board("bluepill-f103")
+    check_tick_budget(load_robot(named), board)
+    check_fit(load_robot(named), board, firmware_gaits(load_robot(named)))
 
 
 def test_proleg_build_refuses_the_rate_in_one_line_before_compiling(tmp_path, capsys):

@@ -32,10 +32,10 @@ from .. import __version__
 from ..errors import BuildError, Interrupted, LinkError
 from ..paths import as_if_created, display_path, templates_dir
 from ..robot import Robot
-from .boards import Board, pwm_channel_error
+from .boards import DEFAULT_I2C_HZ, Board, pwm_channel_error
 from .fit import Fit, check_fit
 from .gaits import firmware_gaits, gait_warnings
-from .placement import place_imus
+from .placement import max_tick_hz, place_imus
 
 __all__ = ["MANIFEST", "BuildResult", "build", "check_buildable", "firmware_gaits", "render_project"]
 
@@ -123,12 +123,15 @@ def check_tick_budget(robot: Robot, board: Board) -> None:
     period_us = 1e6 / hz
     need_us = budget.busy_us(limbs)
     if need_us * hz > budget.BUSY_LIMIT * 1e6:  # need > 70 % of the period, without dividing
+        # the highest rate that passes check_fit's I2C check too: a rate only this one allows is refused there
+        i2c_most = max_tick_hz(place_imus(robot, board), int((board.i2c or {}).get("hz", DEFAULT_I2C_HZ)))
+        most = min(budget.max_tick_hz(limbs), i2c_most)
         message = (
             f"{robot.where}: control.tick_hz = {hz} is too fast for board {board.name}: "
             f"{limbs} {'limb needs' if limbs == 1 else 'limbs need'} {need_us:.0f} µs per tick ({budget.tick_us_base:g} + {limbs} × "
             f"{budget.tick_us_per_limb:g} µs, [budget] of {board.path.name}), more than "
             f"{100 * budget.BUSY_LIMIT:.0f} % of the {period_us:.0f} µs period; at most "
-            f"{budget.max_tick_hz(limbs)} Hz"
+            f"{most} Hz" + (" (its IMUs' I2C reads allow no more)" if most < budget.max_tick_hz(limbs) else "")
         )
         if budget.enforce:
             raise BuildError(message)

@@ -266,11 +266,16 @@ def i2c_tick_us(placements: Sequence[ImuPlacement], i2c_hz: int) -> float:
     return bits * 1e6 / i2c_hz
 
 
+def max_tick_hz(placements: Sequence[ImuPlacement], i2c_hz: int) -> int:
+    """The highest whole tick rate whose I2C reads fit ``I2C_TICK_SHARE`` of its period."""
+    return int(I2C_TICK_SHARE * 1e6 / i2c_tick_us(placements, i2c_hz))
+
+
 def check_tick_budget(robot: Any, bname: str, placements: Sequence[ImuPlacement], i2c_hz: int) -> None:
     tick_us = 1e6 / robot.control.tick_hz
     need = i2c_tick_us(placements, i2c_hz)
     if need > I2C_TICK_SHARE * tick_us:
-        most = int(I2C_TICK_SHARE * 1e6 / need)
+        most = max_tick_hz(placements, i2c_hz)
         raise BuildError(
             f"{robot.where}: reading {len(placements)} IMUs ({mux_selects_per_tick(placements)} channel switches) "
             f"takes about {need:.0f} us of I2C at {i2c_hz // 1000} kHz per tick on board {bname}, more than "
