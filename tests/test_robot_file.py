@@ -340,6 +340,18 @@ def test_duration_for_a_forbidden_transition_is_rejected(tmp_path):
     rejects(tmp_path, text, "durations_s[2][4]", "forbidden")
 
 
+def test_a_duration_past_an_hour_is_refused_in_the_matrix_and_the_csv_as_default_duration_s_is(tmp_path):
+    """default_duration_s was bounded to (0, 3600] but durations_s and a CSV's duration_s took any
+    finite number: 1.7e308 on two steps of a gait overflowed its summed duration (a traceback)."""
+    huge = "durations_s = [[0, 1.7e308, 1, 1], [1, 0, 1, 1.7e308], [1, 1, 0, 1], [1, 1, 1, 0]]"
+    rejects(tmp_path, R1.replace("[transitions]", "[transitions]\n" + huge),
+            "transitions.durations_s[1][2]: expected a duration in (0, 3600] seconds or 'x', got 1.7e+308")
+    hour = huge.replace("1.7e308", "3600")
+    assert load_robot(write(tmp_path, R1.replace("[transitions]", "[transitions]\n" + hour))).transitions.duration.max() == 3600
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: duration_s: expected a number in \(0, 3600\] seconds, got '3601'"):
+        load_robot(csv_robot(tmp_path, "from,to,reward,duration_s\n00,10,1,3\n10,00,1,3601\n"))
+
+
 def test_multi_level_limb_labels(tmp_path):
     text = R1.replace('name = "left"\npsi_star_deg = [20.0]', 'name = "left"\nlevels = 3\npsi_star_deg = [10.0, 25.0]')
     text = text.replace(

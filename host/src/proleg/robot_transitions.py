@@ -28,6 +28,9 @@ MAX_ENTRY = 1e9
 #: The largest planar variance (σ up to MAX_ENTRY) and the largest ``n_trials`` entry.
 MAX_VARIANCE = MAX_ENTRY**2
 MAX_TRIALS = 10**9
+#: The longest duration of a transition (s), in ``durations_s``, a CSV's ``duration_s`` and
+#: ``default_duration_s`` alike: a gait sums them, and 1e308 overflowed the sum (a traceback).
+MAX_DURATION_S = 3600.0
 
 
 #: What a matrix entry counts: steps (× ``[plant] step_mm`` on the table plant) or a length.
@@ -76,7 +79,7 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
         _check_forbidden(path, value["forbidden"], levels, src, dst, rew, csv_file, names)
 
     if f.has("default_duration_s"):
-        default = f.number("default_duration_s", None, 0.0, 3600.0, open_lo=True)
+        default = f.number("default_duration_s", None, 0.0, MAX_DURATION_S, open_lo=True)
         if dur is None:
             dur = np.full(len(src), default)
         else:
@@ -220,8 +223,9 @@ def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.
                         f"{where}[{a + 1}][{b + 1}]: transition is allowed in the matrix, expected a duration > 0"
                     )
                 continue
-            if not _is_number(v) or not v > 0:
-                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration > 0 seconds or 'x', got {toml_text(v)}")
+            if not _is_number(v) or not 0 < v <= MAX_DURATION_S:
+                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration in (0, {MAX_DURATION_S:g}] seconds "
+                                     f"or 'x', got {toml_text(v)}")
             if not allowed[a, b]:
                 raise RobotFileError(
                     f"{where}[{a + 1}][{b + 1}]: transition is forbidden in the matrix, expected 'x', got {toml_text(v)}"
@@ -300,8 +304,8 @@ def _csv_duration(text: str, where: str) -> float:
         d = float(text)
     except ValueError:
         d = -1.0
-    if not d > 0 or not math.isfinite(d):
-        raise RobotFileError(f"{where}: duration_s: expected a number > 0, got {text!r}")
+    if not 0 < d <= MAX_DURATION_S:
+        raise RobotFileError(f"{where}: duration_s: expected a number in (0, {MAX_DURATION_S:g}] seconds, got {text!r}")
     return d
 
 
