@@ -109,7 +109,12 @@ def test_a_library_that_does_not_fit_the_flash_is_refused_naming_it(robot, fw):
     ('library = [0, 360]', r"gaits\.library: heading 360 is given twice \(the same heading as 0\)"),
     ('library = [0]\nmax_transitions = 1000000000', r"gaits\.max_transitions: expected a whole number in 2\.\.256, "
                                                     r"got 1000000000"),
-    ('library = [0]\nvariance_weight = -1', r"gaits\.variance_weight: expected a number >= 0 or \[λx, λy, λθ\], got -1$"),
+    ('library = [0]\nvariance_weight = -1', r"gaits\.variance_weight: expected a number in \[0, 1e\+09\] or \[λx, λy, λθ\], "
+                                            r"got -1$"),
+    ('library = [0]\nvariance_weight = [0, 1e308, 0]', r"gaits\.variance_weight: expected a number in \[0, 1e\+09\] or "
+                                                       r"\[λx, λy, λθ\], got \[0, 1e\+308, 0\]$"),
+    ('library = [0]\ntransition_cost = 1e308', r"gaits\.transition_cost: expected a number in \[0, 1e\+09\] \(a cost "
+                                               r"per transition, as --transition-cost\), got 1e\+308$"),
 ])
 def test_a_bad_gaits_table_is_one_line_naming_the_key(tmp_path, gaits, message):
     text = PLANAR.read_text()

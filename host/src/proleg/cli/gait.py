@@ -57,7 +57,7 @@ def add_gait_parser(sub) -> None:
     p.add_argument("--variance-weight", type=_weights, metavar="λ|λx,λy,λθ",
                    help="subtract λ·(var_dx + var_dy + var_dtheta_deg), those the robot file gives, or each "
                         "with its own weight")
-    p.add_argument("--transition-cost", type=non_negative_float, metavar="κ",
+    p.add_argument("--transition-cost", type=_penalty, metavar="κ",
                    help="subtract κ ≥ 0 per transition (a cost: prefers short gaits)")
     p.add_argument("--rotation-cap-deg", type=non_negative_float, metavar="DEG", help="only gaits turning at most this much per pass")
     p.add_argument("--simple-cycles", action="store_true", help="only simple cycles (each state once per pass)")
@@ -78,8 +78,18 @@ def _weights(text: str) -> float | tuple[float, float, float]:
     parts = [p.strip() for p in text.split(",")]
     if len(parts) not in (1, 3):
         raise argparse.ArgumentTypeError(f"expected λ or λx,λy,λθ, got {text!r}")
-    values = [non_negative_float(p) for p in parts]
+    values = [_penalty(p) for p in parts]
     return values[0] if len(values) == 1 else (values[0], values[1], values[2])
+
+
+def _penalty(text: str) -> float:
+    """A transition cost or variance weight: a number in [0, MAX_PENALTY]."""
+    from ..gait.planar import MAX_PENALTY
+
+    v = non_negative_float(text)
+    if v > MAX_PENALTY:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, {MAX_PENALTY:g}], got {text!r}")
+    return v
 
 
 def _variance_weights(robot, given: float | tuple[float, float, float] | None) -> tuple[float, float, float]:

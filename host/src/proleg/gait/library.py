@@ -18,7 +18,7 @@ from typing import Any
 from ..errors import GaitError, RobotFileError
 from ..transitions import TransitionTable
 from .optimal import whole_body_bound
-from .planar import ROTATIONS, PlanarObjective, dtheta_of, optimal_planar_gaits, planar_scores
+from .planar import MAX_PENALTY, ROTATIONS, PlanarObjective, dtheta_of, optimal_planar_gaits, planar_scores
 from .result import Gait, GaitResult
 
 
@@ -120,8 +120,8 @@ SPEC_KEYS = {
     "library": "headings in degrees and/or \"rot-cw\", \"rot-ccw\", e.g. [0, 90, 180, 270, \"rot-cw\"]",
     "objective": "\"total\" or \"rate\"",
     "max_transitions": f"a whole number in 2..{MAX_GAIT_TRANSITIONS}",
-    "variance_weight": "a number >= 0 or [λx, λy, λθ]",
-    "transition_cost": "a number >= 0 (a cost per transition, as --transition-cost)",
+    "variance_weight": f"a number in [0, {MAX_PENALTY:g}] or [λx, λy, λθ]",
+    "transition_cost": f"a number in [0, {MAX_PENALTY:g}] (a cost per transition, as --transition-cost)",
     "rotation_cap_deg": "a number of degrees >= 0",
     "simple_cycles": "true or false",
     "translation_cap": "a number >= 0 (rotation gaits)",
@@ -197,7 +197,7 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
     if isinstance(vw, (int, float)) and not isinstance(vw, bool):
         vw = (float(vw),) * 3
     if not (isinstance(vw, (list, tuple)) and len(vw) == 3 and all(
-            isinstance(w, (int, float)) and not isinstance(w, bool) and math.isfinite(w) and w >= 0 for w in vw)):
+            isinstance(w, (int, float)) and not isinstance(w, bool) and 0 <= w <= MAX_PENALTY for w in vw)):
         raise GaitError(f"variance_weight: expected {SPEC_KEYS['variance_weight']}, got {given!r}")
     objective = options.get("objective", "total")
     if objective not in ("total", "rate"):
@@ -206,11 +206,12 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
     if mt is not None and (not isinstance(mt, int) or isinstance(mt, bool) or not 2 <= mt <= MAX_GAIT_TRANSITIONS):
         raise GaitError(f"max_transitions: expected {SPEC_KEYS['max_transitions']}, got {mt!r}")
 
-    def number(key: str, low: float | None, default: Any) -> Any:
+    def number(key: str, low: float | None, default: Any, high: float = math.inf) -> Any:
         v = options.get(key, default)
         if v is None:
             return None
-        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or (low is not None and v < low):
+        if (not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) or (low is not None and v < low)
+                or v > high):
             raise GaitError(f"{key}: expected {SPEC_KEYS[key]}, got {v!r}")
         return float(v)
 
@@ -218,7 +219,7 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
     if not isinstance(simple, bool):
         raise GaitError(f"simple_cycles: expected true or false, got {simple!r}")
     return LibrarySpec(tuple(parsed), objective, mt, tuple(float(w) for w in vw),  # type: ignore[arg-type]
-                       number("transition_cost", 0.0, 0.0), number("rotation_cap_deg", 0.0, None), simple,
+                       number("transition_cost", 0.0, 0.0, MAX_PENALTY), number("rotation_cap_deg", 0.0, None), simple,
                        number("translation_cap", 0.0, None))
 
 

@@ -40,6 +40,10 @@ from .optimal import TOTAL_DEFAULT_LIMIT_STATES, _check_request, optimal_gaits, 
 from .result import RELATIVE_TOLERANCE, GaitResult
 
 ROTATIONS = ("cw", "ccw")
+#: The largest transition cost κ and variance weight λ (``--transition-cost``, ``--variance-weight``,
+#: ``[gaits]``), the bound of a matrix entry: a gait sums the penalties, and 1e308 overflowed the
+#: sums to −inf (RuntimeWarnings, and "no gait" where 1e300 listed the best one).
+MAX_PENALTY = 1e9
 
 
 @dataclass(frozen=True)
