@@ -43,6 +43,26 @@ def test_flash_dry_run_prints_the_exact_openocd_and_pyocd_commands(capsys, paren
     assert code == 2 and "no flash tool 'stlink'" in one_line(err) and "openocd, pyocd" in err
 
 
+def test_a_dry_run_refuses_what_the_build_would_refuse(capsys, parent, tmp_path):
+    """With -o the dry run never read the robot file: a missing or broken one, or one the board
+    cannot take, printed an avrdude command and exit 0."""
+    out = parent / "fw"
+    code, stdout, err = cli(capsys, "flash", tmp_path / "missing.toml", "--board", "arduino-nano",
+                            "--port", "/dev/ttyUSB0", "--dry-run", "-o", out)
+    assert code == 2 and stdout == "" and "no such robot file" in one_line(err)
+    five = tmp_path / "five-channels.toml"  # an actuator on channel 4: the Nano has 0..3
+    five.write_text(R1.read_text(encoding="utf-8").replace("channel = 1", "channel = 4"), encoding="utf-8")
+    code, stdout, err = cli(capsys, "flash", five, "--board", "arduino-nano", "--port", "/dev/ttyUSB0",
+                            "--dry-run", "-o", out)
+    assert code == 2 and stdout == "" and "board arduino-nano has 4 PWM channels" in one_line(err)
+    fast = tmp_path / "fast.toml"
+    fast.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", "tick_hz = 1500"), encoding="utf-8")
+    code, stdout, err = cli(capsys, "flash", fast, "--board", "arduino-nano", "--port", "/dev/ttyUSB0",
+                            "--dry-run", "-o", out)
+    assert code == 2 and stdout == "" and "control.tick_hz = 1500 is too fast for board arduino-nano" in one_line(err)
+    assert_nothing_left(parent)
+
+
 def test_avrdude_without_a_port_is_a_clear_error(capsys, parent):
     code, _, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--dry-run", "-o", parent / "fw")
     assert code == 2

@@ -320,11 +320,14 @@ def cmd_flash(args: argparse.Namespace) -> int:
 
     board = load_board(args.board)
     method = choose_method(board, args.tool)
-    if args.dry_run:
-        from ..firmware.build import default_out_dir
+    if args.dry_run:  # builds nothing, but names what the build would refuse (the robot file, the board)
+        from ..firmware.build import check_board_takes, check_tick_budget, default_out_dir
         from ..robot import load_robot
 
-        out = Path(args.out) if args.out else default_out_dir(load_robot(args.robot), board)
+        robot = load_robot(args.robot)
+        check_board_takes(robot, board)
+        check_tick_budget(robot, board)
+        out = Path(args.out) if args.out else default_out_dir(robot, board)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
         return 0
     flash_command(method, Path("firmware"), args.port)  # a missing --port fails before building

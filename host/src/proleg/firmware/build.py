@@ -37,7 +37,8 @@ from .fit import Fit, check_fit
 from .gaits import firmware_gaits, gait_warnings
 from .placement import max_tick_hz, place_imus
 
-__all__ = ["MANIFEST", "BuildResult", "build", "check_buildable", "firmware_gaits", "render_project"]
+__all__ = ["MANIFEST", "BuildResult", "build", "check_board_takes", "check_buildable", "firmware_gaits",
+           "render_project"]
 
 MANIFEST = "proleg-build.json"
 #: The core file that holds main() and the tick loop: in the image only when build.main_loop.
@@ -71,6 +72,22 @@ def default_out_dir(robot: Robot, board: Board) -> Path:
 
 
 def check_buildable(robot: Robot, board: Board) -> None:
+    check_board_takes(robot, board)
+    for tool in board.tools():
+        if shutil.which(tool) is None:
+            pkgs = " ".join(board.packages) or "its toolchain"
+            raise BuildError(
+                f"{tool} not found, needed for board {board.name}: install the Debian packages {pkgs} "
+                f"(`make toolchains` does it)"
+            )
+    if shutil.which("make") is None:
+        raise BuildError("make not found: install the Debian package make")
+    check_tick_budget(robot, board)  # last: with enforce = false it only warns
+
+
+def check_board_takes(robot: Robot, board: Board) -> None:
+    """What the board must offer the robot, checked without a toolchain (``flash --dry-run``
+    too): PWM channels, IMU placement and the link's telemetry rate."""
     channels = len(board.pwm_pins)
     for a in robot.actuators:
         if a.channel >= channels:
@@ -85,16 +102,6 @@ def check_buildable(robot: Robot, board: Board) -> None:
             f"{robot.where}: control.telemetry_hz = {robot.control.telemetry_hz} needs more than half of "
             f"board {board.name}'s {board.uart_baud} baud link (at most {link_hz} Hz for {frame}-byte frames)"
         )
-    for tool in board.tools():
-        if shutil.which(tool) is None:
-            pkgs = " ".join(board.packages) or "its toolchain"
-            raise BuildError(
-                f"{tool} not found, needed for board {board.name}: install the Debian packages {pkgs} "
-                f"(`make toolchains` does it)"
-            )
-    if shutil.which("make") is None:
-        raise BuildError("make not found: install the Debian package make")
-    check_tick_budget(robot, board)  # last: with enforce = false it only warns
 
 
 def check_can_link(robot: Robot, board: Board) -> None:
