@@ -179,6 +179,20 @@ def test_generated_files_start_with_a_comment_naming_generator_and_inputs(board)
     assert sha in _header(generated["gen/robot_config.h"]) and sha in _header(generated["gen/gait_table.c"])
 
 
+def test_a_robot_file_in_a_directory_with_a_line_break_leaves_the_makefile_header_a_comment(tmp_path):
+    """The Makefile's header names the robot file; a line break in its path ended the comment,
+    and the rest of the path's line became the first rule: `make` by hand failed."""
+    odd = tmp_path / "lab\nrobots"
+    odd.mkdir()
+    path = odd / "r1.toml"
+    path.write_text(R1.read_text(encoding="utf-8"), encoding="utf-8")
+    robot, b = load_robot(path), load_board("host-sim")
+    makefile = render_project(robot, b, firmware_gaits(robot))["Makefile"]
+    head = makefile[: makefile.index("\n\n")]
+    assert all(line.startswith("#") for line in head.splitlines()), head
+    assert "lab\\nrobots" in head
+
+
 def test_gait_selection_inputs_are_named_in_the_gait_table_header():
     robot, b = load_robot(R1), load_board("host-sim")
     total = render_project(robot, b, firmware_gaits(robot, "total"))["gen/gait_table.c"]

@@ -174,10 +174,17 @@ def render_project(robot: Robot, board: Board, gaits: dict) -> dict[str, str]:
         version=__version__,
         robot=robot,
         board=board,
-        robot_file=display_path(robot.path),
-        board_file=display_path(board.path),
+        robot_file=_make_comment(display_path(robot.path)),
+        board_file=_make_comment(display_path(board.path)),
     )
     return files
+
+
+def _make_comment(text: str) -> str:
+    """A path as the Makefile's header comment shows it: a line break in it (a directory named
+    so) ended the comment, and the rest of the line became the Makefile's first rule, so `make`
+    by hand failed ("No rule to make target 're-run'")."""
+    return text.replace("\n", "\\n").replace("\r", "\\r")
 
 
 def _in_image(board: Board, name: str) -> bool:
