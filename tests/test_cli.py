@@ -259,6 +259,8 @@ def test_sim_reports_a_lost_start_as_an_error_and_exits_1(capsys):
     ("drift@abc", "drift@RATE (per second of on-time): expected a number, got 'abc'"),
     ("dead-actuator:sma-right+1e400", "the time after '+' must be a finite number ≥ 0 s, got '1e400'"),
     ("dead-actuator:sma-right+100", "100 s is after the run ends (--duration 2 s), so it would never be injected"),
+    # a time just past the end was rounded to it: "2 s is after the run ends (--duration 2 s)"
+    ("dead-actuator:sma-right+2.0000001", "2.0000001 s is after the run ends (--duration 2 s)"),
 ])
 def test_an_injection_out_of_its_range_is_refused_before_the_run(capsys, spec, text):
     """A drop probability of 2 used to run and end in 'no reply to START', exit 1."""

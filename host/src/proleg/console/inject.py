@@ -43,8 +43,9 @@ def parse_injection(spec: str, run_s: float | None = None,
     if fault.partition(":")[0] not in FAULTS:
         raise SimError(f"--inject {spec}: unknown fault (expected one of: {', '.join(sorted(FAULTS))})")
     if run_s is not None and t > run_s:
-        raise SimError(f"--inject {spec}: {t:g} s is after the run ends (--duration {run_s:g} s), so it would "
-                       f"never be injected; expected a time in [0, {run_s:g}] s")
+        # .15g, not g: 5.0000001 was shown as "5 s is after the run ends (--duration 5 s)"
+        raise SimError(f"--inject {spec}: {t:.15g} s is after the run ends (--duration {run_s:.15g} s), so it would "
+                       f"never be injected; expected a time in [0, {run_s:.15g}] s")
     return t, fault
 
 
