@@ -76,3 +76,17 @@ def test_on_the_table_plant_a_cycle_far_from_the_matrix_is_remarked_on(cycles, r
     robot = load_robot(ROBOTS / "paper-r1-stroke.toml")  # units = "mm", no noise
     assert check(robot, "table", 12.0, cycles, 2).remark == remark
     assert check(robot, "physical", 12.0, cycles, 2).remark == (None if cycles[0] > 0 else remark)
+
+
+def test_a_promise_under_a_micrometre_kept_exactly_on_the_table_plant_is_no_remark(capsys, tmp_path):
+    """[plant] step_mm = 1e-9 (any step in (0, 1000] is valid): the table plant walked exactly the
+    3e-9 mm a cycle the matrix promises, and the run was remarked on as "did not move"."""
+    tiny = tmp_path / "tiny.toml"
+    tiny.write_text((ROBOTS / "paper-r1.toml").read_text(encoding="utf-8") + "\n[plant]\nstep_mm = 1e-9\n",
+                    encoding="utf-8")
+    rc, report = run_json(capsys, str(tiny), "--plant", "table", "--duration", "10")
+    c = report["matrix_check"]
+    assert rc == 0 and report["mean_cycle_mm"] == pytest.approx(c["promised_mm"], rel=1e-6)
+    assert c["agrees"] and c["remark"] is None
+    robot = load_robot(tiny)
+    assert check(robot, "table", 3.0, [1e-15, -1e-15]).remark == "did not move"  # still still

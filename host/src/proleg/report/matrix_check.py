@@ -18,7 +18,8 @@ from typing import Any
 
 from ..robot_transitions import UNIT_MM
 
-#: below this much per cycle (mm) a run "does not move", whatever the matrix's units
+#: below this much per cycle (mm) a run "does not move", whatever the matrix's units (a promise of
+#: less than this in mm: below SHORT_SHARE of it)
 STILL_MM = 1e-3
 #: a run in a length unit that makes less than this share of the promised length per cycle
 SHORT_SHARE = 0.1
@@ -53,8 +54,11 @@ def check(robot: Any, plant: str, promised: float, cycles_mm: list[float], steps
         per_mm = robot.plant.step_mm if plant == "table" else None
     promised_mm = promised * per_mm if per_mm is not None else None
     walked = sum(cycles_mm) / len(cycles_mm)
+    # a promise of under STILL_MM a cycle (step_mm = 1e-9 on the table plant) is kept by moving
+    # less than that: "still" is then what "short" is, a share of the promise
+    still = min(STILL_MM, SHORT_SHARE * abs(promised_mm)) if promised_mm else STILL_MM
     remark = None
-    if abs(walked) < STILL_MM:
+    if abs(walked) < still:
         remark = "did not move"
     elif promised * walked < 0:
         remark = "walked the other way"
