@@ -190,7 +190,8 @@ def test_a_log_recorded_for_one_robot_is_refused_for_another(capsys, tmp_path):
     log = tmp_path / "r1.jsonl"
     code, _, _ = run(capsys, "learn", str(ROOT / "robots" / "paper-r1.toml"), "--sim", "--log", str(log),
                      "--repeats", "1", "--report")
-    assert code == 0 and json.loads(log.read_text().splitlines()[0]) == {"trial_log": 1, "robot": "paper-r1"}
+    assert code == 0 and json.loads(log.read_text().splitlines()[0]) == {"trial_log": 1, "robot": "paper-r1",
+                                                                         "levels": [2, 2]}
     before = log.read_bytes()
     code, _, err = run(capsys, "learn", str(ROOT / "robots" / "paper-r2.toml"), "--log", str(log), "--report")
     assert code == 2 and "a trial log of paper-r1, not of paper-r2" in err
@@ -201,6 +202,29 @@ def test_a_log_recorded_for_one_robot_is_refused_for_another(capsys, tmp_path):
     headless.write_text("\n".join(log.read_text().splitlines()[1:]) + "\n")
     code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--log", str(headless), "--report")
     assert code == 2 and "old.jsonl:1: from: state '00' is not one of the robot's" in err
+
+
+def test_a_log_of_the_robot_before_a_limb_got_another_level_is_refused_not_mixed_in(capsys, tmp_path):
+    """The log named only the robot: R1's right limb given a third level kept every label of its
+    log ('01' now the middle level, not the top) and its trials were counted for the new states."""
+    log = tmp_path / "r1.jsonl"
+    code, _, _ = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1", "--report")
+    assert code == 0
+    three = tmp_path / "paper-r1.toml"  # the same robot name, the right limb with three levels
+    text = R1.read_text(encoding="utf-8")
+    head, _, _ = text.partition("[transitions]")
+    head = head.replace('name = "right"\npsi_star_deg = [20.0]', 'name = "right"\nlevels = 3\npsi_star_deg = [10.0, 25.0]')
+    three.write_text(head + '[transitions]\nfile = "t.csv"\n', encoding="utf-8")
+    (tmp_path / "t.csv").write_text("from,to,reward\n00,01,1\n01,00,-1\n00,10,1\n10,00,-1\n", encoding="utf-8")
+    before = log.read_bytes()
+    for extra in (("--report",), ("--sim", "--repeats", "1")):
+        code, _, err = run(capsys, "learn", str(three), "--log", str(log), *extra)
+        assert code == 2 and "a trial log of paper-r1 with limb levels 2,2, but the robot file has 2,3" in err, err
+    assert log.read_bytes() == before
+    old = tmp_path / "old.jsonl"  # a log written before the first line kept the levels: read as before
+    old.write_text('{"trial_log": 1, "robot": "paper-r1"}\n' + "\n".join(before.decode().splitlines()[1:]) + "\n")
+    code, _, err = run(capsys, "learn", str(R1), "--log", str(old), "--report")
+    assert code == 0, err
 
 
 def test_a_trial_of_a_transition_the_robot_does_not_have_is_an_error_not_dropped(tmp_path, capsys):

@@ -229,7 +229,8 @@ def _open_log(args: argparse.Namespace, robot, linked: bool):
                                  "(--port, --can or --sim) to record one)")
             t = robot.transitions
             trial_log = TrialLog(args.log, append=linked, robot=robot.name,  # a report only reads
-                                 states=t.labels(), transitions=zip(map(t.label, t.src), map(t.label, t.dst)))
+                                 states=t.labels(), transitions=zip(map(t.label, t.src), map(t.label, t.dst)),
+                                 levels=[lb.levels for lb in robot.limbs])
     except TrialLogError as e:
         raise LearnError(f"learn: {e}") from None
     except OSError as e:  # exploring writes the log (exit 1, as any output); a report only reads it (exit 2)

@@ -30,9 +30,10 @@ import json
 import math
 import os
 import warnings
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -133,7 +134,8 @@ class TrialLog:
     """An append-only JSONL trial log (see the module docstring)."""
 
     def __init__(self, path: str | Path, *, append: bool = True, robot: str | None = None,
-                 states: Iterable[str] | None = None, transitions: Iterable[tuple[str, str]] | None = None):
+                 states: Iterable[str] | None = None, transitions: Iterable[tuple[str, str]] | None = None,
+                 levels: Sequence[int] | None = None):
         """``append=False`` only reads: the file is never opened for writing, created or
         shortened (a torn last line is skipped, with the same warning).
 
@@ -142,7 +144,10 @@ class TrialLog:
         error, and a new log starts with that line. ``states``: every record's from/to must
         be one of them (a log of another robot, or not a trial log, is an error naming the
         line). ``transitions``: the (from, to) pairs a record may have (the robot's allowed
-        transitions); any other is an error naming the line."""
+        transitions); any other is an error naming the line. ``levels``: each limb's levels, kept
+        in a new log's first line; a log whose first line gives others is an error (its labels
+        name other states: a limb given a third level keeps ``001`` a label, but of another
+        state, and its trials were mixed in without a word)."""
         self.path = Path(path)
         self.trials: list[Trial] = []
         self.robot: str | None = None
@@ -153,18 +158,21 @@ class TrialLog:
         if self.path.exists():
             if not self.path.is_file():  # a device read to its end never ends (/dev/zero)
                 raise OSError(errno.EINVAL, "not a regular file (a device, pipe or socket)", str(self.path))
-            self._read(append, robot)
+            self._read(append, robot, levels)
         if not append:
             return
         self._fh = open(self.path, "r+b" if self.path.exists() else "wb")
         self._fh.truncate(self._good_bytes)  # drop a torn last line
         self._fh.seek(self._good_bytes)
         if self._good_bytes == 0 and robot is not None:  # a new (or empty) log: say whose it is
-            self._fh.write(json.dumps({"trial_log": 1, "robot": robot}, ensure_ascii=False).encode("utf-8") + b"\n")
+            head: dict[str, Any] = {"trial_log": 1, "robot": robot}
+            if levels is not None:
+                head["levels"] = [int(k) for k in levels]
+            self._fh.write(json.dumps(head, ensure_ascii=False).encode("utf-8") + b"\n")
             self._fh.flush()
             self.robot = robot
 
-    def _read(self, append: bool, robot: str | None) -> None:
+    def _read(self, append: bool, robot: str | None, levels: Sequence[int] | None) -> None:
         data = self.path.read_bytes()
         pos = len(_BOM) if data.startswith(_BOM) else 0  # a log saved by Notepad starts with one
         lines = data[pos:].split(b"\n")
@@ -177,9 +185,15 @@ class TrialLog:
                     self._good_bytes = pos
                 continue
             if k == 0 and not self.trials and (header := _header(raw, where)) is not None:
-                if robot is not None and header != robot:
-                    raise TrialLogError(f"{self.path}: a trial log of {header}, not of {robot} (its first line says so)")
-                self.robot = header
+                name, logged = header
+                if robot is not None and name != robot:
+                    raise TrialLogError(f"{self.path}: a trial log of {name}, not of {robot} (its first line says so)")
+                if levels is not None and logged is not None and list(logged) != list(levels):
+                    raise TrialLogError(
+                        f"{self.path}: a trial log of {name} with limb levels {','.join(map(str, logged))}, but the "
+                        f"robot file has {','.join(map(str, levels))} (its first line says so): its state labels "
+                        "name other states; start a new log")
+                self.robot = name
                 pos += len(raw) + (0 if last else 1)
                 self._good_bytes = pos if not last else 0
                 continue
@@ -245,9 +259,10 @@ def _text(raw: bytes, where: str) -> str:
         raise TrialLogError(f"{where}: expected UTF-8 text, got byte {raw[e.start]:#04x} at column {e.start + 1}") from None
 
 
-def _header(raw: bytes, where: str) -> str | None:
-    """The robot a log's first line names (``{"trial_log": 1, "robot": …}``), or None when
-    the line is no header; ``TrialLogError`` for a header of another format version."""
+def _header(raw: bytes, where: str) -> tuple[str, list[int] | None] | None:
+    """The robot a log's first line names (``{"trial_log": 1, "robot": …, "levels": […]}``) and
+    its limbs' levels (None in a log written before they were kept), or None when the line is
+    no header; ``TrialLogError`` for a header of another format version."""
     try:
         d = json.loads(raw.decode("utf-8"))
     except (ValueError, UnicodeDecodeError):
@@ -259,7 +274,11 @@ def _header(raw: bytes, where: str) -> str | None:
         raise TrialLogError(f"{where}: trial_log: expected 1 (the format this proleg reads), got {version!r}")
     if not isinstance(d.get("robot"), str):
         raise TrialLogError(f"{where}: robot: expected the robot's name, got {d.get('robot')!r}")
-    return d["robot"]
+    levels = d.get("levels")
+    if levels is not None and not (isinstance(levels, list) and all(
+            isinstance(k, int) and not isinstance(k, bool) and k >= 2 for k in levels)):
+        raise TrialLogError(f"{where}: levels: expected each limb's levels, whole numbers ≥ 2, got {levels!r}")
+    return d["robot"], levels
 
 
 def counts(table: TransitionTable, trials: Iterable[Trial]) -> np.ndarray:
