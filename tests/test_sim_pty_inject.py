@@ -72,3 +72,20 @@ def test_output_nobody_reads_is_dropped_beyond_a_small_backlog():
         for _ in range(200):  # 200 × 4 KiB, nobody reading: the pty fills, then the server holds the rest
             pending = server._write(pending + bytes(4096))
         assert server.bytes_dropped > 0 and len(pending) <= BACKLOG_BYTES <= 4096
+
+
+def test_a_speed_faster_than_the_machine_still_serves_the_pty_and_stops_when_asked():
+    """The server caught up on speed × wall time before serving again: at 1e9 × it never came
+    back (0.0 s simulated, not a byte served, Ctrl-C's stop never looked at)."""
+    import threading
+    import time
+
+    sim = open_simulated(load_robot(R1), "host-sim")
+    with PtyServer(sim, speed=1e9, say=lambda _: None) as server:
+        start = time.monotonic()
+        runner = threading.Thread(target=server.serve, kwargs={"should_stop": lambda: time.monotonic() - start > 1.0},
+                                  daemon=True)
+        runner.start()
+        runner.join(timeout=10.0)
+        assert not runner.is_alive(), "still serving 10 s after it was asked to stop at 1 s"
+        assert server.elapsed_s > 0 and server.bytes_out > 0  # telemetry went out on the pty

@@ -2,8 +2,8 @@
 
 Any serial tool, or ``proleg console --port /dev/pts/N``, then talks to the simulated
 board as to a real one on a USB serial port. The simulation is paced to the wall
-clock (``speed`` times real time); bytes the host does not read are dropped once the
-pty's buffer is full, like a UART whose cable nobody listens to, and counted.
+clock (``speed`` times real time, or as fast as it can go); bytes the host does not read are
+dropped once the pty's buffer is full, like a UART whose cable nobody listens to, and counted.
 """
 
 from __future__ import annotations
@@ -24,6 +24,11 @@ from .closed_loop import SimulatedRobot
 #: 50 Hz, which a client that connected later took for its own session (proleg run --port
 #: counted 624 frames for a 1 s run, the first ones 11 s before its START).
 BACKLOG_BYTES = 1024
+#: Wall time the server steps the simulation before it serves the pty again. Catching up on
+#: all of ``speed`` × the wall time at once never ended at a speed faster than the machine can
+#: simulate: at ``--speed 1e9`` not one byte was served (and 0.0 s simulated), at 10000 fewer
+#: seconds than at 100. Past what it can do, the simulation runs late instead.
+CATCH_UP_SLICE_S = 0.02
 
 
 class PtyServer:
@@ -86,8 +91,9 @@ class PtyServer:
                 if data:
                     self.bytes_in += len(data)
                     sim.write(data)
-            target = (time.monotonic() - wall0) * self.speed
-            while sim.time_s - sim0 < target:
+            now = time.monotonic()
+            target, slice_end = (now - wall0) * self.speed, now + CATCH_UP_SLICE_S
+            while sim.time_s - sim0 < target and time.monotonic() < slice_end:
                 sim.step()
                 while self.due and sim.time_s - t0 >= self.due[0][0]:
                     at, fault = self.due.pop(0)
