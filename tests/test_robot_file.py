@@ -325,6 +325,19 @@ def test_missing_file():
         load_robot("/nonexistent/robot.toml")
 
 
+@pytest.mark.parametrize("arg, hint", [
+    ("Paper-R1", "Paper-R1: no such robot file (nor a bundled robot: did you mean paper-r1? `proleg robots` lists them)"),
+    ("zzz-robot", "zzz-robot: no such robot file (nor a bundled robot: `proleg robots` lists them)"),
+    ("/nonexistent/paper-r1", "/nonexistent/paper-r1: no such robot file"),
+])
+def test_a_name_that_is_no_bundled_robot_points_to_the_closest_and_to_proleg_robots(capsys, arg, hint):
+    """A user typing a bundled robot's name with the wrong case was told only that no such file exists."""
+    from proleg.cli import main
+
+    assert main(["gait", arg]) == 2
+    assert capsys.readouterr().err == f"proleg: error: {hint}\n"
+
+
 def test_durations_and_speed_data(tmp_path):
     d = "durations_s = [[0, 1.5, 1.0, 2], [1, 0, 2, 1], [1, 1, 0, 1], [2, 2, 2, 0]]"
     r = load_robot(write(tmp_path, R1.replace("[transitions]", "[transitions]\n" + d)))

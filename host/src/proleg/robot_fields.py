@@ -90,10 +90,21 @@ def read_text(path: Path, limit: int, what: str) -> str:
         if len(data) > limit:
             raise RobotFileError(f"{path}: {what} larger than {limit:,} bytes")
     except FileNotFoundError:
-        raise RobotFileError(f"{path}: no such {what}") from None
+        raise RobotFileError(f"{path}: no such {what}{_bundled_hint(path) if what == 'robot file' else ''}") from None
     except OSError as e:
         raise RobotFileError(f"{path}: cannot read: {e.strerror or e}") from None
     return decode_utf8(data, path)
+
+
+def _bundled_hint(path: Path) -> str:
+    """For a bare name that is no bundled robot: the closest bundled name, and where they are listed."""
+    from .paths import bundled_robots
+
+    if path.suffix or len(path.parts) != 1:
+        return ""
+    close = difflib.get_close_matches(path.name.lower(), bundled_robots(), n=1, cutoff=0.6)
+    like = f" did you mean {close[0]}?" if close else ""
+    return f" (nor a bundled robot:{like} `proleg robots` lists them)"
 
 
 def decode_utf8(data: bytes, path: Path) -> str:
