@@ -127,6 +127,14 @@ void drive_apply(void)
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
         sma_request(i, duty[i]);
     }
+#if CFG_FALLBACK_KEEPS_LOST
+    /* safety: a coil the fallback gave up is not heated until the operator takes it back
+     * (limbmap.h; LIMBMAP_NONE is no actuator: sma_request ignores it). A fallback that leaves
+     * a limb on its lost coil ("dead": inchworm-3, caterpillar-4, planar-4) keeps it in the
+     * map, and a gait the host loaded after the fallback that raised that limb heated the
+     * given-up coil again, up to the state timeout, with no operator's word. */
+    sma_request(limbmap_lost(), 0);
+#endif
     hits = sma_tick((uint8_t)!demanding); /* holding a reached target, or not running (all off) */
     if (sma_take_clamped()) {
         telemetry_note_clamped();

@@ -11,6 +11,8 @@
  * suspected, or has been mended. START used to go back to the build's map by itself: a host
  * restarting gait 0 every few seconds heated a dead coil up to the state timeout at every
  * START, 58-73 % of the time, each fault ending in another fallback instead of a latch.
+ * A fallback that leaves a limb on its lost coil keeps that coil in the map: drive.c holds a
+ * given-up coil off in such builds (CFG_FALLBACK_KEEPS_LOST).
  */
 #ifndef PROLEG_LIMBMAP_H
 #define PROLEG_LIMBMAP_H
