@@ -334,6 +334,34 @@ def test_restarting_gait_0_past_a_dead_coil_still_latches_a_fault(rig, stopped_t
     assert [m.code for m in rig.events(EventKind.SUSPECT)][:1] == [1]  # sma-right, not the healthy coil
 
 
+@pytest.mark.parametrize("run_ms", [3000, 4000, 7000])
+def test_restarting_with_hold_ms_0_does_not_credit_a_dead_coil_with_the_start_state(rig, run_ms):
+    """With SET_PARAM hold_ms 0 a START that finds the robot in its gait's state (00: rest)
+    reaches it and moves on to 10 in the same tick, and the controller heats towards 10 in that
+    tick. The step guard took that tick's heating as heating on the way to the state reached, so
+    every START credited the dead coil with progress: its own time and its on-limit hits started
+    again. Restarted every 3 s, R1's dead right coil was above the hold ceiling 77 s of 120 s with
+    no latched fault (every 4-7 s: 14-20 s before the first latch). Now only heating in the
+    intervals before a reach counts for it; the coil's time latches STATE_TIMEOUT as with the
+    default hold_ms."""
+    rig.reset()
+    rig.kill("sma-right")  # Rig.kill: at most state_timeout_ms above the hold ceiling between latches
+    rig.ticks(300)
+    assert rig.reply(rig.send("SET_PARAM", param=int(ParamId.HOLD_MS), index=0, value=0)).spec.name == "ACK"
+    heated = 0
+    for _ in range(60_000 // run_ms):
+        rig.send("START", gait=0, direction=0)
+        for _ in range(run_ms // 250):
+            for _ in range(250):
+                rig.ticks(1)
+                heated += rig.sim.board.pwm_permyriad(1) > rig.env.hold_max_pm
+            rig.send("PING")
+        rig.send("STOP")
+        rig.ticks(1)
+    assert any(m.code == StopReason.FAULT for m in rig.events(EventKind.GAIT_STOPPED)), "no latched fault"
+    assert heated * rig.env.tick_us <= rig.timeout_us + 2 * rig.env.tick_us, heated
+
+
 class _DeadRightCoil:
     """R1 on a fresh rig with its right coil dead (the plant's ``dead-actuator``), its time
     above the hold ceiling counted here until a fault latches (``heated_us``), not bounded per

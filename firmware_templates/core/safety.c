@@ -60,7 +60,6 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
     uint8_t i, was = demanded ? heating : 0u, made = 0;
     demanded = demanding;
     heating = sma_take_heated();
-    progressed |= heating;
     if (reached) {
         /* A coil that hit and has since heated on the way to this target made progress;
          * reaching what the other coils make is none for it (safety.h). The step's time
@@ -73,6 +72,11 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
         progressed = 0;
         unreached_us = 0;
     }
+    /* only now: what sma_tick just decided heats from this tick on, after this tick's reach. A
+     * START that found its target reached and moved on in one tick (hold_ms 0) heated a dead
+     * coil in that tick towards the next target, which counted as progress to the reached one:
+     * restarted every 3 s, R1's dead right coil was heated 77 s of 120 s, no fault latched. */
+    progressed |= heating;
     hit_mask |= hits;
     suspect = GUARD_NO_SUSPECT; /* a latch always comes with a hit in this tick: never its act */
     for (i = 0; i < CFG_N_ACTUATORS; i++, was >>= 1, made >>= 1, hits >>= 1) {

@@ -166,12 +166,49 @@ static void test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_
     raised = 0; /* a coil that hits is cut, not heated */
     CHECK_EQ(tick(1, 0, 0x03), GUARD_OK); /* both coils hit */
     CHECK_EQ(guard_hits(), 2);
-    raised = 0x01u;
+    raised = 0x01u; /* actuator 0 heats, then its target is reached */
+    CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    raised = 0;
     CHECK_EQ(tick(1, 1, 0), GUARD_OK);
     CHECK_EQ(guard_hits(), 2); /* actuator 1 has not heated on the way to a target since */
     raised = 0x02u;
+    CHECK_EQ(tick(1, 0, 0), GUARD_OK);
+    raised = 0;
     CHECK_EQ(tick(1, 1, 0), GUARD_OK);
     CHECK_EQ(guard_hits(), 0);
+}
+
+/* What sma_tick decides in the tick of a reach heats after it (towards the next target, when
+ * the step moved on at once: hold_ms 0): no progress to the target reached. Every START of R1's
+ * gait with hold_ms 0 reached its rest state and heated the dead coil towards 10 in one tick, and
+ * the coil's time and hits started again at every START (77 s of 120 s heated, no fault). */
+static void test_heating_decided_in_the_tick_of_a_reach_is_no_progress_to_it(void)
+{
+    uint32_t k, run = 0;
+    setup(0);
+    raised = 0;
+    CHECK_EQ(tick(1, 0, 0x02), GUARD_OK); /* the dead coil hit once */
+    while (run < 10u) {
+        raised = 0x02u; /* START: the state it stands in reached, the dead coil heats from this tick */
+        guard_started();
+        if (tick(1, 1, 0) != GUARD_OK) {
+            break;
+        }
+        for (k = 0; k < 150u; k++) {
+            if (tick(1, 0, 0) == GUARD_TIMEOUT) {
+                break;
+            }
+        }
+        if (k < 150u) {
+            break;
+        }
+        raised = 0; /* STOP */
+        CHECK_EQ(tick(0, 0, 0), GUARD_OK);
+        run++;
+    }
+    CHECK_EQ(run, 1u); /* 150 ms a run, 200 ms the timeout: the second run */
+    CHECK_EQ(guard_suspect(), 1);
+    CHECK_EQ(guard_hits(), 1); /* its hit still counts */
 }
 
 static void test_the_operator_acknowledging_a_fault_restarts_the_step_time(void)
@@ -335,6 +372,7 @@ int main(void)
     RUN(test_hits_latch_when_only_other_coils_lift_their_limbs_in_between);
     RUN(test_with_no_time_without_progress_the_latch_names_the_coil_that_hit);
     RUN(test_hits_reset_once_every_coil_that_hit_has_heated_on_the_way_to_a_target);
+    RUN(test_heating_decided_in_the_tick_of_a_reach_is_no_progress_to_it);
     RUN(test_the_operator_acknowledging_a_fault_restarts_the_step_time);
     RUN(test_a_narrowed_timeout_applies_and_a_wider_one_counts_as_the_build_value);
     RUN(test_a_coil_that_heats_across_restarts_and_never_progresses_times_out);
