@@ -68,3 +68,30 @@ def test_odd_bounds_leave_a_remainder_and_the_oracle_agrees():
     result = optimal_gaits(t, "total", "+x", 5)
     assert (result.value, result.gaits[0].states, result.gaits[0].repeats) == (6.0, (0, 1, 0), 2)
     assert brute_force_gaits(t, "total", "+x", 5) == (6.0, {(0, 1, 0)})
+
+
+def test_a_search_still_running_after_slow_s_says_so_once():
+    """A 625-state robot searched 12 minutes without a word (it looked hung); now the search
+    says, once, what it is doing and what makes it faster. The answer is unchanged."""
+    import logging
+
+    import proleg.gait.total as total
+
+    said: list[str] = []
+    handler = logging.Handler()
+    handler.emit = lambda record: said.append(record.getMessage())  # type: ignore[method-assign]
+    logger = logging.getLogger(total.__name__)  # the CLI's "proleg" logger may not propagate: listen here
+    logger.addHandler(handler)
+    try:
+        n = 16
+        t = TransitionTable.from_dense((n,), np.ones((n, n)))
+        quick = optimal_gaits(t, "total", "+x", max_transitions=8)
+        assert said == []
+        with mock.patch.object(total, "SLOW_S", 0.0):
+            slow = optimal_gaits(t, "total", "+x", max_transitions=8)
+    finally:
+        logger.removeHandler(handler)
+    assert said == ["gait search: 16 states, 240 allowed transitions, gaits of up to 8 transitions: still "
+                    "searching (the search grows with the gait length: a smaller --max-transitions or [gaits] "
+                    "max_transitions is faster)"]
+    assert (slow.value, slow.gaits) == (quick.value, quick.gaits)

@@ -24,6 +24,8 @@ repeats a shorter walk is not a separate gait: ``(10 11)^2`` is the gait ``10 11
 
 from __future__ import annotations
 
+import logging
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -31,6 +33,11 @@ import numpy as np
 
 from .evaluate import canonical_rotation, is_primitive
 from .maxplus import ClosingBound, Graph
+
+log = logging.getLogger(__name__)
+
+#: A search still running after this long says so, once (it may take minutes on a large robot).
+SLOW_S = 10.0
 
 #: Frontier rows expanded at once (times the largest out-degree).
 _EXPAND = 1 << 18
@@ -85,14 +92,30 @@ def best_total_walks(
         return TotalResult(None, [], False)
     bound = ClosingBound(g, K)
     slack = 1e-12 * (float(np.abs(g.weight).max()) + 1.0) * K
-    best = _best_value(g, bound, K, tol, slack)
+    slow = _SlowNotice(f"gait search: {n} states, {len(g.src)} allowed transitions, gaits of up to {K} "
+                       "transitions: still searching (the search grows with the gait length: a smaller "
+                       "--max-transitions or [gaits] max_transitions is faster)")
+    best = _best_value(g, bound, K, tol, slack, slow)
     if best is None:
         return TotalResult(None, [], False)
-    ties, truncated = _ties(g, bound, K, best, tol, slack, limit, max_states)
+    ties, truncated = _ties(g, bound, K, best, tol, slack, limit, max_states, slow)
     return TotalResult(best, ties, truncated)
 
 
-def _best_value(g: Graph, bound: ClosingBound, K: int, tol: float, slack: float) -> float | None:
+class _SlowNotice:
+    """Logs ``text`` once, at the first ``check`` SLOW_S seconds or more after it was made."""
+
+    def __init__(self, text: str):
+        self.text, self.t0, self.said = text, time.monotonic(), False
+
+    def check(self) -> None:
+        if not self.said and time.monotonic() - self.t0 >= SLOW_S:
+            self.said = True
+            log.warning(self.text)
+
+
+def _best_value(g: Graph, bound: ClosingBound, K: int, tol: float, slack: float,
+                slow: _SlowNotice | None = None) -> float | None:
     """The optimum: exact from the powers' diagonals, else by branch-and-bound."""
     per_length = [bound.closed_walk_bound(r) for r in range(2, K + 1)]
     top = max(per_length)
@@ -113,7 +136,7 @@ def _best_value(g: Graph, bound: ClosingBound, K: int, tol: float, slack: float)
             if per_length[L - 2] < threshold.value - slack:
                 threshold.cut(np.array([per_length[L - 2]]))
                 continue
-            for _, weights in _closed_walks(g, bound, L, threshold, slack, raise_threshold=True):
+            for _, weights in _closed_walks(g, bound, L, threshold, slack, raise_threshold=True, slow=slow):
                 found = max(found or -np.inf, float(weights.max()))
         if found is not None and found > tol:
             return found
@@ -132,7 +155,8 @@ def _rank_lengths(K: int) -> list[int]:
 
 
 def _ties(
-    g: Graph, bound: ClosingBound, K: int, best: float, tol: float, slack: float, limit: int, max_states: int
+    g: Graph, bound: ClosingBound, K: int, best: float, tol: float, slack: float, limit: int, max_states: int,
+    slow: _SlowNotice | None = None,
 ) -> tuple[list[tuple[tuple[int, ...], int]], bool]:
     out: list[tuple[tuple[int, ...], int]] = []
     listed_states = 0
@@ -140,7 +164,7 @@ def _ties(
         k = K // L
         threshold = _Threshold((best - tol) / k)
         found: list[tuple[tuple[int, ...], float]] = []
-        for walks, weights in _closed_walks(g, bound, L, threshold, slack, raise_threshold=False):
+        for walks, weights in _closed_walks(g, bound, L, threshold, slack, raise_threshold=False, slow=slow):
             for row, j in zip(walks.tolist(), weights.tolist()):
                 cyc = tuple(row)
                 if is_primitive(cyc) and canonical_rotation(cyc) == cyc:
@@ -156,14 +180,18 @@ def _ties(
 
 
 def _closed_walks(
-    g: Graph, bound: ClosingBound, L: int, threshold: _Threshold, slack: float, *, raise_threshold: bool
+    g: Graph, bound: ClosingBound, L: int, threshold: _Threshold, slack: float, *, raise_threshold: bool,
+    slow: _SlowNotice | None = None,
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """Closed walks of exactly L transitions worth ≥ threshold, from every start s over
-    states ≥ s, depth first in blocks: yields (walks [k, L] as open cycles, weights [k])."""
+    states ≥ s, depth first in blocks: yields (walks [k, L] as open cycles, weights [k]).
+    ``slow``: told of every block (a search still running after SLOW_S says so)."""
     starts = np.flatnonzero(np.diff(g.ptr) > 0)
     chunk = max(1, _EXPAND // max(1, int(np.diff(g.ptr).max())))
     stack: list[tuple[np.ndarray, np.ndarray]] = [(starts[:, None], np.zeros(len(starts)))]
     while stack:
+        if slow is not None:
+            slow.check()
         paths, reward = stack.pop()
         if len(paths) > chunk:
             stack.append((paths[chunk:], reward[chunk:]))
