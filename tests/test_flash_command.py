@@ -63,6 +63,17 @@ def test_a_dry_run_refuses_what_the_build_would_refuse(capsys, parent, tmp_path)
     assert_nothing_left(parent)
 
 
+def test_a_dry_run_refuses_a_tick_rate_the_imus_i2c_reads_do_not_fit(capsys, parent, tmp_path):
+    """R1 at 3000 Hz passes the bluepill's [budget] (6666 Hz) but not its I2C reads (at most
+    1785 Hz), which the build refuses before compiling (check_fit): the dry run said exit 0."""
+    fast = tmp_path / "fast.toml"
+    fast.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", "tick_hz = 3000"), encoding="utf-8")
+    code, stdout, err = cli(capsys, "flash", fast, "--board", "bluepill-f103", "--port", "/dev/ttyUSB0",
+                            "--dry-run", "-o", parent / "fw")
+    assert code == 2 and stdout == "" and "set control.tick_hz to at most 1785" in one_line(err)
+    assert_nothing_left(parent)
+
+
 def test_avrdude_without_a_port_is_a_clear_error(capsys, parent):
     code, _, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--dry-run", "-o", parent / "fw")
     assert code == 2

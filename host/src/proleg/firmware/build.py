@@ -104,6 +104,15 @@ def check_board_takes(robot: Robot, board: Board) -> None:
         )
 
 
+def check_i2c_ticks(robot: Robot, board: Board) -> None:
+    """The IMUs' I2C reads must fit each tick, as ``check_fit`` checks in a build: ``flash
+    --dry-run`` printed a command and exit 0 for R1 at 3000 Hz on the bluepill, which the
+    build refuses (420 us of I2C in a 333 us tick). After ``check_tick_budget``, as in a build."""
+    from .placement import check_tick_budget as check_i2c
+
+    check_i2c(robot, board.name, place_imus(robot, board), int((board.i2c or {}).get("hz", DEFAULT_I2C_HZ)))
+
+
 def check_can_link(robot: Robot, board: Board) -> None:
     """On a CAN link, telemetry may use at most half the bus (worst-case stuffed frames)."""
     from .can_config import FRAME_BITS, telemetry_frames
