@@ -511,6 +511,17 @@ def test_console_refuses_an_injection_after_its_duration(capsys):
     assert code == 2 and "5 s is after the run ends (--duration 2 s)" in err, err
 
 
+def test_console_reads_a_limb_named_leg_plus_2_whole_whatever_its_duration(capsys, tmp_path):
+    """The console parsed --inject once without the robot's names before opening the simulator:
+    with --duration 1, `dead-actuator:leg+2` (a limb called leg+2) was refused as '2 s is after
+    the run ends', where proleg sim injects it at once."""
+    robot = tmp_path / "plus.toml"
+    robot.write_text((ROBOTS / "paper-r1.toml").read_text().replace('name = "left"', 'name = "leg+2"'))
+    code, _, err = run(capsys, "console", "--sim", str(robot), "--plain", "--duration", "1", "--inject",
+                       "dead-actuator:leg+2")
+    assert code == 0 and "injected dead-actuator:leg+2 at 0.0 s" in err, err
+
+
 def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(capsys):
     """The board would answer FORBIDDEN_TRANSITION (detail 0), exit 1; the host knows which."""
     code, out, err = run(capsys, "load-gait", "--sim", "paper-r1-one-actuator", "00,10,11,01")

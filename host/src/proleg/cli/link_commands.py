@@ -54,7 +54,12 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         check_suffix(record)  # reject an unknown extension before opening anything
     if udp is not None:
         parse_endpoint(udp)
-    timed = [parse_injection(spec, duration_s) for spec in inject]  # a mistake fails before anything is opened
+    try:
+        timed = [parse_injection(spec, duration_s) for spec in inject]  # a mistake fails before anything is opened
+    except SimError:
+        # unless the spec names a limb or coil whole ("dead-actuator:leg+2" with --duration 1 was refused
+        # as "2 s is after the run ends"): parsed again below with the simulated robot's names
+        timed = [(0.0, spec) for spec in inject]
     out = out or sys.stdout
     err = err or sys.stderr
     robot = None
