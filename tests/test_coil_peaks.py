@@ -98,3 +98,19 @@ def test_the_console_shows_a_simulated_coils_temperature_beside_its_duty():
     shown = [float(line.split()[-3]) for line in lines]
     assert all(abs(s - t) < 10.0 for s, t in zip(shown, seen["temps"])), (shown, seen["temps"])
     assert max(shown) > 40.0  # heated: the gait's first rise is under way by 3 s
+
+
+def test_the_coil_temperatures_are_truth_over_the_simulated_can_link_as_over_uart():
+    """hil tests --link can (sim_can_link) read the truth through a hop with the plant and not
+    the robot: it had displacement_mm and no temp_<actuator>_c."""
+    from proleg.link.sim_can_link import sim_can_link
+    from proleg.sim.simulators import open_simulated
+
+    robot = load_robot(R1)
+    link = sim_can_link(open_simulated(robot, "host-sim", link="can", seed=2))
+    try:
+        truth = link.truth()
+    finally:
+        link.close()
+    assert sorted(truth) == ["displacement_mm", "temp_sma_left_c", "temp_sma_right_c"]
+    assert truth["temp_sma_left_c"] == pytest.approx(25.0)  # the plant's ambient, before anything heats

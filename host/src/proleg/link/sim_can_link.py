@@ -37,6 +37,12 @@ class _CanHop:
         return getattr(self.port.sim, "plant", None)
 
     @property
+    def robot(self) -> Any:
+        """The simulated robot's description: ``SimLink.truth`` names each coil's temperature by
+        it (over CAN the truth had ``displacement_mm`` and no ``temp_<actuator>_c``, unlike UART)."""
+        return getattr(self.port.sim, "robot", None)
+
+    @property
     def displacement_mm(self) -> Any:
         return getattr(self.port.sim, "displacement_mm", None)
 
