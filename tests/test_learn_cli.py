@@ -317,9 +317,10 @@ def test_a_log_that_is_a_device_is_refused_before_it_is_read(tmp_path, capsys):
     assert err == f"proleg: error: learn: cannot read trial log {log}: not a regular file (a device, pipe or socket)\n"
 
 
-@pytest.mark.parametrize("value", ["nan", "-1", "inf"])
+@pytest.mark.parametrize("value", ["nan", "-1", "inf", "1e308"])
 def test_learn_variance_weight_is_checked_as_gait_checks_it(tmp_path, capsys, value):
-    """learn took nan, -1 and inf (`mean − -1·σ`); gait refuses them."""
+    """learn took nan, -1 and inf (`mean − -1·σ`); gait refuses them. gait bounds λ to 1e9, and
+    learn took 1e308 still (RuntimeWarnings: overflow in the gait search's sums)."""
     log = tmp_path / "t.jsonl"
     _good_log(log)
     said = []

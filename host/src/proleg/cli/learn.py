@@ -41,7 +41,8 @@ log = logging.getLogger("proleg")
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import baudrate, can_node, non_negative_float, positive_float, positive_int, reply_timeout
+    from .number_args import baudrate, can_node, positive_float, positive_int, reply_timeout
+    from .gait import _penalty
     from .robot_commands import DEFAULT_BAUDRATE
 
     p = subparsers.add_parser(
@@ -78,8 +79,9 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--more", action="store_true", help="with --half-width and a link: run those extra trials")
     p.add_argument("--report", action="store_true", help="print the estimates (always printed after exploring)")
     p.add_argument("--out", metavar="LEARNED.toml", help="write the robot file with the learned [transitions]")
-    p.add_argument("--variance-weight", type=non_negative_float, default=0.0, metavar="λ",
-                   help="report the best gait for mean − λ·σ per transition (default 0: the mean)")
+    # bounded as proleg gait's (1e308 overflowed the gait search's sums: RuntimeWarnings)
+    p.add_argument("--variance-weight", type=_penalty, default=0.0, metavar="λ",
+                   help="report the best gait for mean − λ·σ per transition, λ in [0, 1e9] (default 0: the mean)")
     p.add_argument("--seed", type=int, default=1, help="tour randomisation and simulator seed (default 1)")
     p.add_argument("--max-pieces", type=positive_int, metavar="N",
                    help="stop after N pieces (resume later with the same --log)")
