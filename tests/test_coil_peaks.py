@@ -44,6 +44,10 @@ def test_a_coil_past_120_c_is_warned_about_by_name_and_the_others_are_not():
     assert lines[0] == "  coils, hottest: sma-left 72 °C, sma-right 130 °C"
     assert lines[1:] == ["  WARNING: coil sma-right reached 130 °C, past the 120 °C that wears NiTi out"]
     assert _peaks_text({"a": 120.0})[1:] == []
+    # just past 120 °C: not "reached 120 °C, past the 120 °C", a message contradicting itself
+    assert _peaks_text({"a": 120.3}) == ["  coils, hottest: a 120.3 °C",
+                                         "  WARNING: coil a reached 120.3 °C, past the 120 °C that wears NiTi out"]
+    assert _peaks_text({"a": 119.6}) == ["  coils, hottest: a 119.6 °C"]
 
 
 def test_proleg_sim_reports_each_coils_hottest(capsys):

@@ -314,8 +314,11 @@ def _peaks_text(peaks: dict[str, float]) -> list[str]:
     senses no temperature, so only the simulator can tell (docs/safety.md)."""
     from ..sim.physical.materials import NITI_OVERHEAT_C
 
-    lines = ["  coils, hottest: " + ", ".join(f"{name} {t:.0f} °C" for name, t in peaks.items())]
-    lines += [f"  WARNING: coil {name} reached {t:.0f} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"
+    def shown(t: float) -> str:  # 120.3 °C as "120": "reached 120 °C, past the 120 °C" contradicted itself
+        return f"{t:.1f}" if f"{t:.0f}" == f"{NITI_OVERHEAT_C:.0f}" else f"{t:.0f}"
+
+    lines = ["  coils, hottest: " + ", ".join(f"{name} {shown(t)} °C" for name, t in peaks.items())]
+    lines += [f"  WARNING: coil {name} reached {shown(t)} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"
               for name, t in peaks.items() if t > NITI_OVERHEAT_C]
     return lines
 
