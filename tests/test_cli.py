@@ -281,6 +281,21 @@ def test_a_limb_name_ending_in_plus_a_number_is_a_name_in_inject(capsys, tmp_pat
     assert code == 1 and [(f["code"], f["detail"]) for f in doc["faults"]] == [("SMA_ON_LIMIT", coil)], err
 
 
+@pytest.mark.parametrize("limb", ["leg+2", "front+pad"])
+def test_a_limb_named_with_a_plus_is_injected_at_once_as_any_other_limb(capsys, tmp_path, limb):
+    """A spec naming a limb whole with no +T is 'that limb at once' (README), injected before the
+    boot as imu-silent:left is (START refused); it went to START instead, a different run."""
+    text = (ROBOTS / "paper-r1.toml").read_text()
+    robot = tmp_path / "plus.toml"
+    robot.write_text(text.replace('name = "right"', f'name = "{limb}"'))
+    runs = []
+    for path, spec in ((robot, f"imu-silent:{limb}"), (ROBOTS / "paper-r1.toml", "imu-silent:right")):
+        code, out, err = run(capsys, "sim", str(path), "--duration", "2", "--json", "--inject", spec)
+        doc = json.loads(out)
+        runs.append((code, doc["start_time_s"], [(f["code"], f["detail"]) for f in doc["faults"]]))
+    assert runs[0] == runs[1] == (1, None, [("IMU_NO_ACK", 1)]), runs
+
+
 def test_a_fault_latched_before_start_is_named_with_the_refusal(capsys):
     """An IMU silent from boot latches IMU_NO_ACK before START; START is then refused with
     NOT_ALLOWED, and the report used to show only that, with "faults": []."""

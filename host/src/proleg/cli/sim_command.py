@@ -217,8 +217,15 @@ def _injections(specs: list[str], run_s: float | None,
     from ..console.inject import fault_checker, parse_injection
 
     names_fault = fault_checker(check_fault)
-    timed = [parse_injection(spec, run_s, names_fault) for spec in specs if "+" in spec]
-    return timed, [spec for spec in specs if "+" not in spec]
+    timed: list[tuple[float, str]] = []
+    at_once: list[str] = []
+    for spec in specs:
+        at, fault = parse_injection(spec, run_s, names_fault) if "+" in spec else (0.0, spec)
+        if fault == spec:  # no +T (a limb called leg+2 or front+pad): at once, as any name without a '+'
+            at_once.append(spec)  # (it went to START: imu-silent:leg+2 let the firmware boot, imu-silent:leg did not)
+        else:
+            timed.append((at, fault))
+    return timed, at_once
 
 
 def _serve_pty(sim, args, timed=(), limit_s: float | None = None) -> int:
