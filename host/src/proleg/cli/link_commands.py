@@ -58,7 +58,9 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         timed = [parse_injection(spec, duration_s) for spec in inject]  # a mistake fails before anything is opened
     except SimError:
         # unless the spec names a limb or coil whole ("dead-actuator:leg+2" with --duration 1 was refused
-        # as "2 s is after the run ends"): parsed again below with the simulated robot's names
+        # as "2 s is after the run ends"): on a simulator, parsed again below with the robot's names
+        if sim is None and not (port or "").startswith("sim:"):
+            raise
         timed = [(0.0, spec) for spec in inject]
     out = out or sys.stdout
     err = err or sys.stderr
