@@ -118,3 +118,14 @@ def test_the_coil_temperatures_are_truth_over_the_simulated_can_link_as_over_uar
         link.close()
     assert sorted(truth) == ["displacement_mm", "temp_sma_left_c", "temp_sma_right_c"]
     assert truth["temp_sma_left_c"] == pytest.approx(25.0)  # the plant's ambient, before anything heats
+
+
+def test_the_temperature_columns_follow_the_duty_columns_order(capsys, tmp_path):
+    """Sorted by name they read front, head, rear, tail on caterpillar-4, whose duties (and the
+    robot file) go tail, rear, front, head."""
+    rec = tmp_path / "run.csv"
+    assert main(["sim", "caterpillar-4", "--duration", "1", "--record", str(rec)]) in (0, 1)
+    header = rec.read_text().splitlines()[0].split(",")
+    duties = [c[len("duty_"):-len("_pct")] for c in header if c.startswith("duty_")]
+    temps = [c[len("temp_"):-len("_c")] for c in header if c.startswith("temp_")]
+    assert temps == duties == ["sma_tail", "sma_rear", "sma_front", "sma_head"]

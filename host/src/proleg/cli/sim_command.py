@@ -273,7 +273,7 @@ def _meta(robot, session, board: str):
     from ..record import RecordingMeta
 
     info = session.client.info
-    truth = tuple(sorted(session.link.truth()))  # displacement_mm and each coil's temp_<name>_c
+    truth = tuple(session.link.truth())  # displacement_mm, then each coil's temp_<name>_c in the duties' order
     if info is None:  # no boot INFO (a board that never booted): what the robot file says
         return RecordingMeta.for_robot(robot=robot, board=board, truth=truth)
     meta = RecordingMeta.for_robot(info=info, robot=robot, truth=truth)

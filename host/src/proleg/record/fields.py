@@ -141,7 +141,8 @@ class RecordingMeta:
             else info.robot_name,
             board=info.board if info is not None else kw.pop("board", ""),
             psi_star_deg=stars, info=extra, actuator_names=actuator_names,
-            truth=kw.pop("truth", tuple(sorted(link.truth())) if link is not None else ()), **kw,
+            # the link's order: displacement_mm, then the coils as the duty columns are
+            truth=kw.pop("truth", tuple(link.truth()) if link is not None else ()), **kw,
         )
 
 
