@@ -129,3 +129,19 @@ def test_the_temperature_columns_follow_the_duty_columns_order(capsys, tmp_path)
     duties = [c[len("duty_"):-len("_pct")] for c in header if c.startswith("duty_")]
     temps = [c[len("temp_"):-len("_c")] for c in header if c.startswith("temp_")]
     assert temps == duties == ["sma_tail", "sma_rear", "sma_front", "sma_head"]
+
+
+def test_a_build_time_overheat_warning_just_past_120_c_shows_the_tenth():
+    """'would settle at 120 °C with this supply, past the 120 °C' contradicted itself."""
+    from types import SimpleNamespace
+
+    from proleg.sim.closed_loop import overheat_warnings
+
+    robot = load_robot(R1)
+    ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)
+    settles = {robot.safety.max_duty: 150.0, ceiling: 120.3, robot.safety.mean_ceiling: 110.0}
+    plant = SimpleNamespace(conditions={"ambient_c": 25.0},
+                            steady_coil_temperature_c=lambda duty: [settles[duty]] * 2)
+    lines = overheat_warnings(robot, plant)
+    assert len(lines) == 2 and all("would settle at 120.3 °C with this supply, past the 120 °C" in line
+                                   for line in lines), lines

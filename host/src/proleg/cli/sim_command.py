@@ -320,9 +320,7 @@ def _peaks_text(peaks: dict[str, float]) -> list[str]:
     """The coils' hottest, and a WARNING for each past the 120 °C that wears NiTi out: the firmware
     senses no temperature, so only the simulator can tell (docs/safety.md)."""
     from ..sim.physical.materials import NITI_OVERHEAT_C
-
-    def shown(t: float) -> str:  # 120.3 °C as "120": "reached 120 °C, past the 120 °C" contradicted itself
-        return f"{t:.1f}" if f"{t:.0f}" == f"{NITI_OVERHEAT_C:.0f}" else f"{t:.0f}"
+    from ..sim.physical.materials import shown_c as shown
 
     lines = ["  coils, hottest: " + ", ".join(f"{name} {shown(t)} °C" for name, t in peaks.items())]
     lines += [f"  WARNING: coil {name} reached {shown(t)} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"

@@ -138,7 +138,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     - the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
       envelope lets a coil average for ever, whatever the host commands) held would settle past
       ``NITI_OVERHEAT_C`` (R1 nominal: 115 °C at 0.45; at 1.3× its power, ``power=1.3``, 142 °C)."""
-    from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C
+    from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C, shown_c
 
     duty = robot.safety.max_duty
     ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)
@@ -151,7 +151,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     def worn(act: Any, what: str, duty_held: float, settles_c: float, meaning: str, keys: str) -> str:
         safe = math.floor(100 * duty_held * (NITI_OVERHEAT_C - amb) / (settles_c - amb)) / 100  # below, not up to it
         return (f"{robot.path}: coil {act.name!r} held at {what} {duty_held:g} ({meaning}: docs/safety.md) would "
-                f"settle at {settles_c:.0f} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
+                f"settle at {shown_c(settles_c)} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
                 f"out: lower the supply, or {keys} to {safe:.2f} or less")
 
     for act, hot, warm, avg in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held, averaged):

@@ -23,6 +23,12 @@ NITI_LATENT_HEAT_J_KG = 24.2e3
 #: against prolonged heating far above Af (F1140Rev J, "Overheating"); Toki BioMetal's
 #: working range ends near 100 °C. The claim bench calls an open-loop run past it overheated.
 NITI_OVERHEAT_C = 120.0
+
+
+def shown_c(t: float) -> str:
+    """A temperature to the degree, or to 0.1 °C where the degree would read as the
+    ``NITI_OVERHEAT_C`` line itself ("reached 120 °C, past the 120 °C" for 120.3)."""
+    return f"{t:.1f}" if f"{t:.0f}" == f"{NITI_OVERHEAT_C:.0f}" else f"{t:.0f}"
 #: Where the trained shape itself goes: NiTi wire is shape-set by annealing at about
 #: 400–550 °C (Pelton, DiCello & Miyazaki, "Optimisation of processing and properties of
 #: medical-grade Nitinol wire", Min. Invas. Ther. & Allied Technol. 9 (2000); Dynalloy
