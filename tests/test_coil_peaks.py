@@ -145,3 +145,18 @@ def test_a_build_time_overheat_warning_just_past_120_c_shows_the_tenth():
     lines = overheat_warnings(robot, plant)
     assert len(lines) == 2 and all("would settle at 120.3 °C with this supply, past the 120 °C" in line
                                    for line in lines), lines
+
+
+def test_a_run_that_heats_a_coil_past_120_c_fails_though_no_fault_latched(capsys):
+    """The stroke robot with one coil drawing 1.5× its twin's power: no fault, the robot walks,
+    and its strong coil waits warm at 199 °C. The claim bench counts such a run as overheated;
+    proleg sim exited 0."""
+    code = main(["sim", "paper-r1-stroke", "--duration", "30", "--condition", "coil_mismatch=0.5", "--json"])
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    assert doc["faults"] == [] and doc["cycles"] >= 2  # nothing the firmware could see
+    assert doc["coil_peak_c"]["sma-right"] > 120.0 > doc["coil_peak_c"]["sma-left"]
+    assert code == 1 and doc["errors"] == [
+        f"coil sma-right reached {doc['coil_peak_c']['sma-right']:.0f} °C in the simulated run, past the 120 °C "
+        "that wears NiTi out (no board senses it: docs/safety.md)"]
+    assert f"proleg: error: {doc['errors'][0]}\n" in captured.err
