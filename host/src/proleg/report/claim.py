@@ -389,12 +389,10 @@ def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
     any sequence that moves the robot counts.)"""
     plant = _plant(robot, point)
     nch = max(a.channel for a in robot.actuators) + 1
-    peak = 0.0
     n = int(round(duration_s / dt_s))
     for i in range(n):
         plant.step(dt_s, drive.duties(i * dt_s, nch))
-        if i % 20 == 0:
-            peak = max(peak, float(max(plant.temperature_c)))
+    peak = max(plant.peak_temperature_c)  # every step, as feedback_run reads the firmware's
     x = plant.displacement_mm
     late = [tr for tr in plant.transitions if tr.t_s > duration_s * 2 / 3]
     sign = 1 if direction == "+x" else -1

@@ -311,9 +311,13 @@ class PhysicalPlant:
     def temperature_c(self) -> np.ndarray:
         return np.array(self._temp)
 
+    def reset_peak(self) -> None:
+        """Start each coil's hottest afresh from its temperature now (a run measured from here)."""
+        self._coils.peak[:] = self._coils.temp
+
     @property
     def peak_temperature_c(self) -> list[float]:
-        """Each coil's hottest (°C, coil order) since the plant was made."""
+        """Each coil's hottest (°C, coil order) since the plant was made or ``reset_peak``."""
         return list(self._coils.peak)
 
     @property
