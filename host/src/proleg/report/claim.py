@@ -22,7 +22,7 @@ from typing import Any
 
 from ..errors import SimError
 from ..sim.openloop import OpenLoopDrive, tune_open_loop_robust
-from ..sim.physical.materials import NITI_OVERHEAT_C
+from ..sim.physical.materials import NITI_OVERHEAT_C, shown_c
 
 RUN_S = 40.0        # each run, from a cold robot (at least; run_length: a long gait's runs are longer)
 #: A run holds at least this many of the nominal gait's cycles (a run completes with two).
@@ -374,7 +374,7 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     peak = max(sim.plant.peak_temperature_c)  # since the plant was made: the coils were cold before START
     if peak > OVERHEAT_C:  # the open loop's line (open_loop_run): a run that ruins a coil did not complete
         completed = False
-        note = (note + "; " if note else "") + f"{OVERHEATED} ({peak:.0f} °C)"
+        note = (note + "; " if note else "") + f"{OVERHEATED} ({shown_c(peak)} °C)"
     if cal_note:
         note = (note + "; " if note else "") + cal_note
     return DriveOutcome(completed, speed, run.displacement_mm, faults, note,
@@ -398,7 +398,7 @@ def open_loop_run(robot: Any, drive: OpenLoopDrive, point: GridPoint, *, directi
     sign = 1 if direction == "+x" else -1
     why = ""
     if peak > OVERHEAT_C:
-        why = f"{OVERHEATED} ({peak:.0f} °C)"
+        why = f"{OVERHEATED} ({shown_c(peak)} °C)"
     elif not late:
         why = f"stalled: no state change in the last third (stuck in {robot.transitions.label(plant.true_state)})"
     elif sign * x <= 0:
