@@ -80,6 +80,13 @@ class _FakePlant:
         self.params = _P()
         self.temperature_c = [25.0]
 
+    def reset_peak(self) -> None:
+        pass  # its temperature is its hottest already
+
+    @property
+    def peak_temperature_c(self) -> list[float]:
+        return self.temperature_c
+
     def step(self, dt: float, duties: list[float]) -> None:
         s = duties[0]
         self.temperature_c = [max(self.temperature_c[0], 25.0 + 100.0 * s)]  # its hottest: 25 + 100 × duty °C
