@@ -321,7 +321,8 @@ def cmd_flash(args: argparse.Namespace) -> int:
     board = load_board(args.board)
     method = choose_method(board, args.tool)
     if args.dry_run:  # builds nothing, but names what the build would refuse (the robot file, the board)
-        from ..firmware.build import check_board_takes, check_i2c_ticks, check_tick_budget, default_out_dir
+        from ..firmware.build import check_board_takes, check_tick_budget, default_out_dir
+        from ..firmware.fit import check_i2c_ticks
         from ..robot import load_robot
 
         robot = load_robot(args.robot)

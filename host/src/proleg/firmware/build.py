@@ -32,8 +32,8 @@ from .. import __version__
 from ..errors import BuildError, Interrupted, LinkError
 from ..paths import as_if_created, display_path, templates_dir
 from ..robot import Robot
-from .boards import DEFAULT_I2C_HZ, Board, pwm_channel_error
-from .fit import Fit, check_fit
+from .boards import Board, pwm_channel_error
+from .fit import Fit, check_fit, i2c_hz
 from .gaits import firmware_gaits, gait_warnings
 from .placement import max_tick_hz, place_imus
 
@@ -104,15 +104,6 @@ def check_board_takes(robot: Robot, board: Board) -> None:
         )
 
 
-def check_i2c_ticks(robot: Robot, board: Board) -> None:
-    """The IMUs' I2C reads must fit each tick, as ``check_fit`` checks in a build: ``flash
-    --dry-run`` printed a command and exit 0 for R1 at 3000 Hz on the bluepill, which the
-    build refuses (420 us of I2C in a 333 us tick). After ``check_tick_budget``, as in a build."""
-    from .placement import check_tick_budget as check_i2c
-
-    check_i2c(robot, board.name, place_imus(robot, board), int((board.i2c or {}).get("hz", DEFAULT_I2C_HZ)))
-
-
 def check_can_link(robot: Robot, board: Board) -> None:
     """On a CAN link, telemetry may use at most half the bus (worst-case stuffed frames)."""
     from .can_config import FRAME_BITS, telemetry_frames
@@ -140,7 +131,7 @@ def check_tick_budget(robot: Robot, board: Board) -> None:
     need_us = budget.busy_us(limbs)
     if need_us * hz > budget.BUSY_LIMIT * 1e6:  # need > 70 % of the period, without dividing
         # the highest rate that passes check_fit's I2C check too: a rate only this one allows is refused there
-        i2c_most = max_tick_hz(place_imus(robot, board), int((board.i2c or {}).get("hz", DEFAULT_I2C_HZ)))
+        i2c_most = max_tick_hz(place_imus(robot, board), i2c_hz(board))
         most = min(budget.max_tick_hz(limbs), i2c_most)
         message = (
             f"{robot.where}: control.tick_hz = {hz} is too fast for board {board.name}: "
