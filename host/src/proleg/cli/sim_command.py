@@ -330,11 +330,10 @@ def _overheated(peaks: dict[str, float]) -> list[str]:
 def _peaks_text(peaks: dict[str, float]) -> list[str]:
     """The coils' hottest, and a WARNING for each past the 120 °C that wears NiTi out: the firmware
     senses no temperature, so only the simulator can tell (docs/safety.md)."""
-    from ..sim.physical.materials import NITI_OVERHEAT_C
-    from ..sim.physical.materials import shown_c as shown
+    from ..sim.physical.materials import NITI_OVERHEAT_C, shown_c
 
-    lines = ["  coils, hottest: " + ", ".join(f"{name} {shown(t)} °C" for name, t in peaks.items())]
-    lines += [f"  WARNING: coil {name} reached {shown(t)} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"
+    lines = ["  coils, hottest: " + ", ".join(f"{name} {shown_c(t)} °C" for name, t in peaks.items())]
+    lines += [f"  WARNING: coil {name} reached {shown_c(t)} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"
               for name, t in peaks.items() if t > NITI_OVERHEAT_C]
     return lines
 
