@@ -31,7 +31,6 @@ import json
 import logging
 import multiprocessing
 import platform
-import random
 import sys
 import time
 from pathlib import Path
@@ -39,8 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "host" / "src"))
 
-from proleg.report import claim  # noqa: E402
-from proleg.report.claim import GridPoint  # noqa: E402
+from proleg.report import claim, sweep  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
 
@@ -48,56 +46,16 @@ from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
 #: walks it backwards: docs/plant.md, "R3") nor planar-4 (its +x gait is a library heading).
 ROBOTS = ("paper-r1", "paper-r2", "paper-r1-stroke", "paper-r1-one-actuator", "inchworm-3", "caterpillar-4")
 ROWS = 30
-KEYS_PER_ROW = 3
-
-#: key -> a draw of its value (random.Random -> the value's text). Ends by the grid's names.
-#: Each range spans the claim grid's mild and strong strengths (report/claim.py MODES) and goes
-#: a little past the strong one where the plant allows, never into what the grid calls
-#: impossible (supply collapse, a dead coil).
-DRAWS = {
-    "power": lambda r: f"{r.uniform(0.7, 1.3):.2f}",
-    "ambient_c": lambda r: f"{r.uniform(5, 38):.0f}",
-    "convection": lambda r: f"{r.uniform(0.6, 1.6):.2f}",
-    "supply_ohm": lambda r: f"{r.uniform(0, 8):.1f}",
-    "coil_mismatch": lambda r: f"{r.uniform(0, 0.3):.2f}",
-    "power_scale": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(0.7, 1.0):.2f}",
-    "overlap_mm": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(4, 16):.0f}",
-    "fatigue_cycles": lambda r: f"{r.uniform(0, 30000):.0f}",
-    "imu_offset_deg": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(-8, 8):.1f}",
-    "imu_bias_deg": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(-6, 6):.1f}",
-    "imu_noise_deg": lambda r: f"{r.uniform(0, 1.5):.2f}",
-    "psi_star_shift_deg": lambda r: f"{r.choice(('rear', 'front'))}:{r.uniform(-6, 6):.1f}",
-    "mass_g": lambda r: f"{r.uniform(3, 8):.1f}",
-}
-
-
-def draw_rows(n: int, seed: int) -> list[tuple[str, ...]]:
-    """``n`` rows of KEYS_PER_ROW distinct keys each, drawn with ``seed``."""
-    rng = random.Random(seed)
-    rows = []
-    for _ in range(n):
-        keys = rng.sample(sorted(DRAWS), KEYS_PER_ROW)
-        rows.append(tuple(f"{k}={DRAWS[k](rng)}" for k in keys))
-    return rows
 
 
 def run_row(args: tuple[str, int, tuple[str, ...], float]) -> dict:
     name, i, conditions, run_s = args
-    logging.disable(logging.WARNING)  # make_plant's overheat advice, once per run: rows say it
-    robot = load_robot(ROOT / "robots" / f"{name}.toml")
-    point = GridPoint(f"{name} #{i}", (), "random", conditions, ())
-    ideal = claim.idealised_walk(robot, point)
-    fb = claim.feedback_run(robot, point, duration_s=run_s)
-    hot = fb.coil_peak_c > NITI_OVERHEAT_C
-    return {
-        "robot": name, "row": i, "conditions": list(conditions),
-        "possible": ideal.possible, "why_not": ideal.why_not,
-        "idealised_mm_s": None if ideal.speed_mm_s is None else round(ideal.speed_mm_s, 4),
-        "completed": fb.completed, "speed_mm_s": round(fb.speed_mm_s, 4), "fault": fb.fault,
-        "note": fb.note, "coil_peak_c": round(fb.coil_peak_c, 1), "reported": fb.reported,
-        "missed": ideal.possible and not fb.completed,
-        "dirty_stop": not ideal.possible and not fb.completed and hot,
-    }
+    row = sweep.run_row(load_robot(ROOT / "robots" / f"{name}.toml"), conditions, run_s, name=f"{name} #{i}")
+    d = row.to_json()
+    return {"robot": name, "row": i, "conditions": d["conditions"], "possible": row.possible,
+            "why_not": row.why_not, "idealised_mm_s": d["idealised_mm_s"], "completed": row.completed,
+            "speed_mm_s": d["speed_mm_s"], "fault": row.fault, "note": row.note, "coil_peak_c": d["coil_peak_c"],
+            "reported": row.reported, "missed": row.missed, "dirty_stop": row.hot_stop}
 
 
 def summary(rows: list[dict]) -> dict:
@@ -128,7 +86,7 @@ def main() -> int:
     if args.robot and args.robot.resolve().parent != (ROOT / "robots").resolve():
         ap.error(f"--robot {args.robot}: one of the robot files in {ROOT / 'robots'}")
     t0 = time.perf_counter()
-    draws = draw_rows(args.rows, args.seed)
+    draws = sweep.draw_rows(args.rows, args.seed)
     jobs = []
     for name in names:
         robot = load_robot(ROOT / "robots" / f"{name}.toml")
@@ -136,11 +94,11 @@ def main() -> int:
         run_s = claim.run_length(claim.idealised_walk(robot, claim.NOMINAL))
         logging.disable(logging.NOTSET)
         jobs += [(name, i, c, run_s) for i, c in enumerate(draws)]
-    with multiprocessing.Pool(args.jobs) as pool:
+    with multiprocessing.Pool(args.jobs, initializer=sweep.quiet_worker) as pool:
         rows = pool.map(run_row, jobs, chunksize=1)
     by_robot = {n: summary([r for r in rows if r["robot"] == n]) for n in names}
 
-    print(f"\nψ-feedback under {args.rows} random conditions a robot ({KEYS_PER_ROW} keys each, seed {args.seed})")
+    print(f"\nψ-feedback under {args.rows} random conditions a robot ({sweep.KEYS_PER_ROW} keys each, seed {args.seed})")
     print(f"{'robot':22} {'possible':>8} {'completed':>9} {'impossible':>10} {'fw walks':>8} {'clean stop':>10} "
           f"{'>120 °C':>7} {'hottest °C':>10}")
     for n, s in by_robot.items():
@@ -157,7 +115,7 @@ def main() -> int:
     out = {
         "benchmark": "sweep",
         "machine": {"python": platform.python_version(), "platform": platform.platform()},
-        "inputs": {"robots": list(names), "rows": args.rows, "seed": args.seed, "keys_per_row": KEYS_PER_ROW,
+        "inputs": {"robots": list(names), "rows": args.rows, "seed": args.seed, "keys_per_row": sweep.KEYS_PER_ROW,
                    "overheat_c": NITI_OVERHEAT_C},
         "summary": by_robot, "rows": rows, "bench_wall_s": round(time.perf_counter() - t0, 1),
     }

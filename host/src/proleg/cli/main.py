@@ -1,7 +1,7 @@
 """The ``proleg`` command's parser and the build/flash commands: parse arguments, call the
 library, print. ``gait`` is in ``gait``; ``sim`` in ``sim_command``; ``console``, ``plot`` and
 ``dbc`` in ``link_commands``; ``run``, ``load-gait``, ``set-param`` and ``robots`` in
-``robot_commands``.
+``robot_commands``; ``check`` in ``check``.
 
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
 faulted, an output could not be written, the board does not run the robot file's firmware: a
@@ -221,6 +221,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_robot_commands(sub)  # run, load-gait, set-param, robots
     __import__("proleg.cli.learn", fromlist=["add_arguments"]).add_arguments(sub)  # learn
     __import__("proleg.cli.calibrate", fromlist=["add_arguments"]).add_arguments(sub)  # calibrate
+    __import__("proleg.cli.check", fromlist=["add_arguments"]).add_arguments(sub)  # check
     return p
 
 

@@ -1,0 +1,191 @@
+"""``proleg check``: the robot's firmware under random operating conditions, before it meets them.
+
+``proleg sim`` runs one condition a user names. A lab's robot meets supplies, rooms, worn coils
+and loose IMUs nobody listed, so ``check`` draws them (``report.sweep``: three plant keys a row,
+seeded) and, for each, runs the idealised drive (can the coils walk the gait at all?) and the
+firmware on the simulated board (does it?). It fails (exit 1) on a row the coils can walk that
+the firmware does not complete (a fault stop, the wrong way, a coil past 120 °C), and on a stop
+that heated a coil past 120 °C. Exit codes as in ``main``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import sys
+from typing import Any
+
+from .main import EXIT_FAILED, EXIT_OK, robot_arg
+from .number_args import gait_number, positive_int
+
+log = logging.getLogger("proleg")
+
+#: Rows a check draws unless told (about 2–5 s of CPU each for the example robots).
+DEFAULT_ROWS = 20
+#: The most rows one check draws (an hour or more of CPU).
+MAX_ROWS = 1000
+
+
+def _rows(text: str) -> int:
+    v = positive_int(text)
+    if v > MAX_ROWS:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_ROWS} rows, got {v}")
+    return v
+
+
+def add_arguments(sub) -> None:
+    c = sub.add_parser("check", help="run the robot's firmware on the simulated board under random operating "
+                                     "conditions; exit 1 where it fails a walk the coils can make, or cooks a coil",
+                       description="Run the robot's firmware on the simulated board under random operating "
+                                   "conditions (three plant keys a row, seeded), each against an idealised drive "
+                                   "that says whether the coils can walk the gait there at all.",
+                       epilog="exit status: 0 every row passed; 1 the firmware missed a row the coils can walk "
+                              "(a fault stop, the wrong way, a coil past 120 °C) or stopped one nothing walks with "
+                              "a coil past 120 °C, or the gait cannot be checked (even the idealised drive does not "
+                              "walk it on the nominal plant); 2 a usage mistake")
+    c.add_argument("robot", metavar="ROBOT", type=robot_arg)
+    c.add_argument("--rows", type=_rows, default=DEFAULT_ROWS, metavar="N",
+                   help=f"random conditions to run (default {DEFAULT_ROWS}, at most {MAX_ROWS})")
+    c.add_argument("--seed", type=int, default=1, help="seed of the draws: the same rows for the same seed (default 1)")
+    c.add_argument("--gait", type=gait_number, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
+    c.add_argument("--direction", choices=("+x", "-x"), default="+x")
+    c.add_argument("--condition", action="append", default=[], metavar="KEY=VALUE",
+                   help="a plant condition in every row, on top of the robot file's [plant] (as proleg sim "
+                        "--condition takes it; its key is not drawn); --condition help lists the keys")
+    c.add_argument("--jobs", type=positive_int, default=None, metavar="N",
+                   help="rows run at once (default: the machine's cores)")
+    c.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    c.set_defaults(run=cmd_check)
+
+
+def _work(job: tuple[str, tuple[str, ...], float, str, int, str]) -> Any:
+    from ..report import sweep
+    from ..robot import load_robot
+
+    path, conditions, run_s, direction, gait, name = job
+    return sweep.run_row(load_robot(path), conditions, run_s, direction=direction, gait=gait, name=name)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from ..errors import GaitError
+    from ..firmware.gaits import firmware_gaits
+    from ..report import sweep
+    from ..robot import load_robot
+    from .sim_plant import wants_help
+
+    if wants_help(args):
+        return EXIT_OK
+    robot = load_robot(args.robot)
+    gaits = firmware_gaits(robot).get(args.direction, ())
+    if args.gait >= len(gaits):
+        shown = f"gaits 0..{len(gaits) - 1}" if gaits else "no gait"
+        raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
+    base = tuple(args.condition)
+    base_keys = {c.partition("=")[0].strip() for c in base}
+    run_s, nominal = sweep.run_length(robot, direction=args.direction, gait=args.gait, base=base)  # checks base
+    label = " ".join(robot.transitions.label(s) for s in gaits[args.gait].states)
+    if not nominal.possible:  # a finding about the robot file, not a mistake on the command line: exit 1
+        on = f" under {' '.join(base)}" if base else " on the nominal plant"
+        print(f"proleg: error: {robot.name}: gait {args.gait} ({label}) cannot be checked{on}: {nominal.why_not}. "
+              "If the robot file's matrix was not measured on this body, measure it (proleg sim ROBOT "
+              "--measure-matrix) and build the gaits from that", file=sys.stderr)
+        return EXIT_FAILED
+    draws = sweep.draw_rows(args.rows, args.seed, [limb.name for limb in robot.limbs], leave_out=tuple(base_keys))
+    rows_conditions = [base + d for d in draws]
+    jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i + 1}")
+            for i, c in enumerate(rows_conditions)]
+    log.info("%s: gait %d (%s) in %s under %d random conditions, %g s each (the idealised drive walks "
+             "%+.3f mm/s%s)", robot.name, args.gait, label, args.direction, len(jobs), run_s,
+             nominal.speed_mm_s or 0.0, f" under {' '.join(base)}" if base else " on the nominal plant")
+    rows: list = []
+    try:
+        _run(jobs, args.jobs or os.cpu_count() or 1, rows)
+    except KeyboardInterrupt:
+        from ..errors import Interrupted
+
+        raise Interrupted(f"interrupted after {len(rows)} of {len(jobs)} rows (nothing written: the rows "
+                          f"run are on stderr above; --rows {max(len(rows), 1)} --seed {args.seed} runs them "
+                          "again)") from None
+    summary = sweep.summary(rows)
+    failed = [(i + 1, r) for i, r in enumerate(rows) if r.failed]
+    errors = [_error(i, r) for i, r in failed]
+    if args.json:
+        print(json.dumps({
+            "robot": robot.name, "gait": args.gait, "states": label, "direction": args.direction,
+            "seed": args.seed, "conditions": list(base), "run_s": run_s,
+            "idealised_nominal_mm_s": None if nominal.speed_mm_s is None else round(nominal.speed_mm_s, 4),
+            "rows": [r.to_json() for r in rows], "summary": summary, "ok": not failed, "errors": errors,
+        }, indent=1))
+    else:
+        _print(robot, args, label, run_s, rows, summary)
+    for e in errors:
+        print(f"proleg: error: {e}", file=sys.stderr)
+    return EXIT_FAILED if failed else EXIT_OK
+
+
+def _run(jobs: list, n_jobs: int, rows: list) -> None:
+    """The rows, in order, appended to ``rows``; each says so on stderr when it ends (INFO:
+    ``-q`` hides it)."""
+    n_jobs = min(n_jobs, len(jobs))
+    if n_jobs <= 1:
+        for job in jobs:
+            rows.append(_work(job))
+            _progress(len(rows), len(jobs), rows[-1])
+        return
+    import multiprocessing
+
+    from ..report.sweep import quiet_worker
+
+    pool = multiprocessing.get_context("fork").Pool(n_jobs, initializer=quiet_worker)
+    try:
+        for row in pool.imap(_work, jobs, chunksize=1):
+            rows.append(row)
+            _progress(len(rows), len(jobs), row)
+        pool.close()
+    finally:
+        pool.terminate()  # Ctrl-C or an error: no worker goes on for nobody
+        pool.join()
+
+
+def _progress(done: int, total: int, row: Any) -> None:
+    log.info("row %d of %d: %s: %s", done, total, row.verdict, " ".join(row.conditions))
+
+
+def _error(i: int, r: Any) -> str:
+    conds = " ".join(r.conditions)
+    if r.hot_stop:
+        return (f"row {i} ({conds}): nothing walks this gait here, but the firmware's stop heated a coil to "
+                f"{r.coil_peak_c:.0f} °C, past the 120 °C that wears NiTi out")
+    ideal = f"the idealised drive walks {r.idealised_mm_s:+.3f} mm/s" if r.idealised_mm_s is not None \
+        else "the coils can walk it"
+    return f"row {i} ({conds}): the firmware did not complete the gait ({r.what_happened()}), where {ideal}"
+
+
+def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, rows: list, s: dict) -> None:
+    base = f", with {' '.join(args.condition)}" if args.condition else ""
+    print(f"{robot.name}: gait {args.gait} ({label}) in {args.direction} under {len(rows)} random conditions "
+          f"({len(rows[0].conditions) - len(args.condition)} keys each, seed {args.seed}{base}), {run_s:g} s each "
+          "from cold")
+    width = max(len(" ".join(r.conditions[len(args.condition):])) for r in rows)
+    for i, r in enumerate(rows, 1):
+        conds = " ".join(r.conditions[len(args.condition):])
+        ideal = ("cannot walk" if r.idealised_mm_s is None else
+                 f"{r.idealised_mm_s:+.3f}" + ("" if r.possible else " back"))
+        print(f"  {i:3d}  {conds:<{width}}  idealised {ideal:>11}  firmware {r.verdict:<10} "
+              f"{r.what_happened():<24}  coils ≤ {r.coil_peak_c:.0f} °C")
+    parts = [f"the coils can walk {s['possible']} of {s['rows']}: the firmware completed "
+             f"{s['completed_where_possible']}" + (f", missed {s['missed']}" if s["missed"] else "")]
+    if s["impossible"]:
+        stops = [f"stopped cool in {s['impossible_stopped_below_120c']}"] if s["impossible_stopped_below_120c"] else []
+        if s["impossible_completed_by_the_firmware"]:
+            stops.append(f"walked {s['impossible_completed_by_the_firmware']}")
+        if s["hot_stops"]:
+            stops.append(f"stopped hot in {s['hot_stops']}")
+        parts.append(f"nothing walks {s['impossible']}: the firmware " + ", ".join(stops))
+    parts.append(f"hottest coil {s['hottest_c']:.0f} °C")
+    print("  " + "; ".join(parts))
+    for i, r in enumerate(rows, 1):
+        if not r.possible and r.why_not:
+            print(f"  row {i}: the idealised drive cannot walk it: {r.why_not}")

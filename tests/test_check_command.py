@@ -1,0 +1,177 @@
+"""``proleg check``: the firmware under random operating conditions (``report.sweep``), and
+its verdicts: a row the coils can walk that the firmware does not complete, or a stop that
+cooked a coil, fails the check (exit 1)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from proleg.cli.main import main
+from proleg.report import sweep
+from proleg.robot import load_robot
+from proleg.sim.closed_loop import make_plant
+
+ROBOTS = Path(__file__).resolve().parents[1] / "robots"
+R1 = ROBOTS / "paper-r1.toml"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def _row(**kw) -> sweep.Row:
+    base = dict(conditions=("power=0.9",), possible=True, why_not="", idealised_mm_s=0.4, completed=True,
+                speed_mm_s=0.35, fault="", note="", coil_peak_c=80.0, reported="")
+    return sweep.Row(**{**base, **kw})
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32), n=st.integers(1, 6),
+       robot=st.sampled_from(["paper-r1", "caterpillar-4", "inchworm-3", "planar-4"]))
+def test_every_drawn_row_is_a_condition_the_plant_takes(seed, n, robot):
+    """Distinct keys, limbs of the robot, values inside each key's documented range: the plant
+    takes every row (an out-of-range value would be a SimError)."""
+    r = load_robot(ROBOTS / f"{robot}.toml")
+    limbs = [limb.name for limb in r.limbs]
+    rows = sweep.draw_rows(n, seed, limbs)
+    assert rows == sweep.draw_rows(n, seed, limbs)  # seeded: the same rows again
+    for row in rows:
+        keys = [c.partition("=")[0] for c in row]
+        assert len(row) == sweep.KEYS_PER_ROW and len(set(keys)) == len(keys)
+        for c in row:
+            value = c.partition("=")[2]
+            if ":" in value:
+                assert value.partition(":")[0] in limbs
+        make_plant(r, "physical", list(row))
+
+
+def test_keys_given_for_every_row_are_not_drawn():
+    rows = sweep.draw_rows(40, 5, ["a", "b"], leave_out=("power", "ambient_c"))
+    keys = {c.partition("=")[0] for row in rows for c in row}
+    assert not keys & {"power", "ambient_c"} and len(keys) > 5
+
+
+@pytest.mark.parametrize("kw, verdict, failed", [
+    ({}, "ok", False),
+    ({"completed": False, "fault": "STATE_TIMEOUT"}, "missed", True),
+    ({"completed": False, "note": "coil overheated (130 °C)", "coil_peak_c": 130.0}, "missed", True),
+    ({"possible": False, "completed": False, "fault": "STATE_TIMEOUT", "coil_peak_c": 90.0}, "clean stop", False),
+    ({"possible": False, "completed": False, "fault": "SMA_ON_LIMIT", "coil_peak_c": 121.0}, "hot stop", True),
+    ({"possible": False, "idealised_mm_s": None}, "walked", False),
+])
+def test_the_verdict_of_a_row(kw, verdict, failed):
+    row = _row(**kw)
+    assert row.verdict == verdict and row.failed is failed
+    assert row.to_json()["verdict"] == verdict
+
+
+def test_check_runs_the_drawn_rows_on_the_firmware(capsys):
+    rc, out, err = run(capsys, "check", str(R1), "--rows", "2", "--seed", "4", "--jobs", "1", "--json")
+    report = json.loads(out)
+    assert rc == 0 and report["ok"] and report["errors"] == []
+    assert [tuple(r["conditions"]) for r in report["rows"]] == sweep.draw_rows(2, 4, ["left", "right"])
+    assert report["summary"]["rows"] == 2 and report["run_s"] >= 40
+    for r in report["rows"]:  # R1 walks these rows: each is a real run of the firmware
+        assert r["verdict"] in ("ok", "walked", "clean stop") and 0 < r["coil_peak_c"] < 120
+    assert "row 2 of 2" in err
+
+
+def test_base_conditions_go_into_every_row(capsys):
+    rc, out, _ = run(capsys, "check", str(R1), "--rows", "2", "--jobs", "1", "--json", "--condition", "power=0.9")
+    report = json.loads(out)
+    assert rc == 0
+    for r in report["rows"]:
+        assert r["conditions"][0] == "power=0.9"
+        assert not any(c.startswith("power=") for c in r["conditions"][1:])
+
+
+def test_a_missed_row_fails_the_check_and_says_which(capsys, monkeypatch):
+    def fake(robot, conditions, run_s, **kw):
+        hot = "power=" in " ".join(conditions)
+        return _row(conditions=tuple(conditions), completed=not hot, fault="SMA_ON_LIMIT" if hot else "")
+    monkeypatch.setattr(sweep, "run_row", fake)
+    rc, out, err = run(capsys, "check", str(R1), "--rows", "8", "--jobs", "1")
+    drawn = sweep.draw_rows(8, 1, ["left", "right"])
+    bad = [i + 1 for i, row in enumerate(drawn) if any(c.startswith("power=") for c in row)]
+    assert bad, "seed 1 draws power in some of its first 8 rows"
+    assert rc == 1
+    for i in bad:
+        assert f"proleg: error: row {i} (" in err and "SMA_ON_LIMIT" in err
+    assert f"missed {len(bad)}" in out
+
+
+def test_a_gait_that_does_not_walk_on_the_plant_cannot_be_checked(capsys):
+    """R3's matrix (the paper's) says gait 0 walks +x; on the physical plant it walks −x."""
+    rc, _, err = run(capsys, "check", str(ROBOTS / "paper-r3.toml"), "--rows", "1", "--jobs", "1")
+    assert rc == 1 and "cannot be checked on the nominal plant" in err and "--measure-matrix" in err
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--condition", "power=9"], "power"),
+    (["--condition", "no_such_key=1"], "no_such_key"),
+    (["--gait", "7"], "--gait 7"),
+])
+def test_bad_arguments_are_usage_errors(capsys, argv, says):
+    rc, _, err = run(capsys, "check", str(R1), "--jobs", "1", *argv)
+    assert rc == 2 and says in err and "Traceback" not in err
+
+
+def test_rows_out_of_range_are_refused_by_the_parser(capsys):
+    for n in ("0", "1001"):
+        with pytest.raises(SystemExit) as e:
+            main(["check", str(R1), "--rows", n])
+        assert e.value.code == 2 and "--rows" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_ends_a_check_and_its_workers(sig):
+    """Ctrl-C (or a CI job's timeout) mid-check: exit 130 / 143 with one line, and the worker
+    processes end too (a worker forked from proleg turned SIGTERM into an ignored Ctrl-C, so the
+    pool could not end it and the check ran on)."""
+    from test_interrupted import _AS_FROM_A_TERMINAL
+
+    env = {**os.environ, "PYTHONPATH": str(ROBOTS.parent / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "check", "caterpillar-4", "--rows", "200",
+                             "--jobs", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not _children(proc.pid):
+            time.sleep(0.2)
+        workers = _children(proc.pid)
+        assert workers, "the pool started"
+        time.sleep(0.5)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == (130 if sig == signal.SIGINT else 128 + sig), err
+    assert out == "" and "Traceback" not in err
+    assert err.strip().splitlines()[-1].startswith("proleg: interrupted after ")
+    time.sleep(0.2)
+    assert not [w for w in workers if Path(f"/proc/{w}").exists() and "Z" not in _state(w)]
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+def _state(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "Z"
