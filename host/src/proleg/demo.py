@@ -6,6 +6,8 @@
    each for a simulated minute, with the displacement per cycle and telemetry summary.
 4. The same body with its limbs raised to full strokes (robots/paper-r1-stroke.toml): the
    whole-body ratchet the ψ-feedback firmware walks faster than the best timed drive.
+5. R1's firmware under ten random operating conditions (``proleg check``), each against an
+   idealised drive that says whether the coils can walk the gait there at all.
 """
 
 from __future__ import annotations
@@ -50,6 +52,10 @@ def main() -> int:
         return 1
     print("  (the transitions not in the matrix are 00 -> 10 -> 11 and back: the rise lead crosses psi* "
           "first, by design)")
+
+    _step("5. R1 under ten random operating conditions (proleg check robots/paper-r1.toml --rows 10)")
+    if cli_main(["check", r1, "--rows", "10", "-q"]):
+        return 1
     return 0
 
 
