@@ -45,6 +45,18 @@ typedef uint8_t sag_t;
 #define SAG_STOPPED(i) 1
 #endif
 
+/* A limb whose own coil the fallback gave up is at its level only as far as the body lifts it
+ * (fallback.h): it is never heated toward its hold edge (below, ctl_demand). The coil it is
+ * mapped to holds its own limb; heated on for this one past the end of that limb's travel it
+ * only cooked (R2 with a mismatched pair: 128-130 °C every cycle). */
+#if !CFG_FALLBACK
+#define GIVEN_UP(i) 0
+#elif CFG_LIMB_ACTUATOR_IS_INDEX
+#define GIVEN_UP(i) ((i) == limbmap_lost()) /* its own actuator is actuator i: R1 16 B, not 36 */
+#else
+#define GIVEN_UP(i) limbmap_given_up(i)
+#endif
+
 /* Shared with the watches (stall.h). */
 ctl_limb_t ctl_limb[CFG_N_LIMBS];
 uint8_t ctl_look;
@@ -230,7 +242,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 } else if (ABOVE_TOP(i, thr, level)) {
                     ctl_limb[i].heat = 0;
                 }
-                if (ctl_limb[i].heat) {
+                if (ctl_limb[i].heat && !GIVEN_UP(i)) {
                     move[i] = SAG;
                 }
 #ifdef CFG_LIMB_STROKE_CDEG

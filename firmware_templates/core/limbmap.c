@@ -25,6 +25,11 @@ uint8_t limbmap_lost(void)
     return lost;
 }
 
+uint8_t limbmap_given_up(uint8_t limb)
+{
+    return (uint8_t)(ROM_U8(&compiled[limb]) == lost); /* never while none is: no actuator is LIMBMAP_NONE */
+}
+
 void limbmap_use(uint8_t lost_actuator, const uint8_t *rom_map)
 {
     uint8_t i;

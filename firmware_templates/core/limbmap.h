@@ -28,6 +28,9 @@ void limbmap_init(void);
 uint8_t limbmap_actuator(uint8_t limb);
 /* The actuator the fallback gave up (LIMBMAP_NONE: none). */
 uint8_t limbmap_lost(void);
+/* Nonzero for a limb whose own actuator (the build's map) the fallback gave up: the fallback
+ * lifts it, if at all, through the body with another limb's coil. */
+uint8_t limbmap_given_up(uint8_t limb);
 /* n == 0: the build's map. Returns 0, or a PROTO_ERR_* with *bad = offending limb (0xFFFF:
  * not one entry per limb). The caller refuses it while a gait runs. */
 uint8_t limbmap_set(const uint8_t *actuators, uint8_t n, uint16_t *bad);
