@@ -202,9 +202,12 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
             ctl_limb[i].climb = (uint8_t)(level != PSI_UNKNOWN && level < target[i]);
             ctl_limb[i].lagged = 0;
             ctl_limb[i].capping = 0;
+            ctl_limb[i].spent = 0;
+            ctl_limb[i].knee_n = 0;
         } else if (new_step) {
             ctl_limb[i].climb = 0; /* the robot's next step, which leaves this limb where it is */
             ctl_limb[i].capping = 0;
+            ctl_limb[i].spent = 0; /* its coil has had the steps' change to cool: its hold may re-heat it */
         } else if (ctl_limb[i].clock != 0xFFFFu) {
             ctl_limb[i].clock++;
         }
@@ -352,6 +355,16 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         } else {
             w = WANT_NOTHING; /* held level between hold edge and top: coil off (bang-bang) */
         }
+#ifdef CFG_LIMB_STROKE_CDEG
+        /* The knee watch (ctl.h, CTL_KNEE_MS) of a limb the step raises to its stroke; a limb
+         * whose coil it found spent is heated at most at the hold duty in the rest of the step. */
+        if ((move[i] == RISE && CLIMBS_TO_STROKE(i, target[i])) || (move[i] == SAG && CLIMBS_TO_STROKE(i, level)) ||
+            ctl_limb[i].spent) {
+            if (stall_knee(i, (uint8_t)(w >= WANT_HEAT && !sma_cooling(ctl_limb_actuator(i)))) && (w >= WANT_HEAT || (move[i] != RISE && level != PSI_UNKNOWN))) {
+                w = WANT_HOLD;
+            }
+        }
+#endif
         if (level != PSI_UNKNOWN) {
             stall_watch(i, target[i], level, (uint8_t)(w >= WANT_HEAT && move[i] == RISE), to_go[i]);
             /* Its coil heating and not held off by the envelope, its ψ stopped answering (ctl.h):

@@ -148,6 +148,26 @@
  * smoothed ψ (an atan2 every 16 ticks) took R1 at full strokes from busy p99 688 µs / max 845
  * to 713-745 / 993-1026 µs, past the tick budget (bench/bench_mcu.py). */
 #define CTL_LAG_MS 1000u
+/* Knee watch: a limb the step raises to its stroke, its coil heated at the drive duty, whose
+ * smoothed ψ gained less than 1/2^CTL_KNEE_SHIFT of the most it gained in one CTL_KNEE_MS
+ * window of the same heat (at least CTL_KNEE_FAST_CDEG) has a coil through its
+ * transformation: more heat only heats the wire, ≈ 60 K/s at 0.8 duty on R1 (its ψ answers
+ * the other coils, if anything). It is "spent" for the rest of the step: heated at most at the
+ * hold duty; on its top level it counts as stopped short of its stroke (held where it
+ * stopped), below its band it no longer leads nor is waited for (the others' climb lifts it
+ * through the body). Judged against the coil's own transformation, not a fixed rate:
+ * - a transforming coil at a nominal supply bends its end 100-160°/s (R1 at full strokes), and
+ *   a coil at its end creeps at the rate the others' coils give it: R1's left end with ψ*
+ *   moved to 70° crept 3°/s at 0.8 duty, its coil 85 -> 166 °C (docs/safety.md); a worn coil
+ *   stopped dead 0.5 s before the hover clock told it (125 °C; docs/plant.md, "Off the grid");
+ * - 4° in 80 ms (50°/s) arms it only on a coil seen transforming fast in this heat: a weak
+ *   supply's slow climb, which reaches no dangerous temperature, is left to the hover clock
+ *   as before; under IMU noise (1.5° RMS, a fifth of it smoothed) an 80 ms gain is ±0.4°;
+ * - a coil held at the hold duty or off meanwhile starts over: heated again from below As
+ *   it gains nothing for its dead time (0.15-0.6 s), which is no knee. */
+#define CTL_KNEE_MS 80u
+#define CTL_KNEE_FAST_CDEG 400
+#define CTL_KNEE_SHIFT 3
 #define CTL_STALL_MS 5000u
 /* A rise that ψ no longer answers. A limb rising alone (the body couples limbs that move
  * together), its coil heating and not held off by the envelope, whose smoothed ψ

@@ -71,6 +71,58 @@ static uint8_t climbing(uint8_t i, ctl_limb_t *c)
     return ctl_look == 0u && gained(i, c);
 }
 
+/* Knee watch (ctl.h, CTL_KNEE_MS). Its own look in CTL_REACH_EVERY ticks (KNEE_LOOK), not the
+ * climb's or the fall watch's: at most one more atan2 a limb in a tick. */
+#define KNEE_LOOK (CTL_REACH_EVERY / 4u)
+#define KNEE_LOOKS ((TICKS(CTL_KNEE_MS) + CTL_REACH_EVERY - 1u) / CTL_REACH_EVERY)
+typedef char ctl_knee_fits_a_byte[KNEE_LOOKS < 255u ? 1 : -1];
+
+uint8_t stall_knee(uint8_t i, uint8_t heated)
+{
+    ctl_limb_t *c = &ctl_limb[i];
+    int16_t m, g;
+    if (!heated) {
+        /* held at the hold duty, off, or cut by the envelope: its coil may cool below As, and
+         * heated again it gains nothing through its dead time. Watched afresh: a knee needs a
+         * fast window of the new heat first. */
+        c->knee_n = 0;
+        return c->spent;
+    }
+    if (c->spent || ctl_look != KNEE_LOOK) {
+        return c->spent;
+    }
+    m = psi_smooth_cdeg(i);
+    if (c->knee_n == 0u) {
+        c->knee_at = m;
+        c->fast = 0;
+        c->knee_n = 1;
+        return 0;
+    }
+    if (++c->knee_n <= KNEE_LOOKS) {
+        return 0;
+    }
+    g = (int16_t)(m - c->knee_at);
+    c->knee_at = m;
+    c->knee_n = 1;
+    if (g > c->fast) {
+        c->fast = g;
+    } else if (c->fast >= CTL_KNEE_FAST_CDEG && g < (int16_t)(c->fast >> CTL_KNEE_SHIFT)) {
+        c->spent = 1;
+        if (c->climb && psi_level(i) == c->target) {
+            /* on its top level: stopped short of its stroke, as the hover clock would say
+             * (stall_watch), held where it stopped, and the others in step climb no further */
+            c->stall = CTL_STALL_OSCILLATING;
+            psi_relax(i, 1);
+            c->shortfall = 1;
+            c->capping = 1;
+            c->peak = m;
+            c->ticks = 0;
+        }
+        c->climb = 0; /* below its band: no longer the lead, nor waited for; held at the hold duty */
+    }
+    return c->spent;
+}
+
 /* A limb climbing to its stroke on its top level has stopped after CTL_CLIMB_STOP_MS without a
  * gain, not a hover time (ctl.h); a hover time while another limb in step waits for it (its
  * wait takes the help of its coil away: R1 at full strokes at power 0.5 stopped at 36° of 76°). */

@@ -61,6 +61,10 @@ typedef struct {
     uint8_t shortfall; /* stopped climbing short of its stroke: held where it stopped until it leaves its top level */
     uint8_t lagged;    /* heated CTL_LAG_MS rising without progress in this step: not waited for (ctl.h) */
     uint8_t capping;   /* stopped short of its stroke in this robot step: the others in step climb no further */
+    int16_t knee_at;   /* knee watch (ctl.h, CTL_KNEE_MS): smoothed ψ at the start of its window */
+    int16_t fast;      /* ... the most it gained in one window of this heat at the drive duty */
+    uint8_t knee_n;    /* ... looks into the window; 0: not heated at the drive duty (starts over) */
+    uint8_t spent;     /* its coil went through its transformation in this step: no more than the hold duty */
 #endif
 #if CTL_HELD_UP
     uint16_t held_up;  /* ticks relaxed (oscillating) at its target level without settling, or
@@ -95,6 +99,14 @@ void stall_watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int1
  * CTL_MOVE_CDEG from its lowest in this step and then gained less than CTL_GAIN_CDEG for
  * CTL_REACH_MS (c->still == REACH_LOOKS: it stopped). c->still = NOT_SEEN starts it over. */
 uint8_t stall_at_reach(uint8_t i, ctl_limb_t *c);
+
+#ifdef CFG_LIMB_STROKE_CDEG
+/* Knee watch (ctl.h, CTL_KNEE_MS) of limb i, climbing to its stroke in this step; heated: its
+ * coil at the drive duty this tick (not held off by the envelope). 1 once its coil is through
+ * its transformation (c->spent); it also ends the climb of a limb on its top level as stopped
+ * short of its stroke, as the hover clock does. */
+uint8_t stall_knee(uint8_t i, uint8_t heated);
+#endif
 
 #if SEQ_CLOCK_PAUSE
 /* The tick of CTL_REACH_EVERY in which the fall watch looks: not the reach watch's. */

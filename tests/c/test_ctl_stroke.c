@@ -241,10 +241,13 @@ static void test_a_limb_that_stops_climbing_short_of_its_stroke_settles_there(vo
     CHECK(psi_settled(0)); /* relaxed: settled on the band's edges, the step can go on */
     put(0, 35.6);
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], 0); /* CTL_CLIMB_STOP_MS without a 0.5° gain: held where it stopped from now on */
+    /* a 30° jump, then nothing: the knee watch (CTL_KNEE_MS) found its coil through its
+     * transformation, as the hover clock would have: held where it stopped, and in this step
+     * kept at the hold duty (warm, never the drive duty) */
+    CHECK_EQ(duty[0], HOLD);
     put(0, 33.5);
     demand(1, 0, duty);
-    CHECK_EQ(duty[0], DRIVE);
+    CHECK_EQ(duty[0], HOLD);
     put(1, 30.0);             /* the next step raises limb 1; limb 0 stays up */
     put(0, 35.6);
     demand(1, 1, duty);
@@ -379,11 +382,12 @@ static void test_climbing_in_step_waits_for_a_slow_limb_only_for_the_climb_limit
     setup();
     put(0, 5.0);
     put(1, 5.0);
+    put(1, 20.5); /* in its band from below: level 0 */
     demand(1, 1, duty);
     put(0, 50.0); /* share 74 %: far ahead of limb 1 */
     for (k = 1; k < limit + 10u; k++) {
         put(0, 50.0);
-        put(1, 22.0 + (double)k / 200.0); /* 5°/s, far behind */
+        put(1, 20.5 + (double)k / 200.0); /* 5°/s from its band, far behind: never fast (no knee) */
         demand(1, 1, duty);
         if (k + 1u < limit) {
             CHECK_EQ(duty[0], HOLD);
@@ -411,7 +415,9 @@ static void test_a_limb_that_stopped_short_caps_the_others_in_step(void)
         demand(1, 1, duty);
         CHECK_EQ(duty[1], HOLD);
     }
-    CHECK(k > HOVER_TICKS);                        /* waited for, it is given a hover time */
+    /* waited for, it is given a hover time by the clock; a 25° jump and then nothing is a coil
+     * through its transformation, and the knee watch says so first (CTL_KNEE_MS) */
+    CHECK(k < HOVER_TICKS);
     CHECK_EQ(ctl_stall(0), CTL_STALL_OSCILLATING); /* limb 0 stopped short */
     for (k = 0; k <= STOP_TICKS + 1u && ctl_stall(1) == CTL_STALL_NONE; k++) {
         put(0, 30.0);
@@ -635,6 +641,60 @@ static void test_a_fall_still_coming_down_stands_the_steps_clock_and_one_that_st
     }
 }
 
+/* Step 11 from 00: the rise lead (limb 0) climbs 5 -> 17° at 100°/s (a coil transforming at a
+ * nominal supply), then creeps at `creep` °/s below its band (19..21°) for `ms`: the rest of its
+ * rise is the other coil's doing, not its own (R1 at full strokes with the left ψ* moved to 70°:
+ * 3°/s, its coil 85 -> 166 °C at the drive duty). Its last duties and the other limb's. */
+static void lead_rises_then_creeps(double fast_deg_s, double creep, uint32_t ms, uint16_t duty[CFG_N_ACTUATORS])
+{
+    uint32_t k;
+    double psi = 5.0;
+    setup();
+    put(0, 5.0);
+    put(1, 5.0);
+    demand(1, 1, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    while (psi < 17.0) {
+        psi += fast_deg_s / (double)CFG_TICK_HZ;
+        put(0, psi);
+        put(1, 5.0);
+        demand(1, 1, duty);
+    }
+    for (k = 0; k < ms * CFG_TICK_HZ / 1000u; k++) {
+        put(0, psi + creep * (double)k / (double)CFG_TICK_HZ);
+        put(1, 5.0);
+        demand(1, 1, duty);
+    }
+}
+
+static void test_a_rise_lead_whose_coil_is_spent_below_its_band_is_heated_no_more(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    /* 0.5 s of the creep: the knee watch has seen a window gaining less than 1/8 of its fastest */
+    lead_rises_then_creeps(100.0, 3.0, 500u, duty);
+    CHECK(ctl_stall(0) == CTL_STALL_NONE); /* not cut off: the others' climb may still lift it */
+    CHECK_EQ(duty[0], HOLD);               /* its coil is through its transformation: warm, no more */
+    CHECK_EQ(duty[1], DRIVE);              /* no longer the lead to wait for: the other climbs */
+}
+
+static void test_a_slow_rise_is_no_knee(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    /* 20°/s (a weak supply: 1.6° in a window, never 4°), then the same creep: as before the knee
+     * watch, the lead heats on at the drive duty and the other waits */
+    lead_rises_then_creeps(20.0, 3.0, 500u, duty);
+    CHECK_EQ(duty[0], DRIVE);
+    CHECK(duty[1] != DRIVE);
+}
+
+static void test_a_fast_rise_that_goes_on_is_no_knee(void)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    /* 100°/s, then 30°/s (2.4° a window, above 1/8 of 8°): still transforming */
+    lead_rises_then_creeps(100.0, 30.0, 60u, duty);
+    CHECK_EQ(duty[0], DRIVE);
+}
+
 int main(void)
 {
     RUN(test_the_config_has_the_strokes);
@@ -660,5 +720,8 @@ int main(void)
     RUN(test_climbing_in_step_waits_for_a_limb_only_while_it_still_rises);
     RUN(test_a_lagging_limb_given_up_is_not_waited_for_again_in_the_step);
     RUN(test_a_fall_still_coming_down_stands_the_steps_clock_and_one_that_stopped_does_not);
+    RUN(test_a_rise_lead_whose_coil_is_spent_below_its_band_is_heated_no_more);
+    RUN(test_a_slow_rise_is_no_knee);
+    RUN(test_a_fast_rise_that_goes_on_is_no_knee);
     return UNIT_EXIT();
 }
