@@ -1,5 +1,5 @@
-"""bench/bench_sweep.py's pieces: its random rows are conditions every example robot's plant
-takes (a draw out of a key's range or naming an end a robot lacks would stop the bench
+"""bench/bench_sweep.py's pieces: its random rows (``proleg.report.sweep``, which ``proleg check``
+draws too) are conditions every example robot's plant takes (a draw out of a key's range or naming an end a robot lacks would stop the bench
 mid-run), the same seed draws the same rows, and its summary counts what its rows say."""
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 from proleg.paths import robots_dir
+from proleg.report import sweep as draws
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import make_plant
 
@@ -31,19 +32,19 @@ def test_every_draw_is_a_condition_the_robots_plant_takes(name):
     robot = load_robot(robots_dir() / f"{name}.toml")
     logging.disable(logging.WARNING)  # the plant's overheat advice for hot draws
     try:
-        for row in sweep.draw_rows(40, seed=3):
-            assert len(row) == sweep.KEYS_PER_ROW
-            assert len({c.split("=")[0] for c in row}) == sweep.KEYS_PER_ROW, row
+        for row in draws.draw_rows(40, seed=3):
+            assert len(row) == draws.KEYS_PER_ROW
+            assert len({c.split("=")[0] for c in row}) == draws.KEYS_PER_ROW, row
             make_plant(robot, "physical", list(row))  # SimError on a bad key, value or end
     finally:
         logging.disable(logging.NOTSET)
 
 
 def test_the_seed_decides_the_rows():
-    assert sweep.draw_rows(10, seed=5) == sweep.draw_rows(10, seed=5)
-    assert sweep.draw_rows(10, seed=5) != sweep.draw_rows(10, seed=6)
-    keys = {c.split("=")[0] for row in sweep.draw_rows(200, seed=1) for c in row}
-    assert keys == set(sweep.DRAWS)  # every key gets drawn
+    assert draws.draw_rows(10, seed=5) == draws.draw_rows(10, seed=5)
+    assert draws.draw_rows(10, seed=5) != draws.draw_rows(10, seed=6)
+    keys = {c.split("=")[0] for row in draws.draw_rows(200, seed=1) for c in row}
+    assert keys == set(draws.DRAWS)  # every key gets drawn
 
 
 def _row(possible, completed, peak):
