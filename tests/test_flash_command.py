@@ -124,3 +124,27 @@ def test_missing_artifact_and_failing_tool_are_clear_errors(tmp_path, fake_hex):
     # the tool ran and failed (no sync, a verify error): a failure (exit 1), not a usage error (2)
     with pytest.raises(LinkError, match=r"^false failed with exit status 1 \(its messages are above\)$"):
         flash(method, fake_hex, "/dev/null")
+
+
+@pytest.mark.parametrize("name", ["my robots", "lab {x} [1] $HOME; \"q\"", "tab\there"])
+def test_openocd_gets_the_artifact_as_one_tcl_word(tmp_path, name):
+    """openocd's ``-c 'program {artifact} ...'`` is a Tcl script: a build directory with a space
+    in its path ('program my robots/firmware.bin 0x08000000 ...') handed ``program`` the file
+    'my' and the address 'robots/firmware.bin', and the flash failed. Tcl itself reads the
+    command back: one file name, the whole path, then the address and the options."""
+    tkinter = pytest.importorskip("tkinter")
+    try:
+        tcl = tkinter.Tcl()
+    except tkinter.TclError:
+        pytest.skip("no Tcl library")
+    artifact = tmp_path / name / "firmware.bin"
+    method = choose_method(load_board("bluepill-f103"), "openocd")
+    script = flash_command(method, artifact, None)[-1]
+    tcl.eval("proc program {args} {return $args}")
+    words = tcl.splitlist(tcl.eval(script))
+    assert list(words) == [str(artifact), "0x08000000", "verify", "reset", "exit"]
+    # a tool given the path as a whole argument gets it unchanged
+    pyocd = choose_method(load_board("bluepill-f103"), "pyocd")
+    assert str(artifact) in flash_command(pyocd, artifact, None)
+    nano = choose_method(load_board("arduino-nano"))
+    assert f"flash:w:{artifact}:i" in flash_command(nano, artifact, "/dev/ttyUSB0")

@@ -54,10 +54,28 @@ def is_pseudo_terminal(port: str | None) -> bool:
     return stat.S_ISCHR(st.st_mode) and os.major(st.st_rdev) in _PTY_MAJORS
 
 
+#: tools whose arguments are scripts in their own language, where a path written into a longer
+#: argument is split at its spaces (openocd's ``-c 'program {artifact} ...'`` is Tcl): the path is
+#: escaped for that language there (an argument that is the path alone is passed as it is)
+SCRIPT_QUOTING = {"openocd": "tcl"}
+
+
+def tcl_word(text: str) -> str:
+    r"""``text`` as one Tcl word: each character Tcl gives a meaning (white space, ``; $ [ ] { }
+    " \``) escaped with a backslash, so ``program build/my robot/firmware.bin`` does not hand
+    openocd's ``program`` the file ``build/my`` and an address ``robot/firmware.bin``, and a
+    Windows path keeps its backslashes."""
+    return "".join("\\" + c if c in ' \t;$[]{}"\\' else ("\\n" if c == "\n" else c) for c in text)
+
+
 def flash_command(method: FlashMethod, artifact: Path, port: str | None) -> list[str]:
     if method.needs_port and not port:
         raise BuildError(f"{method.tool} needs the board's serial port: give --port (e.g. /dev/ttyUSB0)")
-    cmd = [part.replace("{artifact}", str(artifact)).replace("{port}", port or "") for part in method.command]
+    program = Path(method.command[0]).name if method.command else method.tool
+    tcl = "tcl" in (SCRIPT_QUOTING.get(method.tool), SCRIPT_QUOTING.get(program))
+    quoted = tcl_word(str(artifact)) if tcl else str(artifact)
+    cmd = [str(artifact) if part == "{artifact}" else part.replace("{artifact}", quoted).replace("{port}", port or "")
+           for part in method.command]
     extra = PTY_OPTIONS.get(method.tool, ())
     if extra and method.needs_port and is_pseudo_terminal(port):
         log.info("%s is a pseudo-terminal (no parity): %s gets %s", port, method.tool, " ".join(extra))
