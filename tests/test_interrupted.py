@@ -71,7 +71,7 @@ def test_a_real_sigint_inside_an_mcap_chunk_write_waits_for_the_chunk(capsys, mo
             self.f = f
 
         def write(self, data):
-            if len(data) > 4096 and not sent:
+            if len(data) > 2048 and not sent:  # a chunk (16 KiB of messages, compressed), not its index
                 sent.append(len(data))
                 os.kill(os.getpid(), signal.SIGINT)  # handled at the next line, mid-chunk
                 half = len(data) // 2
@@ -90,7 +90,7 @@ def test_a_real_sigint_inside_an_mcap_chunk_write_waits_for_the_chunk(capsys, mo
     code, out, err = cli(capsys, "sim", R1, "--duration", "600", "--record", record)
     assert sent and code == 130 and out == "" and "Traceback" not in err, err
     assert err.rstrip().endswith(f"recording kept in {record} (complete up to there)")
-    assert len(read_recording(record).time_s) > 50  # the chunk that was being written is in it
+    assert len(read_recording(record).time_s) > 40  # the chunk that was being written (16 KiB) is in it
 
 
 def test_an_interrupted_sim_without_a_recording_says_nothing_was_recorded(capsys, monkeypatch):

@@ -118,6 +118,40 @@ def test_mcap_recording_reads_back_with_the_mcap_reader(tmp_path):
     assert [e["text"] for e in rec.events if e["msg"] == "INJECT"] == ["dead-actuator:sma-left"]
 
 
+def test_a_killed_mcap_recorder_keeps_every_chunk_it_completed(tmp_path, capsys):
+    """A console killed by SIGKILL (a CI job's hard timeout, a crash) writes no MCAP footer. The
+    library's 1 MiB chunks (an hour of telemetry at 50 Hz) stayed in memory and the reader
+    needed the footer, so the file read back as nothing: every whole chunk is now on disk (at
+    most CHUNK_BYTES are lost) and a file without a footer reads up to its last whole record,
+    with a warning. What is on disk while the recorder runs is what SIGKILL leaves."""
+    pytest.importorskip("mcap")
+    from proleg.cli.main import main
+    from proleg.record.mcap_format import CHUNK_BYTES
+
+    path = tmp_path / "run.mcap"
+    board = FakeBoard()
+    link = SimLink(board)
+    client = RobotClient(link)
+    rec = Logger(path, RecordingMeta.for_robot(info=client.connect(), robot=ROBOT, link=link))
+    client.start(0, "+x")
+    frames = 0
+    while frames < 300:
+        rx = client.recv_received(1.0)
+        assert rx is not None
+        rec.on_message(rx)
+        frames += rx.message.name == "TELEMETRY"
+    killed = tmp_path / "killed.mcap"
+    killed.write_bytes(path.read_bytes())  # the recorder is still open: no footer yet
+    kept = read_recording(killed)
+    assert 0 < 300 - kept.time_s.size < CHUNK_BYTES / 200  # a telemetry message is over 200 bytes of JSON
+    assert np.all(np.diff(kept.seq) == 1) and kept.seq[0] == 0
+    assert main(["plot", str(killed), "-o", str(tmp_path / "out.png")]) == 0
+    assert f"warning: {killed}: no MCAP footer: read up to message" in capsys.readouterr().err
+    rec.stop()
+    assert read_recording(path).time_s.size == 300  # finished: every message, and no warning
+    assert "footer" not in capsys.readouterr().err
+
+
 def test_every_writer_has_a_reader_and_the_suffix_picks_them():
     from proleg.record import READERS, WRITERS
 
@@ -319,7 +353,10 @@ def _csv_cell(column: str, value: str, *, events: bool = False):
     (".jsonl", _first("TELEMETRY", seq=1.5), "run.jsonl:", "seq: expected an integer, got 1.5"),
     (".jsonl", _first("TELEMETRY", t_s="0.1"), "run.jsonl:", "t_s: expected a finite number, got '0.1'"),
     (".mcap", lambda p: p.write_text("1,2\n"), "run.mcap", "not a readable MCAP recording (it ends early"),
-    (".mcap", lambda p: p.write_bytes(p.read_bytes()[:-200]), "run.mcap", "(it ends early"),
+    # cut inside its one chunk: no message was written whole (a cut after a whole chunk reads
+    # back up to it: test_a_killed_mcap_recorder_keeps_every_chunk_it_completed)
+    (".mcap", lambda p: p.write_bytes(p.read_bytes()[:len(p.read_bytes()) // 2]), "run.mcap",
+     "not a readable MCAP recording ("),
 ])
 def test_a_bad_recording_is_one_line_naming_its_file_and_line_and_exit_2(tmp_path, capsys, suffix, spoil, where, says):
     from proleg.cli.main import main

@@ -2,7 +2,7 @@
 
 A ``Writer`` is a ``Listener`` (``proleg.link.listeners``): it gets every decoded message and
 writes it at once (flushed per line or message), so a killed console loses at most the last
-one. Writing never raises into the ``Notifier``'s thread: a failed write (a full disk...)
+one (an MCAP at most its last chunk of 16 KiB: ``mcap_format.CHUNK_BYTES``). Writing never raises into the ``Notifier``'s thread: a failed write (a full disk...)
 closes the writer and keeps the error in ``writer.error`` (a ``LinkError`` naming the file)
 for the caller to report. ``mark(host_s, t_s, text)`` records a fault injection.
 A ``Reader`` reads a file back into a ``Recording``; a missing or malformed file is a
