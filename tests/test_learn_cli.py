@@ -457,3 +457,21 @@ def test_a_stop_no_load_warning_predicts_says_so_and_how_to_find_out():
     tri = load_robot(FIXTURES / "tri-mixed.toml")
     assert any(_predicted(tri, tri.transitions.label(int(a)), "101")
                for a, b in zip(tri.transitions.src, tri.transitions.dst) if tri.transitions.label(int(b)) == "101")
+
+
+def test_more_on_a_fresh_log_runs_the_extra_trials_after_the_first_ones(tmp_path, capsys):
+    """--half-width H --more on a new log planned its extra trials from no trials at all ("two
+    of each"), so it ran no extra trial, fewer than --repeats, and its report then asked for
+    the extra trials "with --more and a robot link", the options it was given. Now the R
+    trials of each transition come first, then the extra trials planned from them."""
+    noisy = tmp_path / "noisy.toml"
+    noisy.write_text(R1.read_text() + "\n[plant]\nnoise_mm = 0.5\n")
+    log = tmp_path / "t.jsonl"
+    code, out, _err = run(capsys, "-q", "learn", str(noisy), "--sim", "--log", str(log), "--repeats", "3",
+                          "--half-width", "1", "--more", "--seed", "3")
+    assert code == 0
+    rows = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.split()[:1] and ln.split()[0].count("->") == 1}
+    assert len(rows) == 12 and all(int(r[1]) >= 3 for r in rows.values())  # --repeats first
+    assert sum(int(r[1]) for r in rows.values()) > 12 * 3 + 12  # then the extra trials
+    # what is left is what the new trials' variances ask for: not "run them with --more"
+    assert re.search(r"extra trials for ± 1: \d+ \(still, after --more: ", out), out

@@ -301,8 +301,13 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
             if args.adaptive:
                 _adaptive(ex, args, t, trial_log, estimate, adaptive_demand)
             elif args.more:
-                need, _plan = extra_plan(estimate(t, trial_log.trials), args.half_width, seed=args.seed)
-                _run_to(ex, need + _counts(t, trial_log.trials), args.max_pieces)
+                # the R trials of each transition first: the extra trials are planned from their
+                # variances (on a fresh log the plan was "2 of each", --more ran no extra trial and
+                # the report then asked for hundreds "with --more and a robot link")
+                ex.run(max_pieces=args.max_pieces)
+                if ex.tally()[1] == 0:
+                    need, _plan = extra_plan(estimate(t, trial_log.trials), args.half_width, seed=args.seed)
+                    _run_to(ex, need + _counts(t, trial_log.trials), args.max_pieces)
             else:
                 ex.run(max_pieces=args.max_pieces)
         except ExplorationError as e:

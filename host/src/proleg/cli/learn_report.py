@@ -140,8 +140,10 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
         print("passed through other states on the way (a limb crossed a level it should have kept; "
               f"their Δx includes those crossings): {strayed}", file=out)
     if extra is not None:
-        print(f"extra trials for ± {args.half_width:g}: {int(extra.sum())} "
-              f"(run them with --more and a robot link)", file=out)
+        why = ("every interval is that narrow" if not extra.sum() else
+               "still, after --more: the new trials changed the intervals' variances; run the same command "
+               "again for more" if getattr(args, "more", False) else "run them with --more and a robot link")
+        print(f"extra trials for ± {args.half_width:g}: {int(extra.sum())} ({why})", file=out)
     if int(dx.n.sum()) and (args.variance_weight or args.report):
         from ..gait import optimal_gaits
 
