@@ -409,6 +409,43 @@ def test_a_full_disk_while_opening_a_csv_recording_leaves_no_empty_files(tmp_pat
     assert [p.name for p in tmp_path.iterdir()] == ["run.events.csv"]  # the link stays; no run.csv, no meta
 
 
+def test_gait_plot_says_which_answers_have_no_gait(tmp_path, capsys, monkeypatch):
+    """A robot with no gait in either direction (one limb, whose two transitions cancel) drew an
+    empty figure titled "10 passes of each gait", with matplotlib's 'No artists with labels
+    found to put in legend' UserWarning on stderr; the one-actuator R1, which has no -x gait,
+    left -x out of the figure without a word. The figure now says which answers have none."""
+    import proleg.plot
+    from proleg.cli.main import main
+
+    drawn = []
+    real = proleg.plot.write_figure
+    monkeypatch.setattr(proleg.plot, "write_figure", lambda fig, path: (drawn.append(fig), real(fig, path)))
+    one = tmp_path / "one.toml"
+    one.write_text('[robot]\nname = "one-leg"\n[[limb]]\nname = "only"\npsi_star_deg = [20.0]\nactuator = "c"\n'
+                   '[[actuator]]\nname = "c"\n[transitions]\nmatrix = [[0, 1], [-1, 0]]\n')
+    out = tmp_path / "none.png"
+    with _no_warning():  # a warning is an error here (matplotlib's legend of nothing was one)
+        assert main(["gait", str(one), "--plot", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "UserWarning" not in err and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    texts = [t.get_text() for t in drawn[-1].axes[0].texts]
+    assert "no gait moves the robot: +x, -x" in texts
+    assert main(["gait", "paper-r1-one-actuator", "--plot", str(tmp_path / "one-way.png")]) == 0
+    ax = drawn[-1].axes[0]
+    assert [t.get_text() for t in ax.texts if t.get_text()] == ["no gait moves the robot: -x"]
+    assert [t.get_text() for t in ax.get_legend().get_texts()][0].startswith("+x: ")
+
+
+def _no_warning():
+    import warnings
+
+    class _Raise(warnings.catch_warnings):
+        def __enter__(self):
+            super().__enter__()
+            warnings.simplefilter("error")
+    return _Raise()
+
+
 def test_gait_plot_with_evaluate_draws_the_sequence_and_cycles_alone_is_refused(tmp_path, capsys):
     from proleg.cli.main import main
 

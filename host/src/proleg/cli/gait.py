@@ -386,6 +386,7 @@ def _plot(robot, answers, cycles: int, out: str, json_out: bool = False) -> None
     t = robot.transitions
     fig = new_figure(7, 7)
     ax = fig.subplots()
+    missing = [name for name, r in answers if not r.gaits]
     for i, (name, r) in enumerate(answers):
         if not r.gaits:
             continue
@@ -405,7 +406,11 @@ def _plot(robot, answers, cycles: int, out: str, json_out: bool = False) -> None
     ax.set_ylabel(f"y ({robot.units})")
     ax.set_title(f"{robot.name}: {cycles} passes of each gait (dots: one pass)")
     ax.grid(True, lw=0.3)
-    ax.legend(loc="best", fontsize="small")
+    if len(missing) < len(answers):  # (a legend of nothing was matplotlib's UserWarning on stderr)
+        ax.legend(loc="best", fontsize="small")
+    if missing:  # an answer without a gait is said, not left out of the figure without a word
+        ax.text(0.02, 0.02, "no gait moves the robot: " + ", ".join(missing), transform=ax.transAxes,
+                fontsize="small", va="bottom")
     write_figure(fig, path)
     print(f"wrote {path}", file=sys.stderr if json_out else note_stream(path))
 
