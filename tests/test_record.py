@@ -19,6 +19,7 @@ from proleg.link.sim_link import SimLink
 
 
 ROBOT = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+ROBOT_FILE = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
 
 
 def record(path: Path, frames: int = 120, inject_at: int | None = None) -> FakeBoard:
@@ -539,3 +540,31 @@ def test_duty_columns_name_the_actuator_the_firmware_sends_whatever_its_channel(
     first_up = int(np.argmax(psi_left > 20.0))  # gait 0 starts 00 -> 10: the left coil alone raises it
     assert first_up > 0
     assert left[:first_up].max() > 50.0 and right[:first_up].max() == 0.0
+
+
+def test_a_name_the_plot_font_cannot_draw_is_one_warning_line(tmp_path, capsys):
+    """Limbs named in Japanese (後ろ足): proleg plot printed matplotlib's raw UserWarning, with
+    its source line, once per character and panel (18 lines for one name); now one line names
+    the characters, and the plot is still written."""
+    from proleg.cli.main import main
+
+    text = ROBOT_FILE.read_text().replace('name = "left"', 'name = "後ろ足"')
+    robot = tmp_path / "jp.toml"
+    robot.write_text(text, encoding="utf-8")
+    path = tmp_path / "run.csv"
+    assert main(["sim", str(robot), "--duration", "2", "--record", str(path), "-q"]) == 0
+    capsys.readouterr()
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.ft2font import FT2Font
+
+    if FT2Font(findfont(FontProperties())).get_char_index(ord("後")):
+        pytest.skip("the plot font draws CJK here")
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["plot", str(path), "-o", str(tmp_path / "out.png")]) == 0
+    err = capsys.readouterr().err
+    assert not [w for w in caught if "Glyph" in str(w.message)] and err.count("\n") == 1, err
+    assert "has no glyph for 後 ろ 足, drawn as boxes" in err
+    assert (tmp_path / "out.png").exists()

@@ -8,6 +8,8 @@ when the write fails.
 
 from __future__ import annotations
 
+import logging
+import re
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +20,8 @@ from .outputs import replacing
 from .protocol.enums import Flag
 from .record import Recording, read_recording
 from .states import label
+
+log = logging.getLogger("proleg")
 
 #: the figure formats proleg writes (matplotlib's Agg backend), chosen by the file's suffix
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -52,9 +56,39 @@ def save_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
     """Write ``fig`` to ``out`` in the format its suffix names, through a temporary file
     renamed over it (``proleg.outputs.replacing``: a symlink's target replaced, a FIFO or
     device written in place): a failed write leaves nothing. ``OSError`` propagates."""
+    import warnings
+
     ext = out.suffix.lower().lstrip(".")
-    with replacing(out, suffix=f".{ext}") as tmp:
-        fig.savefig(tmp, format=ext, dpi=dpi)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with replacing(out, suffix=f".{ext}") as tmp:
+            fig.savefig(tmp, format=ext, dpi=dpi)
+    _say_missing_glyphs(out, caught)
+
+
+#: matplotlib's warning for a character its font cannot draw (once per character and panel)
+_MISSING_GLYPH = re.compile(r"Glyph (\d+) .*missing from font\(s\) (.+)\.$")
+
+
+def _say_missing_glyphs(out: Path, caught: list) -> None:
+    """A name the font cannot draw (a limb called 後ろ足) was one raw ``UserWarning`` with
+    matplotlib's source line per character and panel: one line instead, naming the
+    characters. Other warnings go on as they came."""
+    import warnings
+
+    chars: dict[str, None] = {}
+    font = ""
+    for w in caught:
+        m = _MISSING_GLYPH.search(str(w.message))
+        if m:
+            chars[chr(int(m.group(1)))] = None
+            font = m.group(2)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if chars:
+        log.warning("warning: %s: the plot's font (%s) has no glyph for %s, drawn as boxes: give matplotlib a "
+                    "font that has them (font.family in a matplotlibrc, e.g. Noto Sans CJK JP from Debian's "
+                    "fonts-noto-cjk)", out, font, " ".join(chars))
 
 
 def write_figure(fig: Any, out: Path, dpi: float | None = None) -> None:
