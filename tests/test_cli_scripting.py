@@ -588,3 +588,17 @@ def test_run_starts_once_the_board_knows_where_the_robot_is_so_a_gait_off_rest_t
     start = next(e for e in lines if e["msg"] == "EVENT" and e["kind"] == "GAIT_STARTED")
     tel = [x for x in lines if x["msg"] == "TELEMETRY" and x["t_s"] <= start["t_s"]]
     assert tel and not tel[-1]["flags"] & 512  # Flag.STATE_UNKNOWN: the last frame before START knew the state
+
+
+def test_run_names_a_long_named_robot_as_its_file_does(capsys, tmp_path):
+    """INFO carries the first 15 characters of the robot's name (checked against the file when
+    run connects); run's RESULT and summary line gave that truncation ("a-very-long-rob") as
+    the robot, where proleg sim --json gives the file's name."""
+    long_name = "a-robot-name-of-more-than-fifteen-characters"
+    path = tmp_path / "long.toml"
+    path.write_text((Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").read_text()
+                    .replace('name = "paper-r1"', f'name = "{long_name}"'))
+    code, out, _ = run(capsys, "run", str(path), "--sim", "--duration", "1", "--format", "jsonl", "-q")
+    assert code == 0 and json.loads(out.splitlines()[-1])["robot"] == long_name
+    code, out, _ = run(capsys, "run", str(path), "--sim", "--duration", "1", "-q")
+    assert code == 0 and out.startswith(f"{long_name} on sim ")

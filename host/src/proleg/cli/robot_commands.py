@@ -226,8 +226,13 @@ def cmd_run(args: argparse.Namespace) -> int:
             for listener in listeners:
                 listener.stop()
     errors = list(run.errors) + [str(w.error) for w in listeners if getattr(w, "error", None)]
+    # the board's INFO carries the first 15 characters of the name (checked against the file on
+    # connecting): a robot named at more length was reported by its truncation
+    from ..robot import info_name
+
+    name = robot.name if run.robot == info_name(robot.name) else run.robot
     doc = {
-        "msg": "RESULT", "robot": run.robot, "link": client.link.description, "gait": gait,
+        "msg": "RESULT", "robot": name, "link": client.link.description, "gait": gait,
         "direction": direction, "duration_s": run.duration_s, "cycles": run.cycles,
         # the labels of the states reached, in order, as in proleg sim --json (it was their count)
         "states_reached": [_label(robot, s) for s in run.states_reached], "telemetry_frames": run.telemetry_frames,
@@ -251,7 +256,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         which = (f"gait {gait} in {direction}" if gait != GAIT_USER else
                  "the loaded gait" + (" (its way unstated)" if direction == UNSTATED else f" in {direction}"))
         ran = f"for {run.duration_s:g} s" if run.duration_s else "did not start"
-        print(f"{run.robot} on {doc['link']}: {which} {ran}: "
+        print(f"{name} on {doc['link']}: {which} {ran}: "
               f"{counted(run.cycles, 'cycle')}, {counted(run.telemetry_frames, 'telemetry frame')} "
               f"({run.telemetry_lost} lost), {counted(len(run.faults), 'fault')}")
         if "pose" in doc:
