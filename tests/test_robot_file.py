@@ -152,6 +152,16 @@ def test_psi_star_count_must_match_levels(tmp_path):
             "2 critical angle")
 
 
+def test_two_angles_without_levels_say_that_levels_defaults_to_two(tmp_path):
+    """A three-level limb written without ``levels`` (its two angles given): the error said
+    "expected a list of 1 critical angle(s) in degrees (levels - 1)" and nothing of levels,
+    which the file does not mention."""
+    msg = rejects(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [12.0, 24.0]", 1),
+                  "limb 'left': psi_star_deg")
+    assert msg.endswith("(levels - 1, and levels is 2 when not given), got [12.0, 24.0]: "
+                        "for 2 angles say levels = 3"), msg
+
+
 def test_forbidden_mark_on_a_rewarded_transition_says_what_forbidden_is_for_and_the_fix(tmp_path):
     """It said "(expected 'x' there)", which means nothing for a CSV table, nor says why."""
     text = R1.replace("[transitions]", '[transitions]\nforbidden = ["01->11"]')
