@@ -175,3 +175,22 @@ def _state(pid: int) -> str:
         return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
     except OSError:
         return "Z"
+
+
+def test_check_runs_the_exact_nano_image_on_avr_emu(capsys):
+    """--board avr-emu: the rows on the arduino-nano firmware.elf (simavr), the MCU's own clock;
+    the same row as on host-sim walks within a few percent (the same C, another compiler)."""
+    from proleg.sim.simulated_boards import simulated_board
+
+    lacking = simulated_board("avr-emu").missing()
+    if lacking:
+        pytest.skip(lacking)
+    rc, out, _ = run(capsys, "check", str(R1), "--rows", "1", "--seed", "2", "--jobs", "1", "--board", "avr-emu",
+                     "--json")
+    emu = json.loads(out)
+    rc_host, out_host, _ = run(capsys, "check", str(R1), "--rows", "1", "--seed", "2", "--jobs", "1", "--json")
+    host = json.loads(out_host)
+    assert rc == rc_host == 0 and emu["board"] == "avr-emu" and host["board"] == "host-sim"
+    (e,), (h,) = emu["rows"], host["rows"]
+    assert e["conditions"] == h["conditions"] and e["verdict"] == h["verdict"] == "ok"
+    assert e["speed_mm_s"] == pytest.approx(h["speed_mm_s"], rel=0.15)

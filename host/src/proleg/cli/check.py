@@ -54,22 +54,29 @@ def add_arguments(sub) -> None:
     c.add_argument("--condition", action="append", default=[], metavar="KEY=VALUE",
                    help="a plant condition in every row, on top of the robot file's [plant] (as proleg sim "
                         "--condition takes it; its key is not drawn); --condition help lists the keys")
+    from ..sim.simulated_boards import SIMULATED_BOARDS
+
+    c.add_argument("--board", choices=tuple(SIMULATED_BOARDS), default="host-sim",
+                   help="host-sim: the firmware's C on the host (default, about a second a row); avr-emu / "
+                        "arm-emu: the exact arduino-nano / bluepill firmware.elf on an emulated MCU (about "
+                        "half real time: 20-50 s a row)")
     c.add_argument("--jobs", type=positive_int, default=None, metavar="N",
                    help="rows run at once (default: the machine's cores)")
     c.add_argument("--json", action="store_true", help="print the report as one JSON object")
     c.set_defaults(run=cmd_check)
 
 
-def _work(job: tuple[str, tuple[str, ...], float, str, int, str]) -> Any:
+def _work(job: tuple[str, tuple[str, ...], float, str, int, str, str]) -> Any:
     from ..report import sweep
     from ..robot import load_robot
 
-    path, conditions, run_s, direction, gait, name = job
-    return sweep.run_row(load_robot(path), conditions, run_s, direction=direction, gait=gait, name=name)
+    path, conditions, run_s, direction, gait, name, board = job
+    return sweep.run_row(load_robot(path), conditions, run_s, direction=direction, gait=gait, name=name,
+                         board=board)
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    from ..errors import GaitError
+    from ..errors import GaitError, SimError
     from ..firmware.gaits import firmware_gaits
     from ..report import sweep
     from ..robot import load_robot
@@ -94,7 +101,13 @@ def cmd_check(args: argparse.Namespace) -> int:
         return EXIT_FAILED
     draws = sweep.draw_rows(args.rows, args.seed, [limb.name for limb in robot.limbs], leave_out=tuple(base_keys))
     rows_conditions = [base + d for d in draws]
-    jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i + 1}")
+    if args.board != "host-sim":
+        from ..sim.simulated_boards import simulated_board
+
+        lacking = simulated_board(args.board).missing()
+        if lacking:  # before any row: every row would fail the same way
+            raise SimError(lacking)
+    jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i + 1}", args.board)
             for i, c in enumerate(rows_conditions)]
     log.info("%s: gait %d (%s) in %s under %d random conditions, %g s each (the idealised drive walks "
              "%+.3f mm/s%s)", robot.name, args.gait, label, args.direction, len(jobs), run_s,
@@ -113,7 +126,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     errors = [_error(i, r) for i, r in failed]
     if args.json:
         print(json.dumps({
-            "robot": robot.name, "gait": args.gait, "states": label, "direction": args.direction,
+            "robot": robot.name, "board": args.board, "gait": args.gait, "states": label, "direction": args.direction,
             "seed": args.seed, "conditions": list(base), "run_s": run_s,
             "idealised_nominal_mm_s": None if nominal.speed_mm_s is None else round(nominal.speed_mm_s, 4),
             "rows": [r.to_json() for r in rows], "summary": summary, "ok": not failed, "errors": errors,
@@ -165,7 +178,8 @@ def _error(i: int, r: Any) -> str:
 
 def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, rows: list, s: dict) -> None:
     base = f", with {' '.join(args.condition)}" if args.condition else ""
-    print(f"{robot.name}: gait {args.gait} ({label}) in {args.direction} under {len(rows)} random conditions "
+    print(f"{robot.name} on {args.board}: gait {args.gait} ({label}) in {args.direction} under {len(rows)} random "
+          f"condition{'s' if len(rows) != 1 else ''} "
           f"({len(rows[0].conditions) - len(args.condition)} keys each, seed {args.seed}{base}), {run_s:g} s each "
           "from cold")
     width = max(len(" ".join(r.conditions[len(args.condition):])) for r in rows)

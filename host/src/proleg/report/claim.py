@@ -309,8 +309,9 @@ REST_ON_GROUND_S = 2.5
 
 def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: int | Sequence[int] = 0,
                  duration_s: float = RUN_S, seed: int = 1, calibrate: bool = True,
-                 level_on_ground: bool = False) -> DriveOutcome:
-    """The ψ-feedback firmware on the simulated board, physical plant under ``point``.
+                 level_on_ground: bool = False, board: str = "host-sim") -> DriveOutcome:
+    """The ψ-feedback firmware on the simulated ``board`` (host-sim, or the exact MCU image on
+    avr-emu / arm-emu), physical plant under ``point``.
 
     ``gait``: a firmware gait index, or a state sequence loaded with LOAD_GAIT (learn-then-walk).
     ``calibrate``: first what a user does (docs/calibration.md): the robot on FLAT ground, at
@@ -325,7 +326,13 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
 
     flat = GridPoint(point.name, point.modes, point.strength,
                      tuple(c for c in point.conditions if not c.startswith("incline_deg=")), point.faults)
-    sim = SimulatedRobot(robot, seed=seed, plant=_plant(robot, flat if calibrate else point))
+    first = _plant(robot, flat if calibrate else point)
+    if board == "host-sim":
+        sim = SimulatedRobot(robot, seed=seed, plant=first)
+    else:
+        from ..sim.simulated_boards import simulated_robot
+
+        sim = simulated_robot(board, robot, seed=seed, plant=first)
     session = SimSession(sim)
     cal_note = ""
     if calibrate:

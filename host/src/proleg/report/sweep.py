@@ -10,8 +10,9 @@ as in the claim bench (``report.claim``):
 
 - the idealised drive (true ψ and ψ*, the firmware's envelope) says whether the coils can
   complete the gait under it at all, and how fast it walks;
-- the firmware walks the gait on the simulated board (host-sim), started as a user starts it
-  (a flat calibration, then the condition's ground), for the run length the nominal gait needs.
+- the firmware walks the gait on the simulated board (host-sim, or the exact MCU image on an
+  emulated one), started as a user starts it (a flat calibration, then the condition's ground),
+  for the run length the nominal gait needs.
 
 A row is **missed** when the idealised drive walks it and the firmware does not complete it (a
 fault stop, the wrong way, or a coil past 120 °C), and a **hot stop** when neither walks it and
@@ -129,11 +130,12 @@ class Row:
 
 
 def run_row(robot: Any, conditions: Sequence[str], run_s: float, *, direction: str = "+x",
-            gait: int | Sequence[int] = 0, name: str = "row") -> Row:
-    """The idealised drive and the firmware under ``conditions``, each from a cold robot."""
+            gait: int | Sequence[int] = 0, name: str = "row", board: str = "host-sim") -> Row:
+    """The idealised drive and the firmware (on the simulated ``board``) under ``conditions``,
+    each from a cold robot."""
     point = claim.GridPoint(name, (), "random", tuple(conditions), ())
     ideal = claim.idealised_walk(robot, point, direction, gait)
-    fb = claim.feedback_run(robot, point, direction=direction, gait=gait, duration_s=run_s)
+    fb = claim.feedback_run(robot, point, direction=direction, gait=gait, duration_s=run_s, board=board)
     return Row(tuple(conditions), ideal.possible, ideal.why_not, ideal.speed_mm_s, fb.completed,
                fb.speed_mm_s, fb.fault, fb.note, fb.coil_peak_c, fb.reported)
 
