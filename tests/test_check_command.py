@@ -5,6 +5,7 @@ cooked a coil, fails the check (exit 1)."""
 from __future__ import annotations
 
 import json
+import logging
 import os
 import signal
 import subprocess
@@ -86,6 +87,17 @@ def test_check_runs_the_drawn_rows_on_the_firmware(capsys):
     for r in report["rows"]:  # R1 walks these rows: each is a real run of the firmware
         assert r["verdict"] in ("ok", "walked", "clean stop") and 0 < r["coil_peak_c"] < 120
     assert "row 2 of 2" in err
+
+
+def test_rows_run_in_this_process_are_as_quiet_as_a_pools(capsys):
+    """--jobs 1 (or --rows 1, or a one-core machine) runs the rows in this process: seed 1's
+    first row (power=1.00) printed the plant's advice for the robot file ("coil 'sma-right' ...
+    would settle at 156 °C with this supply ... lower the supply") twice, where the same row in a
+    pool's worker printed nothing; the progress lines still show."""
+    rc, _, err = run(capsys, "check", str(R1), "--rows", "1", "--seed", "1", "--jobs", "1")
+    assert rc == 0 and "row 1 of 1: ok" in err
+    assert "warning" not in err, err
+    assert logging.root.manager.disable == logging.NOTSET  # and logging is as it was after
 
 
 def test_base_conditions_go_into_every_row(capsys):

@@ -144,7 +144,7 @@ def _run(jobs: list, n_jobs: int, rows: list) -> None:
     n_jobs = min(n_jobs, len(jobs))
     if n_jobs <= 1:
         for job in jobs:
-            rows.append(_work(job))
+            rows.append(_quiet_work(job))
             _progress(len(rows), len(jobs), rows[-1])
         return
     import multiprocessing
@@ -160,6 +160,20 @@ def _run(jobs: list, n_jobs: int, rows: list) -> None:
     finally:
         pool.terminate()  # Ctrl-C or an error: no worker goes on for nobody
         pool.join()
+
+
+def _quiet_work(job: tuple) -> Any:
+    """``_work`` in this process, as quiet as a pool's worker (``sweep.quiet_worker``): the
+    plant's advice about a drawn condition (a coil that "would settle at 156 °C with this
+    supply: lower the supply") is not printed once per row and run. With one job (``--jobs 1``,
+    ``--rows 1``, a one-core machine) it was, twice for each hot draw, where the same rows in a
+    pool printed none; the progress lines, logged here between rows, still show."""
+    before = logging.root.manager.disable
+    logging.disable(logging.WARNING)
+    try:
+        return _work(job)
+    finally:
+        logging.disable(before)
 
 
 def _progress(done: int, total: int, row: Any) -> None:
