@@ -153,6 +153,34 @@ def test_a_killed_mcap_recorder_keeps_every_chunk_it_completed(tmp_path, capsys)
     assert "footer" not in capsys.readouterr().err
 
 
+def test_an_mcap_chunk_with_damaged_compressed_bytes_is_read_up_to_it_not_a_traceback(tmp_path, capsys):
+    """A chunk whose zstd bytes were damaged (a disk or copy error): the decompressor's
+    ZstdError is no McapError, and proleg plot printed a traceback. Now the messages before the
+    damaged chunk are read, with a warning that says so (the file has its footer: it was not
+    cut short); a damaged first chunk is the one-line error of any unreadable recording."""
+    pytest.importorskip("mcap")
+    pytest.importorskip("zstandard")
+    from proleg.cli.main import main
+
+    path = tmp_path / "run.mcap"
+    record(path, frames=300)
+    data = path.read_bytes()
+    frames = [i for i in range(len(data)) if data[i:i + 4] == b"\x28\xb5\x2f\xfd"]  # zstd frames: chunks
+    assert len(frames) >= 3, "300 frames make several 16 KiB chunks"
+    for which, rc in ((1, 0), (0, 2)):
+        spoiled = tmp_path / f"spoiled{which}.mcap"
+        spoiled.write_bytes(data[:frames[which]] + b"\0\0\0\0" + data[frames[which] + 4:])
+        assert main(["plot", str(spoiled), "-o", str(tmp_path / f"out{which}.png")]) == rc
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and "ZstdError" not in err, err
+        if rc == 0:
+            kept = read_recording(spoiled)
+            assert 0 < kept.time_s.size < 300 and np.all(np.diff(kept.seq) == 1)
+            assert f"warning: {spoiled}: not readable past message" in err and "footer" not in err
+        else:
+            assert f"{spoiled}: not a readable MCAP recording (a damaged chunk" in err
+
+
 def test_every_writer_has_a_reader_and_the_suffix_picks_them():
     from proleg.record import READERS, WRITERS
 

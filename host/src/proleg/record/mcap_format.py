@@ -114,6 +114,8 @@ class McapReader(Reader):
             return self._cut_short(f, "it ends early: a run cut short, a full disk, or not MCAP")
         except McapError as e:  # a damaged record, or where a killed recorder left no footer, none
             return self._cut_short(f, str(e) or e.__class__.__name__)
+        except _undecompressable() as e:  # a chunk whose compressed bytes were damaged
+            return self._cut_short(f, f"a damaged chunk: {e or e.__class__.__name__}")
         except ValueError as e:  # JSON that is not
             raise RecordingError(f"{p}: not a readable MCAP recording ({e or e.__class__.__name__})") from None
         return meta, rows, events
@@ -150,15 +152,41 @@ class McapReader(Reader):
                 elif isinstance(record, Message) and record.channel_id in channels:
                     n += 1
                     self._message(n, channels[record.channel_id], record, rows, events)
-        except (EndOfFile, EOFError, struct.error, McapError):
-            pass  # the torn end: what came before it is kept
+        except (EndOfFile, EOFError, struct.error, McapError, *_undecompressable()):
+            pass  # the torn end (or a damaged chunk): what came before it is kept
         except ValueError as e:  # JSON that is not
             raise RecordingError(f"{p}: not a readable MCAP recording ({e or e.__class__.__name__})") from None
         if meta is None or not rows:
             raise RecordingError(f"{p}: not a readable MCAP recording ({why})")
-        log.warning("warning: %s: no MCAP footer: read up to message %d, the last whole one (the recording was "
-                    "cut short while writing it)", p, n)
+        if _ends_with_magic(f):  # finished, its footer written: damaged after, not cut short
+            log.warning("warning: %s: not readable past message %d (%s): read up to it", p, n, why)
+        else:
+            log.warning("warning: %s: no MCAP footer: read up to message %d, the last whole one (the recording "
+                        "was cut short while writing it)", p, n)
         return meta, rows, events
+
+
+def _undecompressable() -> tuple[type[BaseException], ...]:
+    """What the mcap library's decompressors raise on a chunk whose compressed bytes are damaged
+    (a disk or copy error, a power cut's garbage): zstandard's ZstdError, lz4's RuntimeError.
+    Neither is an McapError: such a file was a traceback, not one line or the messages before it."""
+    errors: list[type[BaseException]] = [RuntimeError]  # lz4.frame.decompress
+    try:
+        from zstandard import ZstdError
+
+        errors.append(ZstdError)
+    except ImportError:
+        pass
+    return tuple(errors)
+
+
+def _ends_with_magic(f: BinaryIO) -> bool:
+    """``f`` ends with MCAP's magic, as a file whose writer finished it (footer and all) does."""
+    try:
+        f.seek(-8, 2)
+        return f.read(8) == b"\x89MCAP0\r\n"
+    except OSError:
+        return False
 
 
 def _meta(path: Any, metadata: dict[str, str]) -> RecordingMeta:
