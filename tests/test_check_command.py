@@ -147,6 +147,31 @@ def test_rows_out_of_range_are_refused_by_the_parser(capsys):
         assert e.value.code == 2 and "--rows" in capsys.readouterr().err
 
 
+def test_a_ctrl_c_names_the_options_that_run_the_same_rows_again(capsys, monkeypatch):
+    """The line a Ctrl-C leaves said "--rows N --seed S runs them again": without the
+    --condition keys (left out of the draws) and the way, that drew other rows under other
+    conditions; under -q it also pointed at progress lines that were never printed."""
+    calls = []
+
+    def fake(robot, conditions, run_s, **kw):
+        calls.append(conditions)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return _row(conditions=tuple(conditions))
+    monkeypatch.setattr(sweep, "run_row", fake)
+    argv = ["check", str(R1), "--rows", "9", "--seed", "5", "--jobs", "1", "--condition", "power=0.9"]
+    rc, out, err = run(capsys, *argv)
+    line = err.strip().splitlines()[-1]
+    assert rc == 130 and out == "" and "Traceback" not in err
+    assert "--rows 2 --seed 5 --condition power=0.9 runs them again" in line and "stderr above" in line
+    again = line.split("nothing written: ")[1].split("; ")[-1].removesuffix(" runs them again)").split()
+    assert sweep.draw_rows(2, 5, ["left", "right"], leave_out=("power",)) == [c[1:] for c in calls[:2]]
+    assert again[again.index("--condition") + 1] == "power=0.9"
+    calls.clear()
+    rc, _, err = run(capsys, "-q", *argv)
+    assert rc == 130 and "stderr above" not in err.strip().splitlines()[-1]
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_ends_a_check_and_its_workers(sig):
     """Ctrl-C (or a CI job's timeout) mid-check: exit 130 / 143 with one line, and the worker

@@ -118,9 +118,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         from ..errors import Interrupted
 
-        raise Interrupted(f"interrupted after {len(rows)} of {len(jobs)} rows (nothing written: the rows "
-                          f"run are on stderr above; --rows {max(len(rows), 1)} --seed {args.seed} runs them "
-                          "again)") from None
+        raise Interrupted(_interrupted(args, len(rows), len(jobs))) from None
     summary = sweep.summary(rows)
     failed = [(i + 1, r) for i, r in enumerate(rows) if r.failed]
     errors = [_error(i, r) for i, r in failed]
@@ -174,6 +172,23 @@ def _quiet_work(job: tuple) -> Any:
         return _work(job)
     finally:
         logging.disable(before)
+
+
+def _interrupted(args: argparse.Namespace, done: int, total: int) -> str:
+    """The line a Ctrl-C leaves: how far the check got, and the options that run those rows
+    again (the same draws need the same --condition keys left out, and the same gait, way and
+    board; --rows and --seed alone drew other rows under other conditions)."""
+    if not done:
+        return f"interrupted after 0 of {total} rows (nothing written)"
+    again = [f"--rows {done}", f"--seed {args.seed}", *(f"--condition {c}" for c in args.condition)]
+    if args.gait:
+        again.append(f"--gait {args.gait}")
+    if args.direction != "+x":
+        again.append(f"--direction {args.direction}")
+    if args.board != "host-sim":
+        again.append(f"--board {args.board}")
+    shown = "the rows run are on stderr above; " if log.isEnabledFor(logging.INFO) else ""
+    return f"interrupted after {done} of {total} rows (nothing written: {shown}{' '.join(again)} runs them again)"
 
 
 def _progress(done: int, total: int, row: Any) -> None:
