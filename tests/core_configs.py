@@ -79,6 +79,17 @@ def r1_stroke():
     return robot, {"+x": [gait(0, 3, 0)], "-x": []}, SIM_BOARD
 
 
+def r1_swapped():
+    """r1-fast with its coils crossed (left on a1, right on a0): a limb map that is not the
+    identity, so the fallback's hold rule takes limbmap_given_up, not its identity shortcut
+    (test_ctl_given_up.c)."""
+    doc = robot_doc()
+    doc["limb"][0]["actuator"] = "a1"
+    doc["limb"][1]["actuator"] = "a0"
+    robot = robot_from_dict(doc, Path("tests/r1-swapped.toml"))
+    return robot, {"+x": [gait(0, 2, 3, 1, 0)], "-x": []}, SIM_BOARD
+
+
 def r1_one_actuator():
     doc = robot_doc(
         actuator=[{"name": "a0", "channel": 0}],
@@ -147,7 +158,7 @@ def inchworm_entry():
     return robot, {"+x": [gait(3, 7, 3), gait(7, 3, 7)], "-x": [gait(1, 5, 1)]}, board
 
 
-CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "r1-worn": r1_worn, "r1-boost": r1_boost, "multi": multi_level, "big": big}
+CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "r1-swapped": r1_swapped, "r1-worn": r1_worn, "r1-boost": r1_boost, "multi": multi_level, "big": big}
 
 
 def renderer(tmp_path_factory) -> Callable[[str], Path]:
