@@ -30,12 +30,14 @@ def test_a_psi_star_the_limb_cannot_cross_alone_does_not_overheat_its_coil():
     assert calibrate_level(session.client).ok
     session.client.set_param("psi_star_cdeg", 0, 7000)
     session.advance(0.2)
-    session.run_gait("+x", 0, 30.0)
+    run = session.run_gait("+x", 0, 30.0)
     session.advance(2.0)
     peak = max(sim.plant.peak_temperature_c)
     # before: 166 °C, ≈ 7 s of every 30 above 120 °C; now its coil is left at the hold duty once
     # spent (≈ 95 °C) and the step times out, the coils cooling
     assert peak < NITI_OVERHEAT_C - 10, peak
+    assert run.fault_stops > 0 and "STATE_TIMEOUT" in {str(f.code) for f in run.faults}, run.faults
+    assert max(sim.plant.temperature_c) < 60  # 2 s after the stop
 
 
 def test_the_worn_heavy_stroke_robot_of_the_sweep_walks_without_overheating():

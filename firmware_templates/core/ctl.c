@@ -357,7 +357,9 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
 #ifdef CFG_LIMB_STROKE_CDEG
         /* The knee watch (ctl.h, CTL_KNEE_MS) of a limb the step raises to its stroke; a limb
-         * whose coil it found spent is heated at most at the hold duty in the rest of the step. */
+         * whose coil it found spent is kept at the hold duty in the rest of the step: cut down to
+         * it from the drive duty, and raised to it from off where the limb sits at its level (a
+         * spent coil cooling off let its end fall out of the order the ratchet needs). */
         if ((move[i] == RISE && CLIMBS_TO_STROKE(i, target[i])) || (move[i] == SAG && CLIMBS_TO_STROKE(i, level)) ||
             ctl_limb[i].spent) {
             if (stall_knee(i, (uint8_t)(w >= WANT_HEAT && !sma_cooling(ctl_limb_actuator(i)))) && (w >= WANT_HEAT || (move[i] != RISE && level != PSI_UNKNOWN))) {
