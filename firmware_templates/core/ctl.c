@@ -245,7 +245,10 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
                 } else if (ABOVE_TOP(i, thr, level)) {
                     ctl_limb[i].heat = 0;
                 }
-                if (ctl_limb[i].heat && !GIVEN_UP(i)) {
+                if (GIVEN_UP(i)) {
+                    ctl_limb[i].heat = 0; /* nor does it count as climbing (the strokes' bookkeeping) */
+                }
+                if (ctl_limb[i].heat) {
                     move[i] = SAG;
                 }
 #ifdef CFG_LIMB_STROKE_CDEG
