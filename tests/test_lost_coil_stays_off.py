@@ -41,8 +41,8 @@ class LostCoilRig:
     and the fallback gives it up. ``given_up``: the coil given up, as the host last learnt it
     (FALLBACK; SET_ACTUATOR_MAP with no entries ACKed, or a reset, takes it back)."""
 
-    def __init__(self) -> None:
-        self.robot = load_robot(robots_dir() / "inchworm-3.toml")
+    def __init__(self, robot: str = "inchworm-3") -> None:
+        self.robot = load_robot(robots_dir() / f"{robot}.toml")
         self.sim = SimulatedRobot(self.robot, plant="physical")
         self.decoder = FrameDecoder(len(self.robot.limbs), len(self.robot.actuators))
         self.hold_max_pm = 3000
@@ -142,6 +142,43 @@ def test_a_loaded_gait_raising_the_given_up_coils_limb_does_not_heat_it(rig):
     rig.seconds(12)
     assert rig.heated_after_given_up == 0, f"the given-up tail coil heated {rig.heated_after_given_up} ticks"
     assert rig.events(EventKind.GAIT_STOPPED)[-1].code == 1  # the loaded gait times out instead (a second loss)
+
+
+@pytest.mark.parametrize("robot, dead, amap, walk", [
+    ("paper-r1", "sma-right", (0, 1), (0, 1)),   # remap fallback: both limbs on the left coil
+    ("paper-r1", "sma-right", (1, 1), (0, 1)),
+    ("inchworm-3", "sma-tail", (0, 1, 2), (0, 4)),  # dead fallback: held off by drive.c as well
+])
+def test_a_map_naming_the_given_up_coil_is_refused(robot, dead, amap, walk):
+    """On R1 the fallback remaps the lost coil's limb, and the firmware held a given-up coil off
+    only in builds whose fallback keeps it in the map: STOP, SET_ACTUATOR_MAP [0, 1] (the build's
+    own map, not empty: `lost` stayed set), LOAD_GAIT 00 -> 01 and START heated R1's given-up
+    right coil 4.2 s above the hold ceiling until the state timeout, no operator's word. The
+    host's replanner sent such a map itself after a second loss. Now a non-empty map that names
+    the given-up coil is refused (OUT_OF_RANGE, detail = the limb); only the empty map takes it
+    back."""
+    from proleg.protocol.definition import ErrorCode
+
+    rig = LostCoilRig(robot)
+    rig.sim.inject(f"dead-actuator:{dead}")
+    rig.ticks(300)
+    rig.send("START", gait=0, direction=0)
+    for _ in range(60):
+        if rig.given_up != NONE:
+            break
+        rig.seconds(0.5)
+    assert rig.given_up != NONE, f"{robot} falls back without {dead}"
+    rig.send("STOP")
+    rig.seconds(1)
+    token = rig.send("SET_ACTUATOR_MAP", actuators=amap)
+    rig.ticks(5)
+    m = next(m for m in reversed(rig.log) if m.name in ("ACK", "NACK") and m.token == token)
+    assert m.name == "NACK" and m.error == ErrorCode.OUT_OF_RANGE and amap[m.detail] == rig.given_up, m
+    rig.send("LOAD_GAIT", states=walk)
+    rig.ticks(5)
+    rig.send("START", gait=GAIT_USER, direction=0)
+    rig.seconds(12)
+    assert rig.heated_after_given_up == 0, f"the given-up coil heated {rig.heated_after_given_up} ticks"
 
 
 EXAMPLES = int(os.environ.get("PROLEG_ATTACK_EXAMPLES", "6"))

@@ -47,7 +47,7 @@ uint8_t limbmap_set(const uint8_t *actuators, uint8_t n, uint16_t *bad)
         return PROTO_ERR_OUT_OF_RANGE;
     }
     for (i = 0; i < n; i++) {
-        if (actuators[i] >= CFG_N_ACTUATORS) {
+        if (actuators[i] >= CFG_N_ACTUATORS || (CFG_FALLBACK && actuators[i] == lost)) {
             *bad = i;
             return PROTO_ERR_OUT_OF_RANGE;
         }

@@ -105,6 +105,7 @@ class Replanner(Listener):
     _fell_back: bool = False
     _ran: str | None = "+x"                             # the direction the gait ran in (telemetry; None: unstated)
     _done: set[str] = field(default_factory=set)
+    _given_up: int | None = None                        # the actuator the firmware's fallback gave up (FALLBACK)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def _tell(self, text: str) -> None:
@@ -142,6 +143,8 @@ class Replanner(Listener):
                 fb = fallback(self.robot, m.code, way) if ok and way is not None else None
                 self._fell_back = True
                 self._stopped_at = None
+                if ok:
+                    self._given_up = m.code
                 self._done.add(name)
                 told = f"firmware fell back by itself: {fb.describe(self.robot) if fb else name}"
         if told is not None:
@@ -177,6 +180,7 @@ class Replanner(Listener):
             if actuator is not None:
                 self._done.add(actuator)
             direction = self._direction()
+            given_up = self._given_up
         if actuator is None:
             self._tell("gait stopped on a fault that names no actuator: not replanning")
             return
@@ -189,6 +193,12 @@ class Replanner(Listener):
         plan = replan(self.robot, actuator, direction)
         self._tell(f"replanning: {plan.reason}")
         if plan.states is None:
+            return
+        if given_up is not None and given_up in plan.actuator_map:
+            # the firmware refuses a map naming the coil its fallback gave up (only the empty map,
+            # the operator's clear, takes it back): replanning past a second loss would need it
+            self._tell(f"the plan needs {self.robot.actuators[given_up].name}, which the firmware gave up: "
+                       "not replanning (clear takes it back)")
             return
         try:
             self.client.request("SET_ACTUATOR_MAP", retries=2, actuators=tuple(plan.actuator_map))
