@@ -425,6 +425,17 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
 #endif
 #ifdef CFG_LIMB_STROKE_CDEG
     ctl_waited = waiting;
+    /* safety: a coil the knee watch found spent is through its transformation whichever limb
+     * asks for it: with a run-time map that puts two limbs on one coil (SET_ACTUATOR_MAP [0, 0]),
+     * the other limb's rise kept it at the drive duty, the knee watch of a limb whose ψ the coil
+     * moves only through the body never armed, and R1-stroke's left coil reached 167 °C (210 °C
+     * at power 1.3), no fault latched. Kept at the hold duty for every limb on it. */
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        uint8_t a = ctl_limb_actuator(i);
+        if (ctl_limb[i].spent && want[a] > WANT_HOLD) {
+            want[a] = WANT_HOLD;
+        }
+    }
 #endif
 #if SEQ_CLOCK_PAUSE
     if (ctl_look == FALL_LOOK) {

@@ -169,12 +169,27 @@ static uint8_t set_watchdog(uint8_t index, int32_t ticks)
 #define WATCHDOG_SAFE_MIN 0
 #define WATCHDOG_SAFE_MAX ANY
 #endif
-enum { B_0, B_1, B_ANY, B_MAX_MS, B_1000, B_2000, B_M8999, B_8999, B_TIMEOUT, B_MAX_ON, B_COOLDOWN, B_WD_MIN, B_WD_MAX };
+enum { B_0, B_1, B_ANY, B_MAX_MS, B_1000, B_2000, B_M8999, B_8999, B_TIMEOUT, B_MAX_ON, B_COOLDOWN, B_WD_MIN, B_WD_MAX, B_HOLD };
 static const int32_t bounds[] ROM = {
     [B_0] = 0, [B_1] = 1, [B_ANY] = ANY, [B_MAX_MS] = MAX_PARAM_MS, [B_1000] = 1000, [B_2000] = 2000,
     [B_M8999] = -8999, [B_8999] = 8999, [B_TIMEOUT] = (int32_t)CFG_STATE_TIMEOUT_MS, [B_MAX_ON] = (int32_t)CFG_MAX_ON_MS,
     [B_COOLDOWN] = (int32_t)CFG_MIN_COOLDOWN_MS, [B_WD_MIN] = WATCHDOG_SAFE_MIN, [B_WD_MAX] = WATCHDOG_SAFE_MAX,
+#ifdef CFG_LIMB_STROKE_CDEG
+    [B_HOLD] = (int32_t)CFG_HOLD_MAX_DUTY_PM,
+#endif
 };
+
+/* safety: the hold duty a host may set. A stroke build keeps a spent coil (the knee watch,
+ * ctl.c) and every limb waiting in a climb at the hold duty, trusting it to be a duty the coil
+ * may carry for ever: at most the hold ceiling. Up to max_duty, ψ* 70° and a hold duty of 0.4
+ * pre-warmed R1's left coil past its transformation, so the knee watch never saw a fast window,
+ * and the drive duty took it to 133 °C every cycle (9 s of 120 above 120 °C, no fault). Other
+ * builds keep max_duty (R1's Nano image has no 4 bytes to spare); docs/safety.md. */
+#ifdef CFG_LIMB_STROKE_CDEG
+#define B_HOLD_SAFE B_HOLD
+#else
+#define B_HOLD_SAFE B_ANY
+#endif
 
 typedef struct {
     uint8_t scale;              /* AS_IS or MS */
@@ -188,7 +203,7 @@ typedef struct {
 static const param_desc_t table[] ROM = {
     /* id                     scale  min   max       safe_min    safe_max */
     ROW(DRIVE_DUTY) = {AS_IS, B_1, B_ANY, B_0, B_ANY, set_drive_duty}, /* ≤ sma_max_duty() */
-    ROW(HOLD_DUTY) = {AS_IS, B_0, B_ANY, B_0, B_ANY, set_hold_duty},   /* ≤ sma_max_duty() */
+    ROW(HOLD_DUTY) = {AS_IS, B_0, B_ANY, B_0, B_HOLD_SAFE, set_hold_duty}, /* ≤ sma_max_duty() */
     ROW(HOLD_MS) = {MS, B_0, B_MAX_MS, B_0, B_ANY, set_hold},
     ROW(DEBOUNCE_TICKS) = {AS_IS, B_1, B_1000, B_0, B_ANY, set_debounce},
     ROW(STATE_TIMEOUT_MS) = {MS, B_1, B_ANY, B_0, B_TIMEOUT, set_timeout},
