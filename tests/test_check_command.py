@@ -155,7 +155,7 @@ def test_a_ctrl_c_names_the_options_that_run_the_same_rows_again(capsys, monkeyp
 
     def fake(robot, conditions, run_s, **kw):
         calls.append(conditions)
-        if len(calls) == 3:
+        if len(calls) == 4:  # the nominal row, two drawn rows, then Ctrl-C
             raise KeyboardInterrupt
         return _row(conditions=tuple(conditions))
     monkeypatch.setattr(sweep, "run_row", fake)
@@ -165,7 +165,8 @@ def test_a_ctrl_c_names_the_options_that_run_the_same_rows_again(capsys, monkeyp
     assert rc == 130 and out == "" and "Traceback" not in err
     assert "--rows 2 --seed 5 --condition power=0.9 runs them again" in line and "stderr above" in line
     again = line.split("nothing written: ")[1].split("; ")[-1].removesuffix(" runs them again)").split()
-    assert sweep.draw_rows(2, 5, ["left", "right"], leave_out=("power",)) == [c[1:] for c in calls[:2]]
+    assert calls[0] == ("power=0.9",)  # the nominal row: --condition alone
+    assert sweep.draw_rows(2, 5, ["left", "right"], leave_out=("power",)) == [c[1:] for c in calls[1:3]]
     assert again[again.index("--condition") + 1] == "power=0.9"
     calls.clear()
     rc, _, err = run(capsys, "-q", *argv)
@@ -231,3 +232,27 @@ def test_check_runs_the_exact_nano_image_on_avr_emu(capsys):
     (e,), (h,) = emu["rows"], host["rows"]
     assert e["conditions"] == h["conditions"] and e["verdict"] == h["verdict"] == "ok"
     assert e["speed_mm_s"] == pytest.approx(h["speed_mm_s"], rel=0.15)
+
+
+def test_each_row_is_measured_against_a_nominal_row_run_first(capsys):
+    """Row 0 runs the firmware under --condition alone: each drawn row's speed is reported as a
+    share of it, and the summary counts the rows that keep 75 % of it (reported, not a failure)."""
+    rc, out, _ = run(capsys, "check", str(R1), "--rows", "2", "--seed", "4", "--jobs", "1", "--json")
+    report = json.loads(out)
+    nominal = report["nominal"]
+    assert rc == 0 and nominal["conditions"] == [] and nominal["verdict"] == "ok" and nominal["speed_mm_s"] > 0
+    assert len(report["rows"]) == 2 and report["summary"]["nominal_mm_s"] == nominal["speed_mm_s"]
+    kept = sum(r["possible"] and r["completed"] and r["speed_mm_s"] >= 0.75 * nominal["speed_mm_s"]
+               for r in report["rows"])
+    assert report["summary"]["kept_75pct_of_nominal_where_possible"] == kept
+    rc, out, _ = run(capsys, "check", str(R1), "--rows", "2", "--seed", "4", "--jobs", "1")
+    shares = [line for line in out.splitlines() if "% of nominal" in line]
+    assert len(shares) == 2 and "keep 75% of the nominal speed" in out
+
+
+def test_a_nominal_row_the_firmware_does_not_complete_fails_the_check(capsys, monkeypatch):
+    def fake(robot, conditions, run_s, **kw):
+        return _row(conditions=tuple(conditions), completed=bool(conditions), fault="" if conditions else "STATE_TIMEOUT")
+    monkeypatch.setattr(sweep, "run_row", fake)
+    rc, _, err = run(capsys, "check", str(R1), "--rows", "3", "--jobs", "1")
+    assert rc == 1 and "proleg: error: the nominal row (none drawn): the firmware did not complete the gait (STATE_TIMEOUT)" in err
