@@ -18,22 +18,13 @@ import sys
 from typing import Any
 
 from .main import EXIT_FAILED, EXIT_OK, robot_arg
-from .number_args import gait_number, positive_int
+from .number_args import MAX_CHECK_ROWS, check_rows, gait_number, positive_int
 
 log = logging.getLogger("proleg")
 
 #: Rows a check draws unless told (0.5–6 s of CPU each on host-sim for the example robots: R1's
 #: 40 s runs the least, caterpillar-4's 60 s of four limbs the most).
 DEFAULT_ROWS = 20
-#: The most rows one check draws (an hour or more of CPU).
-MAX_ROWS = 1000
-
-
-def _rows(text: str) -> int:
-    v = positive_int(text)
-    if v > MAX_ROWS:
-        raise argparse.ArgumentTypeError(f"expected at most {MAX_ROWS} rows, got {v}")
-    return v
 
 
 def add_arguments(sub) -> None:
@@ -42,13 +33,14 @@ def add_arguments(sub) -> None:
                        description="Run the robot's firmware on the simulated board under random operating "
                                    "conditions (three plant keys a row, seeded), each against an idealised drive "
                                    "that says whether the coils can walk the gait there at all.",
-                       epilog="exit status: 0 every row passed; 1 the firmware missed a row the coils can walk "
+                       epilog="exit status: 0 every row passed; 1 the firmware did not complete the nominal row "
+                              "(row 0: --condition alone), missed a row the coils can walk "
                               "(a fault stop, the wrong way, a coil past 120 °C) or stopped one nothing walks with "
                               "a coil past 120 °C, or the gait cannot be checked (even the idealised drive does not "
                               "walk it on the nominal plant); 2 a usage mistake")
     c.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    c.add_argument("--rows", type=_rows, default=DEFAULT_ROWS, metavar="N",
-                   help=f"random conditions to run (default {DEFAULT_ROWS}, at most {MAX_ROWS})")
+    c.add_argument("--rows", type=check_rows, default=DEFAULT_ROWS, metavar="N",
+                   help=f"random conditions to run (default {DEFAULT_ROWS}, at most {MAX_CHECK_ROWS})")
     c.add_argument("--seed", type=int, default=1, help="seed of the draws: the same rows for the same seed (default 1)")
     c.add_argument("--gait", type=gait_number, default=0, metavar="N", help="gait index in the firmware's table (default 0)")
     c.add_argument("--direction", choices=("+x", "-x"), default="+x")
@@ -58,7 +50,7 @@ def add_arguments(sub) -> None:
     from ..sim.simulated_boards import SIMULATED_BOARDS
 
     c.add_argument("--board", choices=tuple(SIMULATED_BOARDS), default="host-sim",
-                   help="host-sim: the firmware's C on the host (default, about a second a row); avr-emu / "
+                   help="host-sim: the firmware's C on the host (default, 0.5-6 s a row); avr-emu / "
                         "arm-emu: the exact arduino-nano / bluepill firmware.elf on an emulated MCU (about "
                         "half real time: 20-50 s a row)")
     c.add_argument("--jobs", type=positive_int, default=None, metavar="N",

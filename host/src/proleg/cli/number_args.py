@@ -46,6 +46,18 @@ def cycles(text: str) -> int:
     return v
 
 
+#: ``check --rows``: at most this many random rows (an hour or more of CPU).
+MAX_CHECK_ROWS = 1000
+
+
+def check_rows(text: str) -> int:
+    """``check --rows``: random rows to run, 1 .. ``MAX_CHECK_ROWS``."""
+    v = positive_int(text)
+    if v > MAX_CHECK_ROWS:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_CHECK_ROWS} rows, got {v}")
+    return v
+
+
 def gait_index(text: str) -> int:
     """A gait table index ≥ 0, or ``user`` for the LOAD_GAIT sequence (``GAIT_USER``)."""
     if text.strip().lower() == "user":
