@@ -52,8 +52,8 @@ def test_the_worn_heavy_stroke_robot_of_the_sweep_walks_without_overheating():
 
 
 class _Rig:
-    """The stroke robot's host-sim firmware and the physical plant, one tick at a time: the
-    plant's true coil temperatures, commands sent between ticks."""
+    """The stroke robot's host-sim firmware and the physical plant (``SimulatedRobot``), commands
+    sent between control ticks; ``peak``: the hottest any coil has been (the plant's own record)."""
 
     def __init__(self, conditions=None):
         from proleg.protocol.codec import FrameDecoder
@@ -63,24 +63,14 @@ class _Rig:
         self.decoder = FrameDecoder(len(self.robot.limbs), len(self.robot.actuators))
         self.log = []
         self.token = 0
-        self.peak = 0.0
-        self._acc = [0.0] * len(self.sim.channels)
-        self._n = 0
+
+    @property
+    def peak(self):
+        return max(self.sim.plant.peak_temperature_c)
 
     def ticks(self, n):
-        sim, board = self.sim, self.sim.board
-        for _ in range(n):
-            board.run_ticks(1)
-            self.log += self.decoder.feed(sim.read())
-            for k, c in enumerate(sim.channels):
-                self._acc[k] += board.pwm(c)
-            self._n += 1
-            if self._n == sim.ticks_per_step:
-                sim.plant.step(sim.plant_dt_s, [a / self._n for a in self._acc])
-                sim._push_truth()
-                self._acc = [0.0] * len(sim.channels)
-                self._n = 0
-                self.peak = max(self.peak, max(sim.plant.temperature_c))
+        self.sim.run_ticks(n)
+        self.log += self.decoder.feed(self.sim.read())
 
     def seconds(self, s):
         for _ in range(round(s * 4)):
