@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from build_checks import cli as run
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -24,12 +25,6 @@ from proleg.sim.closed_loop import make_plant
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 R1 = ROBOTS / "paper-r1.toml"
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    rc = main(list(argv))
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def _row(**kw) -> sweep.Row:
