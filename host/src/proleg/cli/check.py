@@ -123,7 +123,8 @@ def cmd_check(args: argparse.Namespace) -> int:
             "robot": robot.name, "board": args.board, "gait": args.gait, "states": label, "direction": args.direction,
             "seed": args.seed, "conditions": list(base), "run_s": run_s,
             "idealised_nominal_mm_s": None if nominal.speed_mm_s is None else round(nominal.speed_mm_s, 4),
-            "nominal": nominal_row.to_json(), "rows": [r.to_json() for r in rows], "summary": summary, "ok": not failed, "errors": errors,
+            "nominal": nominal_row.to_json(), "rows": [r.to_json() for r in rows], "summary": summary,
+            "ok": not failed, "errors": errors,
         }, indent=1))
     else:
         _print(robot, args, label, run_s, nominal_row, rows, summary)
