@@ -251,3 +251,24 @@ def test_a_nominal_row_the_firmware_does_not_complete_fails_the_check(capsys, mo
     monkeypatch.setattr(sweep, "run_row", fake)
     rc, _, err = run(capsys, "check", str(R1), "--rows", "3", "--jobs", "1")
     assert rc == 1 and "proleg: error: the nominal row (none drawn): the firmware did not complete the gait (STATE_TIMEOUT)" in err
+
+
+def test_the_nominal_row_reuses_the_idealised_walk_that_set_the_run_length(capsys, monkeypatch):
+    """The idealised drive's walk on the nominal plant (which sets every row's run length) is
+    that row's verdict too: it is run once, not again for row 0 (caterpillar-4: 2.6 s)."""
+    from proleg.report import claim
+
+    walks: list = []
+    real_walk = claim.idealised_walk
+    monkeypatch.setattr(claim, "idealised_walk", lambda *a, **kw: walks.append(a[1].conditions) or real_walk(*a, **kw))
+    given: list = []
+
+    def fake(robot, conditions, run_s, *, ideal=None, **kw):
+        given.append((tuple(conditions), ideal))
+        return _row(conditions=tuple(conditions), possible=ideal.possible if ideal else True)
+    monkeypatch.setattr(sweep, "run_row", fake)
+    rc, _, _ = run(capsys, "check", str(R1), "--rows", "2", "--jobs", "1")
+    assert rc == 0
+    assert walks == [()]  # the nominal walk, once
+    assert given[0][0] == () and isinstance(given[0][1], claim.IdealisedWalk) and given[0][1].possible
+    assert [ideal for _, ideal in given[1:]] == [None, None]  # drawn rows walk their own conditions

@@ -59,13 +59,13 @@ def add_arguments(sub) -> None:
     c.set_defaults(run=cmd_check)
 
 
-def _work(job: tuple[str, tuple[str, ...], float, str, int, str, str]) -> Any:
+def _work(job: tuple[str, tuple[str, ...], float, str, int, str, str, Any]) -> Any:
     from ..report import sweep
     from ..robot import load_robot
 
-    path, conditions, run_s, direction, gait, name, board = job
+    path, conditions, run_s, direction, gait, name, board, ideal = job
     return sweep.run_row(load_robot(path), conditions, run_s, direction=direction, gait=gait, name=name,
-                         board=board)
+                         board=board, ideal=ideal)
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -100,8 +100,10 @@ def cmd_check(args: argparse.Namespace) -> int:
         lacking = simulated_board(args.board).missing()
         if lacking:  # before any row: every row would fail the same way
             raise SimError(lacking)
-    # job 0: the nominal row (only --condition's keys), the speed each row is measured against
-    jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i}", args.board)
+    # job 0: the nominal row (only --condition's keys), the speed each row is measured against;
+    # its idealised walk is the one run_length just made
+    jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i}", args.board,
+             nominal if i == 0 else None)
             for i, c in enumerate([base, *rows_conditions])]
     log.info("%s: gait %d (%s) in %s under %d random condition%s, %g s each (the idealised drive walks "
              "%+.3f mm/s%s)", robot.name, args.gait, label, args.direction, len(draws), "s" if len(draws) != 1 else "",

@@ -130,11 +130,14 @@ class Row:
 
 
 def run_row(robot: Any, conditions: Sequence[str], run_s: float, *, direction: str = "+x",
-            gait: int | Sequence[int] = 0, name: str = "row", board: str = "host-sim") -> Row:
+            gait: int | Sequence[int] = 0, name: str = "row", board: str = "host-sim",
+            ideal: claim.IdealisedWalk | None = None) -> Row:
     """The idealised drive and the firmware (on the simulated ``board``) under ``conditions``,
-    each from a cold robot."""
+    each from a cold robot. ``ideal``: the idealised drive's walk under these conditions where
+    the caller already has it (the nominal row's, from ``run_length``)."""
     point = claim.GridPoint(name, (), "random", tuple(conditions), ())
-    ideal = claim.idealised_walk(robot, point, direction, gait)
+    if ideal is None:
+        ideal = claim.idealised_walk(robot, point, direction, gait)
     fb = claim.feedback_run(robot, point, direction=direction, gait=gait, duration_s=run_s, board=board)
     return Row(tuple(conditions), ideal.possible, ideal.why_not, ideal.speed_mm_s, fb.completed,
                fb.speed_mm_s, fb.fault, fb.note, fb.coil_peak_c, fb.reported)
