@@ -10,8 +10,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from build_checks import cli
 
-from proleg.cli import main
 from proleg.errors import BuildError, RobotFileError
 from proleg.firmware.boards import load_board
 from proleg.firmware.build import build
@@ -25,12 +25,6 @@ from proleg.sim.simulators import open_simulated
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ("inchworm-3", "caterpillar-4")
-
-
-def cli(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.mark.parametrize("name", EXAMPLES)

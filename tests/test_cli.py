@@ -9,16 +9,11 @@ import sys
 from pathlib import Path
 
 import pytest
+from build_checks import cli as run
 
 from proleg.cli import main
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_gait_json_is_one_object_with_the_documented_shape(capsys):

@@ -13,18 +13,13 @@ import sys
 from pathlib import Path
 
 import pytest
+from build_checks import cli as run
 
 from proleg import __version__
 from proleg.cli import main
 
 PROLEG = str(Path(sys.executable).with_name("proleg"))
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def shell(cmd: str, cwd: Path, **env: str) -> subprocess.CompletedProcess:

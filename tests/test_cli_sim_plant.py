@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from build_checks import cli as run
 
 from proleg.cli.main import main
 from proleg.robot import load_robot
@@ -16,12 +17,6 @@ from proleg.sim.physical import PhysicalPlant
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 R1 = ROBOTS / "paper-r1.toml"
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    rc = main(list(argv))
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def test_the_physical_plant_is_the_default_and_json_adds_speed(capsys):

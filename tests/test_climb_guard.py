@@ -13,6 +13,7 @@ import json
 from pathlib import Path
 
 import pytest
+from build_checks import cli as _cli
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import (
@@ -435,13 +436,6 @@ def test_no_sequence_of_operator_steps_gets_a_gait_started_up_too_steep_a_slope(
 
 
 # --------------------------------------------------------------------------- proleg sim --calibrated
-
-def _cli(capsys, *argv: str) -> tuple[int, str, str]:
-    from proleg.cli.main import main
-
-    rc = main(list(argv))
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 R2 = robots_dir() / "paper-r2.toml"  # max_climb_deg = 2.5

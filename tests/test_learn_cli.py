@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from build_checks import cli as run
 
 from proleg.cli import main
 from proleg.cli.learn import ProgressBar
@@ -16,12 +17,6 @@ from proleg.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 R1 = ROOT / "robots" / "paper-r1.toml"
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _lines(path: Path) -> list[str]:

@@ -8,18 +8,11 @@ from __future__ import annotations
 import json
 
 import pytest
+from build_checks import cli as _cli
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from proleg.paths import robots_dir
 from proleg.robot import load_robot
-
-
-def _cli(capsys, *argv: str) -> tuple[int, str, str]:
-    from proleg.cli.main import main
-
-    rc = main(list(argv))
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @settings(max_examples=60, deadline=None)

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 import pytest
+from build_checks import cli as run
 
 from proleg.cli import main
 
@@ -35,12 +36,6 @@ dy         = [[0, 0, 0, "x"], [0, 0, "x", 0], ["x", "x", 0, 1], [0, "x", 0, 0]]
 dtheta_deg = [[0, 2, 10, "x"], [-2, 0, "x", 0], ["x", "x", 0, 10], [0, "x", 0, 0]]
 var_dx     = [[0, 0.1, 1, "x"], [0.1, 0, "x", 0], ["x", "x", 0, 1], [0, "x", 0, 0]]
 """
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture()

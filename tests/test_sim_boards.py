@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from build_checks import cli as run
 
 from proleg.cli import main
 from proleg.errors import SimError
@@ -15,12 +16,6 @@ from proleg.report.gait_run import STOP_TAIL_S
 from proleg.sim.simulated_boards import SIMULATED_BOARDS, SimulatedBoard, simulated_board, simulated_robot
 
 R1 = str(robots_dir() / "paper-r1.toml")
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def needs(board: str):
