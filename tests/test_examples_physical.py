@@ -335,3 +335,39 @@ def test_a_hold_top_out_of_reach_is_one_warning_line_with_the_margin_that_fits(t
     with caplog.at_level(logging.WARNING, logger="proleg"):
         load_robot(path)
     assert caplog.records == []
+
+
+def test_the_body_working_strain_is_a_robot_file_key_the_physical_plant_bends_by(tmp_path, caplog):
+    """``[plant] working_strain`` (a lab's measurement of its body, not an operating condition):
+    a fully heated coil bends its end about in proportion, on the plant and in the load-time
+    reach checks alike; out of range it is refused naming the key."""
+    src = (ROOT / "robots" / "paper-r1.toml").read_text()
+    assert "[plant]" not in src  # R1 leaves every plant key at its default
+
+    def r1(extra: str):
+        path = tmp_path / "r1.toml"
+        path.write_text(src + f"\n[plant]\n{extra}\n")
+        return load_robot(path)
+
+    def bent(robot) -> float:  # the left end with its coil heated through its transformation, the right coil off
+        plant = PhysicalPlant(robot)
+        for _ in range(1500):
+            plant.step(0.002, [0.8, 0.0])
+        return float(plant.psi_deg[0])
+
+    stiff = r1("working_strain = 0.03")
+    assert stiff.plant.working_strain == 0.03 and PhysicalPlant(stiff).geometry.working_strain == 0.03
+    nominal = load_robot(ROOT / "robots" / "paper-r1.toml")
+    full, half = bent(nominal), bent(stiff)
+    assert full > 50.0 and 0.4 < half / full < 0.6, (full, half)
+    from proleg.robot_body import body_of
+    reach = [own_reach_deg(body_of([0, 1], 2, r.plant), [0, 1])[0] for r in (nominal, stiff)]
+    assert 0.45 < reach[1] / reach[0] < 0.55, reach
+    for bad in ("0", "0.3", '"stiff"'):
+        with pytest.raises(RobotFileError, match=r"plant\.working_strain: expected a number in \(0, 0\.2\]"):
+            r1(f"working_strain = {bad}")
+    # so stiff that no coil bends its end past its level: the load-time reach check says so
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        r1("working_strain = 0.005")
+    assert any("psi_star_deg" in rec.getMessage() for rec in caplog.records), [r.getMessage() for r in caplog.records]

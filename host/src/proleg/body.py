@@ -40,13 +40,15 @@ GRID = 41
 PAPER_LENGTH_MM = 80.0     # the paper's two-contact body (R1-class, 80 × 8 × 4 mm)
 SECTION_MM = 40.0          # between neighbouring contacts of a longer body: about one coil (30 mm) and its anchors
 DEFAULT_OVERLAP_MM = 8.0   # [plant] overlap_mm's default
+DEFAULT_WORKING_STRAIN = 0.06  # [plant] working_strain's default: an estimate (docs/control.md, "Is the open
+                               # loop's full stroke physically plausible?")
 
 
 @dataclass(frozen=True)
 class BodyGeometry:
     length_mm: float = 80.0
     coil_offset_mm: float = 2.0       # channel height above the neutral axis
-    working_strain: float = 0.06      # coil contraction achieved against the body at α = 1
+    working_strain: float = DEFAULT_WORKING_STRAIN  # coil contraction achieved against the body at α = 1
     spans: tuple[tuple[float, float], ...] = ((0.0, 48.0), (32.0, 80.0))  # per coil, mm
     contacts_mm: tuple[float, ...] = (0.0, 80.0)
 
@@ -81,7 +83,8 @@ def coil_homes(limb_actuators: list[int], n_actuators: int) -> list[int]:
 
 
 def body_geometry(limb_actuators: list[int], n_actuators: int, length_mm: float,
-                  overlap_mm: list[float], coil_offset_mm: float = 2.0, working_strain: float = 0.06) -> BodyGeometry:
+                  overlap_mm: list[float], coil_offset_mm: float = 2.0,
+                  working_strain: float = DEFAULT_WORKING_STRAIN) -> BodyGeometry:
     """Contacts evenly along ``length_mm`` in limb order, each coil over its home contact's sections."""
     n = len(limb_actuators)
     contacts = tuple(float(x) for x in np.linspace(0.0, length_mm, n))
@@ -103,8 +106,9 @@ def curl_problem(geo: BodyGeometry) -> str:
         if bend > MAX_BEND_DEG:
             return (f"coil {j + 1} spans {b - a:.0f} mm of the {geo.length_mm:g} mm body and bends it by "
                     f"{bend:.0f}° at full stroke, past the {MAX_BEND_DEG:.0f}° the physical plant models "
-                    f"(the body would curl over itself): give [plant] length_mm a shorter body, or the "
-                    f"robot more limbs and coils along it")
+                    f"(the body would curl over itself): give [plant] length_mm a shorter body (or "
+                    f"working_strain, {geo.working_strain:g}, a stiffer one), or the robot more limbs and coils "
+                    f"along it")
     return ""
 
 

@@ -38,10 +38,12 @@ from .robot_plant import PlantSection
 
 
 def body_of(limb_actuators: list[int], n_actuators: int, section: PlantSection) -> BodyGeometry:
-    """The physical plant's body for these limbs and coils (``[plant]`` length_mm, overlap_mm)."""
+    """The physical plant's body for these limbs and coils (``[plant]`` length_mm, overlap_mm,
+    working_strain)."""
     overlap = section.physical.get("overlap_mm", DEFAULT_OVERLAP_MM)
     overlaps = list(overlap) if isinstance(overlap, tuple) else [float(overlap)] * n_actuators
-    return body_geometry(limb_actuators, n_actuators, section.length_mm, overlaps)
+    return body_geometry(limb_actuators, n_actuators, section.length_mm, overlaps,
+                         working_strain=section.working_strain)
 
 
 def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection,

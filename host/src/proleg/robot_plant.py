@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .body import default_length_mm
+from .body import DEFAULT_WORKING_STRAIN, default_length_mm
 from .errors import RobotFileError
 from .robot_fields import toml_text
 from .robot_transitions import UNIT_MM
@@ -136,12 +136,16 @@ _KEYS = (
     PlantKey("length_mm", "mm", 20.0, 2000.0, None, plants=PHYS,
              doc="body length, first contact to last (contacts evenly spaced); default 80 for two limbs, "
                  "40 per gap between neighbouring limbs for more"),
+    PlantKey("working_strain", "", 0.0, 0.2, DEFAULT_WORKING_STRAIN, open_lo=True, plants=PHYS,
+             doc="how much a fully transformed coil shortens the body's fibre it runs along (2 mm above the "
+                 "neutral axis): the body's curvature at full stroke is this / 2 mm; halve it and a coil bends "
+                 "its end about half as far"),
 )
 PLANT_KEYS: dict[str, PlantKey] = {k.name: k for k in _KEYS}
 PER_ACTUATOR = tuple(k.name for k in _KEYS if k.per == "actuator" and "table" in k.plants)
-PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants and k.name not in ("length_mm",))
-# The body's own dimensions: physical-plant keys of the robot file, not run conditions.
-BODY_KEYS = ("length_mm",)
+# The body's own dimensions and stiffness: physical-plant keys of the robot file, not run conditions.
+BODY_KEYS = ("length_mm", "working_strain")
+PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants and k.name not in BODY_KEYS)
 SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
 
 
@@ -172,6 +176,8 @@ class PlantSection:
     one number, or one per actuator / per limb for a per-actuator / per-limb key."""
     length_mm: float = 80.0
     """The physical plant's body length (given, or ``proleg.body.default_length_mm``)."""
+    working_strain: float = DEFAULT_WORKING_STRAIN
+    """The physical plant's working strain (``proleg.body.BodyGeometry``)."""
 
     def scalars(self) -> dict[str, float]:
         return {k: getattr(self, k) for k in SCALARS}
@@ -246,9 +252,10 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
             physical[k] = _scalar(path, spec, table[k])
     length = _scalar(path, PLANT_KEYS["length_mm"], table["length_mm"]) if "length_mm" in table \
         else default_length_mm(n_limbs)
+    strain = _scalar(path, PLANT_KEYS["working_strain"], table.get("working_strain"))
     return PlantSection(
         actuator=per_act, psi_rest_deg=rest, coupling_deg=coupling, true_matrix=truth,
-        given=frozenset(table), physical=physical, length_mm=length, **scalars,
+        given=frozenset(table), physical=physical, length_mm=length, working_strain=strain, **scalars,
     )
 
 

@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...body import default_length_mm
+from ...body import DEFAULT_WORKING_STRAIN, default_length_mm
 from . import materials as mat
 from .thermal import BodyThermal, CoilGeometry
 
@@ -39,7 +39,7 @@ class PhysicalParams:
     body_thermal: BodyThermal = BodyThermal()
     length_mm: float | None = None     # None: the robot file's [plant] length_mm (default from its contacts)
     coil_offset_mm: float = 2.0
-    working_strain: float = 0.06
+    working_strain: float | None = None  # None: the robot file's [plant] working_strain (default 0.06)
     mech_tau_s: float = 0.03
     friction_band_deg: float = 12.0     # soft pad peel / bed-in range (estimate)
     materials: dict = field(default_factory=lambda: dict(mat.MATERIALS))
@@ -77,6 +77,11 @@ class PlantView:
     actuators: tuple[ActView, ...]
     limbs: tuple[LimbView, ...]
     step_mm: float = 1.0
+
+
+def robot_working_strain(robot: Any) -> float:
+    """The robot file's ``[plant] working_strain`` (its default where the robot has no section)."""
+    return float(getattr(getattr(robot, "plant", None), "working_strain", DEFAULT_WORKING_STRAIN))
 
 
 def robot_length_mm(robot: Any, n_limbs: int) -> float:

@@ -40,7 +40,7 @@ from .coils import Coils
 from .conditions import Conditions, coil_of_limb, conditions_from_section
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
-from .params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm
+from .params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm, robot_working_strain
 
 SHAPE_EPS = 3e-4   # contraction change (fraction of stroke) that triggers a shape update (≈ 0.013° of ψ)
 
@@ -89,7 +89,8 @@ class PhysicalPlant:
         # -- geometry -------------------------------------------------------------------------
         overlap = [cond.for_index("overlap_mm", j, anames, by_limb, lnames) for j in range(na)]
         length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
-        geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, p.working_strain)
+        strain = p.working_strain if p.working_strain is not None else robot_working_strain(robot)
+        geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, strain)
         curl = curl_problem(geo)
         if curl:
             raise SimError(f"{getattr(robot, 'path', robot.name)}: plant.length_mm: {curl}")
