@@ -371,3 +371,43 @@ def test_the_body_working_strain_is_a_robot_file_key_the_physical_plant_bends_by
     with caplog.at_level(logging.WARNING, logger="proleg"):
         r1("working_strain = 0.005")
     assert any("psi_star_deg" in rec.getMessage() for rec in caplog.records), [r.getMessage() for r in caplog.records]
+
+
+def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):
+    """``[[limb]] friction`` takes a pad's measured coefficients in place of a material name
+    (the paper's D1/D2 or the materials' coefficients): the soft and hard pads' own numbers
+    walk exactly as "D1" does (and reversed as "D2"), other numbers walk otherwise, and a
+    coefficient out of range or a kinetic one above the static is refused naming the level."""
+    from proleg.sim.physical.materials import HARD, SOFT
+
+    src = (ROOT / "robots" / "paper-r1.toml").read_text()
+    assert src.count('actuator = "sma-') == 2 and "\nfriction" not in src
+
+    def r1(friction: str):
+        path = tmp_path / "r1.toml"
+        path.write_text(src.replace('actuator = "sma-left"', f'actuator = "sma-left"\nfriction = {friction}')
+                           .replace('actuator = "sma-right"', f'actuator = "sma-right"\nfriction = {friction}'))
+        return load_robot(path)
+
+    def travel(robot) -> float:  # the left coil heated and let cool, then the right, three times
+        plant = PhysicalPlant(robot)
+        for _ in range(3):
+            for duties in ([0.8, 0.0], [0.0, 0.0], [0.0, 0.8], [0.0, 0.0]):
+                for _ in range(750 if 0.8 in duties else 1500):
+                    plant.step(0.002, duties)
+        return plant.displacement_mm
+
+    pad = lambda m: f"{{ mu_static = {m.mu_static}, mu_kinetic = {m.mu_kinetic} }}"  # noqa: E731
+    d1 = travel(r1('"D1"'))
+    assert abs(d1) > 0.3
+    assert travel(r1(f"[{pad(SOFT)}, {pad(HARD)}]")) == pytest.approx(d1, abs=1e-9)
+    assert travel(r1(f"[{pad(HARD)}, {pad(SOFT)}]")) == pytest.approx(travel(r1('"D2"')), abs=1e-9)
+    stickier = travel(r1(f"[{{ mu_static = 2.0, mu_kinetic = 1.6 }}, {pad(HARD)}]"))
+    assert abs(stickier - d1) > 0.05, (stickier, d1)  # the numbers are used, not a name's
+    assert r1('["soft", { mu_static = 2, mu_kinetic = 1.5 }]').limbs[0].friction == ("soft", (2.0, 1.5))
+    for bad, said in (("[\"soft\", { mu_static = 0.3, mu_kinetic = 0.4 }]", r"friction\[1\]\.mu_kinetic: expected at most mu_static \(0\.3\), got 0\.4"),
+                      ("[\"soft\", { mu_static = 0, mu_kinetic = 0 }]", r"friction\[1\]\.mu_static: expected a number in \(0, 5\]"),
+                      ("[\"soft\", { mu = 1 }]", r"friction\[1\]: expected the keys mu_static and mu_kinetic"),
+                      ("[\"soft\", \"glue\"]", r"friction\[1\]: expected a material \(soft, hard\)")):
+        with pytest.raises(RobotFileError, match=said):
+            r1(bad)

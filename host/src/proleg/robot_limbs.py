@@ -57,8 +57,9 @@ class Limb:
     hysteresis_deg: float
     actuator: str
     imu: ImuSpec | None = None  # None: placed automatically by the build
-    #: friction mechanism: "D1"/"D2" or one material per level (None: the plant infers it)
-    friction: str | tuple[str, ...] | None = None
+    #: friction mechanism: "D1"/"D2" or one material per level, a name or a pad's (μs, μk)
+    #: (None: the plant infers it)
+    friction: str | tuple[str | tuple[float, float], ...] | None = None
     #: how far the controller raises the limb when its top level is wanted (°): heated until ψ
     #: reaches it and held there, instead of just past the top critical angle (None)
     stroke_deg: float | None = None

@@ -358,9 +358,16 @@ def inference_warning(path: Path, limbs: list[Any]) -> str | None:
             'Say friction = "D1" or "D2" on every limb.')
 
 
-def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tuple[str, ...]:
+#: A pad of the lab's own: its friction coefficients on the ground, in place of a material name.
+#: Rubber-like solids reach μ ≈ 1–3 (Persson, "Sliding Friction", ch. 12); past 5 is no pad.
+PAD_MU_MAX = 5.0
+
+
+def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tuple[str | tuple[float, float], ...]:
     """A limb's ``friction``: ``"D1"``/``"D2"`` (two-level limbs) or a list of ``levels``
-    material names, lowest level first; one line naming the limb otherwise."""
+    materials, lowest level first, each a name (``FRICTION_MATERIALS``) or a pad's own
+    coefficients ``{ mu_static = …, mu_kinetic = … }`` (kept as a ``(μs, μk)`` pair); one line
+    naming the limb otherwise."""
     if isinstance(value, str):
         if value not in FRICTION_MECHANISMS:
             raise RobotFileError(f"{path}: {where}: friction: expected one of {', '.join(FRICTION_MECHANISMS)} "
@@ -369,11 +376,31 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
             raise RobotFileError(f"{path}: {where}: friction: {value} describes 2 levels, the limb has {levels}; "
                                  f"give a list of {levels} materials ({', '.join(FRICTION_MATERIALS)})")
         return value
-    if (not isinstance(value, list) or len(value) != levels
-            or any(not isinstance(m, str) or m not in FRICTION_MATERIALS for m in value)):
+    if not isinstance(value, list) or len(value) != levels or not all(isinstance(m, (str, dict)) for m in value):
         raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
-                             f"from {', '.join(FRICTION_MATERIALS)} (one per level, level 0 first), got {toml_text(value)}")
-    return tuple(value)
+                             f"(one per level, level 0 first), each {' or '.join(FRICTION_MATERIALS)} or "
+                             f"{{ mu_static = …, mu_kinetic = … }}, got {toml_text(value)}")
+    return tuple(_pad(path, f"{where}: friction[{k}]", m) for k, m in enumerate(value))
+
+
+def _pad(path: Path, where: str, m: str | dict) -> str | tuple[float, float]:
+    if isinstance(m, str):
+        if m not in FRICTION_MATERIALS:
+            raise RobotFileError(f"{path}: {where}: expected a material ({', '.join(FRICTION_MATERIALS)}) or "
+                                 f"{{ mu_static = …, mu_kinetic = … }}, got {toml_text(m)}")
+        return m
+    if set(m) != {"mu_static", "mu_kinetic"}:
+        raise RobotFileError(f"{path}: {where}: expected the keys mu_static and mu_kinetic, got {toml_text(m)}")
+    mu = {}
+    for k in ("mu_static", "mu_kinetic"):
+        v = m[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= PAD_MU_MAX:
+            raise RobotFileError(f"{path}: {where}.{k}: expected a number in (0, {PAD_MU_MAX:g}], got {toml_text(v)}")
+        mu[k] = float(v)
+    if mu["mu_kinetic"] > mu["mu_static"]:  # a contact that has started to slide grips less (docs/plant.md)
+        raise RobotFileError(f"{path}: {where}.mu_kinetic: expected at most mu_static ({mu['mu_static']:g}), "
+                             f"got {mu['mu_kinetic']:g}")
+    return mu["mu_static"], mu["mu_kinetic"]
 
 
 def rest_warnings(path: Path, limbs: list[Any], section: PlantSection) -> list[str]:

@@ -70,6 +70,15 @@ SOFT = Material("soft", mu_static=1.0, mu_kinetic=0.8)
 HARD = Material("hard", mu_static=0.35, mu_kinetic=0.25)
 MATERIALS = {"soft": SOFT, "hard": HARD}
 
+
+def material(m: str | tuple[float, float], known: dict[str, Material] = MATERIALS) -> Material:
+    """A level's material: a name from ``known``, or a lab's own pad as its (μs, μk) pair
+    (``[[limb]] friction``, checked by proleg.robot_plant)."""
+    if isinstance(m, str):
+        return known[m]
+    mu_s, mu_k = m
+    return Material(f"pad μs {mu_s:g} / μk {mu_k:g}", mu_static=float(mu_s), mu_kinetic=float(mu_k))
+
 # The paper's two friction mechanisms: the material touching at each level (level 0 = ψ < ψ*).
 # The names are the robot file's (``[[limb]] friction``, checked by proleg.robot_plant).
 MECHANISMS = dict(FRICTION_MECHANISMS)

@@ -2,7 +2,8 @@
 
 The paper's mechanisms: D1 (material M1, touching at ψ < ψ*, is soft/sticky; M2 hard/slippery)
 and D2 (the reverse). A robot file may say so per limb (``friction = "D1"`` or a list of
-material names per level, lowest level first, e.g. ``["soft", "hard", "soft"]``; checked by
+materials per level, lowest level first, e.g. ``["soft", "hard", "soft"]``, a material being a
+name or a pad's own ``{ mu_static, mu_kinetic }``; checked by
 ``proleg.robot``, on every limb or none). A robot file without that key has its mechanisms inferred from the sign pattern of
 the robot's transition matrix: every assignment of D1/D2 to the limbs is swept kinematically
 through every allowed transition (``measure.kinematic_signs_all``: one sweep, replayed per assignment) and the assignment whose signs
@@ -31,7 +32,7 @@ from . import materials as mat
 @dataclass(frozen=True)
 class Mechanisms:
     names: tuple[str, ...]                      # "D1", "D2" or "custom"
-    materials: tuple[tuple[str, ...], ...]      # per limb, material per level
+    materials: tuple[tuple[str | tuple[float, float], ...], ...]  # per limb, material (or pad's μs, μk) per level
     source: str                                 # "robot file", "given", "inferred from the matrix", "default (…why)"
 
 
@@ -43,9 +44,11 @@ def _materials(name_or_list: Any, levels: int, where: str) -> tuple[str, tuple[s
         if levels != 2:
             raise SimError(f"{where}: friction {name_or_list!r} describes 2 levels, the limb has {levels}")
         return name_or_list, mats
-    mats = tuple(str(m) for m in name_or_list)
-    if len(mats) != levels or any(m not in mat.MATERIALS for m in mats):
-        raise SimError(f"{where}: friction: expected {levels} materials from {', '.join(mat.MATERIALS)}, got {list(mats)}")
+    mats = tuple(tuple(float(x) for x in m) if isinstance(m, (tuple, list)) else str(m) for m in name_or_list)
+    if len(mats) != levels or any(isinstance(m, str) and m not in mat.MATERIALS
+                                  or not isinstance(m, str) and len(m) != 2 for m in mats):
+        raise SimError(f"{where}: friction: expected {levels} materials, each one of {', '.join(mat.MATERIALS)} "
+                       f"or a (mu_static, mu_kinetic) pair, got {list(mats)}")
     named = next((k for k, v in mat.MECHANISMS.items() if v == mats), "custom")
     return named, mats
 

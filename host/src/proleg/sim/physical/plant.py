@@ -80,8 +80,9 @@ class PhysicalPlant:
         self.mechanisms = mech.names
         self.mechanism_source = mech.source
         fr = cond.get("friction")
-        self._mu_s = [[p.materials[m].mu_static * fr for m in mats] for mats in mech.materials]
-        self._mu_k = [[p.materials[m].mu_kinetic * fr for m in mats] for mats in mech.materials]
+        pads = [[mat.material(m, p.materials) for m in mats] for mats in mech.materials]
+        self._mu_s = [[pad.mu_static * fr for pad in limb] for limb in pads]
+        self._mu_k = [[pad.mu_kinetic * fr for pad in limb] for limb in pads]
         self._true_th = [tuple(t + cond.for_index("psi_star_shift_deg", i, lnames) for t in lb.psi_star_deg)
                          for i, lb in enumerate(limbs)]
         self._band = p.friction_band_deg
