@@ -6,6 +6,7 @@ within its own coil's reach on the simulated body (``proleg.body``)."""
 from __future__ import annotations
 
 import logging
+import math
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -411,3 +412,48 @@ def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):
                       ("[\"soft\", \"glue\"]", r"friction\[1\]: expected a material \(soft, hard\)")):
         with pytest.raises(RobotFileError, match=said):
             r1(bad)
+
+
+def test_the_robot_files_coils_set_the_physical_plants_wire_and_transformation(tmp_path):
+    """``[plant]`` wire_diameter_mm, coil_diameter_mm, coil_length_mm (per actuator) make each
+    coil's resistance from its wire (ρ·L/A, NiTi 0.80 µΩ·m), a straight wire when the coil is as
+    wide as its wire; as_c..mf_c move its transformation on the physical plant too. They
+    describe the robot, so they are not run conditions."""
+    from proleg.errors import SimError
+    from proleg.sim.closed_loop import make_plant
+
+    src = (ROOT / "robots" / "paper-r1.toml").read_text()
+
+    def r1(plant: str):
+        path = tmp_path / "r1.toml"
+        path.write_text(src + f"\n[plant]\n{plant}\n")
+        return load_robot(path)
+
+    def wire_ohm(d_mm, od_mm, length_mm):
+        wire_m = length_mm * 1e-3 if od_mm == d_mm else (length_mm / d_mm) * math.pi * (od_mm - d_mm) * 1e-3
+        return 0.80e-6 * wire_m / (math.pi * (d_mm * 1e-3) ** 2 / 4)
+
+    assert list(PhysicalPlant(load_robot(ROOT / "robots" / "paper-r1.toml")).resistance_ohm) == \
+        pytest.approx([wire_ohm(0.1, 0.4, 30)] * 2)  # the default coil: 28.8 Ω
+    thick = PhysicalPlant(r1("wire_diameter_mm = [0.1, 0.15]\ncoil_diameter_mm = [0.4, 0.6]"))
+    assert list(thick.resistance_ohm) == pytest.approx([wire_ohm(0.1, 0.4, 30), wire_ohm(0.15, 0.6, 30)])
+    straight = PhysicalPlant(r1("wire_diameter_mm = 0.1\ncoil_diameter_mm = 0.1\ncoil_length_mm = 100"))
+    assert list(straight.resistance_ohm) == pytest.approx([wire_ohm(0.1, 0.1, 100)] * 2)  # 10.2 Ω
+
+    # a 90 °C alloy: at duty 0.3 (≈ 85 °C on this supply) the default coil bends its end, this one does not
+    def bent_at(robot, duty=0.3) -> float:
+        plant = PhysicalPlant(robot)
+        for _ in range(4000):
+            plant.step(0.002, [duty, 0.0])
+        return float(plant.psi_deg[0])
+    hot = r1("as_c = 95.0\naf_c = 110.0\nms_c = 85.0\nmf_c = 70.0")
+    assert PhysicalPlant(hot).transformation_c() == [(95.0, 110.0)] * 2
+    assert bent_at(load_robot(ROOT / "robots" / "paper-r1.toml")) > 20.0 and bent_at(hot) < 2.0
+
+    with pytest.raises(RobotFileError, match=r"plant\.coil_diameter_mm: expected at least the wire's diameter "
+                                             r"for actuator 'sma-left' \(0\.1 mm"):
+        r1("coil_diameter_mm = 0.05")
+    with pytest.raises(RobotFileError, match=r"plant\.wire_diameter_mm\[2\]: expected a number in \(0, 2\] mm"):
+        r1("wire_diameter_mm = [0.1, 0]")
+    with pytest.raises(SimError, match="wire_diameter_mm"):
+        make_plant(load_robot(ROOT / "robots" / "paper-r1.toml"), "physical", ["wire_diameter_mm=0.2"])

@@ -86,10 +86,10 @@ _KEYS = (
     PlantKey("heat_capacity_j_per_k", "J/K", 0.0, 10.0, 4.6e-3, "actuator", open_lo=True, doc="coil heat capacity C"),
     PlantKey("conductance_w_per_k", "W/K", 0.0, 10.0, 4.6e-3, "actuator", open_lo=True,
              doc="heat loss hA to the surroundings (τ = C / hA)"),
-    PlantKey("as_c", "°C", -100.0, 300.0, 64.0, "actuator", doc="austenite start temperature (heating)"),
-    PlantKey("af_c", "°C", -100.0, 300.0, 82.0, "actuator", doc="austenite finish temperature (heating)"),
-    PlantKey("ms_c", "°C", -100.0, 300.0, 56.0, "actuator", doc="martensite start temperature (cooling)"),
-    PlantKey("mf_c", "°C", -100.0, 300.0, 38.0, "actuator", doc="martensite finish temperature (cooling)"),
+    PlantKey("as_c", "°C", -100.0, 300.0, 64.0, "actuator", doc="austenite start temperature (heating)", plants=BOTH),
+    PlantKey("af_c", "°C", -100.0, 300.0, 82.0, "actuator", doc="austenite finish temperature (heating)", plants=BOTH),
+    PlantKey("ms_c", "°C", -100.0, 300.0, 56.0, "actuator", doc="martensite start temperature (cooling)", plants=BOTH),
+    PlantKey("mf_c", "°C", -100.0, 300.0, 38.0, "actuator", doc="martensite finish temperature (cooling)", plants=BOTH),
     PlantKey("max_strain", "", 0.0, 1.0, 0.3, "actuator", open_lo=True,
              doc="coil contraction at full transformation, fraction of its installed length"),
     PlantKey("psi_rest_deg", "°", -90.0, 90.0, 0.0, "limb", open_lo=True, open_hi=True,
@@ -136,6 +136,12 @@ _KEYS = (
     PlantKey("length_mm", "mm", 20.0, 2000.0, None, plants=PHYS,
              doc="body length, first contact to last (contacts evenly spaced); default 80 for two limbs, "
                  "40 per gap between neighbouring limbs for more"),
+    PlantKey("wire_diameter_mm", "mm", 0.0, 2.0, 0.1, "actuator", open_lo=True, plants=PHYS,
+             doc="the NiTi wire's diameter"),
+    PlantKey("coil_diameter_mm", "mm", 0.0, 20.0, 0.4, "actuator", open_lo=True, plants=PHYS,
+             doc="the coil's outer diameter; the wire's own diameter for a straight wire"),
+    PlantKey("coil_length_mm", "mm", 0.0, 1000.0, 30.0, "actuator", open_lo=True, plants=PHYS,
+             doc="the coil's installed length (a straight wire's length)"),
     PlantKey("working_strain", "", 0.0, 0.2, DEFAULT_WORKING_STRAIN, open_lo=True, plants=PHYS,
              doc="how much a fully transformed coil shortens the body's fibre it runs along (2 mm above the "
                  "neutral axis): the body's curvature at full stroke is this / 2 mm; halve it and a coil bends "
@@ -143,9 +149,13 @@ _KEYS = (
 )
 PLANT_KEYS: dict[str, PlantKey] = {k.name: k for k in _KEYS}
 PER_ACTUATOR = tuple(k.name for k in _KEYS if k.per == "actuator" and "table" in k.plants)
-# The body's own dimensions and stiffness: physical-plant keys of the robot file, not run conditions.
+# The body's own dimensions and stiffness, and its coils' wire: physical-plant keys of the robot
+# file, not run conditions (so are the transformation temperatures, which both plants read).
 BODY_KEYS = ("length_mm", "working_strain")
-PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants and k.name not in BODY_KEYS)
+COIL_KEYS = ("wire_diameter_mm", "coil_diameter_mm", "coil_length_mm")
+TRANSFORMATION_KEYS = ("as_c", "af_c", "ms_c", "mf_c")
+PHYSICAL_KEYS = tuple(k.name for k in _KEYS if "physical" in k.plants
+                      and k.name not in BODY_KEYS + COIL_KEYS + TRANSFORMATION_KEYS)
 SCALARS = ("direct_gain_deg", "cross_gain_deg", "mech_tau_s", "ambient_c", "step_mm", "noise_mm", "simultaneous_s")
 
 
@@ -178,6 +188,9 @@ class PlantSection:
     """The physical plant's body length (given, or ``proleg.body.default_length_mm``)."""
     working_strain: float = DEFAULT_WORKING_STRAIN
     """The physical plant's working strain (``proleg.body.BodyGeometry``)."""
+    coil: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    """The physical plant's coils: ``COIL_KEYS`` and ``TRANSFORMATION_KEYS`` the file gives,
+    one value per actuator (a key it does not give is the plant's default coil's)."""
 
     def scalars(self) -> dict[str, float]:
         return {k: getattr(self, k) for k in SCALARS}
@@ -253,10 +266,23 @@ def plant_section(path: Path, table: Any, actuators: list[str], n_limbs: int, n_
     length = _scalar(path, PLANT_KEYS["length_mm"], table["length_mm"]) if "length_mm" in table \
         else default_length_mm(n_limbs)
     strain = _scalar(path, PLANT_KEYS["working_strain"], table.get("working_strain"))
+    coil = {k: _per(path, PLANT_KEYS[k], table[k], na) for k in COIL_KEYS if k in table}
+    coil.update({k: per_act[k] for k in TRANSFORMATION_KEYS if k in table})
+    _check_wire(path, coil, actuators)
     return PlantSection(
         actuator=per_act, psi_rest_deg=rest, coupling_deg=coupling, true_matrix=truth,
-        given=frozenset(table), physical=physical, length_mm=length, working_strain=strain, **scalars,
+        given=frozenset(table), physical=physical, length_mm=length, working_strain=strain, coil=coil, **scalars,
     )
+
+
+def _check_wire(path: Path, coil: dict[str, tuple[float, ...]], actuators: list[str]) -> None:
+    """A coil at least as wide as its wire (as wide: a straight wire)."""
+    spec = {k: PLANT_KEYS[k].default for k in ("wire_diameter_mm", "coil_diameter_mm")}
+    for j, name in enumerate(actuators):
+        d, od = (coil[k][j] if k in coil else spec[k] for k in spec)
+        if od < d:
+            raise RobotFileError(f"{path}: plant.coil_diameter_mm: expected at least the wire's diameter for "
+                                 f"actuator {name!r} ({_g(d)} mm; as much for a straight wire), got {_g(od)}")
 
 
 def _fail(path: Path, key: str, expected: str, got: Any) -> None:

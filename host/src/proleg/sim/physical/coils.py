@@ -21,7 +21,7 @@ from typing import Any
 from ...errors import SimError
 from ..sma import Hysteresis
 from .conditions import Conditions
-from .params import PhysicalParams
+from .params import PhysicalParams, coil_geometries
 
 
 class Coils:
@@ -29,7 +29,7 @@ class Coils:
     are per coil and updated in place (``temp`` may be held and read after each step)."""
 
     def __init__(self, p: PhysicalParams, cond: Conditions, acts: Sequence[Any], anames: Sequence[str],
-                 by_limb: Sequence[int], lnames: Sequence[str]) -> None:
+                 by_limb: Sequence[int], lnames: Sequence[str], robot: Any = None) -> None:
         self.physics = p
         na = len(acts)
         self._na = na
@@ -37,9 +37,10 @@ class Coils:
         mism = cond.get("coil_mismatch")
         conv = cond.get("convection")
         self.R, self.C, self.hA, self.G, self.lat = [], [], [], [], []
+        self.geometry = geos = coil_geometries(p, robot, na)
         for j in range(na):
             scale = 1.0 + (mism if j == 0 else -mism if j == na - 1 and na > 1 else 0.0)
-            g = p.coil
+            g = geos[j]
             self.R.append(g.resistance_ohm * scale)
             self.C.append(g.heat_capacity_j_k * scale)
             self.lat.append(g.latent_j * scale)
@@ -56,8 +57,7 @@ class Coils:
         self.temp = [self.amb] * na
         self.peak = [self.amb] * na  # each coil's hottest since the plant was made
         self.tbody = self.amb
-        g = p.coil
-        self.hyst = [Hysteresis(g.as_c, g.af_c, g.ms_c, g.mf_c, self.amb) for _ in range(na)]
+        self.hyst = [Hysteresis(g.as_c, g.af_c, g.ms_c, g.mf_c, self.amb) for g in geos]
         self.alive = [True] * na
         self.pfactor = [1.0] * na
         self.drift: list[tuple[str, float, float] | None] = [None] * na

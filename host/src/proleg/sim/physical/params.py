@@ -5,6 +5,7 @@ logged state change (``Transition``) and the table plant's view of actuators and
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -77,6 +78,20 @@ class PlantView:
     actuators: tuple[ActView, ...]
     limbs: tuple[LimbView, ...]
     step_mm: float = 1.0
+
+
+#: The robot file's coil keys (``[plant]``, per actuator) and the ``CoilGeometry`` field each sets.
+_COIL_FIELDS = {"wire_diameter_mm": ("wire_diameter_m", 1e-3), "coil_diameter_mm": ("coil_outer_diameter_m", 1e-3),
+                "coil_length_mm": ("coil_length_m", 1e-3), "as_c": ("as_c", 1.0), "af_c": ("af_c", 1.0),
+                "ms_c": ("ms_c", 1.0), "mf_c": ("mf_c", 1.0)}
+
+
+def coil_geometries(p: PhysicalParams, robot: Any, n_actuators: int) -> list[CoilGeometry]:
+    """Each coil: ``p.coil`` with what the robot file's ``[plant]`` says of that actuator's wire
+    and transformation temperatures (``PlantSection.coil``)."""
+    given = getattr(getattr(robot, "plant", None), "coil", None) or {}
+    return [dataclasses.replace(p.coil, **{_COIL_FIELDS[k][0]: v[j] * _COIL_FIELDS[k][1] for k, v in given.items()})
+            for j in range(n_actuators)]
 
 
 def robot_working_strain(robot: Any) -> float:

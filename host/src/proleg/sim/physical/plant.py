@@ -99,7 +99,7 @@ class PhysicalPlant:
         self._shape = Shape(geo)
 
         # -- the coils: supply, thermal nodes, hysteresis, fatigue, drift (``coils``) -----------
-        self._coils = coils = Coils(p, cond, acts, anames, by_limb, lnames)
+        self._coils = coils = Coils(p, cond, acts, anames, by_limb, lnames, robot)
         self._temp = coils.temp   # the coils' own list, updated in place (report.claim reads it)
 
         # -- sensors and world --------------------------------------------------------------

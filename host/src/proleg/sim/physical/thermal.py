@@ -52,7 +52,14 @@ class CoilGeometry:
         return self.coil_length_m / self.wire_diameter_m
 
     @property
+    def straight(self) -> bool:
+        """A straight wire (Flexinol-style): the coil is as wide as its wire."""
+        return self.coil_outer_diameter_m <= self.wire_diameter_m
+
+    @property
     def wire_length_m(self) -> float:
+        if self.straight:
+            return self.coil_length_m
         mean_d = self.coil_outer_diameter_m - self.wire_diameter_m
         return self.turns * math.pi * mean_d
 
@@ -87,7 +94,8 @@ class CoilGeometry:
               / (mat.AIR_KINEMATIC_VISCOSITY_M2_S * mat.AIR_THERMAL_DIFFUSIVITY_M2_S))
         nu = (0.60 + 0.387 * ra ** (1.0 / 6.0) / (1.0 + (0.559 / mat.AIR_PRANDTL) ** (9.0 / 16.0)) ** (8.0 / 27.0)) ** 2
         h = nu * mat.AIR_CONDUCTIVITY_W_MK / d
-        area = math.pi * d * self.wire_length_m * self.exposed_fraction
+        exposed = 1.0 if self.straight else self.exposed_fraction  # a close-wound coil shades its own turns
+        area = math.pi * d * self.wire_length_m * exposed
         t_mean_k = (t_wire_c + t_air_c) / 2.0 + 273.15
         h_rad = 4.0 * self.emissivity * STEFAN_BOLTZMANN * t_mean_k ** 3
         return (h * scale + h_rad) * area
