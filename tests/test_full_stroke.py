@@ -296,3 +296,33 @@ def test_the_table_plant_takes_a_staggered_stroke_step_as_the_matrix_transition_
     assert promised > 20.0
     assert run.cycle_displacements_mm == pytest.approx([promised] * len(run.cycle_displacements_mm))
     assert run.unexpected_transitions == 0
+
+
+def test_a_stroke_out_of_reach_in_a_state_the_matrix_enters_is_one_warning_line(tmp_path, caplog):
+    """inchworm-3's middle limb raised alone bends to ≈ 31° on its 80 mm body: a stroke_deg of 40
+    loaded without a word (only hold tops were checked against the reach), and the firmware heated
+    that coil toward 40° at every raise until the limb stopped short (fric-3-like robot: 106 °C
+    against 78 °C with a stroke in reach). One line names the limb, the state and the stroke that
+    fits; with that stroke, none."""
+    import logging
+
+    text = (ROBOTS / "inchworm-3.toml").read_text(encoding="utf-8")
+    assert text.count('actuator = "sma-middle"\n') == 1
+    path = tmp_path / "worm.toml"
+
+    def warnings(stroke: float) -> list[str]:
+        path.write_text(text.replace('actuator = "sma-middle"\n', f'actuator = "sma-middle"\nstroke_deg = {stroke}\n'),
+                        encoding="utf-8")
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="proleg"):
+            load_robot(path)
+        return [r.getMessage() for r in caplog.records if "stroke_deg" in r.getMessage()]
+
+    lines = warnings(40.0)
+    assert len(lines) == 1, lines
+    assert f"{path}: limb 'middle': stroke_deg 40° is out of reach in state 010" in lines[0], lines
+    reach = float(lines[0].split("bends it to ")[1].split("°")[0])
+    assert 28.0 < reach < 34.0, lines
+    fits = float(lines[0].split("set stroke_deg to at most ")[1].split(",")[0])
+    assert fits == pytest.approx(reach - 0.5, abs=0.06)
+    assert warnings(fits) == []

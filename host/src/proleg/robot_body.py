@@ -393,6 +393,65 @@ def unreachable_states(limbs: list[Any], actuators: list[str], section: PlantSec
     return out
 
 
+def unreachable_strokes(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection,
+                        table: Any, hold_margin_deg: float) -> list[str]:
+    """One line per limb with a ``stroke_deg`` that some state the matrix enters, with the limb
+    on its top level, cannot bend it to on the physical plant's body, even with the coil of
+    every raised limb at full stroke (as ``unreachable_states``): the controller heats it
+    toward its stroke at every such raise, past its transformation, until the limb stops
+    climbing short of it (docs/robot-file.md, "full strokes"). ``unreachable_holds`` leaves
+    strokes out: the middle limb of a three-limb 80 mm body with ``stroke_deg = 40`` bends to
+    31° raised alone, its coil at 106 °C at every raise, and loaded without a word (30°: 78 °C).
+    A limb whose top level is out of reach there is ``unreachable_states``' (an error of the
+    gait check), not repeated here."""
+    from .states import limb_levels
+
+    strokes = [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is not None]
+    if len(limbs) < 2 or not strokes or table.n_states > COUPLING_CHECK_MAX_STATES:
+        return []
+    limb_act = [actuators.index(lb.actuator) for lb in limbs]
+    geo = body_of(limb_act, len(actuators), section)
+    if curl_problem(geo):
+        return []
+    levels = tuple(lb.levels for lb in limbs)
+    rows, wanted = [], []
+    for s in entered_states(table):
+        want = limb_levels(s, levels)
+        if not any(want[i] == levels[i] - 1 for i in strokes):
+            continue
+        c = np.zeros(len(actuators))
+        for i, k in enumerate(want):
+            if k > 0:
+                c[limb_act[i]] = 1.0
+        rows.append(c)
+        wanted.append((s, want))
+    if not rows:
+        return []
+    psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    out = []
+    for i in strokes:
+        lb = limbs[i]
+        entry = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
+        reached = [(float(p[i]), s) for (s, want), p in zip(wanted, psi)
+                   if want[i] == levels[i] - 1 and float(p[i]) >= entry]
+        if not reached:
+            continue
+        r, s = min(reached)
+        if lb.stroke_deg + HOLD_TOP_CLEARANCE_DEG <= r:
+            continue
+        fit = r - HOLD_TOP_CLEARANCE_DEG
+        lowest = hold_top_deg(lb, hold_margin_deg)  # a stroke lies at least here (robot_limbs._check_strokes)
+        advice = (f"set stroke_deg to at most {fit:.1f}" if fit >= lowest else
+                  f"no stroke from {lowest:.1f}° (1° above where it is held without one) is in reach there: "
+                  f"leave stroke_deg out")
+        out.append(f"{path}: limb {lb.name!r}: stroke_deg {lb.stroke_deg:g}° is out of reach in state "
+                   f"{table.label(s)}: every raised limb's coil at full stroke bends it to {r:.1f}° on the "
+                   f"simulated {section.length_mm:g} mm body, so at every raise there its coil heats past its "
+                   f"transformation until the limb stops climbing short of its stroke; {advice}, mark the "
+                   f"transitions into {table.label(s)} \"x\", or give [plant] length_mm")
+    return out
+
+
 def shared_coil_lifts(limbs: list[Any], coupled: dict[int, list[tuple[int, list[int], float]]]
                       ) -> dict[int, tuple[CoilLift, ...]]:
     """The states of ``coupled`` (``coupled_states``) a shared coil cannot hold: a limb is
