@@ -239,6 +239,24 @@ def test_a_limb_the_raised_limbs_hold_inside_its_band_cannot_come_down_and_the_t
     assert not caplog.records, [r.getMessage() for r in caplog.records]
 
 
+def test_a_limb_whose_lowest_band_holds_the_rest_angle_is_warned_as_resting_not_as_held_by_no_limbs(tmp_path, caplog):
+    """R1 with the left ψ* at 0.5°: its level-0 edge is -0.5°, and the body rests at 0°, so
+    lowering it (10 -> 00) never reads level 0. No limb is raised in 00, and the warning read
+    "the raised limbs  hold it at 0.0°" (an empty list). It says the limb rests there, and to
+    check its psi_star_deg."""
+    text = (robots_dir() / "paper-r1.toml").read_text()
+    assert text.count("psi_star_deg = [20.0]") == 2
+    path = tmp_path / "low.toml"
+    path.write_text(text.replace("psi_star_deg = [20.0]", "psi_star_deg = [0.5]", 1))
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    down = [r.getMessage() for r in caplog.records if "transition 10→00" in r.getMessage()]
+    assert len(down) == 1, [r.getMessage() for r in caplog.records]
+    assert "limb 'left' cannot come down to level 0: it rests at 0.0° on the simulated 80 mm body" in down[0], down
+    assert "check its psi_star_deg, or mark the transition" in down[0], down
+    assert "raised limbs" not in down[0] and "  " not in down[0], down
+
+
 def test_one_coil_on_both_limbs_lifts_its_own_end_first_so_the_far_end_alone_is_warned(tmp_path, caplog):
     """R1 with both limbs on sma-left and no forbidden list: state 01 (the far limb up, the
     coil's own down) cannot be held, since the coil lifts its own end first. It loaded

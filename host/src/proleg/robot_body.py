@@ -502,13 +502,16 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
         lb = limbs[i]
         k = limb_levels_of(s, limbs)[i]
         shared = [j for j in raising if limbs[j].actuator == lb.actuator]
-        how = (f"its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} up,"
-               if shared else f"the raised limbs {', '.join(repr(limbs[j].name) for j in raising)}")
+        how = (f"its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} up, "
+               f"holds it at" if shared else
+               f"the raised limbs {', '.join(repr(limbs[j].name) for j in raising)} hold it at" if raising else
+               "it rests at")  # no limb raised: its level-k band holds the body's rest angle
+        fix = "" if raising else "check its psi_star_deg, or "
         kinds["descents"].append(((a, s),
             f"{path}: transition {table.label(a)}→{table.label(s)}: limb {lb.name!r} cannot come down to level "
-            f"{k}: {how} hold it at {psi:.1f}° on the simulated {section.length_mm:g} mm body, above its level-{k} "
+            f"{k}: {how} {psi:.1f}° on the simulated {section.length_mm:g} mm body, above its level-{k} "
             f"edge {lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0:.1f}° (ψ* − hysteresis/2), so it keeps reading "
-            f"level {k + 1} and the step cannot end; mark the transition \"x\" (no gait may rely on it)"))
+            f"level {k + 1} and the step cannot end; {fix}mark the transition \"x\" (no gait may rely on it)"))
     what = {"rests": "a limb resting past its next level's edge",
             "shared": "a limb lifted by its own coil, shared with a raised limb",
             "neighbours": "a limb lifted by raised neighbours"}
