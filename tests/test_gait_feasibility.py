@@ -132,6 +132,36 @@ def test_an_on_time_error_the_build_lets_through_says_to_expect_a_fault_not_erro
     assert not any(": error: " in ln for ln in lines), lines
 
 
+def test_a_step_the_durations_say_outlasts_the_state_timeout_is_one_expect_a_fault_line_per_gait(tmp_path):
+    """R1 whose file says each step takes 0.9 s, with state_timeout_ms = 500: it built without a
+    word and the simulated firmware stopped 0.6 s after START (STATE_TIMEOUT). One problem per
+    gait names its longest step; without durations, or with the timeout above them, none."""
+    from proleg.firmware.gaits import firmware_gaits, gait_warnings
+    from proleg.report import SimSession
+    from proleg.sim.simulators import open_simulated
+
+    text = (ROBOTS / "paper-r1.toml").read_text()
+    assert "state_timeout_ms = 8000" in text and "[transitions]\n" in text
+    slow = text.replace("[transitions]\n", "[transitions]\ndefault_duration_s = 0.9\n")
+    robot = robot_from(tmp_path, slow.replace("state_timeout_ms = 8000", "state_timeout_ms = 500"))
+    problems = [p for p in gait_problems(robot, idx(robot, "00", "10", "11", "01", "00")) if p.kind == "timeout"]
+    assert len(problems) == 1 and problems[0].severity == "error"
+    assert problems[0].message == (
+        "gait 00 10 11 01 00: step 1 (00 -> 10) takes 0.9 s (the robot file's durations) (and 3 more of its steps), "
+        "not under safety.state_timeout_ms = 500: the firmware stops it (STATE_TIMEOUT); raise state_timeout_ms "
+        "or check the durations")
+    lines = gait_warnings(robot, firmware_gaits(robot))  # built, as on-time is: said to expect a fault
+    assert [ln.split(": gait ")[0] for ln in lines if "STATE_TIMEOUT" in ln] == \
+        ["gait 0 of +x: expect a fault", "gait 0 of -x: expect a fault"], lines
+    session = SimSession(open_simulated(robot))
+    session.advance(0.2)
+    report = session.run_gait("+x", 0, 3.0)
+    assert [f.code for f in report.faults][:1] == ["STATE_TIMEOUT"], report.faults
+    for ok in (slow, text.replace("state_timeout_ms = 8000", "state_timeout_ms = 500")):
+        robot = robot_from(tmp_path, ok)
+        assert "timeout" not in kinds(robot, "00", "10", "11", "01", "00")
+
+
 def test_the_entry_path_from_rest_uses_only_allowed_transitions_the_hardware_can_make(tmp_path):
     robot = robot_from(tmp_path, ONE_ACTUATOR)
     # gait 01 11 01: 00 -> 10 -> 01 is shorter to 01 but lowers 'front' while raising 'back'

@@ -27,6 +27,10 @@ and lets them fall when it cools, so:
   up more debt per cycle than the cycle pays back is cut sooner or later (error
   ``never-cools``). Holding a limb up for the whole gait is fine (docs/safety.md: the
   one-coil gait 10 -> 11 -> 10).
+* **Step time vs state timeout** — the firmware latches ``STATE_TIMEOUT`` when a step's
+  target is demanded ``safety.state_timeout_ms`` without being reached (docs/safety.md): a
+  step the robot file says takes that long or longer (``durations_s``, a CSV's ``duration_s``
+  or ``default_duration_s``) is cut (error ``timeout``). Without durations nothing is assumed.
 * **Entry** — the firmware starts from rest (every limb at level 0, state 0) and must reach
   the gait over allowed transitions that the hardware can make (``entry_path``); no such
   path is an error (``no-entry``).
@@ -58,7 +62,7 @@ DEFAULT_DRIVE_S = 1.0  # a transition's drive time when the table has no duratio
 class Problem:
     """One reason a gait cannot run (``severity == "error"``) or may misbehave ("warning")."""
 
-    kind: str       # shared-actuator | opposing | on-time | never-cools | no-entry
+    kind: str       # shared-actuator | opposing | on-time | never-cools | timeout | no-entry
     severity: str   # error | warning
     message: str
 
@@ -225,6 +229,29 @@ def on_time_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
     return out
 
 
+def timeout_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
+    """Each step the robot file's durations say takes ``safety.state_timeout_ms`` or longer: the
+    firmware stops it with STATE_TIMEOUT. R1 with ``default_duration_s = 0.9`` and
+    ``state_timeout_ms = 500`` built without a word and faulted 0.6 s after START."""
+    table = robot.transitions
+    if table.duration is None:
+        return []
+    durations = {(int(a), int(b)): float(d) for a, b, d in zip(table.src, table.dst, table.duration)}
+    timeout_ms = robot.safety.state_timeout_ms
+    long = [(durations[(a, b)], k, a, b) for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)
+            if 1000.0 * durations.get((a, b), 0.0) >= timeout_ms]
+    if not long:
+        return []
+    d, k, a, b = min(long, key=lambda x: (-x[0], x[1]))  # the longest step, the first of equals
+    more = f" (and {len(long) - 1} more of its steps)" if len(long) > 1 else ""
+    return [Problem(
+        "timeout", "error",
+        f"gait {_name(robot, cycle + cycle[:1])}: step {k} ({table.label(a)} -> {table.label(b)}) takes {d:g} s "
+        f"(the robot file's durations){more}, not under safety.state_timeout_ms = {timeout_ms}: the firmware "
+        f"stops it (STATE_TIMEOUT); raise state_timeout_ms or check the durations",
+    )]
+
+
 def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
     """Every problem running ``states`` (a closed or open cycle of state indices) on ``robot``."""
     cycle = _open(states)
@@ -241,6 +268,7 @@ def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
     if unreached:  # first: a state no drive reaches says the most
         out.insert(0, _unreachable_problem(robot, gait, unreached))
     out += on_time_problems(robot, cycle)
+    out += timeout_problems(robot, cycle)
     try:
         entry_path(robot, cycle)
     except GaitError as e:
