@@ -84,6 +84,24 @@ def test_check_runs_the_drawn_rows_on_the_firmware(capsys):
     assert "row 2 of 2" in err
 
 
+def test_a_limb_named_with_spaces_at_its_ends_is_found_by_the_checks_own_draws(capsys, tmp_path):
+    """A robot file may name a limb " left" (any printable text). A condition reads KEY=NAME:value
+    with NAME stripped, so check's own draw power_scale= left:0.85 was "no actuator 'left'"
+    (exit 2, no row run), and --condition could not name the limb at all."""
+    text = R1.read_text()
+    assert text.count('name = "left"') == 1 and text.count('name = "right"') == 1
+    path = tmp_path / "spaced.toml"
+    path.write_text(text.replace('name = "left"', 'name = " left"').replace('name = "right"', 'name = "right "'))
+    rows = sweep.draw_rows(2, 1, [" left", "right "])
+    assert any(": left:" in c or "=right :" in c for c in rows[1]), rows  # a per-limb key, named as drawn
+    rc, out, err = run(capsys, "check", str(path), "--rows", "2", "--seed", "1", "--jobs", "1", "--json")
+    assert rc == 0, err
+    assert [tuple(r["conditions"]) for r in json.loads(out)["rows"]] == rows
+    robot = load_robot(path)
+    plant = make_plant(robot, "physical", ["imu_bias_deg= left:3", "power_scale=right :0.9"])
+    assert plant.conditions.for_index("imu_bias_deg", 0, [lb.name for lb in robot.limbs]) == 3.0
+
+
 def test_rows_run_in_this_process_are_as_quiet_as_a_pools(capsys):
     """--jobs 1 (or --rows 1, or a one-core machine) runs the rows in this process: seed 1's
     first row (power=1.00) printed the plant's advice for the robot file ("coil 'sma-right' ...

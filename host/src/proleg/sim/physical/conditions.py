@@ -112,6 +112,12 @@ def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] =
         return list(names).index(name)
     if by_limb and limbs and name in limbs:
         return by_limb[list(limbs).index(name)]
+    # KEY=NAME:value is read with NAME stripped: a limb named " a" (a robot file may give one)
+    # is "a" there, and `proleg check` refused its own draw imu_bias_deg= a:1.1 ("no limb 'a'")
+    if name in (bare := [n.strip() for n in names]):
+        return bare.index(name)
+    if by_limb and limbs and name in (bare := [n.strip() for n in limbs]):
+        return by_limb[bare.index(name)]
     if name in ALIASES:
         ends = by_limb or range(len(names))
         return ends[ALIASES[name]]
