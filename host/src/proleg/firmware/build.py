@@ -243,7 +243,7 @@ def _build_into(robot: Robot, board: Board, out_dir: Path, objective: str, max_t
                 p = tmp / rel
                 p.parent.mkdir(parents=True, exist_ok=True)
                 p.write_text(text, encoding="utf-8")
-        _make(tmp, jobs)
+        _make(tmp, jobs, f"robot {robot.name} does not fit board {board.name}")
         flash_used, ram_used = _sizes(board, tmp)
         _check_limits(robot, board, flash_used, ram_used)
         digest = gait_table_hash(files)
@@ -292,7 +292,14 @@ def _writing(out_dir: Path) -> Iterator[None]:
         raise LinkError(f"cannot write build directory {out_dir}: {e.strerror or e}") from None
 
 
-def _make(project: Path, jobs: int) -> None:
+#: What a linker says when the image outgrows the board's flash or RAM (GNU ld, avr and arm).
+_OVERFLOW = re.compile(r"is not within region|region `?[\w.]+'? overflowed|will not fit in region")
+
+
+def _make(project: Path, jobs: int, overflow: str = "the firmware does not fit the board") -> None:
+    """Compile and link; a link that overflows the board's memory is one line starting with
+    ``overflow`` (the estimate before compiling lets past what it cannot foresee: four limbs of
+    10, 2, 2, 2 levels on the Nano linked .bss past its RAM, "compilation failed" with four ld lines)."""
     proc = subprocess.run(
         ["make", "-C", str(project), f"-j{jobs}", "all"],
         capture_output=True,
@@ -300,6 +307,11 @@ def _make(project: Path, jobs: int) -> None:
     )
     if proc.returncode != 0:
         out = (proc.stdout + proc.stderr).replace(str(project) + "/", "")
+        full = [line.split(": ", 1)[-1].strip() for line in out.splitlines() if _OVERFLOW.search(line)]
+        if full:
+            raise BuildError(f"{overflow}: the linker puts the firmware past the board's memory ({full[0]}); "
+                             "fewer or shorter gaits (--max-transitions, another objective), fewer levels, "
+                             "or a larger board")
         diagnostic = re.compile(r":\d+(:\d+)?: (fatal )?error:|: undefined reference|ld(\.bfd)?: ")
         errors = [line for line in out.splitlines() if diagnostic.search(line)] or out.splitlines()[-15:]
         raise BuildError("compilation failed:\n  " + "\n  ".join(errors[:15]))

@@ -29,6 +29,12 @@ from .render_gaits import BITMAP_MAX_STATES, gait_table_rows
 FLASH_PER_LIMB = 64
 RAM_PER_LIMB = 155
 BASE_LIMBS = 2
+#: Static RAM of one limb's ψ band beyond the first (psi.c's band_t: five {cos, sin} edges and
+#: four edge values, int16 each), kept for every limb up to the robot's most thresholds
+#: (bands[CFG_N_LIMBS][CFG_MAX_THRESHOLDS]). Measured on the Nano: two limbs of 2 and 10 levels
+#: 1,421 B against 973 B for 2 and 2 (56 B per threshold of the longer limb). Without it four
+#: limbs of 10, 2, 2, 2 levels passed the estimate (1,284 B) and failed to link (.bss past RAM).
+RAM_PER_BAND = 28
 
 
 @dataclass(frozen=True)
@@ -113,12 +119,14 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
                 f"board {name} has {limit_flash:,}{lib_note}"
             )
     if base_ram:
-        ram = base_ram + RAM_PER_LIMB * extra
+        bands = len(robot.limbs) * (max(lb.levels for lb in robot.limbs) - 2)  # past one per limb
+        ram = base_ram + RAM_PER_LIMB * extra + RAM_PER_BAND * bands
         stack = int(_board(board, "stack_bytes", 0) or 0)
         if limit_ram and ram + stack > limit_ram:
             also = f" and {stack:,} for its stack ([board] stack_bytes)" if stack else ""
             raise BuildError(
-                f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs): "
+                f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs"
+                f"{f' of up to {max(lb.levels for lb in robot.limbs)} levels' if bands else ''}): "
                 f"robot {robot.name} needs {ram:,} bytes of static RAM{also}, board {name} has {limit_ram:,}"
             )
     return Fit(placements, mux_selects_per_tick(placements), i2c_tick_us(placements, hz), tables, flash, ram)
