@@ -398,6 +398,23 @@ def test_load_gait_on_the_simulated_board(capsys):
     assert code == 2 and "STATES: 11 follows itself" in err and err.count("\n") == 1
 
 
+def test_load_gait_says_what_the_gait_check_finds_as_proleg_build_does(capsys, tmp_path):
+    """load-gait sent any sequence the matrix allows without a word: R1 whose durations (0.9 s a
+    step) outlast its state_timeout_ms (500) loaded 00 10 11 01 silently, and the board then
+    stopped it at once (STATE_TIMEOUT), where proleg build says 'expect a fault' of the same
+    gait. It still loads (the robot file's body is a model); the warning names the step."""
+    text = (ROBOTS / "paper-r1.toml").read_text()
+    path = tmp_path / "slow.toml"
+    path.write_text(text.replace("state_timeout_ms = 8000", "state_timeout_ms = 500")
+                    .replace("[transitions]\n", "[transitions]\ndefault_duration_s = 0.9\n"))
+    code, out, err = run(capsys, "load-gait", str(path), "--sim", "00,10,11,01")
+    assert code == 0 and "loaded 00 → 10 → 11 → 01 → 00 as the user gait" in out, err
+    assert "proleg: warning: STATES: expect a fault: gait 00 10 11 01 00: step 1 (00 -> 10) takes 0.9 s" in err, err
+    assert "STATE_TIMEOUT" in err and err.count("STATES:") == 1, err
+    code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,10,11,01")
+    assert code == 0 and "warning" not in err, err
+
+
 def test_set_param_by_name_on_the_simulated_board(capsys):
     code, out, err = run(capsys, "set-param", "--sim", "paper-r1", "drive_duty", "3000")
     assert code == 0, err

@@ -334,10 +334,17 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
         if table.lookup(a, b) is None:
             raise GaitError(f"STATES: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
                             "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
-    from ..gait.feasibility import rest_start_warning
+    from ..firmware.gaits import CANNOT_MAKE
+    from ..gait.feasibility import gait_problems, rest_start_warning
 
     if (line := rest_start_warning(robot, states)) is not None:
         log.warning("warning: %s", line)
+    # what proleg build says of its own gaits: a shared coil moving its limbs apart, a state out of
+    # reach, a coil kept on past max_on_ms... (a loaded gait has no entry path: rest_start_warning's)
+    for p in gait_problems(robot, states):
+        if p.severity == "error" and p.kind != "no-entry":
+            why = "the robot cannot make it" if p.kind in CANNOT_MAKE else "expect a fault"
+            log.warning("warning: STATES: %s: %s", why, p.message)
     with open_client(args, args.robot, robot=robot) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(table.label(x) for x in [*states, states[0]])} as the user gait on {client.link.description} "
