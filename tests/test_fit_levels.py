@@ -58,3 +58,19 @@ def test_a_link_past_the_boards_ram_is_one_line_saying_the_robot_does_not_fit(tm
                           "the board's memory ("), msg
     assert "\n" not in msg and "compilation failed" not in msg, msg
     assert not out.exists()
+
+
+def test_a_flash_dry_run_refuses_a_robot_the_ram_estimate_refuses(capsys, tmp_path):
+    """flash --dry-run names what the build would refuse: it printed an avrdude command and exit 0
+    for the robot above, which the build refuses for its static RAM."""
+    from build_checks import cli, one_line
+
+    path = _robot(tmp_path, [10, 2, 2, 2])
+    code, out, err = cli(capsys, "flash", path, "--board", "arduino-nano", "--port", "/dev/ttyUSB0", "--dry-run",
+                         "-o", tmp_path / "fw")
+    assert code == 2 and out == "", out
+    assert "robot many-levels does not fit board arduino-nano" in one_line(err) and "2,180 bytes of static RAM" in err
+    assert not (tmp_path / "fw").exists()
+    code, out, _ = cli(capsys, "flash", _robot(tmp_path, [3, 2]), "--board", "arduino-nano", "--port",
+                       "/dev/ttyUSB0", "--dry-run", "-o", tmp_path / "fw")
+    assert code == 0 and out.startswith("avrdude ")

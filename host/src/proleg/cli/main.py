@@ -323,13 +323,14 @@ def cmd_flash(args: argparse.Namespace) -> int:
     method = choose_method(board, args.tool)
     if args.dry_run:  # builds nothing, but names what the build would refuse (the robot file, the board)
         from ..firmware.build import check_board_takes, check_tick_budget, default_out_dir
-        from ..firmware.fit import check_i2c_ticks
+        from ..firmware.fit import check_i2c_ticks, check_ram
         from ..robot import load_robot
 
         robot = load_robot(args.robot)
         check_board_takes(robot, board)
         check_tick_budget(robot, board)
         check_i2c_ticks(robot, board)
+        check_ram(robot, board)
         out = Path(args.out) if args.out else default_out_dir(robot, board)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
         return 0

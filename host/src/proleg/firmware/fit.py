@@ -95,11 +95,9 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
     hz = i2c_hz(board)
     tables = table_bytes(robot, gaits)
     extra = max(0, len(robot.limbs) - BASE_LIMBS)
-    flash = ram = None
+    flash = None
     base_flash = int(_board(board, "base_flash_bytes", 0) or 0)
-    base_ram = int(_board(board, "base_ram_bytes", 0) or 0)
     limit_flash = int(_board(board, "flash_bytes", 0) or 0)
-    limit_ram = int(_board(board, "ram_bytes", 0) or 0)
     if base_flash:
         flash = base_flash + tables + FLASH_PER_LIMB * extra
         if limit_flash and flash > limit_flash:
@@ -118,15 +116,29 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
                 f"the firmware about {flash - tables:,}; robot {robot.name} needs {flash:,} bytes of flash, "
                 f"board {name} has {limit_flash:,}{lib_note}"
             )
-    if base_ram:
-        bands = len(robot.limbs) * (max(lb.levels for lb in robot.limbs) - 2)  # past one per limb
-        ram = base_ram + RAM_PER_LIMB * extra + RAM_PER_BAND * bands
-        stack = int(_board(board, "stack_bytes", 0) or 0)
-        if limit_ram and ram + stack > limit_ram:
-            also = f" and {stack:,} for its stack ([board] stack_bytes)" if stack else ""
-            raise BuildError(
-                f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs"
-                f"{f' of up to {max(lb.levels for lb in robot.limbs)} levels' if bands else ''}): "
-                f"robot {robot.name} needs {ram:,} bytes of static RAM{also}, board {name} has {limit_ram:,}"
-            )
+    ram = check_ram(robot, board)
     return Fit(placements, mux_selects_per_tick(placements), i2c_tick_us(placements, hz), tables, flash, ram)
+
+
+def check_ram(robot: Any, board: Any) -> int | None:
+    """The static RAM estimate (None: the board gives no base to estimate from), or BuildError
+    when it and the stack reserve do not fit the board. No gaits needed: ``flash --dry-run``
+    asks it too (it printed a command and exit 0 for four limbs of 10, 2, 2, 2 levels on the Nano,
+    which the build refuses)."""
+    name = _board(board, "name", "board")
+    base_ram = int(_board(board, "base_ram_bytes", 0) or 0)
+    limit_ram = int(_board(board, "ram_bytes", 0) or 0)
+    if not base_ram:
+        return None
+    extra = max(0, len(robot.limbs) - BASE_LIMBS)
+    bands = len(robot.limbs) * (max(lb.levels for lb in robot.limbs) - 2)  # past one per limb
+    ram = base_ram + RAM_PER_LIMB * extra + RAM_PER_BAND * bands
+    stack = int(_board(board, "stack_bytes", 0) or 0)
+    if limit_ram and ram + stack > limit_ram:
+        also = f" and {stack:,} for its stack ([board] stack_bytes)" if stack else ""
+        raise BuildError(
+            f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs"
+            f"{f' of up to {max(lb.levels for lb in robot.limbs)} levels' if bands else ''}): "
+            f"robot {robot.name} needs {ram:,} bytes of static RAM{also}, board {name} has {limit_ram:,}"
+        )
+    return ram
