@@ -162,6 +162,39 @@ def test_a_step_the_durations_say_outlasts_the_state_timeout_is_one_expect_a_fau
         assert "timeout" not in kinds(robot, "00", "10", "11", "01", "00")
 
 
+def test_a_gait_through_a_state_the_body_cannot_hold_is_an_unholdable_error_the_build_says_to_expect(tmp_path):
+    """inchworm-3 with the middle ψ* at 10°: in 101 the raised tail and head lift the middle pad
+    to ≈ 12.5°, past its 11° edge. Loading warned about the state, but the gaits the firmware
+    carries through it (+x gait 1: 001 101 100 ...) were built without a word, and gait 1 ended
+    in STATE_TIMEOUT on the nominal plant. Now each such gait is one ``unholdable`` error, which
+    the build prints as 'expect a fault' (a model's finding: not refused)."""
+    from proleg.firmware.gaits import firmware_gaits, gait_warnings
+    from proleg.report import SimSession
+    from proleg.sim.simulators import open_simulated
+
+    text = (ROBOTS / "inchworm-3.toml").read_text()
+    i = text.index('name = "middle"')
+    j = text.index("psi_star_deg = [20.0]", i)
+    robot = robot_from(tmp_path, text[:j] + "psi_star_deg = [10.0]" + text[j + len("psi_star_deg = [20.0]"):])
+    problems = [p for p in gait_problems(robot, idx(robot, "000", "100", "101", "001", "000")) if p.kind == "unholdable"]
+    assert len(problems) == 1 and problems[0].severity == "error", problems
+    assert problems[0].message.startswith(
+        "gait 000 100 101 001 000: goes to state 101 (step 2), which the simulated body cannot hold: in 101 "
+        "'middle' (level 0) sits at 12.5°, past its level-1 edge 11.0° (the warning when the robot file is loaded)")
+    assert "unholdable" not in kinds(robot, "000", "100", "110", "111", "011", "001", "000")
+    gaits = firmware_gaits(robot)
+    through = [k for k, g in enumerate(gaits["+x"]) if robot.transitions.index("101") in g.states]
+    assert through and through[0] != 0, through  # gait 0 is not one of them here
+    lines = gait_warnings(robot, gaits)
+    assert f"gait {through[0]} of +x: expect a fault: " in "\n".join(lines) and \
+        sum("cannot hold" in ln for ln in lines) == sum(robot.transitions.index("101") in g.states
+                                                         for gs in gaits.values() for g in gs), lines
+    session = SimSession(open_simulated(robot))
+    session.advance(0.2)
+    report = session.run_gait("+x", through[0], 20.0)
+    assert [f.code for f in report.faults][:1] == ["STATE_TIMEOUT"], report.faults
+
+
 def test_the_entry_path_from_rest_uses_only_allowed_transitions_the_hardware_can_make(tmp_path):
     robot = robot_from(tmp_path, ONE_ACTUATOR)
     # gait 01 11 01: 00 -> 10 -> 01 is shorter to 01 but lowers 'front' while raising 'back'

@@ -27,7 +27,7 @@ import numpy as np
 from . import states
 from .errors import RobotFileError
 from .robot_body import (CoilLift, Unreached, blocked_descents, coupled_states, coupling_warnings, reach_warnings,
-                         shared_coil_lifts, unreachable_states, unreachable_strokes)
+                         shared_coil_lifts, unholdable_states, unreachable_states, unreachable_strokes)
 from .robot_plant import PlantSection, default_plant_section, inference_warning, plant_section, rest_warnings
 from .robot_climb import climb_guard_refusal
 from .robot_fields import Fields, read_text
@@ -110,6 +110,11 @@ class Robot:
     #: every raised limb's coil at full stroke: state -> (limb, ψ° at most, ψ° needed) per limb;
     #: ``proleg.robot_body.unreachable_states``, checked by ``proleg.gait.feasibility``
     unreachable: dict[int, tuple[Unreached, ...]] = field(default_factory=dict)
+    #: states the matrix enters that the simulated body cannot hold because a limb rests or is
+    #: lifted (by its neighbours, not by a coil it shares) past its level's upper edge: state ->
+    #: (limb, ψ°) per such limb; ``proleg.robot_body.coupled_states``' (the load check's "cannot be
+    #: held" lines), checked by ``proleg.gait.feasibility``
+    unholdable: dict[int, tuple[tuple[int, float], ...]] = field(default_factory=dict)
 
     @property
     def where(self) -> str:
@@ -227,7 +232,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     _check_climb(path, control, limbs, library)
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library,
                  shared_coil_lifts(list(limbs), coupled),
-                 unreachable_states(list(limbs), [a.name for a in actuators], plant, table))
+                 unreachable_states(list(limbs), [a.name for a in actuators], plant, table),
+                 unholdable_states(list(limbs), coupled))
 
 
 def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:

@@ -452,6 +452,22 @@ def unreachable_strokes(path: Path, limbs: list[Any], actuators: list[str], sect
     return out
 
 
+def unholdable_states(limbs: list[Any], coupled: dict[int, list[tuple[int, list[int], float]]]
+                      ) -> dict[int, tuple[tuple[int, float], ...]]:
+    """The states of ``coupled`` (``coupled_states``) the body cannot hold for a limb that rests
+    or is lifted by its neighbours past its level's upper edge: ``{state: ((limb, ψ°), ...)}``.
+    A limb lifted by a coil it shares with a raised limb is ``shared_coil_lifts``' (a
+    ``shared-actuator`` error of the gait check where a step moves only some of that coil's
+    limbs) and left out here."""
+    out: dict[int, tuple[tuple[int, float], ...]] = {}
+    for s, hits in coupled.items():
+        held = tuple((i, psi) for i, raising, psi in hits
+                     if not any(limbs[j].actuator == limbs[i].actuator for j in raising))
+        if held:
+            out[s] = held
+    return out
+
+
 def shared_coil_lifts(limbs: list[Any], coupled: dict[int, list[tuple[int, list[int], float]]]
                       ) -> dict[int, tuple[CoilLift, ...]]:
     """The states of ``coupled`` (``coupled_states``) a shared coil cannot hold: a limb is

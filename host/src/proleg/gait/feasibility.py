@@ -14,6 +14,10 @@ and lets them fall when it cools, so:
   level on the simulated body, even with every raised limb's coil at full stroke (a limb
   named on another limb's coil, which sits at that limb: ``Robot.unreachable``): error
   ``unreachable``.
+* **States the body cannot hold** — a step into a state in which a limb rests or is lifted by
+  its raised neighbours past its level's upper edge on the simulated body (``Robot.unholdable``,
+  the load check's "cannot be held" lines): it reads as another state, and the firmware's step
+  ends in STATE_TIMEOUT (error ``unholdable``, not refused by the build: the body is a model).
 * **Opposing steps** — a step that raises a limb on one actuator while lowering a limb on
   another needs a heating and a cooling crossing to coincide; the controller synchronises
   them as well as it can, but the robot may pass through an intermediate state (warning
@@ -62,7 +66,7 @@ DEFAULT_DRIVE_S = 1.0  # a transition's drive time when the table has no duratio
 class Problem:
     """One reason a gait cannot run (``severity == "error"``) or may misbehave ("warning")."""
 
-    kind: str       # shared-actuator | opposing | on-time | never-cools | timeout | no-entry
+    kind: str       # shared-actuator | unreachable | unholdable | opposing | on-time | never-cools | timeout | no-entry
     severity: str   # error | warning
     message: str
 
@@ -166,6 +170,25 @@ def _unreachable_problem(robot: "Robot", gait: str, unreached: list[tuple[int, i
                                            f"{_short_of(robot, first)} (the warning when the robot file is loaded)")
 
 
+def _unholdable_problem(robot: "Robot", gait: str, unheld: list[tuple[int, int]]) -> Problem:
+    """One ``unholdable`` error for the steps of a gait into states the body cannot hold
+    (``Robot.unholdable``): the first three named, with the limb and its ψ in the first. A
+    planar robot's library gait through such a state (011 111 101 …, the middle pad lifted to
+    12.5° past its 11° edge in 101) was built without a word about it and ended in STATE_TIMEOUT."""
+    label = robot.transitions.label
+    named = ", ".join(f"{label(b)} (step {k})" for k, b in unheld[:3])
+    more = f" and {len(unheld) - 3} more" if len(unheld) > 3 else ""
+    first = unheld[0][1]
+    levels = limb_levels(first, robot.levels)
+    why = "; ".join(f"{robot.limbs[i].name!r} (level {levels[i]}) sits at {psi:.1f}°, past its level-"
+                    f"{levels[i] + 1} edge {robot.limbs[i].psi_star_deg[levels[i]] + robot.limbs[i].hysteresis_deg / 2:.1f}°"
+                    for i, psi in robot.unholdable[first])
+    return Problem("unholdable", "error",
+                   f"gait {gait}: goes to state{'s' if len(unheld) > 1 else ''} {named}{more}, which the simulated "
+                   f"body cannot hold: in {label(first)} {why} (the warning when the robot file is loaded), so it "
+                   f"reads as another state and the step ends in STATE_TIMEOUT")
+
+
 def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
     """Why ``actuator`` cannot hold ``state`` (``Robot.coil_lifts``), or None."""
     for act, lifted, raised in getattr(robot, "coil_lifts", {}).get(state, ()):
@@ -267,6 +290,10 @@ def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
             out.append(Problem(kind, severity, f"gait {gait}: step {k} ({label}) {what}"))
     if unreached:  # first: a state no drive reaches says the most
         out.insert(0, _unreachable_problem(robot, gait, unreached))
+    unheld = [(k, b) for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)
+              if b in getattr(robot, "unholdable", {}) and b not in {s for _, s in unreached}]
+    if unheld:
+        out.append(_unholdable_problem(robot, gait, unheld))
     out += on_time_problems(robot, cycle)
     out += timeout_problems(robot, cycle)
     try:
