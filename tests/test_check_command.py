@@ -19,6 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from proleg.cli.main import main
+from proleg.errors import SimError
 from proleg.report import sweep
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import make_plant
@@ -100,6 +101,11 @@ def test_a_limb_named_with_spaces_at_its_ends_is_found_by_the_checks_own_draws(c
     robot = load_robot(path)
     plant = make_plant(robot, "physical", ["imu_bias_deg= left:3", "power_scale=right :0.9"])
     assert plant.conditions.for_index("imu_bias_deg", 0, [lb.name for lb in robot.limbs]) == 3.0
+    # two names alike but for their spaces: which one is meant cannot be told, so neither is taken
+    both = tmp_path / "alike.toml"
+    both.write_text(path.read_text().replace('name = "right "', 'name = "left "'))
+    with pytest.raises(SimError, match=r"'left' names ' left', 'left ' alike .*give the index instead"):
+        make_plant(load_robot(both), "physical", ["imu_bias_deg=left:3"])
 
 
 def test_rows_run_in_this_process_are_as_quiet_as_a_pools(capsys):

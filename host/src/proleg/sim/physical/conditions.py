@@ -114,10 +114,13 @@ def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] =
         return by_limb[list(limbs).index(name)]
     # KEY=NAME:value is read with NAME stripped: a limb named " a" (a robot file may give one)
     # is "a" there, and `proleg check` refused its own draw imu_bias_deg= a:1.1 ("no limb 'a'")
-    if name in (bare := [n.strip() for n in names]):
-        return bare.index(name)
-    if by_limb and limbs and name in (bare := [n.strip() for n in limbs]):
-        return by_limb[bare.index(name)]
+    for pool, index in ((names, None), (limbs if by_limb else (), by_limb)):
+        bare = [n.strip() for n in pool]
+        if bare.count(name) > 1:
+            raise SimError(f"condition {key}: {name!r} names {', '.join(repr(n) for n in pool if n.strip() == name)} "
+                           f"alike (spaces at a name's ends do not count): give the index instead")
+        if name in bare:
+            return bare.index(name) if index is None else index[bare.index(name)]
     if name in ALIASES:
         ends = by_limb or range(len(names))
         return ends[ALIASES[name]]
