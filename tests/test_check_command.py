@@ -296,3 +296,32 @@ def test_the_nominal_row_reuses_the_idealised_walk_that_set_the_run_length(capsy
     assert walks == [()]  # the nominal walk, once
     assert given[0][0] == () and isinstance(given[0][1], claim.IdealisedWalk) and given[0][1].possible
     assert [ideal for _, ideal in given[1:]] == [None, None]  # drawn rows walk their own conditions
+
+
+@pytest.mark.parametrize("idealised, fails", [(0.001, False), (0.3, True)])
+def test_a_row_the_gait_barely_moves_in_is_not_missed_for_drifting_back(capsys, monkeypatch, idealised, fails):
+    """Where the idealised drive makes less than 5 % of its nominal speed the gait does not
+    carry the robot: a firmware run there that drifts back without a fault and cool is
+    "drifted", not a miss (a lab's CI does not fail on the plant's noise); the same drift where
+    the idealised drive walks is a miss."""
+    def fake(robot, conditions, run_s, **kw):
+        if not conditions:
+            return _row(conditions=(), idealised_mm_s=0.39)
+        return _row(conditions=tuple(conditions), idealised_mm_s=idealised, completed=False, speed_mm_s=-0.002,
+                    note="walks the wrong way (no fault)")
+    monkeypatch.setattr(sweep, "run_row", fake)
+    rc, out, err = run(capsys, "check", str(R1), "--rows", "2", "--jobs", "1", "--json")
+    rows = json.loads(out)["rows"]
+    assert [r["verdict"] for r in rows] == ["missed" if fails else "drifted"] * 2
+    assert rc == (1 if fails else 0) and ("did not complete the gait (walks the wrong way" in err) == fails
+    rc, out, _ = run(capsys, "check", str(R1), "--rows", "2", "--jobs", "1")
+    assert ("drifted back where the gait barely moves in 2" in out) != fails
+
+
+def test_a_drift_with_a_fault_or_a_hot_coil_is_still_missed_where_the_gait_barely_moves():
+    drift = dict(possible=True, idealised_mm_s=0.001, completed=False, note="walks the wrong way (no fault)",
+                 barely_moves=True)
+    assert _row(**drift).verdict == "drifted" and not _row(**drift).failed
+    assert _row(**{**drift, "fault": "STATE_TIMEOUT"}).missed
+    assert _row(**{**drift, "coil_peak_c": 125.0}).missed
+    assert _row(**{**drift, "note": "only 1 cycles (no fault)"}).missed

@@ -35,7 +35,8 @@ def add_arguments(sub) -> None:
                                    "that says whether the coils can walk the gait there at all.",
                        epilog="exit status: 0 every row passed; 1 the firmware did not complete the nominal row "
                               "(row 0: --condition alone), missed a row the coils can walk "
-                              "(a fault stop, the wrong way, a coil past 120 °C) or stopped one nothing walks with "
+                              "(a fault stop, the wrong way where the idealised drive makes 5 % of its nominal "
+                              "speed or more, a coil past 120 °C) or stopped one nothing walks with "
                               "a coil past 120 °C, or the gait cannot be checked (even the idealised drive does not "
                               "walk it on the nominal plant); 2 a usage mistake")
     c.add_argument("robot", metavar="ROBOT", type=robot_arg)
@@ -115,7 +116,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         from ..errors import Interrupted
 
         raise Interrupted(_interrupted(args, max(len(done) - 1, 0), len(jobs) - 1)) from None
-    nominal_row, rows = done[0], done[1:]
+    nominal_row, rows = done[0], sweep.barely_moving(done[1:], nominal.speed_mm_s, args.direction)
+    done = [nominal_row, *rows]
     summary = {**sweep.summary(rows), **_kept(nominal_row, rows),
                "hottest_c": round(max(r.coil_peak_c for r in done), 1)}  # the nominal row's coils too
     failed = [(i, r) for i, r in enumerate(done) if r.failed]
@@ -243,7 +245,8 @@ def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, nomin
         print(f"  {i:3d}  {conds:<{width}}  idealised {ideal:>11}  firmware {r.verdict:<10} "
               f"{r.what_happened():<24} {share:>16}  coils ≤ {r.coil_peak_c:.0f} °C")
     parts = [f"the coils can walk {s['possible']} of {s['rows']}: the firmware completed "
-             f"{s['completed_where_possible']}" + (f", missed {s['missed']}" if s["missed"] else "")]
+             f"{s['completed_where_possible']}" + (f", missed {s['missed']}" if s["missed"] else "")
+             + (f", drifted back where the gait barely moves in {s['drifted']}" if s["drifted"] else "")]
     if s["impossible"]:
         stops = [f"stopped cool in {s['impossible_stopped_below_120c']}"] if s["impossible_stopped_below_120c"] else []
         if s["impossible_completed_by_the_firmware"]:
