@@ -542,6 +542,16 @@ def test_load_gait_refuses_a_transition_the_robot_file_forbids_before_sending(ca
     assert code == 0, err
 
 
+def test_load_gait_refuses_a_gait_longer_than_the_firmware_holds_in_steps_not_protocol_fields(capsys):
+    """It said "LOAD_GAIT.states: 48 elements, at most 24" (the codec's words)."""
+    long = ",".join(["00", "10", "11", "01"] * 12)
+    code, out, err = run(capsys, "load-gait", "--sim", "paper-r1", long)
+    assert code == 2 and out == ""
+    assert "STATES: a gait of 48 steps; the firmware holds a user gait of at most 24" in err and "LOAD_GAIT" not in err
+    code, _, err = run(capsys, "load-gait", "--sim", "paper-r1", ",".join(["00", "10", "11", "01"] * 6))
+    assert code == 0, err  # 24 steps
+
+
 @pytest.mark.parametrize("argv, text", [
     (("set-param", "--sim", "paper-r1", "drive_duty", "9000"), "SAFETY_LIMIT (above the build's duty ceiling, "
                                                                "the robot file's [safety] max_duty"),

@@ -539,12 +539,12 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
         if len(lines) > WARNING_EXAMPLES:
             rest += [line for _, line in lines[WARNING_EXAMPLES:]]
             if kind == "descents":
-                shown.append(f"{path}: {len(lines) - WARNING_EXAMPLES} more lines like these: in all, {len(lines)} "
+                shown.append(f"{path}: {_more(len(lines) - WARNING_EXAMPLES)}: in all, {len(lines)} "
                              f"of the {len(table.src)} transitions the matrix allows cannot end on the simulated "
                              f"body because raised limbs keep a limb from coming down (-v lists every line)")
                 continue
             n = len({s for s, _ in lines})
-            shown.append(f"{path}: {len(lines) - WARNING_EXAMPLES} more lines like these: in all, {n} of the "
+            shown.append(f"{path}: {_more(len(lines) - WARNING_EXAMPLES)}: in all, {n} of the "
                          f"{entered} states the matrix enters cannot be held on the simulated body because of "
                          f"{what[kind]} (-v lists every line)")
     return shown, rest
@@ -554,3 +554,7 @@ def limb_levels_of(state: int, limbs: list[Any]) -> tuple[int, ...]:
     from .states import limb_levels
 
     return tuple(limb_levels(state, tuple(lb.levels for lb in limbs)))
+
+
+def _more(n: int) -> str:
+    return f"{n} more line like these" if n == 1 else f"{n} more lines like these"

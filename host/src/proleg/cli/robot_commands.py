@@ -327,6 +327,11 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
         states = states[:-1]  # a closed walk may repeat its start state
     if len(states) < 2:
         raise GaitError(f"STATES: a gait needs at least two states, got {args.states!r}")
+    from ..protocol.definition import MAX_GAIT_STEPS
+
+    if len(states) > MAX_GAIT_STEPS:
+        raise GaitError(f"STATES: a gait of {len(states)} steps; the firmware holds a user gait of at most "
+                        f"{MAX_GAIT_STEPS} (the start state is not repeated at the end)")
     for a, b in zip(states, [*states[1:], states[0]]):  # the board refuses these: say which, before sending
         if a == b:
             raise GaitError(f"STATES: {table.label(a)} follows itself; each step of a gait changes the state "
