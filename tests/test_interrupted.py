@@ -506,3 +506,30 @@ def test_a_console_interrupted_while_it_sets_up_closes_the_recording_it_opened(c
     assert "robot stopped" in err  # the robot was stopped all the same
     data = record.read_bytes()
     assert data.endswith(b"\x89MCAP0\r\n") and len(data) > 16  # the footer's closing magic: a whole file
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_sigterm_ends_a_console_with_143_where_ctrl_c_leaves_with_0(tmp_path, sig):
+    """``proleg console`` took SIGTERM (a CI job's timeout, ``kill``) and SIGHUP for a ``q`` and
+    exited 0: a script could not tell it was killed. Ctrl-C stays a way to leave (0); SIGTERM
+    exits 143 as every other command does, after the robot is stopped and the recording closed."""
+    record = tmp_path / "session.mcap"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "console", "--sim", "paper-r1", "--plain",
+                             "--record", str(record)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 2_000):
+            time.sleep(0.2)
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert "Traceback" not in err and "robot stopped on sim paper-r1" in err, err
+    if sig == signal.SIGINT:
+        assert proc.returncode == 0, err
+    else:
+        assert proc.returncode == 143, err
+        assert err.splitlines()[-1] == f"proleg: ended by SIGTERM; recording kept in {record} (complete up to there)"
+    assert len(read_recording(record).time_s) > 0

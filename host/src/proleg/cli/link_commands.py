@@ -8,6 +8,7 @@ function taking the parsed namespace, which calls ``console_main`` / ``plot_main
 
 from __future__ import annotations
 
+import argparse
 import sys
 from collections.abc import Sequence
 from typing import Any, TextIO
@@ -94,7 +95,9 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             raise KeyboardInterrupt
 
     watchdog_ms = robot.safety.link_watchdog_ms if robot is not None else None
-    with hangup_as_exception(hang_up), RobotClient(link, timeout=timeout, watchdog_ms=watchdog_ms) as client:
+    recorder = None
+    with hangup_as_exception(hang_up) as ended_by, \
+            RobotClient(link, timeout=timeout, watchdog_ms=watchdog_ms) as client:
         info = client.connect()
         if robot is not None:
             for problem in check_identity(info, robot, force=force, link=link.description):
@@ -105,7 +108,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             meta = RecordingMeta.for_robot(info=info, robot=robot, link=link)
             if record is not None:
                 with interrupts.whole():  # a Ctrl-C in between: the recording is already ours to close
-                    listeners.append(Logger(record, meta))
+                    recorder = Logger(record, meta)
+                    listeners.append(recorder)
             if udp is not None:
                 listeners.append(UdpStreamer(udp, udp_format, meta))
             levels = robot.levels if robot is not None else (2,) * info.limbs
@@ -153,6 +157,13 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         errors = [w.error for w in listeners if getattr(w, "error", None)]
         if errors:
             raise errors[0]
+    if ended_by:  # SIGTERM (kill, a CI job's timeout) or SIGHUP: not a way to leave, as Ctrl-C and q are
+        import signal
+
+        from ..record.base import what_was_kept
+
+        print(f"proleg: ended by {signal.Signals(ended_by[0]).name}; {what_was_kept(recorder)}", file=err)
+        return 128 + ended_by[0]
     if faulted.first is not None:  # exit 1: the robot faulted (README, "Exit status")
         what = "a fault was latched" if faulted.first == "latched" else f"fault {faulted.first}"
         print(f"proleg: the robot faulted during the console session ({what})", file=err)
@@ -199,6 +210,19 @@ def dbc_main(*, out: str, nodes: Sequence[int] = (0,), base: int = 0x100, robot_
 
 
 # --------------------------------------------------------------------------- argparse
+CONSOLE_EPILOG = """\
+Leaving (q, Ctrl-C, the window closed, the link lost, --duration over, SIGTERM) sends STOP,
+ESTOP if it is not acknowledged, unless --leave-running; a recording is closed whole.
+
+exit status:
+  0    left with q, Ctrl-C or at the end of --duration
+  1    failed: the link was lost or a command failed, the robot faulted during the session,
+       a recording could not be written, the board does not run the --robot file's firmware
+  2    usage: a bad argument, a robot file that does not load
+  143  ended by SIGTERM (kill, a CI job's timeout), after the robot was stopped
+  129  ended by SIGHUP (a closed terminal), after the robot was stopped
+"""
+
 def _robot(text: str) -> str:
     from .main import robot_arg
 
@@ -221,7 +245,8 @@ def add_arguments(subparsers: Any) -> None:
     """Add ``console``, ``plot`` and ``dbc`` to the CLI's subparsers."""
     from .main import add_udp_options
 
-    c = subparsers.add_parser("console", help="live console (or --plain lines) on a robot over serial, CAN or the simulator")
+    c = subparsers.add_parser("console", help="live console (or --plain lines) on a robot over serial, CAN or the simulator",
+                              epilog=CONSOLE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     src = c.add_mutually_exclusive_group(required=True)
     src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port, loop://")
     src.add_argument("--can", metavar="CHANNEL", nargs="?", const="",

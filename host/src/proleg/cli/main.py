@@ -39,7 +39,7 @@ exit status:
        board file or recording that does not load, a bad gait
   130  interrupted: Ctrl-C (SIGINT), with one line saying what was kept (console: Ctrl-C
        is a way to leave, 0)
-  143  ended by SIGTERM (kill, a CI job's timeout) the way Ctrl-C ends it
+  143  ended by SIGTERM (kill, a CI job's timeout) the way Ctrl-C ends it (console too)
   129  ended by SIGHUP (a closed terminal) the way Ctrl-C ends it
 
 ROBOT is a robot file or the name of a bundled example (proleg robots lists them).

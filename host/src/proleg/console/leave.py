@@ -40,15 +40,19 @@ class _Hangup(Exception):
 
 
 @contextmanager
-def hangup_as_exception(on_signal: Callable[[], None] | None = None) -> Iterator[None]:
+def hangup_as_exception(on_signal: Callable[[], None] | None = None) -> Iterator[list[int]]:
     """On SIGHUP (the terminal window closed) or SIGTERM, call ``on_signal`` (e.g. ask the UI to
     exit) or raise in the main thread, so the caller's ``finally`` (which stops the robot)
-    runs instead of the process just dying."""
+    runs instead of the process just dying. Yields the list of the signals that arrived: the
+    caller's exit status is 128 + the first (143, 129), as every command's is; before, the
+    console took them for a ``q`` and exited 0, so a CI job's timeout looked like a clean end."""
+    ended_by: list[int] = []
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield ended_by
         return
 
     def handler(signum: int, frame: FrameType | None) -> None:
+        ended_by.append(signum)
         if on_signal is not None:
             on_signal()
         else:
@@ -59,7 +63,7 @@ def hangup_as_exception(on_signal: Callable[[], None] | None = None) -> Iterator
         if sig is not None:
             old[sig] = signal.signal(sig, handler)
     try:
-        yield
+        yield ended_by
     except (_Hangup, KeyboardInterrupt):
         pass  # the caller's finally has stopped the robot; end quietly
     finally:
