@@ -533,3 +533,36 @@ def test_sigterm_ends_a_console_with_143_where_ctrl_c_leaves_with_0(tmp_path, si
         assert proc.returncode == 143, err
         assert err.splitlines()[-1] == f"proleg: ended by SIGTERM; recording kept in {record} (complete up to there)"
     assert len(read_recording(record).time_s) > 0
+
+
+#: as ``_AS_FROM_A_TERMINAL`` but as a script's background job (``proleg run … &``): SIGINT ignored
+_AS_A_BACKGROUND_JOB = _AS_FROM_A_TERMINAL.replace(
+    "[signal.signal(s, signal.SIG_DFL) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)]; ",
+    "[signal.signal(s, signal.SIG_DFL) for s in (signal.SIGTERM, signal.SIGHUP)]; "
+    "signal.signal(signal.SIGINT, signal.SIG_IGN); ")
+
+
+def test_sigterm_ends_a_background_run_as_ctrl_c_does(tmp_path):
+    """``proleg run … &`` in a script ignores Ctrl-C (the shell's doing), and SIGTERM then killed it
+    outright: no STOP sent, no line, an MCAP without its footer. It now ends it as in the
+    foreground: 143, the robot stopped, the recording whole."""
+    assert "SIG_IGN" in _AS_A_BACKGROUND_JOB
+    record = tmp_path / "run.mcap"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-c", _AS_A_BACKGROUND_JOB, "run", str(R1), "--sim", "--speed", "1",
+                             "--duration", "600", "--record", str(record), "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
+            time.sleep(0.2)
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, (proc.returncode, err)
+    lines = [x for x in err.splitlines() if "warning" not in x]
+    assert len(lines) == 1 and "; STOP acknowledged: the gait is stopped and the coils are off; " in lines[0], err
+    assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
+    assert record.read_bytes().endswith(b"\x89MCAP0\r\n")  # the footer: a whole file
+    assert len(read_recording(record).time_s) > 0

@@ -11,7 +11,8 @@ ends. A second one inside the same block raises at once, so a write that blocks 
 pipe, a hung mount) never keeps the user from stopping the robot. ``release()`` puts
 Python's handler back after the last holder. Nothing is deferred off the main thread
 (signals are handled only there), and an ignored SIGINT (a background job) or another
-handler is left alone. Per row: a flag, not a ``signal.signal`` call (those took 18 µs).
+handler is left alone; in a background job SIGTERM and SIGHUP still come as a Ctrl-C
+(``take_terminations``, ``terminate``) and are deferred the same way. Per row: a flag, not a ``signal.signal`` call (those took 18 µs).
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ _lock = threading.Lock()
 _holders = 0
 _inside = False
 _caught = False
+#: SIGTERM/SIGHUP come as a Ctrl-C (``terminate``) while SIGINT itself is ignored (a background job)
+_terminations = False
 
 
 def _on_sigint(signum: int, frame: object) -> None:
@@ -33,6 +36,20 @@ def _on_sigint(signum: int, frame: object) -> None:
         _caught = True  # raised when the block ends
     else:
         raise KeyboardInterrupt  # outside a block, a second Ctrl-C, or nobody holds any more
+
+
+def take_terminations() -> None:
+    """SIGTERM and SIGHUP will call ``terminate``, though SIGINT is ignored (``proleg run … &``
+    in a script: a shell's background job ignores Ctrl-C, not ``kill``): writers hold and defer
+    for them as for a Ctrl-C."""
+    global _terminations
+    _terminations = True
+
+
+def terminate(signum: int, frame: object) -> None:
+    """A SIGTERM/SIGHUP handler raising ``KeyboardInterrupt`` as a Ctrl-C would, deferred
+    inside a ``deferred()`` block (for a process whose SIGINT is ignored)."""
+    _on_sigint(signum, frame)
 
 
 def _main_thread() -> bool:
@@ -49,9 +66,12 @@ def hold() -> bool:
     with _lock:
         current = signal.getsignal(signal.SIGINT)
         if current is not _on_sigint:
-            if current is not signal.default_int_handler:
+            if current is signal.SIG_IGN and _terminations:
+                pass  # Ctrl-C stays ignored; SIGTERM/SIGHUP reach _on_sigint through terminate
+            elif current is not signal.default_int_handler:
                 return False
-            signal.signal(signal.SIGINT, _on_sigint)
+            else:
+                signal.signal(signal.SIGINT, _on_sigint)
         _holders += 1
         return True
 

@@ -60,17 +60,35 @@ def _as_ctrl_c(signum: int, frame: object) -> None:
     os.kill(os.getpid(), signal.SIGINT)
 
 
+def _terminate(signum: int, frame: object) -> None:
+    """``_as_ctrl_c`` for a process whose Ctrl-C is ignored (``proleg run … &`` in a script):
+    raised as one directly, since a SIGINT would be ignored. Before, ``kill`` of such a job
+    killed it mid-run: no STOP, no line, an MCAP without its footer."""
+    from .. import interrupts
+
+    _ended_by.append(signum)
+    interrupts.terminate(signum, frame)
+
+
 def _catch_termination() -> None:
     import threading
 
+    from .. import interrupts
+
     if threading.current_thread() is not threading.main_thread():
         return  # main() called from another thread (a test): signals are the caller's
-    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        return  # Ctrl-C ignored (a background job) or taken by the caller: SIGTERM kills as before
+    sigint = signal.getsignal(signal.SIGINT)
+    if sigint is signal.SIG_IGN:  # a background job: Ctrl-C stays ignored, SIGTERM still ends it whole
+        handler = _terminate
+        interrupts.take_terminations()
+    elif sigint is signal.default_int_handler:
+        handler = _as_ctrl_c
+    else:
+        return  # Ctrl-C taken by the caller: SIGTERM kills as before
     for name in ("SIGTERM", "SIGHUP"):
         sig = getattr(signal, name, None)
         if sig is not None and signal.getsignal(sig) in (signal.SIG_DFL, None):
-            signal.signal(sig, _as_ctrl_c)
+            signal.signal(sig, handler)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
