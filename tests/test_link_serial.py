@@ -98,6 +98,26 @@ def test_client_talks_to_firmware_on_a_pty():
         server.close()
 
 
+def test_a_second_session_on_a_port_in_use_is_refused_naming_it():
+    """Two consoles (or a console and a run) on one port both opened it, and the board's bytes
+    were split between them: gaps and CRC errors in each, and either could START what the other
+    stopped. The second is now refused with one line; the first goes on; the port is free again
+    once the first closes."""
+    server = PtyBoard()
+    try:
+        with RobotClient(SerialLink(server.path)) as client:
+            client.connect()
+            with pytest.raises(LinkError) as e:
+                SerialLink(server.path)
+            assert str(e.value) == (f"cannot open serial port {server.path}: another program has it open (another "
+                                    "proleg console or run? close it first)")
+            frames = list(client.telemetry(count=10))
+            assert client.stats.lost == 0 and len(frames) == 10
+        SerialLink(server.path).close()  # free again
+    finally:
+        server.close()
+
+
 class _BackloggedPort:
     """A port that held old frames when it was opened, and hands over more old bytes still in
     flight after a flush (a pty's flip buffer) before the board's fresh ones."""

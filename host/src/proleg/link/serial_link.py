@@ -44,10 +44,17 @@ class SerialLink(Link):
         self._open()
 
     def _open(self) -> None:
+        # A device is ours alone (pyserial's flock): a second console or run on the same port
+        # opened it too, and the two split the board's bytes between them, each seeing gaps and
+        # CRC errors, each able to START the gait the other stops.
+        exclusive = {} if "://" in self.url else {"exclusive": True}
         try:
-            self._port = self._opener(self.url, baudrate=self.baudrate, timeout=0.0, write_timeout=2.0)
+            self._port = self._opener(self.url, baudrate=self.baudrate, timeout=0.0, write_timeout=2.0, **exclusive)
         except (serial.SerialException, OSError, ValueError, OverflowError) as e:
             self._port = None
+            if "exclusively lock" in str(e):
+                raise LinkError(f"cannot open serial port {self.url}: another program has it open (another proleg "
+                                "console or run? close it first)") from None
             raise LinkError(f"cannot open serial port {self.url}: {_reason(e)}") from None
         self._timeout = 0.0
         self._discard_backlog()
