@@ -148,3 +148,40 @@ def test_openocd_gets_the_artifact_as_one_tcl_word(tmp_path, name):
     assert str(artifact) in flash_command(pyocd, artifact, None)
     nano = choose_method(load_board("arduino-nano"))
     assert f"flash:w:{artifact}:i" in flash_command(nano, artifact, "/dev/ttyUSB0")
+
+
+def _tool_script(tmp_path: Path, body: str) -> Path:
+    tool = tmp_path / "fake-avrdude"
+    tool.write_text("#!/bin/sh\n" + body + "\n")
+    tool.chmod(0o755)
+    return tool
+
+
+def test_a_flash_tool_killed_by_a_signal_is_named_so(tmp_path, fake_hex):
+    """A tool killed mid-write (the OOM killer, a kill -9) was reported as 'exit status -9'."""
+    tool = _tool_script(tmp_path, "kill -9 $$")
+    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', f'command = ["{tool}"'))
+    method = choose_method(load_board(board))
+    with pytest.raises(LinkError) as e:
+        flash(method, fake_hex, "/dev/null")
+    assert str(e.value) == (f"{tool} was killed by SIGKILL (its messages are above); the board's flash may hold part "
+                            "of the firmware: flash it again")
+
+
+def test_a_flash_interrupted_while_the_tool_writes_says_the_board_may_hold_half_a_firmware(tmp_path, fake_hex,
+                                                                                           monkeypatch):
+    """Ctrl-C or SIGTERM while avrdude wrote said only 'proleg: interrupted', nothing about the board."""
+    import subprocess
+
+    from proleg.errors import Interrupted
+
+    def ctrl_c(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    board = board_variant(tmp_path, "arduino-nano", (r'^command = \["avrdude"', 'command = ["true"'))
+    method = choose_method(load_board(board))
+    monkeypatch.setattr(subprocess, "run", ctrl_c)
+    with pytest.raises(Interrupted) as e:
+        flash(method, fake_hex, "/dev/null")
+    assert str(e.value) == (f"interrupted while true was flashing {fake_hex}: the board's flash may hold part of it "
+                            "(flash it again before using the board)")

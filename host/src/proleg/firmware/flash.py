@@ -13,11 +13,12 @@ from __future__ import annotations
 import logging
 import os
 import shutil
+import signal
 import stat
 import subprocess
 from pathlib import Path
 
-from ..errors import BuildError, LinkError
+from ..errors import BuildError, Interrupted, LinkError
 from .boards import Board, FlashMethod
 
 
@@ -94,6 +95,20 @@ def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
         raise BuildError(f"{cmd[0]} not found: install it to flash{hint}")
     if method.needs_port and port and port.startswith("/") and not os.path.exists(port):
         raise BuildError(f"{port}: no such serial port (is the board plugged in?)")
-    proc = subprocess.run(cmd)
+    try:
+        proc = subprocess.run(cmd)  # on Ctrl-C: a moment for the tool to end on its own, then killed
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: "interrupted" alone hid that the board may hold half a firmware
+        raise Interrupted(f"interrupted while {cmd[0]} was flashing {artifact}: the board's flash may hold part of "
+                          "it (flash it again before using the board)") from None
+    if proc.returncode < 0:  # killed by a signal (-9): "exit status -9" named no signal
+        raise LinkError(f"{cmd[0]} was killed by {_signal_name(-proc.returncode)} (its messages are above); the "
+                        "board's flash may hold part of the firmware: flash it again")
     if proc.returncode != 0:  # the board did not answer or refused: a failure (exit 1), not a usage error
         raise LinkError(f"{cmd[0]} failed with exit status {proc.returncode} (its messages are above)")
+
+
+def _signal_name(signum: int) -> str:
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
