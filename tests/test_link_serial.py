@@ -280,3 +280,39 @@ def test_a_recording_on_a_serial_port_counts_t_host_s_from_when_the_link_opened(
     with open(tmp_path / "pty.csv", newline="") as fh:
         t = [float(row["t_host_s"]) for row in csv.DictReader(fh)]
     assert len(t) >= 5 and 0.0 <= min(t) and max(t) < 10.0, t[:3]
+
+
+class _WrongBaudPort:
+    """A board at another baud rate: bytes arrive, none of them a frame (a 0 now and then)."""
+
+    def __init__(self):
+        import random
+
+        self.rng = random.Random(3)
+        self.timeout = 0.0
+        self.in_waiting = 0
+
+    def reset_input_buffer(self) -> None:
+        pass
+
+    def read(self, n: int = 1) -> bytes:
+        time.sleep(min(self.timeout or 0.0, 0.01))
+        return bytes(self.rng.randrange(256) for _ in range(64))
+
+    def write(self, data: bytes) -> int:
+        return len(data)
+
+    def close(self) -> None:
+        pass
+
+
+def test_garbage_on_the_line_suggests_the_baud_rate_instead_of_silence():
+    """A Nano flashed at 57600 opened at 115200 said 'no reply to GET_INFO within 3 s', as a
+    pulled cable does: the error now says bytes came, none valid, and names --baudrate."""
+    link = SerialLink("/dev/ttyUSB0", opener=lambda url, **kw: _WrongBaudPort())
+    with RobotClient(link) as client, pytest.raises(LinkError) as e:
+        client.connect(within_s=0.3)
+    text = str(e.value)
+    assert text.startswith("no reply to GET_INFO within 0.3 s (")
+    assert text.endswith(" garbled frames came, none valid: a board at another baud rate than 115200 (--baudrate), "
+                         "or not proleg firmware?)"), text

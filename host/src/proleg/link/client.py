@@ -116,6 +116,7 @@ class RobotClient(MessageStream):
                 if self.link.clock() >= deadline - _EPS:
                     raise ReplyTimeout(
                         f"no reply to GET_INFO within {_seconds(within_s)} ({tries} tries) on {self.link.description}"
+                        f"{self._garbled_hint()}"
                     ) from None
         if info.protocol_version != PROTOCOL_VERSION:
             raise LinkError(
@@ -123,6 +124,16 @@ class RobotClient(MessageStream):
                 f"this proleg speaks {PROTOCOL_VERSION} (rebuild the firmware or update proleg)"
             )
         return info
+
+    def _garbled_hint(self) -> str:
+        """Why no INFO came, when bytes did but no frame decoded: a board at another baud rate
+        (a Nano flashed at 57600 opened at 115200), or another program on the port. Before, the
+        error read as if the line were silent, and a lab looked for a pulled cable."""
+        if self.stats.frames_ok or not self.stats.corrupt:
+            return ""
+        baud = getattr(self.link, "baudrate", None)
+        other = f"a board at another baud rate than {baud} (--baudrate)" if baud else "a garbled link"
+        return f" ({self.stats.corrupt} garbled frames came, none valid: {other}, or not proleg firmware?)"
 
     def __enter__(self) -> RobotClient:
         return self
