@@ -99,6 +99,7 @@ class GaitRunListener(Listener):
         self.run = run
         self.keep_telemetry = keep_telemetry
         self._last_seq: int | None = None
+        self._last_ms: int | None = None
         self._cycle_start_mm: float | None = None
 
     def on_message(self, rx: Received) -> None:
@@ -108,6 +109,14 @@ class GaitRunListener(Listener):
             if self._last_seq is not None:
                 run.telemetry_lost += (seq - self._last_seq - 1) % 0x10000
             self._last_seq = seq
+            ms = msg.time_ms
+            if self._last_ms is not None and run.started_s is not None and ms < self._last_ms:
+                # the board's clock went back: it reset (a brown-out, its watchdog, a loose
+                # supply) and boots idle; the run went on to its end and exited 0, 0 faults
+                run.errors.append(f"the board reset after START (its clock went back from {self._last_ms / 1000:.3f} s "
+                                  f"to {ms / 1000:.3f} s): a reset board stops the gait and boots idle")
+                run.started_s = None  # a second reset is said again; times after it are on the new clock
+            self._last_ms = ms
             run.telemetry_frames += 1
             if self.keep_telemetry:
                 run.telemetry.append(msg)
@@ -126,6 +135,10 @@ class GaitRunListener(Listener):
             elif msg.kind in (EventKind.GAIT_STARTED, EventKind.GAIT_STOPPED):
                 if msg.kind == EventKind.GAIT_STOPPED and msg.code == StopReason.FAULT:
                     run.fault_stops += 1
+                if msg.kind == EventKind.GAIT_STOPPED and msg.code == StopReason.WATCHDOG:  # no fault: it went unsaid
+                    run.errors.append(f"the board's link watchdog stopped the gait at {msg.time_ms / 1000:.3f} s"
+                                      f"{run.after_start(msg.time_ms / 1000)}: it heard no host for its "
+                                      "link_watchdog_ms (a link that stalled or dropped out)")
                 # a cycle runs from step 0 to step 0 of one gait without a stop between: a
                 # fault's stop and a fallback's start end the one under way uncounted
                 self._cycle_start_mm = None

@@ -1,0 +1,49 @@
+"""``proleg run`` when the board stops the gait by itself without a fault: it reset (a brown-out,
+its watchdog) or its link watchdog stopped it after the host went quiet for a while. Before, the
+run went on to its end, printed "0 faults" and exited 0."""
+
+from __future__ import annotations
+
+from build_checks import R1, cli
+from proleg.link import sim_link
+
+
+def _patch(monkeypatch, *, reset_at_s: float | None = None, mute_s: tuple[float, float] | None = None) -> None:
+    real_read, real_write = sim_link.SimLink.read, sim_link.SimLink.write
+    done: list[bool] = []
+
+    def read(self, timeout):
+        sim = self.board
+        if reset_at_s is not None and not done and sim.time_s > reset_at_s:
+            done.append(True)
+            sim.board.reset()  # the firmware reboots; the plant goes on
+        return real_read(self, timeout)
+
+    def write(self, data):
+        if mute_s is not None and mute_s[0] <= self.board.time_s < mute_s[1]:
+            return  # the host's frames are lost (a stalled link that comes back)
+        real_write(self, data)
+
+    monkeypatch.setattr(sim_link.SimLink, "read", read)
+    monkeypatch.setattr(sim_link.SimLink, "write", write)
+
+
+def test_a_board_that_resets_mid_run_fails_the_run(capsys, monkeypatch):
+    _patch(monkeypatch, reset_at_s=4.0)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "8", "-q")
+    assert code == 1, (out, err)
+    assert "proleg: error: the board reset after START (its clock went back from 4.0" in err
+    assert err.rstrip().endswith("a reset board stops the gait and boots idle")
+
+
+def test_a_gait_the_link_watchdog_stopped_fails_the_run(capsys, monkeypatch):
+    _patch(monkeypatch, mute_s=(3.0, 6.0))  # 3 s without a host frame: the 2 s watchdog stops the gait
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "9", "-q")
+    assert code == 1, (out, err)
+    assert "proleg: error: the board's link watchdog stopped the gait at " in err
+    assert "it heard no host for its link_watchdog_ms" in err
+
+
+def test_an_undisturbed_run_is_still_ok(capsys):
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "6", "-q")
+    assert code == 0 and "error" not in err, err
