@@ -367,3 +367,18 @@ def test_an_idle_console_keeps_the_link_watchdog_fed():
     times = client.heartbeats
     client.close()
     assert times >= 10 and len(pings) == times
+
+
+def test_duration_ends_the_ui_session_too():
+    """--duration was only read by the plain mode: the UI ran on past it (docs: "--duration over"
+    is a way the console leaves)."""
+    board = FakeBoard()
+    client = _client(board)
+    app = ConsoleApp(client, levels=(2, 2), names=NAMES, duration_s=0.5)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await _wait_for(pilot, lambda: not app.is_running, timeout=5.0)
+
+    asyncio.run(scenario())
+    client.close()

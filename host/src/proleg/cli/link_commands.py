@@ -135,7 +135,8 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             else:
                 limbs = [LimbView(limb.name, limb.psi_star_deg) for limb in robot.limbs] if robot is not None else []
                 app = ConsoleApp(client, limbs=limbs, levels=levels, listeners=listeners,
-                                 names=RobotNames.for_robot(robot), robot=robot, replan=replan)
+                                 names=RobotNames.for_robot(robot), robot=robot, replan=replan,
+                                 duration_s=duration_s)
                 if timed:
                     app.extra_listeners.append(Injector(link.board, timed, app.host_says))  # type: ignore[attr-defined]
                 app.run()
@@ -264,7 +265,8 @@ def add_arguments(subparsers: Any) -> None:
     c.add_argument("--format", choices=("text", "jsonl"), default="text",
                    help="with --plain: text lines, or one JSON object per message for scripts")
     add_udp_options(c)
-    c.add_argument("--duration", type=positive_float, metavar="S", help="stop after S seconds (plain mode)")
+    c.add_argument("--duration", type=positive_float, metavar="S",
+                   help="leave after S seconds (the robot stopped as on q)")
     c.add_argument("--force", action="store_true",
                    help="connect even when the board's INFO does not match --robot (name, gait hash, build id)")
     c.add_argument("--leave-running", action="store_true",

@@ -155,9 +155,11 @@ class ConsoleApp(App[None]):
 
     def __init__(self, client: RobotClient, *, limbs: Sequence[LimbView] = (), levels: Sequence[int] = (),
                  listeners: Sequence[Listener] = (), refresh_s: float = 0.1, names: RobotNames | None = None,
-                 robot: Robot | None = None, replan: bool = True):
+                 robot: Robot | None = None, replan: bool = True, duration_s: float | None = None):
         super().__init__()
         self.client = client
+        #: leave after this many wall seconds (``--duration``), as the plain mode does
+        self.duration_s = duration_s
         self.limb_views = list(limbs)
         self.levels = tuple(levels)
         if names is None:
@@ -201,6 +203,8 @@ class ConsoleApp(App[None]):
                                                *([self.replanner] if self.replanner is not None else [])])
         self.refresh_view()
         self._timer = self.set_interval(self.refresh_s, self.refresh_view)
+        if self.duration_s is not None:  # it was ignored here: a session meant to end ran on
+            self.set_timer(self.duration_s, self.exit)
 
     def on_unmount(self) -> None:
         timer = getattr(self, "_timer", None)
