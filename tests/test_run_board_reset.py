@@ -47,3 +47,26 @@ def test_a_gait_the_link_watchdog_stopped_fails_the_run(capsys, monkeypatch):
 def test_an_undisturbed_run_is_still_ok(capsys):
     code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "6", "-q")
     assert code == 0 and "error" not in err, err
+
+
+def test_a_link_lost_mid_run_says_what_stops_the_coils_and_what_was_kept(capsys, monkeypatch, tmp_path):
+    """A cable pulled mid-run ended with the link's error alone: nothing said what the robot was
+    left doing (no STOP can reach it) or whether the recording was kept."""
+    from proleg.errors import LinkError
+    from proleg.record import read_recording
+
+    real_read = sim_link.SimLink.read
+
+    def read(self, timeout):
+        if self.board.time_s > 4.0:
+            raise LinkError("sim paper-r1: device disconnected and not back within 10 s")
+        return real_read(self, timeout)
+
+    monkeypatch.setattr(sim_link.SimLink, "read", read)
+    record = tmp_path / "run.mcap"
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "8", "-q", "--record", record)
+    assert code == 1, (out, err)
+    assert err == ("proleg: error: sim paper-r1: device disconnected and not back within 10 s; the link was lost "
+                   "during the run, no STOP could be sent: the board's link watchdog stops the gait and turns the "
+                   f"coils off within 2000 ms of the last frame; recording kept in {record} (complete up to there)\n")
+    assert len(read_recording(record).time_s) > 0

@@ -218,6 +218,17 @@ def cmd_run(args: argparse.Namespace) -> int:
             for listener in listeners:
                 listener.stop()  # the recording is closed whole (an MCAP gets its footer)
             raise Interrupted(_run_interrupted(e, args, robot, listeners)) from None
+        except LinkError as e:  # the link died mid-run (a cable pulled): no STOP can reach the robot
+            from ..record.base import Writer, what_was_kept
+
+            for listener in listeners:
+                listener.stop()
+            kept = what_was_kept(next((w for w in listeners if isinstance(w, Writer)), None), args.record)
+            watchdog_ms = robot.safety.link_watchdog_ms
+            left = (f"the board's link watchdog stops the gait and turns the coils off within {watchdog_ms} ms of the "
+                    "last frame" if watchdog_ms else "the firmware has no link watchdog ([safety] link_watchdog_ms "
+                    "= 0): the coils may still be on, switch the robot's power off")
+            raise LinkError(f"{e}; the link was lost during the run, no STOP could be sent: {left}; {kept}") from None
         except KeyboardInterrupt:  # before START: a recording of nothing is not kept
             for listener in listeners:
                 getattr(listener, "discard", listener.stop)()
