@@ -382,3 +382,23 @@ def test_duration_ends_the_ui_session_too():
 
     asyncio.run(scenario())
     client.close()
+
+
+def test_a_second_ctrl_c_while_the_leaving_stop_waits_goes_on_to_the_estop(monkeypatch):
+    """Ctrl-C, then Ctrl-C again while the STOP waited for its ACK (a slow or deaf board): the
+    second one ended the console there, exit 0, no ESTOP sent and nothing said about the coils."""
+    board = _StopDeaf()
+    board.running, board.sequence = True, (0, 2, 3, 1)
+    real = RobotClient.request
+
+    def request(self, name, *args, **kwargs):
+        if name == "STOP":
+            self.link.write(b"")  # the STOP went out; the user presses Ctrl-C again while it waits
+            raise KeyboardInterrupt
+        return real(self, name, *args, **kwargs)
+
+    monkeypatch.setattr(RobotClient, "request", request)
+    err, sent = _console_on(board, timeout=0.05)
+    assert sent[-1] == "ESTOP"
+    assert "STOP not acknowledged (interrupted while waiting for it); robot E-stopped" in err
+    assert board.estop and board.duty == [0, 0]

@@ -22,14 +22,17 @@ LEAVE_RETRIES = 2
 
 
 def stop_robot(client: RobotClient, *, retries: int = LEAVE_RETRIES) -> str:
-    """STOP (ESTOP if the STOP gets no ACK); one line saying what happened."""
+    """STOP (ESTOP if the STOP gets no ACK); one line saying what happened. A second Ctrl-C (or a
+    SIGTERM) while the STOP waits goes on to the ESTOP, as in ``proleg run``: before, it ended the
+    console there, exit 0, with no ESTOP sent and nothing said about the coils."""
     try:
         client.request("STOP", retries=retries)
         return "robot stopped"
-    except LinkError as stop_error:
+    except (LinkError, KeyboardInterrupt) as stop_error:
+        why = "interrupted while waiting for it" if isinstance(stop_error, KeyboardInterrupt) else stop_error
         try:
             client.request("ESTOP", retries=retries)
-            return f"STOP not acknowledged ({stop_error}); robot E-stopped"
+            return f"STOP not acknowledged ({why}); robot E-stopped"
         except LinkError as e:
             return (f"could not stop the robot: {e}; its link watchdog stops a running gait "
                     "once the link stays silent")
