@@ -566,3 +566,23 @@ def test_sigterm_ends_a_background_run_as_ctrl_c_does(tmp_path):
     assert lines[0].endswith(f"recording kept in {record} (complete up to there)")
     assert record.read_bytes().endswith(b"\x89MCAP0\r\n")  # the footer: a whole file
     assert len(read_recording(record).time_s) > 0
+
+
+def test_a_learn_ended_by_sigterm_says_sigterm_not_ctrl_c(tmp_path):
+    """SIGTERM is delivered as a Ctrl-C: learn's last line said "paused by Ctrl-C" after a kill."""
+    log = tmp_path / "trials.jsonl"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "learn", "caterpillar-4", "--sim", "--log",
+                             str(log), "--repeats", "50"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and (not log.exists() or len(log.read_text().splitlines()) < 4):
+            time.sleep(0.2)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, err
+    last = err.replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("proleg: learn: paused by SIGTERM (robot stopped): "), last

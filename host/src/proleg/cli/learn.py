@@ -322,8 +322,9 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
             what = stop_robot(client)  # run_piece stops it too; a Ctrl-C may have cut that short
             done, todo = ex.tally()
             from ..errors import Interrupted
+            from .main import interruption
 
-            raise Interrupted(f"learn: paused by Ctrl-C ({what}): {len(trial_log.trials)} trials kept in {args.log}, "
+            raise Interrupted(f"learn: paused by {interruption()} ({what}): {len(trial_log.trials)} trials kept in {args.log}, "
                               f"{done} of {done + todo} done; run the same command to go on") from None
         finally:
             if bar is not None:

@@ -123,6 +123,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILED
 
 
+def interruption() -> str:
+    """What interrupted the command, for its last line: ``Ctrl-C``, or ``SIGTERM``/``SIGHUP``
+    (delivered as a Ctrl-C; a line saying "paused by Ctrl-C" after a ``kill`` misled)."""
+    return signal.Signals(_ended_by[0]).name if _ended_by else "Ctrl-C"
+
+
 def _interrupted_status() -> int:
     """130 for Ctrl-C; 128 + the signal for SIGTERM or SIGHUP (the shell's convention)."""
     return 128 + _ended_by[0] if _ended_by else 130
