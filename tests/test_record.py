@@ -596,3 +596,64 @@ def test_a_name_the_plot_font_cannot_draw_is_one_warning_line(tmp_path, capsys):
     assert not [w for w in caught if "Glyph" in str(w.message)] and err.count("\n") == 1, err
     assert "has no glyph for 後 ろ 足, drawn as boxes" in err
     assert (tmp_path / "out.png").exists()
+
+
+class _DiskFillsAt:
+    """``open`` for a recording whose disk fills after ``limit`` bytes of a file: the write(2)
+    that crosses it writes what fits, the next fails with ENOSPC (as a full file system does)."""
+
+    def __init__(self, limit: int):
+        self.limit = limit
+
+    def __call__(self, path, mode="w", **kw):
+        import errno
+        import io
+
+        limit = self.limit
+
+        class Filling(io.FileIO):
+            written = 0
+
+            def write(self, b):
+                room = limit - self.written
+                if room <= 0:
+                    raise OSError(errno.ENOSPC, "No space left on device", str(path))
+                n = super().write(bytes(b)[:room])
+                self.written += n
+                return n
+
+        raw = Filling(path, "w")
+        return io.TextIOWrapper(io.BufferedWriter(raw), encoding=kw.get("encoding", "utf-8"),
+                                newline=kw.get("newline"), write_through=False)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
+def test_a_disk_that_fills_mid_row_leaves_the_recording_whole_up_to_its_last_row(tmp_path, monkeypatch, caplog,
+                                                                                  suffix):
+    """A full disk mid-session left half a row at the end of the file (read back with a "torn last
+    line" warning, and by pandas as a broken row), and nothing was said until the command ended.
+    The file is now cut back to its last whole row, and a warning says so at once."""
+    import logging
+
+    from proleg.record import base
+
+    monkeypatch.setattr(base, "open", _DiskFillsAt(6000), raising=False)
+    path = tmp_path / f"run{suffix}"
+    board = FakeBoard()
+    link = SimLink(board)
+    client = RobotClient(link)
+    info = client.connect()
+    rec = Logger(path, RecordingMeta.for_robot(info=info, robot=ROBOT, link=link))
+    client.start(0, "+x")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        for _ in range(200):
+            rec.on_message(client.recv_received(1.0))
+    rec.stop()
+    assert rec.error is not None and "No space left on device" in str(rec.error)
+    assert any("the recording stopped here (kept up to its last whole row)" in r.getMessage() for r in caplog.records)
+    text = path.read_text()
+    assert 0 < len(text) <= 6000 and text.endswith("\n")
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        rows = read_recording(path)
+    assert len(rows.time_s) > 10 and not [r for r in caplog.records if "torn" in r.getMessage()]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -122,6 +123,9 @@ class Writer(Listener, ABC):
         except OSError as e:
             self.error = LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             self.stop()
+            # said now: a console or run goes on, and the error line came only at its end
+            log.warning("warning: %s: the recording stopped here (kept up to its last whole row); the session "
+                        "goes on", self.error)
 
     def _let_go(self) -> None:
         if self._held:
@@ -166,6 +170,26 @@ class Reader(ABC):
             raise RecordingError(f"record file {p} does not exist") from None
         except (OSError, UnicodeDecodeError) as e:
             raise RecordingError(f"cannot read record file {p}: {getattr(e, 'strerror', None) or e}") from None
+
+
+def write_row(f: IO[str], text: str) -> None:
+    """Write one row (whole lines) and flush it. When the disk fills part-way through, the file
+    is closed and cut back to its last whole row, so it reads back without a torn last line
+    (before, a full disk left half a row there)."""
+    start = f.tell()
+    try:
+        f.write(text)
+        f.flush()
+    except OSError:
+        try:
+            f.close()  # its buffered rest fails to flush again; the file is closed all the same
+        except OSError:
+            pass
+        try:
+            os.truncate(f.name, start)
+        except (OSError, TypeError, ValueError):
+            pass
+        raise
 
 
 def torn_last(where: str) -> None:

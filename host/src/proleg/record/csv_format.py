@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from ..errors import RecordingError
-from .base import Reader, Recording, Writer, torn_last
+from .base import Reader, Recording, Writer, torn_last, write_row
 from .fields import EVENT_COLUMNS, RecordingMeta
 
 
@@ -55,8 +55,7 @@ class CsvWriter(Writer):
     def _row(f: TextIO, cells: list[Any]) -> None:
         buf = io.StringIO()
         csv.writer(buf, lineterminator="\n").writerow(cells)
-        f.write(buf.getvalue())
-        f.flush()
+        write_row(f, buf.getvalue())
 
     def write_telemetry(self, row: dict[str, Any]) -> None:
         self._row(self._tel, [_cell(row[c]) for c in self._columns])

@@ -11,7 +11,7 @@ from typing import Any, TextIO
 from ..errors import RecordingError
 from ..link.client import Received
 from ..link.listeners import Listener
-from .base import Reader, Recording, Writer, torn_last
+from .base import Reader, Recording, Writer, torn_last, write_row
 from .fields import RecordingMeta, dumps, event_row, telemetry_row
 
 
@@ -23,8 +23,7 @@ class JsonlWriter(Writer):
         self._line({"msg": "META", **self.meta.as_dict()})
 
     def _line(self, obj: dict[str, Any]) -> None:
-        self._f.write(dumps(obj) + "\n")
-        self._f.flush()
+        write_row(self._f, dumps(obj) + "\n")
 
     def write_telemetry(self, row: dict[str, Any]) -> None:
         self._line({"msg": "TELEMETRY", **row})
