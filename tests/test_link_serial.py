@@ -255,6 +255,36 @@ def test_reconnect_gives_up_with_one_line_after_its_timeout():
         client.recv(0.05)
 
 
+def test_after_giving_up_the_leaving_stop_and_estop_do_not_wait_for_the_device_again():
+    """A console whose cable was pulled waited the reconnect timeout three times (the session,
+    then its STOP, then its ESTOP): 30 s before it said anything. After the first wait the
+    STOP and ESTOP try to reopen the port once each; a port that is back is used again."""
+    from proleg.console.leave import stop_robot
+
+    state = {"unplugged": True, "back": False}
+
+    def opener(url, **kw):
+        if not state["back"]:
+            raise serial.SerialException(f"[Errno 2] could not open port {url}")
+        state["unplugged"] = False
+        return FlakyPort(state)
+
+    link = SerialLink("/dev/ttyUSB9", opener=lambda url, **kw: FlakyPort(state))
+    link._opener = opener
+    client = RobotClient(link, reconnect_timeout=1.0, timeout=0.05)
+    t0 = time.monotonic()
+    with pytest.raises(LinkError, match="device disconnected and not back within 1 s"):
+        client.recv(0.05)
+    assert 0.9 < time.monotonic() - t0 < 2.0
+    t0 = time.monotonic()
+    said = stop_robot(client)
+    assert time.monotonic() - t0 < 1.0, said
+    assert said.startswith("could not stop the robot: /dev/ttyUSB9: device disconnected and not back within 1 s")
+    state["back"] = True  # plugged in again: the next reopen finds it
+    client.recv(0.05)
+    assert client.stats.reconnects == 1
+
+
 def test_a_recording_on_a_serial_port_counts_t_host_s_from_when_the_link_opened(tmp_path: Path):
     # docs/data.md: "0 ≈ when the link opened"; a pty recording started at 75763.48 s (the raw
     # monotonic clock)

@@ -90,6 +90,8 @@ class MessageStream:
         self._state_known = False  # the last TELEMETRY frame since the last INFO had a known state
         self._running: tuple[int, int] | None = None  # (gait, direction) the last TELEMETRY ran, if any
         self._reconnect_lock = threading.Lock()
+        #: the device stayed away a whole reconnect_timeout: later reconnects try once, not wait again
+        self._gone = False
         self._closed = False
         self.heartbeat_s = heartbeat_s
         self.fit_heartbeat(watchdog_ms)
@@ -292,7 +294,10 @@ class MessageStream:
             self._reconnect_lock.release()
 
     def _reconnect_locked(self) -> None:
-        deadline = time.monotonic() + self.reconnect_timeout
+        # Once the device has stayed away a whole reconnect_timeout, the commands that follow (the
+        # console's STOP and ESTOP on leaving) try to reopen it once each: they waited 10 s each
+        # again, and a console left 20-30 s after a pulled cable, saying nothing meanwhile.
+        deadline = time.monotonic() + (0.0 if self._gone else self.reconnect_timeout)
         delay = 0.05
         while True:
             if self._closed:
@@ -304,15 +309,18 @@ class MessageStream:
                 pass
             except LinkError as e:
                 if time.monotonic() >= deadline:
+                    self._gone = True
                     raise LinkError(
                         f"{self.link.description}: device disconnected and not back within "
                         f"{_seconds(self.reconnect_timeout)} ({e})"
                     ) from None
             if time.monotonic() >= deadline:
+                self._gone = True
                 raise LinkError(f"{self.link.description}: device disconnected and not back within "
                                 f"{_seconds(self.reconnect_timeout)}")
             time.sleep(delay)
             delay = min(delay * 2, 0.5)
+        self._gone = False
         self.stats.reconnects += 1
         self._last_seq = None
         token = self._next_token()
