@@ -135,10 +135,6 @@ class GaitRunListener(Listener):
             elif msg.kind in (EventKind.GAIT_STARTED, EventKind.GAIT_STOPPED):
                 if msg.kind == EventKind.GAIT_STOPPED and msg.code == StopReason.FAULT:
                     run.fault_stops += 1
-                if msg.kind == EventKind.GAIT_STOPPED and msg.code == StopReason.WATCHDOG:  # no fault: it went unsaid
-                    run.errors.append(f"the board's link watchdog stopped the gait at {msg.time_ms / 1000:.3f} s"
-                                      f"{run.after_start(msg.time_ms / 1000)}: it heard no host for its "
-                                      "link_watchdog_ms (a link that stalled or dropped out)")
                 # a cycle runs from step 0 to step 0 of one gait without a stop between: a
                 # fault's stop and a fallback's start end the one under way uncounted
                 self._cycle_start_mm = None
