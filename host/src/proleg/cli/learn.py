@@ -314,6 +314,13 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
             again = "" if args.sim and getattr(e, "fault", False) else "; run the same command to resume"
             raise LinkError(f"learn: {e}{_stopped_hint(args, e, robot)} (the {len(trial_log.trials)} trials recorded are "
                             f"kept in {args.log}{again})") from None
+        except LinkError as e:  # a cable pulled, a board that stopped answering: said alone, it hid the log
+            raise LinkError(f"learn: {e} (the {len(trial_log.trials)} trials recorded are kept in {args.log}; run the "
+                            "same command to resume)") from None
+        except OSError as e:  # the log's disk filled: "cannot write: No space left on device", no file named
+            raise LinkError(f"learn: cannot write trial log {args.log}: {e.strerror or e} (the "
+                            f"{len(trial_log.trials)} trials recorded before are kept in it, whole; the robot was "
+                            "stopped; make room and run the same command to resume)") from None
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()

@@ -231,10 +231,23 @@ class TrialLog:
         if self._fh is None:
             raise TrialLogError(f"{self.path}: opened to read only")
         prefix = b"\n" if self._needs_newline else b""
+        start = self._fh.tell()
+        try:
+            self._fh.write(prefix + trial.to_json().encode("utf-8") + b"\n")
+            self._fh.flush()
+            os.fsync(self._fh.fileno())
+        except OSError as e:  # a full disk: the log is cut back to its last whole trial, and named
+            fh, self._fh = self._fh, None
+            try:
+                fh.close()
+            except OSError:
+                pass
+            try:
+                os.truncate(self.path, start)
+            except OSError:
+                pass
+            raise OSError(e.errno, e.strerror, str(self.path)) from None
         self._needs_newline = False
-        self._fh.write(prefix + trial.to_json().encode("utf-8") + b"\n")
-        self._fh.flush()
-        os.fsync(self._fh.fileno())
         self.trials.append(trial)
 
     def close(self) -> None:
