@@ -402,3 +402,68 @@ def test_a_second_ctrl_c_while_the_leaving_stop_waits_goes_on_to_the_estop(monke
     assert sent[-1] == "ESTOP"
     assert "STOP not acknowledged (interrupted while waiting for it); robot E-stopped" in err
     assert board.estop and board.duty == [0, 0]
+
+
+def test_closing_the_consoles_terminal_stops_the_robot_and_exits_129(tmp_path):
+    """The UI console in a terminal that is closed (SIGHUP, the tty gone). The signal handler
+    called app.exit() inside textual's own output code: under load the console hung for ever,
+    its heartbeat keeping the gait running; otherwise its last lines failed on the dead terminal
+    (EIO) and it exited 1 instead of 129. Now: STOP sent (the board says stopped, not by its
+    link watchdog), the recording whole, 129."""
+    import os
+    import pty
+    import select
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    from proleg.link.serial_link import SerialLink
+    from proleg.protocol.definition import Flag
+    from proleg.record import read_recording
+
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": str(root / "host" / "src"), "TERM": "xterm-256color"}
+    server = subprocess.Popen([sys.executable, "-m", "proleg", "sim", "paper-r1", "--pty"], stdout=subprocess.PIPE,
+                              stderr=subprocess.DEVNULL, text=True, env=env)
+    record = tmp_path / "session.mcap"
+    pid = None
+    try:
+        port = server.stdout.readline().split(" on ")[1].split(" ")[0]
+        pid, fd = pty.fork()
+        if pid == 0:  # pragma: no cover (the child)
+            os.execve(sys.executable, [sys.executable, "-m", "proleg", "console", "--port", port,
+                                       "--record", str(record)], env)
+
+        def pump(seconds: float) -> None:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                if select.select([fd], [], [], 0.05)[0]:
+                    try:
+                        os.read(fd, 65536)
+                    except OSError:
+                        return
+
+        pump(6.0)  # the UI is up
+        os.write(fd, b"s")  # start the gait
+        pump(3.0)
+        os.close(fd)  # the terminal window is closed
+        status = None
+        for _ in range(300):
+            done, st = os.waitpid(pid, os.WNOHANG)
+            if done:
+                status, pid = os.waitstatus_to_exitcode(st), None
+                break
+            time.sleep(0.1)
+        assert status == 129
+        with RobotClient(SerialLink(port)) as client:  # within the watchdog's 2 s: it is the STOP that stopped it
+            frame = next(iter(client.telemetry(count=1)))
+        assert not frame.flags & (Flag.RUNNING | Flag.LINK_WATCHDOG), Flag(frame.flags)
+        assert len(read_recording(record).time_s) > 0
+    finally:
+        if pid is not None:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+        server.kill()
+        server.wait()

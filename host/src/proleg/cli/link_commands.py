@@ -90,9 +90,19 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
 
     def hang_up() -> None:
         if app is not None and app.is_running:
-            app.exit()
+            # only a flag: the UI leaves on its next refresh. app.exit() from the signal handler ran
+            # textual's code inside textual's own (a terminal write holding its output queue), and
+            # the console hung for ever after its window was closed, pinging the board: the gait ran on
+            app.leave_requested = True
         else:
             raise KeyboardInterrupt
+
+    def tell(text: str) -> None:
+        """One line on ``err``; a terminal that is gone (SIGHUP: EIO) does not stop the leaving."""
+        try:
+            print(text, file=err, flush=True)
+        except OSError:
+            pass
 
     watchdog_ms = robot.safety.link_watchdog_ms if robot is not None else None
     recorder = None
@@ -145,7 +155,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         finally:
             try:
                 if not leave_running:
-                    print(f"proleg: {stop_robot(client)} on {link.description}", file=err)
+                    tell(f"proleg: {stop_robot(client)} on {link.description}")
                 elif robot is None or robot.safety.link_watchdog_ms:
                     after = ("its link_watchdog_ms (2000 unless its robot file says otherwise)" if robot is None
                              else f"{robot.safety.link_watchdog_ms} ms")
@@ -163,7 +173,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
 
         from ..record.base import what_was_kept
 
-        print(f"proleg: ended by {signal.Signals(ended_by[0]).name}; {what_was_kept(recorder)}", file=err)
+        tell(f"proleg: ended by {signal.Signals(ended_by[0]).name}; {what_was_kept(recorder)}")
         return 128 + ended_by[0]
     if faulted.first is not None:  # exit 1: the robot faulted (README, "Exit status")
         what = "a fault was latched" if faulted.first == "latched" else f"fault {faulted.first}"

@@ -160,6 +160,9 @@ class ConsoleApp(App[None]):
         self.client = client
         #: leave after this many wall seconds (``--duration``), as the plain mode does
         self.duration_s = duration_s
+        #: set from a signal handler (SIGHUP, SIGTERM): the next refresh leaves (``exit`` is not
+        #: safe to call there: it may interrupt textual's own output code)
+        self.leave_requested = False
         self.limb_views = list(limbs)
         self.levels = tuple(levels)
         if names is None:
@@ -241,8 +244,8 @@ class ConsoleApp(App[None]):
             self._refresh_view()
         except NoMatches:  # a timer tick while the app is shutting down
             pass
-        if self.model.link_error is not None and self.is_running:
-            self.exit()  # the link is gone: console_main reports it and tries to stop the robot
+        if (self.model.link_error is not None or self.leave_requested) and self.is_running:
+            self.exit()  # the link is gone, or a signal asked to leave: console_main stops the robot
 
     def _refresh_view(self) -> None:
         tel, truth, events, faults = self.model.snapshot()
