@@ -586,3 +586,39 @@ def test_a_learn_ended_by_sigterm_says_sigterm_not_ctrl_c(tmp_path):
     assert proc.returncode == 143, err
     last = err.replace("\r", "\n").strip().splitlines()[-1]
     assert last.startswith("proleg: learn: paused by SIGTERM (robot stopped): "), last
+
+
+def test_a_run_whose_terminal_is_closed_exits_129_not_1(tmp_path):
+    """SIGHUP from a closed terminal stopped the run (STOP acknowledged) but its last line then
+    failed on the dead tty (EIO) and the command ended 1 with a traceback nobody saw."""
+    import pty
+    import select
+
+    record = tmp_path / "run.csv"
+    pid, fd = pty.fork()
+    if pid == 0:  # pragma: no cover (the child)
+        os.environ["PYTHONPATH"] = str(ROOT / "host" / "src")
+        os.execv(sys.executable, [sys.executable, "-c", _AS_FROM_A_TERMINAL, "run", str(R1), "--sim", "--speed", "1",
+                                  "--duration", "600", "--record", str(record)])
+    status = None
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 5_000):
+            if select.select([fd], [], [], 0.1)[0]:
+                try:
+                    os.read(fd, 65536)
+                except OSError:
+                    break
+        os.close(fd)  # the terminal is closed
+        for _ in range(300):
+            done, st = os.waitpid(pid, os.WNOHANG)
+            if done:
+                status, pid = os.waitstatus_to_exitcode(st), None
+                break
+            time.sleep(0.1)
+    finally:
+        if pid is not None:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+    assert status == 129
+    assert len(read_recording(record).time_s) > 0

@@ -99,28 +99,37 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         _setup_logging(args.verbose - args.quiet)
     except KeyboardInterrupt:  # before the command began: nothing to say but that
-        print("proleg: interrupted", file=sys.stderr)
+        _say("proleg: interrupted")
         return _interrupted_status()
     try:
         code = args.run(args)
         sys.stdout.flush()
         return code
     except LinkError as e:  # the robot, the link or a file to write failed
-        print(f"proleg: error: {e}", file=sys.stderr)
+        _say(f"proleg: error: {e}")
         return EXIT_FAILED
     except ProlegError as e:
-        print(f"proleg: error: {e}", file=sys.stderr)
+        _say(f"proleg: error: {e}")
         return EXIT_USAGE
     except KeyboardInterrupt as e:  # Ctrl-C: one line, what was kept where the command says it
-        print(f"proleg: {e}" if isinstance(e, Interrupted) and str(e) else "proleg: interrupted", file=sys.stderr)
+        _say(f"proleg: {e}" if isinstance(e, Interrupted) and str(e) else "proleg: interrupted")
         return _interrupted_status()
     except BrokenPipeError:  # the reader went away (`proleg … | head -1`): not an error
         _silence_stdout()
         return EXIT_OK
     except OSError as e:  # a full disk, a vanished directory... while writing an output
-        print(f"proleg: error: {os_error_line(e)}", file=sys.stderr)
+        _say(f"proleg: error: {os_error_line(e)}")
         _silence_stdout()
         return EXIT_FAILED
+
+
+def _say(line: str) -> None:
+    """The command's last line on stderr. A terminal closed under it (SIGHUP: the tty answers EIO)
+    must not turn the exit status (129) into 1 with a traceback nobody sees."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except OSError:
+        pass
 
 
 def interruption() -> str:
