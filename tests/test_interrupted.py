@@ -557,7 +557,7 @@ def test_sigterm_ends_a_background_run_as_ctrl_c_does(tmp_path):
         while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 20_000):
             time.sleep(0.2)
         proc.send_signal(signal.SIGTERM)
-        out, err = proc.communicate(timeout=30)
+        _, err = proc.communicate(timeout=30)
     finally:
         proc.kill()
     assert proc.returncode == 143, (proc.returncode, err)

@@ -45,7 +45,7 @@ def test_a_gait_the_link_watchdog_stopped_fails_the_run(capsys, monkeypatch):
 
 
 def test_an_undisturbed_run_is_still_ok(capsys):
-    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "6", "-q")
+    code, _, err = cli(capsys, "run", R1, "--sim", "--duration", "6", "-q")
     assert code == 0 and "error" not in err, err
 
 
