@@ -185,3 +185,21 @@ def test_a_flash_interrupted_while_the_tool_writes_says_the_board_may_hold_half_
         flash(method, fake_hex, "/dev/null")
     assert str(e.value) == (f"interrupted while true was flashing {fake_hex}: the board's flash may hold part of it "
                             "(flash it again before using the board)")
+
+
+def test_a_missing_flash_tool_or_port_is_said_before_anything_is_built(tmp_path, capsys, monkeypatch):
+    """proleg flash built the firmware (seconds, a build directory) and only then said the tool
+    was not installed or the port not there."""
+    from proleg.firmware import build as build_module
+
+    def build(*args, **kwargs):  # pragma: no cover (must not be reached)
+        raise AssertionError("built before checking the tool")
+
+    monkeypatch.setattr(build_module, "build", build)
+    monkeypatch.setenv("PATH", str(tmp_path))  # no openocd, no avrdude
+    out = tmp_path / "fw"
+    code, _, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "-o", out)
+    assert code == 2 and err == "proleg: error: openocd not found: install it to flash (Debian package: openocd)\n"
+    code, _, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--port", "/dev/ttyNOPE-proleg", "-o", out)
+    assert code == 2 and "avrdude not found" in err
+    assert not out.exists()

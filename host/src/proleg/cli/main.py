@@ -350,7 +350,7 @@ def cmd_build(args: argparse.Namespace) -> int:
 
 def cmd_flash(args: argparse.Namespace) -> int:
     from ..firmware.boards import load_board
-    from ..firmware.flash import choose_method, flash, flash_command
+    from ..firmware.flash import check_tool, choose_method, flash, flash_command
 
     board = load_board(args.board)
     method = choose_method(board, args.tool)
@@ -367,7 +367,7 @@ def cmd_flash(args: argparse.Namespace) -> int:
         out = Path(args.out) if args.out else default_out_dir(robot, board)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
         return 0
-    flash_command(method, Path("firmware"), args.port)  # a missing --port fails before building
+    check_tool(method, args.port)  # a missing --port, tool or port fails before building
     result = _build(args)
     flash(method, result.artifact, args.port)
     print(f"flashed {result.artifact} with {method.tool}")

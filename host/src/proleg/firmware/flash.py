@@ -84,17 +84,24 @@ def flash_command(method: FlashMethod, artifact: Path, port: str | None) -> list
     return cmd
 
 
+def check_tool(method: FlashMethod, port: str | None) -> None:
+    """``BuildError`` for a flash tool that is not installed or a serial port that is not there
+    (``proleg flash`` asks before building: it built the firmware, then said the tool was missing)."""
+    cmd = flash_command(method, Path("firmware"), port)
+    if shutil.which(cmd[0]) is None:
+        hint = f" (Debian package: {' '.join(method.packages)})" if method.packages else " (pip install pyocd)"
+        raise BuildError(f"{cmd[0]} not found: install it to flash{hint}")
+    if method.needs_port and port and port.startswith("/") and not os.path.exists(port):
+        raise BuildError(f"{port}: no such serial port (is the board plugged in?)")
+
+
 def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
     """Run the flash tool; a missing tool, port or artifact is one clear BuildError (usage),
     a tool that fails (no sync, verify error) a LinkError."""
     cmd = flash_command(method, artifact, port)
     if not Path(artifact).exists():
         raise BuildError(f"{artifact}: no firmware to flash (build it first)")
-    if shutil.which(cmd[0]) is None:
-        hint = f" (Debian package: {' '.join(method.packages)})" if method.packages else " (pip install pyocd)"
-        raise BuildError(f"{cmd[0]} not found: install it to flash{hint}")
-    if method.needs_port and port and port.startswith("/") and not os.path.exists(port):
-        raise BuildError(f"{port}: no such serial port (is the board plugged in?)")
+    check_tool(method, port)
     try:
         proc = subprocess.run(cmd)  # on Ctrl-C: a moment for the tool to end on its own, then killed
     except KeyboardInterrupt:  # Ctrl-C, SIGTERM: "interrupted" alone hid that the board may hold half a firmware
