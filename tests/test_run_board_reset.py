@@ -70,3 +70,14 @@ def test_a_link_lost_mid_run_says_what_stops_the_coils_and_what_was_kept(capsys,
                    "during the run, no STOP could be sent: the board's link watchdog stops the gait and turns the "
                    f"coils off within 2000 ms of the last frame; recording kept in {record} (complete up to there)\n")
     assert len(read_recording(record).time_s) > 0
+
+
+def test_a_plain_console_says_when_the_board_resets(capsys, monkeypatch):
+    """--plain showed only the board's clock starting again: a reset (and the gait it stopped)
+    went unmentioned."""
+    _patch(monkeypatch, reset_at_s=3.0)
+    code, _, err = cli(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "4")
+    assert code == 0, err
+    assert "proleg: the board reset: boot (reset cause POWER_ON); it boots idle (a gait it ran is stopped)\n" in err
+    code, _, err = cli(capsys, "console", "--sim", "paper-r1", "--plain", "--duration", "2")
+    assert "reset" not in err  # the board's first boot is no reset

@@ -131,6 +131,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
 
                 if robot is not None:  # without a robot file there is nothing to replan with: stay quiet
                     say(replan_state(replan, True))
+                listeners.append(_reset_watch(say))
                 if timed:
                     listeners.append(Injector(link.board, timed, say))  # type: ignore[attr-defined]
                 if replan and robot is not None:
@@ -180,6 +181,27 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         print(f"proleg: the robot faulted during the console session ({what})", file=err)
         return 1
     return 0
+
+
+def _reset_watch(say: Any) -> Any:
+    """A listener that says when the board resets mid-session (a BOOT event after telemetry): the
+    plain lines showed only the board's clock starting again, and a gait it had stopped by
+    rebooting went unmentioned."""
+    from ..console.names import event_text
+    from ..link.listeners import CallbackListener
+    from ..protocol.definition import EventKind
+
+    seen: list[bool] = []  # telemetry came: a BOOT from now on is a reset, not the board's first
+
+    def on_message(rx: Any) -> None:
+        m = rx.message
+        if m.name == "TELEMETRY":
+            if not seen:
+                seen.append(True)
+        elif m.name == "EVENT" and m.fields["kind"] == EventKind.BOOT and seen:
+            say(f"the board reset: {event_text(m.fields)}; it boots idle (a gait it ran is stopped)")
+
+    return CallbackListener(on_message)
 
 
 def _prod(levels: Sequence[int]) -> int:
