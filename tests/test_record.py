@@ -657,3 +657,19 @@ def test_a_disk_that_fills_mid_row_leaves_the_recording_whole_up_to_its_last_row
     with caplog.at_level(logging.WARNING, logger="proleg"):
         rows = read_recording(path)
     assert len(rows.time_s) > 10 and not [r for r in caplog.records if "torn" in r.getMessage()]
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl", ".mcap"])
+def test_an_earlier_recording_of_the_same_name_stays_until_the_new_one_records(tmp_path, suffix):
+    """A session that opens a recording and never records (interrupted before START, a link
+    that never came up) leaves an earlier file of that name as it was; once it records, the new
+    recording takes the name, and no file of its own is left beside it."""
+    path = tmp_path / f"run{suffix}"
+    record(path, frames=20)
+    earlier = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    meta = RecordingMeta.for_robot(robot=ROBOT, board="fake")
+    Logger(path, meta).discard()
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == earlier
+    record(path, frames=40)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(earlier)  # no .proleg-new left
+    assert len(read_recording(path).time_s) == 40

@@ -56,13 +56,15 @@ class Writer(Listener, ABC):
         self._open = False
         self._held = False  # owes interrupts.release()
         self._created: list[tuple[Path, IO[Any]]] = []
+        self._pending: dict[Path, Path] = {}  # a new file beside an earlier recording -> that recording
         try:
             self.open()
             self._held = interrupts.hold()  # from here a Ctrl-C lands between two rows (_guard), not inside one
             self._open = True
         except OSError as e:
             self._discard()
-            raise LinkError(f"cannot write record file {e.filename or self.path}: {e.strerror or e}") from None
+            name = self._pending.get(Path(e.filename), e.filename) if e.filename else self.path
+            raise LinkError(f"cannot write record file {name}: {e.strerror or e}") from None
         except BaseException:  # Ctrl-C while the file is being created: no half-written header left
             self._let_go()
             self._discard()
@@ -75,10 +77,23 @@ class Writer(Listener, ABC):
 
     def _create(self, path: Path, mode: str = "w", **kw: Any) -> IO[Any]:
         """Open ``path`` for writing; ``open`` creates every file through this, so a failure
-        part-way removes what it had created (nothing half-written is left)."""
+        part-way removes what it had created (nothing half-written is left). Where an earlier
+        recording has that name, the new file is made beside it and takes its name with the
+        first row (``_commit``): a session that never records (interrupted before START, a
+        link that never came up) leaves the earlier one as it was."""
+        if path.is_file() and not path.is_symlink():
+            target, path = path, path.with_name(f".{path.name}.proleg-new")
+            self._pending[path] = target
         f = open(path, mode, **kw)
         self._created.append((path, f))
         return f
+
+    def _commit(self) -> None:
+        """The new files take their names (replacing the earlier recording's)."""
+        for new, target in self._pending.items():
+            os.replace(new, target)
+        self._created = [(self._pending.get(p, p), f) for p, f in self._created]
+        self._pending = {}
 
     def _discard(self) -> None:
         for path, f in self._created:
@@ -88,6 +103,7 @@ class Writer(Listener, ABC):
                 pass
             if not path.is_symlink():  # the user's link (to a device...) stays
                 path.unlink(missing_ok=True)
+        self._pending = {}
 
     @abstractmethod
     def open(self) -> None:
@@ -120,6 +136,8 @@ class Writer(Listener, ABC):
             with interrupts.deferred():  # a Ctrl-C lands between two rows, not inside one
                 write(row)
                 self.records += 1
+                if self._pending:
+                    self._commit()
         except OSError as e:
             self.error = LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             self.stop()
@@ -147,6 +165,8 @@ class Writer(Listener, ABC):
             except OSError as e:
                 self.error = self.error or LinkError(f"cannot write record file {self.path}: {e.strerror or e}")
             finally:
+                if self._pending:  # a session that ended with no row is still the recording asked for
+                    self._commit()
                 self._let_go()
         interrupts.settle()  # let go on a Notifier thread (a failed write): Python's handler is back now
 
