@@ -132,7 +132,7 @@ class _Scripted:
     def start(self, gait, direction):
         pass
 
-    def stop(self):
+    def request(self, name, **kw):  # STOP at the piece's end
         pass
 
     def recv(self, timeout=0.0):
@@ -284,3 +284,33 @@ def test_the_measured_state_skips_frames_whose_state_is_unknown(tmp_path):
         board.frames = [(unknown, 0xFFFF)] * 300
         with pytest.raises(ExplorationError, match="state stayed unknown over 200 telemetry frames"):
             Explorer(board, robot, log, None).measured_state()
+
+
+def test_a_piece_whose_stop_gets_no_answer_e_stops_and_keeps_why_it_ended(tmp_path, caplog):
+    """A piece ends with STOP; unanswered, ESTOP follows (as run and console leave a robot),
+    and the piece's own error is what the caller sees. It used to be client.stop() alone: its
+    LinkError replaced the piece's error and no ESTOP was sent."""
+    import logging
+
+    from proleg.errors import LinkError
+
+    sent: list[str] = []
+    clock = iter(range(0, 10**6, 5))  # 5 s a look: the piece's deadline passes at once
+
+    def request(name, **kw):
+        sent.append(name)
+        if name == "STOP":
+            raise LinkError("no ACK for STOP within 3 s")
+
+    client = SimpleNamespace(info=None, link=SimpleNamespace(clock=lambda: float(next(clock))),
+                             set_telemetry_rate=lambda hz: None, load_gait=lambda states: None,
+                             start=lambda gait, direction: None, recv=lambda wait: None, request=request)
+    robot = load_robot(ROBOTS / "paper-r1.toml")
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = Explorer(client, robot, log, None, rest=lambda s: None)
+        piece = SimpleNamespace(states=(0, 2, 0), transitions=((0, 2), (2, 0)), loadable=True, gait=lambda: (0, 2))
+        with caplog.at_level(logging.WARNING, logger="proleg"), \
+                pytest.raises(ExplorationError, match="did not finish within"):
+            ex.run_piece(piece)
+    assert sent == ["STOP", "ESTOP"]
+    assert any("STOP not acknowledged" in r.getMessage() and "E-stopped" in r.getMessage() for r in caplog.records)

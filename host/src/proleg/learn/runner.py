@@ -35,12 +35,14 @@ exploration asks for the fastest telemetry the board takes (``WATCH_HZ``) to see
 
 from __future__ import annotations
 
+import logging
 import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..console.leave import stop_robot
 from ..errors import LinkError
 from ..link.direction import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
@@ -49,6 +51,8 @@ from ..states import limb_levels
 from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
+
+log = logging.getLogger("proleg")
 
 
 #: seconds of link time that count as "now" when waiting for a moment on the link's clock
@@ -346,7 +350,11 @@ class Explorer:
                 t_seen = seen[1] if seen is not None and seen[0] == state and seen[1] <= t_ev else None
                 pending = (self._clock() + self.settle_s, t_ev, state, t_seen)
         finally:
-            client.stop()
+            # STOP, ESTOP if the STOP gets no answer (as run and console leave a robot); a STOP
+            # that failed used to raise from here, masking why the piece ended, and sent no ESTOP
+            said = stop_robot(client)
+            if said != "robot stopped":
+                log.warning("warning: %s", said)
         return out
 
 
