@@ -200,16 +200,93 @@ def test_a_two_limb_robot_is_checked_for_states_its_body_cannot_hold_too(tmp_pat
     assert not caplog.records, [r.getMessage() for r in caplog.records]
 
 
+def test_a_two_limb_robot_whose_raised_end_holds_the_other_inside_its_band_is_warned_it_never_settles(tmp_path, caplog):
+    """R1 with hysteresis 16°: the load check posed the raised end at ψ* + margin (24°), which
+    lifts the other end to 10°, under its band (12..28°), and the file loaded without a word.
+    The firmware holds the raised end at its hold edge (ψ* + h/2 + margin = 32°) and above:
+    the other end sat at 13–15°, read level 0 but never settled (no two-limb rule settles a
+    limb held up), and 00 -> 10 ended in STATE_TIMEOUT "one would not settle". Posed at the
+    hold edge it is at 13.2°: 10 and 01 are one line each, and gait 0 is an ``unholdable``
+    error; hysteresis 14° (it walks) loads without a word."""
+    from proleg.firmware.gaits import firmware_gaits
+    from proleg.gait.feasibility import gait_problems
+
+    text = (ROOT / "robots" / "paper-r1.toml").read_text()
+    assert text.count("hysteresis_deg = 2.0") == 2
+    path = tmp_path / "hy.toml"
+    path.write_text(text.replace("hysteresis_deg = 2.0", "hysteresis_deg = 14.0"))
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        load_robot(path)
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+    path.write_text(text.replace("hysteresis_deg = 2.0", "hysteresis_deg = 16.0"))
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 2, warned
+    assert "state 10: limb 'right' (level 0) is held up to 13.2° by the raised limbs 'left'" in warned[1], warned
+    assert "(12.0..28.0°): it reads level 0 but never settles" in warned[1], warned
+    gait0 = [int(s) for s in firmware_gaits(robot)["+x"][0].states]
+    problems = [p for p in gait_problems(robot, gait0) if p.severity == "error"]
+    assert [p.kind for p in problems] == ["unholdable"] and "it never settles" in problems[0].message, problems
+    session = SimSession(open_simulated(robot))
+    session.advance(0.2)
+    report = session.run_gait("+x", 0, 15.0)
+    assert [f.code for f in report.faults][:1] == ["STATE_TIMEOUT"], report.faults
+
+
+def test_a_state_a_raised_limbs_overshoot_lifts_a_limb_past_its_edge_in_is_warned(tmp_path, caplog):
+    """Three 3-level limbs (ψ* 8°, 16°) on a 120 mm body: in 202 the two end limbs are held at
+    level 2. Posed at ψ* + margin (20°) they lifted the middle one to 9.00°, its 9° edge to a
+    thousandth (nano-3x6, three such limbs of 6 levels: read 212 instead of 202 in gait 0 and
+    ended in STATE_TIMEOUT, the middle limb at 9.7°). The firmware heats them to their hold
+    edge (21°: 9.4°), switches the coil off at the hold top (22°), and the rise carries on to
+    ≈ 24° (``HOLD_OVERSHOOT_DEG``): posed at that peak the middle limb is at 10.8°, clear of the
+    edge, and the state is warned about."""
+    from proleg.robot_body import _held_psi, coupled_states
+
+    rows = []
+    labels = [f"{a}{b}{c}" for a in range(3) for b in range(3) for c in range(3)]
+    allowed = {("000", "001"), ("001", "002"), ("002", "102"), ("102", "202"), ("202", "102"), ("102", "002"),
+               ("002", "001"), ("001", "000")}
+    for a in labels:
+        rows.append("  [" + ", ".join("0" if a == b else "1" if (a, b) in allowed else '"x"' for b in labels) + "],")
+    lines = ['[robot]', 'name = "three-3"']
+    for k in range(3):
+        lines += ['[[limb]]', f'name = "l{k}"', 'levels = 3', 'psi_star_deg = [8.0, 16.0]', f'actuator = "a{k}"']
+    lines += [f'[[actuator]]\nname = "a{k}"' for k in range(3)]
+    lines += ['[transitions]', 'matrix = [', *rows, ']', '[plant]', 'length_mm = 120']
+    path = tmp_path / "three-3.toml"
+    path.write_text("\n".join(lines) + "\n")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 1 and "state 202: limb 'l1' (level 0) is lifted to 10.8°" in warned[0], warned
+    t, names = robot.transitions, [a.name for a in robot.actuators]
+    s = t.index("202")
+    assert robot.unholdable == {s: ((1, pytest.approx(10.79, abs=0.01)),)}
+    margin = robot.control.hold_margin_deg
+    old = _held_psi(list(robot.limbs), names, robot.plant, [s], margin - 1.0)  # ψ* + margin: h/2 = 1° lower
+    edge = _held_psi(list(robot.limbs), names, robot.plant, [s], margin)
+    assert old[(s, 1)] == pytest.approx(9.0, abs=0.01) and edge[(s, 1)] == pytest.approx(9.45, abs=0.01)
+    assert s in coupled_states(list(robot.limbs), names, robot.plant, t, robot.control.hold_margin_deg)
+
+
 _THREE_LEVEL_REAR = (Path(__file__).parent / "fixtures" / "l3-l2.toml").read_text()
 
 
 def test_a_limb_the_raised_limbs_hold_inside_its_band_cannot_come_down_and_the_transition_is_warned(tmp_path, caplog):
-    """A three-level rear pad (ψ* 10°, 22°) beside a binary front pad: the raised front end
-    holds the rear one at ≈ 10°, short of its level-1 entry edge (11°), so 01 is reached from
-    00, but above its level-0 edge (9°), so lowering it from 11 never reads level 0. The file
-    loaded without a word; gait 0 (00 10 20 21 11 01 00) ran into STATE_TIMEOUT at 11 -> 01.
-    Now the transition is one warning line, and a file that marks it "x" loads without one."""
+    """A three-level rear pad (ψ* 10°, 22°) beside a binary front pad: posed at ψ* + margin,
+    the raised front end held the rear one at ≈ 10°, short of its level-1 entry edge (11°) but
+    above its level-0 edge (9°), so the load check warned only that lowering it from 11 never
+    reads level 0. The firmware holds the front higher (its hold edge 25°, and its rise
+    overshoots the hold top 26° to 28.8°): driven 00 -> 01 on the physical plant the rear is
+    lifted to 12.2° and reads 11, so 01 cannot be held however it is entered. Posed where the
+    firmware holds it (``robot_body.hold_peak_deg``), the rear is at 11.6°: one line about the
+    state (the transition's own line would say less), and gait 0 (00 10 20 21 11 01 00), which
+    ran into STATE_TIMEOUT at 11 -> 01, is an ``unholdable`` error; a file that marks the
+    transitions into 01 "x" loads without a word."""
     from proleg.firmware.gaits import firmware_gaits
+    from proleg.gait.feasibility import gait_problems
     from proleg.protocol.definition import FaultCode
     from proleg.sim.simulators import open_simulated
 
@@ -219,10 +296,11 @@ def test_a_limb_the_raised_limbs_hold_inside_its_band_cannot_come_down_and_the_t
         robot = load_robot(path)
     warned = [r.getMessage() for r in caplog.records]
     assert len(warned) == 1 and "\n" not in warned[0], warned
-    assert "transition 11→01: limb 'rear' cannot come down to level 0" in warned[0], warned[0]
-    assert "the raised limbs 'front'" in warned[0] and "edge 9.0° (ψ* − hysteresis/2)" in warned[0], warned[0]
-    assert [robot.transitions.label(int(s)) for s in firmware_gaits(robot)["+x"][0].states] == \
-        ["00", "10", "20", "21", "11", "01", "00"]
+    assert "state 01: limb 'rear' (level 0) is lifted to 11.6° by the raised limbs 'front'" in warned[0], warned[0]
+    assert "past its level-1 edge 11.0° (ψ* + hysteresis/2)" in warned[0], warned[0]
+    gait0 = firmware_gaits(robot)["+x"][0].states
+    assert [robot.transitions.label(int(s)) for s in gait0] == ["00", "10", "20", "21", "11", "01", "00"]
+    assert [p.kind for p in gait_problems(robot, [int(s) for s in gait0]) if p.severity == "error"] == ["unholdable"]
     # the simulated firmware on the physical plant: the step 11 -> 01 never ends
     session = SimSession(open_simulated(robot))
     session.advance(0.2)
@@ -233,7 +311,8 @@ def test_a_limb_the_raised_limbs_hold_inside_its_band_cannot_come_down_and_the_t
     assert (t.label(suspect // t.n_states), t.label(suspect % t.n_states)) == ("11", "01")
     # marked "x", the file loads without a word
     caplog.clear()
-    path.write_text(_THREE_LEVEL_REAR.replace('["x", 0, 1, 0, "x", 0],  # 11', '["x", "x", 1, 0, "x", 0],  # 11'))
+    path.write_text(_THREE_LEVEL_REAR.replace('["x", 0, 1, 0, "x", 0],  # 11', '["x", "x", 1, 0, "x", 0],  # 11')
+                    .replace('[0, -1, 1, "x", "x", "x"],  # 00', '[0, "x", 1, "x", "x", "x"],  # 00'))
     with caplog.at_level(logging.WARNING, logger="proleg"):
         load_robot(path)
     assert not caplog.records, [r.getMessage() for r in caplog.records]

@@ -164,7 +164,7 @@ def test_a_step_the_durations_say_outlasts_the_state_timeout_is_one_expect_a_fau
 
 def test_a_gait_through_a_state_the_body_cannot_hold_is_an_unholdable_error_the_build_says_to_expect(tmp_path):
     """inchworm-3 with the middle ψ* at 10°: in 101 the raised tail and head lift the middle pad
-    to ≈ 12.5°, past its 11° edge. Loading warned about the state, but the gaits the firmware
+    to ≈ 14.6° at their hold peaks, past its 11° edge. Loading warned about the state, but the gaits the firmware
     carries through it (+x gait 1: 001 101 100 ...) were built without a word, and gait 1 ended
     in STATE_TIMEOUT on the nominal plant. Now each such gait is one ``unholdable`` error, which
     the build prints as 'expect a fault' (a model's finding: not refused)."""
@@ -180,7 +180,7 @@ def test_a_gait_through_a_state_the_body_cannot_hold_is_an_unholdable_error_the_
     assert len(problems) == 1 and problems[0].severity == "error", problems
     assert problems[0].message.startswith(
         "gait 000 100 101 001 000: goes to state 101 (step 2), which the simulated body cannot hold: in 101 "
-        "'middle' (level 0) sits at 12.5°, past its level-1 edge 11.0° (the warning when the robot file is loaded)")
+        "'middle' (level 0) sits at 14.6°, past its level-1 edge 11.0° (the warning when the robot file is loaded)")
     assert "unholdable" not in kinds(robot, "000", "100", "110", "111", "011", "001", "000")
     gaits = firmware_gaits(robot)
     through = [k for k, g in enumerate(gaits["+x"]) if robot.transitions.index("101") in g.states]

@@ -182,25 +182,75 @@ def worn_holds_of(robot: Any) -> list[int]:
 COUPLING_CHECK_MAX_STATES = 4096
 
 
-def _held_at(limb: Any, level: int, hold_margin_deg: float) -> float:
-    """ψ° the controller holds ``limb`` at on ``level`` ≥ 1 (core/ctl.h): its stroke on its top
-    level if it has one, else ψ* of the level + the hold margin."""
+#: How far past its hold top (the hold edge + 1°, where the bang-bang hold switches the coil off)
+#: a raised limb's rise carries it: the coil, driven at the drive duty through its
+#: transformation, keeps contracting for a while after it is switched off. Measured on the
+#: physical plant (nominal, `proleg sim --record`, 20 s of gait 0, the peak of each limb raised
+#: alone above its hold top): 0.8–1.2° on caterpillar-4, 0.8–2.1° inchworm-3, 2.0–2.6° R1,
+#: 1.9–2.8° R2, 2.5–3.6° R3, 2.0–2.1° nano-3x6 (ψ* 8–40°, 120 mm: l0 rose past its level-2
+#: hold top 22° to 24°, lifting l1 from under its 9° edge to 9.7°: 212 read instead of 202,
+#: STATE_TIMEOUT), 2.7° R1 with hysteresis 16°. The held limbs then swing between the hold edge
+#: and about 1° above the hold top (caterpillar-4's 0101: the rear proleg at 19°, its hold top
+#: 18°; docs/control.md). The typical overshoot, not the largest: a pose at the largest warned
+#: about states the bundled robots walk through.
+HOLD_OVERSHOOT_DEG = 2.0
+
+
+def hold_edge_deg(limb: Any, level: int, hold_margin_deg: float) -> float:
+    """Where the firmware's bang-bang hold heats a limb held on ``level`` ≥ 1 from (core/ctl.c,
+    psi.c ``E_HOLD``): its threshold's upper band edge plus ``hold_margin_deg``, ψ*(level) +
+    hysteresis/2 + margin; on its top level with a ``stroke_deg``, the stroke. The least ψ
+    the hold keeps: below it the coil heats (measured on the physical plant, a held limb stays
+    at or above it once it got there)."""
     stroke = getattr(limb, "stroke_deg", None)
     if stroke is not None and level == limb.levels - 1:
         return float(stroke)
-    return limb.psi_star_deg[level - 1] + hold_margin_deg
+    return limb.psi_star_deg[level - 1] + limb.hysteresis_deg / 2.0 + hold_margin_deg
+
+
+def hold_peak_deg(limb: Any, level: int, hold_margin_deg: float) -> float:
+    """The highest a limb held on ``level`` ≥ 1 goes: its hold top (``hold_edge_deg`` +
+    ``PSI_HOLD_BAND`` 1°, where the coil is switched off) plus ``HOLD_OVERSHOOT_DEG``."""
+    return hold_edge_deg(limb, level, hold_margin_deg) + 1.0 + HOLD_OVERSHOOT_DEG
+
+
+def held_low_deg(limb: Any, level: int, hold_margin_deg: float) -> float:
+    """The least a limb held on ``level`` ≥ 1 sinks to held low (core/ctl.h ``CTL_HELD_UP``,
+    three or more limbs): while a falling limb within 2° of its crossing has not come 1° lower
+    for 1.5 s, every held limb is heated only below its band's upper edge ψ*(level) +
+    hysteresis/2 (a stroke too), not its hold edge ``hold_margin_deg`` above it, and sags under
+    that edge before its coil, heated again, catches it: its band's lower edge ψ* −
+    hysteresis/2, the least at which it still reads its level. Measured on the physical plant
+    (three limbs on 80 mm, ψ* 20°, 8° and 16°/28°, 012 → 002): the held limb sagged from 31° to
+    27.6°, 1.4° under its upper edge 29°, the lowered middle one came down from 8.1° to its 7°
+    edge in 5 s and the step ended, though posed at the upper edge it stayed at 7.5°."""
+    return limb.psi_star_deg[level - 1] - limb.hysteresis_deg / 2.0
+
+
+#: How close above its crossing (its band's lower edge) a falling limb held up must be for the
+#: firmware to hold the others low (core/stall.c: the fall edges, ``PSI_FALL_EDGES`` 1° and 2°).
+HELD_UP_WINDOW_DEG = 2.0
 
 
 def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, states: list[int],
-              hold_margin_deg: float, drive: list[int] | None = None) -> dict[tuple[int, int], float] | None:
+              hold_margin_deg: float, drive: list[int] | None = None,
+              pose: str = "edge") -> dict[tuple[int, int], float] | None:
     """ψ of each limb below its top level in each of ``states`` on the physical plant's body,
     ``{(state, limb): ψ°}``, with every raised limb's coil at the contraction that holds it
-    where the controller holds it (``_held_at``: ψ*(its level) + ``hold_margin_deg``, or its
-    ``stroke_deg`` on its top level; a fraction of its own coil's full-stroke reach,
+    where the firmware holds it (``pose``): "edge", at its hold edge (``hold_edge_deg``,
+    ψ*(its level) + hysteresis/2 + ``hold_margin_deg``, or its ``stroke_deg`` on its top
+    level), the least the bang-bang hold keeps; "peak", at the most its rise reaches
+    (``hold_peak_deg``, the hold top + ``HOLD_OVERSHOOT_DEG``); "low", the least it sinks to held
+    low (``held_low_deg``, its band's lower edge: three or more limbs, while a falling limb is
+    held up); each a
+    fraction of its own coil's full-stroke reach,
     ``own_reach_deg``. A stroke held that high bends the whole body: R1 at full strokes cannot
     hold 10 or 01, and a matrix allowing them loaded without a word when raised limbs were
-    posed just past ψ*), and the limb's own coil at the least it can be (cold, or what the
-    other limbs on a shared coil need: the controller may let it cool that far, no further).
+    posed just past ψ*. Posed at ψ* + margin, h/2 below the hold edge, R1 with hysteresis 16°
+    lifted the lowered end to 10°, under its 12° band; the firmware holds the raised end at
+    32–35° and the other end sat at 13–15° and never settled (STATE_TIMEOUT). The limb's own
+    coil is at the least it can be (cold, or what the other limbs on a shared coil need: the
+    controller may let it cool that far, no further).
     None: a body the model cannot describe (``curl_problem``).
 
     ``drive``: the actuator index that drives each limb, where it is not the robot file's (a
@@ -223,7 +273,8 @@ def _held_psi(limbs: list[Any], actuators: list[str], section: PlantSection, sta
     rows, cases = [], []
     for s in states:
         want = limb_levels(s, levels)
-        demand = [min(1.0, _held_at(limbs[i], k, hold_margin_deg) / reach[i])
+        held_at = {"edge": hold_edge_deg, "peak": hold_peak_deg, "low": held_low_deg}[pose]
+        demand = [min(1.0, held_at(limbs[i], k, hold_margin_deg) / reach[i])
                   if k > 0 and reach[i] > 0 else 0.0 for i, k in enumerate(want)]
         for i, k in enumerate(want):
             if k >= limbs[i].levels - 1:
@@ -266,16 +317,34 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
         return {}
     entered = entered_states(table)
-    held = _held_psi(limbs, actuators, section, entered, hold_margin_deg, drive)
+    held = _held_psi(limbs, actuators, section, entered, hold_margin_deg, drive, pose="peak")
+    # two limbs: no rule settles a limb held up inside the band above its level (PSI_HELD_UP)
+    low = ({} if settles_held_up(len(limbs)) else
+           _held_psi(limbs, actuators, section, entered, hold_margin_deg, drive) or {})
     levels = tuple(lb.levels for lb in limbs)
     out: dict[int, list[tuple[int, list[int], float]]] = {}
     for (s, i), psi_i in (held or {}).items():
         want = limb_levels(s, levels)
         lb = limbs[i]
-        if psi_i >= lb.psi_star_deg[want[i]] + lb.hysteresis_deg / 2.0:
-            raising = [j for j, kj in enumerate(want) if kj > 0 and j != i]
+        star, half = lb.psi_star_deg[want[i]], lb.hysteresis_deg / 2.0
+        raising = [j for j, kj in enumerate(want) if kj > 0 and j != i]
+        if psi_i >= star + half:
             out.setdefault(s, []).append((i, raising, psi_i))
+        elif raising and low.get((s, i), -180.0) >= star - half:
+            out.setdefault(s, []).append((i, raising, low[(s, i)]))
     return out
+
+
+def settles_held_up(n_limbs: int) -> bool:
+    """Whether the firmware settles a limb its neighbours hold up inside the band above its
+    level (``PSI_RELAX_HELD_UP``, core/psi.h ``PSI_HELD_UP``: three or more limbs)."""
+    return n_limbs > 2
+
+
+def unsettled(limb: Any, level: int, psi: float) -> bool:
+    """Whether a ``coupled_states`` hit at ψ is a limb inside the band above its level (it
+    reads its level but never settles: two limbs, ``settles_held_up``), not past it."""
+    return psi < limb.psi_star_deg[level] + limb.hysteresis_deg / 2.0
 
 
 def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
@@ -289,7 +358,15 @@ def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSecti
     (``_held_psi``), a limb whose ψ stays at or above that edge keeps reading level k + 1, and
     the step ends in STATE_TIMEOUT, although the same state is reached from below (raising a
     neighbour lifts the limb short of ψ* + hysteresis/2). Where ψ reaches that upper edge too
-    the state itself cannot be held (``coupled_states``), and it is left to that warning."""
+    the state itself cannot be held (``coupled_states``), and it is left to that warning.
+
+    The raised limbs are posed at their hold edges (ψ* + hysteresis/2 + margin: the least the
+    bang-bang hold keeps them at). With three or more limbs the firmware holds them low (heated
+    only below their band's upper edges; they sag to their lower edges, ``held_low_deg``) once
+    a falling limb sits within
+    ``HELD_UP_WINDOW_DEG`` of its crossing: there the step is blocked only if the limb stays
+    up held low too (the ψ given is then that one). caterpillar-4's 1110 → 1010, the rear
+    proleg at 11.3° against its 11° edge at the hold edges, comes down so (docs/control.md)."""
     from .states import limb_levels
 
     if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
@@ -302,7 +379,10 @@ def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSecti
             down = [i for i, (x, y) in enumerate(zip(limb_levels(a, levels), limb_levels(b, levels))) if y < x]
             if down:
                 lowered[(a, b)] = down
-    held = _held_psi(limbs, actuators, section, sorted({b for _, b in lowered}), hold_margin_deg, drive) or {}
+    into = sorted({b for _, b in lowered})
+    held = _held_psi(limbs, actuators, section, into, hold_margin_deg, drive) or {}
+    low = (_held_psi(limbs, actuators, section, into, hold_margin_deg, drive, pose="low") or {}
+           if settles_held_up(len(limbs)) else {})
     out: dict[tuple[int, int], tuple[int, list[int], float]] = {}
     for (a, b), down in lowered.items():
         want = limb_levels(b, levels)
@@ -310,9 +390,14 @@ def blocked_descents(limbs: list[Any], actuators: list[str], section: PlantSecti
             lb, k = limbs[i], want[i]
             psi_i = held.get((b, i))
             lo = lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0
-            if psi_i is not None and lo <= psi_i < lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:
-                out[(a, b)] = (i, [j for j, kj in enumerate(want) if kj > 0 and j != i], psi_i)
-                break
+            if psi_i is None or not lo <= psi_i < lb.psi_star_deg[k] + lb.hysteresis_deg / 2.0:
+                continue
+            if low and psi_i < lo + HELD_UP_WINDOW_DEG:  # the others are held low: down if that frees it
+                psi_i = low.get((b, i), psi_i)
+                if psi_i < lo:
+                    continue
+            out[(a, b)] = (i, [j for j, kj in enumerate(want) if kj > 0 and j != i], psi_i)
+            break
     return out
 
 
@@ -493,7 +578,8 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
     ``(shown, rest)``. ``shown`` has, per kind (a limb resting past its edge, lifted by a
     shared coil, lifted by raised neighbours, kept from coming down), the first
     ``WARNING_EXAMPLES`` lines, then one line counting the rest; ``rest`` the others (for -v)."""
-    kinds: dict[str, list[tuple[Any, str]]] = {"rests": [], "shared": [], "neighbours": [], "descents": []}
+    kinds: dict[str, list[tuple[Any, str]]] = {"rests": [], "shared": [], "neighbours": [], "unsettled": [],
+                                               "descents": []}
     for s, hits in coupled.items():
         for i, raising, psi in hits:
             lb = limbs[i]
@@ -510,11 +596,23 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
             shared = [j for j in raising if limbs[j].actuator == lb.actuator]
             how = (f"by its own coil {lb.actuator!r}, which also holds {', '.join(repr(limbs[j].name) for j in shared)} "
                    f"up" if shared else f"by the raised limbs {names}")
+            if unsettled(lb, k, psi):
+                lo = lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0
+                kinds["unsettled"].append((s,
+                    f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is held up to {psi:.1f}° {how} on "
+                    f"the simulated {section.length_mm:g} mm body (each at its hold edge, ψ* + hysteresis/2 + "
+                    f"control.hold_margin_deg, the least the firmware holds it at), inside the hysteresis band above "
+                    f"its level ({lo:.1f}..{lo + lb.hysteresis_deg:.1f}°): it reads level {k} but never settles (a two-limb "
+                    f"firmware has no rule that settles a limb held up), so every step into the state ends in "
+                    f"STATE_TIMEOUT; narrow its hysteresis_deg, or mark the transitions into it \"x\""))
+                continue
             kinds["shared" if shared else "neighbours"].append((s,
                 f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° {how} on "
                 f"the simulated {section.length_mm:g} mm body, past its level-{k + 1} {edge}: the state reads "
                 f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)"))
     for (a, s), (i, raising, psi) in (blocked or {}).items():
+        if any(h[0] == i for h in coupled.get(s, ())):
+            continue  # the state's own line says it: the limb never settles there however it comes
         lb = limbs[i]
         k = limb_levels_of(s, limbs)[i]
         shared = [j for j in raising if limbs[j].actuator == lb.actuator]
@@ -523,14 +621,22 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
                f"the raised limbs {', '.join(repr(limbs[j].name) for j in raising)} hold it at" if raising else
                "it rests at")  # no limb raised: its level-k band holds the body's rest angle
         fix = "" if raising else "check its psi_star_deg, or "
+        lo = lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0
+        pose = ""
+        if raising and not shared:
+            pose = (" (each held low, sunk to its band's lower edge ψ* − hysteresis/2, the firmware's rule for a "
+                    "limb held up on its way down)" if settles_held_up(len(limbs)) and psi < lo + HELD_UP_WINDOW_DEG else
+                    " (each at its hold edge, ψ* + hysteresis/2 + control.hold_margin_deg, the least the firmware "
+                    "holds it at)")
         kinds["descents"].append(((a, s),
             f"{path}: transition {table.label(a)}→{table.label(s)}: limb {lb.name!r} cannot come down to level "
-            f"{k}: {how} {psi:.1f}° on the simulated {section.length_mm:g} mm body, above its level-{k} "
-            f"edge {lb.psi_star_deg[k] - lb.hysteresis_deg / 2.0:.1f}° (ψ* − hysteresis/2), so it keeps reading "
+            f"{k}: {how} {psi:.1f}°{pose} on the simulated {section.length_mm:g} mm body, above its level-{k} "
+            f"edge {lo:.1f}° (ψ* − hysteresis/2), so it keeps reading "
             f"level {k + 1} and the step cannot end; {fix}mark the transition \"x\" (no gait may rely on it)"))
     what = {"rests": "a limb resting past its next level's edge",
             "shared": "a limb lifted by its own coil, shared with a raised limb",
-            "neighbours": "a limb lifted by raised neighbours"}
+            "neighbours": "a limb lifted by raised neighbours",
+            "unsettled": "a limb held up inside the band above its level, where it never settles"}
     entered = len({int(d) for d in table.dst})
     shown: list[str] = []
     rest: list[str] = []

@@ -18,6 +18,8 @@ and lets them fall when it cools, so:
   its raised neighbours past its level's upper edge on the simulated body (``Robot.unholdable``,
   the load check's "cannot be held" lines): it reads as another state, and the firmware's step
   ends in STATE_TIMEOUT (error ``unholdable``, not refused by the build: the body is a model).
+  On two limbs, a limb held up inside the band above its level (it reads its level but never
+  settles: the firmware's rule for that is built for three or more limbs) is one too.
 * **Opposing steps** — a step that raises a limb on one actuator while lowering a limb on
   another needs a heating and a cooling crossing to coincide; the controller synchronises
   them as well as it can, but the robot may pass through an intermediate state (warning
@@ -48,9 +50,10 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..errors import GaitError
+from ..robot_body import unsettled
 from .coil_debt import EPS_S, Step, coil_budget, cycle_debt
 from ..states import limb_levels
 from ..transitions import TransitionTable
@@ -180,13 +183,23 @@ def _unholdable_problem(robot: "Robot", gait: str, unheld: list[tuple[int, int]]
     more = f" and {len(unheld) - 3} more" if len(unheld) > 3 else ""
     first = unheld[0][1]
     levels = limb_levels(first, robot.levels)
-    why = "; ".join(f"{robot.limbs[i].name!r} (level {levels[i]}) sits at {psi:.1f}°, past its level-"
-                    f"{levels[i] + 1} edge {robot.limbs[i].psi_star_deg[levels[i]] + robot.limbs[i].hysteresis_deg / 2:.1f}°"
-                    for i, psi in robot.unholdable[first])
+    why = "; ".join(_unheld_why(robot.limbs[i], levels[i], psi) for i, psi in robot.unholdable[first])
+    reads = ("it never settles" if all(unsettled(robot.limbs[i], levels[i], psi) for i, psi in robot.unholdable[first])
+             else "it reads as another state")
     return Problem("unholdable", "error",
                    f"gait {gait}: goes to state{'s' if len(unheld) > 1 else ''} {named}{more}, which the simulated "
-                   f"body cannot hold: in {label(first)} {why} (the warning when the robot file is loaded), so it "
-                   f"reads as another state and the step ends in STATE_TIMEOUT")
+                   f"body cannot hold: in {label(first)} {why} (the warning when the robot file is loaded), so "
+                   f"{reads} and the step ends in STATE_TIMEOUT")
+
+
+def _unheld_why(limb: Any, level: int, psi: float) -> str:
+    """Why ``limb`` on ``level`` at ψ cannot be held: past the band above its level, or (two
+    limbs: ``robot_body.unsettled``) inside it, where it never settles."""
+    lo, hi = (limb.psi_star_deg[level] - limb.hysteresis_deg / 2, limb.psi_star_deg[level] + limb.hysteresis_deg / 2)
+    if unsettled(limb, level, psi):
+        return (f"{limb.name!r} (level {level}) is held up to {psi:.1f}°, inside the band above its level "
+                f"({lo:.1f}..{hi:.1f}°)")
+    return f"{limb.name!r} (level {level}) sits at {psi:.1f}°, past its level-{level + 1} edge {hi:.1f}°"
 
 
 def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
