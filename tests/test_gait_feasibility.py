@@ -195,6 +195,42 @@ def test_a_gait_through_a_state_the_body_cannot_hold_is_an_unholdable_error_the_
     assert [f.code for f in report.faults][:1] == ["STATE_TIMEOUT"], report.faults
 
 
+def test_a_gait_through_a_step_the_body_cannot_end_is_a_blocked_error_the_build_says_to_expect(tmp_path):
+    """inchworm-3 with the middle ψ* 12° and hysteresis 8°: in 101 the tail and head, held at
+    their hold edges (25°), keep the middle pad at ≈ 13°, inside its band (8..16°) and more
+    than 2° above its lower edge, where the firmware's rule for a limb held up on its way down
+    does not look, so 111 -> 101 never reads 101 (on the physical plant it sat at 12.7–14.2°).
+    The load check warned about the transition, but the gaits through it (+x gait 4: 100 110
+    111 101 100) were built without a word and ended in STATE_TIMEOUT. Now each such gait is
+    one ``blocked`` error, which the build prints as 'expect a fault'."""
+    from proleg.firmware.gaits import firmware_gaits, gait_warnings
+    from proleg.report import SimSession
+    from proleg.sim.simulators import open_simulated
+
+    text = (ROBOTS / "inchworm-3.toml").read_text()
+    i = text.index('name = "middle"')
+    j = text.index("psi_star_deg = [20.0]", i)
+    k = text.index("hysteresis_deg = 2.0", i)
+    robot = robot_from(tmp_path, text[:j] + "psi_star_deg = [12.0]" + text[j + len("psi_star_deg = [20.0]"):k] +
+                       "hysteresis_deg = 8.0" + text[k + len("hysteresis_deg = 2.0"):])
+    assert list(robot.blocked) == [tuple(idx(robot, "111", "101"))]
+    problems = [p for p in gait_problems(robot, idx(robot, "100", "110", "111", "101", "100")) if p.severity == "error"]
+    assert [p.kind for p in problems] == ["blocked"], problems
+    assert problems[0].message.startswith(
+        "gait 100 110 111 101 100: step 111 -> 101 (step 3) cannot end on the simulated body: in 101 the raised "
+        "limbs hold 'middle' at 13.0°, above its level-0 edge 8.0°"), problems[0].message
+    assert "blocked" not in kinds(robot, "000", "100", "110", "111", "011", "001", "000")
+    gaits = firmware_gaits(robot)
+    through = [k for k, g in enumerate(gaits["+x"]) if any(
+        (int(a), int(b)) in robot.blocked for a, b in zip(g.states, [*g.states[1:], g.states[0]]))]
+    assert through and through[0] != 0, through
+    assert f"gait {through[0]} of +x: expect a fault: " in "\n".join(gait_warnings(robot, gaits))
+    session = SimSession(open_simulated(robot))
+    session.advance(0.2)
+    report = session.run_gait("+x", through[0], 20.0)
+    assert [f.code for f in report.faults][:1] == ["STATE_TIMEOUT"], report.faults
+
+
 def test_the_entry_path_from_rest_uses_only_allowed_transitions_the_hardware_can_make(tmp_path):
     robot = robot_from(tmp_path, ONE_ACTUATOR)
     # gait 01 11 01: 00 -> 10 -> 01 is shorter to 01 but lowers 'front' while raising 'back'

@@ -115,6 +115,10 @@ class Robot:
     #: (limb, ψ°) per such limb; ``proleg.robot_body.coupled_states``' (the load check's "cannot be
     #: held" lines), checked by ``proleg.gait.feasibility``
     unholdable: dict[int, tuple[tuple[int, float], ...]] = field(default_factory=dict)
+    #: allowed steps the simulated body cannot end because raised limbs keep a limb from coming
+    #: down: (from, to) -> (limb, raising limbs, ψ°); ``proleg.robot_body.blocked_descents``' (the
+    #: load check's "cannot come down" lines), checked by ``proleg.gait.feasibility``
+    blocked: dict[tuple[int, int], tuple[int, list[int], float]] = field(default_factory=dict)
 
     @property
     def where(self) -> str:
@@ -233,7 +237,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library,
                  shared_coil_lifts(list(limbs), coupled),
                  unreachable_states(list(limbs), [a.name for a in actuators], plant, table),
-                 unholdable_states(list(limbs), coupled))
+                 unholdable_states(list(limbs), coupled), blocked)
 
 
 def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:

@@ -20,6 +20,10 @@ and lets them fall when it cools, so:
   ends in STATE_TIMEOUT (error ``unholdable``, not refused by the build: the body is a model).
   On two limbs, a limb held up inside the band above its level (it reads its level but never
   settles: the firmware's rule for that is built for three or more limbs) is one too.
+* **Steps that cannot end** — a step that lowers a limb the raised limbs of the state it goes
+  to keep above its level's lower edge (``Robot.blocked``, the load check's "cannot come down"
+  lines): it keeps reading the level above and the step ends in STATE_TIMEOUT (error
+  ``blocked``, like ``unholdable`` not refused by the build).
 * **Opposing steps** — a step that raises a limb on one actuator while lowering a limb on
   another needs a heating and a cooling crossing to coincide; the controller synchronises
   them as well as it can, but the robot may pass through an intermediate state (warning
@@ -69,7 +73,7 @@ DEFAULT_DRIVE_S = 1.0  # a transition's drive time when the table has no duratio
 class Problem:
     """One reason a gait cannot run (``severity == "error"``) or may misbehave ("warning")."""
 
-    kind: str       # shared-actuator | unreachable | unholdable | opposing | on-time | never-cools | timeout | no-entry
+    kind: str       # shared-actuator | unreachable | unholdable | blocked | opposing | on-time | never-cools | timeout | no-entry
     severity: str   # error | warning
     message: str
 
@@ -202,6 +206,24 @@ def _unheld_why(limb: Any, level: int, psi: float) -> str:
     return f"{limb.name!r} (level {level}) sits at {psi:.1f}°, past its level-{level + 1} edge {hi:.1f}°"
 
 
+def _blocked_problem(robot: "Robot", gait: str, steps: list[tuple[int, int, int]]) -> Problem:
+    """One ``blocked`` error for the steps of a gait the body cannot end (``Robot.blocked``,
+    ``robot_body.blocked_descents``): the first three named, the limb and its ψ in the first.
+    nano-3x6 (three 6-level limbs) and R1 with hysteresis 16° built gaits through such steps
+    without a word, and they ended in STATE_TIMEOUT."""
+    label = robot.transitions.label
+    named = ", ".join(f"{label(a)} -> {label(b)} (step {k})" for k, a, b in steps[:3])
+    more = f" and {len(steps) - 3} more" if len(steps) > 3 else ""
+    _, a, b = steps[0]
+    i, _, psi = robot.blocked[(a, b)]
+    limb, k = robot.limbs[i], limb_levels(b, robot.levels)[i]
+    return Problem("blocked", "error",
+                   f"gait {gait}: step{'s' if len(steps) > 1 else ''} {named}{more} cannot end on the simulated "
+                   f"body: in {label(b)} the raised limbs hold {limb.name!r} at {psi:.1f}°, above its level-{k} edge "
+                   f"{limb.psi_star_deg[k] - limb.hysteresis_deg / 2:.1f}° (the warning when the robot file is "
+                   f"loaded), so it keeps reading level {k + 1} and the step ends in STATE_TIMEOUT")
+
+
 def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
     """Why ``actuator`` cannot hold ``state`` (``Robot.coil_lifts``), or None."""
     for act, lifted, raised in getattr(robot, "coil_lifts", {}).get(state, ()):
@@ -307,6 +329,11 @@ def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
               if b in getattr(robot, "unholdable", {}) and b not in {s for _, s in unreached}]
     if unheld:
         out.append(_unholdable_problem(robot, gait, unheld))
+    skip = {s for _, s in unreached} | {s for _, s in unheld}
+    stuck = [(k, a, b) for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)
+             if (a, b) in getattr(robot, "blocked", {}) and b not in skip]
+    if stuck:
+        out.append(_blocked_problem(robot, gait, stuck))
     out += on_time_problems(robot, cycle)
     out += timeout_problems(robot, cycle)
     try:
