@@ -305,13 +305,15 @@ def coupled_states(limbs: list[Any], actuators: list[str], section: PlantSection
     ``{state: [(limb, raising limbs, ψ°), ...]}`` for every state the matrix lets the robot
     enter (an allowed transition into it from another state).
 
-    Each state is posed as ``_held_psi`` says (raised limbs held where the controller holds
-    them, every other coil cold). A limb below its top level whose ψ then reaches the next
-    level's entry edge (ψ* + hysteresis/2) reads that level: the state is not reachable on
-    this body (e.g. caterpillar-4's 1020: the rear proleg between the raised tail and the
-    front proleg at level 2 bends to ≈ 14° > 13°; one coil on both of R1's limbs lifts its own
-    end first, so 01 cannot be held). A limb that rests past its level-1 edge comes with no
-    raising limbs."""
+    Each state is posed as ``_held_psi`` says (every other coil cold). A limb below its top
+    level whose ψ, with the raised limbs at their hold peaks (``hold_peak_deg``), reaches the
+    next level's entry edge (ψ* + hysteresis/2) reads that level: the state is not reachable
+    on this body (e.g. caterpillar-4's 1020: the rear proleg between the raised tail and the
+    front proleg at level 2 bends to ≈ 16° > 13°; one coil on both of R1's limbs lifts its
+    own end first, so 01 cannot be held). A limb that rests past its level-1 edge comes with
+    no raising limbs. On two limbs (``settles_held_up``) a limb the raised limbs hold at or
+    above its band's lower edge (ψ* − hysteresis/2) even at their hold edges
+    (``hold_edge_deg``) never settles there: it comes with that ψ (``unsettled``)."""
     from .states import limb_levels
 
     if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
