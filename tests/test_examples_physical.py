@@ -511,6 +511,30 @@ def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):
             r1(bad)
 
 
+def test_a_coil_narrower_than_twice_its_wire_is_refused_it_has_no_helix(tmp_path):
+    """Between a straight wire (as wide as its wire) and a helix (at least twice as wide: its
+    inner diameter not negative) there is no coil, and the wire-length formula (turns × π × mean
+    diameter) gave a 0.1 mm wire in a 0.12 mm coil 9 mm of wire for 30 mm of coil: 1 Ω, and
+    `proleg sim` heated it to 415 °C without a word. A thick wire in the default 0.4 mm coil
+    says the coil diameter is the default."""
+    src = (ROOT / "robots" / "paper-r1.toml").read_text()
+
+    def r1(plant: str):
+        path = tmp_path / "r1.toml"
+        path.write_text(src + f"\n[plant]\n{plant}\n")
+        return load_robot(path)
+
+    for od in ("0.12", "0.1001", "0.199"):
+        with pytest.raises(RobotFileError, match=r"r1\.toml: plant\.coil_diameter_mm: expected, for actuator "
+                                                 rf"'sma-left' and its 0\.1 mm wire, .*got {od}$"):
+            r1(f"wire_diameter_mm = 0.1\ncoil_diameter_mm = {od}")
+    with pytest.raises(RobotFileError, match=r"actuator 'sma-right' and its 0\.3 mm wire, 0\.3 \(a straight wire\) "
+                                             r"or at least 0\.6 .*got 0\.4 \(the default: give coil_diameter_mm\)$"):
+        r1("wire_diameter_mm = [0.1, 0.3]")
+    assert list(PhysicalPlant(r1("wire_diameter_mm = 0.1\ncoil_diameter_mm = 0.2")).resistance_ohm) == \
+        pytest.approx([0.80e-6 * (30 / 0.1) * math.pi * 0.1e-3 / (math.pi * (0.1e-3) ** 2 / 4)] * 2)  # 9.6 Ω
+
+
 def test_the_robot_files_coils_set_the_physical_plants_wire_and_transformation(tmp_path):
     """``[plant]`` wire_diameter_mm, coil_diameter_mm, coil_length_mm (per actuator) make each
     coil's resistance from its wire (ρ·L/A, NiTi 0.80 µΩ·m), a straight wire when the coil is as
@@ -547,8 +571,8 @@ def test_the_robot_files_coils_set_the_physical_plants_wire_and_transformation(t
     assert PhysicalPlant(hot).transformation_c() == [(95.0, 110.0)] * 2
     assert bent_at(load_robot(ROOT / "robots" / "paper-r1.toml")) > 20.0 and bent_at(hot) < 2.0
 
-    with pytest.raises(RobotFileError, match=r"plant\.coil_diameter_mm: expected at least the wire's diameter "
-                                             r"for actuator 'sma-left' \(0\.1 mm"):
+    with pytest.raises(RobotFileError, match=r"plant\.coil_diameter_mm: expected, for actuator 'sma-left' and its "
+                                             r"0\.1 mm wire, 0\.1 \(a straight wire\) or at least 0\.2 .*got 0\.05$"):
         r1("coil_diameter_mm = 0.05")
     with pytest.raises(RobotFileError, match=r"plant\.wire_diameter_mm\[2\]: expected a number in \(0, 2\] mm"):
         r1("wire_diameter_mm = [0.1, 0]")
