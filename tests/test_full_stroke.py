@@ -298,21 +298,23 @@ def test_the_table_plant_takes_a_staggered_stroke_step_as_the_matrix_transition_
     assert run.unexpected_transitions == 0
 
 
-def test_a_stroke_out_of_reach_in_a_state_the_matrix_enters_is_one_warning_line(tmp_path, caplog):
+@pytest.mark.parametrize("body", ["", "working_strain = 0.058\n"])
+def test_a_stroke_out_of_reach_in_a_state_the_matrix_enters_is_one_warning_line(tmp_path, caplog, body):
     """inchworm-3's middle limb raised alone bends to ≈ 31° on its 80 mm body: a stroke_deg of 40
     loaded without a word (only hold tops were checked against the reach), and the firmware heated
     that coil toward 40° at every raise until the limb stopped short (fric-3-like robot: 106 °C
     against 78 °C with a stroke in reach). One line names the limb, the state and the stroke that
-    fits; with that stroke, none."""
+    fits; with that stroke, none. A stiffer body (working_strain 0.058) reaches 30.1°: the stroke
+    that fits, 29.56°, was advised rounded up to 29.6, and that stroke was warned of again."""
     import logging
 
     text = (ROBOTS / "inchworm-3.toml").read_text(encoding="utf-8")
-    assert text.count('actuator = "sma-middle"\n') == 1
+    assert text.count('actuator = "sma-middle"\n') == 1 and text.rstrip().splitlines()[-1].startswith("cross_gain")
     path = tmp_path / "worm.toml"
 
     def warnings(stroke: float) -> list[str]:
-        path.write_text(text.replace('actuator = "sma-middle"\n', f'actuator = "sma-middle"\nstroke_deg = {stroke}\n'),
-                        encoding="utf-8")
+        path.write_text(text.replace('actuator = "sma-middle"\n', f'actuator = "sma-middle"\nstroke_deg = {stroke}\n')
+                        + body, encoding="utf-8")
         caplog.clear()
         with caplog.at_level(logging.WARNING, logger="proleg"):
             load_robot(path)
@@ -324,5 +326,5 @@ def test_a_stroke_out_of_reach_in_a_state_the_matrix_enters_is_one_warning_line(
     reach = float(lines[0].split("bends it to ")[1].split("°")[0])
     assert 28.0 < reach < 34.0, lines
     fits = float(lines[0].split("set stroke_deg to at most ")[1].split(",")[0])
-    assert fits == pytest.approx(reach - 0.5, abs=0.06)
+    assert fits == pytest.approx(reach - 0.5, abs=0.16)  # reach to the nearest tenth, the fit to the one below
     assert warnings(fits) == []

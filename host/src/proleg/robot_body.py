@@ -27,6 +27,7 @@ loaded, as warnings about the simulator and the file, not refusals (a real body 
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -114,6 +115,12 @@ def unreachable_levels(path: Path, limbs: list[Any], limb_actuators: list[int], 
 HOLD_TOP_CLEARANCE_DEG = 0.5
 
 
+def _at_most(x: float) -> str:
+    """``x`` to the tenth of a degree below it, as advice to write into the robot file: rounded
+    to the nearest, 30.06° printed 30.1, and that stroke (or margin) was warned of again."""
+    return f"{math.floor(x * 10.0 + 1e-9) / 10.0:.1f}"
+
+
 def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list[float], section: PlantSection,
                       hold_margin_deg: float) -> list[str]:
     """One line per limb whose top level it can reach but whose hold top it cannot with every
@@ -132,7 +139,7 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
         if getattr(lb, "stroke_deg", None) is not None or min(o, r) < entry or top + HOLD_TOP_CLEARANCE_DEG <= r:
             continue  # a stroke, a level out of reach (unreachable_levels' or the body's), or a hold top in reach
         fit = r - HOLD_TOP_CLEARANCE_DEG - 1.0 - entry
-        advice = (f"set control.hold_margin_deg to at most {max(fit, 0.0):.1f}" if fit >= 0.0 else
+        advice = (f"set control.hold_margin_deg to at most {_at_most(max(fit, 0.0))}" if fit >= 0.0 else
                   f"its top level is entered within {r - entry:.1f}° of its reach: lower psi_star_deg")
         out.append(f"{path}: limb {lb.name!r}: held raised, its coil heats until ψ ≥ {top:.1f}° (ψ* "
                    f"{lb.psi_star_deg[-1]:g}° + hysteresis/2 + control.hold_margin_deg {hold_margin_deg:g}° + 1°), "
@@ -528,7 +535,7 @@ def unreachable_strokes(path: Path, limbs: list[Any], actuators: list[str], sect
             continue
         fit = r - HOLD_TOP_CLEARANCE_DEG
         lowest = hold_top_deg(lb, hold_margin_deg)  # a stroke lies at least here (robot_limbs._check_strokes)
-        advice = (f"set stroke_deg to at most {fit:.1f}" if fit >= lowest else
+        advice = (f"set stroke_deg to at most {_at_most(fit)}" if float(_at_most(fit)) >= lowest else
                   f"no stroke from {lowest:.1f}° (1° above where it is held without one) is in reach there: "
                   f"leave stroke_deg out")
         out.append(f"{path}: limb {lb.name!r}: stroke_deg {lb.stroke_deg:g}° is out of reach in state "
