@@ -28,6 +28,7 @@ loaded, as warnings about the simulator and the file, not refusals (a real body 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -443,28 +444,25 @@ def warned_step(robot: Any, a: int, b: int) -> bool:
 Unreached = tuple[int, float, float]
 
 
-def unreachable_states(limbs: list[Any], actuators: list[str], section: PlantSection,
-                       table: Any) -> dict[int, tuple[Unreached, ...]]:
-    """States the matrix enters (an allowed transition into it from another state) in which
-    some raised limb cannot reach its level's entry edge (ψ* + hysteresis/2) on the physical
-    plant's body, even with the coil of every raised limb at full stroke and the others cold:
-    ``{state: ((limb, ψ° reached, ψ° needed), ...)}``. The most any drive of that state gives,
-    so no state is listed that some controller could reach. Empty for a body the model cannot
-    describe (``unreachable_levels`` says why) and past ``COUPLING_CHECK_MAX_STATES``."""
+def _raised_at_full_stroke(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
+                           keep: Callable[[tuple[int, ...]], bool]) -> list[tuple[int, tuple[int, ...], np.ndarray]]:
+    """``(state, levels, ψ° per limb)`` for each state the matrix enters whose levels ``keep``
+    keeps, with the coil of every raised limb at full stroke and the others cold: the most any
+    drive of that state bends each limb to on the physical plant's body. Empty for one limb,
+    for a body the model cannot describe (``curl_problem``) and past ``COUPLING_CHECK_MAX_STATES``."""
     from .states import limb_levels
 
     if len(limbs) < 2 or table.n_states > COUPLING_CHECK_MAX_STATES:
-        return {}  # one limb: unreachable_levels is the whole story
+        return []  # one limb: unreachable_levels is the whole story
     limb_act = [actuators.index(lb.actuator) for lb in limbs]
     geo = body_of(limb_act, len(actuators), section)
     if curl_problem(geo):
-        return {}
+        return []
     levels = tuple(lb.levels for lb in limbs)
-    entered = entered_states(table)
     rows, wanted = [], []
-    for s in entered:
-        want = limb_levels(s, levels)
-        if not any(want):
+    for s in entered_states(table):
+        want = tuple(limb_levels(s, levels))
+        if not keep(want):
             continue
         c = np.zeros(len(actuators))
         for i, k in enumerate(want):
@@ -473,10 +471,21 @@ def unreachable_states(limbs: list[Any], actuators: list[str], section: PlantSec
         rows.append(c)
         wanted.append((s, want))
     if not rows:
-        return {}
+        return []
     psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    return [(s, want, p) for (s, want), p in zip(wanted, psi)]
+
+
+def unreachable_states(limbs: list[Any], actuators: list[str], section: PlantSection,
+                       table: Any) -> dict[int, tuple[Unreached, ...]]:
+    """States the matrix enters (an allowed transition into it from another state) in which
+    some raised limb cannot reach its level's entry edge (ψ* + hysteresis/2) on the physical
+    plant's body, even with the coil of every raised limb at full stroke and the others cold:
+    ``{state: ((limb, ψ° reached, ψ° needed), ...)}``. The most any drive of that state gives,
+    so no state is listed that some controller could reach. Empty for a body the model cannot
+    describe (``unreachable_levels`` says why) and past ``COUPLING_CHECK_MAX_STATES``."""
     out: dict[int, tuple[Unreached, ...]] = {}
-    for (s, want), p in zip(wanted, psi):
+    for s, want, p in _raised_at_full_stroke(limbs, actuators, section, table, any):
         short = []
         for i, k in enumerate(want):
             need = limbs[i].psi_star_deg[k - 1] + limbs[i].hysteresis_deg / 2.0 if k > 0 else None
@@ -498,36 +507,17 @@ def unreachable_strokes(path: Path, limbs: list[Any], actuators: list[str], sect
     31° raised alone, its coil at 106 °C at every raise, and loaded without a word (30°: 78 °C).
     A limb whose top level is out of reach there is ``unreachable_states``' (an error of the
     gait check), not repeated here."""
-    from .states import limb_levels
-
     strokes = [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is not None]
-    if len(limbs) < 2 or not strokes or table.n_states > COUPLING_CHECK_MAX_STATES:
-        return []
-    limb_act = [actuators.index(lb.actuator) for lb in limbs]
-    geo = body_of(limb_act, len(actuators), section)
-    if curl_problem(geo):
+    if not strokes:
         return []
     levels = tuple(lb.levels for lb in limbs)
-    rows, wanted = [], []
-    for s in entered_states(table):
-        want = limb_levels(s, levels)
-        if not any(want[i] == levels[i] - 1 for i in strokes):
-            continue
-        c = np.zeros(len(actuators))
-        for i, k in enumerate(want):
-            if k > 0:
-                c[limb_act[i]] = 1.0
-        rows.append(c)
-        wanted.append((s, want))
-    if not rows:
-        return []
-    psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    raised = _raised_at_full_stroke(limbs, actuators, section, table,
+                                    lambda want: any(want[i] == levels[i] - 1 for i in strokes))
     out = []
     for i in strokes:
         lb = limbs[i]
         entry = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2.0
-        reached = [(float(p[i]), s) for (s, want), p in zip(wanted, psi)
-                   if want[i] == levels[i] - 1 and float(p[i]) >= entry]
+        reached = [(float(p[i]), s) for s, want, p in raised if want[i] == levels[i] - 1 and float(p[i]) >= entry]
         if not reached:
             continue
         r, s = min(reached)
