@@ -69,6 +69,9 @@ def test_sim_json_echoes_the_conditions_given_and_those_in_effect(capsys, tmp_pa
 
 @pytest.mark.parametrize("args, words", [
     (["--condition", "speed=3"], "condition 'speed': unknown key"),
+    # the robot's own body and coils are the robot file's: "unknown key" did not say where they go
+    (["--condition", "working_strain=0.03"], "condition 'working_strain': a key of the robot file's [plant] table only"),
+    (["--condition", "coil_diameter_mm=0.6"], "condition 'coil_diameter_mm': a key of the robot file's [plant] table"),
     (["--condition", "power=9"], "condition power: 9 is outside [0.2, 2] ×"),
     # "expected a number in ×" read oddly, "nan is outside" as if nan were a number
     (["--condition", "power=abc"], "condition power: expected a number (a factor, ×), got 'abc'"),

@@ -175,6 +175,9 @@ def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions 
             _once(given, key.strip(), val.strip(), item)
     fresh: dict[str, set[str]] = {}  # per key, the names these items set (not ``base``)
     for key, val in pairs:
+        if key in PLANT_KEYS and key not in KEYS:  # length_mm, working_strain, the coils' wire, as_c..mf_c
+            raise SimError(f"condition {key!r}: a key of the robot file's [plant] table only (the robot's body, "
+                           f"coils or table plant: docs/robot-file.md), not a run condition (one of: {', '.join(KEYS)})")
         if key not in KEYS:
             raise SimError(f"condition {key!r}: unknown key (expected one of: {', '.join(KEYS)})")
         spec = KEYS[key]
