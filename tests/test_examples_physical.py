@@ -472,6 +472,9 @@ def test_the_body_working_strain_is_a_robot_file_key_the_physical_plant_bends_by
     with caplog.at_level(logging.WARNING, logger="proleg"):
         r1("working_strain = 0.005")
     assert any("psi_star_deg" in rec.getMessage() for rec in caplog.records), [r.getMessage() for r in caplog.records]
+    # and names the key the lab set, not only length_mm (it said "or give [plant] length_mm")
+    assert all("[plant] (length_mm, working_strain)" in rec.getMessage() for rec in caplog.records
+               if "its top level needs" in rec.getMessage()), [r.getMessage() for r in caplog.records]
 
 
 def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):

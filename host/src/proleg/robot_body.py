@@ -106,7 +106,7 @@ def unreachable_levels(path: Path, limbs: list[Any], limb_actuators: list[int], 
             out.append(head + f"in the model that coil sits at limb {limbs[home].name!r} (one [[actuator]] is one "
                               f"coil, at the first limb that names it); give {lb.name!r} a coil of its own")
         else:
-            out.append(head + "lower psi_star_deg or give [plant] length_mm")
+            out.append(head + "lower psi_star_deg, or describe the body in [plant] (length_mm, working_strain)")
     return out
 
 
@@ -532,7 +532,8 @@ def unreachable_strokes(path: Path, limbs: list[Any], actuators: list[str], sect
                    f"{table.label(s)}: every raised limb's coil at full stroke bends it to {r:.1f}° on the "
                    f"simulated {section.length_mm:g} mm body, so at every raise there its coil heats past its "
                    f"transformation until the limb stops climbing short of its stroke; {advice}, mark the "
-                   f"transitions into {table.label(s)} \"x\", or give [plant] length_mm")
+                   f"transitions into {table.label(s)} \"x\", or describe the body in [plant] (length_mm, "
+                   f"working_strain)")
     return out
 
 
