@@ -509,10 +509,13 @@ def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):
     stickier = travel(r1(f"[{{ mu_static = 2.0, mu_kinetic = 1.6 }}, {pad(HARD)}]"))
     assert abs(stickier - d1) > 0.05, (stickier, d1)  # the numbers are used, not a name's
     assert r1('["soft", { mu_static = 2, mu_kinetic = 1.5 }]').limbs[0].friction == ("soft", (2.0, 1.5))
-    for bad, said in (("[\"soft\", { mu_static = 0.3, mu_kinetic = 0.4 }]", r"friction\[1\]\.mu_kinetic: expected at most mu_static \(0\.3\), got 0\.4"),
-                      ("[\"soft\", { mu_static = 0, mu_kinetic = 0 }]", r"friction\[1\]\.mu_static: expected a number in \(0, 5\]"),
-                      ("[\"soft\", { mu = 1 }]", r"friction\[1\]: expected the keys mu_static and mu_kinetic"),
-                      ("[\"soft\", \"glue\"]", r"friction\[1\]: expected a material \(soft, hard\)")):
+    # counted from 1 as every list of the robot file is ("friction[1]" named the second, level 1), with the level
+    for bad, said in (("[\"soft\", { mu_static = 0.3, mu_kinetic = 0.4 }]",
+                       r"limb 'left': friction\[2\]\.mu_kinetic \(level 1\): expected at most mu_static \(0\.3\), got 0\.4$"),
+                      ("[\"soft\", { mu_static = 0, mu_kinetic = 0 }]",
+                       r"friction\[2\]\.mu_static \(level 1\): expected a number in \(0, 5\]"),
+                      ("[{ mu = 1 }, \"hard\"]", r"friction\[1\] \(level 0\): expected the keys mu_static and mu_kinetic"),
+                      ("[\"soft\", \"glue\"]", r"friction\[2\] \(level 1\): expected a material \(soft, hard\)")):
         with pytest.raises(RobotFileError, match=said):
             r1(bad)
 

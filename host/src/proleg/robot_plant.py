@@ -411,25 +411,29 @@ def limb_friction(path: Path, where: str, value: Any, levels: int) -> str | tupl
         raise RobotFileError(f"{path}: {where}: friction: expected D1, D2 or a list of {levels} materials "
                              f"(one per level, level 0 first), each {' or '.join(FRICTION_MATERIALS)} or "
                              f"{{ mu_static = …, mu_kinetic = … }}, got {toml_text(value)}")
-    return tuple(_pad(path, f"{where}: friction[{k}]", m) for k, m in enumerate(value))
+    return tuple(_pad(path, f"{where}: friction[{k + 1}]", k, m) for k, m in enumerate(value))
 
 
-def _pad(path: Path, where: str, m: str | dict) -> str | tuple[float, float]:
+def _pad(path: Path, field: str, level: int, m: str | dict) -> str | tuple[float, float]:
+    """Level ``level``'s material, ``field`` its place in the file (counted from 1, as every list
+    of the robot file is; the level, from 0, beside it)."""
+    at = f"(level {level})"
     if isinstance(m, str):
         if m not in FRICTION_MATERIALS:
-            raise RobotFileError(f"{path}: {where}: expected a material ({', '.join(FRICTION_MATERIALS)}) or "
+            raise RobotFileError(f"{path}: {field} {at}: expected a material ({', '.join(FRICTION_MATERIALS)}) or "
                                  f"{{ mu_static = …, mu_kinetic = … }}, got {toml_text(m)}")
         return m
     if set(m) != {"mu_static", "mu_kinetic"}:
-        raise RobotFileError(f"{path}: {where}: expected the keys mu_static and mu_kinetic, got {toml_text(m)}")
+        raise RobotFileError(f"{path}: {field} {at}: expected the keys mu_static and mu_kinetic, got {toml_text(m)}")
     mu = {}
     for k in ("mu_static", "mu_kinetic"):
         v = m[k]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= PAD_MU_MAX:
-            raise RobotFileError(f"{path}: {where}.{k}: expected a number in (0, {PAD_MU_MAX:g}], got {toml_text(v)}")
+            raise RobotFileError(f"{path}: {field}.{k} {at}: expected a number in (0, {PAD_MU_MAX:g}], "
+                                 f"got {toml_text(v)}")
         mu[k] = float(v)
     if mu["mu_kinetic"] > mu["mu_static"]:  # a contact that has started to slide grips less (docs/plant.md)
-        raise RobotFileError(f"{path}: {where}.mu_kinetic: expected at most mu_static ({mu['mu_static']:g}), "
+        raise RobotFileError(f"{path}: {field}.mu_kinetic {at}: expected at most mu_static ({mu['mu_static']:g}), "
                              f"got {mu['mu_kinetic']:g}")
     return mu["mu_static"], mu["mu_kinetic"]
 
