@@ -85,8 +85,10 @@ def test_a_multi_level_limb_takes_one_material_per_level(tmp_path):
 
 @pytest.mark.parametrize("values, words", [
     (('"D3"', '"D1"'), "limb 'left': friction: expected one of D1, D2 or a list of materials (soft, hard), got 'D3'"),
-    (('["soft"]', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials from soft, hard"),
-    (('["soft", "rubber"]', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials"),
+    (('["soft"]', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials (one per level, level 0 "
+                           "first), each soft or hard or { mu_static = …, mu_kinetic = … }, got ['soft']"),
+    (('["soft", "rubber"]', '"D1"'), "limb 'left': friction[2] (level 1): expected a material (soft, hard) or "
+                                     "{ mu_static = …, mu_kinetic = … }, got 'rubber'"),
     (('1', '"D1"'), "limb 'left': friction: expected D1, D2 or a list of 2 materials"),
     (('"D1"', None), "limb 'right': friction: expected on every limb or on none"),
 ])
