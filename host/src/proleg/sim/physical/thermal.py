@@ -11,11 +11,12 @@ sensible part exactly (exponential step), lets the hysteresis model move α, the
 m_c L Δα out of (or puts it back into) the coil's temperature. Coil geometry gives the numbers:
 
 * wire length = turns × π × mean coil diameter, turns = coil length / wire diameter
-  (close-wound helix); R = ρ L / (π d²/4); C = ρ_NiTi · volume · c_p.
+  (close-wound helix; a straight wire, as wide as its coil, is its coil length);
+  R = ρ L / (π d²/4); C = ρ_NiTi · volume · c_p.
 * convection: Churchill & Chu (1975) correlation for a horizontal cylinder in still air,
   Nu = {0.60 + 0.387 Ra^(1/6) / [1 + (0.559/Pr)^(9/16)]^(8/27)}², applied to the bare wire,
   times the fraction of the wire surface a close-wound coil exposes to the air (*estimate*
-  0.6), plus linearised radiation 4 ε σ T³ (ε ≈ 0.3, oxidised NiTi, *estimate*).
+  0.6; a straight wire exposes all of it), plus linearised radiation 4 ε σ T³ (ε ≈ 0.3, oxidised NiTi, *estimate*).
 * conduction coil → body through the channel it lies in: G_cb (*estimate* 1.5 mW/K).
 """
 
