@@ -162,6 +162,26 @@ def test_a_step_the_durations_say_outlasts_the_state_timeout_is_one_expect_a_fau
         assert "timeout" not in kinds(robot, "00", "10", "11", "01", "00")
 
 
+def test_an_entry_step_from_rest_that_outlasts_the_state_timeout_is_a_timeout_problem_too(tmp_path):
+    """The firmware's sequencer times the entry path's steps as it times the gait's (seq.c): R1
+    whose 00 -> 10 takes 9 s, against state_timeout_ms = 8000, enters gait 10 11 01 by that step
+    and stops there (STATE_TIMEOUT), and the check, which timed only the gait's own steps, let it
+    through. Entered by a quick step (from 01), or with the gait through 00 and no slow step, none."""
+    text = (ROBOTS / "paper-r1.toml").read_text()
+    assert "state_timeout_ms = 8000" in text and text.count("  [ 0,  0,  0,  0],\n]\n") == 1
+    slow = text.replace("  [ 0,  0,  0,  0],\n]\n", "  [ 0,  0,  0,  0],\n]\n"
+                        "durations_s = [[0, 1, 9, 1], [1, 0, 1, 1], [1, 1, 0, 1], [1, 1, 1, 0]]\n")
+    robot = robot_from(tmp_path, slow)
+    assert entry_path(robot, idx(robot, "10", "11", "01")).states == tuple(idx(robot, "00", "10"))
+    problems = [p for p in gait_problems(robot, idx(robot, "10", "11", "01")) if p.kind == "timeout"]
+    assert [p.message for p in problems] == [
+        "gait 10 11 01 10: its entry from rest's step 00 -> 10 takes 9 s (the robot file's durations), not under "
+        "safety.state_timeout_ms = 8000: the firmware stops it (STATE_TIMEOUT); raise state_timeout_ms or check "
+        "the durations"] and problems[0].severity == "error"
+    assert "timeout" not in kinds(robot, "01", "11", "01")  # entered by 00 -> 01, 1 s
+    assert "timeout" not in kinds(robot, "00", "01", "11", "10")
+
+
 def test_a_gait_through_a_state_the_body_cannot_hold_is_an_unholdable_error_the_build_says_to_expect(tmp_path):
     """inchworm-3 with the middle ψ* at 10°: in 101 the raised tail and head lift the middle pad
     to ≈ 14.6° at their hold peaks, past its 11° edge. Loading warned about the state, but the gaits the firmware

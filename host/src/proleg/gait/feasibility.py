@@ -40,7 +40,8 @@ and lets them fall when it cools, so:
 * **Step time vs state timeout** — the firmware latches ``STATE_TIMEOUT`` when a step's
   target is demanded ``safety.state_timeout_ms`` without being reached (docs/safety.md): a
   step the robot file says takes that long or longer (``durations_s``, a CSV's ``duration_s``
-  or ``default_duration_s``) is cut (error ``timeout``). Without durations nothing is assumed.
+  or ``default_duration_s``), the entry path's from rest included, is cut (error ``timeout``).
+  Without durations nothing is assumed.
 * **Entry** — the firmware starts from rest (every limb at level 0, state 0) and must reach
   the gait over allowed transitions that the hardware can make (``entry_path``); no such
   path is an error (``no-entry``).
@@ -288,25 +289,35 @@ def on_time_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
 
 
 def timeout_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
-    """Each step the robot file's durations say takes ``safety.state_timeout_ms`` or longer: the
+    """Each step the robot file's durations say takes ``safety.state_timeout_ms`` or longer, the
+    steps of the entry path from rest included (the sequencer times them alike: seq.c): the
     firmware stops it with STATE_TIMEOUT. R1 with ``default_duration_s = 0.9`` and
-    ``state_timeout_ms = 500`` built without a word and faulted 0.6 s after START."""
+    ``state_timeout_ms = 500`` built without a word and faulted 0.6 s after START; gait 10 11 01
+    of an R1 whose 00 -> 10 takes 9 s (against 8 s) was let through, its entry being that step."""
     table = robot.transitions
     if table.duration is None:
         return []
     durations = {(int(a), int(b)): float(d) for a, b, d in zip(table.src, table.dst, table.duration)}
     timeout_ms = robot.safety.state_timeout_ms
-    long = [(durations[(a, b)], k, a, b) for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)
+    steps = [(f"step {k} ({table.label(a)} -> {table.label(b)})", a, b)
+             for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)]
+    try:
+        entry = entry_path(robot, cycle).states
+    except GaitError:
+        entry = ()  # no-entry's problem
+    steps += [(f"its entry from rest's step {table.label(a)} -> {table.label(b)}", a, b)
+              for a, b in zip(entry, entry[1:])]
+    long = [(durations[(a, b)], i, what) for i, (what, a, b) in enumerate(steps)
             if 1000.0 * durations.get((a, b), 0.0) >= timeout_ms]
     if not long:
         return []
-    d, k, a, b = min(long, key=lambda x: (-x[0], x[1]))  # the longest step, the first of equals
+    d, _, what = min(long, key=lambda x: (-x[0], x[1]))  # the longest step, the first of equals
     more = f" (and {len(long) - 1} more of its steps)" if len(long) > 1 else ""
     return [Problem(
         "timeout", "error",
-        f"gait {_name(robot, cycle + cycle[:1])}: step {k} ({table.label(a)} -> {table.label(b)}) takes {d:g} s "
-        f"(the robot file's durations){more}, not under safety.state_timeout_ms = {timeout_ms}: the firmware "
-        f"stops it (STATE_TIMEOUT); raise state_timeout_ms or check the durations",
+        f"gait {_name(robot, cycle + cycle[:1])}: {what} takes {d:g} s (the robot file's durations){more}, not "
+        f"under safety.state_timeout_ms = {timeout_ms}: the firmware stops it (STATE_TIMEOUT); raise "
+        f"state_timeout_ms or check the durations",
     )]
 
 
