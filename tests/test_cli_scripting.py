@@ -413,6 +413,11 @@ def test_load_gait_says_what_the_gait_check_finds_as_proleg_build_does(capsys, t
     assert "STATE_TIMEOUT" in err and err.count("STATES:") == 1, err
     code, out, err = run(capsys, "load-gait", "paper-r1", "--sim", "00,10,11,01")
     assert code == 0 and "warning" not in err, err
+    # a loaded gait has no entry path from rest: a slow step into it from 00 is no step of it
+    path.write_text(text.replace("  [ 0,  0,  0,  0],\n]\n", "  [ 0,  0,  0,  0],\n]\n"
+                                 "durations_s = [[0, 1, 9, 1], [1, 0, 1, 1], [1, 1, 0, 1], [1, 1, 1, 0]]\n"))
+    code, out, err = run(capsys, "load-gait", str(path), "--sim", "10,11,01")
+    assert code == 0 and "STATE_TIMEOUT" not in err, err
 
 
 def test_set_param_by_name_on_the_simulated_board(capsys):

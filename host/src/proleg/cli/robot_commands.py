@@ -357,8 +357,8 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
         log.warning("warning: %s", line)
     # what proleg build says of its own gaits: a shared coil moving its limbs apart, a state out of
     # reach, a coil kept on past max_on_ms... (a loaded gait has no entry path: rest_start_warning's)
-    for p in gait_problems(robot, states):
-        if p.severity == "error" and p.kind != "no-entry":
+    for p in gait_problems(robot, states, from_rest=False):
+        if p.severity == "error":
             why = "the robot cannot make it" if p.kind in CANNOT_MAKE else "expect a fault"
             log.warning("warning: STATES: %s: %s", why, p.message)
     with open_client(args, args.robot, robot=robot) as client:

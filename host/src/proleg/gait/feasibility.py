@@ -288,7 +288,7 @@ def on_time_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
     return out
 
 
-def timeout_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
+def timeout_problems(robot: "Robot", cycle: list[int], from_rest: bool = True) -> list[Problem]:
     """Each step the robot file's durations say takes ``safety.state_timeout_ms`` or longer, the
     steps of the entry path from rest included (the sequencer times them alike: seq.c): the
     firmware stops it with STATE_TIMEOUT. R1 with ``default_duration_s = 0.9`` and
@@ -302,7 +302,7 @@ def timeout_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
     steps = [(f"step {k} ({table.label(a)} -> {table.label(b)})", a, b)
              for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)]
     try:
-        entry = entry_path(robot, cycle).states
+        entry = entry_path(robot, cycle).states if from_rest else ()
     except GaitError:
         entry = ()  # no-entry's problem
     steps += [(f"its entry from rest's step {table.label(a)} -> {table.label(b)}", a, b)
@@ -321,8 +321,10 @@ def timeout_problems(robot: "Robot", cycle: list[int]) -> list[Problem]:
     )]
 
 
-def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
-    """Every problem running ``states`` (a closed or open cycle of state indices) on ``robot``."""
+def gait_problems(robot: "Robot", states: Sequence[int], from_rest: bool = True) -> list[Problem]:
+    """Every problem running ``states`` (a closed or open cycle of state indices) on ``robot``;
+    with ``from_rest`` False, none of its entry path from rest (a gait loaded by ``load-gait``
+    has none: the firmware starts it where the robot stands)."""
     cycle = _open(states)
     gait = _name(robot, cycle + cycle[:1])
     out = []
@@ -346,7 +348,9 @@ def gait_problems(robot: "Robot", states: Sequence[int]) -> list[Problem]:
     if stuck:
         out.append(_blocked_problem(robot, gait, stuck))
     out += on_time_problems(robot, cycle)
-    out += timeout_problems(robot, cycle)
+    out += timeout_problems(robot, cycle, from_rest)
+    if not from_rest:
+        return out
     try:
         entry_path(robot, cycle)
     except GaitError as e:
