@@ -139,7 +139,7 @@ _KEYS = (
     PlantKey("wire_diameter_mm", "mm", 0.0, 2.0, 0.1, "actuator", open_lo=True, plants=PHYS,
              doc="the NiTi wire's diameter"),
     PlantKey("coil_diameter_mm", "mm", 0.0, 20.0, 0.4, "actuator", open_lo=True, plants=PHYS,
-             doc="the coil's outer diameter; the wire's own diameter for a straight wire"),
+             doc="the coil's outer diameter, at least twice the wire's; the wire's own for a straight wire"),
     PlantKey("coil_length_mm", "mm", 0.0, 1000.0, 30.0, "actuator", open_lo=True, plants=PHYS,
              doc="the coil's installed length (a straight wire's length)"),
     PlantKey("working_strain", "", 0.0, 0.2, DEFAULT_WORKING_STRAIN, open_lo=True, plants=PHYS,
