@@ -477,6 +477,28 @@ def test_the_body_working_strain_is_a_robot_file_key_the_physical_plant_bends_by
                if "its top level needs" in rec.getMessage()), [r.getMessage() for r in caplog.records]
 
 
+def test_a_body_too_soft_for_the_model_is_filed_under_working_strain_not_length_mm(tmp_path, caplog):
+    """R1 with working_strain 0.2 and its default 80 mm body: a coil bends its span by 275°, past
+    what the model describes. The load warning and the physical plant's refusal both named
+    plant.length_mm, a key the file does not give; they name the key it gave, and say which way
+    each key goes. A body given too long is still length_mm's."""
+    from proleg.errors import SimError
+
+    src = (ROOT / "robots" / "paper-r1.toml").read_text()
+    path = tmp_path / "r1.toml"
+    path.write_text(src + "\n[plant]\nworking_strain = 0.2\n")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    warned = [r.getMessage() for r in caplog.records if "curl over itself" in r.getMessage()]
+    assert len(warned) == 1 and f"{path}: plant.working_strain: coil 1 spans 48 mm" in warned[0], warned
+    assert "a shorter body ([plant] length_mm) or a stiffer one (a smaller working_strain than 0.2)" in warned[0]
+    with pytest.raises(SimError, match=r"r1\.toml: plant\.working_strain: coil 1 spans 48 mm .* curl over itself"):
+        PhysicalPlant(robot)
+    path.write_text(src + "\n[plant]\nlength_mm = 1000\nworking_strain = 0.05\n")
+    with pytest.raises(SimError, match=r"r1\.toml: plant\.length_mm: coil 1 spans"):
+        PhysicalPlant(load_robot(path))
+
+
 def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):
     """``[[limb]] friction`` takes a pad's measured coefficients in place of a material name
     (the paper's D1/D2 or the materials' coefficients): the soft and hard pads' own numbers

@@ -31,6 +31,7 @@ the robot-file check compares with the limb's critical angles (``proleg.robot``)
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,10 +107,17 @@ def curl_problem(geo: BodyGeometry) -> str:
         if bend > MAX_BEND_DEG:
             return (f"coil {j + 1} spans {b - a:.0f} mm of the {geo.length_mm:g} mm body and bends it by "
                     f"{bend:.0f}° at full stroke, past the {MAX_BEND_DEG:.0f}° the physical plant models "
-                    f"(the body would curl over itself): give [plant] length_mm a shorter body (or "
-                    f"working_strain, {geo.working_strain:g}, a stiffer one), or the robot more limbs and coils "
+                    f"(the body would curl over itself): give a shorter body ([plant] length_mm) or a stiffer one "
+                    f"(a smaller working_strain than {geo.working_strain:g}), or the robot more limbs and coils "
                     f"along it")
     return ""
+
+
+def curl_key(given: Collection[str]) -> str:
+    """The ``[plant]`` key a ``curl_problem`` line is filed under: ``working_strain`` where the
+    file gives it and not ``length_mm`` (a body too soft, not too long: R1 with working_strain
+    0.2 was told of plant.length_mm, a key it does not have), else ``length_mm``."""
+    return "working_strain" if "working_strain" in given and "length_mm" not in given else "length_mm"
 
 
 def own_reach_deg(geo: BodyGeometry, limb_actuators: list[int]) -> list[float]:

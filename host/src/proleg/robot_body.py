@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from .body import (DEFAULT_OVERLAP_MM, BodyGeometry, Shape, body_geometry, coil_homes, coil_reach_deg, curl_problem,
-                   own_reach_deg)
+from .body import (DEFAULT_OVERLAP_MM, BodyGeometry, Shape, body_geometry, coil_homes, coil_reach_deg, curl_key,
+                   curl_problem, own_reach_deg)
 from .robot_plant import PlantSection
 
 
@@ -60,8 +60,8 @@ def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: 
         return []
     reach = body_reach(limb_actuators, len(actuators), section)
     if isinstance(reach, str):
-        return [f"{path}: plant.length_mm: {reach} (gait and build go on; the physical plant of `proleg sim` "
-                "and `learn --sim` refuses such a body, `--plant table` runs it)"]
+        return [f"{path}: plant.{curl_key(section.given)}: {reach} (gait and build go on; the physical plant of "
+                "`proleg sim` and `learn --sim` refuses such a body, `--plant table` runs it)"]
     own, full = reach
     return (unreachable_levels(path, limbs, limb_actuators, len(actuators), own, section) +
             unreachable_holds(path, limbs, own, full, section, hold_margin_deg))

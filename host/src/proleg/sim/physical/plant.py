@@ -35,7 +35,7 @@ import numpy as np
 from ...errors import SimError
 from ...states import limb_levels
 from . import materials as mat
-from ...body import Shape, body_geometry, curl_problem
+from ...body import Shape, body_geometry, curl_key, curl_problem
 from .coils import Coils
 from .conditions import Conditions, coil_of_limb, conditions_from_section
 from .friction import mu_at, solve_translation, solve_two
@@ -94,7 +94,8 @@ class PhysicalPlant:
         geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, strain)
         curl = curl_problem(geo)
         if curl:
-            raise SimError(f"{getattr(robot, 'path', robot.name)}: plant.length_mm: {curl}")
+            given = getattr(getattr(robot, "plant", None), "given", ())
+            raise SimError(f"{getattr(robot, 'path', robot.name)}: plant.{curl_key(given)}: {curl}")
         self.geometry = geo
         self._shape = Shape(geo)
 
