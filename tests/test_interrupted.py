@@ -138,7 +138,7 @@ def test_a_real_sigint_between_opening_a_recording_and_keeping_it_loses_nothing(
 def test_an_interrupted_build_leaves_nothing_and_says_so(capsys, monkeypatch, tmp_path):
     parent = empty_build_dir(tmp_path)
 
-    def make(project, jobs):  # Ctrl-C while the compiler runs
+    def make(project, jobs, *rest):  # Ctrl-C while the compiler runs
         raise KeyboardInterrupt
 
     monkeypatch.setattr(build_mod, "_make", make)

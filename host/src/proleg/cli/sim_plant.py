@@ -155,7 +155,7 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         warned = any(warned_step(robot, a, b) or warned_step(robot, b, a) for a, b in not_made)
         why = ("see the warnings when the robot file was loaded" if warned else
                "no warning when the robot file was loaded foresaw it: the load checks pose each state at rest "
-               "with its raised limbs held just past ψ*, and a held coil heats further; proleg sim "
+               "with its raised limbs at their hold edge, and a held coil may overshoot it; proleg sim "
                f"{args.robot} --record run.csv shows each limb's ψ")
         print(f"'?': allowed, but not made on the simulated body ({len(not_made)} of "
               f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached ({why})")
