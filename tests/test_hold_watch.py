@@ -91,3 +91,23 @@ def test_a_worn_far_end_that_stops_inside_its_band_lets_the_gait_go_on_cool():
     assert out.fault == "", out
     assert out.coil_peak_c < claim.OVERHEAT_C, out
     assert out.completed and out.speed_mm_s > 0.2, out
+
+
+def test_a_worn_one_actuator_r1_does_not_heat_its_coil_past_its_transformation():
+    """`proleg check robots/paper-r1-one-actuator.toml --rows 30 --seed 4`, row 21: its one coil,
+    worn by 14,758 cycles, bends its own (left) end to 50° and lifts the far end through the body
+    only to its band's upper edge; the far end then creeps by tenths, so the hold watch (0.4° in
+    320 ms) cut the coil only 0.75 s after its own end had stopped: 136 °C at the drive duty,
+    then STATE_TIMEOUT. The coil-wide knee sees its own end stop: at most the hold duty from
+    there. The far end's reach is still marginal (it reaches its level in some cycles, not in
+    others), so the robot walks a few cycles and stops on the state timeout, its coil cool."""
+    robot = load_robot(robots_dir() / "paper-r1-one-actuator.toml")
+    point = claim.GridPoint("seed 4 row 21", (), "random",
+                            ("fatigue_cycles=14758", "mass_g=4.1", "imu_offset_deg=right:-4.0"), ())
+    assert claim.idealised_walk(robot, point).possible
+    out = claim.feedback_run(robot, point, duration_s=40.0)
+    assert out.coil_peak_c < claim.OVERHEAT_C - 10, out  # before: 136 °C
+    assert out.displacement_mm > 5.0, out  # it walked (+12 mm) before it stopped
+    if not out.completed:  # a clean stop: a fault of the firmware's, the coil cooling
+        assert out.fault == "STATE_TIMEOUT", out
+        assert out.coil_max_end_c < 60, out

@@ -437,6 +437,25 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
         }
     }
 #endif
+#if KNEE_COIL
+    /* safety: the coil-wide knee (ctl.h, CTL_KNEE_MS). A coil asked for the drive duty, by
+     * whichever limb, is watched through every limb on it; once one of them, seen moving fast
+     * in this heat, stops, the coil is through its transformation and kept at the hold duty
+     * for the rest of the robot step (or until that limb drops a level: stall_watch). The
+     * one-actuator R1 worn by 14,758 cycles: its coil bent its own (left) end to 50.4° and
+     * stopped, and was heated on at the drive duty for the right end, which it lifts only
+     * through the body, creeping by tenths inside its band: 0.75 s, to 136 °C, before the hold
+     * watch cut it (docs/control.md, "The knee"). A limb's own want is left as it is, so the
+     * reach and hold watches still see it heating and cut or settle it as before, from a coil
+     * that no longer heats past its transformation. */
+    for (i = 0; i < CFG_N_LIMBS; i++) {
+        uint8_t a = ctl_limb_actuator(i);
+        if (psi_level(i) != PSI_UNKNOWN &&
+            stall_knee(i, (uint8_t)(want[a] >= WANT_HEAT && !sma_cooling(a))) && want[a] >= WANT_HEAT) {
+            want[a] = WANT_HOLD;
+        }
+    }
+#endif
 #if SEQ_CLOCK_PAUSE
     if (ctl_look == FALL_LOOK) {
         fall_down = stall_fall_watch(target);

@@ -164,7 +164,17 @@
  *   supply's slow climb, which reaches no dangerous temperature, is left to the hover clock
  *   as before; under IMU noise (1.5° RMS, a fifth of it smoothed) an 80 ms gain is ±0.4°;
  * - a coil held at the hold duty or off meanwhile starts over: heated again from below As
- *   it gains nothing for its dead time (0.15-0.6 s), which is no knee. */
+ *   it gains nothing for its dead time (0.15-0.6 s), which is no knee.
+ * Hold-watch builds (CFG_HOLD_WATCH, no strokes) carry it for the coil (stall.h KNEE_COIL):
+ * every limb on a coil asked for the drive duty is watched, whichever limb asks, and the coil,
+ * once spent, gets at most the hold duty until the robot's next step (or until that limb drops
+ * a level: its coil has cooled back through its transformation). The same constants fit: the
+ * one-actuator R1's coil bends its own end 60-80°/s at 0.8 duty (5-6° a window) and stops dead
+ * past Af, while the far end it lifts through the body moves ≈ 30°/s (2.4° a window, never
+ * armed by itself) and crept on by tenths: heated for it, the coil reached 136 °C (worn by
+ * 14,758 cycles; docs/plant.md, "Off the grid"). inchworm-3's and caterpillar-4's coils at 0.6
+ * duty bend their ends ≈ 40°/s, under the 50°/s that arms it: there it rarely arms, and the
+ * reach and hold watches bound their heats as before. */
 #define CTL_KNEE_MS 80u
 #define CTL_KNEE_FAST_CDEG 400
 #define CTL_KNEE_SHIFT 3

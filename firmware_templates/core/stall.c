@@ -71,6 +71,16 @@ static uint8_t climbing(uint8_t i, ctl_limb_t *c)
     return ctl_look == 0u && gained(i, c);
 }
 
+/* A limb climbing to its stroke on its top level has stopped after CTL_CLIMB_STOP_MS without a
+ * gain, not a hover time (ctl.h); a hover time while another limb in step waits for it (its
+ * wait takes the help of its coil away: R1 at full strokes at power 0.5 stopped at 36° of 76°). */
+#define CLIMB_STOP(i, c, level) ((c)->climb && STROKE(i) && TOP(i, level) && !ctl_waited)
+#else
+#define climbing(i, c) 0
+#define CLIMB_STOP(i, c, level) 0
+#endif
+
+#if KNEE_WATCH
 /* Knee watch (ctl.h, CTL_KNEE_MS). Its own look in CTL_REACH_EVERY ticks (KNEE_LOOK), not the
  * climb's or the fall watch's: at most one more atan2 a limb in a tick. */
 #define KNEE_LOOK (CTL_REACH_EVERY / 4u)
@@ -108,6 +118,7 @@ uint8_t stall_knee(uint8_t i, uint8_t heated)
         c->fast = g;
     } else if (c->fast >= CTL_KNEE_FAST_CDEG && g < (int16_t)(c->fast >> CTL_KNEE_SHIFT)) {
         c->spent = 1;
+#ifdef CFG_LIMB_STROKE_CDEG
         if (c->climb && psi_level(i) == c->target) {
             /* on its top level: stopped short of its stroke, as the hover clock would say
              * (stall_watch), held where it stopped, and the others in step climb no further */
@@ -119,17 +130,10 @@ uint8_t stall_knee(uint8_t i, uint8_t heated)
             c->ticks = 0;
         }
         c->climb = 0; /* below its band: no longer the lead, nor waited for; held at the hold duty */
+#endif
     }
     return c->spent;
 }
-
-/* A limb climbing to its stroke on its top level has stopped after CTL_CLIMB_STOP_MS without a
- * gain, not a hover time (ctl.h); a hover time while another limb in step waits for it (its
- * wait takes the help of its coil away: R1 at full strokes at power 0.5 stopped at 36° of 76°). */
-#define CLIMB_STOP(i, c, level) ((c)->climb && STROKE(i) && TOP(i, level) && !ctl_waited)
-#else
-#define climbing(i, c) 0
-#define CLIMB_STOP(i, c, level) 0
 #endif
 
 /* Reach watch (ctl.h, CTL_REACH_MS) of limb i, rising alone with its coil heating: 1 once
@@ -191,6 +195,17 @@ void stall_watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int1
         psi_mark(i, &c->fall_low); /* the step's fall is measured from here, no drop yet */
         c->fall_quiet = TICKS(CTL_FALL_PROGRESS_MS);
 #endif
+#if KNEE_COIL
+        {
+            /* the robot's next step: every coil is watched afresh (the stroke builds' rule, ctl.c);
+             * a coil heated in it starts from its dead time, a fast window of its own first */
+            uint8_t j;
+            for (j = 0; j < CFG_N_LIMBS; j++) {
+                ctl_limb[j].spent = 0;
+                ctl_limb[j].knee_n = 0;
+            }
+        }
+#endif
     }
     if (level != c->level) {
         c->ticks = 0; /* a new level: the hover and stall clocks restart */
@@ -201,6 +216,9 @@ void stall_watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int1
             c->still = NOT_SEEN; /* dropped from where the hold watch kept it: its rise back is watched afresh */
 #if PSI_IN_LEVEL
             c->risen = 0;
+#endif
+#if KNEE_COIL
+            c->spent = 0; /* its coil cooled back through its transformation: its rise back may heat it */
 #endif
         }
 #if CTL_HELD_UP

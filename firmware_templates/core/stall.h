@@ -35,6 +35,19 @@
 /* The hold watch (ctl.h, CFG_HOLD_WATCH): in builds with the reach watch, where the robot's
  * body leaves a worn coil short of some limb's hold top. */
 #define HOLD_WATCH (REACH_WATCH && CFG_HOLD_WATCH)
+/* The knee watch (ctl.h, CTL_KNEE_MS). Stroke builds watch each limb the step raises to its
+ * stroke while its own want heats its coil (ctl.c). Hold-watch builds watch the coil: every
+ * limb whose coil is asked for the drive duty, whichever limb asks (KNEE_COIL, ctl.c): a coil
+ * shared by several limbs (the one-actuator R1's, or a run-time map's) is heated for a limb it
+ * lifts only through the body, while the end it bends itself shows its transformation. Other
+ * builds (R1, R2, R3) carry no knee watch. */
+#ifdef CFG_LIMB_STROKE_CDEG
+#define KNEE_WATCH 1
+#define KNEE_COIL 0
+#else
+#define KNEE_WATCH HOLD_WATCH
+#define KNEE_COIL HOLD_WATCH
+#endif
 /* CTL_REACH_MS in looks of the reach watch, one every CTL_REACH_EVERY ticks (250 at 10 kHz) */
 #define REACH_LOOKS ((TICKS(CTL_REACH_MS) + CTL_REACH_EVERY - 1u) / CTL_REACH_EVERY)
 
@@ -61,6 +74,8 @@ typedef struct {
     uint8_t shortfall; /* stopped climbing short of its stroke: held where it stopped until it leaves its top level */
     uint8_t lagged;    /* heated CTL_LAG_MS rising without progress in this step: not waited for (ctl.h) */
     uint8_t capping;   /* stopped short of its stroke in this robot step: the others in step climb no further */
+#endif
+#if KNEE_WATCH
     int16_t knee_at;   /* knee watch (ctl.h, CTL_KNEE_MS): smoothed ψ at the start of its window */
     int16_t fast;      /* ... the most it gained in one window of this heat at the drive duty */
     uint8_t knee_n;    /* ... looks into the window; 0: not heated at the drive duty (starts over) */
@@ -100,11 +115,12 @@ void stall_watch(uint8_t i, uint8_t target, uint8_t level, uint8_t heating, int1
  * CTL_REACH_MS (c->still == REACH_LOOKS: it stopped). c->still = NOT_SEEN starts it over. */
 uint8_t stall_at_reach(uint8_t i, ctl_limb_t *c);
 
-#ifdef CFG_LIMB_STROKE_CDEG
-/* Knee watch (ctl.h, CTL_KNEE_MS) of limb i, climbing to its stroke in this step; heated: its
- * coil at the drive duty this tick (not held off by the envelope). 1 once its coil is through
- * its transformation (c->spent); it also ends the climb of a limb on its top level as stopped
- * short of its stroke, as the hover clock does. */
+#if KNEE_WATCH
+/* Knee watch (ctl.h, CTL_KNEE_MS) of limb i (stroke builds: climbing to its stroke in this
+ * step; KNEE_COIL: its coil asked for the drive duty by any limb); heated: its coil at the
+ * drive duty this tick (not held off by the envelope). 1 once its coil is through its
+ * transformation (c->spent); in a stroke build it also ends the climb of a limb on its top
+ * level as stopped short of its stroke, as the hover clock does. */
 uint8_t stall_knee(uint8_t i, uint8_t heated);
 #endif
 

@@ -274,6 +274,110 @@ static void test_a_limb_that_settled_is_not_watched(void)
     CHECK_EQ(ctl_stall(0), CTL_STALL_NONE);
 }
 
+/* The coil-wide knee (ctl.c KNEE_COIL, ctl.h CTL_KNEE_MS), built with the hold watch: a coil asked
+ * for the drive duty whose own end moved fast in this heat and then stopped is through its
+ * transformation, and is kept at no more than the hold duty for the rest of the step. Its
+ * verdict comes a window or two after the stop (80 ms each, the smoothed ψ's lag on top). */
+#define KNEE_TICKS ((int)((uint32_t)CTL_KNEE_MS * CFG_TICK_HZ / 1000u))
+#define KNEE_BY (2 * KNEE_TICKS + (int)SMOOTH_TICKS + 2 * (int)CTL_REACH_EVERY)
+
+/* Ticks of `ticks` at limb 0 = `deg0`, limb 1 creeping from `from1` at 1.5°/s (0.48° per reach
+ * time: the hold watch never sees it stop), targets (1, 1), until coil 0 leaves the drive
+ * duty (-1: never); after that it must stay at no more than the hold duty. */
+static int creep_until_cut(double deg0, int limb, double from, int ticks)
+{
+    uint16_t duty[CFG_N_ACTUATORS];
+    int t, cut = -1;
+    for (t = 0; t < ticks; t++) {
+        put(limb, from + 0.0015 * t);
+        if (limb != 0) {
+            put(0, deg0);
+        }
+        demand(1, (uint8_t)(limb != 0), duty);
+        if (cut < 0 && duty[0] != DRIVE) {
+            cut = t;
+        }
+        if (cut >= 0 && duty[0] > HOLD) {
+            return -2; /* heated past the hold duty again in the same step */
+        }
+    }
+    return cut;
+}
+
+static void test_a_coil_whose_end_stopped_after_a_fast_rise_is_held_at_the_hold_duty(void)
+{
+    /* limb 0 rises at 100°/s (a transforming coil: 8° in a window) into its level, then its
+     * end creeps on by tenths, 1.5°/s, below its hold edge. Before the coil-wide knee the hold
+     * watch never saw it stop and the coil was heated at the drive duty for as long as the creep
+     * lasted (the one-actuator R1 worn by 14,758 cycles: 136 °C); now it is cut to the hold duty
+     * a window or two after its end stopped moving fast. */
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    int t;
+    setup();
+    put(1, 0.0);
+    for (psi = 40.0; psi < 51.5; psi += 0.1) {
+        put(0, psi);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    t = creep_until_cut(0.0, 0, 51.5, 1000);
+    CHECK(t >= 0);
+    CHECK(t <= KNEE_BY);
+    /* the robot's next step starts every coil over: a rise from below heats at the drive duty */
+    for (t = 0; t < 200; t++) {
+        put(0, 45.0);
+        demand(0, 0, duty);
+    }
+    for (t = 0; t < 100; t++) {
+        put(0, 40.0);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+}
+
+static void test_a_shared_coil_is_judged_by_the_end_it_bends_not_the_limb_it_heats_for(void)
+{
+    /* The one-actuator R1's step 10 -> 11: both limbs on coil 0 (a run-time map), limb 0 held
+     * high, limb 1 rising. The coil bends limb 0's end fast (15° in 150 ms) and lifts limb 1
+     * only through the body; limb 0's end stops, limb 1 creeps into its level by tenths. The
+     * coil is heated for limb 1, whose own watch never armed; limb 0's end tells that it is
+     * through its transformation: the hold duty from then on. */
+    const uint8_t both_on_0[2] = {0, 0};
+    uint16_t duty[CFG_N_ACTUATORS];
+    uint16_t bad = 0;
+    int k, t;
+    setup();
+    CHECK_EQ(limbmap_set(both_on_0, 2, &bad), 0);
+    for (k = 0; k <= 150; k++) {
+        put(0, 56.0 + 0.1 * k);   /* its own end: 100°/s */
+        put(1, 40.0 + 0.075 * k); /* through the body: 75°/s, into its level at 51° */
+        demand(1, 1, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    t = creep_until_cut(71.0, 1, 51.25, 1000);
+    CHECK(t >= 0);
+    CHECK(t <= KNEE_BY);
+}
+
+static void test_a_fast_rise_that_goes_on_to_its_hold_top_is_no_knee(void)
+{
+    /* 100°/s all the way from 40° to past its hold top (54°): heated at the drive duty at every
+     * tick of the way, then off as the bang-bang hold says */
+    uint16_t duty[CFG_N_ACTUATORS];
+    double psi;
+    setup();
+    put(1, 0.0);
+    for (psi = 40.0; psi < 54.0; psi += 0.1) {
+        put(0, psi);
+        demand(1, 0, duty);
+        CHECK_EQ(duty[0], DRIVE);
+    }
+    put(0, 54.3);
+    demand(1, 0, duty);
+    CHECK_EQ(duty[0], 0);
+}
+
 int main(void)
 {
     RUN(test_the_config_builds_the_hold_watch_in);
@@ -287,5 +391,8 @@ int main(void)
     RUN(test_a_limb_held_where_it_stopped_that_sags_is_re_heated_and_cut_again_from_there);
     RUN(test_a_held_limb_still_gaining_keeps_heating_to_its_hold_top);
     RUN(test_a_limb_that_settled_is_not_watched);
+    RUN(test_a_coil_whose_end_stopped_after_a_fast_rise_is_held_at_the_hold_duty);
+    RUN(test_a_shared_coil_is_judged_by_the_end_it_bends_not_the_limb_it_heats_for);
+    RUN(test_a_fast_rise_that_goes_on_to_its_hold_top_is_no_knee);
     return UNIT_EXIT();
 }
