@@ -172,8 +172,8 @@
  * one-actuator R1's coil bends its own end 60-80°/s at 0.8 duty (5-6° a window) and stops dead
  * past Af, while the far end it lifts through the body moves ≈ 30°/s (2.4° a window, never
  * armed by itself) and crept on by tenths: heated for it, the coil reached 136 °C (worn by
- * 14,758 cycles; docs/plant.md, "Off the grid"). inchworm-3's and caterpillar-4's coils at 0.6
- * duty bend their ends ≈ 40°/s, under the 50°/s that arms it: there it rarely arms, and the
+ * 14,758 cycles; docs/plant.md, "Off the grid"). At 0.6 duty inchworm-3's coils bend their ends
+ * 36-44°/s, under the 50°/s that arms it: there (and on caterpillar-4) it rarely arms, and the
  * reach and hold watches bound their heats as before. */
 #define CTL_KNEE_MS 80u
 #define CTL_KNEE_FAST_CDEG 400
