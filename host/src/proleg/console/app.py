@@ -28,7 +28,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TextIO
+from typing import Any, TextIO
 
 from rich.text import Text
 from textual.app import App, ComposeResult
@@ -125,9 +125,46 @@ def _flags_text(flags: int) -> str:
     return " ".join(f.name.lower() for f in Flag if f & flags and f.name) or "-"
 
 
+class _TerminalGone:
+    """The UI's terminal file, whose writes and flushes outlive the terminal: once its window is
+    closed (SIGHUP) a write fails with EIO, and that ended textual's writer thread; its queue
+    then filled and the next screen update blocked the console for ever, its heartbeat keeping
+    the gait running. Now such writes go nowhere, so the console gets to its leaving STOP."""
+
+    def __init__(self, file: Any) -> None:
+        self._file = file
+
+    def write(self, text: str) -> int:
+        try:
+            return self._file.write(text)
+        except (OSError, ValueError):  # EIO: the terminal is gone; ValueError: the file was closed
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._file.flush()
+        except (OSError, ValueError):
+            pass
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._file, name)
+
+
 class ConsoleApp(App[None]):
     """The live console on one robot. ``names`` name limbs and actuators in events; the app
     exits by itself when the link is lost (``model.link_error``)."""
+
+    def get_driver_class(self) -> Any:
+        """Textual's driver for this platform, writing to the terminal through ``_TerminalGone``."""
+        base = super().get_driver_class()
+
+        class Driver(base):  # type: ignore[misc, valid-type]
+            def __init__(self, *args: Any, **kw: Any) -> None:
+                super().__init__(*args, **kw)
+                if getattr(self, "_file", None) is not None:
+                    self._file = _TerminalGone(self._file)
+
+        return Driver
 
     CSS = """
     Screen { layout: vertical; }
