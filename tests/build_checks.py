@@ -1,12 +1,15 @@
 """What the build and flash tests share: run the CLI and capture its output (``cli``), a
 board or robot file with a few lines changed (``board_variant``, ``robot_variant``), an
 empty output directory and the check that a failure left nothing in it, and the check that
-an error is one ``proleg: error:`` line (``one_line``). No test lives here.
+an error is one ``proleg: error:`` line (``one_line``), and a forked child's exit status
+(``exit_status_within``). No test lives here.
 """
 
 from __future__ import annotations
 
+import os
 import re
+import time
 from pathlib import Path
 
 from proleg.cli import main
@@ -63,3 +66,14 @@ def one_line(err: str) -> str:
     assert lines[0].startswith("proleg: error: ")
     assert "Traceback" not in err
     return lines[0]
+
+
+def exit_status_within(pid: int, timeout_s: float = 30.0) -> int | None:
+    """The exit status of the child ``pid`` (``os.waitstatus_to_exitcode``) once it ends within
+    ``timeout_s``, else None: it still runs, and is the caller's to kill."""
+    for _ in range(int(timeout_s / 0.1)):
+        done, st = os.waitpid(pid, os.WNOHANG)
+        if done:
+            return os.waitstatus_to_exitcode(st)
+        time.sleep(0.1)
+    return None

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
-from build_checks import R1, assert_nothing_left, cli, empty_build_dir
+from build_checks import R1, assert_nothing_left, cli, empty_build_dir, exit_status_within
 from proleg.firmware import build as build_mod
 from proleg.firmware.boards import load_board
 from proleg.firmware.build import MANIFEST, build
@@ -600,7 +600,6 @@ def test_a_run_whose_terminal_is_closed_exits_129_not_1(tmp_path):
         os.environ["PYTHONPATH"] = str(ROOT / "host" / "src")
         os.execv(sys.executable, [sys.executable, "-c", _AS_FROM_A_TERMINAL, "run", str(R1), "--sim", "--speed", "1",
                                   "--duration", "600", "--record", str(record)])
-    status = None
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and (not record.exists() or record.stat().st_size < 5_000):
@@ -610,12 +609,9 @@ def test_a_run_whose_terminal_is_closed_exits_129_not_1(tmp_path):
                 except OSError:
                     break
         os.close(fd)  # the terminal is closed
-        for _ in range(300):
-            done, st = os.waitpid(pid, os.WNOHANG)
-            if done:
-                status, pid = os.waitstatus_to_exitcode(st), None
-                break
-            time.sleep(0.1)
+        status = exit_status_within(pid)
+        if status is not None:
+            pid = None  # reaped
     finally:
         if pid is not None:
             os.kill(pid, signal.SIGKILL)

@@ -8,6 +8,7 @@ import io
 from proleg.link import RobotClient
 from proleg.cli.link_commands import console_main
 from proleg.console import ConsoleApp, LimbView, RobotNames, describe_event, run_plain
+from build_checks import exit_status_within
 from fake_board import FakeBoard
 from proleg.link.sim_link import SimLink
 
@@ -449,13 +450,9 @@ def test_closing_the_consoles_terminal_stops_the_robot_and_exits_129(tmp_path):
         os.write(fd, b"s")  # start the gait
         pump(3.0)
         os.close(fd)  # the terminal window is closed
-        status = None
-        for _ in range(300):
-            done, st = os.waitpid(pid, os.WNOHANG)
-            if done:
-                status, pid = os.waitstatus_to_exitcode(st), None
-                break
-            time.sleep(0.1)
+        status = exit_status_within(pid)
+        if status is not None:
+            pid = None  # reaped
         assert status == 129
         with RobotClient(SerialLink(port)) as client:  # within the watchdog's 2 s: it is the STOP that stopped it
             frame = next(iter(client.telemetry(count=1)))
