@@ -37,7 +37,7 @@ class Coils:
         mism = cond.get("coil_mismatch")
         conv = cond.get("convection")
         self.R, self.C, self.hA, self.G, self.lat = [], [], [], [], []
-        self.wire = geos = coil_geometries(p, robot, na)  # each coil's wire and alloy
+        geos = coil_geometries(p, robot, na)  # each coil's wire and alloy
         for j in range(na):
             scale = 1.0 + (mism if j == 0 else -mism if j == na - 1 and na > 1 else 0.0)
             g = geos[j]
