@@ -342,7 +342,7 @@ def test_a_closed_terminal_window_runs_the_leaving_code():
     import os
     import signal
 
-    from proleg.console.leave import hangup_as_exception
+    from proleg.interrupts import hangup_as_exception
 
     before = signal.getsignal(signal.SIGHUP)  # SIG_IGN when the tests run under nohup
     called = []

@@ -259,7 +259,7 @@ def test_after_giving_up_the_leaving_stop_and_estop_do_not_wait_for_the_device_a
     """A console whose cable was pulled waited the reconnect timeout three times (the session,
     then its STOP, then its ESTOP): 30 s before it said anything. After the first wait the
     STOP and ESTOP try to reopen the port once each; a port that is back is used again."""
-    from proleg.console.leave import stop_robot
+    from proleg.link.leave import stop_robot
 
     state = {"unplugged": True, "back": False}
 

@@ -13,14 +13,19 @@ Python's handler back after the last holder. Nothing is deferred off the main th
 (signals are handled only there), and an ignored SIGINT (a background job) or another
 handler is left alone; in a background job SIGTERM and SIGHUP still come as a Ctrl-C
 (``take_terminations``, ``terminate``) and are deferred the same way. Per row: a flag, not a ``signal.signal`` call (those took 18 µs).
+
+A session with a robot (console, run) ends on SIGHUP or SIGTERM as on a Ctrl-C:
+``hangup_as_exception`` turns them into an exception (or a callback to the UI), so the
+``finally`` that stops the robot (``proleg.link.leave``) runs instead of the process dying.
 """
 
 from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from types import FrameType
 
 _lock = threading.Lock()
 _holders = 0
@@ -123,3 +128,39 @@ def whole() -> Iterator[None]:
     finally:
         if counted:
             release()
+
+
+class _Hangup(Exception):
+    """SIGHUP/SIGTERM arrived: the terminal went away or someone asked us to end."""
+
+
+@contextmanager
+def hangup_as_exception(on_signal: Callable[[], None] | None = None) -> Iterator[list[int]]:
+    """On SIGHUP (the terminal window closed) or SIGTERM, call ``on_signal`` (e.g. ask the UI to
+    exit) or raise in the main thread, so the caller's ``finally`` (which stops the robot)
+    runs instead of the process just dying. Yields the list of the signals that arrived: the
+    caller's exit status is 128 + the first (143, 129), as every command's is; before, the
+    console took them for a ``q`` and exited 0, so a CI job's timeout looked like a clean end."""
+    ended_by: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield ended_by
+        return
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        ended_by.append(signum)
+        if on_signal is not None:
+            on_signal()
+        else:
+            raise _Hangup(signal.Signals(signum).name)
+
+    old = {}
+    for sig in (getattr(signal, "SIGHUP", None), signal.SIGTERM):
+        if sig is not None:
+            old[sig] = signal.signal(sig, handler)
+    try:
+        yield ended_by
+    except (_Hangup, KeyboardInterrupt):
+        pass  # the caller's finally has stopped the robot; end quietly
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)

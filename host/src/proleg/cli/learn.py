@@ -324,7 +324,7 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
         except KeyboardInterrupt:
             if bar is not None:
                 bar.close()
-            from ..console.leave import stop_robot
+            from ..link.leave import stop_robot
 
             what = stop_robot(client)  # run_piece stops it too; a Ctrl-C may have cut that short
             done, todo = ex.tally()

@@ -43,10 +43,11 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     from ..console import ConsoleApp, LimbView, RobotNames, run_plain
     from ..console.app import replan_state
     from ..console.inject import Injector, fault_checker, parse_injection
+    from ..console.identity import check_identity
     from ..console.replan import ReplanWorker
     from ..errors import SimError
-    from ..console.identity import check_identity
-    from ..console.leave import hangup_as_exception, stop_robot
+    from ..interrupts import hangup_as_exception
+    from ..link.leave import stop_robot
     from ..link.listeners import FaultWatch
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
     from ..record.udp import parse_endpoint

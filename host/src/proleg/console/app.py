@@ -11,7 +11,7 @@ q (or Ctrl-C) quit. ``g`` offers only the gaits INFO says the firmware has (and 
 a user gait is loaded, selected with its way unstated; ``d`` then cycles +x, -x, unstated).
 Events name their kind, fault, stop reason, limb and actuator (``proleg.console.names``). The
 layout fits an 80×24 terminal. Leaving stops the robot: that is ``console_main``'s job
-(``proleg.console.leave``), whatever ended the UI.
+(``proleg.link.leave``), whatever ended the UI.
 
 Given the robot file (``robot``), the console replans after a limb loss unless told not to
 (``replan=False``, ``--no-replan``): when a gait stops on a fault that names an actuator and

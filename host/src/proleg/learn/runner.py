@@ -42,7 +42,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..console.leave import stop_robot
+from ..link.leave import stop_robot
 from ..errors import LinkError
 from ..link.direction import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
