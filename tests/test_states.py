@@ -1,5 +1,9 @@
 """State labels and limb levels: which gait steps move limbs in opposite directions."""
 
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from proleg import states
 from proleg.states import limb_levels, opposing_steps
 
 
@@ -39,3 +43,26 @@ def test_a_digit_out_of_its_limbs_range_says_which_digit_on_a_robot_of_mixed_lev
     # the digit as typed (a letter O for a zero), not lower-cased
     with pytest.raises(ValueError, match=r"state label '1O': digit 2 \('O'\) is not a level of limb 'b', 0\.\.1$"):
         state_index("1O", (2, 2), ("a", "b"))
+
+
+@st.composite
+def _limbs_at(draw):
+    """Limbs of 2..4 levels (ascending thresholds) and a ψ for each."""
+    n = draw(st.integers(1, 5))
+    thresholds = []
+    for _ in range(n):
+        k = draw(st.integers(2, 4))
+        thresholds.append(sorted(draw(st.lists(st.floats(1.0, 80.0), min_size=k - 1, max_size=k - 1, unique=True))))
+    psi = draw(st.lists(st.floats(-10.0, 90.0), min_size=n, max_size=n))
+    return thresholds, psi
+
+
+@settings(max_examples=200, deadline=None)
+@given(_limbs_at())
+def test_classify_reads_the_state_the_limbs_levels_spell(limbs):
+    """The plants' state from ψ is the label whose digit for each limb counts the thresholds its ψ
+    has reached (the brute force: write the label, read it back with ``states.index``)."""
+    thresholds, psi = limbs
+    levels = [len(t) + 1 for t in thresholds]
+    digits = "".join(str(sum(p >= th for th in ths)) for p, ths in zip(psi, thresholds))
+    assert states.classify(psi, thresholds, states.place_values(levels)) == states.index(digits, levels)

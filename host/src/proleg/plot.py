@@ -19,7 +19,7 @@ from .errors import LinkError, UsageError
 from .outputs import replacing
 from .protocol.enums import Flag
 from .record import Recording, read_recording
-from .states import label
+from .states import label, state_count
 
 log = logging.getLogger("proleg")
 
@@ -160,9 +160,7 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     levels = _levels(rec)
     ax.step(t, rec.target, where="post", color="0.6", lw=2.5, label="target")
     ax.step(t, known_measured(rec), where="post", color="C3", lw=1.2, label="measured")
-    n_states = 1
-    for k in levels:
-        n_states *= k
+    n_states = state_count(levels)
     if n_states <= 16:
         ax.set_yticks(range(n_states), [label(s, levels) for s in range(n_states)])
     ax.set_ylabel("state")

@@ -64,6 +64,29 @@ def _limb_levels(index_: int, levels: tuple[int, ...]) -> tuple[int, ...]:
     return tuple(reversed(out))
 
 
+def place_values(levels: Sequence[int]) -> tuple[int, ...]:
+    """Each limb's place value in a state index: the product of the levels of the limbs after it
+    (two binary limbs: (2, 1))."""
+    out, m = [], 1
+    for k in reversed(levels):
+        out.append(m)
+        m *= k
+    return tuple(reversed(out))
+
+
+def classify(psi: Sequence[float], thresholds: Sequence[Sequence[float]], places: Sequence[int]) -> int:
+    """The state index of limbs at contact angles ``psi``: a limb's level is how many of its
+    ascending thresholds (ψ*) its ψ has reached; ``places`` from ``place_values``."""
+    idx = 0
+    for p, ths, m in zip(psi, thresholds, places):
+        lvl = 0
+        for th in ths:
+            if p >= th:
+                lvl += 1
+        idx += lvl * m
+    return idx
+
+
 def opposing_steps(states: Sequence[int], levels: Sequence[int]) -> list[int]:
     """Indices t of the steps states[t] → states[t+1] that raise one limb while lowering
     another.

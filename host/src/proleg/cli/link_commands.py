@@ -125,7 +125,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                 listeners.append(UdpStreamer(udp, udp_format, meta))
             levels = robot.levels if robot is not None else (2,) * info.limbs
             if plain or fmt == "jsonl" or not out.isatty():
-                from ..states import label
+                from ..states import label, state_count
 
                 def say(text: str) -> None:
                     print(f"proleg: {text}", file=err, flush=True)
@@ -141,7 +141,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                     listeners.append(JsonlPrinter(meta, out, telemetry_only=False))
                 try:
                     run_plain(client, listeners=listeners, out=out, duration_s=duration_s, quiet=fmt == "jsonl",
-                              labels=lambda s: label(s, levels) if s < _prod(levels) else str(s))
+                              labels=lambda s: label(s, levels) if s < state_count(levels) else str(s))
                 except KeyboardInterrupt:
                     pass  # Ctrl-C ends the plain mode like the duration does
             else:
@@ -203,13 +203,6 @@ def _reset_watch(say: Any) -> Any:
             say(f"the board reset: {event_text(m.fields)}; it boots idle (a gait it ran is stopped)")
 
     return CallbackListener(on_message)
-
-
-def _prod(levels: Sequence[int]) -> int:
-    n = 1
-    for k in levels:
-        n *= k
-    return n
 
 
 def plot_main(*, record_file: str, out: str, title: str | None = None) -> int:

@@ -40,7 +40,7 @@ from textual.widgets import Footer, Static
 from ..errors import LinkError
 from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, EventKind, Flag
 from ..states import label as state_label
-from ..states import limb_levels
+from ..states import limb_levels, state_count
 from ..link.client import Received, RobotClient, RobotInfo
 from ..link.direction import direction_text
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
@@ -303,8 +303,8 @@ class ConsoleApp(App[None]):
         if tel is None:
             limbs.append("waiting for telemetry…")
         else:
-            measured = limb_levels(tel["measured"], levels) if tel["measured"] < _prod(levels) else (None,) * n
-            target = limb_levels(tel["target"], levels) if tel["target"] < _prod(levels) else (None,) * n
+            measured = limb_levels(tel["measured"], levels) if tel["measured"] < state_count(levels) else (None,) * n
+            target = limb_levels(tel["target"], levels) if tel["target"] < state_count(levels) else (None,) * n
             for i, p in enumerate(tel["psi"]):
                 view = self.limb_views[i] if i < len(self.limb_views) else LimbView(names.limb(i), ())
                 psi = p / 100
@@ -434,13 +434,6 @@ def replan_state(replan: bool, have_robot: bool) -> str:
     if not have_robot:
         return "replan: off (needs --robot)"
     return "replan on limb loss: on"
-
-
-def _prod(levels: Sequence[int]) -> int:
-    n = 1
-    for k in levels:
-        n *= k
-    return n
 
 
 def run_plain(client: RobotClient, *, listeners: Sequence[Listener] = (), out: TextIO | None = None,

@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SimError
-from ..states import limb_levels
+from ..states import classify, limb_levels, place_values
 from .plant_params import (  # noqa: F401 (re-exported: the plant's parameters live beside it)
     CROSS_GAIN_DEG,
     DIRECT_GAIN_DEG,
@@ -156,11 +156,7 @@ class Plant:
         self._g = params.coupling()
         self._rest = [float(limb.psi_rest_deg) for limb in params.limbs]
         self._thresholds = [tuple(float(p) for p in limb.psi_star_deg) for limb in params.limbs]
-        mult, m = [], 1
-        for k in reversed(levels):
-            mult.append(m)
-            m *= k
-        self._mult = list(reversed(mult))
+        self._mult = place_values(levels)
         self._mtau = float(params.mech_tau_s)
         self._psi = self._targets()
         self._dpsi = [0.0] * self._nl
@@ -191,14 +187,7 @@ class Plant:
         return [r + sum(g * c for g, c in zip(row, contraction)) for r, row in zip(self._rest, self._g)]
 
     def _classify(self) -> int:
-        idx = 0
-        for psi, ths, m in zip(self._psi, self._thresholds, self._mult):
-            lvl = 0
-            for th in ths:
-                if psi >= th:
-                    lvl += 1
-            idx += lvl * m
-        return idx
+        return classify(self._psi, self._thresholds, self._mult)
 
     def step(self, dt_s: float, duties: Sequence[float]) -> None:
         """Advance by ``dt_s`` seconds with each channel's duty held constant."""

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimError
-from ...states import limb_levels
+from ...states import classify, limb_levels, place_values
 from . import materials as mat
 from ...body import Shape, body_geometry, curl_key, curl_problem
 from .coils import Coils
@@ -126,11 +126,7 @@ class PhysicalPlant:
         self._t = 0.0
         self._t_eval = 0.0
         self._c_eval = list(coils.c)
-        mult, m = [], 1
-        for k in reversed(self.levels):
-            mult.append(m)
-            m *= k
-        self._mult = list(reversed(mult))
+        self._mult = place_values(self.levels)
         self._state = self._classify()
         self._committed = self._state
         self._pending: float | None = None
@@ -150,14 +146,7 @@ class PhysicalPlant:
         self._com = getattr(self, "_x0", 0.0) + self._com_off
 
     def _classify(self) -> int:
-        idx = 0
-        for psi, ths, m in zip(self._psi, self._true_th, self._mult):
-            lvl = 0
-            for th in ths:
-                if psi >= th:
-                    lvl += 1
-            idx += lvl * m
-        return idx
+        return classify(self._psi, self._true_th, self._mult)
 
     # -- stepping -------------------------------------------------------------------------------
     def step(self, dt_s: float, duties: Sequence[float]) -> None:
