@@ -15,8 +15,11 @@ length (the gap between the contacts) is the chord length, and its weight splits
 the two contacts by the lever rule about its centre of mass (statics of a two-support body).
 
 For one or two coils the shape quantities are tabulated on a grid of contractions when the
-plant is built and interpolated bilinearly while it runs (the hot path stays small); for
-more coils they are computed directly.
+plant is built and interpolated bilinearly while it runs (the hot path stays small). For
+more coils each section between neighbouring contacts is tabulated on its own: its contact
+angles, chord and centre of mass, measured from its own ends, depend only on the coils that
+bend it (at most two on the usual layout: its two contacts' coils), and the body is their
+sum; a section that three or more coils bend leaves the whole body computed directly.
 
 How long the body is, when the robot file does not say (``[plant] length_mm``): the paper's
 80 mm body for two contacts, and 40 mm between neighbouring contacts for more
@@ -33,6 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Collection
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -162,12 +166,20 @@ class Shape:
         self._cnode = [int(round(s / self.ds)) for s in geo.contacts_mm]
         self.n_contacts = len(self._cnode)
         self.n_coils = len(geo.spans)
-        self._table = None
-        if tabulate and self.n_coils <= 2:
-            self._build_table()
+        total = float(geo.length_mm)
+        self._frac = [(q - p) * self.ds / total for p, q in zip(self._cnode, self._cnode[1:])]
+        self._all_coils = list(range(self.n_coils))
+        self._tlist: list | None = None
+        self._sec_tables: list[tuple[list[int], list]] | None = None
+        if tabulate:
+            self._tlist, self._sec_tables = _tables(geo)
 
     # -- exact computation (vectorised over a batch of contraction vectors) ------------------
-    def compute(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def _sections(self, c: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """Per section between neighbouring contacts: (ψ at its first contact, ψ at its second,
+        its chord (the gap), its centre of mass along the chord from its first contact). Each is
+        the section's own shape, whatever the body does before it: the same under a rigid
+        rotation, so it depends only on the coils that bend the section."""
         c = np.atleast_2d(np.asarray(c, dtype=float))              # (B, n_coils)
         kappa = c @ self._w                                          # (B, n_seg)
         dphi = kappa * self.ds
@@ -180,14 +192,8 @@ class Shape:
         y = np.concatenate([np.zeros((len(c), 1)), np.cumsum(chord * np.sin(phi_mid), axis=1)], axis=1)
         xm = (x[:, :-1] + x[:, 1:]) / 2.0
         ym = (y[:, :-1] + y[:, 1:]) / 2.0
-        nc = self.n_contacts
-        psi = np.zeros((len(c), nc))
-        gaps = np.zeros((len(c), nc - 1))
-        load = np.zeros((len(c), nc))
-        com = np.zeros(len(c))
-        start = np.zeros(len(c))
-        total = float(self.geo.length_mm)
-        for k in range(nc - 1):
+        out = []
+        for k in range(self.n_contacts - 1):
             p, q = self._cnode[k], self._cnode[k + 1]
             vx, vy = x[:, q] - x[:, p], y[:, q] - y[:, p]
             g = np.hypot(vx, vy)
@@ -198,11 +204,23 @@ class Shape:
             # interior contact averages two of them, so an unwrapped turn read as ±180° there.
             psi_p = _wrap_deg(np.degrees(phi_nodes[:, p] - chi))
             psi_q = _wrap_deg(np.degrees(chi - phi_nodes[:, q]))
-            psi[:, k] += psi_p if k == 0 else psi_p / 2.0
-            psi[:, k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
             ux, uy = vx / g, vy / g
             u = ((xm[:, p:q] - x[:, p:p + 1]) * ux[:, None] + (ym[:, p:q] - y[:, p:p + 1]) * uy[:, None]).mean(axis=1)
-            frac = (q - p) * self.ds / total                        # section's share of the mass
+            out.append((psi_p, psi_q, g, u))
+        return out
+
+    def compute(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        c = np.atleast_2d(np.asarray(c, dtype=float))
+        nc = self.n_contacts
+        psi = np.zeros((len(c), nc))
+        gaps = np.zeros((len(c), nc - 1))
+        load = np.zeros((len(c), nc))
+        com = np.zeros(len(c))
+        start = np.zeros(len(c))
+        for k, (psi_p, psi_q, g, u) in enumerate(self._sections(c)):
+            psi[:, k] += psi_p if k == 0 else psi_p / 2.0
+            psi[:, k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
+            frac = self._frac[k]                                     # section's share of the mass
             load[:, k] += frac * (1.0 - u / g)
             load[:, k + 1] += frac * (u / g)
             com += frac * (start + u)
@@ -210,34 +228,92 @@ class Shape:
             start = start + g
         return psi, gaps, load, com
 
-    # -- tabulated (one or two coils) ---------------------------------------------------------
-    def _build_table(self) -> None:
-        axes = [np.linspace(0.0, 1.0, GRID)] * self.n_coils
-        mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, self.n_coils)
-        psi, gaps, load, com = self.compute(mesh)
+    # -- tabulated ------------------------------------------------------------------------------
+    def _body_table(self) -> list:
+        """One or two coils: the whole body's quantities on a grid of contractions."""
+        psi, gaps, load, com = self.compute(_grid(self.n_coils))
         flat = np.concatenate([psi, gaps, load, com[:, None]], axis=1)
-        shape = (GRID,) * self.n_coils + (flat.shape[1],)
-        self._table = flat.reshape(shape)
-        self._tlist = self._table.tolist()
+        return flat.reshape((GRID,) * self.n_coils + (flat.shape[1],)).tolist()
+
+    def _section_tables(self) -> list[tuple[list[int], list]] | None:
+        """More than two coils: a table per section over the (at most two) coils that bend it,
+        its four quantities (``_sections``) interpolated as the two-coil body's are; None when
+        a section is bent by three or more coils (the whole body is then computed directly)."""
+        tables = []
+        for k in range(self.n_contacts - 1):
+            p, q = self._cnode[k], self._cnode[k + 1]
+            coils = [j for j in range(self.n_coils) if self._w[j, p:q].any()]
+            if len(coils) > 2:
+                return None
+            mesh = _grid(len(coils))
+            c = np.zeros((len(mesh), self.n_coils))
+            c[:, coils] = mesh
+            flat = np.stack(self._sections(c)[k], axis=1)            # (GRID^m, 4)
+            tables.append((coils, flat.reshape((GRID,) * len(coils) + (4,)).tolist()))
+        return tables
+
+    def _evaluate_sections(self, c: list[float]) -> list[float]:
+        """``evaluate`` from the section tables: the sum ``compute`` makes, on four numbers a section."""
+        nc = self.n_contacts
+        psi = [0.0] * nc
+        gaps = []
+        load = [0.0] * nc
+        com = start = 0.0
+        for k, (coils, table) in enumerate(self._sec_tables):
+            psi_p, psi_q, g, u = _interpolate(coils, table, c)
+            psi[k] += psi_p if k == 0 else psi_p / 2.0
+            psi[k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
+            frac = self._frac[k]
+            load[k] += frac * (1.0 - u / g)
+            load[k + 1] += frac * (u / g)
+            com += frac * (start + u)
+            gaps.append(g)
+            start += g
+        return [*psi, *gaps, *load, com]
 
     def evaluate(self, c: list[float]) -> list[float]:
         """Flat list: ψ per contact, gap per section, load per contact, centre of mass."""
-        if self._table is None:
-            psi, gaps, load, com = self.compute(np.array(c))
-            return [*psi[0], *gaps[0], *load[0], float(com[0])]
-        g1 = GRID - 1
-        if self.n_coils == 1:
-            u = min(max(c[0], 0.0), 1.0) * g1
-            i = min(int(u), g1 - 1)
-            f = u - i
-            a, b = self._tlist[i], self._tlist[i + 1]
-            return [x + (y - x) * f for x, y in zip(a, b)]
-        u = min(max(c[0], 0.0), 1.0) * g1
-        v = min(max(c[1], 0.0), 1.0) * g1
-        i = min(int(u), g1 - 1)
-        j = min(int(v), g1 - 1)
-        fu, fv = u - i, v - j
-        t = self._tlist
-        a, b, cc, d = t[i][j], t[i + 1][j], t[i][j + 1], t[i + 1][j + 1]
-        w00, w10, w01, w11 = (1 - fu) * (1 - fv), fu * (1 - fv), (1 - fu) * fv, fu * fv
-        return [p * w00 + q * w10 + r * w01 + s * w11 for p, q, r, s in zip(a, b, cc, d)]
+        if self._tlist is not None:
+            return _interpolate(self._all_coils, self._tlist, c)
+        if self._sec_tables is not None:
+            return self._evaluate_sections(c)
+        psi, gaps, load, com = self.compute(np.array(c))
+        return [*psi[0], *gaps[0], *load[0], float(com[0])]
+
+
+def _grid(m: int) -> np.ndarray:
+    """Every point of the GRID^m grid of m contractions in [0, 1], one row each (m = 0: one row)."""
+    if m == 0:
+        return np.zeros((1, 0))
+    axes = [np.linspace(0.0, 1.0, GRID)] * m
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, m)
+
+
+def _interpolate(coils: list[int], table: list, c: list[float]) -> list[float]:
+    """Linear (one coil) or bilinear (two) interpolation in ``table`` (nested lists, GRID per
+    coil, then the quantities) at the contractions of ``coils`` in ``c``, each clamped to [0, 1]."""
+    if not coils:
+        return table
+    g1 = GRID - 1
+    u = min(max(c[coils[0]], 0.0), 1.0) * g1
+    i = min(int(u), g1 - 1)
+    fu = u - i
+    if len(coils) == 1:
+        return [x + (y - x) * fu for x, y in zip(table[i], table[i + 1])]
+    v = min(max(c[coils[1]], 0.0), 1.0) * g1
+    j = min(int(v), g1 - 1)
+    fv = v - j
+    a, b, cc, d = table[i][j], table[i + 1][j], table[i][j + 1], table[i + 1][j + 1]
+    w00, w10, w01, w11 = (1 - fu) * (1 - fv), fu * (1 - fv), (1 - fu) * fv, fu * fv
+    return [p * w00 + q * w10 + r * w01 + s * w11 for p, q, r, s in zip(a, b, cc, d)]
+
+
+@lru_cache(maxsize=32)
+def _tables(geo: BodyGeometry) -> tuple[list | None, list[tuple[list[int], list]] | None]:
+    """The interpolation tables of a body (``Shape``'s ``_body_table`` for one or two coils, else
+    its ``_section_tables``), built once per geometry: a check or a sweep builds a plant per
+    row, and an eight-limb body's tables take 0.15 s. Shared read-only."""
+    shape = Shape(geo, tabulate=False)
+    if shape.n_coils <= 2:
+        return shape._body_table(), None
+    return None, shape._section_tables()
