@@ -109,8 +109,8 @@ def test_a_second_session_on_a_port_in_use_is_refused_naming_it():
             client.connect()
             with pytest.raises(LinkError) as e:
                 SerialLink(server.path)
-            assert str(e.value) == (f"cannot open serial port {server.path}: another program has it open (another "
-                                    "proleg console or run? close it first)")
+            assert str(e.value) == (f"cannot open serial port {server.path}: another program has it open (a proleg "
+                                    "console, run, record or learn?); close it first")
             frames = list(client.telemetry(count=10))
             assert client.stats.lost == 0 and len(frames) == 10
         SerialLink(server.path).close()  # free again

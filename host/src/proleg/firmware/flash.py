@@ -6,6 +6,10 @@ parity — Linux's pty driver clears PARENB on every termios change (drivers/tty
 ``pty_set_termios``) — so stm32flash's default 8E1, which the STM32 ROM bootloader needs
 on a real USART, fails stm32flash's own read-back check on a pty ("Failed to set terminal
 flags"). On a pty stm32flash is given ``-m 8n1``; the emulated bootloader needs no parity.
+
+A tool that writes through a serial port (avrdude, stm32flash) takes no lock on it: ``flash``
+holds proleg's own (``link.port_lock``, the one a console or run holds) while the tool runs,
+and refuses, before building, a port a console, run, record or learn has open.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import subprocess
 from pathlib import Path
 
 from ..errors import BuildError, Interrupted, LinkError
+from ..link.port_lock import PortLock, hold_port
 from .boards import Board, FlashMethod
 
 
@@ -93,6 +98,8 @@ def check_tool(method: FlashMethod, port: str | None) -> None:
         raise BuildError(f"{cmd[0]} not found: install it to flash{hint}")
     if method.needs_port and port and port.startswith("/") and not os.path.exists(port):
         raise BuildError(f"{port}: no such serial port (is the board plugged in?)")
+    if method.needs_port and port:
+        PortLock(port, doing="flash through").release()  # a console on the port: said before building
 
 
 def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
@@ -102,11 +109,14 @@ def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
     if not Path(artifact).exists():
         raise BuildError(f"{artifact}: no firmware to flash (build it first)")
     check_tool(method, port)
-    try:
-        proc = subprocess.run(cmd)  # on Ctrl-C: a moment for the tool to end on its own, then killed
-    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: "interrupted" alone hid that the board may hold half a firmware
-        raise Interrupted(f"interrupted while {cmd[0]} was flashing {artifact}: the board's flash may hold part of "
-                          "it (flash it again before using the board)") from None
+    # The port is locked (port_lock, the console's own lock) while the tool writes: a console,
+    # run or record started meanwhile is refused instead of reading the bootloader's replies.
+    with hold_port(port if method.needs_port else None, doing="flash through"):
+        try:
+            proc = subprocess.run(cmd)  # on Ctrl-C: a moment for the tool to end on its own, then killed
+        except KeyboardInterrupt:  # Ctrl-C, SIGTERM: "interrupted" alone hid that the board may hold half a firmware
+            raise Interrupted(f"interrupted while {cmd[0]} was flashing {artifact}: the board's flash may hold part "
+                              "of it (flash it again before using the board)") from None
     if proc.returncode < 0:  # killed by a signal (-9): "exit status -9" named no signal
         raise LinkError(f"{cmd[0]} was killed by {_signal_name(-proc.returncode)} (its messages are above); the "
                         "board's flash may hold part of the firmware: flash it again")

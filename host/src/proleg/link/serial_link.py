@@ -15,6 +15,7 @@ import serial
 
 from ..errors import LinkError
 from .base import Link, LinkDisconnected
+from .port_lock import PortLock
 
 DEFAULT_BAUDRATE = 115200
 #: The fastest serial link the host takes (an FT232H's 12 Mbaud); a bigger number overflows
@@ -39,23 +40,24 @@ class SerialLink(Link):
         self.description = url
         self._opener: Opener = opener or serial.serial_for_url
         self._port: Any = None
+        self._lock: PortLock | None = None
         self._timeout: float | None = None
         self._clock_zero = time.monotonic()  # clock() counts from the opening (t_host_s ≈ 0)
         self._open()
 
     def _open(self) -> None:
-        # A device is ours alone (pyserial's flock): a second console or run on the same port
-        # opened it too, and the two split the board's bytes between them, each seeing gaps and
-        # CRC errors, each able to START the gait the other stops.
-        exclusive = {} if "://" in self.url else {"exclusive": True}
+        # A device is ours alone (port_lock's flock, taken before the port is touched): a second
+        # console or run on the same port opened it too, and the two split the board's bytes
+        # between them, each seeing gaps and CRC errors, each able to START the gait the other
+        # stops; a flash under a console broke both.
+        lock = PortLock(self.url)
         try:
-            self._port = self._opener(self.url, baudrate=self.baudrate, timeout=0.0, write_timeout=2.0, **exclusive)
+            self._port = self._opener(self.url, baudrate=self.baudrate, timeout=0.0, write_timeout=2.0)
         except (serial.SerialException, OSError, ValueError, OverflowError) as e:
+            lock.release()
             self._port = None
-            if "exclusively lock" in str(e):
-                raise LinkError(f"cannot open serial port {self.url}: another program has it open (another proleg "
-                                "console or run? close it first)") from None
             raise LinkError(f"cannot open serial port {self.url}: {_reason(e)}") from None
+        self._lock = lock
         self._timeout = 0.0
         self._discard_backlog()
 
@@ -115,11 +117,14 @@ class SerialLink(Link):
 
     def _drop(self) -> None:
         port, self._port = self._port, None
+        lock, self._lock = self._lock, None
         if port is not None:
             try:
                 port.close()
             except Exception:  # a vanished device may fail to close; it is gone either way
                 pass
+        if lock is not None:
+            lock.release()  # after the port: nobody else opens it while ours is still open
 
 
 def _reason(e: BaseException) -> str:
