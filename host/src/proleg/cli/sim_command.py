@@ -33,8 +33,9 @@ def add_sim_parser(sub) -> None:
     s.add_argument("--inject", action="append", default=[], metavar="FAULT",
                    help="fault to inject, optionally at a time: imu-silent:LIMB, imu-stuck:LIMB, imu-garbage:LIMB, "
                         "dead-actuator:ACTUATOR, drift[:ACTUATOR][@RATE], link-drop[:P], link-corrupt[:P] (a LIMB or "
-                        "ACTUATOR by name or index, an ACTUATOR by its limb's name, or rear/front where no limb "
-                        "or coil has that name: the first/last limb, or its coil, as --condition reads them); "
+                        "ACTUATOR by name, spaces at its ends not counting, a LIMB by index, an ACTUATOR by channel "
+                        "or its limb's name, or rear/front where no limb or coil has that name: the first/last limb, "
+                        "or its coil, as --condition reads them); "
                         "append +T for T simulated seconds after the start, at most --duration (e.g. dead-actuator:sma-right+10)")
     s.add_argument("--seed", type=int, default=1)
     s.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")

@@ -24,7 +24,7 @@ def parse_injection(spec: str, run_s: float | None = None,
     ``--duration``; None: no end), where the fault would never be injected.
     ``names_fault(spec)``: whether the whole spec is a fault of the robot's (its limb or coil
     name ends in ``+`` and a number); then it is that fault, at once."""
-    from ..sim.closed_loop import FAULTS
+    from ..sim.closed_loop import FAULTS, split_fault
 
     if names_fault is not None and "+" in spec and names_fault(spec):
         return 0.0, spec
@@ -40,7 +40,7 @@ def parse_injection(spec: str, run_s: float | None = None,
         t = float(at)
         if not (t >= 0 and math.isfinite(t)):
             raise SimError(f"--inject {spec}: the time after '+' must be a finite number ≥ 0 s, got {at!r}")
-    if fault.partition(":")[0] not in FAULTS:
+    if split_fault(fault)[0] not in FAULTS:
         raise SimError(f"--inject {spec}: unknown fault (expected one of: {', '.join(sorted(FAULTS))})")
     if run_s is not None and t > run_s:
         # .15g, not g: 5.0000001 was shown as "5 s is after the run ends (--duration 5 s)"

@@ -366,46 +366,58 @@ def _dry_run(sim: SimulatedRobot) -> SimpleNamespace:
                            plant=SimpleNamespace(kill_actuator=nothing, inject_drift=nothing))
 
 
-def _apply_fault(sim: Any, fault: str) -> None:
+def split_fault(fault: str) -> tuple[str, str]:
+    """``FAULT[:ARG]`` → (the fault's name, ARG): the name with the spaces at its ends stripped
+    (as ``--condition`` reads `` power = 0.8``), ``drift@RATE`` as ``drift`` with ``@RATE``."""
     name, _, arg = fault.partition(":")
+    name = name.strip()
     if name.startswith("drift@"):  # drift@RATE: every actuator (drift[:ACTUATOR][@RATE])
         name, arg = "drift", name[len("drift"):] + (":" + arg if arg else "")
+    return name, arg
+
+
+def _apply_fault(sim: Any, fault: str) -> None:
+    name, arg = split_fault(fault)
     if name not in FAULTS:
         raise SimError(f"unknown fault {fault!r} (expected one of: {', '.join(sorted(FAULTS))})")
     FAULTS[name](sim, arg)
 
 
 def _limb_addr(sim: SimulatedRobot, arg: str) -> int:
-    """The IMU address of the limb ``arg`` names: its name, its index, or rear/front (the first
-    and last limb, as ``--condition`` reads them, where no limb has that name)."""
-    from .physical.conditions import ALIASES
+    """The IMU address of the limb ``arg`` names, read as ``--condition`` reads a limb
+    (``resolve_name``): its name (spaces at its ends not counting), rear/front (the first and
+    last limb) where no limb has that name, or its index."""
+    from .physical.conditions import ALIASES, NoSuchName, resolve_name
 
     names = [limb.name for limb in sim.robot.limbs]
-    if arg in names:
-        return sim.imu_addresses[names.index(arg)]
-    if arg in ALIASES:
-        return sim.imu_addresses[ALIASES[arg]]
-    if arg.isdigit() and int(arg) < len(names):
-        return sim.imu_addresses[int(arg)]
-    also = [a for a in ALIASES if a not in names]
-    raise SimError(f"fault needs a limb ({', '.join([*names, *also])} or 0..{len(names) - 1}), got {arg!r}")
+    try:
+        return sim.imu_addresses[resolve_name(arg, names)]
+    except NoSuchName:
+        also = [a for a in ALIASES if a not in names]
+        raise SimError(f"fault needs a limb ({', '.join([*names, *also])} or 0..{len(names) - 1}), "
+                       f"got {arg.strip()!r}") from None
 
 
 def _channel(sim: SimulatedRobot, arg: str) -> int:
-    """The channel of the actuator ``arg`` names, as ``--condition`` reads a coil: its name or
-    channel, a limb's name (that limb's coil), or rear/front (the first and last limb's coil)
-    where no actuator or limb has that name (caterpillar-4's ``rear`` is its rear proleg's)."""
-    from .physical.conditions import ALIASES, actuator_index
+    """The channel of the actuator ``arg`` names, as ``--condition`` reads a coil
+    (``resolve_name``): its name or channel, a limb's name (that limb's coil), or rear/front
+    (the first and last limb's coil) where no actuator or limb has that name (caterpillar-4's
+    ``rear`` is its rear proleg's)."""
+    from .physical.conditions import NoSuchName, coil_of_limb, resolve_name
 
-    for a in sim.robot.actuators:
-        if arg in (a.name, str(a.channel)):
+    actuators = sim.robot.actuators
+    name = arg.strip()
+    for a in actuators:
+        if name == a.name or (name.isdigit() and name == str(a.channel)):
             return a.channel
-    if arg in ALIASES or any(lb.name == arg for lb in sim.robot.limbs):
-        return sim.robot.actuators[actuator_index(sim.robot, arg)].channel  # as --condition resolves it
-    raise SimError(
-        f"fault needs an actuator ({', '.join(a.name for a in sim.robot.actuators)}, a limb's name, rear, front "
-        f"or its channel), got {arg!r}"
-    )
+    try:
+        return actuators[resolve_name(name, [a.name for a in actuators], coil_of_limb(sim.robot),
+                                      [lb.name for lb in sim.robot.limbs], index=False)].channel
+    except NoSuchName:
+        raise SimError(
+            f"fault needs an actuator ({', '.join(a.name for a in actuators)}, a limb's name, rear, front "
+            f"or its channel), got {name!r}"
+        ) from None
 
 
 def _rate(arg: str, default: float, what: str, hi: float = math.inf) -> float:
@@ -420,11 +432,24 @@ def _rate(arg: str, default: float, what: str, hi: float = math.inf) -> float:
 
 
 def _drift(sim: SimulatedRobot, arg: str) -> None:
-    target, _, rate = arg.partition("@")
+    # drift:ACTUATOR@RATE: the rate after the last '@', unless the whole names an actuator or a
+    # limb (a limb called front@pad, or leg@2): an '@' may be part of a name, as in --condition
+    target, rate = arg, ""
+    if "@" in arg and not _names_coil(sim, arg):
+        target, _, rate = arg.rpartition("@")
+    target, rate = target.strip(), rate.strip()
     channels = [a.channel for a in sim.robot.actuators] if target in ("", "all") else [_channel(sim, target)]
     r = _rate(rate, 0.05, "drift@RATE (per second of on-time)")
     for ch in channels:
         sim.plant.inject_drift(ch, r)
+
+
+def _names_coil(sim: SimulatedRobot, arg: str) -> bool:
+    try:
+        _channel(sim, arg)
+    except SimError:
+        return False
+    return True
 
 
 FAULTS = {

@@ -103,33 +103,58 @@ def actuator_index(robot: Any, name: str) -> int:
 ALIASES = {"rear": 0, "front": -1}
 
 
-def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] = (),
-             limbs: Sequence[str] = ()) -> int:
-    """Index in ``names`` that ``name`` means for ``key``. For an actuator key with ``by_limb``
-    (each limb's actuator) a limb's name, and rear/front, mean that limb's actuator, so that
-    ``imu_bias_deg=front:3`` and ``power_scale=front:0.8`` name the same end of the robot."""
+class NoSuchName(SimError):
+    """``resolve_name``: ``name`` names nothing (the caller says what it expected)."""
+
+
+def resolve_name(name: str, names: Sequence[str], by_limb: Sequence[int] = (), limbs: Sequence[str] = (), *,
+                 index: bool = True) -> int:
+    """Index in ``names`` (limbs, or actuators) that ``name`` means: the one way ``--condition``
+    and ``--inject`` read a limb's or an actuator's name. ``name`` is taken with the spaces at
+    its ends stripped and may hold any other character (``front@pad``, ``leg+2``); it is a name
+    of ``names``, then (actuators, with ``by_limb``: each limb's actuator) a limb's name, meaning
+    that limb's actuator, then a name with its spaces at the ends not counting (a limb named
+    " a" is "a"), then rear/front (the first/last limb, or its actuator) where nothing has that
+    name, then (``index``) an index. ``NoSuchName`` when it names nothing, a ``SimError`` when
+    it names two alike."""
+    name = name.strip()
     if name in names:
         return list(names).index(name)
     if by_limb and limbs and name in limbs:
         return by_limb[list(limbs).index(name)]
-    # KEY=NAME:value is read with NAME stripped: a limb named " a" (a robot file may give one)
-    # is "a" there, and `proleg check` refused its own draw imu_bias_deg= a:1.1 ("no limb 'a'")
-    for pool, index in ((names, None), (limbs if by_limb else (), by_limb)):
+    # a limb named " a" (a robot file may give one) is "a": `proleg check` refused its own draw
+    # imu_bias_deg= a:1.1 ("no limb 'a'"), and --inject imu-silent:a refused what --condition took
+    for pool, at in ((names, None), (limbs if by_limb else (), by_limb)):
         bare = [n.strip() for n in pool]
         if bare.count(name) > 1:
-            raise SimError(f"condition {key}: {name!r} names {', '.join(repr(n) for n in pool if n.strip() == name)} "
-                           f"alike (spaces at a name's ends do not count): give the index instead")
+            raise SimError(f"{name!r} names {', '.join(repr(n) for n in pool if n.strip() == name)} alike (spaces "
+                           "at a name's ends do not count): give the index instead")
         if name in bare:
-            return bare.index(name) if index is None else index[bare.index(name)]
+            return bare.index(name) if at is None else at[bare.index(name)]
     if name in ALIASES:
         ends = by_limb or range(len(names))
         return ends[ALIASES[name]]
-    if name.isdigit() and int(name) < len(names):
+    if index and name.isdigit() and int(name) < len(names):
         return int(name)
+    raise NoSuchName(f"nothing is named {name!r}")
+
+
+def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] = (),
+             limbs: Sequence[str] = ()) -> int:
+    """Index in ``names`` that ``name`` means for ``key`` (``resolve_name``). For an actuator key
+    with ``by_limb`` (each limb's actuator) a limb's name, and rear/front, mean that limb's
+    actuator, so that ``imu_bias_deg=front:3`` and ``power_scale=front:0.8`` name the same end
+    of the robot."""
+    try:
+        return resolve_name(name, names, by_limb, limbs)
+    except NoSuchName:
+        pass
+    except SimError as e:
+        raise SimError(f"condition {key}: {e}") from None
     what = KEYS[key].per
     also = [a for a in ALIASES if a not in names and a not in limbs]
     named = [*names, *(f"{lb} (its limb)" for lb in limbs if lb not in names)] if by_limb else list(names)
-    raise SimError(f"condition {key}: no {what} {name!r} (expected one of: {', '.join([*named, *also])}, "
+    raise SimError(f"condition {key}: no {what} {name.strip()!r} (expected one of: {', '.join([*named, *also])}, "
                    f"or 0..{len(names) - 1})")
 
 
