@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from .. import interrupts
 from ..link.client import RobotClient
@@ -19,12 +19,15 @@ from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
 from .number_args import baudrate, can_bitrate, can_node, int_auto, positive_float
 
+if TYPE_CHECKING:
+    from ..record.udp import UdpEndpoint
+
 
 def console_main(*, port: str | None = None, can_channel: str | None = None, interface: str | None = None,
                  node: int = 0, sim: str | None = None, robot_file: str | None = None, baudrate: int = DEFAULT_BAUDRATE,
                  record: str | None = None, plain: bool = False, duration_s: float | None = None,
                  timeout: float = 0.5, out: TextIO | None = None, fmt: str = "text",
-                 udp: str | None = None, udp_format: str = "plotjuggler", bitrate: int | None = None,
+                 udp: str | UdpEndpoint | None = None, udp_format: str = "plotjuggler", bitrate: int | None = None,
                  force: bool = False, leave_running: bool = False, err: TextIO | None = None,
                  replan: bool = True, inject: Sequence[str] = ()) -> int:
     """``proleg console``. ``plain`` (or a non-terminal stdout) prints one line per frame
@@ -50,12 +53,12 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     from ..link.leave import stop_robot
     from ..link.listeners import FaultWatch
     from ..record import JsonlPrinter, Logger, RecordingMeta, UdpStreamer, check_suffix
-    from ..record.udp import parse_endpoint
+    from ..record.udp import resolve_endpoint
 
     if record is not None:
         check_suffix(record)  # reject an unknown extension before opening anything
-    if udp is not None:
-        parse_endpoint(udp)
+    if isinstance(udp, str):
+        udp = resolve_endpoint(udp)  # a host that resolves to nothing: said before the link opens
     try:
         timed = [parse_injection(spec, duration_s) for spec in inject]  # a mistake fails before anything is opened
     except SimError:

@@ -23,11 +23,15 @@ import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import __version__
 from ..errors import Interrupted, LinkError, ProlegError
 from .gait import add_gait_parser
 from .number_args import max_transitions
+
+if TYPE_CHECKING:
+    from ..record.udp import UdpEndpoint
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
@@ -265,17 +269,19 @@ def add_udp_options(p: argparse.ArgumentParser) -> None:
                         ">name:timestamp_ms:value lines")
 
 
-def udp_options(args: argparse.Namespace) -> tuple[str | None, str]:
-    """(``--udp`` endpoint or None, ``--udp-format``); ``--udp-format`` without ``--udp`` is a
-    UsageError (it would be ignored), and the endpoint is checked before anything is opened."""
+def udp_options(args: argparse.Namespace) -> tuple[UdpEndpoint | None, str]:
+    """(``--udp`` endpoint, resolved, or None; ``--udp-format``); ``--udp-format`` without
+    ``--udp`` is a UsageError (it would be ignored), and the endpoint is parsed and its host
+    resolved here, before anything is opened (``record.udp.resolve_endpoint``)."""
     from ..errors import UsageError
-    from ..record.udp import parse_endpoint
+    from ..record.udp import resolve_endpoint
 
     if args.udp is None:
         if args.udp_format is not None:
             raise UsageError("--udp-format: only with --udp HOST:PORT (it is the format of that stream)")
         return None, "plotjuggler"
-    parse_endpoint(args.udp)
+    if isinstance(args.udp, str):
+        return resolve_endpoint(args.udp), args.udp_format or "plotjuggler"
     return args.udp, args.udp_format or "plotjuggler"
 
 
