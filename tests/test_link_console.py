@@ -464,3 +464,53 @@ def test_closing_the_consoles_terminal_stops_the_robot_and_exits_129(tmp_path):
             os.waitpid(pid, 0)
         server.kill()
         server.wait()
+
+
+def test_a_full_disk_warning_shows_in_the_ui_not_over_it(tmp_path, monkeypatch):
+    """A recording that hit ENOSPC said its warning through the CLI's stderr handler, written
+    to the terminal under textual's screen (it scribbled over the UI until the next redraw).
+    While the UI is up it is in the status line, the events panel and a notification, nothing
+    goes to stderr; once the UI has left, it is said on stderr too (not lost with the screen)."""
+    import logging
+
+    from pathlib import Path
+
+    from proleg.record import Logger, RecordingMeta, base
+    from proleg.robot import load_robot
+    from test_record import _DiskFillsAt
+
+    robot = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+    monkeypatch.setattr(base, "open", _DiskFillsAt(3000), raising=False)
+    stderr = io.StringIO()  # the CLI's handler (cli.main._setup_logging), on a terminal's stderr
+    handler = logging.StreamHandler(stderr)
+    handler.setFormatter(logging.Formatter("proleg: %(message)s"))
+    logger = logging.getLogger("proleg")
+    monkeypatch.setattr(logger, "handlers", [handler])
+    monkeypatch.setattr(logger, "propagate", False)
+    monkeypatch.setattr(logger, "level", logging.INFO)
+    board = FakeBoard()
+    client = _client(board)
+    path = tmp_path / "run.csv"
+    recorder = Logger(path, RecordingMeta.for_robot(info=client.info, robot=robot, link=client.link))
+    app = ConsoleApp(client, listeners=[recorder], names=NAMES)
+    said = "cannot write record file"
+
+    async def scenario() -> None:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await pilot.press("s")
+            await _wait_for(pilot, lambda: recorder.error is not None)
+            await _wait_for(pilot, lambda: said in app.status)
+            app.refresh_view()
+            assert said in str(app.query_one("#status").content)  # (the events panel has it too, soon scrolled)
+            assert any(said in str(n.message) for n in app._notifications)
+            assert stderr.getvalue() == ""  # nothing written under the screen
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+    assert stderr.getvalue() == ""
+    app.ui_log.replay()  # what ConsoleApp.run does once textual has left the terminal
+    assert logger.handlers == [handler]
+    lines = stderr.getvalue().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"proleg: warning: {said} {path}: No space left on device")
+    assert "No space left on device" in str(recorder.error)
+    client.close()

@@ -22,6 +22,7 @@ starts the best gait of what the robot can still do. Each step shows in the even
 
 from __future__ import annotations
 
+import logging
 import sys
 import threading
 import time
@@ -150,6 +151,53 @@ class _TerminalGone:
         return getattr(self._file, name)
 
 
+class _UiLog(logging.Handler):
+    """While the UI is up, proleg's log lines (a recording that hit a full disk, on the Notifier's
+    thread) go to the events panel and the status line (``say``), a warning to a notification as
+    well (``warn``): the CLI's handler wrote them to the terminal under textual's screen,
+    scribbling over it until the next redraw. ``install`` puts it in place of the ``proleg``
+    logger's handlers, ``uninstall`` puts those back, and ``replay`` gives them every line said
+    meanwhile, once the UI has left the terminal (said on the alternate screen they would vanish
+    with it)."""
+
+    def __init__(self, say: Callable[[str], None], warn: Callable[[str], None] | None = None) -> None:
+        super().__init__()
+        self.say = say
+        self.warn = warn
+        self.held: list[logging.LogRecord] = []
+        self._saved: tuple[list[logging.Handler], bool] | None = None
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            self.held.append(record)
+            text = record.getMessage()
+            self.say(text)
+            if self.warn is not None and record.levelno >= logging.WARNING:
+                self.warn(text)  # a notification too: the status line is one line, soon overwritten
+        except Exception:  # a log line never breaks the thread that logged it
+            self.handleError(record)
+
+    def install(self) -> None:
+        logger = logging.getLogger("proleg")
+        if self._saved is None:
+            self._saved = (logger.handlers[:], logger.propagate)
+            logger.handlers[:] = [self]
+            logger.propagate = False
+
+    def uninstall(self) -> None:
+        logger = logging.getLogger("proleg")
+        if self._saved is not None:
+            logger.handlers[:], logger.propagate = self._saved
+            self._saved = None
+
+    def replay(self) -> None:
+        self.uninstall()
+        held, self.held = self.held, []
+        logger = logging.getLogger("proleg")
+        for record in held:
+            logger.handle(record)  # the CLI's stderr handler (or logging's last resort) says it now
+
+
 class ConsoleApp(App[None]):
     """The live console on one robot. ``names`` name limbs and actuators in events; the app
     exits by itself when the link is lost (``model.link_error``)."""
@@ -216,6 +264,8 @@ class ConsoleApp(App[None]):
         #: what the counters panel says about replanning (``replan_state``)
         self.replan_state = replan_state(replan, robot is not None)
         self.replanner: ReplanWorker | None = None
+        #: proleg's log lines while the UI is up (``_UiLog``)
+        self.ui_log = _UiLog(self.host_says, self._warn)
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -231,6 +281,7 @@ class ConsoleApp(App[None]):
         yield Footer()
 
     def on_mount(self) -> None:
+        self.ui_log.install()
         info = self.client.info
         self.title = f"proleg console — {info.robot_name if info else self.client.link.description}"
         for wid, title in (("limbs", "limbs: ψ vs ψ*"), ("state", "robot state"), ("duty", "SMA duty"),
@@ -252,9 +303,21 @@ class ConsoleApp(App[None]):
             timer.stop()
         if self.notifier is not None:
             self.notifier.stop()  # stops the listeners too, the replan worker among them
+        self.ui_log.uninstall()  # said on stderr from now on; those said in the UI: replay, after run
+
+    def _warn(self, text: str) -> None:
+        self.notify(text, severity="warning", timeout=15)  # thread-safe (textual posts it to the app)
+
+    def run(self, *args: Any, **kwargs: Any) -> Any:
+        """``App.run``; then the log lines the UI showed are said on stderr as well."""
+        try:
+            return super().run(*args, **kwargs)
+        finally:
+            self.ui_log.replay()
 
     def host_says(self, text: str) -> None:
-        """A line from the host (the replan worker's thread): events panel and status line."""
+        """A line from the host (the replan worker's thread, a log line): events panel and status
+        line."""
         self.model.note(f"host: {text}")
         self.status = text
 
