@@ -15,7 +15,10 @@ the claim bench:
 
 A row is *missed* when the idealised drive walks it and the firmware does not complete it (a
 fault stop, the wrong way, or a coil past 120 °C), and a *dirty stop* when neither walks it and
-the firmware's stop heated a coil past 120 °C. The draws are seeded (``--seed``): the same rows
+the firmware's stop heated a coil past 120 °C. The verdicts are ``proleg check``'s
+(``proleg.report.sweep.Row``): a row where the idealised drive makes under 5 % of its speed on
+the nominal plant, and the firmware drifts back without a fault and with cool coils, is
+*drifted*, not missed (the gait does not carry the robot there). The draws are seeded (``--seed``): the same rows
 each run, different ones with another seed.
 
     python bench/bench_sweep.py                        # six example robots (ROBOTS), 30 rows each
@@ -38,7 +41,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "host" / "src"))
 
-from proleg.report import claim, sweep  # noqa: E402
+from proleg.report import sweep  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
 
@@ -48,29 +51,31 @@ ROBOTS = ("paper-r1", "paper-r2", "paper-r1-stroke", "paper-r1-one-actuator", "i
 ROWS = 30
 
 
-def run_row(args: tuple[str, int, tuple[str, ...], float]) -> dict:
+def run_row(args: tuple[str, int, tuple[str, ...], float]) -> tuple[str, int, sweep.Row]:
     name, i, conditions, run_s = args
-    row = sweep.run_row(load_robot(ROOT / "robots" / f"{name}.toml"), conditions, run_s, name=f"{name} #{i}")
+    return name, i, sweep.run_row(load_robot(ROOT / "robots" / f"{name}.toml"), conditions, run_s, name=f"{name} #{i}")
+
+
+def judged(rows: list[sweep.Row], nominal_mm_s: float | None) -> list[sweep.Row]:
+    """One robot's rows with ``proleg check``'s verdicts (``sweep.barely_moving`` against the
+    idealised drive's nominal speed): a row where that drive makes under 5 % of it, and the
+    firmware drifts back without a fault and cool, is *drifted*, not missed. The bench counted
+    those missed: it kept no nominal speed to measure them against."""
+    return sweep.barely_moving(rows, nominal_mm_s)
+
+
+def row_json(name: str, i: int, row: sweep.Row) -> dict:
     d = row.to_json()
     return {"robot": name, "row": i, "conditions": d["conditions"], "possible": row.possible,
             "why_not": row.why_not, "idealised_mm_s": d["idealised_mm_s"], "completed": row.completed,
             "speed_mm_s": d["speed_mm_s"], "fault": row.fault, "note": row.note, "coil_peak_c": d["coil_peak_c"],
-            "reported": row.reported, "missed": row.missed, "dirty_stop": row.hot_stop}
+            "reported": row.reported, "barely_moves": row.barely_moves, "verdict": row.verdict,
+            "missed": row.missed, "drifted": row.drifted, "dirty_stop": row.hot_stop}
 
 
-def summary(rows: list[dict]) -> dict:
-    possible = [r for r in rows if r["possible"]]
-    impossible = [r for r in rows if not r["possible"]]
-    return {
-        "rows": len(rows), "possible": len(possible),
-        "completed_where_possible": sum(r["completed"] for r in possible),
-        "impossible": len(impossible),
-        "impossible_completed_by_the_firmware": sum(r["completed"] for r in impossible),
-        "impossible_stopped_below_120c": sum(not r["completed"] and r["coil_peak_c"] <= NITI_OVERHEAT_C
-                                             for r in impossible),
-        "overheated": sum(r["coil_peak_c"] > NITI_OVERHEAT_C for r in rows),
-        "hottest_c": max((r["coil_peak_c"] for r in rows), default=None),
-    }
+def summary(rows: list[sweep.Row]) -> dict:
+    """``proleg check``'s summary of one robot's rows (``sweep.summary``)."""
+    return sweep.summary(rows)
 
 
 def main() -> int:
@@ -88,27 +93,35 @@ def main() -> int:
     t0 = time.perf_counter()
     draws = sweep.draw_rows(args.rows, args.seed)
     jobs = []
+    nominal_mm_s: dict[str, float | None] = {}
     for name in names:
         robot = load_robot(ROOT / "robots" / f"{name}.toml")
         logging.disable(logging.WARNING)
-        run_s = claim.run_length(claim.idealised_walk(robot, claim.NOMINAL))
+        run_s, nominal = sweep.run_length(robot)  # as proleg check: the idealised drive on the nominal plant
         logging.disable(logging.NOTSET)
+        nominal_mm_s[name] = nominal.speed_mm_s
         jobs += [(name, i, c, run_s) for i, c in enumerate(draws)]
     with multiprocessing.Pool(args.jobs, initializer=sweep.quiet_worker) as pool:
-        rows = pool.map(run_row, jobs, chunksize=1)
-    by_robot = {n: summary([r for r in rows if r["robot"] == n]) for n in names}
+        done = pool.map(run_row, jobs, chunksize=1)
+    judged_rows = {n: judged([row for robot, _, row in done if robot == n], nominal_mm_s[n]) for n in names}
+    by_robot = {n: summary(judged_rows[n]) for n in names}
+    rows = [row_json(n, i, row) for n in names for i, row in enumerate(judged_rows[n])]
 
     print(f"\nψ-feedback under {args.rows} random conditions a robot ({sweep.KEYS_PER_ROW} keys each, seed {args.seed})")
-    print(f"{'robot':22} {'possible':>8} {'completed':>9} {'impossible':>10} {'fw walks':>8} {'clean stop':>10} "
-          f"{'>120 °C':>7} {'hottest °C':>10}")
+    print(f"{'robot':22} {'possible':>8} {'completed':>9} {'drifted':>7} {'missed':>6} {'impossible':>10} "
+          f"{'fw walks':>8} {'clean stop':>10} {'>120 °C':>7} {'hottest °C':>10}")
     for n, s in by_robot.items():
-        print(f"{n:22} {s['possible']:8d} {s['completed_where_possible']:9d} {s['impossible']:10d} "
-              f"{s['impossible_completed_by_the_firmware']:8d} {s['impossible_stopped_below_120c']:10d} "
-              f"{s['overheated']:7d} {s['hottest_c']:10.1f}")
-    missed = [r for r in rows if r["missed"] or r["dirty_stop"]]
-    if missed:
-        print("\nrows the firmware did not complete where the idealised drive walks, or stopped hot:")
-        for r in missed:
+        print(f"{n:22} {s['possible']:8d} {s['completed_where_possible']:9d} {s['drifted']:7d} {s['missed']:6d} "
+              f"{s['impossible']:10d} {s['impossible_completed_by_the_firmware']:8d} "
+              f"{s['impossible_stopped_below_120c']:10d} {s['overheated']:7d} {s['hottest_c']:10.1f}")
+    for heading, pick in (("rows the firmware did not complete where the idealised drive walks, or stopped hot:",
+                           lambda r: r["missed"] or r["dirty_stop"]),
+                          ("rows where the gait barely moves the robot (under 5 % of the idealised nominal speed) "
+                           "and the firmware drifted back, no fault, coils cool (not missed):", lambda r: r["drifted"])):
+        picked = [r for r in rows if pick(r)]
+        if picked:
+            print(f"\n{heading}")
+        for r in picked:
             what = r["fault"] or r["note"] or "no fault"
             print(f"  {r['robot']:22} {' '.join(r['conditions']):70} {what} (peak {r['coil_peak_c']:.0f} °C; "
                   f"idealised {r['idealised_mm_s']} mm/s)")
@@ -116,7 +129,8 @@ def main() -> int:
         "benchmark": "sweep",
         "machine": {"python": platform.python_version(), "platform": platform.platform()},
         "inputs": {"robots": list(names), "rows": args.rows, "seed": args.seed, "keys_per_row": sweep.KEYS_PER_ROW,
-                   "overheat_c": NITI_OVERHEAT_C},
+                   "overheat_c": NITI_OVERHEAT_C, "barely_moves_below": sweep.BARELY},
+        "idealised_nominal_mm_s": {n: None if v is None else round(v, 4) for n, v in nominal_mm_s.items()},
         "summary": by_robot, "rows": rows, "bench_wall_s": round(time.perf_counter() - t0, 1),
     }
     path = ROOT / "bench" / "results" / (f"sweep-{args.robot.stem}.json" if args.robot else "sweep.json")
