@@ -59,7 +59,7 @@ class PortLock:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as e:
             os.close(fd)
-            if e.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+            if e.errno in (errno.EWOULDBLOCK, errno.EAGAIN):
                 raise PortBusy(busy_message(port, doing)) from None
             return  # a device that takes no lock (flock unsupported): used unlocked
         self._fd = fd
