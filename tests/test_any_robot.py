@@ -324,6 +324,32 @@ def test_a_tie_the_hardware_can_make_is_gait_0_when_the_first_ranked_cannot_be(t
     capsys.readouterr()
 
 
+def test_a_tie_the_firmware_would_walk_is_gait_0_when_the_first_ranked_would_fault(tmp_path, capsys):
+    """00 -> 01 -> 00 and 00 -> 10 -> 00 tie at +1 a step, and the engine ranks 00 01 00 first
+    (by states); the robot file says 00 -> 01 takes 20 s, past the 8 s state timeout, so the
+    firmware would stop that gait (STATE_TIMEOUT). START ran it by default, the build warning
+    "expect a fault" about gait 0, though the tie 00 10 00 walks without one."""
+    from proleg.cli.main import main
+    from proleg.firmware.gaits import firmware_gaits
+
+    path = tmp_path / "slow.toml"
+    path.write_text("\n".join([
+        '[robot]', 'name = "slow"',
+        '[[limb]]', 'name = "a"', 'psi_star_deg = [20.0]', 'actuator = "ca"',
+        '[[limb]]', 'name = "b"', 'psi_star_deg = [20.0]', 'actuator = "cb"',
+        '[[actuator]]', 'name = "ca"', 'channel = 0',
+        '[[actuator]]', 'name = "cb"', 'channel = 1',
+        '[transitions]', 'matrix = [[0, 1, 1, "x"], [1, 0, "x", "x"], [1, "x", 0, "x"], ["x", "x", "x", 0]]',
+        'durations_s = [[0, 20, 1, "x"], [1, 0, "x", "x"], [1, "x", 0, "x"], ["x", "x", "x", 0]]', '']))
+    robot = load_robot(path)
+    labels = [" ".join(robot.transitions.label(s) for s in g.states) for g in firmware_gaits(robot)["+x"]]
+    assert labels[0] == "00 10 00" and "00 01 00" in labels, labels
+    assert main(["build", str(path), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 0
+    err = capsys.readouterr().err
+    assert "expect a fault: gait 00 01 00: step 1 (00 -> 01) takes 20 s" in err  # still carried, still said
+    assert "gait 0 of +x" not in err, err
+
+
 def test_a_shared_coil_sits_at_the_same_limb_whatever_the_order_of_the_actuator_tables(tmp_path, caplog):
     """A coil's home was "the limb of the coil's own index if that limb names it, else the first
     limb naming it": listing [[actuator]] b before a moved a shared coil from the tail to the

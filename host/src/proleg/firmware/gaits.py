@@ -104,22 +104,31 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
 
     Ties whose steps each move limbs one way only come first (stable otherwise), so that
     gait 0, the one START and ``proleg sim`` run by default, is the easiest to make
-    physically (``proleg.states.opposing_steps``); and a tie the hardware cannot make at all
-    (``CANNOT_MAKE``: a shared coil moving its limbs apart, a state a raised limb cannot reach on
-    the simulated body, no way in from rest) is never
-    gait 0 while another can be made (the build refused the robot, though a tie it could
-    walk was there)."""
+    physically (``proleg.states.opposing_steps``). Gait 0 is then the first tie without an
+    error (``gait_problems``), else the first the hardware can make at all: a tie the hardware
+    cannot make (``CANNOT_MAKE``: a shared coil moving its limbs apart, a state a raised limb
+    cannot reach on the simulated body, no way in from rest) is never gait 0 while another can
+    be made (the build refused the robot, though a tie it could walk was there), and one the
+    firmware would stop (a state the body cannot hold, a step longer than the state timeout, a
+    coil past its on-time: "expect a fault") is not gait 0 while a tie it would walk exists."""
     from ..gait import optimal_gaits
     from ..gait.feasibility import gait_problems
     from ..states import opposing_steps
 
-    def makeable(g) -> bool:
-        return not cannot_make(gait_problems(robot, g.states))
+    def errors(g) -> list:
+        return [p for p in gait_problems(robot, g.states) if p.severity == "error"]
 
     def ordered(gaits):
         out = sorted(gaits, key=lambda g: len(opposing_steps(g.states, robot.levels)))
-        if out and not makeable(out[0]):  # checked one by one: ties may number thousands
-            first = next((k for k, g in enumerate(out) if makeable(g)), None)
+        if out and errors(out[0]):
+            first = None
+            for k, g in enumerate(out):  # one by one, to the first clean tie: ties may number thousands
+                e = errors(g)
+                if not e:
+                    first = k
+                    break
+                if first is None and not cannot_make(e):
+                    first = k
             if first is not None:
                 out.insert(0, out.pop(first))
         return tuple(out)
