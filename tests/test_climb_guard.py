@@ -281,13 +281,18 @@ def test_only_the_loaded_gait_may_leave_its_way_unstated():
         direction_code(UNSTATED, 0)
 
 
-def test_four_limbs_read_the_slope_from_the_first_and_last_ends():
-    robot = load_robot(robots_dir() / "caterpillar-4.toml")  # { "+x" = [1.5, 1], "-x" = [3, 3.5] }
+def test_four_limbs_read_the_slope_from_the_first_and_last_ends(tmp_path):
+    path = robots_dir() / "caterpillar-4.toml"
+    robot = load_robot(path)  # { "+x" = 1, "-x" = 3 }
     assert _refused(_start_on(robot, 4.0, "+x"))
     assert _refused(_start_on(robot, -4.0, "-x"))
     assert not _refused(_start_on(robot, -4.0, "+x"))  # downhill
     assert _refused(_start_on(robot, 2.2, "+x"))  # 2.2° up: more than +x climbs
     assert not _refused(_start_on(robot, -2.2, "-x"))  # 2.2° up: -x climbs it
+    listed = tmp_path / "c4.toml"  # each of the first two +x gaits its own limit
+    listed.write_text(path.read_text(encoding="utf-8").replace(
+        'max_climb_deg = { "+x" = 1, "-x" = 3 }', 'max_climb_deg = { "+x" = [1.5, 1], "-x" = 3 }'), encoding="utf-8")
+    robot = load_robot(listed)
     assert not _refused(_start_on(robot, 1.25, "+x"))  # limits 1.5° for gait 0, 1° for gait 1
     assert _refused(_start_on(robot, 1.25, "+x", gait=1))
 

@@ -348,13 +348,17 @@ def test_the_documented_next_step_gait_with_a_variance_weight_runs_on_a_one_dime
 
 
 def test_per_gait_climb_limits_become_their_smallest_so_the_learned_file_builds(tmp_path):
-    """caterpillar-4 gives each of its first two gaits of a way its own climb limit. Learned on
-    the physical plant, its matrix ranked one +x gait first and `proleg build`/`sim` of the
+    """caterpillar-4 with each of its first two gaits of a way given its own climb limit. Learned
+    on the physical plant, its matrix ranked one +x gait first and `proleg build`/`sim` of the
     learned file stopped: "control.max_climb_deg.+x: 2 limits, but the firmware carries 1 gait"."""
     from proleg.firmware.gaits import firmware_gaits
     from proleg.robot_climb import check_climb_limit
 
-    robot = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text(encoding="utf-8")
+    line = next(ln for ln in text.splitlines() if ln.startswith("max_climb_deg"))
+    src = tmp_path / "c4.toml"
+    src.write_text(text.replace(line, 'max_climb_deg = { "+x" = [1.5, 1], "-x" = [3, 3.5] }'), encoding="utf-8")
+    robot = load_robot(src)
     t = robot.transitions
     given_limit = robot.control.max_climb_deg
     assert given_limit.plus_x_gaits and given_limit.minus_x_gaits  # the file's lists, per gait

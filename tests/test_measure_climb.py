@@ -26,16 +26,38 @@ def test_the_bisection_finds_the_steepest_grade_a_brute_force_scan_finds(thresho
 
     calls = []
 
-    def walks(robot, states, direction, grade, conditions=()):
+    def mm(robot, states, direction, grade, conditions=()):
         calls.append(grade)
-        return grade <= threshold
+        return 1.0 if grade <= threshold else -0.5
 
-    with mock.patch.object(climb, "walks_up", walks):
+    with mock.patch.object(climb, "climb_mm", mm):
         got = climb.steepest_climb(None, (0, 3), "+x")
     grid = [k * climb.RESOLUTION_DEG for k in range(round(climb.TOP_DEG / climb.RESOLUTION_DEG) + 1)]
     climbed = [g for g in grid if g <= threshold]
     assert got == (max(climbed) if climbed else None)
     assert len(calls) <= 2 + 6  # 48 steps: bisection, not a scan
+
+
+@settings(max_examples=60, deadline=None)
+@given(rates=st.lists(st.floats(-1.0, 1.0), min_size=49, max_size=49).map(lambda r: sorted(r, reverse=True)))
+def test_a_grade_climbed_at_under_5_percent_of_the_flat_speed_is_not_climbed(rates):
+    """Speeds that fall with the grade (one per 0.25° grid step, the flat's first): the steepest
+    grade climbed is the steepest on which the robot still makes 5 % of its flat speed up the
+    slope, as a scan finds; a robot that does not move up on the flat climbs nothing (None)."""
+    from unittest import mock
+
+    from proleg.sim.physical import climb
+
+    def mm(robot, states, direction, grade, conditions=()):
+        return rates[round(grade / climb.RESOLUTION_DEG)]
+
+    with mock.patch.object(climb, "climb_mm", mm):
+        got = climb.steepest_climb(None, (0, 3), "+x")
+    if rates[0] <= 0:
+        assert got is None
+    else:
+        climbed = [k for k, r in enumerate(rates) if r > 0.05 * rates[0]]
+        assert got == max(climbed) * climb.RESOLUTION_DEG
 
 
 def test_each_direction_is_suggested_its_own_limit_and_one_that_does_not_move_takes_the_others():

@@ -254,6 +254,7 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     from ..firmware.build import firmware_gaits
     from ..robot_climb import climb_guard_refusal
     from ..sim.physical.climb import (
+        BARELY_MOVES,
         RESOLUTION_DEG,
         TOP_DEG,
         steepest_climb,
@@ -289,7 +290,8 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
              "gait 0 of each direction (--climb-gaits N: the first N; --all-gaits: every one)" if first == 1 else
              f"the first {first} gaits of each direction")
     print(f"{robot.name}: the steepest grade climbed by {which} on the physical plant (idealised drive within the "
-          f"safety envelope, {RESOLUTION_DEG:g}° steps up to {TOP_DEG:g}°)")
+          f"safety envelope, {RESOLUTION_DEG:g}° steps up to {TOP_DEG:g}°; climbed: at least {BARELY_MOVES:.0%} of the "
+          "flat's speed up the slope)")
     for direction, per in climbs.items():
         for i, climb in enumerate(per):
             text = ("does not move that way even on the flat (not counted)" if climb is None

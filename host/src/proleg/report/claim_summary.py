@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from ..sim.physical.drive import BARELY_MOVES
 from .claim import OVERHEAT_C, OVERHEATED, ConditionResult, DriveOutcome
 
 
@@ -18,7 +19,7 @@ def _clean_stop(fb: DriveOutcome) -> bool:
 
 #: The idealised drive "walks" a row when it makes at least this share of its nominal speed the
 #: right way; below it, comparing the firmware's speed with it says nothing.
-IDEALISED_FLOOR = 0.05
+IDEALISED_FLOOR = BARELY_MOVES
 
 
 def _learned_summary(results: Sequence[ConditionResult], nominal: ConditionResult, sign: float) -> dict[str, Any]:

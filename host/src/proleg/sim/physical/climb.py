@@ -3,9 +3,13 @@
 
 ``steepest_climb`` walks the gait with the idealised drive (true ψ, the firmware's duties, within
 its safety envelope: ``drive.walk_within_envelope``) up ever steeper ground, by
-bisection, and returns the steepest grade on which it still moves up the slope. Bisection
-assumes a gait that slides back on a grade also slides back on every steeper one (true of every
-example robot measured half a degree at a time, docs/calibration.md).
+bisection, and returns the steepest grade on which it still climbs: moves up the slope at
+least ``drive.BARELY_MOVES`` (5 %) of its speed on the flat. Less is the knife edge between
+climbing and sliding back, where a stick or a slip decides and 0.01° of shape changes the
+answer (inchworm-3 made +0.008 mm a cycle, 3 % of its flat speed, from 4.25° to 5.5°, and
+slid back at 5.75°: that is no grade it climbs). Bisection assumes a gait that does not climb a
+grade does not climb any steeper one (true of every example robot measured half a degree at a
+time, docs/calibration.md).
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ...robot_climb import MIN_CLIMB_DEG, ClimbLimit
-from .drive import walk_within_envelope
+from .drive import BARELY_MOVES, walk_within_envelope
 
 #: The plant's steepest ground (conditions.py: incline_deg in −12..12).
 TOP_DEG = 12.0
@@ -25,16 +29,25 @@ RESOLUTION_DEG = 0.25
 SUGGEST_STEP_DEG = 0.5
 
 
-def walks_up(robot: Any, states: Sequence[int], direction: str, grade_deg: float,
-             conditions: Sequence[str] = ()) -> bool:
-    """Does the idealised drive move the robot up a grade of ``grade_deg`` walking ``states``
-    in ``direction`` (the ground rising that way)?"""
+def climb_mm(robot: Any, states: Sequence[int], direction: str, grade_deg: float,
+             conditions: Sequence[str] = ()) -> float | None:
+    """How far up a grade of ``grade_deg`` (the ground rising in ``direction``) the idealised
+    drive moves the robot a cycle walking ``states`` (mm, negative sliding back); None where a
+    state is not reached or the envelope latches a fault."""
     from ..closed_loop import make_plant
 
     sign = 1 if direction == "+x" else -1
     plant = make_plant(robot, "physical", [*conditions, f"incline_deg={sign * grade_deg:g}"])
     mm = walk_within_envelope(robot, states, plant).mm_per_cycle
-    return mm is not None and sign * mm > 0
+    return None if mm is None else sign * mm
+
+
+def walks_up(robot: Any, states: Sequence[int], direction: str, grade_deg: float,
+             conditions: Sequence[str] = (), *, floor_mm: float = 0.0) -> bool:
+    """Does the idealised drive move the robot up a grade of ``grade_deg`` walking ``states``
+    in ``direction``, by more than ``floor_mm`` a cycle?"""
+    mm = climb_mm(robot, states, direction, grade_deg, conditions)
+    return mm is not None and mm > floor_mm
 
 
 def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions: Sequence[str] = (), *,
@@ -44,14 +57,16 @@ def steepest_climb(robot: Any, states: Sequence[int], direction: str, conditions
     steps = top_deg / resolution_deg
     if abs(steps - round(steps)) > 1e-9:
         raise ValueError(f"top_deg {top_deg} is not a whole number of {resolution_deg}° steps")
-    if not walks_up(robot, states, direction, 0.0, conditions):
+    flat = climb_mm(robot, states, direction, 0.0, conditions)
+    if flat is None or flat <= 0:
         return None
-    if walks_up(robot, states, direction, top_deg, conditions):
+    floor = BARELY_MOVES * flat
+    if walks_up(robot, states, direction, top_deg, conditions, floor_mm=floor):
         return top_deg
-    lo, hi = 0, round(steps)  # in steps: climbs lo, slides back at hi
+    lo, hi = 0, round(steps)  # in steps: climbs lo, not hi
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        if walks_up(robot, states, direction, mid * resolution_deg, conditions):
+        if walks_up(robot, states, direction, mid * resolution_deg, conditions, floor_mm=floor):
             lo = mid
         else:
             hi = mid

@@ -29,6 +29,12 @@ from .plant import PhysicalPlant
 #: measured matrix is defined at.
 MARGIN_DEG = 4.0
 
+#: A walk at less than this share of a reference speed (the nominal row's, the flat's) barely
+#: moves: the claim bench counts no row against the firmware where the idealised drive makes
+#: less (report.claim_summary), ``proleg check`` calls such a row "drifted", and a grade up
+#: which the gait makes less is one it does not climb (``climb.steepest_climb``).
+BARELY_MOVES = 0.05
+
 
 #: The firmware's stroke rules (core/ctl.h) the idealised drive follows: how long a limb falling
 #: behind the fall lead is held at its stroke at most (CTL_FALL_WAIT_MS) and how far down the
