@@ -104,3 +104,48 @@ def test_d1_on_a_three_level_limb_says_to_list_the_materials(tmp_path):
     values = ['"D1"' if k == 3 else '"D2"' for k in levels]
     with pytest.raises(RobotFileError, match="friction: D1 describes 2 levels, the limb has 3; give a list of 3"):
         load_robot(with_friction(tmp_path, "caterpillar-4", *values))
+
+
+def _inchworm_with_plant(tmp_path: Path, plant: str) -> Path:
+    """robots/inchworm-3.toml (no friction: its mechanisms are inferred) with a [plant] table."""
+    text = (robots_dir() / "inchworm-3.toml").read_text()
+    path = tmp_path / "inchworm-3.toml"
+    path.write_text(text + "\n[plant]\n" + plant + "\n" if "[plant]" not in text else text.replace("[plant]", "[plant]\n" + plant, 1))
+    return path
+
+
+def test_the_mechanisms_are_inferred_on_the_robot_files_body(tmp_path):
+    """The inference swept a body with the default overlap_mm, not the file's: a 200 mm
+    three-limb body whose coils do not overlap (each coil's section bends 172°) loaded without
+    a word, and `proleg sim` refused it, "coil 2 spans 116 mm … bends it by 199°" (the 100 mm
+    section plus the default 8 mm each side), a body the file does not describe."""
+    r = load_robot(_inchworm_with_plant(tmp_path, "length_mm = 200\noverlap_mm = 0"))
+    plant = PhysicalPlant(r)
+    assert plant.mechanism_source == "inferred from the matrix"
+    assert [round(b - a) for a, b in plant.geometry.spans] == [50, 100, 50]
+
+
+def test_the_inference_is_not_shared_by_robots_of_other_bodies(tmp_path):
+    """The inference's cache took the matrix, limbs and coils as its key, not the body: a second
+    robot of the same matrix on another body got the first one's answer in one process."""
+    from proleg.sim.physical import mechanism
+    from proleg.sim.physical.measure import kinematic_signs_all
+
+    seen = []
+    real = kinematic_signs_all
+
+    def spy(robot, combos, **kw):
+        seen.append(robot.plant.length_mm)
+        return real(robot, combos, **kw)
+
+    mechanism._CACHE.clear()
+    import proleg.sim.physical.measure as measure
+    old, measure.kinematic_signs_all = measure.kinematic_signs_all, spy
+    try:
+        for length in (90, 110):
+            sub = tmp_path / str(length)
+            sub.mkdir()
+            PhysicalPlant(load_robot(_inchworm_with_plant(sub, f"length_mm = {length}")))
+    finally:
+        measure.kinematic_signs_all = old
+    assert seen == [90, 110]

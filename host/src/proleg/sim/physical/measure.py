@@ -171,6 +171,25 @@ def _counting_on(on_step: Callable[[int, int, int], None] | None, measured: Sequ
     return lambda tried, sampled, total: on_step(done * total + tried, sampled_before + sampled, total * n_margins)
 
 
+#: The physical conditions that shape the body rather than the run (``body.body_geometry``):
+#: a kinematic sweep takes them from the robot file's ``[plant]``, and no others.
+BODY_CONDITIONS = ("overlap_mm",)
+
+
+def body_conditions(robot: Any) -> Conditions:
+    """Nominal conditions on the robot file's body: its ``[plant]`` values of
+    ``BODY_CONDITIONS``, every other condition at its default. A sweep on ``Conditions()``
+    posed the default overlap_mm, not the file's: a 200 mm three-limb body with
+    ``overlap_mm = 0`` was refused by ``proleg sim`` as curling over itself (its middle coil
+    taken to span 116 mm, not 100) while inferring its friction mechanisms."""
+    from .conditions import conditions_from_section
+
+    full = conditions_from_section(getattr(robot, "plant", None), [a.name for a in robot.actuators],
+                                   [lb.name for lb in robot.limbs])
+    return Conditions({k: v for k, v in full.values.items() if k in BODY_CONDITIONS},
+                      {k: dict(v) for k, v in full.named.items() if k in BODY_CONDITIONS})
+
+
 def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float = MARGIN_DEG,
                     rate_per_s: float = 1.0, dt_s: float = 0.005) -> np.ndarray:
     """Displacement per allowed transition (mm) with the coils' contractions moved directly
@@ -187,7 +206,7 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
     gap changes, the loads and the centre of mass's offset; each assignment then replays only
     the anchor/slip solve (``PhysicalPlant._move`` itself, on a plant of its own)."""
     names = [tuple(a) for a in assignments]
-    plant = PhysicalPlant(robot, Conditions(), mechanisms=names[0])
+    plant = PhysicalPlant(robot, body_conditions(robot), mechanisms=names[0])
     drive = IdealDrive(robot, plant, margin_deg)
     _, allowed = robot.transitions.dense()
     n = len(allowed)
@@ -240,7 +259,7 @@ def _replay(robot: Any, names: Sequence[tuple[str, ...]],
     anchor/slip solve (``PhysicalPlant._move``) on the pose's gap changes, so the numbers are
     the plant's by construction. Returns (assignments, len(poses) + 1). Sets the plant's own
     fields: one package."""
-    plants = [PhysicalPlant(robot, Conditions(), mechanisms=name) for name in names]
+    plants = [PhysicalPlant(robot, body_conditions(robot), mechanisms=name) for name in names]
     x0 = np.zeros((len(names), len(poses) + 1))
     for m, p in enumerate(plants):
         x0[m, 0] = p._x0

@@ -83,8 +83,22 @@ def _infer(robot: Any) -> tuple[str, ...]:
            tuple((lb.name, tuple(lb.psi_star_deg), lb.actuator, getattr(lb, "stroke_deg", None))
                  for lb in robot.limbs),
            tuple((a.name, a.channel) for a in robot.actuators),
-           stroke_leads(robot.limbs, getattr(robot, "control", None)))  # the drive follows strokes
+           stroke_leads(robot.limbs, getattr(robot, "control", None)),  # the drive follows strokes
+           _body_key(robot))
     return _infer_cached(key, robot)
+
+
+def _body_key(robot: Any) -> tuple:
+    """What else the sweep depends on: each limb's band and the hold margin (where the drive
+    holds it) and the body (``[plant]``: length, stiffness, the physical keys such as the coils'
+    overlaps). Without it a second robot of the same matrix on another body got the first one's
+    mechanisms in one process."""
+    plant = getattr(robot, "plant", None)
+    physical = getattr(plant, "physical", None) or {}
+    return (tuple(float(getattr(lb, "hysteresis_deg", 0.0)) for lb in robot.limbs),
+            float(getattr(getattr(robot, "control", None), "hold_margin_deg", 0.0) or 0.0),
+            repr(getattr(plant, "length_mm", None)), repr(getattr(plant, "working_strain", None)),
+            repr(sorted(physical.items())))
 
 
 # Inference is a pure function of the robot's limbs, actuators and matrix; memoised so that
