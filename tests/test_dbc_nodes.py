@@ -67,3 +67,25 @@ def test_dbc_refuses_to_write_over_its_own_robot_file(tmp_path, capsys):
     assert code == 2 and robot.read_text() == text
     assert err == f"proleg: error: dbc: -o {link} is the --robot file this command reads; " \
                   "write the output to another path\n"
+
+
+def test_limbs_named_in_another_script_stay_apart(tmp_path):
+    """Every character outside ASCII was '_' in an identifier, so any two names of one length in
+    another script (a lab's 前 and 后, or é and è) were one identifier and the robot file was
+    refused, though the docs take "any printable text". Each such character is now its code
+    point: the names load, and their CAN signals and recording columns stay apart."""
+    from types import SimpleNamespace as NS
+
+    from proleg.names import identifier
+    from proleg.robot import load_robot
+
+    assert identifier("sma-left") == "sma_left" and identifier("a-1") == identifier("a_1") == "a_1"
+    assert identifier("前") == "u524d" and identifier("后") == "u540e" and identifier("tête avant") == "tu00eate_avant"
+    r1 = (Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").read_text()
+    for a, b in (("前", "后"), ("é", "è"), ("Ψ 1", "Φ 1")):
+        path = tmp_path / "r.toml"
+        path.write_text(r1.replace('name = "left"', f'name = "{a}"').replace('name = "right"', f'name = "{b}"'))
+        assert [lb.name for lb in load_robot(path).limbs] == [a, b]
+    db = build_database(robot=NS(limbs=[NS(name="前"), NS(name="后")], actuators=[NS(name="sma-a")]))
+    names = {s.name for m in db.messages if m.name.startswith("TELEMETRY") for s in m.signals}
+    assert {"psi_u524d", "psi_u540e"} <= names

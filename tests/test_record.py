@@ -673,3 +673,15 @@ def test_an_earlier_recording_of_the_same_name_stays_until_the_new_one_records(t
     record(path, frames=40)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(earlier)  # no .proleg-new left
     assert len(read_recording(path).time_s) == 40
+
+
+def test_a_recording_made_before_names_kept_their_script_still_reads(tmp_path):
+    """Recordings made before non-ASCII characters were written as their code points name such a
+    limb's column with '_' (tête → t_te): read back, its ψ is that column, not missing."""
+    meta = RecordingMeta(robot="x", limb_names=("tête", "b"), channel_names=("sma-a",))
+    row = {"t_host_s": 0.0, "t_s": 0.0, "seq": 0, "measured": 0, "target": 0, "step": 0, "flags": 0,
+           "psi_t_te_deg": 12.5, "psi_b_deg": 3.0, "duty_sma_a_pct": 0.0}
+    from proleg.record.base import Recording
+
+    rec = Recording.from_rows(tmp_path / "old.csv", meta, [("old.csv:2", row)], [])
+    assert rec.psi_deg.tolist() == [[12.5, 3.0]]

@@ -11,7 +11,19 @@ import re
 
 
 def identifier(name: str) -> str:
-    """``name`` with every character other than ASCII letters, digits and ``_`` made ``_``."""
+    """``name`` as an identifier: ASCII letters, digits and ``_`` kept, every other ASCII
+    character ``_`` (``sma-left`` → ``sma_left``), and every character beyond ASCII its code
+    point (``前`` → ``u524d``, ``tête`` → ``tu00eate``). Making those ``_`` too gave any two
+    names of one length in another script (前 and 后, é and è) the same identifier, and the
+    robot file was refused."""
+    return "".join(c if c.isascii() and (c.isalnum() or c == "_") else "_" if c.isascii() else f"u{ord(c):04x}"
+                   for c in name)
+
+
+def legacy_identifier(name: str) -> str:
+    """What ``identifier`` gave before it kept other scripts' characters (every character
+    other than ASCII letters, digits and ``_`` made ``_``): the column names of recordings
+    made then, which ``record`` still reads."""
     return re.sub(r"[^0-9A-Za-z_]", "_", name)
 
 

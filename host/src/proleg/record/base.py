@@ -25,7 +25,7 @@ from ..errors import LinkError, RecordingError
 from .. import interrupts
 from ..link.client import Received
 from ..link.listeners import Listener
-from ..names import identifier
+from ..names import identifier, legacy_identifier
 from .fields import RecordingMeta, event_row, injection_row, telemetry_row
 
 log = logging.getLogger(__name__)
@@ -239,6 +239,17 @@ def _number(where: str, r: dict[str, Any], k: str, *, optional: bool = False) ->
                          f"got {_shown(v)}")
 
 
+def _column(rows: list[tuple[str, dict[str, Any]]], field: str, name: str, unit: str) -> str:
+    """The column of limb or actuator ``name``: ``field_<identifier>_unit``, or, where no row
+    has it, the name a recording made before identifiers kept other scripts' characters gave
+    it (``names.legacy_identifier``)."""
+    col = f"{field}_{identifier(name)}_{unit}"
+    old = f"{field}_{legacy_identifier(name)}_{unit}"
+    if old != col and not any(col in r for _, r in rows) and any(old in r for _, r in rows):
+        return old
+    return col
+
+
 def event_time(where: str, e: dict[str, Any]) -> float | None:
     """An event's firmware time ``t_s`` (None for a reply, which has none)."""
     return None if e.get("t_s") is None else _number(where, e, "t_s")
@@ -277,8 +288,8 @@ class Recording:
         came from (``file:line``) for the message when a value has the wrong type."""
         if not rows:
             raise RecordingError(f"{path}: no TELEMETRY frames in the recording")
-        psi_cols = [f"psi_{identifier(n)}_deg" for n in meta.limb_names]
-        duty_cols = [f"duty_{identifier(n)}_pct" for n in meta.channel_names]
+        psi_cols = [_column(rows, "psi", n, "deg") for n in meta.limb_names]
+        duty_cols = [_column(rows, "duty", n, "pct") for n in meta.channel_names]
         ints = {k: np.array([_integer(w, r, k) for w, r in rows], dtype=np.int64)
                 for k in ("seq", "measured", "target", "step", "flags")}
         x = np.array([_number(w, r, "displacement_mm", optional=True) for w, r in rows], dtype=float)
