@@ -789,3 +789,14 @@ def test_a_debounce_longer_than_the_state_timeout_is_refused(tmp_path):
     assert load_robot(write(tmp_path, R1 + slow.format(199))).control.debounce_ticks == 199
     assert load_robot(write(tmp_path, R1 + slow.format(50))).control.debounce_ticks == 50
     assert load_robot(write(tmp_path, R1 + "\n[control]\ndebounce_ticks = 1000\n")).control.debounce_ticks == 1000
+
+
+@pytest.mark.parametrize("old, new, where", [
+    ('name = "t"', 'name = "-"', "robot.name"),
+    ('name = "t"', 'name = "-r1"', "robot.name"),
+    ('name = "a"', 'name = "-a"', "actuator '-a': name"),
+])
+def test_a_name_starting_with_a_dash_is_told_it_must_not(tmp_path, old, new, where):
+    """'-' was refused as "expected lowercase letters, digits and '-', 1 to 63 characters,
+    got '-'": every character was one the message allows. The first may not be a '-'."""
+    rejects(tmp_path, R1.replace(old, new, 1), where, "lowercase letters, digits and '-' (not first)")

@@ -179,7 +179,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     head = Fields(path, "robot", doc["robot"], {"name", "description"})
     name = head.string("name")
     if not ROBOT_NAME_RE.fullmatch(name):
-        head.fail("name", "lowercase letters, digits and '-', 1 to 63 characters", name)
+        head.fail("name", "lowercase letters, digits and '-' (not first), 1 to 63 characters", name)
     description = head.string("description", "")
 
     actuators = _actuators(path, doc["actuator"])

@@ -94,7 +94,7 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
         f = Fields(path, _entry("actuator", i, t), t, {"name", "channel"}, sep=": ")
         name = f.string("name")
         if not NAME_RE.fullmatch(name):
-            f.fail("name", "lowercase letters, digits and '-', 1 to 15 characters", name)
+            f.fail("name", "lowercase letters, digits and '-' (not first), 1 to 15 characters", name)
         if any(a.name == name for a in out):
             f.fail("name", "a name no other actuator has", name)
         channel = f.integer("channel", i, 0, MAX_ACTUATORS - 1)

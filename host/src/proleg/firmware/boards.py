@@ -308,7 +308,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     }
     name = _need(path, doc, "board", "name", str)
     if not BOARD_NAME_RE.fullmatch(name):
-        raise BoardError(f"{path}: board.name: expected lowercase letters, digits and '-', 1 to 15 characters "
+        raise BoardError(f"{path}: board.name: expected lowercase letters, digits and '-' (not first), 1 to 15 characters "
                          f"(INFO carries 15), got {name!r}")
     description = doc["board"].get("description", "")
     if not isinstance(description, str):
