@@ -470,3 +470,20 @@ def test_more_on_a_fresh_log_runs_the_extra_trials_after_the_first_ones(tmp_path
     assert sum(int(r[1]) for r in rows.values()) > 12 * 3 + 12  # then the extra trials
     # what is left is what the new trials' variances ask for: not "run them with --more"
     assert re.search(r"extra trials for ± 1: \d+ \(still, after --more: ", out), out
+
+
+@pytest.mark.parametrize("matrix, why", [
+    ('[[0, "x", "x", "x"], ["x", 0, "x", "x"], ["x", "x", 0, "x"], ["x", "x", "x", 0]]', "allows no transition"),
+    ('[[0, "x", "x", "x"], ["x", 0, 1, "x"], [-1, "x", 0, "x"], ["x", "x", "x", 0]]',
+     "none of its 2 allowed transitions is on a closed tour from rest"),
+])
+def test_a_robot_with_nothing_to_explore_is_told_so_before_the_log_is_created(tmp_path, capsys, matrix, why):
+    """Every entry "x" (or no allowed transition reachable from rest and back): learn --sim
+    created the log, explored nothing and said "t.jsonl holds no trial with a measured motion;
+    nothing to write", naming the log, not the robot file that allows nothing to explore."""
+    robot = tmp_path / "r.toml"
+    robot.write_text(re.sub(r"matrix = \[\n.*?\n\]\n", f"matrix = {matrix}\n", R1.read_text(), count=1, flags=re.S))
+    log = tmp_path / "t.jsonl"
+    code, out, err = run(capsys, "learn", str(robot), "--sim", "--log", str(log), "--repeats", "1")
+    assert code == 2 and out == "" and not log.exists()
+    assert err.startswith(f"proleg: error: learn: {robot}: ") and why in err and len(err.strip().splitlines()) == 1

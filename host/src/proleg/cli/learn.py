@@ -137,6 +137,8 @@ def cmd_learn(args: argparse.Namespace) -> int:
     linked = bool(args.port or args.can or args.sim)
     source = _check_options(args, linked)
     truth = _checked_truth(args, robot)  # before the log is created: a bad option leaves no file
+    if linked:
+        _check_explorable(robot)
     # and so is the link: a board that does not answer, or runs another robot, leaves no file either
     client, pose = _connect(args, robot, truth, source) if linked else (None, None)
     try:
@@ -342,6 +344,27 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
         else:
             log.info("learn: stopped after %d pieces (--max-pieces): %d of %d done; run the same command "
                      "to go on", ex.pieces_run, done, done + todo)
+
+
+def _check_explorable(robot) -> None:
+    """``LearnError`` for a robot whose file leaves nothing to explore: no allowed transition,
+    or none on a closed tour from rest (each unreachable from rest or without a way back). It
+    created the log, explored nothing and ended in an empty report (exit 0), or, with --out,
+    "t.jsonl holds no trial with a measured motion", naming the log, not the robot file."""
+    from ..learn.tours import exploration, unexplorable
+
+    t = robot.transitions
+    where = getattr(robot, "where", robot.name)
+    if t.n_transitions == 0:
+        raise LearnError(f"learn: {where}: the robot file allows no transition (its table forbids every one): "
+                         "nothing to explore")
+    unreachable, one_way = unexplorable(t, exploration(t, 1).uncoverable)
+    if len(unreachable) + len(one_way) >= t.n_transitions:
+        parts = [f"{len(x)} {why} ({', '.join(x[:5])}{', …' if len(x) > 5 else ''})"
+                 for x, why in ((unreachable, "unreachable from rest"), (one_way, "one-way, no allowed way back")) if x]
+        raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is on a closed tour "
+                         f"from rest ({'; '.join(parts)}): nothing to explore; allow the transitions that lead "
+                         "there from rest and back in the matrix")
 
 
 def _explored(t, repeats: int) -> str:
