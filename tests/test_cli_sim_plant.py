@@ -282,3 +282,32 @@ def test_a_run_without_a_cycle_or_a_fault_says_why(capsys, tmp_path):
     assert "NOTE: no cycle completed in 20 s, and no fault: each step holds its state control.hold_ms = 30000 ms" in out
     assert main(["sim", str(ROBOTS / "paper-r1.toml"), "--duration", "20"]) == 0
     assert "NOTE: no cycle" not in capsys.readouterr().out
+
+
+ONE_LIMB = """[robot]
+name = "one"
+
+[[limb]]
+name = "only"
+psi_star_deg = [20.0]
+actuator = "sma"
+
+[[actuator]]
+name = "sma"
+
+[transitions]
+matrix = [[0, 1], [-0.5, 0]]
+"""
+
+
+@pytest.mark.parametrize("argv", [["check", "--rows", "1"], ["sim", "--measure-matrix"], ["sim", "--duration", "2"]])
+def test_a_one_limb_robot_on_the_physical_plant_is_told_what_can_simulate_it(tmp_path, capsys, argv):
+    """It was "physical plant: one has one limb; … (--plant table simulates it from its
+    matrix)": no robot file named, and `proleg check` (and --measure-matrix) take no --plant
+    table. The line names the file and the command that simulates such a robot."""
+    robot = tmp_path / "one.toml"
+    robot.write_text(ONE_LIMB)
+    code, out, err = run(capsys, argv[0], str(robot), *argv[1:])
+    assert code == 2 and out == ""
+    assert err.startswith(f"proleg: error: {robot}: the physical plant needs two limbs at least") and \
+        "proleg sim --plant table" in err and len(err.strip().splitlines()) == 1

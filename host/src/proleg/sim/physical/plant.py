@@ -71,8 +71,10 @@ class PhysicalPlant:
         self._rng = random.Random(seed)
         nl, na = len(limbs), len(acts)
         if nl < 2:
-            raise SimError(f"physical plant: {robot.name} has one limb; a body crawls on two contacts at "
-                           "least (--plant table simulates it from its matrix)")
+            raise SimError(f"{getattr(robot, 'path', robot.name)}: the physical plant needs two limbs at least (a "
+                           f"body crawls on two contacts), and {robot.name} has one: `proleg sim --plant table` "
+                           "simulates it from its matrix; `proleg check`, --measure-matrix and --measure-climb "
+                           "run on the physical plant only")
         self._nl, self._na = nl, na
 
         # -- friction mechanisms (robot file, override, or inferred from the matrix) ----------
