@@ -400,3 +400,16 @@ def test_build_folds_tens_of_gait_problems_after_the_first_few(capsys, tmp_path)
     code, _, err = run(capsys, "build", str(robot), "--board", "host-sim", "-o", str(tmp_path / "b"), "-v")
     assert code == 0
     assert len([x for x in err.splitlines() if x.startswith("proleg: warning: gait ")]) == BUILD_WARNINGS_SHOWN + int(more[1])
+
+
+@pytest.mark.parametrize("seq, words", [
+    ("000 100 110 000", "'000 100 110 000' is not one state label: separate the states with commas"),
+    ("000;100;000", "'000;100;000' is not one state label: separate the states with commas"),
+    ("@0,@4,@0", "'@0' is not a state label: one digit per limb, 3 digits (e.g. 010)"),
+])
+def test_a_sequence_written_otherwise_is_told_how_to_write_it(capsys, seq, words):
+    """'000 100 110' was "state label '000 100 110' has 11 digits, expected 3": it has 9 digits
+    and two spaces, and the user needed to hear that states are separated by commas; '@0'
+    "has 2 digits"."""
+    code, out, err = run(capsys, "gait", str(ROBOTS / "inchworm-3.toml"), "--evaluate", seq)
+    assert code == 2 and out == "" and err.count("\n") == 1 and words in err
