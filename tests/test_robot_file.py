@@ -800,3 +800,12 @@ def test_a_name_starting_with_a_dash_is_told_it_must_not(tmp_path, old, new, whe
     """'-' was refused as "expected lowercase letters, digits and '-', 1 to 63 characters,
     got '-'": every character was one the message allows. The first may not be a '-'."""
     rejects(tmp_path, R1.replace(old, new, 1), where, "lowercase letters, digits and '-' (not first)")
+
+
+def test_a_stroke_on_a_limb_held_past_the_largest_stroke_says_no_stroke_fits(tmp_path):
+    """ψ* 80° is held at 85° without a stroke, and a stroke may be at most 85°: the message was
+    "expected an angle from 86 (…) to 85 degrees, got 85", a range with nothing in it. It now
+    says no stroke fits that limb and what would make room."""
+    text = R1.replace('psi_star_deg = [20.0]\nactuator = "a"', 'psi_star_deg = [80.0]\nactuator = "a"\nstroke_deg = 85')
+    err = rejects(tmp_path, text, "limb 'left': stroke_deg:")
+    assert "from 86" not in err and "no stroke fits this limb" in err and "85" in err

@@ -171,6 +171,12 @@ def _check_strokes(path: Path, control: Control, limbs: Sequence[Limb]) -> None:
         if lb.stroke_deg is None:
             continue
         lo = lb.psi_star_deg[-1] + lb.hysteresis_deg / 2 + control.hold_margin_deg + 1.0
+        if lo > STROKE_MAX_DEG:  # "from 86 to 85 degrees" was a range with nothing in it
+            raise RobotFileError(
+                f"{path}: limb {lb.name!r}: stroke_deg: no stroke fits this limb: a stroke lies at least 1° above "
+                f"where it is held without one ({lo - 1:g}°: psi* {lb.psi_star_deg[-1]:g} + hysteresis/2 + "
+                f"control.hold_margin_deg) and at most {STROKE_MAX_DEG:g}°; lower its top psi_star_deg or "
+                f"control.hold_margin_deg, or leave stroke_deg out, got {lb.stroke_deg:g}")
         if not lo <= lb.stroke_deg <= STROKE_MAX_DEG:
             # the firmware holds it between stroke_deg and 1° above (psi.c: edges within ±89°)
             raise RobotFileError(
