@@ -404,3 +404,14 @@ def test_inject_names_the_ends_as_the_conditions_do():
     assert [bool(a) for a in sim.plant.alive] == [True, False, True, True]  # sma-rear, not sma-tail
     with pytest.raises(Exception, match=r"\(tail, rear, front, head or 0..3\)"):
         sim.inject("imu-stuck:nose")
+
+
+def test_more_actuators_than_the_boards_pwm_channels_says_no_numbering_fits(tmp_path):
+    """Eight coils on the Nano named only the first actuator past its 4 channels: renumbering
+    that one led to "a channel no other actuator uses", and only then to the real limit. The
+    line now says the robot has more actuators than the board has channels, and what fits."""
+    robot = load_robot(_worm(tmp_path, 8))
+    with pytest.raises(BuildError) as info:
+        build(robot, load_board("arduino-nano"), tmp_path / "nano")
+    msg = str(info.value)
+    assert "has 8 actuators and board arduino-nano drives at most 4" in msg and "share" in msg and "\n" not in msg

@@ -457,4 +457,11 @@ def pwm_channel_error(robot: Any, actuator: Any, board_name: str, pins: Sequence
         nth = f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
         on = (f"(the {nth} [[actuator]], no channel key) is on channel {actuator.channel} by default, its "
               "position")
-    return f"{robot.where}: actuator {actuator.name!r} {on}, but board {board_name} has {len(pins)} PWM channels: {have}"
+    too_many = ""
+    n = len(getattr(robot, "actuators", ()))
+    if n > len(pins):  # no renumbering fits: say so, not only which channel is out of range
+        too_many = (f"; {robot.name} has {n} actuators and board {board_name} drives at most {len(pins)}: share "
+                    f"coils between limbs (several [[limb]]s naming one [[actuator]]) or build for a board with "
+                    f"more PWM channels")
+    return (f"{robot.where}: actuator {actuator.name!r} {on}, but board {board_name} has {len(pins)} PWM channels: "
+            f"{have}{too_many}")
