@@ -809,3 +809,24 @@ def test_a_stroke_on_a_limb_held_past_the_largest_stroke_says_no_stroke_fits(tmp
     text = R1.replace('psi_star_deg = [20.0]\nactuator = "a"', 'psi_star_deg = [80.0]\nactuator = "a"\nstroke_deg = 85')
     err = rejects(tmp_path, text, "limb 'left': stroke_deg:")
     assert "from 86" not in err and "no stroke fits this limb" in err and "85" in err
+
+
+@pytest.mark.parametrize("psi, hyst, words", [
+    ("[86.0]", 2.0, "the controller holds it raised between 91° and 92° (psi* + hysteresis/2 + "
+                    "control.hold_margin_deg, and 1° above), but the firmware's angles stop at 89°"),
+    ("[-86.0]", 2.0, "lowered, it counts as settled only below -91° (psi* - hysteresis/2 - "
+                     "control.hold_margin_deg), but the firmware's angles stop at -89°"),
+])
+def test_a_hold_or_settle_edge_past_the_firmwares_89_degrees_is_warned_of(tmp_path, caplog, psi, hyst, words):
+    """ψ* 86° loaded without a word: the firmware clamps every hold, hold-top and settle edge to
+    ±89° (psi.c), so the file's 4° hold margin became 2° and the hold band [89°, 89°] nothing."""
+    import logging
+
+    caplog.set_level(logging.WARNING)
+    load_robot(write(tmp_path, R1.replace("psi_star_deg = [20.0]", f"psi_star_deg = {psi}", 1)))
+    lines = [r.getMessage() for r in caplog.records if "89°" in r.getMessage()]
+    assert len(lines) == 1 and "limb 'left'" in lines[0] and words in lines[0], lines
+    caplog.clear()
+    load_robot(write(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [84.0]", 1)
+                     .replace("[transitions]", "[control]\nhold_margin_deg = 1.0\n\n[transitions]")))
+    assert not [r for r in caplog.records if "89°" in r.getMessage()]

@@ -218,6 +218,34 @@ def hold_crossings(path: Path, limbs: Sequence[Limb], hold_margin_deg: float) ->
                        f"(from {hi - h / 2:g}°), so level {k} cannot be held; space them more than {need:g}° "
                        f"apart (hysteresis_deg {h:g} + hold_margin_deg {hold_margin_deg:g} + {HOLD_BAND_DEG:g}), "
                        f"or lower hold_margin_deg or hysteresis_deg")
+        out += _clamped_edges(path, lb, hold_margin_deg)
+    return out
+
+
+#: The firmware's hold, hold-top and settle edges stop at ±this (core/psi.c set_angles).
+EDGE_LIMIT_DEG = 89.0
+
+
+def _clamped_edges(path: Path, lb: Limb, hold_margin_deg: float) -> list[str]:
+    """A warning line for a limb whose hold top (without a stroke: ψ*_top + h/2 + margin + 1°)
+    or settle edge (ψ*_1 − h/2 − margin) lies past ±``EDGE_LIMIT_DEG``: the firmware clamps
+    them there, silently, so the margin the file sets is not the one held."""
+    out = []
+    h = lb.hysteresis_deg
+    if lb.stroke_deg is None:
+        edge = lb.psi_star_deg[-1] + h / 2 + hold_margin_deg
+        if edge + HOLD_BAND_DEG > EDGE_LIMIT_DEG:
+            out.append(f"{path}: limb {lb.name!r}: psi_star_deg {lb.psi_star_deg[-1]:g}°: the controller holds it "
+                       f"raised between {edge:g}° and {edge + HOLD_BAND_DEG:g}° (psi* + hysteresis/2 + "
+                       f"control.hold_margin_deg, and {HOLD_BAND_DEG:g}° above), but the firmware's angles stop at "
+                       f"{EDGE_LIMIT_DEG:g}° and it holds the limb there instead, with less margin than the file "
+                       f"says; lower psi_star_deg, control.hold_margin_deg or hysteresis_deg")
+    settle = lb.psi_star_deg[0] - h / 2 - hold_margin_deg
+    if settle < -EDGE_LIMIT_DEG:
+        out.append(f"{path}: limb {lb.name!r}: psi_star_deg {lb.psi_star_deg[0]:g}°: lowered, it counts as settled "
+                   f"only below {settle:g}° (psi* - hysteresis/2 - control.hold_margin_deg), but the firmware's "
+                   f"angles stop at {-EDGE_LIMIT_DEG:g}° and it settles the limb there instead; raise "
+                   f"psi_star_deg, or lower control.hold_margin_deg or hysteresis_deg")
     return out
 
 
