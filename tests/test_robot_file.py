@@ -830,3 +830,12 @@ def test_a_hold_or_settle_edge_past_the_firmwares_89_degrees_is_warned_of(tmp_pa
     load_robot(write(tmp_path, R1.replace("psi_star_deg = [20.0]", "psi_star_deg = [84.0]", 1)
                      .replace("[transitions]", "[control]\nhold_margin_deg = 1.0\n\n[transitions]")))
     assert not [r for r in caplog.records if "89°" in r.getMessage()]
+
+
+@pytest.mark.parametrize("table", ["limb", "actuator"])
+def test_a_repeated_single_bracket_limb_or_actuator_says_to_write_double_brackets(tmp_path, table):
+    """Two limbs written [limb] (one bracket, a table, not an array of tables) were "not valid
+    TOML: Cannot declare ('limb',) twice (at line 10, column 6)": the parser's words, not
+    the fix. The line adds that each one is a [[limb]]."""
+    text = R1.replace("[[limb]]", "[limb]") if table == "limb" else R1.replace("[[actuator]]", "[actuator]")
+    rejects(tmp_path, text, "not valid TOML", f"write each one as [[{table}]] (two brackets)")

@@ -151,7 +151,13 @@ def load_robot(path: str | Path) -> Robot:
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        raise RobotFileError(f"{path}: not valid TOML: {e}") from None
+        hint = ""
+        for table in ("limb", "actuator"):  # [limb] twice: the parser's words name no fix
+            if f"Cannot declare ('{table}',) twice" in str(e) or f"Cannot overwrite a value" in str(e) and \
+                    re.search(rf"^\s*\[{table}\]", text, re.M):
+                hint = f": a robot has one or more {table}s, write each one as [[{table}]] (two brackets)"
+                break
+        raise RobotFileError(f"{path}: not valid TOML: {e}{hint}") from None
     except RecursionError:  # nesting_depth missed a construct: still one line, never a traceback
         raise RobotFileError(f"{path}: not valid TOML: nested too deeply") from None
     return robot_from_dict(doc, path)
