@@ -149,3 +149,15 @@ def test_the_inference_is_not_shared_by_robots_of_other_bodies(tmp_path):
     finally:
         measure.kinematic_signs_all = old
     assert seen == [90, 110]
+
+
+def test_the_mechanisms_are_inferred_on_the_body_the_run_simulates(tmp_path):
+    """`proleg sim ROBOT --condition overlap_mm=0` on a 200 mm three-limb body: the run's body
+    is one the model describes, but the inference swept the file's (overlap 8 mm: the middle coil
+    over 116 mm, 199°) and the run was refused as curling over itself."""
+    from proleg.sim.closed_loop import plant_conditions
+
+    r = load_robot(_inchworm_with_plant(tmp_path, "length_mm = 200"))
+    plant = PhysicalPlant(r, plant_conditions(r, ["overlap_mm=0"]))
+    assert plant.mechanism_source == "inferred from the matrix"
+    assert [round(b - a) for a, b in plant.geometry.spans] == [50, 100, 50]

@@ -184,10 +184,15 @@ def body_conditions(robot: Any) -> Conditions:
     taken to span 116 mm, not 100) while inferring its friction mechanisms."""
     from .conditions import conditions_from_section
 
-    full = conditions_from_section(getattr(robot, "plant", None), [a.name for a in robot.actuators],
-                                   [lb.name for lb in robot.limbs])
-    return Conditions({k: v for k, v in full.values.items() if k in BODY_CONDITIONS},
-                      {k: dict(v) for k, v in full.named.items() if k in BODY_CONDITIONS})
+    return body_of_run(conditions_from_section(getattr(robot, "plant", None), [a.name for a in robot.actuators],
+                                               [lb.name for lb in robot.limbs]))
+
+
+def body_of_run(conditions: Conditions) -> Conditions:
+    """Of a run's conditions, only those that shape the body (``BODY_CONDITIONS``): the body
+    the run's plant infers its friction mechanisms on."""
+    return Conditions({k: v for k, v in conditions.values.items() if k in BODY_CONDITIONS},
+                      {k: dict(v) for k, v in conditions.named.items() if k in BODY_CONDITIONS})
 
 
 def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float = MARGIN_DEG,
@@ -198,7 +203,7 @@ def kinematic_signs(robot: Any, mechanisms: Sequence[str], *, margin_deg: float 
 
 
 def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, margin_deg: float = MARGIN_DEG,
-                        rate_per_s: float = 1.0, dt_s: float = 0.005) -> list[np.ndarray]:
+                        rate_per_s: float = 1.0, dt_s: float = 0.005, body: Conditions | None = None) -> list[np.ndarray]:
     """``kinematic_signs`` for several D1/D2 assignments at the cost of about one.
 
     The sweep's poses do not depend on the friction mechanisms (the drive and the state read
@@ -206,7 +211,8 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
     gap changes, the loads and the centre of mass's offset; each assignment then replays only
     the anchor/slip solve (``PhysicalPlant._move`` itself, on a plant of its own)."""
     names = [tuple(a) for a in assignments]
-    plant = PhysicalPlant(robot, body_conditions(robot), mechanisms=names[0])
+    body = body if body is not None else body_conditions(robot)
+    plant = PhysicalPlant(robot, body, mechanisms=names[0])
     drive = IdealDrive(robot, plant, margin_deg)
     _, allowed = robot.transitions.dense()
     n = len(allowed)
@@ -244,7 +250,7 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
             if go(b):
                 spans.append((a, b, k0, len(poses)))
 
-    x0 = _replay(robot, names, poses)                        # (assignments, poses + 1)
+    x0 = _replay(robot, names, poses, body)                        # (assignments, poses + 1)
     outs = [np.zeros((n, n)) for _ in names]
     for a, b, k0, k1 in spans:
         for m, out in enumerate(outs):
@@ -253,13 +259,13 @@ def kinematic_signs_all(robot: Any, assignments: Sequence[Sequence[str]], *, mar
 
 
 def _replay(robot: Any, names: Sequence[tuple[str, ...]],
-            poses: Sequence[tuple[list[float], list[float], list[float]]]) -> np.ndarray:
+            poses: Sequence[tuple[list[float], list[float], list[float]]], body: Conditions) -> np.ndarray:
     """The body's rigid translation x0 after each recorded pose, for every assignment: one
     plant per assignment takes each pose's contact angles and loads and runs its own
     anchor/slip solve (``PhysicalPlant._move``) on the pose's gap changes, so the numbers are
     the plant's by construction. Returns (assignments, len(poses) + 1). Sets the plant's own
     fields: one package."""
-    plants = [PhysicalPlant(robot, body_conditions(robot), mechanisms=name) for name in names]
+    plants = [PhysicalPlant(robot, body, mechanisms=name) for name in names]
     x0 = np.zeros((len(names), len(poses) + 1))
     for m, p in enumerate(plants):
         x0[m, 0] = p._x0

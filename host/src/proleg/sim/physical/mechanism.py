@@ -53,7 +53,11 @@ def _materials(name_or_list: Any, levels: int, where: str) -> tuple[str, tuple[s
     return named, mats
 
 
-def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None) -> Mechanisms:
+def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None, body: Any = None) -> Mechanisms:
+    """Each limb's friction mechanism: ``override``, the robot file's, a default, or inferred
+    from the matrix on the robot file's body (the pads are the file's, whatever a run's
+    conditions do to the body), or on ``body`` (the run's, ``measure.body_of_run``) where the
+    file's is one the model cannot pose."""
     limbs = list(robot.limbs)
     levels = [len(lb.psi_star_deg) + 1 for lb in limbs]
     if override is not None:
@@ -72,11 +76,11 @@ def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None) -> Mechan
     if too_many_to_infer(limbs):  # 2^n assignments × n·2^n transitions (robot_plant)
         return Mechanisms(("D1",) * len(limbs), (mat.MECHANISMS["D1"],) * len(limbs),
                           f"default (not inferred for more than {INFER_MAX_LIMBS} limbs)")
-    names = _infer(robot)
+    names = _infer(robot, body)
     return Mechanisms(names, tuple(mat.MECHANISMS[n] for n in names), "inferred from the matrix")
 
 
-def _infer(robot: Any) -> tuple[str, ...]:
+def _infer(robot: Any, body: Any = None) -> tuple[str, ...]:
     reward, allowed = robot.transitions.dense()
     key = (tuple(tuple(float(x) for x in row) for row in np.asarray(reward)),
            tuple(tuple(bool(x) for x in row) for row in np.asarray(allowed)),
@@ -85,7 +89,16 @@ def _infer(robot: Any) -> tuple[str, ...]:
            tuple((a.name, a.channel) for a in robot.actuators),
            stroke_leads(robot.limbs, getattr(robot, "control", None)),  # the drive follows strokes
            _body_key(robot))
-    return _infer_cached(key, robot)
+    try:
+        return _infer_cached(key, robot)
+    except SimError:
+        # the file's body is one the model cannot pose (it would curl over itself: the load
+        # warned) and the run's is another (--condition overlap_mm=0): infer on the run's body
+        # rather than refuse a run whose body is fine
+        if body is None:
+            raise
+        return _infer_cached(key + (repr((dict(body.values), {k: dict(v) for k, v in body.named.items()})),),
+                             robot, body)
 
 
 def _body_key(robot: Any) -> tuple:
@@ -106,7 +119,7 @@ def _body_key(robot: Any) -> tuple:
 _CACHE: dict[tuple, tuple[str, ...]] = {}
 
 
-def _infer_cached(key: tuple, robot: Any) -> tuple[str, ...]:
+def _infer_cached(key: tuple, robot: Any, body: Any = None) -> tuple[str, ...]:
     hit = _CACHE.get(key)
     if hit is not None:
         return hit
@@ -116,7 +129,7 @@ def _infer_cached(key: tuple, robot: Any) -> tuple[str, ...]:
     reward = np.asarray(reward, dtype=float)
     best, best_score = None, -1
     combos = list(itertools.product(("D1", "D2"), repeat=len(robot.limbs)))
-    for combo, signs in zip(combos, kinematic_signs_all(robot, combos)):
+    for combo, signs in zip(combos, kinematic_signs_all(robot, combos, body=body)):
         score = 0
         for a in range(len(reward)):
             for b in range(len(reward)):

@@ -78,7 +78,9 @@ class PhysicalPlant:
         self._nl, self._na = nl, na
 
         # -- friction mechanisms (robot file, override, or inferred from the matrix) ----------
-        mech = limb_mechanisms(robot, mechanisms)
+        from .measure import body_of_run
+
+        mech = limb_mechanisms(robot, mechanisms, body_of_run(cond))  # inferred on this run's body
         self.mechanisms = mech.names
         self.mechanism_source = mech.source
         fr = cond.get("friction")
