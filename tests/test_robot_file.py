@@ -839,3 +839,18 @@ def test_a_repeated_single_bracket_limb_or_actuator_says_to_write_double_bracket
     the fix. The line adds that each one is a [[limb]]."""
     text = R1.replace("[[limb]]", "[limb]") if table == "limb" else R1.replace("[[actuator]]", "[actuator]")
     rejects(tmp_path, text, "not valid TOML", f"write each one as [[{table}]] (two brackets)")
+
+
+@pytest.mark.parametrize("text, line", [
+    ("from;to;reward\n00;10;1\n10;00;-1\n", 1),
+    ("00;10;1\n10;00;-1\n", 1),
+    ("from,to,reward\n00,10,1\n10;00;-1\n", 3),
+    ("from\tto\treward\n00\t10\t1\n", 1),
+])
+def test_a_csv_table_separated_by_semicolons_or_tabs_says_so(tmp_path, text, line):
+    """A spreadsheet set to a European locale exports ';' (and a tab-separated export tabs):
+    such a table was "expected the header from,to,reward[,duration_s] (in this order), got
+    '00;10;1'" (a data row read as a header) or "expected 3 fields". It now says the fields
+    are separated by another character and that the table takes commas."""
+    with pytest.raises(RobotFileError, match=rf"t\.csv:{line}: fields separated by '(;|\\t)', not commas"):
+        load_robot(csv_robot(tmp_path, text))

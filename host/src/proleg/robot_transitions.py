@@ -331,6 +331,11 @@ def _csv_rows(fh, csv_path: Path, header: list[str]):
         if not row or row[0].lstrip().startswith("#"):
             continue
         cells = [c.strip() for c in row]
+        if len(cells) == 1 and (sep := next((c for c in ";\t" if c in row[0]), None)):
+            # a spreadsheet in another locale (';', with decimal commas) or a tab-separated export
+            raise RobotFileError(f"{csv_path}:{start}: fields separated by {sep!r}, not commas: the table takes "
+                                 f"{','.join(CSV_COLUMNS[:3])}[,{CSV_COLUMNS[3]}] separated by commas, with '.' "
+                                 f"as the decimal point (export it as CSV with commas), got {row[0]!r}")
         if first and not _looks_like_a_state(cells[0]):  # the header: checked, not just skipped
             if cells not in (CSV_COLUMNS[:3], CSV_COLUMNS):
                 raise RobotFileError(f"{csv_path}:{start}: expected the header {','.join(CSV_COLUMNS[:3])}"
