@@ -1,4 +1,4 @@
-"""One lock on a serial device for every proleg tool (``proleg.link.port_lock``): ``proleg flash``
+"""One lock on a serial device for every proleg tool (``proleg.ports``): ``proleg flash``
 ran avrdude on a port a console held (avrdude takes no lock), and both broke; a console started
 during a flash opened the port under the flash tool. Each now refuses the other's port, in one
 line naming the port, who holds it and what to do, before it touches the port."""
@@ -17,7 +17,7 @@ from build_checks import R1, board_variant, cli, one_line
 from proleg.errors import LinkError
 from proleg.firmware.boards import load_board
 from proleg.firmware.flash import choose_method, flash
-from proleg.link.port_lock import PortBusy, PortLock, busy_message
+from proleg.ports import PortBusy, PortLock, busy_message
 from proleg.link.serial_link import SerialLink
 from test_link_serial import PtyBoard
 
@@ -141,7 +141,7 @@ def test_a_port_held_by_another_program_is_named_so():
 
 
 def test_without_proc_locks_the_line_is_generic(monkeypatch):
-    from proleg.link import port_lock
+    from proleg import ports as port_lock
 
     monkeypatch.setattr(port_lock, "lock_holder", lambda port: None)
     assert busy_message("/dev/ttyUSB0", "flash through") == (

@@ -153,8 +153,8 @@ def load_robot(path: str | Path) -> Robot:
     except tomllib.TOMLDecodeError as e:
         hint = ""
         for table in ("limb", "actuator"):  # [limb] twice: the parser's words name no fix
-            if f"Cannot declare ('{table}',) twice" in str(e) or f"Cannot overwrite a value" in str(e) and \
-                    re.search(rf"^\s*\[{table}\]", text, re.M):
+            if f"Cannot declare ('{table}',) twice" in str(e) or (
+                    "Cannot overwrite a value" in str(e) and re.search(rf"^\s*\[{table}\]", text, re.M)):
                 hint = f": a robot has one or more {table}s, write each one as [[{table}]] (two brackets)"
                 break
         raise RobotFileError(f"{path}: not valid TOML: {e}{hint}") from None

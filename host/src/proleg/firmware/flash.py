@@ -8,7 +8,7 @@ on a real USART, fails stm32flash's own read-back check on a pty ("Failed to set
 flags"). On a pty stm32flash is given ``-m 8n1``; the emulated bootloader needs no parity.
 
 A tool that writes through a serial port (avrdude, stm32flash) takes no lock on it: ``flash``
-holds proleg's own (``link.port_lock``, the one a console or run holds) while the tool runs,
+holds proleg's own (``proleg.ports``, the one a console or run holds) while the tool runs,
 and refuses, before building, a port a console, run, record or learn has open.
 """
 
@@ -23,7 +23,7 @@ import subprocess
 from pathlib import Path
 
 from ..errors import BuildError, Interrupted, LinkError
-from ..link.port_lock import PortLock, hold_port
+from ..ports import PortLock, hold_port
 from .boards import Board, FlashMethod
 
 
@@ -109,7 +109,7 @@ def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
     if not Path(artifact).exists():
         raise BuildError(f"{artifact}: no firmware to flash (build it first)")
     check_tool(method, port)
-    # The port is locked (port_lock, the console's own lock) while the tool writes: a console,
+    # The port is locked (proleg.ports, the console's own lock) while the tool writes: a console,
     # run or record started meanwhile is refused instead of reading the bootloader's replies.
     with hold_port(port if method.needs_port else None, doing="flash through"):
         try:

@@ -15,7 +15,7 @@ import serial
 
 from ..errors import LinkError
 from .base import Link, LinkDisconnected
-from .port_lock import PortLock
+from ..ports import PortLock
 
 DEFAULT_BAUDRATE = 115200
 #: The fastest serial link the host takes (an FT232H's 12 Mbaud); a bigger number overflows
@@ -46,7 +46,7 @@ class SerialLink(Link):
         self._open()
 
     def _open(self) -> None:
-        # A device is ours alone (port_lock's flock, taken before the port is touched): a second
+        # A device is ours alone (proleg.ports' flock, taken before the port is touched): a second
         # console or run on the same port opened it too, and the two split the board's bytes
         # between them, each seeing gaps and CRC errors, each able to START the gait the other
         # stops; a flash under a console broke both.

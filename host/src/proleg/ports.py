@@ -21,7 +21,7 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-from ..errors import LinkError
+from .errors import LinkError
 
 try:
     import fcntl
