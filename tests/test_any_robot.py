@@ -261,19 +261,30 @@ def test_a_coil_shared_by_limbs_apart_is_explained_as_one_coil(tmp_path, caplog)
     assert "give 'l3' a coil of its own" in warned[0] and "lower psi_star_deg" not in warned[0]
 
 
-def test_build_refuses_a_gait_0_that_raises_one_limb_of_a_shared_coil_alone(tmp_path, capsys):
+def test_build_leaves_out_a_direction_whose_gait_0_raises_one_limb_of_a_shared_coil_alone(tmp_path, capsys):
+    """Every optimal gait of both directions needs a state the shared coil cannot make. The build
+    used to refuse the robot, so a lab could not even learn its matrix (proleg learn and load-gait
+    build the same firmware); now it leaves both directions' gaits out and says why."""
+    import json
+
     from proleg.cli.main import main
 
     fixture = Path(__file__).parent / "fixtures" / "four-shared.toml"
-    assert main(["build", str(fixture), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 2
-    err = capsys.readouterr().err
-    assert "Traceback" not in err and not (tmp_path / "b").exists()
-    assert (f"proleg: error: {fixture}: gait 0 of +x, the one START runs, cannot run on this robot: "
+    assert main(["build", str(fixture), "--board", "host-sim", "-o", str(tmp_path / "b")]) == 0
+    captured = capsys.readouterr()
+    err = captured.err
+    assert "Traceback" not in err
+    assert ("proleg: warning: +x: none of its optimal gaits can run on this robot (the best-ranked, "
             "gait 0000 0100 1100") in err
     # the far limb p2 alone: coil1 sits at p1 and bends p2 to 8.6°, so 0100 is not even reachable
     # (that reason comes first); raising p2 without p1 is the shared coil's error as well
     assert ("goes to states 0100 (step 1), 1100 (step 2)" in err and "which the robot cannot reach" in err
             and "in 0100 'p2' needs ψ ≥ 21.0° and gets at most 8.6°" in err)
+    assert "the firmware carries no +x gait (START +x is refused: NACK NO_GAIT)" in err
+    assert "  +x gaits: none (left out: the hardware cannot make its optimal gaits, warned above)" in captured.out
+    manifest = json.loads((tmp_path / "b" / "proleg-build.json").read_text())
+    assert manifest["gaits"] == {"+x": [], "-x": []}
+    assert set(manifest["gaits_left_out"]) == {"+x", "-x"}
 
 
 def test_many_unholdable_states_are_summarised_not_listed(caplog):

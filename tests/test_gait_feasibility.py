@@ -350,15 +350,33 @@ def test_a_state_a_raised_limb_cannot_reach_is_an_unreachable_error(tmp_path):
 
 
 def test_the_build_does_not_make_a_gait_with_an_unreachable_state_gait_0(tmp_path):
-    """Every optimal gait of the wiring above needs the middle limb up: the build refuses it with
-    the reason, instead of firmware that faults within seconds."""
-    from proleg.errors import BuildError
+    """Every optimal gait of the wiring above needs the middle limb up: the firmware carries none
+    of them (instead of firmware that faults within seconds), and the build says why; it used to
+    refuse the robot, which left a lab no way to learn its matrix or load a gait of its own."""
     from proleg.firmware.gaits import firmware_gaits, gait_warnings
 
     robot = _inchworm_middle_on_the_tail_coil(tmp_path)
+    fw = firmware_gaits(robot)
+    assert fw["+x"] == () and fw["-x"] == ()
+    lines = gait_warnings(robot, fw)
+    assert len(lines) == 2 and lines[0].startswith("+x: none of its optimal gaits can run on this robot")
+    assert "which the robot cannot reach" in lines[0] and "'middle' needs" in lines[0]
+    assert "the firmware carries no +x gait (START +x is refused: NACK NO_GAIT)" in lines[0]
+
+
+def test_a_library_gait_the_hardware_cannot_make_is_still_refused(tmp_path):
+    """A direction left out is refilled by a library entry the user asked for: when that one
+    cannot be made either, the build refuses it as before (the user asked for it)."""
+    from proleg.errors import BuildError
+    from proleg.firmware.gaits import FirmwareGaits, GaitSelection, gait_warnings
+    from types import SimpleNamespace
+
+    robot = _inchworm_middle_on_the_tail_coil(tmp_path)
+    states = robot.transitions.sequence("100,110,111,101,100")
+    fw = FirmwareGaits({"+x": (SimpleNamespace(states=tuple(states)),), "-x": ()}, GaitSelection("total", None))
     with pytest.raises(BuildError, match=r"gait 0 of \+x, the one START runs, cannot run on this robot: .*"
                                          r"which the robot cannot reach .* 'middle' needs"):
-        gait_warnings(robot, firmware_gaits(robot))
+        gait_warnings(robot, fw)
 
 
 def test_no_bundled_robot_has_an_unreachable_state():

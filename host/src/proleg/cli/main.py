@@ -339,6 +339,8 @@ def _build(args: argparse.Namespace):
               f"proleg gait {args.robot} --json lists every gait's problems)", file=sys.stderr)
     for d, gaits in result.gaits.items():
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
+        if d in getattr(result.gaits, "left_out", {}):
+            shown += " (left out: the hardware cannot make its optimal gaits, warned above)"
         print(f"  {d} gaits: {shown}")
     from ..firmware.gaits import fallback_lines
 

@@ -188,7 +188,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                           "robot; nothing recorded") from None
     with client, _before_the_gait():
         info = client.info
-        check_gait(info, gait, direction, gaits_per_direction(robot, fw))
+        if fw is None:
+            from ..firmware.gaits import firmware_gaits
+
+            fw = firmware_gaits(robot)
+        check_gait(info, gait, direction, gaits_per_direction(robot, fw), fw.left_out_line(direction)
+                   if direction in fw else None)
         if choice is not None and choice.index is not None:
             check_library_hash(info, robot, fw, client.link.description, simulated=bool(getattr(args, "sim", False)))
         if choice is not None and choice.index is None:

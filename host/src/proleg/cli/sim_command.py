@@ -104,11 +104,15 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
         raise SimError("--hold-range: it is an option of --measure-matrix (measure the matrix at several hold margins)")
     if not args.pty:
-        gaits = firmware_gaits(robot, args.objective, args.max_transitions).get(args.direction, ())
+        every = firmware_gaits(robot, args.objective, args.max_transitions)
+        gaits = every.get(args.direction, ())
         have = len(gaits)
         if args.gait >= have:
             from ..errors import GaitError
 
+            why = every.left_out_line(args.direction)
+            if why is not None:  # the build leaves the direction out: say why, as the build did
+                raise GaitError(f"--gait {args.gait} of {args.direction}: {robot.where}: {why}")
             shown = f"gaits 0..{have - 1}" if have else "no gait"
             raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
     if args.record and not args.pty:

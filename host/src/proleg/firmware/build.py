@@ -270,6 +270,8 @@ def _build_into(robot: Robot, board: Board, out_dir: Path, objective: str, max_t
             "gait_selection": gaits.selection.as_json(),
             "gaits": {d: [list(g.states) for g in gs] for d, gs in gaits.items()},
         }
+        if gaits.left_out:  # a direction whose optimal gaits the hardware cannot make: none carried, and why
+            manifest["gaits_left_out"] = gaits.left_out
         if gaits.library_spec is not None:  # issue 17: the gait library, heading → (direction, gait)
             manifest["gait_library_selection"] = gaits.library_spec.as_json()
             manifest["gait_library"] = [lg.as_json(robot.transitions.label) for lg in gaits.library]

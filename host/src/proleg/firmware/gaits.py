@@ -90,11 +90,25 @@ class FirmwareGaits(dict):
     """``{direction: (Gait, ...)}`` plus the ``selection`` that produced it and the gait
     ``library`` (LibraryGait per entry that has a gait; empty without a library)."""
 
-    def __init__(self, gaits: dict, selection: GaitSelection, library: tuple = (), library_spec: Any = None):
+    def __init__(self, gaits: dict, selection: GaitSelection, library: tuple = (), library_spec: Any = None,
+                 left_out: dict | None = None):
         super().__init__(gaits)
         self.selection = selection
         self.library = tuple(library)
         self.library_spec = library_spec
+        #: {direction: why}: a direction whose optimal gaits the hardware cannot make (``left_out_line``)
+        self.left_out = dict(left_out or {})
+
+    def left_out_line(self, direction: str) -> str | None:
+        """Why the firmware carries no gait of ``direction`` (its optimal gait 0 is one the
+        hardware cannot make), or None when it was not left out."""
+        why = self.left_out.get(direction)
+        if why is None:
+            return None
+        return (f"{direction}: none of its optimal gaits can run on this robot (the best-ranked, {why}); the "
+                f"firmware carries no {direction} gait (START {direction} is refused: NACK NO_GAIT). Mark the transitions into "
+                f"those states \"x\" in the robot file, or learn its matrix (proleg learn marks the transitions "
+                f"the hardware cannot make \"x\"); a gait of your own runs with proleg load-gait")
 
 
 def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None,
@@ -110,7 +124,13 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
     cannot reach on the simulated body, no way in from rest) is never gait 0 while another can
     be made (the build refused the robot, though a tie it could walk was there), and one the
     firmware would stop (a state the body cannot hold, a step longer than the state timeout, a
-    coil past its on-time: "expect a fault") is not gait 0 while a tie it would walk exists."""
+    coil past its on-time: "expect a fault") is not gait 0 while a tie it would walk exists.
+
+    A direction whose gait 0 is still one the hardware cannot make (then every tie is one) is
+    left out: its gaits are none, and ``left_out`` says why (``left_out_line``). The build
+    warns and goes on, so that a robot whose guessed matrix leads there can still be learned,
+    or walk a gait of its user's own (``proleg learn``, ``proleg load-gait``); the firmware
+    refuses START of that direction (NACK NO_GAIT), and ``proleg sim`` and ``proleg run`` say why."""
     from ..gait import optimal_gaits
     from ..gait.feasibility import gait_problems
     from ..states import opposing_steps
@@ -139,11 +159,17 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
         d: ordered(optimal_gaits(robot.transitions, objective, d, max_transitions).gaits)[:MAX_FIRMWARE_GAITS]
         for d in DIRECTIONS
     }
+    left_out = {}
+    for d in DIRECTIONS:
+        unmade = cannot_make(gait_problems(robot, gaits[d][0].states)) if gaits[d] else []
+        if unmade:  # ordered() put a tie the hardware can make first when there is one: there is none
+            left_out[d] = unmade[0].message
+            gaits[d] = ()
     spec = library if library is not None else getattr(robot, "library", None)
     placed: tuple = ()
     if spec is not None:
         placed = _place_library(robot, spec, gaits)
-    return FirmwareGaits(gaits, GaitSelection(objective, max_transitions), placed, spec)
+    return FirmwareGaits(gaits, GaitSelection(objective, max_transitions), placed, spec, left_out)
 
 
 def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:
@@ -182,10 +208,12 @@ def cannot_make(problems: Any) -> list[Any]:
 
 def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
     """What the hardware may not do in the firmware's gaits (proleg.gait.feasibility):
-    one line per problem, for ``proleg build`` to print. BuildError when gait 0 of a
-    direction (the one START runs by default) is one the hardware cannot make: a shared
-    actuator moving its limbs apart, a state a raised limb cannot reach, or no way in from rest
-    over allowed transitions.
+    one line per problem, for ``proleg build`` to print, first a line per direction whose
+    gaits ``firmware_gaits`` left out (``FirmwareGaits.left_out_line``). BuildError when gait 0
+    of a direction (the one START runs by default) is still one the hardware cannot make (a
+    shared actuator moving its limbs apart, a state a raised limb cannot reach, or no way in
+    from rest over allowed transitions): a gait library's entry the user asked for, appended
+    to a direction left empty.
     A coil on longer than safety.max_on_ms (on-time, never-cools) stays a warning: the
     firmware's hold is bang-bang on psi and sma.c enforces the on-time limit and the
     cool-down (the paper's one-actuator R1 walks 10 11 10 with its coil held)."""
@@ -193,6 +221,9 @@ def gait_warnings(robot: Robot, gaits: dict) -> list[str]:
     from ..gait.feasibility import gait_problems
 
     out = []
+    left_out = getattr(gaits, "left_out_line", None)
+    if left_out is not None:
+        out += [line for d in gaits if (line := left_out(d)) is not None]
     for d, gs in gaits.items():
         for i, g in enumerate(gs):
             problems = gait_problems(robot, g.states)

@@ -87,7 +87,8 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
     if command == "START" and error == ErrorCode.NO_GAIT:
         if detail == GAIT_USER:
             return "no gait is loaded: load one first (proleg load-gait; it lasts until the board resets)"
-        return f"the board has no gait {detail} in that direction"
+        return (f"the board has no gait {detail} in that direction (proleg build lists the gaits it carries; a "
+                "direction whose optimal gaits the hardware cannot make is left out, with a warning saying why)")
     if command == "SET_PARAM" and error == ErrorCode.SAFETY_LIMIT:
         return (_SAFETY_LIMIT.get(detail, "beyond the safety envelope the firmware was built with (the robot file's "
                                           "[safety])") + ": at run time the envelope can be narrowed, never widened")

@@ -56,13 +56,17 @@ def stop_text(stopped: str | None, watchdog_ms: int | None = None) -> str:
             f"coils off within {within} of the last frame")
 
 
-def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[str, int] | None = None) -> None:
+def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[str, int] | None = None,
+               left_out: str | None = None) -> None:
     """``GaitError`` when gait ``gait`` does not exist: beyond INFO's count of compiled gaits,
-    or (when the robot file is known) beyond the gaits in ``direction``."""
+    or (when the robot file is known) beyond the gaits in ``direction``; ``left_out``: why the
+    build carries none in ``direction`` (``FirmwareGaits.left_out_line``), said instead."""
     if gait == GAIT_USER:
         return
     if per_direction is not None and not 0 <= gait < per_direction.get(direction, 0):
         n = per_direction.get(direction, 0)
+        if left_out is not None:
+            raise GaitError(f"--gait {gait} of {direction}: {info.robot_name}: {left_out}")
         have = f"gaits 0..{n - 1}" if n else "no gait"
         raise GaitError(f"--gait {gait}: {info.robot_name} has {have} in {direction}")
     if gait < 0 or gait >= info.gaits:  # without the robot file: INFO counts both directions' gaits
