@@ -289,15 +289,15 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                 raise LearnError("learn: no more input (stdin closed); the trials so far are in the log")
             return line
 
-    t = robot.transitions
     with client:
         ex = Explorer(client, robot, trial_log, pose, repeats=args.repeats, source=source, seed=args.seed,
                       on_progress=progress, ask=ask)
+        t = ex.robot.transitions  # the transitions the hardware can make: goals and plans are aligned with them
         done, todo = ex.tally()
         lim = ex.limits
         log.info("learn: exploring %s on %s: %s = %d trials, %d to do; pieces of up to %s, %.1f s rest "
                  "after each; Ctrl-C pauses (nothing recorded is lost: run the same command to go on)",
-                 robot.name, client.link.description, _explored(t, args.repeats), done + todo, todo,
+                 robot.name, client.link.description, _explored(robot, args.repeats), done + todo, todo,
                  counted(lim.max_transitions, "transition"), lim.rest_s)
         try:
             if args.adaptive:
@@ -351,6 +351,7 @@ def _check_explorable(robot) -> None:
     or none on a closed tour from rest (each unreachable from rest or without a way back). It
     created the log, explored nothing and ended in an empty report (exit 0), or, with --out,
     "t.jsonl holds no trial with a measured motion", naming the log, not the robot file."""
+    from ..learn.makeable import impossible, impossible_line, makeable_robot
     from ..learn.tours import exploration, unexplorable
 
     t = robot.transitions
@@ -358,27 +359,40 @@ def _check_explorable(robot) -> None:
     if t.n_transitions == 0:
         raise LearnError(f"learn: {where}: the robot file allows no transition (its table forbids every one): "
                          "nothing to explore")
-    unreachable, one_way = unexplorable(t, exploration(t, 1).uncoverable)
-    if len(unreachable) + len(one_way) >= t.n_transitions:
+    drop = impossible(robot)
+    made = makeable_robot(robot).transitions
+    if made.n_transitions == 0:
+        raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is one the hardware "
+                         f"can make ({impossible_line(robot, drop)}): nothing to explore; fix what the warnings "
+                         "when the robot file is loaded name")
+    unreachable, one_way = unexplorable(made, exploration(made, 1).uncoverable)
+    if len(unreachable) + len(one_way) >= made.n_transitions:
         parts = [f"{len(x)} {why} ({', '.join(x[:5])}{', …' if len(x) > 5 else ''})"
                  for x, why in ((unreachable, "unreachable from rest"), (one_way, "one-way, no allowed way back")) if x]
+        if drop:
+            parts.insert(0, impossible_line(robot, drop))
         raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is on a closed tour "
                          f"from rest ({'; '.join(parts)}): nothing to explore; allow the transitions that lead "
                          "there from rest and back in the matrix")
 
 
-def _explored(t, repeats: int) -> str:
+def _explored(robot, repeats: int) -> str:
     """``N allowed transitions[, K of them … (a->b, …)]: M × R``: what the exploration covers,
-    naming the transitions no closed tour from rest can make (they get no trials)."""
+    naming the transitions the hardware cannot make and those no closed tour from rest can
+    make (they get no trials)."""
+    from ..learn.makeable import impossible, impossible_line, makeable_robot
     from ..learn.tours import exploration, unexplorable
 
-    unreachable, one_way = unexplorable(t, exploration(t, 1).uncoverable)
-    left = []
+    t = robot.transitions
+    drop = impossible(robot)
+    made = makeable_robot(robot).transitions
+    unreachable, one_way = unexplorable(made, exploration(made, 1).uncoverable)
+    left = [impossible_line(robot, drop)] if drop else []
     for labels, why in ((unreachable, "unreachable from rest"), (one_way, "one-way, no allowed way back")):
         if labels:
             shown = ", ".join(labels[:5]) + (f", … ({len(labels) - 5} more)" if len(labels) > 5 else "")
             left.append(f"{len(labels)} of them {why} ({shown})")
-    skipped = len(unreachable) + len(one_way)
+    skipped = len(drop) + len(unreachable) + len(one_way)
     head = f"{t.n_transitions} allowed transitions" + "".join(f", {x}" for x in left)
     return f"{head}: {t.n_transitions - skipped} × {repeats}" if skipped else f"{head} × {repeats}"
 

@@ -2,7 +2,7 @@
 one; everything else in ``proleg.learn`` is link-free).
 
 ``explore`` repeats until every allowed transition inside a closed tour has ``repeats``
-trials in the log: plan a tour of what is still to do from the robot's measured state
+trials in the log (every one the hardware can make: ``makeable.py``): plan a tour of what is still to do from the robot's measured state
 (``tours.exploration`` with the remaining demand), take its first piece
 (``pieces.split``), run it, rest, append every observed transition to the log. Planning
 again after each piece is what makes a run resumable (an interrupted run's log is the
@@ -48,6 +48,7 @@ from ..link.direction import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
 from ..states import limb_levels
+from .makeable import makeable_robot
 from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
@@ -115,6 +116,10 @@ class Explorer:
                  on_progress: Callable[[Progress], None] | None = None,
                  rest: Callable[[float], None] | None = None,
                  ask: Callable[[str], str] | None = None):
+        # tours over the transitions the hardware can make: asked for one it cannot (a state a
+        # raised limb cannot reach), the firmware heats to the state timeout (makeable.py)
+        self.full_robot = robot
+        robot = makeable_robot(robot)
         self.client, self.robot, self.log, self.pose = client, robot, log, pose
         self.goal: np.ndarray | None = None  # trials wanted per transition (default: repeats each)
         self.repeats, self.settle_s, self.source, self.seed = repeats, settle_s, source, seed
