@@ -79,8 +79,12 @@ def cmd_check(args: argparse.Namespace) -> int:
     if wants_help(args):
         return EXIT_OK
     robot = load_robot(args.robot)
-    gaits = firmware_gaits(robot).get(args.direction, ())
+    every = firmware_gaits(robot)
+    gaits = every.get(args.direction, ())
     if args.gait >= len(gaits):
+        why = every.left_out_line(args.direction)
+        if why is not None:  # the build leaves the direction out: say why, as the build did
+            raise GaitError(f"--gait {args.gait} of {args.direction}: {robot.where}: {why}")
         shown = f"gaits 0..{len(gaits) - 1}" if gaits else "no gait"
         raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
     base = tuple(args.condition)
