@@ -75,3 +75,57 @@ def test_the_tabulated_body_is_the_computed_one_within_a_hundredth(body, strain,
         assert (tabulated._sec_tables is None) == (overlap > SECTION_MM / 2), "tables per section, unless 3 coils bend one"
     got, want = tabulated.evaluate(c[:n]), direct.evaluate(c[:n])
     assert np.allclose(got, want, rtol=0, atol=0.01), (np.array(got) - np.array(want)).round(4)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(min_value=2, max_value=5), st.sampled_from([0.0, 8.0, 20.0]),
+       st.floats(min_value=0.02, max_value=0.2), contractions)
+def test_a_body_the_limit_check_passes_never_wraps_a_contact_angle(n, overlap, strain, c):
+    """Past a half turn between two contacts a section may curl over itself, its ends pass each
+    other and ψ = tangent − chord wraps. ``curl_problem`` checked each coil's span only: R1
+    (two coils overlapping 16 mm) with working_strain 0.12 bends 165° per coil and 330° between
+    its limbs, and read ψ = −16.7° at full stroke (the gait check said "'left' needs ψ ≥ 87.0° and
+    gets at most −16.7°"). Wherever it passes a body, each section's end angles now add up to its
+    turning, unwrapped."""
+    from proleg.body import curl_problem
+
+    geo = body_geometry(list(range(n)), n, 80.0 if n == 2 else SECTION_MM * (n - 1), [overlap] * n,
+                        working_strain=strain)
+    if curl_problem(geo):
+        return
+    shape = Shape(geo, tabulate=False)
+    cc = np.array([c[:n]])
+    sections = shape._sections(cc)
+    kappa = (cc @ shape._w)[0]
+    for (p, q), (psi_p, psi_q, _g, _u) in zip(zip(shape._cnode, shape._cnode[1:]), sections):
+        turning = np.degrees(kappa[p:q].sum() * shape.ds)
+        assert abs(psi_p[0] + psi_q[0] - turning) < 1e-6 and -1e-9 <= psi_p[0] <= 180.0
+
+
+def test_the_limit_check_covers_the_body_between_two_limbs_and_names_the_key(tmp_path, caplog):
+    import logging
+    from pathlib import Path
+
+    from proleg.body import curl_problem
+    from proleg.gait.feasibility import gait_problems
+    from proleg.robot import load_robot
+
+    geo = body_geometry([0, 1], 2, 80.0, [8.0, 8.0], working_strain=0.12)
+    assert curl_problem(geo).startswith(
+        "with every coil at full stroke the body between limbs 1 and 2 (0–80 mm of the 80 mm body, bent by coils 1 "
+        "and 2, which add where they overlap) turns by 330°, past the 180° the physical plant models")
+    assert curl_problem(body_geometry([0, 1], 2, 80.0, [8.0, 8.0], working_strain=0.06)) == ""  # R1: 165°
+
+    src = (Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").read_text(encoding="utf-8")
+    src = src.replace('name = "left"\npsi_star_deg = [20.0]', 'name = "left"\npsi_star_deg = [86]', 1)
+    path = tmp_path / "r1.toml"
+    path.write_text(src + "\n[plant]\nworking_strain = 0.12\n", encoding="utf-8")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    said = [r.getMessage() for r in caplog.records]
+    assert any(f"{path}: plant.working_strain: with every coil at full stroke the body between limbs 1 and 2" in m
+               and "a smaller working_strain than 0.12" in m for m in said), said
+    assert not [m for m in said if "-16.7" in m or "−16.7" in m]
+    # no reach from a wrapped angle: the gait check does not claim 11 is out of reach
+    assert robot.unreachable == {}
+    assert not [p for p in gait_problems(robot, robot.transitions.sequence("00,10,11,01,00")) if "16.7" in p.message]
