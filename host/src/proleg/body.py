@@ -105,13 +105,7 @@ MAX_BEND_DEG = 180.0
 
 def curl_problem(geo: BodyGeometry) -> str:
     """Why the model cannot describe this body ("" when it can): a coil whose section bends
-    past ``MAX_BEND_DEG`` at full stroke (curvature × its span; a long body with few coils), or
-    a stretch between neighbouring contacts that every coil at full stroke bends past it (where
-    coils overlap their curvatures add: R1 with working_strain 0.12 has each coil bend 165° and
-    the body between its two limbs turn 330°). Up to a half turn between two contacts the
-    chord lies between the end tangents and each contact angle is within it; past it the
-    section may curl over itself, its ends pass each other, and ψ = tangent − chord wraps
-    (R1's left limb read −16.7° at full stroke, "needs ψ ≥ 87.0° and gets at most −16.7°")."""
+    past ``MAX_BEND_DEG`` at full stroke (curvature × its span; a long body with few coils)."""
     for j, (a, b) in enumerate(geo.spans):
         bend = math.degrees(geo.kappa_max_per_mm * (b - a))
         if bend > MAX_BEND_DEG:
@@ -120,18 +114,6 @@ def curl_problem(geo: BodyGeometry) -> str:
                     f"(the body would curl over itself): give a shorter body ([plant] length_mm) or a stiffer one "
                     f"(a smaller working_strain than {geo.working_strain:g}), or the robot more limbs and coils "
                     f"along it")
-    for k, (p, q) in enumerate(zip(geo.contacts_mm, geo.contacts_mm[1:])):
-        covered = [max(0.0, min(b, q) - max(a, p)) for a, b in geo.spans]
-        turn = math.degrees(geo.kappa_max_per_mm * sum(covered))
-        if turn > MAX_BEND_DEG:
-            coils = [str(j + 1) for j, c in enumerate(covered) if c > 0]
-            which = f"coil {coils[0]}" if len(coils) == 1 else f"coils {', '.join(coils[:-1])} and {coils[-1]}"
-            return (f"with every coil at full stroke the body between limbs {k + 1} and {k + 2} ({p:g}–{q:g} mm of "
-                    f"the {geo.length_mm:g} mm body, bent by {which}, which add where they overlap) turns by "
-                    f"{turn:.0f}°, past the {MAX_BEND_DEG:.0f}° the physical plant models (it would curl over "
-                    f"itself and its contact angles wrap): give a stiffer body (a smaller working_strain than "
-                    f"{geo.working_strain:g}), a shorter one ([plant] length_mm) or less coil overlap ([plant] "
-                    f"overlap_mm), or the robot more limbs and coils along it")
     return ""
 
 
