@@ -79,6 +79,16 @@ def r1_stroke():
     return robot, {"+x": [gait(0, 3, 0)], "-x": []}, SIM_BOARD
 
 
+def r1_heat():
+    """r1-fast with the paper robots' envelope (max_on 3000 ms, min_cooldown 800 ms, state timeout
+    8 s) and ``[safety] coil_heat_ceiling = true``: the coils' time constant CFG_COIL_TAU_MS is
+    built into core/sma.c (test_sma_heat.c). No knee watch: the ceiling stands alone."""
+    doc = robot_doc(safety={"max_on_ms": 3000, "min_cooldown_ms": 800, "max_duty": 0.8, "state_timeout_ms": 8000,
+                            "coil_heat_ceiling": True})
+    robot = robot_from_dict(doc, Path("tests/r1-heat.toml"))
+    return robot, {"+x": [gait(0, 2, 3, 1, 0), gait(0, 2, 0)], "-x": []}, SIM_BOARD
+
+
 def r1_swapped():
     """r1-fast with its coils crossed (left on a1, right on a0): a limb map that is not the
     identity, so the fallback's hold rule takes limbmap_given_up, not its identity shortcut
@@ -158,7 +168,7 @@ def inchworm_entry():
     return robot, {"+x": [gait(3, 7, 3), gait(7, 3, 7)], "-x": [gait(1, 5, 1)]}, board
 
 
-CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-1act": r1_one_actuator, "r1-swapped": r1_swapped, "r1-worn": r1_worn, "r1-boost": r1_boost, "multi": multi_level, "big": big}
+CONFIGS = {"inch-entry": inchworm_entry, "r1-fast": r1_fast, "r1-stroke": r1_stroke, "r1-heat": r1_heat, "r1-1act": r1_one_actuator, "r1-swapped": r1_swapped, "r1-worn": r1_worn, "r1-boost": r1_boost, "multi": multi_level, "big": big}
 
 
 def renderer(tmp_path_factory) -> Callable[[str], Path]:

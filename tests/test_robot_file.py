@@ -289,6 +289,39 @@ def test_the_thermal_budget_keys_are_robot_file_keys_that_reach_the_firmware(tmp
     rejects(tmp_path, R1 + "\n[safety]\non_limit_latch = 0\n", "safety.on_limit_latch: expected an integer in 1..247")
 
 
+def test_the_coil_heat_ceiling_is_opt_in_and_off_leaves_the_firmware_config_without_it(tmp_path):
+    """[safety] coil_heat_ceiling (docs/safety.md, "The coil's heat ceiling"): off by default, and
+    off the rendered robot_config.h has no CFG_COIL_TAU_MS (core/sma.c compiles none of its code:
+    every example robot's firmware is what it was before the key). On, the config is the same but
+    for that one line, the coils' time constant. Anything but a boolean is refused by name."""
+    from core_configs import SIM_BOARD
+    from proleg.firmware.render import render_config
+
+    gaits = {"+x": [], "-x": []}
+    off = load_robot(write(tmp_path, R1, "off.toml"))
+    said_off = load_robot(write(tmp_path, R1 + "\n[safety]\ncoil_heat_ceiling = false\n", "said-off.toml"))
+    on = load_robot(write(tmp_path, R1 + "\n[safety]\ncoil_heat_ceiling = true\n", "on.toml"))
+    assert (off.safety.coil_heat_ceiling, said_off.safety.coil_heat_ceiling, on.safety.coil_heat_ceiling) == (
+        False, False, True)
+
+    def config(robot) -> list[str]:  # but the lines that name the robot file and hash its text
+        return [line for line in render_config(robot, gaits, SIM_BOARD)["robot_config.h"].splitlines()
+                if "sha256" not in line and "CFG_BUILD_ID" not in line]
+
+    off_h = config(off)
+    assert not any("COIL_TAU" in line or "coil_heat" in line for line in off_h)
+    assert config(said_off) == off_h
+    on_h = config(on)
+    added = [line for line in on_h if line not in off_h]
+    assert len(added) == 1 and added[0].startswith("#define CFG_COIL_TAU_MS 1259UL"), added
+    assert [line for line in on_h if line not in added] == off_h
+    for bad, shown in (("1", "got 1"), ('"yes"', "got 'yes'"), ("0.5", "got 0.5")):
+        rejects(tmp_path, R1 + f"\n[safety]\ncoil_heat_ceiling = {bad}\n",
+                "safety.coil_heat_ceiling: expected true or false", shown)
+    rejects(tmp_path, R1 + "\n[safety]\nheat_ceiling = true\n", "unknown key 'heat_ceiling'",
+            "did you mean 'coil_heat_ceiling'?")
+
+
 def test_a_mean_duty_below_the_default_hold_ceiling_lowers_it_and_a_hold_duty_above_it_is_refused(tmp_path):
     """max_mean_duty = 0.25 (in its range) loaded, then failed at build on the default hold
     ceiling max(0.3, hold_duty), a key the file did not contain, without its path. The default

@@ -32,6 +32,9 @@ typedef struct {
     uint8_t blocked;   /* the mean-duty window refused the last request */
     uint8_t forced;    /* cut at max_on: fully off until the debt is paid */
     uint8_t pay_rem;   /* the pay-back's fraction of a µs (× 256) carried to the next tick */
+#ifdef CFG_COIL_TAU_MS
+    int32_t heat;      /* the duty the pin carried, smoothed with the coil's time constant (pm × 256) */
+#endif
 } act_state_t;
 
 static act_state_t acts[CFG_N_ACTUATORS];
@@ -158,6 +161,32 @@ void sma_request(uint8_t act, uint16_t duty_pm)
 
 static uint8_t heated; /* a bit per channel heated above the hold ceiling since sma_take_heated */
 
+#ifdef CFG_COIL_TAU_MS
+/* The coil's heat (sma.h): a first-order coil's temperature rise is its duty smoothed with the
+ * coil's own time constant CFG_COIL_TAU_MS (heat capacity / conductance to the air), times the
+ * rise a full duty settles at. Smoothed here as heat += (duty - heat) × dt / tau, dt / tau in
+ * 1/65536 from one 32-bit multiply. A coil whose
+ * smoothed duty has reached the mean-duty ceiling is as hot as that ceiling held for ever (what
+ * the envelope already lets it settle at, and what `proleg sim` warns of past 120 °C): it gets at
+ * most that ceiling, which keeps it there, whatever STOP, START or SET_PARAM did in between
+ * (docs/safety.md, "The coil's heat ceiling"). At the ceiling rather than the hold ceiling: a
+ * coil weaker than the nominal one (its heat overstates it) creeps on through its
+ * transformation; and no alternation between two duties tick by tick. Built only where the robot
+ * file opts in ([safety] coil_heat_ceiling = true): it takes every coil for the nominal one. */
+/* 2^32 / tau in µs, rounded up; dt × it < 2^32 for every dt elapsed_us returns (tau > 0.4 s) */
+#define SMA_HEAT_K (0xFFFFFFFFUL / (CFG_COIL_TAU_MS * 1000UL) + 1u)
+typedef char sma_heat_fits[SMA_HEAT_K < 0xFFFFFFFFUL / SMA_DT_MAX ? 1 : -1];
+
+static uint16_t heat_step(act_state_t *a, uint32_t dt)
+{
+    int32_t f = (int32_t)((dt * SMA_HEAT_K) >> 16); /* dt / tau in 1/65536, ≤ 65535 */
+    int32_t d = ((int32_t)a->charged << 8) - a->heat;
+    a->heat += ((d >> 8) * f) >> 8;
+    /* at the ceiling: the duty that keeps it there (its steady state), never more */
+    return a->heat >= ((int32_t)CFG_MEAN_DUTY_PM << 8) ? (uint16_t)CFG_MEAN_DUTY_PM : 0xFFFFu;
+}
+#endif
+
 uint8_t sma_take_heated(void)
 {
     uint8_t h = heated;
@@ -199,6 +228,15 @@ uint8_t sma_tick(uint8_t holding)
                 a->pay_rem = 0;
             }
         }
+#ifdef CFG_COIL_TAU_MS
+        /* as hot as the mean-duty ceiling held for ever: that ceiling at most */
+        {
+            uint16_t most = heat_step(a, dt);
+            if (duty > most) {
+                duty = most;
+            }
+        }
+#endif
         /* then decide the next output */
         if (a->forced) {
             duty = 0; /* cooling after an on-limit hit: off until the debt is paid */

@@ -19,6 +19,15 @@
  * - mean duty: the duty integrated over any window of CFG_DUTY_WINDOW_MS stays at or below
  *   CFG_MEAN_DUTY_PM (a request that would not fit gets 0; while a reached target is held,
  *   the first such tick of a request above the hold ceiling is an on-limit hit).
+ * - the coil's heat (builds with CFG_COIL_TAU_MS, the coil's thermal time constant: the robot
+ *   file's opt-in [safety] coil_heat_ceiling = true; none of its code otherwise): the duty
+ *   the pin carried, smoothed with that time constant, is what a first-order coil's temperature
+ *   follows; while it is at or above the mean-duty ceiling (as hot as that ceiling held for
+ *   ever), a request above it gets the mean-duty ceiling (the duty that keeps it there). A coil
+ *   weaker than the one the time constant was taken from (a mismatch, a draught) is cooler than
+ *   its heat says and is held back with the others. Unlike the debt, whose
+ *   pay-back (max_on / min_cooldown, 3.75× on the paper robots) is far faster than a coil cools,
+ *   it forgives no heat: a STOP + START of a hot coil finds it as hot as it is.
  * Nothing resets the spent budget: sma_all_off() and sma_estop() turn the pins off at once
  * but the interval until the next sma_tick is still charged at the duty it had, so a
  * STOP + START in one tick continues the on-period. Only sma_init() (reset) starts

@@ -47,6 +47,12 @@ class Safety:
     max_mean_duty: float = 0.45
     duty_window_ms: int = 10_000
     on_limit_latch: int = 3
+    #: opt-in (docs/safety.md, "The coil's heat ceiling"): the firmware smooths each coil's duty
+    #: with the coil's thermal time constant and gives a coil whose smoothed duty reached
+    #: max_mean_duty at most max_mean_duty, whatever STOP, START or SET_PARAM did in between.
+    #: It takes every coil for the nominal one: a weak coil (low supply, mismatch, draught) that
+    #: walked may stop with STATE_TIMEOUT. False: none of its code is built in.
+    coil_heat_ceiling: bool = False
 
     @property
     def mean_ceiling(self) -> float:
@@ -106,7 +112,11 @@ def _safety(path: Path, value: Any) -> Safety:
         max_mean_duty=f.number("max_mean_duty", d.max_mean_duty, 0.0, 1.0, open_lo=True),
         duty_window_ms=f.integer("duty_window_ms", d.duty_window_ms, *DUTY_WINDOW_MS_RANGE),
         on_limit_latch=f.integer("on_limit_latch", d.on_limit_latch, 1, MAX_ON_LIMIT_LATCH),
+        coil_heat_ceiling=f.table.get("coil_heat_ceiling", d.coil_heat_ceiling),
     )
+    if not isinstance(s.coil_heat_ceiling, bool):
+        f.fail("coil_heat_ceiling", "true or false (the coil's heat ceiling, docs/safety.md; default false)",
+               s.coil_heat_ceiling)
     if s.hold_max_duty is not None and s.hold_max_duty > s.mean_ceiling:
         f.fail("hold_max_duty", f"at most max_mean_duty and max_duty ({s.mean_ceiling:g}): a "
                "duty the coil may hold forever must fit the mean-duty window", s.hold_max_duty)

@@ -130,6 +130,7 @@ class ControlPart:
     max_climb_gaits_mx: tuple[int, ...] = ()
     hold_watch: int = 0  # 1: core/ctl.h's hold watch is built in (robot_body.worn_holds)
     boost_ms: int = 0  # [control] boost_ms: CTL_BOOST_MS (0: no boost, none of its code)
+    coil_tau_ms: int = 0  # [safety] coil_heat_ceiling: CFG_COIL_TAU_MS of core/sma.h (0: off, none of its code)
 
 
 
@@ -347,6 +348,20 @@ def _climb_cdeg(limit: Any) -> dict[str, int | None]:
             "max_climb_gaits_mx": tuple(round(v * 100) for v in limit.minus_x_gaits)}
 
 
+def coil_tau_ms(robot: Any) -> int:
+    """The coils' thermal time constant in ms (the longest, rounded up: a slower cooling is the
+    safe side) with which core/sma.c smooths each coil's duty into its heat, where the robot file
+    sets ``[safety] coil_heat_ceiling = true``; 0 otherwise (none of its code is built in, and the
+    firmware is byte for byte what it was without the key). The ceiling is sma.c's alone: it
+    needs no other part of the firmware, and any robot and board may carry it."""
+    if not getattr(robot.safety, "coil_heat_ceiling", False):
+        return 0
+    from ..sim.physical.params import coil_time_constant_s
+
+    # sma.c takes dt × 2^32 / tau in 32 bits for a dt up to 400 ms: no coil of the library is near
+    return max(401, math.ceil(coil_time_constant_s(robot, len(robot.actuators)) * 1000))
+
+
 def control_part(robot: Any) -> ControlPart:
     """The robot's control and safety numbers as the firmware is built with them (whole ticks)."""
     ctl, safety = robot.control, robot.safety
@@ -375,6 +390,7 @@ def control_part(robot: Any) -> ControlPart:
         **thermal_budget(robot.name, safety, ctl),
         hold_watch=int(bool(worn_holds_of(robot))),
         boost_ms=int(getattr(ctl, "boost_ms", 0)),
+        coil_tau_ms=coil_tau_ms(robot),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,
         overrun_fault=int(getattr(ctl, "overrun_fault", 10)),

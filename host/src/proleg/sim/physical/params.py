@@ -103,3 +103,14 @@ def robot_length_mm(robot: Any, n_limbs: int) -> float:
     section = getattr(robot, "plant", None)
     length = getattr(section, "length_mm", None)
     return float(length) if length is not None else default_length_mm(n_limbs)
+
+
+def coil_time_constant_s(robot: Any, n_actuators: int, p: PhysicalParams | None = None) -> float:
+    """The longest thermal time constant of the robot's coils in still air at 25 °C: heat capacity
+    over the conductance to the air (convection at 80 °C, as the plant takes it) and to the body,
+    ≈ 1.26 s for the BMX100-class coil. A first-order coil's temperature rise is its duty smoothed
+    with it; the firmware of builds that carry the coil's heat (core/sma.h) smooths each coil's
+    duty with it. The longest: that coil cools the slowest, and a shorter one settles no hotter."""
+    p = p or PhysicalParams()
+    return max(g.heat_capacity_j_k / (g.convection_w_k(80.0, 25.0, 1.0) + g.coil_to_body_w_k)
+               for g in coil_geometries(p, robot, n_actuators))
