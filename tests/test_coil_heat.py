@@ -46,11 +46,16 @@ def heat_ceiling(tmp_path_factory):
 class _Rig:
     """A robot's host-sim firmware and the physical plant, commands sent between control ticks."""
 
-    def __init__(self, path: Path, conditions=None):
+    def __init__(self, path: Path, conditions=None, board: str = "host-sim"):
         from proleg.protocol.codec import FrameDecoder
 
         self.robot = load_robot(path)
-        self.sim = SimulatedRobot(self.robot, seed=1, plant="physical", conditions=conditions)
+        if board == "host-sim":
+            self.sim = SimulatedRobot(self.robot, seed=1, plant="physical", conditions=conditions)
+        else:  # the exact MCU image on its emulator
+            from proleg.sim.simulated_boards import simulated_robot
+
+            self.sim = simulated_robot(board, self.robot, seed=1, plant="physical", conditions=conditions)
         self.decoder = FrameDecoder(len(self.robot.limbs), len(self.robot.actuators))
         self.log = []
         self.token = 0
@@ -85,13 +90,23 @@ class _Rig:
         return next(m for m in reversed(self.log) if m.name in ("ACK", "NACK") and m.token == token)
 
 
-@pytest.mark.parametrize("ceiling", [False, True], ids=["off", "on"])
-def test_restarting_inchworm_3_past_a_head_it_cannot_raise_keeps_its_coil_cool_with_the_ceiling(ceiling, heat_ceiling):
+@pytest.mark.parametrize("ceiling,board", [pytest.param(False, "host-sim", id="off"),
+                                           pytest.param(True, "host-sim", id="on"),
+                                           pytest.param(True, "avr-emu", id="on-avr-emu", marks=pytest.mark.slow)])
+def test_restarting_inchworm_3_past_a_head_it_cannot_raise_keeps_its_coil_cool_with_the_ceiling(ceiling, board,
+                                                                                                heat_ceiling):
     """docs/safety.md's case: the head's ψ* moved to 80° (SET_PARAM) and gait 0 restarted every
     4.5 s. Each restart found the head coil warm from the last heat, its debt paid back, and heated
     it another max_on at 0.6: 138 °C, 3.5 s above 120 °C before SMA_ON_LIMIT latched (the example
-    robot as it is, the key off). With the ceiling ≈ 115 °C."""
-    rig = _Rig(heat_ceiling("inchworm-3") if ceiling else ROBOTS / "inchworm-3.toml")
+    robot as it is, the key off). With the ceiling ≈ 115 °C, on host-sim and in the exact Nano
+    image (avr-emu: 16-bit int, its own clock; 138.7 → 115.0 °C)."""
+    if board != "host-sim":
+        from proleg.sim.simulated_boards import simulated_board
+
+        lacking = simulated_board(board).missing()
+        if lacking:
+            pytest.skip(lacking)
+    rig = _Rig(heat_ceiling("inchworm-3") if ceiling else ROBOTS / "inchworm-3.toml", board=board)
     assert rig.robot.safety.coil_heat_ceiling is ceiling
     rig.seconds(0.3)
     head = len(rig.robot.limbs) - 1
