@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT / "host" / "src"))
 from proleg.robot import load_robot  # noqa: E402
 from proleg.sim.closed_loop import make_plant  # noqa: E402
 from proleg.sim.physical.envelope import Envelope, EnvelopeLatched  # noqa: E402
-from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
+from proleg.physics.materials import NITI_OVERHEAT_C  # noqa: E402
 
 ROBOTS = ("paper-r1", "paper-r1-stroke", "inchworm-3", "caterpillar-4")
 POWERS = (0.7, 1.0, 1.3)

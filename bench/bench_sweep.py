@@ -43,7 +43,7 @@ sys.path.insert(0, str(ROOT / "host" / "src"))
 
 from proleg.report import sweep  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
-from proleg.sim.physical.materials import NITI_OVERHEAT_C  # noqa: E402
+from proleg.physics.materials import NITI_OVERHEAT_C  # noqa: E402
 
 #: The example robots whose gait 0 walks +x on the physical plant: not paper-r3 (the idealised drive
 #: walks it backwards: docs/plant.md, "R3") nor planar-4 (its +x gait is a library heading).

@@ -23,7 +23,7 @@ import pytest
 from proleg.protocol.definition import ClearWhat, ParamId
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import SimulatedRobot
-from proleg.sim.physical.materials import NITI_OVERHEAT_C
+from proleg.physics.materials import NITI_OVERHEAT_C
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 

@@ -504,7 +504,7 @@ def test_a_limb_may_give_its_pads_own_friction_coefficients(tmp_path):
     (the paper's D1/D2 or the materials' coefficients): the soft and hard pads' own numbers
     walk exactly as "D1" does (and reversed as "D2"), other numbers walk otherwise, and a
     coefficient out of range or a kinetic one above the static is refused naming the level."""
-    from proleg.sim.physical.materials import HARD, SOFT
+    from proleg.physics.materials import HARD, SOFT
 
     src = (ROOT / "robots" / "paper-r1.toml").read_text()
     assert src.count('actuator = "sma-') == 2 and "\nfriction" not in src

@@ -15,7 +15,7 @@ from proleg.paths import robots_dir
 from proleg.report import claim
 from proleg.robot import load_robot, robot_from_dict
 from proleg.robot_body import WORN_STROKE_LOSS, body_of, worn_holds, worn_holds_of
-from proleg.sim.physical.params import FatigueLaw
+from proleg.physics.params import FatigueLaw
 
 
 def _worn(name: str) -> list[int]:

@@ -15,7 +15,7 @@ from proleg.robot import load_robot
 from proleg.sim.physical import Conditions, PhysicalPlant, measure_matrix, parse_conditions
 from proleg.sim.physical.friction import mu_at, solve_translation, solve_two
 from proleg.sim.physical.measure import run_sequence
-from proleg.sim.physical.thermal import CoilGeometry
+from proleg.physics.thermal import CoilGeometry
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 PAPER = {

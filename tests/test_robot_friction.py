@@ -15,7 +15,7 @@ from proleg.paths import robots_dir
 from proleg.robot import load_robot
 from proleg.robot_plant import FRICTION_MATERIALS, FRICTION_MECHANISMS
 from proleg.sim.physical import PhysicalPlant, measure_matrix
-from proleg.sim.physical import materials
+from proleg.physics import materials
 
 
 def with_friction(tmp_path: Path, name: str, *values: str | None) -> Path:

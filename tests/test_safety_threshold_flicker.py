@@ -24,7 +24,7 @@ from proleg.protocol.definition import EventKind, FaultCode, ParamId
 from proleg.report.gait_run import SimSession
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import SimulatedRobot
-from proleg.sim.physical.materials import NITI_OVERHEAT_C
+from proleg.physics.materials import NITI_OVERHEAT_C
 
 GAIT_USER = 0xFF
 SAMPLE_S = 0.01  # the coils' temperatures are read this often (their time constant: seconds)

@@ -193,7 +193,7 @@ def test_a_mean_duty_ceiling_that_would_wear_a_coil_out_is_warned_about(caplog):
     import logging
 
     from proleg.sim.closed_loop import make_plant
-    from proleg.sim.physical.materials import NITI_OVERHEAT_C
+    from proleg.physics.materials import NITI_OVERHEAT_C
 
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical")

@@ -17,7 +17,7 @@ from proleg.report import claim
 from proleg.report.gait_run import SimSession
 from proleg.robot import load_robot
 from proleg.sim.closed_loop import SimulatedRobot
-from proleg.sim.physical.materials import NITI_OVERHEAT_C
+from proleg.physics.materials import NITI_OVERHEAT_C
 
 STROKE = Path(__file__).resolve().parents[1] / "robots" / "paper-r1-stroke.toml"
 

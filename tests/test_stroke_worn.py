@@ -9,7 +9,7 @@ from pathlib import Path
 
 from proleg.report import claim
 from proleg.robot import load_robot
-from proleg.sim.physical.materials import NITI_OVERHEAT_C
+from proleg.physics.materials import NITI_OVERHEAT_C
 
 STROKE = Path(__file__).resolve().parents[1] / "robots" / "paper-r1-stroke.toml"
 

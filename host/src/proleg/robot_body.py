@@ -152,7 +152,7 @@ def unreachable_holds(path: Path, limbs: list[Any], own: list[float], full: list
 
 
 #: The recoverable stroke a worn coil has lost: the physical plant's fatigue law after many cycles
-#: (``proleg.sim.physical.params.FatigueLaw.stroke_loss``, which a test keeps equal to this:
+#: (``proleg.physics.params.FatigueLaw.stroke_loss``, which a test keeps equal to this:
 #: Lagoudas (ed.), "Shape Memory Alloys", Springer 2008, ch. 7; Mammano & Dragoni, Int. J.
 #: Fatigue 2014). Here, not imported: the robot file's checks sit below the simulator.
 WORN_STROKE_LOSS = 0.25

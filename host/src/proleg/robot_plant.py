@@ -357,7 +357,7 @@ def _true_matrix(path: Path, m: Any, n: int) -> np.ndarray:
 
 
 # -- [[limb]] friction: which friction mechanism a limb carries ----------------------------------
-#: Contact materials the physical plant knows (``proleg.sim.physical.materials`` holds their
+#: Contact materials the physical plant knows (``proleg.physics.materials`` holds their
 #: friction coefficients) and the paper's two mechanisms: the material touching at each level,
 #: level 0 (ψ < ψ*) first. D1: soft/sticky then hard/slippery; D2 the reverse.
 FRICTION_MATERIALS = ("soft", "hard")

@@ -326,7 +326,7 @@ def coil_peaks(robot, plant) -> dict[str, float]:
 def _overheated(peaks: dict[str, float]) -> list[str]:
     """An error for each coil past the 120 °C that wears NiTi out: the firmware senses no
     temperature, so the run did what no fault reports (docs/safety.md)."""
-    from ..sim.physical.materials import NITI_OVERHEAT_C, shown_c
+    from ..physics.materials import NITI_OVERHEAT_C, shown_c
 
     return [f"coil {name} reached {shown_c(t)} °C in the simulated run, past the {NITI_OVERHEAT_C:.0f} °C that "
             f"wears NiTi out (no board senses it: docs/safety.md)" for name, t in peaks.items() if t > NITI_OVERHEAT_C]
@@ -335,7 +335,7 @@ def _overheated(peaks: dict[str, float]) -> list[str]:
 def _peaks_text(peaks: dict[str, float]) -> list[str]:
     """The coils' hottest, and a WARNING for each past the 120 °C that wears NiTi out: the firmware
     senses no temperature, so only the simulator can tell (docs/safety.md)."""
-    from ..sim.physical.materials import NITI_OVERHEAT_C, shown_c
+    from ..physics.materials import NITI_OVERHEAT_C, shown_c
 
     lines = ["  coils, hottest: " + ", ".join(f"{name} {shown_c(t)} °C" for name, t in peaks.items())]
     lines += [f"  WARNING: coil {name} reached {shown_c(t)} °C, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out"

@@ -47,7 +47,7 @@ from ..link.direction import direction_text
 from ..link.listeners import CallbackListener, Listener, Notifier, Printer
 from ..link.sim_link import temperature_key
 from ..robot import Robot
-from ..sim.physical.materials import NITI_OVERHEAT_C
+from ..physics.materials import NITI_OVERHEAT_C
 from .names import RobotNames, describe_event, gait_text, step_text
 from .replan import ReplanWorker
 

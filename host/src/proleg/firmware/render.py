@@ -356,7 +356,7 @@ def coil_tau_ms(robot: Any) -> int:
     needs no other part of the firmware, and any robot and board may carry it."""
     if not getattr(robot.safety, "coil_heat_ceiling", False):
         return 0
-    from ..sim.physical.params import coil_time_constant_s
+    from ..physics.params import coil_time_constant_s
 
     # sma.c takes dt × 2^32 / tau in 32 bits for a dt up to 400 ms: no coil of the library is near
     return max(401, math.ceil(coil_time_constant_s(robot, len(robot.actuators)) * 1000))

@@ -22,14 +22,14 @@ from typing import Any
 
 from ..errors import SimError
 from ..sim.openloop import OpenLoopDrive, tune_open_loop_robust
-from ..sim.physical.materials import NITI_OVERHEAT_C, shown_c
+from ..physics.materials import NITI_OVERHEAT_C, shown_c
 
 RUN_S = 40.0        # each run, from a cold robot (at least; run_length: a long gait's runs are longer)
 #: A run holds at least this many of the nominal gait's cycles (a run completes with two).
 CYCLES_PER_RUN = 4
 #: How an open-loop run that overheated a coil is noted (``DriveOutcome.note`` starts so).
 OVERHEATED = "coil overheated"
-OVERHEAT_C = NITI_OVERHEAT_C  # an open-loop coil above this is ruined (sim/physical/materials.py)
+OVERHEAT_C = NITI_OVERHEAT_C  # an open-loop coil above this is ruined (physics/materials.py)
 
 
 @dataclass(frozen=True)

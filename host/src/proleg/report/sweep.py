@@ -29,7 +29,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from ..sim.physical.materials import NITI_OVERHEAT_C
+from ..physics.materials import NITI_OVERHEAT_C
 from . import claim
 from .claim_summary import IDEALISED_FLOOR
 

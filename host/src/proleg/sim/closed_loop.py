@@ -138,7 +138,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     - the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
       envelope lets a coil average for ever, whatever the host commands) held would settle past
       ``NITI_OVERHEAT_C`` (R1 nominal: 115 °C at 0.45; at 1.3× its power, ``power=1.3``, 142 °C)."""
-    from .physical.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C, shown_c
+    from ..physics.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C, shown_c
 
     duty = robot.safety.max_duty
     ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)

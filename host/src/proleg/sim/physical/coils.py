@@ -19,9 +19,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from ...errors import SimError
+from ...physics.params import PhysicalParams, coil_geometries
 from ..sma import Hysteresis
 from .conditions import Conditions
-from .params import PhysicalParams, coil_geometries
 
 
 class Coils:

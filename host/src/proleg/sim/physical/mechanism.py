@@ -24,9 +24,9 @@ from typing import Any
 import numpy as np
 
 from ...errors import SimError
+from ...physics import materials as mat
 from ...robot import stroke_leads
 from ...robot_plant import INFER_MAX_LIMBS, too_many_to_infer
-from . import materials as mat
 
 
 @dataclass(frozen=True)

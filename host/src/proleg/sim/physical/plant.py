@@ -32,15 +32,15 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import SimError
-from ...states import classify, limb_levels, place_values
-from . import materials as mat
 from ...body import Shape, body_geometry, curl_key, curl_problem
+from ...errors import SimError
+from ...physics import materials as mat
+from ...physics.params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm, robot_working_strain
+from ...states import classify, limb_levels, place_values
 from .coils import Coils
 from .conditions import Conditions, coil_of_limb, conditions_from_section
 from .friction import mu_at, solve_translation, solve_two
 from .mechanism import limb_mechanisms
-from .params import ActView, LimbView, PhysicalParams, PlantView, Transition, robot_length_mm, robot_working_strain
 
 SHAPE_EPS = 3e-4   # contraction change (fraction of stroke) that triggers a shape update (≈ 0.013° of ψ)
 

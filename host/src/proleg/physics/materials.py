@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ...robot_plant import FRICTION_MECHANISMS
+from ..robot_plant import FRICTION_MECHANISMS
 
 # --- NiTi (Nitinol / Toki BioMetal) ------------------------------------------------------------
 # Density 6.45 g/cm³, specific heat 0.20 cal/(g·K) = 0.837 J/(g·K), latent heat of

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from ...body import DEFAULT_WORKING_STRAIN, default_length_mm
+from ..body import DEFAULT_WORKING_STRAIN, default_length_mm
 from . import materials as mat
 from .thermal import BodyThermal, CoilGeometry
 
