@@ -12,6 +12,16 @@ from proleg import interrupts
 from proleg.interrupts import deferred
 
 
+@pytest.fixture(autouse=True)
+def nothing_held(monkeypatch):
+    """Each test starts from a process nobody holds: the module's state is the process's, and an
+    earlier test in the same worker may have left it otherwise (an in-process ``proleg`` run in
+    a worker that ignores SIGINT takes SIGTERM/SIGHUP as Ctrl-C for the whole process,
+    ``cli.main._catch_termination``; a writer a test never stopped still holds). Put back after."""
+    for name, value in (("_holders", 0), ("_inside", False), ("_caught", False), ("_terminations", False)):
+        monkeypatch.setattr(interrupts, name, value)
+
+
 @pytest.fixture
 def python_handler():
     """Python's own SIGINT handler, as a terminal's Ctrl-C finds it (a worker started in the
