@@ -22,13 +22,19 @@ ROBOT = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.to
 ROBOT_FILE = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
 
 
-def record(path: Path, frames: int = 120, inject_at: int | None = None) -> FakeBoard:
+def _recording(path: Path) -> tuple[FakeBoard, RobotClient, Logger]:
+    """A fake board's gait 0 started, with a Logger recording it to ``path``."""
     board = FakeBoard()
     link = SimLink(board)
     client = RobotClient(link)
     info = client.connect()
     rec = Logger(path, RecordingMeta.for_robot(info=info, robot=ROBOT, link=link))
     client.start(0, "+x")
+    return board, client, rec
+
+
+def record(path: Path, frames: int = 120, inject_at: int | None = None) -> FakeBoard:
+    board, client, rec = _recording(path)
     n = 0
     while n < frames:
         rx = client.recv_received(1.0)
@@ -639,12 +645,7 @@ def test_a_disk_that_fills_mid_row_leaves_the_recording_whole_up_to_its_last_row
 
     monkeypatch.setattr(base, "open", _DiskFillsAt(6000), raising=False)
     path = tmp_path / f"run{suffix}"
-    board = FakeBoard()
-    link = SimLink(board)
-    client = RobotClient(link)
-    info = client.connect()
-    rec = Logger(path, RecordingMeta.for_robot(info=info, robot=ROBOT, link=link))
-    client.start(0, "+x")
+    _, client, rec = _recording(path)
     with caplog.at_level(logging.WARNING, logger="proleg"):
         for _ in range(200):
             rec.on_message(client.recv_received(1.0))
