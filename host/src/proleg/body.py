@@ -37,6 +37,7 @@ import math
 from collections.abc import Collection
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -209,24 +210,33 @@ class Shape:
             out.append((psi_p, psi_q, g, u))
         return out
 
-    def compute(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        c = np.atleast_2d(np.asarray(c, dtype=float))
+    def _assemble(self, sections) -> tuple[list, list, list, Any]:
+        """The body from its sections' (ψ at the first contact, ψ at the second, chord, centre of
+        mass along it): ψ per contact (an inner one the mean of its two sections'), gap per
+        section, each contact's share of the weight by the lever rule, and the centre of mass
+        from contact 0. Each quantity a float, or an array over a batch: ``compute`` and the
+        section tables' ``evaluate`` make the same sum."""
         nc = self.n_contacts
-        psi = np.zeros((len(c), nc))
-        gaps = np.zeros((len(c), nc - 1))
-        load = np.zeros((len(c), nc))
-        com = np.zeros(len(c))
-        start = np.zeros(len(c))
-        for k, (psi_p, psi_q, g, u) in enumerate(self._sections(c)):
-            psi[:, k] += psi_p if k == 0 else psi_p / 2.0
-            psi[:, k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
+        psi = [0.0] * nc
+        load = [0.0] * nc
+        gaps = []
+        com = start = 0.0
+        for k, (psi_p, psi_q, g, u) in enumerate(sections):
+            psi[k] += psi_p if k == 0 else psi_p / 2.0
+            psi[k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
             frac = self._frac[k]                                     # section's share of the mass
-            load[:, k] += frac * (1.0 - u / g)
-            load[:, k + 1] += frac * (u / g)
+            load[k] += frac * (1.0 - u / g)
+            load[k + 1] += frac * (u / g)
             com += frac * (start + u)
-            gaps[:, k] = g
+            gaps.append(g)
             start = start + g
         return psi, gaps, load, com
+
+    def compute(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        c = np.atleast_2d(np.asarray(c, dtype=float))
+        psi, gaps, load, com = self._assemble(self._sections(c))
+        b = len(c)
+        return _columns(psi, b), _columns(gaps, b), _columns(load, b), np.broadcast_to(com, (b,)).astype(float)
 
     # -- tabulated ------------------------------------------------------------------------------
     def _body_table(self) -> list:
@@ -253,22 +263,8 @@ class Shape:
         return tables
 
     def _evaluate_sections(self, c: list[float]) -> list[float]:
-        """``evaluate`` from the section tables: the sum ``compute`` makes, on four numbers a section."""
-        nc = self.n_contacts
-        psi = [0.0] * nc
-        gaps = []
-        load = [0.0] * nc
-        com = start = 0.0
-        for k, (coils, table) in enumerate(self._sec_tables):
-            psi_p, psi_q, g, u = _interpolate(coils, table, c)
-            psi[k] += psi_p if k == 0 else psi_p / 2.0
-            psi[k + 1] += psi_q if k == nc - 2 else psi_q / 2.0
-            frac = self._frac[k]
-            load[k] += frac * (1.0 - u / g)
-            load[k + 1] += frac * (u / g)
-            com += frac * (start + u)
-            gaps.append(g)
-            start += g
+        """``evaluate`` from the section tables."""
+        psi, gaps, load, com = self._assemble(_interpolate(coils, table, c) for coils, table in self._sec_tables)
         return [*psi, *gaps, *load, com]
 
     def evaluate(self, c: list[float]) -> list[float]:
@@ -277,8 +273,17 @@ class Shape:
             return _interpolate(self._all_coils, self._tlist, c)
         if self._sec_tables is not None:
             return self._evaluate_sections(c)
-        psi, gaps, load, com = self.compute(np.array(c))
-        return [*psi[0], *gaps[0], *load[0], float(com[0])]
+        sections = [tuple(float(v[0]) for v in section) for section in self._sections(np.array(c))]
+        psi, gaps, load, com = self._assemble(sections)
+        return [*psi, *gaps, *load, com]
+
+
+def _columns(values: list, batch: int) -> np.ndarray:
+    """``_assemble``'s quantities (arrays over the batch; 0.0 where no section reached one) as
+    the columns of a (batch, n) array."""
+    if not values:
+        return np.zeros((batch, 0))
+    return np.stack([np.broadcast_to(np.asarray(v, dtype=float), (batch,)) for v in values], axis=1)
 
 
 def _grid(m: int) -> np.ndarray:
