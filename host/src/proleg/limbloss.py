@@ -70,14 +70,6 @@ def compiled_map(robot) -> tuple[int, ...]:
     return tuple(index[limb.actuator] for limb in robot.limbs)
 
 
-def _restrict(t: TransitionTable, keep: np.ndarray) -> TransitionTable:
-    planar = None
-    if t.planar is not None:
-        planar = type(t.planar)(**{k: np.asarray(v)[keep] for k, v in t.planar.given().items()})
-    return TransitionTable(t.levels, t.src[keep], t.dst[keep], t.reward[keep],
-                           None if t.duration is None else t.duration[keep], planar)
-
-
 def _unreachable(robot, t: TransitionTable) -> np.ndarray:
     """Per state of ``t``: one the intact robot cannot reach on the simulated body
     (``Robot.unreachable``, every raised limb's coil at full stroke). With a coil lost or its
@@ -96,7 +88,7 @@ def dead_table(robot, lost: int) -> TransitionTable:
     driven = [i for i, a in enumerate(amap) if a == lost]
     up = np.array([any(limb_levels(s, t.levels)[i] > 0 for i in driven) for s in range(t.n_states)], dtype=bool)
     up |= _unreachable(robot, t)
-    return _restrict(t, ~(up[t.src] | up[t.dst]))
+    return t.restricted(~(up[t.src] | up[t.dst]))
 
 
 def foreign_top_level(robot, limb: int, actuator: int) -> int:
@@ -183,8 +175,8 @@ def remapped_table(robot, new_map: tuple[int, ...], lost: int | None = None, *, 
             if any(i in foreign for i in changed) and len(changed) > 1:
                 keep[e] = False
     if groups and body:
-        keep &= _body_allows(robot, _restrict(t, keep), new_map, t)
-    return _restrict(t, keep)
+        keep &= _body_allows(robot, t.restricted(keep), new_map, t)
+    return t.restricted(keep)
 
 
 def _body_allows(robot, table: TransitionTable, new_map: tuple[int, ...], full: TransitionTable) -> np.ndarray:

@@ -125,6 +125,12 @@ class TransitionTable:
         dur = None if duration_matrix is None else np.asarray(duration_matrix, dtype=np.float64)[src, dst]
         return cls(tuple(levels), src.astype(np.int64), dst.astype(np.int64), r[src, dst], dur)
 
+    def restricted(self, keep: np.ndarray) -> "TransitionTable":
+        """This table with only the edges where ``keep`` (a boolean mask over them) is True."""
+        return TransitionTable(self.levels, self.src[keep], self.dst[keep], self.reward[keep],
+                               None if self.duration is None else self.duration[keep],
+                               None if self.planar is None else self.planar.reordered(keep))
+
     def dense(self) -> tuple[np.ndarray, np.ndarray]:
         """(reward matrix with 0 where forbidden, allowed mask): for small robots only."""
         n = self.n_states

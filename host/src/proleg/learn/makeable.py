@@ -41,15 +41,16 @@ def impossible(robot: Robot) -> dict[int, str]:
     return out
 
 
-def without_edges(table: TransitionTable, drop) -> TransitionTable:
-    """``table`` without the edges (indices) in ``drop``."""
+def _kept(table: TransitionTable, drop) -> np.ndarray:
+    """A mask over ``table``'s edges: False at the indices in ``drop``."""
     keep = np.ones(table.n_transitions, dtype=bool)
     keep[list(drop)] = False
-    idx = np.nonzero(keep)[0]
-    return TransitionTable(
-        table.levels, table.src[idx], table.dst[idx], table.reward[idx],
-        None if table.duration is None else table.duration[idx],
-        None if table.planar is None else table.planar.reordered(idx))
+    return keep
+
+
+def without_edges(table: TransitionTable, drop) -> TransitionTable:
+    """``table`` without the edges (indices) in ``drop``."""
+    return table.restricted(_kept(table, drop))
 
 
 def makeable_robot(robot: Robot) -> Robot:
@@ -58,10 +59,9 @@ def makeable_robot(robot: Robot) -> Robot:
     drop = impossible(robot)
     if not drop:
         return robot
-    keep = np.ones(robot.transitions.n_transitions, dtype=bool)
-    keep[list(drop)] = False
+    keep = _kept(robot.transitions, drop)
     n_trials = None if robot.n_trials is None else np.asarray(robot.n_trials)[keep]
-    return replace(robot, transitions=without_edges(robot.transitions, drop), n_trials=n_trials)
+    return replace(robot, transitions=robot.transitions.restricted(keep), n_trials=n_trials)
 
 
 def impossible_line(robot: Robot, drop: dict[int, str] | None = None, shown: int = 5) -> str | None:
