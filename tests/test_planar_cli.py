@@ -178,3 +178,25 @@ def test_a_library_on_a_robot_of_many_states_takes_the_builds_bound(capsys, tmp_
     code, out, err = run(capsys, "gait", str(path), "--library", "0", "--json")
     assert code == 0, err
     assert {r["max_transitions"] for r in json.loads(out)["results"]} == {10}
+
+
+def test_the_physical_plant_says_it_does_not_model_a_robot_that_moves_in_the_plane(caplog):
+    """planar-4 on the physical plant is four contacts in a row moving along x: the plant says
+    so (naming the row it lays out) for a file with planar statistics, and not for R1."""
+    from proleg.robot import load_robot
+    from proleg.sim.closed_loop import make_plant
+
+    with caplog.at_level("WARNING", logger="proleg.sim.closed_loop"):
+        make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical")
+        assert not [r for r in caplog.records if "planar statistics" in r.getMessage()]
+        make_plant(load_robot(ROBOTS / "planar-4.toml"), "physical")
+    lines = [r.getMessage() for r in caplog.records if "planar statistics" in r.getMessage()]
+    assert len(lines) == 1 and "in a row in file order (front, left, back, right)" in lines[0]
+    assert "--plant table" in lines[0]
+
+
+def test_check_of_a_planar_robot_gives_the_plant_as_the_reason_not_a_matrix_to_measure(capsys):
+    code, _, err = run(capsys, "check", str(ROBOTS / "planar-4.toml"), "--rows", "1")
+    assert code == 1
+    assert "planar statistics describe a body that moves in the plane" in err
+    assert "--measure-matrix" not in err.splitlines()[-1]

@@ -93,9 +93,13 @@ def cmd_check(args: argparse.Namespace) -> int:
     label = " ".join(robot.transitions.label(s) for s in gaits[args.gait].states)
     if not nominal.possible:  # a finding about the robot file, not a mistake on the command line: exit 1
         on = f" under {' '.join(base)}" if base else " on the nominal plant"
+        advice = ("The physical plant moves limbs in a row along x only and this robot file's planar "
+                  "statistics describe a body that moves in the plane: `proleg check` cannot check it "
+                  "(docs/plant.md, \"Not modelled\")" if robot.transitions.planar is not None else
+                  "If the robot file's matrix was not measured on this body, measure it (proleg sim ROBOT "
+                  "--measure-matrix) and build the gaits from that")
         print(f"proleg: error: {robot.name}: gait {args.gait} ({label}) cannot be checked{on}: {nominal.why_not}. "
-              "If the robot file's matrix was not measured on this body, measure it (proleg sim ROBOT "
-              "--measure-matrix) and build the gaits from that", file=sys.stderr)
+              f"{advice}", file=sys.stderr)
         return EXIT_FAILED
     draws = sweep.draw_rows(args.rows, args.seed, [limb.name for limb in robot.limbs], leave_out=tuple(base_keys))
     rows_conditions = [base + d for d in draws]

@@ -59,9 +59,26 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
     from .physical import PhysicalPlant
 
     plant = PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
-    for line in overheat_warnings(robot, plant) + underpowered_warnings(robot, plant) + ambient_warnings(robot, plant):
+    for line in (planar_warnings(robot) + overheat_warnings(robot, plant) + underpowered_warnings(robot, plant)
+                 + ambient_warnings(robot, plant)):
         log.warning("warning: %s", line)
     return plant
+
+
+def planar_warnings(robot: Robot) -> list[str]:
+    """A line when the robot file carries planar statistics (Δy, Δθ: a body that steers in the
+    plane, planar-4): the physical plant lays the limbs out in a row, in file order, and moves
+    the body along that row only, so what it simulates is not that robot. planar-4 walked
+    +0.2 mm a cycle \"in +x\" on four contacts in a row (front, left, back, right), and nothing
+    said it was not its star-shaped body."""
+    if robot.transitions.planar is None:
+        return []
+    names = ", ".join(lb.name for lb in robot.limbs)
+    return [f"{robot.path}: [transitions] has planar statistics (dy, dtheta_deg): a robot that moves in the "
+            f"plane, which the physical plant does not model. It lays the {len(robot.limbs)} limbs out in a "
+            f"row in file order ({names}) and moves the body along that row (x) only, so its speeds, "
+            f"faults and measured matrix are of that row, not of this robot; --plant table simulates the "
+            f"file's planar statistics"]
 
 
 def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
