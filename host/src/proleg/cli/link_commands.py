@@ -44,7 +44,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     each step. ``inject`` (simulator only): faults ``FAULT[+T]`` injected T simulated seconds
     after the start (``proleg.console.inject``)."""
     from ..console import ConsoleApp, LimbView, RobotNames, run_plain
-    from ..console.app import replan_state
+    from ..console.plain import replan_state
     from ..console.inject import Injector, fault_checker, parse_injection
     from ..console.identity import check_identity
     from ..console.replan import ReplanWorker

@@ -22,14 +22,8 @@ starts the best gait of what the robot can still do. Each step shows in the even
 
 from __future__ import annotations
 
-import logging
-import sys
-import threading
-import time
-from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from typing import Any, TextIO
+from typing import Any
 
 from rich.text import Text
 from textual.app import App, ComposeResult
@@ -39,81 +33,22 @@ from textual.css.query import NoMatches
 from textual.widgets import Footer, Static
 
 from ..errors import LinkError
-from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, EventKind, Flag
+from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, Flag
 from ..states import label as state_label
 from ..states import limb_levels, state_count
-from ..link.client import Received, RobotClient, RobotInfo
+from ..link.client import RobotClient
 from ..link.direction import direction_text
-from ..link.listeners import CallbackListener, Listener, Notifier, Printer
+from ..link.listeners import CallbackListener, Listener, Notifier
 from ..link.sim_link import temperature_key
 from ..robot import Robot
 from ..physics.materials import NITI_OVERHEAT_C
-from .names import RobotNames, describe_event, gait_text, step_text
+from .model import ConsoleModel, LimbView
+from .names import RobotNames, gait_text, step_text
+from .plain import replan_state
+from .terminal import TerminalGone, UiLog
 from .replan import ReplanWorker
 
 BAR_WIDTH = 24
-
-
-@dataclass(frozen=True)
-class LimbView:
-    """What the console knows about a limb beyond telemetry (from the robot file, if given)."""
-
-    name: str
-    psi_star_deg: tuple[float, ...]
-
-
-@dataclass
-class ConsoleModel:
-    """Latest telemetry and counters, written by the Notifier thread, read by the UI."""
-
-    info: RobotInfo | None = None
-    names: RobotNames = field(default_factory=RobotNames)
-    state_label: Callable[[int], str] | None = None
-    telemetry: dict | None = None
-    truth: dict[str, float] = field(default_factory=dict)
-    events: deque[str] = field(default_factory=lambda: deque(maxlen=8))
-    faults: deque[str] = field(default_factory=lambda: deque(maxlen=4))
-    error: str = ""
-    link_error: Exception | None = None  # the Notifier stopped: the link is gone
-    _times: deque[float] = field(default_factory=lambda: deque(maxlen=2000))
-    _lock: threading.Lock = field(default_factory=threading.Lock)
-
-    def on_message(self, rx: Received) -> None:
-        m = rx.message
-        with self._lock:
-            if m.name == "TELEMETRY":
-                self.telemetry = m.fields
-                self.truth = rx.truth
-                self._times.append(time.monotonic())
-            elif m.name == "EVENT":
-                text = describe_event(m.fields, self.names, self.state_label)
-                self.events.append(text)
-                if m.fields["kind"] == EventKind.FAULT:
-                    self.faults.append(text)
-                elif m.fields["kind"] == EventKind.FAULT_CLEARED:
-                    self.faults.clear()
-
-    def on_error(self, exc: Exception) -> None:
-        self.error = str(exc)
-        self.link_error = exc
-
-    def note(self, text: str) -> None:
-        """A line from the host itself (replanning, injected faults) in the events panel."""
-        with self._lock:
-            self.events.append(text)
-
-    def frame_rate(self, window_s: float = 2.0) -> float:
-        with self._lock:
-            now = time.monotonic()
-            recent = [t for t in self._times if now - t <= window_s]
-        if len(recent) < 2:
-            return 0.0
-        span = max(now - recent[0], 1e-6)
-        return len(recent) / span
-
-    def snapshot(self) -> tuple[dict | None, dict[str, float], list[str], list[str]]:
-        with self._lock:
-            return self.telemetry, dict(self.truth), list(self.events), list(self.faults)
 
 
 def _bar(fraction: float, width: int = BAR_WIDTH) -> str:
@@ -126,91 +61,19 @@ def _flags_text(flags: int) -> str:
     return " ".join(f.name.lower() for f in Flag if f & flags and f.name) or "-"
 
 
-class _TerminalGone:
-    """The UI's terminal file, whose writes and flushes outlive the terminal: once its window is
-    closed (SIGHUP) a write fails with EIO, and that ended textual's writer thread; its queue
-    then filled and the next screen update blocked the console for ever, its heartbeat keeping
-    the gait running. Now such writes go nowhere, so the console gets to its leaving STOP."""
-
-    def __init__(self, file: Any) -> None:
-        self._file = file
-
-    def write(self, text: str) -> int:
-        try:
-            return self._file.write(text)
-        except (OSError, ValueError):  # EIO: the terminal is gone; ValueError: the file was closed
-            return len(text)
-
-    def flush(self) -> None:
-        try:
-            self._file.flush()
-        except (OSError, ValueError):
-            pass
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._file, name)
-
-
-class _UiLog(logging.Handler):
-    """While the UI is up, proleg's log lines (a recording that hit a full disk, on the Notifier's
-    thread) go to the events panel and the status line (``say``), a warning to a notification as
-    well (``warn``): the CLI's handler wrote them to the terminal under textual's screen,
-    scribbling over it until the next redraw. ``install`` puts it in place of the ``proleg``
-    logger's handlers, ``uninstall`` puts those back, and ``replay`` gives them every line said
-    meanwhile, once the UI has left the terminal (said on the alternate screen they would vanish
-    with it)."""
-
-    def __init__(self, say: Callable[[str], None], warn: Callable[[str], None] | None = None) -> None:
-        super().__init__()
-        self.say = say
-        self.warn = warn
-        self.held: list[logging.LogRecord] = []
-        self._saved: tuple[list[logging.Handler], bool] | None = None
-
-    def emit(self, record: logging.LogRecord) -> None:
-        try:
-            self.held.append(record)
-            text = record.getMessage()
-            self.say(text)
-            if self.warn is not None and record.levelno >= logging.WARNING:
-                self.warn(text)  # a notification too: the status line is one line, soon overwritten
-        except Exception:  # a log line never breaks the thread that logged it
-            self.handleError(record)
-
-    def install(self) -> None:
-        logger = logging.getLogger("proleg")
-        if self._saved is None:
-            self._saved = (logger.handlers[:], logger.propagate)
-            logger.handlers[:] = [self]
-            logger.propagate = False
-
-    def uninstall(self) -> None:
-        logger = logging.getLogger("proleg")
-        if self._saved is not None:
-            logger.handlers[:], logger.propagate = self._saved
-            self._saved = None
-
-    def replay(self) -> None:
-        self.uninstall()
-        held, self.held = self.held, []
-        logger = logging.getLogger("proleg")
-        for record in held:
-            logger.handle(record)  # the CLI's stderr handler (or logging's last resort) says it now
-
-
 class ConsoleApp(App[None]):
     """The live console on one robot. ``names`` name limbs and actuators in events; the app
     exits by itself when the link is lost (``model.link_error``)."""
 
     def get_driver_class(self) -> Any:
-        """Textual's driver for this platform, writing to the terminal through ``_TerminalGone``."""
+        """Textual's driver for this platform, writing to the terminal through ``TerminalGone``."""
         base = super().get_driver_class()
 
         class Driver(base):  # type: ignore[misc, valid-type]
             def __init__(self, *args: Any, **kw: Any) -> None:
                 super().__init__(*args, **kw)
                 if getattr(self, "_file", None) is not None:
-                    self._file = _TerminalGone(self._file)
+                    self._file = TerminalGone(self._file)
 
         return Driver
 
@@ -264,8 +127,8 @@ class ConsoleApp(App[None]):
         #: what the counters panel says about replanning (``replan_state``)
         self.replan_state = replan_state(replan, robot is not None)
         self.replanner: ReplanWorker | None = None
-        #: proleg's log lines while the UI is up (``_UiLog``)
-        self.ui_log = _UiLog(self.host_says, self._warn)
+        #: proleg's log lines while the UI is up (``UiLog``)
+        self.ui_log = UiLog(self.host_says, self._warn)
 
     # ------------------------------------------------------------------ layout
     def compose(self) -> ComposeResult:
@@ -488,29 +351,3 @@ class ConsoleApp(App[None]):
         ways = [Direction.PLUS_X, Direction.MINUS_X] + ([DIR_UNSTATED] if self.gait == GAIT_USER else [])
         self.direction = ways[(ways.index(self.direction) + 1) % len(ways)] if self.direction in ways else ways[0]
         self.refresh_view()
-
-
-def replan_state(replan: bool, have_robot: bool) -> str:
-    """One line: does the console replan after a limb loss, and if not, why not."""
-    if not replan:
-        return "replan: off (--no-replan)"
-    if not have_robot:
-        return "replan: off (needs --robot)"
-    return "replan on limb loss: on"
-
-
-def run_plain(client: RobotClient, *, listeners: Sequence[Listener] = (), out: TextIO | None = None,
-              duration_s: float | None = None, labels: Callable[[int], str] | None = None,
-              quiet: bool = False) -> None:
-    """Print one line per telemetry frame (``quiet``: none; the listeners print) until
-    interrupted (or ``duration_s`` wall seconds); a link failure ends it with ``LinkError``."""
-    printers = [] if quiet else [Printer(out or sys.stdout, telemetry_only=True, labels=labels)]
-    notifier = Notifier(client, [*printers, *listeners])
-    t_end = None if duration_s is None else time.monotonic() + duration_s
-    try:
-        while notifier.running and (t_end is None or time.monotonic() < t_end):
-            time.sleep(0.05)
-    finally:
-        notifier.stop()
-    if notifier.error is not None:
-        raise notifier.error
