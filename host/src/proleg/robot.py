@@ -60,7 +60,7 @@ from .robot_settings import (  # noqa: F401 (re-exported: the robot file's names
     _control,
     _safety,
 )
-from .robot_transitions import n_trials_section, transitions_section
+from .robot_transitions import is_unmeasured, n_trials_section, transitions_section
 from .transitions import TransitionTable
 
 log = logging.getLogger(__name__)
@@ -119,6 +119,9 @@ class Robot:
     #: down: (from, to) -> (limb, raising limbs, ψ°); ``proleg.robot_body.blocked_descents``' (the
     #: load check's "cannot come down" lines), checked by ``proleg.gait.feasibility``
     blocked: dict[tuple[int, int], tuple[int, list[int], float]] = field(default_factory=dict)
+    #: ``[transitions] matrix = "unmeasured"``: every allowed transition's reward is 0 until
+    #: measured (``proleg learn``, ``proleg sim --measure-matrix``), so no gait moves it
+    unmeasured: bool = False
 
     @property
     def where(self) -> str:
@@ -230,7 +233,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         log.warning("warning: %s", line)
     for line in rest:
         log.debug("warning: %s", line)
-    if (line := inference_warning(path, list(limbs))) is not None:
+    if (line := inference_warning(path, list(limbs), is_unmeasured(doc["transitions"]))) is not None:
         log.warning("warning: %s", line)
     library = None
     if "gaits" in doc:
@@ -243,7 +246,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library,
                  shared_coil_lifts(list(limbs), coupled),
                  unreachable_states(list(limbs), [a.name for a in actuators], plant, table),
-                 unholdable_states(list(limbs), coupled), blocked)
+                 unholdable_states(list(limbs), coupled), blocked, is_unmeasured(doc["transitions"]))
 
 
 def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:

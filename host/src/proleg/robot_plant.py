@@ -379,9 +379,15 @@ def too_many_to_infer(limbs: list[Any]) -> bool:
             and all(getattr(lb, "friction", None) is None for lb in limbs))
 
 
-def inference_warning(path: Path, limbs: list[Any]) -> str | None:
-    """The warning for a robot too large to have its friction mechanisms inferred (None if
-    the file gives them, or the plant infers them)."""
+def inference_warning(path: Path, limbs: list[Any], unmeasured: bool = False) -> str | None:
+    """The warning for a robot whose friction mechanisms the plant cannot infer from its
+    matrix, too large or with the matrix unmeasured (None if the file gives them, or the plant
+    infers them)."""
+    if unmeasured and any(getattr(lb, "friction", None) is None for lb in limbs):
+        return (f"{path}: the matrix is unmeasured and not every [[limb]] says its friction: the physical plant "
+                "takes D1 (soft at rest) on a two-level limb and alternates soft/hard from level 0 on a "
+                "multi-level one, since there are no signs to infer them from; say friction on every limb "
+                "(\"D1\", \"D2\" or its materials) so that what it measures is your robot")
     if not too_many_to_infer(limbs):
         return None
     return (f"{path}: {len(limbs)} limbs and no [[limb]] friction: the physical plant takes D1 (soft at rest) on "

@@ -33,6 +33,18 @@ MAX_TRIALS = 10**9
 MAX_DURATION_S = 3600.0
 
 
+#: ``matrix = "unmeasured"``: a robot whose rewards are not known yet (every allowed transition
+#: 0, to be measured by ``proleg learn`` or ``proleg sim --measure-matrix``), the transitions it
+#: can make given by ``allow`` (one of ``ALLOW_RULES``) instead of written out: a 256-state
+#: eight-limb robot's matrix has 65,280 entries.
+UNMEASURED = "unmeasured"
+#: ``allow``: one-level (a step moves one limb by one level: the coils driven one at a time,
+#: a multi-level pad passing through its middle levels), one-limb (one limb, by any number of
+#: levels), any (every pair of different states).
+ALLOW_RULES = ("one-level", "one-limb", "any")
+#: The most transitions an unmeasured table may allow (``any`` on 2,048 states is 4.2 million).
+MAX_UNMEASURED_EDGES = 1 << 22
+
 #: What a matrix entry counts: steps (× ``[plant] step_mm`` on the table plant) or a length.
 TRANSITION_UNITS = ("steps", "mm", "cm", "m")
 #: Millimetres per entry for the length units.
@@ -45,8 +57,12 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
     f = Fields(
         path, "transitions", value,
         {"matrix", "file", "forbidden", "durations_s", "default_duration_s", "units", "states", "n_trials",
-         *PLANAR_FIELDS},
+         "allow", *PLANAR_FIELDS},
     )
+    unmeasured = is_unmeasured(value)
+    if f.has("allow") and not unmeasured:
+        f.fail("allow", f'matrix = "{UNMEASURED}" beside it (allow says which transitions an unmeasured robot '
+                        "can make; a matrix or a CSV says it by its \"x\" marks or rows)")
     units = f.string("units", "steps")
     if units not in TRANSITION_UNITS:
         f.fail("units", f"one of {', '.join(repr(u) for u in TRANSITION_UNITS)} (steps: × [plant] step_mm)", units)
@@ -58,7 +74,19 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
         if value["states"] != expected:
             f.fail("states", f"the state order {expected}", value["states"])
 
-    if f.has("matrix"):
+    if unmeasured:
+        for key in ("durations_s", "n_trials", *PLANAR_FIELDS):
+            if f.has(key):
+                f.fail(key, f'no {key} beside matrix = "{UNMEASURED}": it has no entries for them to go with '
+                            + ("(default_duration_s gives every transition a duration)" if key == "durations_s"
+                               else "(proleg learn writes them with the learned matrix)"))
+        rule = f.string("allow", "any")
+        if rule not in ALLOW_RULES:
+            f.fail("allow", f"one of {', '.join(repr(r) for r in ALLOW_RULES)}", rule)
+        src, dst = _allowed_by_rule(path, rule, levels)
+        src, dst = _without_forbidden(path, value.get("forbidden", []), levels, src, dst, names)
+        rew, dur, planar = np.zeros(len(src)), None, None
+    elif f.has("matrix"):
         reward, allowed = _matrix(path, value["matrix"], n)
         src, dst = np.nonzero(allowed)
         rew = reward[src, dst]
@@ -74,7 +102,7 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
         planar = None
         src, dst, rew, dur = _csv(path, f.string("file"), levels, names)
 
-    if f.has("forbidden"):
+    if f.has("forbidden") and not unmeasured:
         csv_file = None if f.has("matrix") else value["file"]
         _check_forbidden(path, value["forbidden"], levels, src, dst, rew, csv_file, names)
 
@@ -160,6 +188,73 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
     return out
 
 
+def is_unmeasured(value: Any) -> bool:
+    """``[transitions]`` says ``matrix = "unmeasured"``."""
+    return isinstance(value, dict) and value.get("matrix") == UNMEASURED
+
+
+def _allowed_by_rule(path: Path, rule: str, levels: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The (from, to) state indices ``allow = rule`` lets an unmeasured robot make, in the
+    table's order (by from, then to)."""
+    n = states.state_count(levels)
+    place = states.place_values(levels)
+    if rule == "any":
+        edges = n * (n - 1)
+    elif rule == "one-limb":
+        edges = sum(n * (k - 1) for k in levels)                  # every other level of one limb
+    else:
+        edges = sum(n * 2 * (k - 1) // k for k in levels)         # one level up or down (one at the ends)
+    if edges > MAX_UNMEASURED_EDGES:
+        raise RobotFileError(
+            f"{path}: transitions.allow: {rule!r} lets the robot's {n:,} states make {edges:,} transitions, more "
+            f"than the {MAX_UNMEASURED_EDGES:,} an unmeasured table may hold; allow \"one-level\" (a step moves one "
+            "limb by one level), or give the table as a CSV file")
+    idx = np.arange(n)
+    if rule == "any":
+        src = np.repeat(idx, n)
+        dst = np.tile(idx, n)
+        keep = src != dst
+        return src[keep], dst[keep]
+    src_parts, dst_parts = [], []
+    for i, k in enumerate(levels):
+        level = (idx // place[i]) % k
+        for d in range(1, 2 if rule == "one-level" else k):
+            for sign in (1, -1):
+                to = level + sign * d
+                ok = (to >= 0) & (to < k)
+                src_parts.append(idx[ok])
+                dst_parts.append(idx[ok] + sign * d * place[i])
+    src = np.concatenate(src_parts)
+    dst = np.concatenate(dst_parts)
+    order = np.lexsort((dst, src))
+    return src[order], dst[order]
+
+
+def _without_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src: np.ndarray, dst: np.ndarray,
+                       names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """An unmeasured table's ``forbidden`` marks take those transitions out of what ``allow``
+    lets it make (with a matrix or a CSV they are a check on the table instead)."""
+    where = f"{path}: transitions.forbidden"
+    if not isinstance(marks, list) or not all(isinstance(m, str) for m in marks):
+        raise RobotFileError(f"{where}: expected a list of transitions like \"01->11\"")
+    n = states.state_count(levels)
+    out = set()
+    for k, mark in enumerate(marks):
+        parts = [p.strip() for p in mark.split("->")]
+        if len(parts) != 2:
+            raise RobotFileError(f"{where}[{k + 1}]: expected FROM->TO, got {mark!r}")
+        a = _state_ref(parts[0], levels, n, f"{where}[{k + 1}]", names)
+        b = _state_ref(parts[1], levels, n, f"{where}[{k + 1}]", names)
+        if a == b:
+            raise RobotFileError(f"{where}[{k + 1}]: {mark} is a state to itself, never a transition (expected FROM->TO "
+                                 "of two different states)")
+        out.add(a * n + b)
+    if not out:
+        return src, dst
+    keep = ~np.isin(src * n + dst, np.fromiter(out, dtype=np.int64))
+    return src[keep], dst[keep]
+
+
 def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, rewards, csv_file: str | None,
                      names: Sequence[str] = ()) -> None:
     """``forbidden = ["01->11", ...]`` states what the robot cannot do; the table must agree:
@@ -190,6 +285,9 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, 
 
 def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
     where = f"{path}: transitions.matrix"
+    if isinstance(rows, str):
+        raise RobotFileError(f"{where}: expected {n} rows of {n} entries, or \"{UNMEASURED}\" (rewards not known "
+                             f"yet: learn or measure them), got {toml_text(rows)}")
     reward = np.zeros((n, n))
     allowed = np.zeros((n, n), dtype=bool)
     for a, row in enumerate(_square(where, rows, n, f"(one per state, {n} = product of limb levels)")):

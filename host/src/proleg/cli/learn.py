@@ -170,7 +170,8 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
         raise LearnError("learn: --truth needs --sim")
     if args.plant is not None and not args.sim:
         raise LearnError("learn: --plant needs --sim (it picks the simulated body)")
-    args.plant = args.plant or "table"
+    args.plant_given = args.plant is not None
+    args.plant = args.plant or "table"  # the physical plant for a robot whose matrix is unmeasured (_checked_truth)
     if args.more and (args.half_width is None or not linked):
         raise LearnError("learn: --more needs --half-width and a robot (--port, --can or --sim)")
     if args.track is not None and source not in (None, "tracker"):
@@ -214,6 +215,9 @@ def _checked_truth(args: argparse.Namespace, robot):
     from ..robot import load_robot
 
     truth = load_robot(args.truth) if args.truth else None
+    if truth is None and getattr(robot, "unmeasured", False) and not getattr(args, "plant_given", True):
+        args.plant = "physical"  # the table plant would move by the unmeasured matrix: nothing at all
+        log.info("learn: the matrix is unmeasured: learning on the physical plant (friction mechanics)")
     try:
         check_plant(robot, truth, args.plant)
     except ExplorationError as e:

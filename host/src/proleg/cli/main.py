@@ -341,6 +341,8 @@ def _build(args: argparse.Namespace):
         shown = "; ".join(" ".join(robot.transitions.label(s) for s in g.states) for g in gaits) or "none"
         if d in getattr(result.gaits, "left_out", {}):
             shown += " (left out: the hardware cannot make its optimal gaits, warned above)"
+        elif not gaits and getattr(result.gaits, "unmeasured", False):
+            shown += " (the matrix is unmeasured: learn or measure it, warned above)"
         print(f"  {d} gaits: {shown}")
     from ..firmware.gaits import fallback_lines
 

@@ -91,17 +91,26 @@ class FirmwareGaits(dict):
     ``library`` (LibraryGait per entry that has a gait; empty without a library)."""
 
     def __init__(self, gaits: dict, selection: GaitSelection, library: tuple = (), library_spec: Any = None,
-                 left_out: dict | None = None):
+                 left_out: dict | None = None, unmeasured: bool = False):
         super().__init__(gaits)
         self.selection = selection
         self.library = tuple(library)
         self.library_spec = library_spec
         #: {direction: why}: a direction whose optimal gaits the hardware cannot make (``left_out_line``)
         self.left_out = dict(left_out or {})
+        #: the robot's matrix is unmeasured (``Robot.unmeasured``): no gait moves it yet
+        self.unmeasured = unmeasured
 
     def left_out_line(self, direction: str) -> str | None:
         """Why the firmware carries no gait of ``direction`` (its optimal gait 0 is one the
-        hardware cannot make), or None when it was not left out."""
+        hardware cannot make, or the matrix is unmeasured), or None when it was not left out."""
+        if self.unmeasured and not self.get(direction):
+            return (f"{direction}: the robot's matrix is unmeasured ([transitions] matrix = \"unmeasured\"), so no "
+                    f"gait moves it yet and the firmware carries no {direction} gait (START {direction} is refused: "
+                    f"NACK NO_GAIT). Learn the matrix on the robot (proleg learn ROBOT --port PORT --out "
+                    f"LEARNED.toml) or on the simulated body (proleg learn ROBOT --sim --out LEARNED.toml, or "
+                    f"proleg sim ROBOT --measure-matrix), and build from that file; a gait of your own runs "
+                    f"with proleg load-gait")
         why = self.left_out.get(direction)
         if why is None:
             return None
@@ -169,7 +178,8 @@ def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int 
     placed: tuple = ()
     if spec is not None:
         placed = _place_library(robot, spec, gaits)
-    return FirmwareGaits(gaits, GaitSelection(objective, max_transitions), placed, spec, left_out)
+    return FirmwareGaits(gaits, GaitSelection(objective, max_transitions), placed, spec, left_out,
+                         getattr(robot, "unmeasured", False))
 
 
 def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:

@@ -11,7 +11,8 @@ agree with the most non-zero matrix entries wins (ties: D1 first). A robot with 
 limb is not inferred: its multi-level limbs alternate soft/hard from level 0, its two-level
 limbs take D1. Robots of more than ``INFER_MAX_LIMBS`` limbs are
 not inferred (the work grows as 4^n): they take D1 on every limb, and loading such a file
-without ``friction`` warns.
+without ``friction`` warns. Nor is a robot whose matrix is unmeasured (no signs to agree with):
+it takes the defaults of a multi-level robot, and its file warns likewise.
 """
 
 from __future__ import annotations
@@ -69,9 +70,11 @@ def limb_mechanisms(robot: Any, override: Sequence[Any] | None = None, body: Any
     if all(d is not None for d in declared):
         got = [_materials(d, k, f"limb {lb.name!r}") for d, k, lb in zip(declared, levels, limbs)]
         return Mechanisms(tuple(g[0] for g in got), tuple(g[1] for g in got), "robot file")
-    if any(k != 2 for k in levels) or getattr(robot, "transitions", None) is None:
+    unmeasured = getattr(robot, "unmeasured", False)
+    if any(k != 2 for k in levels) or getattr(robot, "transitions", None) is None or unmeasured:
         mats = tuple(tuple("soft" if lv % 2 == 0 else "hard" for lv in range(k)) for k in levels)
-        why = "a limb has more than two levels" if any(k != 2 for k in levels) else "no transition matrix"
+        why = ("a limb has more than two levels" if any(k != 2 for k in levels) else
+               "the matrix is unmeasured" if unmeasured else "no transition matrix")
         return Mechanisms(tuple("D1" if k == 2 else "custom" for k in levels), mats, f"default (not inferred: {why})")
     if too_many_to_infer(limbs):  # 2^n assignments × n·2^n transitions (robot_plant)
         return Mechanisms(("D1",) * len(limbs), (mat.MECHANISMS["D1"],) * len(limbs),

@@ -1,0 +1,144 @@
+"""``[transitions] matrix = "unmeasured"``: a robot whose rewards are not known yet, its
+allowed transitions given by a rule (``allow``) instead of written out, learned from there.
+
+The rule is checked against a brute-force oracle (every pair of states, their limb levels
+compared); the rest follows a lab's first day: load, build (no gaits, and why), learn on the
+simulated body, walk the learned file."""
+
+from __future__ import annotations
+
+import itertools
+import json
+from pathlib import Path
+
+import pytest
+from build_checks import cli
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from proleg import states
+from proleg.errors import RobotFileError
+from proleg.robot import load_robot
+from proleg.robot_transitions import MAX_UNMEASURED_EDGES, _allowed_by_rule
+
+
+def _robot_text(levels: list[int], transitions: str, *, friction: bool = True, extra: str = "") -> str:
+    parts = ['[robot]\nname = "fresh"\n']
+    for i, k in enumerate(levels):
+        psi = [12.0 * (j + 1) for j in range(k - 1)]
+        pad = ('friction = "D1"\n' if k == 2 else
+               f"friction = {json.dumps(['soft' if j % 2 == 0 else 'hard' for j in range(k)])}\n") if friction else ""
+        parts.append(f'[[limb]]\nname = "l{i}"\n{"levels = " + str(k) + chr(10) if k != 2 else ""}'
+                     f"psi_star_deg = {psi}\n{pad}actuator = \"a{i}\"\n")
+    parts += [f'[[actuator]]\nname = "a{i}"\nchannel = {i}\n' for i in range(len(levels))]
+    parts.append(extra)
+    parts.append(f"[transitions]\n{transitions}\n")
+    return "\n".join(parts)
+
+
+def _write(tmp_path: Path, levels: list[int], transitions: str, **kw) -> Path:
+    path = tmp_path / "fresh.toml"
+    path.write_text(_robot_text(levels, transitions, **kw), encoding="utf-8")
+    return path
+
+
+def _oracle(rule: str, levels: tuple[int, ...]) -> set[tuple[int, int]]:
+    n = states.state_count(levels)
+    out = set()
+    for a, b in itertools.permutations(range(n), 2):
+        la, lb = states.limb_levels(a, levels), states.limb_levels(b, levels)
+        moved = [abs(x - y) for x, y in zip(la, lb) if x != y]
+        if rule == "any" or (len(moved) == 1 and (rule == "one-limb" or moved[0] == 1)):
+            out.add((a, b))
+    return out
+
+
+@settings(max_examples=60, deadline=None)
+@given(levels=st.lists(st.integers(2, 4), min_size=1, max_size=4), rule=st.sampled_from(["one-level", "one-limb", "any"]))
+def test_the_allow_rules_are_the_brute_force_sets_in_table_order(levels, rule):
+    src, dst = _allowed_by_rule(Path("r.toml"), rule, tuple(levels))
+    got = list(zip(src.tolist(), dst.tolist()))
+    assert set(got) == _oracle(rule, tuple(levels))
+    assert len(got) == len(set(got)) and got == sorted(got)  # by from, then to, as a table's edges
+
+
+def test_an_unmeasured_robot_loads_with_zero_rewards_and_forbidden_marks_taken_out(tmp_path):
+    path = _write(tmp_path, [2, 3, 2], 'matrix = "unmeasured"\nallow = "one-level"\nforbidden = ["000->100", "@1->@0"]')
+    robot = load_robot(path)
+    t = robot.transitions
+    edges = {(t.label(a), t.label(b)) for a, b in zip(t.src.tolist(), t.dst.tolist())}
+    assert robot.unmeasured and not t.reward.any()
+    assert ("000", "100") not in edges and ("001", "000") not in edges and ("100", "000") in edges
+    assert ("000", "020") not in edges and ("010", "020") in edges  # one level at a time
+    assert len(edges) == len(_oracle("one-level", (2, 3, 2))) - 2
+    assert not load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").unmeasured
+
+
+@pytest.mark.parametrize("transitions, says", [
+    ('matrix = "unknown"', 'expected 4 rows of 4 entries, or "unmeasured"'),
+    ('matrix = "unmeasured"\nallow = "two"', "transitions.allow: expected one of 'one-level', 'one-limb', 'any'"),
+    ('matrix = "unmeasured"\ndurations_s = 1', 'transitions.durations_s: expected no durations_s beside matrix = "unmeasured"'),
+    ('matrix = "unmeasured"\nn_trials = 1', "transitions.n_trials: expected no n_trials beside"),
+    ('matrix = [[0, 1, 1, "x"], [1, 0, "x", 1], [1, "x", 0, 1], ["x", 1, 1, 0]]\nallow = "any"',
+     'transitions.allow: expected matrix = "unmeasured" beside it'),
+    ('matrix = "unmeasured"\nforbidden = ["00->00"]', "transitions.forbidden[1]: 00->00 is a state to itself"),
+    ('matrix = "unmeasured"\nforbidden = ["00->21"]', "transitions.forbidden[1]"),
+])
+def test_what_an_unmeasured_table_refuses_names_the_key(tmp_path, transitions, says):
+    with pytest.raises(RobotFileError, match="fresh.toml: ") as e:
+        load_robot(_write(tmp_path, [2, 2], transitions))
+    assert says in str(e.value)
+
+
+def test_a_rule_too_large_for_a_table_says_what_to_allow(tmp_path):
+    """Eight three-level limbs, any pair: 43 million transitions, refused before any is made."""
+    with pytest.raises(RobotFileError, match=r"transitions.allow: 'any' lets the robot's 6,561 states make "
+                                             r"43,040,160 transitions, more than the 4,194,304") as e:
+        load_robot(_write(tmp_path, [3] * 8, 'matrix = "unmeasured"'))
+    assert 'allow "one-level"' in str(e.value)
+    assert MAX_UNMEASURED_EDGES == 4_194_304
+
+
+def test_without_friction_the_plant_says_it_cannot_infer_it_from_an_unmeasured_matrix(tmp_path, caplog):
+    from proleg.sim.physical.mechanism import limb_mechanisms
+
+    with caplog.at_level("WARNING"):
+        robot = load_robot(_write(tmp_path, [2, 2], 'matrix = "unmeasured"', friction=False))
+    assert any("the matrix is unmeasured and not every [[limb]] says its friction" in r.getMessage()
+               for r in caplog.records)
+    mech = limb_mechanisms(robot)
+    assert mech.names == ("D1", "D1") and mech.source == "default (not inferred: the matrix is unmeasured)"
+
+
+def test_the_build_carries_no_gait_and_says_to_learn(tmp_path, capsys):
+    path = _write(tmp_path, [2, 2, 2], 'matrix = "unmeasured"\nallow = "one-level"', extra="[control]\ntick_hz = 500\n")
+    code, out, err = cli(capsys, "build", path, "--board", "host-sim", "-o", tmp_path / "fw")
+    assert code == 0, err
+    assert "+x gaits: none (the matrix is unmeasured: learn or measure it, warned above)" in out
+    assert "the robot's matrix is unmeasured" in err and "proleg learn ROBOT --sim --out LEARNED.toml" in err
+    manifest = json.loads((tmp_path / "fw" / "proleg-build.json").read_text())
+    assert manifest["gaits"] == {"+x": [], "-x": []}
+    code, _, err = cli(capsys, "sim", path, "--duration", "1")
+    assert code == 2 and "--gait 0 of +x" in err and "matrix is unmeasured" in err
+
+
+def test_learning_an_unmeasured_robot_on_the_simulated_body_gives_a_file_that_walks(tmp_path, capsys):
+    """learn --sim takes the physical plant for it (the table plant would move by zeros), and
+    the learned file's gait 0 walks the way it promises."""
+    path = _write(tmp_path, [2, 2, 2], 'matrix = "unmeasured"\nallow = "one-level"\ndefault_duration_s = 1',
+                  extra="[control]\ntick_hz = 500\n")
+    code, _, err = cli(capsys, "learn", path, "--sim", "--plant", "table", "--repeats", "1",
+                       "--log", tmp_path / "t.jsonl")
+    assert code == 2 and "the matrix is unmeasured, and the table plant moves by it" in err
+    out_file = tmp_path / "learned.toml"
+    code, _, err = cli(capsys, "learn", path, "--sim", "--repeats", "2", "--log", tmp_path / "trials.jsonl",
+                       "--out", out_file)
+    assert code == 0, err
+    learned = load_robot(out_file)
+    assert not learned.unmeasured and learned.transitions.reward.any()
+    assert learned.transitions.n_transitions == load_robot(path).transitions.n_transitions
+    for direction, sign in (("+x", 1), ("-x", -1)):
+        code, out, err = cli(capsys, "sim", out_file, "--direction", direction, "--duration", "40", "--json")
+        result = json.loads(out)
+        assert code == 0 and result["faults"] == [], err
+        assert result["cycles"] >= 1 and sign * result["displacement_mm"] > 0
