@@ -27,6 +27,17 @@ def legacy_identifier(name: str) -> str:
     return re.sub(r"[^0-9A-Za-z_]", "_", name)
 
 
-def counted(n: int, noun: str) -> str:
-    """``n`` and ``noun``, plural but for one: "1 cycle", "0 cycles", "3 faults"."""
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+def counted(n: int, noun: str, plural: str | None = None, spec: str = "") -> str:
+    """``n`` and ``noun``, plural but for one: "1 cycle", "0 cycles", "3 faults", "1 IMU",
+    "2 channel switches", "3 entries". The plural is the English regular one (``-es`` after
+    s, x, z, ch and sh; ``-ies`` for a consonant and y) unless ``plural`` gives it; ``spec``
+    formats the number (``","``: "9,990 more ties")."""
+    return f"{n:{spec}} {noun if n == 1 else plural or _plural(noun)}"
+
+
+def _plural(noun: str) -> str:
+    if noun.endswith(("s", "x", "z", "ch", "sh")):
+        return noun + "es"
+    if len(noun) > 1 and noun.endswith("y") and noun[-2].lower() not in "aeiou":
+        return noun[:-1] + "ies"
+    return noun + "s"

@@ -36,6 +36,7 @@ import numpy as np
 
 from .body import (DEFAULT_OVERLAP_MM, BodyGeometry, Shape, body_geometry, coil_homes, coil_reach_deg, curl_key,
                    curl_problem, own_reach_deg)
+from .names import counted
 from .robot_plant import PlantSection
 
 
@@ -663,4 +664,4 @@ def limb_levels_of(state: int, limbs: list[Any]) -> tuple[int, ...]:
 
 
 def _more(n: int) -> str:
-    return f"{n} more line like these" if n == 1 else f"{n} more lines like these"
+    return f"{counted(n, 'more line')} like these"

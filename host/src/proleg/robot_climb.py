@@ -7,6 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
+from .names import counted
 from .robot_fields import Fields
 
 
@@ -130,7 +131,7 @@ def check_climb_limit(limit: ClimbLimit | None, gaits: dict[str, Sequence[Any]])
     for d in ("+x", "-x"):
         per, have = limit.gaits_toward(d), len(gaits.get(d, ()))
         if len(per) > have:
-            return (f"control.max_climb_deg.{d}: {len(per)} limits, but the firmware carries {have} gait"
-                    f"{'' if have == 1 else 's'} walking {d} (one limit per gait, gait 0 first; "
+            return (f"control.max_climb_deg.{d}: {counted(len(per), 'limit')}, but the firmware carries "
+                    f"{counted(have, 'gait')} walking {d} (one limit per gait, gait 0 first; "
                     "`proleg build` lists them)")
     return None

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import RobotFileError
-from .names import identifier
+from .names import counted, identifier
 from .robot_fields import Fields, toml_text
 from .robot_plant import limb_friction
 from .robot_settings import Control
@@ -134,7 +134,7 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
                 # the limb's levels were left to the default: the angles say how many were meant
                 raise RobotFileError(f"{path}: {f.where}: psi_star_deg: expected a list of 1 critical angle in "
                                      f"degrees (levels - 1, and levels is 2 when not given), got {toml_text(psi)}: "
-                                     f"for {len(psi)} angles say levels = {len(psi) + 1}")
+                                     f"for {counted(len(psi), 'angle')} say levels = {len(psi) + 1}")
             f.fail("psi_star_deg", f"a list of {levels - 1} critical angle(s) in degrees (levels - 1)", psi)
         psi_t = tuple(float(p) for p in psi)
         if not all(-90.0 < p < 90.0 for p in psi_t):

@@ -29,6 +29,7 @@ import numpy as np
 
 from .body import DEFAULT_WORKING_STRAIN, default_length_mm
 from .errors import RobotFileError
+from .names import counted
 from .robot_fields import toml_text
 from .robot_transitions import UNIT_MM
 
@@ -335,7 +336,7 @@ def _check_transformation(path: Path, per_act: dict[str, tuple[float, ...]], act
 def _coupling(path: Path, g: Any, n_limbs: int, na: int) -> tuple[tuple[float, ...], ...]:
     spec = PLANT_KEYS["coupling_deg"]
     if not isinstance(g, list) or len(g) != n_limbs or any(not isinstance(r, list) or len(r) != na for r in g):
-        raise RobotFileError(f"{path}: plant.coupling_deg: expected {n_limbs} rows (limbs) of {na} numbers (actuators)")
+        raise RobotFileError(f"{path}: plant.coupling_deg: expected {counted(n_limbs, 'row')} (limbs) of {counted(na, 'number')} (actuators)")
     return tuple(
         tuple(_value(path, spec, f"coupling_deg[{i + 1}][{j + 1}]", x) for j, x in enumerate(r))
         for i, r in enumerate(g)

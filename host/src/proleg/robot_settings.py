@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .names import counted
 from .robot_climb import ClimbLimit, climb_limit
 from .robot_fields import Fields
 
@@ -180,8 +181,8 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
     debounce_ms = c.debounce_ticks * 1000.0 / c.tick_hz
     if 2 * debounce_ms >= safety.state_timeout_ms:
         ticks = math.ceil(safety.state_timeout_ms * c.tick_hz / 1000.0)
-        f.fail("debounce_ticks", f"under half the {ticks} ticks safety.state_timeout_ms lasts at {c.tick_hz} Hz (a "
+        f.fail("debounce_ticks", f"under half the {counted(ticks, 'tick')} safety.state_timeout_ms lasts at {c.tick_hz} Hz (a "
                f"step changes a limb's level after debounce_ticks samples and settles it after as many again): "
-               f"{c.debounce_ticks} ticks take {debounce_ms:g} ms, twice that {2 * debounce_ms:g} ms, and every "
+               f"{counted(c.debounce_ticks, 'tick')} take {debounce_ms:g} ms, twice that {2 * debounce_ms:g} ms, and every "
                f"step would end in STATE_TIMEOUT after {safety.state_timeout_ms} ms", c.debounce_ticks)
     return c

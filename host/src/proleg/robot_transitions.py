@@ -15,6 +15,7 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
+from .names import counted
 from .robot_fields import Fields, toml_text
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
@@ -346,7 +347,7 @@ def _csv(path: Path, name: str, levels: tuple[int, ...], names: Sequence[str] = 
         for lineno, cells in _csv_rows(fh, csv_path, header):
             where = f"{csv_path}:{lineno}"
             if len(cells) not in (3, 4):
-                raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {len(cells)} fields")
+                raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {counted(len(cells), 'field')}")
             if header and len(cells) != len(header):
                 raise RobotFileError(f"{where}: expected {len(header)} fields as the header names "
                                      f"({','.join(header)}), got {len(cells)}")

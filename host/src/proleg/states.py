@@ -11,6 +11,8 @@ from collections.abc import Sequence
 from functools import lru_cache
 from math import prod
 
+from .names import counted
+
 DIGITS = "0123456789abcdefghijklmnopqrstuvwxyz"
 
 
@@ -40,13 +42,13 @@ def index(text: str, levels: Sequence[int], names: Sequence[str] = ()) -> int:
     limb by ``names``, the robot file's, where given; else by its place, ``limb #2``)."""
     if any(ch.lower() not in DIGITS for ch in text):
         example = "".join(DIGITS[i % 2] for i in range(len(levels)))
-        what = f"one digit per limb, {len(levels)} digit{'s' if len(levels) != 1 else ''} (e.g. {example})"
+        what = f"one digit per limb, {counted(len(levels), 'digit')} (e.g. {example})"
         if any(ch.lower() in DIGITS for ch in text) and any(ch.isspace() or ch in ";|/" for ch in text):
             # "000 100 110": several states in one item ("has 11 digits" named neither)
             raise ValueError(f"{text!r} is not one state label: separate the states with commas ({what} each)")
         raise ValueError(f"{text!r} is not a state label: {what}")
     if len(text) != len(levels):
-        raise ValueError(f"state label {text!r} has {len(text)} digits, expected {len(levels)} (one per limb)")
+        raise ValueError(f"state label {text!r} has {counted(len(text), 'digit')}, expected {len(levels)} (one per limb)")
     value = 0
     for i, (ch, k) in enumerate(zip(text, levels)):
         d = DIGITS.find(ch.lower())

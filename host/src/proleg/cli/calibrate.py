@@ -12,6 +12,7 @@ import argparse
 from typing import Any
 
 from ..errors import Interrupted, LinkError
+from ..names import counted
 
 
 #: How long the host watches ψ before it asks for a calibration, and how far a limb's mean ψ may
@@ -56,7 +57,7 @@ def _not_at_rest(client: Any, robot: Any) -> str | None:
 def _limb_names(robot: Any, n: int) -> list[str]:
     names = [limb.name for limb in robot.limbs]
     if len(names) != n:
-        raise LinkError(f"the robot reports {n} limbs, {robot.path.name} has {len(names)}: "
+        raise LinkError(f"the robot reports {counted(n, 'limb')}, {robot.path.name} has {len(names)}: "
                         f"is this the firmware of this robot file?")
     return names
 

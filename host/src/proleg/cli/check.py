@@ -17,6 +17,7 @@ import os
 import sys
 from typing import Any
 
+from ..names import counted
 from .main import EXIT_FAILED, EXIT_OK, robot_arg
 from .number_args import MAX_CHECK_ROWS, check_rows, gait_number, positive_int
 
@@ -114,8 +115,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i}", args.board,
              nominal if i == 0 else None)
             for i, c in enumerate([base, *rows_conditions])]
-    log.info("%s: gait %d (%s) in %s under %d random condition%s, %g s each (the idealised drive walks "
-             "%+.3f mm/s%s)", robot.name, args.gait, label, args.direction, len(draws), "s" if len(draws) != 1 else "",
+    log.info("%s: gait %d (%s) in %s under %s, %g s each (the idealised drive walks "
+             "%+.3f mm/s%s)", robot.name, args.gait, label, args.direction, counted(len(draws), "random condition"),
              run_s, nominal.speed_mm_s or 0.0, f" under {' '.join(base)}" if base else " on the nominal plant")
     done: list = []
     try:
@@ -188,7 +189,7 @@ def _interrupted(args: argparse.Namespace, done: int, total: int) -> str:
     again (the same draws need the same --condition keys left out, and the same gait, way and
     board; --rows and --seed alone drew other rows under other conditions)."""
     if not done:
-        return f"interrupted after 0 of {total} rows (nothing written)"
+        return f"interrupted after 0 of {counted(total, 'row')} (nothing written)"
     again = [f"--rows {done}", f"--seed {args.seed}", *(f"--condition {c}" for c in args.condition)]
     if args.gait:
         again.append(f"--gait {args.gait}")
@@ -197,7 +198,7 @@ def _interrupted(args: argparse.Namespace, done: int, total: int) -> str:
     if args.board != "host-sim":
         again.append(f"--board {args.board}")
     shown = "the rows run are on stderr above; " if log.isEnabledFor(logging.INFO) else ""
-    return f"interrupted after {done} of {total} rows (nothing written: {shown}{' '.join(again)} runs them again)"
+    return f"interrupted after {done} of {counted(total, 'row')} (nothing written: {shown}{' '.join(again)} runs them again)"
 
 
 def _progress(done: int, total: int, row: Any) -> None:
@@ -239,9 +240,9 @@ def _error(i: int, r: Any) -> str:
 def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, nominal: Any, rows: list,
            s: dict) -> None:
     base = f", with {' '.join(args.condition)}" if args.condition else ""
-    print(f"{robot.name} on {args.board}: gait {args.gait} ({label}) in {args.direction} under {len(rows)} random "
-          f"condition{'s' if len(rows) != 1 else ''} "
-          f"({len(rows[0].conditions) - len(args.condition)} keys each, seed {args.seed}{base}), {run_s:g} s each "
+    print(f"{robot.name} on {args.board}: gait {args.gait} ({label}) in {args.direction} under "
+          f"{counted(len(rows), 'random condition')} "
+          f"({counted(len(rows[0].conditions) - len(args.condition), 'key')} each, seed {args.seed}{base}), {run_s:g} s each "
           "from cold")
     width = max(len("nominal"), *(len(" ".join(r.conditions[len(args.condition):])) for r in rows))
     for i, r in enumerate([nominal, *rows]):

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 from ..errors import GaitError
+from ..names import counted
 from .number_args import (
     cycles,
     heading_deg,
@@ -229,7 +230,7 @@ def _header(robot) -> str:
     t = robot.transitions
     shown = " ".join(t.labels()) if t.n_states <= 16 else f"{t.label(0)} … {t.label(t.n_states - 1)}"
     return (
-        f"{robot.name}: {len(robot.limbs)} limb{'s' if len(robot.limbs) != 1 else ''}, {t.n_states} states ({shown}), "
+        f"{robot.name}: {counted(len(robot.limbs), 'limb')}, {t.n_states} states ({shown}), "
         f"{t.n_transitions} allowed transitions, rewards in {robot.units}"
     )
 
@@ -251,12 +252,12 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int, shown: int | No
     what = {"total": "total", "rate": "per transition", "speed": "per second"}[r.objective]
     what = f"score {what}" if planar else {"total": "total reward J", "rate": "reward per transition",
                                            "speed": f"{robot.units} per second"}[r.objective]
-    bound = f", at most {r.max_transitions} transitions" if r.max_transitions is not None else ""
+    bound = f", at most {counted(r.max_transitions, 'transition')}" if r.max_transitions is not None else ""
     head = f"\n{_title(name, planar)}  {r.objective} ({what}{bound}): "
     if r.value is None:
         return head + (f"no gait moves the robot in {name}" if name in DIRECTIONS else "no gait")
     n = len(r.gaits)
-    head += f"best {_fmt(r.value)}, {n} optimal gait{'s' if n != 1 else ''}"
+    head += f"best {_fmt(r.value)}, {counted(n, 'optimal gait')}"
     if r.below_zero:
         head += " (no gait scores above zero: the best one is shown)"
     if r.truncated:
@@ -275,7 +276,7 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int, shown: int | No
             path = gait_path(t, gait.states, cycles)
             one = path[gait.transitions]
             lines.append(f"      per pass Δx={_fmt(one.x)} Δy={_fmt(one.y)} {robot.units}  Δθ={_fmt(one.theta_deg)}°;"
-                         f" after {cycles} passes ({path[-1].x:+.4g}, {path[-1].y:+.4g}) {robot.units},"
+                         f" after {counted(cycles, 'pass')} ({path[-1].x:+.4g}, {path[-1].y:+.4g}) {robot.units},"
                          f" {path[-1].theta_deg:+.4g}°")
     for walk, gait in zip(walks, listed):
         steps = _opposing_text(t, gait)
@@ -291,7 +292,7 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int, shown: int | No
             lines.append(f"    entry: {walk} is entered from rest by {names} (joining at the gait's state {entry.gait_step + 1})")
     if len(listed) < n:
         more = n - len(listed)
-        lines.append(f"    … and {more:,} more tie{'s' if more != 1 else ''}: --ties N or --all-ties lists them, "
+        lines.append(f"    … and {counted(more, 'more tie', spec=',')}: --ties N or --all-ties lists them, "
                      "--json lists every one")
     return "\n".join(lines)
 
@@ -404,7 +405,7 @@ def _plot(robot, answers, cycles: int, out: str, json_out: bool = False) -> None
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(f"x ({robot.units}, start frame)")
     ax.set_ylabel(f"y ({robot.units})")
-    ax.set_title(f"{robot.name}: {cycles} passes of each gait (dots: one pass)")
+    ax.set_title(f"{robot.name}: {counted(cycles, 'pass')} of each gait (dots: one pass)")
     ax.grid(True, lw=0.3)
     if len(missing) < len(answers):  # (a legend of nothing was matplotlib's UserWarning on stderr)
         ax.legend(loc="best", fontsize="small")

@@ -149,7 +149,7 @@ def cmd_learn(args: argparse.Namespace) -> int:
         raise
     with trial_log:
         if trial_log.trials and linked:
-            log.info("%s: %d trials already recorded; resuming", args.log, len(trial_log.trials))
+            log.info("%s: %s already recorded; resuming", args.log, counted(len(trial_log.trials), "trial"))
         if client is not None:
             _explore(args, robot, trial_log, source, client, pose)
         trials = list(trial_log.trials)
@@ -299,9 +299,9 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
         t = ex.robot.transitions  # the transitions the hardware can make: goals and plans are aligned with them
         done, todo = ex.tally()
         lim = ex.limits
-        log.info("learn: exploring %s on %s: %s = %d trials, %d to do; pieces of up to %s, %.1f s rest "
+        log.info("learn: exploring %s on %s: %s = %s, %d to do; pieces of up to %s, %.1f s rest "
                  "after each; Ctrl-C pauses (nothing recorded is lost: run the same command to go on)",
-                 robot.name, client.link.description, _explored(robot, args.repeats), done + todo, todo,
+                 robot.name, client.link.description, _explored(robot, args.repeats), counted(done + todo, "trial"), todo,
                  counted(lim.max_transitions, "transition"), lim.rest_s)
         try:
             if args.adaptive:
@@ -318,14 +318,14 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                 ex.run(max_pieces=args.max_pieces)
         except ExplorationError as e:
             again = "" if args.sim and getattr(e, "fault", False) else "; run the same command to resume"
-            raise LinkError(f"learn: {e}{_stopped_hint(args, e, robot)} (the {len(trial_log.trials)} trials recorded are "
+            raise LinkError(f"learn: {e}{_stopped_hint(args, e, robot)} (the {counted(len(trial_log.trials), 'trial')} recorded are "
                             f"kept in {args.log}{again})") from None
         except LinkError as e:  # a cable pulled, a board that stopped answering: said alone, it hid the log
-            raise LinkError(f"learn: {e} (the {len(trial_log.trials)} trials recorded are kept in {args.log}; run the "
+            raise LinkError(f"learn: {e} (the {counted(len(trial_log.trials), 'trial')} recorded are kept in {args.log}; run the "
                             "same command to resume)") from None
         except OSError as e:  # the log's disk filled: "cannot write: No space left on device", no file named
             raise LinkError(f"learn: cannot write trial log {args.log}: {e.strerror or e} (the "
-                            f"{len(trial_log.trials)} trials recorded before are kept in it, whole; the robot was "
+                            f"{counted(len(trial_log.trials), 'trial')} recorded before are kept in it, whole; the robot was "
                             "stopped; make room and run the same command to resume)") from None
         except KeyboardInterrupt:
             if bar is not None:
@@ -337,17 +337,17 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
             from ..errors import Interrupted
             from .main import interruption
 
-            raise Interrupted(f"learn: paused by {interruption()} ({what}): {len(trial_log.trials)} trials kept in {args.log}, "
+            raise Interrupted(f"learn: paused by {interruption()} ({what}): {counted(len(trial_log.trials), 'trial')} kept in {args.log}, "
                               f"{done} of {done + todo} done; run the same command to go on") from None
         finally:
             if bar is not None:
                 bar.close()
         done, todo = ex.tally()
         if todo == 0 or args.max_pieces is None:
-            log.info("learn: exploration done: %d trials in %s", len(trial_log.trials), args.log)
+            log.info("learn: exploration done: %s in %s", counted(len(trial_log.trials), "trial"), args.log)
         else:
-            log.info("learn: stopped after %d pieces (--max-pieces): %d of %d done; run the same command "
-                     "to go on", ex.pieces_run, done, done + todo)
+            log.info("learn: stopped after %s (--max-pieces): %d of %d done; run the same command "
+                     "to go on", counted(ex.pieces_run, "piece"), done, done + todo)
 
 
 def _check_explorable(robot) -> None:

@@ -18,6 +18,7 @@ import sys
 import numpy as np
 
 from ..errors import LearnError, ProlegError
+from ..names import counted
 
 log = logging.getLogger("proleg")
 
@@ -39,12 +40,13 @@ def with_track(args: argparse.Namespace, trials: list) -> list:
     span = (f"its times {track.t[0]:g}..{track.t[-1]:g} s, the trials' {min(t.t_start for t in bare) + offset:g}.."
             f"{max(t.t_end for t in bare) + offset:g} s on its clock (offset {offset:+.3f} s, {how})")
     if not attached:
-        raise LearnError(f"learn: --track {args.track}: covers none of the {len(bare)} trials without motion: {span}; "
+        raise LearnError(f"learn: --track {args.track}: covers none of the {counted(len(bare), 'trial')} without motion: {span}; "
                          "give the track of this run, or --tracker-offset")
     if outside:
-        log.warning("learn: --track %s: %d of %d trials begin or end outside it and are left without motion "
-                    "(%s)", args.track, len(outside), len(bare), span)
-    log.info("%s: %d trials given their motion (clock offset %+.3f s, %s)", args.track, len(attached), offset, how)
+        log.warning("learn: --track %s: %d of %s begin or end outside it and are left without motion "
+                    "(%s)", args.track, len(outside), counted(len(bare), "trial"), span)
+    log.info("%s: %s given their motion (clock offset %+.3f s, %s)", args.track, counted(len(attached), "trial"), offset,
+             how)
     return [t for t in trials if t.dx is not None] + attached + outside
 
 
@@ -99,7 +101,7 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     t = robot.transitions
     bare = sum(1 for tr in trials if tr.dx is None)
     if bare and bare == len(trials):  # a tracker's trials, no track attached: nothing to estimate
-        what = (f"learn: {args.log}: {bare} transitions recorded without their motion (Δx; --source tracker): "
+        what = (f"learn: {args.log}: {counted(bare, 'transition')} recorded without their motion (Δx; --source tracker): "
                 f"attach the tracker's track with --track FILE.csv (proleg learn {args.robot} --log {args.log} "
                 "--track FILE.csv --report)")
         if args.report or args.out or args.half_width:
@@ -118,7 +120,7 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
         if not int(dx.n.sum()):
             raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
         path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True, impossible=impossible)
-    print(f"{robot.name}: {int(dx.n.sum())} trials, {t.n_transitions} allowed transitions "
+    print(f"{robot.name}: {counted(int(dx.n.sum()), 'trial')}, {counted(t.n_transitions, 'allowed transition')} "
           f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
     extra = est.extra_trials(args.half_width) if args.half_width else None
     if extra is not None and impossible:

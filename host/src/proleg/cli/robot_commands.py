@@ -309,8 +309,8 @@ def _run_interrupted(e: Any, args: argparse.Namespace, robot: Any, listeners: li
 
     clock = " (simulated time)" if getattr(args, "sim", False) else ""
     if e.started:
-        when = (f"interrupted {e.ran_s:.1f} s into the {args.duration:g} s run{clock}, after {e.run.cycles} "
-                f"cycle{'s' if e.run.cycles != 1 else ''}")
+        when = (f"interrupted {e.ran_s:.1f} s into the {args.duration:g} s run{clock}, after "
+                f"{counted(e.run.cycles, 'cycle')}")
     else:
         when = "interrupted while starting the gait (START was not acknowledged yet)"
     kept = what_was_kept(next((w for w in listeners if isinstance(w, Writer)), None), args.record)
@@ -466,7 +466,7 @@ def cmd_robots(args: argparse.Namespace) -> int:
             limbs = len(doc.get("limb", []))
         except (OSError, tomllib.TOMLDecodeError):
             desc, limbs = [], 0
-        print(f"{name:24s} {limbs} limbs  {desc[0] if desc else ''}".rstrip())
+        print(f"{name:24s} {counted(limbs, 'limb')}  {desc[0] if desc else ''}".rstrip())
     return 0
 
 

@@ -11,6 +11,7 @@ import argparse
 import json
 import sys
 
+from ..names import counted
 from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
 from .number_args import gait_number, max_transitions, positive_float
 from .. import interrupts
@@ -389,7 +390,7 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
     lines += _no_cycle_note(robot, report)
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
     lines.append(
-        f"  telemetry: {report.telemetry_frames} frames, {report.telemetry_lost} lost; link errors: {errs}"
+        f"  telemetry: {counted(report.telemetry_frames, 'frame')}, {report.telemetry_lost} lost; link errors: {errs}"
     )
     if budget is not None:
         period, busy = budget["tick_period_us"], budget["tick_busy_us"]

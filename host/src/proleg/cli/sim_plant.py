@@ -15,6 +15,7 @@ import logging
 import time
 from typing import Any
 
+from ..names import counted
 from .number_args import positive_int
 
 PLANT_CHOICES = ("physical", "table")
@@ -194,7 +195,7 @@ class _Steps:
         if tried < total and now - self.said >= PROGRESS_EVERY_S:
             self.said = now
             left = (now - self.started) / tried * (total - tried)
-            log.info("measure-matrix: %d/%d transitions, about %d:%02d left", tried, total, left // 60, left % 60)
+            log.info("measure-matrix: %d/%s, about %d:%02d left", tried, counted(total, "transition"), left // 60, left % 60)
 
     def interrupted(self, allowed: int, margins: int) -> str:
         """The one line a Ctrl-C'd ``--measure-matrix`` ends with: how many transitions were
@@ -203,8 +204,8 @@ class _Steps:
         if not self.tried:
             return f"interrupted before the first transition was measured; {nothing}"
         each = self.total // max(1, allowed * margins)
-        how = f"{allowed} allowed, {each} times each" + (f" at each of {margins} hold margins" if margins > 1 else "")
-        return (f"interrupted after measuring {self.tried} of {self.total} transitions ({how}; {self.sampled} "
+        how = f"{allowed} allowed, {counted(each, 'time')} each" + (f" at each of {margins} hold margins" if margins > 1 else "")
+        return (f"interrupted after measuring {self.tried} of {counted(self.total, 'transition')} ({how}; {self.sampled} "
                 f"reached their target); {nothing}")
 
 

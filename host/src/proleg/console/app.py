@@ -33,6 +33,7 @@ from textual.css.query import NoMatches
 from textual.widgets import Footer, Static
 
 from ..errors import LinkError
+from ..names import counted
 from ..protocol.definition import DIR_UNSTATED, GAIT_USER, Direction, Flag
 from ..states import label as state_label
 from ..states import limb_levels, state_count
@@ -217,7 +218,7 @@ class ConsoleApp(App[None]):
         top = Text()
         if info is not None:
             top.append(f"{info.robot_name}", style="bold")
-            top.append(f" on {info.board} · {info.limbs} limbs · {info.gaits} gaits · {info.tick_hz} Hz tick\n"
+            top.append(f" on {info.board} · {counted(info.limbs, 'limb')} · {counted(info.gaits, 'gait')} · {info.tick_hz} Hz tick\n"
                        f"build {info.build_id:08x} · gait table {info.gait_hash:08x} · {self.client.link.description}")
         else:
             top.append(self.client.link.description)

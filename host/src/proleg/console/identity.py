@@ -15,6 +15,7 @@ from typing import Any
 
 from ..errors import LinkError, ProlegError
 from ..link.client import RobotInfo
+from ..names import counted
 
 OBJECTIVES = ("total", "rate", "speed")
 
@@ -86,6 +87,6 @@ def check_identity(info: RobotInfo, robot: Any, *, force: bool = False, link: st
         raise IdentityMismatch(f"the board does not run firmware built from {robot.path}: "
                                f"{'; '.join(problems)} (rebuild and flash it, or --force)")
     if len(robot.limbs) != info.limbs or len(robot.actuators) != info.actuators:
-        raise IdentityMismatch(f"{link} has {info.limbs} limbs and {info.actuators} actuators, {robot.path} "
+        raise IdentityMismatch(f"{link} has {counted(info.limbs, 'limb')} and {counted(info.actuators, 'actuator')}, {robot.path} "
                                f"{len(robot.limbs)} and {len(robot.actuators)}: --force cannot read one with the other")
     return problems

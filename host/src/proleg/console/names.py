@@ -126,7 +126,7 @@ def event_text(f: dict, names: RobotNames = RobotNames(), state_label: object = 
     if k == EventKind.ESTOP:
         return f"E-STOP ({'hardware input' if code else 'command'})"
     if k == EventKind.GAIT_LOADED:
-        return f"user gait loaded ({detail} steps)"
+        return f"user gait loaded ({counted(detail, 'step')})"
     if k == EventKind.SUSPECT:
         who = "no actuator" if code == 0xFF else names.actuator(code)
         n = names.n_states

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Protocol
 
 from ..errors import SimError
+from ..names import counted
 
 #: emulated time per slice: the pty is served (read, written, open checked) between slices
 SLICE_US = 500
@@ -57,7 +58,7 @@ class PtyStats:
 
     def line(self) -> str:
         return (
-            f"served {self.wall_s:.1f} s ({self.emulated_s:.1f} s emulated): {self.opens} opens, "
+            f"served {self.wall_s:.1f} s ({self.emulated_s:.1f} s emulated): {counted(self.opens, 'open')}, "
             f"{self.bytes_in} bytes in, {self.bytes_out} out, {self.dropped_out} dropped while closed"
         )
 

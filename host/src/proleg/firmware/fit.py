@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import BuildError
+from ..names import counted
 from .boards import DEFAULT_I2C_HZ, pwm_channel_error
 from .placement import ImuPlacement, check_tick_budget, i2c_tick_us, mux_selects_per_tick, place_imus
 from .render_gaits import BITMAP_MAX_STATES, gait_table_rows
@@ -49,8 +50,8 @@ class Fit:
     def lines(self) -> list[str]:
         out = [p.describe() for p in self.placements]
         out.append(
-            f"I2C per tick: about {self.i2c_us_per_tick:.0f} us ({len(self.placements)} IMU reads, "
-            f"{self.mux_selects_per_tick} multiplexer channel switches)"
+            f"I2C per tick: about {self.i2c_us_per_tick:.0f} us ({counted(len(self.placements), 'IMU read')}, "
+            f"{counted(self.mux_selects_per_tick, 'multiplexer channel switch')})"
         )
         return out
 
@@ -107,7 +108,7 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
                 own = [lg for lg in library if lg.appended]
                 state_bytes = 1 if robot.n_states <= 256 else 2
                 lib_bytes = sum((len(lg.gait.states) - 1) * state_bytes + 10 for lg in own)
-                lib_note = (f"; its gait library ({len(library)} headings, {len(own)} gaits of their own) takes about "
+                lib_note = (f"; its gait library ({counted(len(library), 'heading')}, {counted(len(own), 'gait')} of their own) takes about "
                             f"{lib_bytes:,} bytes of that: fewer headings or a smaller max_transitions in [gaits]")
             raise BuildError(
                 f"robot {robot.name} does not fit board {name} (estimated before compiling; fewer gaits: "
@@ -137,7 +138,7 @@ def check_ram(robot: Any, board: Any) -> int | None:
     if limit_ram and ram + stack > limit_ram:
         also = f" and {stack:,} for its stack ([board] stack_bytes)" if stack else ""
         raise BuildError(
-            f"robot {robot.name} does not fit board {name} (estimated before compiling, {len(robot.limbs)} limbs"
+            f"robot {robot.name} does not fit board {name} (estimated before compiling, {counted(len(robot.limbs), 'limb')}"
             f"{f' of up to {max(lb.levels for lb in robot.limbs)} levels' if bands else ''}): "
             f"robot {robot.name} needs {ram:,} bytes of static RAM{also}, board {name} has {limit_ram:,}"
         )

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import BuildError
+from ..names import counted
 from ..robot import MUX_CHANNELS, ImuSpec
 from .boards import I2cBus, i2c_buses
 
@@ -216,7 +217,7 @@ def _automatic(robot: Any, bname: str, buses: Sequence[I2cBus], names: list[str]
         if len(chosen) == len(names):
             return chosen
     raise BuildError(
-        f"robot {robot.name} has {len(robot.limbs)} limbs, each with an IMU, but board {bname} can host at most "
+        f"robot {robot.name} has {counted(len(robot.limbs), 'limb')}, each with an IMU, but board {bname} can host at most "
         f"{capacity(buses)} IMUs ({_bus_summary(buses)})"
     )
 
@@ -277,7 +278,7 @@ def check_tick_budget(robot: Any, bname: str, placements: Sequence[ImuPlacement]
     if need > I2C_TICK_SHARE * tick_us:
         most = max_tick_hz(placements, i2c_hz)
         raise BuildError(
-            f"{robot.where}: reading {len(placements)} IMUs ({mux_selects_per_tick(placements)} channel switches) "
+            f"{robot.where}: reading {counted(len(placements), 'IMU')} ({counted(mux_selects_per_tick(placements), 'channel switch')}) "
             f"takes about {need:.0f} us of I2C at {i2c_hz // 1000} kHz per tick on board {bname}, more than "
             f"{I2C_TICK_SHARE:.0%} of the {tick_us:.0f} us tick: set control.tick_hz to at most {most}"
         )

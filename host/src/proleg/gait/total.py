@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..names import counted
 from .evaluate import canonical_rotation, is_primitive
 from .maxplus import ClosingBound, Graph
 
@@ -92,7 +93,7 @@ def best_total_walks(
         return TotalResult(None, [], False)
     bound = ClosingBound(g, K)
     slack = 1e-12 * (float(np.abs(g.weight).max()) + 1.0) * K
-    slow = _SlowNotice(f"gait search: {n} states, {len(g.src)} allowed transitions, gaits of up to {K} "
+    slow = _SlowNotice(f"gait search: {n} states, {counted(len(g.src), 'allowed transition')}, gaits of up to {K} "
                        "transitions: still searching (the search grows with the gait length: a smaller "
                        "--max-transitions or [gaits] max_transitions is faster)")
     best = _best_value(g, bound, K, tol, slack, slow)

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from types import TracebackType
 
 from ..errors import LinkError
+from ..names import counted
 from ..protocol.codec import Message, encode
 from ..protocol.definition import (
     BY_NAME,
@@ -115,7 +116,7 @@ class RobotClient(MessageStream):
                     break
                 if self.link.clock() >= deadline - _EPS:
                     raise ReplyTimeout(
-                        f"no reply to GET_INFO within {_seconds(within_s)} ({tries} tries) on {self.link.description}"
+                        f"no reply to GET_INFO within {_seconds(within_s)} ({counted(tries, 'try')}) on {self.link.description}"
                         f"{self._garbled_hint()}"
                     ) from None
         if info.protocol_version != PROTOCOL_VERSION:

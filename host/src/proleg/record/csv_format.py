@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from ..errors import RecordingError
+from ..names import counted
 from .base import Reader, Recording, Writer, torn_last, write_row
 from .fields import EVENT_COLUMNS, RecordingMeta
 
@@ -120,5 +121,5 @@ class CsvReader(Reader):
             torn_last(rows.pop()[0])
         for where, cells in rows:
             if len(cells) != len(header):
-                raise RecordingError(f"{where}: {len(cells)} cells, expected {len(header)} as in the header")
+                raise RecordingError(f"{where}: {counted(len(cells), 'cell')}, expected {len(header)} as in the header")
         return header, [(w, dict(zip(header, cells))) for w, cells in rows]

@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from ..errors import SimError
+from ..names import counted
 from ..sim.openloop import OpenLoopDrive, tune_open_loop_robust
 from ..physics.materials import NITI_OVERHEAT_C, shown_c
 
@@ -376,7 +377,7 @@ def feedback_run(robot: Any, point: GridPoint, *, direction: str = "+x", gait: i
     completed = not faults and run.cycles >= 2 and sign * speed > 0
     note = ""
     if not faults and not completed:
-        note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {run.cycles} cycles (no fault)"
+        note = "walks the wrong way (no fault)" if sign * speed <= 0 else f"only {counted(run.cycles, 'cycle')} (no fault)"
     reported = f"{codes} ×{len(run.faults)}" if codes and not stopped else ""
     peak = max(sim.plant.peak_temperature_c)  # since the plant was made: the coils were cold before START
     if peak > OVERHEAT_C:  # the open loop's line (open_loop_run): a run that ruins a coil did not complete

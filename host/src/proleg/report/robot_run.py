@@ -17,6 +17,7 @@ from ..errors import GaitError, Interrupted, LinkError
 from ..link.client import RobotClient, RobotInfo
 from ..link.direction import UNSTATED, direction_code
 from ..link.listeners import Listener
+from ..names import counted
 from ..protocol.definition import GAIT_USER
 from .gait_run import GaitRun, GaitRunListener
 
@@ -70,7 +71,7 @@ def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[s
         have = f"gaits 0..{n - 1}" if n else "no gait"
         raise GaitError(f"--gait {gait}: {info.robot_name} has {have} in {direction}")
     if gait < 0 or gait >= info.gaits:  # without the robot file: INFO counts both directions' gaits
-        have = f"at most {info.gaits} gaits in a direction" if info.gaits else "no gaits"
+        have = f"at most {counted(info.gaits, 'gait')} in a direction" if info.gaits else "no gaits"
         raise GaitError(f"--gait {gait}: {info.robot_name} has {have} (INFO reports {info.gaits} compiled gaits "
                         "in all; give the robot file with --robot for the count in each direction)")
 
@@ -109,8 +110,9 @@ def run_gait_on(
                 replanner.poll()  # type: ignore[attr-defined]
             if progress is not None and clock() >= next_progress - _EPS:
                 next_progress += progress_every_s
-                progress(f"{clock() - t0:6.1f} s: {run.telemetry_frames} frames, "
-                         f"{max(0, len(run.states_reached))} states reached, {len(run.faults)} faults")
+                progress(f"{clock() - t0:6.1f} s: {counted(run.telemetry_frames, 'frame')}, "
+                         f"{counted(max(0, len(run.states_reached)), 'state')} reached, "
+                         f"{counted(len(run.faults), 'fault')}")
 
     def command(name: str, **fields: int) -> bool:
         try:

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SimError
+from ..names import counted
 from ..states import classify, limb_levels, place_values
 from .plant_params import (  # noqa: F401 (re-exported: the plant's parameters live beside it)
     CROSS_GAIN_DEG,
@@ -197,7 +198,7 @@ class Plant:
             self._dt_cache = (dt_s, [math.exp(-dt_s / tau) for tau in self._tau], math.exp(-dt_s / self._mtau))
         _, decay, mdecay = self._dt_cache
         if len(duties) < self._n_channels:
-            raise SimError(f"step: {len(duties)} duties given, the plant drives channels 0..{self._n_channels - 1}")
+            raise SimError(f"step: {counted(len(duties), 'duty')} given, the plant drives channels 0..{self._n_channels - 1}")
         temp = self._temp
         amb = self._amb
         contraction = []

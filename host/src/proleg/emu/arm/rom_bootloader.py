@@ -43,6 +43,7 @@ from collections.abc import Generator
 from pathlib import Path
 
 from ...errors import SimError
+from ...names import counted
 from ..pty import PtyPort, serve_board, stop_on_signals
 
 ACK, NACK = 0x79, 0x1F
@@ -239,7 +240,7 @@ class RomBootloader:
                 pages, cs = list(payload[: n + 1]), payload[n + 1]
                 ok = _xor(bytes([n, *pages])) == cs and self._erase_pages(pages)
                 self._send(ACK if ok else NACK)
-                self.log.append(f"ERASE {len(pages)} pages" if ok else "ERASE refused")
+                self.log.append(f"ERASE {counted(len(pages), 'page')}" if ok else "ERASE refused")
             elif cmd == CMD_EXT_ERASE:
                 self._send(ACK)
                 head = yield 2
@@ -255,7 +256,7 @@ class RomBootloader:
                 pages = [(payload[i] << 8) | payload[i + 1] for i in range(0, 2 * (n + 1), 2)]
                 ok = _xor(head + payload[:-1]) == payload[-1] and self._erase_pages(pages)
                 self._send(ACK if ok else NACK)
-                self.log.append(f"EXTENDED ERASE {len(pages)} pages" if ok else "EXTENDED ERASE refused")
+                self.log.append(f"EXTENDED ERASE {counted(len(pages), 'page')}" if ok else "EXTENDED ERASE refused")
             elif cmd == CMD_GO:
                 self._send(ACK)
                 addr = yield from self._address()

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from ...errors import SimError
+from ...names import counted
 from ...physics.params import PhysicalParams, coil_geometries
 from ..sma import Hysteresis
 from .conditions import Conditions
@@ -93,7 +94,7 @@ class Coils:
             self._dt_cache = (dt_s, k, math.exp(-dt_s / self.physics.mech_tau_s))
         _, decay, mdecay = self._dt_cache
         if len(duties) < self.n_channels:
-            raise SimError(f"step: {len(duties)} duties given, the plant drives channels 0..{self.n_channels - 1}")
+            raise SimError(f"step: {counted(len(duties), 'duty')} given, the plant drives channels 0..{self.n_channels - 1}")
         na = self._na
         ds = []
         for j in range(na):
