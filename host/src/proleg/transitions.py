@@ -92,6 +92,22 @@ class TransitionTable:
             out.append(self.index(part.strip(), names))
         return out
 
+    def cycle(self, text: str, names: Sequence[str] = ()) -> list[int]:
+        """The states of a gait typed as labels, once each around the cycle (the start not
+        repeated): the closed spelling ``00,10,01,00`` and the open ``00,10,01`` both give
+        ``[00, 10, 01]``. ValueError for what is neither: an entry ``sequence`` refuses,
+        fewer than two states, or a state that follows itself (``11,11,10``; ``00,10,00,00``)."""
+        out = self.sequence(text, names)
+        if len(out) > 1 and out[0] == out[-1]:
+            out = out[:-1]  # the closed spelling: the start repeated at the end
+        if len(out) < 2:
+            raise ValueError(f"{text!r} is not a gait: it needs at least two states, e.g. 00,10 (or 00,10,00)")
+        for k, (a, b) in enumerate(zip(out, [*out[1:], out[0]]), 1):
+            if a == b:
+                raise ValueError(f"{self.label(a)} follows itself (entry {k + 1} of {text!r}); each step of a "
+                                 "gait changes the state")
+        return out
+
     @classmethod
     def from_edges(
         cls,

@@ -45,7 +45,8 @@ def add_gait_parser(sub) -> None:
     g.add_argument("--direction", choices=("+x", "-x", "both"), default=None,
                    help="which way to optimise (default both; a planar option gives its own heading)")
     g.add_argument("--max-transitions", type=max_transitions, metavar="N", help="longest gait, 2..256")
-    g.add_argument("--evaluate", metavar="SEQ", help="score a sequence of state labels, e.g. 00,10,11,01,00")
+    g.add_argument("--evaluate", metavar="SEQ", help="score a closed walk of state labels, the start repeated at the end or not: "
+                                                  "00,10,11,01,00 or 00,10,11,01")
     g.add_argument("--json", action="store_true", help="print one JSON object")
     ties = g.add_mutually_exclusive_group()
     ties.add_argument("--ties", type=positive_int, metavar="N",
@@ -421,9 +422,10 @@ def _print_evaluation(robot, args) -> int:
 
     table = robot.transitions
     try:
-        seq = table.sequence(args.evaluate, [limb.name for limb in robot.limbs])
+        cycle = table.cycle(args.evaluate, [limb.name for limb in robot.limbs])
     except ValueError as e:
         raise GaitError(f"--evaluate: {e}") from None
+    seq = [*cycle, cycle[0]]
     names = [table.label(x) for x in seq]
     try:
         gait = evaluate_sequence(table, seq)

@@ -336,22 +336,15 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
     table = robot.transitions
     try:
-        states = table.sequence(args.states, [limb.name for limb in robot.limbs])
+        states = table.cycle(args.states, [limb.name for limb in robot.limbs])
     except ValueError as e:
         raise GaitError(f"STATES: {e}") from None
-    if len(states) > 1 and states[0] == states[-1]:
-        states = states[:-1]  # a closed walk may repeat its start state
-    if len(states) < 2:
-        raise GaitError(f"STATES: a gait needs at least two states, got {args.states!r}")
     from ..protocol.definition import MAX_GAIT_STEPS
 
     if len(states) > MAX_GAIT_STEPS:
         raise GaitError(f"STATES: a gait of {len(states)} steps; the firmware holds a user gait of at most "
                         f"{MAX_GAIT_STEPS} (the start state is not repeated at the end)")
     for a, b in zip(states, [*states[1:], states[0]]):  # the board refuses these: say which, before sending
-        if a == b:
-            raise GaitError(f"STATES: {table.label(a)} follows itself; each step of a gait changes the state "
-                            "(the board refuses a repeat: FORBIDDEN_TRANSITION)")
         if table.lookup(a, b) is None:
             raise GaitError(f"STATES: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
                             "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
@@ -506,7 +499,9 @@ def add_arguments(subparsers: Any) -> None:
 
     lg = subparsers.add_parser("load-gait", help="store a user gait (state labels) on the robot")
     lg.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    lg.add_argument("states", metavar="STATES", help="state labels of a closed walk, e.g. 00,10,11,01")
+    lg.add_argument("states", metavar="STATES",
+                    help="state labels of a closed walk, the start repeated at the end or not: 00,10,11,01 or "
+                         "00,10,11,01,00")
     add_link_options(lg, sim_takes_robot=False)
     lg.set_defaults(run=cmd_load_gait)
 
