@@ -16,7 +16,7 @@ LAYERS: list[set[str]] = [
     {"__init__", "errors", "interrupts", "names", "paths", "states", "outputs", "ports"},
     {"transitions", "protocol"},
     {"body", "physics", "robot", "robot_fields", "robot_limbs", "robot_settings", "robot_transitions", "robot_plant", "robot_body",
-     "robot_climb", "gait", "convert", "limbloss"},
+     "robot_reach", "robot_pose", "robot_coupling", "robot_descents", "robot_climb", "gait", "convert", "limbloss"},
     {"firmware"},
     {"sim", "emu"},
     {"link"},
