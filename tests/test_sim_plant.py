@@ -312,7 +312,7 @@ def test_bad_inputs_raise_sim_errors():
     p = Plant()
     with pytest.raises(SimError, match="outside 0..1"):
         p.step(0.001, [1.5, 0.0])
-    with pytest.raises(SimError, match="duties"):
+    with pytest.raises(SimError, match="1 duty given"):
         p.step(0.001, [0.5])
     with pytest.raises(SimError, match="dt_s"):
         p.step(0.0, [0.5, 0.5])
