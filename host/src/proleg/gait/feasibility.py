@@ -186,15 +186,21 @@ def _unholdable_problem(robot: "Robot", gait: str, unheld: list[tuple[int, int]]
     label = robot.transitions.label
     named = ", ".join(f"{label(b)} (step {k})" for k, b in unheld[:3])
     more = f" and {len(unheld) - 3} more" if len(unheld) > 3 else ""
-    first = unheld[0][1]
-    levels = limb_levels(first, robot.levels)
-    why = "; ".join(_unheld_why(robot.limbs[i], levels[i], psi) for i, psi in robot.unholdable[first])
-    reads = ("it never settles" if all(unsettled(robot.limbs[i], levels[i], psi) for i, psi in robot.unholdable[first])
-             else "it reads as another state")
     return Problem("unholdable", "error",
                    f"gait {gait}: goes to state{'s' if len(unheld) > 1 else ''} {named}{more}, which the simulated "
-                   f"body cannot hold: in {label(first)} {why} (the warning when the robot file is loaded), so "
-                   f"{reads} and the step ends in STATE_TIMEOUT")
+                   f"body cannot hold: {unholdable_why(robot, unheld[0][1])}")
+
+
+def unholdable_why(robot: "Robot", state: int) -> str:
+    """Why the body cannot hold ``state`` (one of ``Robot.unholdable``): ``in 101 'mid' (level 0)
+    sits at …, so it reads as another state and the step ends in STATE_TIMEOUT``."""
+    levels = limb_levels(state, robot.levels)
+    held = robot.unholdable[state]
+    why = "; ".join(_unheld_why(robot.limbs[i], levels[i], psi) for i, psi in held)
+    reads = ("it never settles" if all(unsettled(robot.limbs[i], levels[i], psi) for i, psi in held)
+             else "it reads as another state")
+    return (f"in {robot.transitions.label(state)} {why} (the warning when the robot file is loaded), so {reads} "
+            "and the step ends in STATE_TIMEOUT")
 
 
 def _unheld_why(limb: Any, level: int, psi: float) -> str:
@@ -216,13 +222,19 @@ def _blocked_problem(robot: "Robot", gait: str, steps: list[tuple[int, int, int]
     named = ", ".join(f"{label(a)} -> {label(b)} (step {k})" for k, a, b in steps[:3])
     more = f" and {len(steps) - 3} more" if len(steps) > 3 else ""
     _, a, b = steps[0]
-    i, _, psi = robot.blocked[(a, b)]
-    limb, k = robot.limbs[i], limb_levels(b, robot.levels)[i]
     return Problem("blocked", "error",
                    f"gait {gait}: step{'s' if len(steps) > 1 else ''} {named}{more} cannot end on the simulated "
-                   f"body: in {label(b)} the raised limbs hold {limb.name!r} at {psi:.1f}°, above its level-{k} edge "
-                   f"{limb.psi_star_deg[k] - limb.hysteresis_deg / 2:.1f}° (the warning when the robot file is "
-                   f"loaded), so it keeps reading level {k + 1} and the step ends in STATE_TIMEOUT")
+                   f"body: {blocked_why(robot, a, b)}")
+
+
+def blocked_why(robot: "Robot", a: int, b: int) -> str:
+    """Why the body cannot end the step ``a`` -> ``b`` (one of ``Robot.blocked``): ``in 01 the
+    raised limbs hold …, so it keeps reading level 1 and the step ends in STATE_TIMEOUT``."""
+    i, _, psi = robot.blocked[(a, b)]
+    limb, k = robot.limbs[i], limb_levels(b, robot.levels)[i]
+    return (f"in {robot.transitions.label(b)} the raised limbs hold {limb.name!r} at {psi:.1f}°, above its level-{k} "
+            f"edge {limb.psi_star_deg[k] - limb.hysteresis_deg / 2:.1f}° (the warning when the robot file is loaded), "
+            f"so it keeps reading level {k + 1} and the step ends in STATE_TIMEOUT")
 
 
 def _coil_cannot_hold(robot: "Robot", actuator: str, state: int) -> str | None:
