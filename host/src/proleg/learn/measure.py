@@ -15,6 +15,12 @@ read after ``t_end`` (settled). Example line::
     {"from": "00", "to": "10", "t_start": 1.204, "t_end": 1.951, "dx": 3.98, "dy": null,
      "dtheta_deg": null, "source": "sim"}
 
+A transition the robot faulted on while making it (STATE_TIMEOUT, the on-time limit) is a
+line of its own, a ``Failure``: ``fault`` says what the firmware reported, ``t_fault`` when
+(firmware seconds)::
+
+    {"from": "10", "to": "11", "t_fault": 12.31, "fault": "FAULT STATE_TIMEOUT on right"}
+
 ``TrialLog`` reopens an existing log and keeps everything in it: a run interrupted halfway
 continues with ``remaining`` (what is still to do), and nothing recorded is lost — each
 record is written, flushed and fsync'ed before the next transition is measured. A torn
@@ -91,6 +97,41 @@ class Trial:
             raise TrialLogError(f"{where}: {e}") from None
 
 
+@dataclass(frozen=True)
+class Failure:
+    """A transition the robot could not make: it faulted while making it (``runner.Explorer``
+    records one, and asks for the transition no more; the report writes it "x")."""
+
+    src: str
+    dst: str
+    t_fault: float | None
+    fault: str  # what the firmware reported, e.g. "FAULT STATE_TIMEOUT on mid"
+
+    def to_json(self) -> str:
+        return json.dumps({"from": self.src, "to": self.dst, "t_fault": self.t_fault, "fault": self.fault},
+                          ensure_ascii=False)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Failure:
+        if not isinstance(d["fault"], str):
+            raise ValueError(f"fault: expected what the firmware reported (a string), got {d['fault']!r}")
+        return cls(_label(d, "from"), _label(d, "to"), _number(d, "t_fault"), d["fault"])
+
+
+def _record(line: str, where: str) -> Trial | Failure:
+    """A trial, or a failure (a line with ``fault``), from its JSON line."""
+    try:
+        d = json.loads(line)
+    except ValueError:
+        d = None
+    if isinstance(d, dict) and "fault" in d:
+        try:
+            return Failure.from_dict(d)
+        except ValueError as e:
+            raise TrialLogError(f"{where}: {e}") from None
+    return Trial.from_json(line, where)
+
+
 #: where a trial's motion came from ("" or no key: not said)
 SOURCES = ("sim", "tracker", "manual")
 #: the largest magnitude a trial's number may have (a motion or a time; 1e9 mm is 1000 km)
@@ -150,6 +191,7 @@ class TrialLog:
         state, and its trials were mixed in without a word)."""
         self.path = Path(path)
         self.trials: list[Trial] = []
+        self.failures: list[Failure] = []  # transitions the robot faulted on (``Failure``)
         self.robot: str | None = None
         self._good_bytes = 0
         self._fh = None
@@ -198,7 +240,7 @@ class TrialLog:
                 self._good_bytes = pos if not last else 0
                 continue
             try:
-                trial = Trial.from_json(_text(raw, where), where)
+                trial = _record(_text(raw, where), where)
             except TrialLogError:
                 if last:  # no newline after it: a write cut short (a whole line is no torn record)
                     warnings.warn(f"{where}: torn last record {'dropped' if append else 'skipped'} "
@@ -207,15 +249,18 @@ class TrialLog:
                 raise
             self._check(trial, where)
             if last:  # complete JSON but no newline: keep it, add the newline on the next append
-                self.trials.append(trial)
+                self._keep(trial)
                 self._good_bytes = pos + len(raw)
                 self._needs_newline = True
                 return
-            self.trials.append(trial)
+            self._keep(trial)
             pos += len(raw) + 1
             self._good_bytes = pos
 
-    def _check(self, trial: Trial, where: str) -> None:
+    def _keep(self, record: Trial | Failure) -> None:
+        (self.failures if isinstance(record, Failure) else self.trials).append(record)
+
+    def _check(self, trial: Trial | Failure, where: str) -> None:
         """A record's states are the robot's, and its transition one the robot may make."""
         if self._states is not None and not {trial.src, trial.dst} <= self._states:
             field, bad = ("from", trial.src) if trial.src not in self._states else ("to", trial.dst)
@@ -227,7 +272,8 @@ class TrialLog:
 
     _needs_newline = False
 
-    def append(self, trial: Trial) -> None:
+    def append(self, trial: Trial | Failure) -> None:
+        """Write one record (a trial or a failure), flushed and fsync'ed, and keep it."""
         if self._fh is None:
             raise TrialLogError(f"{self.path}: opened to read only")
         prefix = b"\n" if self._needs_newline else b""
@@ -248,7 +294,7 @@ class TrialLog:
                 pass
             raise OSError(e.errno, e.strerror, str(self.path)) from None
         self._needs_newline = False
-        self.trials.append(trial)
+        self._keep(trial)
 
     def close(self) -> None:
         if self._fh is not None:
