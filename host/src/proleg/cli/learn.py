@@ -85,6 +85,13 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--seed", type=int, default=1, help="tour randomisation and simulator seed (default 1)")
     p.add_argument("--max-pieces", type=positive_int, metavar="N",
                    help="stop after N pieces (resume later with the same --log)")
+    p.add_argument("--try-unholdable", action="store_true",
+                   help="also ask for the transitions into or out of states the body model says the robot cannot "
+                        "hold, and the steps it says the body cannot end (the load warnings; left out and written "
+                        "\"x\" by default): for a robot that holds them after all")
+    p.add_argument("--retry-faulted", action="store_true",
+                   help="with a robot link: ask again for the transitions the robot faulted on in an earlier run "
+                        "of this --log (left out by default)")
     p.set_defaults(run=cmd_learn)
 
 
@@ -138,7 +145,7 @@ def cmd_learn(args: argparse.Namespace) -> int:
     source = _check_options(args, linked)
     truth = _checked_truth(args, robot)  # before the log is created: a bad option leaves no file
     if linked:
-        _check_explorable(robot)
+        _check_explorable(robot, args.try_unholdable)
     # and so is the link: a board that does not answer, or runs another robot, leaves no file either
     client, pose = _connect(args, robot, truth, source) if linked else (None, None)
     try:
@@ -152,9 +159,9 @@ def cmd_learn(args: argparse.Namespace) -> int:
             log.info("%s: %s already recorded; resuming", args.log, counted(len(trial_log.trials), "trial"))
         if client is not None:
             _explore(args, robot, trial_log, source, client, pose)
-        trials = list(trial_log.trials)
+        trials, failures = list(trial_log.trials), list(trial_log.failures)
     trials = with_track(args, trials)
-    return report_and_write(args, robot, trials)
+    return report_and_write(args, robot, trials, failures)
 
 
 def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
@@ -178,6 +185,9 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
         raise LearnError("learn: --track goes with --source tracker")
     if args.tracker_offset is not None and args.track is None:
         raise LearnError("learn: --tracker-offset goes with --track")
+    if args.retry_faulted and not linked:
+        raise LearnError("learn: --retry-faulted needs a robot (--port, --can or --sim): it asks for transitions "
+                         "again")
     if not (linked or args.report or args.out or args.half_width):
         raise LearnError("learn: nothing to do: give a robot link to explore, or --report / --out / --half-width")
     if args.out is not None:
@@ -295,13 +305,14 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
 
     with client:
         ex = Explorer(client, robot, trial_log, pose, repeats=args.repeats, source=source, seed=args.seed,
-                      on_progress=progress, ask=ask)
+                      on_progress=progress, ask=ask, try_unholdable=args.try_unholdable,
+                      retry_faulted=args.retry_faulted)
         t = ex.robot.transitions  # the transitions the hardware can make: goals and plans are aligned with them
         done, todo = ex.tally()
         lim = ex.limits
         log.info("learn: exploring %s on %s: %s = %s, %d to do; pieces of up to %s, %.1f s rest "
                  "after each; Ctrl-C pauses (nothing recorded is lost: run the same command to go on)",
-                 robot.name, client.link.description, _explored(robot, args.repeats), counted(done + todo, "trial"), todo,
+                 robot.name, client.link.description, _explored(robot, ex.left_out, args.repeats), counted(done + todo, "trial"), todo,
                  counted(lim.max_transitions, "transition"), lim.rest_s)
         try:
             if args.adaptive:
@@ -350,12 +361,12 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                      "to go on", counted(ex.pieces_run, "piece"), done, done + todo)
 
 
-def _check_explorable(robot) -> None:
+def _check_explorable(robot, try_unholdable: bool = False) -> None:
     """``LearnError`` for a robot whose file leaves nothing to explore: no allowed transition,
     or none on a closed tour from rest (each unreachable from rest or without a way back). It
     created the log, explored nothing and ended in an empty report (exit 0), or, with --out,
     "t.jsonl holds no trial with a measured motion", naming the log, not the robot file."""
-    from ..learn.makeable import impossible, impossible_line, makeable_robot
+    from ..learn.makeable import makeable_robot, not_asked, skipped_lines
     from ..learn.tours import exploration, unexplorable
 
     t = robot.transitions
@@ -363,35 +374,33 @@ def _check_explorable(robot) -> None:
     if t.n_transitions == 0:
         raise LearnError(f"learn: {where}: the robot file allows no transition (its table forbids every one): "
                          "nothing to explore")
-    drop = impossible(robot)
-    made = makeable_robot(robot).transitions
+    drop = not_asked(robot, try_unholdable=try_unholdable)
+    made = makeable_robot(robot, drop).transitions
     if made.n_transitions == 0:
-        raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is one the hardware "
-                         f"can make ({impossible_line(robot, drop)}): nothing to explore; fix what the warnings "
+        raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is one learning asks "
+                         f"for ({'; '.join(skipped_lines(robot, drop))}): nothing to explore; fix what the warnings "
                          "when the robot file is loaded name")
     unreachable, one_way = unexplorable(made, exploration(made, 1).uncoverable)
     if len(unreachable) + len(one_way) >= made.n_transitions:
         parts = [f"{len(x)} {why} ({', '.join(x[:5])}{', …' if len(x) > 5 else ''})"
                  for x, why in ((unreachable, "unreachable from rest"), (one_way, "one-way, no allowed way back")) if x]
-        if drop:
-            parts.insert(0, impossible_line(robot, drop))
+        parts[:0] = skipped_lines(robot, drop)
         raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is on a closed tour "
                          f"from rest ({'; '.join(parts)}): nothing to explore; allow the transitions that lead "
                          "there from rest and back in the matrix")
 
 
-def _explored(robot, repeats: int) -> str:
+def _explored(robot, drop: dict, repeats: int) -> str:
     """``N allowed transitions[, K of them … (a->b, …)]: M × R``: what the exploration covers,
-    naming the transitions the hardware cannot make and those no closed tour from rest can
-    make (they get no trials)."""
-    from ..learn.makeable import impossible, impossible_line, makeable_robot
+    naming the transitions learning leaves out (``drop``: ``makeable.not_asked``) and those no
+    closed tour from rest can make (they get no trials)."""
+    from ..learn.makeable import makeable_robot, skipped_lines
     from ..learn.tours import exploration, unexplorable
 
     t = robot.transitions
-    drop = impossible(robot)
-    made = makeable_robot(robot).transitions
+    made = makeable_robot(robot, drop).transitions
     unreachable, one_way = unexplorable(made, exploration(made, 1).uncoverable)
-    left = [impossible_line(robot, drop)] if drop else []
+    left = skipped_lines(robot, drop)
     for labels, why in ((unreachable, "unreachable from rest"), (one_way, "one-way, no allowed way back")):
         if labels:
             shown = ", ".join(labels[:5]) + (f", … ({len(labels) - 5} more)" if len(labels) > 5 else "")

@@ -88,14 +88,11 @@ def _trial_units(args: argparse.Namespace, robot, trials: list) -> str:
 FLAGGED_SHOWN = 10
 
 
-def _impossible(robot) -> dict[int, str]:
-    from ..learn.makeable import impossible
-
-    return impossible(robot)
-
-
-def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
+def report_and_write(args: argparse.Namespace, robot, trials: list, failures: list = ()) -> int:
+    """Print the report of ``trials`` (and ``failures``, the transitions the robot faulted on:
+    ``measure.Failure``), write ``--out``; the exit code."""
     from ..learn.estimate import estimate, penalised_table
+    from ..learn.makeable import KINDS, not_asked, report_lines
     from ..learn.robotfile import write_learned_robot
 
     t = robot.transitions
@@ -112,19 +109,21 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     est = estimate(t, trials)
     out = sys.stdout
     dx = est.dx
-    # transitions the hardware cannot make (learn/makeable.py), which exploring never asks for:
-    # not measured, said so, and "x" in the learned file (one measured after all keeps its trials)
-    impossible = {e: why for e, why in _impossible(robot).items() if dx.n[e] == 0}
+    # transitions exploring leaves out (learn/makeable.py: the hardware cannot make them, the body
+    # cannot hold their state, the robot faulted making them): not measured, said so, and "x" in
+    # the learned file (one measured after all keeps its trials)
+    left = not_asked(robot, try_unholdable=getattr(args, "try_unholdable", False), failures=failures)
+    left_out = {e: why for e, why in left.items() if dx.n[e] == 0}
     path = None
     if args.out:  # written before the table is printed: a reader that goes away (| head) loses no file
         if not int(dx.n.sum()):
             raise LearnError(f"learn: {args.log} holds no trial with a measured motion; nothing to write")
-        path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True, impossible=impossible)
+        path = write_learned_robot(robot, est, args.out, units=units, stats_as_keys=True, left_out=left_out)
     print(f"{robot.name}: {counted(int(dx.n.sum()), 'trial')}, {counted(t.n_transitions, 'allowed transition')} "
           f"(Δx in {units}, {int(est.confidence * 100)} % intervals)", file=out)
     extra = est.extra_trials(args.half_width) if args.half_width else None
-    if extra is not None and impossible:
-        extra[list(impossible)] = 0
+    if extra is not None and left_out:
+        extra[list(left_out)] = 0
     head = f"{'transition':>12} {'n':>3} {'mean Δx':>9} {'var':>8} {'interval':>19}"
     planar = "dy" in est.components and bool(np.any(est.components["dy"].n > 0))
     if planar:
@@ -134,8 +133,8 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     print(head, file=out)
     for e, (a, b) in enumerate(zip(t.src.tolist(), t.dst.tolist())):
         lab = f"{t.label(a)}->{t.label(b)}"
-        if e in impossible:
-            print(f"{lab:>12} {0:>3} {'-':>9} {'-':>8} {'impossible here':>19}", file=out)
+        if e in left_out:
+            print(f"{lab:>12} {0:>3} {'-':>9} {'-':>8} {KINDS[left_out[e].kind].tag:>19}", file=out)
             continue
         ci = "-" if math.isnan(dx.half_width[e]) else f"[{dx.low[e]:.2f}, {dx.high[e]:.2f}]"
         row = f"{lab:>12} {int(dx.n[e]):>3} {_fmt(dx.mean[e]):>9} {_fmt(dx.var[e]):>8} {ci:>19}"
@@ -147,14 +146,9 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
     if bare:
         print(f"{bare} more transitions recorded without their motion (Δx) are not counted: attach the "
               "tracker's track with --track FILE.csv", file=out)
-    if impossible:
-        labels = [f"{t.label(int(t.src[e]))}->{t.label(int(t.dst[e]))}" for e in sorted(impossible)]
-        first = min(impossible)
-        print(f"impossible on this hardware, not asked for (marked \"x\" in the learned file): {len(labels)} of "
-              f"{t.n_transitions}: {', '.join(labels[:FLAGGED_SHOWN])}"
-              f"{f', … ({len(labels) - FLAGGED_SHOWN} more)' if len(labels) > FLAGGED_SHOWN else ''}; "
-              f"{labels[0]}: {impossible[first]}", file=out)
-    skip = {f"{t.label(int(t.src[e]))}->{t.label(int(t.dst[e]))}" for e in impossible}
+    for line in report_lines(t, left_out, FLAGGED_SHOWN):
+        print(line, file=out)
+    skip = {f"{t.label(int(t.src[e]))}->{t.label(int(t.dst[e]))}" for e in left_out}
     flagged = [f for f in est.flagged() if f not in skip]
     if flagged:  # the table above has each one's n: a few names and the count, not hundreds of them
         shown = ", ".join(flagged[:FLAGGED_SHOWN]) + (
@@ -173,10 +167,10 @@ def report_and_write(args: argparse.Namespace, robot, trials: list) -> int:
 
         try:
             table = penalised_table(est, args.variance_weight, fallback=t)
-            if impossible:  # a gait the hardware cannot make is no best gait
+            if left_out:  # a gait the hardware cannot make is no best gait
                 from ..learn.makeable import without_edges
 
-                table = without_edges(table, impossible)
+                table = without_edges(table, left_out)
             res = optimal_gaits(table, "total", "+x")
             best = res.gaits[0] if res.gaits and res.value is not None else None
         except ProlegError:

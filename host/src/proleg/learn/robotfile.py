@@ -2,8 +2,9 @@
 
 The new ``[transitions]`` holds the learned Δx means as ``matrix`` (in the trials' units,
 stated in ``units``; forbidden entries stay ``"x"``; a transition never measured keeps its
-previous value and is named in a comment, but one the hardware cannot make, which exploring
-never asks for (``impossible``: ``makeable.impossible``), becomes ``"x"``, named in a comment too), the durations of the old table when it had
+previous value and is named in a comment, but one learning left out, never measured (``left_out``:
+``makeable.not_asked``: the hardware cannot make it, the body cannot hold its state, or the robot
+faulted making it), becomes ``"x"``, named in a comment too), the durations of the old table when it had
 some, and beside it the learned statistics under issue 17's names — ``dy``,
 ``dtheta_deg``, ``var_dx``, ``var_dy``, ``var_dtheta_deg`` — and ``n_trials``, same shape as
 ``matrix``, ``"x"`` where forbidden, ``nan`` where unknown — real keys that the loader
@@ -35,6 +36,7 @@ from ..robot import Robot
 from ..robot_climb import ClimbLimit
 from ..robot_transitions import UNIT_MM
 from .estimate import Estimates
+from .makeable import Left, file_comments
 
 _KEY = r"""(?:[A-Za-z0-9_-]+|"[^"\n]*"|'[^'\n]*')"""  # a bare or quoted TOML key
 HEADER_RE = re.compile(rf"^\s*\[\[?\s*{_KEY}(?:\s*\.\s*{_KEY})*\s*\]\]?\s*(#.*)?$")
@@ -114,7 +116,7 @@ def unit_factor(robot: Robot, units: str) -> float:
 
 
 def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = True,
-                             note: str = "", impossible: dict[int, str] | None = None) -> list[str]:
+                             note: str = "", left_out: dict[int, Left] | None = None) -> list[str]:
     table = robot.transitions
     n = table.n_states
     old, allowed = table.dense()
@@ -122,13 +124,13 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
     k = unit_factor(robot, units)
     new = old * k  # a transition not measured keeps its value, in the new unit
     missing = []
-    forbidden = []  # not measured, and the hardware cannot make them (learn/makeable.py): "x" now
+    forbidden: dict[int, Left] = {}  # not measured, and left out by learning (learn/makeable.py): "x" now
     for e, (a, b) in enumerate(zip(table.src.tolist(), table.dst.tolist())):
         if dx.n[e] >= 1:
             new[a, b] = dx.mean[e]
-        elif impossible and e in impossible:
+        elif left_out and e in left_out:
             allowed[a, b] = False
-            forbidden.append(f"{table.label(a)}->{table.label(b)}")
+            forbidden[e] = left_out[e]
         else:
             missing.append(f"{table.label(a)}->{table.label(b)}")
     when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -140,10 +142,7 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
     if missing:
         kept = "previous value kept" + (f", × {k:g} from {robot.units} to {units}" if k != 1.0 else "")
         out.append(f"# not measured ({kept}): {', '.join(missing)}")
-    if forbidden:
-        out.append(f"# forbidden (\"x\") now: the hardware cannot make them (a state a raised limb cannot reach, or "
-                   f"a shared coil moving its limbs apart: the warnings when the robot file is loaded), so they were "
-                   f"not asked for: {', '.join(forbidden)}")
+    out += file_comments(table, forbidden)
     out += ["[transitions]", f'units = "{units}"',
             "states = [" + ", ".join(f'"{table.label(i)}"' for i in range(n)) + "]"]
     out += _matrix("matrix", new, allowed)
@@ -181,14 +180,14 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
 
 
 def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units: str | None = None,
-                        stats_as_keys: bool = True, note: str = "", impossible: dict[int, str] | None = None) -> Path:
+                        stats_as_keys: bool = True, note: str = "", left_out: dict[int, Left] | None = None) -> Path:
     """Write ``robot``'s file with the learned ``[transitions]`` (see the module docstring),
     atomically, after checking that the text reads back as the robot file with only
     ``[transitions]`` changed (``LearnedFileError`` otherwise: nothing is written)."""
     source = Path(robot.path).read_text(encoding="utf-8")
     units = units or robot.units
     new = learned_transitions_text(robot, est, units=units, stats_as_keys=stats_as_keys, note=note,
-                                   impossible=impossible)
+                                   left_out=left_out)
     lines = source.splitlines()
     if units != robot.units and units in UNIT_MM:  # the matrix's unit fixes step_mm now
         lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")

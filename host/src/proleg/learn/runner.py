@@ -48,7 +48,7 @@ from ..link.direction import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
 from ..robot import Robot
 from ..states import limb_levels
-from .makeable import makeable_robot
+from .makeable import makeable_robot, not_asked
 from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
@@ -115,11 +115,16 @@ class Explorer:
                  source: str = "sim", seed: int | None = None,
                  on_progress: Callable[[Progress], None] | None = None,
                  rest: Callable[[float], None] | None = None,
-                 ask: Callable[[str], str] | None = None):
-        # tours over the transitions the hardware can make: asked for one it cannot (a state a
-        # raised limb cannot reach), the firmware heats to the state timeout (makeable.py)
+                 ask: Callable[[str], str] | None = None,
+                 try_unholdable: bool = False, retry_faulted: bool = False):
+        # tours over the transitions the hardware can make, the body can hold (unless
+        # ``try_unholdable``) and the robot did not fault on before in this log (unless
+        # ``retry_faulted``): asked for one of the others, the firmware heats a coil to the
+        # state timeout (makeable.py)
         self.full_robot = robot
-        robot = makeable_robot(robot)
+        self.left_out = not_asked(robot, try_unholdable=try_unholdable, failures=log.failures,
+                                  retry_faulted=retry_faulted)
+        robot = makeable_robot(robot, self.left_out)
         self.client, self.robot, self.log, self.pose = client, robot, log, pose
         self.goal: np.ndarray | None = None  # trials wanted per transition (default: repeats each)
         self.repeats, self.settle_s, self.source, self.seed = repeats, settle_s, source, seed
