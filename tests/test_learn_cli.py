@@ -367,22 +367,6 @@ def test_the_start_line_names_the_transitions_unreachable_from_rest_and_counts_r
             "(101->001, 101->100, 101->111): 34 × 3 = 102 trials, 102 to do;") in err
 
 
-def test_a_state_timeout_on_the_simulated_robot_names_the_transition_and_the_robot_file_fix(tmp_path, capsys):
-    # tri-mixed enters 101, which the simulated body cannot hold (a load warning says so; learning
-    # asks for it with --try-unholdable only); the advice was to clear the fault in proleg console,
-    # on a board that ends with the command
-    code, _out, err = run(capsys, "learn", str(FIXTURES / "tri-mixed.toml"), "--sim", "--plant", "physical",
-                          "--log", str(tmp_path / "t.jsonl"), "--try-unholdable")
-    assert code == 1
-    last = err.strip().splitlines()[-1]
-    assert "proleg console" not in last and "run the same command" not in last
-    assert re.search(r"^proleg: error: learn: the robot stopped while making (\d{3})->101: FAULT STATE_TIMEOUT "
-                     r"on mid \(firmware time [\d.]+s\); the simulated robot cannot make \1->101 and would stop "
-                     r"there again: look for a warning about state 101 or transition \1→101 when the robot file was "
-                     r"loaded \(.*\) and "
-                     r"mark the transitions into 101 \"x\" \(forbidden\) in the robot file", last), last
-
-
 def test_a_fault_on_a_real_robot_still_says_to_clear_it_in_the_console():
     from types import SimpleNamespace
 
@@ -434,25 +418,24 @@ def test_the_report_writes_no_minus_zero():
     assert [_fmt(v) for v in (-0.001, -0.01, 0.0, -1.5, float("nan"), None)] == ["0.00", "-0.01", "0.00", "-1.50", "-", "-"]
 
 
-def test_a_stop_no_load_warning_predicts_says_so_and_how_to_find_out():
-    """caterpillar-4 learned on the physical plant stops on 0101->0111 (STATE_TIMEOUT, a limb that
-    will not settle): the advice pointed at a load warning about 0111 that does not exist. It
-    now says that no warning predicts it and to measure the matrix; where a warning does
-    (tri-mixed's 101, test above), the advice is unchanged."""
+def test_a_fault_no_load_warning_predicts_says_so_and_how_to_find_out():
+    """caterpillar-4 learned on the physical plant faults on 0101->0111 (STATE_TIMEOUT, a limb
+    that will not settle): the advice pointed at a load warning about 0111 that does not exist.
+    The end of the exploration now says that no warning predicts it and to measure the matrix;
+    where a warning does (tri-mixed's 101), it says nothing more."""
     from types import SimpleNamespace
 
-    from proleg.cli.learn import _predicted, _stopped_hint
-    from proleg.learn.runner import ExplorationError
+    from proleg.cli.learn import _faulted_hint, _predicted
 
     cat = load_robot(ROOT / "robots" / "caterpillar-4.toml")
     assert not _predicted(cat, "0101", "0111")
-    e = ExplorationError("the robot stopped", transition=("0101", "0111"), fault=True)
-    hint = _stopped_hint(SimpleNamespace(sim=True, robot="caterpillar-4"), e, cat)
-    assert "which no warning at load predicts" in hint and "proleg sim caterpillar-4 --measure-matrix" in hint
-    assert 'mark 0101->0111 "x"' in hint
+    hint = _faulted_hint(SimpleNamespace(sim=True, robot="caterpillar-4"), cat, [("0101", "0111")])
+    assert "no warning at load predicts 0101->0111" in hint and "proleg sim caterpillar-4 --measure-matrix" in hint
+    assert _faulted_hint(SimpleNamespace(sim=False, robot="caterpillar-4"), cat, [("0101", "0111")]) == ""
     tri = load_robot(FIXTURES / "tri-mixed.toml")
     assert any(_predicted(tri, tri.transitions.label(int(a)), "101")
                for a, b in zip(tri.transitions.src, tri.transitions.dst) if tri.transitions.label(int(b)) == "101")
+    assert _faulted_hint(SimpleNamespace(sim=True, robot="tri-mixed"), tri, [("001", "101")]) == ""
 
 
 def test_more_on_a_fresh_log_runs_the_extra_trials_after_the_first_ones(tmp_path, capsys):

@@ -211,19 +211,30 @@ def test_trials_the_track_does_not_cover_keep_no_motion_rather_than_zero(tmp_pat
     assert "2 of 4 trials begin or end outside it and are left without motion" in captured.err
 
 
-def test_a_fault_during_exploration_is_told_by_name_and_what_to_do(tmp_path):
-    from proleg.learn.runner import ExplorationError, Explorer, simulated_robot
+def test_a_coil_that_dies_during_exploration_costs_the_transitions_it_makes_not_the_run(tmp_path, caplog):
+    """The right coil dead: each transition that raises the right end faults (SMA_ON_LIMIT or
+    STATE_TIMEOUT, named by transition); each is recorded as not made and not asked for again,
+    the robot cooled and cleared, and the rest learned. It used to end the run at the first."""
+    import logging
+
+    from proleg.learn.runner import Explorer, simulated_robot
 
     robot = load_robot(R1)
+    t = robot.transitions
     sim, client, pose = simulated_robot(robot, seed=1)
-    with client, TrialLog(tmp_path / "t.jsonl") as log:
+    with client, TrialLog(tmp_path / "t.jsonl") as log, caplog.at_level(logging.WARNING, logger="proleg"):
         client.connect()
         sim.inject("dead-actuator:sma-right")
-        with pytest.raises(ExplorationError, match=r"the robot stopped while making (\d\d)->(\d\d): FAULT "
-                                                    r"SMA_ON_LIMIT on sma-right \(firmware time [\d.]+s\)$") as e:
-            Explorer(client, robot, log, pose, repeats=2, seed=1).run()
-    # what to do is the CLI's (it knows --sim); the error carries what it needs
-    assert e.value.fault and e.value.transition == re.search(r"making (\d\d)->(\d\d)", str(e.value)).groups()
+        Explorer(client, robot, log, pose, repeats=2, seed=1).run()
+        failed = {(f.src, f.dst): f.fault for f in log.failures}
+        made = counts(t, log.trials)
+    raises_right = {("00", "01"), ("10", "01"), ("00", "11"), ("10", "11")}
+    assert set(failed) == raises_right
+    assert all(re.fullmatch(r"FAULT (SMA_ON_LIMIT on sma-right|STATE_TIMEOUT on right)", f) for f in failed.values())
+    assert made[t.lookup(t.index("00"), t.index("10"))] >= 2 and made[t.lookup(t.index("10"), t.index("00"))] >= 2
+    said = [r.getMessage() for r in caplog.records]
+    assert any("the robot could not make 00->01: FAULT SMA_ON_LIMIT on sma-right; recorded as not made" in m
+               for m in said), said
 
 
 def test_learning_planar_4_on_the_table_plant_measures_dy_and_dtheta(tmp_path):

@@ -88,7 +88,8 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--try-unholdable", action="store_true",
                    help="also ask for the transitions into or out of states the body model says the robot cannot "
                         "hold, and the steps it says the body cannot end (the load warnings; left out and written "
-                        "\"x\" by default): for a robot that holds them after all")
+                        "\"x\" by default): for a robot that holds them after all; a fault on one is recorded and "
+                        "learning goes on")
     p.add_argument("--retry-faulted", action="store_true",
                    help="with a robot link: ask again for the transitions the robot faulted on in an earlier run "
                         "of this --log (left out by default)")
@@ -329,7 +330,7 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                 ex.run(max_pieces=args.max_pieces)
         except ExplorationError as e:
             again = "" if args.sim and getattr(e, "fault", False) else "; run the same command to resume"
-            raise LinkError(f"learn: {e}{_stopped_hint(args, e, robot)} (the {counted(len(trial_log.trials), 'trial')} recorded are "
+            raise LinkError(f"learn: {e}{_stopped_hint(args, e)} (the {counted(len(trial_log.trials), 'trial')} recorded are "
                             f"kept in {args.log}{again})") from None
         except LinkError as e:  # a cable pulled, a board that stopped answering: said alone, it hid the log
             raise LinkError(f"learn: {e} (the {counted(len(trial_log.trials), 'trial')} recorded are kept in {args.log}; run the "
@@ -354,8 +355,12 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
             if bar is not None:
                 bar.close()
         done, todo = ex.tally()
+        failed = [(t.label(int(t.src[e])), t.label(int(t.dst[e]))) for e in sorted(ex.failed)]
+        faulted = (f"; the robot faulted making {counted(len(failed), 'transition')} "
+                   f"({', '.join(f'{a}->{b}' for a, b in failed)}), recorded as not made, not asked for "
+                   f"again{_faulted_hint(args, robot, failed)}") if failed else ""
         if todo == 0 or args.max_pieces is None:
-            log.info("learn: exploration done: %s in %s", counted(len(trial_log.trials), "trial"), args.log)
+            log.info("learn: exploration done: %s in %s%s", counted(len(trial_log.trials), "trial"), args.log, faulted)
         else:
             log.info("learn: stopped after %s (--max-pieces): %d of %d done; run the same command "
                      "to go on", counted(ex.pieces_run, "piece"), done, done + todo)
@@ -410,28 +415,31 @@ def _explored(robot, drop: dict, repeats: int) -> str:
     return f"{head}: {t.n_transitions - skipped} × {repeats}" if skipped else f"{head} × {repeats}"
 
 
-def _stopped_hint(args: argparse.Namespace, e: Exception, robot=None) -> str:
-    """What to do about an exploration that stopped: on a real robot, look at it and clear the
-    fault; on the simulated one (it does not outlive the command, and running again meets
-    the same fault) name the transition and what in the robot file would explain it, or, when
-    the load checks predicted nothing for it, say so and how to find out (the physical plant
-    can stop a step its body model's checks pass: a step slower than the state timeout)."""
+def _stopped_hint(args: argparse.Namespace, e: Exception) -> str:
+    """What to do about an exploration that stopped on a fault it does not go on from (an
+    E-stop, a fault while no transition was being made, several transitions in a row faulted):
+    on a real robot, look at it and clear the fault; the simulated one does not outlive the
+    command, and running it again meets the same fault. (A fault while making a transition no
+    longer stops learning: ``Explorer`` records it and goes on; ``_faulted_hint``.)"""
     if not getattr(e, "fault", False):
         return ""
     if not args.sim:
         return "; look at the robot (proleg console), then clear the fault (key c there)"
-    if getattr(e, "transition", None) is None:
-        return "; the simulated robot meets it again if run the same way: check the warnings printed when the robot file was loaded"
-    a, b = e.transition
-    if robot is not None and not _predicted(robot, a, b):
-        return (f"; the simulated robot stopped making {a}->{b}, which no warning at load predicts (the body "
-                f"model's checks pass it): proleg sim {args.robot} --measure-matrix says whether the body can make "
-                f"it at all (its not_made list); if it can, the firmware's control failed it on this body. To "
-                f"learn the rest meanwhile, mark {a}->{b} \"x\" (forbidden) in the robot file")
-    return (f"; the simulated robot cannot make {a}->{b} and would stop there again: look for a warning about state "
-            f"{b} or transition {a}→{b} when the robot file was loaded (a state that cannot be held, a step that "
-            f"cannot end, a level out of reach) and mark the transitions into {b} \"x\" (forbidden) in the robot "
-            f"file, or fix what the warning names")
+    return "; the simulated robot meets it again if run the same way: check the warnings printed when the robot file was loaded"
+
+
+def _faulted_hint(args: argparse.Namespace, robot, failed: list[tuple[str, str]]) -> str:
+    """For the end of an exploration on the simulated robot that faulted making ``failed``
+    (labels): when the load checks predicted none of some of them, say so and how to find out
+    (the physical plant can stop a step its body model's checks pass: a step slower than the
+    state timeout, a weak coil)."""
+    surprise = [f"{a}->{b}" for a, b in failed if not _predicted(robot, a, b)]
+    if not args.sim or not surprise:
+        return ""
+    return (f"; no warning at load predicts {', '.join(surprise)} (the body model's checks pass "
+            f"{'it' if len(surprise) == 1 else 'them'}): proleg sim {args.robot} --measure-matrix says whether the "
+            "body can make them at all (its not_made list); if it can, the firmware's control failed them on this "
+            "body (or a [plant] condition did)")
 
 
 def _predicted(robot, a: str, b: str) -> bool:

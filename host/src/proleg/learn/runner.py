@@ -16,6 +16,15 @@ can reach within the thermal limits. A run whose pieces keep making nothing it n
 robot does not do what was planned) stops after ``STALL_PIECES`` of them with what is
 left, instead of running for ever.
 
+A fault of making a transition (STATE_TIMEOUT, SMA_ON_LIMIT while a piece's transition is
+under way), predicted by the body model or not, does not end the run: ``_after_fault`` records
+the transition as not made (``measure.Failure``, in the log), rests the robot with the fault
+still latched (``fault_rest_s``), clears it (``RobotClient.clear``) and plans again without it;
+it is never asked for again in the run (``plan_table``), and what only it led to gets no
+trials. Any other stop (an E-stop, a fault while no transition is under way, another kind of
+fault) and ``FAULTS_IN_A_ROW`` such faults with no transition made between them end the run
+as before, the last fault left latched.
+
 A piece ``p0 → … → pk`` runs as a user gait: LOAD_GAIT of the piece closed by the
 shortest way back to p0 (the firmware accepts closed walks only), START, and STOP once
 the firmware's STATE_REACHED event says ``pk`` was reached the k-th time. Each reached
@@ -45,11 +54,12 @@ import numpy as np
 from ..link.leave import stop_robot
 from ..errors import LinkError
 from ..link.direction import UNSTATED
-from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, EventKind, Flag
+from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, ClearWhat, EventKind, FaultCode, Flag
 from ..robot import Robot
 from ..states import limb_levels
-from .makeable import makeable_robot, not_asked
-from .measure import Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
+from ..transitions import TransitionTable
+from .makeable import makeable_robot, not_asked, without_edges
+from .measure import Failure, Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
 from .pieces import Piece, PieceLimits, limits_for, split
 from .tours import _bfs_path, exploration
 
@@ -64,6 +74,12 @@ STALL_PIECES = 5
 PLAN_TRIES = 8
 #: telemetry frames ``Explorer.measured_state`` reads at most for three with a known state
 STATE_FRAMES = 200
+#: transitions in a row the robot faults on (no trial made between them) before ``Explorer.run``
+#: stops: one fault is the transition's, several in a row more likely the robot's (a dead coil)
+FAULTS_IN_A_ROW = 3
+#: the faults of making a transition (the robot did not get there): ``Explorer.run`` records the
+#: transition as not made, cools, clears and goes on; any other fault stops it
+MAKING_FAULTS = (FaultCode.STATE_TIMEOUT, FaultCode.SMA_ON_LIMIT)
 #: telemetry rates (Hz) an exploration asks for, fastest first: the board refuses what its
 #: link cannot carry (telemetry.c: at most half the UART), and the first it takes is used
 WATCH_HZ = (250, 200, 150, 100)
@@ -72,12 +88,20 @@ WATCH_HZ = (250, 200, 150, 100)
 class ExplorationError(RuntimeError):
     """The robot stopped (fault, E-stop, timeout); the log keeps every trial made.
     ``transition``: the (from, to) labels being made when it stopped, when known; ``fault``:
-    a latched fault or E-stop (cleared on the robot before going on)."""
+    a latched fault or E-stop (cleared on the robot before going on); ``making_failed``: a
+    fault of making that transition (STATE_TIMEOUT, SMA_ON_LIMIT), which ``Explorer.run``
+    records and goes on from; ``made``: the piece's trials before it stopped; ``what``: the
+    event as the firmware reported it."""
 
-    def __init__(self, message: str, *, transition: tuple[str, str] | None = None, fault: bool = False):
+    def __init__(self, message: str, *, transition: tuple[str, str] | None = None, fault: bool = False,
+                 making_failed: bool = False, made: list[Trial] | None = None, what: str = "",
+                 t_fault: float | None = None):
         super().__init__(message)
         self.transition = transition
         self.fault = fault
+        self.making_failed = making_failed
+        self.made = made or []
+        self.what, self.t_fault = what, t_fault
 
 
 @dataclass(frozen=True)
@@ -125,6 +149,9 @@ class Explorer:
         self.left_out = not_asked(robot, try_unholdable=try_unholdable, failures=log.failures,
                                   retry_faulted=retry_faulted)
         robot = makeable_robot(robot, self.left_out)
+        # edges of ``robot.transitions`` the robot faulted on in this run: not asked for again
+        self.failed: dict[int, str] = {}
+        self._faults_in_a_row = 0
         self.client, self.robot, self.log, self.pose = client, robot, log, pose
         self.goal: np.ndarray | None = None  # trials wanted per transition (default: repeats each)
         self.repeats, self.settle_s, self.source, self.seed = repeats, settle_s, source, seed
@@ -200,20 +227,47 @@ class Explorer:
                 continue
         return None
 
+    def plan_table(self) -> TransitionTable:
+        """The transitions tours are planned over: the robot's, but those it faulted on."""
+        t = self.robot.transitions
+        return without_edges(t, self.failed) if self.failed else t
+
+    def _unexplored(self) -> np.ndarray:
+        """A mask over ``self.robot.transitions``: the transitions that get no (more) trials:
+        those the robot faulted on, those no closed tour of the others can make, and those the
+        faulted ones cut off from the rest state (every way there went through one of them)."""
+        t = self.robot.transitions
+        out = np.zeros(t.n_transitions, dtype=bool)
+        if not self.failed:
+            for a, b in exploration(t, 1).uncoverable:
+                out[t.lookup(a, b)] = True
+            return out
+        out[list(self.failed)] = True
+        pt = self.plan_table()
+        if pt.n_transitions:
+            for a, b in exploration(pt, 1).uncoverable:
+                out[t.lookup(a, b)] = True
+        was, now = _reached(t), _reached(pt)
+        out |= np.array([a in was and a not in now for a in t.src.tolist()], dtype=bool)
+        return out
+
     def _run(self, max_pieces: int | None) -> list[Trial]:
         added: list[Trial] = []
         t = self.robot.transitions
         stalled = 0
         while max_pieces is None or self.pieces_run < max_pieces:
             demand = self.to_do()
-            ex = exploration(t, 1)  # which transitions any closed tour can make
-            for a, b in ex.uncoverable:
-                demand[t.lookup(a, b)] = 0
+            demand[self._unexplored()] = 0
             if demand.sum() == 0:
                 break
             start = self.measured_state()
             piece = self.next_piece(start, demand)
-            made = self.run_piece(piece, record=self.ask is None)
+            began = self._clock()
+            try:
+                made = self.run_piece(piece, record=self.ask is None)
+                self._faults_in_a_row = 0 if made else self._faults_in_a_row
+            except ExplorationError as e:
+                made = self._after_fault(e, self._clock() - began)
             if self.ask is None:
                 added += made
             else:
@@ -236,12 +290,52 @@ class Explorer:
             self._rest(self.limits.rest_s)
         return added
 
+    def _after_fault(self, e: ExplorationError, driven_s: float) -> list[Trial]:
+        """Go on after the robot faulted while making a transition (``e.making_failed``): record
+        it (``Failure``) and ask for it no more, rest (``fault_rest_s``), clear the fault and
+        return the piece's trials made before it. Re-raises any other stop, and stops (the fault
+        left latched) after ``FAULTS_IN_A_ROW`` such faults without a trial between them."""
+        t = self.robot.transitions
+        edge = None
+        if e.making_failed and e.transition is not None:
+            edge = t.lookup(t.index(e.transition[0]), t.index(e.transition[1]))
+        if edge is None:
+            raise e
+        a, b = e.transition
+        self.log.append(Failure(a, b, e.t_fault, e.what))
+        self.failed[edge] = e.what
+        self._faults_in_a_row = (0 if e.made else self._faults_in_a_row) + 1
+        if self._faults_in_a_row >= FAULTS_IN_A_ROW:
+            recent = [f"{f.src}->{f.dst} ({f.fault})" for f in self.log.failures[-FAULTS_IN_A_ROW:]]
+            raise ExplorationError(
+                f"the robot faulted on {FAULTS_IN_A_ROW} transitions in a row, with no transition made between them: "
+                f"{', '.join(recent)}; that is more likely the robot than the transitions (a dead or weak coil, the "
+                "supply): each is recorded as not made in the log; once the robot is fixed, run the same command "
+                "with --retry-faulted to ask for them again", transition=None, fault=True)
+        rest = self.fault_rest_s(driven_s)
+        log.warning("warning: learn: the robot could not make %s->%s: %s; recorded as not made and not asked for "
+                    "again: cooling %.1f s, then clearing the fault and going on", a, b, e.what, rest)
+        self._rest(rest)
+        self.client.clear(ClearWhat.FAULTS)
+        return e.made
+
+    def fault_rest_s(self, driven_s: float) -> float:
+        """The rest after a fault: as long as the piece's drive so far (``driven_s``) needs at
+        ``max_duty`` (its coils may have been on all along), at least the rest between pieces,
+        and then ``min_cooldown_ms`` more, the cool-down a whole ``max_on_ms`` on-period owes (the
+        coil that faulted may have spent all of it)."""
+        safety = self.robot.safety
+        duty = max(1e-3, float(safety.max_duty))
+        return max(self.limits.rest_s, driven_s * (1.0 / duty - 1.0)) + safety.min_cooldown_ms / 1000.0
+
     def next_piece(self, start: int, demand: np.ndarray) -> Piece:
         """The first piece of a random tour from ``start`` that makes at least one transition
         still to do (a few tours are tried); else the shortest way to one of them. Raises
         ``ExplorationError`` naming the transitions no piece from ``start`` can reach within
-        the thermal limits."""
-        t = self.robot.transitions
+        the thermal limits. ``demand`` is over ``self.robot.transitions``; the pieces go over
+        ``plan_table`` (never a transition the robot faulted on)."""
+        t = self.plan_table()
+        demand = np.delete(demand, sorted(self.failed))
         for attempt in range(PLAN_TRIES):
             seed = None if self.seed is None else (self.seed + self.pieces_run) * PLAN_TRIES + attempt
             plan = exploration(t, demand=demand, start=start, seed=seed)
@@ -278,8 +372,7 @@ class Explorer:
         can make are left out of both."""
         t = self.robot.transitions
         goal = self.goal if self.goal is not None else np.full(t.n_transitions, self.repeats)
-        for a, b in exploration(t, 1).uncoverable:
-            goal = np.where(np.arange(t.n_transitions) == t.lookup(a, b), 0, goal)
+        goal = np.where(self._unexplored(), 0, goal)
         have = counts(t, self.log.trials)
         return int(np.minimum(goal, have).sum()), int(np.maximum(0, goal - have).sum())
 
@@ -349,8 +442,11 @@ class Explorer:
                     when, _, what = what.partition(" ")
                     making = _making(t, piece.states, reached)
                     during = f" while making {making[0]}->{making[1]}" if making else ""
+                    failed = kind == EventKind.FAULT and int(msg.code) in MAKING_FAULTS and making is not None
                     raise ExplorationError(f"the robot stopped{during}: {what} (firmware time {when})",
-                                           transition=making, fault=kind in (EventKind.FAULT, EventKind.ESTOP))
+                                           transition=making, fault=kind in (EventKind.FAULT, EventKind.ESTOP),
+                                           making_failed=failed, made=out, what=what,
+                                           t_fault=int(msg.time_ms) / 1000.0)
                 if kind != EventKind.STATE_REACHED:
                     continue
                 state = int(msg.detail)
@@ -366,6 +462,18 @@ class Explorer:
             if said != "robot stopped":
                 log.warning("warning: %s", said)
         return out
+
+
+def _reached(t: TransitionTable, start: int = 0) -> set[int]:
+    """The states some way of allowed transitions leads to from ``start`` (the rest state)."""
+    succ = _successors(t)
+    seen, todo = {start}, [start]
+    while todo:
+        for b in succ[todo.pop()]:
+            if b not in seen:
+                seen.add(b)
+                todo.append(b)
+    return seen
 
 
 def _making(t, states: tuple[int, ...], reached: list) -> tuple[str, str] | None:
