@@ -142,3 +142,9 @@ def test_learning_an_unmeasured_robot_on_the_simulated_body_gives_a_file_that_wa
         result = json.loads(out)
         assert code == 0 and result["faults"] == [], err
         assert result["cycles"] >= 1 and sign * result["displacement_mm"] > 0
+
+
+def test_gait_says_why_no_gait_moves_an_unmeasured_robot(tmp_path, capsys):
+    code, out, _ = cli(capsys, "gait", _write(tmp_path, [2, 2], 'matrix = "unmeasured"'))
+    assert code == 0
+    assert out.count("no gait moves the robot in") == 2 and out.count("its matrix is unmeasured: learn it") == 2
