@@ -397,3 +397,20 @@ def test_the_fallbacks_leave_out_the_states_the_robot_cannot_reach(tmp_path):
     for t in tables:
         entered = {int(s) for s in t.src} | {int(d) for d in t.dst}
         assert entered and not entered & set(robot.unreachable), sorted(entered & set(robot.unreachable))
+
+
+def test_a_limb_that_passes_its_level_on_the_way_is_not_called_unreachable(tmp_path):
+    """R1 with a soft body (working_strain 0.12) and ψ* 86°: both coils at full stroke turn it
+    197° in all, read as −16.7° at its ends, and 11 was 'unreachable: gets at most −16.7°',
+    though both ends pass 87° on the way there. The reach is the most along the way."""
+    from build_checks import robot_variant
+
+    r1 = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
+    soft = robot_variant(tmp_path, r1, (r"psi_star_deg = \[20.0\]", "psi_star_deg = [86.0]"),
+                         (r"psi_star_deg = \[20.0\]", "psi_star_deg = [86.0]"),
+                         (r"\Z", "\n[plant]\nworking_strain = 0.12\n"))
+    robot = load_robot(soft)
+    assert robot.transitions.index("11") not in robot.unreachable
+    stiff = robot_variant(tmp_path / "stiff", r1, (r"psi_star_deg = \[20.0\]", "psi_star_deg = [86.0]"))
+    [(_, got, need)] = [u for u in load_robot(stiff).unreachable[load_robot(stiff).transitions.index("10")]]
+    assert 0.0 < got < need  # a body that does not bend so far: still unreachable, with what it gets

@@ -191,6 +191,10 @@ def entered_states(table: Any) -> list[int]:
 Unreached = tuple[int, float, float]
 
 
+#: Where along the way to full stroke ``_raised_at_full_stroke`` looks at a state's shape.
+REACH_PATH_FRACTIONS = tuple(k / 8 for k in range(1, 9))
+
+
 def _raised_at_full_stroke(limbs: list[Any], actuators: list[str], section: PlantSection, table: Any,
                            keep: Callable[[tuple[int, ...]], bool]) -> list[tuple[int, tuple[int, ...], np.ndarray]]:
     """``(state, levels, ψ° per limb)`` for each state the matrix enters whose levels ``keep``
@@ -219,7 +223,13 @@ def _raised_at_full_stroke(limbs: list[Any], actuators: list[str], section: Plan
         wanted.append((s, want))
     if not rows:
         return []
-    psi = Shape(geo, tabulate=False).compute(np.array(rows))[0]
+    # the most along the way there (all raised coils contracting together), not only at the
+    # end: a soft body whose raised coils turn it past a half turn in all reads its ends'
+    # angles past 180° as negative there (R1 with working_strain 0.12, both coils at full
+    # stroke: 197° read as −16.7°, "gets at most −16.7°" for a ψ* of 86° it passes on the way)
+    rows = np.array(rows)
+    shape = Shape(geo, tabulate=False)
+    psi = np.max([shape.compute(rows * f)[0] for f in REACH_PATH_FRACTIONS], axis=0)
     return [(s, want, p) for (s, want), p in zip(wanted, psi)]
 
 
