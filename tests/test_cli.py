@@ -413,3 +413,21 @@ def test_a_sequence_written_otherwise_is_told_how_to_write_it(capsys, seq, words
     "has 2 digits"."""
     code, out, err = run(capsys, "gait", str(ROBOTS / "inchworm-3.toml"), "--evaluate", seq)
     assert code == 2 and out == "" and err.count("\n") == 1 and words in err
+
+
+def test_log_lines_go_to_the_stderr_of_the_moment_not_the_one_main_was_called_with(capsys):
+    """main called again in one process with stderr replaced in between (the tests, a lab's
+    script): its handler wrote later lines to the stream of the first call, closed by then."""
+    import io
+    import logging
+    import sys
+
+    main(["robots"])
+    capsys.readouterr()
+    replaced, old = io.StringIO(), sys.stderr
+    sys.stderr = replaced
+    try:
+        logging.getLogger("proleg").warning("a later line")
+    finally:
+        sys.stderr = old
+    assert "proleg: a later line" in replaced.getvalue()

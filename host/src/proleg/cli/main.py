@@ -186,11 +186,29 @@ def _silence_stdout() -> None:
         pass
 
 
+class _StderrHandler(logging.StreamHandler):
+    """A handler on whatever ``sys.stderr`` is when a line is logged, not on the stream it was
+    at setup (as logging's own last resort): ``main`` called again in one process (the tests,
+    a lab's script) with stderr replaced in between wrote later lines to a closed stream
+    ("--- Logging error --- I/O operation on closed file")."""
+
+    def __init__(self) -> None:
+        super().__init__(sys.stderr)
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, _value) -> None:
+        pass
+
+
 def _setup_logging(verbosity: int) -> None:
     """-v: debug; default: info (progress); -q: warnings only; -qq: errors only."""
     level = {1: logging.DEBUG, 0: logging.INFO, -1: logging.WARNING}.get(verbosity, logging.DEBUG if verbosity > 0
                                                                       else logging.ERROR)
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _StderrHandler()
     handler.setFormatter(logging.Formatter("proleg: %(message)s"))
     log.handlers[:] = [handler]
     log.setLevel(level)
