@@ -338,7 +338,7 @@ def test_a_ctrl_c_whose_stop_goes_unanswered_sends_estop_and_says_what_is_left()
 def _board_kept_across_commands(monkeypatch):
     """A simulated R1 board that outlives ``proleg calibrate --port …``, as a real one does:
     the command's link opens on it, and the test reconnects afterwards to see what it kept."""
-    from proleg.cli import robot_commands
+    from proleg.cli import robot_link
     from proleg.link.client import RobotClient
     from proleg.link.sim_link import SimLink
     from proleg.sim.closed_loop import SimulatedRobot
@@ -350,7 +350,7 @@ def _board_kept_across_commands(monkeypatch):
         client.connect()
         return client
 
-    monkeypatch.setattr(robot_commands, "open_client", connect)
+    monkeypatch.setattr(robot_link, "open_client", connect)  # where calibrate takes its link
     return connect
 
 
@@ -379,7 +379,7 @@ def test_an_interrupted_calibration_is_finished_by_the_board_whole_and_the_line_
 
 
 def test_a_calibration_interrupted_while_connecting_asked_the_board_nothing(capsys, monkeypatch):
-    from proleg.cli import robot_commands
+    from proleg.cli import robot_link
     from proleg.protocol.definition import LevelStatus
 
     connect = _board_kept_across_commands(monkeypatch)
@@ -387,7 +387,7 @@ def test_a_calibration_interrupted_while_connecting_asked_the_board_nothing(caps
     def ctrl_c(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(robot_commands, "open_client", ctrl_c)
+    monkeypatch.setattr(robot_link, "open_client", ctrl_c)
     code, out, err = cli(capsys, "calibrate", R1, "--port", "/dev/ttyUSB9")
     assert code == 130 and out == ""
     assert err == "proleg: interrupted before anything was asked of the board: its level calibration is unchanged\n"

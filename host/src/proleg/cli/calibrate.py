@@ -69,7 +69,7 @@ def _table(names: list[str], offsets_cdeg: tuple[int, ...], status: list[str], w
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from ..robot import load_robot
-    from .robot_commands import open_client
+    from .robot_link import open_client
 
     robot = load_robot(args.robot)
     asked: list[str] = []  # the command that changes what the board keeps, once it is being sent
@@ -158,7 +158,7 @@ def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[st
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .robot_commands import add_link_options
+    from .robot_link import add_link_options
 
     c = subparsers.add_parser(
         "calibrate", help="level calibration: record each IMU's rest tilt on flat ground and store it on the board",

@@ -43,7 +43,7 @@ def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
     from .number_args import baudrate, can_node, positive_float, positive_int, reply_timeout
     from .gait import _penalty
-    from .robot_commands import DEFAULT_BAUDRATE
+    from .robot_link import DEFAULT_BAUDRATE
 
     p = subparsers.add_parser(
         "learn", help="measure the robot's transition matrix (explore, report, write a learned robot file)",
@@ -138,7 +138,7 @@ class ProgressBar:
 def cmd_learn(args: argparse.Namespace) -> int:
     from ..robot import load_robot
 
-    from .robot_commands import link_settings
+    from .robot_link import link_settings
 
     link_settings(args)  # a --baudrate or --node of a link not chosen is refused, not ignored
     robot = load_robot(args.robot)
@@ -265,7 +265,7 @@ def _connect(args: argparse.Namespace, robot, truth, source: str):
     """The connected robot to explore (the simulator with --sim) and, with ``--source sim``,
     its ground-truth pose: (client, pose or None)."""
     from ..learn.runner import ExplorationError, simulated_robot
-    from .robot_commands import open_client
+    from .robot_link import open_client
 
     if not args.sim:
         return open_client(args, args.robot, robot=robot), None

@@ -261,7 +261,7 @@ def _robot(text: str) -> str:
 
 def _console(a: Any) -> int:
     from .main import udp_options
-    from .robot_commands import link_settings
+    from .robot_link import link_settings
 
     link, (udp, udp_format) = link_settings(a), udp_options(a)
     return console_main(

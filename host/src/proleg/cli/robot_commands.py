@@ -20,97 +20,13 @@ from typing import Any
 from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..names import counted
-from ..link.serial_link import DEFAULT_BAUDRATE
-from .number_args import (baudrate, can_bitrate, can_node, gait_index, heading_deg, param_index, positive_float,
-                          reply_timeout)
+from .number_args import gait_index, heading_deg, param_index, positive_float
+from .robot_link import add_link_options, link_settings, open_client
 
 log = logging.getLogger("proleg")
 
 
 # --------------------------------------------------------------------------- shared
-def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> None:
-    """``--port`` / ``--can`` / ``--sim`` (exactly one) and their settings."""
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port")
-    src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
-    if sim_takes_robot:
-        src.add_argument("--sim", metavar="ROBOT", help="the robot's firmware on the simulated board")
-    else:
-        src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board")
-    p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, else socketcan)")
-    p.add_argument("--bitrate", type=can_bitrate, metavar="BIT/S",
-                   help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
-    p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
-    p.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
-    p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
-
-
-#: Link settings that belong to one link option: dest → (the setting's option, that link's option).
-LINK_SETTINGS = {"baudrate": ("--baudrate", "--port"), "node": ("--node", "--can"),
-                 "bitrate": ("--bitrate", "--can"), "interface": ("--interface", "--can")}
-
-
-def link_settings(args: argparse.Namespace) -> dict[str, Any]:
-    """baudrate, node, bitrate and interface for the link the options choose, defaults filled
-    in (their options default to None). A setting of another link is a UsageError: it would be
-    ignored (``--sim --baudrate -5`` used to run)."""
-    for dest, (option, link) in LINK_SETTINGS.items():
-        if getattr(args, dest, None) is not None and getattr(args, link[2:], None) is None:
-            raise UsageError(f"{option}: only with {link} (a setting of that link, which this command does not use)")
-    return {"baudrate": getattr(args, "baudrate", None) or DEFAULT_BAUDRATE, "node": getattr(args, "node", None) or 0,
-            "bitrate": getattr(args, "bitrate", None), "interface": getattr(args, "interface", None)}
-
-
-def open_client(args: argparse.Namespace, robot_path: str | None = None, *, speed: float | None = None,
-                robot: Any = None):
-    """A connected ``RobotClient`` on the link the options name (the simulated board runs
-    flat out unless ``speed`` paces it). With ``robot`` (the loaded robot file): a board that
-    runs another robot is refused before anything is sent to it, and the heartbeat keeps
-    pace with the file's link watchdog."""
-    from ..link.client import RobotClient
-    from ..link.factory import link_url, open_link
-
-    sim = args.sim
-    if sim is True:
-        sim = robot_path
-    elif sim is False:
-        sim = None
-    if isinstance(sim, str):
-        from .main import robot_arg
-
-        sim = robot_arg(sim)
-    given = link_settings(args)
-    url = link_url(port=args.port, can_channel=args.can, interface=given["interface"], node=given["node"], sim=sim,
-                   bitrate=given["bitrate"])
-    robot_file = None
-    if robot_path is not None:
-        from .main import robot_arg
-
-        robot_file = robot_arg(robot_path)
-    link = open_link(url, baudrate=given["baudrate"], speed=speed, robot_file=robot_file)
-    client = RobotClient(link, timeout=args.timeout, watchdog_ms=None if robot is None else robot.safety.link_watchdog_ms)
-    try:
-        info = client.connect()
-        if robot is not None:
-            check_robot_name(info, robot, client.link.description)
-    except BaseException:
-        client.close()
-        raise
-    log.debug("connected to %s on %s (build %08x)", info.robot_name, link.description, info.build_id)
-    return client
-
-
-def check_robot_name(info: Any, robot: Any, link: str) -> None:
-    """LinkError unless the board's INFO names ``robot`` (its first 15 characters): learning,
-    calibrating or loading a gait for one robot on a board that runs another records or sends
-    what the file says of the wrong body."""
-    from ..robot import info_name
-
-    if info.robot_name != info_name(robot.name):
-        raise LinkError(f"{link} runs robot {info.robot_name!r}, not {robot.name!r} ({robot.path}); "
-                        "give the robot file it was built from")
-
-
 def gaits_per_direction(robot: Any, fw: Any = None) -> dict[str, int]:
     """How many gaits the robot's firmware carries in each direction (``fw``: its
     ``firmware_gaits``, computed when not given)."""
