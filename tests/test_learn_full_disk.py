@@ -46,8 +46,8 @@ def test_learn_on_a_full_disk_names_the_log_and_what_it_kept(tmp_path, capsys, m
     log = tmp_path / "trials.jsonl"
     code, _, err = cli(capsys, "learn", R1, "--sim", "--log", log, "--repeats", "3", "-q")
     assert code == 1
-    assert err == (f"proleg: error: learn: cannot write trial log {log}: No space left on device (the 5 trials "
-                   "recorded before are kept in it, whole; the robot was stopped; make room and run the same "
+    assert err == (f"proleg: error: learn: cannot write trial log {log}: No space left on device (it keeps "
+                   "the 5 trials recorded before, whole; the robot was stopped; make room and run the same "
                    "command to resume)\n")
     assert len(TrialLog(log).trials) == 5
 
@@ -70,5 +70,5 @@ def test_learn_whose_link_is_lost_says_the_trials_are_kept(tmp_path, capsys, mon
     code, _, err = cli(capsys, "learn", R1, "--sim", "--log", log, "--repeats", "3", "-q")
     n = len(TrialLog(log).trials)
     assert code == 1 and n > 0
-    assert err == (f"proleg: error: learn: sim paper-r1: device disconnected and not back within 10 s (the {n} "
-                   f"trials recorded are kept in {log}; run the same command to resume)\n")
+    assert err == (f"proleg: error: learn: sim paper-r1: device disconnected and not back within 10 s ({log} keeps "
+                   f"the {n} trials recorded; run the same command to resume)\n")

@@ -330,14 +330,13 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
                 ex.run(max_pieces=args.max_pieces)
         except ExplorationError as e:
             again = "" if args.sim and getattr(e, "fault", False) else "; run the same command to resume"
-            raise LinkError(f"learn: {e}{_stopped_hint(args, e)} (the {counted(len(trial_log.trials), 'trial')} recorded are "
-                            f"kept in {args.log}{again})") from None
+            raise LinkError(f"learn: {e}{_stopped_hint(args, e)} ({args.log} keeps the {_recorded(trial_log)}{again})") from None
         except LinkError as e:  # a cable pulled, a board that stopped answering: said alone, it hid the log
-            raise LinkError(f"learn: {e} (the {counted(len(trial_log.trials), 'trial')} recorded are kept in {args.log}; run the "
+            raise LinkError(f"learn: {e} ({args.log} keeps the {_recorded(trial_log)}; run the "
                             "same command to resume)") from None
         except OSError as e:  # the log's disk filled: "cannot write: No space left on device", no file named
-            raise LinkError(f"learn: cannot write trial log {args.log}: {e.strerror or e} (the "
-                            f"{counted(len(trial_log.trials), 'trial')} recorded before are kept in it, whole; the robot was "
+            raise LinkError(f"learn: cannot write trial log {args.log}: {e.strerror or e} (it keeps "
+                            f"the {_recorded(trial_log)} before, whole; the robot was "
                             "stopped; make room and run the same command to resume)") from None
         except KeyboardInterrupt:
             if bar is not None:
@@ -413,6 +412,11 @@ def _explored(robot, drop: dict, repeats: int) -> str:
     skipped = len(drop) + len(unreachable) + len(one_way)
     head = f"{t.n_transitions} allowed transitions" + "".join(f", {x}" for x in left)
     return f"{head}: {t.n_transitions - skipped} × {repeats}" if skipped else f"{head} × {repeats}"
+
+
+def _recorded(trial_log) -> str:
+    """"3 trials recorded", "1 trial recorded": what the log keeps, for the lines that say so."""
+    return f"{counted(len(trial_log.trials), 'trial')} recorded"
 
 
 def _stopped_hint(args: argparse.Namespace, e: Exception) -> str:
