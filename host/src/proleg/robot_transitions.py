@@ -61,7 +61,8 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
          "allow", *PLANAR_FIELDS},
     )
     unmeasured = is_unmeasured(value)
-    if f.has("allow") and not unmeasured:
+    # a misspelt "unmeasured" beside allow is the matrix's mistake: _matrix names it below
+    if f.has("allow") and not unmeasured and not isinstance(value.get("matrix"), str):
         f.fail("allow", f'matrix = "{UNMEASURED}" beside it (allow says which transitions an unmeasured robot '
                         "can make; a matrix or a CSV says it by its \"x\" marks or rows)")
     units = f.string("units", "steps")

@@ -1,0 +1,37 @@
+"""A lab's first day with a robot of its own and no matrix yet: the mistakes it makes in
+``[transitions] matrix = "unmeasured"`` / ``allow`` and in the learn flow, and what the
+tools say about the files it writes (tests/test_unmeasured.py has the flow that works)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from proleg.errors import RobotFileError
+from proleg.robot import load_robot
+
+_LIMBS = "".join(f'[[limb]]\nname = "l{i}"\npsi_star_deg = [20.0]\nactuator = "a{i}"\nfriction = "D1"\n\n'
+                 f'[[actuator]]\nname = "a{i}"\n\n' for i in range(2))
+
+
+def _robot(tmp_path: Path, transitions: str, name: str = "lab.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(f'[robot]\nname = "lab"\n\n{_LIMBS}[transitions]\n{transitions}\n', encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("word", ["unmesured", "Unmeasured"])
+def test_a_misspelt_unmeasured_beside_allow_is_named_as_the_matrix_not_the_allow(tmp_path, word):
+    """It used to say 'transitions.allow: expected matrix = "unmeasured" beside it', which
+    sends the lab to the key it wrote right."""
+    with pytest.raises(RobotFileError) as e:
+        load_robot(_robot(tmp_path, f'matrix = "{word}"\nallow = "one-level"'))
+    assert "transitions.matrix: expected 4 rows of 4 entries, or \"unmeasured\"" in str(e.value)
+    assert f"got '{word}'" in str(e.value) or f'got "{word}"' in str(e.value)
+
+
+def test_allow_beside_a_written_matrix_is_still_refused_on_allow(tmp_path):
+    with pytest.raises(RobotFileError, match='transitions.allow: expected matrix = "unmeasured" beside it'):
+        load_robot(_robot(tmp_path, 'matrix = [[0, 1, 1, "x"], [1, 0, "x", 1], [1, "x", 0, 1], ["x", 1, 1, 0]]\n'
+                                    'allow = "any"'))
