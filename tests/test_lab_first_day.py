@@ -35,3 +35,20 @@ def test_allow_beside_a_written_matrix_is_still_refused_on_allow(tmp_path):
     with pytest.raises(RobotFileError, match='transitions.allow: expected matrix = "unmeasured" beside it'):
         load_robot(_robot(tmp_path, 'matrix = [[0, 1, 1, "x"], [1, 0, "x", 1], [1, "x", 0, 1], ["x", 1, 1, 0]]\n'
                                     'allow = "any"'))
+
+
+_LEARNED = ('units = "mm"\nmatrix = [[0, 0.2, -0.1, "x"], [0.1, 0, "x", 0.3], [0.2, "x", 0, -0.1], ["x", 0.1, 0.2, 0]]\n'
+            'n_trials = [[0, 2, 2, "x"], [2, 0, "x", 2], [2, "x", 0, 2], ["x", 2, 2, 0]]\n'
+            'var_dx = [[0, 0.01, 0.02, "x"], [0.01, 0, "x", 0.01], [0.01, "x", 0, 0.03], ["x", 0.01, 0.01, 0]]\n')
+
+
+def test_a_learned_file_with_variances_alone_is_not_warned_about_as_a_planar_robot(tmp_path):
+    """learn --out writes var_dx and n_trials beside the matrix; every physical-plant run of
+    such a file (sim, run --sim, check) said '[transitions] has planar statistics (dy,
+    dtheta_deg): a robot that moves in the plane', of a worm that has none."""
+    from proleg.sim.closed_loop import planar_warnings
+
+    assert planar_warnings(load_robot(_robot(tmp_path, _LEARNED))) == []
+    dy = 'dy = [[0, 0.1, 0.1, "x"], [0.1, 0, "x", 0.1], [0.1, "x", 0, 0.1], ["x", 0.1, 0.1, 0]]\n'
+    lines = planar_warnings(load_robot(_robot(tmp_path, _LEARNED + dy, "planar.toml")))
+    assert len(lines) == 1 and "has planar statistics (dy, dtheta_deg)" in lines[0]

@@ -70,8 +70,10 @@ def planar_warnings(robot: Robot) -> list[str]:
     plane, planar-4): the physical plant lays the limbs out in a row, in file order, and moves
     the body along that row only, so what it simulates is not that robot. planar-4 walked
     +0.2 mm a cycle \"in +x\" on four contacts in a row (front, left, back, right), and nothing
-    said it was not its star-shaped body."""
-    if robot.transitions.planar is None:
+    said it was not its star-shaped body. Variances alone (``var_dx``, a learned file's) are not
+    a planar motion: every file ``proleg learn --out`` wrote was warned about as a planar robot."""
+    planar = robot.transitions.planar
+    if planar is None or (planar.dy is None and planar.dtheta_deg is None):
         return []
     names = ", ".join(lb.name for lb in robot.limbs)
     return [f"{robot.path}: [transitions] has planar statistics (dy, dtheta_deg): a robot that moves in the "
