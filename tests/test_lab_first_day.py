@@ -52,3 +52,33 @@ def test_a_learned_file_with_variances_alone_is_not_warned_about_as_a_planar_rob
     dy = 'dy = [[0, 0.1, 0.1, "x"], [0.1, 0, "x", 0.1], [0.1, "x", 0, 0.1], ["x", 0.1, 0.1, 0]]\n'
     lines = planar_warnings(load_robot(_robot(tmp_path, _LEARNED + dy, "planar.toml")))
     assert len(lines) == 1 and "has planar statistics (dy, dtheta_deg)" in lines[0]
+
+
+
+def _relearn(tmp_path, capsys, *extra):
+    from build_checks import cli
+
+    learned = _robot(tmp_path, _LEARNED + "\n[control]\ntick_hz = 500\n")
+    log = tmp_path / f"again{len(extra)}.jsonl"
+    code, _, err = cli(capsys, "learn", learned, "--sim", *extra, "--repeats", "1", "--max-pieces", "1", "--log", log)
+    assert code == 0, err
+    return err, log
+
+
+def test_relearning_a_learned_file_on_the_table_plant_says_it_hands_back_its_own_means(tmp_path, capsys):
+    """A learned file learned again with --sim: the table plant moves by the file's own learned
+    matrix, so the trials hand its means back, and nothing said so."""
+    err, _ = _relearn(tmp_path, capsys)
+    assert "was learned (it has n_trials), and --sim's table plant moves by its matrix" in err
+    err, _ = _relearn(tmp_path, capsys, "--plant", "table")
+    assert "was learned" not in err  # asked for by name: no warning
+
+
+def test_a_truth_with_variances_alone_logs_no_planar_motion(tmp_path, capsys):
+    """The learned file's var_dx made the table plant move a planar pose, and every trial's Δy
+    and Δθ were logged as 0, then written as dy, dtheta_deg: a worm turned into a planar robot."""
+    import json
+
+    _, log = _relearn(tmp_path, capsys, "--plant", "table")
+    trials = [json.loads(line) for line in log.read_text().splitlines()[1:]]
+    assert trials and all(t["dy"] is None and t["dtheta_deg"] is None for t in trials)

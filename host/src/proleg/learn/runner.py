@@ -550,9 +550,14 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, 
     sim = SimulatedRobot(robot, seed=seed, plant=plant)
     client = RobotClient(SimLink(sim, description=f"sim {robot.name}"), watchdog_ms=robot.safety.link_watchdog_ms)
 
+    moves = truth.transitions.planar
+    steers = moves is not None and (moves.dy is not None or moves.dtheta_deg is not None)
+
     def pose() -> Pose:
+        # variances alone (a learned file's var_dx) move no Δy, Δθ: recorded as 0 they were
+        # written back as dy, dtheta_deg and made a worm a planar robot
         planar = sim.plant.pose
-        return (sim.plant.displacement_mm, None, None) if planar is None else planar
+        return (sim.plant.displacement_mm, None, None) if planar is None or not steers else planar
 
     return sim, client, pose
 
