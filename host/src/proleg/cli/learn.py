@@ -229,6 +229,13 @@ def _checked_truth(args: argparse.Namespace, robot):
     if truth is None and getattr(robot, "unmeasured", False) and not getattr(args, "plant_given", True):
         args.plant = "physical"  # the table plant would move by the unmeasured matrix: nothing at all
         log.info("learn: the matrix is unmeasured: learning on the physical plant (friction mechanics)")
+    elif (truth is None and args.plant == "table" and getattr(robot, "n_trials", None) is not None
+          and not getattr(args, "plant_given", True)):
+        # a learned file (it carries n_trials): the table plant would hand its own means back
+        log.warning("warning: learn: %s was learned (it has n_trials), and --sim's table plant moves by "
+                    "its matrix: these trials give back the file's own means, not the robot's motion; --plant "
+                    "physical learns the simulated body again (as an unmeasured robot does), and more trials of "
+                    "the robot go into the first run's --log (docs/learning.md)", robot.path)
     try:
         check_plant(robot, truth, args.plant)
     except ExplorationError as e:
