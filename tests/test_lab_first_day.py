@@ -82,3 +82,23 @@ def test_a_truth_with_variances_alone_logs_no_planar_motion(tmp_path, capsys):
     _, log = _relearn(tmp_path, capsys, "--plant", "table")
     trials = [json.loads(line) for line in log.read_text().splitlines()[1:]]
     assert trials and all(t["dy"] is None and t["dtheta_deg"] is None for t in trials)
+
+
+def test_the_learn_commands_the_build_suggests_for_an_unmeasured_robot_parse(tmp_path, capsys):
+    """The build (and sim, run, check) of an unmeasured robot said to run `proleg learn ROBOT
+    --sim --out LEARNED.toml`; typed as given it stopped at 'the following arguments are
+    required: --log'."""
+    import re
+    import shlex
+
+    from proleg.cli.main import build_parser
+    from proleg.firmware.gaits import firmware_gaits
+
+    robot = load_robot(_robot(tmp_path, 'matrix = "unmeasured"\nallow = "one-level"'))
+    line = firmware_gaits(robot).left_out_line("+x")
+    commands = re.findall(r"\((proleg learn [^)]*?)(?:,|\))", line)
+    assert len(commands) == 2, line
+    for command in commands:
+        argv = shlex.split(command.replace("ROBOT", "lab.toml").replace("PORT", "/dev/ttyUSB0"))[1:]
+        args = build_parser().parse_args(argv)
+        assert args.log is not None and args.out is not None

@@ -115,7 +115,7 @@ def test_the_build_carries_no_gait_and_says_to_learn(tmp_path, capsys):
     code, out, err = cli(capsys, "build", path, "--board", "host-sim", "-o", tmp_path / "fw")
     assert code == 0, err
     assert "+x gaits: none (the matrix is unmeasured: learn or measure it, warned above)" in out
-    assert "the robot's matrix is unmeasured" in err and "proleg learn ROBOT --sim --out LEARNED.toml" in err
+    assert "the robot's matrix is unmeasured" in err and "proleg learn ROBOT --sim --log TRIALS.jsonl --out LEARNED.toml" in err
     manifest = json.loads((tmp_path / "fw" / "proleg-build.json").read_text())
     assert manifest["gaits"] == {"+x": [], "-x": []}
     code, _, err = cli(capsys, "sim", path, "--duration", "1")
