@@ -102,3 +102,24 @@ def test_the_learn_commands_the_build_suggests_for_an_unmeasured_robot_parse(tmp
         argv = shlex.split(command.replace("ROBOT", "lab.toml").replace("PORT", "/dev/ttyUSB0"))[1:]
         args = build_parser().parse_args(argv)
         assert args.log is not None and args.out is not None
+
+
+def test_forbidden_marks_that_cut_a_part_off_from_rest_leave_it_out_instead_of_stopping_learning(tmp_path, capsys):
+    """Marks that leave no way from rest (00) into 01 and 11: their own tour 01 <-> 11 was
+    planned all the same (28 of a worm's 37 transitions, when every way out of rest was
+    marked), and learning stopped at once: 'no piece within the thermal limits ([safety]
+    max_on_ms, ...) reaches ...' of a robot whose limits had nothing to do with it."""
+    from build_checks import cli
+
+    path = _robot(tmp_path, 'matrix = "unmeasured"\nallow = "one-level"\nforbidden = ["00->01", "10->11"]\n'
+                            "\n[control]\ntick_hz = 500\n")
+    code, _, err = cli(capsys, "learn", path, "--sim", "--repeats", "1", "--log", tmp_path / "t.jsonl")
+    assert code == 0, err
+    assert "4 of them unreachable from rest (01->00, 01->11, 11->01, 11->10): 2 × 1 = 2 trials" in err
+    assert "thermal limits" not in err
+
+    cut = _robot(tmp_path, 'matrix = "unmeasured"\nallow = "one-level"\nforbidden = ["00->01", "00->10"]', "cut.toml")
+    code, _, err = cli(capsys, "learn", cut, "--sim", "--repeats", "1", "--log", tmp_path / "cut.jsonl")
+    assert code == 2 and "none of its 6 allowed transitions is on a closed tour from rest" in err
+    assert "6 unreachable from rest" in err and 'with matrix = "unmeasured": its allow and forbidden' in err
+    assert not (tmp_path / "cut.jsonl").exists()

@@ -398,7 +398,8 @@ def _check_explorable(robot, try_unholdable: bool = False) -> None:
         parts[:0] = skipped_lines(robot, drop)
         raise LearnError(f"learn: {where}: none of its {t.n_transitions} allowed transitions is on a closed tour "
                          f"from rest ({'; '.join(parts)}): nothing to explore; allow the transitions that lead "
-                         "there from rest and back in the matrix")
+                         "there from rest and back (in the matrix; with matrix = \"unmeasured\": its allow and "
+                         "forbidden)")
 
 
 def _explored(robot, drop: dict, repeats: int) -> str:

@@ -238,17 +238,15 @@ class Explorer:
         faulted ones cut off from the rest state (every way there went through one of them)."""
         t = self.robot.transitions
         out = np.zeros(t.n_transitions, dtype=bool)
-        if not self.failed:
-            for a, b in exploration(t, 1).uncoverable:
-                out[t.lookup(a, b)] = True
-            return out
         out[list(self.failed)] = True
-        pt = self.plan_table()
+        pt = self.plan_table() if self.failed else t
         if pt.n_transitions:
             for a, b in exploration(pt, 1).uncoverable:
                 out[t.lookup(a, b)] = True
-        was, now = _reached(t), _reached(pt)
-        out |= np.array([a in was and a not in now for a in t.src.tolist()], dtype=bool)
+        # a part of the graph the rest state has no way into (every way out of rest forbidden)
+        # has tours of its own, but the robot, resting, never gets there
+        now = _reached(pt)
+        out |= np.array([a not in now for a in t.src.tolist()], dtype=bool)
         return out
 
     def _run(self, max_pieces: int | None) -> list[Trial]:

@@ -263,9 +263,12 @@ def exploration(
 
 def unexplorable(table: TransitionTable, uncoverable: tuple[tuple[int, int], ...], start: int = 0
                  ) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """Why no closed tour makes the ``uncoverable`` transitions (``Exploration.uncoverable``),
-    as ``a->b`` labels: (those whose start no allowed way reaches from ``start``, the rest:
-    one-way, no allowed way leads back from where they end)."""
+    """Why no closed tour from ``start`` (the rest state) makes a transition, as ``a->b``
+    labels: (every transition whose start no allowed way reaches from ``start``, whether or
+    not it lies on a closed tour of its own part: the robot, resting at ``start``, never gets
+    there; the other ``uncoverable`` ones (``Exploration.uncoverable``): one-way, no allowed
+    way leads back from where they end). A part the rest state cannot reach was planned, and
+    learning stopped at its first piece with "no piece within the thermal limits"."""
     succ: list[list[int]] = [[] for _ in range(table.n_states)]
     for a, b in zip(table.src.tolist(), table.dst.tolist()):
         succ[a].append(b)
@@ -276,7 +279,8 @@ def unexplorable(table: TransitionTable, uncoverable: tuple[tuple[int, int], ...
             if b not in seen:
                 seen.add(b)
                 queue.append(b)
-    unreachable = tuple(f"{table.label(a)}->{table.label(b)}" for a, b in uncoverable if a not in seen)
+    unreachable = tuple(f"{table.label(a)}->{table.label(b)}"
+                        for a, b in zip(table.src.tolist(), table.dst.tolist()) if a not in seen)
     one_way = tuple(f"{table.label(a)}->{table.label(b)}" for a, b in uncoverable if a in seen)
     return unreachable, one_way
 
