@@ -14,6 +14,7 @@ envelope if given one. ``run_sequence`` and ``walk_within_envelope`` walk a gait
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -88,6 +89,7 @@ class IdealDrive:
         self._capped: set[int] = set()              # waiting past where a limb in step stopped short
         self._gain: dict[int, tuple[float, float]] = {}  # limb -> (ψ at its last CLIMB_GAIN_DEG gain, s since)
         self._ahead: set[int] = set()  # limbs that waited in step for another in the last command
+        self._band_cache: dict[tuple[int, tuple[int, ...]], list[tuple[int, int, float, float, bool]]] = {}
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
@@ -96,8 +98,26 @@ class IdealDrive:
         heat = [False] * self.n_act
         cool = [False] * self.n_act
         active = [False] * self.n_act
-        for i, (p, k) in enumerate(zip(psi, want)):
-            j = self.limb_act[i]
+        for (i, j, lo, hi, raised), p in zip(self._bands(target, held), psi):
+            if p > hi:
+                cool[j] = True
+            elif p < lo and i not in waits:
+                heat[j] = True
+            if raised:
+                active[j] = True
+        self._heated = {i for i, j in enumerate(self.limb_act) if heat[j] and not cool[j]}
+        return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
+
+    def _bands(self, target: int, held: set[int]) -> list[tuple[int, int, float, float, bool]]:
+        """Per limb, the band ``command`` keeps it in on the way to ``target``: (limb, its
+        actuator, lowest ψ, highest ψ, raised off level 0), ``held`` limbs at their strokes.
+        They depend on nothing else: made once per target (``command`` runs every step)."""
+        key = (target, tuple(sorted(held)) if held else ())
+        got = self._band_cache.get(key)
+        if got is not None:
+            return got
+        out = []
+        for i, k in enumerate(limb_levels(target, self.levels)):
             th = self.th[i]
             if i in held:   # held at its stroke while the fall lead goes down
                 k = len(th)
@@ -107,18 +127,14 @@ class IdealDrive:
                 lo = hi = (th[k - 1] + th[k]) / 2
             if k == len(th) and self.stroke[i] is not None:  # raised to its stroke (as the firmware)
                 lo = max(lo, self.stroke[i])
-            if p > hi:
-                cool[j] = True
-            elif p < lo and i not in waits:
-                heat[j] = True
-            if k > 0:
-                active[j] = True
-        self._heated = {i for i, j in enumerate(self.limb_act) if heat[j] and not cool[j]}
-        return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
+            out.append((i, self.limb_act[i], lo, hi, k > 0))
+        self._band_cache[key] = out
+        return out
 
     def level_of(self, psi: Sequence[float]) -> list[int]:
-        """Each limb's level at ``psi``: how many of its true thresholds it is at or past."""
-        return [sum(p >= x for x in th) for p, th in zip(psi, self.th)]
+        """Each limb's level at ``psi``: how many of its true thresholds it is at or past (they
+        increase: the count is a bisection, called every step of ``_run_to``)."""
+        return [bisect_right(th, p) for p, th in zip(psi, self.th)]
 
     def _stroke_rules(self, psi: Sequence[float], want: Sequence[int], target: int,
                       dt_s: float) -> tuple[set[int], set[int]]:
@@ -222,9 +238,9 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
     first = since = None
     arrived = False
     want = limb_levels(target, drive.levels)
-    clock = StepClock(plant.psi_deg, pause=any(s is not None for s in drive.stroke) or len(drive.th) > 2)
+    clock = StepClock(plant.psi_now, pause=any(s is not None for s in drive.stroke) or len(drive.th) > 2)
     while True:
-        cmd = drive.command(plant.psi_deg.tolist(), target, dt)
+        cmd = drive.command(plant.psi_now, target, dt)
         duties = [0.0] * nch
         for j, c in enumerate(cmd):
             if c > 0:
@@ -233,8 +249,9 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
             duties = envelope.gate(duties)
         plant.step(dt, duties)
         now = plant.time_s - t0
-        away = clock.tick(dt, plant.psi_deg, drive.level_of(plant.psi_deg), want, any(d > 0 for d in duties))
-        arrived = plant.true_state == target and (arrived or drive.at_strokes(plant.psi_deg, plant.dpsi_dps, target))
+        psi = plant.psi_now
+        away = clock.tick(dt, psi, drive.level_of(psi), want, any(d > 0 for d in duties))
+        arrived = plant.true_state == target and (arrived or drive.at_strokes(psi, plant.dpsi_now, target))
         if arrived:
             if since is None:
                 since = now

@@ -300,6 +300,17 @@ class PhysicalPlant:
         return np.array(self._dpsi)
 
     @property
+    def psi_now(self) -> tuple[float, ...]:
+        """``psi_deg`` as a tuple of floats: for a drive that reads it every step (an array
+        made three times a step was a tenth of ``measure_matrix``'s time)."""
+        return tuple(self._psi)
+
+    @property
+    def dpsi_now(self) -> tuple[float, ...]:
+        """``dpsi_dps`` as a tuple of floats."""
+        return tuple(self._dpsi)
+
+    @property
     def true_psi_star_deg(self) -> list[tuple[float, ...]]:
         return list(self._true_th)
 
