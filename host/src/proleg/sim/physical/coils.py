@@ -96,30 +96,36 @@ class Coils:
         if len(duties) < self.n_channels:
             raise SimError(f"step: {counted(len(duties), 'duty')} given, the plant drives channels 0..{self.n_channels - 1}")
         na = self._na
+        channel, alive = self.channel, self.alive
         ds = []
         for j in range(na):
-            d = duties[self.channel[j]]
+            d = duties[channel[j]]
             if not 0.0 <= d <= 1.0:
-                raise SimError(f"step: duty {d!r} on channel {self.channel[j]} is outside 0..1")
-            ds.append(d if self.alive[j] else 0.0)
+                raise SimError(f"step: duty {d!r} on channel {channel[j]} is outside 0..1")
+            ds.append(d if alive[j] else 0.0)
         v = self.supply
         if self.rsrc > 0.0:
             v = v * v / (v + self.rsrc * sum(d * v / r for d, r in zip(ds, self.R)))
         amb, tb = self.amb, self.tbody
+        # the per-coil lists, looked up once a step (this runs every 2 ms of a measurement)
+        R, pscale, pfactor, hA, G, C, lat = self.R, self.pscale, self.pfactor, self.hA, self.G, self.C, self.lat
+        temp, peak, hyst, cs, cycles, fat_at = self.temp, self.peak, self.hyst, self.c, self.cycles, self.fat_at
+        fat_stroke, drift_stroke, drift, ontime, speedup = (self.fat_stroke, self.drift_stroke, self.drift,
+                                                             self.ontime, self.speedup)
         to_body = 0.0
         changed = False
         moving = False
         for j in range(na):
             d = ds[j]
             if d > 0.0:
-                self.ontime[j] += d * dt_s
-                if self.drift[j] is not None:
+                ontime[j] += d * dt_s
+                if drift[j] is not None:
                     self._apply_drift(j, d * dt_s)
-            power = d * v * v / self.R[j] * self.pscale[j] * self.pfactor[j]
-            h, g = self.hA[j], self.G[j]
+            power = d * v * v / R[j] * pscale[j] * pfactor[j]
+            h, g = hA[j], G[j]
             t_eq = (power + h * amb + g * tb) / (h + g)
-            t = t_eq + (self.temp[j] - t_eq) * decay[j]
-            hy = self.hyst[j]
+            t = t_eq + (temp[j] - t_eq) * decay[j]
+            hy = hyst[j]
             a0 = hy.alpha
             if (a0 == 0.0 and t < hy.as_c + hy.shift_c and hy.temp < hy.as_c + hy.shift_c) or (
                     a0 == 1.0 and t > hy.ms_c + hy.shift_c and hy.temp > hy.ms_c + hy.shift_c):
@@ -127,24 +133,24 @@ class Coils:
             else:
                 a1 = hy.update(t)
             if a1 != a0:
-                t -= self.lat[j] * (a1 - a0) / self.C[j]
+                t -= lat[j] * (a1 - a0) / C[j]
                 hy.temp = t
-                self.cycles[j] += abs(a1 - a0) * 0.5 * self.speedup
-                if abs(self.cycles[j] - self.fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
+                cycles[j] += abs(a1 - a0) * 0.5 * speedup
+                if abs(cycles[j] - fat_at[j]) > 0.01:   # fatigue e-folds over 10³+ cycles
                     self._update_fatigue(j)
-            self.temp[j] = t
-            if t > self.peak[j]:
-                self.peak[j] = t
+            temp[j] = t
+            if t > peak[j]:
+                peak[j] = t
             to_body += g * (t - tb)
-            target = a1 * self.fat_stroke[j] * self.drift_stroke[j]
-            c = self.c[j]
+            target = a1 * fat_stroke[j] * drift_stroke[j]
+            c = cs[j]
             if c != target:
                 c = target + (c - target) * mdecay
                 if abs(c - target) < 1e-7:
                     c = target
                 else:
                     moving = True
-                self.c[j] = c
+                cs[j] = c
                 changed = True
         self.tbody = tb + dt_s * (to_body - self.hAb * (tb - amb)) / self.Cb
         return changed, moving
