@@ -439,10 +439,37 @@ def test_an_interrupted_matrix_measurement_says_how_many_transitions_and_prints_
 
 def test_an_interrupted_hold_range_counts_over_every_margin(capsys, monkeypatch):
     _ctrl_c_at_drive(monkeypatch, 48 + 5)  # the first margin's 24 transitions, then 2 of the second's
-    code, out, err = cli(capsys, "sim", R1, "--measure-matrix", "--hold-range", "--json")
+    # in this process (--jobs 1): the stand-in Ctrl-C is raised in the drive, which a worker would run
+    code, out, err = cli(capsys, "sim", R1, "--measure-matrix", "--hold-range", "--json", "--jobs", "1")
     assert code == 130 and out == ""
     assert err.startswith("proleg: interrupted after measuring 26 of 72 transitions (12 allowed, 2 times each at "
                           "each of 3 hold margins; 26 reached their target); nothing printed")
+
+
+def test_ctrl_c_on_a_hold_range_measured_in_workers_ends_with_the_line_and_leaves_no_process():
+    """The signal itself, as a terminal sends it: SIGINT to the whole process group of ``proleg
+    sim caterpillar-4 --measure-matrix --hold-range --jobs 3`` (the parent, its three workers and
+    the queue they count through): it exits 130 with the one line, counted over the margins, and
+    nothing of the group goes on."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "sim", str(ROOT / "robots" / "caterpillar-4.toml"),
+                             "--measure-matrix", "--hold-range", "--jobs", "3", "--json"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    time.sleep(4.0)  # started, the workers measuring (the whole takes about a minute of CPU)
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
+    line = err.strip().splitlines()[-1]
+    assert line.startswith("proleg: interrupted after measuring ") and " of 840 transitions (140 allowed, 2 times each at " \
+        "each of 3 hold margins; " in line, line
+    deadline = time.monotonic() + 10
+    while True:
+        try:
+            os.killpg(proc.pid, 0)   # any process left in its group
+        except ProcessLookupError:
+            break
+        assert time.monotonic() < deadline, "a worker outlived the interrupted measurement"
+        time.sleep(0.1)
 
 
 def test_a_matrix_measurement_interrupted_at_once_measured_nothing(capsys, monkeypatch):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import time
 from typing import Any
 
@@ -51,7 +52,12 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
     s.add_argument("--hold-range", action="store_true",
                    help="with --measure-matrix: measure it again holding raised limbs 2° and 8° past psi* (the "
                         "matrix is measured at 4°) and print each entry's range: how much it depends on the hold "
-                        "(three measurements, so three times as long)")
+                        "(three measurements, so three times as long; --jobs measures them at once)")
+    s.add_argument("--jobs", type=positive_int, default=None, metavar="N",
+                   help="with --measure-matrix --hold-range: hold margins measured at once, in up to N worker "
+                        "processes (default: the machine's cores; there are three margins); the numbers do not "
+                        "depend on N. One matrix is one chain of transitions on one body, each starting where the "
+                        "last ended, so it is measured in one process")
 
 
 def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
@@ -121,7 +127,8 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         if args.hold_range:
             from ..sim.physical.measure import MARGIN_DEG, measure_matrix_range
 
-            rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed, on_step=steps)
+            rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed, on_step=steps,
+                                       jobs=args.jobs or os.cpu_count() or 1)
             m = rng.at(MARGIN_DEG)
         else:
             m = measure_matrix(robot, conditions, seed=args.seed, on_step=steps)
@@ -242,6 +249,10 @@ def refuse_what_does_not_apply(args: argparse.Namespace) -> None:
             raise SimError(f"{mode}: not with {flag} (it does not use it)")
     if mode != "--pty" and _GIVEN["--speed"](args):
         raise SimError("--speed: only with --pty (a plain sim runs as fast as it can)")
+    if args.jobs is not None and not (mode == "--measure-matrix" and args.hold_range):
+        raise SimError("--jobs: only with --measure-matrix --hold-range (its hold margins are measured at once; one "
+                       "matrix is one chain of transitions on one body, each starting where the last ended, so it is "
+                       "measured in one process)")
     if mode != "--measure-climb" and (args.all_gaits or args.climb_gaits is not None):
         raise SimError("--all-gaits / --climb-gaits: only with --measure-climb (which gaits it measures)")
 

@@ -141,24 +141,75 @@ class MatrixRange:
                 "high": json_matrix(self.high_mm)}
 
 
-def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_DEG,
+def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_DEG, *, jobs: int = 1,
                          **kwargs: Any) -> MatrixRange:
     """``measure_matrix`` once per hold margin, and each entry's range over them.
 
     How far past ψ* the held limbs are changes the body's shape and the load on each contact,
     and with it which end slides: R1's 11 → 00 measures −0.90 mm at 2°, +0.01 at 4° and −0.07
     at 8°. The range says how much the matrix depends on the hold; it is not a bound on what
-    a drive that holds within it walks (a gait's steps interact: docs/plant.md)."""
+    a drive that holds within it walks (a gait's steps interact: docs/plant.md).
+
+    The margins are measured on plants of their own, so ``jobs`` > 1 measures up to that many
+    at once in worker processes, with the same numbers as one after another (each matrix is
+    one chain of transitions on one body, each starting where the last ended: it is not split)."""
     if not margins_deg:
         raise ValueError("measure_matrix_range: no hold margins given")
+    if jobs < 1:
+        raise ValueError(f"measure_matrix_range: jobs must be at least 1, got {jobs!r}")
     on_step = kwargs.pop("on_step", None)
     measured: list[MeasuredMatrix] = []
-    for m in margins_deg:
-        step = _counting_on(on_step, measured, len(margins_deg))
-        measured.append(measure_matrix(robot, margin_deg=m, on_step=step, **kwargs))
+    if min(jobs, len(margins_deg)) > 1:
+        measured = _measure_margins_at_once(robot, margins_deg, jobs, on_step, kwargs)
+    else:
+        for m in margins_deg:
+            step = _counting_on(on_step, measured, len(margins_deg))
+            measured.append(measure_matrix(robot, margin_deg=m, on_step=step, **kwargs))
     stack = np.array([m.matrix_mm for m in measured])
     return MatrixRange(tuple(float(m) for m in margins_deg), tuple(measured),
                        np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0))
+
+
+def _measure_margins_at_once(robot: Any, margins_deg: Sequence[float], jobs: int,
+                             on_step: Callable[[int, int, int], None] | None,
+                             kwargs: dict[str, Any]) -> list[MeasuredMatrix]:
+    """``measure_matrix`` at each of ``margins_deg`` in up to ``jobs`` worker processes, in the
+    order given. Each worker sends its ``on_step`` counts back through a queue; ``on_step``
+    hears the sums over the margins, as it does from the margins one after another."""
+    import multiprocessing
+    import queue as queue_mod
+
+    from ...report.sweep import quiet_worker
+
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Manager() as manager:
+        counts = manager.Queue()
+        pool = ctx.Pool(min(jobs, len(margins_deg)), initializer=quiet_worker)
+        try:
+            pending = [pool.apply_async(_measure_margin, (robot, m, i, counts, kwargs))
+                       for i, m in enumerate(margins_deg)]
+            tried, sampled, total = [0] * len(pending), [0] * len(pending), [0] * len(pending)
+            while True:
+                try:
+                    i, t, s, n = counts.get(timeout=0.2)
+                except queue_mod.Empty:
+                    if all(p.ready() for p in pending):
+                        break
+                    continue
+                tried[i], sampled[i], total[i] = t, s, n
+                if on_step is not None:
+                    on_step(sum(tried), sum(sampled), max(total) * len(pending))
+            measured = [p.get() for p in pending]   # a worker's error is raised here
+            pool.close()
+        finally:
+            pool.terminate()  # Ctrl-C or an error: no worker goes on for nobody
+            pool.join()
+    return measured
+
+
+def _measure_margin(robot: Any, margin_deg: float, index: int, counts: Any, kwargs: dict[str, Any]) -> MeasuredMatrix:
+    """One worker's margin for ``_measure_margins_at_once``: its counts go to ``counts`` tagged ``index``."""
+    return measure_matrix(robot, margin_deg=margin_deg, on_step=lambda t, s, n: counts.put((index, t, s, n)), **kwargs)
 
 
 def _counting_on(on_step: Callable[[int, int, int], None] | None, measured: Sequence[MeasuredMatrix],
