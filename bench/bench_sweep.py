@@ -41,6 +41,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "host" / "src"))
 
+from proleg.interrupts import quiet_worker  # noqa: E402
 from proleg.report import sweep  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.physics.materials import NITI_OVERHEAT_C  # noqa: E402
@@ -101,7 +102,7 @@ def main() -> int:
         logging.disable(logging.NOTSET)
         nominal_mm_s[name] = nominal.speed_mm_s
         jobs += [(name, i, c, run_s) for i, c in enumerate(draws)]
-    with multiprocessing.Pool(args.jobs, initializer=sweep.quiet_worker) as pool:
+    with multiprocessing.Pool(args.jobs, initializer=quiet_worker) as pool:
         done = pool.map(run_row, jobs, chunksize=1)
     judged_rows = {n: judged([row for robot, _, row in done if robot == n], nominal_mm_s[n]) for n in names}
     by_robot = {n: summary(judged_rows[n]) for n in names}

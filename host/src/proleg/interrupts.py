@@ -14,6 +14,8 @@ Python's handler back after the last holder. Nothing is deferred off the main th
 handler is left alone; in a background job SIGTERM and SIGHUP still come as a Ctrl-C
 (``take_terminations``, ``terminate``) and are deferred the same way. Per row: a flag, not a ``signal.signal`` call (those took 18 µs).
 
+A pool's worker process leaves Ctrl-C to its parent (``quiet_worker``).
+
 A session with a robot (console, run) ends on SIGHUP or SIGTERM as on a Ctrl-C:
 ``hangup_as_exception`` turns them into an exception (or a callback to the UI), so the
 ``finally`` that stops the robot (``proleg.link.leave``) runs instead of the process dying.
@@ -164,3 +166,18 @@ def hangup_as_exception(on_signal: Callable[[], None] | None = None) -> Iterator
     finally:
         for sig, h in old.items():
             signal.signal(sig, h)
+
+
+def quiet_worker() -> None:
+    """A worker process's setup: no plant advice per row (the rows say what happened); Ctrl-C
+    is the parent's to handle, and SIGTERM (how the parent's pool ends its workers) ends a
+    worker, whatever handler the forked parent had for it (``proleg`` turns SIGTERM into a
+    Ctrl-C, which a worker ignores). For ``multiprocessing`` pools: ``proleg check``'s rows,
+    ``--measure-matrix --hold-range``'s margins (``sim.physical.measure``), the sweep bench."""
+    import logging
+
+    logging.disable(logging.WARNING)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), signal.SIG_DFL)

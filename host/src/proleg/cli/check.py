@@ -157,7 +157,7 @@ def _run(jobs: list, n_jobs: int, rows: list) -> None:
         return
     import multiprocessing
 
-    from ..report.sweep import quiet_worker
+    from ..interrupts import quiet_worker
 
     pool = multiprocessing.get_context("fork").Pool(n_jobs, initializer=quiet_worker)
     try:
@@ -171,7 +171,7 @@ def _run(jobs: list, n_jobs: int, rows: list) -> None:
 
 
 def _quiet_work(job: tuple) -> Any:
-    """``_work`` in this process, as quiet as a pool's worker (``sweep.quiet_worker``): the
+    """``_work`` in this process, as quiet as a pool's worker (``interrupts.quiet_worker``): the
     plant's advice about a drawn condition (a coil that "would settle at 156 °C with this
     supply: lower the supply") is not printed once per row and run. With one job (``--jobs 1``,
     ``--rows 1``, a one-core machine) it was, twice for each hot draw, where the same rows in a

@@ -23,7 +23,6 @@ same rows every run, other rows with another seed.
 from __future__ import annotations
 
 import dataclasses
-import logging
 import random
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -196,17 +195,3 @@ def summary(rows: Sequence[Row]) -> dict[str, Any]:
         "overheated": sum(r.hot for r in rows),
         "hottest_c": None if not rows else round(max(r.coil_peak_c for r in rows), 1),
     }
-
-
-def quiet_worker() -> None:
-    """A worker process's setup: no plant advice per row (the rows say what happened); Ctrl-C
-    is the parent's to handle, and SIGTERM (how the parent's pool ends its workers) ends a
-    worker, whatever handler the forked parent had for it (``proleg`` turns SIGTERM into a
-    Ctrl-C, which a worker ignores)."""
-    import signal
-
-    logging.disable(logging.WARNING)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for name in ("SIGTERM", "SIGHUP"):
-        if hasattr(signal, name):
-            signal.signal(getattr(signal, name), signal.SIG_DFL)

@@ -179,7 +179,7 @@ def _measure_margins_at_once(robot: Any, margins_deg: Sequence[float], jobs: int
     import multiprocessing
     import queue as queue_mod
 
-    from ...report.sweep import quiet_worker
+    from ...interrupts import quiet_worker
 
     ctx = multiprocessing.get_context("fork")
     with ctx.Manager() as manager:
