@@ -53,3 +53,17 @@ def test_jobs_without_hold_range_is_refused_not_ignored(capsys, mode):
     code, out, err = run(capsys, "sim", str(R1), *mode, "--jobs", "2")
     assert code == 2 and out == "" and "Traceback" not in err
     assert "--jobs: only with --measure-matrix --hold-range" in err
+
+
+def test_the_six_limb_bench_body_loads_quietly_with_one_pad_per_transition(caplog):
+    """tests/fixtures/caterpillar-6.toml, bench/bench_plant.py's large --measure-matrix: 64 states,
+    each transition raising or lowering one pad (384), no load warning a lab would have to read past."""
+    import logging
+
+    from proleg.robot import load_robot
+
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(ROOT / "tests" / "fixtures" / "caterpillar-6.toml")
+    _, allowed = robot.transitions.dense()
+    assert len(allowed) == 64 and robot.transitions.n_transitions == 384 and not caplog.records
+    assert all(bin(a ^ b).count("1") == 1 for a in range(64) for b in range(64) if allowed[a][b])
