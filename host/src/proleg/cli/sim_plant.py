@@ -184,7 +184,7 @@ def _mm(x: float) -> str:
 log = logging.getLogger("proleg")
 
 #: ``--measure-matrix`` says how far it has got at most this often (a 96-state robot takes
-#: about ten minutes: without a word a lab cannot tell it from a hang).
+#: minutes: without a word a lab cannot tell it from a hang).
 PROGRESS_EVERY_S = 10.0
 
 
