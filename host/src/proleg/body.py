@@ -174,6 +174,8 @@ class Shape:
         self._sec_tables: list[tuple[list[int], list]] | None = None
         if tabulate:
             self._tlist, self._sec_tables = _tables(geo)
+        # per section, (its coils' contractions, its values) at its last evaluation
+        self._sec_last: list[tuple[tuple[float, ...], list[float]] | None] = [None] * len(self._sec_tables or ())
 
     # -- exact computation (vectorised over a batch of contraction vectors) ------------------
     def _sections(self, c: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
@@ -263,8 +265,18 @@ class Shape:
         return tables
 
     def _evaluate_sections(self, c: list[float]) -> list[float]:
-        """``evaluate`` from the section tables."""
-        psi, gaps, load, com = self._assemble(_interpolate(coils, table, c) for coils, table in self._sec_tables)
+        """``evaluate`` from the section tables. A section whose coils' contractions are those
+        of its last evaluation takes its last values (the interpolation is a function of them
+        alone): while one coil moves, the sections it does not bend are not looked up again."""
+        last = self._sec_last
+        sections = []
+        for k, (coils, table) in enumerate(self._sec_tables):
+            key = tuple([c[j] for j in coils])
+            got = last[k]
+            if got is None or got[0] != key:
+                got = last[k] = (key, _interpolate(coils, table, c))
+            sections.append(got[1])
+        psi, gaps, load, com = self._assemble(sections)
         return [*psi, *gaps, *load, com]
 
     def evaluate(self, c: list[float]) -> list[float]:
