@@ -148,3 +148,31 @@ def test_gait_says_why_no_gait_moves_an_unmeasured_robot(tmp_path, capsys):
     code, out, _ = cli(capsys, "gait", _write(tmp_path, [2, 2], 'matrix = "unmeasured"'))
     assert code == 0
     assert out.count("no gait moves the robot in") == 2 and out.count("its matrix is unmeasured: learn it") == 2
+
+
+def test_measure_matrix_out_writes_the_robot_file_with_the_measured_matrix(tmp_path, capsys):
+    """--measure-matrix --out: the file holds what --json measured (mm, samples as n_trials),
+    the rest of the robot file as it was, and it walks; --out over ROBOT, into a missing folder
+    or without --measure-matrix is refused before anything is measured or written."""
+    path = _write(tmp_path, [2, 2], 'matrix = "unmeasured"\nallow = "one-level"', extra="[control]\ntick_hz = 500\n")
+    out_file = tmp_path / "measured.toml"
+    code, out, err = cli(capsys, "sim", path, "--measure-matrix", "--json", "--out", out_file)
+    assert code == 0, err
+    measured = json.loads(out)
+    robot = load_robot(out_file)
+    assert not robot.unmeasured and robot.units == "mm"
+    dense, allowed = robot.transitions.dense()
+    for a, row in enumerate(measured["matrix"]):
+        for b, mm in enumerate(row):
+            if a != b and mm is not None:
+                assert allowed[a][b] and abs(dense[a][b] - mm) < 1e-4  # --json rounds to 0.1 µm
+    assert [lb.friction for lb in robot.limbs] == [lb.friction for lb in load_robot(path).limbs]
+    assert 'matrix = "unmeasured"' in out_file.read_text()  # the old table, commented out below
+    code, out, err = cli(capsys, "sim", out_file, "--duration", "30", "--json")
+    assert code == 0 and json.loads(out)["displacement_mm"] > 0, err
+    for argv, says in (((path, "--measure-matrix", "--out", path), "is the ROBOT file this command reads"),
+                       ((path, "--measure-matrix", "--out", tmp_path / "no" / "m.toml"), "does not exist"),
+                       ((path, "--out", tmp_path / "m.toml"), "--out: only with --measure-matrix")):
+        code, out, err = cli(capsys, "sim", *argv)
+        assert code == 2 and says in err and out == ""
+    assert not (tmp_path / "m.toml").exists()

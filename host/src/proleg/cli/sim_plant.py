@@ -14,8 +14,10 @@ import json
 import logging
 import os
 import time
+from pathlib import Path
 from typing import Any
 
+from ..errors import UsageError
 from ..names import counted
 from .number_args import positive_int
 
@@ -49,6 +51,10 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                         "as proleg build lists them); the gaits past them take the smallest limit")
     s.add_argument("--measure-matrix", action="store_true",
                    help="measure the robot's transition reward matrix (mm) on the physical plant and print it")
+    s.add_argument("--out", metavar="FILE.toml",
+                   help="with --measure-matrix: also write the robot file with the measured matrix (mm) as its "
+                        "[transitions], the old table kept below in comments (as proleg learn --out writes a "
+                        "learned one): the file to build and walk a robot whose matrix is unmeasured")
     s.add_argument("--hold-range", action="store_true",
                    help="with --measure-matrix: measure it again holding raised limbs 2° and 8° past psi* (the "
                         "matrix is measured at 4°) and print each entry's range: how much it depends on the hold "
@@ -120,6 +126,13 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 
     if args.plant != "physical":
         raise SimError("--measure-matrix: the matrix is measured on the physical plant (the table plant is the matrix)")
+    if args.out is not None:  # known now, not after minutes of measuring
+        from ..outputs import refuse_inputs
+
+        directory = Path(args.out).parent
+        if not directory.is_dir():
+            raise UsageError(f"--out {args.out}: directory {directory} does not exist")
+        refuse_inputs("sim --measure-matrix", "--out", args.out, {"ROBOT": robot.path})
     conditions = plant_conditions(robot, args.condition)
     rng = None
     steps = _Steps()
@@ -141,6 +154,13 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     _, allowed = robot.transitions.dense()
     not_made = [(a, b) for a in range(len(m.states)) for b in range(len(m.states))
                 if a != b and allowed[a][b] and not m.samples[a][b]]
+    if args.out is not None:  # written before the table is printed: a reader that goes away (| head) loses no file
+        from ..learn.robotfile import write_measured_robot
+
+        if args.condition:  # the robot file's own [plant] describes the robot; --condition is a day's weather
+            log.warning("warning: --out: the matrix was measured under --condition %s, and %s holds it as the "
+                        "robot's matrix", " ".join(flat_conditions(args)), args.out)
+        log.info("wrote %s", write_measured_robot(robot, m, args.out))
     if args.json:
         extra = {} if rng is None else rng.to_json()
         print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(),
@@ -253,6 +273,8 @@ def refuse_what_does_not_apply(args: argparse.Namespace) -> None:
         raise SimError("--jobs: only with --measure-matrix --hold-range (its hold margins are measured at once; one "
                        "matrix is one chain of transitions on one body, each starting where the last ended, so it is "
                        "measured in one process)")
+    if mode != "--measure-matrix" and getattr(args, "out", None) is not None:
+        raise SimError("--out: only with --measure-matrix (the robot file it writes holds the measured matrix)")
     if mode != "--measure-climb" and (args.all_gaits or args.climb_gaits is not None):
         raise SimError("--all-gaits / --climb-gaits: only with --measure-climb (which gaits it measures)")
 

@@ -107,10 +107,10 @@ class FirmwareGaits(dict):
         if self.unmeasured and not self.get(direction):
             return (f"{direction}: the robot's matrix is unmeasured ([transitions] matrix = \"unmeasured\"), so no "
                     f"gait moves it yet and the firmware carries no {direction} gait (START {direction} is refused: "
-                    f"NACK NO_GAIT). Learn the matrix on the robot (proleg learn ROBOT --port PORT --log "
-                    f"TRIALS.jsonl --out LEARNED.toml) or on the simulated body (proleg learn ROBOT --sim --log "
-                    f"TRIALS.jsonl --out LEARNED.toml, or "
-                    f"proleg sim ROBOT --measure-matrix), and build from that file; a gait of your own runs "
+                    f"NACK NO_GAIT). Learn the matrix on the robot (proleg learn ROBOT --port PORT --source "
+                    f"tracker|manual --log TRIALS.jsonl --out LEARNED.toml) or on the simulated body (proleg "
+                    f"learn ROBOT --sim --log TRIALS.jsonl --out LEARNED.toml, or proleg sim ROBOT "
+                    f"--measure-matrix --out MEASURED.toml), and build from that file; a gait of your own runs "
                     f"with proleg load-gait")
         why = self.left_out.get(direction)
         if why is None:

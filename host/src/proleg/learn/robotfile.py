@@ -27,6 +27,7 @@ import re
 import tomllib
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -116,7 +117,8 @@ def unit_factor(robot: Robot, units: str) -> float:
 
 
 def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_as_keys: bool = True,
-                             note: str = "", left_out: dict[int, Left] | None = None) -> list[str]:
+                             note: str = "", left_out: dict[int, Left] | None = None,
+                             header: list[str] | None = None) -> list[str]:
     table = robot.transitions
     n = table.n_states
     old, allowed = table.dense()
@@ -134,7 +136,7 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
         else:
             missing.append(f"{table.label(a)}->{table.label(b)}")
     when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    out = [
+    out = [line.format(when=when, units=units) for line in header] if header is not None else [
         f"# [transitions] learned by proleg learn ({when}) from {int(dx.n.sum())} trials{note}.",
         f"# matrix: mean Δx per transition in {units}; var_*: sample variances (square of the unit, deg² for θ);",
         f"# n_trials: trials per transition; {int(est.confidence * 100)} % intervals are in the learn report.",
@@ -180,14 +182,17 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
 
 
 def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units: str | None = None,
-                        stats_as_keys: bool = True, note: str = "", left_out: dict[int, Left] | None = None) -> Path:
+                        stats_as_keys: bool = True, note: str = "", left_out: dict[int, Left] | None = None,
+                        header: list[str] | None = None, command: str = "learn") -> Path:
     """Write ``robot``'s file with the learned ``[transitions]`` (see the module docstring),
     atomically, after checking that the text reads back as the robot file with only
-    ``[transitions]`` changed (``LearnedFileError`` otherwise: nothing is written)."""
+    ``[transitions]`` changed (``LearnedFileError`` otherwise: nothing is written).
+    ``header``: the comment lines above the table (``{when}``, ``{units}`` filled in) in place
+    of learning's; ``command``: what the messages name."""
     source = Path(robot.path).read_text(encoding="utf-8")
     units = units or robot.units
     new = learned_transitions_text(robot, est, units=units, stats_as_keys=stats_as_keys, note=note,
-                                   left_out=left_out)
+                                   left_out=left_out, header=header)
     lines = source.splitlines()
     if units != robot.units and units in UNIT_MM:  # the matrix's unit fixes step_mm now
         lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")
@@ -202,7 +207,40 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
     if climb is not None and learned.control.max_climb_deg != climb:
         raise LearnedFileError(f"learn: {robot.path}: [control] max_climb_deg would not read back as {climb} "
                                "in the learned file; nothing written")
-    return write_text_atomic(out, text, "learn")
+    return write_text_atomic(out, text, command)
+
+
+def measured_estimates(robot: Robot, measured: Any) -> Estimates:
+    """``proleg sim --measure-matrix``'s ``MeasuredMatrix`` as the statistics a learned file is
+    written from: per allowed transition its samples, their mean and sample variance (Δx only:
+    the plant moves along x)."""
+    from .estimate import Component
+
+    t = robot.transitions
+    src, dst = t.src, t.dst
+    n = np.asarray(measured.samples)[src, dst].astype(np.int64)
+    mean = np.where(n >= 1, np.asarray(measured.matrix_mm, dtype=float)[src, dst], np.nan)
+    std = np.asarray(measured.std_mm, dtype=float)[src, dst]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var = np.where(n >= 2, std ** 2 * n / np.maximum(n - 1, 1), np.nan)  # np.std's ddof=0 → ddof=1
+    return Estimates(t, 0.95, 2, {"dx": Component(n, mean, var, np.full(len(n), np.nan))})
+
+
+def write_measured_robot(robot: Robot, measured: Any, out: str | Path) -> Path:
+    """Write ``robot``'s file with the matrix ``proleg sim --measure-matrix`` measured (mm) as
+    its ``[transitions]``, as ``write_learned_robot`` writes a learned one: the old table kept
+    below in comments, a transition the simulated body did not make keeping its old value
+    (named in a comment), nothing written unless the file reads back."""
+    header = [
+        f"# [transitions] measured by proleg sim --measure-matrix ({{when}}) on the physical plant, "
+        f"{int(np.asarray(measured.samples).sum())} samples; friction {'/'.join(measured.mechanisms)} "
+        f"({measured.mechanism_source}).",
+        "# matrix: mean Δx per transition in {units} (an idealised drive, true ψ); var_dx: sample variances;",
+        "# n_trials: samples per transition. The simulated body, not the robot: learn it on the robot "
+        "(proleg learn) to replace it.",
+    ]
+    return write_learned_robot(robot, measured_estimates(robot, measured), out, units="mm", header=header,
+                               command="sim --measure-matrix")
 
 
 def climb_for_new_gaits(robot: Robot) -> ClimbLimit | None:
