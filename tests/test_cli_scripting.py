@@ -344,7 +344,7 @@ def test_a_udp_host_that_does_not_resolve_is_a_usage_error(capsys, monkeypatch):
     (("run", "paper-r1", "--sim", "--bitrate", "500000"), "--bitrate: only with --can"),
     (("run", "paper-r1", "--port", "loop://", "--interface", "virtual"), "--interface: only with --can"),
     (("console", "--sim", "paper-r1", "--plain", "--baudrate", "9600"), "--baudrate: only with --port"),
-    (("learn", "paper-r1", "--sim", "--log", "LOG", "--node", "1"), "--node: only with --can"),
+    (("learn", "paper-r1", "--sim", "--plant", "table", "--log", "LOG", "--node", "1"), "--node: only with --can"),
     (("run", "paper-r1", "--can", "x", "--interface", "nosuch"), "unknown CAN interface 'nosuch'; python-can knows:"),
     (("run", "paper-r1", "--port", "sim://paper-r1", "--speed", "2"), "--speed: only with --sim"),
 ])

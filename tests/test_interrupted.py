@@ -599,7 +599,7 @@ def test_a_learn_ended_by_sigterm_says_sigterm_not_ctrl_c(tmp_path):
     """SIGTERM is delivered as a Ctrl-C: learn's last line said "paused by Ctrl-C" after a kill."""
     log = tmp_path / "trials.jsonl"
     env = {**os.environ, "PYTHONPATH": str(ROOT / "host" / "src")}
-    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "learn", "caterpillar-4", "--sim", "--log",
+    proc = subprocess.Popen([sys.executable, "-c", _AS_FROM_A_TERMINAL, "learn", "caterpillar-4", "--sim", "--plant", "table", "--log",
                              str(log), "--repeats", "50"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, env=env)
     try:

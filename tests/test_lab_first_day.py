@@ -65,13 +65,15 @@ def _relearn(tmp_path, capsys, *extra):
     return err, log
 
 
-def test_relearning_a_learned_file_on_the_table_plant_says_it_hands_back_its_own_means(tmp_path, capsys):
-    """A learned file learned again with --sim: the table plant moves by the file's own learned
-    matrix, so the trials hand its means back, and nothing said so."""
+def test_relearning_a_learned_file_learns_the_body_not_the_files_own_means(tmp_path, capsys):
+    """A learned file learned again with --sim: the table plant (--sim's default then) moved by
+    the file's own learned matrix, so the trials handed its means back, and nothing said so.
+    --sim learns on the physical plant now unless --truth gives a matrix to hide; the table
+    plant asked for by name still says what it does."""
     err, _ = _relearn(tmp_path, capsys)
-    assert "was learned (it has n_trials), and --sim's table plant moves by its matrix" in err
+    assert "(physical plant)" in err and "was learned" not in err
     err, _ = _relearn(tmp_path, capsys, "--plant", "table")
-    assert "was learned" not in err  # asked for by name: no warning
+    assert "was learned (it has n_trials), and the table plant moves by its matrix" in err
 
 
 def test_a_truth_with_variances_alone_logs_no_planar_motion(tmp_path, capsys):

@@ -27,12 +27,12 @@ def _lines(path: Path) -> list[str]:
 
 def test_an_interrupted_learn_resumes_from_its_log_and_loses_nothing(tmp_path, capsys):
     log = tmp_path / "trials.jsonl"
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2", "--max-pieces", "1")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "2", "--max-pieces", "1")
     assert code == 0
     first = _lines(log)
     assert 0 < len(first) < 24
     assert "transitions," in err and "left" in err  # the progress line on stderr
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2", "--seed", "5")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "2", "--seed", "5")
     assert code == 0 and f"{len(first)} trials already recorded; resuming" in err
     again = _lines(log)
     assert again[:len(first)] == first  # nothing recorded is lost or rewritten
@@ -90,7 +90,7 @@ def test_the_report_says_which_transitions_passed_through_other_states(tmp_path,
 
 def test_adaptive_spends_the_same_budget_where_intervals_are_widest(tmp_path, capsys):
     log = tmp_path / "t.jsonl"
-    code, _out, _err = run(capsys, "-q", "learn", str(R1), "--sim", "--log", str(log), "--repeats", "3", "--adaptive")
+    code, _out, _err = run(capsys, "-q", "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "3", "--adaptive")
     assert code == 0
     n = len(_lines(log))
     assert 12 * 2 <= n <= 12 * 3 + 23  # two each first, then the budget (a piece may overshoot it)
@@ -99,7 +99,7 @@ def test_adaptive_spends_the_same_budget_where_intervals_are_widest(tmp_path, ca
 def test_manual_entry_asks_on_stderr_and_records_the_answers(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr("sys.stdin", io.StringIO("oops\n2.5\n"))
     log = tmp_path / "t.jsonl"
-    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--source", "manual", "--log", str(log),
+    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--plant", "table", "--source", "manual", "--log", str(log),
                           "--repeats", "1", "--max-pieces", "1")
     assert code == 0 and "(empty = skip): " in err and "not a number ('oops')" in err
     recorded = [json.loads(ln) for ln in _lines(log)]
@@ -112,7 +112,7 @@ def test_manual_entry_measures_from_rest_then_says_what_only_a_tracker_can(tmp_p
     sent the user to the wrong knob."""
     monkeypatch.setattr("sys.stdin", io.StringIO("1\n1\n1\n"))
     log = tmp_path / "m.jsonl"
-    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--source", "manual", "--log", str(log),
+    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--plant", "table", "--source", "manual", "--log", str(log),
                           "--repeats", "1")
     assert code == 1 and "Traceback" not in err
     assert "manual entry measures one transition at a time from where the robot rests (00)" in err
@@ -157,14 +157,14 @@ def test_ctrl_c_stops_the_robot_keeps_every_trial_and_says_how_to_go_on(tmp_path
         return real(self, piece, record)
 
     monkeypatch.setattr(Explorer, "run_piece", interrupted)
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "2")
     assert code == 130
     kept = _lines(log)
     assert "exploring paper-r1" in err and "Ctrl-C pauses" in err
     assert f"paused by Ctrl-C (robot stopped): {len(kept)} trials kept in {log}" in err
     assert "run the same command to go on" in err and "Traceback" not in err
     monkeypatch.setattr(Explorer, "run_piece", real)
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "2")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "2")
     assert code == 0 and _lines(log)[:len(kept)] == kept and "exploration done" in err
     assert "add --out LEARNED.toml" in err
 
@@ -183,14 +183,14 @@ def test_a_report_only_reads_its_log_and_refuses_what_is_not_a_trial_log(capsys,
 
 def test_a_log_recorded_for_one_robot_is_refused_for_another(capsys, tmp_path):
     log = tmp_path / "r1.jsonl"
-    code, _, _ = run(capsys, "learn", str(ROOT / "robots" / "paper-r1.toml"), "--sim", "--log", str(log),
+    code, _, _ = run(capsys, "learn", str(ROOT / "robots" / "paper-r1.toml"), "--sim", "--plant", "table", "--log", str(log),
                      "--repeats", "1", "--report")
     assert code == 0 and json.loads(log.read_text().splitlines()[0]) == {"trial_log": 1, "robot": "paper-r1",
                                                                          "levels": [2, 2]}
     before = log.read_bytes()
     code, _, err = run(capsys, "learn", str(ROOT / "robots" / "paper-r2.toml"), "--log", str(log), "--report")
     assert code == 2 and "a trial log of paper-r1, not of paper-r2" in err
-    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--sim", "--log", str(log))
+    code, _, err = run(capsys, "learn", str(ROOT / "robots" / "inchworm-3.toml"), "--sim", "--plant", "table", "--log", str(log))
     assert code == 2 and "not of inchworm-3" in err
     assert log.read_bytes() == before  # nothing explored, nothing written
     headless = tmp_path / "old.jsonl"  # a log from before the first line: its states are checked
@@ -203,7 +203,7 @@ def test_a_log_of_the_robot_before_a_limb_got_another_level_is_refused_not_mixed
     """The log named only the robot: R1's right limb given a third level kept every label of its
     log ('01' now the middle level, not the top) and its trials were counted for the new states."""
     log = tmp_path / "r1.jsonl"
-    code, _, _ = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1", "--report")
+    code, _, _ = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "1", "--report")
     assert code == 0
     three = tmp_path / "paper-r1.toml"  # the same robot name, the right limb with three levels
     text = R1.read_text(encoding="utf-8")
@@ -278,7 +278,7 @@ def test_a_log_in_a_folder_that_does_not_exist_is_a_usage_error_and_creates_noth
     """The log's folder was created, parents and all (exit 0), where every other output
     (--out, -o, --record) is refused when its folder does not exist."""
     log = tmp_path / "nope" / "deeper" / "t.jsonl"
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "1")
     assert code == 2 and out == ""
     assert err == f"proleg: error: learn: --log {log}: directory {log.parent} does not exist\n"
     assert not (tmp_path / "nope").exists()
@@ -292,7 +292,7 @@ def test_a_log_that_cannot_be_written_is_a_failed_output_in_words(tmp_path, caps
         pytest.skip("no sysfs")
     (tmp_path / "folder.jsonl").mkdir()
     log = tmp_path / where  # an absolute where stays itself
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "1")
     assert code == 1 and out == ""
     assert err == f"proleg: error: learn: cannot write trial log {log}: {why}\n"
 
@@ -304,7 +304,7 @@ def test_a_log_that_is_a_device_is_refused_before_it_is_read(tmp_path, capsys):
         pytest.skip("no /dev/null")
     log = tmp_path / "t.jsonl"
     log.symlink_to("/dev/null")
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--log", str(log), "--repeats", "1")
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--log", str(log), "--repeats", "1")
     assert (code, out) == (1, "")
     assert err == f"proleg: error: learn: cannot write trial log {log}: not a regular file (a device, pipe or socket)\n"
     code, out, err = run(capsys, "learn", str(R1), "--log", str(log), "--report")
@@ -360,7 +360,7 @@ FIXTURES = Path(__file__).parent / "fixtures"
 def test_the_start_line_names_the_transitions_unreachable_from_rest_and_counts_right(tmp_path, capsys):
     # "37 allowed transitions × 3 = 102 trials": the 3 out of 101 (nothing leads into it) were
     # dropped silently
-    code, _out, err = run(capsys, "learn", str(FIXTURES / "tri-mixed-x.toml"), "--sim", "--log",
+    code, _out, err = run(capsys, "learn", str(FIXTURES / "tri-mixed-x.toml"), "--sim", "--plant", "table", "--log",
                           str(tmp_path / "x.jsonl"), "--repeats", "3", "--max-pieces", "1")
     assert code == 0, err
     assert ("exploring tri-mixed-x on sim tri-mixed-x: 37 allowed transitions, 3 of them unreachable from rest "
@@ -381,7 +381,7 @@ def test_a_fault_on_a_real_robot_still_says_to_clear_it_in_the_console():
 
 def test_tracker_trials_without_a_track_say_so_before_and_after_not_a_zero_trial_report(tmp_path, capsys):
     log = tmp_path / "q.jsonl"
-    code, out, err = run(capsys, "learn", str(R1), "--sim", "--source", "tracker", "--log", str(log),
+    code, out, err = run(capsys, "learn", str(R1), "--sim", "--plant", "table", "--source", "tracker", "--log", str(log),
                          "--max-pieces", "1")
     assert code == 0, err
     assert err.index("--source tracker: the trials recorded now have no motion") < err.index("exploring paper-r1")
@@ -446,7 +446,7 @@ def test_more_on_a_fresh_log_runs_the_extra_trials_after_the_first_ones(tmp_path
     noisy = tmp_path / "noisy.toml"
     noisy.write_text(R1.read_text() + "\n[plant]\nnoise_mm = 0.5\n")
     log = tmp_path / "t.jsonl"
-    code, out, _err = run(capsys, "-q", "learn", str(noisy), "--sim", "--log", str(log), "--repeats", "3",
+    code, out, _err = run(capsys, "-q", "learn", str(noisy), "--sim", "--plant", "table", "--log", str(log), "--repeats", "3",
                           "--half-width", "1", "--more", "--seed", "3")
     assert code == 0
     rows = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.split()[:1] and ln.split()[0].count("->") == 1}
@@ -468,6 +468,6 @@ def test_a_robot_with_nothing_to_explore_is_told_so_before_the_log_is_created(tm
     robot = tmp_path / "r.toml"
     robot.write_text(re.sub(r"matrix = \[\n.*?\n\]\n", f"matrix = {matrix}\n", R1.read_text(), count=1, flags=re.S))
     log = tmp_path / "t.jsonl"
-    code, out, err = run(capsys, "learn", str(robot), "--sim", "--log", str(log), "--repeats", "1")
+    code, out, err = run(capsys, "learn", str(robot), "--sim", "--plant", "table", "--log", str(log), "--repeats", "1")
     assert code == 2 and out == "" and not log.exists()
     assert err.startswith(f"proleg: error: learn: {robot}: ") and why in err and len(err.strip().splitlines()) == 1

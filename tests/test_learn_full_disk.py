@@ -44,7 +44,7 @@ def test_learn_on_a_full_disk_names_the_log_and_what_it_kept(tmp_path, capsys, m
 
     monkeypatch.setattr(TrialLog, "append", append)
     log = tmp_path / "trials.jsonl"
-    code, _, err = cli(capsys, "learn", R1, "--sim", "--log", log, "--repeats", "3", "-q")
+    code, _, err = cli(capsys, "learn", R1, "--sim", "--plant", "table", "--log", log, "--repeats", "3", "-q")
     assert code == 1
     assert err == (f"proleg: error: learn: cannot write trial log {log}: No space left on device (it keeps "
                    "the 5 trials recorded before, whole; the robot was stopped; make room and run the same "
@@ -67,7 +67,7 @@ def test_learn_whose_link_is_lost_says_the_trials_are_kept(tmp_path, capsys, mon
 
     monkeypatch.setattr(sim_link.SimLink, "read", read)
     log = tmp_path / "trials.jsonl"
-    code, _, err = cli(capsys, "learn", R1, "--sim", "--log", log, "--repeats", "3", "-q")
+    code, _, err = cli(capsys, "learn", R1, "--sim", "--plant", "table", "--log", log, "--repeats", "3", "-q")
     n = len(TrialLog(log).trials)
     assert code == 1 and n > 0
     assert err == (f"proleg: error: learn: sim paper-r1: device disconnected and not back within 10 s ({log} keeps "

@@ -101,7 +101,7 @@ def test_load_gait_sim_loads_a_gait_the_hardware_can_make(tmp_path, capsys):
 def test_learn_sim_explores_what_the_hardware_can_make_and_forbids_the_rest(tmp_path, capsys):
     path = _robot_file(tmp_path)
     log, out = tmp_path / "t.jsonl", tmp_path / "learned.toml"
-    assert main(["learn", str(path), "--sim", "--repeats", "2", "--log", str(log), "--out", str(out)]) == 0
+    assert main(["learn", str(path), "--sim", "--plant", "table", "--repeats", "2", "--log", str(log), "--out", str(out)]) == 0
     captured = capsys.readouterr()
     said, report = captured.err, captured.out
     assert ("24 allowed transitions, 16 of them impossible on this hardware, not asked for (000->010, 001->011, "

@@ -176,3 +176,16 @@ def test_measure_matrix_out_writes_the_robot_file_with_the_measured_matrix(tmp_p
         code, out, err = cli(capsys, "sim", *argv)
         assert code == 2 and says in err and out == ""
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_learn_sim_takes_the_physical_plant_unless_a_truth_is_given(tmp_path):
+    """--sim learns what the simulated body does; the table plant is the default only with
+    --truth (a matrix to hide from the learner), as the issue's simulator has it."""
+    from proleg.cli.learn import _check_options
+    from proleg.cli.main import build_parser
+
+    r1 = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
+    for extra, plant in (((), "physical"), (("--truth", str(r1)), "table"), (("--plant", "table"), "table")):
+        args = build_parser().parse_args(["learn", str(r1), "--sim", "--log", str(tmp_path / "t.jsonl"), *extra])
+        _check_options(args, linked=True)
+        assert args.plant == plant, extra

@@ -53,7 +53,8 @@ def add_arguments(subparsers: Any) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--port", metavar="URL", help="serial port or pyserial URL of the robot")
     src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
-    src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board with a table plant")
+    src.add_argument("--sim", action="store_true",
+                     help="ROBOT's firmware on the simulated board, in closed loop with the physical plant (or --plant)")
     p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
                                        "else socketcan)")
     p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
@@ -62,8 +63,9 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
                    help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
     p.add_argument("--plant", choices=("table", "physical"), default=None,
-                   help="with --sim: the table plant (a matrix drives it: ROBOT's or --truth's, default) or the "
-                        "physical plant (friction mechanics: learn what the robot really does)")
+                   help="with --sim: the physical plant (friction mechanics: learn what the simulated body "
+                        "really does; the default) or the table plant (a matrix moves it: --truth's, the default "
+                        "with --truth, or ROBOT's own, to test learning against a known matrix)")
     p.add_argument("--log", required=True, metavar="TRIALS.jsonl",
                    help="append-only trial log; an existing one is resumed, nothing recorded is lost")
     p.add_argument("--repeats", type=positive_int, default=5, metavar="R", help="trials per transition (default 5)")
@@ -178,8 +180,9 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
         raise LearnError("learn: --truth needs --sim")
     if args.plant is not None and not args.sim:
         raise LearnError("learn: --plant needs --sim (it picks the simulated body)")
-    args.plant_given = args.plant is not None
-    args.plant = args.plant or "table"  # the physical plant for a robot whose matrix is unmeasured (_checked_truth)
+    # the physical plant learns what the simulated body does; the table plant is moved by a
+    # matrix, so it is the default only where one is given to hide from the learner (--truth)
+    args.plant = args.plant or ("table" if args.truth else "physical")
     if args.more and (args.half_width is None or not linked):
         raise LearnError("learn: --more needs --half-width and a robot (--port, --can or --sim)")
     if args.track is not None and source not in (None, "tracker"):
@@ -226,16 +229,12 @@ def _checked_truth(args: argparse.Namespace, robot):
     from ..robot import load_robot
 
     truth = load_robot(args.truth) if args.truth else None
-    if truth is None and getattr(robot, "unmeasured", False) and not getattr(args, "plant_given", True):
-        args.plant = "physical"  # the table plant would move by the unmeasured matrix: nothing at all
-        log.info("learn: the matrix is unmeasured: learning on the physical plant (friction mechanics)")
-    elif (truth is None and args.plant == "table" and getattr(robot, "n_trials", None) is not None
-          and not getattr(args, "plant_given", True)):
-        # a learned file (it carries n_trials): the table plant would hand its own means back
-        log.warning("warning: learn: %s was learned (it has n_trials), and --sim's table plant moves by "
-                    "its matrix: these trials give back the file's own means, not the robot's motion; --plant "
-                    "physical learns the simulated body again (as an unmeasured robot does), and more trials of "
-                    "the robot go into the first run's --log (docs/learning.md)", robot.path)
+    if truth is None and args.plant == "table" and getattr(robot, "n_trials", None) is not None:
+        # a learned file (it carries n_trials): the table plant hands its own means back
+        log.warning("warning: learn: %s was learned (it has n_trials), and the table plant moves by its matrix: "
+                    "these trials give back the file's own means, not the robot's motion; the physical plant "
+                    "(the default) learns the simulated body again, and more trials of the robot go into the "
+                    "first run's --log (docs/learning.md)", robot.path)
     try:
         check_plant(robot, truth, args.plant)
     except ExplorationError as e:

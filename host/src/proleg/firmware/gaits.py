@@ -108,7 +108,7 @@ class FirmwareGaits(dict):
             return (f"{direction}: the robot's matrix is unmeasured ([transitions] matrix = \"unmeasured\"), so no "
                     f"gait moves it yet and the firmware carries no {direction} gait (START {direction} is refused: "
                     f"NACK NO_GAIT). Learn the matrix on the robot (proleg learn ROBOT --port PORT --source "
-                    f"tracker|manual --log TRIALS.jsonl --out LEARNED.toml) or on the simulated body (proleg "
+                    f"tracker --log TRIALS.jsonl --out LEARNED.toml, or --source manual to give each trial by hand) or on the simulated body (proleg "
                     f"learn ROBOT --sim --log TRIALS.jsonl --out LEARNED.toml, or proleg sim ROBOT "
                     f"--measure-matrix --out MEASURED.toml), and build from that file; a gait of your own runs "
                     f"with proleg load-gait")

@@ -508,8 +508,8 @@ def check_plant(robot: Robot, truth: Robot | None, plant: str) -> None:
         raise ExplorationError("--truth drives the table plant; the physical plant has no matrix")
     if plant == "table" and truth is None and getattr(robot, "unmeasured", False):
         raise ExplorationError(f"{robot.where}: the matrix is unmeasured, and the table plant moves by it: every "
-                               "trial would read 0; learn on the physical plant (--plant physical, the default "
-                               "for such a robot) or give --truth TRUTH.toml")
+                               "trial would read 0; learn on the physical plant (the default without --truth) "
+                               "or give --truth TRUTH.toml")
     if truth is not None and truth.levels != robot.levels:
         raise ExplorationError(f"truth {truth.path} has state levels {truth.levels}, the robot {robot.levels}")
     if truth is not None:  # the table plant takes its limbs from the truth: they must be the robot's
