@@ -232,25 +232,34 @@ def _allowed_by_rule(path: Path, rule: str, levels: tuple[int, ...]) -> tuple[np
     return src[order], dst[order]
 
 
-def _without_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src: np.ndarray, dst: np.ndarray,
-                       names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    """An unmeasured table's ``forbidden`` marks take those transitions out of what ``allow``
-    lets it make (with a matrix or a CSV they are a check on the table instead)."""
+def _forbidden_marks(path: Path, marks: Any, levels: tuple[int, ...], names: Sequence[str]
+                     ) -> list[tuple[int, str, int, int]]:
+    """``forbidden``'s marks read: ``(k, mark, from, to)`` each, ``k`` counted from 1 in
+    messages as the matrix's rows; a RobotFileError naming the mark otherwise."""
     where = f"{path}: transitions.forbidden"
     if not isinstance(marks, list) or not all(isinstance(m, str) for m in marks):
         raise RobotFileError(f"{where}: expected a list of transitions like \"01->11\"")
     n = states.state_count(levels)
-    out = set()
-    for k, mark in enumerate(marks):
+    out = []
+    for k, mark in enumerate(marks, 1):
         parts = [p.strip() for p in mark.split("->")]
         if len(parts) != 2:
-            raise RobotFileError(f"{where}[{k + 1}]: expected FROM->TO, got {mark!r}")
-        a = _state_ref(parts[0], levels, n, f"{where}[{k + 1}]", names)
-        b = _state_ref(parts[1], levels, n, f"{where}[{k + 1}]", names)
+            raise RobotFileError(f"{where}[{k}]: expected FROM->TO, got {mark!r}")
+        a = _state_ref(parts[0], levels, n, f"{where}[{k}]", names)
+        b = _state_ref(parts[1], levels, n, f"{where}[{k}]", names)
         if a == b:
-            raise RobotFileError(f"{where}[{k + 1}]: {mark} is a state to itself, never a transition (expected FROM->TO "
+            raise RobotFileError(f"{where}[{k}]: {mark} is a state to itself, never a transition (expected FROM->TO "
                                  "of two different states)")
-        out.add(a * n + b)
+        out.append((k, mark, a, b))
+    return out
+
+
+def _without_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src: np.ndarray, dst: np.ndarray,
+                       names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """An unmeasured table's ``forbidden`` marks take those transitions out of what ``allow``
+    lets it make (with a matrix or a CSV they are a check on the table instead)."""
+    n = states.state_count(levels)
+    out = {a * n + b for _k, _mark, a, b in _forbidden_marks(path, marks, levels, names)}
     if not out:
         return src, dst
     keep = ~np.isin(src * n + dst, np.fromiter(out, dtype=np.int64))
@@ -262,24 +271,13 @@ def _check_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src, dst, 
     """``forbidden = ["01->11", ...]`` states what the robot cannot do; the table must agree:
     the matrix has "x" there, the CSV ``csv_file`` (None: the table is the matrix) no row."""
     where = f"{path}: transitions.forbidden"
-    if not isinstance(marks, list) or not all(isinstance(m, str) for m in marks):
-        raise RobotFileError(f"{where}: expected a list of transitions like \"01->11\"")
     given = dict(zip(zip(np.asarray(src).tolist(), np.asarray(dst).tolist()), np.asarray(rewards).tolist()))
-    n = states.state_count(levels)
-    for k, mark in enumerate(marks):  # counted from 1 in messages, as the matrix's rows
-        parts = [p.strip() for p in mark.split("->")]
-        if len(parts) != 2:
-            raise RobotFileError(f"{where}[{k + 1}]: expected FROM->TO, got {mark!r}")
-        a = _state_ref(parts[0], levels, n, f"{where}[{k + 1}]", names)
-        b = _state_ref(parts[1], levels, n, f"{where}[{k + 1}]", names)
-        if a == b:
-            raise RobotFileError(f"{where}[{k + 1}]: {mark} is a state to itself, never a transition (expected FROM->TO "
-                                 "of two different states)")
+    for k, mark, a, b in _forbidden_marks(path, marks, levels, names):
         if (a, b) in given:
             there, fix = ((f"transitions.matrix[{a + 1}][{b + 1}]", 'write "x" there') if csv_file is None
                           else (f"the table {csv_file}", "delete its row"))
             raise RobotFileError(
-                f"{where}[{k + 1}]: {mark} is marked forbidden, but {there} gives it a reward ({given[a, b]:g}): "
+                f"{where}[{k}]: {mark} is marked forbidden, but {there} gives it a reward ({given[a, b]:g}): "
                 "forbidden lists the transitions the robot cannot make, to check that the table allows none "
                 f"of them; {fix}, or drop the mark"
             )
