@@ -139,10 +139,9 @@ def main() -> int:
         print(f"each run lasts {run_s:g} s: {claim.CYCLES_PER_RUN} of the gait's nominal cycles", flush=True)
     jobs = [(args.robot, p, d, learned, run_s) for p in [claim.NOMINAL, *points]]
     if args.jobs > 1:
-        from multiprocessing import get_context
+        from proleg.interrupts import in_workers
 
-        with get_context("fork").Pool(min(args.jobs, 2)) as pool:
-            rows = pool.map(_worker, jobs, chunksize=1)
+        rows = list(in_workers(_worker, jobs, min(args.jobs, 2), "running a grid point"))
     else:
         rows = [_worker(j) for j in jobs]
     grid_s = time.perf_counter() - t1

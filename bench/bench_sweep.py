@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import multiprocessing
 import platform
 import sys
 import time
@@ -41,7 +40,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "host" / "src"))
 
-from proleg.interrupts import quiet_worker  # noqa: E402
+from proleg.interrupts import in_workers  # noqa: E402
 from proleg.report import sweep  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
 from proleg.physics.materials import NITI_OVERHEAT_C  # noqa: E402
@@ -102,8 +101,7 @@ def main() -> int:
         logging.disable(logging.NOTSET)
         nominal_mm_s[name] = nominal.speed_mm_s
         jobs += [(name, i, c, run_s) for i, c in enumerate(draws)]
-    with multiprocessing.Pool(args.jobs, initializer=quiet_worker) as pool:
-        done = pool.map(run_row, jobs, chunksize=1)
+    done = list(in_workers(run_row, jobs, args.jobs, "running a row"))
     judged_rows = {n: judged([row for robot, _, row in done if robot == n], nominal_mm_s[n]) for n in names}
     by_robot = {n: summary(judged_rows[n]) for n in names}
     rows = [row_json(n, i, row) for n in names for i, row in enumerate(judged_rows[n])]

@@ -57,3 +57,11 @@ class Interrupted(KeyboardInterrupt):
 class UsageError(ProlegError):
     """An option's value the command cannot take (an output's file type, an endpoint, a node
     id): exit 2, like any other usage mistake."""
+
+
+class WorkerLost(ProlegError):
+    """A worker process of a command that runs its work in several (``proleg check --jobs``,
+    ``--measure-matrix --hold-range --jobs``) died without an answer: killed by the system
+    (out of memory) or by a signal. Exit 1, a failure: ``multiprocessing.Pool`` waited for the
+    lost answer for ever."""
+

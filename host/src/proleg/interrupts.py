@@ -14,7 +14,8 @@ Python's handler back after the last holder. Nothing is deferred off the main th
 handler is left alone; in a background job SIGTERM and SIGHUP still come as a Ctrl-C
 (``take_terminations``, ``terminate``) and are deferred the same way. Per row: a flag, not a ``signal.signal`` call (those took 18 µs).
 
-A pool's worker process leaves Ctrl-C to its parent (``quiet_worker``).
+A pool's worker process leaves Ctrl-C to its parent (``quiet_worker``); ``in_workers`` runs
+a command's work in such workers and says so when one dies instead of waiting for it.
 
 A session with a robot (console, run) ends on SIGHUP or SIGTERM as on a Ctrl-C:
 ``hangup_as_exception`` turns them into an exception (or a callback to the UI), so the
@@ -25,7 +26,7 @@ from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from types import FrameType
 
@@ -181,3 +182,53 @@ def quiet_worker() -> None:
     for name in ("SIGTERM", "SIGHUP"):
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_DFL)
+
+
+def worker_pool(n_jobs: int):
+    """A ``ProcessPoolExecutor`` of ``n_jobs`` forked workers set up by ``quiet_worker``. Unlike
+    ``multiprocessing.Pool``, whose lost task a killed worker leaves to be waited for ever (a
+    lab's CI hung), its futures fail with ``BrokenProcessPool`` when a worker dies: callers
+    turn that into ``WorkerLost`` (``lost_worker``) and leave through ``end_workers``."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(n_jobs, mp_context=multiprocessing.get_context("fork"), initializer=quiet_worker)
+
+
+def end_workers(pool) -> None:
+    """Leave ``worker_pool``'s pool: nothing queued starts, and a worker still at work is ended
+    (SIGTERM; after a Ctrl-C or an error no worker goes on for nobody)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=5.0)
+
+
+def lost_worker(what: str):
+    """The ``WorkerLost`` for a worker that died while doing ``what``."""
+    from .errors import WorkerLost
+
+    return WorkerLost(f"a worker process died while {what} (killed by the system, out of memory, or by a signal); "
+                      "nothing it was doing is reported: run again, or with --jobs 1 to keep it in this process")
+
+
+def in_workers(fn: Callable, items: Iterable, n_jobs: int, what: str = "working") -> Iterator:
+    """``fn(item)`` for each of ``items`` in up to ``n_jobs`` workers (``worker_pool``), yielded
+    in order as each is done; ``WorkerLost`` when a worker dies (``what``: what they were doing,
+    for the message). Leaving early (Ctrl-C, an error, the caller stops) ends the workers."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    pool = worker_pool(n_jobs)
+    try:
+        futures = [pool.submit(fn, item) for item in items]
+        for future in futures:
+            try:
+                yield future.result()
+            except BrokenProcessPool:
+                raise lost_worker(what) from None
+    finally:
+        end_workers(pool)
+

@@ -155,19 +155,11 @@ def _run(jobs: list, n_jobs: int, rows: list) -> None:
             rows.append(_quiet_work(job))
             _progress(len(rows), len(jobs), rows[-1])
         return
-    import multiprocessing
+    from ..interrupts import in_workers
 
-    from ..interrupts import quiet_worker
-
-    pool = multiprocessing.get_context("fork").Pool(n_jobs, initializer=quiet_worker)
-    try:
-        for row in pool.imap(_work, jobs, chunksize=1):
-            rows.append(row)
-            _progress(len(rows), len(jobs), row)
-        pool.close()
-    finally:
-        pool.terminate()  # Ctrl-C or an error: no worker goes on for nobody
-        pool.join()
+    for row in in_workers(_work, jobs, n_jobs, "running the check's rows"):
+        rows.append(row)
+        _progress(len(rows), len(jobs), row)
 
 
 def _quiet_work(job: tuple) -> Any:

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .. import __version__
-from ..errors import Interrupted, LinkError, ProlegError
+from ..errors import Interrupted, LinkError, ProlegError, WorkerLost
 from .gait import add_gait_parser
 from .number_args import max_transitions
 
@@ -109,7 +109,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = args.run(args)
         sys.stdout.flush()
         return code
-    except LinkError as e:  # the robot, the link or a file to write failed
+    except (LinkError, WorkerLost) as e:  # the robot, the link, a file to write or a worker process failed
         _say(f"proleg: error: {e}")
         return EXIT_FAILED
     except ProlegError as e:

@@ -178,32 +178,32 @@ def _measure_margins_at_once(robot: Any, margins_deg: Sequence[float], jobs: int
     hears the sums over the margins, as it does from the margins one after another."""
     import multiprocessing
     import queue as queue_mod
+    from concurrent.futures.process import BrokenProcessPool
 
-    from ...interrupts import quiet_worker
+    from ...interrupts import end_workers, lost_worker, worker_pool
 
-    ctx = multiprocessing.get_context("fork")
-    with ctx.Manager() as manager:
+    with multiprocessing.get_context("fork").Manager() as manager:
         counts = manager.Queue()
-        pool = ctx.Pool(min(jobs, len(margins_deg)), initializer=quiet_worker)
+        pool = worker_pool(min(jobs, len(margins_deg)))
         try:
-            pending = [pool.apply_async(_measure_margin, (robot, m, i, counts, kwargs))
-                       for i, m in enumerate(margins_deg)]
+            pending = [pool.submit(_measure_margin, robot, m, i, counts, kwargs) for i, m in enumerate(margins_deg)]
             tried, sampled, total = [0] * len(pending), [0] * len(pending), [0] * len(pending)
             while True:
                 try:
                     i, t, s, n = counts.get(timeout=0.2)
                 except queue_mod.Empty:
-                    if all(p.ready() for p in pending):
+                    if all(p.done() for p in pending):  # a worker that died is done too (BrokenProcessPool)
                         break
                     continue
                 tried[i], sampled[i], total[i] = t, s, n
                 if on_step is not None:
                     on_step(sum(tried), sum(sampled), max(total) * len(pending))
-            measured = [p.get() for p in pending]   # a worker's error is raised here
-            pool.close()
+            try:
+                measured = [p.result() for p in pending]   # a worker's error is raised here
+            except BrokenProcessPool:
+                raise lost_worker("measuring the matrix at a hold margin") from None
         finally:
-            pool.terminate()  # Ctrl-C or an error: no worker goes on for nobody
-            pool.join()
+            end_workers(pool)
     return measured
 
 
