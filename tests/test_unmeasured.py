@@ -189,3 +189,15 @@ def test_learn_sim_takes_the_physical_plant_unless_a_truth_is_given(tmp_path):
         args = build_parser().parse_args(["learn", str(r1), "--sim", "--log", str(tmp_path / "t.jsonl"), *extra])
         _check_options(args, linked=True)
         assert args.plant == plant, extra
+
+
+def test_a_forbidden_mark_the_rule_already_leaves_out_is_warned_of(tmp_path, caplog):
+    """000->020 (one-level moves a limb one level: no such transition) takes nothing out: a typo
+    for 000->010 would go unseen."""
+    with caplog.at_level("WARNING"):
+        robot = load_robot(_write(tmp_path, [2, 3, 2], 'matrix = "unmeasured"\nallow = "one-level"\n'
+                                                       'forbidden = ["000->010", "000->020"]'))
+    said = [r.getMessage() for r in caplog.records if "forbidden[" in r.getMessage()]
+    assert len(said) == 1 and "transitions.forbidden[2]: 000->020 is not a transition allow = 'one-level'" in said[0]
+    t = robot.transitions
+    assert t.lookup(t.index("000"), t.index("010")) is None

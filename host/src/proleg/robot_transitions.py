@@ -6,6 +6,7 @@ problem is a RobotFileError naming the file, the field and what was expected
 from __future__ import annotations
 
 import csv
+import logging
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -18,6 +19,8 @@ from .errors import RobotFileError
 from .names import counted
 from .robot_fields import Fields, toml_text
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
+
+log = logging.getLogger(__name__)
 
 #: The mark of a forbidden transition in a matrix ("x").
 FORBIDDEN = "x"
@@ -86,7 +89,7 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
         if rule not in ALLOW_RULES:
             f.fail("allow", f"one of {', '.join(repr(r) for r in ALLOW_RULES)}", rule)
         src, dst = _allowed_by_rule(path, rule, levels)
-        src, dst = _without_forbidden(path, value.get("forbidden", []), levels, src, dst, names)
+        src, dst = _without_forbidden(path, value.get("forbidden", []), levels, src, dst, names, rule)
         rew, dur, planar = np.zeros(len(src)), None, None
     elif f.has("matrix"):
         reward, allowed = _matrix(path, value["matrix"], n)
@@ -255,13 +258,20 @@ def _forbidden_marks(path: Path, marks: Any, levels: tuple[int, ...], names: Seq
 
 
 def _without_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src: np.ndarray, dst: np.ndarray,
-                       names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+                       names: Sequence[str], rule: str) -> tuple[np.ndarray, np.ndarray]:
     """An unmeasured table's ``forbidden`` marks take those transitions out of what ``allow``
     lets it make (with a matrix or a CSV they are a check on the table instead)."""
     n = states.state_count(levels)
-    out = {a * n + b for _k, _mark, a, b in _forbidden_marks(path, marks, levels, names)}
+    marked = _forbidden_marks(path, marks, levels, names)
+    out = {a * n + b for _k, _mark, a, b in marked}
     if not out:
         return src, dst
+    allowed = set((src * n + dst).tolist())
+    for k, mark, a, b in marked:  # a typo's mark (000->020 for 000->010) would take nothing out unseen
+        if a * n + b not in allowed:
+            log.warning("warning: %s: transitions.forbidden[%d]: %s is not a transition allow = %r lets the robot "
+                        "make, so the mark takes nothing out; check it names the transition you meant",
+                        path, k, mark, rule)
     keep = ~np.isin(src * n + dst, np.fromiter(out, dtype=np.int64))
     return src[keep], dst[keep]
 
