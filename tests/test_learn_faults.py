@@ -106,24 +106,25 @@ def test_try_unholdable_asks_for_them_and_a_fault_there_is_recorded_cooled_clear
 
 def test_a_transition_a_weak_coil_cannot_make_is_marked_and_the_rest_learned_then_not_asked_for_again(
         tmp_path, capsys):
-    """No load warning predicts it: the right coil at half power cannot raise the right end from
-    00 or 10 (SMA_ON_LIMIT), though it does with the left coil's help (00->11, 10->11)."""
-    robot, log, out = _weak_r1(tmp_path), tmp_path / "t.jsonl", tmp_path / "learned.toml"
+    """No load warning predicts it: the right coil at 40 % of its power cannot raise the right
+    end (STATE_TIMEOUT, its on-time hits not latched: it cools and tries again until the step's
+    time is up). At half power it makes every transition, late: the first on-time hit used to
+    be taken for a fault of the transition (learn/runner.py: an unlatched hit is none)."""
+    robot, log, out = _weak_r1(tmp_path, 0.4), tmp_path / "t.jsonl", tmp_path / "learned.toml"
     code, report, err = run(capsys, "learn", str(robot), "--sim", "--plant", "physical", "--repeats", "2",
                             "--log", str(log), "--out", str(out))
     assert code == 0, err
     assert "warning: " + str(robot) not in err  # nothing predicted at load
     trials, failures = _records(log)
     failed = {(f["from"], f["to"]) for f in failures}
-    assert ("00", "01") in failed and ("10", "11") not in failed
-    assert all(f["fault"] == "FAULT SMA_ON_LIMIT on sma-right" for f in failures)
+    assert failed == {("00", "01"), ("10", "01"), ("00", "11"), ("10", "11")}  # every raise of the right end
+    assert all(f["fault"] == "FAULT STATE_TIMEOUT on right" for f in failures)
     assert f"no warning at load predicts {', '.join(f'{a}->{b}' for a, b in sorted(failed))}" in err
     assert "00->01   0         -        -             faulted" in report
     rows = {ln.split()[0]: ln.split() for ln in report.splitlines() if ln.split()[:1] and "->" in ln.split()[0]}
-    assert all(int(rows[f"{a}->{b}"][1]) >= 2 for a, b in
-               {("00", "10"), ("10", "00"), ("10", "11"), ("00", "11"), ("11", "00")})
+    assert all(int(rows[f"{a}->{b}"][1]) >= 2 for a, b in {("00", "10"), ("10", "00")})
     learned = _matrix(out)
-    assert learned["00", "01"] == "x" and isinstance(learned["10", "11"], float)
+    assert learned["00", "01"] == "x" and isinstance(learned["10", "00"], float)
 
     # the same log again: the faulted transitions are not asked for, and said so
     code, _report, err = run(capsys, "learn", str(robot), "--sim", "--plant", "physical", "--repeats", "3",
@@ -224,3 +225,22 @@ def test_a_fault_that_is_not_one_transitions_stops_learning_and_leaves_the_fault
         assert stop.value.fault
         assert ex.did.count("clear 1") == len(faults) - 1  # the last fault is left for the lab to look at
         assert len(log.failures) == len(faults) - (faults == ["estop"])
+
+
+def test_an_on_time_hit_that_does_not_latch_is_no_fault_of_the_transition(tmp_path, capsys):
+    """R1 with max_on_ms 600: a rise hits the on-time limit, the firmware reports it (EVENT
+    FAULT SMA_ON_LIMIT, not latched: the coil cools and the gait goes on, docs/safety.md) and
+    the gait walks. Learning took each such report for a fault that ended the transition: the
+    first three transitions were marked not made and learning stopped ('3 in a row')."""
+    path = tmp_path / "r1-short-on.toml"
+    path.write_text(R1.read_text().replace("max_on_ms = 3000", "max_on_ms = 600")
+                    .replace('units = "steps"', 'units = "steps"\ndefault_duration_s = 0.3'))
+    _code, out, _ = run(capsys, "sim", path, "--duration", "20", "--json")  # exit 1: it reports faults
+    walked = json.loads(out)
+    assert walked["cycles"] >= 2 and walked["displacement_mm"] > 0, walked  # the gait walks ...
+    assert any("SMA_ON_LIMIT" in str(f) for f in walked["faults"])  # ... through unlatched on-time hits
+    log = tmp_path / "t.jsonl"
+    code, _, err = run(capsys, "learn", path, "--sim", "--repeats", "2", "--log", log)
+    trials, failures = _records(log)
+    assert code == 0 and failures == [], err
+    assert {(t["from"], t["to"]) for t in trials} == {(a, b) for a, b in _matrix(R1) if _matrix(R1)[a, b] != "x"}
