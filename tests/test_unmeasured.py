@@ -201,3 +201,18 @@ def test_a_forbidden_mark_the_rule_already_leaves_out_is_warned_of(tmp_path, cap
     assert len(said) == 1 and "transitions.forbidden[2]: 000->020 is not a transition allow = 'one-level'" in said[0]
     t = robot.transitions
     assert t.lookup(t.index("000"), t.index("010")) is None
+
+
+def test_the_load_warnings_of_an_unmeasured_file_say_forbidden_not_x(tmp_path, caplog):
+    """caterpillar-4 unmeasured, one level a step: the states its body cannot hold are warned
+    of as for the written matrix, but there is no entry to mark "x": forbidden is the fix."""
+    text = (Path(__file__).resolve().parents[1] / "robots" / "caterpillar-4.toml").read_text()
+    start = text.index("[transitions]")
+    end = text.index("\n[", start + 1)
+    path = tmp_path / "cat.toml"
+    path.write_text(text[:start] + '[transitions]\nmatrix = "unmeasured"\nallow = "one-level"\n' + text[end:])
+    with caplog.at_level("WARNING"):
+        load_robot(path)
+    said = [r.getMessage() for r in caplog.records if "cannot be held;" in r.getMessage()]
+    assert said and all("list the transitions into it in [transitions] forbidden" in m for m in said)
+    assert not any('"x"' in r.getMessage() for r in caplog.records)

@@ -228,7 +228,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         log.warning("warning: %s", line)
     coupled = coupled_states(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
     blocked = blocked_descents(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
-    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled, blocked)
+    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled, blocked, is_unmeasured(doc["transitions"]))
     for line in shown:
         log.warning("warning: %s", line)
     for line in rest:

@@ -60,15 +60,23 @@ def warned_step(robot: Any, a: int, b: int) -> bool:
                                robot.control.hold_margin_deg))
 
 
+def take_out(what: str, unmeasured: bool) -> str:
+    """How a load warning says to take ``what`` (transitions) out of the robot's table: an
+    ``"x"`` in a written matrix, a ``forbidden`` mark in an unmeasured one (which has no entries
+    to mark)."""
+    return f"list {what} in [transitions] forbidden" if unmeasured else f"mark {what} \"x\""
+
+
 def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table: Any,
                       coupled: dict[int, list[tuple[int, list[int], float]]],
-                      blocked: dict[tuple[int, int], tuple[int, list[int], float]] | None = None
-                      ) -> tuple[list[str], list[str]]:
+                      blocked: dict[tuple[int, int], tuple[int, list[int], float]] | None = None,
+                      unmeasured: bool = False) -> tuple[list[str], list[str]]:
     """Lines about ``coupled`` (``coupled_states``), one per lifted limb naming the state, the
     limb and what lifts it, and about ``blocked`` (``blocked_descents``), one per transition:
     ``(shown, rest)``. ``shown`` has, per kind (a limb resting past its edge, lifted by a
     shared coil, lifted by raised neighbours, kept from coming down), the first
-    ``WARNING_EXAMPLES`` lines, then one line counting the rest; ``rest`` the others (for -v)."""
+    ``WARNING_EXAMPLES`` lines, then one line counting the rest; ``rest`` the others (for -v).
+    ``unmeasured``: the table is ``matrix = "unmeasured"`` (``take_out``)."""
     kinds: dict[str, list[tuple[Any, str]]] = {"rests": [], "shared": [], "neighbours": [], "unsettled": [],
                                                "descents": []}
     for s, hits in coupled.items():
@@ -80,8 +88,8 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
                 kinds["rests"].append((s, 
                     f"{path}: state {table.label(s)}: limb {lb.name!r} rests at {psi:.1f}° on the simulated "
                     f"{section.length_mm:g} mm body, past its level-{k + 1} {edge}: its level {k} lies below "
-                    f"where it rests and cannot be held; check its psi_star_deg, or mark the transitions into "
-                    f"the state \"x\""))
+                    f"where it rests and cannot be held; check its psi_star_deg, or "
+                    f"{take_out('the transitions into the state', unmeasured)}"))
                 continue
             names = ", ".join(repr(limbs[j].name) for j in raising)
             shared = [j for j in raising if limbs[j].actuator == lb.actuator]
@@ -95,12 +103,12 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
                     f"control.hold_margin_deg, the least the firmware holds it at), inside the hysteresis band above "
                     f"its level ({lo:.1f}..{lo + lb.hysteresis_deg:.1f}°): it reads level {k} but never settles (a two-limb "
                     f"firmware has no rule that settles a limb held up), so every step into the state ends in "
-                    f"STATE_TIMEOUT; narrow its hysteresis_deg, or mark the transitions into it \"x\""))
+                    f"STATE_TIMEOUT; narrow its hysteresis_deg, or {take_out('the transitions into it', unmeasured)}"))
                 continue
             kinds["shared" if shared else "neighbours"].append((s,
                 f"{path}: state {table.label(s)}: limb {lb.name!r} (level {k}) is lifted to {psi:.1f}° {how} on "
                 f"the simulated {section.length_mm:g} mm body, past its level-{k + 1} {edge}: the state reads "
-                f"as another and cannot be held; mark the transitions into it \"x\" (no gait may rely on it)"))
+                f"as another and cannot be held; {take_out('the transitions into it', unmeasured)} (no gait may rely on it)"))
     for (a, s), (i, raising, psi) in (blocked or {}).items():
         if any(h[0] == i for h in coupled.get(s, ())):
             continue  # the state's own line says it: the limb never settles there however it comes
@@ -123,7 +131,7 @@ def coupling_warnings(path: Path, limbs: list[Any], section: PlantSection, table
             f"{path}: transition {table.label(a)}→{table.label(s)}: limb {lb.name!r} cannot come down to level "
             f"{k}: {how} {psi:.1f}°{pose} on the simulated {section.length_mm:g} mm body, above its level-{k} "
             f"edge {lo:.1f}° (ψ* − hysteresis/2), so it keeps reading "
-            f"level {k + 1} and the step cannot end; {fix}mark the transition \"x\" (no gait may rely on it)"))
+            f"level {k + 1} and the step cannot end; {fix}{take_out('the transition', unmeasured)} (no gait may rely on it)"))
     what = {"rests": "a limb resting past its next level's edge",
             "shared": "a limb lifted by its own coil, shared with a raised limb",
             "neighbours": "a limb lifted by raised neighbours",
