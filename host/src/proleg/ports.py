@@ -96,6 +96,19 @@ def hold_port(port: str | None, *, doing: str = "open serial port") -> Iterator[
         lock.release()
 
 
+def refuse_if_held(port: str, *, doing: str = "open serial port") -> None:
+    """``PortBusy`` when another process holds ``port``'s lock, read from ``/proc/locks``
+    without opening the device: opening a USB serial port raises DTR, and an Arduino resets.
+    ``proleg flash``'s check before building opened and closed the port for it, one reset of
+    the Nano more than avrdude's own (and, on the emulated Nano, a third open now and then).
+    Where ``/proc/locks`` cannot be read nothing is checked here: the lock taken around the
+    flash tool still refuses."""
+    if fcntl is None or not is_local_device(port):
+        return
+    if lock_holder(port) is not None:
+        raise PortBusy(busy_message(port, doing))
+
+
 def busy_message(port: str, doing: str = "open serial port") -> str:
     """One line: the port is in use, by whom if that can be read, and what to do."""
     holder = lock_holder(port)

@@ -23,7 +23,7 @@ import subprocess
 from pathlib import Path
 
 from ..errors import BuildError, Interrupted, LinkError
-from ..ports import PortLock, hold_port
+from ..ports import hold_port, refuse_if_held
 from .boards import Board, FlashMethod
 
 
@@ -99,7 +99,7 @@ def check_tool(method: FlashMethod, port: str | None) -> None:
     if method.needs_port and port and port.startswith("/") and not os.path.exists(port):
         raise BuildError(f"{port}: no such serial port (is the board plugged in?)")
     if method.needs_port and port:
-        PortLock(port, doing="flash through").release()  # a console on the port: said before building
+        refuse_if_held(port, doing="flash through")  # a console on the port: said before building, unopened
 
 
 def flash(method: FlashMethod, artifact: Path, port: str | None) -> None:
