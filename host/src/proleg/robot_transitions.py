@@ -42,6 +42,12 @@ MAX_DURATION_S = 3600.0
 #: can make given by ``allow`` (one of ``ALLOW_RULES``) instead of written out: a 256-state
 #: eight-limb robot's matrix has 65,280 entries.
 UNMEASURED = "unmeasured"
+#: Where an unmeasured robot's matrix comes from, as the messages that meet one say it ("learn
+#: the matrix " + this): the commands, ready to run but for ROBOT and PORT.
+HOW_TO_MEASURE = ("on the robot (proleg learn ROBOT --port PORT --source tracker --log TRIALS.jsonl --out "
+                  "LEARNED.toml, or --source manual to give each trial by hand) or on the simulated body (proleg "
+                  "learn ROBOT --sim --log TRIALS.jsonl --out LEARNED.toml, or proleg sim ROBOT --measure-matrix "
+                  "--out MEASURED.toml)")
 #: ``allow``: one-level (a step moves one limb by one level: the coils driven one at a time,
 #: a multi-level pad passing through its middle levels), one-limb (one limb, by any number of
 #: levels), any (every pair of different states).
@@ -266,13 +272,14 @@ def _without_forbidden(path: Path, marks: Any, levels: tuple[int, ...], src: np.
     out = {a * n + b for _k, _mark, a, b in marked}
     if not out:
         return src, dst
-    allowed = set((src * n + dst).tolist())
+    keys = src * n + dst
+    allowed = set(keys.tolist())
     for k, mark, a, b in marked:  # a typo's mark (000->020 for 000->010) would take nothing out unseen
         if a * n + b not in allowed:
             log.warning("warning: %s: transitions.forbidden[%d]: %s is not a transition allow = %r lets the robot "
                         "make, so the mark takes nothing out; check it names the transition you meant",
                         path, k, mark, rule)
-    keep = ~np.isin(src * n + dst, np.fromiter(out, dtype=np.int64))
+    keep = ~np.isin(keys, np.fromiter(out, dtype=np.int64))
     return src[keep], dst[keep]
 
 

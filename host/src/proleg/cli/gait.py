@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ..errors import GaitError
 from ..names import counted
+from ..robot_transitions import HOW_TO_MEASURE
 from .number_args import (
     cycles,
     heading_deg,
@@ -256,9 +257,7 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int, shown: int | No
     bound = f", at most {counted(r.max_transitions, 'transition')}" if r.max_transitions is not None else ""
     head = f"\n{_title(name, planar)}  {r.objective} ({what}{bound}): "
     if r.value is None:
-        why = (" (its matrix is unmeasured: learn it, proleg learn ROBOT --sim --log TRIALS.jsonl --out "
-               "LEARNED.toml, or on the robot with --port, or measure it, proleg sim ROBOT --measure-matrix "
-               "--out MEASURED.toml)" if getattr(robot, "unmeasured", False) else "")
+        why = f" (its matrix is unmeasured: learn it {HOW_TO_MEASURE})" if getattr(robot, "unmeasured", False) else ""
         return head + (f"no gait moves the robot in {name}" if name in DIRECTIONS else "no gait") + why
     n = len(r.gaits)
     head += f"best {_fmt(r.value)}, {counted(n, 'optimal gait')}"

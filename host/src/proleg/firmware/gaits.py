@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from ..robot import Robot
+from ..robot_transitions import HOW_TO_MEASURE
 
 #: The rank of tied optimal gaits in the table: gait 0 is the one START runs by default.
 RANK = "fewest opposing steps first, then search order"
@@ -107,11 +108,8 @@ class FirmwareGaits(dict):
         if self.unmeasured and not self.get(direction):
             return (f"{direction}: the robot's matrix is unmeasured ([transitions] matrix = \"unmeasured\"), so no "
                     f"gait moves it yet and the firmware carries no {direction} gait (START {direction} is refused: "
-                    f"NACK NO_GAIT). Learn the matrix on the robot (proleg learn ROBOT --port PORT --source "
-                    f"tracker --log TRIALS.jsonl --out LEARNED.toml, or --source manual to give each trial by hand) or on the simulated body (proleg "
-                    f"learn ROBOT --sim --log TRIALS.jsonl --out LEARNED.toml, or proleg sim ROBOT "
-                    f"--measure-matrix --out MEASURED.toml), and build from that file; a gait of your own runs "
-                    f"with proleg load-gait")
+                    f"NACK NO_GAIT). Learn the matrix {HOW_TO_MEASURE}, and build from that file; a gait of your "
+                    f"own runs with proleg load-gait")
         why = self.left_out.get(direction)
         if why is None:
             return None
