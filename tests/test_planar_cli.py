@@ -200,3 +200,16 @@ def test_check_of_a_planar_robot_gives_the_plant_as_the_reason_not_a_matrix_to_m
     assert code == 1
     assert "planar statistics describe a body that moves in the plane" in err
     assert "--measure-matrix" not in err.splitlines()[-1]
+
+
+def test_only_a_planar_motion_makes_a_table_move_in_the_plane(tmp_path):
+    """dy or dθ (planar-4) is a motion in the plane; variances alone (a learned file's var_dx)
+    are not: the physical plant's warning, learn's pose and check's advice all ask this."""
+    from proleg.robot import load_robot
+
+    learned = tmp_path / "learned.toml"
+    learned.write_text(PLANAR.replace("dy         =", "#dy =").replace("dtheta_deg =", "#dtheta_deg ="))
+    assert load_robot(ROBOTS / "planar-4.toml").transitions.moves_in_plane
+    assert load_robot(learned).transitions.planar is not None  # var_dx is there
+    assert not load_robot(learned).transitions.moves_in_plane
+    assert not load_robot(ROBOTS / "paper-r1.toml").transitions.moves_in_plane

@@ -72,6 +72,12 @@ class TransitionTable:
     def n_transitions(self) -> int:
         return len(self.src)
 
+    @property
+    def moves_in_plane(self) -> bool:
+        """The table gives a planar motion (Δy or Δθ): a robot that steers, planar-4. Variances
+        alone (``var_dx``, a learned file's) are no motion in the plane."""
+        return self.planar is not None and (self.planar.dy is not None or self.planar.dtheta_deg is not None)
+
     def label(self, i: int) -> str:
         return states.label(i, self.levels)
 

@@ -96,7 +96,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         on = f" under {' '.join(base)}" if base else " on the nominal plant"
         advice = ("The physical plant moves limbs in a row along x only and this robot file's planar "
                   "statistics describe a body that moves in the plane: `proleg check` cannot check it "
-                  "(docs/plant.md, \"Not modelled\")" if robot.transitions.planar is not None else
+                  "(docs/plant.md, \"Not modelled\")" if robot.transitions.moves_in_plane else
                   "If the robot file's matrix was not measured on this body, measure it (proleg sim ROBOT "
                   "--measure-matrix) and build the gaits from that")
         print(f"proleg: error: {robot.name}: gait {args.gait} ({label}) cannot be checked{on}: {nominal.why_not}. "

@@ -567,8 +567,7 @@ def simulated_robot(robot: Robot, truth: Robot | None = None, *, seed: int = 1, 
     sim = SimulatedRobot(robot, seed=seed, plant=plant)
     client = RobotClient(SimLink(sim, description=f"sim {robot.name}"), watchdog_ms=robot.safety.link_watchdog_ms)
 
-    moves = truth.transitions.planar
-    steers = moves is not None and (moves.dy is not None or moves.dtheta_deg is not None)
+    steers = truth.transitions.moves_in_plane
 
     def pose() -> Pose:
         # variances alone (a learned file's var_dx) move no Δy, Δθ: recorded as 0 they were

@@ -72,8 +72,7 @@ def planar_warnings(robot: Robot) -> list[str]:
     +0.2 mm a cycle \"in +x\" on four contacts in a row (front, left, back, right), and nothing
     said it was not its star-shaped body. Variances alone (``var_dx``, a learned file's) are not
     a planar motion: every file ``proleg learn --out`` wrote was warned about as a planar robot."""
-    planar = robot.transitions.planar
-    if planar is None or (planar.dy is None and planar.dtheta_deg is None):
+    if not robot.transitions.moves_in_plane:
         return []
     names = ", ".join(lb.name for lb in robot.limbs)
     return [f"{robot.path}: [transitions] has planar statistics (dy, dtheta_deg): a robot that moves in the "
