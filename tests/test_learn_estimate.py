@@ -393,3 +393,37 @@ def test_a_climb_limit_list_learn_cannot_replace_as_text_is_refused_and_nothing_
     with pytest.raises(LearnedFileError, match=r"\[control\] max_climb_deg .* one line"):
         write_learned_robot(robot, estimate(t, _sim_trials(t)), tmp_path / "l.toml", units=robot.units)
     assert not (tmp_path / "l.toml").exists()
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 7), st.floats(0.0, 3.0)), min_size=1, max_size=24), st.booleans())
+def test_the_learned_file_carries_the_mean_time_each_transition_took(tmp_path_factory, timed, old_durations):
+    """durations_s: per transition the mean of its trials' t_end − t_start (a brute-force
+    recount), a trial with no time (t_end = t_start) not counted; a transition never timed keeps
+    the old table's duration, or gets the longest timed one when the old table had none, and a
+    comment names it. Without any timed trial the old durations stay as they were."""
+    path = tmp_path_factory.mktemp("dur") / "r.toml"
+    text = R1.read_text()  # R1's file gives no durations
+    path.write_text(text.replace("[transitions]", "[transitions]\ndefault_duration_s = 0.9") if old_durations else text)
+    robot = load_robot(path)
+    t = robot.transitions
+    assert (t.duration is not None) == old_durations
+    edges = list(zip(t.src.tolist(), t.dst.tolist()))
+    trials = [Trial(t.label(edges[e % len(edges)][0]), t.label(edges[e % len(edges)][1]), 10.0, 10.0 + d, 1.0)
+              for e, d in timed]
+    learned = load_robot(write_learned_robot(robot, estimate(t, trials), path.with_name("l.toml"), units="mm"))
+    took = {k: [(10.0 + d) - 10.0 for e, d in timed if edges[e % len(edges)] == k and 10.0 + d > 10.0] for k in edges}
+    longest = max((float(np.mean(v)) for v in took.values() if v), default=None)  # a transition's mean
+    text = path.with_name("l.toml").read_text()
+    if longest is None:
+        assert (learned.transitions.duration is None) == (not old_durations)
+        if old_durations:
+            assert np.allclose(learned.transitions.duration, t.duration)
+        return
+    got = dict(zip(edges, learned.transitions.duration.tolist()))
+    for e, (k, v) in enumerate(took.items()):
+        want = float(np.mean(v)) if v else (t.duration[e] if old_durations else longest)
+        assert got[k] == pytest.approx(want, rel=1e-9), k
+    untimed = [f"{t.label(a)}->{t.label(b)}" for (a, b), v in took.items() if not v]
+    assert ("# durations_s not timed" in text) == bool(untimed)
+    assert all(label in text for label in untimed)

@@ -168,6 +168,16 @@ def test_measure_matrix_out_writes_the_robot_file_with_the_measured_matrix(tmp_p
                 assert allowed[a][b] and abs(dense[a][b] - mm) < 1e-4  # --json rounds to 0.1 µm
     assert [lb.friction for lb in robot.limbs] == [lb.friction for lb in load_robot(path).limbs]
     assert 'matrix = "unmeasured"' in out_file.read_text()  # the old table, commented out below
+    # the time each transition took is written too: the speed objective and the state-timeout
+    # checks need it, and an unmeasured file had none to keep
+    table = robot.transitions
+    took = {(a, b): d for a, b, d in zip(table.src.tolist(), table.dst.tolist(), table.duration.tolist())}
+    for a, row in enumerate(measured["duration_s"]):
+        for b, s in enumerate(row):
+            if a != b and s is not None:
+                assert abs(took[(a, b)] - s) < 1e-3  # --json rounds to 1 ms
+    code, out, err = cli(capsys, "gait", out_file, "--objective", "speed", "--json")
+    assert code == 0, err
     code, out, err = cli(capsys, "sim", out_file, "--duration", "30", "--json")
     assert code == 0 and json.loads(out)["displacement_mm"] > 0, err
     for argv, says in (((path, "--measure-matrix", "--out", path), "is the ROBOT file this command reads"),

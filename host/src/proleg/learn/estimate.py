@@ -50,6 +50,9 @@ class Estimates:
     confidence: float
     min_samples: int
     components: dict[str, Component]
+    #: mean time each transition took (s, aligned with table.src), NaN where none was timed;
+    #: None when the trials carry no times
+    duration_s: np.ndarray | None = None
 
     @property
     def dx(self) -> Component:
@@ -89,6 +92,7 @@ def estimate(table: TransitionTable, trials: Iterable[Trial], *, confidence: flo
              min_samples: int = 2) -> Estimates:
     """Statistics per allowed transition of ``table`` from ``trials`` (others are ignored)."""
     per: dict[str, list[list[float]]] = {c: [[] for _ in range(table.n_transitions)] for c in COMPONENTS}
+    took: list[list[float]] = [[] for _ in range(table.n_transitions)]
     for t in trials:
         try:
             e = table.lookup(table.index(t.src), table.index(t.dst))
@@ -100,10 +104,13 @@ def estimate(table: TransitionTable, trials: Iterable[Trial], *, confidence: flo
             v = getattr(t, c)
             if v is not None:
                 per[c][e].append(v)
+        if t.duration_s is not None:
+            took[e].append(t.duration_s)
     comps = {c: _component(per[c], confidence, min_samples) for c in COMPONENTS if any(per[c])}
     if "dx" not in comps:
         comps["dx"] = _component(per["dx"], confidence, min_samples)
-    return Estimates(table, confidence, min_samples, comps)
+    durations = np.array([float(np.mean(v)) if v else math.nan for v in took]) if any(took) else None
+    return Estimates(table, confidence, min_samples, comps, durations)
 
 
 def extra_trials(comp: Component, half_width: float, confidence: float = 0.95, min_samples: int = 2,

@@ -64,6 +64,14 @@ class Trial:
     passed: tuple[str, ...] = ()  # states outside src..dst the telemetry showed on the way
 
     @property
+    def duration_s(self) -> float | None:
+        """How long the firmware took to make the transition (``t_end`` − ``t_start``: until it
+        reported the state reached, as a gait's step takes), None when the clock says nothing
+        (a log with the two equal, or a clock that stepped back)."""
+        d = self.t_end - self.t_start
+        return d if math.isfinite(d) and d > 0 else None
+
+    @property
     def t_moved(self) -> float:
         """Best firmware time of the transition's last motion: ``t_seen``, else ``t_end``."""
         return self.t_end if self.t_seen is None else self.t_seen

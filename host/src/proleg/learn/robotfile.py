@@ -36,6 +36,7 @@ from ..outputs import write_text_atomic
 from ..robot import Robot
 from ..robot_climb import ClimbLimit
 from ..robot_transitions import UNIT_MM
+from ..transitions import TransitionTable
 from .estimate import Estimates
 from .makeable import Left, file_comments
 
@@ -148,10 +149,11 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
     out += ["[transitions]", f'units = "{units}"',
             "states = [" + ", ".join(f'"{table.label(i)}"' for i in range(n)) + "]"]
     out += _matrix("matrix", new, allowed)
-    if table.duration is not None:
+    durations, said = _durations(table, est, allowed[table.src, table.dst])
+    if durations is not None:
         dur = np.zeros((n, n))
-        dur[table.src, table.dst] = table.duration
-        out += _matrix("durations_s", dur, allowed)
+        dur[table.src, table.dst] = durations
+        out += said + _matrix("durations_s", dur, allowed)
     prefix = "" if stats_as_keys else PREFIX
     if not stats_as_keys:
         out.append(f"# Learned statistics beside the matrix, commented out for an older proleg: delete '{PREFIX}'")
@@ -179,6 +181,30 @@ def learned_transitions_text(robot: Robot, est: Estimates, *, units: str, stats_
             m[table.src, table.dst] = np.where(dx.n >= 1, getattr(c, what), old_values)
         out += _matrix(key, m, allowed, prefix)
     return out
+
+
+def _durations(table: TransitionTable, est: Estimates, kept: np.ndarray) -> tuple[np.ndarray | None, list[str]]:
+    """Each allowed transition's duration for ``durations_s`` (aligned with ``table.src``) and
+    the comment lines that say where they come from: the mean time it took where it was timed,
+    else the old table's duration, else the longest timed one (a guess that makes no untimed
+    step look fast, nor safe from the state timeout). None when nothing was timed and the old
+    table had no durations. ``kept``: the transitions the new table still allows (a left-out
+    one is "x" and needs no duration)."""
+    took = est.duration_s
+    timed = np.zeros(len(table.src), dtype=bool) if took is None else np.isfinite(took) & kept
+    if not timed.any():
+        return (None if table.duration is None else table.duration.copy()), []
+    said = ["# durations_s: the mean time each transition took, until its state was reached (s)"]
+    untimed = [f"{table.label(a)}->{table.label(b)}" for a, b, ok, k in zip(table.src, table.dst, timed, kept)
+               if k and not ok]
+    if table.duration is not None:
+        fill, how = table.duration, "the previous durations kept"
+    else:
+        longest = float(np.max(took[timed]))
+        fill, how = np.full(len(timed), longest), f"the longest timed one, {longest:.3g} s, written"
+    if untimed:
+        said.append(f"# durations_s not timed ({how}): {', '.join(untimed)}")
+    return np.where(timed, took, fill), said
 
 
 def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units: str | None = None,
@@ -223,7 +249,8 @@ def measured_estimates(robot: Robot, measured: Any) -> Estimates:
     std = np.asarray(measured.std_mm, dtype=float)[src, dst]
     with np.errstate(divide="ignore", invalid="ignore"):
         var = np.where(n >= 2, std ** 2 * n / np.maximum(n - 1, 1), np.nan)  # np.std's ddof=0 → ddof=1
-    return Estimates(t, 0.95, 2, {"dx": Component(n, mean, var, np.full(len(n), np.nan))})
+    took = np.where(n >= 1, np.asarray(measured.duration_s, dtype=float)[src, dst], np.nan)
+    return Estimates(t, 0.95, 2, {"dx": Component(n, mean, var, np.full(len(n), np.nan))}, took)
 
 
 def write_measured_robot(robot: Robot, measured: Any, out: str | Path) -> Path:
