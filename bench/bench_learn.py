@@ -18,7 +18,7 @@ widest 95 % half-width, coverage (share of intervals holding the truth), sign ag
 (|truth| > 1 mm), and gait % = true rate of the rate-optimal gait of the learned matrix /
 the true optimum's rate.
 
-Part 2 — the proof in closed loop: ``learn.runner.explore_simulated`` (host-sim firmware +
+Part 2 — the proof in closed loop: ``learn.simulated.explore_simulated`` (host-sim firmware +
 table plant) with R = 5 on paper-r1, paper-r3, inchworm-3 (8 states) and caterpillar-4 (36
 states), seeds 1–8 (caterpillar-4: 1–3), each against a hidden truth from ``proleg.learn.truth`` (the robot's
 matrix in mm, each entry ±10 %, noise 0.5 mm per plant transition, merged into the file's
@@ -189,7 +189,7 @@ def closed_loop_run(name: str, seed: int, repeats: int = 5) -> dict:
     R = ``repeats``; accuracy against the plant's effective truth and the truth file."""
     from proleg.learn.evaluate import accuracy, effective_truth
     from proleg.learn.measure import TrialLog
-    from proleg.learn.runner import explore_simulated
+    from proleg.learn.simulated import explore_simulated
     from proleg.learn.truth import write_truth
 
     robot = load_robot(ROOT / "robots" / f"{name}.toml")

@@ -20,7 +20,7 @@ import pytest
 from proleg.learn.estimate import estimate
 from proleg.learn.evaluate import accuracy, effective_truth, plant_changes
 from proleg.learn.measure import TrialLog, counts
-from proleg.learn.runner import explore_simulated
+from proleg.learn.simulated import explore_simulated
 from proleg.learn.truth import write_truth
 from proleg.robot import load_robot
 

@@ -15,7 +15,7 @@ from proleg.learn.estimate import estimate, penalised_table
 from proleg.learn.evaluate import effective_truth, plant_changes
 from proleg.learn.measure import TrialLog, counts
 from proleg.learn.robotfile import write_learned_robot
-from proleg.learn.runner import explore_simulated
+from proleg.learn.simulated import explore_simulated
 from proleg.robot import load_robot
 from proleg.transitions import TransitionTable
 
@@ -104,7 +104,8 @@ def test_the_gait_from_the_learned_matrix_is_at_least_95_percent_as_fast_as_the_
 
 
 def test_an_interrupted_exploration_resumes_from_its_log_and_loses_nothing(tmp_path):
-    from proleg.learn.runner import Explorer, simulated_robot
+    from proleg.learn.runner import Explorer
+    from proleg.learn.simulated import simulated_robot
 
     robot = load_robot(R1)
     log_path = tmp_path / "trials.jsonl"
@@ -124,7 +125,8 @@ def test_an_interrupted_exploration_resumes_from_its_log_and_loses_nothing(tmp_p
 
 
 def test_manual_entry_asks_once_per_transition_with_the_robot_at_rest(tmp_path):
-    from proleg.learn.runner import Explorer, simulated_robot
+    from proleg.learn.runner import Explorer
+    from proleg.learn.simulated import simulated_robot
 
     robot = load_robot(R1)
     sim, client, _pose = simulated_robot(robot, seed=7)
@@ -146,7 +148,8 @@ def test_manual_entry_asks_once_per_transition_with_the_robot_at_rest(tmp_path):
 def test_a_tracker_run_gets_its_motion_from_the_track_afterwards(tmp_path):
     """Record without a pose, write the plant's path as a camera would (other clock, 30 fps),
     then attach the track: the trials match the ground truth."""
-    from proleg.learn.runner import Explorer, simulated_robot
+    from proleg.learn.runner import Explorer
+    from proleg.learn.simulated import simulated_robot
     from proleg.learn.tracker import Track, attach_track
 
     robot = load_robot(R1)
@@ -217,7 +220,8 @@ def test_a_coil_that_dies_during_exploration_costs_the_transitions_it_makes_not_
     the robot cooled and cleared, and the rest learned. It used to end the run at the first."""
     import logging
 
-    from proleg.learn.runner import Explorer, simulated_robot
+    from proleg.learn.runner import Explorer
+    from proleg.learn.simulated import simulated_robot
 
     robot = load_robot(R1)
     t = robot.transitions

@@ -129,7 +129,7 @@ def test_learn_sim_explores_what_the_hardware_can_make_and_forbids_the_rest(tmp_
 def test_start_of_the_left_out_direction_is_still_refused(tmp_path, capsys):
     """The user asks for gait 0 of +x: proleg sim refuses it with the reason, and the firmware,
     which carries no +x gait, refuses START with NACK NO_GAIT that the host explains."""
-    from proleg.learn.runner import simulated_robot
+    from proleg.learn.simulated import simulated_robot
     from proleg.link.client import CommandRefused
     from proleg.protocol.definition import ErrorCode
 

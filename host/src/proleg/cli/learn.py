@@ -225,7 +225,8 @@ def _checked_truth(args: argparse.Namespace, robot):
     """``--truth``'s robot (None without it), checked against ``--plant`` and ROBOT's levels."""
     if not args.sim:
         return None
-    from ..learn.runner import ExplorationError, check_plant
+    from ..learn.runner import ExplorationError
+    from ..learn.simulated import check_plant
     from ..robot import load_robot
 
     truth = load_robot(args.truth) if args.truth else None
@@ -270,7 +271,8 @@ def _open_log(args: argparse.Namespace, robot, linked: bool):
 def _connect(args: argparse.Namespace, robot, truth, source: str):
     """The connected robot to explore (the simulator with --sim) and, with ``--source sim``,
     its ground-truth pose: (client, pose or None)."""
-    from ..learn.runner import ExplorationError, simulated_robot
+    from ..learn.runner import ExplorationError
+    from ..learn.simulated import simulated_robot
     from .robot_link import open_client
 
     if not args.sim:
