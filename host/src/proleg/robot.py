@@ -79,7 +79,7 @@ def info_name(name: str) -> str:
     return name[:INFO_NAME_LEN]
 
 #: A robot file larger than this is refused before it is parsed (an inline matrix of
-#: 1,024 states takes about 5 MB); a transition CSV larger than robot_transitions.MAX_CSV_BYTES likewise.
+#: 1,024 states takes about 5 MB); a transition CSV larger than robot_transitions_csv.MAX_CSV_BYTES likewise.
 MAX_FILE_BYTES = 16 * 1024 * 1024
 #: Brackets and braces nested deeper than this are refused before parsing (a robot file
 #: needs 3: a matrix row inside the matrix inside a table); tomllib recurses per level.

@@ -1,11 +1,11 @@
-"""A robot file's [transitions]: the reward matrix inline or in an external CSV, per-transition
-durations, the planar statistics of a learned file, the forbidden-transition marks. Every
+"""A robot file's [transitions]: the reward matrix inline or in an external CSV (read by
+``robot_transitions_csv``), per-transition durations, the planar statistics of a learned file,
+the forbidden-transition marks, an unmeasured matrix's allowed transitions. Every
 problem is a RobotFileError naming the file, the field and what was expected
 (``transitions_section``, called by ``proleg.robot.robot_from_dict``)."""
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 from collections.abc import Sequence
@@ -16,25 +16,14 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .names import counted
+from .robot_entries import (FORBIDDEN, MAX_DURATION_S, MAX_ENTRY, MAX_TRIALS, MAX_VARIANCE, in_range, is_number,
+                            state_ref)
 from .robot_fields import Fields, toml_text
+from .robot_transitions_csv import read_csv
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
 
 log = logging.getLogger(__name__)
 
-#: The mark of a forbidden transition in a matrix ("x").
-FORBIDDEN = "x"
-#: A transition CSV larger than this is refused before it is read.
-MAX_CSV_BYTES = 256 * 1024 * 1024
-#: The largest |entry| of the matrix, a CSV reward and the planar means, as ``[plant] true_matrix``:
-#: a gait sums its entries, and 1e308 would overflow to inf and turn the gait search's answer.
-MAX_ENTRY = 1e9
-#: The largest planar variance (σ up to MAX_ENTRY) and the largest ``n_trials`` entry.
-MAX_VARIANCE = MAX_ENTRY**2
-MAX_TRIALS = 10**9
-#: The longest duration of a transition (s), in ``durations_s``, a CSV's ``duration_s`` and
-#: ``default_duration_s`` alike: a gait sums them, and 1e308 overflowed the sum (a traceback).
-MAX_DURATION_S = 3600.0
 
 
 #: ``matrix = "unmeasured"``: a robot whose rewards are not known yet (every allowed transition
@@ -111,7 +100,7 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
             if f.has(key):
                 f.fail(key, "an inline 'matrix' (planar statistics are not read from a CSV table yet)")
         planar = None
-        src, dst, rew, dur = _csv(path, f.string("file"), levels, names)
+        src, dst, rew, dur = read_csv(path, f.string("file"), levels, names)
 
     if f.has("forbidden") and not unmeasured:
         csv_file = None if f.has("matrix") else value["file"]
@@ -191,7 +180,7 @@ def _same_shape_matrix(path: Path, name: str, rows: Any, n: int, allowed: np.nda
                     raise RobotFileError(f"{cell}: transition is allowed in the matrix, expected {expected}, got 'x'")
                 continue
             unknown = allow_nan and isinstance(v, float) and math.isnan(v)
-            if not unknown and (not _in_range(v, lo, hi) or (whole and not float(v).is_integer())):
+            if not unknown and (not in_range(v, lo, hi) or (whole and not float(v).is_integer())):
                 raise RobotFileError(f"{cell}: expected {expected} or 'x', got {toml_text(v)}")
             if not allowed[a, b]:
                 raise RobotFileError(f"{cell}: transition is forbidden in the matrix, expected 'x', got {toml_text(v)}")
@@ -254,8 +243,8 @@ def _forbidden_marks(path: Path, marks: Any, levels: tuple[int, ...], names: Seq
         parts = [p.strip() for p in mark.split("->")]
         if len(parts) != 2:
             raise RobotFileError(f"{where}[{k}]: expected FROM->TO, got {mark!r}")
-        a = _state_ref(parts[0], levels, n, f"{where}[{k}]", names)
-        b = _state_ref(parts[1], levels, n, f"{where}[{k}]", names)
+        a = state_ref(parts[0], levels, n, f"{where}[{k}]", names)
+        b = state_ref(parts[1], levels, n, f"{where}[{k}]", names)
         if a == b:
             raise RobotFileError(f"{where}[{k}]: {mark} is a state to itself, never a transition (expected FROM->TO "
                                  "of two different states)")
@@ -310,12 +299,12 @@ def _matrix(path: Path, rows: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
     for a, row in enumerate(_square(where, rows, n, f"(one per state, {n} = product of limb levels)")):
         for b, v in enumerate(row):
             if a == b:
-                if not (v == FORBIDDEN or _is_number(v)):
+                if not (v == FORBIDDEN or is_number(v)):
                     raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a number or 'x', got {toml_text(v)}")
                 continue  # the diagonal is not a transition
             if v == FORBIDDEN:
                 continue
-            if not _in_range(v, -MAX_ENTRY, MAX_ENTRY):
+            if not in_range(v, -MAX_ENTRY, MAX_ENTRY):
                 raise RobotFileError(
                     f"{where}[{a + 1}][{b + 1}]: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}] or 'x' "
                     f"(forbidden), got {toml_text(v)}"
@@ -338,7 +327,7 @@ def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.
                         f"{where}[{a + 1}][{b + 1}]: transition is allowed in the matrix, expected a duration > 0"
                     )
                 continue
-            if not _is_number(v) or not 0 < v <= MAX_DURATION_S:
+            if not is_number(v) or not 0 < v <= MAX_DURATION_S:
                 raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration in (0, {MAX_DURATION_S:g}] seconds "
                                      f"or 'x', got {toml_text(v)}")
             if not allowed[a, b]:
@@ -347,167 +336,3 @@ def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.
                 )
             out[a, b] = float(v)
     return out
-
-
-def _csv(path: Path, name: str, levels: tuple[int, ...], names: Sequence[str] = ()):
-    csv_path = (path.parent / name).resolve()
-    n = states.state_count(levels)
-    src: list[int] = []
-    dst: list[int] = []
-    rew: list[float] = []
-    dur: list[float] = []
-    seen: set[tuple[int, int]] = set()
-    has_duration = None
-    header: list[str] = []
-    with _open_csv(path, csv_path) as fh:
-        for lineno, cells in _csv_rows(fh, csv_path, header):
-            where = f"{csv_path}:{lineno}"
-            if len(cells) not in (3, 4):
-                raise RobotFileError(f"{where}: expected from,to,reward[,duration_s], got {counted(len(cells), 'field')}")
-            if header and len(cells) != len(header):
-                raise RobotFileError(f"{where}: expected {len(header)} fields as the header names "
-                                     f"({','.join(header)}), got {len(cells)}")
-            if has_duration is None:
-                has_duration = len(cells) == 4
-            elif has_duration != (len(cells) == 4):
-                raise RobotFileError(f"{where}: every row must have a duration, or none")
-            a, b, r = _csv_transition(cells, levels, n, where, names)
-            if (a, b) in seen:
-                raise RobotFileError(f"{where}: transition {cells[0]} -> {cells[1]} is given twice")
-            seen.add((a, b))
-            src.append(a)
-            dst.append(b)
-            rew.append(r)
-            if has_duration:
-                dur.append(_csv_duration(cells[3], where))
-    if not src:
-        raise RobotFileError(f"{csv_path}: no transitions (expected rows from,to,reward)")
-    return src, dst, rew, (dur if dur else None)
-
-
-def _open_csv(path: Path, csv_path: Path):
-    """The CSV as text (a leading BOM, as Excel writes, dropped), refused if too large."""
-    try:
-        size = csv_path.stat().st_size
-        fh = csv_path.open(newline="", encoding="utf-8-sig")
-    except OSError as e:
-        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {e.strerror}") from None
-    if size > MAX_CSV_BYTES:
-        fh.close()
-        raise RobotFileError(f"{path}: transitions.file: {csv_path} has {size:,} bytes, expected at most {MAX_CSV_BYTES:,}")
-    return fh
-
-
-def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: str,
-                    names: Sequence[str] = ()) -> tuple[int, int, float]:
-    a = _state_ref(cells[0], levels, n, f"{where}: from", names)
-    b = _state_ref(cells[1], levels, n, f"{where}: to", names)
-    if a == b:
-        raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
-    try:
-        r = float(cells[2])
-    except ValueError:
-        raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
-    if not _in_range(r, -MAX_ENTRY, MAX_ENTRY):
-        raise RobotFileError(f"{where}: reward: expected a number in [{-MAX_ENTRY:g}, {MAX_ENTRY:g}], "
-                             f"got {cells[2]!r}")
-    return a, b, r
-
-
-def _csv_duration(text: str, where: str) -> float:
-    try:
-        d = float(text)
-    except ValueError:
-        d = -1.0
-    if not 0 < d <= MAX_DURATION_S:
-        raise RobotFileError(f"{where}: duration_s: expected a number in (0, {MAX_DURATION_S:g}] seconds, got {text!r}")
-    return d
-
-
-def _csv_rows(fh, csv_path: Path, header: list[str]):
-    """(line, stripped cells) of each data row: ``line`` is the file line the row starts on
-    (a quoted cell may span lines); blank rows and ``#`` comments are skipped, and the header
-    (a first row that starts with no state) must be ``from,to,reward[,duration_s]``: its
-    cells go to ``header``. csv.reader's errors (NUL bytes, a field over its size limit,
-    bytes that are not UTF-8) are RobotFileError naming the line."""
-    reader = csv.reader(fh)
-    first = True
-    while True:
-        start = reader.line_num + 1
-        try:
-            row = next(reader)
-        except StopIteration:
-            return
-        except csv.Error as e:
-            raise RobotFileError(f"{csv_path}:{reader.line_num}: not a readable CSV row: {e}") from None
-        except UnicodeDecodeError as e:
-            raise RobotFileError(f"{csv_path}:{_first_non_utf8_line(csv_path)}: not UTF-8 text ({e.reason}); "
-                                 "save it as UTF-8") from None
-        if not row or row[0].lstrip().startswith("#"):
-            continue
-        cells = [c.strip() for c in row]
-        if len(cells) == 1 and (sep := next((c for c in ";\t" if c in row[0]), None)):
-            # a spreadsheet in another locale (';', with decimal commas) or a tab-separated export
-            raise RobotFileError(f"{csv_path}:{start}: fields separated by {sep!r}, not commas: the table takes "
-                                 f"{','.join(CSV_COLUMNS[:3])}[,{CSV_COLUMNS[3]}] separated by commas, with '.' "
-                                 f"as the decimal point (export it as CSV with commas), got {row[0]!r}")
-        if first and not _looks_like_a_state(cells[0]):  # the header: checked, not just skipped
-            if cells not in (CSV_COLUMNS[:3], CSV_COLUMNS):
-                raise RobotFileError(f"{csv_path}:{start}: expected the header {','.join(CSV_COLUMNS[:3])}"
-                                     f"[,{CSV_COLUMNS[3]}] (in this order), got {','.join(cells)!r}")
-            header.extend(cells)
-            first = False
-            continue
-        first = False
-        yield start, cells
-
-
-#: A CSV transition table's columns, in order; the last is optional.
-CSV_COLUMNS = ["from", "to", "reward", "duration_s"]
-
-
-def _looks_like_a_state(cell: str) -> bool:
-    """A state label (digits) or index (@N): a first row starting otherwise is a header."""
-    return cell.startswith("@") or (cell.isascii() and cell.isdigit())
-
-
-def _first_non_utf8_line(csv_path: Path) -> int:
-    """The line of the first bytes that are not UTF-8 (the text reader decodes in chunks,
-    so csv.reader's line count does not say)."""
-    with csv_path.open("rb") as fh:
-        for lineno, raw in enumerate(fh, start=1):
-            try:
-                raw.decode("utf-8")
-            except UnicodeDecodeError:
-                return lineno
-    return 1
-
-
-def _state_ref(text: str, levels: tuple[int, ...], n: int, where: str, names: Sequence[str] = ()) -> int:
-    """A state in a CSV row or a forbidden mark: a label (one digit per limb), or an index
-    written ``@N``. A string of digits of another length is an error, never an index: a label
-    with a digit missing or one too many would otherwise name a different state."""
-    L = len(levels)
-    expected = f"{where}: expected a state label of {L} digits or a state index @0..@{n - 1}, got {text!r}"
-    if text.startswith("@"):
-        index = text[1:]
-        if index.isascii() and index.isdigit() and int(index) < n:  # "¹" and "١" are digits too
-            return int(index)
-        raise RobotFileError(expected)
-    if len(text) == L:
-        try:
-            return states.index(text, levels, names)
-        except ValueError as e:
-            raise RobotFileError(f"{expected} ({e})") from None
-    if text.isascii() and text.isdigit():
-        raise RobotFileError(f"{where}: {text!r} is not a state label of {L} digits (one per limb, e.g. "
-                             f"{states.label(0, levels)}; a state index is written @0..@{n - 1})")
-    raise RobotFileError(expected)
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _in_range(v: Any, lo: float, hi: float) -> bool:
-    return _is_number(v) and lo <= v <= hi
