@@ -444,6 +444,65 @@ def test_a_replanning_host_leaves_a_firmware_fallback_alone():
     assert not any(s.startswith("loaded and started") for s in said), said
 
 
+def test_a_second_loss_is_replanned_without_the_first_coil_too():
+    """caterpillar-4 without its tail coil walks on its rear, front and head coils; without its
+    head coil too, the best gait without the head alone raises the tail. The replanner planned
+    each loss on its own: after the second it mapped the dead tail coil back in, cleared the
+    fault itself and heated that coil at the drive duty up to the state timeout again."""
+    cat4 = load_robot(ROOT / "robots" / "caterpillar-4.toml")
+    alone = replan(cat4, "sma-head", "+x")
+    assert any(limb_levels(s, cat4.levels)[0] > 0 for s in alone.states)  # the tail rises
+    plan = replan(cat4, "sma-head", "+x", lost_before=["sma-tail"])
+    assert plan.states is not None and plan.reason.startswith("without sma-head and sma-tail: gait")
+    assert not any(limb_levels(s, cat4.levels)[i] > 0 for s in plan.states for i in (0, 3))
+    assert replan(cat4, "sma-head", "+x", lost_before=["sma-head"]).states == alone.states  # itself: no other
+    r1 = load_robot(R1)
+    assert replan(r1, "sma-right", "+x", lost_before=["sma-left"]).states is None
+
+
+def test_after_a_second_loss_the_replanning_host_never_heats_the_first_dead_coil_again(tmp_path):
+    """End to end, with the fallback off: the tail coil dies, the host replans; the head coil
+    dies, the host replans again. From the first fault on the dead tail coil is never driven
+    above the hold ceiling (it was for 9 s, until a third fault, after the second replan)."""
+    text = (ROOT / "robots" / "caterpillar-4.toml").read_text()
+    assert "telemetry_hz = 25" in text
+    p = tmp_path / "caterpillar-4.toml"
+    p.write_text(text.replace("telemetry_hz = 25", "telemetry_hz = 25\nfallback = false"))
+    robot = load_robot(p)
+    sim = open_host_sim(robot)
+    client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s), max_limbs=4, max_channels=4)
+    client.connect()
+    said: list[str] = []
+    hold_ceiling_pm = 3000  # the default hold ceiling (caterpillar-4's [safety] leaves it)
+    tail_duty: list[tuple[float, int]] = []
+    events: list[tuple[float, int, int]] = []
+
+    class Losses(Listener):
+        def on_message(self, rx: Received) -> None:
+            t = sim.time_s
+            if t >= 10.0 and not hasattr(self, "first"):
+                sim.inject("dead-actuator:sma-tail")
+                self.first = t
+            replanned = [s for s in said if s.startswith("loaded and started")]
+            if len(replanned) == 1 and not hasattr(self, "second") and t >= self.first + 20.0:
+                sim.inject("dead-actuator:sma-head")
+                self.second = t
+            m = rx.message
+            if m.name == "TELEMETRY":
+                tail_duty.append((t, m.duty[0]))
+            elif m.name == "EVENT":
+                events.append((t, m.kind, m.code))
+
+    losses = Losses()
+    run_gait_on(client, 0, "+x", 90.0, listeners=[losses], replanner=Replanner(robot, client, "+x", say=said.append))
+    assert hasattr(losses, "second"), said
+    faults = [t for t, k, _ in events if k == EventKind.FAULT]
+    assert len(faults) == 2, (faults, said)  # one a loss: the second plan raised the tail and faulted again
+    assert any(s.startswith("replanning: without sma-head and sma-tail: gait") for s in said), said
+    assert [s for s in said if s.startswith("loaded and started")][-1] == "loaded and started 0110→0210→0220→0120→0110 in +x"
+    assert max(d for t, d in tail_duty if t > faults[0]) <= hold_ceiling_pm
+
+
 def test_the_build_says_which_fallbacks_the_firmware_carries(tmp_path):
     from proleg.firmware.gaits import fallback_lines
 

@@ -35,6 +35,7 @@ with them (proleg.learn.replan); both must agree, so both call ``fallback`` here
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,12 +81,14 @@ def _unreachable(robot, t: TransitionTable) -> np.ndarray:
     return bad
 
 
-def dead_table(robot, lost: int) -> TransitionTable:
-    """The robot's table without the transitions that need actuator ``lost`` (module doc),
-    nor those into or out of a state the robot cannot reach (``_unreachable``)."""
+def dead_table(robot, lost: int | Iterable[int]) -> TransitionTable:
+    """The robot's table without the transitions that need actuator ``lost`` (module doc; or
+    any of several actuators: a host that lost one after another), nor those into or out of a
+    state the robot cannot reach (``_unreachable``)."""
     t = robot.transitions
     amap = compiled_map(robot)
-    driven = [i for i, a in enumerate(amap) if a == lost]
+    gone = {lost} if isinstance(lost, int) else set(lost)
+    driven = [i for i, a in enumerate(amap) if a in gone]
     up = np.array([any(limb_levels(s, t.levels)[i] > 0 for i in driven) for s in range(t.n_states)], dtype=bool)
     up |= _unreachable(robot, t)
     return t.restricted(~(up[t.src] | up[t.dst]))

@@ -24,16 +24,17 @@ gait ran in (from TELEMETRY), as the console needs; ``proleg run`` gives its own
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 from ..errors import LinkError
-from ..limbloss import Fallback, dead_table, fallback
+from ..limbloss import Fallback, best_gait, compiled_map, dead_table, fallback
 from ..link.client import Received, RobotClient
 from ..link.direction import direction_code, direction_text
 from ..link.listeners import Listener
 from ..protocol.definition import GAIT_USER, ClearWhat, EventKind, FaultCode, Flag, StopReason
 from ..robot import Robot
+from ..states import limb_levels
 from ..transitions import TransitionTable
 
 #: seconds of link time the replanner waits after the gait stopped, for a FALLBACK event
@@ -76,16 +77,39 @@ def without_actuator(robot: Robot, actuator: str) -> TransitionTable:
     return dead_table(robot, names.index(actuator))
 
 
-def replan(robot: Robot, actuator: str, direction: str = "+x") -> Replan:
+def replan(robot: Robot, actuator: str, direction: str = "+x", lost_before: Iterable[str] = ()) -> Replan:
     """The best gait (rate: reward per transition) of ``robot`` without ``actuator``, with
-    the compiled limb→actuator map or a remapped one, whichever is better."""
+    the compiled limb→actuator map or a remapped one, whichever is better. ``lost_before``:
+    actuators lost earlier in the run; a gait that would raise a limb on one of them is not
+    taken: then the best gait with all of them dead (their limbs down, the compiled map)."""
     fb: Fallback = fallback(robot, actuator, direction)
+    names = [a.name for a in robot.actuators]
+    before = tuple(dict.fromkeys(names.index(a) for a in lost_before if a in names and a != actuator))
+    if before and fb.states is not None and _raises_on(robot, fb.actuator_map, fb.states, before):
+        # a plan without this coil alone brought one lost before back (caterpillar-4 without its tail
+        # coil, then without its head coil: a gait raising the tail, whose dead coil was heated up to
+        # the state timeout again after the replanner's own CLEAR)
+        gone = (names.index(actuator), *before)
+        table = dead_table(robot, gone)
+        states, rate = best_gait(table, direction)
+        fb = Fallback(" and ".join(names[i] for i in gone), gone[0], "dead", compiled_map(robot), table, states,
+                      rate)
+        if states is None:
+            return Replan(actuator, table, None, 0.0,
+                          f"without {fb.actuator} (lost before) no gait moves {robot.name} in {direction}",
+                          fb.actuator_map)
     if fb.states is None:
         return Replan(actuator, fb.table, None, 0.0,
                       f"without {actuator} no gait moves {robot.name} in {direction}, with the compiled "
                       "limb→actuator map nor with the remaining coils raising the lost coil's limbs",
                       fb.actuator_map)
     return Replan(actuator, fb.table, fb.states, fb.rate, fb.describe(robot), fb.actuator_map)
+
+
+def _raises_on(robot: Robot, actuator_map: tuple[int, ...], states: Iterable[int], actuators: Iterable[int]) -> bool:
+    """Whether a walk through ``states`` raises a limb that ``actuator_map`` gives one of ``actuators``."""
+    on = [i for i, a in enumerate(actuator_map) if a in set(actuators)]
+    return any(limb_levels(s, robot.levels)[i] > 0 for s in states for i in on)
 
 
 @dataclass
@@ -177,6 +201,7 @@ class Replanner(Listener):
                 actuator = suspect(self.robot, *self._fault)
             self._suspect, self._fault = None, None
             again = actuator in self._done
+            lost_before = tuple(self._done)  # each coil replanned around (or given up) in this run
             if actuator is not None:
                 self._done.add(actuator)
             direction = self._direction()
@@ -190,7 +215,7 @@ class Replanner(Listener):
         if again:
             self._tell(f"{actuator} lost again after replanning: giving up")
             return
-        plan = replan(self.robot, actuator, direction)
+        plan = replan(self.robot, actuator, direction, lost_before)
         self._tell(f"replanning: {plan.reason}")
         if plan.states is None:
             return
