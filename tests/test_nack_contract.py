@@ -155,6 +155,10 @@ def test_set_param_refusals_name_the_parameter(board):
 def test_actuator_map_level_and_telemetry_refusals(board):
     assert _refusal(board, "SET_ACTUATOR_MAP", actuators=(0, 2)) == (E.OUT_OF_RANGE, 1)
     assert _refusal(board, "SET_ACTUATOR_MAP", actuators=(0,)) == (E.OUT_OF_RANGE, 0xFFFF)
+    # more entries than limbs: refused by the receiver (the array's count), which the protocol text
+    # did not say and the host had no words for ("TOO_LONG (detail 0)")
+    assert _refusal(board, "SET_ACTUATOR_MAP", actuators=(0, 0, 0)) == (E.TOO_LONG, 0)
+    assert "TOO_LONG" in d.BY_NAME["SET_ACTUATOR_MAP"].doc
     assert _refusal(board, "CALIBRATE_LEVEL", ground=2) == (E.OUT_OF_RANGE, 1)
     assert _refusal(board, "SET_TELEMETRY_RATE", hz=181) == (E.OUT_OF_RANGE, 0)
     board.client.start(0, "+x")

@@ -111,6 +111,8 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
         if detail == 0xFFFF:
             return "give one actuator per limb, or none (the build's map); nothing changed"
         return f"limb {detail}'s actuator is not one this build has; nothing changed"
+    if command == "SET_ACTUATOR_MAP" and error == ErrorCode.TOO_LONG:
+        return "more actuators than this robot has limbs: give one per limb, or none (the build's map); nothing changed"
     if command == "SET_TELEMETRY_RATE" and error == ErrorCode.OUT_OF_RANGE:
         return ("faster than the firmware sends: at most its tick rate, and at most half of what the UART carries "
                 "(the rest is kept for replies and events)")

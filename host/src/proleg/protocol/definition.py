@@ -275,7 +275,8 @@ MESSAGES: tuple[MessageSpec, ...] = (
                        "(a coil the fallback gave up taken back)",
                        max_count="limbs")),
         "Set which actuator raises each limb (the safety envelope stays per actuator); NACK NOT_ALLOWED "
-        "while a gait runs, OUT_OF_RANGE (detail = limb index; 0xFFFF: not one per limb) for a bad value.",
+        "while a gait runs, OUT_OF_RANGE (detail = limb index; 0xFFFF: fewer than one per limb) for a bad value, "
+        "TOO_LONG (detail 0) for more entries than the build has limbs (refused as it is received, before NOT_ALLOWED).",
         reply="ACK",
     ),
     MessageSpec(0x15, "GET_ACTUATOR_MAP", "h2r", (_TOKEN,), "Answered by ACTUATOR_MAP.", reply="ACTUATOR_MAP"),
