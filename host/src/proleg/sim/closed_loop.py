@@ -84,27 +84,51 @@ def planar_warnings(robot: Robot) -> list[str]:
 
 def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
     """A line per coil that the duty a rise heats at (``control.drive_duty``; with
-    ``control.boost_ms``, ``safety.max_duty``) cannot bring to As with this plant's supply and
-    conditions: its limbs can never rise. R1 with drive_duty = 0.15 (its coils settle at 55 °C,
-    As 64 °C) stopped with SMA_ON_LIMIT and STATE_TIMEOUT 'suspects sma-left', and nothing said
-    that no duty it was allowed could lift a limb."""
+    ``control.boost_ms``, ``safety.max_duty``) cannot bring far enough through its
+    transformation, with this plant's supply and conditions, to lift a limb it drives past its
+    level-1 edge (ψ*₁ + hysteresis/2): that limb can never rise. R1 with drive_duty = 0.15 (its
+    coils settle at 55 °C, As 64 °C) stopped with SMA_ON_LIMIT and STATE_TIMEOUT 'suspects
+    sma-left', and nothing said that no duty it was allowed could lift a limb; at power 0.35 its
+    coils settle at 67 °C, past As but 7 % of the way to Af, which bends each end to 4° of the
+    21° it must pass, and the same stop came without a word. The duty advised is the one that
+    would settle the coil bending its limbs past their edges (``PhysicalPlant.settled_bend``),
+    not merely at As, where a coil has not begun to contract."""
+    from .sma import heating_branch
+
     boost = robot.control.boost_ms > 0
     duty = robot.safety.max_duty if boost else robot.control.drive_duty
     key = "safety.max_duty (control.boost_ms is on)" if boost else "control.drive_duty"
     amb = plant.conditions.get("ambient_c")
+    edges = [lb.psi_star_deg[0] + lb.hysteresis_deg / 2.0 for lb in robot.limbs]
+    bends = plant.settled_bend(duty, edges)
     out = []
-    for act, settles, (as_c, _af) in zip(robot.actuators, plant.steady_coil_temperature_c(duty),
-                                         plant.transformation_c()):
-        if settles >= as_c or amb >= as_c:
+    for j, (act, settles, (as_c, af_c)) in enumerate(zip(robot.actuators, plant.steady_coil_temperature_c(duty),
+                                                         plant.transformation_c())):
+        if amb >= as_c:
             continue
-        need = duty * (as_c - amb) / (settles - amb) if settles > amb else math.inf
+        limbs = [i for i, lb in enumerate(robot.limbs) if lb.actuator == act.name]
+        short = [i for i in limbs if bends[i][2] is not None and bends[i][0] < edges[i]]
+        if settles >= as_c and not short:
+            continue
+        needs = [bends[i][2] for i in short]
+        need = max(needs) if needs else (duty * (as_c - amb) / (settles - amb) if settles > amb else math.inf)
         advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} (at most safety.max_duty), or a stronger supply"
                   if need <= robot.safety.max_duty else
                   f"a stronger supply: even safety.max_duty {robot.safety.max_duty:g} does not get it there")
-        out.append(f"{robot.path}: coil {act.name!r} heated at {key} {duty:g} settles at {settles:.0f} °C with "
-                   f"this supply, below the {as_c:.0f} °C where it starts to contract (As on the physical plant): "
-                   f"no limb it drives can rise, and a gait stops with SMA_ON_LIMIT or STATE_TIMEOUT; it needs "
-                   f"{advice}")
+        if settles < as_c:
+            out.append(f"{robot.path}: coil {act.name!r} heated at {key} {duty:g} settles at {settles:.0f} °C with "
+                       f"this supply, below the {as_c:.0f} °C where it starts to contract (As on the physical plant): "
+                       f"no limb it drives can rise, and a gait stops with SMA_ON_LIMIT or STATE_TIMEOUT; it needs "
+                       f"{advice}")
+            continue
+        bent = ", ".join(f"limb {robot.limbs[i].name!r} to {bends[i][0]:.1f}° (its level-1 edge: {edges[i]:.1f}°)"
+                         for i in short)
+        part = heating_branch(settles, as_c, af_c)
+        out.append(f"{robot.path}: coil {act.name!r} heated at {key} {duty:g} settles at {settles:.0f} °C with this "
+                   f"supply, past the {as_c:.0f} °C where it starts to contract but short of the {af_c:.0f} °C where "
+                   f"it finishes (As, Af on the physical plant): it contracts {100 * part:.0f} % of the way and bends "
+                   f"{bent}, below the edge (ψ* + hysteresis/2), so {'that limb' if len(short) == 1 else 'those limbs'} "
+                   f"cannot rise, and a gait stops with SMA_ON_LIMIT or STATE_TIMEOUT; it needs {advice}")
     return out
 
 

@@ -255,6 +255,45 @@ class PhysicalPlant:
         heating neglected), one coil drawing (no sag from the others): what the supply can do."""
         return self._coils.steady_temperature_c(duty)
 
+    def settled_bend(self, duty: float, targets: Sequence[float]) -> list[tuple[float, float, float | None]]:
+        """Per limb, its own coil heated at ``duty`` until it settles (``steady_coil_temperature_c``;
+        from cold, up the major heating branch) with every other coil cold: (ψ° it bends the limb
+        to there; ψ° at the coil's full stroke now, fatigue included; the duty at which it would
+        settle bending the limb to ``targets[i]``°, ``math.inf`` where no duty heats it at all,
+        None where even the full stroke falls short or the limb is there at rest). A coil that
+        settles between As and Af contracts only part of its stroke (R1 at power 0.35: 67 °C,
+        7 %, its limbs at 4° against their 21° edge)."""
+        from ..sma import heating_branch
+
+        temps = self._coils.steady_temperature_c(duty)
+        trans = self._coils.transformation_c()
+        strokes = self._coils.stroke()
+        amb = self.conditions.get("ambient_c")
+        out: list[tuple[float, float, float | None]] = []
+        for i, j in enumerate(coil_of_limb(self.robot)):
+            as_c, af_c = trans[j]
+
+            def bend(c: float, i: int = i, j: int = j) -> float:
+                cs = [0.0] * self._na
+                cs[j] = c
+                return float(self._shape.evaluate(cs)[i])
+
+            target = targets[i]
+            settled = bend(heating_branch(temps[j], as_c, af_c) * strokes[j])
+            full = bend(strokes[j])
+            need: float | None = None
+            if full >= target > bend(0.0) and strokes[j] > 0.0:
+                lo, hi = 0.0, strokes[j]   # the contraction that bends it to the target (ψ rises with it)
+                for _ in range(40):
+                    mid = 0.5 * (lo + hi)
+                    lo, hi = (mid, hi) if bend(mid) < target else (lo, mid)
+                frac = min(1.0, hi / strokes[j])
+                t_need = as_c + (af_c - as_c) * math.acos(1.0 - 2.0 * frac) / math.pi
+                per_duty = (temps[j] - amb) / duty if duty > 0 else 0.0   # °C above the air per unit duty
+                need = (t_need - amb) / per_duty if per_duty > 0 else math.inf
+            out.append((settled, full, need))
+        return out
+
     def warm_rest(self) -> tuple[list[float], list[float]]:
         """Where the body comes to rest once every coil has been heated through its
         transformation and then switched off, its temperature settled at the air's
