@@ -21,7 +21,7 @@ from typing import Any
 from ...errors import SimError
 from ...names import counted
 from ...physics.params import PhysicalParams, coil_geometries
-from ..sma import Hysteresis
+from ..sma import Hysteresis, heating_branch
 from .conditions import Conditions
 
 
@@ -73,7 +73,15 @@ class Coils:
         self.fat_at = [0.0] * na
         for j in range(na):
             self._update_fatigue(j)
-        self.c = [0.0] * na   # contraction, fraction of the fresh stroke (after the lag)
+        # Each coil starts as the air left it, warmed from below As (where it was made and kept) to
+        # ambient_c: past As part of the way through its transformation, past Af all of it. Every
+        # coil used to start in martensite whatever the air: at 100 °C (Af 82 °C) the first touch of
+        # heat transformed it at once, its latent heat took it 9 °C under the air it sat in, and the
+        # body it bent moved R1 by 6 mm with no limb raised.
+        for h in self.hyst:
+            h.alpha = h.alpha_r = heating_branch(self.amb, h.as_c + h.shift_c, h.af_c + h.shift_c)
+        # contraction, fraction of the fresh stroke (after the lag): at rest where the air holds it
+        self.c = [h.alpha * s for h, s in zip(self.hyst, self.stroke())]
         self._dt_cache: tuple[float, list[float], float] = (-1.0, [], 0.0)
 
     def _update_fatigue(self, j: int) -> None:
