@@ -325,3 +325,31 @@ def test_a_drift_with_a_fault_or_a_hot_coil_is_still_missed_where_the_gait_barel
     assert _row(**{**drift, "fault": "STATE_TIMEOUT"}).missed
     assert _row(**{**drift, "coil_peak_c": 125.0}).missed
     assert _row(**{**drift, "note": "only 1 cycles (no fault)"}).missed
+
+
+def _printed(capsys, rows: list) -> str:
+    """``proleg check``'s text report of a nominal row and ``rows``."""
+    import argparse
+
+    from proleg.cli import check
+
+    args = argparse.Namespace(condition=[], board="host-sim", gait=0, direction="+x", seed=1)
+    nominal = _row(conditions=(), coil_peak_c=80.0)
+    summary = {**sweep.summary(rows), **check._kept(nominal, rows),
+               "hottest_c": round(max(r.coil_peak_c for r in [nominal, *rows]), 1)}
+    check._print(load_robot(R1), args, "00 10 11 01 00", 40.0, nominal, rows, summary)
+    return capsys.readouterr().out
+
+
+def test_the_hottest_coil_reads_the_same_in_its_row_and_the_summary(capsys):
+    """A row whose coil peaked at 104.5012 °C read "coils ≤ 105 °C" and the summary "hottest coil
+    104 °C" (rounded to 0.1 for --json first, then to the even degree); a coil at 120.3 °C read
+    "≤ 120 °C" in a row the check failed as past 120 °C, and its error "120 °C, past the 120 °C"."""
+    from proleg.cli import check
+
+    out = _printed(capsys, [_row(coil_peak_c=104.5012)])
+    assert "coils ≤ 105 °C" in out and "hottest coil 105 °C" in out, out
+    hot = _row(possible=False, completed=False, fault="SMA_ON_LIMIT", coil_peak_c=120.3)
+    out = _printed(capsys, [_row(coil_peak_c=104.5012), hot])
+    assert "coils ≤ 120.3 °C" in out and "hottest coil 120.3 °C" in out, out
+    assert "heated a coil to 120.3 °C, past the 120 °C" in check._error(2, hot)

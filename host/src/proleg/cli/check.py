@@ -18,6 +18,7 @@ import sys
 from typing import Any
 
 from ..names import counted
+from ..physics.materials import shown_c
 from .main import EXIT_FAILED, EXIT_OK, robot_arg
 from .number_args import MAX_CHECK_ROWS, check_rows, gait_number, positive_int
 
@@ -223,7 +224,7 @@ def _error(i: int, r: Any) -> str:
         return f"the nominal row ({conds}): the firmware did not complete the gait ({r.what_happened()})"
     if r.hot_stop:
         return (f"row {i} ({conds}): nothing walks this gait here, but the firmware's stop heated a coil to "
-                f"{r.coil_peak_c:.0f} °C, past the 120 °C that wears NiTi out")
+                f"{shown_c(r.coil_peak_c)} °C, past the 120 °C that wears NiTi out")
     ideal = f"the idealised drive walks {r.idealised_mm_s:+.3f} mm/s" if r.idealised_mm_s is not None \
         else "the coils can walk it"
     return f"row {i} ({conds}): the firmware did not complete the gait ({r.what_happened()}), where {ideal}"
@@ -244,7 +245,7 @@ def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, nomin
         frac = _fraction(nominal, r)
         share = "" if i == 0 or frac is None else f"{frac:4.0%} of nominal"
         print(f"  {i:3d}  {conds:<{width}}  idealised {ideal:>11}  firmware {r.verdict:<10} "
-              f"{r.what_happened():<24} {share:>16}  coils ≤ {r.coil_peak_c:.0f} °C")
+              f"{r.what_happened():<24} {share:>16}  coils ≤ {shown_c(r.coil_peak_c)} °C")
     parts = [f"the coils can walk {s['possible']} of {s['rows']}: the firmware completed "
              f"{s['completed_where_possible']}" + (f", missed {s['missed']}" if s["missed"] else "")
              + (f", drifted back where the gait barely moves in {s['drifted']}" if s["drifted"] else "")]
@@ -258,7 +259,9 @@ def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, nomin
     if s["kept_75pct_of_nominal_where_possible"] is not None and s["possible"]:
         parts.append(f"{s['kept_75pct_of_nominal_where_possible']} of the {s['possible']} keep {KEPT:.0%} of the "
                      "nominal speed")
-    parts.append(f"hottest coil {s['hottest_c']:.0f} °C")
+    # from the rows' own peaks, as each row shows its own: s['hottest_c'] is rounded to 0.1 °C for
+    # --json, and 104.5012 read "≤ 105" in its row and "hottest coil 104" here (104.5 to the even degree)
+    parts.append(f"hottest coil {shown_c(max(r.coil_peak_c for r in [nominal, *rows]))} °C")
     print("  " + "; ".join(parts))
     for i, r in enumerate(rows, 1):
         if not r.possible and r.why_not:
