@@ -311,3 +311,20 @@ def test_a_one_limb_robot_on_the_physical_plant_is_told_what_can_simulate_it(tmp
     assert code == 2 and out == ""
     assert err.startswith(f"proleg: error: {robot}: the physical plant needs two limbs at least") and \
         "proleg sim --plant table" in err and len(err.strip().splitlines()) == 1
+
+
+def test_measure_matrix_that_makes_no_transition_fails_and_writes_no_file(capsys, tmp_path):
+    """At ambient_c=100 R1's coils are past Af before any heat (Ms 56 °C: they never come back),
+    so the idealised drive makes none of its 12 transitions. --measure-matrix printed a table of
+    '?', exit 0, and --out wrote the robot file as measured with every entry kept (an unmeasured
+    file's zeros became a measured table of zeros). Now: exit 1, one error line, no file; the
+    table is still printed (it says what was not made)."""
+    out_file = tmp_path / "hot.toml"
+    rc, out, err = run(capsys, "sim", str(R1), "--measure-matrix", "--condition", "ambient_c=100",
+                       "--out", str(out_file), "--json")
+    m = json.loads(out)
+    assert rc == 1 and len(m["not_made"]) == 12 and not any(map(any, m["samples"]))
+    assert "made none of the 12 allowed transitions" in err and f"--out {out_file} not written" in err, err
+    assert not out_file.exists()
+    rc, out, err = run(capsys, "sim", str(R1), "--measure-matrix", "--condition", "ambient_c=35", "--out", str(out_file))
+    assert rc == 0 and out_file.exists() and "error" not in err, err

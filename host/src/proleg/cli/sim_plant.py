@@ -13,6 +13,7 @@ import argparse
 import json
 import logging
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -154,7 +155,20 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     _, allowed = robot.transitions.dense()
     not_made = [(a, b) for a in range(len(m.states)) for b in range(len(m.states))
                 if a != b and allowed[a][b] and not m.samples[a][b]]
-    if args.out is not None:  # written before the table is printed: a reader that goes away (| head) loses no file
+    # none made: a measurement of nothing (R1 at ambient_c=100, its coils past Af before any heat) is a
+    # failure, not a matrix; its --out was the robot file with every entry "kept" (an unmeasured
+    # file's zeros, written as a measured table of zeros), and the command said so with exit 0
+    nothing = bool(not_made) and len(not_made) == robot.transitions.n_transitions
+    if nothing:
+        from ..robot_body import warned_step
+
+        why = ("the load warnings above say which states the body cannot hold" if
+               any(warned_step(robot, a, b) or warned_step(robot, b, a) for a, b in not_made) else
+               "the warnings above, if any, say why")
+        failure = (f"--measure-matrix: the idealised drive made none of the {robot.transitions.n_transitions} "
+                   f"allowed transitions on the simulated body under these conditions ({why}): nothing was measured"
+                   + (f"; --out {args.out} not written" if args.out is not None else ""))
+    if args.out is not None and not nothing:  # written before the table is printed: a reader that goes away (| head) loses no file
         from ..learn.robotfile import write_measured_robot
 
         if args.condition:  # the robot file's own [plant] describes the robot; --condition is a day's weather
@@ -165,7 +179,7 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         extra = {} if rng is None else rng.to_json()
         print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(),
                           "not_made": [f"{m.states[a]}->{m.states[b]}" for a, b in not_made], **extra}))
-        return 0
+        return _measured(failure if nothing else None)
     print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
     cells = [[None if x != x else _mm(x) for x in row] for row in m.matrix_mm]
@@ -192,7 +206,15 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
               "(mm, low..high):")
         _table(m.states, [[None if lo != lo else f"{_mm(lo)}..{_mm(hi)}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
-    return 0
+    return _measured(failure if nothing else None)
+
+
+def _measured(failure: str | None) -> int:
+    """``--measure-matrix``'s exit code: 1 with ``failure`` said on stderr (nothing was measured), else 0."""
+    if failure is None:
+        return 0
+    print(f"proleg: error: {failure}", file=sys.stderr)
+    return 1
 
 
 def _mm(x: float) -> str:
