@@ -67,6 +67,26 @@ def test_sim_json_echoes_the_conditions_given_and_those_in_effect(capsys, tmp_pa
     assert report["plant"] == "table" and report["conditions"] == report["effective_conditions"] == []
 
 
+def test_effective_conditions_name_each_limb_and_coil_once_and_can_be_given_back(capsys, tmp_path):
+    """A robot file's overlap_mm = 20 and imu_bias_deg = [1, 2] under --condition overlap_mm=right:14
+    and imu_bias_deg=0:3 (the right limb's coil, the first limb): effective_conditions listed
+    'overlap_mm=sma-right:20.0' and 'overlap_mm=right:14.0', 'imu_bias_deg=left:1.0' and
+    'imu_bias_deg=0:3.0', each item twice, and given back as --condition (which the docs promise)
+    they were refused: "both name actuator 'sma-right'". Each is listed once now, by the name its
+    value was last given by (the value the plant uses), and the same run comes out of R1 with them."""
+    path = tmp_path / "paper-r1.toml"
+    path.write_text(R1.read_text() + "\n[plant]\noverlap_mm = 20.0\nimu_bias_deg = [1.0, 2.0]\n")
+    rc, out, _ = run(capsys, "sim", str(path), "--duration", "5", "--json", "--condition", "overlap_mm=right:14",
+                     "--condition", "imu_bias_deg=0:3")
+    report = json.loads(out)
+    assert rc == 0 and sorted(report["effective_conditions"]) == [
+        "imu_bias_deg=0:3.0", "imu_bias_deg=right:2.0", "overlap_mm=right:14.0", "overlap_mm=sma-left:20.0"]
+    given = [a for c in report["effective_conditions"] for a in ("--condition", c)]
+    rc, out, err = run(capsys, "sim", str(R1), "--duration", "5", "--json", *given)
+    assert rc == 0, err
+    assert json.loads(out)["displacement_mm"] == report["displacement_mm"]
+
+
 @pytest.mark.parametrize("args, words", [
     (["--condition", "speed=3"], "condition 'speed': unknown key"),
     # the robot's own body and coils are the robot file's: "unknown key" did not say where they go

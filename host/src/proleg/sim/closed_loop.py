@@ -218,16 +218,16 @@ def plant_conditions(robot: Robot, conditions: Any = None) -> Any:
     """The physical plant's ``Conditions`` for ``robot``: its robot file's ``[plant]`` values,
     with ``conditions`` (strings, a mapping or a ``Conditions``) on top."""
     from .physical import Conditions, parse_conditions
-    from .physical.conditions import check_given_once, coil_of_limb, conditions_from_section
+    from .physical.conditions import by_item_name, check_given_once, coil_of_limb, conditions_from_section
 
-    base = conditions_from_section(robot.plant, [a.name for a in robot.actuators], [lb.name for lb in robot.limbs])
+    limbs, acts = [lb.name for lb in robot.limbs], [a.name for a in robot.actuators]
+    base = conditions_from_section(robot.plant, acts, limbs)
     if isinstance(conditions, Conditions):
-        return _merge(base, conditions)
+        return by_item_name(_merge(base, conditions), limbs, acts, coil_of_limb(robot))
     parsed = parse_conditions(conditions or [], base)  # a name given twice: its own error
     if conditions and not isinstance(conditions, Mapping):
-        check_given_once(conditions, [lb.name for lb in robot.limbs], [a.name for a in robot.actuators],
-                         coil_of_limb(robot))
-    return parsed
+        check_given_once(conditions, limbs, acts, coil_of_limb(robot))
+    return by_item_name(parsed, limbs, acts, coil_of_limb(robot))  # each limb and coil once
 
 
 def condition_strings(conditions: Any) -> list[str]:

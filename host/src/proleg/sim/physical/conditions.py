@@ -254,6 +254,26 @@ def check_given_once(items: Iterable[str], limbs: Sequence[str], actuators: Sequ
         seen[key, index] = item
 
 
+def by_item_name(cond: Conditions, limbs: Sequence[str], actuators: Sequence[str],
+                 by_limb: Sequence[int] = ()) -> Conditions:
+    """``cond`` with one per-limb or per-actuator value for each limb or actuator, the last given
+    (as the plant reads them: ``Conditions.for_index``), under the name it was given by. A robot
+    file's ``overlap_mm = 20`` (listed as ``sma-right:20``) under ``--condition overlap_mm=right:14``
+    kept both, so ``effective_conditions`` named the coil twice, and given back as
+    ``--condition`` they were refused ("both name actuator 'sma-right'")."""
+    named: dict[str, dict[str, float]] = {}
+    for key, per in cond.named.items():
+        per_limb = KEYS[key].per == "limb"
+        names = limbs if per_limb else actuators
+        last: dict[int, str] = {}   # item -> the name its value was last given by
+        for name in per:
+            if name:
+                last[_resolve(key, name, names, () if per_limb else by_limb, () if per_limb else limbs)] = name
+        kept = set(last.values())
+        named[key] = {name: v for name, v in per.items() if not name or name in kept}
+    return replace(cond, named=named)
+
+
 def describe_keys() -> str:
     """One line per key: name, unit, range, default, what it does."""
     out = []
