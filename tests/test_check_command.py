@@ -128,6 +128,28 @@ def test_base_conditions_go_into_every_row(capsys):
         assert not any(c.startswith("power=") for c in r["conditions"][1:])
 
 
+def test_what_the_robot_file_says_the_robot_is_is_not_drawn(capsys, monkeypatch, tmp_path):
+    """A 15 g robot with worn coils is checked as that robot: its file's mass_g and
+    fatigue_cycles are held, not replaced by draws about the paper robot's; the environment
+    (power, ambient, ...) is still drawn, and a robot file without them draws them as before."""
+    seen = []
+
+    def fake(robot, conditions, run_s, **kw):
+        seen.append(tuple(conditions))
+        return _row(conditions=tuple(conditions))
+    monkeypatch.setattr(sweep, "run_row", fake)
+    mine = tmp_path / "heavy.toml"
+    mine.write_text(R1.read_text() + "\n[plant]\nmass_g = 15\nfatigue_cycles = 25000\n")
+    for path, held in ((mine, ["fatigue_cycles", "mass_g"]), (R1, [])):
+        seen.clear()
+        rc, out, _ = run(capsys, "check", str(path), "--rows", "40", "--seed", "3", "--jobs", "1", "--json")
+        assert rc == 0 and json.loads(out)["held"] == held
+        drawn = {c.partition("=")[0] for row in seen for c in row}
+        assert drawn.isdisjoint(held) and "power" in drawn
+        if not held:
+            assert {"mass_g", "fatigue_cycles"} <= drawn  # seed 3 draws both in 40 rows
+
+
 def test_a_missed_row_fails_the_check_and_says_which(capsys, monkeypatch):
     def fake(robot, conditions, run_s, **kw):
         hot = "power=" in " ".join(conditions)

@@ -103,7 +103,12 @@ def cmd_check(args: argparse.Namespace) -> int:
         print(f"proleg: error: {robot.name}: gait {args.gait} ({label}) cannot be checked{on}: {nominal.why_not}. "
               f"{advice}", file=sys.stderr)
         return EXIT_FAILED
-    draws = sweep.draw_rows(args.rows, args.seed, [limb.name for limb in robot.limbs], leave_out=tuple(base_keys))
+    held = sorted(k for k in sweep.ROBOT_KEYS if k in robot.plant.given and k not in base_keys)
+    if held:
+        log.info("%s: %s held at the robot file's [plant] values (what the robot is, not drawn)", robot.name,
+                 ", ".join(held))
+    draws = sweep.draw_rows(args.rows, args.seed, [limb.name for limb in robot.limbs],
+                            leave_out=tuple(base_keys | set(held)))
     rows_conditions = [base + d for d in draws]
     if args.board != "host-sim":
         from ..sim.simulated_boards import simulated_board
@@ -135,7 +140,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({
             "robot": robot.name, "board": args.board, "gait": args.gait, "states": label, "direction": args.direction,
-            "seed": args.seed, "conditions": list(base), "run_s": run_s,
+            "seed": args.seed, "conditions": list(base), "held": held, "run_s": run_s,
             "idealised_nominal_mm_s": None if nominal.speed_mm_s is None else round(nominal.speed_mm_s, 4),
             "nominal": nominal_row.to_json(), "rows": [r.to_json() for r in rows], "summary": summary,
             "ok": not failed, "errors": errors,

@@ -52,6 +52,12 @@ DRAWS: dict[str, Callable[[random.Random, Sequence[str]], str]] = {
     "mass_g": lambda r, _: f"{r.uniform(3, 8):.1f}",
 }
 
+#: Keys that say what the robot is (its mass, its coils' overlap, how worn they are) rather than
+#: what it meets: a robot file whose ``[plant]`` gives one is checked as that robot, the key held
+#: at the file's value and not drawn (the draws are absolute values about the paper robot's: a
+#: 15 g robot drew rows of 3–8 g, a coil worn 25,000 cycles rows of less wear).
+ROBOT_KEYS = ("mass_g", "overlap_mm", "fatigue_cycles")
+
 #: The limb names of the bench's draws: the claim grid's (the first and last limb).
 GRID_LIMBS = ("rear", "front")
 
