@@ -255,6 +255,27 @@ def test_a_duty_advice_under_one_percent_is_not_printed_as_zero(caplog):
     assert 0.001 < advised < 0.01, warned[0]
 
 
+def test_a_steady_state_past_the_melting_point_is_not_printed_as_a_temperature(caplog):
+    """R1 at 60 V: its coil at max_duty "would settle at 10519 °C", a temperature no wire has
+    (NiTi melts at about 1310 °C): it is said to heat past the melting point instead. 20 V
+    (about 1,000 °C, below it) still names its temperature."""
+    import logging
+
+    from proleg.physics.materials import NITI_MELT_C
+    from proleg.sim.closed_loop import make_plant
+
+    for volts, past_melting in ((60.0, True), (20.0, False)):
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="proleg"):
+            plant = make_plant(r1_with_plant({"supply_v": volts}), "physical")
+        hot = max(plant.steady_coil_temperature_c(0.8))
+        assert (hot > NITI_MELT_C) == past_melting, hot
+        warned = [r.getMessage() for r in caplog.records if "trained shape" in r.getMessage()]
+        assert len(warned) == 2, warned
+        for w in warned:
+            assert ("where NiTi melts" in w) == past_melting and ("would settle at" in w) != past_melting, w
+
+
 def _settled_psi(robot, conditions, duty: float, seconds: float = 20.0) -> float:
     """The first limb's ψ once its coil (channel 0) has been held at ``duty`` for ``seconds`` on the
     physical plant, every other coil off."""

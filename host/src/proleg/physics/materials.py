@@ -34,6 +34,9 @@ def shown_c(t: float) -> str:
 #: medical-grade Nitinol wire", Min. Invas. Ther. & Allied Technol. 9 (2000); Dynalloy
 #: F1140Rev J). A supply that can hold a coil there within the safety envelope is a mistake.
 NITI_ANNEAL_C = 400.0
+#: NiTi melts at about 1310 °C (ASM Handbook vol. 2, "Shape memory alloys"; Fort Wayne Metals'
+#: Nitinol data sheet, 1310 °C). A steady state computed past it describes no wire: the wire is gone.
+NITI_MELT_C = 1310.0
 NITI_RESISTIVITY_OHM_M = 0.80e-6          # between martensite (0.76) and austenite (0.82)
 
 # --- air at a film temperature of ≈ 50 °C (1 atm) -----------------------------------------------

@@ -168,7 +168,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     envelope lets heat too far: the envelope bounds duty and on-time, not energy.
 
     - ``max_duty`` held would heat it to where NiTi loses its trained shape (``NITI_ANNEAL_C``):
-      such a supply ruins a coil within the envelope (R1 at 60 V: about 10,000 °C; at its own
+      such a supply ruins a coil within the envelope (R1 at 60 V: past NiTi's melting point; at its own
       7.4 V: 185 °C, which the on-time and mean-duty limits keep it from holding); else, each
       on its own line, the two ceilings below past ``NITI_OVERHEAT_C``, the mean-duty one
       first (lowering it lowers a default hold ceiling too);
@@ -180,7 +180,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
     - the mean-duty ceiling (``safety.max_mean_duty``, at most ``max_duty``: what the
       envelope lets a coil average for ever, whatever the host commands) held would settle past
       ``NITI_OVERHEAT_C`` (R1 nominal: 115 °C at 0.45; at 1.3× its power, ``power=1.3``, 142 °C)."""
-    from ..physics.materials import NITI_ANNEAL_C, NITI_OVERHEAT_C, shown_c
+    from ..physics.materials import NITI_ANNEAL_C, NITI_MELT_C, NITI_OVERHEAT_C, shown_c
 
     duty = robot.safety.max_duty
     ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)
@@ -201,7 +201,11 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
             safe = duty * (NITI_ANNEAL_C - amb) / (hot - amb)
             # two significant digits below 0.01: 60 V with power=2 advised "max_duty below 0.00"
             shown = f"{safe:.2f}" if safe >= 0.01 else f"{safe:.2g}"
-            out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} would settle at {hot:.0f} °C with "
+            # past the melting point a steady state is no temperature the wire would have (R1 at 60 V:
+            # "about 10,519 °C"): the wire melts first
+            settles = (f"would settle at {hot:.0f} °C" if hot < NITI_MELT_C else
+                       f"would heat past the {NITI_MELT_C:.0f} °C where NiTi melts")
+            out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} {settles} with "
                        f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
                        f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {shown}")
             continue
