@@ -45,6 +45,9 @@ def test_conditions_parse_scalars_and_per_limb_values():
     ("power=abc", "expected a number"),
     ("power", "expected key=value"),
     ("power=left:1", "takes one number"),
+    ("ambient_c=1_0", "expected a number"),  # float() reads it as 10
+    ("imu_bias_deg=:3", "expected NAME:value with a limb name"),  # was every limb
+    ("power_scale= :0.9", "with an actuator name"),
 ])
 def test_a_bad_condition_is_one_clear_line(item, words):
     with pytest.raises(SimError) as e:

@@ -161,6 +161,8 @@ def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] =
 def _number(key: str, text: str) -> float:
     spec = KEYS[key]
     try:
+        if "_" in text:  # Python's float() reads "1_0" as 10: a typo, not a number to take
+            raise ValueError(text)
         v = float(text)
     except ValueError:
         raise SimError(f"condition {key}: expected a number{_in_unit(spec.unit)}, got {text!r}") from None
@@ -212,6 +214,10 @@ def parse_conditions(items: Iterable[str] | Mapping[str, Any], base: Conditions 
             values[key] = _number(key, val)
         else:
             name, colon, num = val.rpartition(":")
+            if colon and not name.strip():  # ":3" read as every item: a name left out by mistake
+                article = "an" if spec.per[0] in "aeiou" else "a"
+                raise SimError(f"condition {key}: expected NAME:value with {article} {spec.per} name or index before "
+                               f"':', or a bare value for every {spec.per}, got {val!r}")
             per = named.setdefault(key, {})
             if not colon:
                 # a bare value goes on top of every item ``base`` names: a robot file's
