@@ -219,6 +219,10 @@ def test_run_exits_1_when_the_robot_refuses_to_start(capsys):
     assert code == 1
     assert "START failed" in err and "robot refused START" in err
     assert "did not start" in out and "for 1 s" not in out  # it never ran
+    # a --sim board is this command's alone: the NACK's "load one first" cannot be followed, so
+    # the way that can is named (a board that stays, on a pty)
+    assert "warning: --gait user --sim: the simulated board lives for this command only" in err
+    assert "paper-r1.toml --pty, then proleg load-gait" in err and "--port PTY --gait user" in err
     code, out, _ = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "--format", "jsonl")
     result = json.loads(out.strip().splitlines()[-1])
     assert code == 1 and result["ok"] is False and result["duration_s"] == 0.0

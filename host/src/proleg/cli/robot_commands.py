@@ -97,6 +97,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     direction = args.direction or (UNSTATED if gait == GAIT_USER else "+x")
     if choice is not None:
         gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
+    elif gait == GAIT_USER and args.sim:
+        # a --sim board is this command's alone: no load-gait can have reached it (QA hunt: the
+        # NACK's "load one first" could not be followed); the refusal below still stands, exit 1
+        log.warning("warning: --gait user --sim: the simulated board lives for this command only, so no gait was loaded "
+                    "into it and START will be refused (NO_GAIT). To run a sequence of your own on the simulator, "
+                    "start one that stays: proleg sim %s --pty, then proleg load-gait %s --port PTY SEQ and proleg "
+                    "run %s --port PTY --gait user", args.robot, args.robot, args.robot)
     try:
         client = open_client(args, args.robot, speed=args.speed, robot=robot)
     except KeyboardInterrupt:
