@@ -92,6 +92,9 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["run", R1, "--gait", "-1"], "argument --gait: expected a gait index ≥ 0, got -1"),
         (["run", R1, "--gait", "x"], "argument --gait: expected a gait index or 'user', got 'x'"),
         (["run", R1, "--duration", "soon"], "argument --duration: expected a number, got 'soon'"),
+        (["run", R1, "--duration", "1_0"], "argument --duration: expected a number, got '1_0'"),  # float(): 10
+        (["run", R1, "--sim", "--progress", "0.00001"],
+         "argument --progress: expected at least 0.1 s between progress lines, got 0.00001"),
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),
         (["learn", R1, "--node", "one"], "argument --node: expected an integer (0x.. for hex), got 'one'"),
         (["learn", R1, "--repeats", "-3"], "argument --repeats: expected at least 1, got -3"),

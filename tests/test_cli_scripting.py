@@ -102,6 +102,15 @@ def test_build_accepts_a_bundled_robot_name(capsys, tmp_path, monkeypatch):
     assert "built paper-r1 for arduino-nano" in out
 
 
+def test_progress_lines_come_once_a_period_of_the_run_and_end_with_it(capsys):
+    """--progress 0.1 over a 1 s run: the start line and one line a period, none from the
+    STOP's tail after it (a "0.2 s" line followed a 0.1 s run)."""
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", "--progress", "0.1")
+    times = [float(line.split("proleg: ")[1].split(" s:")[0]) for line in err.splitlines() if " s: " in line]
+    assert code == 0 and "started gait 0" in err
+    assert len(times) == 10 and times == sorted(times) and max(times) <= 1.0 + 1e-6, err
+
+
 def test_verbosity_flags_control_progress_on_stderr(capsys):
     code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2")
     assert code == 0, err

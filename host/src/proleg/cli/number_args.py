@@ -135,6 +135,20 @@ def positive_float(text: str) -> float:
     return v
 
 
+#: The shortest ``run --progress`` period: a line per tenth of a second of the run at most (a
+#: shorter period printed the same line once per pass of the receive loop: 10,002 lines for
+#: ``--progress 0.00001 --duration 0.1``).
+MIN_PROGRESS_S = 0.1
+
+
+def progress_period(text: str) -> float:
+    """``run --progress``: seconds between progress lines, at least ``MIN_PROGRESS_S``."""
+    v = positive_float(text)
+    if v < MIN_PROGRESS_S:
+        raise argparse.ArgumentTypeError(f"expected at least {MIN_PROGRESS_S:g} s between progress lines, got {text}")
+    return v
+
+
 #: The shortest reply timeout the CLI takes: a reply frame takes a few ms at 115200 baud
 #: (the simulated board answers within a tick or two), so a shorter one could never succeed.
 MIN_REPLY_TIMEOUT_S = 0.01
@@ -161,6 +175,8 @@ def heading_deg(text: str) -> float:
 
 def _float(text: str, expected: str) -> float:
     try:
+        if "_" in text:  # float() reads "1_0" as 10: a typo, not a number to take
+            raise ValueError(text)
         return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None

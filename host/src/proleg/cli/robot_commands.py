@@ -20,7 +20,7 @@ from typing import Any
 from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..names import counted
-from .number_args import gait_index, heading_deg, param_index, positive_float
+from .number_args import gait_index, heading_deg, param_index, positive_float, progress_period
 from .robot_link import add_link_options, link_settings, open_client
 
 log = logging.getLogger("proleg")
@@ -412,7 +412,8 @@ def add_arguments(subparsers: Any) -> None:
     add_udp_options(r)
     r.add_argument("--format", choices=("text", "jsonl"), default="text",
                    help="text: a summary; jsonl: every message as a JSON line, then a RESULT line")
-    r.add_argument("--progress", type=positive_float, default=1.0, metavar="S", help="progress every S seconds")
+    r.add_argument("--progress", type=progress_period, default=1.0, metavar="S",
+                   help="progress every S seconds of the run (at least 0.1; default 1)")
     r.add_argument("--speed", type=positive_float, default=None,
                    help="with --sim: times real time (default: as fast as possible)")
     r.add_argument("--no-replan", dest="replan", action="store_false",

@@ -11,6 +11,7 @@ refuses a gait index the robot does not have.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable
 
 from ..errors import GaitError, Interrupted, LinkError
@@ -95,7 +96,7 @@ def run_gait_on(
     targets = [*listeners, report] + ([replanner] if replanner is not None else [])
     clock = client.link.clock
 
-    def pump(seconds: float) -> None:
+    def pump(seconds: float, report_progress: bool = True) -> None:
         deadline = clock() + seconds
         next_progress = clock() + progress_every_s
         while True:
@@ -108,8 +109,10 @@ def run_gait_on(
                     listener.on_message(rx)
             if replanner is not None:
                 replanner.poll()  # type: ignore[attr-defined]
-            if progress is not None and clock() >= next_progress - _EPS:
-                next_progress += progress_every_s
+            if report_progress and progress is not None and clock() >= next_progress - _EPS:
+                # one line however many periods a stalled loop missed, the next a period on
+                missed = math.floor((clock() - next_progress) / progress_every_s + _EPS)
+                next_progress += (max(0, missed) + 1) * progress_every_s
                 progress(f"{clock() - t0:6.1f} s: {counted(run.telemetry_frames, 'frame')}, "
                          f"{counted(max(0, len(run.states_reached)), 'state')} reached, "
                          f"{counted(len(run.faults), 'fault')}")
@@ -141,7 +144,7 @@ def run_gait_on(
     t_stop = clock()
     if not command("STOP"):
         command("ESTOP")  # the coils must go cold whatever the link does
-    pump(STOP_TAIL_S - (clock() - t_stop))
+    pump(STOP_TAIL_S - (clock() - t_stop), report_progress=False)  # the run's lines end with it
     run.telemetry_lost = client.stats.lost
     return run
 
