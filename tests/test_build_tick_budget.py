@@ -79,8 +79,8 @@ def test_the_nano_refuses_a_one_limb_robot_at_10_khz_for_its_budget_the_lower_li
     one = dataclasses.replace(one, limbs=one.limbs[:1])
     with pytest.raises(BuildError) as e:
         check_tick_budget(one, load_board("arduino-nano"))
-    assert "1 limb needs 539 µs per tick (389 + 1 × 150 µs, [budget] of arduino-nano.toml)" in str(e.value)
-    assert str(e.value).endswith("at most 1298 Hz")  # the I2C reads would take 3,571
+    assert "1 limb needs 541 µs per tick (391 + 1 × 150 µs, [budget] of arduino-nano.toml)" in str(e.value)
+    assert str(e.value).endswith("at most 1293 Hz")  # the I2C reads would take 3,571
 
 
 def test_the_rate_a_refused_tick_names_builds_where_the_i2c_reads_allow_less_than_the_budget(tmp_path, capsys):
