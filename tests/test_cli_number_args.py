@@ -119,3 +119,17 @@ def test_a_bad_number_is_one_line_naming_the_option_and_exit_2(capsys, argv, lin
     assert exit_.value.code == 2
     assert err.strip().splitlines()[-1].endswith(line)
 
+
+
+def test_every_command_that_takes_can_takes_its_settings_too():
+    """learn took --can with no --bitrate: a CAN robot at another bit rate could not be learned."""
+    import argparse
+
+    from proleg.cli.main import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    with_can = {name: {o for a in p._actions for o in a.option_strings}
+                for name, p in sub.choices.items() if any("--can" in a.option_strings for a in p._actions)}
+    assert {"learn", "run", "console", "calibrate"} <= set(with_can)
+    for name, options in with_can.items():
+        assert {"--bitrate", "--node", "--interface"} <= options, name

@@ -145,7 +145,7 @@ def test_without_proc_locks_the_line_is_generic(monkeypatch):
 
     monkeypatch.setattr(port_lock, "lock_holder", lambda port: None)
     assert busy_message("/dev/ttyUSB0", "flash through") == (
-        "cannot flash through /dev/ttyUSB0: another program has it open (a proleg console, run, record or learn?); "
+        "cannot flash through /dev/ttyUSB0: another program has it open (a proleg console, run, learn or calibrate?); "
         "close it first")
 
 

@@ -1,6 +1,6 @@
 """The one lock on a serial device that every proleg tool takes before using it.
 
-A console, ``run``, ``record`` or ``learn`` (``SerialLink``) and ``proleg flash`` (around the
+A console, ``run``, ``learn``, ``calibrate``, ``load-gait`` or ``set-param`` (``SerialLink``) and ``proleg flash`` (around the
 flash tool: avrdude and stm32flash take no lock of their own) each hold an exclusive
 ``flock`` on the device while they use it, taken before anything touches the port (no
 termios change, no byte written). A second one is refused with one line naming the port,
@@ -29,7 +29,7 @@ except ImportError:  # pragma: no cover (Windows)
     fcntl = None  # type: ignore[assignment]
 
 #: the proleg commands that may hold a port, as a holder's command line names them
-_COMMANDS = ("flash", "console", "run", "record", "learn", "calibrate", "plot", "load-gait", "set-param")
+_COMMANDS = ("flash", "console", "run", "learn", "calibrate", "plot", "load-gait", "set-param")
 
 
 class PortBusy(LinkError):
@@ -113,7 +113,7 @@ def busy_message(port: str, doing: str = "open serial port") -> str:
     """One line: the port is in use, by whom if that can be read, and what to do."""
     holder = lock_holder(port)
     if holder is None:
-        who, then = "another program has it open (a proleg console, run, record or learn?)", "close it first"
+        who, then = "another program has it open (a proleg console, run, learn or calibrate?)", "close it first"
     elif holder[1] == "flash":
         who, then = f"proleg flash is writing firmware through it (pid {holder[0]})", "wait for the flash to end"
     elif holder[1]:

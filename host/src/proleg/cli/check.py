@@ -54,8 +54,9 @@ def add_arguments(sub) -> None:
 
     c.add_argument("--board", choices=tuple(SIMULATED_BOARDS), default="host-sim",
                    help="host-sim: the firmware's C on the host (default, 0.5-6 s a row); avr-emu / "
-                        "arm-emu: the exact arduino-nano / bluepill firmware.elf on an emulated MCU (about "
-                        "half real time: 20-50 s a row)")
+                        "arm-emu: the exact arduino-nano / bluepill firmware.elf on an emulated MCU (avr-emu about "
+                        "twice real time, arm-emu 0.4-0.6x: a 40 s row takes about 20 s / 65-105 s; "
+                        "bench/results/mcu.json)")
     c.add_argument("--jobs", type=positive_int, default=None, metavar="N",
                    help="rows run at once (default: the machine's cores)")
     c.add_argument("--json", action="store_true", help="print the report as one JSON object")

@@ -41,7 +41,7 @@ log = logging.getLogger("proleg")
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import baudrate, can_node, positive_float, positive_int, reply_timeout
+    from .number_args import baudrate, can_bitrate, can_node, positive_float, positive_int, reply_timeout
     from .gait import _penalty
     from .robot_link import DEFAULT_BAUDRATE
 
@@ -57,6 +57,8 @@ def add_arguments(subparsers: Any) -> None:
                      help="ROBOT's firmware on the simulated board, in closed loop with the physical plant (or --plant)")
     p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
                                        "else socketcan)")
+    p.add_argument("--bitrate", type=can_bitrate, metavar="BIT/S",
+                   help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
     p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
     p.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
     p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
