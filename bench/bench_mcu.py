@@ -203,7 +203,9 @@ def run_mcu(measure_one, board: str, cases: list) -> dict[str, dict]:
         try:
             rows[name] = measure_one(robot)
         except (BuildError, ProlegError) as e:
-            rows[name] = {"skipped": f"does not build or run on {board}: {str(e).splitlines()[0]}"}
+            # the checkout's own path is not part of the result (it named another clone's /tmp)
+            why = str(e).splitlines()[0].replace(f"{ROOT}/", "")
+            rows[name] = {"skipped": f"does not build or run on {board}: {why}"}
         print(f"  {board} {name}: done", flush=True)
     return rows
 
