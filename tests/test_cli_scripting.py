@@ -69,7 +69,8 @@ def test_a_board_built_from_another_robot_exits_1_as_the_documented_rule_says(ca
     assert "runs robot 'paper-r1', not 'paper-r3'" in err and "give the robot file it was built from" in err
     readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8").split())
     assert ("the board does not run the firmware of the robot file given); **2** usage (a bad argument, "
-            "an output directory that does not exist, a robot or board file that does not load, a bad gait)") in readme
+            "an output directory that does not exist, a robot or board file or a recording (`proleg plot`) that does "
+            "not load, a bad gait)") in readme
     with pytest.raises(SystemExit):
         main(["--help"])
     assert "the board does not run the firmware of the robot file given" in " ".join(capsys.readouterr().out.split())
@@ -231,10 +232,33 @@ def test_run_exits_1_when_the_robot_refuses_to_start(capsys):
     # a --sim board is this command's alone: the NACK's "load one first" cannot be followed, so
     # the way that can is named (a board that stays, on a pty)
     assert "warning: --gait user --sim: the simulated board lives for this command only" in err
-    assert "paper-r1.toml --pty, then proleg load-gait" in err and "--port PTY --gait user" in err
+    assert "give the sequence to run itself: --states SEQ" in err
     code, out, _ = run(capsys, "run", "paper-r1", "--sim", "--gait", "user", "--duration", "1", "--format", "jsonl")
     result = json.loads(out.strip().splitlines()[-1])
     assert code == 1 and result["ok"] is False and result["duration_s"] == 0.0
+
+
+def test_run_states_loads_and_runs_a_sequence_in_its_own_session(capsys):
+    """run --states SEQ: the sequence is loaded in run's own session (a Nano resets when its port
+    opens, and a --sim board is new to each command, so load-gait then run --gait user cannot
+    work there) and the board runs it: R1's paper sequence C_T1, cycle after cycle."""
+    code, out, err = run(capsys, "run", "paper-r1", "--sim", "--states", "00,10,01", "--direction", "+x",
+                         "--duration", "20", "--format", "jsonl")
+    result = json.loads(out.strip().splitlines()[-1])
+    assert code == 0 and result["ok"], err
+    reached = result["states_reached"]
+    cycle = ["00", "10", "01"]
+    k = reached.index("00")
+    assert reached[k:k + 7] == (cycle * 3)[:7]
+    assert result["cycles"] >= 2 and result["gait"] == 255 and result["direction"] == "+x"
+    for argv, says in ((("--states", "00,10,01", "--gait", "0"), "--states: the gait to run; leave out --gait"),
+                       (("--states", "00,10,10"), "--states: 10 follows itself"),
+                       (("--states", "00,1x"), "--states:")):
+        code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", *argv)
+        assert code == 2 and says in err and out == "", (argv, err)
+    # a step the robot file forbids is refused before anything is sent, as load-gait refuses it
+    code, out, err = run(capsys, "run", "paper-r1-one-actuator", "--sim", "--duration", "1", "--states", "00,01,11")
+    assert code == 2 and "--states: 00 → 01 is forbidden" in err, err
 
 
 def test_run_on_a_faulting_robot_reports_the_fault(tmp_path):

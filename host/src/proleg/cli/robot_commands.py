@@ -92,18 +92,22 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.speed is not None and not args.sim:  # a real board keeps its own time
         raise UsageError("--speed: only with --sim (a simulated board's pace; a real one runs in real time)")
     fw, choice = heading_choice(args, robot)
+    own = None
+    if args.states is not None:  # loaded in this session: a Nano resets on each open, a --sim board is new
+        if choice is not None or args.gait is not None:
+            raise UsageError("--states: the gait to run; leave out --gait, --heading and --rotate")
+        own = user_gait(robot, args.states, "--states")
+        args.gait = GAIT_USER
     gait = args.gait if args.gait is not None else 0
     # the loaded sequence's way is stated only by --direction (the climb guard checks it)
     direction = args.direction or (UNSTATED if gait == GAIT_USER else "+x")
     if choice is not None:
         gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
-    elif gait == GAIT_USER and args.sim:
+    elif gait == GAIT_USER and args.sim and own is None:
         # a --sim board is this command's alone: no load-gait can have reached it (QA hunt: the
         # NACK's "load one first" could not be followed); the refusal below still stands, exit 1
         log.warning("warning: --gait user --sim: the simulated board lives for this command only, so no gait was loaded "
-                    "into it and START will be refused (NO_GAIT). To run a sequence of your own on the simulator, "
-                    "start one that stays: proleg sim %s --pty, then proleg load-gait %s --port PTY SEQ and proleg "
-                    "run %s --port PTY --gait user", args.robot, args.robot, args.robot)
+                    "into it and START will be refused (NO_GAIT); give the sequence to run itself: --states SEQ")
     try:
         client = open_client(args, args.robot, speed=args.speed, robot=robot)
     except KeyboardInterrupt:
@@ -119,11 +123,12 @@ def cmd_run(args: argparse.Namespace) -> int:
                    if direction in fw else None)
         if choice is not None and choice.index is not None:
             check_library_hash(info, robot, fw, client.link.description, simulated=bool(getattr(args, "sim", False)))
-        if choice is not None and choice.index is None:
+        loaded = own if own is not None else choice.states if choice is not None and choice.index is None else None
+        if loaded is not None:
             from ..gait.feasibility import loaded_start
 
             known = client.wait_known_state()  # a loaded gait starts where the robot stands (no entry path)
-            client.load_gait(choice.states if known is None else loaded_start(robot, choice.states, known.measured))
+            client.load_gait(loaded if known is None else loaded_start(robot, loaded, known.measured))
         meta = RecordingMeta.for_robot(info=info, robot=robot, link=client.link)
         listeners: list[Any] = []
         try:
@@ -253,23 +258,24 @@ SIM_IS_FRESH = ("note: a --sim board lives for this command only; the next comma
                 "(proleg console --sim, or proleg sim --pty with --port, keeps one board running)")
 
 
-def cmd_load_gait(args: argparse.Namespace) -> int:
-    from ..robot import load_robot
-
-    robot = load_robot(args.robot)
+def user_gait(robot: Any, text: str, what: str = "STATES") -> list[int]:
+    """The closed walk ``text`` names (``00,10,11,01`` or with the start repeated), checked as
+    the board would check it (GaitError naming ``what``: a forbidden step, too many steps), and
+    warned of where proleg build would warn of its own gaits (a step the robot cannot make, a
+    fault to expect; a loaded gait has no entry path from rest)."""
     table = robot.transitions
     try:
-        states = table.cycle(args.states, [limb.name for limb in robot.limbs])
+        states = table.cycle(text, [limb.name for limb in robot.limbs])
     except ValueError as e:
-        raise GaitError(f"STATES: {e}") from None
+        raise GaitError(f"{what}: {e}") from None
     from ..protocol.definition import MAX_GAIT_STEPS
 
     if len(states) > MAX_GAIT_STEPS:
-        raise GaitError(f"STATES: a gait of {len(states)} steps; the firmware holds a user gait of at most "
+        raise GaitError(f"{what}: a gait of {len(states)} steps; the firmware holds a user gait of at most "
                         f"{MAX_GAIT_STEPS} (the start state is not repeated at the end)")
     for a, b in zip(states, [*states[1:], states[0]]):  # the board refuses these: say which, before sending
         if table.lookup(a, b) is None:
-            raise GaitError(f"STATES: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
+            raise GaitError(f"{what}: {table.label(a)} → {table.label(b)} is forbidden in {robot.name}'s robot file "
                             "(\"x\" in its matrix); the board refuses it (FORBIDDEN_TRANSITION)")
     from ..firmware.gaits import CANNOT_MAKE
     from ..gait.feasibility import gait_problems, rest_start_warning
@@ -281,7 +287,16 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
     for p in gait_problems(robot, states, from_rest=False):
         if p.severity == "error":
             why = "the robot cannot make it" if p.kind in CANNOT_MAKE else "expect a fault"
-            log.warning("warning: STATES: %s: %s", why, p.message)
+            log.warning("warning: %s: %s: %s", what, why, p.message)
+    return states
+
+
+def cmd_load_gait(args: argparse.Namespace) -> int:
+    from ..robot import load_robot
+
+    robot = load_robot(args.robot)
+    table = robot.transitions
+    states = user_gait(robot, args.states)
     with open_client(args, args.robot, robot=robot) as client:
         client.load_gait(states)
         print(f"loaded {' → '.join(table.label(x) for x in [*states, states[0]])} as the user gait on {client.link.description} "
@@ -398,6 +413,10 @@ def add_arguments(subparsers: Any) -> None:
     r.add_argument("--direction", choices=("+x", "-x"), default=None,
                    help="default +x; with --gait user, the way the loaded sequence walks, which the "
                         "firmware's climb guard checks ([control] max_climb_deg; unstated by default)")
+    r.add_argument("--states", metavar="SEQ",
+                   help="run this closed walk of state labels (00,10,11,01 or with the start repeated), loaded "
+                        "in this session (LOAD_GAIT) as load-gait would: a Nano resets when its port opens, so "
+                        "a gait loaded by an earlier command is gone; --direction states its way")
     steer = r.add_mutually_exclusive_group()
     steer.add_argument("--heading", type=heading_deg, metavar="DEG",
                        help="run the gait library's gait for this heading (0 = +x, 90 = +y; the nearest the "
