@@ -212,6 +212,38 @@ def test_measure_matrix_hold_range_prints_each_entrys_low_and_high(capsys, monke
     assert rc == 0 and lines[at + 2].split() == ["00", ".", "-0.25..+1.50", "-0.25..+1.50", "-0.25..+1.50"]
 
 
+def test_measure_matrix_history_range_pools_three_orders_and_writes_that_matrix(capsys, tmp_path):
+    """--history-range: the matrix made in three orders; --json's matrix is their pooled mean
+    (three times the samples), bracketed by each entry's range over them, and --out writes it:
+    the file a lab builds from averages over what came before each step, and its var_dx shows
+    how much that moves it."""
+    out_file = tmp_path / "pooled.toml"
+    rc, out, err = run(capsys, "sim", str(R1), "--measure-matrix", "--history-range", "--jobs", "2", "--json",
+                       "--out", str(out_file))
+    m = json.loads(out)
+    assert rc == 0 and m["orders"] == ["rows", "reversed", "shuffled"], err
+    rc, plain_out, _ = run(capsys, "sim", str(R1), "--measure-matrix", "--json")
+    plain = json.loads(plain_out)
+    learned = load_robot(out_file)
+    dense, _ = learned.transitions.dense()
+    var = learned.transitions.planar.var_dx
+    for a in range(4):
+        for b in range(4):
+            if a != b:
+                assert m["samples"][a][b] == 3 * plain["samples"][a][b]
+                assert m["low"][a][b] - 1e-4 <= m["matrix"][a][b] <= m["high"][a][b] + 1e-4, (a, b)
+                assert m["low"][a][b] - 1e-4 <= plain["matrix"][a][b] <= m["high"][a][b] + 1e-4, (a, b)
+                assert abs(dense[a][b] - m["matrix"][a][b]) < 1e-4
+    spread = max(var[learned.transitions.lookup(0, 3)], var[learned.transitions.lookup(3, 0)])
+    assert spread > 0.05  # 00↔11: (≥ 0.5 mm between orders)² / several, where one order's samples agree
+    for argv, says in ((("--measure-matrix", "--history-range", "--hold-range"), "one range at a time"),
+                       (("--history-range",), "--history-range: it is an option of --measure-matrix"),
+                       (("--measure-matrix", "--jobs", "2"), "--jobs: only with --measure-matrix --hold-range or "
+                                                             "--history-range")):
+        rc, out, err = run(capsys, "sim", str(R1), *argv)
+        assert rc == 2 and says in err and out == "", (argv, err)
+
+
 def test_hold_range_without_measure_matrix_is_a_one_line_error(capsys):
     rc, _, err = run(capsys, "sim", str(R1), "--hold-range")
     assert rc != 0 and "--hold-range: it is an option of --measure-matrix" in err and "Traceback" not in err

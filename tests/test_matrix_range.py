@@ -128,3 +128,59 @@ def test_a_level_narrower_than_two_margins_is_held_in_its_middle():
 def test_no_margins_is_an_error():
     with pytest.raises(ValueError, match="no hold margins"):
         measure_matrix_range(r1(), ())
+
+
+# -- the history range: the same matrix made in other orders ---------------------------------------
+@functools.cache
+def r1_history():
+    from proleg.sim.physical import measure_history_range
+
+    return measure_history_range(r1(), repeats=1)
+
+
+def test_the_history_range_holds_every_order_and_its_first_order_is_the_plain_measurement():
+    from proleg.sim.physical.measure import ORDERS
+
+    h = r1_history()
+    assert h.orders == ORDERS
+    np.testing.assert_array_equal(h.at("rows").matrix_mm, measure_matrix(r1(), repeats=1).matrix_mm)
+    for order in ORDERS:
+        m = h.at(order).matrix_mm
+        ok = ~np.isnan(m)
+        assert (h.low_mm[ok] <= m[ok]).all() and (m[ok] <= h.high_mm[ok]).all(), order
+
+
+def test_an_entry_depends_on_what_came_before_it_where_both_limbs_move_not_where_one_does():
+    """R1, measured in three orders: the one-limb steps with the other limb down (00↔01, 00↔10)
+    are the same whatever came before (within 0.2 mm), but a step into or out of 11 (both limbs
+    raised) is not: which end crosses ψ* first depends on the coils' heat the step before left."""
+    h, t = r1_history(), r1().transitions
+    span = {(t.label(a), t.label(b)): h.high_mm[a, b] - h.low_mm[a, b]
+            for a in range(t.n_states) for b in range(t.n_states) if a != b}
+    for step in (("00", "01"), ("01", "00"), ("00", "10"), ("10", "00")):
+        assert span[step] < 0.2, (step, span[step])
+    assert max(span[("00", "11")], span[("11", "00")]) > 0.5, span
+
+
+def test_the_pooled_matrix_is_the_mean_and_spread_of_every_orders_samples():
+    """A brute-force recount: with one sample an order, the pooled entry is the mean of the three
+    orders' entries and its spread their population spread; the samples add up."""
+    from proleg.sim.physical.measure import pooled
+
+    h = r1_history()
+    p = pooled(h.measured)
+    stack = np.array([m.matrix_mm for m in h.measured])
+    n = r1().transitions.n_states
+    for a in range(n):
+        for b in range(n):
+            if a != b:
+                assert p.matrix_mm[a, b] == pytest.approx(float(np.mean(stack[:, a, b])), abs=1e-12)
+                assert p.std_mm[a, b] == pytest.approx(float(np.std(stack[:, a, b])), abs=1e-9)
+                assert p.samples[a, b] == sum(int(m.samples[a, b]) for m in h.measured) == 3
+
+
+def test_an_unknown_order_is_refused_before_anything_is_measured():
+    from proleg.sim.physical import measure_history_range
+
+    with pytest.raises(ValueError, match="order must be one of rows, reversed, shuffled, got 'sideways'"):
+        measure_history_range(None, ("rows", "sideways"))

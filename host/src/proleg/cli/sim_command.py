@@ -100,10 +100,12 @@ def cmd_sim(args: argparse.Namespace) -> int:
             raise SimError("--calibrated: not with --measure-matrix (the matrix is measured by an idealised drive "
                            "with true psi, no firmware to calibrate)")
         return cmd_measure_matrix(args, robot)
-    if args.hold_range:
+    if args.hold_range or args.history_range:
         from ..errors import SimError
 
-        raise SimError("--hold-range: it is an option of --measure-matrix (measure the matrix at several hold margins)")
+        flag = "--hold-range" if args.hold_range else "--history-range"
+        raise SimError(f"{flag}: it is an option of --measure-matrix (measure the matrix "
+                       f"{'at several hold margins' if args.hold_range else 'in several orders'})")
     if not args.pty:
         every = firmware_gaits(robot, args.objective, args.max_transitions)
         gaits = every.get(args.direction, ())

@@ -60,11 +60,16 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                    help="with --measure-matrix: measure it again holding raised limbs 2° and 8° past psi* (the "
                         "matrix is measured at 4°) and print each entry's range: how much it depends on the hold "
                         "(three measurements, so three times as long; --jobs measures them at once)")
+    s.add_argument("--history-range", action="store_true",
+                   help="with --measure-matrix: measure it again with its transitions made in reverse and in a "
+                        "random order (each starts where the one before left the body) and print each entry's "
+                        "range: how much it depends on what came before it (three measurements; --jobs measures "
+                        "them at once)")
     s.add_argument("--jobs", type=positive_int, default=None, metavar="N",
-                   help="with --measure-matrix --hold-range: hold margins measured at once, in up to N worker "
-                        "processes (default: the machine's cores; there are three margins); the numbers do not "
-                        "depend on N. One matrix is one chain of transitions on one body, each starting where the "
-                        "last ended, so it is measured in one process")
+                   help="with --measure-matrix --hold-range or --history-range: its three measurements at once, "
+                        "in up to N worker processes (default: the machine's cores); the numbers do not depend on "
+                        "N. One matrix is one chain of transitions on one body, each starting where the last "
+                        "ended, so it is measured in one process")
 
 
 def plant_kwargs(args: argparse.Namespace) -> dict[str, Any]:
@@ -144,12 +149,18 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
             rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed, on_step=steps,
                                        jobs=args.jobs or os.cpu_count() or 1)
             m = rng.at(MARGIN_DEG)
+        elif args.history_range:
+            from ..sim.physical.measure import measure_history_range, pooled
+
+            rng = measure_history_range(robot, conditions=conditions, seed=args.seed, on_step=steps,
+                                        jobs=args.jobs or os.cpu_count() or 1)
+            m = pooled(rng.measured)  # every order's samples: the mean over histories, their spread in std
         else:
             m = measure_matrix(robot, conditions, seed=args.seed, on_step=steps)
     except KeyboardInterrupt:
         from ..errors import Interrupted
 
-        margins = 3 if args.hold_range else 1
+        margins = 3 if args.hold_range or args.history_range else 1
         raise Interrupted(steps.interrupted(robot.transitions.n_transitions, margins)) from None
     # allowed by the robot file, but the idealised drive did not make them on this body
     _, allowed = robot.transitions.dense()
@@ -180,7 +191,8 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(),
                           "not_made": [f"{m.states[a]}->{m.states[b]}" for a, b in not_made], **extra}))
         return _measured(failure if nothing else None)
-    print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from; "
+    pooled_over = f", pooled over {len(rng.orders)} orders" if args.history_range else ""
+    print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from{pooled_over}; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
     cells = [[None if x != x else _mm(x) for x in row] for row in m.matrix_mm]
     for a, b in not_made:
@@ -202,8 +214,9 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         print(f"'?': allowed, but not made on the simulated body ({len(not_made)} of "
               f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached ({why})")
     if rng is not None:
-        print(f"\neach entry's range over hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi* "
-              "(mm, low..high):")
+        over = (f"hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi*" if args.hold_range else
+                f"the orders the transitions were made in, {'/'.join(rng.orders)} (what came before each)")
+        print(f"\neach entry's range over {over} (mm, low..high):")
         _table(m.states, [[None if lo != lo else f"{_mm(lo)}..{_mm(hi)}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
     return _measured(failure if nothing else None)
@@ -291,10 +304,12 @@ def refuse_what_does_not_apply(args: argparse.Namespace) -> None:
             raise SimError(f"{mode}: not with {flag} (it does not use it)")
     if mode != "--pty" and _GIVEN["--speed"](args):
         raise SimError("--speed: only with --pty (a plain sim runs as fast as it can)")
-    if args.jobs is not None and not (mode == "--measure-matrix" and args.hold_range):
-        raise SimError("--jobs: only with --measure-matrix --hold-range (its hold margins are measured at once; one "
-                       "matrix is one chain of transitions on one body, each starting where the last ended, so it is "
-                       "measured in one process)")
+    if args.jobs is not None and not (mode == "--measure-matrix" and (args.hold_range or args.history_range)):
+        raise SimError("--jobs: only with --measure-matrix --hold-range or --history-range (their measurements are "
+                       "made at once; one matrix is one chain of transitions on one body, each starting where the "
+                       "last ended, so it is measured in one process)")
+    if args.hold_range and args.history_range:
+        raise SimError("--hold-range and --history-range: one range at a time (each measures the matrix three times)")
     if mode != "--measure-matrix" and getattr(args, "out", None) is not None:
         raise SimError("--out: only with --measure-matrix (the robot file it writes holds the measured matrix)")
     if mode != "--measure-climb" and (args.all_gaits or args.climb_gaits is not None):
@@ -320,7 +335,8 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     if args.plant != "physical":
         raise SimError("--measure-climb: grades are climbed on the physical plant (the table plant has no slope)")
     for flag, given in (("--calibrated", args.calibrated), ("--measure-matrix", args.measure_matrix),
-                        ("--hold-range", args.hold_range), ("--pty", args.pty), ("--board", args.board != "host-sim")):
+                        ("--hold-range", args.hold_range), ("--history-range", args.history_range), ("--pty", args.pty),
+                        ("--board", args.board != "host-sim")):
         if given:
             raise SimError(f"--measure-climb: not with {flag} (an idealised drive on the plant climbs, no board)")
     if any(c.partition("=")[0].strip() == "incline_deg" for c in args.condition):

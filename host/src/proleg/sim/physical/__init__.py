@@ -8,8 +8,10 @@ See docs/plant.md for the model, its constants and their sources.
 
 from .conditions import KEYS as CONDITION_KEYS
 from .conditions import Conditions, describe_keys, parse_conditions
-from .measure import MatrixRange, MeasuredMatrix, measure_matrix, measure_matrix_range
+from .measure import (HistoryRange, MatrixRange, MeasuredMatrix, measure_history_range, measure_matrix,
+                      measure_matrix_range)
 from .plant import PhysicalParams, PhysicalPlant
 
-__all__ = ["CONDITION_KEYS", "Conditions", "MatrixRange", "MeasuredMatrix", "PhysicalParams", "PhysicalPlant",
-           "describe_keys", "measure_matrix", "measure_matrix_range", "parse_conditions"]
+__all__ = ["CONDITION_KEYS", "Conditions", "HistoryRange", "MatrixRange", "MeasuredMatrix", "PhysicalParams",
+           "PhysicalPlant", "describe_keys", "measure_history_range", "measure_matrix", "measure_matrix_range",
+           "parse_conditions"]

@@ -5,7 +5,9 @@ sensing, each limb's coil heated at ``duty`` until its end is ``margin_deg`` pas
 level's critical angle, then held there). For every allowed transition a → b it goes to a,
 settles, records the centre of mass, drives to b, settles again and records the displacement;
 ``repeats`` times. A transition the drive cannot reach within ``timeout_s`` gets no sample (its
-entry is NaN and its count 0). ``measure_matrix_range`` measures it at several hold margins.
+entry is NaN and its count 0). ``measure_matrix_range`` measures it at several hold margins,
+``measure_history_range`` in several orders (each entry starts where the one before left the
+body, so an entry depends on what came before it: docs/plant.md).
 
 ``kinematic_signs`` does the same with the coils' contractions moved directly at a fixed rate
 (no thermal model): the sign pattern a friction assignment predicts, used to infer D1/D2.
@@ -13,6 +15,7 @@ entry is NaN and its count 0). ``measure_matrix_range`` measures it at several h
 
 from __future__ import annotations
 
+import random
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -67,10 +70,12 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
                    duty: float | None = None, margin_deg: float = MARGIN_DEG, settle_s: float = 2.5,
                    timeout_s: float = 12.0, dt_s: float = 0.002, seed: int = 0,
                    params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None,
-                   on_step: Callable[[int, int, int], None] | None = None) -> MeasuredMatrix:
+                   on_step: Callable[[int, int, int], None] | None = None, order: str = "rows",
+                   order_seed: int = 0) -> MeasuredMatrix:
     """The reward matrix of ``robot`` measured on the physical plant (mm, row = from).
     ``on_step(tried, sampled, total)`` after each transition tried: how many were tried, how
-    many of those gave a sample, of ``total`` (the allowed transitions × ``repeats``)."""
+    many of those gave a sample, of ``total`` (the allowed transitions × ``repeats``).
+    ``order``: the order the transitions are made in, each repeat alike (``ORDERS``)."""
     plant = PhysicalPlant(robot, conditions, seed=seed, params=params, mechanisms=mechanisms)
     drive = IdealDrive(robot, plant, margin_deg)
     duty = robot.control.drive_duty if duty is None else duty
@@ -78,7 +83,7 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
     n = len(allowed)
     sums = [[[] for _ in range(n)] for _ in range(n)]
     times = [[[] for _ in range(n)] for _ in range(n)]
-    steps = [(a, b) for a in range(n) for b in range(n) if a != b and allowed[a][b]]
+    steps = _ordered([(a, b) for a in range(n) for b in range(n) if a != b and allowed[a][b]], order, order_seed)
     tried = sampled = 0
     for _ in range(repeats):
         for a, b in steps:
@@ -108,6 +113,34 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
     return MeasuredMatrix(list(labels), mean, std, count, dur, tuple(plant.mechanisms), plant.mechanism_source)
 
 
+#: The orders ``measure_matrix`` makes the transitions in: row by row (the default), the same
+#: reversed, and a random permutation (``order_seed``). ``measure_history_range`` uses all three.
+ORDERS = ("rows", "reversed", "shuffled")
+
+
+def _ordered(steps: list[tuple[int, int]], order: str, seed: int) -> list[tuple[int, int]]:
+    if order == "rows":
+        return steps
+    if order == "reversed":
+        return steps[::-1]
+    if order == "shuffled":
+        shuffled = list(steps)
+        random.Random(seed).shuffle(shuffled)
+        return shuffled
+    raise ValueError(f"measure_matrix: order must be one of {', '.join(ORDERS)}, got {order!r}")
+
+
+def _cycle_range(low: np.ndarray, high: np.ndarray, states: Sequence[int]) -> tuple[float, float]:
+    """(lowest, highest) displacement along ``states``, each step at its own extreme."""
+    steps = list(zip(states, states[1:]))
+    return float(sum(low[a, b] for a, b in steps)), float(sum(high[a, b] for a, b in steps))
+
+
+def _low_high(measured: Sequence[MeasuredMatrix]) -> tuple[np.ndarray, np.ndarray]:
+    stack = np.array([m.matrix_mm for m in measured])
+    return np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0)
+
+
 #: Hold margins (° past the critical angle) that ``measure_matrix_range`` spans: a drive may hold a
 #: raised limb anywhere from half to twice the idealised drive's 4°, and the firmware's raised limbs
 #: pass through all of it in a gait (they overshoot to about ψ* + 13° before they settle on their
@@ -132,9 +165,7 @@ class MatrixRange:
     def cycle_range(self, states: Sequence[int]) -> tuple[float, float]:
         """(lowest, highest) displacement along ``states``, each step at its own extreme: within a
         gait, each step's held limbs may sit anywhere in the range, independently of the others."""
-        steps = list(zip(states, states[1:]))
-        return (float(sum(self.low_mm[a, b] for a, b in steps)),
-                float(sum(self.high_mm[a, b] for a, b in steps)))
+        return _cycle_range(self.low_mm, self.high_mm, states)
 
     def to_json(self) -> dict:
         return {"hold_margins_deg": list(self.margins_deg), "low": json_matrix(self.low_mm),
@@ -157,25 +188,90 @@ def measure_matrix_range(robot: Any, margins_deg: Sequence[float] = HOLD_RANGE_D
         raise ValueError("measure_matrix_range: no hold margins given")
     if jobs < 1:
         raise ValueError(f"measure_matrix_range: jobs must be at least 1, got {jobs!r}")
+    measured = _measure_variants(robot, [{"margin_deg": m} for m in margins_deg], jobs, "at a hold margin", kwargs)
+    return MatrixRange(tuple(float(m) for m in margins_deg), tuple(measured), *_low_high(measured))
+
+
+@dataclass
+class HistoryRange:
+    """The matrix measured with its transitions made in several orders (``ORDERS``): per entry,
+    the lowest and highest mean over the orders (NaN where none reached it). Each entry starts
+    where the transition before it left the body (its coils' heat, how far each limb is held),
+    so the range is how much an entry depends on what came before it; the samples of one order
+    (``std``) do not show that."""
+
+    orders: tuple[str, ...]
+    measured: tuple[MeasuredMatrix, ...]
+    low_mm: np.ndarray
+    high_mm: np.ndarray
+
+    def at(self, order: str) -> MeasuredMatrix:
+        return self.measured[self.orders.index(order)]
+
+    def cycle_range(self, states: Sequence[int]) -> tuple[float, float]:
+        """(lowest, highest) displacement along ``states``, each step at its own extreme."""
+        return _cycle_range(self.low_mm, self.high_mm, states)
+
+    def to_json(self) -> dict:
+        return {"orders": list(self.orders), "low": json_matrix(self.low_mm), "high": json_matrix(self.high_mm)}
+
+
+def pooled(measured: Sequence[MeasuredMatrix]) -> MeasuredMatrix:
+    """One matrix from several measurements of it: per entry the mean and spread of all their
+    samples together (the spread over ``HistoryRange``'s orders is its history's, which one
+    order's samples do not show), the samples summed, the durations their samples' mean."""
+    first = measured[0]
+    n = np.array([m.samples for m in measured], dtype=float)
+    total = n.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        def mean_of(values: np.ndarray) -> np.ndarray:
+            return np.where(total > 0, np.nansum(np.where(n > 0, values * n, 0.0), axis=0) / total, np.nan)
+        mean = mean_of(np.array([m.matrix_mm for m in measured]))
+        second = mean_of(np.array([m.std_mm ** 2 + m.matrix_mm ** 2 for m in measured]))
+        std = np.sqrt(np.maximum(second - mean ** 2, 0.0))
+        duration = mean_of(np.array([m.duration_s for m in measured]))
+    return MeasuredMatrix(first.states, mean, std, total.astype(int), duration, first.mechanisms,
+                          first.mechanism_source)
+
+
+def measure_history_range(robot: Any, orders: Sequence[str] = ORDERS, *, jobs: int = 1,
+                          **kwargs: Any) -> HistoryRange:
+    """``measure_matrix`` once per order of ``orders`` (the first is the one ``measure_matrix``
+    makes by default), and each entry's range over them. Measured in reverse, R1's steps into
+    and out of 11 moved by up to 1.24 mm and three changed sign, its one-limb steps by less than
+    0.2 mm (docs/plant.md). ``jobs`` > 1: the orders on plants of their own in worker processes,
+    with the same numbers as one after another."""
+    if not orders:
+        raise ValueError("measure_history_range: no orders given")
+    for o in orders:
+        _ordered([], o, 0)  # an unknown order: ValueError before anything is measured
+    measured = _measure_variants(robot, [{"order": o} for o in orders], jobs, "in an order", kwargs)
+    return HistoryRange(tuple(orders), tuple(measured), *_low_high(measured))
+
+
+def _measure_variants(robot: Any, variants: Sequence[dict[str, Any]], jobs: int, what: str,
+                      kwargs: dict[str, Any]) -> list[MeasuredMatrix]:
+    """``measure_matrix`` once per variant (its keyword arguments on top of ``kwargs``), one after
+    another or, with ``jobs`` > 1, in worker processes; ``kwargs``' ``on_step`` hears the counts
+    summed over the variants either way."""
+    if jobs < 1:
+        raise ValueError(f"measuring the matrix {what}: jobs must be at least 1, got {jobs!r}")
     on_step = kwargs.pop("on_step", None)
+    if min(jobs, len(variants)) > 1:
+        return _measure_at_once(robot, variants, jobs, on_step, kwargs, what)
     measured: list[MeasuredMatrix] = []
-    if min(jobs, len(margins_deg)) > 1:
-        measured = _measure_margins_at_once(robot, margins_deg, jobs, on_step, kwargs)
-    else:
-        for m in margins_deg:
-            step = _counting_on(on_step, measured, len(margins_deg))
-            measured.append(measure_matrix(robot, margin_deg=m, on_step=step, **kwargs))
-    stack = np.array([m.matrix_mm for m in measured])
-    return MatrixRange(tuple(float(m) for m in margins_deg), tuple(measured),
-                       np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0))
+    for v in variants:
+        step = _counting_on(on_step, measured, len(variants))
+        measured.append(measure_matrix(robot, on_step=step, **{**kwargs, **v}))
+    return measured
 
 
-def _measure_margins_at_once(robot: Any, margins_deg: Sequence[float], jobs: int,
-                             on_step: Callable[[int, int, int], None] | None,
-                             kwargs: dict[str, Any]) -> list[MeasuredMatrix]:
-    """``measure_matrix`` at each of ``margins_deg`` in up to ``jobs`` worker processes, in the
-    order given. Each worker sends its ``on_step`` counts back through a queue; ``on_step``
-    hears the sums over the margins, as it does from the margins one after another."""
+def _measure_at_once(robot: Any, variants: Sequence[dict[str, Any]], jobs: int,
+                     on_step: Callable[[int, int, int], None] | None,
+                     kwargs: dict[str, Any], what: str) -> list[MeasuredMatrix]:
+    """``measure_matrix`` for each variant in up to ``jobs`` worker processes, in the order
+    given. Each worker sends its ``on_step`` counts back through a queue; ``on_step`` hears the
+    sums over the variants, as it does from the variants one after another."""
     import multiprocessing
     import queue as queue_mod
     from concurrent.futures.process import BrokenProcessPool
@@ -184,9 +280,9 @@ def _measure_margins_at_once(robot: Any, margins_deg: Sequence[float], jobs: int
 
     with multiprocessing.get_context("fork").Manager() as manager:
         counts = manager.Queue()
-        pool = worker_pool(min(jobs, len(margins_deg)))
+        pool = worker_pool(min(jobs, len(variants)))
         try:
-            pending = [pool.submit(_measure_margin, robot, m, i, counts, kwargs) for i, m in enumerate(margins_deg)]
+            pending = [pool.submit(_measure_variant, robot, v, i, counts, kwargs) for i, v in enumerate(variants)]
             tried, sampled, total = [0] * len(pending), [0] * len(pending), [0] * len(pending)
             while True:
                 try:
@@ -201,21 +297,22 @@ def _measure_margins_at_once(robot: Any, margins_deg: Sequence[float], jobs: int
             try:
                 measured = [p.result() for p in pending]   # a worker's error is raised here
             except BrokenProcessPool:
-                raise lost_worker("measuring the matrix at a hold margin") from None
+                raise lost_worker(f"measuring the matrix {what}") from None
         finally:
             end_workers(pool)
     return measured
 
 
-def _measure_margin(robot: Any, margin_deg: float, index: int, counts: Any, kwargs: dict[str, Any]) -> MeasuredMatrix:
-    """One worker's margin for ``_measure_margins_at_once``: its counts go to ``counts`` tagged ``index``."""
-    return measure_matrix(robot, margin_deg=margin_deg, on_step=lambda t, s, n: counts.put((index, t, s, n)), **kwargs)
+def _measure_variant(robot: Any, variant: dict[str, Any], index: int, counts: Any,
+                     kwargs: dict[str, Any]) -> MeasuredMatrix:
+    """One worker's variant for ``_measure_at_once``: its counts go to ``counts`` tagged ``index``."""
+    return measure_matrix(robot, on_step=lambda t, s, n: counts.put((index, t, s, n)), **{**kwargs, **variant})
 
 
 def _counting_on(on_step: Callable[[int, int, int], None] | None, measured: Sequence[MeasuredMatrix],
                  n_margins: int) -> Callable[[int, int, int], None] | None:
-    """``on_step`` for the next of ``n_margins`` measurements: its counts go on from the
-    matrices already ``measured``, out of all the margins' transitions."""
+    """``on_step`` for the next of ``n_margins`` measurements (margins or orders): its counts go
+    on from the matrices already ``measured``, out of all the measurements' transitions."""
     if on_step is None:
         return None
     done, sampled_before = len(measured), sum(int(x.samples.sum()) for x in measured)
