@@ -112,6 +112,40 @@ def test_progress_lines_come_once_a_period_of_the_run_and_end_with_it(capsys):
     assert len(times) == 10 and times == sorted(times) and max(times) <= 1.0 + 1e-6, err
 
 
+def test_a_stalled_loop_says_one_progress_line_and_the_stop_tail_none():
+    """run_gait_on's own progress (the library has no 0.1 s floor): a host loop held up for a
+    second (a slow disk, a loaded machine) printed one line per period it missed, one after
+    the other with the same time; and the 0.1 s after STOP printed lines of their own, past
+    the run's duration."""
+    from proleg.link import RobotClient, open_link
+    from proleg.link.listeners import Listener
+    from proleg.report import run_gait_on
+
+    def progress_times(period: float, stall_s: float) -> list[float]:
+        link = open_link("sim://paper-r1")
+        real, stalled = link.clock, []
+        link.clock = lambda: real() + (stall_s if stalled else 0.0)
+
+        class Stall(Listener):
+            def on_message(self, rx) -> None:
+                if stall_s and not stalled and real() >= 0.5:
+                    stalled.append(real())
+
+        lines: list[str] = []
+        with RobotClient(link) as client:
+            client.connect()
+            run_gait_on(client, 0, "+x", 1.0 + stall_s, listeners=[Stall()], progress=lines.append,
+                        progress_every_s=period)
+        return [float(s.split(" s:")[0]) for s in lines if " s: " in s]
+
+    times = progress_times(0.1, 1.0)
+    # one line at the stall, the next on the period's grid (0.06 s on here: both read 1.5 s); it
+    # was a line per period missed, one each receive pass (ten lines reading 1.5 s)
+    assert times == sorted(times) and max(times.count(t) for t in times) <= 2, times
+    times = progress_times(0.02, 0.0)
+    assert len(times) <= round(1.0 / 0.02), times  # none from the STOP's tail
+
+
 def test_verbosity_flags_control_progress_on_stderr(capsys):
     code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "2")
     assert code == 0, err
