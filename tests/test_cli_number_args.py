@@ -93,6 +93,12 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["run", R1, "--gait", "x"], "argument --gait: expected a gait index or 'user', got 'x'"),
         (["run", R1, "--duration", "soon"], "argument --duration: expected a number, got 'soon'"),
         (["run", R1, "--duration", "1_0"], "argument --duration: expected a number, got '1_0'"),  # float(): 10
+        (["run", R1, "--gait", "1_0"], "argument --gait: expected a gait index or 'user', got '1_0'"),  # int(): 10
+        (["check", R1, "--rows", "1_0"], "argument --rows: expected a whole number, got '1_0'"),
+        (["console", "--node", "0x_f"], "argument --node: expected an integer (0x.. for hex), got '0x_f'"),
+        (["set-param", "--port", "/dev/null", "drive_duty", "5_000"],
+         "argument VALUE: expected a whole number, got '5_000'"),
+        (["set-param", "--port", "/dev/null", "drive_duty", "lots"], "argument VALUE: expected a whole number, got 'lots'"),
         (["run", R1, "--sim", "--progress", "0.00001"],
          "argument --progress: expected at least 0.1 s between progress lines, got 0.00001"),
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),

@@ -84,6 +84,8 @@ def gait_number(text: str) -> int:
 def int_auto(text: str) -> int:
     """An integer in any base Python reads (``16``, ``0x10``, ``0o20``): CAN node ids and ids."""
     try:
+        if "_" in text:  # int() reads "1_0" as 10: a typo, not a number to take
+            raise ValueError(text)
         return int(text, 0)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
@@ -189,8 +191,15 @@ def _int_in(text: str, lo: int, hi: int, what: str) -> int:
     return v
 
 
+def integer(text: str) -> int:
+    """A whole number of either sign (``set-param``'s VALUE: ψ* may be negative)."""
+    return _int(text, "a whole number")
+
+
 def _int(text: str, expected: str) -> int:
     try:
+        if "_" in text:  # int() reads "1_0" as 10, as float() does
+            raise ValueError(text)
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
