@@ -89,7 +89,7 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
     level-1 edge (ψ*₁ + hysteresis/2): that limb can never rise. R1 with drive_duty = 0.15 (its
     coils settle at 55 °C, As 64 °C) stopped with SMA_ON_LIMIT and STATE_TIMEOUT 'suspects
     sma-left', and nothing said that no duty it was allowed could lift a limb; at power 0.35 its
-    coils settle at 67 °C, past As but 7 % of the way to Af, which bends each end to 4° of the
+    coils settle at 67 °C, past As but 6 % of the way to Af, which bends each end to 3.6° of the
     21° it must pass, and the same stop came without a word. The duty advised is the one that
     would settle the coil bending its limbs past their edges (``PhysicalPlant.settled_bend``),
     not merely at As, where a coil has not begun to contract."""

@@ -262,7 +262,7 @@ class PhysicalPlant:
         settle bending the limb to ``targets[i]``°, ``math.inf`` where no duty heats it at all,
         None where even the full stroke falls short or the limb is there at rest). A coil that
         settles between As and Af contracts only part of its stroke (R1 at power 0.35: 67 °C,
-        7 %, its limbs at 4° against their 21° edge)."""
+        6 %, its limbs at 3.6° against their 21° edge)."""
         from ..sma import heating_branch
 
         temps = self._coils.steady_temperature_c(duty)
