@@ -35,6 +35,7 @@ with them (proleg.learn.replan); both must agree, so both call ``fallback`` here
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -87,7 +88,7 @@ def dead_table(robot, lost: int | Iterable[int]) -> TransitionTable:
     state the robot cannot reach (``_unreachable``)."""
     t = robot.transitions
     amap = compiled_map(robot)
-    gone = {lost} if isinstance(lost, int) else set(lost)
+    gone = {int(lost)} if isinstance(lost, numbers.Integral) else {int(x) for x in lost}
     driven = [i for i, a in enumerate(amap) if a in gone]
     up = np.array([any(limb_levels(s, t.levels)[i] > 0 for i in driven) for s in range(t.n_states)], dtype=bool)
     up |= _unreachable(robot, t)

@@ -110,7 +110,7 @@ def run_gait_on(
             if replanner is not None:
                 replanner.poll()  # type: ignore[attr-defined]
             if report_progress and progress is not None and clock() >= next_progress - _EPS:
-                # one line however many periods a stalled loop missed, the next a period on
+                # one line however many periods a stalled loop missed; the next on the same period grid
                 missed = math.floor((clock() - next_progress) / progress_every_s + _EPS)
                 next_progress += (max(0, missed) + 1) * progress_every_s
                 progress(f"{clock() - t0:6.1f} s: {counted(run.telemetry_frames, 'frame')}, "

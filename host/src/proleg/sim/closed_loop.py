@@ -112,7 +112,10 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
             continue
         needs = [bends[i][2] for i in short]
         need = max(needs) if needs else (duty * (as_c - amb) / (settles - amb) if settles > amb else math.inf)
-        advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} (at most safety.max_duty), or a stronger supply"
+        # a floor: at it the limb settles just past its edge, and a rise that slow may still meet the
+        # on-time limit or the state timeout (R1 advised 0.24 still stops at 0.25: docs/plant.md)
+        advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} at the least (at most safety.max_duty; a "
+                  "rise that slow may still pass the on-time limit), or a stronger supply"
                   if need <= robot.safety.max_duty else
                   f"a stronger supply: even safety.max_duty {robot.safety.max_duty:g} does not get it there")
         if settles < as_c:
