@@ -110,7 +110,7 @@ def test_a_second_session_on_a_port_in_use_is_refused_naming_it():
             with pytest.raises(LinkError) as e:
                 SerialLink(server.path)
             assert str(e.value) == (f"cannot open serial port {server.path}: another program has it open (a proleg "
-                                    "console, run, record or learn?); close it first")
+                                    "console, run, learn or calibrate?); close it first")
             frames = list(client.telemetry(count=10))
             assert client.stats.lost == 0 and len(frames) == 10
         SerialLink(server.path).close()  # free again

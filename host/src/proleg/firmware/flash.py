@@ -9,7 +9,7 @@ flags"). On a pty stm32flash is given ``-m 8n1``; the emulated bootloader needs 
 
 A tool that writes through a serial port (avrdude, stm32flash) takes no lock on it: ``flash``
 holds proleg's own (``proleg.ports``, the one a console or run holds) while the tool runs,
-and refuses, before building, a port a console, run, record or learn has open.
+and refuses, before building, a port a console, run, learn or calibrate has open.
 """
 
 from __future__ import annotations
