@@ -347,6 +347,35 @@ def test_the_documented_next_step_gait_with_a_variance_weight_runs_on_a_one_dime
     assert "needs [transitions].var_dy" in capsys.readouterr().err
 
 
+def test_a_gaits_library_weighs_the_variances_a_one_dimensional_file_gives_as_gait_does(tmp_path):
+    """[gaits] variance_weight = 1 in a file measured or learned along x (var_dx only) was refused
+    ("variance weight on dy needs [transitions].var_dy") where `proleg gait --variance-weight 1`
+    weighed var_dx: one number now weighs what the file gives, in the file as on the command
+    line, and the firmware carries the gait the command computes; a list still names each."""
+    from proleg.cli.gait import _variance_weights
+    from proleg.errors import RobotFileError
+    from proleg.gait.library import gait_library
+
+    robot = load_robot(R1)
+    t = robot.transitions
+    trials = [Trial(t.label(a), t.label(b), 0, 1, 2.0 + 0.5 * k * (e % 3), None, None, "sim")
+              for e, (a, b) in enumerate(zip(t.src, t.dst)) for k in range(3)]
+    out = write_learned_robot(robot, estimate(t, trials), tmp_path / "l.toml", units="mm")
+    text = out.read_text().replace("max_climb_deg", "# max_climb_deg")  # the climb guard is not for a library
+    for weight, loads in (("1", True), ("[1, 1, 0]", False)):
+        path = tmp_path / f"g{loads}.toml"
+        path.write_text(text + f"\n[gaits]\nlibrary = [0, 180]\nvariance_weight = {weight}\n")
+        if not loads:
+            with pytest.raises(RobotFileError, match=r"gaits\.library: .*needs \[transitions\]\.var_dy"):
+                load_robot(path)
+            continue
+        lib = load_robot(path)
+        assert lib.library.variance_weight == (1.0, 0.0, 0.0) == _variance_weights(lib, 1.0)
+        by_hand = gait_library(lib.transitions, "0,180", variance_weight=_variance_weights(lib, 1.0))
+        carried = [e.gait.states for e in lib.library.entries(lib.transitions)]
+        assert carried == [e.gait.states for e in by_hand] and all(carried)
+
+
 def test_per_gait_climb_limits_become_their_smallest_so_the_learned_file_builds(tmp_path):
     """caterpillar-4 with each of its first two gaits of a way given its own climb limit. Learned
     on the physical plant, its matrix ranked one +x gait first and `proleg build`/`sim` of the

@@ -239,7 +239,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     if "gaits" in doc:
         from .gait.library import library_from_robot_file, missing_statistics
 
-        library = library_from_robot_file(path, doc["gaits"])
+        library = library_from_robot_file(path, doc["gaits"], table)
         if library is not None and (why := missing_statistics(library, table)):
             raise RobotFileError(f"{path}: gaits.library: {why}")
     _check_climb(path, control, limbs, library)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from ..errors import GaitError, RobotFileError
@@ -223,9 +223,12 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
                        number("translation_cap", 0.0, None))
 
 
-def library_from_robot_file(path: Any, value: Any) -> LibrarySpec | None:
+def library_from_robot_file(path: Any, value: Any, table: TransitionTable | None = None) -> LibrarySpec | None:
     """The robot file's ``[gaits]`` table → LibrarySpec (None without ``library``);
-    RobotFileError naming file and key."""
+    RobotFileError naming file and key. One ``variance_weight`` number weighs the variances
+    ``table`` gives, as ``proleg gait --variance-weight λ`` does (a file measured or learned
+    along x has ``var_dx`` only; a list names each weight, and one on a variance the file
+    lacks is refused)."""
     if not isinstance(value, dict):
         raise RobotFileError(f"{path}: gaits: expected a table [gaits]")
     unknown = sorted(set(value) - set(SPEC_KEYS))
@@ -236,7 +239,14 @@ def library_from_robot_file(path: Any, value: Any) -> LibrarySpec | None:
             raise RobotFileError(f"{path}: gaits: the keys {', '.join(sorted(value))} describe a library; give gaits.library")
         return None
     try:
-        return library_spec(value["library"], **{k: v for k, v in value.items() if k != "library"})
+        spec = library_spec(value["library"], **{k: v for k, v in value.items() if k != "library"})
+        weight = value.get("variance_weight")
+        if table is not None and isinstance(weight, (int, float)) and not isinstance(weight, bool):
+            have = table.planar.given() if table.planar is not None else {}
+            spec = replace(spec, variance_weight=(spec.variance_weight[0],
+                                                  *(w if key in have else 0.0 for w, key in
+                                                    zip(spec.variance_weight[1:], ("var_dy", "var_dtheta_deg")))))
+        return spec
     except GaitError as e:
         text = str(e).removeprefix("--library: ")
         key = text.split(":", 1)[0] if text.split(":", 1)[0] in SPEC_KEYS else "library"
