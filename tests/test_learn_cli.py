@@ -354,6 +354,25 @@ def test_a_log_mixing_simulated_and_hand_measured_trials_on_a_steps_robot_is_ref
     assert code == 2 and "mixes simulated trials (Δx in mm) with manual ones (in steps" in err, err
 
 
+@pytest.mark.parametrize("before, argv", [("manual", ("--sim", "--plant", "table")),
+                                          ("sim", ("--sim", "--plant", "table", "--source", "tracker"))])
+def test_resuming_a_log_with_a_source_of_another_unit_is_refused_before_anything_is_explored(
+        tmp_path, capsys, before, argv):
+    """A log of hand-measured trials (in the robot file's steps) resumed with --sim (mm), or the
+    other way round: the new trials were appended and only the report refused the log, mixed
+    for good (exit 2 after a piece had run). Refused before the robot moves, the log as it was."""
+    log = tmp_path / "t.jsonl"
+    lines = ['{"trial_log": 1, "robot": "paper-r1", "levels": [2, 2]}',
+             '{"from": "00", "to": "10", "t_start": 0, "t_end": 1, "dx": 1.0, "dy": null, "dtheta_deg": null, '
+             f'"source": "{before}"}}']
+    log.write_text("\n".join(lines) + "\n")
+    kept = log.read_bytes()
+    code, out, err = run(capsys, "learn", str(R1), *argv, "--log", str(log), "--repeats", "1", "--max-pieces", "1")
+    assert code == 2 and f"learn: --log {log}:" in err and "steps" in err and "mm" in err, err
+    assert "another --log" in err and "exploring" not in err, err
+    assert log.read_bytes() == kept
+
+
 FIXTURES = Path(__file__).parent / "fixtures"
 
 

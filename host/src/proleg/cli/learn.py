@@ -160,6 +160,12 @@ def cmd_learn(args: argparse.Namespace) -> int:
             client.close()
         raise
     with trial_log:
+        if client is not None:
+            try:
+                _check_resumed_units(args, robot, trial_log.trials, source)
+            except BaseException:
+                client.close()
+                raise
         if trial_log.trials and linked:
             log.info("%s: %s already recorded; resuming", args.log, counted(len(trial_log.trials), "trial"))
         if client is not None:
@@ -167,6 +173,22 @@ def cmd_learn(args: argparse.Namespace) -> int:
         trials, failures = list(trial_log.trials), list(trial_log.failures)
     trials = with_track(args, trials)
     return report_and_write(args, robot, trials, failures)
+
+
+def _check_resumed_units(args: argparse.Namespace, robot, trials: list, source: str) -> None:
+    """A log resumed with a source whose Δx come in another unit than its trials' (the
+    simulator's mm against a hand's or a tracker's, in a robot file counting steps) is refused
+    before anything is explored: the report cannot average the two, and the new trials were
+    appended first, leaving a log mixed for good (``LearnError``, exit 2)."""
+    def unit(src: str | None) -> str:
+        return "mm" if src == "sim" else robot.units
+
+    old = next((tr for tr in trials if unit(tr.source) != unit(source)), None)
+    if old is None:
+        return
+    raise LearnError(f"learn: --log {args.log}: its trials are {old.source or 'unsaid'} ones (Δx in "
+                     f"{unit(old.source)}), --source {source}'s are in {unit(source)}: one log cannot average "
+                     "the two; explore into another --log")
 
 
 def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
