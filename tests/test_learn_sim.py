@@ -214,6 +214,40 @@ def test_trials_the_track_does_not_cover_keep_no_motion_rather_than_zero(tmp_pat
     assert "2 of 4 trials begin or end outside it and are left without motion" in captured.err
 
 
+def test_trials_in_a_gap_of_the_track_keep_no_motion_rather_than_an_interpolated_one(tmp_path, capsys):
+    """A camera that lost the robot for a while (no rows for 3 s of a 10 Hz track): a pose read
+    in that gap was interpolated across it, so a transition whose motion fell there got a Δx
+    that was never measured (2.4 mm read as 0.46), exit 0 and no word. It keeps none, as a trial
+    outside the track does, and the warning names the gap."""
+    from proleg.cli.main import main
+    from proleg.learn.measure import Trial, TrialLog
+    from proleg.learn.tracker import Track, attach_track
+
+    t = np.round(np.arange(0.0, 10.0, 0.1), 3)
+    x = np.where(t < 2.0, 0.0, np.where(t < 6.0, 1.0, 3.0))  # +1 mm at 2 s, +2 mm at 6 s
+    gap = (t > 4.5) & (t < 7.5)  # no frame from 4.5 to 7.5 s
+    track = Track(t[~gap], x[~gap])
+    trials = [Trial("00", "10", 1.0, 3.0), Trial("10", "11", 5.0, 6.5), Trial("11", "01", 3.0, 8.0)]
+    got, offset, outside = attach_track(trials, track, 0.0, settle_s=0.0)
+    assert [(tr.src, tr.dst, tr.dx) for tr in got] == [("00", "10", pytest.approx(1.0)),
+                                                       ("11", "01", pytest.approx(2.0))]
+    assert [(tr.src, tr.dst) for tr in outside] == [("10", "11")]
+    assert track.covers(4.5) and track.covers(7.5) and not track.covers(6.0)
+    assert track.gap_around(6.0) == pytest.approx((4.5, 7.5)) and track.gap_around(3.0) is None
+
+    log = tmp_path / "run.jsonl"
+    with TrialLog(log) as tl:
+        for tr in trials:
+            tl.append(tr)
+    csv = tmp_path / "track.csv"
+    csv.write_text("time,x,y,theta\n" + "".join(f"{a:g},{b:g},,\n" for a, b in zip(t[~gap], x[~gap])))
+    code = main(["learn", str(R1), "--log", str(log), "--track", str(csv), "--tracker-offset", "-0.05", "--report"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "1 of 3 trials fall in a gap of it and are left without motion" in captured.err, captured.err
+    assert "no frame from 4.5 to 7.5 s" in captured.err, captured.err
+
+
 def test_a_coil_that_dies_during_exploration_costs_the_transitions_it_makes_not_the_run(tmp_path, caplog):
     """The right coil dead: each transition that raises the right end faults (SMA_ON_LIMIT or
     STATE_TIMEOUT, named by transition); each is recorded as not made and not asked for again,

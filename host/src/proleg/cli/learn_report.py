@@ -26,7 +26,7 @@ log = logging.getLogger("proleg")
 def with_track(args: argparse.Namespace, trials: list) -> list:
     if args.track is None:
         return trials
-    from ..learn.tracker import TrackerError, attach_track, read_track
+    from ..learn.tracker import GAP_FRAMES, TrackerError, attach_track, read_track
 
     try:
         track = read_track(args.track)
@@ -42,9 +42,17 @@ def with_track(args: argparse.Namespace, trials: list) -> list:
     if not attached:
         raise LearnError(f"learn: --track {args.track}: covers none of the {counted(len(bare), 'trial')} without motion: {span}; "
                          "give the track of this run, or --tracker-offset")
-    if outside:
+    settle = 0.05  # attach_track's settle_s: the poses are read that long after each event
+    gaps = [g for g in ((track.gap_around(t.t_start + settle + offset) or track.gap_around(t.t_end + settle + offset))
+                        for t in outside) if g is not None]
+    if len(gaps) < len(outside):
         log.warning("learn: --track %s: %d of %s begin or end outside it and are left without motion "
-                    "(%s)", args.track, len(outside), counted(len(bare), "trial"), span)
+                    "(%s)", args.track, len(outside) - len(gaps), counted(len(bare), "trial"), span)
+    if gaps:
+        log.warning("learn: --track %s: %d of %s fall in a gap of it and are left without motion (no frame from "
+                    "%g to %g s%s, on its clock: more than %d of its frame intervals; the camera lost the robot, "
+                    "or dropped frames)", args.track, len(gaps), counted(len(bare), "trial"), gaps[0][0], gaps[0][1],
+                    "" if len(set(gaps)) == 1 else f", and {counted(len(set(gaps)) - 1, 'other gap')}", GAP_FRAMES)
     log.info("%s: %s given their motion (clock offset %+.3f s, %s)", args.track, counted(len(attached), "trial"), offset,
              how)
     return [t for t in trials if t.dx is not None] + attached + outside

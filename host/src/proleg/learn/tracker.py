@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -36,8 +37,25 @@ class Track:
     theta_deg: np.ndarray | None = None
 
     def covers(self, t: float) -> bool:
-        """Tracker time ``t`` lies within the track (a pose there is measured, not made up)."""
-        return bool(self.t[0] <= t <= self.t[-1])
+        """Tracker time ``t`` lies within the track and in no gap of it (a pose there is
+        measured, not made up)."""
+        return bool(self.t[0] <= t <= self.t[-1]) and self.gap_around(t) is None
+
+    @cached_property
+    def max_frame_gap_s(self) -> float:
+        """The longest time between two rows that still gives a pose between them: ``GAP_FRAMES``
+        of the track's median frame interval. Longer, the camera lost the robot (or dropped
+        frames) and a pose there would be interpolated across whatever it did meanwhile."""
+        return GAP_FRAMES * float(np.median(np.diff(self.t)))
+
+    def gap_around(self, t: float) -> tuple[float, float] | None:
+        """The times of the rows around tracker time ``t`` when they are further apart than
+        ``max_frame_gap_s`` (no pose there), else None (a row at ``t`` is never in a gap)."""
+        k = int(np.searchsorted(self.t, t, side="left"))
+        if k >= len(self.t) or k == 0 or self.t[k] == t:
+            return None
+        a, b = float(self.t[k - 1]), float(self.t[k])
+        return (a, b) if b - a > self.max_frame_gap_s else None
 
     def pose(self, t: float) -> tuple[float | None, float | None, float | None]:
         """Linear interpolation at tracker time ``t`` (clamped to the ends: ask ``covers``
@@ -49,6 +67,9 @@ class Track:
 
 
 COLUMNS = ("time", "x", "y", "theta")
+#: rows further apart than this many of the track's median frame intervals leave a gap: no pose
+#: between them (``Track.gap_around``)
+GAP_FRAMES = 5
 #: the largest magnitude a tracker number may have (seconds or the robot file's unit)
 MAX_ABS = 1e9
 _MAX_TEXT = "1e9"
@@ -208,7 +229,9 @@ def attach_track(trials, track: Track, offset_s: float | None = None, *, settle_
     motion ended (``Trial.t_moved``: when the telemetry first showed the new state, else the
     state-reached event) unless given; the poses are read ``settle_s`` after the events
     (the robot settled). A trial that begins or ends outside the track keeps no motion (the
-    track says nothing about it; before, the track's end pose made it a motion of 0). Returns
+    track says nothing about it; before, the track's end pose made it a motion of 0), and so does
+    one whose pose falls in a gap of the track (``Track.gap_around``: before, interpolated across
+    it). Returns
     (new trials, offset used, trials left without motion)."""
     from dataclasses import replace
 
