@@ -116,6 +116,14 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
          "argument --bitrate: expected a CAN bit rate in bit/s in 1..1,000,000, got 0"),
         (["calibrate", R1, "--can", "x", "--node", "99"], "argument --node: expected a CAN node id in 0..15, got 99"),
         (["dbc", "-o", "x.dbc", "--node", "16"], "argument --node: expected a CAN node id in 0..15, got 16"),
+        # a nan, inf or 1e300 offset was taken, and the error after reading log and track said the
+        # trials lay at "nan..nan s on its clock (offset +nan s, given)"
+        (["learn", R1, "--log", "t.jsonl", "--track", "t.csv", "--tracker-offset", "nan"],
+         "argument --tracker-offset: expected seconds within ±1e9 (the track's times), got 'nan'"),
+        (["learn", R1, "--log", "t.jsonl", "--track", "t.csv", "--tracker-offset=-inf"],
+         "argument --tracker-offset: expected seconds within ±1e9 (the track's times), got '-inf'"),
+        (["learn", R1, "--log", "t.jsonl", "--track", "t.csv", "--tracker-offset", "1e300"],
+         "argument --tracker-offset: expected seconds within ±1e9 (the track's times), got '1e300'"),
     ],
 )
 def test_a_bad_number_is_one_line_naming_the_option_and_exit_2(capsys, argv, line):

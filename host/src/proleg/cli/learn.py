@@ -41,7 +41,7 @@ log = logging.getLogger("proleg")
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import baudrate, can_bitrate, can_node, positive_float, positive_int, reply_timeout
+    from .number_args import baudrate, can_bitrate, can_node, positive_float, positive_int, reply_timeout, tracker_offset
     from .gait import _penalty
     from .robot_link import DEFAULT_BAUDRATE
 
@@ -74,7 +74,7 @@ def add_arguments(subparsers: Any) -> None:
     p.add_argument("--source", choices=("sim", "tracker", "manual"),
                    help="position source (default: sim with --sim; required otherwise)")
     p.add_argument("--track", metavar="FILE.csv", help="tracker CSV (time,x,y,theta) for trials without motion")
-    p.add_argument("--tracker-offset", type=float, metavar="S",
+    p.add_argument("--tracker-offset", type=tracker_offset, metavar="S",
                    help="tracker time − firmware time from a sync event (default: estimated)")
     p.add_argument("--adaptive", action="store_true",
                    help="spend the R × transitions budget where the intervals are widest (2 trials each first)")

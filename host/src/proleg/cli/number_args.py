@@ -121,6 +121,15 @@ def finite_float(text: str) -> float:
     return v
 
 
+def tracker_offset(text: str) -> float:
+    """``learn --tracker-offset``: tracker time − firmware time, in seconds within ±1e9 (the
+    bound of a track's own times, ``proleg.learn.tracker.MAX_ABS``)."""
+    v = _float(text, "seconds")
+    if not abs(v) <= 1e9:
+        raise argparse.ArgumentTypeError(f"expected seconds within ±1e9 (the track's times), got {text!r}")
+    return v
+
+
 def non_negative_float(text: str) -> float:
     """A finite number ≥ 0."""
     v = finite_float(text)
