@@ -121,6 +121,23 @@ def test_manual_entry_asks_again_for_a_number_the_log_could_not_read_back(tmp_pa
     assert [tr.dx for tr in TrialLog(tmp_path / "m.jsonl", append=False).trials] == [1e9]
 
 
+def test_manual_entry_asks_again_for_a_typo_rather_than_reading_another_number():
+    """float() reads '1_0' as 10 (the CLI's number options refuse it as a typo): typed for 1.0 it
+    was logged as 10 mm without a word. A decimal comma ('1,5', read as two numbers) was asked
+    again with 'expected Δx [mm]', not saying the comma was the trouble."""
+    answers = iter(["1_0", "1,5", "1.5"])
+    prompts = []
+
+    def ask(p):
+        prompts.append(p)
+        return next(answers)
+
+    t = manual_trial("00", "10", 1.0, 2.0, ask=ask)
+    assert t is not None and t.dx == 1.5
+    assert "not a number ('1_0')" in prompts[1]
+    assert "a decimal point is '.'" in prompts[2] and "'1,5'" in prompts[2]
+
+
 def test_planar_delta_is_in_the_start_frame():
     dx, dy, dth = planar_delta((10.0, 0.0, 90.0), (10.0, 5.0, 100.0))
     assert dx == pytest.approx(5.0) and dy == pytest.approx(0.0, abs=1e-12) and dth == pytest.approx(10.0)

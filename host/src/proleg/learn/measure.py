@@ -403,11 +403,14 @@ def manual_trial(src: str, dst: str, t_start: float, t_end: float, *,
     what = f"Δx Δy [{units}] Δθ [deg]" if planar else f"Δx [{units}]"
     prompt = f"{src} → {dst}: {what} (empty = skip): "
     while True:
-        text = ask(prompt).strip().replace(",", " ")
+        typed = ask(prompt).strip()
+        text = typed.replace(",", " ")
         if not text:
             return None
         parts = text.split()
         try:
+            if any("_" in p for p in parts):  # float() reads "1_0" as 10: a typo, not a number to take
+                raise ValueError(text)
             vals = [float(p) for p in parts]
         except ValueError:
             prompt = f"  not a number ({text!r}); {src} → {dst}: {what}: "
@@ -418,4 +421,5 @@ def manual_trial(src: str, dst: str, t_start: float, t_end: float, *,
                 return Trial(src, dst, t_start, t_end, vals[0], vals[1], vals[2], "manual")
             prompt = f"  expected numbers within ±{_MAX_TEXT} ({text!r}); {src} → {dst}: {what}: "
             continue
-        prompt = f"  expected {what}; {src} → {dst}: "
+        comma = " (a comma separates Δx Δy Δθ: a decimal point is '.')" if "," in typed else ""
+        prompt = f"  expected {what}{comma}, got {typed!r}; {src} → {dst}: "
