@@ -295,6 +295,17 @@ def test_run_states_loads_and_runs_a_sequence_in_its_own_session(capsys):
     assert code == 2 and "--states: 00 → 01 is forbidden" in err, err
 
 
+def test_run_states_with_a_heading_or_rotation_is_refused_before_a_gait_is_computed(capsys):
+    """--states with --heading computed the heading's gait first and said it was "loaded with
+    LOAD_GAIT" (nothing was: no link was open) before refusing the pair; with --rotate the
+    error was the rotation's (no dtheta_deg), not the pair's."""
+    for argv in (("--heading", "0"), ("--rotate", "cw"), ("--heading", "90", "--exact-heading")):
+        code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", "--states", "00,10,01", *argv)
+        assert code == 2 and out == "", (argv, err)
+        assert err.strip().splitlines() == ["proleg: error: --states: the gait to run; leave out --gait, --heading "
+                                            "and --rotate"], (argv, err)
+
+
 def test_run_on_a_faulting_robot_reports_the_fault(tmp_path):
     from proleg.link import RobotClient, open_link
     from proleg.report import run_gait_on

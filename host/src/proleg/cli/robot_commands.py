@@ -91,11 +91,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     link_settings(args)  # before the gait is chosen: an option of another link is refused first
     if args.speed is not None and not args.sim:  # a real board keeps its own time
         raise UsageError("--speed: only with --sim (a simulated board's pace; a real one runs in real time)")
+    # before the heading's gait is computed (it said "loaded with LOAD_GAIT" before this refusal)
+    if args.states is not None and (args.gait is not None or args.heading is not None or args.rotate is not None):
+        raise UsageError("--states: the gait to run; leave out --gait, --heading and --rotate")
     fw, choice = heading_choice(args, robot)
     own = None
     if args.states is not None:  # loaded in this session: a Nano resets on each open, a --sim board is new
-        if choice is not None or args.gait is not None:
-            raise UsageError("--states: the gait to run; leave out --gait, --heading and --rotate")
         own = user_gait(robot, args.states, "--states")
         args.gait = GAIT_USER
     gait = args.gait if args.gait is not None else 0
