@@ -147,3 +147,14 @@ def test_every_command_that_takes_can_takes_its_settings_too():
     assert {"learn", "run", "console", "calibrate"} <= set(with_can)
     for name, options in with_can.items():
         assert {"--bitrate", "--node", "--interface"} <= options, name
+
+
+@pytest.mark.parametrize("argv", [["sim", R1, "--duration=--"], ["gait", R1, "--max-transitions=--"],
+                                  ["run", R1, "--sim", "--states=--"], ["check", R1, "--rows=--"]])
+def test_an_option_given_a_bare_double_dash_is_a_usage_error(capsys, argv):
+    """Python 3.11's argparse hands --option=-- an empty list without its type: sim
+    --duration=-- was a TypeError traceback, --max-transitions=-- said "got []"."""
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "expected a value, got '--'" in err and "Traceback" not in err

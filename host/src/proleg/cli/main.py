@@ -23,7 +23,7 @@ import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .. import __version__
 from ..errors import Interrupted, LinkError, ProlegError, WorkerLost
@@ -244,8 +244,19 @@ def robot_arg(text: str) -> str:
     return str(resolve_robot(text))
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but ``--option=--`` is a usage error: Python 3.11's argparse drops the ``--``
+    and hands the option an empty list without its ``type`` (``sim --duration=--`` ran into a
+    TypeError traceback, and ``--max-transitions=--`` said "got []")."""
+
+    def _get_values(self, action: argparse.Action, arg_strings: list[str]) -> Any:
+        if action.option_strings and arg_strings == ["--"] and action.nargs is None:
+            raise argparse.ArgumentError(action, "expected a value, got '--'")
+        return super()._get_values(action, arg_strings)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="proleg", description="Gaits, firmware and simulation for soft crawling robots.",
+    p = _Parser(prog="proleg", description="Gaits, firmware and simulation for soft crawling robots.",
                                 epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--version", action="version", version=f"proleg {__version__}")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more messages on stderr (-vv: debug)")
