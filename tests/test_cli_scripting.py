@@ -290,6 +290,14 @@ def test_run_states_loads_and_runs_a_sequence_in_its_own_session(capsys):
                        (("--states", "00,1x"), "--states:")):
         code, out, err = run(capsys, "run", "paper-r1", "--sim", "--duration", "1", *argv)
         assert code == 2 and says in err and out == "", (argv, err)
+    # a way stated against the matrix's is warned of (the climb guard checks the way stated), as
+    # load-gait says the matrix's way; C_T2 walks -x
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--states", "00,01,10", "--direction", "+x",
+                       "--duration", "1")
+    assert code == 0 and "matrix says this sequence walks -x, and --direction states +x" in err
+    code, _, err = run(capsys, "run", "paper-r1", "--sim", "--states", "00,01,10", "--direction", "-x",
+                       "--duration", "1")
+    assert code == 0 and "warning" not in err
     # a step the robot file forbids is refused before anything is sent, as load-gait refuses it
     code, out, err = run(capsys, "run", "paper-r1-one-actuator", "--sim", "--duration", "1", "--states", "00,01,11")
     assert code == 2 and "--states: 00 → 01 is forbidden" in err, err

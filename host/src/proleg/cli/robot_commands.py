@@ -99,6 +99,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.states is not None:  # loaded in this session: a Nano resets on each open, a --sim board is new
         own = user_gait(robot, args.states, "--states")
         args.gait = GAIT_USER
+        hint = _way_hint(robot.transitions, own)
+        says = "-x" if "walks -x" in hint else "+x" if "walks +x" in hint else None
+        if args.direction is None:
+            log.info("--states: %s", hint.replace("run it with --gait user ", "give "))
+        elif says is not None and says != args.direction:  # the climb guard would check the other way
+            log.warning("warning: --states: the robot file's matrix says this sequence walks %s, and --direction "
+                        "states %s: the climb guard ([control] max_climb_deg) checks the way stated", says,
+                        args.direction)
     gait = args.gait if args.gait is not None else 0
     # the loaded sequence's way is stated only by --direction (the climb guard checks it)
     direction = args.direction or (UNSTATED if gait == GAIT_USER else "+x")

@@ -352,4 +352,4 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
     why = "not in the firmware's library" if fw.library else "the firmware carries no gait library"
     return HeadingChoice(asked, heading, "+x", None, tuple(g.states[:-1]), net,
                          f"{asked}: {why}; computed {' '.join(label(s) for s in g.states)} (per pass dx "
-                         f"{net.x:+.3g} dy {net.y:+.3g} dtheta {net.theta_deg:+.3g}°), loaded with LOAD_GAIT")
+                         f"{net.x:+.3g} dy {net.y:+.3g} dtheta {net.theta_deg:+.3g}°), to be loaded with LOAD_GAIT")
