@@ -156,9 +156,22 @@ def test_a_bad_tracker_file_names_the_line(tmp_path):
         read_track(p)
 
 
+def test_a_track_along_x_may_say_so_in_its_header(tmp_path):
+    """Rows may give time,x alone; the header had to name y and theta all the same."""
+    p = tmp_path / "t.csv"
+    p.write_text("time,x\n0,0\n0.1,1.5\n")
+    track = read_track(p)
+    assert track.x.tolist() == [0.0, 1.5] and track.y is None and track.theta_deg is None
+
+
 @pytest.mark.parametrize("text, message", [
     ("# c\n\n# c\ntime,x,y,theta\n0,0,0,0\n0.1,abc,0,0\n", r"t\.csv: line 6, column x: expected a number, got 'abc'"),
-    ("# c\n# c\ntime,x\n0,0\n", r"t\.csv: line 3: expected the header time,x,y,theta"),
+    ("# c\n# c\ntime,y\n0,0\n", r"t\.csv: line 3: expected the header time,x,y,theta \(or time,x or time,x,y\), "
+                                  r"got 'time,y'"),
+    # a fifth column passed the header and failed every row after it
+    ("time,x,y,theta,z\n0,0,0,0,0\n", r"t\.csv: line 1: expected the header .*got 'time,x,y,theta,z'"),
+    ("time,x\n0,0\n0.1,1,2\n", r"t\.csv: line 3: expected time,x as the header says, got '0.1,1,2'"),
+    ("time,x,y,theta\n0,0,,\n0.1,1_0,,\n", r"t\.csv: line 3, column x: expected a number, got '1_0'"),
     ("# c\ntime,x,y,theta\n0,0,0,0\n0.1,1e308,0,0\n", r"t\.csv: line 4, column x: expected a finite number within ±1e9"),
     ("# c\ntime,x,y,theta\n0,0,0,0\n# caf\xe9\n", r"t\.csv: line 4: expected UTF-8 text, got byte 0xe9"),
     # these named neither line nor column

@@ -80,13 +80,18 @@ def read_track(path: str | Path) -> Track:
     (as an editor counts it, comments included) and the column."""
     path = Path(path)
     rows = _rows(path)
-    if not rows or [c.strip() for c in rows[0][1]][:4] != list(COLUMNS):
+    header = [c.strip() for c in rows[0][1]] if rows else []
+    # time,x alone is a header as the rows may be (a tracker along x); a fifth column is not read,
+    # so it is refused here and not on every row after (it passed, and each row failed)
+    if not 2 <= len(header) <= 4 or header != list(COLUMNS[:len(header)]):
         where = f"line {rows[0][0]}" if rows else "line 1"
-        raise TrackerError(f"{path}: {where}: expected the header time,x,y,theta")
+        got = f", got {','.join(header)!r}" if rows else ""
+        raise TrackerError(f"{path}: {where}: expected the header time,x,y,theta (or time,x or time,x,y){got}")
     cols: list[list[float | None]] = [[], [], [], []]
+    shape = ",".join(COLUMNS[:2]) + "".join(f"[,{c}" for c in COLUMNS[2:len(header)]) + "]" * (len(header) - 2)
     for k, row in rows[1:]:
-        if len(row) < 2 or len(row) > 4:
-            raise TrackerError(f"{path}: line {k}: expected time,x[,y[,theta]], got {','.join(row)!r}")
+        if len(row) < 2 or len(row) > len(header):
+            raise TrackerError(f"{path}: line {k}: expected {shape} as the header says, got {','.join(row)!r}")
         for j, cell in enumerate(row + [""] * (4 - len(row))):
             cols[j].append(_cell(cell.strip(), j, f"{path}: line {k}"))
     t = np.array(cols[0], dtype=float)
@@ -132,6 +137,8 @@ def _cell(cell: str, j: int, where: str) -> float | None:
     if not cell and j >= 2:
         return None
     try:
+        if "_" in cell:  # float() reads "1_0" as 10: a typo, not a number to take
+            raise ValueError(cell)
         v = float(cell)
     except ValueError:
         raise TrackerError(f"{where}, column {COLUMNS[j]}: expected a number, got {cell!r}") from None
