@@ -226,3 +226,29 @@ def test_the_load_warnings_of_an_unmeasured_file_say_forbidden_not_x(tmp_path, c
     said = [r.getMessage() for r in caplog.records if "cannot be held;" in r.getMessage()]
     assert said and all("list the transitions into it in [transitions] forbidden" in m for m in said)
     assert not any('"x"' in r.getMessage() for r in caplog.records)
+
+
+def test_an_unmeasured_matrix_is_learned_in_mm_and_a_leftover_step_mm_is_said_and_dropped(tmp_path, caplog):
+    """An unmeasured table counted in steps by default: a hand's ruler or a tracker gives mm, and
+    --source manual asked for "Δx [steps]", so a learned file read 4 mm a step into what was
+    measured in mm. It is mm now; a step_mm left from a written matrix is said not to be used
+    (the table plant, its only reader, cannot drive an unmeasured matrix) and the learned file
+    leaves it out, so that it loads; units = "steps" given keeps steps."""
+    from proleg.learn.estimate import estimate
+    from proleg.learn.measure import Trial
+    from proleg.learn.robotfile import write_learned_robot
+
+    path = _write(tmp_path, [2, 2], 'matrix = "unmeasured"\nallow = "one-level"', extra="[plant]\nstep_mm = 3.0\n")
+    with caplog.at_level("WARNING"):
+        robot = load_robot(path)
+    assert robot.units == "mm" and robot.plant.step_mm == 1.0
+    assert any("plant.step_mm is not used: an unmeasured matrix is learned in mm" in r.getMessage()
+               for r in caplog.records)
+    t = robot.transitions
+    trials = [Trial(t.label(a), t.label(b), 0, 1, 2.5, None, None, "manual") for a, b in zip(t.src, t.dst)]
+    learned = load_robot(write_learned_robot(robot, estimate(t, trials), tmp_path / "l.toml"))
+    assert learned.units == "mm" and (learned.transitions.reward == 2.5).all()
+    assert "# step_mm = 3.0   # the matrix is in mm now (learned)" in (tmp_path / "l.toml").read_text()
+    steps = _write(tmp_path, [2, 2], 'matrix = "unmeasured"\nallow = "one-level"\nunits = "steps"',
+                   extra="[plant]\nstep_mm = 3.0\n")
+    assert load_robot(steps).units == "steps" and load_robot(steps).plant.step_mm == 3.0

@@ -217,7 +217,17 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     for line in hold_crossings(path, limbs, control.hold_margin_deg):
         log.warning("warning: %s", line)
     act_index = {a.name: j for j, a in enumerate(actuators)}
-    plant = plant_section(path, doc.get("plant", {}), [a.name for a in actuators], len(limbs), table.n_states,
+    plant_doc = doc.get("plant", {})
+    transitions = doc["transitions"] if isinstance(doc.get("transitions"), dict) else {}
+    if (is_unmeasured(transitions) and "units" not in transitions and isinstance(plant_doc, dict)
+            and "step_mm" in plant_doc):
+        # an unmeasured matrix counts in mm (what a hand, a tracker or the simulator measures), and
+        # step_mm is the table plant's, which an unmeasured matrix cannot drive: a file that was a
+        # written one in steps keeps loading, told so (learn --out leaves it out)
+        log.warning('warning: %s: plant.step_mm is not used: an unmeasured matrix is learned in mm (say '
+                    'transitions.units = "steps" to count in step_mm instead)', path)
+        plant_doc = {k: v for k, v in plant_doc.items() if k != "step_mm"}
+    plant = plant_section(path, plant_doc, [a.name for a in actuators], len(limbs), table.n_states,
                           [act_index[limb.actuator] for limb in limbs], units)
     for line in rest_warnings(path, list(limbs), plant):
         log.warning("warning: %s", line)

@@ -63,7 +63,9 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
     if f.has("allow") and not unmeasured and not isinstance(value.get("matrix"), str):
         f.fail("allow", f'matrix = "{UNMEASURED}" beside it (allow says which transitions an unmeasured robot '
                         "can make; a matrix or a CSV says it by its \"x\" marks or rows)")
-    units = f.string("units", "steps")
+    # an unmeasured table has no steps to count: what learning measures is a length, by hand with a
+    # ruler too (--source manual asked for "Δx [steps]" of such a robot)
+    units = f.string("units", "mm" if unmeasured else "steps")
     if units not in TRANSITION_UNITS:
         f.fail("units", f"one of {', '.join(repr(u) for u in TRANSITION_UNITS)} (steps: × [plant] step_mm)", units)
     n = states.state_count(levels)

@@ -220,7 +220,8 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
     new = learned_transitions_text(robot, est, units=units, stats_as_keys=stats_as_keys, note=note,
                                    left_out=left_out, header=header)
     lines = source.splitlines()
-    if units != robot.units and units in UNIT_MM:  # the matrix's unit fixes step_mm now
+    # the matrix's unit fixes step_mm now (an unmeasured file's step_mm was not used: robot.py)
+    if units in UNIT_MM and (units != robot.units or getattr(robot, "unmeasured", False)):
         lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")
     climb = climb_for_new_gaits(robot)
     if climb is not None:
