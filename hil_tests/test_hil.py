@@ -140,7 +140,7 @@ def test_optimal_gait_moves_the_robot_its_way_at_the_measured_matrix_rate(open_t
     from proleg.sim.physical.measure import MARGIN_DEG
 
     t = open_target(robot_name)
-    if t.robot.transitions.planar is not None:
+    if t.robot.transitions.moves_in_plane:
         pytest.skip(f"{t.robot.name} is a planar robot (its matrix has Δy/Δθ statistics): the physical plant is a "
                     "body with its contacts in a row along x; its gaits are checked on the planar table plant "
                     "(tests/test_planar_plant.py)")

@@ -426,3 +426,24 @@ def test_more_actuators_than_the_boards_pwm_channels_says_no_numbering_fits(tmp_
         build(robot, load_board("arduino-nano"), tmp_path / "nano")
     msg = str(info.value)
     assert "has 8 actuators and board arduino-nano drives at most 4" in msg and "share" in msg and "\n" not in msg
+
+
+def test_hil_gait_test_walks_a_robot_file_with_var_dx_only(tmp_path):
+    """`proleg sim --measure-matrix --out` and `proleg learn` write `var_dx` beside the matrix:
+    a variance of Δx, no motion in the plane. hil_tests skipped such a robot's gait test as
+    'a planar robot (its matrix has Δy/Δθ statistics)', so a measured or learned robot file lost
+    its plant-truth test on every target without a word."""
+    text = (ROOT / "robots" / "paper-r1.toml").read_text(encoding="utf-8")
+    text = text.replace('name = "paper-r1"', 'name = "r1-var-dx"', 1)
+    var_dx = "var_dx = [[0, 0.01, 0.01, 0.01], [0.01, 0, 0.01, 0.01], [0.01, 0.01, 0, 0.01], [0.01, 0.01, 0.01, 0]]\n"
+    text = text.replace("\n[safety]", "\n" + var_dx + "\n[safety]", 1)
+    robot = tmp_path / "r1-var-dx.toml"
+    robot.write_text(text, encoding="utf-8")
+    assert load_robot(robot).transitions.planar is not None  # var_dx is read
+    out = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-rs", "-p", "no:xdist", "-p", "no:cacheprovider", str(ROOT / "hil_tests"),
+         "--robot", str(robot), "--target", "host-sim", "-k", "measured_matrix_rate and +x"],
+        capture_output=True, text=True, cwd=ROOT,
+    ).stdout
+    assert "planar robot" not in out, out
+    assert "1 passed" in out, out
