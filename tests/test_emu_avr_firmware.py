@@ -356,3 +356,24 @@ def test_a_bus_held_low_for_good_faults_the_imus_turns_the_coils_off_and_never_h
     faults = {(f.code, f.detail) for f in events(msgs, EventKind.FAULT)}
     assert faults == {(FaultCode.IMU_NO_ACK, 0), (FaultCode.IMU_NO_ACK, 1)}
     assert not any(board.pwm_permyriad(ch) for ch in range(4))
+
+
+def test_hil_max_on_test_accepts_the_nano_at_a_tick_rate_whose_plant_step_is_one_tick(tmp_path):
+    """R1 at 706 Hz: the plant step is one 1.4 ms tick, and the coil measured 2,995.8 ms for
+    max_on_ms 3000 (sampling, the tick charged ahead, the tick's busy time before the pin is
+    written). hil_tests' lower bound of two plant steps called that 'the limit was never
+    reached: the test proved nothing'."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    text = (robots_dir() / "paper-r1.toml").read_text(encoding="utf-8")
+    assert "\ntick_hz = 1000" in text
+    robot = tmp_path / "r1-706.toml"
+    robot.write_text(text.replace("\ntick_hz = 1000", "\ntick_hz = 706", 1), encoding="utf-8")
+    out = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:xdist", "-p", "no:cacheprovider", str(root / "hil_tests"),
+         "--robot", str(robot), "--target", "avr-emu", "-k", "test_no_coil_stays_on_longer_than_max_on_ms"],
+        capture_output=True, text=True, cwd=root,
+    ).stdout
+    assert "1 passed" in out, out
