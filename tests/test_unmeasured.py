@@ -252,3 +252,33 @@ def test_an_unmeasured_matrix_is_learned_in_mm_and_a_leftover_step_mm_is_said_an
     steps = _write(tmp_path, [2, 2], 'matrix = "unmeasured"\nallow = "one-level"\nunits = "steps"',
                    extra="[plant]\nstep_mm = 3.0\n")
     assert load_robot(steps).units == "steps" and load_robot(steps).plant.step_mm == 3.0
+
+
+def test_a_transition_the_simulated_body_did_not_make_is_forbidden_in_the_measured_file(tmp_path):
+    """--measure-matrix --out of an unmeasured file: a transition the idealised drive did not make
+    kept its 'old value', the unmeasured table's 0, and a gait went through it (a state the body
+    cannot hold, with a warning). It is "x" now, named in a comment, as learning writes what it
+    left out; every made one keeps its measurement."""
+    import numpy as np
+
+    from proleg.learn.robotfile import write_measured_robot
+    from proleg.sim.physical.measure import MeasuredMatrix
+
+    robot = load_robot(_write(tmp_path, [2, 2], 'matrix = "unmeasured"\nallow = "one-level"'))
+    t = robot.transitions
+    n = t.n_states
+    mean, samples = np.full((n, n), np.nan), np.zeros((n, n), dtype=int)
+    skip = (t.index("01"), t.index("11"))
+    for k, (a, b) in enumerate(zip(t.src.tolist(), t.dst.tolist())):
+        if (a, b) != skip:
+            mean[a, b], samples[a, b] = 0.5 + k, 2
+    m = MeasuredMatrix(t.labels(), mean, np.where(samples > 0, 0.1, np.nan), samples,
+                       np.where(samples > 0, 0.8, np.nan), ("D1", "D1"), "test")
+    out = write_measured_robot(robot, m, tmp_path / "m.toml")
+    measured = load_robot(out).transitions
+    assert measured.lookup(*skip) is None
+    assert measured.n_transitions == t.n_transitions - 1
+    for a, b in zip(measured.src.tolist(), measured.dst.tolist()):
+        assert measured.reward[measured.lookup(a, b)] == mean[a, b]
+    assert '# forbidden ("x") now: the idealised drive did not make them on the simulated body' in out.read_text()
+    assert "01->11" in out.read_text()

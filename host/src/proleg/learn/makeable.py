@@ -1,6 +1,7 @@
 """The allowed transitions learning leaves out, and the words that say so.
 
-Three kinds (``KINDS``), each with the reason per transition (``Left``):
+Three kinds for learning (``KINDS``; a fourth, ``not_made``, for a matrix measured on the simulated
+body), each with the reason per transition (``Left``):
 
 * ``impossible``: transitions the robot's hardware cannot make at all. A step that moves limbs
   of one shared coil apart, or raises some of them into a state the coil cannot hold
@@ -73,6 +74,11 @@ KINDS = {
         "the robot faulted making them (the fault is in the trial log and the learn report), so they were not "
         "asked for again (proleg learn --retry-faulted asks for them)",
         "--retry-faulted asks for them again"),
+    # proleg sim --measure-matrix --out of an unmeasured file (learnt: the simulated body's)
+    "not_made": Words(
+        "not made on the simulated body", "not made on the simulated body", "not made",
+        "the idealised drive did not make them on the simulated body (proleg sim --measure-matrix: their start "
+        "or end state was not reached), and an unmeasured matrix has no value of theirs to keep"),
 }
 
 

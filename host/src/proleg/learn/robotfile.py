@@ -267,8 +267,18 @@ def write_measured_robot(robot: Robot, measured: Any, out: str | Path) -> Path:
         "# n_trials: samples per transition. The simulated body, not the robot: learn it on the robot "
         "(proleg learn) to replace it.",
     ]
+    left_out = None
+    if getattr(robot, "unmeasured", False):
+        # an unmeasured file's 0 is no value to keep: a transition the body did not make is "x", as
+        # learning writes one it left out (kept at 0, a gait went through a state the body cannot hold)
+        from .makeable import Left
+
+        t = robot.transitions
+        left_out = {e: Left("not_made", "not made on the simulated body")
+                    for e, (a, b) in enumerate(zip(t.src.tolist(), t.dst.tolist()))
+                    if not np.asarray(measured.samples)[a, b]}
     return write_learned_robot(robot, measured_estimates(robot, measured), out, units="mm", header=header,
-                               command="sim --measure-matrix")
+                               command="sim --measure-matrix", left_out=left_out)
 
 
 def climb_for_new_gaits(robot: Robot) -> ClimbLimit | None:
