@@ -214,7 +214,10 @@ def _open_sim(robot: Robot, board: str = "host-sim", seed: int = 1, plant: str |
                                  description=f"{robot.name} on {board} over CAN (python-can virtual bus)")
     else:
         transport = SimLink(sim, description=f"{robot.name} on {board}")
-    client = RobotClient(transport, max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
+    # the heartbeat fits the robot's link watchdog: at 100 ms (the least a file may say) the default
+    # 0.5 s heartbeat let every test that waits trip LINK_WATCHDOG
+    client = RobotClient(transport, max_limbs=len(robot.limbs), max_channels=len(robot.actuators),
+                         watchdog_ms=robot.safety.link_watchdog_ms)
     client.connect()
     return Target(robot, firmware_board, client, sim, board, link)
 
@@ -226,7 +229,8 @@ def _open_serial(config, robot: Robot) -> Target:
     if not board_name:
         pytest.exit("--target serial:PORT needs --board", returncode=4)
     port = config.getoption("--target").split(":", 1)[1]
-    client = RobotClient(SerialLink(port), max_limbs=len(robot.limbs), max_channels=len(robot.actuators))
+    client = RobotClient(SerialLink(port), max_limbs=len(robot.limbs), max_channels=len(robot.actuators),
+                         watchdog_ms=robot.safety.link_watchdog_ms)
     client.connect()
     return Target(robot, load_board(board_name), client, None)
 

@@ -362,10 +362,13 @@ def test_no_coil_stays_on_longer_than_max_on_ms(target, record_property):
     received = []
     t_end = sim.board.time_us + max_on_us + 1_000_000
     next_ping = sim.board.time_us
+    # four PINGs a watchdog period (2 s: every 500 ms), whatever [safety] link_watchdog_ms says
+    watchdog_ms = robot.safety.link_watchdog_ms or 2000
+    ping_us = min(500_000, watchdog_ms * 1000 // 4)
     while sim.board.time_us < t_end:
-        if sim.board.time_us >= next_ping:  # a host that stays: the link watchdog (2 s) is fed
+        if sim.board.time_us >= next_ping:  # a host that stays: the link watchdog is fed
             target.client.link.write(encode(Message.new("PING", token=200)))
-            next_ping += 500_000
+            next_ping += ping_us
         target.step()
         now = sim.board.time_us
         for ch in sim.channels:

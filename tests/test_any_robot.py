@@ -447,3 +447,20 @@ def test_hil_gait_test_walks_a_robot_file_with_var_dx_only(tmp_path):
     ).stdout
     assert "planar robot" not in out, out
     assert "1 passed" in out, out
+
+
+def test_hil_tests_feed_a_short_link_watchdog(tmp_path):
+    """A robot file with link_watchdog_ms = 100, the least the loader takes: the hil tests' client
+    pinged every 0.5 s (a quarter of the default 2 s) and the on-time test every 500 ms, so the
+    firmware stopped them all with LINK_WATCHDOG (3 of the focused subset failed on host-sim)."""
+    text = (ROOT / "robots" / "paper-r1.toml").read_text(encoding="utf-8")
+    text = text.replace("\n[control]", "\nlink_watchdog_ms = 100\n\n[control]", 1)
+    robot = tmp_path / "r1-short-watchdog.toml"
+    robot.write_text(text, encoding="utf-8")
+    assert load_robot(robot).safety.link_watchdog_ms == 100
+    out = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:xdist", "-p", "no:cacheprovider", str(ROOT / "hil_tests"),
+         "--robot", str(robot), "--target", "host-sim", "-k", "test_no_coil_stays_on_longer or ct1_and_ct2"],
+        capture_output=True, text=True, cwd=ROOT,
+    ).stdout
+    assert "failed" not in out and "passed" in out, out
