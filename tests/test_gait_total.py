@@ -95,3 +95,59 @@ def test_a_search_still_running_after_slow_s_says_so_once():
                     "searching (the search grows with the gait length: a smaller --max-transitions or [gaits] "
                     "max_transitions is faster)"]
     assert (slow.value, slow.gaits) == (quick.value, quick.gaits)
+
+
+tied_rewards = st.sampled_from([-1.0, 0.0, 1.0, 2.0])
+
+
+@st.composite
+def tied_tables(draw):
+    n = draw(st.integers(3, 6))
+    reward = np.array(draw(st.lists(tied_rewards, min_size=n * n, max_size=n * n))).reshape(n, n)
+    allowed = np.array(draw(st.lists(st.booleans(), min_size=n * n, max_size=n * n))).reshape(n, n)
+    return TransitionTable.from_dense((n,), reward, allowed | draw(st.sampled_from([False, True])))
+
+
+def _value_search_yields_only_better_walks(monkeypatch_target):
+    """Wrap total._closed_walks: in the value search (raise_threshold) every block it yields
+    must beat every block before it; a block no better is a walk the search had no use for."""
+    import proleg.gait.total as total
+
+    real = total._closed_walks
+
+    def checked(g, bound, L, threshold, slack, *, raise_threshold, slow=None):
+        for walks, weights in real(g, bound, L, threshold, slack, raise_threshold=raise_threshold, slow=slow):
+            if raise_threshold:
+                best = monkeypatch_target.get("best")
+                assert best is None or float(weights.max()) > best, (L, best, weights.max())
+                monkeypatch_target["best"] = float(weights.max())
+            yield walks, weights
+
+    return checked
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(table=tied_tables(), direction=st.sampled_from(["+x", "-x"]), bound=st.sampled_from([None, 2, 3, 4, 5]))
+def test_the_value_search_stops_listing_walks_once_one_is_found_and_agrees_with_the_oracle(table, direction, bound):
+    # 256 states, any transition, rewards -3..3 (every bound reached by some walk): the value
+    # search listed every walk of 16 transitions worth the best after the first had proved it,
+    # and `proleg gait` / `proleg build` ran for ever. Tied rewards make the same shape small
+    # (and small blocks of the depth-first search, many of them).
+    import proleg.gait.total as total
+
+    seen: dict[str, float] = {}
+    with mock.patch("proleg.gait.maxplus.EXACT_ENTRIES", 0), mock.patch.object(total, "_EXPAND", 4), \
+            mock.patch.object(total, "_closed_walks", _value_search_yields_only_better_walks(seen)):
+        assert_matches_oracle(table, "total", direction, bound)
+
+
+def test_flat_rewards_too_many_for_the_full_powers_find_the_optimum_with_one_walk():
+    import proleg.gait.total as total
+
+    n = 10
+    t = TransitionTable.from_dense((n,), np.ones((n, n)))
+    seen: dict[str, float] = {}
+    with mock.patch("proleg.gait.maxplus.EXACT_ENTRIES", 0), \
+            mock.patch.object(total, "_closed_walks", _value_search_yields_only_better_walks(seen)):
+        result = optimal_gaits(t, "total", "+x", max_transitions=8)
+    assert result.value == 8.0 and seen["best"] == 8.0

@@ -57,12 +57,24 @@ class TotalResult:
 
 class _Threshold:
     """The value a closed walk must reach (the value search raises it as it finds walks),
-    and the best bound among the prefixes it cut off (where the next search may start)."""
+    and the best bound among the prefixes it cut off (where the next search may start).
+
+    Once the value search has found a walk (``found``), only a better one is of use: a prefix
+    whose bound merely equals the best found is cut too. Kept, it made a table of tied rewards
+    (every bound reached: 256 states, any transition, rewards −3..3) list every walk of 16
+    transitions worth the best, for ever, after the first had already proved the optimum."""
 
     def __init__(self, value: float):
         self.value = value
+        self.found = False
         self.pruned = -np.inf
         self.pruned_exact = -np.inf  # the best cut value that is a closed walk's own value
+
+    def keeps(self, values: np.ndarray, slack: float) -> np.ndarray:
+        """Which of ``values`` (bounds or closed walks' values) the search still needs."""
+        if self.found:
+            return values > self.value + slack
+        return values >= self.value - slack
 
     def cut(self, bounds: np.ndarray, exact: bool = False) -> None:
         if len(bounds):
@@ -203,19 +215,22 @@ def _closed_walks(
         keep = nxt >= start
         if left == 0:
             keep &= nxt == start
-            threshold.cut(new_reward[keep & (new_reward < threshold.value - slack)], exact=True)
-            keep &= new_reward >= threshold.value - slack
+            wanted = threshold.keeps(new_reward, slack)
+            threshold.cut(new_reward[keep & ~wanted], exact=True)
+            keep &= wanted
             if keep.any():
                 weights = new_reward[keep]
                 if raise_threshold:
                     threshold.value = max(threshold.value, float(weights.max()))
+                    threshold.found = True
                 yield paths[rows[keep]], weights
             continue
         reach = new_reward[keep] + bound(left, nxt[keep], start[keep])
         # one transition to go: the bound is that transition's own reward, so a cut prefix
         # is a closed walk of exactly that value (over states >= its start)
-        threshold.cut(reach[reach < threshold.value - slack], exact=left == 1)
-        keep[keep] = reach >= threshold.value - slack
+        wanted = threshold.keeps(reach, slack)
+        threshold.cut(reach[~wanted], exact=left == 1)
+        keep[keep] = wanted
         if keep.any():
             stack.append((np.hstack([paths[rows[keep]], nxt[keep, None]]), new_reward[keep]))
 
