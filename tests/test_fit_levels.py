@@ -74,3 +74,32 @@ def test_a_flash_dry_run_refuses_a_robot_the_ram_estimate_refuses(capsys, tmp_pa
     code, out, _ = cli(capsys, "flash", _robot(tmp_path, [3, 2]), "--board", "arduino-nano", "--port",
                        "/dev/ttyUSB0", "--dry-run", "-o", tmp_path / "fw")
     assert code == 0 and out.startswith("avrdude ")
+
+
+def test_a_table_of_allowed_transitions_too_big_for_any_gaits_says_to_forbid_transitions(tmp_path):
+    """Eight binary limbs allowing any transition: the sorted key list of 65,280 transitions
+    takes 261,120 B, four times the bluepill's flash. The refusal advised fewer gaits
+    (--max-transitions, another objective), which cannot make it fit; it now names the
+    allowed transitions and how to forbid them. A robot whose gaits are what overflows keeps
+    the advice about gaits."""
+    out = ['[robot]\nname = "eight-any"\n']
+    for i in range(8):
+        out.append(f'[[limb]]\nname = "l{i}"\npsi_star_deg = [20.0]\nactuator = "a{i}"\nfriction = "D1"\n')
+    out += [f'[[actuator]]\nname = "a{i}"\n' for i in range(8)]
+    out.append('[transitions]\nmatrix = "unmeasured"\nallow = "any"\n[control]\ntick_hz = 200\n')
+    path = tmp_path / "eight.toml"
+    path.write_text("".join(out))
+    robot = load_robot(path)
+    no_gaits = {"+x": [], "-x": []}
+    with pytest.raises(BuildError) as e:
+        fit.check_fit(robot, load_board("bluepill-f103"), no_gaits)
+    msg = str(e.value)
+    assert "its 65,280 allowed transitions alone take 261,120 bytes" in msg and "allow = \"one-level\"" in msg, msg
+    assert "fewer gaits" not in msg and "\n" not in msg, msg
+
+    r1 = load_robot(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
+    from types import SimpleNamespace
+
+    big = {"+x": [SimpleNamespace(states=tuple([0, 1] * 12000 + [0]))], "-x": []}
+    with pytest.raises(BuildError, match=r"fewer gaits: --max-transitions or another objective"):
+        fit.check_fit(r1, load_board("arduino-nano"), big)

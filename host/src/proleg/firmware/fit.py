@@ -63,8 +63,14 @@ def table_bytes(robot: Any, gaits: Mapping[str, Sequence[Any]]) -> int:
     rows = gait_table_rows(gaits)
     steps = sum(len(st) for _, _, st in rows)
     index = 10 * max(1, len(rows))  # first, length; entry first, length, join
-    transitions = (n * n + 7) // 8 if n <= BITMAP_MAX_STATES else 4 * max(1, len(robot.transitions.src))
-    return steps * state_bytes + index + transitions
+    return steps * state_bytes + index + transition_bytes(robot)
+
+
+def transition_bytes(robot: Any) -> int:
+    """Flash the allowed-transition table takes, whatever the gaits: an n × n bitmap up to
+    BITMAP_MAX_STATES states, a sorted 32-bit key per transition above."""
+    n = robot.n_states
+    return (n * n + 7) // 8 if n <= BITMAP_MAX_STATES else 4 * max(1, len(robot.transitions.src))
 
 
 def _board(board: Any, key: str, default: Any = None) -> Any:
@@ -110,9 +116,17 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
                 lib_bytes = sum((len(lg.gait.states) - 1) * state_bytes + 10 for lg in own)
                 lib_note = (f"; its gait library ({counted(len(library), 'heading')}, {counted(len(own), 'gait')} of their own) takes about "
                             f"{lib_bytes:,} bytes of that: fewer headings or a smaller max_transitions in [gaits]")
+            allowed = transition_bytes(robot)
+            fix = "fewer gaits: --max-transitions or another objective, or a larger board"
+            if base_flash + allowed + FLASH_PER_LIMB * extra > limit_flash:
+                # no choice of gaits fits: the table of allowed transitions alone is too big
+                fix = (f"its {len(robot.transitions.src):,} allowed transitions alone take {allowed:,} bytes, "
+                       "too many for any gaits: forbid the transitions the robot does not make ('x' in the matrix, "
+                       "rows left out of the CSV, or allow = \"one-level\" or \"one-limb\" on an unmeasured robot), "
+                       "or a larger board")
             raise BuildError(
-                f"robot {robot.name} does not fit board {name} (estimated before compiling; fewer gaits: "
-                f"--max-transitions or another objective, or a larger board): its gait and transition tables take "
+                f"robot {robot.name} does not fit board {name} (estimated before compiling; {fix}): "
+                f"its gait and transition tables take "
                 f"{tables:,} bytes ({robot.n_states:,} states, {len(robot.transitions.src):,} transitions), the rest of "
                 f"the firmware about {flash - tables:,}; robot {robot.name} needs {flash:,} bytes of flash, "
                 f"board {name} has {limit_flash:,}{lib_note}"
