@@ -203,3 +203,35 @@ def test_a_missing_flash_tool_or_port_is_said_before_anything_is_built(tmp_path,
     code, _, err = cli(capsys, "flash", R1, "--board", "arduino-nano", "--port", "/dev/ttyNOPE-proleg", "-o", out)
     assert code == 2 and "avrdude not found" in err
     assert not out.exists()
+
+
+def test_a_dry_run_refuses_what_the_build_refuses_before_compiling(capsys, parent, tmp_path):
+    """The dry run checked the board and the robot file but not the rest of what the build
+    refuses before compiling: it printed a command and exit 0 for tables four times the
+    bluepill's flash, --objective speed on a file without durations, a --library heading the
+    file has no dy for, and an -o the build will not replace or whose folder does not exist."""
+    eight = ['[robot]\nname = "eight-any"\n']
+    for i in range(8):
+        eight.append(f'[[limb]]\nname = "l{i}"\npsi_star_deg = [20.0]\nactuator = "a{i}"\nfriction = "D1"\n')
+    eight += [f'[[actuator]]\nname = "a{i}"\n' for i in range(8)]
+    eight.append('[transitions]\nmatrix = "unmeasured"\nallow = "any"\n[control]\ntick_hz = 200\n')
+    big = tmp_path / "eight.toml"
+    big.write_text("".join(eight), encoding="utf-8")
+    out = parent / "fw"
+    foreign = tmp_path / "not-a-build"
+    foreign.mkdir()
+    cases = [
+        ((big, "--board", "bluepill-f103"), "robot eight-any does not fit board bluepill-f103"),
+        ((R1, "--board", "bluepill-f103", "--objective", "speed"), "gives no transition durations"),
+        ((R1, "--board", "bluepill-f103", "--library", "0,90"), "heading 90° (off the x axis) needs [transitions].dy"),
+    ]
+    for argv, expected in cases:
+        code, stdout, err = cli(capsys, "flash", *argv, "--dry-run", "-o", out)
+        assert code == 2 and stdout == "" and expected in one_line(err), (argv, err)
+        build_code, _, build_err = cli(capsys, "build", *argv, "-o", out)
+        assert build_code == 2 and expected in one_line(build_err), (argv, build_err)
+    code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--dry-run", "-o", foreign)
+    assert code == 2 and stdout == "" and "is not a proleg build directory" in one_line(err)
+    code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--dry-run", "-o", tmp_path / "no" / "fw")
+    assert code == 2 and stdout == "" and "does not exist" in one_line(err)
+    assert_nothing_left(parent)

@@ -334,9 +334,10 @@ def _firmware_args(p: argparse.ArgumentParser) -> None:
 BUILD_WARNINGS_SHOWN = 6
 
 
-def _build(args: argparse.Namespace):
+def _firmware_request(args: argparse.Namespace, board=None):
+    """(robot, board, library) of a build or flash, with what the command line itself must get
+    right checked: the output's folder, the speed objective's durations, ``--library``."""
     from ..firmware.boards import load_board
-    from ..firmware.build import build
     from ..robot import load_robot
 
     if args.out is not None and not Path(args.out).parent.is_dir():
@@ -344,7 +345,7 @@ def _build(args: argparse.Namespace):
 
         raise UsageError(f"-o {args.out}: directory {Path(args.out).parent} does not exist")
     robot = load_robot(args.robot)
-    board = load_board(args.board)
+    board = load_board(args.board) if board is None else board
     from .gait import check_speed_objective
 
     check_speed_objective(robot, args.objective)
@@ -353,6 +354,13 @@ def _build(args: argparse.Namespace):
         from ..gait.library import library_spec
 
         library = library_spec(args.library, **(robot.library.as_kwargs() if robot.library is not None else {}))
+    return robot, board, library
+
+
+def _build(args: argparse.Namespace):
+    from ..firmware.build import build
+
+    robot, board, library = _firmware_request(args)
     result = build(robot, board, args.out, objective=args.objective, max_transitions=args.max_transitions,
                    library=library)
     print(f"built {robot.name} for {board.name}: {result.artifact}")
@@ -393,17 +401,18 @@ def cmd_flash(args: argparse.Namespace) -> int:
 
     board = load_board(args.board)
     method = choose_method(board, args.tool)
-    if args.dry_run:  # builds nothing, but names what the build would refuse (the robot file, the board)
-        from ..firmware.build import check_board_takes, check_tick_budget, default_out_dir
+    if args.dry_run:  # builds nothing, but names what the build would refuse (the robot file, the board, the
+        # command line, the gaits' tables: everything the build checks before it compiles)
+        from ..firmware.build import check_board_takes, check_tick_budget, default_out_dir, plan_build
         from ..firmware.fit import check_i2c_ticks, check_ram
-        from ..robot import load_robot
 
-        robot = load_robot(args.robot)
+        robot, board, library = _firmware_request(args, board)
         check_board_takes(robot, board)
         check_tick_budget(robot, board)
         check_i2c_ticks(robot, board)
         check_ram(robot, board)
         out = Path(args.out) if args.out else default_out_dir(robot, board)
+        plan_build(robot, board, out, args.objective, args.max_transitions, library)
         print(shlex.join(flash_command(method, out / board.artifact, args.port)))
         return 0
     check_tool(method, args.port)  # a missing --port, tool or port fails before building

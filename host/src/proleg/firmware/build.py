@@ -37,7 +37,7 @@ from .fit import Fit, check_fit, check_i2c_ticks, i2c_hz
 from .gaits import firmware_gaits, gait_warnings
 from .placement import max_tick_hz, place_imus
 
-__all__ = ["MANIFEST", "BuildResult", "build", "check_board_takes", "check_buildable", "firmware_gaits",
+__all__ = ["MANIFEST", "BuildResult", "build", "check_board_takes", "check_buildable", "firmware_gaits", "plan_build",
            "render_project"]
 
 MANIFEST = "proleg-build.json"
@@ -229,12 +229,22 @@ def build(
         raise Interrupted(f"interrupted; nothing built{kept}") from None
 
 
-def _build_into(robot: Robot, board: Board, out_dir: Path, objective: str, max_transitions: int | None, jobs: int,
-           library: Any, written: list[Path]) -> BuildResult:
+def plan_build(robot: Robot, board: Board, out_dir: Path, objective: str = "total", max_transitions: int | None = None,
+               library: Any = None) -> tuple[Any, Fit]:
+    """What the build decides before it renders anything: the project directory it may
+    replace, the gaits the firmware carries and whether their tables fit the board
+    (BuildError otherwise). ``flash --dry-run`` asks it too: it printed a command and exit 0
+    for robots whose tables are four times the board's flash, or whose directory the build
+    refuses to replace."""
     if out_dir.exists() and not (out_dir / MANIFEST).exists():
         raise BuildError(f"{out_dir} exists and is not a proleg build directory: refusing to replace it")
     gaits = firmware_gaits(robot, objective, max_transitions, library)  # library: default the robot file's
-    fit = check_fit(robot, board, gaits)
+    return gaits, check_fit(robot, board, gaits)
+
+
+def _build_into(robot: Robot, board: Board, out_dir: Path, objective: str, max_transitions: int | None, jobs: int,
+           library: Any, written: list[Path]) -> BuildResult:
+    gaits, fit = plan_build(robot, board, out_dir, objective, max_transitions, library)
     warnings = tuple(gait_warnings(robot, gaits))
     files = render_project(robot, board, gaits)
 
