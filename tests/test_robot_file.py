@@ -401,11 +401,36 @@ def test_a_duration_past_an_hour_is_refused_in_the_matrix_and_the_csv_as_default
     finite number: 1.7e308 on two steps of a gait overflowed its summed duration (a traceback)."""
     huge = "durations_s = [[0, 1.7e308, 1, 1], [1, 0, 1, 1.7e308], [1, 1, 0, 1], [1, 1, 1, 0]]"
     rejects(tmp_path, R1.replace("[transitions]", "[transitions]\n" + huge),
-            "transitions.durations_s[1][2]: expected a duration in (0, 3600] seconds or 'x', got 1.7e+308")
+            "transitions.durations_s[1][2]: expected a duration in [1e-06, 3600] seconds or 'x', got 1.7e+308")
     hour = huge.replace("1.7e308", "3600")
     assert load_robot(write(tmp_path, R1.replace("[transitions]", "[transitions]\n" + hour))).transitions.duration.max() == 3600
-    with pytest.raises(RobotFileError, match=r"t\.csv:3: duration_s: expected a number in \(0, 3600\] seconds, got '3601'"):
+    with pytest.raises(RobotFileError, match=r"t\.csv:3: duration_s: expected a number in \[1e-06, 3600\] seconds, got '3601'"):
         load_robot(csv_robot(tmp_path, "from,to,reward,duration_s\n00,10,1,3\n10,00,1,3601\n"))
+
+
+def test_a_duration_under_a_microsecond_is_refused_everywhere_and_the_shortest_keeps_speed_finite(tmp_path):
+    """Durations took anything above 0: 1e9 steps in 1e-300 s is past float64, so --objective
+    speed printed numpy's overflow warnings and answered 'no gait moves the robot' for R1. The
+    shortest duration is a microsecond (the fastest tick is 100 µs), where J / T stays finite
+    and the speed search agrees with the brute-force oracle."""
+    from proleg.gait import optimal_gaits
+    from proleg.gait.bruteforce import brute_force_gaits
+
+    tiny = "durations_s = [[0, 1e-300, 1, 1], [1, 0, 1, 1], [1, 1, 0, 1], [1, 1, 1, 0]]"
+    rejects(tmp_path, R1.replace("[transitions]", "[transitions]\n" + tiny),
+            "transitions.durations_s[1][2]: expected a duration in [1e-06, 3600] seconds or 'x', got 1e-300")
+    rejects(tmp_path, R1.replace("[transitions]", "[transitions]\ndefault_duration_s = 1e-300"),
+            "transitions.default_duration_s: expected a number in [1e-06, 3600.0], got 1e-300")
+    with pytest.raises(RobotFileError, match=r"t\.csv:2: duration_s: expected a number in \[1e-06, 3600\] seconds, got '1e-7'"):
+        load_robot(csv_robot(tmp_path, "from,to,reward,duration_s\n00,10,1,1e-7\n10,00,1,3\n"))
+    extreme = R1.replace("[[0, -1, 1, 0], [1, 0, 0, -1]", "[[0, 1e9, -1e9, 0], [1e9, 0, 0, -1e9]")
+    assert extreme != R1
+    robot = load_robot(write(tmp_path, extreme.replace("[transitions]", "[transitions]\ndefault_duration_s = 1e-6")))
+    for direction in ("+x", "-x"):
+        result = optimal_gaits(robot.transitions, "speed", direction)
+        value, ties = brute_force_gaits(robot.transitions, "speed", direction)
+        assert value is not None and result.value == pytest.approx(value, rel=1e-9)
+        assert {g.states for g in result.gaits} == ties
 
 
 def test_multi_level_limb_labels(tmp_path):

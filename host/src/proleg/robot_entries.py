@@ -22,6 +22,16 @@ MAX_TRIALS = 10**9
 #: The longest duration of a transition (s), in ``durations_s``, a CSV's ``duration_s`` and
 #: ``default_duration_s`` alike: a gait sums them, and 1e308 overflowed the sum (a traceback).
 MAX_DURATION_S = 3600.0
+#: The shortest (s), a microsecond (the fastest control tick is 100 µs): the speed objective divides
+#: rewards by durations, and 1e9 in 1e-300 s is past float64 (numpy's overflow warnings, and
+#: "no gait moves the robot" for a gait that plainly did). Within these bounds |J / T| ≤ 1e15.
+MIN_DURATION_S = 1e-6
+DURATION_RANGE = f"[{MIN_DURATION_S:g}, {MAX_DURATION_S:g}]"
+
+
+def is_duration(v: Any) -> bool:
+    """A transition's duration in seconds within [MIN_DURATION_S, MAX_DURATION_S]."""
+    return is_number(v) and MIN_DURATION_S <= v <= MAX_DURATION_S
 
 
 def state_ref(text: str, levels: tuple[int, ...], n: int, where: str, names: Sequence[str] = ()) -> int:

@@ -16,8 +16,8 @@ import numpy as np
 
 from . import states
 from .errors import RobotFileError
-from .robot_entries import (FORBIDDEN, MAX_DURATION_S, MAX_ENTRY, MAX_TRIALS, MAX_VARIANCE, in_range, is_number,
-                            state_ref)
+from .robot_entries import (DURATION_RANGE, FORBIDDEN, MAX_DURATION_S, MAX_ENTRY, MAX_TRIALS, MAX_VARIANCE,
+                            MIN_DURATION_S, in_range, is_duration, is_number, state_ref)
 from .robot_fields import Fields, toml_text
 from .robot_transitions_csv import read_csv
 from .transitions import PLANAR_FIELDS, PlanarRewards, TransitionTable
@@ -109,7 +109,7 @@ def transitions_section(path: Path, value: Any, levels: tuple[int, ...],
         _check_forbidden(path, value["forbidden"], levels, src, dst, rew, csv_file, names)
 
     if f.has("default_duration_s"):
-        default = f.number("default_duration_s", None, 0.0, MAX_DURATION_S, open_lo=True)
+        default = f.number("default_duration_s", None, MIN_DURATION_S, MAX_DURATION_S)
         if dur is None:
             dur = np.full(len(src), default)
         else:
@@ -329,8 +329,8 @@ def _durations_matrix(path: Path, rows: Any, n: int, allowed: np.ndarray) -> np.
                         f"{where}[{a + 1}][{b + 1}]: transition is allowed in the matrix, expected a duration > 0"
                     )
                 continue
-            if not is_number(v) or not 0 < v <= MAX_DURATION_S:
-                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration in (0, {MAX_DURATION_S:g}] seconds "
+            if not is_duration(v):
+                raise RobotFileError(f"{where}[{a + 1}][{b + 1}]: expected a duration in {DURATION_RANGE} seconds "
                                      f"or 'x', got {toml_text(v)}")
             if not allowed[a, b]:
                 raise RobotFileError(

@@ -12,7 +12,7 @@ from pathlib import Path
 from . import states
 from .errors import RobotFileError
 from .names import counted
-from .robot_entries import MAX_DURATION_S, MAX_ENTRY, in_range, state_ref
+from .robot_entries import DURATION_RANGE, MAX_ENTRY, in_range, is_duration, state_ref
 
 #: A transition CSV larger than this is refused before it is read.
 MAX_CSV_BYTES = 256 * 1024 * 1024
@@ -88,8 +88,8 @@ def _csv_duration(text: str, where: str) -> float:
         d = float(text)
     except ValueError:
         d = -1.0
-    if not 0 < d <= MAX_DURATION_S:
-        raise RobotFileError(f"{where}: duration_s: expected a number in (0, {MAX_DURATION_S:g}] seconds, got {text!r}")
+    if not is_duration(d):
+        raise RobotFileError(f"{where}: duration_s: expected a number in {DURATION_RANGE} seconds, got {text!r}")
     return d
 
 
