@@ -67,9 +67,12 @@ class Trial:
     def duration_s(self) -> float | None:
         """How long the firmware took to make the transition (``t_end`` − ``t_start``: until it
         reported the state reached, as a gait's step takes), None when the clock says nothing
-        (a log with the two equal, or a clock that stepped back)."""
+        (a log with the two equal, or a clock that stepped back) or nothing a robot file takes
+        (``robot_entries.is_duration``: the learned file must load)."""
+        from ..robot_entries import is_duration
+
         d = self.t_end - self.t_start
-        return d if math.isfinite(d) and d > 0 else None
+        return d if is_duration(d) else None
 
     @property
     def t_moved(self) -> float:
