@@ -152,12 +152,18 @@ def positive_float(text: str) -> float:
 MIN_PROGRESS_S = 0.1
 
 
+def _seconds_from(text: str, least: float, expected: str) -> float:
+    """A finite number of seconds of at least ``least``; below it ``expected at least … s
+    <expected>, got …``."""
+    v = positive_float(text)
+    if v < least:
+        raise argparse.ArgumentTypeError(f"expected at least {least:g} s {expected}, got {text}")
+    return v
+
+
 def progress_period(text: str) -> float:
     """``run --progress``: seconds between progress lines, at least ``MIN_PROGRESS_S``."""
-    v = positive_float(text)
-    if v < MIN_PROGRESS_S:
-        raise argparse.ArgumentTypeError(f"expected at least {MIN_PROGRESS_S:g} s between progress lines, got {text}")
-    return v
+    return _seconds_from(text, MIN_PROGRESS_S, "between progress lines")
 
 
 #: The shortest reply timeout the CLI takes: a reply frame takes a few ms at 115200 baud
@@ -167,10 +173,7 @@ MIN_REPLY_TIMEOUT_S = 0.01
 
 def reply_timeout(text: str) -> float:
     """``--timeout``: seconds to wait for a command's reply, at least ``MIN_REPLY_TIMEOUT_S``."""
-    v = positive_float(text)
-    if v < MIN_REPLY_TIMEOUT_S:
-        raise argparse.ArgumentTypeError(f"expected at least {MIN_REPLY_TIMEOUT_S} s (a reply takes a few ms), got {text}")
-    return v
+    return _seconds_from(text, MIN_REPLY_TIMEOUT_S, "(a reply takes a few ms)")
 
 
 def heading_deg(text: str) -> float:
