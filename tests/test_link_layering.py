@@ -13,7 +13,7 @@ ROOT = Path(proleg.__file__).resolve().parent
 
 #: lowest first; a module may import from its own layer or any layer before it
 LAYERS: list[set[str]] = [
-    {"__init__", "errors", "interrupts", "names", "paths", "states", "outputs", "ports"},
+    {"__init__", "errors", "interrupts", "names", "paths", "states", "outputs", "ports", "typed"},
     {"transitions", "protocol"},
     {"body", "physics", "robot", "robot_fields", "robot_limbs", "robot_settings", "robot_transitions", "robot_transitions_csv", "robot_entries", "robot_plant", "robot_body",
      "robot_reach", "robot_pose", "robot_coupling", "robot_descents", "robot_climb", "gait", "convert", "limbloss"},

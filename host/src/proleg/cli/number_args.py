@@ -11,6 +11,7 @@ import argparse
 import math
 
 from ..protocol.definition import GAIT_USER
+from ..typed import typed_float, typed_int
 
 
 def positive_int(text: str) -> int:
@@ -84,9 +85,7 @@ def gait_number(text: str) -> int:
 def int_auto(text: str) -> int:
     """An integer in any base Python reads (``16``, ``0x10``, ``0o20``): CAN node ids and ids."""
     try:
-        if "_" in text:  # int() reads "1_0" as 10: a typo, not a number to take
-            raise ValueError(text)
-        return int(text, 0)
+        return typed_int(text, 0)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected an integer (0x.. for hex), got {text!r}") from None
 
@@ -189,9 +188,7 @@ def heading_deg(text: str) -> float:
 
 def _float(text: str, expected: str) -> float:
     try:
-        if "_" in text:  # float() reads "1_0" as 10: a typo, not a number to take
-            raise ValueError(text)
-        return float(text)
+        return typed_float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
 
@@ -210,8 +207,6 @@ def integer(text: str) -> int:
 
 def _int(text: str, expected: str) -> int:
     try:
-        if "_" in text:  # int() reads "1_0" as 10, as float() does
-            raise ValueError(text)
-        return int(text)
+        return typed_int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None

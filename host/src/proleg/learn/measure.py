@@ -43,7 +43,9 @@ from typing import Any
 
 import numpy as np
 
+from ..robot_entries import is_duration
 from ..transitions import TransitionTable
+from ..typed import typed_float
 
 
 class TrialLogError(ValueError):
@@ -69,8 +71,6 @@ class Trial:
         reported the state reached, as a gait's step takes), None when the clock says nothing
         (a log with the two equal, or a clock that stepped back) or nothing a robot file takes
         (``robot_entries.is_duration``: the learned file must load)."""
-        from ..robot_entries import is_duration
-
         d = self.t_end - self.t_start
         return d if is_duration(d) else None
 
@@ -412,9 +412,7 @@ def manual_trial(src: str, dst: str, t_start: float, t_end: float, *,
             return None
         parts = text.split()
         try:
-            if any("_" in p for p in parts):  # float() reads "1_0" as 10: a typo, not a number to take
-                raise ValueError(text)
-            vals = [float(p) for p in parts]
+            vals = [typed_float(p) for p in parts]
         except ValueError:
             prompt = f"  not a number ({text!r}); {src} → {dst}: {what}: "
             continue

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..typed import typed_float
+
 
 class TrackerError(ValueError):
     """A tracker file that does not follow the documented format."""
@@ -137,9 +139,7 @@ def _cell(cell: str, j: int, where: str) -> float | None:
     if not cell and j >= 2:
         return None
     try:
-        if "_" in cell:  # float() reads "1_0" as 10: a typo, not a number to take
-            raise ValueError(cell)
-        v = float(cell)
+        v = typed_float(cell)
     except ValueError:
         raise TrackerError(f"{where}, column {COLUMNS[j]}: expected a number, got {cell!r}") from None
     if not abs(v) <= MAX_ABS:

@@ -19,6 +19,7 @@ from typing import Any
 
 from ...errors import SimError
 from ...robot_plant import PHYSICAL_KEYS, PLANT_KEYS, PlantKey
+from ...typed import typed_float
 
 
 @dataclass(frozen=True)
@@ -161,9 +162,7 @@ def _resolve(key: str, name: str, names: Sequence[str], by_limb: Sequence[int] =
 def _number(key: str, text: str) -> float:
     spec = KEYS[key]
     try:
-        if "_" in text:  # Python's float() reads "1_0" as 10: a typo, not a number to take
-            raise ValueError(text)
-        v = float(text)
+        v = typed_float(text)
     except ValueError:
         raise SimError(f"condition {key}: expected a number{_in_unit(spec.unit)}, got {text!r}") from None
     if not math.isfinite(v):
