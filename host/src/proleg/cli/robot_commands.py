@@ -99,11 +99,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.states is not None:  # loaded in this session: a Nano resets on each open, a --sim board is new
         own = user_gait(robot, args.states, "--states")
         args.gait = GAIT_USER
-        hint = _way_hint(robot.transitions, own)
-        says = "-x" if "walks -x" in hint else "+x" if "walks +x" in hint else None
+        says = _matrix_way(robot.transitions, own)
         if args.direction is None:
-            log.info("--states: %s", hint.replace("run it with --gait user ", "give "))
-        elif says is not None and says != args.direction:  # the climb guard would check the other way
+            if says:
+                log.info("--states: the robot file's matrix says it walks %s: give --direction %s", says, says)
+        elif says and says != args.direction:  # the climb guard would check the other way
             log.warning("warning: --states: the robot file's matrix says this sequence walks %s, and --direction "
                         "states %s: the climb guard ([control] max_climb_deg) checks the way stated", says,
                         args.direction)
@@ -112,7 +112,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     direction = args.direction or (UNSTATED if gait == GAIT_USER else "+x")
     if choice is not None:
         gait, direction = (choice.index, choice.direction) if choice.index is not None else (GAIT_USER, UNSTATED)
-    elif gait == GAIT_USER and args.sim and own is None:
+    elif gait == GAIT_USER and args.sim and own is None:  # --states loads one in this session
         # a --sim board is this command's alone: no load-gait can have reached it (QA hunt: the
         # NACK's "load one first" could not be followed); the refusal below still stands, exit 1
         log.warning("warning: --gait user --sim: the simulated board lives for this command only, so no gait was loaded "
@@ -315,18 +315,26 @@ def cmd_load_gait(args: argparse.Namespace) -> int:
     return 0
 
 
-def _way_hint(table: Any, states: list[int]) -> str:
-    """How to run a loaded sequence: with the way the robot file's matrix says it walks
-    stated, so that the climb guard checks it (docs/calibration.md)."""
+def _matrix_way(table: Any, states: list[int]) -> str | None:
+    """The way the robot file's matrix says the closed walk ``states`` goes: "+x", "-x", "" for
+    neither, None when the matrix cannot score it."""
     from ..gait import evaluate_sequence
 
     try:
         reward = evaluate_sequence(table, [*states, states[0]]).reward
     except GaitError:
+        return None
+    return "" if reward == 0 else "+x" if reward > 0 else "-x"
+
+
+def _way_hint(table: Any, states: list[int]) -> str:
+    """How to run a loaded sequence: with the way the robot file's matrix says it walks
+    stated, so that the climb guard checks it (docs/calibration.md)."""
+    way = _matrix_way(table, states)
+    if way is None:
         return "run it with --gait user"
-    if reward == 0:
+    if not way:
         return "the robot file's matrix says it walks neither way; run it with --gait user"
-    way = "+x" if reward > 0 else "-x"
     return f"the robot file's matrix says it walks {way}: run it with --gait user --direction {way}"
 
 

@@ -221,7 +221,7 @@ def write_learned_robot(robot: Robot, est: Estimates, out: str | Path, *, units:
                                    left_out=left_out, header=header)
     lines = source.splitlines()
     # the matrix's unit fixes step_mm now (an unmeasured file's step_mm was not used: robot.py)
-    if units in UNIT_MM and (units != robot.units or getattr(robot, "unmeasured", False)):
+    if units in UNIT_MM and (units != robot.units or robot.unmeasured):
         lines = _drop_plant_key(lines, "step_mm", f"the matrix is in {units} now (learned)")
     climb = climb_for_new_gaits(robot)
     if climb is not None:
@@ -257,8 +257,9 @@ def measured_estimates(robot: Robot, measured: Any) -> Estimates:
 def write_measured_robot(robot: Robot, measured: Any, out: str | Path) -> Path:
     """Write ``robot``'s file with the matrix ``proleg sim --measure-matrix`` measured (mm) as
     its ``[transitions]``, as ``write_learned_robot`` writes a learned one: the old table kept
-    below in comments, a transition the simulated body did not make keeping its old value
-    (named in a comment), nothing written unless the file reads back."""
+    below in comments, a transition the simulated body did not make keeping its old value, or
+    ``"x"`` where the old matrix was unmeasured (no value to keep), named in a comment; nothing
+    written unless the file reads back."""
     header = [
         f"# [transitions] measured by proleg sim --measure-matrix ({{when}}) on the physical plant, "
         f"{int(np.asarray(measured.samples).sum())} samples; friction {'/'.join(measured.mechanisms)} "
@@ -267,18 +268,13 @@ def write_measured_robot(robot: Robot, measured: Any, out: str | Path) -> Path:
         "# n_trials: samples per transition. The simulated body, not the robot: learn it on the robot "
         "(proleg learn) to replace it.",
     ]
-    left_out = None
-    if getattr(robot, "unmeasured", False):
-        # an unmeasured file's 0 is no value to keep: a transition the body did not make is "x", as
-        # learning writes one it left out (kept at 0, a gait went through a state the body cannot hold)
-        from .makeable import Left
-
-        t = robot.transitions
-        left_out = {e: Left("not_made", "not made on the simulated body")
-                    for e, (a, b) in enumerate(zip(t.src.tolist(), t.dst.tolist()))
-                    if not np.asarray(measured.samples)[a, b]}
-    return write_learned_robot(robot, measured_estimates(robot, measured), out, units="mm", header=header,
-                               command="sim --measure-matrix", left_out=left_out)
+    est = measured_estimates(robot, measured)
+    # an unmeasured file's 0 is no value to keep: a transition the body did not make is "x", as
+    # learning writes one it left out (kept at 0, a gait went through a state the body cannot hold)
+    left_out = ({int(e): Left("not_made", "not made on the simulated body") for e in np.flatnonzero(est.n == 0)}
+                if robot.unmeasured else None)
+    return write_learned_robot(robot, est, out, units="mm", header=header, command="sim --measure-matrix",
+                               left_out=left_out)
 
 
 def climb_for_new_gaits(robot: Robot) -> ClimbLimit | None:

@@ -130,12 +130,6 @@ def _ordered(steps: list[tuple[int, int]], order: str, seed: int) -> list[tuple[
     raise ValueError(f"measure_matrix: order must be one of {', '.join(ORDERS)}, got {order!r}")
 
 
-def _cycle_range(low: np.ndarray, high: np.ndarray, states: Sequence[int]) -> tuple[float, float]:
-    """(lowest, highest) displacement along ``states``, each step at its own extreme."""
-    steps = list(zip(states, states[1:]))
-    return float(sum(low[a, b] for a, b in steps)), float(sum(high[a, b] for a, b in steps))
-
-
 def _low_high(measured: Sequence[MeasuredMatrix]) -> tuple[np.ndarray, np.ndarray]:
     stack = np.array([m.matrix_mm for m in measured])
     return np.fmin.reduce(stack, axis=0), np.fmax.reduce(stack, axis=0)
@@ -165,7 +159,9 @@ class MatrixRange:
     def cycle_range(self, states: Sequence[int]) -> tuple[float, float]:
         """(lowest, highest) displacement along ``states``, each step at its own extreme: within a
         gait, each step's held limbs may sit anywhere in the range, independently of the others."""
-        return _cycle_range(self.low_mm, self.high_mm, states)
+        steps = list(zip(states, states[1:]))
+        return (float(sum(self.low_mm[a, b] for a, b in steps)),
+                float(sum(self.high_mm[a, b] for a, b in steps)))
 
     def to_json(self) -> dict:
         return {"hold_margins_deg": list(self.margins_deg), "low": json_matrix(self.low_mm),
@@ -207,10 +203,6 @@ class HistoryRange:
 
     def at(self, order: str) -> MeasuredMatrix:
         return self.measured[self.orders.index(order)]
-
-    def cycle_range(self, states: Sequence[int]) -> tuple[float, float]:
-        """(lowest, highest) displacement along ``states``, each step at its own extreme."""
-        return _cycle_range(self.low_mm, self.high_mm, states)
 
     def to_json(self) -> dict:
         return {"orders": list(self.orders), "low": json_matrix(self.low_mm), "high": json_matrix(self.high_mm)}
