@@ -170,11 +170,10 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     # failure, not a matrix; its --out was the robot file with every entry "kept" (an unmeasured
     # file's zeros, written as a measured table of zeros), and the command said so with exit 0
     nothing = bool(not_made) and len(not_made) == robot.transitions.n_transitions
+    # whether the load warnings foresaw the transitions not made: the failure and the table both say
+    warned = bool(not_made) and _load_warned(robot, not_made)
     if nothing:
-        from ..robot_body import warned_step
-
-        why = ("the load warnings above say which states the body cannot hold" if
-               any(warned_step(robot, a, b) or warned_step(robot, b, a) for a, b in not_made) else
+        why = ("the load warnings above say which states the body cannot hold" if warned else
                "the warnings above, if any, say why")
         failure = (f"--measure-matrix: the idealised drive made none of the {robot.transitions.n_transitions} "
                    f"allowed transitions on the simulated body under these conditions ({why}): nothing was measured"
@@ -200,13 +199,10 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     _table(m.states, cells)
     print(f"samples per entry: {int(m.samples.max()) if m.samples.size else 0} ('-': not an allowed transition)")
     if not_made:
-        from ..robot_body import warned_step
-
         shown = ", ".join(f"{m.states[a]}->{m.states[b]}" for a, b in not_made[:6])
         more = f", … ({len(not_made) - 6} more)" if len(not_made) > 6 else ""
         # "see the warnings" pointed at nothing when the load checks passed every one of them
         # (their body model poses each state still, the plant's held coils overshoot)
-        warned = any(warned_step(robot, a, b) or warned_step(robot, b, a) for a, b in not_made)
         why = ("see the warnings when the robot file was loaded" if warned else
                "no warning when the robot file was loaded foresaw it: the load checks pose each state at rest "
                "with its raised limbs at their hold edge, and a held coil may overshoot it; proleg sim "
@@ -220,6 +216,14 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         _table(m.states, [[None if lo != lo else f"{_mm(lo)}..{_mm(hi)}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
     return _measured(failure if nothing else None)
+
+
+def _load_warned(robot: Any, steps: list[tuple[int, int]]) -> bool:
+    """Whether a load warning named one of ``steps`` (a state the body cannot hold, a step it
+    cannot end), either way."""
+    from ..robot_body import warned_step
+
+    return any(warned_step(robot, a, b) or warned_step(robot, b, a) for a, b in steps)
 
 
 def _measured(failure: str | None) -> int:
