@@ -205,6 +205,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
             f"{path}: limb: {n:,} states (the product of the limbs' levels {levels}), expected at most {MAX_STATES:,}"
         )
     table, units = transitions_section(path, doc["transitions"], levels, [limb.name for limb in limbs])
+    unmeasured = is_unmeasured(doc["transitions"])
     n_trials = None
     if isinstance(doc["transitions"], dict) and "n_trials" in doc["transitions"]:
         allowed = np.zeros((table.n_states, table.n_states), dtype=bool)
@@ -218,9 +219,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         log.warning("warning: %s", line)
     act_index = {a.name: j for j, a in enumerate(actuators)}
     plant_doc = doc.get("plant", {})
-    transitions = doc["transitions"] if isinstance(doc.get("transitions"), dict) else {}
-    if (is_unmeasured(transitions) and "units" not in transitions and isinstance(plant_doc, dict)
-            and "step_mm" in plant_doc):
+    if unmeasured and "units" not in doc["transitions"] and isinstance(plant_doc, dict) and "step_mm" in plant_doc:
         # an unmeasured matrix counts in mm (what a hand, a tracker or the simulator measures), and
         # step_mm is the table plant's, which an unmeasured matrix cannot drive: a file that was a
         # written one in steps keeps loading, told so (learn --out leaves it out)
@@ -238,12 +237,12 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
         log.warning("warning: %s", line)
     coupled = coupled_states(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
     blocked = blocked_descents(list(limbs), [a.name for a in actuators], plant, table, control.hold_margin_deg)
-    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled, blocked, is_unmeasured(doc["transitions"]))
+    shown, rest = coupling_warnings(path, list(limbs), plant, table, coupled, blocked, unmeasured)
     for line in shown:
         log.warning("warning: %s", line)
     for line in rest:
         log.debug("warning: %s", line)
-    if (line := inference_warning(path, list(limbs), is_unmeasured(doc["transitions"]))) is not None:
+    if (line := inference_warning(path, list(limbs), unmeasured)) is not None:
         log.warning("warning: %s", line)
     library = None
     if "gaits" in doc:
@@ -256,7 +255,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     return Robot(name, path, description, limbs, actuators, table, units, safety, control, plant, n_trials, library,
                  shared_coil_lifts(list(limbs), coupled),
                  unreachable_states(list(limbs), [a.name for a in actuators], plant, table),
-                 unholdable_states(list(limbs), coupled), blocked, is_unmeasured(doc["transitions"]))
+                 unholdable_states(list(limbs), coupled), blocked, unmeasured)
 
 
 def _check_climb(path: Path, control: Control, limbs: Sequence[Limb], library: Any) -> None:

@@ -96,16 +96,14 @@ def _penalty(text: str) -> float:
 
 
 def _variance_weights(robot, given: float | tuple[float, float, float] | None) -> tuple[float, float, float]:
-    """``--variance-weight`` as (λx, λy, λθ): one λ weighs every variance the robot file gives
-    (a learned one-dimensional file has var_dx only: λ on it, not an error about var_dy); var_dx
-    always, so that a file with no variances at all is told so."""
+    """``--variance-weight`` as (λx, λy, λθ): a list as given, one λ by ``library.one_weight``."""
+    from ..gait.library import one_weight
+
     if given is None:
         return (0.0, 0.0, 0.0)
     if isinstance(given, tuple):
         return given
-    planar = robot.transitions.planar
-    have = planar.given() if planar is not None else {}
-    return (given, given if "var_dy" in have else 0.0, given if "var_dtheta_deg" in have else 0.0)
+    return one_weight(robot.transitions, given)
 
 
 def check_speed_objective(robot, objective: str) -> None:

@@ -223,6 +223,15 @@ def library_spec(headings: str | Sequence[Any], **options: Any) -> LibrarySpec:
                        number("translation_cap", 0.0, None))
 
 
+def one_weight(table: TransitionTable, weight: float) -> tuple[float, float, float]:
+    """One variance weight λ as (λx, λy, λθ): on every variance ``table`` gives (a file learned or
+    measured along x has var_dx only: λ on it, not an error about var_dy), and on var_dx always,
+    so that a file with no variances at all is told so. ``proleg gait --variance-weight λ`` and a
+    robot file's ``[gaits] variance_weight = λ`` alike."""
+    have = table.planar.given() if table.planar is not None else {}
+    return (weight, weight if "var_dy" in have else 0.0, weight if "var_dtheta_deg" in have else 0.0)
+
+
 def library_from_robot_file(path: Any, value: Any, table: TransitionTable | None = None) -> LibrarySpec | None:
     """The robot file's ``[gaits]`` table → LibrarySpec (None without ``library``);
     RobotFileError naming file and key. One ``variance_weight`` number weighs the variances
@@ -242,10 +251,7 @@ def library_from_robot_file(path: Any, value: Any, table: TransitionTable | None
         spec = library_spec(value["library"], **{k: v for k, v in value.items() if k != "library"})
         weight = value.get("variance_weight")
         if table is not None and isinstance(weight, (int, float)) and not isinstance(weight, bool):
-            have = table.planar.given() if table.planar is not None else {}
-            spec = replace(spec, variance_weight=(spec.variance_weight[0],
-                                                  *(w if key in have else 0.0 for w, key in
-                                                    zip(spec.variance_weight[1:], ("var_dy", "var_dtheta_deg")))))
+            spec = replace(spec, variance_weight=one_weight(table, spec.variance_weight[0]))
         return spec
     except GaitError as e:
         text = str(e).removeprefix("--library: ")
