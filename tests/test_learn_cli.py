@@ -108,17 +108,23 @@ def test_manual_entry_asks_on_stderr_and_records_the_answers(tmp_path, capsys, m
 
 def test_manual_entry_measures_from_rest_then_says_what_only_a_tracker_can(tmp_path, capsys, monkeypatch):
     """One transition a piece, from where the robot rests: R1's 9 transitions out of 01, 10
-    and 11 are never reached. It said "no piece within the thermal limits reaches …", which
-    sent the user to the wrong knob."""
+    and 11 are never reached. That is manual entry's normal end (docs/learning.md): it said
+    "no piece within the thermal limits reaches …", then "error: … run the same command to
+    resume" with exit 1, and a resumed run said the same again."""
     monkeypatch.setattr("sys.stdin", io.StringIO("1\n1\n1\n"))
-    log = tmp_path / "m.jsonl"
-    code, _out, err = run(capsys, "-q", "learn", str(R1), "--sim", "--plant", "table", "--source", "manual", "--log", str(log),
-                          "--repeats", "1")
-    assert code == 1 and "Traceback" not in err
-    assert "manual entry measures one transition at a time from where the robot rests (00)" in err
-    assert "record them with --source tracker into the same --log" in err and "thermal limits" not in err
+    log, out = tmp_path / "m.jsonl", tmp_path / "learned.toml"
+    argv = ["-q", "learn", str(R1), "--sim", "--plant", "table", "--source", "manual", "--log", str(log), "--repeats", "1"]
+    code, report, err = run(capsys, *argv, "--out", str(out))
+    assert code == 0 and "Traceback" not in err and "error" not in err and "resume" not in err
+    assert "manual entry is done: 3 trials" in err and "thermal limits" not in err
+    assert "01->00, 01->10, 01->11, 10->00, 10->01, 10->11, 11->00, 11->01, 11->10 start where the robot does not rest" in err
+    assert "record them with --source tracker into the same --log" in err
     assert sorted((r["from"], r["to"]) for r in map(json.loads, _lines(log))) == [("00", "01"), ("00", "10"),
                                                                                    ("00", "11")]
+    assert "00->01   1" in report and out.exists()  # the report and the learned file, as after any exploration
+    monkeypatch.setattr("sys.stdin", io.StringIO(""))  # again: nothing left to ask, the same end
+    code, _report, err = run(capsys, *argv)
+    assert code == 0 and "manual entry is done: 3 trials" in err and len(_lines(log)) == 3
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -390,7 +390,13 @@ def _explore(args: argparse.Namespace, robot, trial_log, source: str, client, po
         faulted = (f"; the robot faulted making {counted(len(failed), 'transition')} "
                    f"({', '.join(f'{a}->{b}' for a, b in failed)}), recorded as not made, not asked for "
                    f"again{_faulted_hint(args, robot, failed)}") if failed else ""
-        if todo == 0 or args.max_pieces is None:
+        if ex.left_for_tracker:  # manual entry's normal end: the rest cannot be measured by eye
+            log.warning("learn: manual entry is done: %s in %s%s; %s start where the robot does not rest (it "
+                        "passes through on its way): record them with --source tracker into the same --log (a "
+                        "camera's track gives each transition of a piece its motion)",
+                        counted(len(trial_log.trials), "trial"), args.log, faulted,
+                        ", ".join(ex.left_for_tracker))
+        elif todo == 0 or args.max_pieces is None:
             log.info("learn: exploration done: %s in %s%s", counted(len(trial_log.trials), "trial"), args.log, faulted)
         else:
             log.info("learn: stopped after %s (--max-pieces): %d of %d done; run the same command "

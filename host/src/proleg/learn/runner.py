@@ -168,6 +168,9 @@ class Explorer:
         self._t0 = _time.monotonic()
         self._trials0 = len(log.trials)  # the pace counts this run's trials only (a resumed log)
         self.pieces_run = 0
+        # manual entry's end: the transitions still to do that start where the robot does not
+        # rest, so no one can measure them by eye (labels; the tracker records them)
+        self.left_for_tracker: list[str] = []
 
     def _clock(self) -> float:
         return float(self.client.link.clock()) if hasattr(self.client.link, "clock") else _time.monotonic()
@@ -261,6 +264,8 @@ class Explorer:
                 break
             start = self.measured_state()
             piece = self.next_piece(start, demand)
+            if piece is None:  # manual entry did all it can from where the robot rests
+                break
             began = self._clock()
             try:
                 made = self.run_piece(piece, record=self.ask is None)
@@ -343,12 +348,14 @@ class Explorer:
         duty = max(1e-3, float(safety.max_duty))
         return max(self.limits.rest_s, driven_s * (1.0 / duty - 1.0)) + safety.min_cooldown_ms / 1000.0
 
-    def next_piece(self, start: int, demand: np.ndarray) -> Piece:
+    def next_piece(self, start: int, demand: np.ndarray) -> Piece | None:
         """The first piece of a random tour from ``start`` that makes at least one transition
         still to do (a few tours are tried); else the shortest way to one of them. Raises
         ``ExplorationError`` naming the transitions no piece from ``start`` can reach within
-        the thermal limits. ``demand`` is over ``self.robot.transitions``; the pieces go over
-        ``plan_table`` (never a transition the robot faulted on)."""
+        the thermal limits. With manual entry, whose pieces are one transition from where the
+        robot rests, the others are its normal end: None, and ``left_for_tracker`` names them.
+        ``demand`` is over ``self.robot.transitions``; the pieces go over ``plan_table`` (never
+        a transition the robot faulted on)."""
         t = self.plan_table()
         demand = np.delete(demand, sorted(self.failed))
         for attempt in range(PLAN_TRIES):
@@ -372,11 +379,8 @@ class Explorer:
         if best is None:
             left = [f"{t.label(a)}->{t.label(b)}" for a, b, k in zip(t.src, t.dst, demand) if k > 0]
             if self.ask is not None:  # one transition a piece: the operator measures from where it rests
-                raise ExplorationError(
-                    f"manual entry measures one transition at a time from where the robot rests ({t.label(start)}), "
-                    f"and {', '.join(left)} start elsewhere (the robot passes through on its way, it does not stop "
-                    "there): record them with --source tracker into the same --log (a camera's track gives each "
-                    "transition of a piece its motion)")
+                self.left_for_tracker = left
+                return None
             raise ExplorationError(
                 f"from {t.label(start)}, where the robot rests, no piece within the thermal limits ([safety] "
                 f"max_on_ms, min_cooldown_ms; the transition durations) reaches {', '.join(left)}")
