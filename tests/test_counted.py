@@ -1,11 +1,13 @@
 """Counts in messages read as English: ``names.counted`` and a message that used to say
-"reading 1 IMUs (0 channel switches)"."""
+"reading 1 IMUs (0 channel switches)"; names padded to a table's columns (``names.padded``)."""
 
 from __future__ import annotations
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
-from proleg.names import counted
+from proleg.names import counted, display_width, padded
 
 
 @pytest.mark.parametrize("n, noun, text", [
@@ -41,3 +43,14 @@ def test_the_tick_budget_refusal_counts_one_imu_as_one():
 
 def test_counted_formats_the_number_as_told():
     assert counted(9990, "more tie", spec=",") == "9,990 more ties" and counted(1, "more tie", spec=",") == "1 more tie"
+
+
+@given(st.text(alphabet=st.sampled_from("ab前後é\u0301ｱＡ"), max_size=8), st.integers(0, 20))
+def test_padded_fills_to_the_terminal_columns_a_character_takes(text, width):
+    """Against a count by hand: two columns for the wide and fullwidth ones (前 後 Ａ), none
+    for the combining acute, one for the rest (a b é and the halfwidth ｱ)."""
+    columns = sum(2 if c in "前後Ａ" else 0 if c == "\u0301" else 1 for c in text)
+    assert display_width(text) == columns
+    out = padded(text, width)
+    assert out.startswith(text) and set(out[len(text):]) <= {" "}
+    assert display_width(out) == max(width, columns)

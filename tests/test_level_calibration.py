@@ -284,6 +284,16 @@ def test_cli_calibrate_prints_each_limb_by_name(capsys):
     assert "no level calibration stored" in capsys.readouterr().out  # a new simulated board each run
 
 
+def test_the_calibration_table_lines_up_under_wide_limb_names():
+    """``前`` takes two columns on a terminal: padded by ``len``, its row's tilt stood one
+    column right of the other rows'."""
+    from proleg.cli.calibrate import _table
+    from proleg.names import display_width
+
+    rows = _table(["前", "tail", "後ろ"], (150, -200, 0), ["ok", "ok", "ok"]).splitlines()
+    assert [display_width(r[:r.index("rest tilt")]) for r in rows] == [display_width("  limb tail  ")] * 3
+
+
 def test_the_sim_report_names_the_limb_a_fault_is_on(capsys):
     main(["sim", "paper-r1", "--duration", "15", "--condition", "imu_offset_deg=left:8",
           "--condition", "imu_offset_deg=right:-8"])

@@ -1,5 +1,6 @@
 """How a limb's or an actuator's name appears where only identifiers go: CAN signal names in
-the DBC file (``protocol.dbc``) and column names of recordings (``record.fields``).
+the DBC file (``protocol.dbc``) and column names of recordings (``record.fields``); and how
+wide it prints in a table's column (``padded``).
 
 ``identifier("sma-left")`` → ``sma_left``. Two names that give the same identifier would
 give one column or signal for two limbs, so the robot file refuses them (``robot_limbs._limbs``).
@@ -8,6 +9,7 @@ give one column or signal for two limbs, so the robot file refuses them (``robot
 from __future__ import annotations
 
 import re
+import unicodedata
 
 
 def identifier(name: str) -> str:
@@ -25,6 +27,19 @@ def legacy_identifier(name: str) -> str:
     other than ASCII letters, digits and ``_`` made ``_``): the column names of recordings
     made then, which ``record`` still reads."""
     return re.sub(r"[^0-9A-Za-z_]", "_", name)
+
+
+def display_width(text: str) -> int:
+    """The columns ``text`` takes on a terminal: two for a wide character (East Asian wide or
+    fullwidth, ``前``), none for a combining mark, one for any other. ``len`` counts
+    characters, and a table padded by it put the columns after ``前`` one place to the right."""
+    return sum(0 if unicodedata.combining(c) else 2 if unicodedata.east_asian_width(c) in "WF" else 1
+               for c in text)
+
+
+def padded(text: str, width: int) -> str:
+    """``text`` left-aligned in ``width`` terminal columns (``display_width``)."""
+    return text + " " * max(0, width - display_width(text))
 
 
 def counted(n: int, noun: str, plural: str | None = None, spec: str = "") -> str:

@@ -12,7 +12,7 @@ import argparse
 from typing import Any
 
 from ..errors import Interrupted, LinkError
-from ..names import counted
+from ..names import counted, display_width, padded
 
 
 #: How long the host watches ψ before it asks for a calibration, and how far a limb's mean ψ may
@@ -63,8 +63,8 @@ def _limb_names(robot: Any, n: int) -> list[str]:
 
 
 def _table(names: list[str], offsets_cdeg: tuple[int, ...], status: list[str], what: str = "rest tilt") -> str:
-    w = max(len(n) for n in names)
-    return "\n".join(f"  limb {n:<{w}}  {what} {o / 100:+6.2f}°  {s}" for n, o, s in zip(names, offsets_cdeg, status))
+    w = max(map(display_width, names))
+    return "\n".join(f"  limb {padded(n, w)}  {what} {o / 100:+6.2f}°  {s}" for n, o, s in zip(names, offsets_cdeg, status))
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:

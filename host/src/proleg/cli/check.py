@@ -17,7 +17,7 @@ import os
 import sys
 from typing import Any
 
-from ..names import counted
+from ..names import counted, display_width, padded
 from ..physics.materials import shown_c
 from .main import EXIT_FAILED, EXIT_OK, robot_arg
 from .number_args import MAX_CHECK_ROWS, check_rows, gait_number, positive_int
@@ -243,14 +243,14 @@ def _print(robot: Any, args: argparse.Namespace, label: str, run_s: float, nomin
           f"{counted(len(rows), 'random condition')} "
           f"({counted(len(rows[0].conditions) - len(args.condition), 'key')} each, seed {args.seed}{base}), {run_s:g} s each "
           "from cold")
-    width = max(len("nominal"), *(len(" ".join(r.conditions[len(args.condition):])) for r in rows))
+    width = max(len("nominal"), *(display_width(" ".join(r.conditions[len(args.condition):])) for r in rows))
     for i, r in enumerate([nominal, *rows]):
         conds = " ".join(r.conditions[len(args.condition):]) or "nominal"
         ideal = ("cannot walk" if r.idealised_mm_s is None else
                  f"{r.idealised_mm_s:+.3f}" + ("" if r.possible else " back"))
         frac = _fraction(nominal, r)
         share = "" if i == 0 or frac is None else f"{frac:4.0%} of nominal"
-        print(f"  {i:3d}  {conds:<{width}}  idealised {ideal:>11}  firmware {r.verdict:<10} "
+        print(f"  {i:3d}  {padded(conds, width)}  idealised {ideal:>11}  firmware {r.verdict:<10} "
               f"{r.what_happened():<24} {share:>16}  coils ≤ {shown_c(r.coil_peak_c)} °C")
     parts = [f"the coils can walk {s['possible']} of {s['rows']}: the firmware completed "
              f"{s['completed_where_possible']}" + (f", missed {s['missed']}" if s["missed"] else "")
