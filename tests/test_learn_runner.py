@@ -210,7 +210,7 @@ def test_between_is_every_state_on_a_monotone_way_from_a_to_b():
     b; the states met on any such way are the ones a transition a → b may pass through."""
     from itertools import product
 
-    from proleg.learn.runner import _between
+    from proleg.learn.measure import between_levels as _between
     from proleg.states import DIGITS, index, limb_levels
 
     levels = (2, 3, 2)

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..robot_entries import is_duration
+from ..states import limb_levels
 from ..transitions import TransitionTable
 from ..typed import typed_float
 
@@ -424,3 +425,21 @@ def manual_trial(src: str, dst: str, t_start: float, t_end: float, *,
             continue
         comma = " (a comma separates Δx Δy Δθ: a decimal point is '.')" if "," in typed else ""
         prompt = f"  expected {what}{comma}, got {typed!r}; {src} → {dst}: "
+
+
+def psi_state(robot: Any, psi_centideg) -> int:
+    """The state ψ alone says, without the hysteresis band: each limb's level is how many of
+    its ψ* it is at or past (telemetry's ψ, 0.01°). A sag across ψ* that stays inside the band
+    changes this and not the measured state."""
+    index = 0
+    for limb, k, psi in zip(robot.limbs, robot.levels, psi_centideg):
+        level = sum(1 for star in limb.psi_star_deg if psi >= round(star * 100))
+        index = index * k + level
+    return index
+
+
+def between_levels(levels: tuple[int, ...], a: int, b: int, s: int) -> bool:
+    """Is every limb of state ``s`` at a level between its levels in ``a`` and in ``b`` (the
+    states a → b may pass through when the limbs it changes cross one by one)?"""
+    la, lb, ls = limb_levels(a, levels), limb_levels(b, levels), limb_levels(s, levels)
+    return all(min(x, y) <= z <= max(x, y) for x, y, z in zip(la, lb, ls))

@@ -57,12 +57,12 @@ from ..errors import LinkError
 from ..link.direction import UNSTATED
 from ..protocol.definition import GAIT_USER, MAX_GAIT_STEPS, ClearWhat, EventKind, FaultCode, Flag
 from ..robot import Robot
-from ..states import limb_levels
 from ..transitions import TransitionTable
 from .makeable import makeable_robot, not_asked, without_edges
-from .measure import Failure, Pose, Trial, TrialLog, counts, manual_trial, planar_delta, remaining
+from .measure import (Failure, Pose, Trial, TrialLog, between_levels, counts, manual_trial, planar_delta, psi_state,
+                      remaining)
 from .pieces import Piece, PieceLimits, limits_for, split
-from .tours import _bfs_path, exploration
+from .tours import _bfs_path, exploration, reached_from, successors
 
 log = logging.getLogger("proleg")
 
@@ -118,18 +118,11 @@ def _closing_gait(robot: Robot, piece: Piece, max_steps: int) -> tuple[int, ...]
     t = robot.transitions
     s = piece.states
     if not piece.loadable:
-        if s[-1] != s[0] and _bfs_path(t.n_states, _successors(t), s[-1], s[0]) is None:
+        if s[-1] != s[0] and _bfs_path(t.n_states, successors(t), s[-1], s[0]) is None:
             raise ExplorationError(f"no way back from {t.label(s[-1])} to {t.label(s[0])} to close the piece")
         raise ExplorationError(f"piece {'→'.join(t.label(x) for x in s)} and its way back need more gait steps "
                                f"than the firmware takes ({max_steps})")
     return piece.gait()
-
-
-def _successors(t) -> list[list[int]]:
-    succ: list[list[int]] = [[] for _ in range(t.n_states)]
-    for a, b in zip(t.src.tolist(), t.dst.tolist()):
-        succ[a].append(b)
-    return succ
 
 
 class Explorer:
@@ -249,7 +242,7 @@ class Explorer:
                 out[t.lookup(a, b)] = True
         # a part of the graph the rest state has no way into (every way out of rest forbidden)
         # has tours of its own, but the robot, resting, never gets there
-        now = _reached(pt)
+        now = reached_from(pt)
         out |= np.array([a not in now for a in t.src.tolist()], dtype=bool)
         return out
 
@@ -367,7 +360,7 @@ class Explorer:
             piece = split(t, tour.states, self.limits)[0]
             if piece.loadable and any(demand[t.lookup(a, b)] > 0 for a, b in piece.transitions):
                 return piece
-        succ = _successors(t)
+        succ = successors(t)
         best: Piece | None = None
         for (a, b), k in zip(zip(t.src.tolist(), t.dst.tolist()), demand.tolist()):
             way = _bfs_path(t.n_states, succ, start, a) if k > 0 else None
@@ -431,7 +424,7 @@ class Explorer:
                         t0, a, p0 = reached[-1]
                         if t.lookup(a, state) is not None:
                             d = planar_delta(p0, pose) if (p0 is not None and pose is not None) else (None, None, None)
-                            stray = tuple(t.label(x) for x in sorted(passed) if not _between(t.levels, a, state, x))
+                            stray = tuple(t.label(x) for x in sorted(passed) if not between_levels(t.levels, a, state, x))
                             trial = Trial(t.label(a), t.label(state), t0, t_ev, d[0], d[1], d[2], self.source, t_seen,
                                           stray)
                             if record:
@@ -485,18 +478,6 @@ class Explorer:
         return out
 
 
-def _reached(t: TransitionTable, start: int = 0) -> set[int]:
-    """The states some way of allowed transitions leads to from ``start`` (the rest state)."""
-    succ = _successors(t)
-    seen, todo = {start}, [start]
-    while todo:
-        for b in succ[todo.pop()]:
-            if b not in seen:
-                seen.add(b)
-                todo.append(b)
-    return seen
-
-
 def _making(t, states: tuple[int, ...], reached: list) -> tuple[str, str] | None:
     """(from, to) labels of the piece's transition under way, given the states ``reached``
     so far (the first is the piece's start); None before the start is reached."""
@@ -504,21 +485,3 @@ def _making(t, states: tuple[int, ...], reached: list) -> tuple[str, str] | None
     if k == 0 or k >= len(states):
         return None
     return t.label(reached[-1][1]), t.label(states[k])
-
-
-def psi_state(robot: Robot, psi_centideg) -> int:
-    """The state ψ alone says, without the hysteresis band: each limb's level is how many of
-    its ψ* it is at or past (telemetry's ψ, 0.01°). A sag across ψ* that stays inside the band
-    changes this and not the measured state."""
-    index = 0
-    for limb, k, psi in zip(robot.limbs, robot.levels, psi_centideg):
-        level = sum(1 for star in limb.psi_star_deg if psi >= round(star * 100))
-        index = index * k + level
-    return index
-
-
-def _between(levels: tuple[int, ...], a: int, b: int, s: int) -> bool:
-    """Is every limb of state ``s`` at a level between its levels in ``a`` and in ``b`` (the
-    states a → b may pass through when the limbs it changes cross one by one)?"""
-    la, lb, ls = limb_levels(a, levels), limb_levels(b, levels), limb_levels(s, levels)
-    return all(min(x, y) <= z <= max(x, y) for x, y, z in zip(la, lb, ls))

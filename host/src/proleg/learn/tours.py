@@ -116,6 +116,26 @@ def strongly_connected_components(n: int, edges: list[tuple[int, int]]) -> list[
     return comp
 
 
+def successors(t: TransitionTable) -> list[list[int]]:
+    """Per state, the states one allowed transition of ``t`` leads to."""
+    succ: list[list[int]] = [[] for _ in range(t.n_states)]
+    for a, b in zip(t.src.tolist(), t.dst.tolist()):
+        succ[a].append(b)
+    return succ
+
+
+def reached_from(t: TransitionTable, start: int = 0) -> set[int]:
+    """The states some way of allowed transitions leads to from ``start`` (the rest state)."""
+    succ = successors(t)
+    seen, todo = {start}, [start]
+    while todo:
+        for b in succ[todo.pop()]:
+            if b not in seen:
+                seen.add(b)
+                todo.append(b)
+    return seen
+
+
 def _bfs_path(n: int, succ: list[list[int]], a: int, b: int) -> list[int] | None:
     """Shortest state path a → … → b (fewest transitions), or None."""
     prev = [-1] * n
@@ -269,16 +289,7 @@ def unexplorable(table: TransitionTable, uncoverable: tuple[tuple[int, int], ...
     there; the other ``uncoverable`` ones (``Exploration.uncoverable``): one-way, no allowed
     way leads back from where they end). A part the rest state cannot reach was planned, and
     learning stopped at its first piece with "no piece within the thermal limits"."""
-    succ: list[list[int]] = [[] for _ in range(table.n_states)]
-    for a, b in zip(table.src.tolist(), table.dst.tolist()):
-        succ[a].append(b)
-    seen = {start}
-    queue = deque([start])
-    while queue:
-        for b in succ[queue.popleft()]:
-            if b not in seen:
-                seen.add(b)
-                queue.append(b)
+    seen = reached_from(table, start)
     unreachable = tuple(f"{table.label(a)}->{table.label(b)}"
                         for a, b in zip(table.src.tolist(), table.dst.tolist()) if a not in seen)
     one_way = tuple(f"{table.label(a)}->{table.label(b)}" for a, b in uncoverable if a in seen)
