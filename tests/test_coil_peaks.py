@@ -142,7 +142,7 @@ def test_a_build_time_overheat_warning_just_past_120_c_shows_the_tenth():
     """'would settle at 120 °C with this supply, past the 120 °C' contradicted itself."""
     from types import SimpleNamespace
 
-    from proleg.sim.closed_loop import overheat_warnings
+    from proleg.sim.plant_warnings import overheat_warnings
 
     robot = load_robot(R1)
     ceiling = robot.safety.hold_ceiling(robot.control.hold_duty)

@@ -46,7 +46,7 @@ def test_a_learned_file_with_variances_alone_is_not_warned_about_as_a_planar_rob
     """learn --out writes var_dx and n_trials beside the matrix; every physical-plant run of
     such a file (sim, run --sim, check) said '[transitions] has planar statistics (dy,
     dtheta_deg): a robot that moves in the plane', of a worm that has none."""
-    from proleg.sim.closed_loop import planar_warnings
+    from proleg.sim.plant_warnings import planar_warnings
 
     assert planar_warnings(load_robot(_robot(tmp_path, _LEARNED))) == []
     dy = 'dy = [[0, 0.1, 0.1, "x"], [0.1, 0, "x", 0.1], [0.1, "x", 0, 0.1], ["x", 0.1, 0.1, 0]]\n'
