@@ -395,7 +395,7 @@ def test_the_start_line_names_the_transitions_unreachable_from_rest_and_counts_r
 def test_a_fault_on_a_real_robot_still_says_to_clear_it_in_the_console():
     from types import SimpleNamespace
 
-    from proleg.cli.learn import _stopped_hint
+    from proleg.cli.learn_scope import stopped_hint as _stopped_hint
     from proleg.learn.runner import ExplorationError
 
     e = ExplorationError("the robot stopped", transition=("00", "10"), fault=True)
@@ -450,7 +450,7 @@ def test_a_fault_no_load_warning_predicts_says_so_and_how_to_find_out():
     where a warning does (tri-mixed's 101), it says nothing more."""
     from types import SimpleNamespace
 
-    from proleg.cli.learn import _faulted_hint, _predicted
+    from proleg.cli.learn_scope import faulted_hint as _faulted_hint, predicted as _predicted
 
     cat = load_robot(ROOT / "robots" / "caterpillar-4.toml")
     assert not _predicted(cat, "0101", "0111")
