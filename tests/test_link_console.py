@@ -22,7 +22,10 @@ def _client(board: FakeBoard) -> RobotClient:
     return client
 
 
-async def _wait_for(pilot, predicate, timeout: float = 5.0) -> None:
+async def _wait_for(pilot, predicate, timeout: float = 20.0) -> None:
+    """Until ``predicate()`` holds (at once when it does): the timeout is only how long a
+    condition that never comes is waited for. 5 s ran out on a machine loaded 2.5 times over
+    its cores (the full-disk warning's test, 2026-12-01)."""
     for _ in range(int(timeout / 0.05)):
         await pilot.pause(0.05)
         if predicate():
