@@ -3,7 +3,7 @@
 ``Coils(params, conditions, actuators, …)`` holds every coil's electrical, thermal and
 material state; ``step(dt_s, duties)`` advances them with each channel's duty held constant
 and says whether a contraction moved. Per step: the supply's voltage at the coils
-(V_s·√power − R_source·ΣI, sag when several draw), each coil's thermal node (``thermal``)
+(each coil's V_s·√power, less the sag R_source·ΣI when several draw), each coil's thermal node (``thermal``)
 and Liang–Rogers hysteresis (``proleg.sim.sma``) with latent heat, the body node they all
 warm, fatigue (stroke loss, transformation-temperature shift) with transformation cycles,
 injected drift, and the contraction ``c[j]`` = α_j × stroke_j through a first-order
@@ -50,7 +50,9 @@ class Coils:
         # the body node is the robot's mass: all that mass_g changes (every force scales with it)
         self.Cb = dataclasses.replace(p.body_thermal, mass_kg=cond.get("mass_g") * 1e-3).heat_capacity_j_k()
         self.hAb = p.body_thermal.convection_w_k(conv)
-        self.supply = cond.get("supply_v") * math.sqrt(cond.get("power"))
+        # each coil's own supply (a robot file's supply_v list), all behind one source resistance
+        self.supply = [cond.for_index("supply_v", j, anames, by_limb, lnames) * math.sqrt(cond.get("power"))
+                       for j in range(na)]
         self.rsrc = cond.get("supply_ohm")
         self.pscale = [cond.for_index("power_scale", j, anames, by_limb, lnames) for j in range(na)]
         self.channel = [a.channel for a in acts]
@@ -111,9 +113,10 @@ class Coils:
             if not 0.0 <= d <= 1.0:
                 raise SimError(f"step: duty {d!r} on channel {channel[j]} is outside 0..1")
             ds.append(d if alive[j] else 0.0)
-        v = self.supply
+        vs = self.supply
         if self.rsrc > 0.0:
-            v = v * v / (v + self.rsrc * sum(d * v / r for d, r in zip(ds, self.R)))
+            drawn = self.rsrc * sum(d * v / r for d, v, r in zip(ds, vs, self.R))
+            vs = [v * v / (v + drawn) for v in vs]
         amb, tb = self.amb, self.tbody
         # the per-coil lists, looked up once a step (this runs every 2 ms of a measurement)
         R, pscale, pfactor, hA, G, C, lat = self.R, self.pscale, self.pfactor, self.hA, self.G, self.C, self.lat
@@ -129,6 +132,7 @@ class Coils:
                 ontime[j] += d * dt_s
                 if drift[j] is not None:
                     self._apply_drift(j, d * dt_s)
+            v = vs[j]
             power = d * v * v / R[j] * pscale[j] * pfactor[j]
             h, g = hA[j], G[j]
             t_eq = (power + h * amb + g * tb) / (h + g)
@@ -203,10 +207,9 @@ class Coils:
     # -- what the coils can reach -----------------------------------------------------------------
     def steady_temperature_c(self, duty: float) -> list[float]:
         """See ``PhysicalPlant.steady_coil_temperature_c``."""
-        v = self.supply
         out = []
         for j in range(self._na):
-            r = self.R[j]
+            r, v = self.R[j], self.supply[j]
             vv = v * r / (r + self.rsrc) if self.rsrc > 0.0 else v
             power = duty * vv * vv / r * self.pscale[j] * self.pfactor[j] * (1.0 if self.alive[j] else 0.0)
             out.append(self.amb + power / (self.hA[j] + self.G[j]))

@@ -42,9 +42,7 @@ class Key:
 def _key(spec: PlantKey) -> Key:
     default = spec.default_for("physical")
     assert default is not None
-    # the physical plant has one supply (a per-coil one in a robot file becomes power_scale)
-    per = None if spec.name == "supply_v" else spec.per or None
-    return Key(spec.unit, spec.lo, spec.hi, default, per, spec.doc, spec)
+    return Key(spec.unit, spec.lo, spec.hi, default, spec.per or None, spec.doc, spec)
 
 
 # The one schema lives with the robot file's [plant] table (proleg.robot_plant): the same keys,
@@ -60,6 +58,10 @@ class Conditions:
     named: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
 
     def get(self, key: str) -> float:
+        """A key's one value; for a per-limb or per-actuator key the value given for all of
+        them (``for_index`` reads one item's)."""
+        if KEYS[key].per:
+            return float(self.named.get(key, {}).get("", KEYS[key].default))
         return float(self.values.get(key, KEYS[key].default))
 
     def for_index(self, key: str, index: int, names: Sequence[str], by_limb: Sequence[int] = (),
@@ -292,28 +294,23 @@ def describe_keys() -> str:
 
 def conditions_from_section(section: Any, actuators: Sequence[str], limbs: Sequence[str]) -> Conditions:
     """The physical keys a robot file's checked ``[plant]`` table gives, as ``Conditions``
-    (``section``: ``proleg.robot_plant.PlantSection``). A per-actuator ``supply_v`` list
-    becomes the highest voltage plus a per-coil ``power_scale`` of (V_j / V_max)²."""
+    (``section``: ``proleg.robot_plant.PlantSection``). A per-actuator ``supply_v`` list is each
+    coil's own supply (``supply_v=NAME:value``), one number every coil's. It used to become the
+    highest voltage and a ``power_scale`` of (V_j / V_max)² per coil, so a ``--condition
+    power_scale=1`` (a crimp) put R1's 3 V coil on 7.4 V, and ``effective_conditions`` named a
+    ``power_scale`` below 0.2 that ``--condition`` refused."""
     values: dict[str, float] = {}
     named: dict[str, dict[str, float]] = {}
     given = dict(getattr(section, "physical", {}) or {})
-    supply = given.pop("supply_v", None)
-    if isinstance(supply, tuple):
-        top = max(supply)
-        values["supply_v"] = top
-        scale = named.setdefault("power_scale", {})
-        for j, v in enumerate(supply):
-            scale[actuators[j]] = (v / top) ** 2
-    elif supply is not None:
-        values["supply_v"] = float(supply)
     for key, v in given.items():
         per = KEYS[key].per
         if per is None:
             values[key] = float(v)  # type: ignore[arg-type]
             continue
+        if key == "supply_v" and not isinstance(v, tuple):
+            named[key] = {"": float(v)}  # one supply: ``Conditions.get("supply_v")``
+            continue
         names = actuators if per == "actuator" else limbs
         vals = v if isinstance(v, tuple) else (float(v),) * len(names)
-        slot = named.setdefault(key, {})
-        for name, x in zip(names, vals):
-            slot[name] = slot.get(name, 1.0) * x if key == "power_scale" else x
+        named[key] = {name: float(x) for name, x in zip(names, vals)}
     return Conditions(values=values, named=named)
