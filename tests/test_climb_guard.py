@@ -476,3 +476,12 @@ def test_sim_without_calibrated_never_refuses(capsys):
     """The board of a plain `proleg sim` was never calibrated: a gauge, not the guard."""
     rc, out, err = _cli(capsys, "sim", str(R2), "--condition", "incline_deg=4", "--duration", "5", "--json")
     assert "TOO_STEEP" not in err
+
+
+def test_sim_calibrated_says_in_words_which_limb_the_flat_calibration_refused(capsys):
+    """An IMU biased 20° (in range) leaves R2's left limb past the 20° a calibration takes: the
+    error printed the LevelOutcome's repr (``LevelOutcome(result=<LevelResult.TOO_TILTED: 1>, …``)."""
+    rc, _, err = _cli(capsys, "sim", str(R2), "--calibrated", "--condition", "imu_bias_deg=-20", "--duration", "5")
+    assert rc != 0 and "Traceback" not in err
+    assert "flat calibration was refused: limb 'left': tilted more than 20° at rest" in err
+    assert "LevelOutcome" not in err and "<" not in err

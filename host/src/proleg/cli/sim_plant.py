@@ -102,7 +102,8 @@ def flat_conditions(args: argparse.Namespace) -> list[str]:
 def calibrate_then_put_down(session: Any, sim: Any, robot: Any, args: argparse.Namespace) -> None:
     """``--calibrated``: the flat calibration (the board at rest on flat ground), then the robot
     on the condition's ground, at rest for ``claim.REST_ON_GROUND_S`` (the firmware levels on a
-    ground it has rested on for 2 s). A refused calibration is a SimError saying why."""
+    ground it has rested on for 2 s). A refused calibration is a SimError saying why, in words
+    (it printed the ``LevelOutcome``'s repr)."""
     from ..errors import SimError
     from ..link.level import calibrate_level
     from ..report.claim import REST_ON_GROUND_S
@@ -110,7 +111,9 @@ def calibrate_then_put_down(session: Any, sim: Any, robot: Any, args: argparse.N
 
     outcome = calibrate_level(session.client)
     if not outcome.ok:
-        raise SimError(f"--calibrated: the flat calibration was refused: {outcome}")
+        raise SimError(f"--calibrated: the flat calibration was refused: "
+                       f"{outcome.refusal_text([lb.name for lb in robot.limbs])}; it is made on flat ground under every "
+                       f"other condition (imu_offset_deg, imu_bias_deg, a hot ambient_c tilt a limb there too)")
     sim.plant = make_plant(robot, args.plant, list(args.condition), seed=args.seed)
     session.advance(REST_ON_GROUND_S)
 

@@ -8,6 +8,7 @@ reports.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ..errors import LinkError
@@ -63,6 +64,15 @@ class LevelOutcome:
         if self.result in (LevelResult.TOO_TILTED, LevelResult.IMU) and not self.limbs_mask >> limb & 1:
             return "not stored (another limb was refused)"
         return _RESULT_TEXT.get(self.result, f"refused: result {int(self.result)}")
+
+    def refusal_text(self, names: Sequence[str]) -> str:
+        """Why a calibration was refused, in words, naming the limbs it concerns (``names``:
+        the limbs' names, first limb first): "limb 'left': tilted more than 20° at rest (…)"."""
+        limbs = [n for i, n in enumerate(names) if self.limbs_mask >> i & 1]
+        why = _RESULT_TEXT.get(self.result, f"refused: result {int(self.result)}").removeprefix("refused: ")
+        if not limbs:
+            return why
+        return f"{'limb' if len(limbs) == 1 else 'limbs'} {', '.join(repr(n) for n in limbs)}: {why}"
 
 
 def get_level(client: RobotClient, timeout: float | None = None) -> LevelReading:
