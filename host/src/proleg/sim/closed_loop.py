@@ -59,9 +59,11 @@ def make_plant(robot: Robot, kind: str = DEFAULT_PLANT, conditions: Any = None, 
         raise SimError(f"plant {kind!r}: expected one of: {', '.join(PLANTS)}")
     from .physical import PhysicalPlant
 
+    from .physical.climb import slope_warnings
+
     plant = PhysicalPlant(robot, plant_conditions(robot, conditions), seed=seed)
     for line in (planar_warnings(robot) + overheat_warnings(robot, plant) + underpowered_warnings(robot, plant)
-                 + ambient_warnings(robot, plant)):
+                 + ambient_warnings(robot, plant) + slope_warnings(robot, plant)):
         log.warning("warning: %s", line)
     return plant
 

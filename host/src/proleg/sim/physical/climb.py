@@ -97,3 +97,27 @@ def suggested_limit(climbs: Sequence[float | None]) -> float | None:
     if not known:
         return None
     return max(MIN_CLIMB_DEG, math.floor(min(known) / SUGGEST_STEP_DEG) * SUGGEST_STEP_DEG)
+
+
+def slope_warnings(robot: Any, plant: Any) -> list[str]:
+    """A line when the run's ground (``incline_deg``) is steeper than the contacts' static
+    friction holds the body on (``PhysicalPlant.standing_grip``): at rest, or in a state with every
+    contact on its least grippy pad. A real robot slides downhill there without a coil heated;
+    the plant moves the body only while its shape changes, so it stood still: R1 on 12° at
+    ``friction=0.2`` (its soft pads' μ_s 0.2 < tan 12°) stopped with STATE_TIMEOUT and stayed
+    put for the rest of the run, and nothing said that no robot would."""
+    incline = plant.conditions.get("incline_deg")
+    rest, weakest = plant.standing_grip()
+    grade = math.tan(math.radians(abs(incline)))
+    if grade <= weakest:
+        return []
+    fr = plant.conditions.get("friction")
+    if grade > rest:
+        where, mu = "at rest", rest
+    else:
+        where, mu = "with every contact on its least grippy pad", weakest
+    return [f"{robot.path}: incline_deg {incline:g}° is steeper than the contacts' static friction holds the body on "
+            f"{where} ({math.floor(100 * math.degrees(math.atan(mu))) / 100:g}° at friction {fr:g}): a real robot slides downhill there "
+            f"with no coil heated; the physical plant (quasi-static) moves the body only while its shape changes, "
+            f"so on this slope it stands where a robot slides, and its displacement is too far uphill"]
+

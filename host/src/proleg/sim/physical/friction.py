@@ -13,7 +13,9 @@ previous step offers its static coefficient, a sliding one its kinetic coefficie
 (stick-slip). When the friction of the two groups of contacts is exactly equal (e.g. two
 identical ends), every δ between their breakpoints balances; the symmetric choice (the
 middle) is taken. If the weight along the slope exceeds every contact's friction together,
-the body slides downhill (``downhill_mm``).
+the contacts slide as far as the shape change moves them, and no further: a body at rest does
+not move, even on a ground steeper than its contacts hold (it would accelerate downhill, which no
+quasi-static model describes; ``climb.slope_warnings`` says so when a run's ground is that steep).
 
 The friction coefficient of a contact follows its material: the level of its mechanism at
 the contact angle ψ (level k: ψ*_k ≤ ψ < ψ*_{k+1}), blended linearly over ``band_deg`` on the

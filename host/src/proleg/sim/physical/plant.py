@@ -308,6 +308,16 @@ class PhysicalPlant:
              for (ms, mf), s in zip(coils.reverse_transformation_c(), coils.stroke())]
         return c, [float(p) for p in self._shape.evaluate(c)[:self._nl]]
 
+    def standing_grip(self) -> tuple[float, float]:
+        """How steep a ground the contacts' static friction holds the body on, as the tangent of
+        its grade: (at rest, where the plant starts; with every contact on its least grippy pad,
+        e.g. R1's 11 on its hard pads), each the contacts' μ_s weighted by their loads at rest.
+        Steeper, a real robot slides downhill; this quasi-static plant moves the body only while
+        its shape changes, so it holds it where it stands (``climb.slope_warnings``)."""
+        load, band = self._load, self._band
+        rest = sum(w * mu_at(p, th, mus, band) for w, p, th, mus in zip(load, self._psi, self._true_th, self._mu_s))
+        return rest, sum(w * min(mus) for w, mus in zip(load, self._mu_s))
+
     @property
     def alive(self) -> tuple[bool, ...]:
         """Per actuator: False once ``kill_actuator`` was called on it."""
