@@ -93,6 +93,9 @@ def test_effective_conditions_name_each_limb_and_coil_once_and_can_be_given_back
     (["--condition", "working_strain=0.03"], "condition 'working_strain': a key of the robot file's [plant] table only"),
     (["--condition", "coil_diameter_mm=0.6"], "condition 'coil_diameter_mm': a key of the robot file's [plant] table"),
     (["--condition", "power=9"], "condition power: 9 is outside [0.2, 2] ×"),
+    # the value as given: it read "2 is outside [0.2, 2]", "20 is outside [-20, 20]"
+    (["--condition", "power=2.0000001"], "condition power: 2.0000001 is outside [0.2, 2] ×"),
+    (["--condition", "imu_bias_deg=left:20.0000001"], "condition imu_bias_deg: 20.0000001 is outside [-20, 20] °"),
     # "expected a number in ×" read oddly, "nan is outside" as if nan were a number
     (["--condition", "power=abc"], "condition power: expected a number (a factor, ×), got 'abc'"),
     (["--condition", "ambient_c=warm"], "condition ambient_c: expected a number (in °C), got 'warm'"),

@@ -84,7 +84,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if not args.pty and (args.duration or 0) > MAX_SIM_S:
         from ..errors import SimError
 
-        raise SimError(f"--duration {args.duration:g}: expected at most {MAX_SIM_S:g} simulated seconds (an hour "
+        raise SimError(f"--duration {args.duration:.12g}: expected at most {MAX_SIM_S:g} simulated seconds (an hour "
                        "takes about a minute to simulate; run several shorter simulations instead)")
     if args.duration is None:
         args.duration = 60.0

@@ -170,7 +170,8 @@ def _number(key: str, text: str) -> float:
     if not math.isfinite(v):
         raise SimError(f"condition {key}: expected a finite number in {spec.range_text()}, got {text!r}")
     if not spec.accepts(v):
-        raise SimError(f"condition {key}: {v:g} is outside {spec.range_text()}")
+        # as given: {v:g} refused power=2.0000001 as "2 is outside [0.2, 2]"
+        raise SimError(f"condition {key}: {text.strip()} is outside {spec.range_text()}")
     return v
 
 
