@@ -205,3 +205,27 @@ def test_request_retries_with_the_same_token_until_acknowledged():
     assert len(sent) == 3 and len({m.token for m in sent}) == 1
     assert client.stats.retries == 2 and client.stats.timeouts == 1
 
+
+
+@pytest.mark.parametrize("call", [
+    lambda c: c.set_param("hold_duty", 0, 0.3),      # a duty as a fraction: sent 0, a bang-bang hold, ACKed
+    lambda c: c.set_param("psi_star_cdeg", 0, 20.5),  # sent 20: ψ* 0.20°
+    lambda c: c.set_param(ParamId.DRIVE_DUTY, 0.5, 5000),
+    lambda c: c.load_gait([0, 2.7, 3]),               # loaded state 2
+    lambda c: c.start(0.9),                           # started gait 0
+    lambda c: c.set_telemetry_rate(float("nan")),
+])
+def test_a_fraction_where_a_command_carries_a_whole_number_is_refused_not_truncated(call):
+    board, client = make()
+    with pytest.raises(LinkError, match="expected a whole number"):
+        call(client)
+    assert [m.name for m in board.received] == ["GET_INFO"]  # nothing sent
+
+
+def test_whole_numbers_given_as_floats_or_numpy_ints_are_sent_as_they_are():
+    import numpy as np
+
+    board, client = make()
+    client.set_param("drive_duty", 0, 5000.0)
+    client.load_gait([np.int64(0), 2, 3.0, 1])
+    assert board.drive_duty == 5000 and board.user_gait == (0, 2, 3, 1)

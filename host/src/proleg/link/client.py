@@ -17,6 +17,7 @@ the waiting command itself when nobody else is, the Notifier thread otherwise.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from types import TracebackType
 
@@ -160,7 +161,7 @@ class RobotClient(MessageStream):
         """Run gait ``gait`` (``GAIT_USER`` / ``"user"`` for the loaded one) in ``direction``
         (``Direction``, 0/1, ``"+x"``/``"-x"``; for the loaded one, the way it walks, which the
         climb guard checks, or ``UNSTATED``)."""
-        g = GAIT_USER if gait == "user" else int(gait)
+        g = GAIT_USER if gait == "user" else _whole("START gait", gait)
         if not self._state_known:  # just reset, or last seen without a state: the board would refuse
             self.wait_known_state()  # (it answers for itself if the wait runs out)
         self.request("START", gait=g, direction=direction_code(direction, g))
@@ -189,7 +190,7 @@ class RobotClient(MessageStream):
 
     def load_gait(self, states: Sequence[int]) -> None:
         """Store a user gait: a closed walk without the repeated start state."""
-        self.request("LOAD_GAIT", states=tuple(int(s) for s in states))
+        self.request("LOAD_GAIT", states=tuple(_whole("LOAD_GAIT state", s) for s in states))
 
     def set_param(self, param: ParamId | int | str, index: int, value: int) -> None:
         if isinstance(param, str):
@@ -197,12 +198,15 @@ class RobotClient(MessageStream):
                 param = ParamId[param.upper()]
             except KeyError:
                 raise LinkError(f"unknown parameter {param!r}; known: {', '.join(p.name.lower() for p in ParamId)}") from None
-        self.request("SET_PARAM", param=int(param), index=int(index), value=int(value))
+        what = f"SET_PARAM {param.name.lower() if isinstance(param, ParamId) else param}"
+        unit = " in the parameter's unit (permyriad for a duty, ms for a time, 0.01° for an angle)"
+        self.request("SET_PARAM", param=_whole("SET_PARAM param", param), index=_whole(f"{what} index", index),
+                     value=_whole(f"{what} value", value, unit))
         if int(param) == ParamId.LINK_WATCHDOG_MS:
             self.fit_heartbeat(int(value))  # a shorter watchdog from here on
 
     def set_telemetry_rate(self, hz: int) -> None:
-        self.request("SET_TELEMETRY_RATE", hz=int(hz))
+        self.request("SET_TELEMETRY_RATE", hz=_whole("SET_TELEMETRY_RATE hz", hz))
 
     def firmware_stats(self, timeout: float | None = None) -> FirmwareStats:
         """The firmware's link counters (GET_STATS)."""
@@ -300,3 +304,14 @@ class RobotClient(MessageStream):
                 with self._cond:
                     if token not in self._replies:
                         self._cond.wait(self.poll_s)
+
+
+def _whole(what: str, value: object, unit: str = "") -> int:
+    """``value`` as the whole number a command's field carries. A fraction is a LinkError, not
+    truncated: ``set_param("hold_duty", 0, 0.3)`` (a duty as a fraction, not in permyriad) sent 0,
+    a hold by bang-bang only, and the board acknowledged it; ``set_param("psi_star_cdeg", 0,
+    20.5)`` moved ψ* to 0.20°; ``load_gait([0, 2.7])`` loaded state 2."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not float(value).is_integer():
+        raise LinkError(f"{what}: expected a whole number{unit}, got {value!r}")
+    return int(value)
+
