@@ -222,7 +222,7 @@ def test_console_script_is_installed():
 SIM_JSON_FIELDS = {
     "robot", "board", "direction", "gait", "duration_s", "cycles", "cycle_displacements_mm", "mean_cycle_mm",
     "displacement_mm", "speed_mm_s", "states_reached", "true_transitions", "unexpected_transitions", "faults",
-    "telemetry_frames", "telemetry_lost", "link_errors", "errors", "start_time_s",
+    "telemetry_frames", "telemetry_lost", "telemetry_silent_s", "link_errors", "errors", "start_time_s",
     "matrix_check",  # README: the run against what the matrix promises
     "plant", "conditions", "effective_conditions",  # README: as --measure-matrix --json names them
     "coil_peak_c",  # README: each coil's hottest in the run

@@ -189,7 +189,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         "direction": direction, "duration_s": run.duration_s, "cycles": run.cycles,
         # the labels of the states reached, in order, as in proleg sim --json (it was their count)
         "states_reached": [_label(robot, s) for s in run.states_reached], "telemetry_frames": run.telemetry_frames,
-        "telemetry_lost": run.telemetry_lost,
+        "telemetry_lost": run.telemetry_lost, "telemetry_silent_s": round(run.telemetry_silent_s, 3),
         "faults": [{"t_s": f.time_s, "code": f.code, "detail": f.detail} for f in run.faults],
         "start_time_s": run.started_s,  # the board's clock at START: fault times are on it
         "errors": errors, "ok": run.ok and not errors,
@@ -211,7 +211,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         ran = f"for {run.duration_s:g} s" if run.duration_s else "did not start"
         print(f"{name} on {doc['link']}: {which} {ran}: "
               f"{counted(run.cycles, 'cycle')}, {counted(run.telemetry_frames, 'telemetry frame')} "
-              f"({run.telemetry_lost} lost), {counted(len(run.faults), 'fault')}")
+              f"({run.lost_text()}), {counted(len(run.faults), 'fault')}")
         if "pose" in doc:
             pose = doc["pose"]["x_mm"], doc["pose"]["y_mm"], doc["pose"]["theta_deg"]
             print(f"  pose: x {pose[0]:+.1f} mm, y {pose[1]:+.1f} mm, theta {pose[2]:+.1f} deg")

@@ -316,6 +316,7 @@ def _report_json(robot, report, board: str = "host-sim") -> dict:
         "faults": [{"time_s": f.time_s, "code": f.code, "detail": f.detail} for f in report.faults],
         "telemetry_frames": report.telemetry_frames,
         "telemetry_lost": report.telemetry_lost,
+        "telemetry_silent_s": round(report.telemetry_silent_s, 3),
         "link_errors": report.link_errors,
         "errors": report.errors,
     }
@@ -392,7 +393,7 @@ def _report_text(robot, report, board: str = "host-sim", budget: dict | None = N
     lines += _no_cycle_note(robot, report)
     errs = ", ".join(f"{k} {v}" for k, v in report.link_errors.items()) or "none"
     lines.append(
-        f"  telemetry: {counted(report.telemetry_frames, 'frame')}, {report.telemetry_lost} lost; link errors: {errs}"
+        f"  telemetry: {counted(report.telemetry_frames, 'frame')}, {report.lost_text()}; link errors: {errs}"
     )
     if budget is not None:
         period, busy = budget["tick_period_us"], budget["tick_busy_us"]

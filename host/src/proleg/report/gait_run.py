@@ -47,6 +47,12 @@ class Fault:
         return cls(event.time_ms / 1000.0, FaultCode(event.code).name, event.detail)
 
 
+#: A run's last frames missing for this many frame intervals, and at least ``SILENT_MIN_S``,
+#: is a silent link (``GaitRun.end_silence``).
+SILENT_FRAMES = 5
+SILENT_MIN_S = 0.5
+
+
 @dataclass
 class GaitRun:
     """What one run of a gait produced: firmware view and plant truth side by side."""
@@ -63,6 +69,12 @@ class GaitRun:
     faults: list[Fault] = field(default_factory=list)
     telemetry_frames: int = 0
     telemetry_lost: int = 0  # sequence-number gaps
+    #: Seconds at the end of the run (STOP's tail included) in which no telemetry frame came: a
+    #: link that went silent loses frames no sequence gap counts (``silent_tail``).
+    telemetry_silent_s: float = 0.0
+    silent_after_s: float = 0.0  # from START to the last frame (or 0), when telemetry_silent_s says silence
+    first_frame_at: float | None = None  # link clock of the first and the last telemetry frame
+    last_frame_at: float | None = None
     link_errors: dict[str, int] = field(default_factory=dict)
     replies: list[Message] = field(default_factory=list)
     telemetry: list[Message] = field(default_factory=list)
@@ -76,6 +88,29 @@ class GaitRun:
     def after_start(self, time_s: float) -> str:
         """For a board time: ' (6.600 s after START)', or '' when START was never reported."""
         return "" if self.started_s is None else f" ({time_s - self.started_s:.3f} s after START)"
+
+    def end_silence(self, started_at: float, ended_at: float, telemetry_hz: float | None = None) -> None:
+        """Set ``telemetry_silent_s`` for a run whose START went out at ``started_at`` and whose
+        STOP's tail ended at ``ended_at`` (link clock): the time since the last frame (since START
+        if none came), when it is longer than ``SILENT_FRAMES`` frame intervals and
+        ``SILENT_MIN_S``, else 0 (a frame due just after the end is no silence). The interval is
+        the frames' own (a host may have changed the rate), else ``1 / telemetry_hz``."""
+        first, last = self.first_frame_at, self.last_frame_at
+        if first is not None and last is not None and self.telemetry_frames > 1 and last > first:
+            interval = (last - first) / (self.telemetry_frames - 1)
+        else:
+            interval = 1.0 / telemetry_hz if telemetry_hz else SILENT_MIN_S
+        since = max(last if last is not None else started_at, started_at)
+        quiet = ended_at - since
+        self.telemetry_silent_s = quiet if quiet > max(SILENT_MIN_S, SILENT_FRAMES * interval) else 0.0
+        self.silent_after_s = since - started_at
+
+    def lost_text(self) -> str:
+        """"3 lost", or "3 lost, none after 5.0 s of the run (20.1 s without a frame)": what the
+        telemetry line says of the frames that did not come."""
+        silent = (f", none after {self.silent_after_s:.1f} s of the run ({self.telemetry_silent_s:.1f} s without a "
+                  "frame)") if self.telemetry_silent_s else ""
+        return f"{self.telemetry_lost} lost{silent}"
 
     @property
     def cycles(self) -> int:
@@ -118,6 +153,9 @@ class GaitRunListener(Listener):
                 run.started_s = None  # a second reset is said again; times after it are on the new clock
             self._last_ms = ms
             run.telemetry_frames += 1
+            run.last_frame_at = rx.time
+            if run.first_frame_at is None:
+                run.first_frame_at = rx.time
             if self.keep_telemetry:
                 run.telemetry.append(msg)
         elif msg.name == "EVENT":
@@ -223,6 +261,7 @@ class SimSession:
             if not self._command(run, "STOP"):
                 self._command(run, "ESTOP")  # the coils must go cold whatever the link does
             self.advance(STOP_TAIL_S - (self.link.clock() - t_stop))
+            run.end_silence(t0, self.link.clock(), self.sim.robot.control.telemetry_hz)
         finally:
             self.listeners.remove(listener)
         run.displacement_mm = plant.displacement_mm - start_mm

@@ -146,6 +146,7 @@ def run_gait_on(
         command("ESTOP")  # the coils must go cold whatever the link does
     pump(STOP_TAIL_S - (clock() - t_stop), report_progress=False)  # the run's lines end with it
     run.telemetry_lost = client.stats.lost
+    run.end_silence(t0, clock())
     return run
 
 

@@ -1,0 +1,66 @@
+"""A link that goes silent near the end of a run loses frames no sequence gap shows: no frame
+comes after them to count from. ``proleg sim --inject link-drop:1+5`` for 20 s said "250 frames,
+0 lost" (and ``telemetry_lost`` 0) while the last 15 s and STOP's tries heard nothing; the
+report now says from when nothing came (``GaitRun.end_silence``), on ``sim`` and on ``run``."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from build_checks import R1, cli
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from proleg.link import sim_link
+from proleg.report.gait_run import SILENT_FRAMES, SILENT_MIN_S, GaitRun
+
+
+def test_sim_says_the_link_went_silent_after_5_s(capsys):
+    code, out, _err = cli(capsys, "sim", R1, "--duration", "12", "--inject", "link-drop:1+5", "--json")
+    doc = json.loads(out)
+    assert code == 1 and doc["telemetry_lost"] == 0  # no frame after the silence to count a gap from
+    assert doc["telemetry_silent_s"] > 12 - 5  # the run's last 7 s and STOP's tries
+    code, out, _err = cli(capsys, "sim", R1, "--duration", "12", "--inject", "link-drop:1+5")
+    assert "none after 5.0 s of the run (" in out
+
+
+def test_an_undisturbed_run_has_no_silence(capsys):
+    code, out, _err = cli(capsys, "sim", R1, "--duration", "6", "--json")
+    assert code == 0 and json.loads(out)["telemetry_silent_s"] == 0
+    code, out, _err = cli(capsys, "sim", R1, "--duration", "6")
+    assert "none after" not in out
+
+
+def test_run_says_when_its_board_went_quiet(capsys, monkeypatch):
+    """``proleg run``: the board's frames stop reaching the host 4 s into an 8 s run; STOP's
+    answer is lost with them, and the run fails."""
+    real_read = sim_link.SimLink.read
+
+    def read(self, timeout):
+        data = real_read(self, timeout)
+        return b"" if self.board.time_s > 4.0 else data
+
+    monkeypatch.setattr(sim_link.SimLink, "read", read)
+    code, out, err = cli(capsys, "run", R1, "--sim", "--duration", "8", "--format", "jsonl", "-q")
+    doc = next(json.loads(ln) for ln in out.splitlines() if '"RESULT"' in ln)
+    assert code == 1 and doc["telemetry_silent_s"] > 4.0, (out, err)
+
+
+@settings(max_examples=200, deadline=None)
+@given(frames=st.integers(0, 50), interval=st.floats(0.001, 1.0), gap=st.floats(0.0, 30.0),
+       start=st.floats(0.0, 100.0))
+def test_silence_is_the_time_since_the_last_frame_past_five_intervals(frames, interval, gap, start):
+    """Against the rule by hand: frames every ``interval`` from START, then ``gap`` seconds to
+    the end; silent when the gap is longer than 5 intervals and 0.5 s."""
+    run = GaitRun("r", "+x", 0, 1.0)
+    for k in range(frames):
+        run.telemetry_frames += 1
+        run.last_frame_at = start + k * interval
+        run.first_frame_at = start if run.first_frame_at is None else run.first_frame_at
+    last = start + (frames - 1) * interval if frames else start
+    run.end_silence(start, last + gap, telemetry_hz=50.0)
+    step = interval if frames > 1 else 1 / 50.0
+    silent = gap > max(SILENT_MIN_S, SILENT_FRAMES * step)
+    assert run.telemetry_silent_s == (pytest.approx(gap) if silent else 0.0)
+    assert (run.lost_text() != "0 lost") == silent
