@@ -13,6 +13,7 @@ from . import states
 from .errors import RobotFileError
 from .names import counted
 from .robot_entries import DURATION_RANGE, MAX_ENTRY, in_range, is_duration, state_ref
+from .typed import typed_float
 
 #: A transition CSV larger than this is refused before it is read.
 MAX_CSV_BYTES = 256 * 1024 * 1024
@@ -74,7 +75,7 @@ def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: st
     if a == b:
         raise RobotFileError(f"{where}: a transition from a state to itself is not a transition")
     try:
-        r = float(cells[2])
+        r = typed_float(cells[2])
     except ValueError:
         raise RobotFileError(f"{where}: reward: expected a number, got {cells[2]!r}") from None
     if not in_range(r, -MAX_ENTRY, MAX_ENTRY):
@@ -85,7 +86,7 @@ def _csv_transition(cells: list[str], levels: tuple[int, ...], n: int, where: st
 
 def _csv_duration(text: str, where: str) -> float:
     try:
-        d = float(text)
+        d = typed_float(text)
     except ValueError:
         d = -1.0
     if not is_duration(d):

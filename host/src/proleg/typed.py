@@ -1,5 +1,5 @@
 """Numbers as a person types them: on a command line, in a ``--condition``, a tracker's CSV
-cell, a Δx at the manual-entry prompt.
+cell, a transition CSV's reward and duration, a Δx at the manual-entry prompt.
 
 Python's ``float()`` and ``int()`` take digit separators (PEP 515): ``"1_0"`` reads as 10.
 From a person that is a typo, not a number, and it went into a run or a trial log without a
