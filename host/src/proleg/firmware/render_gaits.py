@@ -191,8 +191,17 @@ def _fallback_part(robot: Any) -> dict[str, Any]:
             walk = [int(s) for s in fb.states[:-1]]
             steps += walk
             length.append(len(walk))
-            notes.append(f"{d}: {fb.describe(robot)} ({fb.mode})")
+            notes.append(f"{d}: {fb.describe(robot)}; {fb.mode}: {_mode_text(fb, robot)}")
     return dict(fallback=bool(fbs), fb_maps=maps, fb_steps=steps, fb_first=first, fb_len=length, fb_notes=notes)
+
+
+def _mode_text(fb: Any, robot: Any) -> str:
+    """What a fallback's mode means for this loss, for the generated file's comment: after the
+    map, a bare "(dead)" read as if the last limb in it were the dead one."""
+    if fb.mode == "dead":
+        return f"the limbs on {fb.actuator} stay down"
+    moved = [lb.name for lb, a in zip(robot.limbs, fb.actuator_map) if robot.actuators[a].name != lb.actuator]
+    return "moved to another coil: " + ", ".join(moved)
 
 
 def _compiled_map(robot: Any) -> list[int]:
