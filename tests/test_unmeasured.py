@@ -282,3 +282,21 @@ def test_a_transition_the_simulated_body_did_not_make_is_forbidden_in_the_measur
         assert measured.reward[measured.lookup(a, b)] == mean[a, b]
     assert '# forbidden ("x") now: the idealised drive did not make them on the simulated body' in out.read_text()
     assert "01->11" in out.read_text()
+
+
+@pytest.mark.parametrize("transitions", [
+    'matrix = "unmeasured"\nallow = "one-level"\nforbidden = ["00->01", "00->10", "01->00", "10->00", "01->11", '
+    '"10->11", "11->01", "11->10"]',
+    'matrix = [["x", "x", "x", "x"], ["x", "x", "x", "x"], ["x", "x", "x", "x"], ["x", "x", "x", "x"]]',
+], ids=["unmeasured-all-forbidden", "all-x"])
+def test_measure_matrix_of_a_file_that_allows_no_transition_is_refused_and_writes_nothing(tmp_path, capsys,
+                                                                                        transitions):
+    """As learn refuses it: a robot file whose table forbids every transition has nothing to
+    measure. --measure-matrix printed a table of dashes and wrote --out with an all-"x"
+    matrix, exit 0."""
+    path = _write(tmp_path, [2, 2], transitions)
+    out_file = tmp_path / "measured.toml"
+    code, out, err = cli(capsys, "sim", path, "--measure-matrix", "--out", out_file)
+    assert code == 2 and out == ""
+    assert "the robot file allows no transition" in err and "nothing to measure" in err
+    assert not out_file.exists()

@@ -135,6 +135,9 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
 
     if args.plant != "physical":
         raise SimError("--measure-matrix: the matrix is measured on the physical plant (the table plant is the matrix)")
+    if robot.transitions.n_transitions == 0:  # as learn says: it printed a table of dashes and wrote an all-"x" file, exit 0
+        raise SimError(f"--measure-matrix: {robot.path}: the robot file allows no transition (its table forbids "
+                       "every one): nothing to measure")
     if args.out is not None:  # known now, not after minutes of measuring
         from ..outputs import refuse_inputs
 
