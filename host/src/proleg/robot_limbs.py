@@ -98,8 +98,14 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
         if any(a.name == name for a in out):
             f.fail("name", "a name no other actuator has", name)
         channel = f.integer("channel", i, 0, MAX_ACTUATORS - 1)
-        if any(a.channel == channel for a in out):
-            f.fail("channel", "a channel no other actuator uses", channel)
+        other = next((a for a in out if a.channel == channel), None)
+        if other is not None:  # the one that has it, and a default said as one: "got 1" named no line of the file
+            written = f"channel = {channel}" if other.channel_given else f"channel {channel}, by default"
+            if "channel" in t:
+                f.fail("channel", f"a channel no other actuator uses (actuator {other.name!r} has {written})", channel)
+            f.fail("channel", f"a channel no other actuator uses: without one it takes its place among the [[actuator]]s "
+                              f"counted from 0, {channel}, which actuator {other.name!r} has ({written}): give it a "
+                              "channel of its own")
         out.append(Actuator(name, channel, "channel" in t))
     return tuple(out)
 
