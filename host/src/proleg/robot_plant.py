@@ -316,6 +316,8 @@ def _per(path: Path, spec: PlantKey, v: Any, n: int) -> tuple[float, ...]:
         if len(v) != n:
             _fail(path, spec.name, f"one number or a list of {n} (one per {spec.per})", v)
         return tuple(_value(path, spec, f"{spec.name}[{i + 1}]", x) for i, x in enumerate(v))
+    if isinstance(v, bool) or not isinstance(v, (int, float)):  # a string or a table: say a list is taken too
+        _fail(path, spec.name, f"a number in {spec.range_text()}, or a list of {n} (one per {spec.per})", v)
     return (_value(path, spec, spec.name, v),) * n
 
 
