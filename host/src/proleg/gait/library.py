@@ -87,7 +87,8 @@ def gait_library(
     entries, the translation cap to the rotation entries."""
     if isinstance(headings, str):
         headings = parse_headings(headings)
-    if max_transitions is None and not simple_cycles:  # the bound the firmware build takes
+    if max_transitions is None:  # the bound the firmware build takes, simple cycles or not (past 16 states
+        # they were refused: "objective total on 32 states needs an explicit max_transitions")
         max_transitions = whole_body_bound(table.levels, kind)
     out = []
     for h in headings:
