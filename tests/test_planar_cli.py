@@ -109,6 +109,14 @@ def test_a_heading_on_a_robot_without_dy_names_the_file_and_the_heading(capsys):
     assert code == 2 and "paper-r1.toml: heading 90° (off the x axis) needs [transitions].dy" in err
 
 
+def test_build_with_a_library_the_robot_file_cannot_answer_names_the_file_as_gait_does(capsys, tmp_path):
+    for library, needs in (("0,90", "heading 90° (off the x axis) needs [transitions].dy"),
+                           ("rot-cw", "a rotation gait needs [transitions].dtheta_deg")):
+        code, out, err = run(capsys, "build", str(ROBOTS / "paper-r1.toml"), "--board", "host-sim",
+                             "--library", library, "-o", str(tmp_path / "fw"))
+        assert code == 2 and out == "" and f"paper-r1.toml: {needs} in the robot file" in err, err
+
+
 def test_evaluate_with_library_names_library_not_an_option_from_the_gaits_table(capsys):
     """planar-4's [gaits] table fills --library's other options; --evaluate named the first of
     them (--variance-weight), an option the user had not given."""

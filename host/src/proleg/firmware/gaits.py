@@ -189,8 +189,14 @@ def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:
     def key(g) -> tuple[int, ...]:
         return tuple(int(s) for s in g.states)
 
+    from ..errors import GaitError
+
+    try:
+        entries = spec.entries(robot.transitions)
+    except GaitError as e:  # "… needs [transitions].dy in the robot file": which file, as proleg gait says
+        raise GaitError(f"{robot.path}: {e}") from None
     out = []
-    for entry in spec.entries(robot.transitions):
+    for entry in entries:
         g = entry.gait
         if g is None:
             continue
