@@ -347,10 +347,23 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
         spec = library_spec("0")
     heading = Heading(f"{heading_deg:g}", heading_deg=float(heading_deg)) if rotate is None else \
         Heading(f"rot-{rotate}", rotate=rotate)
-    entry = replace(spec, headings=(heading,)).entries(robot.transitions)[0]
+    try:
+        entry = replace(spec, headings=(heading,)).entries(robot.transitions)[0]
+    except GaitError as e:  # "… needs [transitions].dy in the robot file": which file, as proleg gait says
+        raise GaitError(f"{robot.path}: {e}") from None
     if entry.gait is None:
         raise GaitError(f"{asked}: {robot.name} has no gait for it (no closed walk qualifies)")
     g = entry.gait
+    table = next(((d, i) for d in DIRECTIONS for i, h in enumerate(fw.get(d) or ())
+                  if tuple(int(s) for s in h.states) == tuple(int(s) for s in g.states)), None)
+    if table is not None:  # the firmware carries it: START it by its index, with its way in from rest; loaded
+        # as the user gait it has none, and from rest in a state it does not visit it was refused
+        d, i = table
+        net = net_motion(robot.transitions, g.states)
+        why = "not in the firmware's library" if fw.library else "the firmware carries no gait library"
+        return HeadingChoice(asked, heading, d, i, tuple(g.states[:-1]), net,
+                             f"{asked}: {why}; computed {' '.join(label(s) for s in g.states)}, the firmware's {d} "
+                             f"gait {i} (per pass dx {net.x:+.3g} dy {net.y:+.3g} dtheta {net.theta_deg:+.3g}°)")
     if len(g.states) - 1 > MAX_LOADED_STEPS:
         raise GaitError(f"{asked}: the gait for it has {len(g.states) - 1} steps, LOAD_GAIT takes at most "
                         f"{MAX_LOADED_STEPS}; put the heading in the robot file's [gaits] library")
