@@ -111,7 +111,16 @@ def test_robot_file_imu_fields_are_checked():
         "limb": [{"name": "l", "psi_star_deg": [20.0], "actuator": "a", "imu": {"mux": 0x69}}],
         "transitions": {"matrix": [[0, 1], [1, 0]]},
     }
-    with pytest.raises(RobotFileError, match=r"limb 'l': imu.mux: expected an integer in 112..119, got 105"):
+    with pytest.raises(RobotFileError, match=r"limb 'l': imu.mux: expected an address in 0x70..0x77 \(a number, "
+                                             r"written like 0x70 without quotes\), got 0x69$"):
+        robot_from_dict(doc, Path("r.toml"))  # in hex, as the file writes it: "in 112..119, got 105" before
+    doc["limb"][0]["imu"] = {"address": "0x68"}
+    with pytest.raises(RobotFileError, match=r"imu.address: expected an address in 0x08..0x77 \(a number, "
+                                             r"written like 0x68 without quotes\), got '0x68'$"):
+        robot_from_dict(doc, Path("r.toml"))
+    doc["limb"][0]["imu"] = {"address": 0x71}
+    with pytest.raises(RobotFileError, match=r"imu.address: expected an IMU address outside the multiplexer range "
+                                             r"0x70..0x77, got 0x71$"):
         robot_from_dict(doc, Path("r.toml"))
     doc["limb"][0]["imu"] = {"bus": "I2C1", "channel": 3, "address": 0x69}
     assert robot_from_dict(doc, Path("r.toml")).limbs[0].imu == ImuSpec("I2C1", None, 3, 0x69)

@@ -269,13 +269,25 @@ def stroke_leads(limbs: Sequence[Any], control: Any) -> tuple[int, int | None] |
             names.index(fall) if fall else None)
 
 
+def _i2c_address(f: Fields, key: str, lo: int, hi: int) -> int:
+    """A 7-bit I2C address, said in hex as the file and the data sheets write it: ``mux = 0x69``
+    was "expected an integer in 112..119, got 105"."""
+    v = f.table.get(key)
+    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+        got = f"0x{v:02x}" if isinstance(v, int) and not isinstance(v, bool) and v >= 0 else toml_text(v)
+        raise RobotFileError(f"{f.path}: {f.where}{f.sep}{key}: expected an address in 0x{lo:02x}..0x{hi:02x} "
+                             f"(a number, written like 0x{max(lo, 0x68):02x} without quotes), got {got}")
+    return v
+
+
 def _imu_spec(path: Path, where: str, value: Any) -> ImuSpec:
     """``imu = { bus = "I2C1", mux = 0x70, channel = 3, address = 0x68 }``, every part optional."""
     f = Fields(path, where, value, {"bus", "mux", "channel", "address"}, sep=".")
     bus = f.string("bus") if f.has("bus") else None
-    mux = f.integer("mux", 0, MUX_ADDRESSES.start, MUX_ADDRESSES.stop - 1) if f.has("mux") else None
+    mux = _i2c_address(f, "mux", MUX_ADDRESSES.start, MUX_ADDRESSES.stop - 1) if f.has("mux") else None
     channel = f.integer("channel", 0, 0, MUX_CHANNELS - 1) if f.has("channel") else None
-    address = f.integer("address", 0, 0x08, 0x77) if f.has("address") else None
+    address = _i2c_address(f, "address", 0x08, 0x77) if f.has("address") else None
     if address is not None and address in MUX_ADDRESSES:
-        f.fail("address", "an IMU address outside the multiplexer range 0x70..0x77", address)
+        raise RobotFileError(f"{path}: {where}.address: expected an IMU address outside the multiplexer range "
+                             f"0x70..0x77, got 0x{address:02x}")
     return ImuSpec(bus, mux, channel, address)
