@@ -300,3 +300,17 @@ def test_measure_matrix_of_a_file_that_allows_no_transition_is_refused_and_write
     assert code == 2 and out == ""
     assert "the robot file allows no transition" in err and "nothing to measure" in err
     assert not out_file.exists()
+
+
+@pytest.mark.parametrize("transitions, says", [
+    ('matrix = "unmeasured"\nallow = "one-level"', "the robot's matrix is unmeasured"),
+    ('matrix = [["x", "x", "x", "x"], ["x", "x", "x", "x"], ["x", "x", "x", "x"], ["x", "x", "x", "x"]]',
+     "fresh has no gait in +x or -x"),
+], ids=["unmeasured", "all-x"])
+def test_measure_climb_without_any_gait_is_refused_not_a_measurement(tmp_path, capsys, transitions, says):
+    """A firmware that carries no gait has nothing to climb with: --measure-climb printed its
+    header and "no gait moves: no max_climb_deg to suggest", exit 0, as if it had measured."""
+    path = _write(tmp_path, [2, 2], transitions)
+    code, out, err = cli(capsys, "sim", path, "--measure-climb")
+    assert code == 2 and out == ""
+    assert "--measure-climb: " in err and "the firmware carries no gait to climb with" in err and says in err

@@ -358,6 +358,9 @@ def cmd_measure_climb(args: argparse.Namespace, robot: Any) -> int:
     every = firmware_gaits(robot, args.objective, args.max_transitions)
     first = None if args.all_gaits else (args.climb_gaits or 1)
     gaits = {d: list(every.get(d, ()))[:first] for d in ("+x", "-x")}
+    if not any(gaits.values()):  # nothing measured: it said "no gait moves" with exit 0, as if measured so
+        why = every.left_out_line("+x") or f"{robot.name} has no gait in +x or -x"
+        raise SimError(f"--measure-climb: {robot.path}: the firmware carries no gait to climb with: {why}")
     climbs: dict[str, list[float | None]] = {
         d: [steepest_climb(robot, g.states, d, list(args.condition)) for g in gs] for d, gs in gaits.items() if gs}
     limit = suggested_limits(climbs)
