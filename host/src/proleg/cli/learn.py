@@ -150,6 +150,10 @@ def cmd_learn(args: argparse.Namespace) -> int:
     linked = bool(args.port or args.can or args.sim)
     source = _check_options(args, linked)
     truth = _checked_truth(args, robot)  # before the log is created: a bad option leaves no file
+    if args.sim and args.plant == "physical" and len(robot.limbs) < 2:  # the plant's own line named `proleg sim`
+        raise LearnError(f"learn: {robot.path}: the physical plant needs two limbs at least (a body crawls on two "
+                         f"contacts), and {robot.name} has one: learn it on the table plant, which a matrix moves: "
+                         "--truth TRUTH.toml (a robot file whose matrix is the truth to learn)")
     if linked:
         check_explorable(robot, args.try_unholdable)
     # and so is the link: a board that does not answer, or runs another robot, leaves no file either
