@@ -57,3 +57,43 @@ def test_run_heading_0_walks_a_gait_that_does_not_visit_rest(tmp_path, capsys):
     result = json.loads(out.strip().splitlines()[-1])
     assert result["ok"] and result["gait"] == 0 and result["direction"] == "+x"
     assert result["heading"]["loaded"] is False and result["cycles"] >= 1
+
+
+PL2 = """
+[robot]
+name = "pl2"
+[[limb]]
+name = "L"
+psi_star_deg = [20.0]
+actuator = "x"
+[[limb]]
+name = "R"
+psi_star_deg = [20.0]
+actuator = "y"
+[[actuator]]
+name = "x"
+[[actuator]]
+name = "y"
+[transitions]
+units = "mm"
+matrix = [[0, -1, 1, "x"], [1, 0, "x", -1], [-1, "x", 0, 1], ["x", 0.5, -0.5, 0]]
+dy = [[0, 0.5, 0.2, "x"], [0.1, 0, "x", 0.3], [-0.2, "x", 0, 0.1], ["x", 0.1, 0.1, 0]]
+dtheta_deg = [[0, 2, -1, "x"], [1, 0, "x", 3], [-1, "x", 0, 1], ["x", 1, 1, 0]]
+[gaits]
+library = [0, 90, 270]
+"""
+
+
+def test_a_library_heading_nothing_walks_is_said_as_a_warning_when_run(tmp_path, capsys):
+    """The build says "(nothing scores above zero: the best)" of such an entry; run walked it
+    (270°: a gait drifting +y) with the library's plain line."""
+    path = tmp_path / "pl2.toml"
+    path.write_text(PL2)
+    robot = load_robot(path)
+    fw = firmware_gaits(robot)
+    assert {lg.heading.name: lg.below_zero for lg in fw.library} == {"0": False, "90": False, "270": True}
+    down = choose_heading(robot, fw, 270.0)
+    assert down.still and down.warned and not down.nearest
+    assert down.message.endswith("(nothing scores above zero for it: the library's best, which does not move that way)")
+    up = choose_heading(robot, fw, 90.0)
+    assert not up.still and not up.warned and "nothing scores" not in up.message

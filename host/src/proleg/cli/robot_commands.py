@@ -53,7 +53,7 @@ def heading_choice(args: argparse.Namespace, robot: Any) -> tuple[Any, Any]:
         spec = library_spec(args.library, **(robot.library.as_kwargs() if robot.library is not None else {}))
     fw = firmware_gaits(robot, library=spec)
     choice = choose_heading(robot, fw, args.heading, args.rotate, exact=args.exact_heading)
-    (log.warning if choice.nearest or choice.index is None else log.info)(choice.message)
+    (log.warning if choice.warned else log.info)(choice.message)
     return fw, choice
 
 
@@ -204,7 +204,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.format == "jsonl":
         print(json.dumps(doc))
     else:
-        if choice is not None and not (choice.nearest or choice.index is None):
+        if choice is not None and not choice.warned:
             print(choice.message)  # the others were said as a warning before the run (heading_choice)
         which = (f"gait {gait} in {direction}" if gait != GAIT_USER else
                  "the loaded gait" + (" (its way unstated)" if direction == UNSTATED else f" in {direction}"))

@@ -310,6 +310,13 @@ class HeadingChoice:
     net: Any  # Pose of one pass
     message: str
     nearest: bool = False  # the library's nearest heading, not the one asked for
+    still: bool = False  # the library's entry scores nothing above zero for it: said as a warning too
+
+    @property
+    def warned(self) -> bool:
+        """Whether ``message`` is a warning: another heading, a gait that does not move that way,
+        or a gait computed here to be loaded."""
+        return self.nearest or self.still or self.index is None
 
 
 def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = None, rotate: str | None = None,
@@ -338,10 +345,14 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
         off = "" if rotate is not None else abs((hit.heading.heading_deg - heading_deg + 180) % 360 - 180)
         how = ("" if rotate is not None or off < 1e-9 else
                f" (the library's nearest heading, {hit.heading.name}°, {off:g}° off)")
+        # the build says so of such an entry; run, which walks it, said nothing (planar: 270° walked +y)
+        still = (" (nothing scores above zero for it: the library's best, which does not move that way)"
+                 if hit.below_zero else "")
         return HeadingChoice(asked, hit.heading, hit.direction, hit.index, tuple(hit.gait.states[:-1]), hit.net,
                              f"{asked}{how}: {hit.direction} gait {hit.index} from the firmware's library, "
                              f"{' '.join(label(s) for s in hit.gait.states)}, per pass dx {hit.net.x:+.3g} "
-                             f"dy {hit.net.y:+.3g} dtheta {hit.net.theta_deg:+.3g}°", nearest=bool(how))
+                             f"dy {hit.net.y:+.3g} dtheta {hit.net.theta_deg:+.3g}°{still}",
+                             nearest=bool(how), still=hit.below_zero)
     spec = fw.library_spec
     if spec is None:
         spec = library_spec("0")
