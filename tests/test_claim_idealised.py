@@ -146,22 +146,18 @@ def test_a_rise_that_stops_short_is_cut_before_its_coil_overheats_and_a_slow_one
     assert out.completed and out.speed_mm_s > 0.5, out
 
 
-def test_an_on_limit_hit_the_gait_walks_on_from_is_reported_in_the_note_and_a_latched_one_stops_it(tmp_path):
-    """A single on-limit hit is a report, not a stop (docs/safety.md): the one-actuator R1 with
-    mismatched coils behind 8 Ω, given the mean-duty budget 0.5 (the default before it became
-    0.45, where this condition no longer walks), holds 10 beyond that budget once, and walks on.
-    The bench calls that run completed and lists the hit (``reported``); a fault that latches
-    stops the run (the worn coil's rise cut as "cannot reach": STATE_TIMEOUT)."""
+def test_an_on_limit_hit_the_gait_walks_on_from_is_reported_in_the_note_and_a_latched_one_stops_it():
+    """An on-limit hit that does not latch is a report, not a stop (docs/safety.md): the
+    one-actuator R1 at a 30 % weaker supply in a strong draught runs into its on-time limit a
+    few times and walks on (bench/results/claim-paper-r1-1act.json). The bench calls that run
+    completed and lists the hits (``reported``); a fault that latches stops the run (the worn
+    coil's rise cut as "cannot reach": STATE_TIMEOUT). (Its first condition, mismatched coils
+    behind 8 Ω at a mean-duty budget of 0.5, latches since the plant sags a coil by its full
+    current in its PWM on-phase.)"""
     path = robots_dir() / "paper-r1-one-actuator.toml"
-    text = path.read_text(encoding="utf-8")
-    assert "[safety]\n" in text
-    mean_05 = tmp_path / "paper-r1-one-actuator.toml"
-    mean_05.write_text(text.replace("[safety]\n", "[safety]\nmax_mean_duty = 0.5\n", 1), encoding="utf-8")
-    robot = load_robot(mean_05)
-    assert robot.safety.max_mean_duty == 0.5
-    out = claim.feedback_run(robot, claim.point("coil mismatch + source resistance (strong)"), duration_s=40.0)
+    robot = load_robot(path)
+    out = claim.feedback_run(robot, claim.point("supply sag + draught (strong)"), duration_s=40.0)
     assert out.completed and not out.fault and out.speed_mm_s > 0.5, out
     assert out.reported.startswith("SMA_ON_LIMIT ×"), out
-    robot = load_robot(path)
     out = claim.feedback_run(robot, claim.point("fatigue (strong)"), gait=[2, 3, 2], duration_s=12.0)
     assert not out.completed and out.fault and not out.reported, out
