@@ -222,6 +222,17 @@ def test_a_fraction_where_a_command_carries_a_whole_number_is_refused_not_trunca
     assert [m.name for m in board.received] == ["GET_INFO"]  # nothing sent
 
 
+@pytest.mark.parametrize("ms", [1, 50, 99.0])
+def test_a_link_watchdog_below_100_ms_is_refused_before_it_reaches_the_board(ms):
+    """The board narrows its watchdog to any 1 ms or more, and the client's heartbeat then
+    pinged every quarter of it (every 0.25 ms at 1 ms); ``proleg set-param`` refused it, the
+    Python API sent it."""
+    board, client = make()
+    with pytest.raises(LinkError, match="expected at least 100 ms"):
+        client.set_param("link_watchdog_ms", 0, ms)
+    assert [m.name for m in board.received] == ["GET_INFO"]  # nothing sent
+
+
 def test_whole_numbers_given_as_floats_or_numpy_ints_are_sent_as_they_are():
     import numpy as np
 

@@ -23,6 +23,7 @@ from types import TracebackType
 
 from ..errors import LinkError
 from ..names import counted
+from ..robot_settings import MIN_LINK_WATCHDOG_MS
 from ..protocol.codec import Message, encode
 from ..protocol.definition import (
     BY_NAME,
@@ -200,10 +201,14 @@ class RobotClient(MessageStream):
                 raise LinkError(f"unknown parameter {param!r}; known: {', '.join(p.name.lower() for p in ParamId)}") from None
         what = f"SET_PARAM {param.name.lower() if isinstance(param, ParamId) else param}"
         unit = " in the parameter's unit (permyriad for a duty, ms for a time, 0.01° for an angle)"
-        self.request("SET_PARAM", param=_whole("SET_PARAM param", param), index=_whole(f"{what} index", index),
-                     value=_whole(f"{what} value", value, unit))
-        if int(param) == ParamId.LINK_WATCHDOG_MS:
-            self.fit_heartbeat(int(value))  # a shorter watchdog from here on
+        pid, v = _whole("SET_PARAM param", param), _whole(f"{what} value", value, unit)
+        if pid == ParamId.LINK_WATCHDOG_MS and 0 < v < MIN_LINK_WATCHDOG_MS:
+            # the board narrows its watchdog to any 1 ms or more, and the heartbeat would then ping
+            # every quarter of it (a ping every 0.25 ms); proleg set-param refuses it alike
+            raise LinkError(f"{what}: expected at least {MIN_LINK_WATCHDOG_MS} ms (as in a robot file), got {v}")
+        self.request("SET_PARAM", param=pid, index=_whole(f"{what} index", index), value=v)
+        if pid == ParamId.LINK_WATCHDOG_MS:
+            self.fit_heartbeat(v)  # a shorter watchdog from here on
 
     def set_telemetry_rate(self, hz: int) -> None:
         self.request("SET_TELEMETRY_RATE", hz=_whole("SET_TELEMETRY_RATE hz", hz))
