@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from build_checks import cli as run
+from hypothesis import given
+from hypothesis import strategies as st
 
 from proleg.cli.main import main
 from proleg.robot import load_robot
@@ -140,6 +142,30 @@ def test_measure_matrix_json_has_states_matrix_in_mm_and_sample_counts(capsys):
                 assert m["samples"][a][b] >= 1
                 if paper[a][b]:
                     assert m["matrix"][a][b] * paper[a][b] > 0, (a, b)
+
+
+def test_measure_matrix_says_each_coils_hottest_and_warns_past_120_c(capsys, tmp_path):
+    """A supply that cooks the coils while measuring (R1 at 60 V: 145 °C) was said nowhere;
+    ``proleg sim`` fails a firmware run past 120 °C. The JSON gives each coil's hottest."""
+    rc, out, err = run(capsys, "sim", str(R1), "--measure-matrix", "--json")
+    peaks = json.loads(out)["coil_peak_c"]
+    assert rc == 0 and set(peaks) == {"sma-left", "sma-right"} and all(25 < t < 120 for t in peaks.values())
+    assert "wears NiTi out" not in err
+    learned = tmp_path / "hot.toml"
+    rc, out, err = run(capsys, "sim", str(R1), "--measure-matrix", "--json", "--condition", "supply_v=60",
+                       "--out", str(learned))
+    peaks = json.loads(out)["coil_peak_c"]
+    assert all(t > 120 for t in peaks.values()), peaks
+    assert "warning: --measure-matrix: coil sma-left reached" in err and "past the 120 °C that wears NiTi out" in err
+
+
+@given(st.lists(st.dictionaries(st.sampled_from(["a", "b", "c"]), st.floats(-50, 500)), min_size=1, max_size=4))
+def test_the_hottest_of_several_measurements_is_each_coils_highest(peaks):
+    from proleg.sim.physical.measure import MeasuredMatrix, hottest
+
+    empty = np.zeros((1, 1))
+    got = hottest([MeasuredMatrix(["0"], empty, empty, empty.astype(int), empty, (), "", p) for p in peaks])
+    assert got == {k: max(p[k] for p in peaks if k in p) for k in set().union(*peaks)}
 
 
 def test_measure_matrix_tells_an_allowed_transition_the_body_did_not_make_from_a_forbidden_one(capsys):

@@ -178,13 +178,19 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     nothing = bool(not_made) and len(not_made) == robot.transitions.n_transitions
     # whether the load warnings foresaw the transitions not made: the failure and the table both say
     warned = bool(not_made) and _load_warned(robot, not_made)
+    failure = None
     if nothing:
         why = ("the load warnings above say which states the body cannot hold" if warned else
                "the warnings above, if any, say why")
         failure = (f"--measure-matrix: the idealised drive made none of the {robot.transitions.n_transitions} "
                    f"allowed transitions on the simulated body under these conditions ({why}): nothing was measured"
                    + (f"; --out {args.out} not written" if args.out is not None else ""))
-    if args.out is not None and not nothing:  # written before the table is printed: a reader that goes away (| head) loses no file
+    # a coil past the temperature that wears NiTi out while measuring (R1 at supply_v=60: 145 °C)
+    # was said nowhere; a run of the firmware fails on it (proleg sim)
+    m.coil_peak_c = _hottest_of(m, rng)
+    if cooked := _cooked(m.coil_peak_c):
+        log.warning("warning: --measure-matrix: %s", cooked)
+    if args.out is not None and failure is None:  # written before the table is printed: a reader that goes away (| head) loses no file
         from ..learn.robotfile import write_measured_robot
 
         if args.condition:  # the robot file's own [plant] describes the robot; --condition is a day's weather
@@ -195,7 +201,7 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         extra = {} if rng is None else rng.to_json()
         print(json.dumps({"robot": robot.name, **conditions_json(robot, args), **m.to_json(),
                           "not_made": [f"{m.states[a]}->{m.states[b]}" for a, b in not_made], **extra}))
-        return _measured(failure if nothing else None)
+        return _measured(failure)
     pooled_over = f", pooled over {len(rng.orders)} orders" if args.history_range else ""
     print(f"{robot.name}: reward matrix measured on the physical plant (mm, row = from{pooled_over}; "
           f"mechanisms {'/'.join(m.mechanisms)}, {m.mechanism_source})")
@@ -221,7 +227,25 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         print(f"\neach entry's range over {over} (mm, low..high):")
         _table(m.states, [[None if lo != lo else f"{_mm(lo)}..{_mm(hi)}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
-    return _measured(failure if nothing else None)
+    return _measured(failure)
+
+
+def _hottest_of(m: Any, rng: Any) -> dict[str, float]:
+    """Each coil's hottest over the matrix measured and, with a range, every measurement of it."""
+    from ..sim.physical.measure import hottest
+
+    return hottest([m, *(rng.measured if rng is not None else ())])
+
+
+def _cooked(peaks: dict[str, float]) -> str:
+    """The coils past ``NITI_OVERHEAT_C`` while measuring, said in a line ("" when none)."""
+    from ..physics.materials import NITI_OVERHEAT_C, shown_c
+
+    hot = [f"coil {name} reached {shown_c(t)} °C" for name, t in peaks.items() if t > NITI_OVERHEAT_C]
+    return (f"{', '.join(hot)} while measuring, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out. The "
+            "idealised drive that measures is not the firmware: it heats at the drive duty until a step is made "
+            "and held (up to 12 s), with no safety envelope; proleg sim ROBOT runs the firmware, and fails a run "
+            f"that heats a coil past {NITI_OVERHEAT_C:.0f} °C") if hot else ""
 
 
 def _load_warned(robot: Any, steps: list[tuple[int, int]]) -> bool:

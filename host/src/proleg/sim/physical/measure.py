@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import random
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -53,12 +53,16 @@ class MeasuredMatrix:
     duration_s: np.ndarray     # mean time to reach the target state
     mechanisms: tuple[str, ...]
     mechanism_source: str
+    #: each coil's hottest (°C) while measuring, by actuator name: the idealised drive heats as
+    #: the firmware's duties do, so a supply that cooks a coil cooks it here too
+    coil_peak_c: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {"states": self.states, "matrix": json_matrix(self.matrix_mm), "units": "mm",
                 "std": json_matrix(self.std_mm), "samples": self.samples.tolist(),
                 "duration_s": json_matrix(self.duration_s), "mechanisms": list(self.mechanisms),
-                "mechanism_source": self.mechanism_source}
+                "mechanism_source": self.mechanism_source,
+                "coil_peak_c": {k: round(v, 1) for k, v in self.coil_peak_c.items()}}
 
 
 def json_matrix(m: np.ndarray) -> list:
@@ -110,7 +114,8 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
                 dur[a, b] = float(np.mean(times[a][b]))
                 count[a, b] = len(sums[a][b])
     labels = robot.transitions.labels() if hasattr(robot.transitions, "labels") else [str(i) for i in range(n)]
-    return MeasuredMatrix(list(labels), mean, std, count, dur, tuple(plant.mechanisms), plant.mechanism_source)
+    peaks = {a.name: t for a, t in zip(robot.actuators, plant.peak_temperature_c)}
+    return MeasuredMatrix(list(labels), mean, std, count, dur, tuple(plant.mechanisms), plant.mechanism_source, peaks)
 
 
 #: The orders ``measure_matrix`` makes the transitions in: row by row (the default), the same
@@ -223,7 +228,17 @@ def pooled(measured: Sequence[MeasuredMatrix]) -> MeasuredMatrix:
         std = np.sqrt(np.maximum(second - mean ** 2, 0.0))
         duration = mean_of(np.array([m.duration_s for m in measured]))
     return MeasuredMatrix(first.states, mean, std, total.astype(int), duration, first.mechanisms,
-                          first.mechanism_source)
+                          first.mechanism_source, hottest(measured))
+
+
+def hottest(measured: Sequence[MeasuredMatrix | None]) -> dict[str, float]:
+    """Each coil's hottest over several measurements (``MeasuredMatrix.coil_peak_c``; a None
+    among them is one not made)."""
+    out: dict[str, float] = {}
+    for m in measured:
+        for name, t in (m.coil_peak_c.items() if m is not None else ()):
+            out[name] = max(t, out.get(name, t))
+    return out
 
 
 def measure_history_range(robot: Any, orders: Sequence[str] = ORDERS, *, jobs: int = 1,
