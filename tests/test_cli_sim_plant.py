@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from build_checks import cli as run
-from hypothesis import given
+from hypothesis import given as for_all
 from hypothesis import strategies as st
 
 from proleg.cli.main import main
@@ -159,7 +159,7 @@ def test_measure_matrix_says_each_coils_hottest_and_warns_past_120_c(capsys, tmp
     assert "warning: --measure-matrix: coil sma-left reached" in err and "past the 120 °C that wears NiTi out" in err
 
 
-@given(st.lists(st.dictionaries(st.sampled_from(["a", "b", "c"]), st.floats(-50, 500)), min_size=1, max_size=4))
+@for_all(st.lists(st.dictionaries(st.sampled_from(["a", "b", "c"]), st.floats(-50, 500)), min_size=1, max_size=4))
 def test_the_hottest_of_several_measurements_is_each_coils_highest(peaks):
     from proleg.sim.physical.measure import MeasuredMatrix, hottest
 
