@@ -121,8 +121,7 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
             if base_flash + allowed + FLASH_PER_LIMB * extra > limit_flash:
                 # no choice of gaits fits: the table of allowed transitions alone is too big
                 fix = (f"its {len(robot.transitions.src):,} allowed transitions alone take {allowed:,} bytes, "
-                       "too many for any gaits: forbid the transitions the robot does not make ('x' in the matrix, "
-                       "rows left out of the CSV, or allow = \"one-level\" or \"one-limb\" on an unmeasured robot), "
+                       f"too many for any gaits: forbid the transitions the robot does not make ({_narrower(robot)}), "
                        "or a larger board")
             raise BuildError(
                 f"robot {robot.name} does not fit board {name} (estimated before compiling; {fix}): "
@@ -133,6 +132,20 @@ def check_fit(robot: Any, board: Any, gaits: Mapping[str, Sequence[Any]]) -> Fit
             )
     ram = check_ram(robot, board)
     return Fit(placements, mux_selects_per_tick(placements), i2c_tick_us(placements, hz), tables, flash, ram)
+
+
+def _narrower(robot: Any) -> str:
+    """How the robot file can allow fewer transitions: an unmeasured matrix a narrower
+    ``allow`` than the one it has (named only when there is one) and ``forbidden``; a written
+    table 'x' entries or rows left out. It said allow = "one-level" to a file that had it."""
+    if not getattr(robot, "unmeasured", False):
+        return "'x' in the matrix, rows left out of the CSV"
+    n, have = robot.n_states, len(robot.transitions.src)
+    one_level = sum(n * 2 * (k - 1) // k for k in robot.levels)  # robot_transitions._allowed_by_rule's count
+    one_limb = sum(n * (k - 1) for k in robot.levels)
+    rules = [f'allow = "{rule}": {count:,} transitions' for rule, count in (("one-limb", one_limb),
+                                                                             ("one-level", one_level)) if count < have]
+    return "; ".join(rules + ["forbidden = [...] beside the allow it has"])
 
 
 def check_ram(robot: Any, board: Any) -> int | None:
