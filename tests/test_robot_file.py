@@ -912,3 +912,20 @@ def test_a_csv_table_separated_by_semicolons_or_tabs_says_so(tmp_path, text, lin
     are separated by another character and that the table takes commas."""
     with pytest.raises(RobotFileError, match=rf"t\.csv:{line}: fields separated by '(;|\\t)', not commas"):
         load_robot(csv_robot(tmp_path, text))
+
+
+@pytest.mark.parametrize("window_ms, drive, warned", [
+    (100, 0.6, True), (2000, 0.6, True), (3000, 0.6, False), (10_000, 0.6, False), (100, 0.45, False),
+])
+def test_a_mean_duty_window_shorter_than_an_on_period_is_warned_of(tmp_path, window_ms, drive, warned):
+    """duty_window_ms = 100 loaded without a word, and R1's rises ran into SMA_ON_LIMIT: the
+    mean-duty limit (0.45) held within each on-period, under the drive duty (0.6)."""
+    from proleg.robot_settings import window_warning
+
+    path = write(tmp_path, R1 + f"\n[safety]\nduty_window_ms = {window_ms}\n\n[control]\ndrive_duty = {drive}\n")
+    robot = load_robot(path)
+    line = window_warning(path, robot.safety, robot.control)
+    assert (line is not None) == warned
+    if warned:
+        assert f"safety.duty_window_ms {window_ms} is shorter than max_on_ms 3000" in line
+        assert f"once it has been on about {window_ms * 0.45 / drive:.0f} ms of a window" in line

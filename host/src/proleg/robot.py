@@ -59,6 +59,7 @@ from .robot_settings import (  # noqa: F401 (re-exported: the robot file's names
     Safety,
     _control,
     _safety,
+    window_warning,
 )
 from .robot_transitions import is_unmeasured, n_trials_section, transitions_section
 from .transitions import TransitionTable
@@ -215,6 +216,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     safety = _safety(path, doc.get("safety", {}))
     control = _control(path, doc.get("control", {}), safety)
     _check_strokes(path, control, limbs)
+    if (line := window_warning(path, safety, control)) is not None:
+        log.warning("warning: %s", line)
     for line in hold_crossings(path, limbs, control.hold_margin_deg):
         log.warning("warning: %s", line)
     act_index = {a.name: j for j, a in enumerate(actuators)}

@@ -186,3 +186,18 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
                f"{counted(c.debounce_ticks, 'tick')} take {debounce_ms:g} ms, twice that {2 * debounce_ms:g} ms, and every "
                f"step would end in STATE_TIMEOUT after {safety.state_timeout_ms} ms", c.debounce_ticks)
     return c
+
+
+def window_warning(path: Path, safety: Safety, control: Control) -> str | None:
+    """A line when ``duty_window_ms`` is shorter than ``max_on_ms`` and the drive duty above the
+    mean-duty limit: the limit then holds within one on-period, and a rise that needs the
+    drive duty for longer is throttled (R1 at 100, 300 and 1000 ms ran into SMA_ON_LIMIT; it
+    loaded without a word). None otherwise."""
+    w, x, d = safety.duty_window_ms, safety.max_mean_duty, control.drive_duty
+    if w >= safety.max_on_ms or d <= x:
+        return None
+    return (f"{path}: safety.duty_window_ms {w} is shorter than max_on_ms {safety.max_on_ms}, so the mean-duty "
+            f"limit max_mean_duty {x:g} already holds within one on-period: a coil driven at control.drive_duty "
+            f"{d:g} is throttled to {x:g} once it has been on about {w * x / d:.0f} ms of a window, and a rise that "
+            "takes longer can run into its on-time limit (SMA_ON_LIMIT); the window is meant to span many cycles "
+            f"(default {Safety.duty_window_ms})")
