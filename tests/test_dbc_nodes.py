@@ -53,19 +53,6 @@ def test_two_limbs_that_would_share_an_identifier_are_refused(tmp_path):
         load_robot(path)
 
 
-def test_two_limbs_whose_names_differ_only_by_spaces_at_their_ends_are_refused(tmp_path):
-    """--condition and --inject name a limb with the spaces at its ends left out: " leg" and
-    "leg" both loaded, and " leg" could be named only by its index."""
-    from proleg.errors import RobotFileError
-    from proleg.robot import load_robot
-
-    r1 = (Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml").read_text()
-    path = tmp_path / "r.toml"
-    path.write_text(r1.replace('name = "left"', 'name = "leg"').replace('name = "right"', 'name = " leg "'))
-    with pytest.raises(RobotFileError, match=r"name: expected a name that differs from limb 'leg' by more than spaces"):
-        load_robot(path)
-
-
 def test_dbc_refuses_to_write_over_its_own_robot_file(tmp_path, capsys):
     """`dbc -o X --robot X` replaced the robot file with DBC text (exit 0)."""
     from proleg.cli import main

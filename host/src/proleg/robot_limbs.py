@@ -124,10 +124,6 @@ def _limbs(path: Path, value: Any, actuator_names: set[str]) -> tuple[Limb, ...]
             f.fail("name", "a name of printable characters, at least one", name)
         if any(limb.name == name for limb in out):
             f.fail("name", "a name no other limb has (duplicate limb)", name)
-        if (twin := next((limb.name for limb in out if limb.name.strip() == name.strip()), None)) is not None:
-            f.fail("name", f"a name that differs from limb {twin!r} by more than spaces at its ends (--condition "
-                           "and --inject name a limb with those spaces left out, so one of the two could be named "
-                           "only by its index)", name)
         if (twin := next((limb.name for limb in out if identifier(limb.name) == identifier(name)), None)) is not None:
             f.fail("name", f"a name that stays apart from limb {twin!r} as an identifier (both are "
                            f"{identifier(name)!r} in recordings and CAN signals)", name)
