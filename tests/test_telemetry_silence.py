@@ -64,3 +64,22 @@ def test_silence_is_the_time_since_the_last_frame_past_five_intervals(frames, in
     silent = gap > max(SILENT_MIN_S, SILENT_FRAMES * step)
     assert run.telemetry_silent_s == (pytest.approx(gap) if silent else 0.0)
     assert (run.lost_text() != "0 lost") == silent
+
+
+@pytest.mark.parametrize("argv", [("sim", R1, "--json"), ("run", R1, "--sim", "--format", "jsonl", "-q")])
+def test_a_run_that_heard_one_frame_judges_its_silence_by_the_board_telemetry_rate(capsys, monkeypatch, argv):
+    """With fewer than two frames there is no interval to measure: ``proleg sim`` took the
+    robot's telemetry rate (50 Hz: silent past 0.5 s) and ``proleg run`` none (silent only past
+    5 × 0.5 s), so a 1.5 s run that heard a single frame was silent in one and not the other."""
+    from proleg.report.gait_run import GaitRunListener
+
+    real = GaitRunListener.on_message
+
+    def one_frame(self, rx):
+        if rx.message.name != "TELEMETRY" or self.run.telemetry_frames == 0:
+            real(self, rx)
+
+    monkeypatch.setattr(GaitRunListener, "on_message", one_frame)
+    _code, out, err = cli(capsys, *argv, "--duration", "1.5")
+    doc = next(json.loads(ln) for ln in reversed(out.splitlines()) if ln.startswith("{"))
+    assert doc["telemetry_frames"] == 1 and doc["telemetry_silent_s"] > 1.5, (out, err)

@@ -146,7 +146,8 @@ def run_gait_on(
         command("ESTOP")  # the coils must go cold whatever the link does
     pump(STOP_TAIL_S - (clock() - t_stop), report_progress=False)  # the run's lines end with it
     run.telemetry_lost = client.stats.lost
-    run.end_silence(t0, clock())
+    # the board's rate, as SimSession takes the robot file's: with under two frames there is no interval to measure
+    run.end_silence(t0, clock(), client.info.telemetry_hz if client.info is not None else None)
     return run
 
 
