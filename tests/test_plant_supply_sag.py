@@ -41,3 +41,14 @@ def test_two_coils_on_together_sag_each_other_and_at_full_duty_as_before():
     assert both[0] == pytest.approx(both[1], abs=0.5) and both[0] < alone - 10
     nominal = _settled([], [0.6, 0.0]).temperature_c[0]  # no source resistance: no sag at all
     assert nominal == pytest.approx(_settled([], [0.6, 0.0]).steady_coil_temperature_c(0.6)[0], abs=0.5)
+
+
+def test_the_condition_help_says_a_lone_coil_sags_too():
+    """``--condition help`` said "supply sag when they draw together", and one coil alone sags
+    behind ``supply_ohm`` (above: 20 °C cooler at 20 Ω than at none)."""
+    from proleg.sim.physical import describe_keys
+
+    line = next(ln for ln in describe_keys().splitlines() if ln.startswith("supply_ohm "))
+    assert "sags while it draws" in line and "when they draw together" not in line, line
+    alone = _settled(["supply_ohm=20"], [1.0, 0.0]).temperature_c[0]
+    assert alone < _settled([], [1.0, 0.0]).temperature_c[0] - 10

@@ -112,7 +112,8 @@ _KEYS = (
     PlantKey("power", "×", 0.2, 2.0, 1.0, plants=PHYS,
              doc="heating power factor at the coils (supply voltage² / nominal): supply sag or boost"),
     PlantKey("supply_ohm", "Ω", 0.0, 50.0, 0.0, plants=PHYS,
-             doc="source resistance shared by all coils (supply sag when they draw together)"),
+             doc="source resistance shared by all coils (a coil's supply sags while it draws, more when several draw "
+                 "together)"),
     PlantKey("convection", "×", 0.2, 5.0, 1.0, plants=PHYS,
              doc="convective heat transfer factor (draught > 1, enclosure < 1)"),
     PlantKey("fatigue_cycles", "cycles", 0.0, 1e6, 0.0, plants=PHYS,
