@@ -53,8 +53,9 @@ class MeasuredMatrix:
     duration_s: np.ndarray     # mean time to reach the target state
     mechanisms: tuple[str, ...]
     mechanism_source: str
-    #: each coil's hottest (°C) while measuring, by actuator name: the idealised drive heats as
-    #: the firmware's duties do, so a supply that cooks a coil cooks it here too
+    #: each coil's hottest (°C) while measuring, by actuator name: a supply that cooks a coil
+    #: cooks it here too, and more, since the idealised drive heats a step until it is made and
+    #: held, with no safety envelope (the one-actuator R1: 183 °C, docs/plant.md)
     coil_peak_c: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict:
