@@ -151,6 +151,8 @@ def test_measure_matrix_says_each_coils_hottest_and_warns_past_120_c(capsys, tmp
     peaks = json.loads(out)["coil_peak_c"]
     assert rc == 0 and set(peaks) == {"sma-left", "sma-right"} and all(25 < t < 120 for t in peaks.values())
     assert "wears NiTi out" not in err
+    rc, out, _ = run(capsys, "sim", str(R1), "--measure-matrix")
+    assert rc == 0 and "coils, hottest while measuring: sma-left " in out
     learned = tmp_path / "hot.toml"
     rc, out, err = run(capsys, "sim", str(R1), "--measure-matrix", "--json", "--condition", "supply_v=60",
                        "--out", str(learned))

@@ -210,6 +210,10 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         cells[a][b] = "?"
     _table(m.states, cells)
     print(f"samples per entry: {int(m.samples.max()) if m.samples.size else 0} ('-': not an allowed transition)")
+    if m.coil_peak_c:  # as proleg sim's summary says it; past 120 °C a warning said why above
+        from ..physics.materials import shown_c
+
+        print("coils, hottest while measuring: " + ", ".join(f"{name} {shown_c(t)} °C" for name, t in m.coil_peak_c.items()))
     if not_made:
         shown = ", ".join(f"{m.states[a]}->{m.states[b]}" for a, b in not_made[:6])
         more = f", … ({len(not_made) - 6} more)" if len(not_made) > 6 else ""

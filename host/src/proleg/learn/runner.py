@@ -199,6 +199,7 @@ class Explorer:
         Raises ``ExplorationError`` when ``STALL_PIECES`` pieces in a row make none of the
         transitions still to do (the robot does not do what was planned), naming them."""
         restore = self._watch_closely()
+        self.left_for_tracker = []  # said again by this run's end, if it is manual entry's
         try:
             return self._run(max_pieces)
         finally:
