@@ -116,3 +116,13 @@ def test_every_example_robots_limit_is_what_measure_climb_suggests(capsys, name)
 def test_measure_climb_says_what_it_cannot_do(capsys, argv, text):
     rc, _, err = _cli(capsys, "sim", str(robots_dir() / f"{argv[0]}.toml"), *argv[1:])
     assert rc == 2 and text in err and "Traceback" not in err
+
+
+def test_a_warning_every_plant_gives_is_said_once(capsys):
+    """Each grade and way is a plant of its own, and each plant's warnings were printed again,
+    word for word: R1 at 20 V said each coil's overheat advice once per plant."""
+    code, _out, err = _cli(capsys, "sim", robots_dir() / "paper-r1.toml", "--measure-climb", "--condition", "supply_v=20")
+    lines = [ln for ln in err.splitlines() if ln.startswith("proleg: warning:")]
+    assert code == 0 and len(lines) == 2 and len(set(lines)) == 2, err  # sma-left's and sma-right's
+    code, _out, err = _cli(capsys, "sim", robots_dir() / "paper-r1.toml", "--measure-climb", "--condition", "supply_v=20")
+    assert len([ln for ln in err.splitlines() if ln.startswith("proleg: warning:")]) == 2  # said again by a new command

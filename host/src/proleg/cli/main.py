@@ -125,6 +125,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         _say(f"proleg: error: {os_error_line(e)}")
         _silence_stdout()
         return EXIT_FAILED
+    finally:  # the handler stays for what runs after main in this process (a script, a test): all of it said
+        for handler in log.handlers:
+            for f in [f for f in handler.filters if isinstance(f, _SaidOnce)]:
+                handler.removeFilter(f)
 
 
 def _say(line: str) -> None:
@@ -204,11 +208,31 @@ class _StderrHandler(logging.StreamHandler):
         pass
 
 
+class _SaidOnce(logging.Filter):
+    """Each warning once per command: one made again by every plant a command makes (``sim
+    --measure-climb``'s grades, ``check``'s rows) was printed again with each, word for word."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.said: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno != logging.WARNING:
+            return True
+        text = record.getMessage()
+        if text in self.said:
+            return False
+        self.said.add(text)
+        return True
+
+
 def _setup_logging(verbosity: int) -> None:
-    """-v: debug; default: info (progress); -q: warnings only; -qq: errors only."""
+    """-v: debug; default: info (progress); -q: warnings only; -qq: errors only. A warning is
+    said once per command (``_SaidOnce``)."""
     level = {1: logging.DEBUG, 0: logging.INFO, -1: logging.WARNING}.get(verbosity, logging.DEBUG if verbosity > 0
                                                                       else logging.ERROR)
     handler = _StderrHandler()
+    handler.addFilter(_SaidOnce())
     handler.setFormatter(logging.Formatter("proleg: %(message)s"))
     log.handlers[:] = [handler]
     log.setLevel(level)
