@@ -1,7 +1,8 @@
 """A link that goes silent near the end of a run loses frames no sequence gap shows: no frame
 comes after them to count from. ``proleg sim --inject link-drop:1+5`` for 20 s said "250 frames,
 0 lost" (and ``telemetry_lost`` 0) while the last 15 s and STOP's tries heard nothing; the
-report now says from when nothing came (``GaitRun.end_silence``), on ``sim`` and on ``run``."""
+report now says from when nothing came (``GaitRun.end_silence``), on ``sim`` and on ``run``;
+and ``run`` counts the frames lost in the run, as ``sim`` does."""
 
 from __future__ import annotations
 
@@ -85,3 +86,18 @@ def test_a_run_that_heard_one_frame_judges_its_silence_by_the_board_telemetry_ra
     _code, out, err = cli(capsys, *argv, "--duration", "1.5")
     doc = next(json.loads(ln) for ln in reversed(out.splitlines()) if ln.startswith("{"))
     assert doc["telemetry_frames"] == 1 and doc["telemetry_silent_s"] > 1.5, (out, err)
+
+
+def test_run_counts_the_frames_lost_in_the_run_not_since_connecting():
+    """``run``'s ``telemetry_lost`` was the link's count since it connected, so frames lost
+    while the host waited for the board's state before START counted as the run's (``sim``
+    counts the run's own)."""
+    from proleg.link import RobotClient, open_link
+    from proleg.report import run_gait_on
+
+    link = open_link("sim://paper-r1")
+    with RobotClient(link) as client:
+        client.connect()
+        client.stats.lost += 7  # lost before START
+        result = run_gait_on(client, 0, "+x", 3.0)
+    assert result.ok and result.telemetry_lost == 0, result

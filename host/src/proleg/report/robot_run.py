@@ -126,6 +126,7 @@ def run_gait_on(
             return False
 
     client.wait_known_state(KNOWN_STATE_WAIT_S)  # queued for pump: the listeners get them in order
+    lost_before = client.stats.lost  # the run's own losses: the link's count runs from connecting
     t0 = clock()
     started = False
     try:
@@ -145,7 +146,7 @@ def run_gait_on(
     if not command("STOP"):
         command("ESTOP")  # the coils must go cold whatever the link does
     pump(STOP_TAIL_S - (clock() - t_stop), report_progress=False)  # the run's lines end with it
-    run.telemetry_lost = client.stats.lost
+    run.telemetry_lost = client.stats.lost - lost_before
     # the board's rate, as SimSession takes the robot file's: with under two frames there is no interval to measure
     run.end_silence(t0, clock(), client.info.telemetry_hz if client.info is not None else None)
     return run
