@@ -236,6 +236,24 @@ def test_plot_has_fault_and_injection_markers_and_limb_names(tmp_path):
     assert "injected dead-actuator:sma-left" in svg or "injected" in svg
 
 
+def test_plot_labels_the_states_a_large_robot_visits(capsys, tmp_path):
+    """caterpillar-4 has 36 states: its state panel counted indices 0..35, where a lab reads
+    labels (0220). The states the run visits are labelled when they are 16 or fewer."""
+    from proleg.cli.main import main
+    from proleg.plot import MAX_STATE_TICKS, state_ticks
+
+    assert state_ticks([0, 3], [np.nan, 1.0], 4) == [0, 1, 2, 3]  # a small robot: every state
+    assert state_ticks([0, 9, 27], [np.nan, 65535.0, 9.0, 11.0], 36) == [0, 9, 11, 27]
+    assert state_ticks(list(range(MAX_STATE_TICKS + 1)), [], 36) == []  # too many: indices
+    run_path = tmp_path / "cat.jsonl"
+    assert main(["sim", "caterpillar-4", "--duration", "20", "--record", str(run_path)]) == 0
+    capsys.readouterr()
+    assert plot_recording(run_path, tmp_path / "cat.svg").stat().st_size > 0
+    rec = read_recording(run_path)
+    ticks = state_ticks(rec.target, rec.measured, 36)
+    assert 0 in ticks and 2 <= len(ticks) <= MAX_STATE_TICKS  # rest and the gait's states, by label
+
+
 def test_plot_writes_the_image_atomically(tmp_path):
     src = tmp_path / "run.csv"
     record(src)

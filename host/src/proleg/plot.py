@@ -106,6 +106,22 @@ def _levels(rec: Recording) -> tuple[int, ...]:
     return (2,) * rec.limbs
 
 
+#: The most state labels the state panel's axis carries.
+MAX_STATE_TICKS = 16
+
+
+def state_ticks(target: Any, measured: Any, n_states: int) -> list[int]:
+    """The states the state panel labels: every one when there are ``MAX_STATE_TICKS`` or
+    fewer, else those the recording visits (targets and measured), if as few; else none (the
+    axis counts indices). A robot of more than 16 states (caterpillar-4: 36) was plotted by
+    index, 0..35, where its labels (0220) are what a lab reads."""
+    if n_states <= MAX_STATE_TICKS:
+        return list(range(n_states))
+    seen = {int(v) for v in np.concatenate([np.asarray(target, float), np.asarray(measured, float)])
+            if np.isfinite(v) and 0 <= v < n_states}
+    return sorted(seen) if len(seen) <= MAX_STATE_TICKS else []
+
+
 def known_measured(rec: Recording) -> np.ndarray:
     """The measured state per frame as floats, NaN where the board did not know it (the
     ``STATE_UNKNOWN`` flag, and the 65535 a recording keeps there, docs/data.md): the state
@@ -161,9 +177,10 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     ax.step(t, rec.target, where="post", color="0.6", lw=2.5, label="target")
     ax.step(t, known_measured(rec), where="post", color="C3", lw=1.2, label="measured")
     n_states = state_count(levels)
-    if n_states <= 16:
-        ax.set_yticks(range(n_states), [label(s, levels) for s in range(n_states)])
-    ax.set_ylabel("state")
+    shown = state_ticks(rec.target, known_measured(rec), n_states)
+    if shown:
+        ax.set_yticks(shown, [label(s, levels) for s in shown])
+    ax.set_ylabel("state" if shown or n_states <= 1 else "state (index)")
     ax.legend(loc="upper right", fontsize="small")
 
     ax = axes[2]
