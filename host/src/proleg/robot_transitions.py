@@ -195,17 +195,22 @@ def is_unmeasured(value: Any) -> bool:
     return isinstance(value, dict) and value.get("matrix") == UNMEASURED
 
 
+def allowed_count(rule: str, levels: tuple[int, ...]) -> int:
+    """How many transitions ``allow = rule`` lets a robot of these limbs' levels make."""
+    n = states.state_count(levels)
+    if rule == "any":
+        return n * (n - 1)
+    if rule == "one-limb":
+        return sum(n * (k - 1) for k in levels)                   # every other level of one limb
+    return sum(n * 2 * (k - 1) // k for k in levels)              # one level up or down (one at the ends)
+
+
 def _allowed_by_rule(path: Path, rule: str, levels: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """The (from, to) state indices ``allow = rule`` lets an unmeasured robot make, in the
     table's order (by from, then to)."""
     n = states.state_count(levels)
     place = states.place_values(levels)
-    if rule == "any":
-        edges = n * (n - 1)
-    elif rule == "one-limb":
-        edges = sum(n * (k - 1) for k in levels)                  # every other level of one limb
-    else:
-        edges = sum(n * 2 * (k - 1) // k for k in levels)         # one level up or down (one at the ends)
+    edges = allowed_count(rule, levels)
     if edges > MAX_UNMEASURED_EDGES:
         raise RobotFileError(
             f"{path}: transitions.allow: {rule!r} lets the robot's {n:,} states make {edges:,} transitions, more "

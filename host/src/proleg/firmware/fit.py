@@ -140,11 +140,11 @@ def _narrower(robot: Any) -> str:
     table 'x' entries or rows left out. It said allow = "one-level" to a file that had it."""
     if not getattr(robot, "unmeasured", False):
         return "'x' in the matrix, rows left out of the CSV"
-    n, have = robot.n_states, len(robot.transitions.src)
-    one_level = sum(n * 2 * (k - 1) // k for k in robot.levels)  # robot_transitions._allowed_by_rule's count
-    one_limb = sum(n * (k - 1) for k in robot.levels)
-    rules = [f'allow = "{rule}": {count:,} transitions' for rule, count in (("one-limb", one_limb),
-                                                                             ("one-level", one_level)) if count < have]
+    from ..robot_transitions import allowed_count
+
+    have = len(robot.transitions.src)
+    counts = [(rule, allowed_count(rule, robot.levels)) for rule in ("one-limb", "one-level")]
+    rules = [f'allow = "{rule}": {count:,} transitions' for rule, count in counts if count < have]
     return "; ".join(rules + ["forbidden = [...] beside the allow it has"])
 
 
