@@ -150,11 +150,14 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     steps = _Steps()
     try:
         if args.hold_range:
-            from ..sim.physical.measure import MARGIN_DEG, measure_matrix_range
+            from dataclasses import replace
+
+            from ..sim.physical.measure import MARGIN_DEG, hottest, measure_matrix_range
 
             rng = measure_matrix_range(robot, conditions=conditions, seed=args.seed, on_step=steps,
                                        jobs=args.jobs or os.cpu_count() or 1)
-            m = rng.at(MARGIN_DEG)
+            # the 4° matrix, with the coils' hottest over every margin measured (pooled() keeps it so)
+            m = replace(rng.at(MARGIN_DEG), coil_peak_c=hottest(rng.measured))
         elif args.history_range:
             from ..sim.physical.measure import measure_history_range, pooled
 
@@ -187,7 +190,6 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
                    + (f"; --out {args.out} not written" if args.out is not None else ""))
     # a coil past the temperature that wears NiTi out while measuring (R1 at supply_v=60: 145 °C)
     # was said nowhere; a run of the firmware fails on it (proleg sim)
-    m.coil_peak_c = _hottest_of(m, rng)
     if cooked := _cooked(m.coil_peak_c):
         log.warning("warning: --measure-matrix: %s", cooked)
     if args.out is not None and failure is None:  # written before the table is printed: a reader that goes away (| head) loses no file
@@ -232,13 +234,6 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         _table(m.states, [[None if lo != lo else f"{_mm(lo)}..{_mm(hi)}" for lo, hi in zip(rl, rh)]
                           for rl, rh in zip(rng.low_mm, rng.high_mm)])
     return _measured(failure)
-
-
-def _hottest_of(m: Any, rng: Any) -> dict[str, float]:
-    """Each coil's hottest over the matrix measured and, with a range, every measurement of it."""
-    from ..sim.physical.measure import hottest
-
-    return hottest([m, *(rng.measured if rng is not None else ())])
 
 
 def _cooked(peaks: dict[str, float]) -> str:
