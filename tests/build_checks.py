@@ -1,8 +1,9 @@
 """What the build and flash tests share: run the CLI and capture its output (``cli``), a
 board or robot file with a few lines changed (``board_variant``, ``robot_variant``), an
 empty output directory and the check that a failure left nothing in it, and the check that
-an error is one ``proleg: error:`` line (``one_line``), and a forked child's exit status
-(``exit_status_within``). No test lives here.
+an error is one ``proleg: error:`` line (``one_line``), a forked child's exit status
+(``exit_status_within``), and the smallest two-limb robot file up to its ``[transitions]``
+(``TWO_LIMBS``) for the robot-file tests to finish. No test lives here.
 """
 
 from __future__ import annotations
@@ -16,6 +17,34 @@ from proleg.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 R1 = ROOT / "robots" / "paper-r1.toml"
+
+#: R1's two limbs (ψ* 20°) on coils a and b, channels 0 and 1: a robot file but for its
+#: [transitions] table, which the tests append (and what they are about after it).
+TWO_LIMBS = """
+[robot]
+name = "t"
+
+[[limb]]
+name = "left"
+psi_star_deg = [20.0]
+actuator = "a"
+
+[[limb]]
+name = "right"
+psi_star_deg = [20.0]
+actuator = "b"
+
+[[actuator]]
+name = "a"
+channel = 0
+
+[[actuator]]
+name = "b"
+channel = 1
+
+"""
+#: R1's matrix in the paper's steps, as a [transitions] table line.
+R1_MATRIX = "matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]"
 
 
 def cli(capsys, *argv: str) -> tuple[int, str, str]:

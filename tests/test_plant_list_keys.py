@@ -5,35 +5,12 @@ the key took one value only."""
 from __future__ import annotations
 
 import pytest
+from build_checks import R1_MATRIX, TWO_LIMBS
 
 from proleg.errors import RobotFileError
 from proleg.robot import load_robot
 
-R1 = """
-[robot]
-name = "t"
-
-[[limb]]
-name = "left"
-psi_star_deg = [20.0]
-actuator = "a"
-
-[[limb]]
-name = "right"
-psi_star_deg = [20.0]
-actuator = "b"
-
-[[actuator]]
-name = "a"
-
-[[actuator]]
-name = "b"
-
-[transitions]
-matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]
-
-[plant]
-"""
+R1 = TWO_LIMBS + f"[transitions]\n{R1_MATRIX}\n\n[plant]\n"
 
 
 @pytest.mark.parametrize("line, says", [

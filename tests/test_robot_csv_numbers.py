@@ -7,33 +7,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from build_checks import TWO_LIMBS
 
 from proleg.errors import RobotFileError
 from proleg.robot import load_robot
 
-HEAD = """
-[robot]
-name = "t"
-
-[[limb]]
-name = "left"
-psi_star_deg = [20.0]
-actuator = "a"
-
-[[limb]]
-name = "right"
-psi_star_deg = [20.0]
-actuator = "b"
-
-[[actuator]]
-name = "a"
-
-[[actuator]]
-name = "b"
-
-[transitions]
-file = "t.csv"
-"""
+HEAD = TWO_LIMBS + '[transitions]\nfile = "t.csv"\n'
 
 
 def csv_robot(tmp_path: Path, rows: str) -> Path:

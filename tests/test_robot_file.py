@@ -8,37 +8,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from build_checks import R1_MATRIX, TWO_LIMBS
 
 from proleg.errors import RobotFileError
 from proleg.robot import load_robot
 
 ROBOTS = Path(__file__).resolve().parents[1] / "robots"
 
-R1 = """
-[robot]
-name = "t"
-
-[[limb]]
-name = "left"
-psi_star_deg = [20.0]
-actuator = "a"
-
-[[limb]]
-name = "right"
-psi_star_deg = [20.0]
-actuator = "b"
-
-[[actuator]]
-name = "a"
-channel = 0
-
-[[actuator]]
-name = "b"
-channel = 1
-
-[transitions]
-matrix = [[0, -1, 1, 0], [1, 0, 0, -1], [-1, 0, 0, 1], [0, 0, 0, 0]]
-"""
+R1 = TWO_LIMBS + f"[transitions]\n{R1_MATRIX}\n"
 
 
 def write(tmp_path: Path, text: str, name: str = "robot.toml") -> Path:
