@@ -189,14 +189,8 @@ def _place_library(robot: Robot, spec: Any, gaits: dict) -> tuple:
     def key(g) -> tuple[int, ...]:
         return tuple(int(s) for s in g.states)
 
-    from ..errors import GaitError
-
-    try:
-        entries = spec.entries(robot.transitions)
-    except GaitError as e:  # "… needs [transitions].dy in the robot file": which file, as proleg gait says
-        raise GaitError(f"{robot.path}: {e}") from None
     out = []
-    for entry in entries:
+    for entry in _entries(robot, spec):
         g = entry.gait
         if g is None:
             continue
@@ -319,6 +313,17 @@ class HeadingChoice:
         return self.nearest or self.still or self.index is None
 
 
+def _entries(robot: Robot, spec: Any) -> list:
+    """``spec.entries`` of the robot's table; its GaitError names the robot file, as proleg gait's
+    does ("… needs [transitions].dy in the robot file" named none)."""
+    from ..errors import GaitError
+
+    try:
+        return spec.entries(robot.transitions)
+    except GaitError as e:
+        raise GaitError(f"{robot.path}: {e}") from None
+
+
 def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = None, rotate: str | None = None,
                    *, exact: bool = False) -> HeadingChoice:
     """The firmware gait for a heading (degrees) or a rotation ("cw"/"ccw"): the library
@@ -358,10 +363,7 @@ def choose_heading(robot: Robot, fw: FirmwareGaits, heading_deg: float | None = 
         spec = library_spec("0")
     heading = Heading(f"{heading_deg:g}", heading_deg=float(heading_deg)) if rotate is None else \
         Heading(f"rot-{rotate}", rotate=rotate)
-    try:
-        entry = replace(spec, headings=(heading,)).entries(robot.transitions)[0]
-    except GaitError as e:  # "… needs [transitions].dy in the robot file": which file, as proleg gait says
-        raise GaitError(f"{robot.path}: {e}") from None
+    entry = _entries(robot, replace(spec, headings=(heading,)))[0]
     if entry.gait is None:
         raise GaitError(f"{asked}: {robot.name} has no gait for it (no closed walk qualifies)")
     g = entry.gait
