@@ -319,4 +319,3 @@ def _whole(what: str, value: object, unit: str = "") -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not float(value).is_integer():
         raise LinkError(f"{what}: expected a whole number{unit}, got {value!r}")
     return int(value)
-

@@ -120,4 +120,3 @@ def slope_warnings(robot: Any, plant: Any) -> list[str]:
             f"{where} ({math.floor(100 * math.degrees(math.atan(mu))) / 100:g}° at friction {fr:g}): a real robot slides downhill there "
             f"with no coil heated; the physical plant (quasi-static) moves the body only while its shape changes, "
             f"so on this slope it stands where a robot slides, and its displacement is too far uphill"]
-

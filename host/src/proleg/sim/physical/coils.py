@@ -2,9 +2,9 @@
 
 ``Coils(params, conditions, actuators, …)`` holds every coil's electrical, thermal and
 material state; ``step(dt_s, duties)`` advances them with each channel's duty held constant
-and says whether a contraction moved. Per step: the supply's voltage at the coils
-(each coil's V_s·√power, less the sag R_source·ΣI when several draw), each coil's thermal node (``thermal``)
-and Liang–Rogers hysteresis (``proleg.sim.sma``) with latent heat, the body node they all
+and says whether a contraction moved. Per step: the supply's voltage at the coils (each
+coil's V_s·√power, sagged behind R_source by its own on-phase current and the others' mean),
+each coil's thermal node (``thermal``) and Liang–Rogers hysteresis (``proleg.sim.sma``) with latent heat, the body node they all
 warm, fatigue (stroke loss, transformation-temperature shift) with transformation cycles,
 injected drift, and the contraction ``c[j]`` = α_j × stroke_j through a first-order
 mechanical lag (``PhysicalParams.mech_tau_s``). Nothing here knows the body's shape or its
