@@ -184,7 +184,8 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     failure = None
     if nothing:
         why = ("the load warnings above say which states the body cannot hold" if warned else
-               "the warnings above, if any, say why")
+               "the safety envelope latched a fault on the way to each: " + _latched_text(m)
+               if all(k in m.latched for k in not_made) else "the warnings above, if any, say why")
         failure = (f"--measure-matrix: the idealised drive made none of the {robot.transitions.n_transitions} "
                    f"allowed transitions on the simulated body under these conditions ({why}): nothing was measured"
                    + (f"; --out {args.out} not written" if args.out is not None else ""))
@@ -222,11 +223,15 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         # "see the warnings" pointed at nothing when the load checks passed every one of them
         # (their body model poses each state still, the plant's held coils overshoot)
         why = ("see the warnings when the robot file was loaded" if warned else
+               "the safety envelope latched a fault on its way: below" if all(k in m.latched for k in not_made) else
                "no warning when the robot file was loaded foresaw it: the load checks pose each state at rest "
                "with its raised limbs at their hold edge, and a held coil may overshoot it; proleg sim "
                f"{args.robot} --record run.csv shows each limb's ψ")
         print(f"'?': allowed, but not made on the simulated body ({len(not_made)} of "
               f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached ({why})")
+        if m.latched:  # the measuring drive keeps to the firmware's envelope: where it gave up, the firmware would stop
+            print("the safety envelope latched a fault on the way (the firmware, keeping to it, would stop there "
+                  "too; docs/safety.md): " + _latched_text(m))
     if rng is not None:
         over = (f"hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi*" if args.hold_range else
                 f"the orders the transitions were made in, {'/'.join(rng.orders)} (what came before each)")
@@ -236,15 +241,25 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     return _measured(failure)
 
 
+def _latched_text(m: Any) -> str:
+    """``MeasuredMatrix.latched`` in a line: each fault with the transitions it stopped."""
+    by_code: dict[str, list[str]] = {}
+    for (a, b), code in sorted(m.latched.items()):
+        by_code.setdefault(code, []).append(f"{m.states[a]}->{m.states[b]}")
+    return "; ".join(f"{code} on {', '.join(steps[:6])}{f', … ({len(steps) - 6} more)' if len(steps) > 6 else ''}"
+                     for code, steps in by_code.items())
+
+
 def _cooked(peaks: dict[str, float]) -> str:
     """The coils past ``NITI_OVERHEAT_C`` while measuring, said in a line ("" when none)."""
     from ..physics.materials import NITI_OVERHEAT_C, shown_c
 
     hot = [f"coil {name} reached {shown_c(t)} °C" for name, t in peaks.items() if t > NITI_OVERHEAT_C]
     return (f"{', '.join(hot)} while measuring, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi out. The "
-            "idealised drive that measures is not the firmware: it heats at the drive duty until a step is made "
-            "and held (up to 12 s), with no safety envelope; proleg sim ROBOT runs the firmware, and fails a run "
-            f"that heats a coil past {NITI_OVERHEAT_C:.0f} °C") if hot else ""
+            "idealised drive that measures is not the firmware: within the safety envelope, it heats at the drive "
+            "duty until a step is made and held (up to 12 s), without the firmware's rules that stop heating a coil "
+            "through its transformation; proleg sim ROBOT runs the firmware, and fails a run that heats a coil past "
+            f"{NITI_OVERHEAT_C:.0f} °C") if hot else ""
 
 
 def _load_warned(robot: Any, steps: list[tuple[int, int]]) -> bool:

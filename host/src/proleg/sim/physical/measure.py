@@ -2,10 +2,14 @@
 
 ``measure_matrix`` drives the plant with the idealised drive (``drive.IdealDrive``: perfect
 sensing, each limb's coil heated at ``duty`` until its end is ``margin_deg`` past its target
-level's critical angle, then held there). For every allowed transition a → b it goes to a,
-settles, records the centre of mass, drives to b, settles again and records the displacement;
-``repeats`` times. A transition the drive cannot reach within ``timeout_s`` gets no sample (its
-entry is NaN and its count 0). ``measure_matrix_range`` measures it at several hold margins,
+level's critical angle, then held there), its duties put through the firmware's safety
+envelope (``envelope.Envelope``: the duty ceiling, the on-time limit, the mean-duty window and
+the state timeout, as the robot's firmware is built with them). For every allowed transition
+a → b it goes to a, settles, records the centre of mass, drives to b, settles again and records
+the displacement; ``repeats`` times. A transition the drive cannot reach within ``timeout_s``,
+or only past the envelope (it would latch a fault), gets no sample (its entry is NaN and its
+count 0); the envelope's faults are kept in ``MeasuredMatrix.latched``, and the coils rest
+until the on-time debt is paid before the next one, as an operator clears the fault. ``measure_matrix_range`` measures it at several hold margins,
 ``measure_history_range`` in several orders (each entry starts where the one before left the
 body, so an entry depends on what came before it: docs/plant.md).
 
@@ -41,6 +45,7 @@ from .drive import (  # noqa: F401 (re-exported: the idealised drive was part of
     run_sequence,
     walk_within_envelope,
 )
+from .envelope import Envelope, EnvelopeLatched
 from .plant import PhysicalParams, PhysicalPlant
 
 
@@ -54,16 +59,19 @@ class MeasuredMatrix:
     mechanisms: tuple[str, ...]
     mechanism_source: str
     #: each coil's hottest (°C) while measuring, by actuator name: a supply that cooks a coil
-    #: cooks it here too, and more, since the idealised drive heats a step until it is made and
-    #: held, with no safety envelope (the one-actuator R1: 183 °C, docs/plant.md)
+    #: cooks it here too
     coil_peak_c: dict[str, float] = field(default_factory=dict)
+    #: (from, to) → the fault the safety envelope latched on that transition's way (its last
+    #: try): the firmware, keeping to the same envelope, would stop there too
+    latched: dict[tuple[int, int], str] = field(default_factory=dict)
 
     def to_json(self) -> dict:
         return {"states": self.states, "matrix": json_matrix(self.matrix_mm), "units": "mm",
                 "std": json_matrix(self.std_mm), "samples": self.samples.tolist(),
                 "duration_s": json_matrix(self.duration_s), "mechanisms": list(self.mechanisms),
                 "mechanism_source": self.mechanism_source,
-                "coil_peak_c": {k: round(v, 1) for k, v in self.coil_peak_c.items()}}
+                "coil_peak_c": {k: round(v, 1) for k, v in self.coil_peak_c.items()},
+                "latched": {f"{self.states[a]}->{self.states[b]}": code for (a, b), code in sorted(self.latched.items())}}
 
 
 def json_matrix(m: np.ndarray) -> list:
@@ -76,11 +84,13 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
                    timeout_s: float = 12.0, dt_s: float = 0.002, seed: int = 0,
                    params: PhysicalParams | None = None, mechanisms: Sequence[Any] | None = None,
                    on_step: Callable[[int, int, int], None] | None = None, order: str = "rows",
-                   order_seed: int = 0) -> MeasuredMatrix:
+                   order_seed: int = 0, envelope: bool = True) -> MeasuredMatrix:
     """The reward matrix of ``robot`` measured on the physical plant (mm, row = from).
     ``on_step(tried, sampled, total)`` after each transition tried: how many were tried, how
     many of those gave a sample, of ``total`` (the allowed transitions × ``repeats``).
-    ``order``: the order the transitions are made in, each repeat alike (``ORDERS``)."""
+    ``order``: the order the transitions are made in, each repeat alike (``ORDERS``).
+    ``envelope``: keep to the firmware's safety envelope (off: the bare idealised drive, which
+    heats a step until it is made and held, however hot: the one-actuator R1 reached 183 °C)."""
     plant = PhysicalPlant(robot, conditions, seed=seed, params=params, mechanisms=mechanisms)
     drive = IdealDrive(robot, plant, margin_deg)
     duty = robot.control.drive_duty if duty is None else duty
@@ -89,13 +99,20 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
     sums = [[[] for _ in range(n)] for _ in range(n)]
     times = [[[] for _ in range(n)] for _ in range(n)]
     steps = _ordered([(a, b) for a in range(n) for b in range(n) if a != b and allowed[a][b]], order, order_seed)
+    gate = Envelope(robot, max(a.channel for a in plant.params.actuators) + 1, dt_s) if envelope else None
+    latched: dict[tuple[int, int], str] = {}
     tried = sampled = 0
     for _ in range(repeats):
         for a, b in steps:
             took = None
-            if _run_to(plant, drive, a, duty, dt_s, timeout_s, settle_s) is not None:
-                x0 = plant.displacement_mm
-                took = _run_to(plant, drive, b, duty, dt_s, timeout_s, settle_s)
+            try:
+                if _run_to(plant, drive, a, duty, dt_s, timeout_s, settle_s, gate) is not None:
+                    x0 = plant.displacement_mm
+                    took = _run_to(plant, drive, b, duty, dt_s, timeout_s, settle_s, gate)
+            except EnvelopeLatched as e:
+                assert gate is not None
+                latched[a, b] = e.code
+                _rest(plant, gate, dt_s)
             if took is not None:
                 sums[a][b].append(plant.displacement_mm - x0)
                 times[a][b].append(took)
@@ -116,7 +133,23 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
                 count[a, b] = len(sums[a][b])
     labels = robot.transitions.labels() if hasattr(robot.transitions, "labels") else [str(i) for i in range(n)]
     peaks = {a.name: t for a, t in zip(robot.actuators, plant.peak_temperature_c)}
-    return MeasuredMatrix(list(labels), mean, std, count, dur, tuple(plant.mechanisms), plant.mechanism_source, peaks)
+    return MeasuredMatrix(list(labels), mean, std, count, dur, tuple(plant.mechanisms), plant.mechanism_source, peaks,
+                          {k: v for k, v in latched.items() if not count[k]})
+
+
+def _rest(plant: PhysicalPlant, gate: Envelope, dt_s: float) -> None:
+    """After a latched fault: every coil off until the envelope's on-time debt is paid (at least
+    ``REST_S``), then the fault cleared (``Envelope.acknowledge``), as an operator would."""
+    off = [0.0] * len(gate.debt)
+    waited = 0.0
+    while waited < REST_S or any(gate.debt):
+        plant.step(dt_s, gate.gate(off))
+        waited += dt_s
+    gate.acknowledge()
+
+
+#: the least rest after a latched fault: the coils cool towards the air first
+REST_S = 3.0
 
 
 #: The orders ``measure_matrix`` makes the transitions in: row by row (the default), the same
@@ -228,8 +261,9 @@ def pooled(measured: Sequence[MeasuredMatrix]) -> MeasuredMatrix:
         second = mean_of(np.array([m.std_mm ** 2 + m.matrix_mm ** 2 for m in measured]))
         std = np.sqrt(np.maximum(second - mean ** 2, 0.0))
         duration = mean_of(np.array([m.duration_s for m in measured]))
+    latched = {k: v for m in measured for k, v in m.latched.items() if not total[k]}
     return MeasuredMatrix(first.states, mean, std, total.astype(int), duration, first.mechanisms,
-                          first.mechanism_source, hottest(measured))
+                          first.mechanism_source, hottest(measured), latched)
 
 
 def hottest(measured: Sequence[MeasuredMatrix | None]) -> dict[str, float]:

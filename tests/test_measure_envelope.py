@@ -1,0 +1,62 @@
+"""``sim --measure-matrix`` keeps to the firmware's safety envelope: its idealised drive's
+duties go through the duty ceiling, the on-time limit, the mean-duty window and the state
+timeout (``sim/physical/envelope.py``), and a transition it could make only past them is not
+measured, with the fault the firmware would latch named."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from proleg.cli.main import main
+from proleg.paths import robots_dir
+from proleg.robot import load_robot
+from proleg.sim.physical import measure_matrix
+from proleg.sim.closed_loop import plant_conditions
+
+R1 = robots_dir() / "paper-r1.toml"
+
+
+def _same(a, b) -> bool:
+    return bool(np.array_equal(a.matrix_mm, b.matrix_mm, equal_nan=True)) and a.coil_peak_c == b.coil_peak_c
+
+
+def test_a_duty_past_the_ceiling_is_measured_as_the_ceiling():
+    """R1's max_duty is 0.8: asked for 1.0, the envelope clamps every heat to 0.8 (sma_clamp),
+    so the measurement is the 0.8 one to the bit; the bare drive heats at 1.0, and its coils
+    get hotter."""
+    robot = load_robot(R1)
+    assert robot.safety.max_duty == 0.8
+    at_ceiling = measure_matrix(robot, repeats=1, duty=0.8)
+    asked_more = measure_matrix(robot, repeats=1, duty=1.0)
+    bare = measure_matrix(robot, repeats=1, duty=1.0, envelope=False)
+    assert _same(at_ceiling, asked_more)
+    assert not _same(at_ceiling, bare)
+    assert max(bare.coil_peak_c.values()) > max(at_ceiling.coil_peak_c.values())
+    assert not at_ceiling.latched and not bare.latched
+
+
+def test_a_supply_that_cannot_make_the_steps_latches_the_firmwares_faults():
+    """At a third of the heating power R1's coils never reach As: every transition ends in the
+    fault the firmware would latch (the state timeout, or the on-time limit where a coil heats
+    on for a state never reached), none is measured, and the bare drive latches nothing."""
+    robot = load_robot(R1)
+    weak = plant_conditions(robot, ["power=0.35"])
+    m = measure_matrix(robot, weak, repeats=1)
+    bare = measure_matrix(robot, weak, repeats=1, envelope=False, timeout_s=4.0)
+    _, allowed = robot.transitions.dense()
+    steps = {(a, b) for a in range(4) for b in range(4) if a != b and allowed[a][b]}
+    assert set(m.latched) == steps
+    assert set(m.latched.values()) <= {"STATE_TIMEOUT", "SMA_ON_LIMIT"}
+    assert int(m.samples.sum()) == 0
+    assert not bare.latched and int(bare.samples.sum()) == 0
+
+
+def test_the_command_names_the_latched_faults_and_fails(capsys):
+    code = main(["sim", str(R1), "--measure-matrix", "--condition", "power=0.35", "--json"])
+    out = capsys.readouterr()
+    assert code == 1
+    got = json.loads(out.out)
+    assert set(got["latched"]) == set(got["not_made"]) and len(got["not_made"]) == 12
+    assert "the safety envelope latched a fault on the way to each: STATE_TIMEOUT on 00->01" in out.err
