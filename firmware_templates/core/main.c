@@ -27,17 +27,18 @@ void wait_tick(void);
 void __attribute__((noinline)) wait_tick(void)
 {
     uint32_t now = hal_micros();
-    if ((int32_t)(now - next_tick) > (int32_t)CFG_TICK_US) {
-        next_tick = now; /* overran by more than a tick: resynchronise */
+    uint32_t due = next_tick; /* in a register across app_idle, which leaves next_tick alone */
+    if ((int32_t)(now - due) > (int32_t)CFG_TICK_US) {
+        next_tick = due = now; /* overran by more than a tick: resynchronise */
     }
     for (;;) {
-        int32_t left = (int32_t)(next_tick - hal_micros());
+        int32_t left = (int32_t)(due - hal_micros());
         if (left <= 0) {
             break;
         }
         app_idle((uint32_t)left);
     }
-    next_tick += CFG_TICK_US;
+    next_tick = due + CFG_TICK_US;
 }
 
 int main(void)
