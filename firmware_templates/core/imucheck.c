@@ -33,6 +33,14 @@ static const uint8_t imu_addr[CFG_N_LIMBS] ROM = CFG_LIMB_IMU_ADDR;
 /* A state number is below CFG_N_STATES ≤ 65535 (proleg build refuses more): never UNKNOWN. */
 typedef char unknown_is_no_state[CFG_N_STATES <= IMUCHECK_UNKNOWN ? 1 : -1];
 
+/* Identical samples in a row: a byte where the limit fits one (it never counts past the limit:
+ * reaching it marks the limb bad, and its restart clears the count). */
+#if CFG_IMU_STUCK_SAMPLES <= 0xFFu
+typedef uint8_t stuck_count_t;
+#else
+typedef uint16_t stuck_count_t;
+#endif
+
 /* Per limb, in one record: on an 8-bit MCU a function then computes the limb's address once. */
 typedef struct {
     uint8_t rx[MPU6050_ACCEL_BYTES]; /* the transaction's reply */
@@ -41,7 +49,7 @@ typedef struct {
     uint32_t t0;                     /* hal_micros() at (re)start */
     uint32_t wait;                   /* µs after t0 before the first transaction */
     uint8_t err;                     /* failed reads in a row */
-    uint16_t stuck;                  /* identical samples in a row */
+    stuck_count_t stuck;             /* identical samples in a row */
     mpu6050_accel_t last;
 } limb_t;
 
