@@ -35,9 +35,37 @@
 
 static volatile uint32_t t0_overflows;
 
-ISR(TIMER0_OVF_vect)
+/* t0_overflows++ by hand: SREG, r24 and Z saved, the count incremented in memory a byte at a time
+ * through Z (the carry chain of subi/sbci 0xFF). What avr-gcc makes of the C statement saves r0,
+ * r1 and four registers and moves the count with eight 4-byte LDS/STS: this is 50 B of flash,
+ * not 74 (R1 on the Nano), and fewer cycles in every overflow. */
+ISR(TIMER0_OVF_vect, ISR_NAKED)
 {
-    t0_overflows++;
+    __asm__ __volatile__("push r24\n\t"
+                         "in r24, __SREG__\n\t"
+                         "push r24\n\t"
+                         "push r30\n\t"
+                         "push r31\n\t"
+                         "ldi r30, lo8(%0)\n\t"
+                         "ldi r31, hi8(%0)\n\t"
+                         "ld r24, Z\n\t"
+                         "subi r24, 0xFF\n\t" /* +1: the carry is set unless it wrapped */
+                         "st Z+, r24\n\t"
+                         "ld r24, Z\n\t"
+                         "sbci r24, 0xFF\n\t" /* +1 if the byte below wrapped (carry clear) */
+                         "st Z+, r24\n\t"
+                         "ld r24, Z\n\t"
+                         "sbci r24, 0xFF\n\t"
+                         "st Z+, r24\n\t"
+                         "ld r24, Z\n\t"
+                         "sbci r24, 0xFF\n\t"
+                         "st Z, r24\n\t"
+                         "pop r31\n\t"
+                         "pop r30\n\t"
+                         "pop r24\n\t"
+                         "out __SREG__, r24\n\t"
+                         "pop r24\n\t"
+                         "reti" ::"i"(&t0_overflows));
 }
 
 uint32_t hal_micros(void)
