@@ -80,7 +80,7 @@ uint32_t hal_micros(void)
         ovf++; /* overflow pending, not yet counted */
     }
     SREG = sreg;
-    return ((ovf << 8) + cnt) * 4u;
+    return ((ovf << 8) | cnt) * 4u; /* | : the shifted count's low byte is 0 (no carry chain) */
 }
 
 /* ------------------------------------------------------------------ PWM */
