@@ -138,6 +138,7 @@ void telemetry_tick(void)
 void telemetry_idle(uint32_t until_next_tick_us)
 {
     uint32_t t0, dt;
+    uint16_t d;
     if (!st.pending || until_next_tick_us <= st.cost_us) {
         return;
     }
@@ -145,10 +146,8 @@ void telemetry_idle(uint32_t until_next_tick_us)
     tx_send_msg(&st.frame);
     st.pending = 0;
     dt = hal_micros() - t0;
-    if (dt > 0xFFFFu) {
-        dt = 0xFFFFu;
-    }
-    if ((uint16_t)dt > st.cost_us) {
-        st.cost_us = (uint16_t)dt;
+    d = (uint16_t)(dt >> 16) != 0u ? 0xFFFFu : (uint16_t)dt; /* at most 0xFFFF: its high half tested */
+    if (d > st.cost_us) {
+        st.cost_us = d;
     }
 }
