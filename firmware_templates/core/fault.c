@@ -98,7 +98,7 @@ void fault_watchdog_tick(void)
 {
     /* safety: on real time (hal_micros, wrap-safe), not on the tick count */
     uint32_t since = hal_micros() - st.rx_us;
-    if (since >= 0x40000000UL) {
+    if ((uint8_t)(since >> 24) >= 0x40u) { /* since ≥ 2^30: its top byte tested */
         st.rx_stale = 1;
     }
     if (st.rx_stale) {
