@@ -53,6 +53,7 @@ def robot_doc(**over):
             "hold_ms": 10,
             "telemetry_hz": 50,
             "hold_margin_deg": 1.0,
+            "boost_ms": 0,  # the unit tests' rules are the drive duty's; r1-boost's config runs the boost
         },
     }
     doc.update(over)

@@ -231,16 +231,42 @@ def test_boost_ms_is_off_or_between_a_dead_time_and_the_stall(tmp_path, ms, frag
     rejects(tmp_path, R1 + f"\n[control]\nboost_ms = {ms}\n", "control.boost_ms", fragment)
 
 
-def test_boost_ms_reaches_the_firmware_only_when_set(tmp_path):
+def test_boost_ms_is_on_by_default_off_at_0_and_left_out_where_the_drive_is_at_the_ceiling(tmp_path):
     from core_configs import SIM_BOARD
     from proleg.firmware.render import render_config
+    from proleg.robot_reach import boost_ms_of
+    from proleg.robot_settings import BOOST_DEFAULT_MS
 
-    off = load_robot(write(tmp_path, R1, "off.toml"))
-    on = load_robot(write(tmp_path, R1 + "\n[control]\nboost_ms = 700\n", "on.toml"))
-    assert off.control.boost_ms == 0 and on.control.boost_ms == 700
+    default = load_robot(write(tmp_path, R1, "default.toml"))
+    off = load_robot(write(tmp_path, R1 + "\n[control]\nboost_ms = 0\n", "off.toml"))
+    on = load_robot(write(tmp_path, R1 + "\n[control]\nboost_ms = 1200\n", "on.toml"))
+    # R1's file: drive_duty 0.6 under max_duty 0.8; at the ceiling a boost has nothing to add
+    ceiling = load_robot(write(tmp_path, R1 + "\n[control]\ndrive_duty = 0.8\nboost_ms = 700\n", "ceiling.toml"))
+    assert (default.control.boost_ms, off.control.boost_ms, on.control.boost_ms) == (None, 0, 1200)
+    assert [boost_ms_of(r) for r in (default, off, on, ceiling)] == [BOOST_DEFAULT_MS, 0, 1200, 0]
     gaits = {"+x": [], "-x": []}
-    assert "CTL_BOOST_MS" not in render_config(off, gaits, SIM_BOARD)["robot_config.h"]
-    assert "#define CTL_BOOST_MS 700u" in render_config(on, gaits, SIM_BOARD)["robot_config.h"]
+    config = {name: render_config(r, gaits, SIM_BOARD)["robot_config.h"]
+              for name, r in (("default", default), ("off", off), ("on", on), ("ceiling", ceiling))}
+    assert f"#define CTL_BOOST_MS {BOOST_DEFAULT_MS}u" in config["default"]
+    assert "#define CTL_BOOST_MS 1200u" in config["on"]
+    assert "CTL_BOOST_MS" not in config["off"] and "CTL_BOOST_MS" not in config["ceiling"]
+
+
+def test_the_default_boost_is_off_where_a_worn_coil_may_end_short_of_a_hold(tmp_path):
+    """caterpillar-4's limbs hold within a worn coil's stroke loss of their reach (the hold
+    watch's robots): a rise that lags there may be a coil at the end of its travel, and the
+    boost would only heat it. Off by default there; the file can still turn it on."""
+    from proleg.paths import robots_dir
+    from proleg.robot_body import worn_holds_of
+    from proleg.robot_reach import boost_ms_of
+
+    path = robots_dir() / "caterpillar-4.toml"
+    robot = load_robot(path)
+    assert worn_holds_of(robot) and robot.control.boost_ms is None and boost_ms_of(robot) == 0
+    text = path.read_text(encoding="utf-8")
+    assert text.count("\n[control]\n") == 1
+    on = load_robot(write(tmp_path, text.replace("\n[control]\n", "\n[control]\nboost_ms = 700\n"), "on.toml"))
+    assert boost_ms_of(on) == 700
 
 
 def test_the_thermal_budget_keys_are_robot_file_keys_that_reach_the_firmware(tmp_path):

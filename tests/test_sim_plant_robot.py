@@ -299,13 +299,20 @@ def test_a_drive_too_weak_to_reach_as_is_warned_about(caplog):
     from proleg.sim.closed_loop import make_plant
 
     doc = copy.deepcopy(tomllib.loads((ROBOTS / "paper-r1.toml").read_text()))
-    doc["control"].update(drive_duty=0.15, hold_duty=0.1)
+    doc["control"].update(drive_duty=0.15, hold_duty=0.1, boost_ms=0)  # no boost: the drive duty is all it gets
     doc["safety"]["hold_max_duty"] = 0.1
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(robot_from_dict(doc, Path("weak.toml")), "physical")
     warned = [r.getMessage() for r in caplog.records]
     assert len(warned) == 2 and all("heated at control.drive_duty 0.15 settles at 55 °C" in w and
                                     "below the 64 °C where it starts to contract" in w for w in warned), warned
+    caplog.clear()
+    del doc["control"]["boost_ms"]  # the default boost: a lagging rise heats at max_duty 0.8, which gets there
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(robot_from_dict(doc, Path("weak.toml")), "physical")
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+    caplog.clear()
+    doc["control"]["boost_ms"] = 0
     # the duty advised lifts the limb: not the duty that reaches As (0.20 was advised, and at 0.21 the
     # coil settles at 67 °C, 6 % through its transformation, the limb at 4° of its 21°)
     advised = float(warned[0].split("a duty above ")[1].split()[0])
@@ -327,12 +334,18 @@ def test_a_supply_that_heats_a_coil_only_part_way_through_its_transformation_is_
     the way to Af, which bends each end to under 4° of the 21° it must pass; the gait stopped
     with SMA_ON_LIMIT and STATE_TIMEOUT and nothing said why (only a coil below As was warned
     of). Warned, with what the limb reaches and the duty that would lift it; at power 0.4 (50 %
-    through, the end past its edge) nothing is said."""
+    through, the end past its edge) nothing is said. That is R1 without the boost; with it (the
+    default) a lagging rise heats at max_duty 0.8, which lifts the limb: nothing to warn of."""
     import logging
 
     from proleg.sim.closed_loop import make_plant
 
-    robot = load_robot(ROBOTS / "paper-r1.toml")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["power=0.35"])
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+    doc = tomllib.loads((ROBOTS / "paper-r1.toml").read_text())
+    doc["control"]["boost_ms"] = 0
+    robot = robot_from_dict(doc, ROBOTS / "paper-r1.toml")
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(robot, "physical", ["power=0.35"])
     warned = [r.getMessage() for r in caplog.records]

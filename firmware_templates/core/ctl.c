@@ -419,7 +419,7 @@ void ctl_demand(const uint8_t target[CFG_N_LIMBS], uint16_t drive_pm, uint16_t h
     }
     /* Without CTL_BOOST_MS no limb is ever boosted (boost stays 0: WANT_HEAT is the strongest
      * want), so the ceiling's case is compiled out and heat is "at least WANT_HEAT": the same
-     * duties, R1 24 B smaller on the Nano. */
+     * duties, 24 B smaller on the Nano (R1 measured without its boost). */
 #if CTL_HELD_UP
     hold_low = held_up; /* the holds of the next tick */
 #endif

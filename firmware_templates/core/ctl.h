@@ -213,10 +213,11 @@
 #define CTL_REACH_MS 320u
 #define CTL_REACH_EVERY 16u
 /* Rising without progress for this long: heat at the duty ceiling (0: off). The robot file's
- * control.boost_ms (robot_config.h); off by default (R1 on the Nano has no room for its 68 B,
- * and the default controller passes the hil central-claim points without it). It gives
- * heating-limited conditions (weak supply, draught, worn coil) back their rises
- * (docs/control.md, "The boost"). */
+ * control.boost_ms (robot_config.h): by default 700 ms where the body's reach says a lag can
+ * only be a coil short of heat, none where a worn coil may end short of a hold or the drive
+ * duty is already the ceiling (proleg.robot_reach.boost_ms_of). It gives heating-limited
+ * conditions (weak supply, draught, a cold start) back their rises (docs/control.md, "The
+ * boost"). */
 #ifndef CTL_BOOST_MS
 #define CTL_BOOST_MS 0u
 #endif

@@ -176,6 +176,25 @@ def worn_holds_of(robot: Any) -> list[int]:
                       float(robot.control.hold_margin_deg))
 
 
+def boost_ms_of(robot: Any) -> int:
+    """How long a rise may lag before the firmware heats it at safety.max_duty (CTL_BOOST_MS; 0:
+    no boost, none of its code). The robot file's control.boost_ms where it gives one. By default
+    ``BOOST_DEFAULT_MS`` where every limb's hold top stays within a worn coil's reach: a rise
+    that lags there is a coil short of heat (a weak supply, a draught), and the duty ceiling's
+    headroom lifts it. Where a worn coil's stroke may end short of a hold (``worn_holds_of``),
+    a lag may be a coil at the end of its travel, and heating it harder only heats it:
+    caterpillar-4 with the boost, worn by 7,220 cycles at 6 °C ambient, reached 131 °C where it
+    walked at 110 °C without (bench/bench_sweep.py --seed 7); off there by default. None either
+    way where the drive duty is already the ceiling: there is nothing to boost into."""
+    from .robot_settings import BOOST_DEFAULT_MS
+
+    if round(robot.control.drive_duty * 10000) >= round(robot.safety.max_duty * 10000):
+        return 0
+    if robot.control.boost_ms is not None:
+        return int(robot.control.boost_ms)
+    return 0 if worn_holds_of(robot) else BOOST_DEFAULT_MS
+
+
 #: Above this many states the coupling check is skipped (one shape per state; the largest
 #: example robots have 36).
 COUPLING_CHECK_MAX_STATES = 4096

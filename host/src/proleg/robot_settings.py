@@ -73,6 +73,8 @@ class Safety:
 #: detector's 5 s (CTL_STALL_MS) the limb is cut off as "cannot reach" first.
 BOOST_MIN_MS = 100
 BOOST_MAX_MS = 4000
+#: the default where the body leaves the boost safe (robot_reach.boost_ms_of; docs/control.md, "The boost")
+BOOST_DEFAULT_MS = 700
 
 
 @dataclass(frozen=True)
@@ -86,8 +88,9 @@ class Control:
     telemetry_hz: int = 50
     overrun_fault: int = 10  # consecutive ticks whose work overran the period: fault TICK_OVERRUN
     #: a rising limb that gets no progress edge closer for this long heats at safety.max_duty
-    #: until the next START (core/ctl.h, CTL_BOOST_MS); 0: never (the default)
-    boost_ms: int = 0
+    #: until the next START (core/ctl.h, CTL_BOOST_MS); 0: never; None (not in the file): by the
+    #: robot's body, robot_reach.boost_ms_of (docs/robot-file.md)
+    boost_ms: int | None = None
     fallback: bool = True  # firmware switches to a build-time fallback gait when it loses an actuator
     #: limbs raised to their strokes together: which crosses psi* first (None: the largest stroke);
     #: lowered together: which goes down first while the others are held at their strokes (None:
@@ -145,7 +148,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
         hold_margin_deg=f.number("hold_margin_deg", d.hold_margin_deg, 0.0, 30.0),
         telemetry_hz=f.integer("telemetry_hz", d.telemetry_hz, 1, 1000),
         overrun_fault=f.integer("overrun_fault", d.overrun_fault, 1, 1000),
-        boost_ms=f.integer("boost_ms", d.boost_ms, 0, BOOST_MAX_MS),
+        boost_ms=f.integer("boost_ms", 0, 0, BOOST_MAX_MS) if f.has("boost_ms") else None,
         fallback=f.table.get("fallback", d.fallback),
         stroke_rise_lead=f.string("stroke_rise_lead") if f.has("stroke_rise_lead") else None,
         stroke_fall_lead=f.string("stroke_fall_lead") if f.has("stroke_fall_lead") else None,
@@ -170,7 +173,7 @@ def _control(path: Path, value: Any, safety: Safety) -> Control:
                "so max_on_ms, the cool-down and the on-limit latch would never apply", c.drive_duty)
     if c.telemetry_hz > c.tick_hz:
         f.fail("telemetry_hz", f"at most control.tick_hz ({c.tick_hz})", c.telemetry_hz)
-    if 0 < c.boost_ms < BOOST_MIN_MS:
+    if c.boost_ms is not None and 0 < c.boost_ms < BOOST_MIN_MS:
         f.fail("boost_ms", f"0 (off) or {BOOST_MIN_MS} .. {BOOST_MAX_MS} ms", c.boost_ms)
     # a step changes a limb's level only after debounce_ticks samples past its band, and counts
     # it settled only after as many again clear of its edges (docs/control.md), all the while

@@ -32,6 +32,7 @@ from ..paths import display_path, templates_dir
 from ..robot import DUTY_WINDOW_MS_RANGE, MAX_ON_LIMIT_LATCH, Safety, stroke_leads
 from ..robot_body import worn_holds_of
 from ..robot_climb import check_climb_limit
+from ..robot_reach import boost_ms_of
 from .boards import DEFAULT_I2C_HZ, DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
 from .families import Family, load_family
 from .placement import place_imus
@@ -389,7 +390,7 @@ def control_part(robot: Any) -> ControlPart:
         watchdog_ticks=_ticks(safety.link_watchdog_ms, tick_hz),
         **thermal_budget(robot.name, safety, ctl),
         hold_watch=int(bool(worn_holds_of(robot))),
-        boost_ms=int(getattr(ctl, "boost_ms", 0)),
+        boost_ms=boost_ms_of(robot),
         coil_tau_ms=coil_tau_ms(robot),
         stuck_samples=max(20, tick_hz // 5),
         max_loaded=MAX_LOADED_STEPS,

@@ -11,6 +11,7 @@ import math
 from typing import Any
 
 from ..robot import Robot
+from ..robot_reach import boost_ms_of
 
 
 def planar_warnings(robot: Robot) -> list[str]:
@@ -43,7 +44,7 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
     not merely at As, where a coil has not begun to contract."""
     from .sma import heating_branch
 
-    boost = robot.control.boost_ms > 0
+    boost = boost_ms_of(robot) > 0  # as the firmware is built (CTL_BOOST_MS)
     duty = robot.safety.max_duty if boost else robot.control.drive_duty
     key = "safety.max_duty (control.boost_ms is on)" if boost else "control.drive_duty"
     amb = plant.conditions.get("ambient_c")
