@@ -252,23 +252,6 @@ def test_boost_ms_is_on_by_default_off_at_0_and_left_out_where_the_drive_is_at_t
     assert "CTL_BOOST_MS" not in config["off"] and "CTL_BOOST_MS" not in config["ceiling"]
 
 
-def test_the_default_boost_is_off_where_a_worn_coil_may_end_short_of_a_hold(tmp_path):
-    """caterpillar-4's limbs hold within a worn coil's stroke loss of their reach (the hold
-    watch's robots): a rise that lags there may be a coil at the end of its travel, and the
-    boost would only heat it. Off by default there; the file can still turn it on."""
-    from proleg.paths import robots_dir
-    from proleg.robot_body import worn_holds_of
-    from proleg.robot_reach import boost_ms_of
-
-    path = robots_dir() / "caterpillar-4.toml"
-    robot = load_robot(path)
-    assert worn_holds_of(robot) and robot.control.boost_ms is None and boost_ms_of(robot) == 0
-    text = path.read_text(encoding="utf-8")
-    assert text.count("\n[control]\n") == 1
-    on = load_robot(write(tmp_path, text.replace("\n[control]\n", "\n[control]\nboost_ms = 700\n"), "on.toml"))
-    assert boost_ms_of(on) == 700
-
-
 def test_the_thermal_budget_keys_are_robot_file_keys_that_reach_the_firmware(tmp_path):
     """docs/safety.md listed hold_max_duty, max_mean_duty, duty_window_ms and on_limit_latch as
     [safety] keys, and a robot file giving one was refused as an unknown key."""

@@ -28,6 +28,7 @@ from . import states
 from .errors import RobotFileError
 from .robot_body import (CoilLift, Unreached, blocked_descents, coupled_states, coupling_warnings, reach_warnings,
                          shared_coil_lifts, unholdable_states, unreachable_states, unreachable_strokes)
+from .robot_reach import boost_warning
 from .robot_plant import PlantSection, default_plant_section, inference_warning, plant_section, rest_warnings
 from .robot_climb import climb_guard_refusal
 from .robot_fields import Fields, read_text
@@ -234,6 +235,8 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     for line in rest_warnings(path, list(limbs), plant):
         log.warning("warning: %s", line)
     for line in reach_warnings(path, list(limbs), [a.name for a in actuators], plant, control.hold_margin_deg):
+        log.warning("warning: %s", line)
+    if (line := boost_warning(path, list(limbs), [a.name for a in actuators], plant, control, safety)) is not None:
         log.warning("warning: %s", line)
     for line in unreachable_strokes(path, list(limbs), [a.name for a in actuators], plant, table,
                                     control.hold_margin_deg):

@@ -184,15 +184,34 @@ def boost_ms_of(robot: Any) -> int:
     headroom lifts it. Where a worn coil's stroke may end short of a hold (``worn_holds_of``),
     a lag may be a coil at the end of its travel, and heating it harder only heats it:
     caterpillar-4 with the boost, worn by 7,220 cycles at 6 °C ambient, reached 131 °C where it
-    walked at 110 °C without (bench/bench_sweep.py --seed 7); off there by default. None either
-    way where the drive duty is already the ceiling: there is nothing to boost into."""
+    walked at 110 °C without (bench/bench_sweep.py --seed 7); off there by default, unless the
+    firmware carries the coil's heat ceiling (safety.coil_heat_ceiling), which bounds it (the
+    same row: 88 °C, and it walks). None either way where the drive duty is already the
+    ceiling: there is nothing to boost into."""
     from .robot_settings import BOOST_DEFAULT_MS
 
     if round(robot.control.drive_duty * 10000) >= round(robot.safety.max_duty * 10000):
         return 0
     if robot.control.boost_ms is not None:
         return int(robot.control.boost_ms)
-    return 0 if worn_holds_of(robot) else BOOST_DEFAULT_MS
+    return 0 if worn_holds_of(robot) and not robot.safety.coil_heat_ceiling else BOOST_DEFAULT_MS
+
+
+def boost_warning(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection, control: Any,
+                  safety: Any) -> str | None:
+    """A line when the file turns the boost on for a body where a worn coil may end short of a
+    hold (``worn_holds``) without the coil's heat ceiling: the default leaves it off there."""
+    if not control.boost_ms or safety.coil_heat_ceiling or control.drive_duty >= safety.max_duty:
+        return None
+    worn = worn_holds(limbs, actuators, section, float(control.hold_margin_deg))
+    if not worn:
+        return None
+    names = ", ".join(repr(limbs[i].name) for i in worn)
+    return (f"{path}: control.boost_ms = {control.boost_ms} on a body where a worn coil may end short of its "
+            f"hold (limbs {names}): a worn coil that lags at the end of its travel is heated at safety.max_duty "
+            f"{safety.max_duty:g}, through its transformation, with nothing to gain (caterpillar-4 worn by 7,220 "
+            "cycles: 130 °C); set [safety] coil_heat_ceiling = true, which bounds it (88 °C there), or leave "
+            "boost_ms out (off on such a body; docs/control.md, \"The boost\")")
 
 
 #: Above this many states the coupling check is skipped (one shape per state; the largest
