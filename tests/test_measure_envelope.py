@@ -60,3 +60,24 @@ def test_the_command_names_the_latched_faults_and_fails(capsys):
     got = json.loads(out.out)
     assert set(got["latched"]) == set(got["not_made"]) and len(got["not_made"]) == 12
     assert "the safety envelope latched a fault on the way to each: STATE_TIMEOUT on 00->01" in out.err
+
+
+def test_where_the_firmware_boosts_the_latched_line_does_not_say_it_stops_there_too(tmp_path, capsys):
+    """R1 at power=0.4: the measuring drive, at the drive duty 0.6, latches on every transition,
+    while the firmware, whose boost (on by default) heats a lagging rise at max_duty 0.8, walks
+    there (proleg sim: 5 cycles in 40 s). The line said "the firmware, keeping to it, would stop
+    there too"; it says why it may not. Without the boost the firmware does stop (SMA_ON_LIMIT):
+    the line says so, and says nothing of a boost."""
+    code = main(["sim", str(R1), "--measure-matrix", "--condition", "power=0.4"])
+    out = capsys.readouterr()
+    assert code == 1
+    assert "would stop there too" not in out.out and "would stop there too" not in out.err
+    for said in (out.out, out.err):
+        assert ("the measuring drive heats at control.drive_duty 0.6, where the firmware's boost heats a rise "
+                "that lags 700 ms at safety.max_duty 0.8") in said and f"proleg sim {R1} runs it" in said, said
+    off = tmp_path / "paper-r1.toml"
+    off.write_text(R1.read_text(encoding="utf-8").replace("\n[control]\n", "\n[control]\nboost_ms = 0\n"),
+                   encoding="utf-8")
+    assert main(["sim", str(off), "--measure-matrix", "--condition", "power=0.4"]) == 1
+    out = capsys.readouterr()
+    assert "the firmware, keeping to it, would stop there too" in out.out and "boost" not in out.out + out.err
