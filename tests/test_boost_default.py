@@ -63,3 +63,18 @@ def test_the_default_follows_the_body_and_the_heat_ceiling(tmp_path, caplog):
         load_robot(_variant(tmp_path, "both", True, True))
         load_robot(robots_dir() / "paper-r1.toml")
     assert not [r for r in caplog.records if "boost_ms" in r.getMessage()]
+
+
+def test_no_warning_of_a_boost_the_build_leaves_out(tmp_path, caplog):
+    """drive_duty 0.79999 is max_duty 0.8 in the firmware's per-myriad units: the build leaves the
+    boost out (boost_ms_of 0), so the load must not warn that a worn coil is boosted. The warning
+    compared the floats and warned of a boost the firmware does not carry."""
+    text = _variant(tmp_path, "boost", True, False).read_text(encoding="utf-8")
+    assert text.count("\ndrive_duty = 0.6\n") == 1
+    text = text.replace("\ndrive_duty = 0.6\n", "\ndrive_duty = 0.79999\n")
+    path = tmp_path / "at-ceiling.toml"
+    path.write_text(text, encoding="utf-8")
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = load_robot(path)
+    assert boost_ms_of(robot) == 0
+    assert not [r for r in caplog.records if "boost_ms" in r.getMessage()]

@@ -190,18 +190,25 @@ def boost_ms_of(robot: Any) -> int:
     ceiling: there is nothing to boost into."""
     from .robot_settings import BOOST_DEFAULT_MS
 
-    if round(robot.control.drive_duty * 10000) >= round(robot.safety.max_duty * 10000):
+    if not _boost_headroom(robot.control, robot.safety):
         return 0
     if robot.control.boost_ms is not None:
         return int(robot.control.boost_ms)
     return 0 if worn_holds_of(robot) and not robot.safety.coil_heat_ceiling else BOOST_DEFAULT_MS
 
 
+def _boost_headroom(control: Any, safety: Any) -> bool:
+    """The drive duty is below the duty ceiling in the firmware's per-myriad units (CFG_DRIVE_DUTY_PM
+    against CFG_MAX_DUTY_PM): there is something to boost into. One test for the build and the
+    load warning, so that the warning never speaks of a boost the build leaves out."""
+    return round(control.drive_duty * 10000) < round(safety.max_duty * 10000)
+
+
 def boost_warning(path: Path, limbs: list[Any], actuators: list[str], section: PlantSection, control: Any,
                   safety: Any) -> str | None:
     """A line when the file turns the boost on for a body where a worn coil may end short of a
     hold (``worn_holds``) without the coil's heat ceiling: the default leaves it off there."""
-    if not control.boost_ms or safety.coil_heat_ceiling or control.drive_duty >= safety.max_duty:
+    if not control.boost_ms or safety.coil_heat_ceiling or not _boost_headroom(control, safety):
         return None
     worn = worn_holds(limbs, actuators, section, float(control.hold_margin_deg))
     if not worn:
