@@ -59,6 +59,7 @@ from bench_firmware import machine  # noqa: E402
 from proleg.report import claim  # noqa: E402
 from proleg.report.claim_summary import summarise  # noqa: E402
 from proleg.robot import load_robot  # noqa: E402
+from proleg.robot_reach import boost_ms_of  # noqa: E402
 from proleg.sim.closed_loop import sim_library  # noqa: E402
 from proleg.sim.openloop import OpenLoopDrive  # noqa: E402
 
@@ -203,7 +204,9 @@ def main() -> int:
                                     "measured_matrix": measured.to_json()},
                    "open_loop_budget": args.budget, "open_loop_powers": [0.9, 1.0, 1.1], "quick": args.quick,
                    # the envelope the firmware was built with: its defaults change between rounds
-                   "safety": dataclasses.asdict(robot.safety)},
+                   "safety": dataclasses.asdict(robot.safety),
+                   # the boost as built (on by default where the body allows it: docs/control.md "The boost")
+                   "boost_ms": boost_ms_of(robot)},
         "open_loop_drive": _drive_json(d), "open_loop_tuned_worst_mm_s": round(tuned.worst_speed_mm_s, 4),
         "open_loop_tuned_peak_coil_c": round(tuned.peak_coil_c, 1), "open_loop_max_coil_c": claim.OVERHEAT_C,
         "open_loop_tuned_by_power": {str(k): round(v, 4) for k, v in tuned.speed_by_power.items()},
