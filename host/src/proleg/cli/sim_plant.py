@@ -184,7 +184,7 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     failure = None
     if nothing:
         why = ("the load warnings above say which states the body cannot hold" if warned else
-               "the safety envelope latched a fault on the way to each: " + _latched_text(m) + _boost_note(robot, args)
+               "the safety envelope latched a fault on the way to each: " + _latched_text(m)
                if all(k in m.latched for k in not_made) else "the warnings above, if any, say why")
         failure = (f"--measure-matrix: the idealised drive made none of the {robot.transitions.n_transitions} "
                    f"allowed transitions on the simulated body under these conditions ({why}): nothing was measured"
@@ -230,10 +230,8 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         print(f"'?': allowed, but not made on the simulated body ({len(not_made)} of "
               f"{robot.transitions.n_transitions}: {shown}{more}): its start or end state was not reached ({why})")
         if m.latched:  # the measuring drive keeps to the firmware's envelope: where it gave up, the firmware would stop
-            # (unless the firmware's boost heats harder than the measuring drive does: _boost_note)
-            stops = ("" if _boost_note(robot, args) else
-                     " (the firmware, keeping to it, would stop there too; docs/safety.md)")
-            print(f"the safety envelope latched a fault on the way{stops}: " + _latched_text(m) + _boost_note(robot, args))
+            print("the safety envelope latched a fault on the way (the firmware, keeping to it, would stop there "
+                  "too; docs/safety.md): " + _latched_text(m))
     if rng is not None:
         over = (f"hold margins {'/'.join(f'{x:g}' for x in rng.margins_deg)}° past psi*" if args.hold_range else
                 f"the orders the transitions were made in, {'/'.join(rng.orders)} (what came before each)")
@@ -250,21 +248,6 @@ def _latched_text(m: Any) -> str:
         by_code.setdefault(code, []).append(f"{m.states[a]}->{m.states[b]}")
     return "; ".join(f"{code} on {', '.join(steps[:6])}{f', … ({len(steps) - 6} more)' if len(steps) > 6 else ''}"
                      for code, steps in by_code.items())
-
-
-def _boost_note(robot: Any, args: argparse.Namespace) -> str:
-    """Where the firmware carries the boost (robot_reach.boost_ms_of), why a fault the measuring
-    drive latched does not say the firmware stops there: the measuring drive heats every rise at
-    control.drive_duty, the firmware a lagging one at safety.max_duty (R1 at power=0.4: the
-    measuring drive latched on all 12 transitions, the firmware walked 5 cycles). "" without it."""
-    from ..robot_reach import boost_ms_of
-
-    boost = boost_ms_of(robot)
-    if not boost:
-        return ""
-    return (f"; the measuring drive heats at control.drive_duty {robot.control.drive_duty:g}, where the firmware's "
-            f"boost heats a rise that lags {boost} ms at safety.max_duty {robot.safety.max_duty:g} (control.boost_ms, "
-            f"docs/control.md \"The boost\"), so the firmware may make these: proleg sim {args.robot} runs it")
 
 
 def _cooked(peaks: dict[str, float]) -> str:

@@ -288,7 +288,10 @@ def idealised_walk(robot: Any, point: GridPoint, direction: str = "+x",
 
 
 def _why_not_walked(robot: Any, plant: Any, latched: str) -> str:
-    duty = robot.control.drive_duty
+    from ..robot_reach import boost_ms_of
+
+    # the hottest duty the firmware gives a rise: the duty ceiling where it boosts a lagging one
+    duty = robot.safety.max_duty if boost_ms_of(robot) else robot.control.drive_duty
     hot = plant.steady_coil_temperature_c(duty)
     tr = plant.transformation_c()
     for j, a in enumerate(robot.actuators):

@@ -5,7 +5,8 @@ true ψ and ψ*: each limb's own coil heated until its end reaches the target le
 ``margin_deg`` (the middle of a level narrower than two margins; a limb's top level at its
 ``stroke_deg`` if it has one, by core/ctl.h's stroke rules), then held there bang-bang; coils
 whose limbs are all to be at level 0 are switched off and cool freely (as the firmware does).
-``_run_to`` heats the commanded coils at ``duty`` until the robot has settled in the target and
+``_run_to`` heats the commanded coils at ``duty`` (a boosted limb's at the duty ceiling: the
+firmware's boost, ``IdealDrive._watch_boost``) until the robot has settled in the target and
 returns when it first got there (None: not within ``timeout_s``), within the firmware's safety
 envelope if given one. ``run_sequence`` and ``walk_within_envelope`` walk a gait with it;
 ``measure`` measures the reward matrix with it and re-exports these names.
@@ -20,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...robot import stroke_leads
+from ...robot_reach import boost_ms_of
 from ...states import limb_levels
 from .conditions import Conditions
 from .envelope import Envelope, EnvelopeLatched, StepClock
@@ -90,6 +92,15 @@ class IdealDrive:
         self._gain: dict[int, tuple[float, float]] = {}  # limb -> (ψ at its last CLIMB_GAIN_DEG gain, s since)
         self._ahead: set[int] = set()  # limbs that waited in step for another in the last command
         self._band_cache: dict[tuple[int, tuple[int, ...]], list[tuple[int, int, float, float, bool]]] = {}
+        # the firmware's boost (ctl.c CTL_BOOST_MS, as the robot's firmware is built with it): a
+        # limb heated rising for boost_s without getting one progress edge closer heats at the duty
+        # ceiling from then on, on every heat of its coil (sticky, as until the firmware's next START)
+        control, safety = getattr(robot, "control", None), getattr(robot, "safety", None)
+        self.boost_s = boost_ms_of(robot) / 1000.0 if control is not None and safety is not None else 0.0
+        self.boost_duty = float(safety.max_duty) if safety is not None else 1.0
+        self.boosted: set[int] = set()      # limbs boosted
+        self.boost_act: set[int] = set()    # actuators the last command heats for a boosted limb
+        self._rise: dict[int, tuple[int, int, float, float]] = {}  # limb -> (target, level, best edge, s idle)
 
     def command(self, psi: Sequence[float], target: int, dt_s: float = 0.0) -> list[int]:
         want = limb_levels(target, self.levels)
@@ -106,7 +117,35 @@ class IdealDrive:
             if raised:
                 active[j] = True
         self._heated = {i for i, j in enumerate(self.limb_act) if heat[j] and not cool[j]}
+        if self.boost_s > 0.0:
+            self._watch_boost(psi, want, target, dt_s)
+            self.boost_act = {self.limb_act[i] for i in self.boosted if i in self._heated}
         return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
+
+    def _watch_boost(self, psi: Sequence[float], want: Sequence[int], target: int, dt_s: float) -> None:
+        """The firmware's boost watch (ctl.c, on stall.c's clock): a limb rising towards a higher
+        level, its coil heated, that gets no progress edge closer to the upper edge of the band
+        it must cross (psi.c psi_to_go_cdeg) for ``boost_s`` is boosted; the clock restarts on a
+        progress edge and on a change of level, the best edge on a new target."""
+        level = self.level_of(psi)
+        for i, (p, k, now) in enumerate(zip(psi, want, level)):
+            if i in self.boosted:
+                continue
+            t, was, best, idle = self._rise.get(i, (-1, -1, math.inf, 0.0))
+            if t != target:
+                best, idle = math.inf, 0.0
+            elif was != now:
+                idle = 0.0
+            elif k > now and i in self._heated:
+                gap = self.th[i][now] + self.half_band[i] - p
+                edge = 0 if gap <= 0 else next((e for e in PROGRESS_DEG if gap <= e), math.inf)
+                if edge < best:
+                    best, idle = edge, 0.0
+                else:
+                    idle += dt_s
+                    if idle >= self.boost_s:
+                        self.boosted.add(i)
+            self._rise[i] = (target, now, best, idle)
 
     def _bands(self, target: int, held: set[int]) -> list[tuple[int, int, float, float, bool]]:
         """Per limb, the band ``command`` keeps it in on the way to ``target``: (limb, its
@@ -244,7 +283,7 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
         duties = [0.0] * nch
         for j, c in enumerate(cmd):
             if c > 0:
-                duties[chans[j]] = duty
+                duties[chans[j]] = max(duty, drive.boost_duty) if j in drive.boost_act else duty
         if envelope is not None:
             duties = envelope.gate(duties)
         plant.step(dt, duties)
