@@ -604,19 +604,29 @@ def test_a_remap_whose_coil_would_hold_the_body_up_is_not_used(tmp_path):
         (t.label(a), t.label(b)) in allowed for a, b in zip(fb.states, fb.states[1:]))
 
 
-def test_the_fallback_does_not_heat_a_coil_for_the_limb_whose_coil_it_gave_up(capsys):
-    """R2 with a mismatched pair (a sweep row, docs/plant.md "Off the grid"): the weak left coil
-    times out and is given up; the fallback raises both ends with the right coil, which lifts
-    the left end through the body to 23.8°, short of its hold edge (25°). The firmware heated
-    the right coil on toward that edge, after its own end had topped out, for the rest of each
-    step: 128-130 °C every cycle. Now a limb whose coil was given up asks for no hold heat."""
+def test_the_fallback_does_not_heat_a_coil_for_the_limb_whose_coil_it_gave_up(capsys, tmp_path):
+    """R2 without its boost, with a mismatched pair (a sweep row, docs/plant.md "Off the grid"):
+    the weak left coil times out and is given up; the fallback raises both ends with the right
+    coil, which lifts the left end through the body to 23.8°, short of its hold edge (25°). The
+    firmware heated the right coil on toward that edge, after its own end had topped out, for
+    the rest of each step: 128-130 °C every cycle. Now a limb whose coil was given up asks for no
+    hold heat. With the boost (R2's default) the weak coil makes its rises at the duty ceiling
+    and nothing is given up."""
     import re
 
     from proleg.cli.main import main
 
-    rc = main(["sim", str(ROOT / "robots" / "paper-r2.toml"), "--calibrated", "--duration", "40",
-               "--condition", "coil_mismatch=0.30", "--condition", "mass_g=3.4",
-               "--condition", "power_scale=rear:0.82"])
+    row = ["--calibrated", "--duration", "40", "--condition", "coil_mismatch=0.30", "--condition", "mass_g=3.4",
+           "--condition", "power_scale=rear:0.82"]
+    r2 = ROOT / "robots" / "paper-r2.toml"
+    rc = main(["sim", str(r2), *row])
+    out = capsys.readouterr().out
+    assert rc == 0 and "FALLBACK" not in out and int(re.search(r"cycles completed: (\d+)", out).group(1)) >= 4, out
+    text = r2.read_text(encoding="utf-8")
+    assert text.count("\n[control]\n") == 1
+    no_boost = tmp_path / "paper-r2.toml"
+    no_boost.write_text(text.replace("\n[control]\n", "\n[control]\nboost_ms = 0\n"), encoding="utf-8")
+    rc = main(["sim", str(no_boost), *row])
     out = capsys.readouterr().out
     assert "FALLBACK: gave up sma-left" in out
     peak = int(re.search(r"sma-right (\d+) °C", out.split("coils, hottest:")[1]).group(1))
