@@ -127,6 +127,8 @@ class IdealDrive:
         level, its coil heated, that gets no progress edge closer to the upper edge of the band
         it must cross (psi.c psi_to_go_cdeg) for ``boost_s`` is boosted; the clock restarts on a
         progress edge and on a change of level, the best edge on a new target."""
+        if len(self.boosted) == len(psi):
+            return
         level = self.level_of(psi)
         for i, (p, k, now) in enumerate(zip(psi, want, level)):
             if i in self.boosted:

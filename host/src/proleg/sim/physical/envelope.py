@@ -86,6 +86,7 @@ class Envelope:
         self.hit_mask = 0  # coils hit since each last heated on the way to a target reached
         self.heated = 0    # coils heated above the hold ceiling since the last target reached
         self.win = [[0] * n_channels for _ in range(WIN_SLOTS)]
+        self.win_sum = [0] * n_channels  # per channel, the sum over every slot (kept as they change)
         self.win_rem = [0] * n_channels
         self.pay_rem = [0] * n_channels  # the pay-back's fraction of a µs (× 256), as sma.c
         self.slot, self.slot_us = 0, 0
@@ -110,8 +111,16 @@ class Envelope:
         self._advance_window()
         w = self.win[self.slot]
         for ch, duty in enumerate(duties):
+            if not duty and not self.charged[ch] and not self.debt[ch]:
+                # off, and off and paid up before: nothing to charge or pay (what the steps
+                # below come to for such a coil; most coils are off most of the time)
+                self.pay_rem[ch] = 0
+                self.cut[ch] = False
+                out.append(0.0)
+                continue
             x = self.charged[ch] * self.dt_us + self.win_rem[ch]  # charge the step just gone
             w[ch] += x >> 10
+            self.win_sum[ch] += x >> 10
             self.win_rem[ch] = x & 1023
             if self.charged[ch] > self.hold_ceiling_pm:
                 self.debt[ch] += self.dt_us
@@ -138,7 +147,7 @@ class Envelope:
                     raise EnvelopeLatched("SMA_ON_LIMIT", (
                         f"the safety envelope's on-time limit: {self.latch} on-limit hits (max_on_ms "
                         f"{self.max_on_us / 1000:.0f} ms of heating, the last on channel {ch}) without reaching the state"))
-            if pm > 0 and sum(s[ch] for s in self.win) + ((pm * self.ahead_us + 1023) >> 10) > self.win_limit:
+            if pm > 0 and self.win_sum[ch] + ((pm * self.ahead_us + 1023) >> 10) > self.win_limit:
                 pm = 0  # does not fit the mean-duty window: 0 (not a hit)
             self.charged[ch] = pm
             out.append(pm / 10000.0)
@@ -150,6 +159,8 @@ class Envelope:
         while self.slot_us >= self.slot_len_us:
             self.slot_us -= self.slot_len_us
             self.slot = (self.slot + 1) % WIN_SLOTS
+            for ch, gone in enumerate(self.win[self.slot]):
+                self.win_sum[ch] -= gone
             self.win[self.slot] = [0] * len(self.win_rem)
 
 
