@@ -16,6 +16,13 @@ The claim bench asks whether the coils *can* complete a gait under a condition
   drive holds a reached state 0.3 s). As in
   sma.c the window is 9 slots of 1/8 window (their sum spans 1 to 9/8 windows) and the charge
   is counted in ‱·µs / 1024, rounded as the firmware rounds it;
+- *coil heat ceiling* (where the robot file sets ``[safety] coil_heat_ceiling = true``): each
+  coil's duty smoothed with its thermal time constant (sma.c heat_step, in its integer units);
+  a coil whose heat reached ``max_mean_duty`` gets at most that, across a latched fault and
+  its rest as across the firmware's STOP and START (docs/safety.md, "The coil's heat ceiling").
+  Without it the idealised drive, boosted to ``max_duty`` on such a body by default
+  (``robot_reach.boost_ms_of``), measured caterpillar-4 at power 0.5 in full where the firmware,
+  held to the ceiling, timed out at its first step;
 - *state timeout*: a target not reached ``state_timeout_ms`` after it was first demanded
   latches STATE_TIMEOUT (``_run_to`` checks that one, on a ``StepClock``: where the firmware
   is built with it, a fall still coming down does not count, ctl.h CTL_FALL_PROGRESS_MS). The firmware also times out each coil's
@@ -90,6 +97,11 @@ class Envelope:
         self.win_rem = [0] * n_channels
         self.pay_rem = [0] * n_channels  # the pay-back's fraction of a µs (× 256), as sma.c
         self.slot, self.slot_us = 0, 0
+        # sma.c's coil heat ceiling (CFG_COIL_TAU_MS; 0: not built): SMA_HEAT_K = 2^32 / tau in µs,
+        # rounded up, and each coil's heat in ‱ × 256
+        self.heat_k = 0xFFFFFFFF // (c.coil_tau_ms * 1000) + 1 if c.coil_tau_ms else 0
+        self.mean_duty_pm = c.mean_duty_pm
+        self.heat = [0] * n_channels
 
     def reached(self) -> None:
         """A target was reached: on-limit hits start counting again once every coil that hit
@@ -133,6 +145,8 @@ class Envelope:
                     self.cut[ch] = False
                     self.pay_rem[ch] = 0
             pm = min(round(duty * 10000), self.max_duty_pm)  # sma_clamp: the duty ceiling first
+            if self.heat_k:
+                pm = min(pm, self._heat_step(ch))  # as hot as the mean-duty ceiling held for ever: that at most
             if self.cut[ch]:
                 pm = 0  # cooling after an on-limit hit: off until the debt is paid
             elif pm > self.hold_ceiling_pm and self.debt[ch] + self.ahead_us <= self.max_on_us:
@@ -152,6 +166,16 @@ class Envelope:
             self.charged[ch] = pm
             out.append(pm / 10000.0)
         return out
+
+    def _heat_step(self, ch: int) -> int:
+        """sma.c heat_step: the coil's heat moves towards the duty it carried over the step just
+        gone by dt / tau (in 1/65536); the most it may get now (the mean-duty ceiling once its
+        heat has reached it, else no limit). Integer arithmetic as the firmware's (an arithmetic
+        shift of a negative difference, as its int32 ``>>``)."""
+        f = ((self.dt_us * self.heat_k) & 0xFFFFFFFF) >> 16
+        d = (self.charged[ch] << 8) - self.heat[ch]
+        self.heat[ch] += ((d >> 8) * f) >> 8
+        return self.mean_duty_pm if self.heat[ch] >= self.mean_duty_pm << 8 else 0xFFFF
 
     def _advance_window(self) -> None:
         """sma.c advance_window: slots older than the window fall out."""
