@@ -167,6 +167,36 @@ def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, ho
     return [i for i in no_stroke if hold_top_deg(limbs[i], hold_margin_deg) > kept * min(reach[0][i], reach[1][i])]
 
 
+def worn_strokes(limbs: list[Any], actuators: list[str], section: PlantSection) -> list[int]:
+    """The limbs (indices) with a ``stroke_deg`` that a worn coil may fall short of on the
+    simulated body: their stroke lies above what their reach (their own coil's and every
+    coil's, the lesser) keeps after ``WORN_STROKE_LOSS``, as ``worn_holds`` asks of a hold top
+    (a limb with a stroke is held at its stroke, not at a hold top, so ``worn_holds`` leaves it
+    out). Such a coil lags at the end of its travel short of the stroke: inchworm-3 with
+    ``stroke_deg = 29`` on every limb (own reach 31.1°, 23.3° worn), the boost on, worn by
+    7,220 cycles at 6 °C ambient: its tail coil reached 126 °C (106 °C without the boost); at
+    100,000 cycles and 0 °C 133 °C (98 °C). With ``stroke_deg = 27`` on a 100 mm body (38.1°,
+    28.6° worn) the boost keeps both rows at 82-87 °C. A body the model cannot describe counts
+    every limb with a stroke."""
+    if len(limbs) < 2:
+        return []
+    strokes = [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is not None]
+    if not strokes:
+        return []
+    reach = body_reach([actuators.index(lb.actuator) for lb in limbs], len(actuators), section)
+    if isinstance(reach, str):
+        return strokes
+    kept = 1.0 - WORN_STROKE_LOSS
+    return [i for i in strokes if limbs[i].stroke_deg > kept * min(reach[0][i], reach[1][i])]
+
+
+def _worn_short(limbs: list[Any], actuators: list[str], section: PlantSection, hold_margin_deg: float) -> list[int]:
+    """The limbs whose hold top (``worn_holds``) or stroke (``worn_strokes``) a worn coil may
+    fall short of: where the boost is off by default (``boost_ms_of``) or warned of."""
+    return sorted(set(worn_holds(limbs, actuators, section, hold_margin_deg)) |
+                  set(worn_strokes(limbs, actuators, section)))
+
+
 def worn_holds_of(robot: Any) -> list[int]:
     """``worn_holds`` of a loaded robot, with its own hold margin; none for a robot without
     its [plant] table."""
@@ -182,7 +212,8 @@ def boost_ms_of(robot: Any) -> int:
     ``BOOST_DEFAULT_MS`` where every limb's hold top stays within a worn coil's reach: a rise
     that lags there is a coil short of heat (a weak supply, a draught), and the duty ceiling's
     headroom lifts it. Where a worn coil's stroke may end short of a hold (``worn_holds_of``),
-    a lag may be a coil at the end of its travel, and heating it harder only heats it:
+    or of a ``stroke_deg`` (``worn_strokes``), a lag may be a coil at the end of its travel,
+    and heating it harder only heats it:
     caterpillar-4 with the boost, worn by 7,220 cycles at 6 °C ambient, reached 131 °C where it
     walked at 110 °C without (bench/bench_sweep.py --seed 7); off there by default, unless the
     firmware carries the coil's heat ceiling (safety.coil_heat_ceiling), which bounds it (the
@@ -194,7 +225,11 @@ def boost_ms_of(robot: Any) -> int:
         return 0
     if robot.control.boost_ms is not None:
         return int(robot.control.boost_ms)
-    return 0 if worn_holds_of(robot) and not robot.safety.coil_heat_ceiling else BOOST_DEFAULT_MS
+    if robot.safety.coil_heat_ceiling or getattr(robot, "plant", None) is None:
+        return BOOST_DEFAULT_MS
+    worn = _worn_short(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
+                       float(robot.control.hold_margin_deg))
+    return 0 if worn else BOOST_DEFAULT_MS
 
 
 def _boost_headroom(control: Any, safety: Any) -> bool:
@@ -210,12 +245,12 @@ def boost_warning(path: Path, limbs: list[Any], actuators: list[str], section: P
     hold (``worn_holds``) without the coil's heat ceiling: the default leaves it off there."""
     if not control.boost_ms or safety.coil_heat_ceiling or not _boost_headroom(control, safety):
         return None
-    worn = worn_holds(limbs, actuators, section, float(control.hold_margin_deg))
+    worn = _worn_short(limbs, actuators, section, float(control.hold_margin_deg))
     if not worn:
         return None
     names = ", ".join(repr(limbs[i].name) for i in worn)
     return (f"{path}: control.boost_ms = {control.boost_ms} on a body where a worn coil may end short of its "
-            f"hold (limbs {names}): a worn coil that lags at the end of its travel is heated at safety.max_duty "
+            f"hold or stroke (limbs {names}): a worn coil that lags at the end of its travel is heated at safety.max_duty "
             f"{safety.max_duty:g}, through its transformation, with nothing to gain (caterpillar-4 worn by 7,220 "
             "cycles: 130 °C); set [safety] coil_heat_ceiling = true, which bounds it (88 °C there), or leave "
             "boost_ms out (off on such a body; docs/control.md, \"The boost\")")
