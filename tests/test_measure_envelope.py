@@ -85,3 +85,26 @@ def test_the_measuring_drive_boosts_as_the_firmware_does(tmp_path, capsys):
     assert measured == 1 and len(m["latched"]) == 12
     assert w["cycles"] == 0 and w["faults"]
 
+
+
+def test_a_shared_coil_heats_at_the_ceiling_only_for_a_boosted_limb_that_asks(tmp_path):
+    """The firmware gives a coil its limbs' strongest want (ctl.c): WANT_HEAT + the boost of the
+    limb that asks for heat. The idealised drive boosted a coil whenever it heated and some
+    boosted limb sat on it: the one-actuator R1 (boost_ms = 700, drive_duty 0.6), its left end
+    boosted once and held in its band, was heated at max_duty for the right end's rise, which
+    the firmware heats at the drive duty."""
+    from proleg.sim.physical.drive import IdealDrive
+    from proleg.sim.physical.plant import PhysicalPlant
+
+    text = (robots_dir() / "paper-r1-one-actuator.toml").read_text(encoding="utf-8")
+    assert text.count("\ndrive_duty = 0.8 ") == 1
+    path = tmp_path / "one-boosted.toml"
+    path.write_text(text.replace("\ndrive_duty = 0.8 ", "\nboost_ms = 700\ndrive_duty = 0.6 "), encoding="utf-8")
+    robot = load_robot(path)
+    drive = IdealDrive(robot, PhysicalPlant(robot), 4.0)
+    assert drive.boost_s == 0.7 and drive.th == [(20.0,), (20.0,)]
+    drive.boosted = {0}                                   # the left end lagged once
+    assert drive.command([26.0, 0.0], 3, 0.002) == [1]    # to 11: the right end rises, the left is in its band
+    assert drive.boost_act == set()                       # heated for the right end: the drive duty
+    assert drive.command([10.0, 0.0], 3, 0.002) == [1]    # the left end below its band asks too
+    assert drive.boost_act == {0}

@@ -109,17 +109,22 @@ class IdealDrive:
         heat = [False] * self.n_act
         cool = [False] * self.n_act
         active = [False] * self.n_act
+        asks: set[int] = set()  # limbs whose own band asks for heat
         for (i, j, lo, hi, raised), p in zip(self._bands(target, held), psi):
             if p > hi:
                 cool[j] = True
             elif p < lo and i not in waits:
                 heat[j] = True
+                asks.add(i)
             if raised:
                 active[j] = True
         self._heated = {i for i, j in enumerate(self.limb_act) if heat[j] and not cool[j]}
         if self.boost_s > 0.0:
             self._watch_boost(psi, want, target, dt_s)
-            self.boost_act = {self.limb_act[i] for i in self.boosted if i in self._heated}
+            # a coil heats at the ceiling for a boosted limb that asks for heat itself (ctl.c: the
+            # coil serves its limbs' strongest want, WANT_HEAT + that limb's boost), not for a
+            # boosted limb it heats only because another limb on it, not boosted, asks
+            self.boost_act = {self.limb_act[i] for i in self.boosted if i in self._heated and i in asks}
         return [-1 if cool[j] else 1 if heat[j] else 0 if active[j] else -1 for j in range(self.n_act)]
 
     def _watch_boost(self, psi: Sequence[float], want: Sequence[int], target: int, dt_s: float) -> None:
