@@ -361,3 +361,26 @@ def test_a_supply_that_heats_a_coil_only_part_way_through_its_transformation_is_
         make_plant(robot, "physical", ["power=0.4"])
     assert not caplog.records, [r.getMessage() for r in caplog.records]
     assert _settled_psi(robot, ["power=0.4"], robot.control.drive_duty) > 21.0
+
+
+def test_a_supply_the_coil_heat_ceiling_leaves_short_of_as_is_warned_about(caplog):
+    """R1 with [safety] coil_heat_ceiling = true at power 0.4: the ceiling holds each coil's heat
+    to max_mean_duty 0.45, which settles at 61 °C there, below As 64 °C; the firmware stopped
+    (SMA_ON_LIMIT, STATE_TIMEOUT, coils at 61 °C) and nothing said why: the warning looked at
+    the boost's max_duty 0.8 (89 °C). Without the ceiling the boost walks it: no warning."""
+    import logging
+
+    from proleg.sim.closed_loop import make_plant
+
+    doc = copy.deepcopy(tomllib.loads((ROBOTS / "paper-r1.toml").read_text()))
+    doc["safety"]["coil_heat_ceiling"] = True
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(robot_from_dict(doc, Path("ceiling.toml")), "physical", ["power=0.4"])
+    warned = [r.getMessage() for r in caplog.records]
+    assert len(warned) == 2 and all("heated at safety.max_mean_duty (the coil's heat ceiling) 0.45 settles at 61 °C"
+                                    in w and "below the 64 °C where it starts to contract" in w for w in warned), warned
+    caplog.clear()
+    del doc["safety"]["coil_heat_ceiling"]
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        make_plant(robot_from_dict(doc, Path("boosted.toml")), "physical", ["power=0.4"])
+    assert not [r for r in caplog.records if "settles at" in r.getMessage()]

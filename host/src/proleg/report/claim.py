@@ -288,10 +288,11 @@ def idealised_walk(robot: Any, point: GridPoint, direction: str = "+x",
 
 
 def _why_not_walked(robot: Any, plant: Any, latched: str) -> str:
-    from ..robot_reach import boost_ms_of
+    from ..sim.plant_warnings import rise_duty
 
-    # the hottest duty the firmware gives a rise: the duty ceiling where it boosts a lagging one
-    duty = robot.safety.max_duty if boost_ms_of(robot) else robot.control.drive_duty
+    # the hottest duty the firmware gives a rise for good: the duty ceiling where it boosts a
+    # lagging one, the mean-duty ceiling where the coil's heat ceiling holds it there
+    duty, _ = rise_duty(robot)
     hot = plant.steady_coil_temperature_c(duty)
     tr = plant.transformation_c()
     for j, a in enumerate(robot.actuators):

@@ -31,6 +31,21 @@ def planar_warnings(robot: Robot) -> list[str]:
             f"file's planar statistics"]
 
 
+def rise_duty(robot: Any) -> tuple[float, str]:
+    """The hottest duty the firmware gives a rise for good, and its key: ``control.drive_duty``;
+    with the boost (``robot_reach.boost_ms_of``) ``safety.max_duty``; with the coil's heat
+    ceiling (``[safety] coil_heat_ceiling``) at most ``safety.max_mean_duty``, the duty whose
+    steady heat the ceiling holds a coil to (core/sma.c heat_step; docs/safety.md). R1 with the
+    ceiling at power 0.4: its coils stopped at 61 °C, the steady temperature of 0.45, below As
+    (64 °C), and nothing said so: the warning looked at the boost's 0.8 (89 °C)."""
+    boost = boost_ms_of(robot) > 0  # as the firmware is built (CTL_BOOST_MS)
+    duty = robot.safety.max_duty if boost else robot.control.drive_duty
+    key = "safety.max_duty (control.boost_ms is on)" if boost else "control.drive_duty"
+    if getattr(robot.safety, "coil_heat_ceiling", False) and robot.safety.mean_ceiling < duty:
+        return robot.safety.mean_ceiling, "safety.max_mean_duty (the coil's heat ceiling)"
+    return duty, key
+
+
 def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
     """A line per coil that the duty a rise heats at (``control.drive_duty``; with
     ``control.boost_ms``, ``safety.max_duty``) cannot bring far enough through its
@@ -44,9 +59,9 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
     not merely at As, where a coil has not begun to contract."""
     from .sma import heating_branch
 
-    boost = boost_ms_of(robot) > 0  # as the firmware is built (CTL_BOOST_MS)
-    duty = robot.safety.max_duty if boost else robot.control.drive_duty
-    key = "safety.max_duty (control.boost_ms is on)" if boost else "control.drive_duty"
+    duty, key = rise_duty(robot)
+    top, top_key = ((robot.safety.mean_ceiling, "safety.max_mean_duty (the coil's heat ceiling)")
+                    if robot.safety.coil_heat_ceiling else (robot.safety.max_duty, "safety.max_duty"))
     amb = plant.conditions.get("ambient_c")
     edges = [lb.psi_star_deg[0] + lb.hysteresis_deg / 2.0 for lb in robot.limbs]
     bends = plant.settled_bend(duty, edges)
@@ -63,10 +78,10 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
         need = max(needs) if needs else (duty * (as_c - amb) / (settles - amb) if settles > amb else math.inf)
         # a floor: at it the limb settles just past its edge, and a rise that slow may still meet the
         # on-time limit or the state timeout (R1 advised 0.24 still stops at 0.25: docs/plant.md)
-        advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} at the least (at most safety.max_duty; a "
+        advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} at the least (at most {top_key}; a "
                   "rise that slow may still pass the on-time limit), or a stronger supply"
-                  if need <= robot.safety.max_duty else
-                  f"a stronger supply: even safety.max_duty {robot.safety.max_duty:g} does not get it there")
+                  if need <= top else
+                  f"a stronger supply: even {top_key} {top:g} does not get it there")
         if settles < as_c:
             out.append(f"{robot.path}: coil {act.name!r} heated at {key} {duty:g} settles at {settles:.0f} °C with "
                        f"this supply, below the {as_c:.0f} °C where it starts to contract (As on the physical plant): "
