@@ -108,3 +108,47 @@ def test_a_shared_coil_heats_at_the_ceiling_only_for_a_boosted_limb_that_asks(tm
     assert drive.boost_act == set()                       # heated for the right end: the drive duty
     assert drive.command([10.0, 0.0], 3, 0.002) == [1]    # the left end below its band asks too
     assert drive.boost_act == {0}
+
+
+def test_latched_says_what_each_transitions_last_try_did(monkeypatch):
+    """``latched`` names the fault of a transition's last try: a fault in the first repeat that
+    a second repeat did not latch (it timed out, or was made) is not kept; and after a latch the
+    drive starts unboosted, as the firmware's run after CLEAR and START."""
+    from proleg.sim.physical import measure as measure_mod
+    from proleg.sim.physical.envelope import EnvelopeLatched
+
+    tries: dict[tuple[int, int], int] = {}
+    boosted_after_latch = []
+
+    def fake_run_to(plant, drive, target, *args):
+        key = (fake_run_to.start, target)
+        if fake_run_to.start is None:  # going to the start state
+            fake_run_to.start = target
+            return 0.1
+        fake_run_to.start = None
+        tries[key] = tries.get(key, 0) + 1
+        if key == (0, 2) and tries[key] == 1:
+            drive.boosted.add(0)
+            raise EnvelopeLatched("SMA_ON_LIMIT", "test")
+        if key == (0, 2):
+            boosted_after_latch.append(set(drive.boosted))
+            return None  # the second try times out: no fault, no sample
+        if key == (1, 0) and tries[key] == 1:
+            return None
+        if key == (1, 0):
+            raise EnvelopeLatched("STATE_TIMEOUT", "test")
+        return 0.2
+
+    def fake_to(plant, drive, target, *args):
+        try:
+            return fake_run_to(plant, drive, target, *args)
+        except EnvelopeLatched:
+            fake_run_to.start = None
+            raise
+
+    fake_run_to.start = None
+    monkeypatch.setattr(measure_mod, "_run_to", fake_to)
+    monkeypatch.setattr(measure_mod, "_rest", lambda plant, gate, dt_s: None)
+    m = measure_matrix(load_robot(R1), repeats=2)
+    assert m.latched == {(1, 0): "STATE_TIMEOUT"}
+    assert boosted_after_latch == [set()]

@@ -109,10 +109,12 @@ def measure_matrix(robot: Any, conditions: Conditions | None = None, *, repeats:
                 if _run_to(plant, drive, a, duty, dt_s, timeout_s, settle_s, gate) is not None:
                     x0 = plant.displacement_mm
                     took = _run_to(plant, drive, b, duty, dt_s, timeout_s, settle_s, gate)
+                latched.pop((a, b), None)  # what its last try did: this one latched nothing
             except EnvelopeLatched as e:
                 assert gate is not None
                 latched[a, b] = e.code
                 _rest(plant, gate, dt_s)
+                drive.boosted.clear()  # the operator's CLEAR and START begin the firmware's next run unboosted
             if took is not None:
                 sums[a][b].append(plant.displacement_mm - x0)
                 times[a][b].append(took)
