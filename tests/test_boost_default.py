@@ -20,8 +20,8 @@ CATERPILLAR = robots_dir() / "caterpillar-4.toml"
 WORN = ["ambient_c=6", "overlap_mm=front:9", "fatigue_cycles=7220"]
 
 
-def _variant(tmp_path, name: str, boost: bool, ceiling: bool):
-    text = CATERPILLAR.read_text(encoding="utf-8")
+def _write(tmp_path, name: str, text: str, boost: bool, ceiling: bool):
+    """``text`` as ``name``.toml, with boost_ms = 700 and the coil heat ceiling as asked."""
     assert text.count("\n[control]\n") == 1 and text.count("\n[safety]\n") == 1
     if boost:
         text = text.replace("\n[control]\n", "\n[control]\nboost_ms = 700\n")
@@ -30,6 +30,10 @@ def _variant(tmp_path, name: str, boost: bool, ceiling: bool):
     path = tmp_path / f"{name}.toml"
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def _variant(tmp_path, name: str, boost: bool, ceiling: bool):
+    return _write(tmp_path, name, CATERPILLAR.read_text(encoding="utf-8"), boost, ceiling)
 
 
 def _hottest(capsys, path) -> tuple[int, float, int]:
@@ -94,13 +98,7 @@ def _strokes(tmp_path, name: str, stroke: float, *, length_mm: float | None = No
         text = text.replace(line, line + f"stroke_deg = {stroke}\n")
     if length_mm is not None:
         text = text.replace("\n[plant]\n", f"\n[plant]\nlength_mm = {length_mm}\n")
-    if boost:
-        text = text.replace("\n[control]\n", "\n[control]\nboost_ms = 700\n")
-    if ceiling:
-        text = text.replace("\n[safety]\n", "\n[safety]\ncoil_heat_ceiling = true\n")
-    path = tmp_path / f"{name}.toml"
-    path.write_text(text, encoding="utf-8")
-    return path
+    return _write(tmp_path, name, text, boost, ceiling)
 
 
 def test_a_stroke_a_worn_coil_may_fall_short_of_leaves_the_boost_off(tmp_path, caplog):
