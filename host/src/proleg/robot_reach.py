@@ -225,7 +225,7 @@ def boost_ms_of(robot: Any) -> int:
         return 0
     if robot.control.boost_ms is not None:
         return int(robot.control.boost_ms)
-    if robot.safety.coil_heat_ceiling or getattr(robot, "plant", None) is None:
+    if getattr(robot.safety, "coil_heat_ceiling", False) or getattr(robot, "plant", None) is None:
         return BOOST_DEFAULT_MS
     worn = _worn_short(list(robot.limbs), [a.name for a in robot.actuators], robot.plant,
                        float(robot.control.hold_margin_deg))
