@@ -6,6 +6,7 @@ measured, with the fault the firmware would latch named."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -152,3 +153,16 @@ def test_latched_says_what_each_transitions_last_try_did(monkeypatch):
     m = measure_matrix(load_robot(R1), repeats=2)
     assert m.latched == {(1, 0): "STATE_TIMEOUT"}
     assert boosted_after_latch == [set()]
+
+
+def test_faults_on_every_transition_are_named_even_where_load_warnings_foresaw_some(capsys):
+    """tri-mixed warns at load of a state its body cannot hold. At power=0.3 every one of its 40
+    transitions latched a fault, and the error said 'the load warnings above say which states
+    the body cannot hold': the faults are why, and it names them."""
+    tri = Path(__file__).resolve().parent / "fixtures" / "tri-mixed.toml"
+    code = main(["sim", str(tri), "--measure-matrix", "--condition", "power=0.3"])
+    out = capsys.readouterr()
+    assert code == 1
+    assert "the safety envelope latched a fault on the way to each: STATE_TIMEOUT on 000->001" in out.err
+    assert "the load warnings above say" not in out.err
+    assert "its start or end state was not reached (the safety envelope latched a fault on its way: below)" in out.out

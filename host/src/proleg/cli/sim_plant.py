@@ -181,11 +181,15 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
     nothing = bool(not_made) and len(not_made) == robot.transitions.n_transitions
     # whether the load warnings foresaw the transitions not made: the failure and the table both say
     warned = bool(not_made) and _load_warned(robot, not_made)
+    # every one not made ended in a fault the envelope latched: that is why, whatever the load
+    # warnings foresaw (tri-mixed at power=0.3 latched all 40, and the error pointed to its
+    # warnings of one state the body cannot hold)
+    all_latched = bool(not_made) and all(k in m.latched for k in not_made)
     failure = None
     if nothing:
-        why = ("the load warnings above say which states the body cannot hold" if warned else
-               "the safety envelope latched a fault on the way to each: " + _latched_text(m)
-               if all(k in m.latched for k in not_made) else "the warnings above, if any, say why")
+        why = ("the safety envelope latched a fault on the way to each: " + _latched_text(m) if all_latched else
+               "the load warnings above say which states the body cannot hold" if warned else
+               "the warnings above, if any, say why")
         failure = (f"--measure-matrix: the idealised drive made none of the {robot.transitions.n_transitions} "
                    f"allowed transitions on the simulated body under these conditions ({why}): nothing was measured"
                    + (f"; --out {args.out} not written" if args.out is not None else ""))
@@ -222,8 +226,8 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         more = f", … ({len(not_made) - 6} more)" if len(not_made) > 6 else ""
         # "see the warnings" pointed at nothing when the load checks passed every one of them
         # (their body model poses each state still, the plant's held coils overshoot)
-        why = ("see the warnings when the robot file was loaded" if warned else
-               "the safety envelope latched a fault on its way: below" if all(k in m.latched for k in not_made) else
+        why = ("the safety envelope latched a fault on its way: below" if all_latched else
+               "see the warnings when the robot file was loaded" if warned else
                "no warning when the robot file was loaded foresaw it: the load checks pose each state at rest "
                "with its raised limbs at their hold edge, and a held coil may overshoot it; proleg sim "
                f"{args.robot} --record run.csv shows each limb's ψ")
