@@ -136,3 +136,14 @@ def test_the_heat_ceiling_cuts_where_the_firmware_cuts(replay):
     assert fw == _model(robot, requests)
     mean_pm = round(robot.safety.max_mean_duty * 10000)
     assert any(a == mean_pm for a, _, _ in fw[:2500]), "the heat ceiling never cut in"
+
+
+@pytest.mark.parametrize("replay", ["heat-ceiling"], indirect=True)
+def test_an_idle_coils_heat_cools_as_the_firmwares(replay):
+    """A coil off and paid up still cools in sma.c's heat_step: a rest long enough to pay the
+    on-time debt back (2.5 s on pays back in about 0.7 s) and then some, before heating again.
+    The model's skip of idle coils left their heat where it was."""
+    robot, run = replay
+    requests = [(8000, 8000)] * 2500 + [(0, 0)] * 2000 + [(8000, 8000)] * 2500
+    fw = run(requests)
+    assert fw == _model(robot, requests)

@@ -123,9 +123,10 @@ class Envelope:
         self._advance_window()
         w = self.win[self.slot]
         for ch, duty in enumerate(duties):
-            if not duty and not self.charged[ch] and not self.debt[ch]:
-                # off, and off and paid up before: nothing to charge or pay (what the steps
-                # below come to for such a coil; most coils are off most of the time)
+            if not duty and not self.charged[ch] and not self.debt[ch] and not self.heat[ch]:
+                # off, and off, paid up and cool (its heat-ceiling heat, where built, at 0) before:
+                # nothing to charge, pay or cool (what the steps below come to for such a coil;
+                # most coils are off most of the time)
                 self.pay_rem[ch] = 0
                 self.cut[ch] = False
                 out.append(0.0)
