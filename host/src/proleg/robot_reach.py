@@ -157,44 +157,32 @@ def worn_holds(limbs: list[Any], actuators: list[str], section: PlantSection, ho
     coil's contraction). The firmware is built with its hold watch where any such limb exists
     (``CFG_HOLD_WATCH``, core/ctl.h): a held limb that stopped short of its hold edge is held where
     it stopped instead of heated on. A body the model cannot describe counts every limb."""
-    if len(limbs) < 2:
-        return []
-    reach = body_reach([actuators.index(lb.actuator) for lb in limbs], len(actuators), section)
-    no_stroke = [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is None]
-    if isinstance(reach, str):
-        return no_stroke
-    kept = 1.0 - WORN_STROKE_LOSS
-    return [i for i in no_stroke if hold_top_deg(limbs[i], hold_margin_deg) > kept * min(reach[0][i], reach[1][i])]
-
-
-def worn_strokes(limbs: list[Any], actuators: list[str], section: PlantSection) -> list[int]:
-    """The limbs (indices) with a ``stroke_deg`` that a worn coil may fall short of on the
-    simulated body: their stroke lies above what their reach (their own coil's and every
-    coil's, the lesser) keeps after ``WORN_STROKE_LOSS``, as ``worn_holds`` asks of a hold top
-    (a limb with a stroke is held at its stroke, not at a hold top, so ``worn_holds`` leaves it
-    out). Such a coil lags at the end of its travel short of the stroke: inchworm-3 with
-    ``stroke_deg = 29`` on every limb (own reach 31.1°, 23.3° worn), the boost on, worn by
-    7,220 cycles at 6 °C ambient: its tail coil reached 126 °C (106 °C without the boost); at
-    100,000 cycles and 0 °C 133 °C (98 °C). With ``stroke_deg = 27`` on a 100 mm body (38.1°,
-    28.6° worn) the boost keeps both rows at 82-87 °C. A body the model cannot describe counts
-    every limb with a stroke."""
-    if len(limbs) < 2:
-        return []
-    strokes = [i for i, lb in enumerate(limbs) if getattr(lb, "stroke_deg", None) is not None]
-    if not strokes:
-        return []
-    reach = body_reach([actuators.index(lb.actuator) for lb in limbs], len(actuators), section)
-    if isinstance(reach, str):
-        return strokes
-    kept = 1.0 - WORN_STROKE_LOSS
-    return [i for i in strokes if limbs[i].stroke_deg > kept * min(reach[0][i], reach[1][i])]
+    return [i for i in _worn_short(limbs, actuators, section, hold_margin_deg)
+            if getattr(limbs[i], "stroke_deg", None) is None]
 
 
 def _worn_short(limbs: list[Any], actuators: list[str], section: PlantSection, hold_margin_deg: float) -> list[int]:
-    """The limbs whose hold top (``worn_holds``) or stroke (``worn_strokes``) a worn coil may
-    fall short of: where the boost is off by default (``boost_ms_of``) or warned of."""
-    return sorted(set(worn_holds(limbs, actuators, section, hold_margin_deg)) |
-                  set(worn_strokes(limbs, actuators, section)))
+    """The limbs (indices) whose top a worn coil may fall short of: a limb is held at its
+    ``stroke_deg`` where it has one, else at its hold top (``worn_holds``), and either lies
+    above what its reach keeps after ``WORN_STROKE_LOSS``; every limb on a body the model cannot
+    describe. Where the boost is off by default (``boost_ms_of``) or warned of: such a coil lags
+    at the end of its travel short of its top. inchworm-3 with ``stroke_deg = 29`` on every limb
+    (own reach 31.1°, 23.3° worn), the boost on, worn by 7,220 cycles at 6 °C ambient: its tail
+    coil reached 126 °C (106 °C without the boost); at 100,000 cycles and 0 °C 133 °C (98 °C).
+    With ``stroke_deg = 27`` on a 100 mm body (38.1°, 28.6° worn) the boost keeps both rows at
+    82-87 °C."""
+    if len(limbs) < 2:
+        return []
+    reach = body_reach([actuators.index(lb.actuator) for lb in limbs], len(actuators), section)
+    if isinstance(reach, str):
+        return list(range(len(limbs)))
+    kept = 1.0 - WORN_STROKE_LOSS
+
+    def top(lb: Any) -> float:
+        stroke = getattr(lb, "stroke_deg", None)
+        return hold_top_deg(lb, hold_margin_deg) if stroke is None else stroke
+
+    return [i for i, lb in enumerate(limbs) if top(lb) > kept * min(reach[0][i], reach[1][i])]
 
 
 def worn_holds_of(robot: Any) -> list[int]:
@@ -212,7 +200,7 @@ def boost_ms_of(robot: Any) -> int:
     ``BOOST_DEFAULT_MS`` where every limb's hold top stays within a worn coil's reach: a rise
     that lags there is a coil short of heat (a weak supply, a draught), and the duty ceiling's
     headroom lifts it. Where a worn coil's stroke may end short of a hold (``worn_holds_of``),
-    or of a ``stroke_deg`` (``worn_strokes``), a lag may be a coil at the end of its travel,
+    or of a ``stroke_deg`` (``_worn_short``), a lag may be a coil at the end of its travel,
     and heating it harder only heats it:
     caterpillar-4 with the boost, worn by 7,220 cycles at 6 °C ambient, reached 131 °C where it
     walked at 110 °C without (bench/bench_sweep.py --seed 7); off there by default, unless the
