@@ -40,6 +40,7 @@ from proleg.protocol.codec import FrameDecoder, Message, encode
 from proleg.protocol.definition import ClearWhat, ErrorCode, EventKind, FaultCode, ParamId, StopReason
 from proleg.robot import Robot, load_robot
 from proleg.sim.plant import Plant, plant_params_from_robot, true_rewards_from_robot
+from proleg.sim.board import RESTART_CAUSES
 from proleg.sim.closed_loop import SimulatedRobot
 
 from proleg.paths import robots_dir
@@ -156,6 +157,15 @@ class Rig:
         self._seen = 0
         self.last_frame = b""
 
+    def restart(self, cause: str = "external") -> None:
+        """The board resets without losing power (a Nano resets whenever its port is opened; a
+        brown-out, the watchdog): the plant and the monitor go on, the firmware restarts. It
+        forgets its latched faults, as a power cycle would, so the dead coils' count starts over;
+        what it must not forget is what the coils spent (docs/safety.md, "A reset")."""
+        self.sim.board.restart(cause)
+        self.sim._push_truth()
+        self.dead = dict.fromkeys(self.dead, 0)
+
     @property
     def now_us(self) -> int:
         return self.sim.board.time_us
@@ -239,6 +249,27 @@ def _dead_left_on_a_two_state_user_gait(rig: Rig) -> None:
 
 
 # ------------------------------------------------------------------ the three bypasses of issue 12
+
+
+@pytest.mark.parametrize("cause", ["external", "brown-out", "watchdog"])
+def test_a_board_reset_and_a_start_at_once_do_not_refresh_the_envelope(rig, cause):
+    """A host that resets the board every 2 s (a Nano resets whenever its port is opened) and
+    STARTs again at once, with a dead coil that is demanded all the time: each reset started
+    every coil cold, so the coil was heated on after 2 s of its 3 s on-time with none of its
+    cool-down, and the mean-duty window forgot its last 10 s. The monitor, which sees no reset,
+    checks the on-time, its cool-down and the window on every tick across them."""
+    _dead_left_on_a_two_state_user_gait(rig)
+    for _ in range(8):
+        rig.ticks(2000)
+        rig.restart(cause)
+        rig.ticks(50)
+        assert rig.reply(rig.send("LOAD_GAIT", states=(2, 3))).spec.name == "ACK"
+        rig.send("START", gait=GAIT_USER, direction=0)
+        rig.ticks(1)
+    rig.ticks(4000)
+    boots = rig.events(EventKind.BOOT)
+    assert len(boots) >= 8 and all(m.code == RESTART_CAUSES[cause] for m in boots[-8:])
+    assert rig.monitor.ch[0].longest_on_us > rig.env.max_on_us // 2  # it was heated, within its limits
 
 
 def test_stop_and_start_in_one_tick_every_2_99_s_cannot_keep_a_coil_on(rig):
@@ -593,6 +624,15 @@ class Attacker(RuleBasedStateMachine):
         reply = self.rig.reply(token, 3)
         assert reply.spec.name == "NACK" and reply.error == ErrorCode.NOT_ALLOWED and reply.detail == 2, reply
 
+    @rule(cause=st.sampled_from(["external", "brown-out", "watchdog"]), after=st.sampled_from([30, 50, 300]),
+          gait=st.sampled_from([0, 1]))
+    def board_resets_and_the_host_starts_again(self, cause, after, gait):
+        """The board resets without losing power; the plant, and the monitor, go on."""
+        self.rig.restart(cause)
+        self.rig.ticks(after)
+        self.rig.send("START", gait=gait, direction=0)
+        self.rig.ticks(1)
+
     @rule(n=st.sampled_from([1, 2, 50, 799, 1000, 2990, 2999, 4000]))
     def wait(self, n):
         self.rig.ticks(n)
@@ -653,10 +693,39 @@ class EmuAttacker(Attacker):
     def restart_every(self, gait, period, times):
         Attacker.restart_every(self, gait, period, times)
 
+    @rule(cause=st.just("external"), after=st.sampled_from([50, 300]), gait=st.sampled_from([0, 1]))
+    def board_resets_and_the_host_starts_again(self, cause, after, gait):
+        """The emulated MCUs reset by their reset pin (RAM kept, as the chips')."""
+        Attacker.board_resets_and_the_host_starts_again(self, cause, after, gait)
+
     def reset_then_start_before_the_imus_are_read(self, after, also):  # not a rule here
         """An emulated MCU's reset runs its start-up code before the UART listens, so a frame
         sent in its first ticks is lost, not refused (the rule runs on host-sim;
         tests/test_emu_*.py start their gaits after a known state)."""
+
+
+@pytest.mark.parametrize("board", ["avr-emu", "arm-emu"])
+def test_a_reset_pin_and_a_start_at_once_do_not_refresh_the_envelope_on_the_emulated_mcus(board):
+    """The exact images keep what the coils spent across their reset pin: their RAM outlives the
+    reset (.noinit), and the build checks that it set it (sma.c)."""
+    from proleg.sim.simulated_boards import simulated_board, simulated_robot
+
+    lacking = simulated_board(board).missing()
+    if lacking:
+        pytest.skip(lacking)
+    robot = _robot()
+    rig = Rig(robot, simulated_robot(board, robot))
+    _dead_left_on_a_two_state_user_gait(rig)
+    for _ in range(2):
+        rig.ticks(2000)
+        rig.restart("external")
+        rig.ticks(300)
+        assert rig.reply(rig.send("LOAD_GAIT", states=(2, 3))).spec.name == "ACK"
+        rig.send("START", gait=GAIT_USER, direction=0)
+        rig.ticks(1)
+    rig.ticks(2500)
+    assert [m.code for m in rig.events(EventKind.BOOT)][-2:] == [RESTART_CAUSES["external"]] * 2
+    assert rig.monitor.ch[0].longest_on_us > rig.env.max_on_us // 2
 
 
 @pytest.mark.parametrize("board", ["avr-emu", "arm-emu"])

@@ -52,6 +52,7 @@ uint32_t app_time_ms(void)
 void app_init(void)
 {
     uint8_t i;
+    uint8_t cause = hal_reset_cause();
     INIT_ZERO(st); /* again on host-sim's reset */
     INIT_ZERO(overruns);
     st.ms_us = hal_micros();
@@ -62,7 +63,7 @@ void app_init(void)
     telemetry_init();
     drive_init();
     imucheck_init();
-    sma_init();
+    sma_init(cause != HAL_RESET_POWER_ON);
     guard_init(); /* safety: the step guard on real time */
     psi_init();
     ctl_reset();
@@ -70,7 +71,7 @@ void app_init(void)
     seq_init();
     cmd_init();
     cmd_send_info(0);
-    tx_event(PROTO_EV_BOOT, hal_reset_cause(), 0);
+    tx_event(PROTO_EV_BOOT, cause, 0);
     for (i = 0; i < CFG_N_LIMBS; i++) {
         imucheck_power_up(i);
     }

@@ -25,4 +25,13 @@
 #define INIT_ZERO(obj) memset(&(obj), 0, sizeof(obj))
 #endif
 
+/* NOINIT: an object the C runtime leaves as it was at reset (the .noinit section of the AVR
+ * and STM32 link scripts), for state kept across a reset that is not a power-on; its init
+ * decides whether to trust it (sma.c). Host builds keep every global across their resets. */
+#if defined(__AVR__) || defined(__arm__)
+#define NOINIT __attribute__((section(".noinit")))
+#else
+#define NOINIT
+#endif
+
 #endif /* PROLEG_INITZERO_H */

@@ -1,6 +1,8 @@
 /* sma.c - see sma.h. */
 #include "sma.h"
 
+#include <string.h>
+
 #include "elapsed.h"
 #include "hal.h"
 #include "initzero.h"
@@ -37,8 +39,22 @@ typedef struct {
 #endif
 } act_state_t;
 
-static act_state_t acts[CFG_N_ACTUATORS];
-static uint32_t win[SMA_WIN_SLOTS][CFG_N_ACTUATORS];
+/* What the envelope keeps across a reset that is not a power-on (a Nano's DTR auto-reset, a
+ * brown-out, the watchdog, the reset button): every coil's unpaid on-time and heat, its
+ * mean-duty window and where the window is. Otherwise each reset started every coil cold,
+ * and a host that reconnected (which resets a Nano) and STARTed at once heated a coil the
+ * envelope had just cut as if it had rested (docs/safety.md, "A reset"). The time the reset
+ * took counts as none: the coil is taken to have cooled no further. `mark` says this build
+ * set the rest: RAM after a power-on, or after another image ran, is not trusted. */
+typedef struct {
+    act_state_t acts[CFG_N_ACTUATORS];
+    uint32_t win[SMA_WIN_SLOTS][CFG_N_ACTUATORS];
+    uint32_t slot_us;   /* time in the slot being filled */
+    uint8_t slot;       /* the slot being filled */
+    uint16_t mark;      /* SMA_KEPT_MARK once sma_init has cleared the rest */
+} sma_kept_t;
+#define SMA_KEPT_MARK ((uint16_t)(CFG_BUILD_ID ^ (CFG_BUILD_ID >> 16) ^ 0x5AA5u))
+static sma_kept_t kept NOINIT;
 static uint32_t last_us;
 /* What sma_init sets, in one record it copies from one ROM block (no .data bytes in flash;
  * on AVR a 16 B block and one copy call instead of storing each value: R1 66 B smaller on
@@ -47,8 +63,6 @@ typedef struct {
     uint32_t max_on_us; /* the limits in force (SET_PARAM may narrow them) */
     uint16_t max_duty;
     uint16_t refill_q8; /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
-    uint32_t slot_us;   /* time in the slot being filled */
-    uint8_t slot;       /* the slot being filled */
     uint8_t estopped;
 } sma_vars_t;
 static sma_vars_t st;
@@ -71,8 +85,8 @@ uint16_t sma_clamp(uint16_t duty_pm)
  * clamp again here (R1 18 B smaller on the Nano). */
 static void output(uint8_t act, uint16_t duty_pm)
 {
-    acts[act].applied = duty_pm;
-    acts[act].charged = duty_pm;
+    kept.acts[act].applied = duty_pm;
+    kept.acts[act].charged = duty_pm;
     hal_pwm_set(ROM_U8(&act_channel[act]), duty_pm);
 }
 
@@ -86,8 +100,8 @@ static void every_channel_off(void)
         hal_pwm_set(ch, 0);
     }
     for (i = 0; i < CFG_N_ACTUATORS; i++) {
-        acts[i].request = 0;
-        acts[i].applied = 0;
+        kept.acts[i].request = 0;
+        kept.acts[i].applied = 0;
     }
 }
 
@@ -99,11 +113,11 @@ static void every_channel_off(void)
 #define REFILL_Q8_OF(q) ((uint16_t)((q) > 10000u ? 10000u : (q))) /* the rate from REFILL_QUOT's q */
 #define REFILL_Q8(on_us, cooldown_us) REFILL_Q8_OF(REFILL_QUOT(on_us, cooldown_us))
 
-/* At start: the build's limits (what sma_set_limits makes of its max_on and min_cooldown), the
- * window at its first slot, no hits, no ESTOP. */
+/* At start: the build's limits (what sma_set_limits makes of its max_on and min_cooldown), no
+ * ESTOP. */
 #define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
 #define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
-static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0, 0, 0};
+static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0};
 /* The build's own limits pay back (robot_settings.py refuses a min_cooldown_ms of 256 × max_on_ms or
  * more; this makes a hand-edited config fail to compile rather than lock every coil off). */
 typedef char sma_build_cooldown_pays_back[REFILL_QUOT(SMA_ON_US, SMA_COOLDOWN_US) > 0u ? 1 : -1];
@@ -118,14 +132,14 @@ static void advance_window(uint32_t dt)
     }
     /* slot_us < one slot before, so below SMA_WIN_SLOTS + 1 slots now: at most
      * SMA_WIN_SLOTS slots fall out, each cleared once */
-    st.slot_us += dt;
-    while (st.slot_us >= SMA_SLOT_US) {
-        st.slot_us -= SMA_SLOT_US;
-        if (++st.slot >= SMA_WIN_SLOTS) { /* in 8 bits (issue 11) */
-            st.slot = 0;
+    kept.slot_us += dt;
+    while (kept.slot_us >= SMA_SLOT_US) {
+        kept.slot_us -= SMA_SLOT_US;
+        if (++kept.slot >= SMA_WIN_SLOTS) { /* in 8 bits (issue 11) */
+            kept.slot = 0;
         }
         for (i = 0; i < CFG_N_ACTUATORS; i++) {
-            win[st.slot][i] = 0;
+            kept.win[kept.slot][i] = 0;
         }
     }
 }
@@ -138,15 +152,30 @@ static uint32_t window_sum(uint8_t act)
     uint32_t t = 0;
     uint8_t k;
     for (k = 0; k < SMA_WIN_SLOTS; k++) {
-        t += win[k][act];
+        t += kept.win[k][act];
     }
     return t;
 }
 
-void sma_init(void)
+void sma_init(uint8_t warm)
 {
-    INIT_ZERO(acts);
-    INIT_ZERO(win);
+    /* the slot indexes the window: one out of range is RAM this build did not leave */
+    if (!warm || kept.mark != SMA_KEPT_MARK || kept.slot >= SMA_WIN_SLOTS) {
+        memset(&kept, 0, sizeof kept);
+        kept.mark = SMA_KEPT_MARK;
+    }
+#ifdef CFG_COIL_TAU_MS
+    else {
+        /* a heat is a smoothed duty: one outside 0 .. 100 % is noise that matched the mark (and
+         * would overflow heat_step): taken as hot as can be */
+        uint8_t i;
+        for (i = 0; i < CFG_N_ACTUATORS; i++) {
+            if ((uint32_t)kept.acts[i].heat > (10000UL << 8)) {
+                kept.acts[i].heat = (int32_t)10000L << 8;
+            }
+        }
+    }
+#endif
     last_us = hal_micros();
     ROM_COPY(&st, &st_init, sizeof st);
     every_channel_off();
@@ -155,7 +184,7 @@ void sma_init(void)
 void sma_request(uint8_t act, uint16_t duty_pm)
 {
     if (act < CFG_N_ACTUATORS) {
-        acts[act].request = duty_pm;
+        kept.acts[act].request = duty_pm;
     }
 }
 
@@ -201,9 +230,9 @@ uint8_t sma_tick(uint8_t holding)
     uint8_t i, bit, blocked;
     uint32_t *w;
     advance_window(dt);
-    w = win[st.slot];
+    w = kept.win[kept.slot];
     for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
-        act_state_t *a = &acts[i];
+        act_state_t *a = &kept.acts[i];
         uint16_t duty = st.estopped ? 0u : sma_clamp(a->request);
         uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
         if (!st.estopped && duty != a->request) {
@@ -316,17 +345,17 @@ uint16_t sma_max_duty(void)
 
 uint16_t sma_duty(uint8_t act)
 {
-    return acts[act].applied;
+    return kept.acts[act].applied;
 }
 
 uint8_t sma_cooling(uint8_t act)
 {
-    return (uint8_t)(acts[act].forced | acts[act].blocked); /* each 0 or 1 */
+    return (uint8_t)(kept.acts[act].forced | kept.acts[act].blocked); /* each 0 or 1 */
 }
 
 uint32_t sma_debt_us(uint8_t act)
 {
-    return acts[act].debt_us;
+    return kept.acts[act].debt_us;
 }
 
 uint8_t sma_take_clamped(void)

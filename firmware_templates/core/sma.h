@@ -30,8 +30,9 @@
  *   it forgives no heat: a STOP + START of a hot coil finds it as hot as it is.
  * Nothing resets the spent budget: sma_all_off() and sma_estop() turn the pins off at once
  * but the interval until the next sma_tick is still charged at the duty it had, so a
- * STOP + START in one tick continues the on-period. Only sma_init() (reset) starts
- * from a cold budget. sma_estop() latches until sma_clear_estop().
+ * STOP + START in one tick continues the on-period. Only sma_init(0) (a power-on) starts
+ * from a cold budget; after any other reset sma_init(1) keeps what the last run spent (the
+ * time in reset counts as none). sma_estop() latches until sma_clear_estop().
  */
 #ifndef PROLEG_SMA_H
 #define PROLEG_SMA_H
@@ -56,7 +57,9 @@
  * loop is the hardware watchdog's job); a backwards step of the clock as one tick. */
 #define SMA_DT_CAP_US ELAPSED_CAP_US
 
-void sma_init(void);
+/* warm: the chip reset without losing power (hal_reset_cause() not HAL_RESET_POWER_ON): keep
+ * the budget this build's last run left in RAM, if it is there. */
+void sma_init(uint8_t warm);
 
 /* Duty (permyriad) the controller wants for actuator `act` from the next sma_tick on. */
 void sma_request(uint8_t act, uint16_t duty_pm);

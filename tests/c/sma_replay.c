@@ -13,7 +13,7 @@ int main(void)
     unsigned d0, d1;
     fake_hal_reset();
     fake_now_us = 0;
-    sma_init();
+    sma_init(0);
     while (scanf("%u %u", &d0, &d1) == 2) {
         uint8_t hits;
         sma_request(0, (uint16_t)d0);

@@ -14,7 +14,7 @@ static void setup_at(uint64_t t0)
 {
     fake_hal_reset();
     fake_now_us = t0;
-    sma_init();
+    sma_init(0);
 }
 
 static void setup(void)
@@ -402,6 +402,58 @@ static void test_all_off_turns_every_board_channel_off_at_once(void)
     CHECK(!sma_estopped());
 }
 
+/* A reset that is not a power-on (sma_init(1)) keeps what the last run spent: a coil cut at
+ * max_on stays off for its whole cool-down, whenever the reset came (docs/safety.md, "A reset"). */
+static void test_a_warm_reset_keeps_the_cool_down_a_cold_one_forgets(void)
+{
+    uint8_t hit, warm;
+    for (warm = 0; warm < 2; warm++) {
+        uint32_t off = 0;
+        setup();
+        on_time_until_cut(6000, CFG_TICK_US, &hit);
+        tick_us(COOL_US / 4u);      /* a quarter of the cool-down paid, then the reset */
+        fake_now_us = 12345u;       /* the chip's clock starts over */
+        sma_init(warm);
+        CHECK_EQ(fake_pwm[0], 0);   /* every pin off at once, either way */
+        CHECK_EQ(sma_cooling(0), warm);
+        sma_request(0, 6000);
+        while (fake_pwm[0] == 0u && off < 10u * COOL_US) {
+            tick();
+            off += CFG_TICK_US;
+        }
+        if (warm) {
+            CHECK(off + CFG_TICK_US >= COOL_US * 3u / 4u); /* the rest of the cool-down, reset time not counted */
+            CHECK(off <= COOL_US);
+        } else {
+            CHECK_EQ(off, CFG_TICK_US); /* cold: heats at the first tick */
+        }
+    }
+}
+
+/* The mean-duty window too: a coil that spent its window before the reset gets nothing more
+ * until the window lets it, as if there had been no reset. */
+static void test_a_warm_reset_keeps_the_mean_duty_window(void)
+{
+    enum { W = CFG_DUTY_WINDOW_MS * 1000UL / CFG_TICK_US };
+    static uint16_t hist[W];
+    uint64_t sum = 0;
+    uint32_t t;
+    setup();
+    memset(hist, 0, sizeof hist);
+    sma_request(0, 8000);
+    for (t = 0; t < 3u * W; t++) {
+        if (t % (W / 3u) == W / 6u) {
+            sma_init(1);               /* resets, every third of a window */
+            sma_request(0, 8000);
+        }
+        tick();
+        sum += fake_pwm[0];
+        sum -= hist[t % W];
+        hist[t % W] = fake_pwm[0];
+        CHECK(sum <= (uint64_t)CFG_MEAN_DUTY_PM * W + 8000u);
+    }
+}
+
 int main(void)
 {
     RUN(test_init_turns_every_board_channel_off);
@@ -423,5 +475,7 @@ int main(void)
     RUN(test_run_time_limits_may_narrow_but_never_widen_the_envelope);
     RUN(test_estop_turns_every_mosfet_off_within_one_tick);
     RUN(test_all_off_turns_every_board_channel_off_at_once);
+    RUN(test_a_warm_reset_keeps_the_cool_down_a_cold_one_forgets);
+    RUN(test_a_warm_reset_keeps_the_mean_duty_window);
     return UNIT_EXIT();
 }

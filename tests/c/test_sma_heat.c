@@ -19,7 +19,7 @@ static void setup(void)
 {
     fake_hal_reset();
     fake_now_us = 0;
-    sma_init();
+    sma_init(0);
     model = 0.0;
 }
 
@@ -149,6 +149,22 @@ static void test_holding_at_or_below_the_hold_ceiling_is_never_capped(void)
     CHECK(model > 0.29);
 }
 
+/* A reset that is not a power-on keeps the heat: a coil at the ceiling gets the ceiling's duty
+ * right after it, and after a power-on the full drive (docs/safety.md, "A reset"). */
+static void test_a_warm_reset_keeps_the_heat_a_cold_one_forgets(void)
+{
+    uint8_t warm;
+    for (warm = 0; warm < 2; warm++) {
+        setup();
+        ask(6000, 2.5);
+        CHECK_EQ(fake_pwm[0], CFG_MEAN_DUTY_PM);
+        fake_now_us = 777u; /* the chip's clock starts over */
+        sma_init(warm);
+        ask(6000, 0.01);
+        CHECK_EQ(fake_pwm[0], warm ? CFG_MEAN_DUTY_PM : 6000u);
+    }
+}
+
 int main(void)
 {
     RUN(test_the_build_carries_the_coils_time_constant);
@@ -157,5 +173,6 @@ int main(void)
     RUN(test_estop_and_clear_refund_no_heat);
     RUN(test_no_host_pattern_heats_a_coil_past_the_mean_duty_ceiling_held_for_ever);
     RUN(test_holding_at_or_below_the_hold_ceiling_is_never_capped);
+    RUN(test_a_warm_reset_keeps_the_heat_a_cold_one_forgets);
     return UNIT_EXIT();
 }

@@ -162,9 +162,12 @@ void hal_uart_tx_start(void)
     /* nothing to switch on: drain_line() empties the transmit ring at the line rate */
 }
 
+/* sim_reset is a power-on; sim_restart(cause) a reset that is not */
+static uint8_t reset_cause = HAL_RESET_POWER_ON;
+
 uint8_t hal_reset_cause(void)
 {
-    return HAL_RESET_POWER_ON; /* sim_reset is a power-on */
+    return reset_cause;
 }
 
 void hal_watchdog_feed(void)
@@ -199,14 +202,22 @@ static void drain_line(void)
     }
 }
 
-SIM_API void sim_reset(uint32_t seed)
+/* The chip restarts: its clock from 0, the link's queues empty, the firmware from app_init. */
+static void restart(void)
 {
-    uint8_t i;
     now_us = 0;
     line_budget = 0;
     uart_dropped = 0;
     i2c_count = 0;
     hostq.head = hostq.count = 0;
+    hal_init();
+    app_init();
+}
+
+SIM_API void sim_reset(uint32_t seed)
+{
+    uint8_t i;
+    reset_cause = HAL_RESET_POWER_ON;
     sim_mpu_power_on(seed);
     sim_tca_power_on();
     for (i = 0; i < CFG_N_LIMBS; i++) {
@@ -215,8 +226,17 @@ SIM_API void sim_reset(uint32_t seed)
             sim_tca_attach(limb_bus[i], limb_mux[i]);
         }
     }
-    hal_init();
-    app_init();
+    restart();
+}
+
+/* A reset that is not a power-on (HAL_RESET_EXTERNAL: a Nano's DTR auto-reset or the button;
+ * HAL_RESET_BROWN_OUT, HAL_RESET_WATCHDOG, ...): the IMUs and multiplexers stay powered as they
+ * were, and RAM keeps what a real chip's keeps (here every global; the firmware zeroes what it
+ * does not keep). */
+SIM_API void sim_restart(uint8_t cause)
+{
+    reset_cause = cause;
+    restart();
 }
 
 SIM_API void sim_run_ticks(uint32_t n)

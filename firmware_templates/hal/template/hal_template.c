@@ -107,7 +107,10 @@ void hal_uart_tx_start(void)
 }
 
 /* Read the reset flags in hal_init (then clear them so the next reset reports its own)
- * and return the cause as HAL_RESET_*; HAL_RESET_UNKNOWN if the MCU cannot tell. */
+ * and return the cause as HAL_RESET_*; HAL_RESET_UNKNOWN if the MCU cannot tell. Anything but
+ * HAL_RESET_POWER_ON lets the envelope keep what the coils spent before the reset, from RAM
+ * the start-up code leaves alone: an AVR or Cortex-M link script must place the `.noinit`
+ * section in RAM after .bss, not zeroed (core/initzero.h NOINIT; docs/safety.md, "A reset"). */
 uint8_t hal_reset_cause(void)
 {
     return HAL_RESET_UNKNOWN;

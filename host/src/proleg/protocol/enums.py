@@ -66,7 +66,7 @@ class EventKind(IntEnum):
 
 class ResetCause(IntEnum):
     """``EVENT.code`` when ``kind == BOOT``: why the MCU last reset (its reset flags; a
-    board that cannot tell reports UNKNOWN, host-sim POWER_ON)."""
+    board that cannot tell reports UNKNOWN; host-sim POWER_ON, or the cause ``SimBoard.restart`` gave)."""
 
     UNKNOWN = 0
     POWER_ON = 1

@@ -17,13 +17,19 @@ from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 from ..errors import SimError
+from ..protocol.enums import ResetCause
 from .private_library import load_private_copy
+
+#: Resets that are not a power-on, by name ("external", "brown-out", "watchdog", "software").
+RESTART_CAUSES = {c.name.lower().replace("_", "-"): int(c) for c in ResetCause
+                  if c not in (ResetCause.UNKNOWN, ResetCause.POWER_ON)}
 
 #: IMU fault modes understood by the C MPU-6050 model.
 IMU_FAULTS = {"ok": 0, "no-ack": 1, "stuck": 2, "garbage": 3}
 
 _SIGNATURES = {
     "sim_reset": ([c_uint32], None),
+    "sim_restart": ([c_uint8], None),
     "sim_run_ticks": ([c_uint32], None),
     "sim_time_us": ([], c_uint64),
     "sim_tick_period_us": ([], c_uint32),
@@ -117,6 +123,15 @@ class SimBoard:
         """Power-on reset: firmware globals cleared, IMUs asleep, time 0, FIFOs empty."""
         self._lib.sim_reset(seed & 0xFFFFFFFF)
         self.tick_us = int(self._lib.sim_tick_period_us())
+        self._pending_us = 0.0
+
+    def restart(self, cause: str = "external") -> None:
+        """A reset that is not a power-on (``cause`` in ``RESTART_CAUSES``: a Nano's DTR
+        auto-reset or its button, a brown-out, the watchdog): the firmware restarts with its
+        clock at 0, the IMUs stay powered, and RAM keeps what a chip's keeps across it."""
+        if cause not in RESTART_CAUSES:
+            raise ValueError(f"restart cause {cause!r}: expected one of {', '.join(RESTART_CAUSES)}")
+        self._lib.sim_restart(RESTART_CAUSES[cause])
         self._pending_us = 0.0
 
     def run_ticks(self, n: int) -> None:

@@ -190,6 +190,15 @@ class ArmEmuBoard(MmioAccess, TickMarks, FirmwareProbes):
         self.busy_us: list[float] = []
         self.resets: list[tuple[float, str]] = []
 
+    def restart(self, cause: str = "external") -> None:
+        """A reset that is not a power-on (``SimBoard.restart``): the NRST pin ("external"), the
+        watchdog or a software reset; RAM keeps what it held, as the chip's does (on the
+        STM32F103 a brown-out is a power-on reset: POR/PDR)."""
+        if cause not in ("external", "watchdog", "software"):
+            raise ValueError(f"restart cause {cause!r}: expected external, watchdog or software")
+        self.resets.append((self.cycles / CPU_HZ, cause))
+        self._system_reset(cause)
+
     def _system_reset(self, cause: str) -> None:
         for d in self.devices:
             if d is self.rcc:

@@ -148,8 +148,9 @@ class AvrEmuBoard:
         self.markers: TickMarkers | None = tick_markers(self.elf)
         if self.markers is not None:
             self._lib.emu_set_tick_markers(self.markers.start, self.markers.end)
-        bss_end = find_symbol(self.elf, "__bss_end") or find_symbol(self.elf, "_end")
-        self._static_end = bss_end.address if bss_end is not None else 0
+        # the end of static RAM: _end follows .noinit (state a warm reset keeps), __bss_end does not
+        static_end = find_symbol(self.elf, "_end") or find_symbol(self.elf, "__bss_end")
+        self._static_end = static_end.address if static_end is not None else 0
         self._rx_buf = (c_uint8 * 8192)()
         n = 1 << 14
         self._t_start, self._t_busy, self._t_i2c = (c_uint64 * n)(), (c_uint32 * n)(), (c_uint32 * n)()
@@ -443,3 +444,10 @@ class AvrEmuBoard:
     def external_reset(self) -> None:
         """Pull RESET low: the MCU restarts with MCUSR = EXTRF (a Nano's DTR auto-reset)."""
         self._lib.emu_external_reset()
+
+    def restart(self, cause: str = "external") -> None:
+        """A reset that is not a power-on (``SimBoard.restart``): here the RESET pin only; SRAM
+        keeps what it held, as the chip's does."""
+        if cause != "external":
+            raise ValueError(f"restart cause {cause!r}: the emulated Nano restarts by its RESET pin only ('external')")
+        self.external_reset()
