@@ -244,11 +244,16 @@ static void measured(void)
     uint8_t i, far = 0;
     int16_t o[CFG_N_LIMBS];
     for (i = 0; i < CFG_N_LIMBS; i++) {
-        /* sum / LEVEL_SAMPLES (C rounds towards 0) as a shift of the magnitude: the signed
-         * division would link libgcc's __divmodsi4. |sum| ≤ 64 × 18000 < 2^21. */
+        /* sum / LEVEL_SAMPLES (C rounds towards 0) as a shift: the signed division would link
+         * libgcc's __divmodsi4. An arithmetic shift (gcc and clang) rounds down, so a negative sum
+         * is first raised by LEVEL_SAMPLES - 1: the shift then rounds it up, towards 0, as the
+         * negated shift of its magnitude did (R1 26 B smaller on the Nano). |sum| ≤ 64 × 18000 < 2^21:
+         * no overflow, and the quotient fits an int16. */
         int32_t sum = lm[i].sum;
-        uint32_t mag = (uint32_t)(sum < 0 ? -sum : sum) >> LEVEL_SAMPLES_LOG2;
-        o[i] = (int16_t)(lm[i].ground + (sum < 0 ? -(int16_t)mag : (int16_t)mag));
+        if (sum < 0) {
+            sum += LEVEL_SAMPLES - 1;
+        }
+        o[i] = (int16_t)(lm[i].ground + (int16_t)(sum >> LEVEL_SAMPLES_LOG2));
         if (!ground_mode) {
             o[i] = (int16_t)(o[i] + level_offset_cdeg(i));
         }
