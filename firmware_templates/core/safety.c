@@ -9,21 +9,25 @@
 #include "sma.h"
 
 static uint32_t last_us;
-static uint32_t unreached_us;
 static uint32_t timeout_us; /* set by guard_init (no .data bytes in flash) */
-static uint8_t hits_since_reached;
+/* The tallies guard_ack clears, in one record: one memset instead of a store for each, and
+ * guard_tick reaches them from one address (R1 34 B smaller on the Nano). */
+static struct {
+    uint32_t unreached_us;
+    uint8_t hits_since_reached; /* a byte: guard_hits_fit_a_byte, below */
+    uint8_t hit_mask; /* actuators hit since each last heated on the way to a target reached */
+    /* Each coil's time heated while a target was demanded, since it last heated on the way to a
+     * target reached. STOP and START keep it: a host restarting a gait past a dead coil
+     * re-reaches the states the other coils make, which is no progress for it (safety.h). At
+     * most timeout_us + one interval: past timeout_us, while demanding, the caller latches a fault
+     * and nothing is demanded until guard_ack clears it. */
+    uint32_t coil_us[CFG_N_ACTUATORS];
+} tally;
 /* The hit count is a byte: it stops at the latch, reached in a tick in which every coil may hit. */
 typedef char guard_hits_fit_a_byte[(CFG_ON_LIMIT_LATCH - 1u + CFG_N_ACTUATORS <= 255u) ? 1 : -1];
-static uint8_t hit_mask; /* actuators hit since each last heated on the way to a target reached */
 static uint8_t progressed; /* actuators heated since the last target reached or START */
 static uint8_t heating;    /* actuators heated in the interval the tick just charged */
 static uint8_t demanded;   /* the last tick demanded a target (that interval's demand) */
-/* Each coil's time heated while a target was demanded, since it last heated on the way to a
- * target reached. STOP and START keep it: a host restarting a gait past a dead coil
- * re-reaches the states the other coils make, which is no progress for it (safety.h). At
- * most timeout_us + one interval: past timeout_us, while demanding, the caller latches a fault
- * and nothing is demanded until guard_ack clears it. */
-static uint32_t coil_us[CFG_N_ACTUATORS];
 /* This tick's coil with the most of that time (the lowest of equals); when no coil has any,
  * the last that hit in this tick, else GUARD_NO_SUSPECT. Set by guard_tick, read through
  * guard_suspect. */
@@ -65,51 +69,51 @@ uint8_t guard_tick(uint8_t demanding, uint8_t reached, uint8_t hits, uint8_t *ac
          * reaching what the other coils make is none for it (safety.h). The step's time
          * starts again either way; the hits do only once every coil that hit progressed. */
         made = progressed;
-        hit_mask &= (uint8_t)~made;
-        if (!hit_mask) {
-            hits_since_reached = 0;
+        tally.hit_mask &= (uint8_t)~made;
+        if (!tally.hit_mask) {
+            tally.hits_since_reached = 0;
         }
         progressed = 0;
-        unreached_us = 0;
+        tally.unreached_us = 0;
     }
     /* only now: what sma_tick just decided heats from this tick on, after this tick's reach. A
      * START that found its target reached and moved on in one tick (hold_ms 0) heated a dead
      * coil in that tick towards the next target, which counted as progress to the reached one:
      * restarted every 3 s, R1's dead right coil was heated 77 s of 120 s, no fault latched. */
     progressed |= heating;
-    hit_mask |= hits;
+    tally.hit_mask |= hits;
     suspect = GUARD_NO_SUSPECT; /* a latch always comes with a hit in this tick: never its act */
     for (i = 0; i < CFG_N_ACTUATORS; i++, was >>= 1, made >>= 1, hits >>= 1) {
-        uint32_t t = coil_us[i];
+        uint32_t t = tally.coil_us[i];
         if (was & 1u) {
             t += dt;
         }
         if (made & 1u) {
             t = 0; /* heated on the way to this target: progress */
         }
-        coil_us[i] = t;
+        tally.coil_us[i] = t;
         if (t > most) {
             most = t;
             suspect = i;
         }
         if (hits & 1u) {
-            hits_since_reached++; /* no saturation: once it reaches the latch no coil is driven (guard_hits_fit_a_byte) */
+            tally.hits_since_reached++; /* no saturation: once it reaches the latch no coil is driven (guard_hits_fit_a_byte) */
             if (!most) {
                 suspect = i; /* no coil heated without progress (yet): the one that hit */
             }
         }
     }
-    if (hits_since_reached >= CFG_ON_LIMIT_LATCH) {
+    if (tally.hits_since_reached >= CFG_ON_LIMIT_LATCH) {
         /* the coil heated longest without progress (none: the last that hit), not the coil
          * that hit last, which may be a healthy one slow at a weak supply */
         *act = suspect;
         return GUARD_ON_LIMIT;
     }
     if (demanding) {
-        uint32_t u = unreached_us + dt;
-        unreached_us = u < dt ? 0xFFFFFFFFUL : u; /* saturates: the sum wrapped iff it is below dt */
+        uint32_t u = tally.unreached_us + dt;
+        tally.unreached_us = u < dt ? 0xFFFFFFFFUL : u; /* saturates: the sum wrapped iff it is below dt */
         /* the step, or one coil over all the steps it heated towards and none reached */
-        if (unreached_us >= timeout_us || most >= timeout_us) {
+        if (tally.unreached_us >= timeout_us || most >= timeout_us) {
             return GUARD_TIMEOUT;
         }
     }
@@ -121,10 +125,7 @@ __attribute__((noinline)) /* four callers: one copy */
 #endif
 void guard_ack(void)
 {
-    unreached_us = 0;
-    hits_since_reached = 0;
-    hit_mask = 0;
-    memset(coil_us, 0, sizeof coil_us);
+    memset(&tally, 0, sizeof tally);
 }
 
 void guard_started(void)
@@ -139,10 +140,10 @@ uint8_t guard_suspect(void)
 
 uint32_t guard_unreached_us(void)
 {
-    return unreached_us;
+    return tally.unreached_us;
 }
 
 uint8_t guard_hits(void)
 {
-    return hits_since_reached;
+    return tally.hits_since_reached;
 }
