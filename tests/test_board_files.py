@@ -58,7 +58,7 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
     ("baud = 115200", "baud = -9600", r"variant.toml: uart.baud: expected a baud rate .*, got -9600$"),
     ("flash_bytes = 30720", "flash_bytes = -5", r"variant.toml: board.flash_bytes: expected a size in bytes in 0..4_294_967_295, got -5$"),
     ("ram_bytes = 2048", "ram_bytes = -1", r"variant.toml: board.ram_bytes: expected a size in bytes .*, got -1$"),
-    ("base_flash_bytes = 14282", "base_flash_bytes = -100", r"variant.toml: board.base_flash_bytes: expected a size in bytes .*, got -100$"),
+    ("base_flash_bytes = ", "base_flash_bytes = -100 # ", r"variant.toml: board.base_flash_bytes: expected a size in bytes .*, got -100$"),
     ('pins = ["D9", "D10"', 'pins = ["D9", "D9"',
      r"variant.toml: pwm.pins: expected each pin once \(one channel per pin\), got 'D9' twice$"),
     ('packages = ["avrdude"]', 'pakages = ["avrdude"]', r"variant.toml: flash\[0\].pakages: unknown key \(did you mean 'packages'\?\)$"),
