@@ -223,6 +223,8 @@ def test_boot_reports_the_watchdog_as_reset_cause(elf):
     boots = _events(_messages(b), EventKind.BOOT)
     assert boots and boots[-1].code == ResetCause.WATCHDOG
     assert boots[0].code == ResetCause.POWER_ON
+    # a power-on starts the envelope cold; the watchdog's reset keeps what the coils spent
+    assert boots[0].detail == 0 and boots[-1].detail == 1
 
 
 def test_an_imu_that_stops_answering_is_a_fault_not_a_hang(elf):

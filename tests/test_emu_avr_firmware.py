@@ -307,6 +307,7 @@ def test_a_stuck_loop_is_reset_by_the_watchdog_the_coils_go_off_and_boot_says_wa
     msgs = decoder.feed(board.read())
     boots = events(msgs, EventKind.BOOT)
     assert [b.code for b in boots] == [ResetCause.WATCHDOG]
+    assert [b.detail for b in boots] == [1]  # the envelope kept what the coils spent (docs/safety.md)
 
 
 def test_power_on_boot_reports_power_on(r1):
@@ -316,6 +317,7 @@ def test_power_on_boot_reports_power_on(r1):
     board.advance(0.05)
     boots = events(FrameDecoder().feed(board.read()), EventKind.BOOT)
     assert [b.code for b in boots] == [ResetCause.POWER_ON]
+    assert [b.detail for b in boots] == [0]  # a cold budget
 
 
 def test_a_slave_stranded_mid_byte_is_clocked_free_without_a_hang_or_a_fault(r1):

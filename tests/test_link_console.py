@@ -281,6 +281,7 @@ def test_events_name_kinds_faults_reasons_limbs_and_actuators_never_raw_codes():
     assert text(EventKind.LEVEL_DONE, 1, 0b10).endswith("level calibration refused: TOO_TILTED (right)")
     assert text(EventKind.LEVEL_DONE, 0, 3).endswith("level calibration done")
     assert text(EventKind.BOOT, 4, 0).endswith("boot (reset cause WATCHDOG)")
+    assert text(EventKind.BOOT, 2, 1).endswith("boot (reset cause EXTERNAL; the envelope kept what the coils spent)")
     assert "unknown 99" in describe_event(_event(2, 99, 0).message.fields)
 
 

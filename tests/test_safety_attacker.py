@@ -269,6 +269,7 @@ def test_a_board_reset_and_a_start_at_once_do_not_refresh_the_envelope(rig, caus
     rig.ticks(4000)
     boots = rig.events(EventKind.BOOT)
     assert len(boots) >= 8 and all(m.code == RESTART_CAUSES[cause] for m in boots[-8:])
+    assert [m.detail for m in boots[-8:]] == [1] * 8  # each said it kept what the coils spent
     assert rig.monitor.ch[0].longest_on_us > rig.env.max_on_us // 2  # it was heated, within its limits
 
 
@@ -724,7 +725,8 @@ def test_a_reset_pin_and_a_start_at_once_do_not_refresh_the_envelope_on_the_emul
         rig.send("START", gait=GAIT_USER, direction=0)
         rig.ticks(1)
     rig.ticks(2500)
-    assert [m.code for m in rig.events(EventKind.BOOT)][-2:] == [RESTART_CAUSES["external"]] * 2
+    boots = rig.events(EventKind.BOOT)[-2:]
+    assert [(m.code, m.detail) for m in boots] == [(RESTART_CAUSES["external"], 1)] * 2
     assert rig.monitor.ch[0].longest_on_us > rig.env.max_on_us // 2
 
 

@@ -53,6 +53,7 @@ void app_init(void)
 {
     uint8_t i;
     uint8_t cause = hal_reset_cause();
+    uint8_t kept;
     INIT_ZERO(st); /* again on host-sim's reset */
     INIT_ZERO(overruns);
     st.ms_us = hal_micros();
@@ -63,7 +64,7 @@ void app_init(void)
     telemetry_init();
     drive_init();
     imucheck_init();
-    sma_init(cause != HAL_RESET_POWER_ON);
+    kept = sma_init(cause != HAL_RESET_POWER_ON);
     guard_init(); /* safety: the step guard on real time */
     psi_init();
     ctl_reset();
@@ -71,7 +72,7 @@ void app_init(void)
     seq_init();
     cmd_init();
     cmd_send_info(0);
-    tx_event(PROTO_EV_BOOT, cause, 0);
+    tx_event(PROTO_EV_BOOT, cause, kept);
     for (i = 0; i < CFG_N_LIMBS; i++) {
         imucheck_power_up(i);
     }

@@ -157,12 +157,13 @@ static uint32_t window_sum(uint8_t act)
     return t;
 }
 
-void sma_init(uint8_t warm)
+uint8_t sma_init(uint8_t warm)
 {
     /* the slot indexes the window: one out of range is RAM this build did not leave */
     if (!warm || kept.mark != SMA_KEPT_MARK || kept.slot >= SMA_WIN_SLOTS) {
         memset(&kept, 0, sizeof kept);
         kept.mark = SMA_KEPT_MARK;
+        warm = 0;
     }
 #ifdef CFG_COIL_TAU_MS
     else {
@@ -179,6 +180,7 @@ void sma_init(uint8_t warm)
     last_us = hal_micros();
     ROM_COPY(&st, &st_init, sizeof st);
     every_channel_off();
+    return warm;
 }
 
 void sma_request(uint8_t act, uint16_t duty_pm)

@@ -58,8 +58,9 @@
 #define SMA_DT_CAP_US ELAPSED_CAP_US
 
 /* warm: the chip reset without losing power (hal_reset_cause() not HAL_RESET_POWER_ON): keep
- * the budget this build's last run left in RAM, if it is there. */
-void sma_init(uint8_t warm);
+ * the budget this build's last run left in RAM, if it is there. Returns 1 if it kept it, 0 if
+ * the budget starts cold (the BOOT event's detail). */
+uint8_t sma_init(uint8_t warm);
 
 /* Duty (permyriad) the controller wants for actuator `act` from the next sma_tick on. */
 void sma_request(uint8_t act, uint16_t duty_pm);

@@ -144,6 +144,7 @@ def event_text(f: dict, names: RobotNames = RobotNames(), state_label: object = 
         on = f" ({names.limb_set(detail)})" if code in (LevelResult.TOO_TILTED, LevelResult.IMU) else ""
         return f"level calibration refused: {enum_name(LevelResult, code)}{on}"
     if k == EventKind.BOOT:
-        return f"boot (reset cause {enum_name(ResetCause, code)})"
+        kept = "; the envelope kept what the coils spent" if detail == 1 else ""
+        return f"boot (reset cause {enum_name(ResetCause, code)}{kept})"
     return f"{k.name.lower()} (code {code}, detail {detail})"
 

@@ -50,7 +50,7 @@ class FaultCode(IntEnum):
 class EventKind(IntEnum):
     """``EVENT.kind``; the meaning of ``code``/``detail`` per kind is in the comment."""
 
-    BOOT = 0  # code = ResetCause, detail = 0
+    BOOT = 0  # code = ResetCause, detail = 1 if the safety envelope kept what the coils spent before the reset, else 0
     STATE_REACHED = 1  # code = gait step index, detail = state index
     FAULT = 2  # code = FaultCode, detail = limb/channel index
     GAIT_STARTED = 3  # code = gait index, detail = Direction (DIR_UNSTATED for a loaded gait's unstated way)
