@@ -3,7 +3,9 @@
  * every tick (envelope.h aborts on a violation).
  *
  * Input: a program of ops, each one byte, some followed by arguments:
- *   0x00-0x3F  write the next (op + 1) bytes to the UART as they are (noise, partial frames)
+ *   0x00-0x3E  write the next (op + 1) bytes to the UART as they are (noise, partial frames)
+ *   0x3F       the board resets without losing power (sim_restart: cause (next byte & 3) + 2,
+ *              external, brown-out, watchdog or software); the monitor goes on across it
  *   0x40-0x7F  run (op & 0x3F) + 1 ticks
  *   0x80-0xBF  run ((op & 0x3F) + 1) × 64 ticks (long waits: on-limits, timeouts, windows)
  *   0xC0-0xFF  limb = op & 1, what = (op >> 1) & 3:
@@ -23,6 +25,7 @@
 #include "envelope.h"
 
 void sim_reset(uint32_t seed);
+void sim_restart(uint8_t cause);
 void sim_run_ticks(uint32_t n);
 uint64_t sim_time_us(void);
 uint16_t sim_pwm_duty(uint8_t ch);
@@ -83,7 +86,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     limbs = sim_n_limbs();
     while (i < size) {
         uint8_t op = data[i++];
-        if (op < 0x40u) {
+        if (op == 0x3Fu) {
+            if (i >= size) {
+                break;
+            }
+            sim_restart((uint8_t)((data[i++] & 3u) + 2u));
+            drain();
+        } else if (op < 0x40u) {
             size_t n = (size_t)op + 1u;
             if (n > size - i) {
                 n = size - i;

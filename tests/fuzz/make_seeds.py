@@ -29,8 +29,14 @@ def frame(name: str, **fields) -> bytes:
 
 def raw(b: bytes) -> bytes:
     """App op: write these bytes to the UART as they are."""
-    assert 1 <= len(b) <= 64
+    assert 1 <= len(b) <= 63
     return bytes([len(b) - 1]) + b
+
+
+def restart(cause: int) -> bytes:
+    """App op: the board resets without losing power (cause 2 external .. 5 software)."""
+    assert 2 <= cause <= 5
+    return bytes([0x3F, cause - 2])
 
 
 def ticks(n: int) -> bytes:
@@ -88,6 +94,9 @@ APP = {
     + cmd("CLEAR", what=7) + cmd("START", **START) + ticks(50) + imu(1, 1) + ticks(10),
     "noise_and_partial_frames": raw(b"\x00\x01\x02\x03garbage\x00") + raw(frame("STOP")[:-3]) + ticks(3)
     + cmd("PING") + ticks(3),
+    "reset_and_start_at_once": BOOT + cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER)
+    + (ticks(2000) + restart(2) + BOOT + cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER)) * 4
+    + restart(3) + BOOT + cmd("START", **START) + ticks(3000),
     "hold_forever": BOOT + cmd("LOAD_GAIT", states=(2, 3)) + cmd("START", **USER) + ticks(20) + psi(0, 25)
     + ticks(4000),
 }
