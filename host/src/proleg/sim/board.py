@@ -61,6 +61,11 @@ class SimulatedBoardLike(Protocol):
     def reset(self, seed: int = 1) -> None:
         """Power-on reset: firmware state cleared, time 0, FIFOs empty; ``seed`` seeds the models."""
 
+    def restart(self, cause: str = "external") -> None:
+        """A reset that is not a power-on ("external": the reset pin; the host-sim build also
+        "brown-out", "watchdog" and "software"): the firmware restarts, RAM keeps what the
+        chip's keeps, the models stay powered."""
+
     def run_ticks(self, n: int) -> None:
         """Run ``n`` control ticks of the firmware."""
 
