@@ -183,6 +183,11 @@ def _attacker(rig: Rig) -> type[RuleBasedStateMachine]:
         def wait(self, n):
             rig.ticks(n)
 
+        @rule(cause=st.sampled_from(["external", "brown-out", "watchdog"]))
+        def board_resets(self, cause):
+            rig.restart(cause)  # the plant and the monitor go on: what the coils spent is kept
+            rig.ticks(60)
+
         @rule(act=st.sampled_from([a.name for a in robot.actuators]))
         def dead_coil(self, act):
             rig.sim.inject(f"dead-actuator:{act}")  # the envelope's rules hold whatever lifts its limbs
