@@ -490,12 +490,12 @@ def test_a_body_too_soft_for_the_model_is_filed_under_working_strain_not_length_
     with caplog.at_level(logging.WARNING, logger="proleg"):
         robot = load_robot(path)
     warned = [r.getMessage() for r in caplog.records if "curl over itself" in r.getMessage()]
-    assert len(warned) == 1 and f"{path}: plant.working_strain: coil 1 spans 48 mm" in warned[0], warned
+    assert len(warned) == 1 and f"{path}: plant.working_strain: coil 'sma-left' spans 48 mm" in warned[0], warned
     assert "a shorter body ([plant] length_mm) or a stiffer one (a smaller working_strain than 0.2)" in warned[0]
-    with pytest.raises(SimError, match=r"r1\.toml: plant\.working_strain: coil 1 spans 48 mm .* curl over itself"):
+    with pytest.raises(SimError, match=r"r1\.toml: plant\.working_strain: coil 'sma-left' spans 48 mm .* curl over itself"):
         PhysicalPlant(robot)
     path.write_text(src + "\n[plant]\nlength_mm = 1000\nworking_strain = 0.05\n")
-    with pytest.raises(SimError, match=r"r1\.toml: plant\.length_mm: coil 1 spans"):
+    with pytest.raises(SimError, match=r"r1\.toml: plant\.length_mm: coil 'sma-left' spans"):
         PhysicalPlant(load_robot(path))
 
 

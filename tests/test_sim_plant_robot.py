@@ -126,7 +126,7 @@ def test_a_body_that_would_curl_over_itself_is_refused_by_the_physical_plant_and
     with caplog.at_level(logging.WARNING, logger="proleg"):
         long = r1_with_plant({"length_mm": 1000.0})
     warned = [r.getMessage() for r in caplog.records]
-    assert len(warned) == 1 and "plant.length_mm: coil 1 spans 508 mm" in warned[0], warned
+    assert len(warned) == 1 and "plant.length_mm: coil 'sma-left' spans 508 mm" in warned[0], warned
     assert "bends it by 873°" in warned[0] and "curl over itself" in warned[0]
     assert "gait and build go on" in warned[0]  # the warning says what it stops, the error below stops it
     with pytest.raises(SimError, match="past the 180° the physical plant models"):
@@ -135,6 +135,30 @@ def test_a_body_that_would_curl_over_itself_is_refused_by_the_physical_plant_and
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(r1_with_plant({"length_mm": 190.0}), "physical")
     assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
+def test_a_body_that_would_curl_names_the_coil_by_its_actuator_name(caplog):
+    """Five limbs on coils named c0..c4 and a 300 mm body: the load warning and the physical
+    plant's refusal said "coil 2", which a lab reads as its coil c2 (or channel 2); the coil
+    that curls is c1, the second [[actuator]]. Messages name actuators as the file does."""
+    import logging
+
+    from proleg.errors import SimError
+    from proleg.sim.closed_loop import make_plant
+
+    doc = tomllib.loads((ROBOTS / "paper-r1.toml").read_text())
+    doc["limb"] = [{"name": f"l{i}", "psi_star_deg": [18.0], "actuator": f"c{i}", "friction": "D1"}
+                   for i in range(5)]
+    doc["actuator"] = [{"name": f"c{i}"} for i in range(5)]
+    doc["transitions"] = {"matrix": "unmeasured", "allow": "one-level"}
+    doc["control"] = {"tick_hz": 400}
+    doc["plant"] = {"length_mm": 300.0, "working_strain": 0.08}
+    with caplog.at_level(logging.WARNING, logger="proleg"):
+        robot = robot_from_dict(doc, Path("mole.toml"))
+    warned = [r.getMessage() for r in caplog.records if "curl over itself" in r.getMessage()]
+    assert len(warned) == 1 and "plant.length_mm: coil 'c1' spans 91 mm" in warned[0], warned
+    with pytest.raises(SimError, match="plant.length_mm: coil 'c1' spans 91 mm"):
+        make_plant(robot, "physical")
 
 
 def test_a_supply_that_would_anneal_a_coil_within_the_envelope_is_warned_about(caplog):

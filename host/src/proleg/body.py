@@ -34,7 +34,7 @@ the robot-file check compares with the limb's critical angles (``proleg.robot``)
 from __future__ import annotations
 
 import math
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -104,13 +104,16 @@ def body_geometry(limb_actuators: list[int], n_actuators: int, length_mm: float,
 MAX_BEND_DEG = 180.0
 
 
-def curl_problem(geo: BodyGeometry) -> str:
+def curl_problem(geo: BodyGeometry, names: Sequence[str] = ()) -> str:
     """Why the model cannot describe this body ("" when it can): a coil whose section bends
-    past ``MAX_BEND_DEG`` at full stroke (curvature × its span; a long body with few coils)."""
+    past ``MAX_BEND_DEG`` at full stroke (curvature × its span; a long body with few coils).
+    The coil is named by its ``[[actuator]]`` name where ``names`` gives them (messages name
+    actuators as the robot file does: "coil 2" of a file whose coils are c0..c4 was c1)."""
     for j, (a, b) in enumerate(geo.spans):
         bend = math.degrees(geo.kappa_max_per_mm * (b - a))
         if bend > MAX_BEND_DEG:
-            return (f"coil {j + 1} spans {b - a:.0f} mm of the {geo.length_mm:g} mm body and bends it by "
+            coil = f"coil {names[j]!r}" if j < len(names) else f"coil {j + 1}"
+            return (f"{coil} spans {b - a:.0f} mm of the {geo.length_mm:g} mm body and bends it by "
                     f"{bend:.0f}° at full stroke, past the {MAX_BEND_DEG:.0f}° the physical plant models "
                     f"(the body would curl over itself): give a shorter body ([plant] length_mm) or a stiffer one "
                     f"(a smaller working_strain than {geo.working_strain:g}), or the robot more limbs and coils "

@@ -19,7 +19,7 @@ the robot file's plausibility checks (``robot_body``), warnings, not refusals:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -49,7 +49,7 @@ def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: 
     limb_actuators = [actuators.index(lb.actuator) for lb in limbs]
     if len(limbs) < 2:
         return []
-    reach = body_reach(limb_actuators, len(actuators), section)
+    reach = body_reach(limb_actuators, len(actuators), section, actuators)
     if isinstance(reach, str):
         return [f"{path}: plant.{curl_key(section.given)}: {reach} (gait and build go on; the physical plant of "
                 "`proleg sim` and `learn --sim` refuses such a body, `--plant table` runs it)"]
@@ -58,13 +58,13 @@ def reach_warnings(path: Path, limbs: list[Any], actuators: list[str], section: 
             unreachable_holds(path, limbs, own, full, section, hold_margin_deg))
 
 
-def body_reach(limb_actuators: list[int], n_actuators: int,
-               section: PlantSection) -> tuple[list[float], list[float]] | str:
+def body_reach(limb_actuators: list[int], n_actuators: int, section: PlantSection,
+               names: Sequence[str] = ()) -> tuple[list[float], list[float]] | str:
     """ψ per limb on the physical plant's body: ``(own, full)``, with only the limb's own coil
     at full stroke and with every coil at full stroke; or, for a body too long for the model,
-    why (``body.curl_problem``)."""
+    why (``body.curl_problem``, naming the coil by ``names``: the actuators' names)."""
     geo = body_of(limb_actuators, n_actuators, section)
-    curl = curl_problem(geo)
+    curl = curl_problem(geo, names)
     if curl:
         return curl
     own = own_reach_deg(geo, limb_actuators)

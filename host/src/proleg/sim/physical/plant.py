@@ -96,7 +96,7 @@ class PhysicalPlant:
         length = p.length_mm if p.length_mm is not None else robot_length_mm(robot, nl)
         strain = p.working_strain if p.working_strain is not None else robot_working_strain(robot)
         geo = body_geometry(by_limb, na, length, overlap, p.coil_offset_mm, strain)
-        curl = curl_problem(geo)
+        curl = curl_problem(geo, anames)
         if curl:
             given = getattr(getattr(robot, "plant", None), "given", ())
             raise SimError(f"{getattr(robot, 'path', robot.name)}: plant.{curl_key(given)}: {curl}")
