@@ -317,6 +317,35 @@ def test_the_entry_path_avoids_a_step_the_shared_coil_cannot_make():
         entry_path(robot, robot.transitions.sequence("0011,0111,0011"))
 
 
+CRAB = Path(__file__).parent / "fixtures" / "crab-3-entry.toml"  # 010, 011, 020, 021 cannot be held
+
+
+def test_the_entry_path_keeps_out_of_states_the_body_cannot_hold_where_it_can():
+    """The shortest way into 120 121 120 was 000 -> 010 -> 020 -> 120, through two states the
+    load check warns the body cannot hold: the firmware follows it and stopped in STATE_TIMEOUT
+    (110 -> 020, the back pad lifted) before the gait began, while `proleg gait` listed the gait
+    without a word. 000 -> 100 -> 110 -> 120 is as short and holdable."""
+    robot = load_robot(CRAB)
+    assert {robot.transitions.index(s) for s in ("010", "020")} <= set(robot.unholdable)
+    path = entry_path(robot, robot.transitions.sequence("120,121,120"))
+    assert [robot.transitions.label(s) for s in path.states] == ["000", "100", "110", "120"]
+    assert gait_problems(robot, robot.transitions.sequence("120,121,120")) == []
+
+
+def test_an_entry_path_only_through_states_the_body_cannot_hold_is_an_unholdable_error(tmp_path):
+    text = CRAB.read_text(encoding="utf-8").replace('allow = "one-level"',
+                                                   'allow = "one-level"\nforbidden = ["000->100", "000->001"]')
+    robot = robot_from(tmp_path, text)
+    walk = robot.transitions.sequence("120,121,120")
+    path = entry_path(robot, walk)  # no other way in: the shortest, as before
+    assert [robot.transitions.label(s) for s in path.states] == ["000", "010", "020", "120"]
+    [p] = [p for p in gait_problems(robot, walk) if p.kind == "unholdable"]
+    assert p.severity == "error"
+    assert p.message.startswith("gait 120 121 120: its entry from rest (000 010 020 120) goes to states 010, 020, "
+                                "which the simulated body cannot hold, and there is no other way in: in 010 "
+                                "'back' (level 0) sits at"), p.message
+
+
 def _inchworm_middle_on_the_tail_coil(tmp_path: Path):
     """inchworm-3 with its middle limb named on the tail's coil (a lab wiring two limbs to one
     coil): in the model the coil sits at the tail and bends the middle to 8.1° alone."""

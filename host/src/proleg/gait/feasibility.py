@@ -53,7 +53,7 @@ is the gait's first transition), as everywhere in proleg's messages.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -364,9 +364,36 @@ def gait_problems(robot: "Robot", states: Sequence[int], from_rest: bool = True)
     if not from_rest:
         return out
     try:
-        entry_path(robot, cycle)
+        entry = entry_path(robot, cycle).states
     except GaitError as e:
         out.append(Problem("no-entry", "error", str(e)))
+        return out
+    return out + _entry_body_problems(robot, gait, cycle, entry)
+
+
+def _entry_body_problems(robot: "Robot", gait: str, cycle: list[int], entry: Sequence[int]) -> list[Problem]:
+    """The ``unholdable`` and ``blocked`` errors of a gait's entry path from rest, where every
+    way in goes through a state the body cannot hold or a step it cannot end (``entry_path``
+    keeps out of them where it can): the firmware follows that path, and it ends in
+    STATE_TIMEOUT before the gait begins, though the gait's own steps are clean."""
+    label = robot.transitions.label
+    steps = list(zip(entry, entry[1:]))
+    out = []
+    unheld = [b for _, b in steps if b in getattr(robot, "unholdable", {}) and b not in cycle]
+    if unheld:
+        named = ", ".join(label(b) for b in unheld[:3]) + (f" and {len(unheld) - 3} more" if len(unheld) > 3 else "")
+        out.append(Problem("unholdable", "error",
+                           f"gait {gait}: its entry from rest ({_name(robot, entry)}) goes to state"
+                           f"{'s' if len(unheld) > 1 else ''} {named}, which the simulated body cannot hold, and "
+                           f"there is no other way in: {unholdable_why(robot, unheld[0])}"))
+    stuck = [(a, b) for a, b in steps if (a, b) in getattr(robot, "blocked", {}) and b not in unheld]
+    if stuck:
+        a, b = stuck[0]
+        named = ", ".join(f"{label(x)} -> {label(y)}" for x, y in stuck[:3])
+        out.append(Problem("blocked", "error",
+                           f"gait {gait}: its entry from rest ({_name(robot, entry)}) makes the step"
+                           f"{'s' if len(stuck) > 1 else ''} {named}{' and more' if len(stuck) > 3 else ''}, which "
+                           f"the simulated body cannot end, and there is no other way in: {blocked_why(robot, a, b)}"))
     return out
 
 
@@ -380,10 +407,32 @@ def check_gait(robot: "Robot", states: Sequence[int]) -> None:
 def entry_path(robot: "Robot", states: Sequence[int], rest: int = REST) -> EntryPath:
     """The shortest walk from ``rest`` into the gait over allowed transitions that the
     hardware can make (no shared actuator moving its limbs apart); ties go to the gait state
-    that comes first in the gait, then to the lowest states. GaitError when there is none."""
+    that comes first in the gait, then to the lowest states. GaitError when there is none.
+
+    A walk that keeps out of the states the body cannot hold (``Robot.unholdable``) and the
+    steps it cannot end (``Robot.blocked``) is taken where there is one, however much longer:
+    the shortest walk went through them (a three-limb robot's -x gait entered by 000 -> 010 ->
+    020 -> 120, its back pad lifted past its edge in 010 and 020, when 000 -> 100 -> 110 -> 120
+    was there), and the firmware, which follows this path, stopped in STATE_TIMEOUT before the
+    gait began. Where every walk goes through one, ``gait_problems`` says so."""
     cycle = _open(states)
     if rest in cycle:
         return EntryPath((rest,), cycle.index(rest))
+    unheld = getattr(robot, "unholdable", {})
+    blocked = getattr(robot, "blocked", {})
+
+    def holdable(a: int, b: int) -> bool:  # a gait state's own trouble is the gait's problem
+        return (b not in unheld or b in cycle) and (a, b) not in blocked
+
+    try:
+        return _entry_path(robot, cycle, rest, holdable)
+    except GaitError:
+        return _entry_path(robot, cycle, rest, lambda a, b: True)
+
+
+def _entry_path(robot: "Robot", cycle: list[int], rest: int, ok: Callable[[int, int], bool]) -> EntryPath:
+    """``entry_path``'s breadth-first search over the steps the hardware can make and ``ok``
+    lets through."""
     table: TransitionTable = robot.transitions
     targets = {s: i for i, s in reversed(list(enumerate(cycle)))}
     parent = {rest: rest}
@@ -401,7 +450,8 @@ def entry_path(robot: "Robot", states: Sequence[int], rest: int = REST) -> Entry
         for a in layer:
             lo, hi = table.src.searchsorted(a), table.src.searchsorted(a, side="right")
             for b in sorted(int(x) for x in table.dst[lo:hi]):
-                if b not in parent and not any(sev == "error" for _, sev, _ in step_problems(robot, a, b)):
+                if b not in parent and ok(a, b) and not any(
+                        sev == "error" for _, sev, _ in step_problems(robot, a, b)):
                     parent[b] = a
                     queue.append(b)
     raise GaitError(
