@@ -633,3 +633,21 @@ def test_the_fallback_does_not_heat_a_coil_for_the_limb_whose_coil_it_gave_up(ca
     assert peak < 100, out
     cycles = int(re.search(r"cycles completed: (\d+)", out).group(1))
     assert cycles >= 4 and rc == 1, out  # the STATE_TIMEOUT that gave the coil up is a fault
+
+
+def test_the_dead_fallback_leaves_out_what_the_body_cannot_hold_or_end():
+    """A three-limb robot (4, 3 and 2 levels) whose middle pad raised lifts the back pad past
+    its edge (010, 011, 020, 021: load warnings, `unholdable` in every gait): without the back
+    coil the firmware was built to fall back on +x 000 -> 010 -> 011 -> 001, through two of
+    them, which would have ended in STATE_TIMEOUT too. The dead mode keeps the compiled map, so
+    the intact body's states it cannot hold and steps it cannot end are out of its table."""
+    from proleg.limbloss import dead_table
+
+    robot = load_robot(ROOT / "tests" / "fixtures" / "crab-3-entry.toml")
+    t = robot.transitions
+    unheld = {t.label(s) for s in robot.unholdable}
+    assert {"010", "011"} <= unheld and ("000", "010") in _pairs(t)
+    for lost in range(len(robot.actuators)):
+        pairs = _pairs(dead_table(robot, lost))
+        assert pairs and not any(a in unheld or b in unheld for a, b in pairs), robot.actuators[lost].name
+        assert not any((t.index(a), t.index(b)) in robot.blocked for a, b in pairs)

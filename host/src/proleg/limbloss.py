@@ -85,14 +85,28 @@ def _unreachable(robot, t: TransitionTable) -> np.ndarray:
 def dead_table(robot, lost: int | Iterable[int]) -> TransitionTable:
     """The robot's table without the transitions that need actuator ``lost`` (module doc; or
     any of several actuators: a host that lost one after another), nor those into or out of a
-    state the robot cannot reach (``_unreachable``)."""
+    state the robot cannot reach (``_unreachable``), nor those the body cannot make with the
+    compiled map (``_unheld``): the dead mode keeps that map, so what the intact body cannot
+    hold or end it cannot either."""
     t = robot.transitions
     amap = compiled_map(robot)
     gone = {int(lost)} if isinstance(lost, numbers.Integral) else {int(x) for x in lost}
     driven = [i for i, a in enumerate(amap) if a in gone]
     up = np.array([any(limb_levels(s, t.levels)[i] > 0 for i in driven) for s in range(t.n_states)], dtype=bool)
     up |= _unreachable(robot, t)
-    return t.restricted(~(up[t.src] | up[t.dst]))
+    return t.restricted(~(up[t.src] | up[t.dst]) & _unheld(robot, t))
+
+
+def _unheld(robot, t: TransitionTable) -> np.ndarray:
+    """Per transition of ``t``: False where the intact body cannot make it, into or out of a
+    state it cannot hold (``Robot.unholdable``) or a step it cannot end (``Robot.blocked``),
+    the load warnings the gait check turns into errors. A three-limb robot without its back
+    coil fell back on 000 -> 010 -> 011 -> 001, in 010 and 011 the back pad lifted past its edge
+    by the middle one: the fallback the firmware switches to would have ended in STATE_TIMEOUT."""
+    unheld = getattr(robot, "unholdable", {})
+    blocked = getattr(robot, "blocked", {})
+    return np.array([int(a) not in unheld and int(b) not in unheld and (int(a), int(b)) not in blocked
+                     for a, b in zip(t.src, t.dst)], dtype=bool)
 
 
 def foreign_top_level(robot, limb: int, actuator: int) -> int:
