@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -161,3 +162,17 @@ def test_an_on_limit_hit_the_gait_walks_on_from_is_reported_in_the_note_and_a_la
     assert out.reported.startswith("SMA_ON_LIMIT ×"), out
     out = claim.feedback_run(robot, claim.point("fatigue (strong)"), gait=[2, 3, 2], duration_s=12.0)
     assert not out.completed and out.fault and not out.reported, out
+
+
+def test_a_state_the_idealised_drive_cannot_reach_is_named_by_its_label():
+    """crab-3 (4, 3 and 2 levels): the middle pad raised to level 2 lifts the back pad past its
+    edge, so 020 is never reached and the envelope's state timeout latches. `proleg check` said
+    "state 4 not reached within state_timeout_ms", the state's index; messages name states by
+    their labels (state 4 of this robot is 020, of a binary three-limb one 100)."""
+    import pytest
+    from proleg.sim.physical.drive import run_sequence
+    from proleg.sim.physical.envelope import EnvelopeLatched
+
+    robot = load_robot(Path(__file__).parent / "fixtures" / "crab-3-entry.toml")
+    with pytest.raises(EnvelopeLatched, match=r"state timeout: state 020 not reached within state_timeout_ms"):
+        run_sequence(robot, robot.transitions.sequence("000,010,020,010,000"), envelope=True)

@@ -76,6 +76,9 @@ class IdealDrive:
         self.limb_act = [names.index(lb.actuator) for lb in robot.limbs]
         self.n_act = len(names)
         self.levels = plant.levels
+        # states in messages by label ("020"), as everywhere: a check's error said "state 4"
+        table = getattr(robot, "transitions", None)
+        self.label = table.label if table is not None else str
         self.th = plant.true_psi_star_deg
         self.margin = margin_deg
         self.stroke = [getattr(lb, "stroke_deg", None) for lb in robot.limbs]
@@ -310,8 +313,8 @@ def _run_to(plant: PhysicalPlant, drive: IdealDrive, target: int, duty: float, d
             since = None
             if envelope is not None and first is None and away > envelope.state_timeout_s:
                 raise EnvelopeLatched("STATE_TIMEOUT", (
-                    f"the safety envelope's state timeout: state {target} not reached within state_timeout_ms "
-                    f"({envelope.state_timeout_s * 1000:.0f} ms)"))
+                    f"the safety envelope's state timeout: state {drive.label(target)} not reached within "
+                    f"state_timeout_ms ({envelope.state_timeout_s * 1000:.0f} ms)"))
         if now > timeout_s:
             return None
 
@@ -337,10 +340,10 @@ def run_sequence(robot: Any, states: Sequence[int], *, cycles: int = 3, conditio
     def one_cycle() -> None:
         for s in seq[1:] + seq[:1]:
             if _run_to(plant, drive, s, duty, dt_s, timeout_s, settle_s, gate) is None:
-                raise SimError(f"run_sequence: state {s} not reached within {timeout_s} s")
+                raise SimError(f"run_sequence: state {drive.label(s)} not reached within {timeout_s} s")
 
     if _run_to(plant, drive, seq[0], duty, dt_s, timeout_s, settle_s, gate) is None:
-        raise SimError(f"run_sequence: start state {seq[0]} not reached")
+        raise SimError(f"run_sequence: start state {drive.label(seq[0])} not reached")
     one_cycle()
     x0, t0 = plant.displacement_mm, plant.time_s
     for _ in range(cycles):
