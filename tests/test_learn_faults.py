@@ -213,6 +213,41 @@ def test_a_fault_while_making_a_transition_is_recorded_cooled_cleared_and_never_
         assert ex.tally()[1] == 0
 
 
+class _Cooling(_Faulting):
+    """A robot measured in ``first`` (a limb still up, its coil cooling) and at rest after that."""
+
+    def __init__(self, robot, log, first, **kw):
+        super().__init__(robot, log, [], **kw)
+        self.seen = [first]
+
+    def measured_state(self) -> int:
+        return self.seen.pop(0) if self.seen else 0
+
+
+def test_a_robot_measured_where_no_piece_starts_is_looked_at_again_until_it_rests(tmp_path):
+    """crab-3 (its 010 cannot be held: no transition into or out of it is asked for) measured
+    in 010, as a robot whose middle coil still cools after a fault: learning stopped with
+    "from 010, where the robot rests, no piece … reaches" every transition left, the robot on
+    its way to 000 (a six-limb robot 0.6 s after a STATE_TIMEOUT). It looks again until the
+    state stops changing, and goes on from there."""
+    from proleg.learn import runner
+
+    robot = load_robot(ROOT / "tests" / "fixtures" / "crab-3-entry.toml")
+    t = robot.transitions
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = _Cooling(robot, log, t.index("010"), repeats=1, seed=1)
+        ex.run(max_pieces=1)
+        assert ex.asked and t.label(ex.asked[0][0]) == "000"
+        look = f"rest {runner.SETTLE_LOOK_S:g}"
+        assert ex.did[:2] == [look, look]  # 000, then 000 again
+    with TrialLog(tmp_path / "u.jsonl") as log:  # a robot that stays where no piece starts: the error, as before
+        ex = _Cooling(robot, log, t.index("010"), repeats=1, seed=1)
+        ex.seen = [t.index("010")] * 3
+        ex.measured_state = lambda: t.index("010")
+        with pytest.raises(ExplorationError, match="from 010, where the robot rests, no piece"):
+            ex.run(max_pieces=1)
+
+
 @pytest.mark.parametrize("faults, why", [
     (["estop"], "the robot stopped"),  # not a transition's fault: stops as before
     (["timeout"] * FAULTS_IN_A_ROW, f"the robot faulted on {FAULTS_IN_A_ROW} transitions in a row"),

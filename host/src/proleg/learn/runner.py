@@ -19,7 +19,8 @@ left, instead of running for ever.
 A fault of making a transition (STATE_TIMEOUT, SMA_ON_LIMIT while a piece's transition is
 under way), predicted by the body model or not, does not end the run: ``_after_fault`` records
 the transition as not made (``measure.Failure``, in the log), rests the robot with the fault
-still latched (``fault_rest_s``), clears it (``RobotClient.clear``) and plans again without it;
+still latched (``fault_rest_s``), clears it (``RobotClient.clear``) and plans again without it
+(from where the robot settles: ``_settled_state``, where no piece starts from where it is first measured);
 it is never asked for again in the run (``plan_table``), and what only it led to gets no
 trials. Any other stop (an E-stop, a fault while no transition is under way, another kind of
 fault) and ``FAULTS_IN_A_ROW`` such faults with no transition made between them end the run
@@ -78,6 +79,11 @@ STATE_FRAMES = 200
 #: transitions in a row the robot faults on (no trial made between them) before ``Explorer.run``
 #: stops: one fault is the transition's, several in a row more likely the robot's (a dead coil)
 FAULTS_IN_A_ROW = 3
+#: a robot with no piece from where it is measured is looked at again this often (s), for at most
+#: ``SETTLE_MAX_S``, until its state stops changing (``Explorer._settled_state``): a coil cooling
+#: through its transformation lowers its limb within a few seconds
+SETTLE_LOOK_S = 1.0
+SETTLE_MAX_S = 30.0
 #: the faults of making a transition (the robot did not get there): ``Explorer.run`` records the
 #: transition as not made, cools, clears and goes on; any other fault stops it
 MAKING_FAULTS = (FaultCode.STATE_TIMEOUT, FaultCode.SMA_ON_LIMIT)
@@ -257,7 +263,14 @@ class Explorer:
             if demand.sum() == 0:
                 break
             start = self.measured_state()
-            piece = self.next_piece(start, demand)
+            try:
+                piece = self.next_piece(start, demand)
+            except ExplorationError:
+                # no piece from where the robot is: it may not be resting there yet
+                settled = self._settled_state(start)
+                if settled == start:
+                    raise
+                piece = self.next_piece(settled, demand)
             if piece is None:  # manual entry did all it can from where the robot rests
                 break
             began = self._clock()
@@ -287,6 +300,25 @@ class Explorer:
                     "again with the same --log to go on")
             self._rest(self.limits.rest_s)
         return added
+
+    def _settled_state(self, state: int) -> int:
+        """The robot's measured state once it stops changing: rests of ``SETTLE_LOOK_S`` while
+        each shows another state than the last, for at most ``SETTLE_MAX_S``. After a fault's
+        rest (``fault_rest_s``, from the envelope's ``max_duty`` and ``min_cooldown_ms``) a coil
+        may still be cooling through its transformation: a six-limb robot with max_duty 1 and
+        min_cooldown_ms 300 was measured at 110000 (a shared coil's two limbs still up) 0.6 s
+        after a STATE_TIMEOUT, no piece led from there, and learning stopped with "from 110000,
+        where the robot rests, no piece … reaches" every transition left, the robot on its way
+        to 000000."""
+        waited = 0.0
+        while waited < SETTLE_MAX_S:
+            self._rest(SETTLE_LOOK_S)
+            waited += SETTLE_LOOK_S
+            now = self.measured_state()
+            if now == state:
+                break
+            state = now
+        return state
 
     def _after_fault(self, e: ExplorationError, driven_s: float) -> list[Trial]:
         """Go on after the robot faulted while making a transition (``e.making_failed``): record
