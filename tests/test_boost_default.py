@@ -45,13 +45,16 @@ def _hottest(capsys, path) -> tuple[int, float, int]:
     return code, max(got["coil_peak_c"].values()), got["cycles"]
 
 
-def test_a_boosted_worn_coil_overheats_unless_the_heat_ceiling_bounds_it(tmp_path, capsys):
-    code, hottest, _ = _hottest(capsys, _variant(tmp_path, "boost", True, False))
-    assert code != 0 and hottest > 120.0, (code, hottest)
+def test_a_boosted_worn_coil_runs_hotter_unless_the_heat_ceiling_bounds_it(tmp_path, capsys):
+    """The worn row: 114 °C boosted, 96 °C as shipped, 88 °C boosted with the ceiling (131, 110
+    and 88 °C before the hold watch watched a limb that settles short of its hold edge: the
+    boosted run then overheated, exit 1)."""
+    _code, boosted, _ = _hottest(capsys, _variant(tmp_path, "boost", True, False))
     code, hottest, cycles = _hottest(capsys, _variant(tmp_path, "ceiling", True, True))
     assert code == 0 and hottest < 100.0 and cycles >= 2, (code, hottest, cycles)
-    code, hottest, cycles = _hottest(capsys, CATERPILLAR)  # as shipped: no boost
-    assert code == 0 and hottest < 120.0 and cycles >= 2, (code, hottest, cycles)
+    code, shipped, cycles = _hottest(capsys, CATERPILLAR)  # as shipped: no boost
+    assert code == 0 and shipped < 120.0 and cycles >= 2, (code, shipped, cycles)
+    assert boosted > shipped + 10.0, (boosted, shipped)  # heated harder, with nothing to gain
 
 
 def test_the_default_follows_the_body_and_the_heat_ceiling(tmp_path, caplog):

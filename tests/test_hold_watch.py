@@ -111,3 +111,18 @@ def test_a_worn_one_actuator_r1_does_not_heat_its_coil_past_its_transformation()
     if not out.completed:  # a clean stop: a fault of the firmware's, the coil cooling
         assert out.fault == "STATE_TIMEOUT", out
         assert out.coil_max_end_c < 60, out
+
+
+def test_a_worn_limb_that_settles_by_the_margins_short_of_its_hold_edge_is_watched():
+    """snake-8 (tests/fixtures: eight binary limbs on the default 280 mm body), `proleg check
+    --rows 3` row 2, worn by 22,868 cycles: the tail's coil lifts it to 24.95°, just short of its
+    25° hold edge. Settled by the margins, it counted as held, and a held limb is not watched: the
+    bang-bang hold heated it on at the drive duty for 3 s at a time, to 140 °C. A limb counts as
+    held once it got to its hold top; short of it, its rise is watched as before: held where it
+    stopped, it walks, every coil below 120 °C."""
+    robot = load_robot(Path(__file__).parent / "fixtures" / "snake-8.toml")
+    point = claim.GridPoint("worn", (), "random", ("fatigue_cycles=22868",), ())
+    out = claim.feedback_run(robot, point, duration_s=40.0)
+    assert out.fault == "", out
+    assert out.coil_peak_c < claim.OVERHEAT_C, out  # before: 140 °C
+    assert out.completed and out.speed_mm_s > 0.0, out

@@ -65,7 +65,8 @@ typedef struct {
     uint8_t still;     /* ... its looks since hi last rose; NOT_SEEN: none yet */
 #if PSI_IN_LEVEL
     uint8_t risen;     /* rose CTL_MOVE_CDEG into its target level in this step, and has not settled
-                        * there by the margins since (the hold watch's SAG_STOPPED, ctl.c) */
+                        * there by the margins since, with its hold off (at its hold top): the hold
+                        * watch's SAG_STOPPED, ctl.c */
 #endif
 #ifdef CFG_LIMB_STROKE_CDEG
     int16_t peak;      /* ψ (0.01°) when the hover clock last restarted on a climb */

@@ -202,8 +202,9 @@ def boost_ms_of(robot: Any) -> int:
     headroom lifts it. Where a worn coil's stroke may end short of a hold (``worn_holds_of``),
     or of a ``stroke_deg`` (``_worn_short``), a lag may be a coil at the end of its travel,
     and heating it harder only heats it:
-    caterpillar-4 with the boost, worn by 7,220 cycles at 6 °C ambient, reached 131 °C where it
-    walked at 110 °C without (bench/bench_sweep.py --seed 7); off there by default, unless the
+    caterpillar-4 with the boost, worn by 7,220 cycles at 6 °C ambient, reached 114 °C where it
+    walked at 96 °C without (bench/bench_sweep.py --seed 7; 131 and 110 °C before the hold watch
+    watched a limb that settles short of its hold edge); off there by default, unless the
     firmware carries the coil's heat ceiling (safety.coil_heat_ceiling), which bounds it (the
     same row: 88 °C, and it walks). None either way where the drive duty is already the
     ceiling: there is nothing to boost into."""
@@ -240,7 +241,7 @@ def boost_warning(path: Path, limbs: list[Any], actuators: list[str], section: P
     return (f"{path}: control.boost_ms = {control.boost_ms} on a body where a worn coil may end short of its "
             f"hold or stroke (limbs {names}): a worn coil that lags at the end of its travel is heated at safety.max_duty "
             f"{safety.max_duty:g}, through its transformation, with nothing to gain (caterpillar-4 worn by 7,220 "
-            "cycles: 130 °C); set [safety] coil_heat_ceiling = true, which bounds it (88 °C there), or leave "
+            "cycles: 114 °C, 96 °C without); set [safety] coil_heat_ceiling = true, which bounds it (88 °C there), or leave "
             "boost_ms out (off on such a body; docs/control.md, \"The boost\")")
 
 
