@@ -52,6 +52,20 @@ def refuse_inputs(what: str, option: str, out: str | Path, inputs: Mapping[str, 
                              "write the output to another path")
 
 
+def refuse_unwritable(what: str, out: str | Path) -> None:
+    """``LinkError`` now, with the message ``write_text_atomic`` would give at the end, for an
+    output that is a directory or whose folder cannot be written: ``learn --out`` and ``sim
+    --measure-matrix --out`` write after minutes (or hours) of exploring, and a directory given
+    as --out was found only then, the measurement lost. A folder that does not exist is the
+    caller's ``UsageError``, checked before this."""
+    target = output_target(out)[0]
+    why = ("Is a directory" if target.is_dir() else
+           "Permission denied" if not os.access(target.parent, os.W_OK | os.X_OK)
+           or (target.exists() and not os.access(target, os.W_OK)) else "")
+    if why:
+        raise LinkError(f"{what}: cannot write {out}: {why}")
+
+
 def output_target(path: str | Path) -> tuple[Path, bool]:
     """Where an output named ``path`` lands, and whether it is written in place.
 
