@@ -171,6 +171,23 @@ def test_a_gait_that_does_not_walk_on_the_plant_cannot_be_checked(capsys):
     assert rc == 1 and "cannot be checked on the nominal plant" in err and "--measure-matrix" in err
 
 
+def test_a_gait_the_idealised_drive_moves_by_noise_only_cannot_be_checked(capsys, monkeypatch):
+    """A six-limb robot's gait 0: the idealised drive moved it +0.0002 mm a cycle (+0.0001 mm/s,
+    the plant's noise). The check went on, every row where the firmware drifted back 0.01 mm/s was
+    "missed ... where the idealised drive walks +0.000 mm/s", exit 1 blaming the firmware; -0.0002
+    would have said that nothing walks the gait. Under 0.001 mm a cycle (a run that "did not
+    move", proleg sim's NOTE) it cannot be checked either way."""
+    from proleg.report import claim
+
+    def barely(*_a, **_kw):
+        return claim.IdealisedWalk(True, "", 0.0001, 1.7)
+    monkeypatch.setattr(claim, "idealised_walk", barely)
+    monkeypatch.setattr(sweep, "run_row", lambda *a, **kw: pytest.fail("a row was run"))
+    rc, _, err = run(capsys, "check", str(R1), "--rows", "2", "--jobs", "1")
+    assert rc == 1 and "cannot be checked on the nominal plant" in err, err
+    assert "even an ideal drive (true ψ) moves +0.0002 mm per cycle (under 0.001 mm: no motion)" in err
+
+
 @pytest.mark.parametrize("argv, says", [
     (["--condition", "power=9"], "power"),
     (["--condition", "no_such_key=1"], "no_such_key"),
