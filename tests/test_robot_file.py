@@ -648,6 +648,16 @@ def test_robot_names_longer_than_the_firmwares_15_characters_are_accepted(tmp_pa
     rejects(tmp_path, R1.replace('name = "t"', f'name = "{"a" * 64}"'), "robot.name", "1 to 63 characters")
 
 
+def test_a_name_of_the_right_characters_but_too_long_says_how_long_it_is(tmp_path):
+    """A lab's 64-character robot name (a-very-long-robot-name-for-our-lab-crawler-prototype-
+    number-0042) was told "1 to 63 characters, got '…'", left to count the characters."""
+    name = "a-very-long-robot-name-for-our-lab-crawler-prototype-number-0042"
+    msg = rejects(tmp_path, R1.replace('name = "t"', f'name = "{name}"'), "robot.name", "1 to 63 characters")
+    assert msg.endswith(f"got '{name}' (64 characters)"), msg
+    msg = rejects(tmp_path, R1.replace('name = "t"', 'name = "My Robot"'), "robot.name")
+    assert msg.endswith("got 'My Robot'"), msg  # the wrong characters: no count
+
+
 # -- planar statistics in [transitions] (issue 17) ----------------------------------------------
 
 PLANAR = R1 + """dy = [[0, 0.5, -0.5, 0], [0, 0, 0, 0.1], [0.2, 0, 0, 0], [0, 0, 0, 0]]

@@ -48,6 +48,7 @@ from .robot_limbs import (  # noqa: F401 (re-exported: the robot file's names ar
     _limbs,
     hold_crossings,
     stroke_leads,
+    too_long,
 )
 from .robot_settings import (  # noqa: F401 (re-exported: the robot file's names are imported from proleg.robot)
     BOOST_MAX_MS,
@@ -190,7 +191,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     head = Fields(path, "robot", doc["robot"], {"name", "description"})
     name = head.string("name")
     if not ROBOT_NAME_RE.fullmatch(name):
-        head.fail("name", "lowercase letters, digits and '-' (not first), 1 to 63 characters", name)
+        head.fail("name", "lowercase letters, digits and '-' (not first), 1 to 63 characters", name, too_long(name))
     description = head.string("description", "")
 
     actuators = _actuators(path, doc["actuator"])

@@ -42,10 +42,11 @@ class Fields:
             raise RobotFileError(f"{path}: {where}: unknown key {unknown[0]!r} ({hint})")
         self.table = table
 
-    def fail(self, key: str, expected: str, got: Any = None) -> None:
+    def fail(self, key: str, expected: str, got: Any = None, note: str = "") -> None:
+        """``note``: said after what was got (`` (64 characters)``)."""
         name = f"{self.where}{self.sep}{key}" if key else self.where
         shown = "" if got is None else f", got {toml_text(got)}"
-        raise RobotFileError(f"{self.path}: {name}: expected {expected}{shown}")
+        raise RobotFileError(f"{self.path}: {name}: expected {expected}{shown}{note}")
 
     def has(self, key: str) -> bool:
         return key in self.table

@@ -23,6 +23,12 @@ from .robot_settings import Control
 
 NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,14}")  # fullmatch: "$" would let a final "\n" through
 
+
+def too_long(name: str) -> str:
+    """`` (N characters)`` for a name of the right characters but too many of them, else "": a
+    lab's 64-character robot name was told "1 to 63 characters, got '…'", left to count."""
+    return f" ({len(name)} characters)" if re.fullmatch(r"[a-z0-9][a-z0-9-]*", name) else ""
+
 MAX_LIMBS = 8
 MAX_ACTUATORS = 8
 
@@ -94,7 +100,7 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
         f = Fields(path, _entry("actuator", i, t), t, {"name", "channel"}, sep=": ")
         name = f.string("name")
         if not NAME_RE.fullmatch(name):
-            f.fail("name", "lowercase letters, digits and '-' (not first), 1 to 15 characters", name)
+            f.fail("name", "lowercase letters, digits and '-' (not first), 1 to 15 characters", name, too_long(name))
         if any(a.name == name for a in out):
             f.fail("name", "a name no other actuator has", name)
         channel = f.integer("channel", i, 0, MAX_ACTUATORS - 1)
