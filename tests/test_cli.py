@@ -152,6 +152,17 @@ def test_evaluate_scores_a_valid_sequence(capsys):
     assert ev["valid"] is True and ev["reward"] == 3 and ev["transitions"] == 4 and ev["rate"] == 0.75
 
 
+def test_evaluate_shows_the_duration_as_the_listing_does(capsys, tmp_path):
+    """With durations in the file the listing shows each gait's T; --evaluate's line did not
+    (its --json had duration_s): the same gait read J=-12.5 T=5.4s in one and J=-12.5 in the other."""
+    path = tmp_path / "r1.toml"
+    path.write_text((ROBOTS / "paper-r1.toml").read_text().replace("[transitions]", "[transitions]\ndefault_duration_s = 0.9", 1))
+    code, out, _ = run(capsys, "gait", str(path), "--evaluate", "00,10,11,01,00")
+    assert code == 0 and "J=+3  T=3.6s  N=4" in out, out
+    code, out, _ = run(capsys, "gait", str(ROBOTS / "paper-r1.toml"), "--evaluate", "00,10,11,01,00")
+    assert code == 0 and "T=" not in out, out  # no durations: nothing assumed
+
+
 def test_evaluate_names_the_forbidden_transition(capsys):
     code, out, err = run(capsys, "gait", str(ROBOTS / "paper-r1-one-actuator.toml"), "--evaluate", "00,01,00")
     assert code == 2 and out == "" and err.count("\n") == 1  # a bad gait: exit 2, one line on stderr

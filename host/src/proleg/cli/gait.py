@@ -447,7 +447,9 @@ def _print_evaluation(robot, args) -> int:
         print(json.dumps({"robot": robot.name, "evaluation": {"valid": True, "feasible": not errors,
                                                               **_gait_json(robot, gait)}}))
     else:
-        print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}  N={gait.transitions}  rate={_fmt(gait.rate)}")
+        # T as the listing shows it, where the file gives durations (it was in --json only)
+        took = f"  T={gait.duration:.3g}s" if gait.duration is not None else ""
+        print(f"{robot.name}: {walk}    J={_fmt(gait.reward)}{took}  N={gait.transitions}  rate={_fmt(gait.rate)}")
         steps = _opposing_text(table, gait)
         if steps:
             print(f"    note: raises one limb while lowering another in {steps}")
