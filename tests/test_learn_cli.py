@@ -504,7 +504,7 @@ def test_an_out_that_is_a_directory_is_refused_before_anything_is_explored(tmp_p
     """`learn --out DIR` and `sim --measure-matrix --out DIR` explored (hours on a robot, 40 s for
     a five-limb robot's measurement) and then said "cannot write DIR: Is a directory", the
     measurement lost: refused at once, exit 1 in the words the write would have used."""
-    import proleg.sim.physical as physical
+    from proleg.sim import physical
 
     def measured(*_a, **_k):
         raise AssertionError("measured before --out was checked")
@@ -512,7 +512,7 @@ def test_an_out_that_is_a_directory_is_refused_before_anything_is_explored(tmp_p
     monkeypatch.setattr(physical, "measure_matrix", measured)
     (tmp_path / "folder.toml").mkdir()
     argv = [command[0], str(R1), *(a.format(tmp=tmp_path) for a in command[1:]), "--out", str(tmp_path / "folder.toml")]
-    code, out, err = run(capsys, *argv)
+    code, _out, err = run(capsys, *argv)
     what = "learn" if command[0] == "learn" else "sim --measure-matrix"
     assert code == 1 and err == f"proleg: error: {what}: cannot write {tmp_path / 'folder.toml'}: Is a directory\n", err
     assert not (tmp_path / "t.jsonl").exists()  # nothing explored
