@@ -285,6 +285,12 @@ def _result_text(robot, name: str, r, planar: bool, cycles: int, shown: int | No
             lines.append(f"    note: {walk} raises one limb while lowering another in {steps}; an SMA robot")
             lines.append("          may make such a step as two transitions (heating and cooling differ in speed)")
     for walk, gait in zip(walks, listed):
+        guessed = _unmeasured_steps(robot, gait)
+        if guessed:
+            steps = ", ".join(f"{t.label(a)} → {t.label(b)}" for a, b in guessed)
+            lines.append(f"    note: {walk} takes {steps} at the value the file had before learning (n_trials 0:")
+            lines.append("          never measured), so its reward is partly a guess; learn those steps before trusting it")
+    for walk, gait in zip(walks, listed):
         problems, entry = _feasibility(robot, gait)
         for p in problems:
             lines.append(f"    {p.severity}: {p.message}")
@@ -317,6 +323,18 @@ def _opposing_text(table, gait) -> str:
     return ", ".join(f"{table.label(gait.states[t])} → {table.label(gait.states[t + 1])}" for t in steps)
 
 
+def _unmeasured_steps(robot, gait) -> list[tuple[int, int]]:
+    """The steps of ``gait`` that a learned file (it carries ``n_trials``) never measured: their
+    reward is the file's own value from before learning (docs/learning.md), a guess."""
+    n_trials = getattr(robot, "n_trials", None)
+    if n_trials is None:
+        return []
+    t = robot.transitions
+    trials = {(int(a), int(b)): int(k) for a, b, k in zip(t.src, t.dst, n_trials)}
+    steps = list(zip(gait.states, gait.states[1:]))
+    return [(int(a), int(b)) for a, b in steps if trials.get((int(a), int(b)), 1) == 0]
+
+
 def _gait_json(robot, gait, planar: bool = False, cycles: int = 10) -> dict:
     from ..states import opposing_steps
 
@@ -331,6 +349,8 @@ def _gait_json(robot, gait, planar: bool = False, cycles: int = 10) -> dict:
             for t in opposing_steps(gait.states, table.levels)
         ],
     }
+    if getattr(robot, "n_trials", None) is not None:
+        d["unmeasured_steps"] = [[table.label(a), table.label(b)] for a, b in _unmeasured_steps(robot, gait)]
     if gait.duration is not None:
         d["duration_s"] = gait.duration
     # what the text shows of every gait: how often it repeats within the bound (value =
