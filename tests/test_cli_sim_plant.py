@@ -211,8 +211,8 @@ def test_measure_matrix_says_how_far_it_has_got(capsys, monkeypatch):
     monkeypatch.setattr(sim_plant, "PROGRESS_EVERY_S", 0.0)
     rc, _, err = run(capsys, "sim", str(R1), "--measure-matrix")
     said = [x.removeprefix("proleg: ") for x in err.splitlines() if x.startswith("proleg: measure-matrix: ")]
-    assert rc == 0 and said[0].startswith("measure-matrix: 1/24 transitions, about ") and len(said) == 23, said
-    assert said[-1].startswith("measure-matrix: 23/24 transitions")
+    assert rc == 0 and said[0].startswith("measure-matrix: 1/24 trials, about ") and len(said) == 23, said
+    assert said[-1].startswith("measure-matrix: 23/24 trials")
 
 
 def test_measure_matrix_hold_range_brackets_the_4_degree_matrix_and_says_its_margins(capsys):

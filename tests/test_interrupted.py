@@ -432,7 +432,7 @@ def test_an_interrupted_matrix_measurement_says_how_many_transitions_and_prints_
     _ctrl_c_at_drive(monkeypatch, 7)  # in the 4th transition: 3 measured
     code, out, err = cli(capsys, "sim", R1, "--measure-matrix", *json_flag)
     assert code == 130 and out == ""
-    assert err == ("proleg: interrupted after measuring 3 of 24 transitions (12 allowed, 2 times each; 3 reached "
+    assert err == ("proleg: interrupted after 3 of 24 trials (12 allowed transitions, 2 times each; 3 reached "
                    "their target); nothing printed: the matrix (text or --json) is printed only once every "
                    "transition is measured\n")
 
@@ -442,7 +442,7 @@ def test_an_interrupted_hold_range_counts_over_every_margin(capsys, monkeypatch)
     # in this process (--jobs 1): the stand-in Ctrl-C is raised in the drive, which a worker would run
     code, out, err = cli(capsys, "sim", R1, "--measure-matrix", "--hold-range", "--json", "--jobs", "1")
     assert code == 130 and out == ""
-    assert err.startswith("proleg: interrupted after measuring 26 of 72 transitions (12 allowed, 2 times each at "
+    assert err.startswith("proleg: interrupted after 26 of 72 trials (12 allowed transitions, 2 times each at "
                           "each of 3 hold margins; 26 reached their target); nothing printed")
 
 
@@ -460,7 +460,7 @@ def test_ctrl_c_on_a_hold_range_measured_in_workers_ends_with_the_line_and_leave
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and out == "" and "Traceback" not in err, err
     line = err.strip().splitlines()[-1]
-    assert line.startswith("proleg: interrupted after measuring ") and " of 840 transitions (140 allowed, 2 times each at " \
+    assert line.startswith("proleg: interrupted after ") and " of 840 trials (140 allowed transitions, 2 times each at " \
         "each of 3 hold margins; " in line, line
     deadline = time.monotonic() + 10
     while True:

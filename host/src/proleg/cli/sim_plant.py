@@ -310,17 +310,19 @@ class _Steps:
         if tried < total and now - self.said >= PROGRESS_EVERY_S:
             self.said = now
             left = (now - self.started) / tried * (total - tried)
-            log.info("measure-matrix: %d/%s, about %d:%02d left", tried, counted(total, "transition"), left // 60, left % 60)
+            # trials: each allowed transition is measured several times (and at each hold margin)
+            log.info("measure-matrix: %d/%s, about %d:%02d left", tried, counted(total, "trial"), left // 60, left % 60)
 
     def interrupted(self, allowed: int, margins: int) -> str:
-        """The one line a Ctrl-C'd ``--measure-matrix`` ends with: how many transitions were
-        measured, and that nothing was printed (the matrix comes out whole or not at all)."""
+        """The one line a Ctrl-C'd ``--measure-matrix`` ends with: how many trials were
+        made, and that nothing was printed (the matrix comes out whole or not at all)."""
         nothing = "nothing printed: the matrix (text or --json) is printed only once every transition is measured"
         if not self.tried:
             return f"interrupted before the first transition was measured; {nothing}"
         each = self.total // max(1, allowed * margins)
-        how = f"{allowed} allowed, {counted(each, 'time')} each" + (f" at each of {margins} hold margins" if margins > 1 else "")
-        return (f"interrupted after measuring {self.tried} of {counted(self.total, 'transition')} ({how}; {self.sampled} "
+        how = (f"{counted(allowed, 'allowed transition')}, {counted(each, 'time')} each"
+               + (f" at each of {margins} hold margins" if margins > 1 else ""))
+        return (f"interrupted after {self.tried} of {counted(self.total, 'trial')} ({how}; {self.sampled} "
                 f"reached their target); {nothing}")
 
 
