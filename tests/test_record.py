@@ -406,6 +406,11 @@ def _csv_cell(column: str, value: str, *, events: bool = False):
     (".jsonl", _first("TELEMETRY", seq=1.5), "run.jsonl:", "seq: expected an integer, got 1.5"),
     (".jsonl", _first("TELEMETRY", t_s="0.1"), "run.jsonl:", "t_s: expected a finite number, got '0.1'"),
     (".mcap", lambda p: p.write_text("1,2\n"), "run.mcap", "not a readable MCAP recording (it ends early"),
+    # its magic and a few bytes, shorter than the footer the index is read from (a recorder
+    # killed as it began): the reader's seek back from the end was "cannot write: Invalid
+    # argument", exit 1
+    (".mcap", lambda p: p.write_bytes(p.read_bytes()[:20]), "run.mcap",
+     "not a readable MCAP recording (it ends early"),
     # cut inside its one chunk: no message was written whole (a cut after a whole chunk reads
     # back up to it: test_a_killed_mcap_recorder_keeps_every_chunk_it_completed)
     (".mcap", lambda p: p.write_bytes(p.read_bytes()[:len(p.read_bytes()) // 2]), "run.mcap",

@@ -13,6 +13,7 @@ console killed after minutes of recording left an MCAP that read back as nothing
 from __future__ import annotations
 
 import json
+import os
 from datetime import datetime
 from typing import Any, BinaryIO
 
@@ -97,13 +98,19 @@ class McapReader(Reader):
         import struct
 
         from mcap.exceptions import EndOfFile, McapError
-        from mcap.reader import make_reader
+        from mcap.reader import FOOTER_SIZE, make_reader
+        from mcap.stream_reader import MAGIC_SIZE
 
         p = self.path
         rows: list[tuple[str, dict[str, Any]]] = []
         events: list[tuple[str, dict[str, Any]]] = []
         meta: RecordingMeta | None = None
         try:
+            if os.fstat(f.fileno()).st_size < 2 * MAGIC_SIZE + FOOTER_SIZE:
+                # the index is read from the footer, seeking back from the end: a file shorter
+                # than that (a recorder killed as it began) failed the seek, an OSError that
+                # said "cannot write: Invalid argument" (exit 1) for a recording that does not load
+                raise EndOfFile()
             reader = make_reader(f)
             for record in reader.iter_metadata():
                 if record.name == "proleg":
