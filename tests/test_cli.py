@@ -336,6 +336,14 @@ def test_sim_refuses_a_duration_it_would_take_days_to_simulate(capsys, given, sh
     assert code == 2 and f"--duration {shown}: expected at most 3600 simulated seconds" in err and err.count("\n") == 1
 
 
+def test_run_sim_refuses_a_duration_it_would_take_days_to_simulate_flat_out(capsys):
+    """run --sim runs the simulated board as fast as it can, as sim does: --duration 1e9 ran
+    for ever where sim refuses it. Paced by --speed, it lasts what was asked, in real time."""
+    code, _, err = run(capsys, "run", "--sim", str(ROBOTS / "paper-r1.toml"), "--duration", "1e9")
+    assert code == 2 and "--duration 1000000000: with --sim, expected at most 3600 simulated seconds" in err
+    assert err.count("\n") == 1
+
+
 @pytest.mark.parametrize("argv", [("gait", "paper-r1"), ("sim", "paper-r1", "--duration", "1"),
                                   ("build", "paper-r1", "--board", "host-sim")])
 def test_objective_speed_without_durations_names_the_file_and_the_key(capsys, tmp_path, argv):

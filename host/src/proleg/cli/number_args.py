@@ -47,6 +47,12 @@ def cycles(text: str) -> int:
     return v
 
 
+#: The longest ``proleg sim`` run and ``run --sim`` run flat out (simulated seconds): an hour
+#: takes about a minute on host-sim (the emulated boards are slower); 1e12 never finished.
+#: ``sim --pty`` and ``run --sim --speed`` are paced in real time, unbounded.
+MAX_SIM_S = 3600.0
+
+
 #: ``check --rows``: at most this many random rows (an hour or more of CPU).
 MAX_CHECK_ROWS = 1000
 

@@ -20,7 +20,7 @@ from typing import Any
 from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..names import counted
-from .number_args import gait_index, heading_deg, integer, param_index, positive_float, progress_period
+from .number_args import MAX_SIM_S, gait_index, heading_deg, integer, param_index, positive_float, progress_period
 from .robot_link import add_link_options, link_settings, open_client
 
 log = logging.getLogger("proleg")
@@ -91,6 +91,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     link_settings(args)  # before the gait is chosen: an option of another link is refused first
     if args.speed is not None and not args.sim:  # a real board keeps its own time
         raise UsageError("--speed: only with --sim (a simulated board's pace; a real one runs in real time)")
+    if args.sim and args.speed is None and args.duration > MAX_SIM_S:
+        # flat out, as proleg sim runs (an hour in about a minute): 1e9 ran for ever, no refusal,
+        # where sim refuses it; paced by --speed the run lasts what the user asked for in real time
+        raise UsageError(f"--duration {args.duration:.12g}: with --sim, expected at most {MAX_SIM_S:g} simulated "
+                         "seconds (an hour takes about a minute to simulate; run several shorter runs instead, "
+                         "or pace a longer one in real time with --speed)")
     # before the heading's gait is computed (it said "loaded with LOAD_GAIT" before this refusal)
     if args.states is not None and (args.gait is not None or args.heading is not None or args.rotate is not None):
         raise UsageError("--states: the gait to run; leave out --gait, --heading and --rotate")
@@ -443,7 +449,8 @@ def add_arguments(subparsers: Any) -> None:
                    help="with --heading: a heading the library does not hold is computed and loaded (LOAD_GAIT)")
     r.add_argument("--library", metavar="HEADINGS",
                    help="the library the firmware was built with (proleg build --library), if not the robot file's")
-    r.add_argument("--duration", type=positive_float, default=10.0, metavar="S", help="seconds to run (default 10)")
+    r.add_argument("--duration", type=positive_float, default=10.0, metavar="S",
+                   help=f"seconds to run (default 10; with --sim and no --speed, at most {MAX_SIM_S:g})")
     r.add_argument("--record", metavar="FILE", help="record every frame (.csv, .jsonl or .mcap)")
     add_udp_options(r)
     r.add_argument("--format", choices=("text", "jsonl"), default="text",

@@ -13,14 +13,9 @@ import sys
 
 from ..names import counted
 from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
-from .number_args import gait_number, max_transitions, positive_float
+from .number_args import MAX_SIM_S, gait_number, max_transitions, positive_float
 from .. import interrupts
 from ..report.matrix_check import check, remark_text
-
-#: The longest ``proleg sim`` run (simulated seconds): an hour takes about a minute on host-sim
-#: (the emulated boards are slower); 1e12 never finished. ``--pty`` serves in real time, unbounded.
-MAX_SIM_S = 3600.0
-
 
 def add_sim_parser(sub) -> None:
     """Add ``proleg sim`` to the one parser's subcommands."""
