@@ -59,6 +59,29 @@ def test_every_piece_starts_where_the_robot_rests_and_makes_a_transition_still_t
             assert (t.index("111"), t.index("110")) in piece.transitions
 
 
+def test_a_piece_is_planned_from_a_tour_of_a_bounded_demand_however_many_trials_are_asked(tmp_path, monkeypatch):
+    """Only a tour's first piece is used, so its tour need not cover every trial still to do:
+    --repeats 999999999 planned a tour of 12e9 transitions for R1's first piece (10 GB in 16 s,
+    no trial made), and --more's 100,000 extra trials took 10 s a piece."""
+    import proleg.learn.runner as runner
+
+    robot = load_robot(ROBOTS / "inchworm-3.toml")
+    t = robot.transitions
+    planned: list[int] = []
+
+    def bounded(table, demand=None, **kw):
+        planned.append(int(np.max(demand)))
+        assert planned[-1] <= 1000, f"a tour planned for {planned[-1]} trials of a transition"
+        return real(table, demand=demand, **kw)
+
+    real = runner.exploration
+    monkeypatch.setattr(runner, "exploration", bounded)
+    with TrialLog(tmp_path / "t.jsonl") as log:
+        ex = _Offline(robot, log, rest=t.index("000"), repeats=10**9, seed=1)
+        piece = ex.next_piece(t.index("000"), np.full(t.n_transitions, 10**9, dtype=np.int64))
+    assert planned and piece.states[0] == t.index("000") and piece.loadable and piece.transitions
+
+
 def test_a_transition_no_piece_can_reach_is_named_before_the_robot_moves(tmp_path):
     robot = load_robot(ROBOTS / "inchworm-3.toml")
     t = robot.transitions

@@ -74,6 +74,12 @@ CLOCK_EPS_S = 1e-6
 STALL_PIECES = 5
 #: random tours ``Explorer.next_piece`` tries for a first piece that makes progress
 PLAN_TRIES = 8
+#: the most trials of one transition a piece's tour is planned for: only the tour's first piece
+#: is used, and the tour is planned again for the next, so a tour of the whole demand cost its
+#: length at every piece (--repeats 999999999 on R1 planned a tour of 12e9 transitions, 10 GB
+#: in 16 s and no trial made; --more's 100,000 extra trials each took 10 s a piece). Tours of
+#: every run asking at most this many are planned as before.
+PLAN_DEMAND_CAP = 100
 #: telemetry frames ``Explorer.measured_state`` reads at most for three with a known state
 STATE_FRAMES = 200
 #: transitions in a row the robot faults on (no trial made between them) before ``Explorer.run``
@@ -383,7 +389,7 @@ class Explorer:
         ``demand`` is over ``self.robot.transitions``; the pieces go over ``plan_table`` (never
         a transition the robot faulted on)."""
         t = self.plan_table()
-        demand = np.delete(demand, sorted(self.failed))
+        demand = np.minimum(np.delete(demand, sorted(self.failed)), PLAN_DEMAND_CAP)
         for attempt in range(PLAN_TRIES):
             seed = None if self.seed is None else (self.seed + self.pieces_run) * PLAN_TRIES + attempt
             plan = exploration(t, demand=demand, start=start, seed=seed)
