@@ -104,6 +104,9 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),
         (["learn", R1, "--node", "one"], "argument --node: expected an integer (0x.. for hex), got 'one'"),
         (["learn", R1, "--repeats", "-3"], "argument --repeats: expected at least 1, got -3"),
+        # a run that would never end: its header said 11999999988 trials, and planning them took 10 GB
+        (["learn", R1, "--repeats", "999999999"],
+         "argument --repeats: expected at most 100,000 trials per transition, got 999999999"),
         (["run", R1, "--sim", "--timeout", "0.001"],
          "argument --timeout: expected at least 0.01 s (a reply takes a few ms), got 0.001"),
         (["run", R1, "--port", "/dev/ttyS0", "--baudrate", "-5"],

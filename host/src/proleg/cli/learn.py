@@ -42,7 +42,8 @@ log = logging.getLogger("proleg")
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import baudrate, can_bitrate, can_node, positive_float, positive_int, reply_timeout, tracker_offset
+    from .number_args import (baudrate, can_bitrate, can_node, positive_float, positive_int, repeats, reply_timeout,
+                              tracker_offset)
     from .gait import _penalty
     from .robot_link import DEFAULT_BAUDRATE
 
@@ -71,7 +72,8 @@ def add_arguments(subparsers: Any) -> None:
                         "with --truth, or ROBOT's own, to test learning against a known matrix)")
     p.add_argument("--log", required=True, metavar="TRIALS.jsonl",
                    help="append-only trial log; an existing one is resumed, nothing recorded is lost")
-    p.add_argument("--repeats", type=positive_int, default=5, metavar="R", help="trials per transition (default 5)")
+    p.add_argument("--repeats", type=repeats, default=5, metavar="R",
+                   help="trials per transition (default 5, at most 100,000)")
     p.add_argument("--source", choices=("sim", "tracker", "manual"),
                    help="position source (default: sim with --sim; required otherwise)")
     p.add_argument("--track", metavar="FILE.csv", help="tracker CSV (time,x,y,theta) for trials without motion")

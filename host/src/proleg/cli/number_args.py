@@ -65,6 +65,20 @@ def check_rows(text: str) -> int:
     return v
 
 
+#: ``learn --repeats``: at most this many trials of each transition, as many as ``--half-width``
+#: ever plans (``learn.estimate.extra_trials``' limit): a robot's trial takes a second or more,
+#: so more is days a transition; 999999999 was taken and its header said 11999999988 trials.
+MAX_REPEATS = 100_000
+
+
+def repeats(text: str) -> int:
+    """``learn --repeats``: trials per transition, 1 .. ``MAX_REPEATS``."""
+    v = positive_int(text)
+    if v > MAX_REPEATS:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_REPEATS:,} trials per transition, got {v}")
+    return v
+
+
 def gait_index(text: str) -> int:
     """A gait table index ≥ 0, or ``user`` for the LOAD_GAIT sequence (``GAIT_USER``)."""
     if text.strip().lower() == "user":
