@@ -46,6 +46,10 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
     ('family = "avr"', 'family = "rp2040"',
      r"variant.toml: board.family: expected one of avr, sim, stm32f1, template \(a folder with a family.toml"),
     ("tx_buffer = 128", "tx_buffer = 100", r"variant.toml: uart.tx_buffer: expected a power of two"),
+    # past 128 bytes the rings take 16-bit indices, not atomic on the ATmega328P: the file was
+    # taken (flash --dry-run exit 0) and only hal_avr.c's #error refused it, in the compiler
+    ("rx_buffer = 64", "rx_buffer = 256", r"variant.toml: uart.rx_buffer: expected a power of two from 16 to 128 "
+                                          r"bytes \(the most the avr family's HAL takes: .*\), got 256$"),
     # a zero or negative number is refused, never replaced by a default or compiled in
     ("frequency_hz = 490", "frequency_hz = 0",
      r"variant.toml: pwm.frequency_hz: expected a PWM frequency in Hz in 1..1_000_000, got 0$"),
@@ -71,6 +75,12 @@ def test_a_board_file_mistake_is_one_line_naming_the_field(tmp_path, old, new, e
     with pytest.raises(BoardError, match=expected) as e:
         load_board(_board_variant(tmp_path, old, new))
     assert "\n" not in str(e.value)
+
+
+def test_flash_dry_run_refuses_a_uart_ring_the_boards_hal_cannot_take(tmp_path, capsys):
+    board = _board_variant(tmp_path, "rx_buffer = 64", "rx_buffer = 256")
+    code, out, err = cli(capsys, "flash", R1, "--board", board, "--dry-run", "--port", "/dev/ttyUSB0")
+    assert code == 2 and not out and "uart.rx_buffer: expected a power of two from 16 to 128 bytes" in one_line(err)
 
 
 @pytest.mark.parametrize("table", ["pwm", "uart", "toolchain", "build"])

@@ -21,7 +21,7 @@ from typing import Any
 from ..errors import BoardError
 from ..paths import boards_dir
 from .can_config import CanConfig, can_config, link_transport
-from .families import available_families, hal_root
+from .families import MAX_RING_BYTES, available_families, hal_root, load_family
 
 #: [uart] buffers when a board file does not give them (bytes, powers of two).
 DEFAULT_UART_RX_BUFFER = 64
@@ -244,10 +244,16 @@ def _fill(part: str, **values: str) -> str:
     return part
 
 
-def _buffer(path: Path, doc: dict, key: str, default: int) -> int:
+def _buffer(path: Path, doc: dict, key: str, default: int, family: str) -> int:
+    """A UART ring's size, within what the family's HAL takes: past an 8-bit MCU's 128 bytes
+    the board file was taken (flash --dry-run printed its command, exit 0) and only the
+    compiler refused it, at hal_avr.c's #error."""
+    top = load_family(family).max_ring_bytes
     v = doc.get("uart", {}).get(key, default)
-    if not isinstance(v, int) or isinstance(v, bool) or v < 16 or v > 32768 or v & (v - 1):
-        raise BoardError(f"{path}: uart.{key}: expected a power of two from 16 to 32768 bytes, got {v!r}")
+    if not isinstance(v, int) or isinstance(v, bool) or v < 16 or v > top or v & (v - 1):
+        on = (f" (the most the {family} family's HAL takes: its family.toml's uart.max_ring_bytes)"
+              if top < MAX_RING_BYTES else "")
+        raise BoardError(f"{path}: uart.{key}: expected a power of two from 16 to {top} bytes{on}, got {v!r}")
     return v
 
 
@@ -332,8 +338,8 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         pwm_frequency_hz=_whole(path, doc, "pwm", "frequency_hz"),
         uart_port=_need(path, doc, "uart", "port", str),
         uart_baud=_whole(path, doc, "uart", "baud"),
-        uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER),
-        uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER),
+        uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER, family),
+        uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER, family),
         flash_methods=_flash_methods(path, doc),
         i2c_buses=buses,
         base_flash_bytes=_whole(path, doc, "board", "base_flash_bytes", 0),

@@ -13,6 +13,10 @@ from pathlib import Path
 from ..errors import BoardError, BuildError
 from ..paths import templates_dir
 
+#: The largest UART ring a board file may ask for (``uart.rx_buffer``/``tx_buffer``), on a
+#: family that sets no lower ``[uart] max_ring_bytes``.
+MAX_RING_BYTES = 32768
+
 
 @dataclass(frozen=True)
 class Family:
@@ -22,6 +26,9 @@ class Family:
     description: str
     pin_kind: str  # what a PWM pin is to this HAL ("timer output", "channel", ...)
     pwm_pins: dict[str, str] | None  # pin name (upper case) -> CFG_PWM_MAP entry; None: any pin, entry = channel
+    # the largest UART ring the HAL takes: an 8-bit MCU reads only 8-bit ring indices in one
+    # access (core/ring.h), so its rings stop at 128 bytes
+    max_ring_bytes: int = MAX_RING_BYTES
 
     def pwm_entry(self, board_name: str, channel: int, pin: str) -> str:
         """The C initialiser of channel's CFG_PWM_MAP entry; BuildError for a pin the HAL cannot drive."""
@@ -66,7 +73,12 @@ def load_family(name: str) -> Family:
         table = {str(k).upper(): _c_entry(spec, k, v) for k, v in pins.items()}
     else:
         raise BoardError(f"{spec}: pwm.pins: expected \"any\" or a table of pin = C entry")
-    return Family(name, path, fid, str(fam.get("description", "")), str(pwm.get("pin_kind", "PWM pin")), table)
+    ring = doc.get("uart", {}).get("max_ring_bytes", MAX_RING_BYTES)
+    if not isinstance(ring, int) or isinstance(ring, bool) or not 16 <= ring <= MAX_RING_BYTES or ring & (ring - 1):
+        raise BoardError(f"{spec}: uart.max_ring_bytes: expected a power of two from 16 to {MAX_RING_BYTES}, "
+                         f"got {ring!r}")
+    return Family(name, path, fid, str(fam.get("description", "")), str(pwm.get("pin_kind", "PWM pin")), table,
+                  ring)
 
 
 def _c_entry(spec: Path, pin: str, value: object) -> str:
