@@ -46,6 +46,16 @@ def _board_variant(tmp_path: Path, old: str, new: str) -> Path:
     ('family = "avr"', 'family = "rp2040"',
      r"variant.toml: board.family: expected one of avr, sim, stm32f1, template \(a folder with a family.toml"),
     ("tx_buffer = 128", "tx_buffer = 100", r"variant.toml: uart.tx_buffer: expected a power of two"),
+    # an empty artifact named the project directory itself: flash --dry-run printed it as the
+    # file to write (exit 0), and the build made no artifact
+    ('artifact = "firmware.hex"', 'artifact = ""',
+     r"variant.toml: build.artifact: expected a file name in the project directory .*, got ''$"),
+    ('link = "firmware.elf"', 'link = "../firmware.elf"',
+     r"variant.toml: build.link: expected a file name in the project directory .*, got '../firmware.elf'$"),
+    # an empty program was looked for on PATH: "proleg: error:  not found, needed for board …"
+    ('cc = "avr-gcc"', 'cc = ""', r"variant.toml: toolchain.cc: expected the name of a program .*, got ''$"),
+    ('size = ["avr-size"', 'size = [" avr-size"',
+     r"variant.toml: build.size\[0\]: expected the name of a program .*, got ' avr-size'$"),
     # past 128 bytes the rings take 16-bit indices, not atomic on the ATmega328P: the file was
     # taken (flash --dry-run exit 0) and only hal_avr.c's #error refused it, in the compiler
     ("rx_buffer = 64", "rx_buffer = 256", r"variant.toml: uart.rx_buffer: expected a power of two from 16 to 128 "

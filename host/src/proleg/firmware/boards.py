@@ -257,6 +257,25 @@ def _buffer(path: Path, doc: dict, key: str, default: int, family: str) -> int:
     return v
 
 
+def _file_name(path: Path, doc: dict, key: str) -> str:
+    """``build.link`` or ``build.artifact``: a file the Makefile makes in the project
+    directory. An empty one was taken: the artifact then named the directory itself, which
+    flash --dry-run printed as the file to write (exit 0) and the build never made."""
+    v = _need(path, doc, "build", key, str)
+    if not v.strip() or v != v.strip() or "/" in v or "\\" in v or v in (".", ".."):
+        raise BoardError(f"{path}: build.{key}: expected a file name in the project directory (no folder, "
+                         f"no spaces at its ends), e.g. \"firmware.elf\", got {v!r}")
+    return v
+
+
+def _program(path: Path, where: str, name: str) -> str:
+    """A program a build step runs, found on PATH: an empty name was looked for as itself
+    ("proleg: error:  not found, needed for board ...")."""
+    if not name.strip() or name != name.strip():
+        raise BoardError(f"{path}: {where}: expected the name of a program (no spaces at its ends), got {name!r}")
+    return name
+
+
 def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
     b = doc.get("build")
     if not isinstance(b, dict):
@@ -264,12 +283,15 @@ def _build_steps(path: Path, doc: dict) -> dict[str, Any]:
     main_loop = b.get("main_loop")
     if not isinstance(main_loop, bool):
         raise BoardError(f"{path}: build.main_loop: expected true or false, got {main_loop!r}")
-    link = _need(path, doc, "build", "link", str)
-    artifact = _need(path, doc, "build", "artifact", str)
+    link = _file_name(path, doc, "link")
+    artifact = _file_name(path, doc, "artifact")
     objcopy = _strings(path, doc, "build", "objcopy", [])
     size = _strings(path, doc, "build", "size")
     if not size:
         raise BoardError(f"{path}: build.size: expected a command, e.g. [\"size\", \"-B\", \"{{link}}\"]")
+    for key, command in (("objcopy", objcopy), ("size", size)):
+        if command:
+            _program(path, f"build.{key}[0]", command[0])
     if artifact != link and not objcopy:
         raise BoardError(f"{path}: build.objcopy: missing, needed to make artifact {artifact!r} from {link!r}")
     if artifact == link and objcopy:
@@ -328,7 +350,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         clock_hz=_whole(path, doc, "board", "clock_hz"),
         flash_bytes=_whole(path, doc, "board", "flash_bytes"),
         ram_bytes=_whole(path, doc, "board", "ram_bytes"),
-        cc=_need(path, doc, "toolchain", "cc", str),
+        cc=_program(path, "toolchain.cc", _need(path, doc, "toolchain", "cc", str)),
         cflags=_strings(path, doc, "toolchain", "cflags", []),
         ldflags=_strings(path, doc, "toolchain", "ldflags", []),
         packages=_strings(path, doc, "toolchain", "packages", []),
