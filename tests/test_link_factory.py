@@ -57,6 +57,12 @@ def test_can_url_needs_a_channel_from_itself_or_python_can_configuration(tmp_pat
     ("sim://paper-r1?speed=abc", "speed: expected a finite number above 0 (times real time) or 'max', got 'abc'"),
     ("serial:///dev/ttyS0?baudrate=abc", "baudrate: expected an integer in 1..12000000, got 'abc'"),
     ("serial:///dev/ttyS0?baudrate=99999999999999", "baudrate: expected an integer in 1..12000000, got 99999999999999"),
+    # pyserial's words were "Could not open port …: 'debug|info|warning|error'" and "'<=' not
+    # supported between instances of 'int' and 'NoneType'", exit 1 as if the link had failed
+    ("socket://localhost:99999", "socket://localhost:99999: port 99999 is outside 1..65535 (expected socket://"),
+    ("socket://localhost:+5", "socket://localhost:+5: port '+5' is not a number"),
+    ("socket://localhost", "socket://localhost: no TCP port (expected socket://HOST:PORT, e.g."),
+    ("rfc2217://x", "rfc2217://x: no TCP port (expected rfc2217://HOST:PORT"),
 ])
 def test_a_bad_url_setting_is_a_usage_error_naming_it(url, words):
     # these were a LinkError (exit 1) or a traceback (baudrate=abc, speed=abc)

@@ -37,13 +37,38 @@ PYSERIAL_SCHEMES = ("socket", "rfc2217", "loop", "spy", "alt", "hwgrep")
 def _open_serial(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
     from .serial_link import DEFAULT_BAUDRATE, SerialLink
 
-    port = url if url.split("://", 1)[0] in PYSERIAL_SCHEMES or "://" not in url else rest
+    scheme = url.split("://", 1)[0]
+    port = url if scheme in PYSERIAL_SCHEMES or "://" not in url else rest
     if not port:
         raise LinkError(f"{url}: no serial device (expected serial:///dev/ttyUSB0)")
+    if scheme in NETWORK_SCHEMES:
+        _network_port(url, scheme)
     from .serial_link import MAX_BAUDRATE
 
     baudrate = _int(url, "baudrate", query.get("baudrate", options.get("baudrate") or DEFAULT_BAUDRATE), 1, MAX_BAUDRATE)
     return SerialLink(port, baudrate)
+
+
+#: pyserial's schemes that connect to HOST:PORT over TCP
+NETWORK_SCHEMES = ("socket", "rfc2217")
+
+
+def _network_port(url: str, scheme: str) -> int:
+    """A ``socket://`` or ``rfc2217://`` URL's TCP port, 1..65535; a ``UsageError`` naming what is
+    wrong. pyserial said "Could not open port socket://host:99999: 'debug|info|warning|error'"
+    for a port out of range or not a number, and "'<=' not supported between instances of 'int'
+    and 'NoneType'" for none at all (exit 1, as if the link had failed)."""
+    example = f"expected {scheme}://HOST:PORT, e.g. {scheme}://127.0.0.1:7000"
+    netloc = urlsplit(url).netloc
+    _host, colon, text = netloc.rpartition(":")
+    if not colon or not text or "]" in text:
+        raise UsageError(f"{url}: no TCP port ({example})")
+    if not text.isascii() or not text.isdigit():  # pyserial reads digits alone ('+5' failed as 'abc' did)
+        raise UsageError(f"{url}: port {text!r} is not a number ({example})")
+    port = int(text)
+    if not 1 <= port <= 65535:
+        raise UsageError(f"{url}: port {port} is outside 1..65535 ({example})")
+    return port
 
 
 def _open_can(url: str, rest: str, query: dict[str, str], options: dict[str, Any]) -> Link:
