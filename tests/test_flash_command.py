@@ -43,6 +43,18 @@ def test_flash_dry_run_prints_the_exact_openocd_and_pyocd_commands(capsys, paren
     assert code == 2 and "no flash tool 'stlink'" in one_line(err) and "openocd, pyocd" in err
 
 
+def test_a_port_given_to_a_tool_that_takes_none_is_refused_before_anything_is_built(capsys, parent):
+    """It was dropped: the bluepill's default openocd flashed over the ST-Link whatever serial
+    port --port named, and the dry run printed openocd's command, exit 0."""
+    for dry in (("--dry-run",), ()):
+        code, stdout, err = cli(capsys, "flash", R1, "--board", "bluepill-f103", "--port", "/dev/ttyUSB0", *dry,
+                                "-o", parent / "fw")
+        assert code == 2 and stdout == "", err
+        assert one_line(err) == ("proleg: error: --port /dev/ttyUSB0: openocd takes no serial port; --tool "
+                                 "stm32flash flashes through a serial port; or leave --port out")
+    assert_nothing_left(parent)
+
+
 def test_a_dry_run_refuses_what_the_build_would_refuse(capsys, parent, tmp_path):
     """With -o the dry run never read the robot file: a missing or broken one, or one the board
     cannot take, printed an avrdude command and exit 0."""
@@ -68,8 +80,7 @@ def test_a_dry_run_refuses_a_tick_rate_the_imus_i2c_reads_do_not_fit(capsys, par
     1785 Hz), which the build refuses before compiling (check_fit): the dry run said exit 0."""
     fast = tmp_path / "fast.toml"
     fast.write_text(R1.read_text(encoding="utf-8").replace("tick_hz = 1000", "tick_hz = 3000"), encoding="utf-8")
-    code, stdout, err = cli(capsys, "flash", fast, "--board", "bluepill-f103", "--port", "/dev/ttyUSB0",
-                            "--dry-run", "-o", parent / "fw")
+    code, stdout, err = cli(capsys, "flash", fast, "--board", "bluepill-f103", "--dry-run", "-o", parent / "fw")
     assert code == 2 and stdout == "" and "set control.tick_hz to at most 1785" in one_line(err)
     assert_nothing_left(parent)
 

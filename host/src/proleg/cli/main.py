@@ -424,7 +424,7 @@ def cmd_flash(args: argparse.Namespace) -> int:
     from ..firmware.flash import check_tool, choose_method, flash, flash_command
 
     board = load_board(args.board)
-    method = choose_method(board, args.tool)
+    method = choose_method(board, args.tool, args.port)
     if args.dry_run:  # builds nothing, but names what the build would refuse (the robot file, the board, the
         # command line, the gaits' tables: everything the build checks before it compiles)
         from ..firmware.build import check_board_takes, check_tick_budget, default_out_dir, plan_build

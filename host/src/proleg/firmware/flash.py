@@ -27,18 +27,23 @@ from ..ports import hold_port, refuse_if_held
 from .boards import Board, FlashMethod
 
 
-def choose_method(board: Board, tool: str | None = None) -> FlashMethod:
+def choose_method(board: Board, tool: str | None = None, port: str | None = None) -> FlashMethod:
+    """The board's flash method ``tool`` (default its first). A ``port`` given to a tool that
+    takes none is refused: it was dropped, and bluepill's default openocd flashed over the
+    ST-Link whatever serial port was named (a board on a USB-serial adapter meant stm32flash)."""
     if not board.flash_methods:
         raise BuildError(f"board {board.name} is not flashed: the simulator loads it (proleg sim)")
-    if tool is None:
-        return board.flash_methods[0]
-    for m in board.flash_methods:
-        if m.tool == tool:
-            return m
-    raise BuildError(
-        f"board {board.name} has no flash tool {tool!r} (expected one of: "
-        f"{', '.join(m.tool for m in board.flash_methods)})"
-    )
+    method = next((m for m in board.flash_methods if m.tool == tool), None) if tool else board.flash_methods[0]
+    if method is None:
+        raise BuildError(
+            f"board {board.name} has no flash tool {tool!r} (expected one of: "
+            f"{', '.join(m.tool for m in board.flash_methods)})"
+        )
+    if port and not method.needs_port:
+        serial = [m.tool for m in board.flash_methods if m.needs_port]
+        hint = f"; --tool {' or '.join(serial)} flashes through a serial port" if serial else ""
+        raise BuildError(f"--port {port}: {method.tool} takes no serial port{hint}; or leave --port out")
+    return method
 
 
 log = logging.getLogger("proleg")
