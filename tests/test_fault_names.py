@@ -85,6 +85,23 @@ def test_a_name_neither_knows_is_refused_by_both_naming_it(sim):
         sim.check_fault("drift:front@pad@x")
 
 
+@pytest.mark.parametrize("spec, says", [
+    ("drift@", "no rate after '@' (expected e.g. drift@0.05, or drift alone for 0.05)"),
+    ("drift:front@pad@", "no rate after '@'"),
+    ("drift:", "nothing after ':' (expected drift:ACTUATOR[@RATE], or drift alone for every coil)"),
+    ("drift:@0.1", "no actuator between ':' and '@'"),
+    ("link-drop:", "nothing after ':' (expected link-drop:P, or link-drop alone for P = 0.01)"),
+    ("link-corrupt: ", "nothing after ':'"),
+    ("imu-silent:", "nothing after ':' (expected imu-silent:LIMB)"),
+])
+def test_a_name_or_number_left_out_after_its_separator_is_refused(sim, spec, says):
+    """Each was the fault's default, as if the ':' or '@' were not there: drift@ drifted at 0.05,
+    drift: and drift:@0.1 every coil, link-drop: dropped 1 % of the bytes."""
+    with pytest.raises(SimError) as e:
+        sim.check_fault(spec)
+    assert str(e.value).startswith(f"--inject {spec}: ") and says in str(e.value), str(e.value)
+
+
 def test_names_alike_but_for_spaces_are_refused_alike():
     with pytest.raises(SimError, match=r"^'a' names ' a', 'a ' alike \(spaces at a name's ends do not count\): give "
                                        "the index instead$"):

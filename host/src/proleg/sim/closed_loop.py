@@ -276,6 +276,15 @@ def _apply_fault(sim: Any, fault: str) -> None:
     name, arg = split_fault(fault)
     if name not in FAULTS:
         raise SimError(f"unknown fault {fault!r} (expected one of: {', '.join(sorted(FAULTS))})")
+    # a ':' with nothing after it is a name or number left out, not the fault's default: drift:
+    # drifted every coil and link-drop: dropped 1 % of the bytes, as if the ':' were not there
+    _, colon, rest = fault.partition(":")
+    if colon and not rest.strip():
+        raise SimError(f"nothing after ':' (expected {name}:{FAULT_ARGS[name]}, or {name} alone "
+                       f"for {FAULT_DEFAULTS[name]})" if name in FAULT_DEFAULTS else
+                       f"nothing after ':' (expected {name}:{FAULT_ARGS[name]})")
+    if name == "drift" and colon and rest.strip().startswith("@") and not _names_coil(sim, rest):
+        raise SimError("no actuator between ':' and '@' (expected drift:ACTUATOR@RATE, or drift@RATE for every coil)")
     FAULTS[name](sim, arg)
 
 
@@ -333,6 +342,9 @@ def _drift(sim: SimulatedRobot, arg: str) -> None:
     target, rate = arg, ""
     if "@" in arg and not _names_coil(sim, arg):
         target, _, rate = arg.rpartition("@")
+    if "@" in arg and not _names_coil(sim, arg) and not rate.strip():  # drift@ drifted at the default rate
+        raise SimError("drift@RATE (per second of on-time): no rate after '@' (expected e.g. drift@0.05, or drift "
+                       "alone for 0.05)")
     target, rate = target.strip(), rate.strip()
     channels = [a.channel for a in sim.robot.actuators] if target in ("", "all") else [_channel(sim, target)]
     r = _rate(rate, 0.05, "drift@RATE (per second of on-time)")
@@ -347,6 +359,12 @@ def _names_coil(sim: SimulatedRobot, arg: str) -> bool:
         return False
     return True
 
+
+#: What follows a fault's ':', for the messages that name it.
+FAULT_ARGS = {"imu-silent": "LIMB", "imu-stuck": "LIMB", "imu-garbage": "LIMB", "dead-actuator": "ACTUATOR",
+              "drift": "ACTUATOR[@RATE]", "link-drop": "P", "link-corrupt": "P"}
+#: What a fault without its ':' part does, where it may go without.
+FAULT_DEFAULTS = {"drift": "every coil", "link-drop": "P = 0.01", "link-corrupt": "P = 0.01"}
 
 FAULTS = {
     # imu-silent:LIMB — the IMU stops acknowledging on I2C
