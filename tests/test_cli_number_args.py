@@ -99,6 +99,10 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["set-param", "--port", "/dev/null", "drive_duty", "5_000"],
          "argument VALUE: expected a whole number, got '5_000'"),
         (["set-param", "--port", "/dev/null", "drive_duty", "lots"], "argument VALUE: expected a whole number, got 'lots'"),
+        # refused by the codec after the port was opened (a Nano resets then), in its own words
+        (["set-param", "--port", "/dev/null", "hold_ms", "99999999999"],
+         "argument VALUE: expected a whole number in -2,147,483,648..2,147,483,647 (SET_PARAM's 32-bit value; each "
+         "parameter's range: docs/control.md), got 99999999999"),
         (["run", R1, "--sim", "--progress", "0.00001"],
          "argument --progress: expected at least 0.1 s between progress lines, got 0.00001"),
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),

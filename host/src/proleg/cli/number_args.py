@@ -220,9 +220,15 @@ def _int_in(text: str, lo: int, hi: int, what: str) -> int:
     return v
 
 
-def integer(text: str) -> int:
-    """A whole number of either sign (``set-param``'s VALUE: ψ* may be negative)."""
-    return _int(text, "a whole number")
+def param_value(text: str) -> int:
+    """``set-param``'s VALUE: a whole number of either sign (ψ* may be negative) that SET_PARAM's
+    32-bit field carries. A larger one was refused after the port was opened (a Nano resets
+    then), in the codec's words: "SET_PARAM.value: 99999999999 outside -2147483648..2147483647"."""
+    v = _int(text, "a whole number")
+    if not -2**31 <= v < 2**31:
+        raise argparse.ArgumentTypeError(f"expected a whole number in -2,147,483,648..2,147,483,647 (SET_PARAM's "
+                                         f"32-bit value; each parameter's range: docs/control.md), got {v}")
+    return v
 
 
 def _int(text: str, expected: str) -> int:

@@ -20,7 +20,8 @@ from typing import Any
 from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..names import counted
-from .number_args import MAX_SIM_S, gait_index, heading_deg, integer, param_index, positive_float, progress_period
+from .number_args import (MAX_SIM_S, gait_index, heading_deg, param_index, param_value, positive_float,
+                          progress_period)
 from .robot_link import add_link_options, link_settings, open_client
 
 log = logging.getLogger("proleg")
@@ -477,7 +478,7 @@ def add_arguments(subparsers: Any) -> None:
     sp = subparsers.add_parser("set-param", help="set a firmware parameter (within the build's safety envelope)",
                                epilog="parameters: " + ", ".join(p.name.lower() for p in ParamId))
     sp.add_argument("name", metavar="NAME", type=_param_name, help="parameter name (see below)")
-    sp.add_argument("value", metavar="VALUE", type=integer, help="value in the parameter's unit (permyriad, ms, 0.01°)")
+    sp.add_argument("value", metavar="VALUE", type=param_value, help="value in the parameter's unit (permyriad, ms, 0.01°)")
     sp.add_argument("--index", type=param_index, default=None, metavar="N",
                     help="hysteresis_cdeg: the limb, from 0 = the first; psi_star_cdeg: the threshold, counted limb "
                          "by limb (a limb of k levels has k-1); default 0. The other parameters have none. "
