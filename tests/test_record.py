@@ -431,6 +431,34 @@ def test_a_bad_recording_is_one_line_naming_its_file_and_line_and_exit_2(tmp_pat
     assert not (tmp_path / "out.png").exists()
 
 
+def _meta_json(**fields):
+    def edit(path: Path) -> None:
+        meta = path.with_name(f"{path.stem}.meta.json")
+        meta.write_text(json.dumps({**json.loads(meta.read_text()), **fields}))
+    return edit
+
+
+@pytest.mark.parametrize("suffix, spoil, says", [
+    (".csv", _meta_json(limb_names=["left"]), "names limbs left and actuators sma-left, sma-right, but its rows "
+                                              "have a column psi_right_deg it does not name"),
+    (".csv", _meta_json(channel_names=[]), "but its rows have a column duty_sma_left_pct it does not name"),
+    (".jsonl", _jsonl_field(1, limb_names=["left", "right", "middle"]), "but no row has a column psi_middle_deg"),
+])
+def test_a_recording_whose_metadata_is_another_recordings_is_refused(tmp_path, capsys, suffix, spoil, says):
+    """A .meta.json copied or edited beside the CSV was plotted without a word, exit 0: a limb
+    it does not name left out (and matplotlib's "No artists with labels" warning for no coil),
+    one it names but no row has drawn as nothing."""
+    from proleg.cli.main import main
+
+    path = tmp_path / f"run{suffix}"
+    record(path, 20)
+    spoil(path)
+    code = main(["plot", str(path), "-o", str(tmp_path / "out.png")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and f"{path}: its metadata " in err and says in err, err
+    assert "the metadata is not this recording's" in err and not (tmp_path / "out.png").exists()
+
+
 @pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
 def test_a_killed_recorders_torn_last_row_is_dropped_with_a_warning(tmp_path, capsys, suffix):
     from proleg.cli.main import main

@@ -250,6 +250,23 @@ def _column(rows: list[tuple[str, dict[str, Any]]], field: str, name: str, unit:
     return col
 
 
+def _check_columns(path: Path, meta: RecordingMeta, rows: list[tuple[str, dict[str, Any]]], named: list[str]) -> None:
+    """The ψ and duty columns the metadata names are the rows' own: a recording whose metadata
+    is another's (a .meta.json copied or edited beside the CSV) was plotted without a word, a
+    limb it does not name left out, one it names but no row has drawn as nothing."""
+    def per_limb_or_coil(k: str) -> bool:
+        return (k.startswith("psi_") and k.endswith("_deg")) or (k.startswith("duty_") and k.endswith("_pct"))
+
+    missing = [c for c in named if not any(c in r for _, r in rows)]
+    extra = sorted({k for _, r in rows for k in r if per_limb_or_coil(k)} - set(named))
+    if missing or extra:
+        names = (f"limbs {', '.join(meta.limb_names) or '(none)'} and actuators "
+                 f"{', '.join(meta.channel_names) or '(none)'}")
+        what = f"no row has a column {missing[0]}" if missing else f"its rows have a column {extra[0]} it does not name"
+        raise RecordingError(f"{path}: its metadata names {names}, but {what}: the metadata is not this "
+                             "recording's")
+
+
 def event_time(where: str, e: dict[str, Any]) -> float | None:
     """An event's firmware time ``t_s`` (None for a reply, which has none)."""
     return None if e.get("t_s") is None else _number(where, e, "t_s")
@@ -290,6 +307,7 @@ class Recording:
             raise RecordingError(f"{path}: no TELEMETRY frames in the recording")
         psi_cols = [_column(rows, "psi", n, "deg") for n in meta.limb_names]
         duty_cols = [_column(rows, "duty", n, "pct") for n in meta.channel_names]
+        _check_columns(path, meta, rows, psi_cols + duty_cols)
         ints = {k: np.array([_integer(w, r, k) for w, r in rows], dtype=np.int64)
                 for k in ("seq", "measured", "target", "step", "flags")}
         x = np.array([_number(w, r, "displacement_mm", optional=True) for w, r in rows], dtype=float)
