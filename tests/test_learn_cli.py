@@ -303,6 +303,27 @@ def test_a_log_that_cannot_be_written_is_a_failed_output_in_words(tmp_path, caps
     assert err == f"proleg: error: learn: cannot write trial log {log}: {why}\n"
 
 
+@pytest.mark.parametrize("command", [["learn", str(R1), "--sim", "--plant", "table", "--repeats", "1", "--log", "t.jsonl"],
+                                     ["sim", str(R1), "--measure-matrix"]])
+def test_an_out_that_cannot_be_written_is_said_before_the_robot_is_measured(tmp_path, capsys, monkeypatch, command):
+    """A directory in --out's place failed the write after the exploration or measurement, which
+    was lost with it; now before it starts, in the words the write failed with (exit 1)."""
+    import proleg.learn.runner
+    import proleg.sim.physical
+
+    def measured(*_a, **_k):
+        raise AssertionError("measured before --out was checked")
+
+    monkeypatch.setattr(proleg.sim.physical, "measure_matrix", measured)
+    monkeypatch.setattr(proleg.learn.runner.Explorer, "run", measured)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "folder.toml").mkdir()
+    code, out, err = run(capsys, *command, "--out", "folder.toml")
+    what = "learn" if command[0] == "learn" else "sim --measure-matrix"
+    assert code == 1 and out == "" and err == f"proleg: error: {what}: cannot write folder.toml: Is a directory\n"
+    assert not (tmp_path / "t.jsonl").exists()
+
+
 def test_a_log_that_is_a_device_is_refused_before_it_is_read(tmp_path, capsys):
     """A --log linked to /dev/full was read to its end (which never comes) until the kernel
     killed the process; a report reading one got the same. A trial log is a regular file."""

@@ -5,7 +5,8 @@ a symlink or a hard link to it): writing it would destroy what the command reads
 a usage error (exit 2) named before anything is read or written. ``write_text_atomic``
 writes through a temporary file in the same directory renamed over the output: a failed
 write (a full disk, a directory in the way) leaves the old file as it was and no partial
-one, and its error names the output (exit 1).
+one, and its error names the output (exit 1). ``check_writable`` says that error before a
+command's minutes of work, not after it.
 
 ``replacing`` is that temporary file for every output proleg renames into place (DBC,
 ``learn --out``, plots). The rename lands on what the path *means*, never on the path's
@@ -50,20 +51,6 @@ def refuse_inputs(what: str, option: str, out: str | Path, inputs: Mapping[str, 
         if path is not None and same_file(out, path):
             raise UsageError(f"{what}: {option} {out} is the {name} file this command reads; "
                              "write the output to another path")
-
-
-def refuse_unwritable(what: str, out: str | Path) -> None:
-    """``LinkError`` now, with the message ``write_text_atomic`` would give at the end, for an
-    output that is a directory or whose folder cannot be written: ``learn --out`` and ``sim
-    --measure-matrix --out`` write after minutes (or hours) of exploring, and a directory given
-    as --out was found only then, the measurement lost. A folder that does not exist is the
-    caller's ``UsageError``, checked before this."""
-    target = output_target(out)[0]
-    why = ("Is a directory" if target.is_dir() else
-           "Permission denied" if not os.access(target.parent, os.W_OK | os.X_OK)
-           or (target.exists() and not os.access(target, os.W_OK)) else "")
-    if why:
-        raise LinkError(f"{what}: cannot write {out}: {why}")
 
 
 def output_target(path: str | Path) -> tuple[Path, bool]:
@@ -118,6 +105,18 @@ def replacing(path: str | Path, suffix: str = ".tmp") -> Iterator[Path]:
         os.replace(tmp, target)
     finally:
         Path(tmp).unlink(missing_ok=True)
+
+
+def check_writable(path: str | Path, what: str) -> None:
+    """``LinkError`` (exit 1) when the output ``path`` could not be written, in the words its
+    write would fail with: a directory in its place, or a folder the temporary file cannot be
+    made in. For a command that works for minutes before it writes (``learn --out``, ``sim
+    --measure-matrix --out``): they measured first and failed after, the work lost."""
+    target, in_place = output_target(path)
+    if target.is_dir():
+        raise LinkError(f"{what}: cannot write {path}: Is a directory")
+    if not in_place and target.parent.is_dir() and not os.access(target.parent, os.W_OK | os.X_OK):
+        raise LinkError(f"{what}: cannot write {path}: Permission denied")
 
 
 def write_text_atomic(path: str | Path, text: str, what: str, encoding: str = "utf-8") -> Path:

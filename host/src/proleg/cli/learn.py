@@ -200,7 +200,7 @@ def _check_resumed_units(args: argparse.Namespace, robot, trials: list, source: 
 
 def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
     """The position source; ``LearnError`` for options that do not go together."""
-    from ..outputs import refuse_inputs, refuse_unwritable
+    from ..outputs import check_writable, refuse_inputs
 
     source = args.source or ("sim" if args.sim else None)
     if linked and source is None:
@@ -231,7 +231,7 @@ def _check_options(args: argparse.Namespace, linked: bool) -> str | None:
             raise LearnError(f"learn: --out {args.out}: directory {directory} does not exist")
         refuse_inputs("learn", "--out", args.out,
                       {"ROBOT": args.robot, "--log": args.log, "--track": args.track, "--truth": args.truth})
-        refuse_unwritable("learn", args.out)
+        check_writable(args.out, "learn")
     if linked:
         _check_log_writable(args.log)
     return source

@@ -139,13 +139,13 @@ def cmd_measure_matrix(args: argparse.Namespace, robot: Any) -> int:
         raise SimError(f"--measure-matrix: {robot.path}: the robot file allows no transition (its table forbids "
                        "every one): nothing to measure")
     if args.out is not None:  # known now, not after minutes of measuring
-        from ..outputs import refuse_inputs, refuse_unwritable
+        from ..outputs import check_writable, refuse_inputs
 
         directory = Path(args.out).parent
         if not directory.is_dir():
             raise UsageError(f"--out {args.out}: directory {directory} does not exist")
         refuse_inputs("sim --measure-matrix", "--out", args.out, {"ROBOT": robot.path})
-        refuse_unwritable("sim --measure-matrix", args.out)
+        check_writable(args.out, "sim --measure-matrix")
     conditions = plant_conditions(robot, args.condition)
     rng = None
     steps = _Steps()
