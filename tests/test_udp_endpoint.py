@@ -83,3 +83,68 @@ def test_endpoints_that_are_fine():
     with pytest.raises(UsageError):
         resolve_endpoint("127.0.0.1:65536")
     assert not issubclass(UsageError, LinkError)
+
+
+def _telemetry_rx():
+    """One TELEMETRY frame of paper-r1, as a listener receives it."""
+    from types import SimpleNamespace
+
+    fields = {"time_ms": 20, "seq": 1, "measured": 0, "target": 0, "gait": 0, "direction": 0, "step": 0,
+              "flags": 0, "psi": [0, 0], "duty": [0, 0]}
+    return SimpleNamespace(message=SimpleNamespace(name="TELEMETRY", fields=fields), time=0.02, truth={})
+
+
+def _streamer(endpoint: str):
+    from proleg.record import RecordingMeta, UdpStreamer
+    from proleg.paths import robots_dir
+    from proleg.robot import load_robot
+
+    meta = RecordingMeta.for_robot(robot=load_robot(robots_dir() / "paper-r1.toml"))
+    return UdpStreamer(endpoint, "plotjuggler", meta)
+
+
+def test_a_broadcast_address_is_streamed_to():
+    """Every send to 255.255.255.255 (or a subnet's .255, PlotJuggler on another machine of the
+    LAN) failed with EACCES without SO_BROADCAST: nothing streamed, nothing said, exit 0."""
+    streamer = _streamer("255.255.255.255:9870")
+    try:
+        streamer.on_message(_telemetry_rx())
+        if streamer.errors and not streamer.sent:
+            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:  # no broadcast route here at all?
+                s.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+                try:
+                    s.sendto(b"x", ("255.255.255.255", 9870))
+                except OSError as e:
+                    pytest.skip(f"this machine sends no broadcast: {e}")
+        assert (streamer.sent, streamer.errors) == (1, 0)
+    finally:
+        streamer.stop()
+
+
+def test_a_send_that_fails_but_for_nobody_listening_is_said_once(caplog):
+    import errno
+
+    streamer = _streamer("127.0.0.1:9870")
+
+    class Failing:
+        def __init__(self, code: int):
+            self.code = code
+
+        def sendto(self, data, addr):
+            raise OSError(self.code, {errno.EACCES: "Permission denied", errno.ECONNREFUSED: "Connection refused"}
+                          [self.code])
+
+        def close(self):
+            pass
+
+    streamer._sock = Failing(errno.ECONNREFUSED)  # nobody listening yet: the stream's ordinary lot
+    for _ in range(3):
+        streamer.on_message(_telemetry_rx())
+    assert streamer.errors == 3 and not caplog.records
+    streamer._sock = Failing(errno.EACCES)
+    for _ in range(3):
+        streamer.on_message(_telemetry_rx())
+    assert streamer.errors == 6
+    assert [r.getMessage() for r in caplog.records] == [
+        "warning: --udp 127.0.0.1:9870: cannot send (Permission denied): the stream does not reach it; the run goes on"]
+    streamer.stop()

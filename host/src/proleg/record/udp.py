@@ -8,11 +8,14 @@ under the recordings' field names (``proleg.record.fields``):
 
 ``resolve_endpoint`` reads ``--udp HOST:PORT`` and resolves its host before a command opens
 anything (``cli.main.udp_options``). ``UdpStreamer`` is a ``Listener``; a send that fails (no route, nobody listening on an ICMP-
-answering host) is counted in ``errors`` and never stops the run.
+answering host) is counted in ``errors`` and never stops the run; one that fails for another
+reason than nobody listening is said once (a warning) for each reason.
 """
 
 from __future__ import annotations
 
+import errno
+import logging
 import socket
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +25,8 @@ from ..link.client import Received
 from ..link.listeners import Listener
 from ..protocol.enums import Flag
 from .fields import RecordingMeta, dumps, telemetry_row
+
+log = logging.getLogger("proleg")
 
 UDP_FORMATS = ("plotjuggler", "teleplot")
 #: getaddrinfo's answers for a name that does not exist (not a DNS server that did not answer).
@@ -112,10 +117,19 @@ class UdpStreamer(Listener):
         self.sent = 0
         self.errors = 0
         self._addr = endpoint.address
+        self._said: set[int] = set()
         try:
             self._sock: socket.socket | None = socket.socket(endpoint.family, socket.SOCK_DGRAM)
         except OSError as e:
             raise LinkError(f"--udp {endpoint.text}: {e.strerror or e}") from None
+        if endpoint.family == socket.AF_INET:
+            # a broadcast address (255.255.255.255, a subnet's .255: PlotJuggler on another
+            # machine of the LAN) is sent to only with SO_BROADCAST; without it every send
+            # failed with EACCES, nothing was streamed and nothing said so
+            try:
+                self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+            except OSError:
+                pass
 
     def on_message(self, rx: Received) -> None:
         if self._sock is None or rx.message.name != "TELEMETRY":
@@ -127,8 +141,14 @@ class UdpStreamer(Listener):
         try:
             self._sock.sendto(data, self._addr)
             self.sent += 1
-        except OSError:
+        except OSError as e:
             self.errors += 1
+            if e.errno != errno.ECONNREFUSED and e.errno not in self._said:
+                # nobody listening yet (an ICMP port unreachable) is the stream's ordinary lot;
+                # any other failure means no datagram reaches the host: said once, the run goes on
+                self._said.add(e.errno)
+                log.warning("warning: --udp %s:%d: cannot send (%s): the stream does not reach it; the run goes on",
+                            self.host, self.port, e.strerror or e)
 
     def stop(self) -> None:
         if self._sock is not None:
