@@ -108,6 +108,11 @@ def test_each_parser_refuses_what_it_does_not_take(parse, text):
         (["console", "--node", "zz"], "argument --node: expected an integer (0x.. for hex), got 'zz'"),
         (["learn", R1, "--node", "one"], "argument --node: expected an integer (0x.. for hex), got 'one'"),
         (["learn", R1, "--repeats", "-3"], "argument --repeats: expected at least 1, got -3"),
+        # a simulated second in 32 years: run --sim --duration 1 never ended
+        (["run", R1, "--sim", "--speed", "1e-9"],
+         "argument --speed: expected at least 0.001 times real time (a simulated second in 17 minutes), got 1e-9"),
+        (["sim", R1, "--pty", "--speed", "0.0001"],
+         "argument --speed: expected at least 0.001 times real time (a simulated second in 17 minutes), got 0.0001"),
         # a run that would never end: its header said 11999999988 trials, and planning them took 10 GB
         (["learn", R1, "--repeats", "999999999"],
          "argument --repeats: expected at most 100,000 trials per transition, got 999999999"),

@@ -55,6 +55,7 @@ def test_can_url_needs_a_channel_from_itself_or_python_can_configuration(tmp_pat
     ("can://virtual/ch0?bitrate=0", "bitrate: expected an integer in 1..1000000, got 0"),
     ("sim://paper-r1?seed=abc", "sim://paper-r1?seed=abc: seed: expected an integer in 0..4294967295, got 'abc'"),
     ("sim://paper-r1?speed=abc", "speed: expected a finite number above 0 (times real time) or 'max', got 'abc'"),
+    ("sim://paper-r1?speed=1e-9", "speed: expected at least 0.001 times real time, or 'max', got '1e-9'"),
     ("serial:///dev/ttyS0?baudrate=abc", "baudrate: expected an integer in 1..12000000, got 'abc'"),
     ("serial:///dev/ttyS0?baudrate=99999999999999", "baudrate: expected an integer in 1..12000000, got 99999999999999"),
     # pyserial's words were "Could not open port …: 'debug|info|warning|error'" and "'<=' not

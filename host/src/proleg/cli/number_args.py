@@ -165,6 +165,18 @@ def positive_float(text: str) -> float:
     return v
 
 
+def speed_factor(text: str) -> float:
+    """``--speed``: times real time, at least ``link.sim_link.MIN_SPEED`` (finite: as fast as
+    the host can goes past any pace there is)."""
+    from ..link.sim_link import MIN_SPEED
+
+    v = positive_float(text)
+    if v < MIN_SPEED:
+        raise argparse.ArgumentTypeError(f"expected at least {MIN_SPEED:g} times real time (a simulated second in "
+                                         f"{1 / MIN_SPEED / 60:.0f} minutes), got {text}")
+    return v
+
+
 #: The shortest ``run --progress`` period: a line per tenth of a second of the run at most (a
 #: shorter period printed the same line once per pass of the receive loop: 10,002 lines for
 #: ``--progress 0.00001 --duration 0.1``).

@@ -21,7 +21,7 @@ from .. import interrupts
 from ..errors import GaitError, Interrupted, LinkError, UsageError
 from ..names import counted
 from .number_args import (MAX_SIM_S, gait_index, heading_deg, param_index, param_value, positive_float,
-                          progress_period)
+                          progress_period, speed_factor)
 from .robot_link import add_link_options, link_settings, open_client
 
 log = logging.getLogger("proleg")
@@ -458,8 +458,8 @@ def add_arguments(subparsers: Any) -> None:
                    help="text: a summary; jsonl: every message as a JSON line, then a RESULT line")
     r.add_argument("--progress", type=progress_period, default=1.0, metavar="S",
                    help="progress every S seconds of the run (at least 0.1; default 1)")
-    r.add_argument("--speed", type=positive_float, default=None,
-                   help="with --sim: times real time (default: as fast as possible)")
+    r.add_argument("--speed", type=speed_factor, default=None,
+                   help="with --sim: times real time, at least 0.001 (default: as fast as possible)")
     r.add_argument("--no-replan", dest="replan", action="store_false",
                    help="do not replan after an actuator loss (default: on a fault naming an actuator, "
                         "load the best gait of what the robot can still do and go on; docs/learning.md)")

@@ -13,7 +13,7 @@ import sys
 
 from ..names import counted
 from .main import EXIT_FAILED, EXIT_OK, add_udp_options, robot_arg, udp_options
-from .number_args import MAX_SIM_S, gait_number, max_transitions, positive_float
+from .number_args import MAX_SIM_S, gait_number, max_transitions, positive_float, speed_factor
 from .. import interrupts
 from ..report.matrix_check import check, remark_text
 
@@ -39,7 +39,7 @@ def add_sim_parser(sub) -> None:
     s.add_argument("--json", action="store_true", help="print the report as one JSON object")
     s.add_argument("--pty", action="store_true",
                    help="serve the simulated board on a pseudo-terminal in real time instead (for proleg console)")
-    s.add_argument("--speed", type=positive_float, default=1.0, help="with --pty: times real time (default 1)")
+    s.add_argument("--speed", type=speed_factor, default=1.0, help="with --pty: times real time (default 1, at least 0.001)")
     from .sim_plant import add_plant_options
 
     add_plant_options(s)  # --plant, --condition, --measure-matrix

@@ -192,10 +192,14 @@ def _int(url: str, name: str, value: Any, lo: int, hi: int) -> int:
 
 
 def _speed(url: str, text: str) -> float:
+    from .sim_link import MIN_SPEED
+
     try:
         v = float(text)
     except ValueError:
         v = math.nan
     if not (v > 0 and math.isfinite(v)):
         raise UsageError(f"{url}: speed: expected a finite number above 0 (times real time) or 'max', got {text!r}")
+    if v < MIN_SPEED:  # a simulated second in years: as --speed refuses it
+        raise UsageError(f"{url}: speed: expected at least {MIN_SPEED:g} times real time, or 'max', got {text!r}")
     return v

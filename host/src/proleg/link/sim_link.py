@@ -39,6 +39,12 @@ def temperature_key(actuator: str) -> str:
     return f"temp_{identifier(actuator)}_c"
 
 
+#: The slowest pace (``speed``) the CLI takes for a simulated board (``run --sim --speed``, ``sim
+#: --pty --speed``, a ``sim://`` URL's ``speed``): a thousandth of real time, a simulated second
+#: in about 17 minutes. 1e-9 was taken, and ``run --sim --duration 1`` then lasted 32 years.
+MIN_SPEED = 0.001
+
+
 class SimLink(Link):
     def __init__(self, board: BoardLike, *, step_s: float = 0.002, speed: float | None = None,
                  description: str = "simulated board"):
