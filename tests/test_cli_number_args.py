@@ -36,6 +36,7 @@ R1 = str(Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml")
         (gait_index, "0", 0),
         (gait_index, " User ", 0xFF),
         (reply_timeout, "0.01", 0.01),
+        (reply_timeout, "60", 60.0),
     ],
 )
 def test_each_parser_returns_the_number_it_reads(parse, text, value):
@@ -59,6 +60,7 @@ def test_each_parser_returns_the_number_it_reads(parse, text, value):
         (gait_index, "first"),
         (reply_timeout, "0"),
         (reply_timeout, "0.001"),
+        (reply_timeout, "60.5"),  # a board that stopped answering kept the command waiting (1e9: 31 years)
     ],
 )
 def test_each_parser_refuses_what_it_does_not_take(parse, text):

@@ -202,9 +202,19 @@ def progress_period(text: str) -> float:
 MIN_REPLY_TIMEOUT_S = 0.01
 
 
+#: The longest: a board that has not answered in a minute will not (it reset, or its link is
+#: gone); 1e9 was taken, and a board that stopped answering kept the command waiting 31 years.
+MAX_REPLY_TIMEOUT_S = 60.0
+
+
 def reply_timeout(text: str) -> float:
-    """``--timeout``: seconds to wait for a command's reply, at least ``MIN_REPLY_TIMEOUT_S``."""
-    return _seconds_from(text, MIN_REPLY_TIMEOUT_S, "(a reply takes a few ms)")
+    """``--timeout``: seconds to wait for a command's reply, ``MIN_REPLY_TIMEOUT_S`` ..
+    ``MAX_REPLY_TIMEOUT_S``."""
+    v = _seconds_from(text, MIN_REPLY_TIMEOUT_S, "(a reply takes a few ms)")
+    if v > MAX_REPLY_TIMEOUT_S:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_REPLY_TIMEOUT_S:g} s (a reply takes a few ms; a board "
+                                         f"silent for a minute will not answer), got {text}")
+    return v
 
 
 def heading_deg(text: str) -> float:

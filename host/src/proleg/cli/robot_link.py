@@ -31,7 +31,8 @@ def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> No
                    help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
     p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
     p.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
-    p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S", help="reply timeout per command (default 0.5 s)")
+    p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S",
+                   help="reply timeout per command (default 0.5 s, 0.01..60)")
 
 
 #: Link settings that belong to one link option: dest → (the setting's option, that link's option).
