@@ -398,6 +398,11 @@ def _csv_cell(column: str, value: str, *, events: bool = False):
     (".csv", _csv_cell("t_s", "bar", events=True), "run.events.csv:3", "t_s: expected a finite number, got 'bar'"),
     (".csv", _csv_cell("t_s", "abc0.1"), "run.csv:3", "t_s: expected a finite number, got 'abc0.1'"),
     (".csv", _csv_cell("seq", "nan"), "run.csv:3", "seq: expected an integer, got nan"),
+    # a damaged file's 1e308 was plotted, with numpy's "overflow encountered" warnings and exit 0
+    (".csv", _csv_cell("t_s", "1e308"), "run.csv:3", "t_s: expected a finite number within ±1e+12 (a damaged "
+                                                     "file?), got 1e+308"),
+    (".csv", _csv_cell("psi_left_deg", "-inf"), "run.csv:3", "psi_left_deg: expected a number or empty within "
+                                                             "±1e+12 (a damaged file?), got -inf"),
     (".csv", _csv_cell("seq", "1.5"), "run.csv:3", "seq: expected an integer, got 1.5"),
     (".csv", lambda p: _edit_line(p, 3, lambda line: line + ",9,9"), "run.csv:3", "16 cells, expected 14"),
     (".jsonl", _jsonl_field(1, psi_star_deg="abc"), "run.jsonl:1", "psi_star_deg: expected a list of lists"),

@@ -229,14 +229,23 @@ def _integer(where: str, r: dict[str, Any], k: str) -> int:
     raise RecordingError(f"{where}: {k}: expected an integer, got {_shown(v)}")
 
 
+#: The largest magnitude a recorded number has: firmware times reach 4.3e6 s, angles ±327.67°,
+#: duties 100 %, a displacement or temperature far less. 1e308 in a damaged file was plotted,
+#: numpy's "overflow encountered in multiply" warnings on stderr and exit 0.
+MAX_RECORDED = 1e12
+
+
 def _number(where: str, r: dict[str, Any], k: str, *, optional: bool = False) -> float:
     v = r.get(k)
     if optional and v is None:
         return math.nan
+    expected = "a number or empty" if optional else "a finite number"
     if isinstance(v, (int, float)) and not isinstance(v, bool) and (optional or math.isfinite(v)):
-        return float(v)
-    raise RecordingError(f"{where}: {k}: expected {'a number or empty' if optional else 'a finite number'}, "
-                         f"got {_shown(v)}")
+        if (optional and math.isnan(v)) or abs(v) <= MAX_RECORDED:
+            return float(v)
+        raise RecordingError(f"{where}: {k}: expected {expected} within ±{MAX_RECORDED:g} (a damaged file?), "
+                             f"got {_shown(v)}")
+    raise RecordingError(f"{where}: {k}: expected {expected}, got {_shown(v)}")
 
 
 def _column(rows: list[tuple[str, dict[str, Any]]], field: str, name: str, unit: str) -> str:
