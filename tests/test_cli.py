@@ -452,3 +452,42 @@ def test_log_lines_go_to_the_stderr_of_the_moment_not_the_one_main_was_called_wi
     finally:
         sys.stderr = old
     assert "proleg: a later line" in replaced.getvalue()
+
+
+@pytest.mark.skipif(not Path("/dev/zero").exists(), reason="no /dev/zero")
+@pytest.mark.parametrize("what, argv, says", [
+    ("board.toml", ("build", "paper-r1", "--board", "{p}", "-o", "{tmp}/fw"), "{p}: cannot read the board file: "),
+    ("run.csv", ("plot", "{p}", "-o", "{tmp}/out.png"), "cannot read record file {p}: "),
+    ("run.jsonl", ("plot", "{p}", "-o", "{tmp}/out.png"), "cannot read record file {p}: "),
+    ("track.csv", ("learn", "paper-r1", "--log", "{tmp}/t.jsonl", "--source", "tracker", "--track", "{p}", "--report"),
+     "learn: {p}: cannot read: "),
+    ("t.csv", ("gait", "{tmp}/csv-robot.toml"), "transitions.file: cannot open /dev/zero: "),  # the link followed
+])
+def test_an_input_that_is_a_device_is_refused_not_read_for_ever(tmp_path, what, argv, says):
+    """A board file, transition CSV, recording or track that is /dev/zero (here through a link,
+    as a slip of `ln -s` makes one) was read to an end that never comes: the memory filled until
+    the kernel killed the process. Run in a child with its memory capped, so that a regression
+    fails with a MemoryError traceback, not by taking the machine's memory."""
+    import resource
+
+    p = tmp_path / what
+    p.symlink_to("/dev/zero")
+    (tmp_path / "t.jsonl").write_text('{"trial_log": 1, "robot": "paper-r1", "levels": [2, 2]}\n')
+    robot = (ROBOTS / "paper-r1.toml").read_text(encoding="utf-8")
+    (tmp_path / "csv-robot.toml").write_text(robot[:robot.index("[transitions]")] + f'[transitions]\nfile = "{p}"\n',
+                                             encoding="utf-8")
+    args = [a.format(p=p, tmp=tmp_path) for a in argv]
+
+    def cap() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+    import os
+
+    import proleg
+
+    env = {**os.environ, "PYTHONPATH": str(Path(proleg.__file__).resolve().parents[1])}  # this proleg
+    proc = subprocess.run([sys.executable, "-m", "proleg", *args], capture_output=True, text=True, timeout=120,
+                          preexec_fn=cap, cwd=tmp_path, env=env)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.endswith(f"{says.format(p=p)}not a regular file (a device, pipe or socket)\n"), proc.stderr
+    assert proc.stderr.startswith("proleg: error: ") and proc.stderr.count("\n") == 1, proc.stderr

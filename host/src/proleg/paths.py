@@ -11,6 +11,7 @@ are kept: ``$PROLEG_CACHE``, else ``$XDG_CACHE_HOME/proleg`` (default ``~/.cache
 from __future__ import annotations
 
 import os
+import stat
 from importlib import resources
 from pathlib import Path
 
@@ -32,6 +33,21 @@ def home() -> Path:
     if env:
         return Path(env)
     return _packaged() or Path(__file__).resolve().parents[3]
+
+
+def not_a_regular_file(path: str | Path) -> str | None:
+    """Why ``path`` cannot be read whole as an input file: "not a regular file (a device, pipe or
+    socket)" when it is neither a file nor a directory, else None (a directory or a missing
+    file is said by the read itself, in its words). A device is read to an end that never comes:
+    a board file, transition CSV, recording or track named /dev/zero (or a link to it) filled
+    the memory until the kernel killed the process."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    return "not a regular file (a device, pipe or socket)"
 
 
 def boards_dir() -> Path:

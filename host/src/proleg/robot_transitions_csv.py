@@ -12,6 +12,7 @@ from pathlib import Path
 from . import states
 from .errors import RobotFileError
 from .names import counted
+from .paths import not_a_regular_file
 from .robot_entries import DURATION_RANGE, MAX_ENTRY, in_range, is_duration, state_ref
 from .typed import typed_float
 
@@ -57,6 +58,9 @@ def read_csv(path: Path, name: str, levels: tuple[int, ...], names: Sequence[str
 
 def _open_csv(path: Path, csv_path: Path):
     """The CSV as text (a leading BOM, as Excel writes, dropped), refused if too large."""
+    odd = not_a_regular_file(csv_path)
+    if odd:
+        raise RobotFileError(f"{path}: transitions.file: cannot open {csv_path}: {odd}")
     try:
         size = csv_path.stat().st_size
         fh = csv_path.open(newline="", encoding="utf-8-sig")

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import BoardError
-from ..paths import boards_dir
+from ..paths import boards_dir, not_a_regular_file
 from .can_config import CanConfig, can_config, link_transport
 from .families import MAX_RING_BYTES, available_families, hal_root, load_family
 
@@ -180,6 +180,9 @@ def load_board(name_or_path: str | Path) -> Board:
 def _read_doc(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     """The board file's tables; ``[board] extends = "NAME"`` takes every table of board NAME
     and lays this file's over it (tables key by key, lists and values replaced)."""
+    odd = not_a_regular_file(path)
+    if odd:
+        raise BoardError(f"{path}: cannot read the board file: {odd}")
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:

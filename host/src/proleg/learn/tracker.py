@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..paths import not_a_regular_file
 from ..typed import typed_float
 
 
@@ -121,6 +122,9 @@ def read_track(path: str | Path) -> Track:
 
 def _rows(path: Path) -> list[tuple[int, list[str]]]:
     """(line number, cells) of every line that is neither blank nor a comment."""
+    odd = not_a_regular_file(path)
+    if odd:
+        raise TrackerError(f"{path}: cannot read: {odd}")
     try:
         data = path.read_bytes()
     except OSError as e:

@@ -26,6 +26,7 @@ from .. import interrupts
 from ..link.client import Received
 from ..link.listeners import Listener
 from ..names import identifier, legacy_identifier
+from ..paths import not_a_regular_file
 from .fields import RecordingMeta, event_row, injection_row, telemetry_row
 
 log = logging.getLogger(__name__)
@@ -184,6 +185,9 @@ class Reader(ABC):
 
     def _text(self, path: Path | None = None) -> str:
         p = path or self.path
+        odd = not_a_regular_file(p)
+        if odd:
+            raise RecordingError(f"cannot read record file {p}: {odd}")
         try:
             return p.read_text(encoding="utf-8")
         except FileNotFoundError:
