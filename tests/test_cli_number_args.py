@@ -172,3 +172,12 @@ def test_an_option_given_a_bare_double_dash_is_a_usage_error(capsys, argv):
         main(argv)
     err = capsys.readouterr().err
     assert e.value.code == 2 and "expected a value, got '--'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", [["check", "paper-r1", "--rows", "1"], ["sim", "paper-r1", "--measure-matrix", "--hold-range"]])
+def test_jobs_past_what_a_machine_holds_are_refused(capsys, command):
+    """``--jobs 1000`` started a thousand simulated robots (100-200 MB each) before any row ran."""
+    with pytest.raises(SystemExit) as e:
+        main([*command, "--jobs", "1000"])
+    assert e.value.code == 2
+    assert "argument --jobs: expected at most 64 worker processes, got 1000" in capsys.readouterr().err

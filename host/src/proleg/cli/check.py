@@ -20,7 +20,7 @@ from typing import Any
 from ..names import counted, display_width, padded
 from ..physics.materials import shown_c
 from .main import EXIT_FAILED, EXIT_OK, robot_arg
-from .number_args import MAX_CHECK_ROWS, check_rows, gait_number, positive_int
+from .number_args import MAX_CHECK_ROWS, check_rows, gait_number, worker_jobs
 
 log = logging.getLogger("proleg")
 
@@ -57,7 +57,7 @@ def add_arguments(sub) -> None:
                         "arm-emu: the exact arduino-nano / bluepill firmware.elf on an emulated MCU (avr-emu about "
                         "twice real time, arm-emu 0.4-0.6x: a 40 s row takes about 20 s / 65-105 s; "
                         "bench/results/mcu.json)")
-    c.add_argument("--jobs", type=positive_int, default=None, metavar="N",
+    c.add_argument("--jobs", type=worker_jobs, default=None, metavar="N",
                    help="rows run at once (default: the machine's cores)")
     c.add_argument("--json", action="store_true", help="print the report as one JSON object")
     c.set_defaults(run=cmd_check)

@@ -79,6 +79,20 @@ def repeats(text: str) -> int:
     return v
 
 
+#: ``check --jobs`` and ``sim --jobs``: at most this many worker processes. Each is a whole
+#: simulated robot (a Python process with its plant and firmware, 100-200 MB): 1000 of them
+#: exhausted a lab machine's memory long before any row ran.
+MAX_JOBS = 64
+
+
+def worker_jobs(text: str) -> int:
+    """``--jobs``: worker processes, 1 .. ``MAX_JOBS``."""
+    v = positive_int(text)
+    if v > MAX_JOBS:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_JOBS} worker processes, got {v}")
+    return v
+
+
 def gait_index(text: str) -> int:
     """A gait table index ≥ 0, or ``user`` for the LOAD_GAIT sequence (``GAIT_USER``)."""
     if text.strip().lower() == "user":

@@ -20,7 +20,7 @@ from typing import Any
 
 from ..errors import UsageError
 from ..names import counted
-from .number_args import positive_int
+from .number_args import positive_int, worker_jobs
 
 PLANT_CHOICES = ("physical", "table")
 
@@ -65,7 +65,7 @@ def add_plant_options(s: argparse.ArgumentParser) -> None:
                         "random order (each starts where the one before left the body) and print each entry's "
                         "range: how much it depends on what came before it (three measurements; --jobs measures "
                         "them at once)")
-    s.add_argument("--jobs", type=positive_int, default=None, metavar="N",
+    s.add_argument("--jobs", type=worker_jobs, default=None, metavar="N",
                    help="with --measure-matrix --hold-range or --history-range: its three measurements at once, "
                         "in up to N worker processes (default: the machine's cores); the numbers do not depend on "
                         "N. One matrix is one chain of transitions on one body, each starting where the last "
