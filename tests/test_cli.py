@@ -491,3 +491,30 @@ def test_an_input_that_is_a_device_is_refused_not_read_for_ever(tmp_path, what, 
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.endswith(f"{says.format(p=p)}not a regular file (a device, pipe or socket)\n"), proc.stderr
     assert proc.stderr.startswith("proleg: error: ") and proc.stderr.count("\n") == 1, proc.stderr
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("args", [["--help"], ["--version"], ["gait", "--help"]])
+def test_a_help_that_cannot_be_written_fails(args):
+    """argparse swallows the OSError of a help it cannot write: ``proleg --help > /dev/full``
+    exited 0 with nothing written and nothing said."""
+    import os
+
+    import proleg
+
+    env = {**os.environ, "PYTHONPATH": str(Path(proleg.__file__).resolve().parents[1])}  # this proleg
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "proleg", *args], stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=60, env=env)
+    assert proc.returncode == 1 and proc.stderr == "proleg: error: cannot write: No space left on device\n", proc.stderr
+
+
+def test_a_help_read_by_head_is_not_an_error():
+    import os
+
+    import proleg
+
+    env = {**os.environ, "PYTHONPATH": str(Path(proleg.__file__).resolve().parents[1])}
+    proc = subprocess.run(f"'{sys.executable}' -m proleg --help | head -c 10", shell=True, capture_output=True,
+                          text=True, timeout=60, env=env)
+    assert proc.stdout == "usage: pro" and proc.stderr == "", proc.stderr

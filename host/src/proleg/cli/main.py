@@ -105,6 +105,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:  # before the command began: nothing to say but that
         _say("proleg: interrupted")
         return _interrupted_status()
+    except BrokenPipeError:  # `proleg --help | head -1`: the reader went away, not an error
+        _silence_stdout()
+        return EXIT_OK
+    except OSError as e:  # a --help or --version that could not be written (_Parser._print_message)
+        _say(f"proleg: error: {os_error_line(e)}")
+        _silence_stdout()
+        return EXIT_FAILED
     try:
         code = args.run(args)
         sys.stdout.flush()
@@ -272,6 +279,19 @@ class _Parser(argparse.ArgumentParser):
     """argparse, but ``--option=--`` is a usage error: Python 3.11's argparse drops the ``--``
     and hands the option an empty list without its ``type`` (``sim --duration=--`` ran into a
     TypeError traceback, and ``--max-transitions=--`` said "got []")."""
+
+    def _print_message(self, message: str, file: Any = None) -> None:
+        """argparse's, but a help or version on stdout that cannot be written (a full disk) fails
+        the command: argparse swallows the OSError, and `proleg --help > /dev/full` was an exit 0
+        with nothing written and nothing said. What goes to stderr stays argparse's (there is no
+        one left to tell)."""
+        if not message:
+            return
+        if file is None or file is sys.stderr:
+            super()._print_message(message, file)
+            return
+        file.write(message)
+        file.flush()
 
     def _get_values(self, action: argparse.Action, arg_strings: list[str]) -> Any:
         if action.option_strings and arg_strings == ["--"] and action.nargs is None:
