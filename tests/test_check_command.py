@@ -392,3 +392,22 @@ def test_the_hottest_coil_reads_the_same_in_its_row_and_the_summary(capsys):
     out = _printed(capsys, [_row(coil_peak_c=104.5012), hot])
     assert "coils ≤ 120.3 °C" in out and "hottest coil 120.3 °C" in out, out
     assert "heated a coil to 120.3 °C, past the 120 °C" in check._error(2, hot)
+
+
+def test_a_robot_the_emulated_board_cannot_carry_is_refused_before_the_nominal_walk(capsys, monkeypatch):
+    """snake-8's eight coils on the Nano's four PWM channels: refused only after the nominal
+    idealised walk (minutes on a long body), the build of the first row saying it."""
+    from proleg.report import sweep
+    from proleg.sim.simulated_boards import simulated_board
+
+    lacking = simulated_board("avr-emu").missing()
+    if lacking:
+        pytest.skip(lacking)
+
+    def walk(*_a, **_k):
+        raise AssertionError("the nominal walk ran before the board was checked")
+
+    monkeypatch.setattr(sweep, "run_length", walk)
+    snake = Path(__file__).parent / "fixtures" / "snake-8.toml"
+    rc, out, err = run(capsys, "check", str(snake), "--rows", "1", "--board", "avr-emu")
+    assert rc == 2 and out == "" and "but board arduino-nano has 4 PWM channels" in err, err

@@ -111,6 +111,16 @@ def cmd_check(args: argparse.Namespace) -> int:
             raise GaitError(f"--gait {args.gait} of {args.direction}: {robot.where}: {why}")
         shown = f"gaits 0..{len(gaits) - 1}" if gaits else "no gait"
         raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
+    if args.board != "host-sim":  # before the nominal walk: every row would fail the same way
+        from ..firmware.boards import load_board
+        from ..firmware.build import check_board_takes
+        from ..sim.simulated_boards import simulated_board
+
+        entry = simulated_board(args.board)
+        lacking = entry.missing()
+        if lacking:
+            raise SimError(lacking)
+        check_board_takes(robot, load_board(entry.firmware_board))  # its PWM channels, IMUs, link rate
     base = tuple(args.condition)
     base_keys = {c.partition("=")[0].strip() for c in base}
     run_s, nominal = sweep.run_length(robot, direction=args.direction, gait=args.gait, base=base)  # checks base
@@ -133,12 +143,6 @@ def cmd_check(args: argparse.Namespace) -> int:
     draws = sweep.draw_rows(args.rows, args.seed, [limb.name for limb in robot.limbs],
                             leave_out=tuple(base_keys | set(held)))
     rows_conditions = [base + d for d in draws]
-    if args.board != "host-sim":
-        from ..sim.simulated_boards import simulated_board
-
-        lacking = simulated_board(args.board).missing()
-        if lacking:  # before any row: every row would fail the same way
-            raise SimError(lacking)
     # job 0: the nominal row (only --condition's keys), the speed each row is measured against;
     # its idealised walk is the one run_length just made
     jobs = [(str(args.robot), c, run_s, args.direction, args.gait, f"{robot.name} #{i}", args.board,
