@@ -705,6 +705,26 @@ class EmuAttacker(Attacker):
         tests/test_emu_*.py start their gaits after a known state)."""
 
 
+@pytest.mark.parametrize("cause", ["external", "brown-out"])
+def test_an_estop_stays_latched_across_a_reset_that_is_not_a_power_on(rig, cause):
+    """An operator's E-stop was released by any reset: a reconnect (a Nano resets when its port
+    opens) or a brown-out, and START heated again with no CLEAR. Now only CLEAR releases it;
+    a power-on starts without one."""
+    rig.reset()
+    rig.ticks(50)
+    assert rig.reply(rig.send("ESTOP")).spec.name == "ACK"
+    rig.restart(cause)
+    rig.ticks(50)
+    m = rig.reply(rig.send("START", gait=0, direction=0))
+    assert m.spec.name == "NACK" and m.error == ErrorCode.ESTOP_LATCHED, m
+    assert all(rig.sim.board.pwm(c) == 0 for c in rig.sim.channels)
+    assert rig.reply(rig.send("CLEAR", what=int(ClearWhat.ESTOP))).spec.name == "ACK"
+    assert rig.reply(rig.send("START", gait=0, direction=0)).spec.name == "ACK"
+    rig.reset()  # a power-on: no E-stop
+    rig.ticks(50)
+    assert rig.reply(rig.send("START", gait=0, direction=0)).spec.name == "ACK"
+
+
 @pytest.mark.parametrize("board", ["avr-emu", "arm-emu"])
 def test_a_reset_pin_and_a_start_at_once_do_not_refresh_the_envelope_on_the_emulated_mcus(board):
     """The exact images keep what the coils spent across their reset pin: their RAM outlives the

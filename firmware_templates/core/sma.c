@@ -51,6 +51,7 @@ typedef struct {
     uint32_t win[SMA_WIN_SLOTS][CFG_N_ACTUATORS];
     uint32_t slot_us;   /* time in the slot being filled */
     uint8_t slot;       /* the slot being filled */
+    uint8_t estopped;   /* an E-stop latched: a reset does not release it, CLEAR does */
     uint16_t mark;      /* SMA_KEPT_MARK once sma_init has cleared the rest */
 } sma_kept_t;
 #define SMA_KEPT_MARK ((uint16_t)(CFG_BUILD_ID ^ (CFG_BUILD_ID >> 16) ^ 0x5AA5u))
@@ -63,7 +64,6 @@ typedef struct {
     uint32_t max_on_us; /* the limits in force (SET_PARAM may narrow them) */
     uint16_t max_duty;
     uint16_t refill_q8; /* on-time paid back per µs of cool-down, × 256, rounded down; ≤ 10000 */
-    uint8_t estopped;
 } sma_vars_t;
 static sma_vars_t st;
 static uint8_t clamped;
@@ -117,7 +117,7 @@ static void every_channel_off(void)
  * ESTOP. */
 #define SMA_ON_US ((uint32_t)(CFG_MAX_ON_TICKS * CFG_TICK_US))
 #define SMA_COOLDOWN_US ((uint32_t)(CFG_MIN_COOLDOWN_TICKS * CFG_TICK_US))
-static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US), 0};
+static const sma_vars_t st_init ROM = {SMA_ON_US, CFG_MAX_DUTY_PM, REFILL_Q8(SMA_ON_US, SMA_COOLDOWN_US)};
 /* The build's own limits pay back (robot_settings.py refuses a min_cooldown_ms of 256 × max_on_ms or
  * more; this makes a hand-edited config fail to compile rather than lock every coil off). */
 typedef char sma_build_cooldown_pays_back[REFILL_QUOT(SMA_ON_US, SMA_COOLDOWN_US) > 0u ? 1 : -1];
@@ -235,9 +235,9 @@ uint8_t sma_tick(uint8_t holding)
     w = kept.win[kept.slot];
     for (i = 0, bit = 1u; i < CFG_N_ACTUATORS; i++, bit = (uint8_t)(bit << 1)) {
         act_state_t *a = &kept.acts[i];
-        uint16_t duty = st.estopped ? 0u : sma_clamp(a->request);
+        uint16_t duty = kept.estopped ? 0u : sma_clamp(a->request);
         uint32_t x = (uint32_t)a->charged * dt + a->win_rem; /* ≤ 10000 × 400000 + 1023 */
-        if (!st.estopped && duty != a->request) {
+        if (!kept.estopped && duty != a->request) {
             clamped = 1;
         }
         /* charge the interval since the last tick at the duty the pin carried */
@@ -305,18 +305,18 @@ void sma_all_off(void)
 
 void sma_estop(void)
 {
-    st.estopped = 1;
+    kept.estopped = 1;
     every_channel_off();
 }
 
 void sma_clear_estop(void)
 {
-    st.estopped = 0;
+    kept.estopped = 0;
 }
 
 uint8_t sma_estopped(void)
 {
-    return st.estopped;
+    return kept.estopped;
 }
 
 int8_t sma_set_limits(uint16_t max_duty_pm, uint32_t max_on_ticks, uint32_t cooldown_ticks)

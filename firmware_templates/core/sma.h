@@ -32,7 +32,8 @@
  * but the interval until the next sma_tick is still charged at the duty it had, so a
  * STOP + START in one tick continues the on-period. Only sma_init(0) (a power-on) starts
  * from a cold budget; after any other reset sma_init(1) keeps what the last run spent (the
- * time in reset counts as none). sma_estop() latches until sma_clear_estop().
+ * time in reset counts as none). sma_estop() latches until sma_clear_estop(), across such a
+ * reset too.
  */
 #ifndef PROLEG_SMA_H
 #define PROLEG_SMA_H

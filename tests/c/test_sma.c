@@ -454,6 +454,26 @@ static void test_a_warm_reset_keeps_the_mean_duty_window(void)
     }
 }
 
+/* An E-stop latched before a reset that is not a power-on stays latched (CLEAR releases it);
+ * a power-on starts without one. */
+static void test_an_estop_survives_a_warm_reset_not_a_power_on(void)
+{
+    setup();
+    sma_estop();
+    sma_init(1);
+    CHECK(sma_estopped());
+    sma_request(0, 6000);
+    tick();
+    CHECK_EQ(fake_pwm[0], 0);
+    sma_clear_estop();
+    sma_request(0, 6000);
+    tick();
+    CHECK_EQ(fake_pwm[0], 6000);
+    sma_estop();
+    sma_init(0);
+    CHECK(!sma_estopped());
+}
+
 int main(void)
 {
     RUN(test_init_turns_every_board_channel_off);
@@ -477,5 +497,6 @@ int main(void)
     RUN(test_all_off_turns_every_board_channel_off_at_once);
     RUN(test_a_warm_reset_keeps_the_cool_down_a_cold_one_forgets);
     RUN(test_a_warm_reset_keeps_the_mean_duty_window);
+    RUN(test_an_estop_survives_a_warm_reset_not_a_power_on);
     return UNIT_EXIT();
 }
