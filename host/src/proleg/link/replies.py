@@ -94,7 +94,7 @@ def _explain(error: ErrorCode | int, detail: int, command: str = "") -> str:
                                           "[safety])") + ": at run time the envelope can be narrowed, never widened")
     if error == ErrorCode.ESTOP_LATCHED:
         return ("the E-stop is latched: every coil stays off until it is released (CLEAR ESTOP: proleg "
-                "console key c, or RobotClient.clear)")
+                "console key c, or RobotClient.clear; a reset of the board does not release it, a power cycle does)")
     if command == "LOAD_GAIT" and error == ErrorCode.FORBIDDEN_TRANSITION:
         return (f"step {detail} to the next (the last to the first) is not a transition this robot's firmware "
                 "allows: a state that follows itself, or an \"x\" in the robot file's matrix")
