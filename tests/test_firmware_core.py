@@ -31,6 +31,8 @@ C_TESTS = {
     "test_psi_multilevel.c": ("multi", ["psi.c", "angle.c", "seq.c", "count.c"], ["gait_table.c"], []),
     "test_sma.c": ("r1-fast", ["sma.c", "elapsed.c"], [], []),
     "test_sma_heat.c": ("r1-heat", ["sma.c", "elapsed.c"], [], []),
+    "test_sma_kept.c": ("r1-fast", ["elapsed.c"], [], []),  # includes sma.c: writes its kept RAM
+    "test_sma_kept.c@r1-heat": ("r1-heat", ["elapsed.c"], [], []),
     "test_safety.c": ("r1-fast", ["safety.c", "elapsed.c"], [], []),
     "test_ctl.c": ("r1-fast", ["ctl.c", "stall.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
     "test_ctl_shared.c": ("r1-1act", ["ctl.c", "stall.c", "psi.c", "angle.c", "limbmap.c", "sma.c", "elapsed.c"], [], []),
