@@ -224,3 +224,31 @@ def test_install_bootloader_refuses_bytes_below_the_boot_section(tmp_path, optib
         board.install_bootloader({0x7000: b"\x00\x00"}, 0x7E00)
     with pytest.raises(SimError, match="past the end of flash"):
         board.flash_write(0x7FFF, b"\x00\x00")
+
+
+def test_a_dtr_reset_through_optiboot_keeps_the_envelope_and_a_power_on_does_not(optiboot_hex):
+    """A real Nano's reset cause is always UNKNOWN behind optiboot, which clears MCUSR on every
+    start: a power-on too. The DTR auto-reset (optiboot's 1 s wait, then its watchdog) must
+    keep what the coils spent (docs/safety.md, "A reset"): the firmware treats UNKNOWN as not a
+    power-on and the mark decides; optiboot leaves .noinit alone (its buffer is at RAMSTART)."""
+    from proleg.emu.avr import nano_elf
+    from proleg.paths import robots_dir
+    from proleg.protocol.codec import FrameDecoder
+    from proleg.protocol.definition import EventKind, ResetCause
+    from proleg.robot import load_robot
+
+    board = nano(nano_elf(load_robot(robots_dir() / "paper-r1.toml")), optiboot_hex)
+    decoder = FrameDecoder()
+
+    def boots():
+        msgs = decoder.feed(board.read())
+        return [(m.code, m.detail) for m in msgs if m.name == "EVENT" and m.kind == EventKind.BOOT]
+
+    board.advance(0.05)
+    assert boots() == [(ResetCause.UNKNOWN, 0)]  # a power-on: RAM without the mark, a cold budget
+    kept = board.read_symbol("kept")
+    board.external_reset()
+    board.advance(1.5)
+    assert board.mcu_resets == 2  # the DTR reset and optiboot's watchdog
+    assert boots() == [(ResetCause.UNKNOWN, 1)]  # the budget kept
+    assert board.read_symbol("kept")[-2:] == kept[-2:]  # the same mark
