@@ -39,12 +39,17 @@ def max_transitions(text: str) -> int:
 MAX_CYCLES = 10_000
 
 
+def _at_most(text: str, cap: int, what: str) -> int:
+    """A whole number 1 .. ``cap``; ``what``: what it counts, for the refusal."""
+    v = positive_int(text)
+    if v > cap:
+        raise argparse.ArgumentTypeError(f"expected at most {cap:,} {what}, got {v}")
+    return v
+
+
 def cycles(text: str) -> int:
     """``--cycles``: passes in the composed path, 1 .. ``MAX_CYCLES``."""
-    v = positive_int(text)
-    if v > MAX_CYCLES:
-        raise argparse.ArgumentTypeError(f"expected at most {MAX_CYCLES:,} passes, got {v}")
-    return v
+    return _at_most(text, MAX_CYCLES, "passes")
 
 
 #: The longest ``proleg sim`` run and ``run --sim`` run flat out (simulated seconds): an hour
@@ -59,10 +64,7 @@ MAX_CHECK_ROWS = 1000
 
 def check_rows(text: str) -> int:
     """``check --rows``: random rows to run, 1 .. ``MAX_CHECK_ROWS``."""
-    v = positive_int(text)
-    if v > MAX_CHECK_ROWS:
-        raise argparse.ArgumentTypeError(f"expected at most {MAX_CHECK_ROWS} rows, got {v}")
-    return v
+    return _at_most(text, MAX_CHECK_ROWS, "rows")
 
 
 #: ``learn --repeats``: at most this many trials of each transition, as many as ``--half-width``
@@ -73,10 +75,7 @@ MAX_REPEATS = 100_000
 
 def repeats(text: str) -> int:
     """``learn --repeats``: trials per transition, 1 .. ``MAX_REPEATS``."""
-    v = positive_int(text)
-    if v > MAX_REPEATS:
-        raise argparse.ArgumentTypeError(f"expected at most {MAX_REPEATS:,} trials per transition, got {v}")
-    return v
+    return _at_most(text, MAX_REPEATS, "trials per transition")
 
 
 #: ``check --jobs`` and ``sim --jobs``: at most this many worker processes. Each is a whole
@@ -87,10 +86,7 @@ MAX_JOBS = 64
 
 def worker_jobs(text: str) -> int:
     """``--jobs``: worker processes, 1 .. ``MAX_JOBS``."""
-    v = positive_int(text)
-    if v > MAX_JOBS:
-        raise argparse.ArgumentTypeError(f"expected at most {MAX_JOBS} worker processes, got {v}")
-    return v
+    return _at_most(text, MAX_JOBS, "worker processes")
 
 
 def gait_index(text: str) -> int:
