@@ -36,7 +36,7 @@ with them (proleg.learn.replan); both must agree, so both call ``fallback`` here
 from __future__ import annotations
 
 import numbers
-from collections.abc import Iterable
+from collections.abc import Container, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,7 +86,7 @@ def dead_table(robot, lost: int | Iterable[int]) -> TransitionTable:
     """The robot's table without the transitions that need actuator ``lost`` (module doc; or
     any of several actuators: a host that lost one after another), nor those into or out of a
     state the robot cannot reach (``_unreachable``), nor those the body cannot make with the
-    compiled map (``_unheld``): the dead mode keeps that map, so what the intact body cannot
+    compiled map (``Robot.unholdable``, ``Robot.blocked``): the dead mode keeps that map, so what the intact body cannot
     hold or end it cannot either."""
     t = robot.transitions
     amap = compiled_map(robot)
@@ -94,18 +94,17 @@ def dead_table(robot, lost: int | Iterable[int]) -> TransitionTable:
     driven = [i for i, a in enumerate(amap) if a in gone]
     up = np.array([any(limb_levels(s, t.levels)[i] > 0 for i in driven) for s in range(t.n_states)], dtype=bool)
     up |= _unreachable(robot, t)
-    return t.restricted(~(up[t.src] | up[t.dst]) & _unheld(robot, t))
+    # the load warnings the gait check turns into errors: a three-limb robot without its back
+    # coil fell back on 000 -> 010 -> 011 -> 001, in 010 and 011 the back pad lifted past its edge
+    # by the middle one: the fallback the firmware switches to would have ended in STATE_TIMEOUT
+    held = _clear_of(t, getattr(robot, "unholdable", {}), getattr(robot, "blocked", {}))
+    return t.restricted(~(up[t.src] | up[t.dst]) & held)
 
 
-def _unheld(robot, t: TransitionTable) -> np.ndarray:
-    """Per transition of ``t``: False where the intact body cannot make it, into or out of a
-    state it cannot hold (``Robot.unholdable``) or a step it cannot end (``Robot.blocked``),
-    the load warnings the gait check turns into errors. A three-limb robot without its back
-    coil fell back on 000 -> 010 -> 011 -> 001, in 010 and 011 the back pad lifted past its edge
-    by the middle one: the fallback the firmware switches to would have ended in STATE_TIMEOUT."""
-    unheld = getattr(robot, "unholdable", {})
-    blocked = getattr(robot, "blocked", {})
-    return np.array([int(a) not in unheld and int(b) not in unheld and (int(a), int(b)) not in blocked
+def _clear_of(t: TransitionTable, states: Container[int], steps: Container[tuple[int, int]]) -> np.ndarray:
+    """Per transition of ``t``: neither into nor out of one of ``states``, nor one of ``steps``
+    (the body's states it cannot hold and steps it cannot end, ``robot_body``)."""
+    return np.array([int(a) not in states and int(b) not in states and (int(a), int(b)) not in steps
                      for a, b in zip(t.src, t.dst)], dtype=bool)
 
 
@@ -208,8 +207,7 @@ def _body_allows(robot, table: TransitionTable, new_map: tuple[int, ...], full: 
     from .robot_body import body_coupling
 
     coupled, blocked = body_coupling(robot, table, list(new_map))
-    return np.array([int(a) not in coupled and int(b) not in coupled and (int(a), int(b)) not in blocked
-                     for a, b in zip(full.src, full.dst)], dtype=bool)
+    return _clear_of(full, coupled, blocked)
 
 
 def best_gait(table: TransitionTable, direction: str) -> tuple[tuple[int, ...] | None, float]:
