@@ -342,9 +342,9 @@ def _drift(sim: SimulatedRobot, arg: str) -> None:
     target, rate = arg, ""
     if "@" in arg and not _names_coil(sim, arg):
         target, _, rate = arg.rpartition("@")
-    if "@" in arg and not _names_coil(sim, arg) and not rate.strip():  # drift@ drifted at the default rate
-        raise SimError("drift@RATE (per second of on-time): no rate after '@' (expected e.g. drift@0.05, or drift "
-                       "alone for 0.05)")
+        if not rate.strip():  # drift@ drifted at the default rate
+            raise SimError("drift@RATE (per second of on-time): no rate after '@' (expected e.g. drift@0.05, or "
+                           "drift alone for 0.05)")
     target, rate = target.strip(), rate.strip()
     channels = [a.channel for a in sim.robot.actuators] if target in ("", "all") else [_channel(sim, target)]
     r = _rate(rate, 0.05, "drift@RATE (per second of on-time)")
