@@ -41,9 +41,16 @@ def rise_duty(robot: Any) -> tuple[float, str]:
     boost = boost_ms_of(robot) > 0  # as the firmware is built (CTL_BOOST_MS)
     duty = robot.safety.max_duty if boost else robot.control.drive_duty
     key = "safety.max_duty (control.boost_ms is on)" if boost else "control.drive_duty"
-    if getattr(robot.safety, "coil_heat_ceiling", False) and robot.safety.mean_ceiling < duty:
+    top = duty_ceiling(robot)
+    return top if top[0] < duty else (duty, key)
+
+
+def duty_ceiling(robot: Any) -> tuple[float, str]:
+    """The most any rise may get, and its key: ``safety.max_duty``; with the coil's heat ceiling
+    (``[safety] coil_heat_ceiling``) ``safety.max_mean_duty``, where it holds a coil for good."""
+    if getattr(robot.safety, "coil_heat_ceiling", False):
         return robot.safety.mean_ceiling, "safety.max_mean_duty (the coil's heat ceiling)"
-    return duty, key
+    return robot.safety.max_duty, "safety.max_duty"
 
 
 def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
@@ -60,8 +67,7 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
     from .sma import heating_branch
 
     duty, key = rise_duty(robot)
-    top, top_key = ((robot.safety.mean_ceiling, "safety.max_mean_duty (the coil's heat ceiling)")
-                    if robot.safety.coil_heat_ceiling else (robot.safety.max_duty, "safety.max_duty"))
+    top, top_key = duty_ceiling(robot)
     amb = plant.conditions.get("ambient_c")
     edges = [lb.psi_star_deg[0] + lb.hysteresis_deg / 2.0 for lb in robot.limbs]
     bends = plant.settled_bend(duty, edges)
