@@ -33,6 +33,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from ..errors import LearnError, LinkError
+from ..paths import not_a_regular_file
 from ..names import counted
 from .learn_report import FLAGGED_SHOWN, _fmt, report_and_write, with_track  # noqa: F401 (first two re-exported)
 from .learn_scope import check_explorable, explored, faulted_hint, stopped_hint
@@ -247,9 +248,8 @@ def _check_log_writable(path: str) -> None:
         if not directory.is_dir():
             raise LearnError(f"learn: --log {path}: directory {directory} does not exist")
     why = ("Is a directory" if p.is_dir() else
-           "not a regular file (a device, pipe or socket)" if p.exists() and not p.is_file() else
-           "Permission denied" if not os.access(p.parent, os.W_OK | os.X_OK)
-           or (p.exists() and not os.access(p, os.R_OK | os.W_OK)) else "")
+           not_a_regular_file(p) or ("Permission denied" if not os.access(p.parent, os.W_OK | os.X_OK)
+                                     or (p.exists() and not os.access(p, os.R_OK | os.W_OK)) else ""))
     if why:
         raise LinkError(f"learn: cannot write trial log {path}: {why}")
 
