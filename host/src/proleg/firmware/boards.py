@@ -21,7 +21,7 @@ from typing import Any
 from ..errors import BoardError
 from ..paths import boards_dir, not_a_regular_file
 from .can_config import CanConfig, can_config, link_transport
-from .families import MAX_RING_BYTES, available_families, hal_root, load_family
+from .families import MAX_RING_BYTES, available_families, hal_root, is_ring_size, load_family
 
 #: [uart] buffers when a board file does not give them (bytes, powers of two).
 DEFAULT_UART_RX_BUFFER = 64
@@ -253,7 +253,7 @@ def _buffer(path: Path, doc: dict, key: str, default: int, family: str) -> int:
     compiler refused it, at hal_avr.c's #error."""
     top = load_family(family).max_ring_bytes
     v = doc.get("uart", {}).get(key, default)
-    if not isinstance(v, int) or isinstance(v, bool) or v < 16 or v > top or v & (v - 1):
+    if not is_ring_size(v, top):
         on = (f" (the most the {family} family's HAL takes: its family.toml's uart.max_ring_bytes)"
               if top < MAX_RING_BYTES else "")
         raise BoardError(f"{path}: uart.{key}: expected a power of two from 16 to {top} bytes{on}, got {v!r}")

@@ -18,6 +18,11 @@ from ..paths import templates_dir
 MAX_RING_BYTES = 32768
 
 
+def is_ring_size(v: object, top: int = MAX_RING_BYTES) -> bool:
+    """A UART ring's size (core/ring.h): a whole power of two from 16 to ``top`` bytes."""
+    return isinstance(v, int) and not isinstance(v, bool) and 16 <= v <= top and not v & (v - 1)
+
+
 @dataclass(frozen=True)
 class Family:
     name: str
@@ -74,7 +79,7 @@ def load_family(name: str) -> Family:
     else:
         raise BoardError(f"{spec}: pwm.pins: expected \"any\" or a table of pin = C entry")
     ring = doc.get("uart", {}).get("max_ring_bytes", MAX_RING_BYTES)
-    if not isinstance(ring, int) or isinstance(ring, bool) or not 16 <= ring <= MAX_RING_BYTES or ring & (ring - 1):
+    if not is_ring_size(ring):
         raise BoardError(f"{spec}: uart.max_ring_bytes: expected a power of two from 16 to {MAX_RING_BYTES}, "
                          f"got {ring!r}")
     return Family(name, path, fid, str(fam.get("description", "")), str(pwm.get("pin_kind", "PWM pin")), table,
