@@ -25,7 +25,7 @@ from ...errors import SimError
 from ...firmware.families import hal_root
 from .bkp import Bkp
 from .bxcan import BxCan
-from .clocks import CPU_HZ, Iwdg, Rcc
+from .clocks import CPU_HZ, RESET_FLAGS, Iwdg, Rcc
 from .core import HARDFAULT, SYSTICK, CortexM
 from .elf import read_elf
 from .fpec import PAGE_SIZE as NV_PAGE_SIZE, Fpec
@@ -194,8 +194,9 @@ class ArmEmuBoard(MmioAccess, TickMarks, FirmwareProbes):
         """A reset that is not a power-on (``SimBoard.restart``): the NRST pin ("external"), the
         watchdog or a software reset; RAM keeps what it held, as the chip's does (on the
         STM32F103 a brown-out is a power-on reset: POR/PDR)."""
-        if cause not in ("external", "watchdog", "software"):
-            raise ValueError(f"restart cause {cause!r}: expected external, watchdog or software")
+        causes = [c for c in RESET_FLAGS if c != "power-on"]
+        if cause not in causes:
+            raise ValueError(f"restart cause {cause!r}: expected one of {', '.join(causes)}")
         self.resets.append((self.cycles / CPU_HZ, cause))
         self._system_reset(cause)
 
