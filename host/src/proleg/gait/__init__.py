@@ -7,6 +7,7 @@
 
     feasibility: gait_problems(robot, states) -> list[Problem], check_gait(robot, states),
                  entry_path(robot, states) -> EntryPath
+    entry:       entry_walk(table, cycle, rest, can_step, unheld, blocked) -> EntryPath (the search)
     planar:      optimal_planar_gaits(table, PlanarObjective(...), kind, max_transitions,
                                   rotation_cap_deg, simple_cycles=, rotate=, translation_cap=)
     compose:     net_motion(table, states) -> Pose, gait_path(table, states, cycles) -> [Pose]
@@ -18,7 +19,8 @@ for what ``total`` counts (repeated walks: ``Gait.repeats``) and how ties are ra
 """
 
 from .evaluate import evaluate_sequence
-from .feasibility import EntryPath, Problem, check_gait, entry_path, gait_problems
+from .entry import EntryPath
+from .feasibility import Problem, check_gait, entry_path, gait_problems
 from .optimal import optimal_gaits, rank_gaits
 from .compose import Pose, gait_path, net_motion
 from .library import Heading, LibraryEntry, gait_library, library_gaits, parse_headings

@@ -52,21 +52,19 @@ is the gait's first transition), as everywhere in proleg's messages.
 
 from __future__ import annotations
 
-from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import GaitError
 from ..robot_body import unsettled
 from .coil_debt import EPS_S, Step, coil_budget, cycle_debt
+from .entry import REST, EntryPath, entry_walk
 from ..states import limb_levels
-from ..transitions import TransitionTable
 
 if TYPE_CHECKING:  # the robot layer sits above the gait engine; only its shape is used
     from ..robot import Robot
 
-REST = 0  # every limb at level 0
 DEFAULT_DRIVE_S = 1.0  # a transition's drive time when the table has no durations: R1 takes 0.7–1.2 s
 
 
@@ -77,20 +75,6 @@ class Problem:
     kind: str       # shared-actuator | unreachable | unholdable | blocked | opposing | on-time | never-cools | timeout | no-entry
     severity: str   # error | warning
     message: str
-
-
-@dataclass(frozen=True)
-class EntryPath:
-    """From rest into a gait: ``states`` runs from the rest state to ``states[-1]``, which is
-    the gait's state at position ``gait_step`` (0 = the gait's first state); the gait is then
-    run from there. ``states == (rest,)`` when the gait passes through rest."""
-
-    states: tuple[int, ...]
-    gait_step: int
-
-    @property
-    def transitions(self) -> int:
-        return len(self.states) - 1
 
 
 def _open(states: Sequence[int]) -> list[int]:
@@ -414,56 +398,20 @@ def entry_path(robot: "Robot", states: Sequence[int], rest: int = REST) -> Entry
     the shortest walk went through them (a three-limb robot's -x gait entered by 000 -> 010 ->
     020 -> 120, its back pad lifted past its edge in 010 and 020, when 000 -> 100 -> 110 -> 120
     was there), and the firmware, which follows this path, stopped in STATE_TIMEOUT before the
-    gait began. Where every walk goes through one, ``gait_problems`` says so."""
-    cycle = _open(states)
-    if rest in cycle:
-        return EntryPath((rest,), cycle.index(rest))
-    unheld = getattr(robot, "unholdable", {})
-    blocked = getattr(robot, "blocked", {})
-
-    def holdable(a: int, b: int) -> bool:  # a gait state's own trouble is the gait's problem
-        return (b not in unheld or b in cycle) and (a, b) not in blocked
-
-    try:
-        return _entry_path(robot, cycle, rest, holdable)
-    except GaitError:
-        return _entry_path(robot, cycle, rest, lambda a, b: True)
+    gait began. Where every walk goes through one, ``gait_problems`` says so. The search
+    itself: ``gait.entry``."""
+    return entry_walk(robot.transitions, _open(states), rest, lambda a, b: _hardware_can(robot, a, b),
+                      getattr(robot, "unholdable", {}), getattr(robot, "blocked", {}))
 
 
-def _entry_path(robot: "Robot", cycle: list[int], rest: int, ok: Callable[[int, int], bool]) -> EntryPath:
-    """``entry_path``'s breadth-first search over the steps the hardware can make and ``ok``
-    lets through."""
-    table: TransitionTable = robot.transitions
-    targets = {s: i for i, s in reversed(list(enumerate(cycle)))}
-    parent = {rest: rest}
-    queue = deque([rest])
-    while queue:
-        layer = sorted(queue)
-        queue.clear()
-        reached = [s for s in layer if s in targets]
-        if reached:
-            end = min(reached, key=lambda s: targets[s])
-            path = [end]
-            while path[-1] != rest:
-                path.append(parent[path[-1]])
-            return EntryPath(tuple(reversed(path)), targets[end])
-        for a in layer:
-            lo, hi = table.src.searchsorted(a), table.src.searchsorted(a, side="right")
-            for b in sorted(int(x) for x in table.dst[lo:hi]):
-                if b not in parent and ok(a, b) and not any(
-                        sev == "error" for _, sev, _ in step_problems(robot, a, b)):
-                    parent[b] = a
-                    queue.append(b)
-    raise GaitError(
-        f"gait {_name(robot, cycle + cycle[:1])}: no allowed path from the rest state "
-        f"{table.label(rest)} into the gait (every limb at level 0 first)"
-    )
+def _hardware_can(robot: "Robot", a: int, b: int) -> bool:
+    """The hardware can make a -> b (step_problems finds no error)."""
+    return not any(sev == "error" for _, sev, _ in step_problems(robot, a, b))
 
 
 def _can_step(robot: "Robot", a: int, b: int) -> bool:
     """a -> b is allowed in the robot file and the hardware can make it (step_problems)."""
-    return robot.transitions.lookup(a, b) is not None and not any(
-        sev == "error" for _, sev, _ in step_problems(robot, a, b))
+    return robot.transitions.lookup(a, b) is not None and _hardware_can(robot, a, b)
 
 
 def loaded_start(robot: "Robot", states: Sequence[int], standing: int) -> list[int]:
