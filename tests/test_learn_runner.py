@@ -63,7 +63,7 @@ def test_a_piece_is_planned_from_a_tour_of_a_bounded_demand_however_many_trials_
     """Only a tour's first piece is used, so its tour need not cover every trial still to do:
     --repeats 999999999 planned a tour of 12e9 transitions for R1's first piece (10 GB in 16 s,
     no trial made), and --more's 100,000 extra trials took 10 s a piece."""
-    import proleg.learn.runner as runner
+    import proleg.learn.next_piece as planner
 
     robot = load_robot(ROBOTS / "inchworm-3.toml")
     t = robot.transitions
@@ -74,8 +74,8 @@ def test_a_piece_is_planned_from_a_tour_of_a_bounded_demand_however_many_trials_
         assert planned[-1] <= 1000, f"a tour planned for {planned[-1]} trials of a transition"
         return real(table, demand=demand, **kw)
 
-    real = runner.exploration
-    monkeypatch.setattr(runner, "exploration", bounded)
+    real = planner.exploration
+    monkeypatch.setattr(planner, "exploration", bounded)
     with TrialLog(tmp_path / "t.jsonl") as log:
         ex = _Offline(robot, log, rest=t.index("000"), repeats=10**9, seed=1)
         piece = ex.next_piece(t.index("000"), np.full(t.n_transitions, 10**9, dtype=np.int64))

@@ -9,12 +9,10 @@ again after each piece is what makes a run resumable (an interrupted run's log i
 demand already met) and robust to what a piece really did (a timeout, the robot relaxing
 into another state while its coils cool).
 
-The first piece of a random tour may make none of what is still to do (only transitions
-that balance or join the tour): ``next_piece`` tries a few tours, then takes the shortest
-way to a transition still to do, and names the transitions no piece from the rest state
-can reach within the thermal limits. A run whose pieces keep making nothing it needs (the
-robot does not do what was planned) stops after ``STALL_PIECES`` of them with what is
-left, instead of running for ever.
+Which piece comes next is ``next_piece.plan_piece``'s (link-free); ``Explorer.next_piece``
+names the transitions no piece from the rest state can reach within the thermal limits. A
+run whose pieces keep making nothing it needs (the robot does not do what was planned)
+stops after ``STALL_PIECES`` of them with what is left, instead of running for ever.
 
 A fault of making a transition (STATE_TIMEOUT, SMA_ON_LIMIT while a piece's transition is
 under way), predicted by the body model or not, does not end the run: ``_after_fault`` records
@@ -62,7 +60,8 @@ from ..transitions import TransitionTable
 from .makeable import makeable_robot, not_asked, without_edges
 from .measure import (Failure, Pose, Trial, TrialLog, between_levels, counts, manual_trial, planar_delta, psi_state,
                       remaining)
-from .pieces import Piece, PieceLimits, limits_for, split
+from .next_piece import plan_piece
+from .pieces import Piece, PieceLimits, limits_for
 from .tours import _bfs_path, exploration, reached_from, successors
 
 log = logging.getLogger("proleg")
@@ -72,14 +71,6 @@ log = logging.getLogger("proleg")
 CLOCK_EPS_S = 1e-6
 #: pieces in a row without a transition still to do before ``Explorer.run`` gives up
 STALL_PIECES = 5
-#: random tours ``Explorer.next_piece`` tries for a first piece that makes progress
-PLAN_TRIES = 8
-#: the most trials of one transition a piece's tour is planned for: only the tour's first piece
-#: is used, and the tour is planned again for the next, so a tour of the whole demand cost its
-#: length at every piece (--repeats 999999999 on R1 planned a tour of 12e9 transitions, 10 GB
-#: in 16 s and no trial made; --more's 100,000 extra trials each took 10 s a piece). Tours of
-#: every run asking at most this many are planned as before.
-PLAN_DEMAND_CAP = 100
 #: telemetry frames ``Explorer.measured_state`` reads at most for three with a known state
 STATE_FRAMES = 200
 #: transitions in a row the robot faults on (no trial made between them) before ``Explorer.run``
@@ -389,25 +380,8 @@ class Explorer:
         ``demand`` is over ``self.robot.transitions``; the pieces go over ``plan_table`` (never
         a transition the robot faulted on)."""
         t = self.plan_table()
-        demand = np.minimum(np.delete(demand, sorted(self.failed)), PLAN_DEMAND_CAP)
-        for attempt in range(PLAN_TRIES):
-            seed = None if self.seed is None else (self.seed + self.pieces_run) * PLAN_TRIES + attempt
-            plan = exploration(t, demand=demand, start=start, seed=seed)
-            tour = next((x for x in plan.tours if x.states[0] == start), None)
-            if tour is None:
-                break
-            piece = split(t, tour.states, self.limits)[0]
-            if piece.loadable and any(demand[t.lookup(a, b)] > 0 for a, b in piece.transitions):
-                return piece
-        succ = successors(t)
-        best: Piece | None = None
-        for (a, b), k in zip(zip(t.src.tolist(), t.dst.tolist()), demand.tolist()):
-            way = _bfs_path(t.n_states, succ, start, a) if k > 0 else None
-            if way is None:
-                continue
-            pieces = split(t, way + [b], self.limits)
-            if len(pieces) == 1 and pieces[0].loadable and (best is None or len(pieces[0].states) < len(best.states)):
-                best = pieces[0]
+        demand = np.delete(demand, sorted(self.failed))
+        best = plan_piece(t, start, demand, self.limits, None if self.seed is None else self.seed + self.pieces_run)
         if best is None:
             left = [f"{t.label(a)}->{t.label(b)}" for a, b, k in zip(t.src, t.dst, demand) if k > 0]
             if self.ask is not None:  # one transition a piece: the operator measures from where it rests
