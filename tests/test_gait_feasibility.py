@@ -215,6 +215,16 @@ def test_a_gait_through_a_state_the_body_cannot_hold_is_an_unholdable_error_the_
     assert [f.code for f in report.faults][:1] == ["STATE_TIMEOUT"], report.faults
 
 
+def _inchworm_middle_held_up() -> str:
+    """inchworm-3 with the middle ψ* 12° and hysteresis 8°: 111 -> 101 cannot end."""
+    text = (ROBOTS / "inchworm-3.toml").read_text()
+    i = text.index('name = "middle"')
+    j = text.index("psi_star_deg = [20.0]", i)
+    k = text.index("hysteresis_deg = 2.0", i)
+    return (text[:j] + "psi_star_deg = [12.0]" + text[j + len("psi_star_deg = [20.0]"):k] + "hysteresis_deg = 8.0"
+            + text[k + len("hysteresis_deg = 2.0"):])
+
+
 def test_a_gait_through_a_step_the_body_cannot_end_is_a_blocked_error_the_build_says_to_expect(tmp_path):
     """inchworm-3 with the middle ψ* 12° and hysteresis 8°: in 101 the tail and head, held at
     their hold edges (25°), keep the middle pad at ≈ 13°, inside its band (8..16°) and more
@@ -227,17 +237,13 @@ def test_a_gait_through_a_step_the_body_cannot_end_is_a_blocked_error_the_build_
     from proleg.report import SimSession
     from proleg.sim.simulators import open_simulated
 
-    text = (ROBOTS / "inchworm-3.toml").read_text()
-    i = text.index('name = "middle"')
-    j = text.index("psi_star_deg = [20.0]", i)
-    k = text.index("hysteresis_deg = 2.0", i)
-    robot = robot_from(tmp_path, text[:j] + "psi_star_deg = [12.0]" + text[j + len("psi_star_deg = [20.0]"):k] +
-                       "hysteresis_deg = 8.0" + text[k + len("hysteresis_deg = 2.0"):])
+    robot = robot_from(tmp_path, _inchworm_middle_held_up())
     assert list(robot.blocked) == [tuple(idx(robot, "111", "101"))]
     problems = [p for p in gait_problems(robot, idx(robot, "100", "110", "111", "101", "100")) if p.severity == "error"]
     assert [p.kind for p in problems] == ["blocked"], problems
     assert problems[0].message.startswith(
-        "gait 100 110 111 101 100: step 111 -> 101 (step 3) cannot end on the simulated body: in 101 the raised "
+        "gait 100 110 111 101 100: makes the step 111 -> 101 (step 3), which the simulated body cannot end: in 101 "
+        "the raised "
         "limbs hold 'middle' at 13.0°, above its level-0 edge 8.0°"), problems[0].message
     assert "blocked" not in kinds(robot, "000", "100", "110", "111", "011", "001", "000")
     gaits = firmware_gaits(robot)
@@ -344,6 +350,24 @@ def test_an_entry_path_only_through_states_the_body_cannot_hold_is_an_unholdable
     assert p.message.startswith("gait 120 121 120: its entry from rest (000 010 020 120) goes to states 010, 020, "
                                 "which the simulated body cannot hold, and there is no other way in: in 010 "
                                 "'back' (level 0) sits at"), p.message
+
+
+def test_an_entry_path_only_through_a_step_the_body_cannot_end_is_a_blocked_error_worded_as_the_gaits(tmp_path):
+    """The gait 101 001 101 is clean, but with 000 -> 001, 100 -> 101 and 011 -> 001 forbidden
+    every way in ends with 111 -> 101, which cannot end: the error names the entry as the
+    unholdable one does (its count of the steps past three was "and more", without a number)."""
+    text = _inchworm_middle_held_up()
+    for row, fixed in (('[  0,  -3,   0, "x",   3,', '[  0, "x",   0, "x",   3,'),
+                       ('[ -3, "x", "x", "x",   0,  -3,', '[ -3, "x", "x", "x",   0, "x",'),
+                       ('["x",   3,   3,   0,', '["x", "x",   3,   0,')):
+        text = text.replace(row, fixed)
+    robot = robot_from(tmp_path, text)
+    walk = robot.transitions.sequence("101,001,101")
+    assert [robot.transitions.label(s) for s in entry_path(robot, walk).states] == ["000", "010", "011", "111", "101"]
+    [p] = [p for p in gait_problems(robot, walk) if p.severity == "error"]
+    assert p.kind == "blocked" and p.message.startswith(
+        "gait 101 001 101: its entry from rest (000 010 011 111 101) makes the step 111 -> 101, which the simulated "
+        "body cannot end, and there is no other way in: in 101 the raised limbs hold 'middle' at 13.0°"), p.message
 
 
 def _inchworm_middle_on_the_tail_coil(tmp_path: Path):

@@ -162,17 +162,28 @@ def _unreachable_problem(robot: "Robot", gait: str, unreached: list[tuple[int, i
                                            f"{_short_of(robot, first)} (the warning when the robot file is loaded)")
 
 
-def _unholdable_problem(robot: "Robot", gait: str, unheld: list[tuple[int, int]]) -> Problem:
-    """One ``unholdable`` error for the steps of a gait into states the body cannot hold
-    (``Robot.unholdable``): the first three named, with the limb and its ψ in the first. A
-    planar robot's library gait through such a state (011 111 101 …, the middle pad lifted to
-    12.5° past its 11° edge in 101) was built without a word about it and ended in STATE_TIMEOUT."""
-    label = robot.transitions.label
-    named = ", ".join(f"{label(b)} (step {k})" for k, b in unheld[:3])
-    more = f" and {len(unheld) - 3} more" if len(unheld) > 3 else ""
-    return Problem("unholdable", "error",
-                   f"gait {gait}: goes to state{'s' if len(unheld) > 1 else ''} {named}{more}, which the simulated "
-                   f"body cannot hold: {unholdable_why(robot, unheld[0][1])}")
+def _body_problem(robot: "Robot", gait: str, kind: str, places: list[str], why: str,
+                  entry: Sequence[int] = ()) -> Problem:
+    """One ``unholdable`` or ``blocked`` error for a gait's steps into states the body cannot
+    hold (``Robot.unholdable``; ``places`` names the states) or steps it cannot end
+    (``Robot.blocked``, ``robot_body.blocked_descents``; ``places`` names the steps), the first
+    three named, with ``why`` the first cannot be (``unholdable_why``, ``blocked_why``). With
+    ``entry``, the places are on the gait's entry path from rest, which goes through them
+    because every way in does (``entry_path`` keeps out of them where it can).
+
+    A planar robot's library gait through such a state (011 111 101 …, the middle pad lifted to
+    12.5° past its 11° edge in 101), nano-3x6 (three 6-level limbs) and R1 with hysteresis 16°
+    through such steps were built without a word and ended in STATE_TIMEOUT; so did a gait whose
+    own steps are clean but whose entry is not: the firmware follows that path, and it stopped
+    before the gait began."""
+    more = f" and {len(places) - 3} more" if len(places) > 3 else ""
+    s = "s" if len(places) > 1 else ""
+    what = (f"goes to state{s} {', '.join(places[:3])}{more}, which the simulated body cannot hold"
+            if kind == "unholdable" else
+            f"makes the step{s} {', '.join(places[:3])}{more}, which the simulated body cannot end")
+    if entry:
+        what = f"its entry from rest ({_name(robot, entry)}) {what}, and there is no other way in"
+    return Problem(kind, "error", f"gait {gait}: {what}: {why}")
 
 
 def unholdable_why(robot: "Robot", state: int) -> str:
@@ -195,20 +206,6 @@ def _unheld_why(limb: Any, level: int, psi: float) -> str:
         return (f"{limb.name!r} (level {level}) is held up to {psi:.1f}°, inside the band above its level "
                 f"({lo:.1f}..{hi:.1f}°)")
     return f"{limb.name!r} (level {level}) sits at {psi:.1f}°, past its level-{level + 1} edge {hi:.1f}°"
-
-
-def _blocked_problem(robot: "Robot", gait: str, steps: list[tuple[int, int, int]]) -> Problem:
-    """One ``blocked`` error for the steps of a gait the body cannot end (``Robot.blocked``,
-    ``robot_body.blocked_descents``): the first three named, the limb and its ψ in the first.
-    nano-3x6 (three 6-level limbs) and R1 with hysteresis 16° built gaits through such steps
-    without a word, and they ended in STATE_TIMEOUT."""
-    label = robot.transitions.label
-    named = ", ".join(f"{label(a)} -> {label(b)} (step {k})" for k, a, b in steps[:3])
-    more = f" and {len(steps) - 3} more" if len(steps) > 3 else ""
-    _, a, b = steps[0]
-    return Problem("blocked", "error",
-                   f"gait {gait}: step{'s' if len(steps) > 1 else ''} {named}{more} cannot end on the simulated "
-                   f"body: {blocked_why(robot, a, b)}")
 
 
 def blocked_why(robot: "Robot", a: int, b: int) -> str:
@@ -336,13 +333,16 @@ def gait_problems(robot: "Robot", states: Sequence[int], from_rest: bool = True)
         out.insert(0, _unreachable_problem(robot, gait, unreached))
     unheld = [(k, b) for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)
               if b in getattr(robot, "unholdable", {}) and b not in {s for _, s in unreached}]
+    label = robot.transitions.label
     if unheld:
-        out.append(_unholdable_problem(robot, gait, unheld))
+        out.append(_body_problem(robot, gait, "unholdable", [f"{label(b)} (step {k})" for k, b in unheld],
+                                 unholdable_why(robot, unheld[0][1])))
     skip = {s for _, s in unreached} | {s for _, s in unheld}
     stuck = [(k, a, b) for k, (a, b) in enumerate(zip(cycle, cycle[1:] + cycle[:1]), start=1)
              if (a, b) in getattr(robot, "blocked", {}) and b not in skip]
     if stuck:
-        out.append(_blocked_problem(robot, gait, stuck))
+        out.append(_body_problem(robot, gait, "blocked", [f"{label(a)} -> {label(b)} (step {k})" for k, a, b in stuck],
+                                 blocked_why(robot, *stuck[0][1:])))
     out += on_time_problems(robot, cycle)
     out += timeout_problems(robot, cycle, from_rest)
     if not from_rest:
@@ -365,19 +365,12 @@ def _entry_body_problems(robot: "Robot", gait: str, cycle: list[int], entry: Seq
     out = []
     unheld = [b for _, b in steps if b in getattr(robot, "unholdable", {}) and b not in cycle]
     if unheld:
-        named = ", ".join(label(b) for b in unheld[:3]) + (f" and {len(unheld) - 3} more" if len(unheld) > 3 else "")
-        out.append(Problem("unholdable", "error",
-                           f"gait {gait}: its entry from rest ({_name(robot, entry)}) goes to state"
-                           f"{'s' if len(unheld) > 1 else ''} {named}, which the simulated body cannot hold, and "
-                           f"there is no other way in: {unholdable_why(robot, unheld[0])}"))
+        out.append(_body_problem(robot, gait, "unholdable", [label(b) for b in unheld],
+                                 unholdable_why(robot, unheld[0]), entry))
     stuck = [(a, b) for a, b in steps if (a, b) in getattr(robot, "blocked", {}) and b not in unheld]
     if stuck:
-        a, b = stuck[0]
-        named = ", ".join(f"{label(x)} -> {label(y)}" for x, y in stuck[:3])
-        out.append(Problem("blocked", "error",
-                           f"gait {gait}: its entry from rest ({_name(robot, entry)}) makes the step"
-                           f"{'s' if len(stuck) > 1 else ''} {named}{' and more' if len(stuck) > 3 else ''}, which "
-                           f"the simulated body cannot end, and there is no other way in: {blocked_why(robot, a, b)}"))
+        out.append(_body_problem(robot, gait, "blocked", [f"{label(a)} -> {label(b)}" for a, b in stuck],
+                                 blocked_why(robot, *stuck[0]), entry))
     return out
 
 
