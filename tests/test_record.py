@@ -555,8 +555,8 @@ def test_gait_plot_to_a_directory_or_a_full_disk_names_the_users_file(tmp_path, 
     from proleg.cli.main import main
 
     (tmp_path / "d.png").mkdir()
-    assert main(["gait", "paper-r1", "--plot", str(tmp_path / "d.png")]) == 2
-    assert capsys.readouterr().err == f"proleg: error: --plot {tmp_path / 'd.png'}: is a directory\n"
+    assert main(["gait", "paper-r1", "--plot", str(tmp_path / "d.png")]) == 1  # as every output (was 2)
+    assert capsys.readouterr().err == f"proleg: error: gait --plot: cannot write {tmp_path / 'd.png'}: Is a directory\n"
 
     def full(*a, **k):
         raise OSError(28, "No space left on device")

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .errors import LinkError, UsageError
-from .outputs import replacing
+from .outputs import check_writable, replacing
 from .protocol.enums import Flag
 from .record import Recording, read_recording
 from .states import label, state_count
@@ -30,15 +30,17 @@ FIGURE_FORMATS = ("png", "svg", "pdf")
 STATE_UNKNOWN_VALUE = 0xFFFF
 
 
-def figure_problem(out: Path) -> str | None:
-    """Why no figure can be written to ``out`` (its suffix, a missing directory), else None."""
+def figure_problem(out: Path, what: str) -> str | None:
+    """Why ``out`` is no figure's name (its suffix, a folder that does not exist: a usage
+    mistake, exit 2), else None; ``LinkError`` (exit 1, ``outputs.check_writable``) when it
+    names a place no figure can be written (a directory), as every output proleg writes says
+    it. ``what``: the command and option, the message's prefix."""
     if out.suffix.lower().lstrip(".") not in FIGURE_FORMATS:
         return "the file must end in .png, .svg or .pdf"
     directory = out.parent  # "." for a bare file name
     if not directory.is_dir():
         return f"directory {directory} does not exist"
-    if out.is_dir():
-        return "is a directory"
+    check_writable(out, what)
     return None
 
 
@@ -152,7 +154,7 @@ def plot_recording(path: str | Path, out: str | Path, *, title: str | None = Non
     """Plot recording ``path`` into ``out`` (format from its extension: png, svg, pdf)."""
     rec = read_recording(path)
     out = Path(out)
-    problem = figure_problem(out)
+    problem = figure_problem(out, "plot -o")
     if problem:
         raise UsageError(f"{out}: {problem}")
 

@@ -402,7 +402,7 @@ def _plot(robot, answers, cycles: int, out: str, json_out: bool = False) -> None
     from ..plot import figure_problem, new_figure, write_figure
 
     path = Path(out)
-    problem = figure_problem(path)
+    problem = figure_problem(path, "gait --plot")
     if problem:
         raise GaitError(f"--plot {out}: {problem}")
     t = robot.transitions

@@ -4,7 +4,8 @@ library, print. ``gait`` is in ``gait``; ``sim`` in ``sim_command``; ``console``
 ``robot_commands``; ``check`` in ``check``.
 
 Exit codes (also in ``proleg --help``): 0 ok; 1 failed (a link or command failed, the robot
-faulted, an output could not be written, the board does not run the robot file's firmware: a
+faulted, an output could not be written where it is named (a directory in its place: every
+output option alike), the board does not run the robot file's firmware: a
 file that loads but is not the one the board was built from is found only over the link);
 2 usage (a bad argument, a robot file, board file or recording that does not load, a bad
 gait); 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP. Every user mistake arrives here as a ``ProlegError`` and leaves as one line on stderr;
@@ -37,7 +38,8 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 EPILOG = """\
 exit status:
   0    ok
-  1    failed: a link or command failed, the robot faulted, an output could not be written,
+  1    failed: a link or command failed, the robot faulted, an output could not be written
+       where it is named (a directory in its place, a folder not writable, a full disk),
        the board does not run the firmware of the robot file given
   2    usage: a bad argument (an output directory that does not exist), a robot file,
        board file or recording that does not load, a bad gait
