@@ -38,6 +38,7 @@ from .robot_limbs import (  # noqa: F401 (re-exported: the robot file's names ar
     MAX_LIMBS,
     MUX_ADDRESSES,
     MUX_CHANNELS,
+    NAME_ALPHABET,
     NAME_RE,
     STROKE_MAX_DEG,
     Actuator,
@@ -47,6 +48,7 @@ from .robot_limbs import (  # noqa: F401 (re-exported: the robot file's names ar
     _check_strokes,
     _limbs,
     hold_crossings,
+    name_re,
     stroke_leads,
     too_long,
 )
@@ -72,7 +74,7 @@ log = logging.getLogger(__name__)
 #: robot_name field, protocol ROBOT_NAME_LEN 16 with its NUL): the firmware keeps the full
 #: name in ROM and sends the first 15 characters. Published robots have longer names
 #: (issue 17); 63 keeps build directory names reasonable.
-ROBOT_NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,62}")
+ROBOT_NAME_RE = name_re(63)
 INFO_NAME_LEN = 15
 
 
@@ -191,7 +193,7 @@ def robot_from_dict(doc: dict[str, Any], path: Path) -> Robot:
     head = Fields(path, "robot", doc["robot"], {"name", "description"})
     name = head.string("name")
     if not ROBOT_NAME_RE.fullmatch(name):
-        head.fail("name", "lowercase letters, digits and '-' (not first), 1 to 63 characters", name, too_long(name))
+        head.fail("name", f"{NAME_ALPHABET}, 1 to 63 characters", name, too_long(name))
     description = head.string("description", "")
 
     actuators = _actuators(path, doc["actuator"])

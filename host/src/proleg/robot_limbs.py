@@ -21,13 +21,25 @@ from .robot_fields import Fields, toml_text
 from .robot_plant import limb_friction
 from .robot_settings import Control
 
-NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,14}")  # fullmatch: "$" would let a final "\n" through
+#: The alphabet of robot, limb, actuator and board names (the one place it is spelled), and
+#: its words in their messages: a first character, then any more.
+NAME_FIRST, NAME_REST = "[a-z0-9]", "[a-z0-9-]"
+NAME_ALPHABET = "lowercase letters, digits and '-' (not first)"
+
+
+def name_re(max_chars: int) -> re.Pattern[str]:
+    """Names of 1 to ``max_chars`` characters of the names' alphabet; use ``fullmatch`` ("$"
+    would let a final "\n" through)."""
+    return re.compile(f"{NAME_FIRST}{NAME_REST}{{0,{max_chars - 1}}}")
+
+
+NAME_RE = name_re(15)  # limbs and actuators: the firmware's names are 15 characters
 
 
 def too_long(name: str) -> str:
     """`` (N characters)`` for a name of the right characters but too many of them, else "": a
     lab's 64-character robot name was told "1 to 63 characters, got '…'", left to count."""
-    return f" ({len(name)} characters)" if re.fullmatch(r"[a-z0-9][a-z0-9-]*", name) else ""
+    return f" ({len(name)} characters)" if re.fullmatch(f"{NAME_FIRST}{NAME_REST}*", name) else ""
 
 MAX_LIMBS = 8
 MAX_ACTUATORS = 8
@@ -100,7 +112,7 @@ def _actuators(path: Path, value: Any) -> tuple[Actuator, ...]:
         f = Fields(path, _entry("actuator", i, t), t, {"name", "channel"}, sep=": ")
         name = f.string("name")
         if not NAME_RE.fullmatch(name):
-            f.fail("name", "lowercase letters, digits and '-' (not first), 1 to 15 characters", name, too_long(name))
+            f.fail("name", f"{NAME_ALPHABET}, 1 to 15 characters", name, too_long(name))
         if any(a.name == name for a in out):
             f.fail("name", "a name no other actuator has", name)
         channel = f.integer("channel", i, 0, MAX_ACTUATORS - 1)

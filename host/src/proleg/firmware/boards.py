@@ -11,7 +11,6 @@ a board name (``arduino-nano``) or a path to a board file. See docs/adding-a-boa
 from __future__ import annotations
 
 import difflib
-import re
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -20,6 +19,7 @@ from typing import Any
 
 from ..errors import BoardError
 from ..paths import boards_dir, not_a_regular_file
+from ..robot_limbs import NAME_ALPHABET, name_re
 from .can_config import CanConfig, can_config, link_transport
 from .families import MAX_RING_BYTES, available_families, hal_root, is_ring_size, load_family
 
@@ -29,8 +29,8 @@ DEFAULT_UART_TX_BUFFER = 128
 #: [i2c] hz when a board file does not give it (fast mode).
 DEFAULT_I2C_HZ = 400_000
 #: What a board name may be: it is `--board`'s argument, a C string in the firmware and INFO's
-#: board_name (15 characters), so the robot names' alphabet (robot.NAME_RE).
-BOARD_NAME_RE = re.compile(r"[a-z0-9][a-z0-9-]{0,14}")
+#: board_name (15 characters), so the robot names' alphabet (robot_limbs.name_re).
+BOARD_NAME_RE = name_re(15)
 #: The ranges of a board file's whole numbers, (lo, hi, what): clock_hz 0 is virtual time (host
 #: builds); flash_bytes/ram_bytes 0 is no limit, base_*/stack_bytes 0 not measured. The C takes
 #: them as unsigned long (32 bits on the MCUs); a HAL may need a narrower range of its own.
@@ -339,7 +339,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
     }
     name = _need(path, doc, "board", "name", str)
     if not BOARD_NAME_RE.fullmatch(name):
-        raise BoardError(f"{path}: board.name: expected lowercase letters, digits and '-' (not first), 1 to 15 characters "
+        raise BoardError(f"{path}: board.name: expected {NAME_ALPHABET}, 1 to 15 characters "
                          f"(INFO carries 15), got {name!r}")
     description = doc["board"].get("description", "")
     if not isinstance(description, str):
