@@ -43,29 +43,18 @@ log = logging.getLogger("proleg")
 
 def add_arguments(subparsers: Any) -> None:
     from .main import robot_arg
-    from .number_args import (baudrate, can_bitrate, can_node, positive_float, positive_int, repeats, reply_timeout,
-                              tracker_offset)
+    from .number_args import positive_float, positive_int, repeats, tracker_offset
     from .gait import _penalty
-    from .robot_link import DEFAULT_BAUDRATE
+    from .robot_link import add_link_options
 
     p = subparsers.add_parser(
         "learn", help="measure the robot's transition matrix (explore, report, write a learned robot file)",
         description="Explore the robot's allowed transitions (randomised Euler tours, resumable from --log), "
                     "estimate each transition's motion with confidence intervals, and write a learned robot file.")
     p.add_argument("robot", metavar="ROBOT", type=robot_arg)
-    src = p.add_mutually_exclusive_group()
-    src.add_argument("--port", metavar="URL", help="serial port or pyserial URL of the robot")
-    src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
-    src.add_argument("--sim", action="store_true",
-                     help="ROBOT's firmware on the simulated board, in closed loop with the physical plant (or --plant)")
-    p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, "
-                                       "else socketcan)")
-    p.add_argument("--bitrate", type=can_bitrate, metavar="BIT/S",
-                   help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
-    p.add_argument("--node", type=can_node, help="with --can: CAN node id of the robot, 0..15 (default 0)")
-    p.add_argument("--baudrate", type=baudrate, help=f"with --port: serial baud rate (default {DEFAULT_BAUDRATE})")
-    p.add_argument("--timeout", type=reply_timeout, default=0.5, metavar="S",
-                   help="reply timeout per command (default 0.5 s, 0.01..60)")
+    add_link_options(p, sim_takes_robot=False, required=False,  # --report and --out need no robot
+                     sim_help="ROBOT's firmware on the simulated board, in closed loop with the physical plant "
+                              "(or --plant)")
     p.add_argument("--truth", metavar="TRUTH.toml", type=robot_arg,
                    help="with --sim: a robot file whose [transitions] matrix drives the plant, hidden from the learner")
     p.add_argument("--plant", choices=("table", "physical"), default=None,

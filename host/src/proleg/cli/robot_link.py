@@ -17,15 +17,17 @@ from .number_args import baudrate, can_bitrate, can_node, reply_timeout
 log = logging.getLogger("proleg")
 
 
-def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool) -> None:
-    """``--port`` / ``--can`` / ``--sim`` (exactly one) and their settings."""
-    src = p.add_mutually_exclusive_group(required=True)
+def add_link_options(p: argparse.ArgumentParser, *, sim_takes_robot: bool, required: bool = True,
+                     sim_help: str = "") -> None:
+    """``--port`` / ``--can`` / ``--sim`` (exactly one; at most one unless ``required``) and
+    their settings; ``sim_help`` says more of ``--sim`` where a command simulates more."""
+    src = p.add_mutually_exclusive_group(required=required)
     src.add_argument("--port", metavar="URL", help="serial port or pyserial URL: /dev/ttyUSB0, COM3, socket://host:port")
     src.add_argument("--can", metavar="CHANNEL", help="CAN channel (python-can), e.g. can0")
     if sim_takes_robot:
-        src.add_argument("--sim", metavar="ROBOT", help="the robot's firmware on the simulated board")
+        src.add_argument("--sim", metavar="ROBOT", help=sim_help or "the robot's firmware on the simulated board")
     else:
-        src.add_argument("--sim", action="store_true", help="ROBOT's firmware on the simulated board")
+        src.add_argument("--sim", action="store_true", help=sim_help or "ROBOT's firmware on the simulated board")
     p.add_argument("--interface", help="python-can interface for --can (default: CAN_INTERFACE or ~/.canrc, else socketcan)")
     p.add_argument("--bitrate", type=can_bitrate, metavar="BIT/S",
                    help="with --can: CAN bit rate (default: CAN_BITRATE or ~/.canrc)")
