@@ -62,7 +62,7 @@ from .plant_params import (  # noqa: F401 (re-exported: the plant's parameters l
     plant_params_from_robot,
     true_rewards_from_robot,
 )
-from .sma import Hysteresis
+from .sma import Hysteresis, checked_drift, drifted
 
 #: The longest pass (a -> b -> c booked as a -> c): full strokes' leads cross first and the
 #: others follow within CTL_SAG_WAIT_MS + CTL_CLIMB_MAX_MS (3.5 s, core/ctl.h); a state held
@@ -292,15 +292,15 @@ class Plant:
         return dx
 
     def _apply_drift(self, j: int, on: float) -> None:
-        mode, rate, step = self._drift[j]
+        mode = self._drift[j][0]
         self._ontime[j] += on
-        x = self._ontime[j] * rate
+        now = drifted(self._drift[j], self._ontime[j])
         if mode == "power":
-            self._pfactor[j] = (1.0 - step) * math.exp(-x)
+            self._pfactor[j] = now
         elif mode == "stroke":
-            self._stroke[j] = (1.0 - step) * math.exp(-x)
+            self._stroke[j] = now
         else:  # temperature
-            self._hyst[j].shift_c = step + x
+            self._hyst[j].shift_c = now
 
     # -- faults -------------------------------------------------------------------------------
     def _actuator_of(self, channel: int) -> int:
@@ -321,13 +321,7 @@ class Plant:
         (0.3 → 30 % weaker at once), °C for "temperature".
         """
         j = self._actuator_of(channel)
-        if mode not in ("power", "temperature", "stroke"):
-            raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
-        if not (math.isfinite(rate) and rate >= 0):
-            raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
-        if mode != "temperature" and not 0.0 <= step < 1.0:
-            raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
-        self._drift[j] = (mode, float(rate), float(step))
+        self._drift[j] = checked_drift(mode, rate, step)
         self._ontime[j] = 0.0
         self._apply_drift(j, 0.0)
 

@@ -38,6 +38,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..errors import SimError
+
 _PI = math.pi
 
 
@@ -177,3 +179,30 @@ class Hysteresis:
             if a < self.alpha:
                 self.alpha = a if a > 0.0 else 0.0
         return self.alpha
+
+
+#: How a coil drifts with its on-time (∫ duty dt), as both plants' ``inject_drift`` takes it:
+#: its heating ("power") or its stroke fades, or its transformation temperatures rise.
+DRIFT_MODES = ("power", "temperature", "stroke")
+
+
+def checked_drift(mode: str, rate: float, step: float) -> tuple[str, float, float]:
+    """A drift's ``(mode, rate, step)``, else a SimError saying which is wrong: ``rate`` per
+    second of on-time (1/s for "power" and "stroke", °C/s for "temperature"), ≥ 0; ``step`` an
+    immediate part, a fraction in [0, 1) for "power" and "stroke", °C for "temperature"."""
+    if mode not in DRIFT_MODES:
+        raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
+    if not (math.isfinite(rate) and rate >= 0):
+        raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
+    if mode != "temperature" and not 0.0 <= step < 1.0:
+        raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
+    return mode, float(rate), float(step)
+
+
+def drifted(drift: tuple[str, float, float], on_s: float) -> float:
+    """What ``drift`` (``checked_drift``) has made of its coil after ``on_s`` of on-time: for
+    "power" and "stroke" the factor left, (1 − step)·exp(−rate·on_s); for "temperature" the
+    shift in °C, step + rate·on_s."""
+    mode, rate, step = drift
+    x = on_s * rate
+    return step + x if mode == "temperature" else (1.0 - step) * math.exp(-x)

@@ -21,7 +21,7 @@ from typing import Any
 from ...errors import SimError
 from ...names import counted
 from ...physics.params import PhysicalParams, coil_geometries
-from ..sma import Hysteresis, heating_branch
+from ..sma import Hysteresis, checked_drift, drifted, heating_branch
 from .conditions import Conditions
 
 
@@ -174,15 +174,15 @@ class Coils:
         return changed, moving
 
     def _apply_drift(self, j: int, on: float) -> None:
-        mode, rate, step = self.drift[j]
+        mode = self.drift[j][0]
         self.drift_on[j] += on
-        x = self.drift_on[j] * rate
+        now = drifted(self.drift[j], self.drift_on[j])
         if mode == "power":
-            self.pfactor[j] = (1.0 - step) * math.exp(-x)
+            self.pfactor[j] = now
         elif mode == "stroke":
-            self.drift_stroke[j] = (1.0 - step) * math.exp(-x)
+            self.drift_stroke[j] = now
         else:
-            self.drift_shift[j] = step + x
+            self.drift_shift[j] = now
             self.hyst[j].shift_c = self.fat_shift[j] + self.drift_shift[j]
 
     # -- faults ---------------------------------------------------------------------------------
@@ -200,13 +200,7 @@ class Coils:
     def inject_drift(self, channel: int, rate: float, mode: str = "power", step: float = 0.0) -> None:
         """See ``PhysicalPlant.inject_drift``."""
         j = self.of_channel(channel)
-        if mode not in ("power", "temperature", "stroke"):
-            raise SimError(f"inject_drift: mode must be 'power', 'temperature' or 'stroke', got {mode!r}")
-        if not (math.isfinite(rate) and rate >= 0):
-            raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
-        if mode != "temperature" and not 0.0 <= step < 1.0:
-            raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
-        self.drift[j] = (mode, float(rate), float(step))
+        self.drift[j] = checked_drift(mode, rate, step)
         self.drift_on[j] = 0.0
         self._apply_drift(j, 0.0)
 
