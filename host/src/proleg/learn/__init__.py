@@ -5,7 +5,8 @@ Modules: ``tours`` (randomised Euler exploration tours, exact min-cost balancing
 ground-truth and manual sources), ``tracker`` (tracker CSV, clock offset), ``stats``
 (Student t), ``estimate`` (means, variances, intervals, extra trials, penalised table),
 ``plan`` (extra-trial and adaptive plans), ``robotfile`` (the learned robot file) and
-``runner`` (the one module that drives a robot over a link) with ``next_piece`` (which piece it runs next).
+``runner`` (the one module that drives a robot over a link) with ``next_piece`` (which
+piece it runs next).
 """
 
 from .estimate import Estimates, estimate, extra_trials, penalised_table
