@@ -364,3 +364,35 @@ def test_the_board_refuses_to_calibrate_until_at_rest_2_s_after_a_gait(r1):
     client = reset(sim, client)
     client.request("CALIBRATE_LEVEL", ground=0)  # from a reset: nothing was driven
     client.close()
+
+
+@pytest.mark.parametrize("cause", ["external", "brown-out", "watchdog"])
+def test_a_reset_that_is_not_a_power_on_does_not_make_a_falling_robot_at_rest(r1, cause):
+    """A Nano resets when a host opens its port, and the firmware started every reset at rest:
+    a host that reconnected 0.1 s after STOP and calibrated 0.95 s later got the board's ACK
+    and R1's still-falling ends (9.7° and 4.3°) stored as mounting tilts, kept across power
+    cycles. A reset that keeps the coils' budget now keeps "a gait ran since the last 2 s at
+    rest" too (NOT_ALLOWED 6), and a board reset at rest still calibrates at once."""
+    sim = SimulatedRobot(r1, seed=4)
+    client = connect(sim)
+    assert client.wait_known_state()
+    client.start(0, "+x")
+    wait(client, 3.5)  # both ends up
+    client.stop()
+    wait(client, 0.1)
+    client.close()
+    sim.board.restart(cause)
+    client = connect(sim)
+    wait(client, 0.95)
+    assert max(next(client.telemetry(count=1)).psi) > 300, "still coming down"
+    with pytest.raises(CommandRefused) as e:
+        client.request("CALIBRATE_LEVEL", ground=0)
+    assert (e.value.error, e.value.detail) == (ErrorCode.NOT_ALLOWED, 6)
+    wait(client, 10.0)  # the coils cool, the ends come down and rest
+    client.close()
+    sim.board.restart(cause)  # at rest: nothing to wait for
+    client = connect(sim)
+    assert client.wait_known_state()
+    outcome = calibrate_level(client)
+    assert outcome.ok and max(abs(v) for v in outcome.reading.offsets_cdeg) < 100
+    client.close()

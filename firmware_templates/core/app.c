@@ -70,7 +70,7 @@ void app_init(void)
     ctl_reset();
     limbmap_init();
     seq_init();
-    cmd_init();
+    cmd_init(kept);
     cmd_send_info(0);
     tx_event(PROTO_EV_BOOT, cause, kept);
     for (i = 0; i < CFG_N_LIMBS; i++) {

@@ -350,10 +350,10 @@ static void handle_command(void)
     }
 }
 
-void cmd_init(void)
+void cmd_init(uint8_t kept)
 {
     proto_rx_init(&rx);
-    level_init();
+    level_init(kept);
 }
 
 void cmd_poll(void)

@@ -12,7 +12,8 @@
 
 #include <stdint.h>
 
-void cmd_init(void);
+/* kept: the reset kept the coils' budget (sma_init), passed on to level_init. */
+void cmd_init(uint8_t kept);
 void cmd_poll(void);
 void cmd_send_info(uint8_t token);
 

@@ -43,8 +43,9 @@ static uint8_t left;     /* ticks of sampling left */
 static uint8_t ground_mode; /* the calibration under way levels on this ground (RAM only) */
 #if LEVEL_AT_REST
 static uint16_t rest_ticks; /* ticks the robot has been at rest (up to LEVEL_REST_TICKS) */
-static uint8_t after_gait;  /* a gait ran (or a fault latched) and the robot has not been at rest
-                             * LEVEL_REST_TICKS since: no calibration (level_calibrate) */
+/* A gait ran (or a fault latched) and the robot has not been at rest LEVEL_REST_TICKS since: no
+ * calibration (level_calibrate). Kept across a reset that kept the coils' budget (level_init). */
+static uint8_t after_gait NOINIT;
 static uint8_t rest_limb;   /* the limb whose reading this tick low-passes */
 #endif
 static uint16_t waited;  /* ticks some limb had no sample yet */
@@ -151,11 +152,19 @@ static void load(void)
     }
 }
 
-void level_init(void)
+void level_init(uint8_t kept)
 {
     phase = PH_IDLE;
 #if LEVEL_AT_REST
-    INIT_ZERO(after_gait); /* from a reset: at rest, as far as anything was driven */
+    /* A power-on (or RAM this build did not leave): at rest, as far as anything was driven. A
+     * reset that kept the coils' budget (a Nano's port opened, a brown-out) keeps whether the
+     * robot has rested since its last gait: it forgot, and a calibration 1 s after a reset that
+     * came 0.1 s after STOP stored R1's still-falling ends (9.7° and 4.3°) as mounting tilts. */
+    if (!kept) {
+        after_gait = 0;
+    }
+#else
+    (void)kept;
 #endif
     load();
 }

@@ -64,8 +64,10 @@
 #endif
 
 #if CFG_LEVEL_CALIBRATION
-/* Load the stored record (status and offsets) and stop any calibration. */
-void level_init(void);
+/* Load the stored record (status and offsets) and stop any calibration. kept: the reset kept
+ * the coils' budget (sma_init's result): a gait that ran before it still needs its 2 s of rest
+ * before a calibration (level_calibrate's -3); otherwise nothing was driven. */
+void level_init(uint8_t kept);
 
 /* Rotate a sample of `limb` by its rest tilt (nothing when none is stored). */
 void level_apply(uint8_t limb, int16_t *ax, int16_t *az);
@@ -114,7 +116,7 @@ uint8_t level_status(void);
 int16_t level_offset_cdeg(uint8_t limb);
 int16_t level_ground_cdeg(uint8_t limb);
 #else
-#define level_init() ((void)0)
+#define level_init(kept) ((void)(kept))
 #define level_apply(limb, ax, az) ((void)0)
 #define level_calibrate(on_this_ground) ((void)(on_this_ground), (int8_t)-2)
 #define level_clear() ((int8_t)-2)
