@@ -15,9 +15,24 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_a_fault_names_the_actuator_to_suspect():
     r1 = load_robot(ROOT / "robots" / "paper-r1.toml")
-    assert suspect(r1, FaultCode.SMA_ON_LIMIT, 1) == "sma-right"  # detail: the channel
+    assert suspect(r1, FaultCode.SMA_ON_LIMIT, 1) == "sma-right"  # detail: the actuator
     assert suspect(r1, FaultCode.STATE_TIMEOUT, 0) == "sma-left"  # detail: the limb
     assert suspect(r1, FaultCode.IMU_NO_ACK, 0) is None
+
+
+def test_an_on_limit_hit_names_the_actuator_by_its_index_not_its_channel(tmp_path):
+    """The firmware's SMA_ON_LIMIT detail is the actuator's index (core/drive.c, as SUSPECT's
+    code). Read as a PWM channel, R1 wired the other way round (left coil on channel 1) had a
+    hit of its left coil blamed on its right one, and a coil on channel 6 on none."""
+    text = (ROOT / "robots" / "paper-r1.toml").read_text(encoding="utf-8")
+    swapped = text.replace("channel = 0", "channel = 9").replace("channel = 1", "channel = 0").replace("channel = 9", "channel = 1")
+    path = tmp_path / "r1-swapped.toml"
+    path.write_text(swapped, encoding="utf-8")
+    robot = load_robot(path)
+    assert [a.channel for a in robot.actuators] == [1, 0]
+    assert suspect(robot, FaultCode.SMA_ON_LIMIT, 0) == "sma-left"
+    assert suspect(robot, FaultCode.SMA_ON_LIMIT, 1) == "sma-right"
+    assert suspect(robot, FaultCode.SMA_ON_LIMIT, 2) is None
 
 
 def test_without_its_right_coil_r1_moves_on_only_with_the_left_coil_raising_both_ends():

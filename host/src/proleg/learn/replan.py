@@ -2,7 +2,7 @@
 and ``Replanner``, which carries a running gait on after the loss (``proleg run``).
 
 The firmware reports a coil that cannot do its job as FAULT SMA_ON_LIMIT (detail: the
-channel) or STATE_TIMEOUT (detail: the limb off its target; 0xFF: none is, one would not settle), followed by EVENT SUSPECT (code:
+actuator's index, as EVENT SUSPECT's code; not its PWM channel) or STATE_TIMEOUT (detail: the limb off its target; 0xFF: none is, one would not settle), followed by EVENT SUSPECT (code:
 the actuator it suspects, detail: the failed transition from × n_states + to). What the robot
 can still do without that actuator, and with which limb→actuator map, is
 ``proleg.limbloss.fallback`` (the same model the firmware's build-time fallbacks come from:
@@ -52,9 +52,11 @@ class Replan:
 
 
 def suspect(robot: Robot, code: int, detail: int) -> str | None:
-    """The actuator a fault points at: SMA_ON_LIMIT names the channel, STATE_TIMEOUT the limb."""
+    """The actuator a fault points at: SMA_ON_LIMIT names the actuator (its index in the robot
+    file, as core/drive.c sends it), STATE_TIMEOUT the limb. Read as a channel, a hit on a robot
+    whose coils are not wired to channels 0, 1, ... in file order named another coil, or none."""
     if code == FaultCode.SMA_ON_LIMIT:
-        return next((a.name for a in robot.actuators if a.channel == detail), None)
+        return robot.actuators[detail].name if 0 <= detail < len(robot.actuators) else None
     if code == FaultCode.STATE_TIMEOUT and 0 <= detail < len(robot.limbs):
         return robot.limbs[detail].actuator
     return None
