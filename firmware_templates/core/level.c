@@ -56,7 +56,7 @@ static struct {
 #if LEVEL_AT_REST
     int16_t rest;   /* ψ at rest as corrected now, low-passed over 2^LEVEL_REST_SHIFT of its samples */
 #endif
-} lm[CFG_N_LIMBS]; /* per limb, in one record */
+} lm[CFG_N_LIMBS] NOINIT; /* per limb, in one record; kept across a reset for its ground (level_init) */
 
 #if defined(__GNUC__)
 __attribute__((noinline)) /* three callers: one copy */
@@ -152,20 +152,24 @@ static void load(void)
     }
 }
 
+static void set_ground(const int16_t *o);
+
 void level_init(uint8_t kept)
 {
     phase = PH_IDLE;
-#if LEVEL_AT_REST
-    /* A power-on (or RAM this build did not leave): at rest, as far as anything was driven. A
-     * reset that kept the coils' budget (a Nano's port opened, a brown-out) keeps whether the
-     * robot has rested since its last gait: it forgot, and a calibration 1 s after a reset that
-     * came 0.1 s after STOP stored R1's still-falling ends (9.7° and 4.3°) as mounting tilts. */
+    /* A power-on (or RAM this build did not leave): no ground levelled on, and at rest as far
+     * as anything was driven. A reset that kept the coils' budget (a Nano's port opened, a
+     * brown-out) keeps both. It forgot them: a START at once after a reconnect found no slope
+     * (the ground levelled on at rest needs 2 s at rest to come back), and R1 on the Nano
+     * started up a 6° slope its 2.5° climb guard had just refused; a calibration 1 s after a
+     * reset that came 0.1 s after STOP stored R1's still-falling ends (9.7° and 4.3°) as
+     * mounting tilts. The rest of lm[] is set again before it is read. */
     if (!kept) {
+#if LEVEL_AT_REST
         after_gait = 0;
-    }
-#else
-    (void)kept;
 #endif
+        set_ground(0);
+    }
     load();
 }
 

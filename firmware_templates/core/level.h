@@ -14,8 +14,8 @@
  * On a slope. The ground's incline tilts each end's IMU too (the first limb's end up the
  * slope, the last one down), which no flat calibration can know. level_calibrate(1), with
  * the robot at rest on the slope, measures each limb's remaining tilt the same way and
- * applies it on top of the record, in RAM only (the ground changes; a reset, CLEAR_LEVEL
- * or a flat calibration sets it back to 0). Relative to a flat calibration this is the
+ * applies it on top of the record, in RAM only (the ground changes; a power-on, CLEAR_LEVEL
+ * or a flat calibration sets it back to 0; a reset that keeps the coils' budget keeps it). Relative to a flat calibration this is the
  * slope itself, as each end sees it; GET_LEVEL reports both.
  *
  * At rest, by itself (LEVEL_AT_REST). Between gaits the firmware watches for rest: no
@@ -73,7 +73,7 @@ void level_init(uint8_t kept);
 void level_apply(uint8_t limb, int16_t *ax, int16_t *az);
 
 /* Begin sampling: on flat ground (0: the result is stored) or on this ground (1: applied
- * on top of the record until reset). 0, or -1 when a calibration or an erase is under way
+ * on top of the record until a power-on). 0, or -1 when a calibration or an erase is under way
  * (-2: not in this build), -3 (with LEVEL_AT_REST) when a gait ran or a fault latched since
  * the robot was last at rest LEVEL_REST_TICKS: its limbs may still be coming down (a flat
  * calibration 5 ms after STOP stored R1's falling ends, 7.6° and 17.4°, as mounting tilts,

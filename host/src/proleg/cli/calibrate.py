@@ -122,7 +122,7 @@ def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[st
         if reading.status == LevelStatus.STORED:
             print(_table(names, reading.offsets_cdeg, ["applied"] * len(names)))
         if any(reading.ground_cdeg):
-            print("levelled on this ground (until reset):")
+            print("levelled on this ground (until a power-on):")
             print(_table(names, reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
         return 0
     if (moving := _not_at_rest(client, robot)) is not None:
@@ -138,7 +138,7 @@ def _calibrate(args: argparse.Namespace, robot: Any, client: Any, asked: list[st
     if outcome.ok and args.ground:
         if outcome.reading.status != LevelStatus.STORED:
             print("note: no flat calibration is stored, so the tilts below include each IMU's mounting tilt")
-        print(f"levelled on this ground on {where} (applied until the board resets; not stored)")
+        print(f"levelled on this ground on {where} (applied until a power-on; not stored)")
         print(_table(names, outcome.reading.ground_cdeg, ["applied"] * len(names), "slope tilt"))
         return 0
     if outcome.ok:
@@ -172,5 +172,5 @@ def add_arguments(subparsers: Any) -> None:
     g.add_argument("--clear", action="store_true", help="erase the stored calibration (offsets 0)")
     g.add_argument("--ground", action="store_true",
                    help="level on the ground the robot rests on now (a slope), on top of the flat calibration; "
-                        "kept in RAM until the board resets")
+                        "kept in RAM until a power-on (a reset that is not one, such as a Nano's when its port opens, keeps it)")
     c.set_defaults(run=cmd_calibrate)
