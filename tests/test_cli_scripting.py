@@ -510,6 +510,37 @@ def test_load_gait_says_what_the_gait_check_finds_as_proleg_build_does(capsys, t
     assert code == 0 and "STATE_TIMEOUT" not in err, err
 
 
+def test_set_param_on_a_port_says_a_nano_forgets_it_at_the_next_open(capsys, monkeypatch):
+    """`set-param max_on_ms 1000 --port ...` printed only `set max_on_ms[0] = 1000`; a Nano
+    resets whenever its port opens, so the `proleg run` after it ran with the robot file's
+    3000 ms, the narrowing a lab made for a fragile coil gone without a word."""
+    from proleg.cli import robot_commands
+    from proleg.link.client import RobotClient
+    from proleg.link.sim_link import SimLink
+    from proleg.sim.closed_loop import SimulatedRobot
+    from proleg.robot import load_robot
+    from proleg.paths import robots_dir
+
+    sim = SimulatedRobot(load_robot(robots_dir() / "paper-r1.toml"))
+
+    class _Open:
+        def __init__(self, *a, **k):
+            self.client = RobotClient(SimLink(sim, step_s=sim.plant_dt_s))
+
+        def __enter__(self):
+            self.client.connect()
+            return self.client
+
+        def __exit__(self, *exc):
+            self.client.close()
+
+    monkeypatch.setattr(robot_commands, "open_client", _Open)
+    code, out, err = run(capsys, "set-param", "--port", "/dev/ttyUSB0", "max_on_ms", "1000")
+    assert code == 0, err
+    assert out.startswith("set max_on_ms[0] = 1000")
+    assert "a Nano resets whenever its port is opened" in out and "robot file's value again" in out
+
+
 def test_set_param_by_name_on_the_simulated_board(capsys):
     code, out, err = run(capsys, "set-param", "--sim", "paper-r1", "drive_duty", "3000")
     assert code == 0, err

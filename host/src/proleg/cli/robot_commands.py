@@ -364,7 +364,18 @@ def cmd_set_param(args: argparse.Namespace) -> int:
                   "link_watchdog_ms) and rebuild to keep it")
         if getattr(args, "sim", None):
             print(SIM_IS_FRESH)  # as load-gait and calibrate say: the setting ends with this command
+        elif args.port:
+            print(PORT_OPEN_RESETS)
     return 0
+
+
+#: After set-param on a serial port: the value lasts until the board resets, and a Nano resets
+#: whenever its port is opened. A max_on_ms narrowed this way for a fragile coil was silently
+#: the robot file's again in the next command's session (proleg run), with no word.
+PORT_OPEN_RESETS = ("note: the board keeps it until it resets, and a Nano resets whenever its port is opened: the next "
+                    "proleg command on this port (proleg run ...) starts with the robot file's value again; a script that "
+                    "sets it and runs in one session (RobotClient.set_param, then start) keeps it, and the robot file "
+                    "([safety], [control]) keeps it for good")
 
 
 #: The parameters that take ``--index``, and what it counts (docs/control.md); the others have none.
