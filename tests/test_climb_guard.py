@@ -322,7 +322,7 @@ def test_levelling_on_the_ground_without_a_flat_record_does_not_arm_the_guard(tm
 
 
 
-@pytest.mark.parametrize("board, cause", [("host-sim", "external"), ("host-sim", "brown-out"), ("avr-emu", "external")])
+@pytest.mark.parametrize("board, cause", [("host-sim", "external"), ("host-sim", "brown-out"), ("avr-emu", "external"), ("arm-emu", "external")])
 def test_a_reconnect_does_not_blind_the_guard_to_the_slope_it_refused(tmp_path_factory, board, cause):
     """A Nano resets whenever a host opens its port, and every reset forgot the ground levelled
     on (the levelling at rest needs 2 s at rest to come back): `proleg run` STARTs as soon as
