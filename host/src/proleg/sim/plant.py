@@ -15,13 +15,19 @@ Chain per step, for a PWM duty held constant over the step:
    11 → 10 → 00, as in the paper's loss-of-actuation experiment;
 4. ψ_i follows ψ°_i with a first-order mechanical lag (τ_m = 30 ms, the soft body's
    response); dψ/dt is the lag's derivative, for the gyro model;
-5. friction level of limb i = number of critical angles with ψ_i ≥ ψ*_i,k (the TRUE state;
-   the firmware's classifier with hysteresis and debounce is not modelled here);
+5. friction level of limb i, counted as the firmware's classifier counts it (psi.h) from the
+   true ψ: up past ψ*_i,k + h_i/2, down below ψ*_i,k − h_i/2 (h_i the limb's
+   ``hysteresis_deg``; 0: the critical angles reached). The matrix describes the firmware's
+   state changes, so a held limb sagging past ψ* inside its band changes nothing, and a
+   multi-level limb passing a level on its way to another books each level it passes
+   (0 → 1, 1 → 2), as the firmware's measured state passes it. The debounce is not modelled;
 6. robot state index (mixed radix, first limb most significant); when it changes, the change
    and any further change within ``simultaneous_s`` (30 ms) form one transition a → b, and
-   displacement += T_true[a][b] · step_mm + N(0, noise_mm²). A transition that T_true forbids
-   (NaN) but that physically happened earns 0 and is counted in ``unexpected_transitions``,
-   unless the next one is forbidden too, T_true allows the two as one (a → b → c, a → c
+   displacement += T_true[a][b] · step_mm + N(0, noise_mm²). Where T_true forbids a → b but
+   allows each change of the window in turn (two limbs crossing a few ms apart: 110 → 120 →
+   220 under a one-level matrix), each is booked, as the firmware saw them. A transition that
+   T_true forbids (NaN) but that physically happened earns 0 and is counted in
+   ``unexpected_transitions``, unless the next one is forbidden too, T_true allows the two as one (a → b → c, a → c
    allowed) and every limb's level in b lies between a's and c's: that was a pass, the limbs
    of one step crossing apart (full strokes' rise and fall leads cross one limb first on
    purpose, up to 3.5 s before the others), booked as a → c when c is reached within
@@ -51,7 +57,7 @@ import numpy as np
 
 from ..errors import SimError
 from ..names import counted
-from ..states import classify, limb_levels, place_values
+from ..states import limb_levels, place_values
 from .plant_params import (  # noqa: F401 (re-exported: the plant's parameters live beside it)
     CROSS_GAIN_DEG,
     DIRECT_GAIN_DEG,
@@ -157,6 +163,8 @@ class Plant:
         self._g = params.coupling()
         self._rest = [float(limb.psi_rest_deg) for limb in params.limbs]
         self._thresholds = [tuple(float(p) for p in limb.psi_star_deg) for limb in params.limbs]
+        self._half_band = [float(limb.hysteresis_deg) / 2.0 for limb in params.limbs]
+        self._limb_level = [0] * self._nl  # each limb's level with its bands' hysteresis (_classify)
         self._mult = place_values(levels)
         self._mtau = float(params.mech_tau_s)
         self._psi = self._targets()
@@ -166,6 +174,7 @@ class Plant:
         self._state = self._classify()
         self._committed = self._state
         self._pending_since: float | None = None
+        self._path: list[int] = []  # the states seen since _pending_since, from _committed on
         self._displacement = 0.0
         self._transitions: list[Transition] = []
         self._unexpected = 0
@@ -188,7 +197,20 @@ class Plant:
         return [r + sum(g * c for g, c in zip(row, contraction)) for r, row in zip(self._rest, self._g)]
 
     def _classify(self) -> int:
-        return classify(self._psi, self._thresholds, self._mult)
+        """The state index of ψ now, each limb's level counted as the firmware's classifier
+        counts it (psi.h): up past a threshold at ψ* + h/2, down below ψ* − h/2, from the level
+        it had (the first call: the upper edges ψ has reached). Without bands (h = 0), the
+        thresholds ψ* reached (``proleg.states.classify``)."""
+        idx = 0
+        for i, (p, ths, half, m) in enumerate(zip(self._psi, self._thresholds, self._half_band, self._mult)):
+            lvl = self._limb_level[i]
+            while lvl < len(ths) and p >= ths[lvl] + half:
+                lvl += 1
+            while lvl > 0 and p < ths[lvl - 1] - half:
+                lvl -= 1
+            self._limb_level[i] = lvl
+            idx += lvl * m
+        return idx
 
     def step(self, dt_s: float, duties: Sequence[float]) -> None:
         """Advance by ``dt_s`` seconds with each channel's duty held constant."""
@@ -236,6 +258,8 @@ class Plant:
             self._state = state
             if self._pending_since is None:
                 self._pending_since = self._t
+                self._path = [self._committed]
+            self._path.append(state)
         if self._pending_since is not None and self._t - self._pending_since >= self._window - 1e-12:
             self._commit()
 
@@ -243,8 +267,16 @@ class Plant:
         a, b = self._committed, self._state
         t0 = self._pending_since
         self._pending_since = None
+        path, self._path = self._path, []
         if a == b:
             return  # changed and changed back within the window: no transition
+        if self._reward[a][b] is None and len(path) > 2 and all(
+                self._reward[x][y] is not None for x, y in zip(path, path[1:])):
+            # changes the window joins into one the matrix forbids, each of them allowed (two
+            # limbs crossing a few ms apart, 110 -> 120 -> 220): the firmware saw each, in turn
+            for x, y in zip(path, path[1:]):
+                self._record(t0, x, y, self._reward[x][y])
+            return
         last = self._transitions[-1] if self._transitions else None
         if (self._reward[a][b] is None and last is not None and last.dst == a and self._reward[last.src][a] is None
                 and last.src != b and self._reward[last.src][b] is not None and self._between(last.src, a, b)

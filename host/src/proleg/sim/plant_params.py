@@ -24,6 +24,9 @@ class LimbParams:
     name: str = "limb"
     psi_star_deg: tuple[float, ...] = (20.0,)   # critical angles, increasing; levels = len + 1
     psi_rest_deg: float = 0.0                   # body relaxed and straight: the ends lie flat
+    #: width of each ψ*'s band (the robot file's ``hysteresis_deg``): the level goes up at
+    #: ψ* + h/2 and down below ψ* − h/2, as the firmware's classifier counts it (psi.h)
+    hysteresis_deg: float = 0.0
     actuator: int | None = None                 # index into PlantParams.actuators that raises it
 
 
@@ -93,6 +96,9 @@ class PlantParams:
             ps = list(limb.psi_star_deg)
             if not ps or any(not -90.0 < p < 90.0 for p in ps) or any(b <= a for a, b in zip(ps, ps[1:])):
                 return f"limb {limb.name!r}: psi_star_deg must be increasing angles in (-90, 90), got {ps}"
+            h = limb.hysteresis_deg
+            if not (math.isfinite(h) and h >= 0) or any(b - a <= h for a, b in zip(ps, ps[1:])):
+                return f"limb {limb.name!r}: hysteresis_deg must be ≥ 0 and less than the gaps between its ψ*, got {h!r}"
             if limb.actuator is not None and not 0 <= limb.actuator < len(self.actuators):
                 return f"limb {limb.name!r}: actuator index {limb.actuator} out of range"
         g = self.coupling()
@@ -142,6 +148,7 @@ def plant_params_from_robot(robot: Any) -> PlantParams:
             name=lb.name,
             psi_star_deg=tuple(float(p) for p in lb.psi_star_deg),
             psi_rest_deg=section.psi_rest_deg[i],
+            hysteresis_deg=float(lb.hysteresis_deg),
             actuator=names.index(lb.actuator),
         )
         for i, lb in enumerate(robot.limbs)
