@@ -750,3 +750,15 @@ def test_run_names_a_long_named_robot_as_its_file_does(capsys, tmp_path):
     assert code == 0 and json.loads(out.splitlines()[-1])["robot"] == long_name
     code, out, _ = run(capsys, "run", str(path), "--sim", "--duration", "1", "-q")
     assert code == 0 and out.startswith(f"{long_name} on sim ")
+
+
+@pytest.mark.parametrize("command", [["sim", "--duration", "1"], ["check", "--rows", "1"],
+                                     ["run", "--sim", "--duration", "1"]])
+def test_a_robot_that_walks_only_minus_x_is_told_to_ask_for_minus_x(capsys, command):
+    robot = str(Path(__file__).parent / "fixtures" / "ratchet-minus-x.toml")
+    code, out, err = run(capsys, command[0], robot, *command[1:])  # the default direction, +x
+    assert code == 2 and out == ""
+    assert err.strip().splitlines()[-1] == ("proleg: error: --gait 0: ratchet-minus-x has no gait in +x "
+                                            "(it has 1 in -x: --direction -x)")
+    code, _, err = run(capsys, command[0], robot, *command[1:], "--direction", "-x", "--gait", "5")
+    assert code == 2 and err.strip().splitlines()[-1] == "proleg: error: --gait 5: ratchet-minus-x has gaits 0..0 in -x"

@@ -109,8 +109,9 @@ def cmd_check(args: argparse.Namespace) -> int:
         why = every.left_out_line(args.direction)
         if why is not None:  # the build leaves the direction out: say why, as the build did
             raise GaitError(f"--gait {args.gait} of {args.direction}: {robot.where}: {why}")
-        shown = f"gaits 0..{len(gaits) - 1}" if gaits else "no gait"
-        raise GaitError(f"--gait {args.gait}: {robot.name} has {shown} in {args.direction}")
+        from ..firmware.gaits import no_such_gait
+
+        raise GaitError(no_such_gait(args.gait, robot.name, args.direction, {d: len(g) for d, g in every.items()}))
     if args.board != "host-sim":  # before the nominal walk: every row would fail the same way
         from ..firmware.boards import load_board
         from ..firmware.build import check_board_takes

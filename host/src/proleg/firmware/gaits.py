@@ -119,6 +119,21 @@ class FirmwareGaits(dict):
                 f"the hardware cannot make \"x\"); a gait of your own runs with proleg load-gait")
 
 
+def no_such_gait(gait: int, robot_name: str, direction: str, per_direction: dict[str, int]) -> str:
+    """The line refusing ``--gait gait`` of ``direction``, which the robot's firmware does not
+    carry (``per_direction``: how many gaits it carries each way). When the other direction has
+    gaits the line names them and ``--direction``: a robot that walks only one way (a ratchet)
+    was told only that it has "no gait in +x", the default it had not asked for."""
+    n = per_direction.get(direction, 0)
+    shown = f"gaits 0..{n - 1}" if n else "no gait"
+    line = f"--gait {gait}: {robot_name} has {shown} in {direction}"
+    other = next((d for d in DIRECTIONS if d != direction), None)
+    m = per_direction.get(other, 0) if other else 0
+    if gait < m:
+        line += f" (it has {m} in {other}: --direction {other})"
+    return line
+
+
 def firmware_gaits(robot: Robot, objective: str = "total", max_transitions: int | None = None,
                    library: Any = None) -> FirmwareGaits:
     """The optimal gaits the firmware carries, all ties, for +x and -x (possibly none), and

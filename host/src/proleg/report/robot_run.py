@@ -66,11 +66,11 @@ def check_gait(info: RobotInfo, gait: int, direction: str, per_direction: dict[s
     if gait == GAIT_USER:
         return
     if per_direction is not None and not 0 <= gait < per_direction.get(direction, 0):
-        n = per_direction.get(direction, 0)
         if left_out is not None:
             raise GaitError(f"--gait {gait} of {direction}: {info.robot_name}: {left_out}")
-        have = f"gaits 0..{n - 1}" if n else "no gait"
-        raise GaitError(f"--gait {gait}: {info.robot_name} has {have} in {direction}")
+        from ..firmware.gaits import no_such_gait
+
+        raise GaitError(no_such_gait(gait, info.robot_name, direction, per_direction))
     if gait < 0 or gait >= info.gaits:  # without the robot file: INFO counts both directions' gaits
         have = f"at most {counted(info.gaits, 'gait')} in a direction" if info.gaits else "no gaits"
         raise GaitError(f"--gait {gait}: {info.robot_name} has {have} (INFO reports {info.gaits} compiled gaits "
