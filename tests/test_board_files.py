@@ -128,3 +128,28 @@ def test_the_makefile_runs_the_board_files_build_steps(tmp_path):
     assert "\tavr-objcopy -O ihex firmware.elf firmware.hex\n" in makefile
     assert "\tavr-size -B firmware.elf\n" in makefile
     assert "family" not in makefile.lower()
+
+
+def _eight_mhz_nano(tmp_path: Path, baud: int) -> Path:
+    text = (ROOT / "boards" / "arduino-nano.toml").read_text()
+    text = text.replace("clock_hz = 16000000", "clock_hz = 8000000").replace("baud = 115200", f"baud = {baud}")
+    p = tmp_path / "pro-mini-8.toml"
+    p.write_text(text)
+    return p
+
+
+def test_a_baud_rate_the_boards_clock_cannot_make_is_refused_naming_the_rates_it_can(tmp_path, capsys):
+    # an 8 MHz ATmega328P makes 115200 as 8e6 / (8 × 9) = 111,111 baud: 3.5 % slow, a garbled link
+    board = _eight_mhz_nano(tmp_path, 115200)
+    with pytest.raises(BoardError, match=r"pro-mini-8.toml: uart.baud: 115200 is made as 111,111 baud \(-3.5%\) "
+                                         r"by the avr HAL on a 8,000,000 Hz clock .* 38400, 57600,") as e:
+        load_board(board)
+    assert "\n" not in str(e.value)
+    code, out, err = cli(capsys, "build", R1, "--board", board)
+    assert code == 2 and not out and "uart.baud: 115200 is made as 111,111 baud" in one_line(err)
+    assert load_board(_eight_mhz_nano(tmp_path, 57600)).uart_baud == 57600  # 58,824: +2.1 %, as the Nano's 115200
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "boards").glob("*.toml")))
+def test_every_shipped_board_makes_its_baud_rate(name):
+    load_board(ROOT / "boards" / f"{name}.toml")  # the Nano's 115200 is 117,647 (+2.1 %), within the 3 %

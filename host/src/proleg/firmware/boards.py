@@ -260,6 +260,30 @@ def _buffer(path: Path, doc: dict, key: str, default: int, family: str) -> int:
     return v
 
 
+#: the most a board's UART may run off the rate its file names: the host's USB-serial adapter
+#: makes the rate exactly, and 8N1 at U2X tolerates about ±3.7 % in all (ATmega328P data
+#: sheet, "Asynchronous Operational Range"); the Nano's 16 MHz makes 115200 as 117,647 (+2.1 %)
+MAX_BAUD_ERROR = 0.03
+STANDARD_BAUDS = (9600, 19200, 38400, 57600, 115200, 230400, 250000, 460800, 500000, 921600, 1000000)
+
+
+def _baud(path: Path, doc: dict, family: str) -> int:
+    """``uart.baud``, which the family's HAL can make from ``board.clock_hz`` within
+    ``MAX_BAUD_ERROR``: a board file of an 8 MHz ATmega328P at 115200 loaded, built, and
+    its UART ran at 111,111 (-3.5 %): every frame garbled."""
+    baud = _whole(path, doc, "uart", "baud")
+    clock = _whole(path, doc, "board", "clock_hz")
+    fam = load_family(family)
+    actual = fam.actual_baud(clock, baud) if clock else None  # clock_hz 0: virtual time
+    if actual is None or abs(actual / baud - 1) <= MAX_BAUD_ERROR:
+        return baud
+    fits = [b for b in STANDARD_BAUDS if abs(fam.actual_baud(clock, b) / b - 1) <= MAX_BAUD_ERROR]
+    raise BoardError(f"{path}: uart.baud: {baud} is made as {actual:,.0f} baud ({actual / baud - 1:+.1%}) by the "
+                     f"{family} HAL on a {clock:,} Hz clock (board.clock_hz), more than {MAX_BAUD_ERROR:.0%} off: "
+                     f"the link would garble; rates within it: {', '.join(map(str, fits)) or 'none of the usual'} "
+                     f"(give the host the same with --baudrate)")
+
+
 def _file_name(path: Path, doc: dict, key: str) -> str:
     """``build.link`` or ``build.artifact``: a file the Makefile makes in the project
     directory. An empty one was taken: the artifact then named the directory itself, which
@@ -362,7 +386,7 @@ def _board_from_dict(path: Path, doc: dict) -> Board:
         pwm_pins=_pwm_pins(path, doc),
         pwm_frequency_hz=_whole(path, doc, "pwm", "frequency_hz"),
         uart_port=_need(path, doc, "uart", "port", str),
-        uart_baud=_whole(path, doc, "uart", "baud"),
+        uart_baud=_baud(path, doc, family),
         uart_rx_buffer=_buffer(path, doc, "rx_buffer", DEFAULT_UART_RX_BUFFER, family),
         uart_tx_buffer=_buffer(path, doc, "tx_buffer", DEFAULT_UART_TX_BUFFER, family),
         flash_methods=_flash_methods(path, doc),

@@ -34,6 +34,17 @@ class Family:
     # the largest UART ring the HAL takes: an 8-bit MCU reads only 8-bit ring indices in one
     # access (core/ring.h), so its rings stop at 128 bytes
     max_ring_bytes: int = MAX_RING_BYTES
+    # the UART's bit period is baud_divider × n clock cycles, n a whole number the HAL rounds
+    # (avr U2X: 8 × (UBRR + 1); stm32f1: BRR); None: the family does not say, nothing is checked
+    baud_divider: int | None = None
+
+    def actual_baud(self, clock_hz: int, baud: int) -> float | None:
+        """The rate the HAL's UART really runs at for ``baud`` on a ``clock_hz`` clock (None
+        when the family gives no ``baud_divider``)."""
+        if self.baud_divider is None:
+            return None
+        n = max(1, (clock_hz + self.baud_divider * baud // 2) // (self.baud_divider * baud))
+        return clock_hz / (self.baud_divider * n)
 
     def pwm_entry(self, board_name: str, channel: int, pin: str) -> str:
         """The C initialiser of channel's CFG_PWM_MAP entry; BuildError for a pin the HAL cannot drive."""
@@ -82,8 +93,11 @@ def load_family(name: str) -> Family:
     if not is_ring_size(ring):
         raise BoardError(f"{spec}: uart.max_ring_bytes: expected a power of two from 16 to {MAX_RING_BYTES}, "
                          f"got {ring!r}")
+    divider = doc.get("uart", {}).get("baud_divider")
+    if divider is not None and (isinstance(divider, bool) or not isinstance(divider, int) or not 1 <= divider <= 64):
+        raise BoardError(f"{spec}: uart.baud_divider: expected a whole number 1..64, got {divider!r}")
     return Family(name, path, fid, str(fam.get("description", "")), str(pwm.get("pin_kind", "PWM pin")), table,
-                  ring)
+                  ring, divider)
 
 
 def _c_entry(spec: Path, pin: str, value: object) -> str:
