@@ -314,3 +314,13 @@ def test_measure_climb_without_any_gait_is_refused_not_a_measurement(tmp_path, c
     code, out, err = cli(capsys, "sim", path, "--measure-climb")
     assert code == 2 and out == ""
     assert "--measure-climb: " in err and "the firmware carries no gait to climb with" in err and says in err
+
+
+def test_the_build_says_an_unmeasured_robot_has_no_fallbacks_because_its_matrix_is_unmeasured(tmp_path):
+    from proleg.firmware.gaits import fallback_lines
+
+    unmeasured = load_robot(_write(tmp_path, [2, 2, 2], 'matrix = "unmeasured"\nallow = "one-level"'))
+    assert fallback_lines(unmeasured) == [
+        "fallback gaits: none (the matrix is unmeasured: no gait moves the robot yet, with or without a coil)"]
+    one = Path(__file__).resolve().parents[1] / "robots" / "paper-r1-one-actuator.toml"
+    assert fallback_lines(load_robot(one)) == ["fallback gaits: none (one actuator only)"]

@@ -290,8 +290,14 @@ def fallback_lines(robot: Robot) -> list[str]:
     if not getattr(robot.control, "fallback", True):
         return ["fallback gaits: off ([control] fallback = false)"]
     fbs = firmware_fallbacks(robot)
-    if not fbs:
-        return ["fallback gaits: none (one actuator only, or no single-actuator loss leaves a gait that moves it)"]
+    if not fbs:  # say which of the reasons it is: an unmeasured robot was told it had one actuator only
+        if len(robot.actuators) < 2:
+            why = "one actuator only"
+        elif getattr(robot, "unmeasured", False):
+            why = "the matrix is unmeasured: no gait moves the robot yet, with or without a coil"
+        else:
+            why = "no single-actuator loss leaves a gait that moves it"
+        return [f"fallback gaits: none ({why})"]
     out = []
     for (a, d), fb in sorted(fbs.items()):
         walk = " ".join(fb.table.label(s) for s in fb.states)
