@@ -173,6 +173,7 @@ def test_a_supply_that_would_anneal_a_coil_within_the_envelope_is_warned_about(c
     warned = [r.getMessage() for r in caplog.records]
     assert len(warned) == 2 and all("where NiTi loses its trained shape" in w for w in warned), warned
     assert "coil 'sma-left' held at max_duty 0.8" in warned[0] and "max_duty below 0.03" in warned[0]
+    assert "lower the supply ([plant] supply_v)" in warned[0]  # the key to change, not just "the supply"
     caplog.clear()
     with caplog.at_level(logging.WARNING, logger="proleg"):
         make_plant(load_robot(ROBOTS / "paper-r1.toml"), "physical", ["power=1.3"])
@@ -330,6 +331,7 @@ def test_a_drive_too_weak_to_reach_as_is_warned_about(caplog):
     warned = [r.getMessage() for r in caplog.records]
     assert len(warned) == 2 and all("heated at control.drive_duty 0.15 settles at 55 °C" in w and
                                     "below the 64 °C where it starts to contract" in w for w in warned), warned
+    assert all("stronger supply ([plant] supply_v)" in w for w in warned), warned
     caplog.clear()
     del doc["control"]["boost_ms"]  # the default boost: a lagging rise heats at max_duty 0.8, which gets there
     with caplog.at_level(logging.WARNING, logger="proleg"):

@@ -85,9 +85,9 @@ def underpowered_warnings(robot: Robot, plant: Any) -> list[str]:
         # a floor: at it the limb settles just past its edge, and a rise that slow may still meet the
         # on-time limit or the state timeout (R1 advised 0.24 still stops at 0.25: docs/plant.md)
         advice = (f"a duty above {math.ceil(100 * need) / 100:.2f} at the least (at most {top_key}; a "
-                  "rise that slow may still pass the on-time limit), or a stronger supply"
+                  "rise that slow may still pass the on-time limit), or a stronger supply ([plant] supply_v)"
                   if need <= top else
-                  f"a stronger supply: even {top_key} {top:g} does not get it there")
+                  f"a stronger supply ([plant] supply_v): even {top_key} {top:g} does not get it there")
         if settles < as_c:
             out.append(f"{robot.path}: coil {act.name!r} heated at {key} {duty:g} settles at {settles:.0f} °C with "
                        f"this supply, below the {as_c:.0f} °C where it starts to contract (As on the physical plant): "
@@ -167,7 +167,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
         safe = math.floor(100 * duty_held * (NITI_OVERHEAT_C - amb) / (settles_c - amb)) / 100  # below, not up to it
         return (f"{robot.path}: coil {act.name!r} held at {what} {duty_held:g} ({meaning}: docs/safety.md) would "
                 f"settle at {shown_c(settles_c)} °C with this supply, past the {NITI_OVERHEAT_C:.0f} °C that wears NiTi "
-                f"out: lower the supply, or {keys} to {safe:.2f} or less")
+                f"out: lower the supply ([plant] supply_v), or {keys} to {safe:.2f} or less")
 
     for act, hot, warm, avg in zip(robot.actuators, plant.steady_coil_temperature_c(duty), held, averaged):
         if hot > NITI_ANNEAL_C:
@@ -180,7 +180,7 @@ def overheat_warnings(robot: Robot, plant: Any) -> list[str]:
                        f"would heat past the {NITI_MELT_C:.0f} °C where NiTi melts")
             out.append(f"{robot.path}: coil {act.name!r} held at max_duty {duty:g} {settles} with "
                        f"this supply, past the {NITI_ANNEAL_C:.0f} °C where NiTi loses its trained shape: the safety "
-                       f"envelope bounds duty, not energy; lower the supply, or [safety] max_duty below {shown}")
+                       f"envelope bounds duty, not energy; lower the supply ([plant] supply_v), or [safety] max_duty below {shown}")
             continue
         if avg > NITI_OVERHEAT_C:
             out.append(worn(act, "the mean-duty ceiling", mean, avg, "what the safety envelope lets a coil average "
