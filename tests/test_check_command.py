@@ -411,3 +411,20 @@ def test_a_robot_the_emulated_board_cannot_carry_is_refused_before_the_nominal_w
     snake = Path(__file__).parent / "fixtures" / "snake-8.toml"
     rc, out, err = run(capsys, "check", str(snake), "--rows", "1", "--board", "avr-emu")
     assert rc == 2 and out == "" and "but board arduino-nano has 4 PWM channels" in err, err
+
+
+def test_a_nominal_row_walked_far_slower_than_the_idealised_drive_is_noted():
+    """Each row's share is of the firmware's own nominal speed, so a firmware crawling on the
+    nominal plant passed unremarked (a lab's wedge: -0.062 mm/s against the idealised -0.56, rows
+    at 869 % of nominal). The nominal row now says its share of the idealised drive, and a share
+    under half is noted; a failed nominal row is an error already, not a note."""
+    from proleg.cli import check
+
+    slow = _row(conditions=(), idealised_mm_s=-0.56, speed_mm_s=-0.062)
+    assert check._kept(slow, [])["nominal_share_of_idealised"] == pytest.approx(0.111, abs=1e-3)
+    note = check._slow_nominal_note(slow)
+    assert note.startswith("NOTE:") and "-0.062 mm/s, 11% of the idealised drive's -0.560" in note
+    assert check._slow_nominal_note(_row(conditions=(), idealised_mm_s=0.39, speed_mm_s=0.36)) is None  # R1
+    assert check._slow_nominal_note(_row(conditions=(), idealised_mm_s=0.4, speed_mm_s=0.1, completed=False)) is None
+    none = _row(conditions=(), idealised_mm_s=None, possible=False)
+    assert check._kept(none, [])["nominal_share_of_idealised"] is None and check._slow_nominal_note(none) is None
