@@ -35,7 +35,9 @@ class ErrorCode(IntEnum):
 
 
 class FaultCode(IntEnum):
-    """``EVENT.code`` when ``kind == FAULT`` (``detail`` = limb or channel index)."""
+    """``EVENT.code`` when ``kind == FAULT``; ``detail`` is the limb index (STATE_TIMEOUT: the first
+    limb off its target; IMU_NO_ACK, IMU_BAD_DATA: the limb whose IMU), the actuator index
+    (SMA_ON_LIMIT: the robot file's [[actuator]] order, not its PWM channel), else 0."""
 
     NONE = 0
     STATE_TIMEOUT = 1  # target state not reached within state_timeout_ms
@@ -52,7 +54,7 @@ class EventKind(IntEnum):
 
     BOOT = 0  # code = ResetCause, detail = 1 if the safety envelope kept what the coils spent before the reset, else 0
     STATE_REACHED = 1  # code = gait step index, detail = state index
-    FAULT = 2  # code = FaultCode, detail = limb/channel index
+    FAULT = 2  # code = FaultCode, detail = limb or actuator index (FaultCode)
     GAIT_STARTED = 3  # code = gait index, detail = Direction (DIR_UNSTATED for a loaded gait's unstated way)
     GAIT_STOPPED = 4  # code = StopReason, detail = completed cycles (saturating)
     ESTOP = 5  # code = 0 command / 1 hardware input, detail = 0
