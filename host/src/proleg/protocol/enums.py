@@ -35,9 +35,10 @@ class ErrorCode(IntEnum):
 
 
 class FaultCode(IntEnum):
-    """``EVENT.code`` when ``kind == FAULT``; ``detail`` is the limb index (STATE_TIMEOUT: the first
-    limb off its target, 0xFF when every limb is at its level; IMU_NO_ACK, IMU_BAD_DATA: the limb whose IMU), the actuator index
-    (SMA_ON_LIMIT: the robot file's [[actuator]] order, not its PWM channel), else 0."""
+    """``EVENT.code`` when ``kind == FAULT``; ``detail`` is the limb index (STATE_TIMEOUT: the
+    first limb off its target, 0xFF when every limb is at its level; IMU_NO_ACK, IMU_BAD_DATA:
+    the limb whose IMU), the actuator index (SMA_ON_LIMIT: the robot file's [[actuator]] order,
+    not its PWM channel), else 0."""
 
     NONE = 0
     STATE_TIMEOUT = 1  # target state not reached within state_timeout_ms
