@@ -292,6 +292,11 @@ def test_an_interrupted_run_stops_the_robot_says_how_far_it_got_and_keeps_a_whol
     assert duties == [[0.0, 0.0]]  # a coil was heating at the Ctrl-C; none is once the link closes
     recording = read_recording(record)  # closed whole: the MCAP has its footer
     assert 2.5 < recording.time_s[-1] < 3.5
+    # the stop the line reports is in the recording too: STOP's ACK and the firmware's GAIT_STOPPED
+    stops = [e for e in recording.events if e["kind"] == "GAIT_STOPPED"]
+    assert len(stops) == 1 and stops[0]["text"].startswith("gait stopped: COMMAND"), recording.events[-3:]
+    assert 2.5 < stops[0]["t_s"] < 3.5
+    assert any(e["msg"] == "ACK" and e["t_host_s"] >= stops[0]["t_host_s"] - 0.01 for e in recording.events)
 
 
 def test_an_interrupted_jsonl_run_says_no_result_line_was_printed(capsys, monkeypatch):

@@ -141,7 +141,15 @@ def run_gait_on(
             run.duration_s = 0.0  # it never ran
     except KeyboardInterrupt:  # also while START waited for its ACK: the board may have started
         ran_s = clock() - t0
-        raise RunInterrupted(run, ran_s, started, _stop_after_ctrl_c(command)) from None
+        stopped = _stop_after_ctrl_c(command)
+        if stopped is not None:
+            # as after a run's end: the STOP's ACK and GAIT_STOPPED (queued while STOP waited) reach the
+            # recording, which otherwise ended on a running gait with no word of its stop
+            try:
+                pump(STOP_TAIL_S, report_progress=False)
+            except KeyboardInterrupt:
+                pass  # a second Ctrl-C: the robot is already stopped, the tail is not worth waiting for
+        raise RunInterrupted(run, ran_s, started, stopped) from None
     t_stop = clock()
     if not command("STOP"):
         command("ESTOP")  # the coils must go cold whatever the link does
