@@ -762,3 +762,23 @@ def test_a_robot_that_walks_only_minus_x_is_told_to_ask_for_minus_x(capsys, comm
                                             "(it has 1 in -x: --direction -x)")
     code, _, err = run(capsys, command[0], robot, *command[1:], "--direction", "-x", "--gait", "5")
     assert code == 2 and err.strip().splitlines()[-1] == "proleg: error: --gait 5: ratchet-minus-x has gaits 0..0 in -x"
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".mcap"])
+def test_console_recording_and_jsonl_mark_an_injection_as_sim_does(capsys, tmp_path, suffix):
+    """console --sim --inject said 'injected …' on stderr but its recording (and --format jsonl)
+    had no INJECT row: the plot drew the FAULT without the orange marker of its cause."""
+    from proleg.plot import _markers
+    from proleg.record import read_recording
+
+    path = tmp_path / f"run{suffix}"
+    code, out, err = run(capsys, "console", "--sim", "inchworm-3", "--plain", "--format", "jsonl", "--duration", "3",
+                         "--record", str(path), "--inject", "imu-stuck:middle+1")
+    assert code == 1 and "injected imu-stuck:middle at 1.0 s" in err, err
+    printed = [r for r in map(json.loads, out.splitlines()) if r["msg"] == "INJECT"]
+    recorded = [e for e in read_recording(path).events if e["msg"] == "INJECT"]
+    for rows in (printed, recorded):
+        assert [r["text"] for r in rows] == ["imu-stuck:middle"]
+        assert rows[0]["t_s"] == pytest.approx(1.0, abs=0.05)
+    labels = [m[2] for m in _markers(read_recording(path))]
+    assert labels[0] == "injected imu-stuck:middle" and any(x.startswith("FAULT ") for x in labels)

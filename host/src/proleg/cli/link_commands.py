@@ -137,7 +137,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                     say(replan_state(replan, True))
                 listeners.append(_reset_watch(say))
                 if timed:
-                    listeners.append(Injector(link.board, timed, say))  # type: ignore[attr-defined]
+                    listeners.append(Injector(link.board, timed, say, marks=listeners))  # type: ignore[attr-defined]
                 if replan and robot is not None:
                     listeners.append(ReplanWorker(robot, client, say))
                 if fmt == "jsonl":
@@ -153,7 +153,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                                  names=RobotNames.for_robot(robot), robot=robot, replan=replan,
                                  duration_s=duration_s)
                 if timed:
-                    app.extra_listeners.append(Injector(link.board, timed, app.host_says))  # type: ignore[attr-defined]
+                    app.extra_listeners.append(Injector(link.board, timed, app.host_says, marks=listeners))  # type: ignore[attr-defined]
                 app.run()
                 if app.model.link_error is not None:
                     raise app.model.link_error

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from ..errors import SimError
 from ..link.client import Received
@@ -73,15 +74,21 @@ class Injector(Listener):
     """Injects each ``(at_s, fault)`` into ``sim`` (a ``SimulatedRobot``) once its clock has run
     ``at_s`` past where it stood at construction; ``say`` tells each injection."""
 
-    def __init__(self, sim, faults: Sequence[tuple[float, str]], say: Callable[[str], None] = print):
+    def __init__(self, sim, faults: Sequence[tuple[float, str]], say: Callable[[str], None] = print,
+                 marks: Sequence[Any] = ()):
         self.sim = sim
         self.t0 = float(sim.time_s)
         self.due = sorted(faults)
         self.say = say
+        self.marks = marks  # listeners whose ``mark`` records each injection (the recorder: INJECT rows)
 
     def on_message(self, rx: Received) -> None:
         now = float(self.sim.time_s)
         while self.due and now - self.t0 >= self.due[0][0]:
             at, fault = self.due.pop(0)
             self.sim.inject(fault)
+            for listener in self.marks:  # as proleg sim does: the recording's INJECT row, the plot's marker
+                mark = getattr(listener, "mark", None)
+                if callable(mark):
+                    mark(rx.time, now, fault)
             self.say(f"injected {fault} at {now:.1f} s (simulated)")

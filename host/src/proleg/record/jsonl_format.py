@@ -12,7 +12,7 @@ from ..errors import RecordingError
 from ..link.client import Received
 from ..link.listeners import Listener
 from .base import Reader, Recording, Writer, torn_last, write_row
-from .fields import RecordingMeta, dumps, event_row, telemetry_row
+from .fields import RecordingMeta, dumps, event_row, injection_row, telemetry_row
 
 
 class JsonlWriter(Writer):
@@ -93,6 +93,14 @@ class JsonlPrinter(Listener):
             obj = {"msg": "TELEMETRY", **telemetry_row(self.meta, rx.time, m.fields, rx.truth)}
         else:
             obj = event_row(rx.time, m.name, m.fields, self.meta)
+        self._write(obj)
+
+    def mark(self, host_s: float, t_s: float | None, text: str) -> None:
+        """A fault the simulator injected: the JSONL recording's INJECT line."""
+        if not self.closed and not self.telemetry_only:
+            self._write(injection_row(host_s, t_s, text))
+
+    def _write(self, obj: dict[str, Any]) -> None:
         try:
             self.out.write(dumps(obj) + "\n")
             self.out.flush()
