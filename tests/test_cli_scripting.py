@@ -782,3 +782,27 @@ def test_console_recording_and_jsonl_mark_an_injection_as_sim_does(capsys, tmp_p
         assert rows[0]["t_s"] == pytest.approx(1.0, abs=0.05)
     labels = [m[2] for m in _markers(read_recording(path))]
     assert labels[0] == "injected imu-stuck:middle" and any(x.startswith("FAULT ") for x in labels)
+
+
+def test_console_leaving_a_running_gait_records_its_stop(capsys, tmp_path, monkeypatch):
+    """Leaving sends STOP after the Notifier stopped: its ACK and the firmware's GAIT_STOPPED were
+    never handed to the recorder, whose recording ended on a running gait."""
+    import proleg.console
+
+    real = proleg.console.run_plain
+
+    def with_a_gait(client, **kw):
+        client.wait_known_state(2.0)
+        client.request("START", gait=0, direction=0)  # as the UI's key does
+        real(client, **kw)
+
+    monkeypatch.setattr(proleg.console, "run_plain", with_a_gait)
+    path = tmp_path / "run.jsonl"
+    code, out, err = run(capsys, "console", "--sim", "paper-r1", "--plain", "--format", "jsonl", "--duration", "1",
+                         "--record", str(path))
+    assert code == 0 and "robot stopped" in err, err
+    from proleg.record import read_recording
+
+    events = read_recording(path).events
+    assert [e["text"] for e in events if e["kind"] == "GAIT_STOPPED"] == ["gait stopped: COMMAND after 0 cycles"], [(e["msg"], e["kind"], e["text"]) for e in events][-4:]
+    assert events[-1]["kind"] == "GAIT_STOPPED" or events[-2]["kind"] == "GAIT_STOPPED"

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 from .. import interrupts
+from ..errors import LinkError
 from ..link.client import RobotClient
 from ..link.factory import link_url, open_link
 from ..link.serial_link import DEFAULT_BAUDRATE
@@ -144,6 +145,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                     listeners.append(JsonlPrinter(meta, out, telemetry_only=False))
                 try:
                     run_plain(client, listeners=listeners, out=out, duration_s=duration_s, quiet=fmt == "jsonl",
+                              keep_open=_takers(listeners),
                               labels=lambda s: label(s, levels) if s < state_count(levels) else str(s))
                 except KeyboardInterrupt:
                     pass  # Ctrl-C ends the plain mode like the duration does
@@ -154,6 +156,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
                                  duration_s=duration_s)
                 if timed:
                     app.extra_listeners.append(Injector(link.board, timed, app.host_says, marks=listeners))  # type: ignore[attr-defined]
+                app.keep_open = _takers(listeners)
                 app.run()
                 if app.model.link_error is not None:
                     raise app.model.link_error
@@ -161,6 +164,7 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
             try:
                 if not leave_running:
                     tell(f"proleg: {stop_robot(client)} on {link.description}")
+                    _hand_on_the_stop(client, listeners)
                 elif robot is None or robot.safety.link_watchdog_ms:
                     after = ("its link_watchdog_ms (2000 unless its robot file says otherwise)" if robot is None
                              else f"{robot.safety.link_watchdog_ms} ms")
@@ -185,6 +189,38 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
         print(f"proleg: the robot faulted during the console session ({what})", file=err)
         return 1
     return 0
+
+
+#: how long after the leaving STOP the console still hands messages to the recording and streams
+STOP_TAIL_S = 0.1
+
+
+def _takers(listeners: Sequence[Any]) -> list[Any]:
+    """The recording and the streams: open until the leaving STOP has been handed on to them."""
+    from ..record import JsonlPrinter, UdpStreamer
+    from ..record.base import Writer
+
+    return [w for w in listeners if isinstance(w, (Writer, JsonlPrinter, UdpStreamer))]
+
+
+def _hand_on_the_stop(client: Any, listeners: Sequence[Any]) -> None:
+    """The STOP's ACK and the firmware's GAIT_STOPPED come after the session's Notifier stopped:
+    hand them (and the frames with them) to the recording and the streams, as ``proleg run`` does,
+    else a recording of a session left with a gait running ended on it running. Not to the
+    replanner or the injector: the session is over. A link that fails meanwhile ends it."""
+    takers = _takers(listeners)
+    if not takers:
+        return
+    clock = client.link.clock
+    deadline = clock() + STOP_TAIL_S
+    try:
+        while (remaining := deadline - clock()) > 0:
+            rx = client.recv_received(remaining)
+            if rx is not None:
+                for taker in takers:
+                    taker.on_message(rx)
+    except (LinkError, OSError, KeyboardInterrupt):
+        pass  # the robot was stopped (or could not be, as said): the tail is not worth more
 
 
 def _reset_watch(say: Any) -> Any:

@@ -118,6 +118,7 @@ class ConsoleApp(App[None]):
             names = RobotNames(tuple(v.name for v in self.limb_views))
         self.model = ConsoleModel(info=client.info, names=names, state_label=self._state_text)
         self.extra_listeners = list(listeners)
+        self.keep_open: list[Listener] = []  # listeners the caller stops itself (after the leaving STOP)
         self.refresh_s = refresh_s
         self.gait = 0
         self.direction = Direction.PLUS_X
@@ -166,7 +167,7 @@ class ConsoleApp(App[None]):
         if timer is not None:
             timer.stop()
         if self.notifier is not None:
-            self.notifier.stop()  # stops the listeners too, the replan worker among them
+            self.notifier.stop(keep=self.keep_open)  # stops the listeners too, the replan worker among them
         self.ui_log.uninstall()  # said on stderr from now on; those said in the UI: replay, after run
 
     def _warn(self, text: str) -> None:

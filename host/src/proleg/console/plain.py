@@ -23,7 +23,7 @@ def replan_state(replan: bool, have_robot: bool) -> str:
 
 def run_plain(client: RobotClient, *, listeners: Sequence[Listener] = (), out: TextIO | None = None,
               duration_s: float | None = None, labels: Callable[[int], str] | None = None,
-              quiet: bool = False) -> None:
+              quiet: bool = False, keep_open: Sequence[Listener] = ()) -> None:
     """Print one line per telemetry frame (``quiet``: none; the listeners print) until
     interrupted (or ``duration_s`` wall seconds); a link failure ends it with ``LinkError``."""
     printers = [] if quiet else [Printer(out or sys.stdout, telemetry_only=True, labels=labels)]
@@ -33,6 +33,6 @@ def run_plain(client: RobotClient, *, listeners: Sequence[Listener] = (), out: T
         while notifier.running and (t_end is None or time.monotonic() < t_end):
             time.sleep(0.05)
     finally:
-        notifier.stop()
+        notifier.stop(keep=keep_open)  # those the caller closes itself
     if notifier.error is not None:
         raise notifier.error

@@ -164,13 +164,15 @@ class Notifier:
             for listener in listeners:
                 listener.on_error(e)
 
-    def stop(self, timeout: float = 5.0) -> None:
-        """Stop the thread, then stop every listener (flushing recorders)."""
+    def stop(self, timeout: float = 5.0, keep: Iterable[Listener] = ()) -> None:
+        """Stop the thread, then stop every listener (flushing recorders) but those in ``keep``,
+        which the caller still feeds and stops (the console's recording, through its leaving STOP)."""
         self._running = False
         if threading.current_thread() is not self._thread:
             self._thread.join(timeout)
+        kept = {id(listener) for listener in keep}
         with self._lock:
-            listeners = list(self.listeners)
+            listeners = [listener for listener in self.listeners if id(listener) not in kept]
         for listener in listeners:
             listener.stop()
 
