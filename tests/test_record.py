@@ -159,6 +159,36 @@ def test_a_killed_mcap_recorder_keeps_every_chunk_it_completed(tmp_path, capsys)
     assert "footer" not in capsys.readouterr().err
 
 
+def test_an_mcap_recorder_killed_before_its_first_chunk_says_so(tmp_path, capsys):
+    """SIGKILL in the recording's first second (a few frames, all in the unwritten first chunk)
+    left the header and the metadata: read back, that was 'not a readable MCAP recording
+    (unknown (opcode 34) record has length 7310018830345052218 …)', the metadata's last bytes
+    taken for a footer, as if the file were garbage."""
+    pytest.importorskip("mcap")
+    from proleg.cli.main import main
+
+    path = tmp_path / "run.mcap"
+    board = FakeBoard()
+    link = SimLink(board)
+    client = RobotClient(link)
+    rec = Logger(path, RecordingMeta.for_robot(info=client.connect(), robot=ROBOT, link=link))
+    client.start(0, "+x")
+    for _ in range(10):
+        rx = client.recv_received(1.0)
+        assert rx is not None
+        rec.on_message(rx)
+    killed = tmp_path / "killed.mcap"
+    killed.write_bytes(path.read_bytes())  # what SIGKILL leaves now: the first chunk is not written yet
+    rec.stop()
+    with pytest.raises(RecordingError) as e:
+        read_recording(killed)
+    assert str(e.value) == (f"{killed}: not a readable MCAP recording (no telemetry in it: it ends, without a "
+                            "footer, before its first chunk was written whole: a recorder killed in its first "
+                            "second or so)")
+    assert main(["plot", str(killed), "-o", str(tmp_path / "out.png")]) == 2
+    assert "opcode" not in capsys.readouterr().err
+
+
 def test_an_mcap_chunk_with_damaged_compressed_bytes_is_read_up_to_it_not_a_traceback(tmp_path, capsys):
     """A chunk whose zstd bytes were damaged (a disk or copy error): the decompressor's
     ZstdError is no McapError, and proleg plot printed a traceback. Now the messages before the

@@ -163,6 +163,12 @@ class McapReader(Reader):
             pass  # the torn end (or a damaged chunk): what came before it is kept
         except ValueError as e:  # JSON that is not
             raise RecordingError(f"{p}: not a readable MCAP recording ({e or e.__class__.__name__})") from None
+        if meta is not None and not rows and not _ends_with_magic(f):
+            # a whole header and metadata, then no whole message: not garbage, the first chunk never came
+            # whole (the footer was read from the metadata's last bytes: "unknown (opcode 34) record")
+            raise RecordingError(f"{p}: not a readable MCAP recording (no telemetry in it: it ends, without a footer, "
+                                 "before its first chunk was written whole: a recorder killed in its first second "
+                                 "or so)")
         if meta is None or not rows:
             raise RecordingError(f"{p}: not a readable MCAP recording ({why})")
         if _ends_with_magic(f):  # finished, its footer written: damaged after, not cut short
