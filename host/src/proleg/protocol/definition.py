@@ -161,7 +161,7 @@ MESSAGES: tuple[MessageSpec, ...] = (
         (_TOKEN, _u8("ground", "0: on flat ground, store the result; 1: level on this ground (a slope), RAM only")),
         "Record each IMU's rest tilt (the mean of 64 ticks' samples; robot at rest, coils cold): "
         "on flat ground as its level offset, stored in non-volatile memory; with ground = 1 as "
-        "this ground's tilt on top of it, until reset. ACK when sampling begins, then EVENT LEVEL_DONE. NACK NOT_ALLOWED while a gait runs (detail 1), an IMU is bad (2), "
+        "this ground's tilt on top of it, until a power-on (a reset that keeps the coils' budget keeps it). ACK when sampling begins, then EVENT LEVEL_DONE. NACK NOT_ALLOWED while a gait runs (detail 1), an IMU is bad (2), "
         "a fault is latched (3), a calibration is under way (4), the build leaves level "
         "calibration out (5), or a gait ran or a fault latched since the robot was last at rest for 2 s (6); "
         "OUT_OF_RANGE (detail 1) for a ground other than 0 or 1, checked first.",
