@@ -220,9 +220,9 @@ def test_a_terminal_without_utf8_gets_replacement_characters(tmp_path, env):
 def test_run_a_gait_that_does_not_exist_is_a_usage_error(capsys):
     code, out, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "7", "--duration", "1")
     assert code == 2 and out == ""
-    assert err.count("\n") == 1 and "--gait 7: paper-r1 has gaits 0..0 in +x" in err  # not INFO's 2 (both ways)
+    assert err.count("\n") == 1 and "--gait 7: paper-r1 has gait 0 only in +x" in err  # not INFO's 2 (both ways)
     code, _, err = run(capsys, "run", "paper-r1", "--sim", "--gait", "1", "--duration", "1")
-    assert code == 2 and "--gait 1: paper-r1 has gaits 0..0 in +x" in err
+    assert code == 2 and "--gait 1: paper-r1 has gait 0 only in +x" in err
     code, _, err = run(capsys, "run", "paper-r1-one-actuator", "--sim", "--direction", "-x", "--duration", "1")
     assert code == 2 and "no gait in -x" in err
     code, _, err = run(capsys, "sim", "paper-r1", "--gait", "3", "--duration", "1")
@@ -759,9 +759,13 @@ def test_a_robot_that_walks_only_minus_x_is_told_to_ask_for_minus_x(capsys, comm
     code, out, err = run(capsys, command[0], robot, *command[1:])  # the default direction, +x
     assert code == 2 and out == ""
     assert err.strip().splitlines()[-1] == ("proleg: error: --gait 0: ratchet-minus-x has no gait in +x "
-                                            "(it has 1 in -x: --direction -x)")
+                                            "(it has gait 0 only in -x: --direction -x)")
     code, _, err = run(capsys, command[0], robot, *command[1:], "--direction", "-x", "--gait", "5")
-    assert code == 2 and err.strip().splitlines()[-1] == "proleg: error: --gait 5: ratchet-minus-x has gaits 0..0 in -x"
+    assert code == 2 and err.strip().splitlines()[-1] == "proleg: error: --gait 5: ratchet-minus-x has gait 0 only in -x"
+    # a gait number past -x's too: +x has none at all, which alone says nothing of -x
+    code, _, err = run(capsys, command[0], robot, *command[1:], "--gait", "3")
+    assert code == 2 and err.strip().splitlines()[-1] == ("proleg: error: --gait 3: ratchet-minus-x has no gait in +x "
+                                                          "(it has gait 0 only in -x: --direction -x)")
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".mcap"])

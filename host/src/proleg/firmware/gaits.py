@@ -123,14 +123,17 @@ def no_such_gait(gait: int, robot_name: str, direction: str, per_direction: dict
     """The line refusing ``--gait gait`` of ``direction``, which the robot's firmware does not
     carry (``per_direction``: how many gaits it carries each way). When the other direction has
     gaits the line names them and ``--direction``: a robot that walks only one way (a ratchet)
-    was told only that it has "no gait in +x", the default it had not asked for."""
+    was told only that it has "no gait in +x", the default it had not asked for (and so it
+    still was for a ``--gait`` past the other direction's)."""
+    def shown(k: int) -> str:
+        return "no gait" if not k else "gait 0 only" if k == 1 else f"gaits 0..{k - 1}"
+
     n = per_direction.get(direction, 0)
-    shown = f"gaits 0..{n - 1}" if n else "no gait"
-    line = f"--gait {gait}: {robot_name} has {shown} in {direction}"
+    line = f"--gait {gait}: {robot_name} has {shown(n)} in {direction}"
     other = next((d for d in DIRECTIONS if d != direction), None)
     m = per_direction.get(other, 0) if other else 0
-    if gait < m:
-        line += f" (it has {m} in {other}: --direction {other})"
+    if m and (gait < m or not n):
+        line += f" (it has {shown(m)} in {other}: --direction {other})"
     return line
 
 
