@@ -153,3 +153,19 @@ def test_a_baud_rate_the_boards_clock_cannot_make_is_refused_naming_the_rates_it
 @pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "boards").glob("*.toml")))
 def test_every_shipped_board_makes_its_baud_rate(name):
     load_board(ROOT / "boards" / f"{name}.toml")  # the Nano's 115200 is 117,647 (+2.1 %), within the 3 %
+
+
+@pytest.mark.parametrize("board, baud, clock, rates", [
+    # UBRR0 holds 12 bits: 300 baud on 16 MHz takes UBRR0 = 6666, which it cannot hold
+    ("arduino-nano", 300, "16,000,000", "488 to 2,000,000 baud"),
+    # BRR's mantissa would be 0 (BRR = 6): the STM32F1's USART makes at most clock / 16
+    ("bluepill-f103", 12_000_000, "72,000,000", "1,099 to 4,500,000 baud"),
+])
+def test_a_baud_rate_the_uarts_register_cannot_hold_is_refused(tmp_path, board, baud, clock, rates):
+    # the divider's rounding alone said these ran at exactly the rate named: the register truncates it
+    text = (ROOT / "boards" / f"{board}.toml").read_text()
+    p = tmp_path / f"{board}-odd.toml"
+    p.write_text(re.sub(r"(?m)^baud = \d+", f"baud = {baud}", text))
+    with pytest.raises(BoardError, match=rf"uart.baud: {baud} is beyond what the \w+ HAL's UART makes on a {clock} Hz "
+                                         rf"clock \(board.clock_hz\): {rates}: the link would garble; rates within 3%: "):
+        load_board(p)

@@ -274,14 +274,26 @@ def _baud(path: Path, doc: dict, family: str) -> int:
     baud = _whole(path, doc, "uart", "baud")
     clock = _whole(path, doc, "board", "clock_hz")
     fam = load_family(family)
-    actual = fam.actual_baud(clock, baud) if clock else None  # clock_hz 0: virtual time
-    if actual is None or abs(actual / baud - 1) <= MAX_BAUD_ERROR:
+    if not clock or fam.baud_divider is None:  # clock_hz 0: virtual time
         return baud
-    fits = [b for b in STANDARD_BAUDS if abs(fam.actual_baud(clock, b) / b - 1) <= MAX_BAUD_ERROR]
-    raise BoardError(f"{path}: uart.baud: {baud} is made as {actual:,.0f} baud ({actual / baud - 1:+.1%}) by the "
-                     f"{family} HAL on a {clock:,} Hz clock (board.clock_hz), more than {MAX_BAUD_ERROR:.0%} off: "
-                     f"the link would garble; rates within it: {', '.join(map(str, fits)) or 'none of the usual'} "
-                     f"(give the host the same with --baudrate)")
+    actual = fam.actual_baud(clock, baud)
+    if actual is not None and abs(actual / baud - 1) <= MAX_BAUD_ERROR:
+        return baud
+
+    def fits(b: int) -> bool:
+        a = fam.actual_baud(clock, b)
+        return a is not None and abs(a / b - 1) <= MAX_BAUD_ERROR
+
+    usual = ', '.join(str(b) for b in STANDARD_BAUDS if fits(b)) or 'none of the usual'
+    if actual is None:  # the UART's register cannot hold the divider (an 8-bit UBRR0H:L, BRR's mantissa 0)
+        lo, hi = fam.baud_counts
+        made = (f"is beyond what the {family} HAL's UART makes on a {clock:,} Hz clock (board.clock_hz): "
+                f"{clock / (fam.baud_divider * hi):,.0f} to {clock / (fam.baud_divider * lo):,.0f} baud")
+    else:
+        made = (f"is made as {actual:,.0f} baud ({actual / baud - 1:+.1%}) by the {family} HAL on a {clock:,} Hz "
+                f"clock (board.clock_hz), more than {MAX_BAUD_ERROR:.0%} off")
+    raise BoardError(f"{path}: uart.baud: {baud} {made}: the link would garble; rates within "
+                     f"{MAX_BAUD_ERROR:.0%}: {usual} (give the host the same with --baudrate)")
 
 
 def _file_name(path: Path, doc: dict, key: str) -> str:

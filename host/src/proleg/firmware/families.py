@@ -37,13 +37,24 @@ class Family:
     # the UART's bit period is baud_divider × n clock cycles, n a whole number the HAL rounds
     # (avr U2X: 8 × (UBRR + 1); stm32f1: BRR); None: the family does not say, nothing is checked
     baud_divider: int | None = None
+    # the n the UART's register can hold (avr: UBRR0 + 1 of 12 bits, 1..4096; stm32f1: BRR, whose
+    # 12-bit mantissa must not be 0, 16..65535); an n outside it is a rate the HAL cannot make
+    baud_counts: tuple[int, int] = (1, 1 << 32)
+
+    def baud_count(self, clock_hz: int, baud: int) -> int | None:
+        """The whole number n the HAL rounds ``baud`` to on a ``clock_hz`` clock (None when the
+        family gives no ``baud_divider``)."""
+        if self.baud_divider is None:
+            return None
+        return (clock_hz + self.baud_divider * baud // 2) // (self.baud_divider * baud)
 
     def actual_baud(self, clock_hz: int, baud: int) -> float | None:
         """The rate the HAL's UART really runs at for ``baud`` on a ``clock_hz`` clock (None
-        when the family gives no ``baud_divider``)."""
-        if self.baud_divider is None:
+        when the family gives no ``baud_divider``, or when the register cannot hold the n it
+        would take: ``baud_counts``)."""
+        n = self.baud_count(clock_hz, baud)
+        if n is None or not self.baud_counts[0] <= n <= self.baud_counts[1]:
             return None
-        n = max(1, (clock_hz + self.baud_divider * baud // 2) // (self.baud_divider * baud))
         return clock_hz / (self.baud_divider * n)
 
     def pwm_entry(self, board_name: str, channel: int, pin: str) -> str:
@@ -96,8 +107,12 @@ def load_family(name: str) -> Family:
     divider = doc.get("uart", {}).get("baud_divider")
     if divider is not None and (isinstance(divider, bool) or not isinstance(divider, int) or not 1 <= divider <= 64):
         raise BoardError(f"{spec}: uart.baud_divider: expected a whole number 1..64, got {divider!r}")
+    counts = doc.get("uart", {}).get("baud_counts", [1, 1 << 32])
+    if (not isinstance(counts, list) or len(counts) != 2 or any(isinstance(c, bool) or not isinstance(c, int) for c in counts)
+            or not 1 <= counts[0] <= counts[1]):
+        raise BoardError(f"{spec}: uart.baud_counts: expected [lowest, highest] whole numbers from 1, got {counts!r}")
     return Family(name, path, fid, str(fam.get("description", "")), str(pwm.get("pin_kind", "PWM pin")), table,
-                  ring, divider)
+                  ring, divider, (counts[0], counts[1]))
 
 
 def _c_entry(spec: Path, pin: str, value: object) -> str:
