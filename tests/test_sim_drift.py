@@ -22,6 +22,8 @@ R1 = Path(__file__).resolve().parents[1] / "robots" / "paper-r1.toml"
     ("power", -0.1, 0.0, "rate must be ≥ 0, got -0.1"),
     ("power", math.nan, 0.0, "rate must be ≥ 0, got nan"),
     ("stroke", 0.1, 1.0, "step must be in [0, 1) for mode 'stroke', got 1.0"),
+    ("temperature", 0.1, math.nan, "step must be a finite number of °C for mode 'temperature', got nan"),
+    ("temperature", 0.1, math.inf, "step must be a finite number of °C for mode 'temperature', got inf"),
 ])
 def test_both_plants_refuse_a_bad_drift_in_the_same_words(mode, rate, step, why):
     for plant in (Plant(), PhysicalPlant(load_robot(R1))):

@@ -196,6 +196,8 @@ def checked_drift(mode: str, rate: float, step: float) -> tuple[str, float, floa
         raise SimError(f"inject_drift: rate must be ≥ 0, got {rate!r}")
     if mode != "temperature" and not 0.0 <= step < 1.0:
         raise SimError(f"inject_drift: step must be in [0, 1) for mode {mode!r}, got {step!r}")
+    if not math.isfinite(step):  # a NaN shift made every later ψ NaN, silently
+        raise SimError(f"inject_drift: step must be a finite number of °C for mode 'temperature', got {step!r}")
     return mode, float(rate), float(step)
 
 
