@@ -260,40 +260,16 @@ def _buffer(path: Path, doc: dict, key: str, default: int, family: str) -> int:
     return v
 
 
-#: the most a board's UART may run off the rate its file names: the host's USB-serial adapter
-#: makes the rate exactly, and 8N1 at U2X tolerates about ±3.7 % in all (ATmega328P data
-#: sheet, "Asynchronous Operational Range"); the Nano's 16 MHz makes 115200 as 117,647 (+2.1 %)
-MAX_BAUD_ERROR = 0.03
-STANDARD_BAUDS = (9600, 19200, 38400, 57600, 115200, 230400, 250000, 460800, 500000, 921600, 1000000)
-
-
 def _baud(path: Path, doc: dict, family: str) -> int:
-    """``uart.baud``, which the family's HAL can make from ``board.clock_hz`` within
-    ``MAX_BAUD_ERROR``: a board file of an 8 MHz ATmega328P at 115200 loaded, built, and
-    its UART ran at 111,111 (-3.5 %): every frame garbled."""
+    """``uart.baud``, which the family's HAL can make from ``board.clock_hz`` (``Family.baud_problem``):
+    a board file of an 8 MHz ATmega328P at 115200 loaded, built, and its UART ran at 111,111
+    (-3.5 %): every frame garbled."""
     baud = _whole(path, doc, "uart", "baud")
     clock = _whole(path, doc, "board", "clock_hz")
-    fam = load_family(family)
-    if not clock or fam.baud_divider is None:  # clock_hz 0: virtual time
-        return baud
-    actual = fam.actual_baud(clock, baud)
-    if actual is not None and abs(actual / baud - 1) <= MAX_BAUD_ERROR:
-        return baud
-
-    def fits(b: int) -> bool:
-        a = fam.actual_baud(clock, b)
-        return a is not None and abs(a / b - 1) <= MAX_BAUD_ERROR
-
-    usual = ', '.join(str(b) for b in STANDARD_BAUDS if fits(b)) or 'none of the usual'
-    if actual is None:  # the UART's register cannot hold the divider (an 8-bit UBRR0H:L, BRR's mantissa 0)
-        lo, hi = fam.baud_counts
-        made = (f"is beyond what the {family} HAL's UART makes on a {clock:,} Hz clock (board.clock_hz): "
-                f"{clock / (fam.baud_divider * hi):,.0f} to {clock / (fam.baud_divider * lo):,.0f} baud")
-    else:
-        made = (f"is made as {actual:,.0f} baud ({actual / baud - 1:+.1%}) by the {family} HAL on a {clock:,} Hz "
-                f"clock (board.clock_hz), more than {MAX_BAUD_ERROR:.0%} off")
-    raise BoardError(f"{path}: uart.baud: {baud} {made}: the link would garble; rates within "
-                     f"{MAX_BAUD_ERROR:.0%}: {usual} (give the host the same with --baudrate)")
+    problem = load_family(family).baud_problem(clock, baud) if clock else None  # clock_hz 0: virtual time
+    if problem:
+        raise BoardError(f"{path}: uart.baud: {baud} {problem}")
+    return baud
 
 
 def _file_name(path: Path, doc: dict, key: str) -> str:

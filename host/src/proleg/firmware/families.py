@@ -16,6 +16,11 @@ from ..paths import templates_dir
 #: The largest UART ring a board file may ask for (``uart.rx_buffer``/``tx_buffer``), on a
 #: family that sets no lower ``[uart] max_ring_bytes``.
 MAX_RING_BYTES = 32768
+#: the most a board's UART may run off the rate its file names: the host's USB-serial adapter
+#: makes the rate exactly, and 8N1 at U2X tolerates about ±3.7 % in all (ATmega328P data
+#: sheet, "Asynchronous Operational Range"); the Nano's 16 MHz makes 115200 as 117,647 (+2.1 %)
+MAX_BAUD_ERROR = 0.03
+STANDARD_BAUDS = (9600, 19200, 38400, 57600, 115200, 230400, 250000, 460800, 500000, 921600, 1000000)
 
 
 def is_ring_size(v: object, top: int = MAX_RING_BYTES) -> bool:
@@ -56,6 +61,31 @@ class Family:
         if n is None or not self.baud_counts[0] <= n <= self.baud_counts[1]:
             return None
         return clock_hz / (self.baud_divider * n)
+
+    def baud_problem(self, clock_hz: int, baud: int) -> str | None:
+        """Why this HAL's UART cannot run at ``baud`` on a ``clock_hz`` clock (off by more than
+        ``MAX_BAUD_ERROR``, or a divider its register cannot hold), naming the usual rates it
+        can; None when it can, or when the family gives no ``baud_divider``."""
+        if self.baud_divider is None:
+            return None
+        actual = self.actual_baud(clock_hz, baud)
+        if actual is not None and abs(actual / baud - 1) <= MAX_BAUD_ERROR:
+            return None
+
+        def fits(b: int) -> bool:
+            a = self.actual_baud(clock_hz, b)
+            return a is not None and abs(a / b - 1) <= MAX_BAUD_ERROR
+
+        usual = ", ".join(str(b) for b in STANDARD_BAUDS if fits(b)) or "none of the usual"
+        if actual is None:  # the register cannot hold the divider (the 12-bit UBRR0, BRR's mantissa 0)
+            lo, hi = self.baud_counts
+            made = (f"is beyond what the {self.name} HAL's UART makes on a {clock_hz:,} Hz clock (board.clock_hz): "
+                    f"{clock_hz / (self.baud_divider * hi):,.0f} to {clock_hz / (self.baud_divider * lo):,.0f} baud")
+        else:
+            made = (f"is made as {actual:,.0f} baud ({actual / baud - 1:+.1%}) by the {self.name} HAL on a "
+                    f"{clock_hz:,} Hz clock (board.clock_hz), more than {MAX_BAUD_ERROR:.0%} off")
+        return (f"{made}: the link would garble; rates within {MAX_BAUD_ERROR:.0%}: {usual} (give the host the same "
+                "with --baudrate)")
 
     def pwm_entry(self, board_name: str, channel: int, pin: str) -> str:
         """The C initialiser of channel's CFG_PWM_MAP entry; BuildError for a pin the HAL cannot drive."""
