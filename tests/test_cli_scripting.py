@@ -538,7 +538,7 @@ def test_set_param_on_a_port_says_a_nano_forgets_it_at_the_next_open(capsys, mon
     code, out, err = run(capsys, "set-param", "--port", "/dev/ttyUSB0", "max_on_ms", "1000")
     assert code == 0, err
     assert out.startswith("set max_on_ms[0] = 1000")
-    assert "a Nano resets whenever its port is opened" in out and "robot file's value again" in out
+    assert "a Nano resets whenever its port is opened: on a Nano the next" in out and "robot file's value again" in out
 
 
 def test_set_param_by_name_on_the_simulated_board(capsys):

@@ -372,8 +372,8 @@ def cmd_set_param(args: argparse.Namespace) -> int:
 #: After set-param on a serial port: the value lasts until the board resets, and a Nano resets
 #: whenever its port is opened. A max_on_ms narrowed this way for a fragile coil was silently
 #: the robot file's again in the next command's session (proleg run), with no word.
-PORT_OPEN_RESETS = ("note: the board keeps it until it resets, and a Nano resets whenever its port is opened: the next "
-                    "proleg command on this port (proleg run ...) starts with the robot file's value again; a script that "
+PORT_OPEN_RESETS = ("note: the board keeps it until it resets, and a Nano resets whenever its port is opened: on a Nano "
+                    "the next proleg command on this port (proleg run ...) starts with the robot file's value again; a script that "
                     "sets it and runs in one session (RobotClient.set_param, then start) keeps it, and the robot file "
                     "([safety], [control]) keeps it for good")
 
