@@ -17,6 +17,7 @@ duties, safety envelope), ``render_gaits.gait_part`` (step tables, transitions, 
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 from collections.abc import Mapping, Sequence
@@ -418,11 +419,31 @@ def control_part(robot: Any) -> ControlPart:
 
 
 def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:
+    """The firmware's identity (INFO's build_id; the console's "right firmware" check) and the
+    seed of the mark by which sma.c trusts RAM a reset left (docs/safety.md, "A reset"): the
+    robot file's bytes, the board, its pins, the gaits, and the firmware's own sources. Without
+    the sources, an image built by another proleg of the same version number for the same robot
+    file had the same id, so after flashing it the new image trusted the old one's RAM, whatever
+    its layout (the reviewer's note)."""
     bh = hashlib.sha256(
         f"proleg {__version__}|{robot_sha}|{board.board_name}|{board.family}|{','.join(board.pins)}|"
-        f"{gait_hash[2:].lower()}".encode()
+        f"{gait_hash[2:].lower()}|{firmware_sources_sha256()}".encode()
     )
     return f"0x{int.from_bytes(bh.digest()[:4], 'big'):08X}"
+
+
+@functools.cache
+def firmware_sources_sha256(root: Path | None = None) -> str:
+    """SHA-256 over every file under the firmware templates (core, every HAL, the templates),
+    each by its path relative to ``root`` and its bytes, in path order."""
+    root = root or templates_dir()
+    h = hashlib.sha256()
+    for path in sorted(p for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts):
+        rel = path.relative_to(root).as_posix().encode()
+        h.update(len(rel).to_bytes(4, "big") + rel)
+        data = path.read_bytes()
+        h.update(len(data).to_bytes(8, "big") + data)
+    return h.hexdigest()
 
 
 def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], board: Any) -> RenderContext:
