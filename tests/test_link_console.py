@@ -470,6 +470,45 @@ def test_closing_the_consoles_terminal_stops_the_robot_and_exits_129(tmp_path):
         server.wait()
 
 
+def test_a_warning_said_while_a_command_runs_stays_where_its_ok_would_go(monkeypatch):
+    """The START a key sent ran on a worker; when it came back it wrote "start …: ok" over the
+    status line, so a warning the host said meanwhile (a recording that hit a full disk) was
+    replaced as soon as it showed (the full-disk test failed so, once, in CI). A command's "ok"
+    now replaces only its own "…" line; with nothing said meanwhile it still shows."""
+    import threading
+
+    board = FakeBoard()
+    client = _client(board)
+    app = ConsoleApp(client, limbs=[LimbView("left", (20.0,)), LimbView("right", (20.0,))], levels=(2, 2),
+                     names=NAMES)
+    said, real = threading.Event(), client.start
+    returned = []
+
+    def start_after_the_warning(*args, **kw):
+        said.wait(10.0)
+        out = real(*args, **kw)
+        returned.append(True)
+        return out
+
+    monkeypatch.setattr(client, "start", start_after_the_warning)
+    warning = "cannot write record file run.csv: No space left on device"
+
+    async def scenario() -> None:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await pilot.press("s")
+            await _wait_for(pilot, lambda: app.status.endswith("…"))
+            app.host_says(warning)
+            said.set()
+            await _wait_for(pilot, lambda: bool(returned))
+            await pilot.pause(0.2)
+            assert app.status == warning
+            await pilot.press("x")  # STOP: nothing said meanwhile, so its ok shows
+            await _wait_for(pilot, lambda: app.status == "stop: ok")
+            await pilot.press("q")
+
+    asyncio.run(scenario())
+
+
 def test_a_full_disk_warning_shows_in_the_ui_not_over_it(tmp_path, monkeypatch):
     """A recording that hit ENOSPC said its warning through the CLI's stderr handler, written
     to the terminal under textual's screen (it scribbled over the UI until the next redraw).

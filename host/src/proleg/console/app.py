@@ -298,14 +298,21 @@ class ConsoleApp(App[None]):
 
     # ------------------------------------------------------------------ commands
     def _command(self, what: str, call: Callable[[], object]) -> None:
+        """Run ``call`` off the UI thread, saying so in the status line. Its "ok" replaces only
+        its own "…" line: a warning the host said meanwhile (a recording that hit a full disk)
+        stays in view, where the "ok" of the START that raced it used to replace it. A failure
+        is always said."""
+        pending = f"{what}…"
+
         def work() -> None:
             try:
                 call()
-                self.status = f"{what}: ok"
+                if self.status == pending:
+                    self.status = f"{what}: ok"
             except LinkError as e:
                 self.status = f"{what}: {e}"
 
-        self.status = f"{what}…"
+        self.status = pending
         self.run_worker(work, thread=True, group="commands", exclusive=False)
 
     def action_start(self) -> None:
