@@ -339,18 +339,24 @@ def test_calibrate_refuses_a_robot_whose_ends_are_still_coming_down(r1, capsys):
     client.close()
 
 
-def test_the_board_refuses_to_calibrate_until_at_rest_2_s_after_a_gait(r1):
-    """A host that asks the board itself (not proleg calibrate, which checks rest first): a flat
-    calibration 5 ms after STOP stored R1's still-falling ends (7.6° and 17.4°) as mounting
-    tilts, and START +x on flat ground was refused TOO_STEEP from then on, across resets. The
-    board now refuses (NOT_ALLOWED 6) until every limb has been at level 0 for 2 s with no gait
-    and no fault since; a fresh board, at rest from its reset, calibrates at once."""
+def _ends_up_then_stopped(r1) -> tuple[SimulatedRobot, RobotClient]:
+    """R1 (seed 4) walked until both ends are up, then STOPped: its ends are still coming down."""
     sim = SimulatedRobot(r1, seed=4)
     client = connect(sim)
     assert client.wait_known_state()
     client.start(0, "+x")
     wait(client, 3.5)  # both ends up
     client.stop()
+    return sim, client
+
+
+def test_the_board_refuses_to_calibrate_until_at_rest_2_s_after_a_gait(r1):
+    """A host that asks the board itself (not proleg calibrate, which checks rest first): a flat
+    calibration 5 ms after STOP stored R1's still-falling ends (7.6° and 17.4°) as mounting
+    tilts, and START +x on flat ground was refused TOO_STEEP from then on, across resets. The
+    board now refuses (NOT_ALLOWED 6) until every limb has been at level 0 for 2 s with no gait
+    and no fault since; a fresh board, at rest from its reset, calibrates at once."""
+    sim, client = _ends_up_then_stopped(r1)
     for gap_s in (0.005, 1.0):
         wait(client, gap_s)
         with pytest.raises(CommandRefused) as e:
@@ -373,12 +379,7 @@ def test_a_reset_that_is_not_a_power_on_does_not_make_a_falling_robot_at_rest(r1
     and R1's still-falling ends (9.7° and 4.3°) stored as mounting tilts, kept across power
     cycles. A reset that keeps the coils' budget now keeps "a gait ran since the last 2 s at
     rest" too (NOT_ALLOWED 6), and a board reset at rest still calibrates at once."""
-    sim = SimulatedRobot(r1, seed=4)
-    client = connect(sim)
-    assert client.wait_known_state()
-    client.start(0, "+x")
-    wait(client, 3.5)  # both ends up
-    client.stop()
+    sim, client = _ends_up_then_stopped(r1)
     wait(client, 0.1)
     client.close()
     sim.board.restart(cause)

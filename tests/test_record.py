@@ -136,11 +136,7 @@ def test_a_killed_mcap_recorder_keeps_every_chunk_it_completed(tmp_path, capsys)
     from proleg.record.mcap_format import CHUNK_BYTES
 
     path = tmp_path / "run.mcap"
-    board = FakeBoard()
-    link = SimLink(board)
-    client = RobotClient(link)
-    rec = Logger(path, RecordingMeta.for_robot(info=client.connect(), robot=ROBOT, link=link))
-    client.start(0, "+x")
+    _, client, rec = _recording(path)
     frames = 0
     while frames < 300:
         rx = client.recv_received(1.0)
@@ -168,11 +164,7 @@ def test_an_mcap_recorder_killed_before_its_first_chunk_says_so(tmp_path, capsys
     from proleg.cli.main import main
 
     path = tmp_path / "run.mcap"
-    board = FakeBoard()
-    link = SimLink(board)
-    client = RobotClient(link)
-    rec = Logger(path, RecordingMeta.for_robot(info=client.connect(), robot=ROBOT, link=link))
-    client.start(0, "+x")
+    _, client, rec = _recording(path)
     for _ in range(10):
         rx = client.recv_received(1.0)
         assert rx is not None

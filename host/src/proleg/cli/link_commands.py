@@ -191,10 +191,6 @@ def console_main(*, port: str | None = None, can_channel: str | None = None, int
     return 0
 
 
-#: how long after the leaving STOP the console still hands messages to the recording and streams
-STOP_TAIL_S = 0.1
-
-
 def _takers(listeners: Sequence[Any]) -> list[Any]:
     """The recording and the streams: open until the leaving STOP has been handed on to them."""
     from ..record import JsonlPrinter, UdpStreamer
@@ -208,6 +204,8 @@ def _hand_on_the_stop(client: Any, listeners: Sequence[Any]) -> None:
     hand them (and the frames with them) to the recording and the streams, as ``proleg run`` does,
     else a recording of a session left with a gait running ended on it running. Not to the
     replanner or the injector: the session is over. A link that fails meanwhile ends it."""
+    from ..report.robot_run import STOP_TAIL_S  # as long as proleg run reads after its STOP
+
     takers = _takers(listeners)
     if not takers:
         return

@@ -23,6 +23,8 @@ from ..protocol.definition import GAIT_USER
 from .gait_run import GaitRun, GaitRunListener
 
 COMMAND_RETRIES = 2
+#: how long after a STOP the link is still read, its ACK and the firmware's GAIT_STOPPED handed
+#: to the recording and streams (run, and the console leaving a gait running)
 STOP_TAIL_S = 0.1
 #: how long ``run_gait_on`` waits, before START, for a telemetry frame whose measured state is
 #: known: a board just reset (opening a Nano's port resets it) refuses START until it has read
