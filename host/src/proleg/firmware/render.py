@@ -17,7 +17,6 @@ duties, safety envelope), ``render_gaits.gait_part`` (step tables, transitions, 
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import math
 from collections.abc import Mapping, Sequence
@@ -35,6 +34,7 @@ from ..robot_body import worn_holds_of
 from ..robot_climb import check_climb_limit
 from ..robot_reach import boost_ms_of
 from .boards import DEFAULT_I2C_HZ, DEFAULT_UART_RX_BUFFER, DEFAULT_UART_TX_BUFFER, pwm_channel_error
+from .build_id import build_id
 from .families import Family, load_family
 from .placement import place_imus
 from .render_gaits import GaitPart, gait_part
@@ -400,52 +400,6 @@ def control_part(robot: Any) -> ControlPart:
     )
 
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-def _build_id(robot_sha: str, board: BoardPart, gait_hash: str) -> str:
-    """The firmware's identity (INFO's build_id; the console's "right firmware" check) and the
-    seed of the mark by which sma.c trusts RAM a reset left (docs/safety.md, "A reset"): the
-    robot file's bytes, the board, its pins, the gaits, and the firmware's own sources. Without
-    the sources, an image built by another proleg of the same version number for the same robot
-    file had the same id, so after flashing it the new image trusted the old one's RAM, whatever
-    its layout (the reviewer's note)."""
-    bh = hashlib.sha256(
-        f"proleg {__version__}|{robot_sha}|{board.board_name}|{board.family}|{','.join(board.pins)}|"
-        f"{gait_hash[2:].lower()}|{firmware_sources_sha256()}".encode()
-    )
-    return f"0x{int.from_bytes(bh.digest()[:4], 'big'):08X}"
-
-
-@functools.cache
-def firmware_sources_sha256(root: Path | None = None) -> str:
-    """SHA-256 over every file under the firmware templates (core, every HAL, the templates),
-    each by its path relative to ``root`` and its bytes, in path order."""
-    root = root or templates_dir()
-    h = hashlib.sha256()
-    for path in sorted(p for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts):
-        rel = path.relative_to(root).as_posix().encode()
-        h.update(len(rel).to_bytes(4, "big") + rel)
-        data = path.read_bytes()
-        h.update(len(data).to_bytes(8, "big") + data)
-    return h.hexdigest()
-
-
 def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], board: Any) -> RenderContext:
     """Everything the templates need, checked (BuildError when the robot does not fit)."""
     board_part = _board_part(board)
@@ -460,7 +414,7 @@ def render_context(robot: Any, gaits_by_direction: Mapping[str, Sequence[Any]], 
         robot_name=robot.name,
         robot_path=_display_path(getattr(robot, "path", None)),
         robot_sha=robot_sha,
-        build_id=_build_id(robot_sha, board_part, gaits.gait_hash),
+        build_id=build_id(robot_sha, board_part.board_name, board_part.family, board_part.pins, gaits.gait_hash),
         board=board_part,
         limb=limb_part,
         control=control,
